@@ -1,0 +1,31 @@
+"""blueprint: drawings of the visible and hidden edges of 3D models, computed on the GPU."""
+
+from blueprint.api import default_renderer, peel, render, render_frame
+from blueprint.compose.style import STYLES, Style
+from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
+from blueprint.render.renderer import Frame, Layers, Renderer
+from blueprint.scene.camera import VIEWS, Camera
+from blueprint.scene.loader import load_model
+from blueprint.scene.model import Model
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "STYLES",
+    "VIEWS",
+    "BlueprintError",
+    "Camera",
+    "Frame",
+    "GLUnavailableError",
+    "InputError",
+    "Layers",
+    "Model",
+    "Renderer",
+    "ShaderError",
+    "Style",
+    "default_renderer",
+    "load_model",
+    "peel",
+    "render",
+    "render_frame",
+]

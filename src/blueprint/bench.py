@@ -1,0 +1,84 @@
+"""Benchmark: median whole-frame time (image read back) after warm-up, as JSON records."""
+
+from __future__ import annotations
+
+import statistics
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+from rich.progress import Progress
+
+from blueprint.api import default_renderer
+from blueprint.render.renderer import Renderer
+from blueprint.scene.loader import load_model
+
+
+def time_frames(renderer: Renderer, model, *, frames: int, warmup: int, **options) -> dict:
+    """Median and spread of ``frames`` timed renders after ``warmup`` untimed ones, plus one
+    profiled frame (synchronised after every stage) for the per-stage split."""
+    for _ in range(warmup):
+        renderer.render(model, **options)
+    times = []
+    frame = None
+    for _ in range(frames):
+        frame = renderer.render(model, **options)
+        times.append(frame.ms)
+    profiled = renderer.render(model, profile=True, **options)
+    return {
+        "layers": frame.layers,
+        "ms": round(statistics.median(times), 3),
+        "ms_min": round(min(times), 3),
+        "ms_max": round(max(times), 3),
+        "fps": round(1000.0 / statistics.median(times), 1),
+        "draws": frame.draws,
+        "stages": {k: round(v, 3) for k, v in profiled.stages.items()},
+    }
+
+
+def run_bench(
+    models: Sequence[str | Path],
+    *,
+    sizes: Sequence[tuple[int, int]] = ((512, 512), (1024, 1024)),
+    layer_options: Sequence[int | None] = (5, None),
+    frames: int = 20,
+    warmup: int = 3,
+    supersample: int = 2,
+    style: str = "blueprint",
+) -> Iterator[dict]:
+    renderer = default_renderer()
+    jobs = [(m, s, n) for m in models for s in sizes for n in layer_options]
+    with Progress(transient=True) as progress:
+        task = progress.add_task("benchmark", total=len(jobs))
+        loaded: dict = {}
+        for path, size, max_layers in jobs:
+            if path not in loaded:
+                for old in loaded.values():
+                    renderer.forget(old)
+                loaded = {path: load_model(path)}
+            model = loaded[path]
+            camera = renderer.camera_for(model, size)
+            progress.update(task, description=f"{Path(path).name} {size[0]}x{size[1]}")
+            record = {
+                "renderer": renderer.info["renderer"],
+                "model": Path(path).name,
+                "triangles": model.triangle_count,
+                "width": size[0],
+                "height": size[1],
+                "max_layers": max_layers or "all",
+                "supersample": supersample,
+            }
+            record.update(
+                time_frames(
+                    renderer,
+                    model,
+                    camera=camera,
+                    size=size,
+                    max_layers=max_layers,
+                    frames=frames,
+                    warmup=warmup,
+                    supersample=supersample,
+                    style=style,
+                )
+            )
+            progress.advance(task)
+            yield record

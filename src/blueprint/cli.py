@@ -1,0 +1,281 @@
+"""The command line: a thin shell over the Python API (every option is an API argument)."""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from pathlib import Path
+
+import click
+
+from blueprint.errors import BlueprintError, InputError
+from blueprint.scene.camera import VIEWS
+
+STYLE_NAMES = ("blueprint", "paper", "transparent", "wireframe")
+
+
+class _OneLine(logging.Handler):
+    def emit(self, record: logging.LogRecord) -> None:
+        click.echo(f"blueprint: warning: {record.getMessage()}", err=True)
+
+
+def _setup_logging() -> None:
+    log = logging.getLogger("blueprint")
+    if not any(isinstance(h, _OneLine) for h in log.handlers):
+        log.addHandler(_OneLine())
+    log.setLevel(logging.WARNING)
+    log.propagate = False
+
+
+def camera_options(func):
+    """Options shared by every command that places a camera."""
+    options = [
+        click.option(
+            "--size",
+            nargs=2,
+            type=int,
+            default=None,
+            metavar="W H",
+            help="Image width and height in pixels.",
+        ),
+        click.option("--view", default="iso", show_default=True, help=f"Named view: {', '.join(VIEWS)}."),
+        click.option(
+            "--azimuth", type=float, default=None, help="Degrees from the front, towards the right."
+        ),
+        click.option("--elevation", type=float, default=None, help="Degrees above the horizon."),
+        click.option(
+            "--fov",
+            type=float,
+            default=30.0,
+            show_default=True,
+            help="Vertical field of view, degrees.",
+        ),
+        click.option("--ortho", is_flag=True, help="Orthographic projection (plan views)."),
+        click.option(
+            "--up",
+            type=click.Choice(["y", "z"]),
+            default=None,
+            help="Model up axis (default: z for STL/3MF, y otherwise).",
+        ),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return func
+
+
+def _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, default_size):
+    if view not in VIEWS:
+        raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
+    return dict(
+        size=tuple(size) if size else default_size,
+        view=view,
+        azimuth=azimuth,
+        elevation=elevation,
+        fov=fov,
+        ortho=ortho,
+        up=up,
+    )
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="blueprint")
+def cli() -> None:
+    """Blueprints of 3D models: the visible and hidden edges of every part, drawn on the GPU."""
+    _setup_logging()
+
+
+@cli.command()
+@click.argument("model", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="PNG file to write.")
+@camera_options
+@click.option("--style", default="blueprint", show_default=True, help=f"One of {', '.join(STYLE_NAMES)}.")
+@click.option("--grid", type=float, default=None, help="Grid spacing in pixels (0: none).")
+@click.option(
+    "--max-layers",
+    type=int,
+    default=8,
+    show_default=True,
+    help="Depth layers to peel at most (0: all).",
+)
+@click.option(
+    "--min-fraction",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Stop when a layer covers less than this fraction of the first.",
+)
+@click.option("--crease-angle", type=float, default=30.0, show_default=True, help="Degrees.")
+@click.option("--line-width", type=float, default=1.0, show_default=True, help="Pixels.")
+@click.option("--supersample", type=int, default=2, show_default=True, help="Anti-aliasing factor (1-4).")
+def render(
+    model,
+    output,
+    size,
+    view,
+    azimuth,
+    elevation,
+    fov,
+    ortho,
+    up,
+    style,
+    grid,
+    max_layers,
+    min_fraction,
+    crease_angle,
+    line_width,
+    supersample,
+):
+    """Draw the blueprint of MODEL into a PNG."""
+    from blueprint.api import default_renderer, render_frame
+    from blueprint.compose.style import get_style
+    from blueprint.export.files import check_output, save_png
+    from blueprint.scene.loader import load_model
+
+    output = check_output(output, (".png",))
+    chosen = get_style(style, grid)
+    kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024))
+    loaded = load_model(model, up=kwargs.pop("up"))
+    frame = render_frame(
+        loaded,
+        style=chosen,
+        max_layers=max_layers or None,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        supersample=supersample,
+        **kwargs,
+    )
+    save_png(output, frame.image)
+    info = default_renderer().info
+    click.echo(
+        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles, "
+        f"{frame.layers} layers, {frame.ms:.1f} ms on {info['renderer']}"
+    )
+
+
+@cli.command()
+@click.argument("model", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="NPZ file to write.")
+@camera_options
+@click.option("--max-layers", type=int, default=0, show_default=True, help="Layers at most (0: all).")
+@click.option("--min-fraction", type=float, default=0.0, show_default=True)
+def layers(model, output, size, view, azimuth, elevation, fov, ortho, up, max_layers, min_fraction):
+    """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
+    from blueprint.api import peel
+    from blueprint.export.files import check_output, save_layers
+    from blueprint.scene.loader import load_model
+
+    output = check_output(output, (".npz",))
+    kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (512, 512))
+    loaded = load_model(model, up=kwargs.pop("up"))
+    result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)
+    save_layers(output, result)
+    click.echo(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")
+
+
+@cli.command()
+@click.argument("model", required=False, type=click.Path(path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def info(model, as_json):
+    """Without MODEL: the OpenGL renderer. With MODEL: its parts, triangles and bounds."""
+    if model is None:
+        from blueprint.gpu import create_context, gl_info
+
+        ctx = create_context()
+        data = gl_info(ctx)
+        ctx.release()
+        if as_json:
+            click.echo(json.dumps(data))
+        else:
+            click.echo(f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}")
+        return
+    from blueprint.scene.loader import load_model
+
+    loaded = load_model(model)
+    counts = loaded.part_triangle_counts()
+    lo, hi = loaded.bounds
+    if as_json:
+        click.echo(
+            json.dumps(
+                {
+                    "file": str(model),
+                    "triangles": loaded.triangle_count,
+                    "up": loaded.up,
+                    "bounds": [lo.tolist(), hi.tolist()],
+                    "parts": [
+                        {"index": i, "name": n, "triangles": int(c)}
+                        for i, (n, c) in enumerate(zip(loaded.part_names, counts, strict=True))
+                    ],
+                }
+            )
+        )
+        return
+    click.echo(f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, up {loaded.up}")
+    click.echo(f"bounds: [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] - [{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
+    for i, (name, count) in enumerate(zip(loaded.part_names, counts, strict=True)):
+        click.echo(f"  {i:4d}  {count:9d}  {name}")
+
+
+@cli.command()
+@click.argument("models", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option(
+    "--size",
+    "sizes",
+    nargs=2,
+    type=int,
+    multiple=True,
+    metavar="W H",
+    help="Image size; repeat for several (default 512 512 and 1024 1024).",
+)
+@click.option(
+    "--max-layers",
+    "layer_options",
+    type=int,
+    multiple=True,
+    help="Layers at most; 0 for all; repeat for several (default 5 and 0).",
+)
+@click.option("--frames", type=int, default=20, show_default=True, help="Timed frames per configuration.")
+@click.option("--warmup", type=int, default=3, show_default=True)
+@click.option("--supersample", type=int, default=2, show_default=True)
+@click.option("--style", default="blueprint", show_default=True)
+def bench(models, sizes, layer_options, frames, warmup, supersample, style):
+    """Time whole frames (image read back) and print one JSON object per configuration."""
+    from blueprint.bench import run_bench
+
+    for record in run_bench(
+        models,
+        sizes=[tuple(s) for s in sizes] or [(512, 512), (1024, 1024)],
+        layer_options=[n or None for n in layer_options] or [5, None],
+        frames=frames,
+        warmup=warmup,
+        supersample=supersample,
+        style=style,
+    ):
+        click.echo(json.dumps(record))
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point: user errors become one line on stderr and exit code 2."""
+    try:
+        cli.main(args=argv, prog_name="blueprint", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("blueprint: interrupted", err=True)
+        sys.exit(130)
+    except click.ClickException as exc:
+        click.echo(f"blueprint: error: {exc.format_message()}", err=True)
+        sys.exit(2)
+    except BlueprintError as exc:
+        click.echo(f"blueprint: error: {exc}", err=True)
+        sys.exit(2)
+    except MemoryError:
+        click.echo("blueprint: error: out of memory (try a smaller --size)", err=True)
+        sys.exit(2)
+    except KeyboardInterrupt:
+        click.echo("blueprint: interrupted", err=True)
+        sys.exit(130)
+    sys.exit(0)
+
+
+if __name__ == "__main__":
+    main()

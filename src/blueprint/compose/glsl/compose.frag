@@ -1,0 +1,41 @@
+// Depth-sprite composition of up to 8 edge layers (4 per RGBA texture, one layer per channel),
+// back to front, each weighted by its ink's opacity; the box filter over the supersampled
+// edge maps gives anti-aliased lines. Output is premultiplied, blended over what is there.
+uniform sampler2D u_edges0;
+uniform sampler2D u_edges1;
+uniform int u_layers;        // layers of these two textures that take part
+uniform int u_supersample;
+uniform bool u_threshold;    // wire-frame variant: binary edges
+uniform vec4 u_ink[8];       // straight colour and opacity per layer
+
+out vec4 o_color;
+
+void main() {
+    ivec2 base = ivec2(gl_FragCoord.xy) * u_supersample;
+    vec4 c0 = vec4(0.0);
+    vec4 c1 = vec4(0.0);
+    for (int y = 0; y < u_supersample; ++y) {
+        for (int x = 0; x < u_supersample; ++x) {
+            vec4 e0 = texelFetch(u_edges0, base + ivec2(x, y), 0);
+            vec4 e1 = u_layers > 4 ? texelFetch(u_edges1, base + ivec2(x, y), 0) : vec4(0.0);
+            if (u_threshold) {
+                e0 = step(0.5, e0);
+                e1 = step(0.5, e1);
+            }
+            c0 += e0;
+            c1 += e1;
+        }
+    }
+    float norm = 1.0 / float(u_supersample * u_supersample);
+    float coverage[8] = float[8](c0.x, c0.y, c0.z, c0.w, c1.x, c1.y, c1.z, c1.w);
+    vec3 color = vec3(0.0);
+    float alpha = 0.0;
+    for (int k = 7; k >= 0; --k) {
+        if (k < u_layers) {
+            float a = clamp(coverage[k] * norm, 0.0, 1.0) * u_ink[k].a;
+            color = u_ink[k].rgb * a + color * (1.0 - a);
+            alpha = a + alpha * (1.0 - a);
+        }
+    }
+    o_color = vec4(color, alpha);
+}

@@ -1,0 +1,112 @@
+"""Drawing styles: paper, inks, grid, and how hidden layers fade. No GPU here."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from blueprint.errors import InputError
+
+RGBA = tuple[float, float, float, float]
+
+
+def hex_color(value: str, alpha: float = 1.0) -> RGBA:
+    """'#rrggbb' to a linear-in-sRGB RGBA tuple in [0, 1]."""
+    text = value.lstrip("#")
+    if len(text) != 6:
+        raise InputError(f"colour {value!r} is not of the form #rrggbb")
+    try:
+        r, g, b = (int(text[i : i + 2], 16) / 255 for i in (0, 2, 4))
+    except ValueError:
+        raise InputError(f"colour {value!r} is not of the form #rrggbb") from None
+    return (r, g, b, alpha)
+
+
+@dataclass(frozen=True)
+class Style:
+    """How the edge layers become a picture.
+
+    Layer 0 (visible edges) is drawn in ``ink`` at full strength; layer ``k >= 1`` (edges hidden
+    behind ``k`` surfaces) in ``hidden_ink`` at ``hidden_opacity * fade ** (k - 1)``.
+    ``paper`` is ``None`` for a transparent background; ``grid`` is the minor grid spacing in
+    pixels (0: none). ``threshold`` draws binary edges (the paper's wire-frame variant).
+    """
+
+    name: str
+    paper: RGBA | None
+    ink: RGBA
+    hidden_ink: RGBA
+    hidden_opacity: float = 0.7
+    fade: float = 0.8
+    grid: float = 0.0
+    grid_color: RGBA = (1.0, 1.0, 1.0, 0.12)
+    threshold: bool = False
+
+    def __post_init__(self) -> None:
+        for label, value in (("hidden_opacity", self.hidden_opacity), ("fade", self.fade)):
+            if not 0.0 <= value <= 1.0:
+                raise InputError(f"style {self.name}: {label} must be in [0, 1], got {value}")
+        if self.grid < 0:
+            raise InputError(f"style {self.name}: grid spacing must be >= 0, got {self.grid}")
+
+    def layer_inks(self, count: int) -> np.ndarray:
+        """(count, 4) float32: colour and opacity for each layer, front first."""
+        inks = np.empty((count, 4), np.float32)
+        for k in range(count):
+            if k == 0:
+                inks[k] = self.ink
+            else:
+                opacity = self.hidden_opacity * self.fade ** (k - 1)
+                inks[k] = (*self.hidden_ink[:3], self.hidden_ink[3] * opacity)
+        return inks
+
+    def with_options(self, **changes) -> Style:
+        return replace(self, **changes)
+
+
+STYLES: dict[str, Style] = {
+    "blueprint": Style(
+        "blueprint",
+        paper=hex_color("#12457a"),
+        ink=hex_color("#ffffff"),
+        hidden_ink=hex_color("#bfe0ff"),
+        hidden_opacity=0.75,
+        fade=0.8,
+        grid=0.0,
+    ),
+    "paper": Style(
+        "paper",
+        paper=hex_color("#ffffff"),
+        ink=hex_color("#0a1f44"),
+        hidden_ink=hex_color("#2f6bd0"),
+        hidden_opacity=0.8,
+        fade=0.8,
+    ),
+    "transparent": Style(
+        "transparent",
+        paper=None,
+        ink=hex_color("#0a1f44"),
+        hidden_ink=hex_color("#2f6bd0"),
+        hidden_opacity=0.8,
+        fade=0.8,
+    ),
+    "wireframe": Style(
+        "wireframe",
+        paper=hex_color("#ffffff"),
+        ink=hex_color("#000000"),
+        hidden_ink=hex_color("#000000"),
+        hidden_opacity=1.0,
+        fade=1.0,
+        threshold=True,
+    ),
+}
+
+
+def get_style(style: str | Style, grid: float | None = None) -> Style:
+    """A named style or a Style; ``grid`` overrides its grid spacing (pixels)."""
+    if isinstance(style, str):
+        if style not in STYLES:
+            raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)})")
+        style = STYLES[style]
+    return style if grid is None else style.with_options(grid=float(grid))

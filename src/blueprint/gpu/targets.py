@@ -1,0 +1,92 @@
+"""One owner of every render target: textures and framebuffers by (name, size, format)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+# (components, dtype) per format name; the G-buffer and the ops agree through these names
+FORMATS: dict[str, tuple[int, str]] = {
+    "r8": (1, "f1"),
+    "rgba8": (4, "f1"),
+    "r32f": (1, "f4"),
+    "rg32f": (2, "f4"),
+    "rgba16f": (4, "f2"),
+    "rgba32f": (4, "f4"),
+    "r32i": (1, "i4"),
+    "rg32i": (2, "i4"),
+}
+
+
+@dataclass(frozen=True)
+class TargetKey:
+    name: str
+    size: tuple[int, int]
+    fmt: str
+
+
+class TargetPool:
+    """Creates textures lazily, keeps them while their size and format stay, drops them on
+    change. Passes borrow targets by name; only the pool releases them."""
+
+    def __init__(self, ctx) -> None:
+        self.ctx = ctx
+        self._textures: dict[str, tuple[TargetKey, object]] = {}
+        self._depth: dict[str, tuple[tuple[int, int], object]] = {}
+        self._framebuffers: dict[tuple, object] = {}
+
+    def texture(self, name: str, size: tuple[int, int], fmt: str):
+        """The texture called ``name``, (re)created at ``size`` in format ``fmt``."""
+        key = TargetKey(name, tuple(size), fmt)
+        held = self._textures.get(name)
+        if held is not None and held[0] == key:
+            return held[1]
+        if held is not None:
+            self._drop(name)
+        if fmt not in FORMATS:
+            raise ValueError(f"unknown target format {fmt!r} (choose {', '.join(FORMATS)})")
+        components, dtype = FORMATS[fmt]
+        tex = self.ctx.texture(key.size, components, dtype=dtype)
+        tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        tex.repeat_x = tex.repeat_y = False
+        self._textures[name] = (key, tex)
+        return tex
+
+    def depth(self, name: str, size: tuple[int, int]):
+        """A depth renderbuffer for the depth test of geometry passes."""
+        held = self._depth.get(name)
+        if held is not None and held[0] == tuple(size):
+            return held[1]
+        if held is not None:
+            self._drop(name)
+        rb = self.ctx.depth_renderbuffer(tuple(size))
+        self._depth[name] = (tuple(size), rb)
+        return rb
+
+    def framebuffer(self, colors: tuple, depth=None):
+        """A framebuffer over pool textures, cached while its attachments live."""
+        key = (tuple(id(c) for c in colors), id(depth) if depth is not None else None)
+        fbo = self._framebuffers.get(key)
+        if fbo is None:
+            fbo = self.ctx.framebuffer(color_attachments=list(colors), depth_attachment=depth)
+            self._framebuffers[key] = (fbo, colors, depth)
+            return fbo
+        return fbo[0]
+
+    def _drop(self, name: str) -> None:
+        old = self._textures.pop(name, (None, None))[1] or self._depth.pop(name, (None, None))[1]
+        for key, (fbo, colors, depth) in list(self._framebuffers.items()):
+            if any(c is old for c in colors) or depth is old:
+                fbo.release()
+                del self._framebuffers[key]
+        old.release()
+
+    def release(self) -> None:
+        for fbo, _, _ in self._framebuffers.values():
+            fbo.release()
+        for _, tex in self._textures.values():
+            tex.release()
+        for _, rb in self._depth.values():
+            rb.release()
+        self._framebuffers.clear()
+        self._textures.clear()
+        self._depth.clear()

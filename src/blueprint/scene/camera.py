@@ -1,0 +1,164 @@
+"""Cameras: named views, auto-fit to a model, OpenGL view and projection matrices."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from blueprint.errors import InputError
+
+# (azimuth, elevation) in degrees; azimuth turns from the front towards the right.
+VIEWS: dict[str, tuple[float, float]] = {
+    "iso": (45.0, math.degrees(math.atan(1 / math.sqrt(2)))),
+    "front": (0.0, 0.0),
+    "back": (180.0, 0.0),
+    "left": (-90.0, 0.0),
+    "right": (90.0, 0.0),
+    "top": (0.0, 90.0),
+    "bottom": (0.0, -90.0),
+}
+
+# right, up and front axes of a Y-up and a Z-up model (right x up = front)
+_BASES = {
+    "y": (np.array([1.0, 0, 0]), np.array([0, 1.0, 0]), np.array([0, 0, 1.0])),
+    "z": (np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, -1.0, 0])),
+}
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole (perspective) or orthographic camera.
+
+    ``fov`` is the vertical field of view in degrees (perspective); ``height`` the full height of
+    the view volume in model units (orthographic). ``aspect`` is width / height.
+    """
+
+    eye: tuple[float, float, float]
+    target: tuple[float, float, float]
+    up: tuple[float, float, float]
+    near: float
+    far: float
+    aspect: float = 1.0
+    fov: float = 30.0
+    ortho: bool = False
+    height: float = 1.0
+    name: str = "custom"
+
+    def view_matrix(self) -> np.ndarray:
+        """(4, 4) float64: model to eye coordinates (camera looks down -Z)."""
+        eye, target, up = (np.asarray(v, np.float64) for v in (self.eye, self.target, self.up))
+        f = target - eye
+        f /= np.linalg.norm(f)
+        s = np.cross(f, up)
+        s /= np.linalg.norm(s)
+        u = np.cross(s, f)
+        m = np.eye(4)
+        m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+        m[:3, 3] = -m[:3, :3] @ eye
+        return m
+
+    def projection_matrix(self) -> np.ndarray:
+        """(4, 4) float64: eye to clip coordinates, OpenGL conventions (z in [-1, 1])."""
+        n, f = self.near, self.far
+        m = np.zeros((4, 4))
+        if self.ortho:
+            top = self.height / 2
+            right = top * self.aspect
+            m[0, 0], m[1, 1] = 1 / right, 1 / top
+            m[2, 2], m[2, 3] = -2 / (f - n), -(f + n) / (f - n)
+            m[3, 3] = 1
+        else:
+            t = 1 / math.tan(math.radians(self.fov) / 2)
+            m[0, 0], m[1, 1] = t / self.aspect, t
+            m[2, 2], m[2, 3] = -(f + n) / (f - n), -2 * f * n / (f - n)
+            m[3, 2] = -1
+        return m
+
+    def pixel_angle(self, height_px: int) -> float:
+        """Size of one pixel at unit distance (perspective) or in model units (orthographic)."""
+        if self.ortho:
+            return self.height / height_px
+        return 2 * math.tan(math.radians(self.fov) / 2) / height_px
+
+    @classmethod
+    def fit(
+        cls,
+        points: np.ndarray,
+        view: str = "iso",
+        *,
+        azimuth: float | None = None,
+        elevation: float | None = None,
+        fov: float = 30.0,
+        ortho: bool = False,
+        aspect: float = 1.0,
+        margin: float = 0.05,
+        up: str = "y",
+    ) -> Camera:
+        """Aim at ``points`` (N, 3) from a named view and move back until all of them fit.
+
+        ``azimuth`` / ``elevation`` (degrees) override the named view's angles. ``margin`` is
+        the fraction of the image kept free at each side.
+        """
+        if view not in VIEWS:
+            raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
+        if not 0 < fov < 180:
+            raise InputError(f"field of view must be between 0 and 180 degrees, got {fov}")
+        if not 0 <= margin < 0.5:
+            raise InputError(f"margin must be in [0, 0.5), got {margin}")
+        az, el = VIEWS[view]
+        az = az if azimuth is None else azimuth
+        el = el if elevation is None else elevation
+        right, up_axis, front = _BASES[up]
+        a, e = math.radians(az), math.radians(max(-90.0, min(90.0, el)))
+        direction = math.cos(e) * (math.cos(a) * front + math.sin(a) * right) + math.sin(e) * up_axis
+        if abs(math.cos(e)) < 1e-6:
+            # straight down or up: keep the front of the model at the bottom of the image
+            turned = math.cos(a) * front + math.sin(a) * right
+            up_vec = -turned if e > 0 else turned
+        else:
+            up_vec = up_axis
+        cam_z = direction / np.linalg.norm(direction)
+        cam_x = np.cross(up_vec, cam_z)
+        cam_x /= np.linalg.norm(cam_x)
+        cam_y = np.cross(cam_z, cam_x)
+
+        pts = np.asarray(points, np.float64).reshape(-1, 3)
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        center = (lo + hi) / 2
+        extent = float(np.linalg.norm(hi - lo)) or 1.0
+        rel = pts - center
+        x, y, z = rel @ cam_x, rel @ cam_y, rel @ cam_z
+        # re-centre on the projected extents so the drawing sits in the middle of the image
+        center = center + cam_x * (x.max() + x.min()) / 2 + cam_y * (y.max() + y.min()) / 2
+        x -= (x.max() + x.min()) / 2
+        y -= (y.max() + y.min()) / 2
+        fill = 1 - 2 * margin
+        if ortho:
+            height = max(2 * np.abs(y).max(), 2 * np.abs(x).max() / aspect) / fill
+            height = height if height > 0 else extent
+            distance = float(z.max()) + extent
+        else:
+            tan_y = math.tan(math.radians(fov) / 2) * fill
+            tan_x = tan_y * aspect
+            distance = float(np.max(z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)))
+            distance = max(distance, float(z.max()) + extent * 1e-3)
+            height = 1.0
+        depth = distance - z
+        pad = extent * 0.02
+        near = max(float(depth.min()) - pad, distance * 1e-3)
+        far = float(depth.max()) + pad
+        eye = center + cam_z * distance
+        return cls(
+            eye=tuple(eye),
+            target=tuple(center),
+            up=tuple(cam_y),
+            near=near,
+            far=far,
+            aspect=aspect,
+            fov=fov,
+            ortho=ortho,
+            height=float(height),
+            name=view,
+        )

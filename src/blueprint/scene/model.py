@@ -1,0 +1,93 @@
+"""GPU-free model data: triangles, parts and their names."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """A triangle model split into named parts.
+
+    Parameters
+    ----------
+    positions : (V, 3) float32
+        Vertex positions in model coordinates, scene transforms applied.
+    faces : (F, 3) int32
+        Vertex indices per triangle. Face ``i`` is triangle ID ``i`` in every buffer.
+    face_part : (F,) int32
+        Part index of each face.
+    part_names : tuple of str
+        One name per part (a scene's node name, or the file's stem for a single mesh).
+    up : {"y", "z"}
+        The model's up axis, used by the named views.
+    source : str or None
+        The file it came from, for messages.
+    """
+
+    positions: np.ndarray
+    faces: np.ndarray
+    face_part: np.ndarray
+    part_names: tuple[str, ...]
+    up: str = "y"
+    source: str | None = None
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.positions.ndim != 2 or self.positions.shape[1] != 3:
+            raise ValueError(f"positions must be (V, 3), got {self.positions.shape}")
+        if self.faces.ndim != 2 or self.faces.shape[1] != 3:
+            raise ValueError(f"faces must be (F, 3), got {self.faces.shape}")
+        if self.face_part.shape != (len(self.faces),):
+            raise ValueError("face_part must have one entry per face")
+        if self.up not in ("y", "z"):
+            raise ValueError(f"up must be 'y' or 'z', got {self.up!r}")
+
+    @classmethod
+    def from_arrays(
+        cls,
+        positions: np.ndarray,
+        faces: np.ndarray,
+        face_part: np.ndarray | None = None,
+        part_names: tuple[str, ...] | list[str] | None = None,
+        up: str = "y",
+        source: str | None = None,
+    ) -> Model:
+        """Build a model from plain arrays (one part unless ``face_part`` says otherwise)."""
+        positions = np.ascontiguousarray(positions, dtype=np.float32)
+        faces = np.ascontiguousarray(faces, dtype=np.int32)
+        if face_part is None:
+            face_part = np.zeros(len(faces), np.int32)
+        face_part = np.ascontiguousarray(face_part, dtype=np.int32)
+        if part_names is None:
+            count = int(face_part.max()) + 1 if len(face_part) else 1
+            part_names = tuple(f"part{i}" for i in range(count))
+        return cls(positions, faces, face_part, tuple(part_names), up, source)
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.faces)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) float64: minimum and maximum corner of the used vertices."""
+        used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
+        return np.array([used.min(axis=0), used.max(axis=0)], dtype=np.float64)
+
+    def part_triangle_counts(self) -> np.ndarray:
+        """(P,) int64: triangles per part."""
+        return np.bincount(self.face_part, minlength=len(self.part_names))
+
+    def degenerate_faces(self) -> np.ndarray:
+        """(F,) bool: faces with zero area or a repeated vertex; they are never drawn."""
+        if "degenerate" not in self._cache:
+            tri = self.positions[self.faces].astype(np.float64)
+            cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            area2 = np.einsum("ij,ij->i", cross, cross)
+            scale = np.ptp(self.bounds, axis=0).max() if len(self.faces) else 1.0
+            f = self.faces
+            repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
+            self._cache["degenerate"] = repeated | (area2 <= (scale * 1e-12) ** 2)
+        return self._cache["degenerate"]

@@ -1,0 +1,79 @@
+"""Corner normals smoothed within a crease angle, robust to soups and inconsistent winding."""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
+# smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
+_MAX_DEGREE = 64
+
+
+def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
+    """(F, 3) int64: vertex ids where vertices at the same position (within ``rel_tol`` of the
+    bounding-box diagonal) share an id, so triangle soups smooth like indexed meshes."""
+    used = positions[faces.reshape(-1)].astype(np.float64)
+    diag = float(np.linalg.norm(np.ptp(used, axis=0))) or 1.0
+    keys = np.round(used / (diag * rel_tol)).astype(np.int64)
+    _, inverse = np.unique(keys, axis=0, return_inverse=True)
+    return inverse.reshape(-1, 3)
+
+
+def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:
+    """Normal per triangle corner: the area-weighted mean of the normals of the faces around the
+    corner's vertex that lie within ``crease_angle`` degrees of the corner's face.
+
+    Normals are compared up to sign, so faces wound the wrong way still smooth with their
+    neighbours; each corner keeps its own face's orientation.
+
+    Parameters
+    ----------
+    positions : (V, 3) float
+    faces : (F, 3) int
+    crease_angle : float
+        Degrees; 0 gives flat (per-face) normals.
+
+    Returns
+    -------
+    (F, 3, 3) float32
+        Unit normal for corner ``j`` of face ``i`` at ``[i, j]``.
+    """
+    tri = positions[faces].astype(np.float64)
+    area_normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(area_normals, axis=1)
+    unit = area_normals / np.where(length > 0, length, 1.0)[:, None]
+    flat = np.repeat(unit[:, None, :], 3, axis=1)
+    if crease_angle <= 0 or len(faces) == 0:
+        return flat.astype(np.float32)
+
+    vertex = weld_ids(positions, faces).reshape(-1)
+    corner_face = np.repeat(np.arange(len(faces)), 3)
+    order = np.argsort(vertex, kind="stable")
+    sorted_vertex = vertex[order]
+    starts = np.flatnonzero(np.r_[True, sorted_vertex[1:] != sorted_vertex[:-1]])
+    degree = np.diff(np.r_[starts, len(order)])
+    group_start = np.repeat(starts, degree)
+    group_size = np.repeat(degree, degree)
+    smooth = group_size <= _MAX_DEGREE
+
+    # every ordered pair (corner a, corner b) around the same vertex
+    a_sorted = np.flatnonzero(smooth)
+    counts = group_size[a_sorted]
+    a_idx = np.repeat(a_sorted, counts)
+    within = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
+    b_idx = group_start[a_idx] + within
+    face_a = corner_face[order[a_idx]]
+    face_b = corner_face[order[b_idx]]
+
+    cos = np.einsum("ij,ij->i", unit[face_a], unit[face_b])
+    keep = np.abs(cos) >= np.cos(np.radians(crease_angle)) - 1e-9
+    contribution = area_normals[face_b[keep]] * np.sign(cos[keep])[:, None]
+    target = order[a_idx[keep]]
+    summed = np.zeros((len(vertex), 3))
+    for axis in range(3):
+        summed[:, axis] = np.bincount(target, contribution[:, axis], minlength=len(vertex))
+    norm = np.linalg.norm(summed, axis=1)
+    result = flat.reshape(-1, 3).copy()
+    ok = norm > 0
+    result[ok] = summed[ok] / norm[ok, None]
+    return result.reshape(-1, 3, 3).astype(np.float32)
