@@ -1,0 +1,79 @@
+"""Object-space silhouette extraction: the CPU baseline of triangle-ID silhouette rendering.
+
+The method has two timed stages, kept as separate calls so a benchmark can time each:
+
+* preprocessing, :func:`build_adjacency`: vertex welding, edge connectivity and consistent
+  winding, which depend on the geometry only;
+* per-frame extraction, :func:`classify_edges`: facing tests and edge classification for one
+  camera, followed by drawing with :func:`draw_segments`.
+
+:func:`silhouette_image` chains all three.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+
+from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges
+from .mesh import Adjacency, build_adjacency, weld
+from .raster import draw_segments
+
+__all__ = [
+    "BORDER",
+    "CREASE",
+    "SILHOUETTE",
+    "Adjacency",
+    "EdgeSet",
+    "build_adjacency",
+    "classify_edges",
+    "draw_segments",
+    "silhouette_image",
+    "weld",
+]
+
+
+def silhouette_image(
+    positions: np.ndarray,
+    faces: np.ndarray,
+    view: np.ndarray,
+    projection: np.ndarray,
+    width: int,
+    height: int,
+    crease_angle: float = 30.0,
+    kinds: Iterable[int] = (SILHOUETTE, BORDER),
+    line_width: float = 1.0,
+) -> np.ndarray:
+    """Draw the feature edges of a triangle soup seen through one camera.
+
+    Parameters
+    ----------
+    positions : np.ndarray
+        (V, 3) float vertex positions.
+    faces : np.ndarray
+        (F, 3) integer vertex indices.
+    view, projection : np.ndarray
+        (4, 4) float OpenGL model-to-eye and eye-to-clip matrices (column vectors).
+    width, height : int
+        Image size in pixels.
+    crease_angle : float
+        Dihedral threshold in degrees for crease edges.
+    kinds : iterable of int
+        Edge kinds to draw, from `SILHOUETTE`, `BORDER`, `CREASE`.
+    line_width : float
+        Line width in pixels.
+
+    Returns
+    -------
+    np.ndarray
+        (height, width) float32 line coverage in [0, 1].
+    """
+    kinds = np.asarray(list(kinds), dtype=np.int64)
+    if not np.isin(kinds, (SILHOUETTE, BORDER, CREASE)).all():
+        raise ValueError(f"kinds must be among SILHOUETTE, BORDER, CREASE, got {kinds.tolist()}")
+    edge_set = classify_edges(
+        build_adjacency(positions, faces), view, projection, width, height, crease_angle
+    )
+    chosen = np.isin(edge_set.kind, kinds)
+    return draw_segments(edge_set.segments2d[chosen], width, height, line_width)

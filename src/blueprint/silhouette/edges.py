@@ -1,0 +1,182 @@
+"""Per-view edge classification: the per-frame stage of the object-space silhouette method.
+
+Every face is tested for facing the camera, every edge is compared against its faces (the
+brute-force extraction of the paper's CPU baseline), and the kept edges are clipped against
+the near plane and projected to pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .mesh import Adjacency
+
+__all__ = ["BORDER", "CREASE", "SILHOUETTE", "EdgeSet", "classify_edges"]
+
+SILHOUETTE = 1
+BORDER = 2
+CREASE = 3
+
+# Clipped segments keep w >= this, so the perspective divide never meets w <= 0 even for
+# projections whose near plane does not bound w away from zero.
+_MIN_W = 1e-12
+
+
+@dataclass(frozen=True)
+class EdgeSet:
+    """Classified feature edges of one view.
+
+    Attributes
+    ----------
+    segments3d : np.ndarray
+        (N, 2, 3) float64 model-space endpoints, after clipping to the near plane.
+    segments2d : np.ndarray
+        (N, 2, 2) float64 pixel coordinates: x right, y down, origin at the top-left corner
+        of the image, pixel centres at +0.5.
+    kind : np.ndarray
+        (N,) uint8, one of `SILHOUETTE`, `BORDER`, `CREASE`.
+    faces : np.ndarray
+        (N, 2) int64 faces beside each edge: (front-facing, back-facing) for silhouettes,
+        (face, -1) for borders, both faces in index order for creases.
+    """
+
+    segments3d: np.ndarray
+    segments2d: np.ndarray
+    kind: np.ndarray
+    faces: np.ndarray
+
+
+def _check_matrix(name: str, matrix: np.ndarray) -> np.ndarray:
+    matrix = np.asarray(matrix, dtype=np.float64)
+    if matrix.shape != (4, 4) or not np.isfinite(matrix).all():
+        raise ValueError(f"{name} must be a finite (4, 4) matrix, got shape {matrix.shape}")
+    return matrix
+
+
+def _front_facing(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """(F,) bool: True where a face's normal points towards the camera."""
+    camera_to_model = np.linalg.inv(view)
+    if projection[3, 3] == 1.0:
+        # Orthographic: every face sees the same direction, the camera's +z axis (it looks
+        # down -z), so facing does not depend on where the face is.
+        facing = adj.face_normals @ camera_to_model[:3, 2]
+    else:
+        eye = camera_to_model[:3, 3]
+        facing = np.einsum("ij,ij->i", adj.face_normals, eye - adj.positions[adj.faces[:, 0]])
+    return facing > 0.0
+
+
+def _clip(clip: np.ndarray, model: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Clip segments to ``dist >= 0``, `dist` (N, 2) being linear in clip coordinates.
+
+    Clip coordinates are an affine function of model coordinates (the divide comes later),
+    so the same parameter moves both endpoint arrays consistently. Returns the kept rows'
+    clip (M, 2, 4) and model (M, 2, 3) endpoints and the indices (M,) of the kept rows.
+    """
+    keep = np.flatnonzero((dist >= 0.0).any(axis=1))
+    clip, model, dist = clip[keep].copy(), model[keep].copy(), dist[keep]
+    for end in (0, 1):
+        out = dist[:, end] < 0.0
+        t = dist[out, end] / (dist[out, end] - dist[out, 1 - end])
+        inside_clip, inside_model = clip[out, 1 - end], model[out, 1 - end]
+        clip[out, end] += t[:, None] * (inside_clip - clip[out, end])
+        model[out, end] += t[:, None] * (inside_model - model[out, end])
+    return clip, model, keep
+
+
+def classify_edges(
+    adj: Adjacency,
+    view: np.ndarray,
+    projection: np.ndarray,
+    width: int,
+    height: int,
+    crease_angle: float = 30.0,
+) -> EdgeSet:
+    """Find the silhouette, border and crease edges of a mesh for one camera.
+
+    A silhouette edge has both a front- and a back-facing face among its faces (this covers
+    non-manifold edges too); faces with a zero normal count as neither. A border edge has
+    exactly one face. A crease is a two-face edge that is not a silhouette and whose face
+    normals differ by more than `crease_angle`. Each edge gets at most one kind, in that
+    order of priority.
+
+    Parameters
+    ----------
+    adj : Adjacency
+        Output of :func:`blueprint.silhouette.build_adjacency`.
+    view, projection : np.ndarray
+        (4, 4) float model-to-eye and eye-to-clip matrices, OpenGL conventions, acting on
+        column vectors. ``projection[3, 3] == 1`` marks an orthographic projection.
+    width, height : int
+        Image size in pixels.
+    crease_angle : float
+        Dihedral threshold in degrees, in [0, 180].
+
+    Returns
+    -------
+    EdgeSet
+        The classified edges in edge-index order, clipped to the near plane (and to w > 0);
+        edges wholly on the camera's side of the near plane are dropped.
+    """
+    view = _check_matrix("view", view)
+    projection = _check_matrix("projection", projection)
+    if int(width) != width or int(height) != height or width <= 0 or height <= 0:
+        raise ValueError(f"width and height must be positive integers, got {width}x{height}")
+    if not 0.0 <= crease_angle <= 180.0:
+        raise ValueError(f"crease_angle must be in [0, 180] degrees, got {crease_angle}")
+
+    normal_ok = adj.face_normals.any(axis=1)
+    front = _front_facing(adj, view, projection) & normal_ok
+    back = ~front & normal_ok
+
+    edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
+    num_edges = len(adj.edges)
+    count = np.bincount(edge, minlength=num_edges)
+    # Incidences are sorted by edge then face, so each edge's first two faces sit at its start.
+    start = np.cumsum(count) - count
+    f0 = np.where(count >= 1, face[np.minimum(start, len(face) - 1)], -1)
+    f1 = np.where(count >= 2, face[np.minimum(start + 1, len(face) - 1)], -1)
+
+    # The lowest-index front and back face of every edge; "no face" stays at len(faces).
+    no_face = len(adj.faces)
+    first_front = np.full(num_edges, no_face, dtype=np.int64)
+    first_back = np.full(num_edges, no_face, dtype=np.int64)
+    np.minimum.at(first_front, edge[front[face]], face[front[face]])
+    np.minimum.at(first_back, edge[back[face]], face[back[face]])
+    silhouette = (first_front < no_face) & (first_back < no_face)
+
+    border = count == 1
+    manifold = (count == 2) & ~silhouette
+    cos_angle = np.einsum("ij,ij->i", adj.face_normals[f0[manifold]], adj.face_normals[f1[manifold]])
+    crease = np.zeros(num_edges, dtype=bool)
+    crease[manifold] = (
+        normal_ok[f0[manifold]] & normal_ok[f1[manifold]] & (cos_angle < np.cos(np.radians(crease_angle)))
+    )
+
+    kind = np.zeros(num_edges, dtype=np.uint8)
+    kind[crease] = CREASE
+    kind[border] = BORDER
+    kind[silhouette] = SILHOUETTE
+    side_faces = np.stack([f0, np.where(border, -1, f1)], axis=1)
+    side_faces[silhouette] = np.stack([first_front, first_back], axis=1)[silhouette]
+
+    chosen = np.flatnonzero(kind)
+    model = adj.positions[adj.edges[chosen]]
+    homogeneous = np.concatenate([model, np.ones(model.shape[:2] + (1,))], axis=2)
+    clip = homogeneous @ (projection @ view).T
+    # Near plane of an OpenGL frustum: z_clip >= -w_clip; then keep the divide safe.
+    clip, model, keep = _clip(clip, model, clip[..., 2] + clip[..., 3])
+    chosen = chosen[keep]
+    clip, model, keep = _clip(clip, model, clip[..., 3] - _MIN_W)
+    chosen = chosen[keep]
+
+    ndc = clip[..., :2] / clip[..., 3:]
+    pixels = np.stack([(ndc[..., 0] + 1.0) * 0.5 * width, (1.0 - ndc[..., 1]) * 0.5 * height], -1)
+    return EdgeSet(
+        segments3d=model,
+        segments2d=pixels,
+        kind=kind[chosen],
+        faces=side_faces[chosen],
+    )

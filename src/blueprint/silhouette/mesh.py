@@ -1,0 +1,286 @@
+"""Preprocessing of a triangle soup: vertex welding, edge connectivity, consistent winding.
+
+This is the "CPU-Preprocess" stage of the conventional object-space silhouette method
+(weld, connect, orient); everything here depends only on the geometry, not on the view.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse import csgraph
+
+__all__ = ["Adjacency", "build_adjacency", "weld"]
+
+# Default weld tolerance, relative to the bounding-box diagonal.
+_REL_TOL = 1e-6
+# Faces whose doubled area is below this fraction of their longest edge squared get a zero
+# normal: their cross product is rounding noise and its direction would be arbitrary.
+_DEGENERATE_REL_AREA = 1e-12
+
+# The cell itself and the 13 lexicographically positive offsets: together they pair every
+# cell with each of its 26 neighbours once.
+_FORWARD_OFFSETS = np.array(
+    [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)], dtype=np.int64
+)[13:]
+# Large odd multipliers for a spatial hash of integer cell coordinates (Teschner et al. 2003).
+_HASH = np.array([73856093, 19349663, 83492791], dtype=np.int64)
+
+
+@dataclass(frozen=True)
+class Adjacency:
+    """Welded, connected and consistently wound triangle mesh.
+
+    Attributes
+    ----------
+    positions : np.ndarray
+        (V, 3) float64 welded vertex positions.
+    faces : np.ndarray
+        (F, 3) int64 vertex indices into `positions`, in the original face order. Winding is
+        consistent within each component where the surface is orientable.
+    flipped : np.ndarray
+        (F,) bool, True for faces whose winding was reversed.
+    edges : np.ndarray
+        (E, 2) int64 unique undirected edges, each row sorted ascending.
+    edge_faces : np.ndarray
+        (K, 2) int64 rows ``(edge index, face index)``, one per incidence, sorted by edge then
+        face. Edges with three or more faces (non-manifold) keep all incidences. Faces with a
+        repeated vertex index after welding contribute no incidences.
+    component : np.ndarray
+        (F,) int64 component id per face; components are the sets of faces connected through
+        manifold (two-face) edges, i.e. the units over which winding was made consistent.
+    face_normals : np.ndarray
+        (F, 3) float64 unit normals of the oriented faces, zero for degenerate faces.
+    """
+
+    positions: np.ndarray
+    faces: np.ndarray
+    flipped: np.ndarray
+    edges: np.ndarray
+    edge_faces: np.ndarray
+    component: np.ndarray
+    face_normals: np.ndarray
+
+
+def _check_mesh(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    positions = np.asarray(positions, dtype=np.float64)
+    faces = np.asarray(faces)
+    if positions.ndim != 2 or positions.shape[1] != 3:
+        raise ValueError(f"positions must have shape (V, 3), got {positions.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise ValueError(f"faces must have shape (F, 3), got {faces.shape}")
+    if faces.size and not np.issubdtype(faces.dtype, np.integer):
+        raise ValueError(f"faces must hold integers, got dtype {faces.dtype}")
+    faces = faces.astype(np.int64)
+    if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
+        raise ValueError(f"face indices must lie in [0, {len(positions)})")
+    if not np.isfinite(positions).all():
+        raise ValueError("positions must be finite")
+    return positions, faces
+
+
+def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of distinct points with ``|p_i - p_j| <= tol``, found through a grid hash.
+
+    With cells slightly larger than `tol`, two points within `tol` lie in the same or in
+    adjacent cells whichever side of a cell boundary they fall, so probing each point's cell
+    and its neighbours finds every pair. Cells are bucketed by a wrapping integer hash: a
+    collision only merges two buckets, adding candidates that the distance test rejects.
+    """
+    scaled = (points - points.min(axis=0)) / (tol * (1.0 + 1e-9))
+    if scaled.max(initial=0.0) >= 2.0**52:
+        raise ValueError("weld tolerance is too small relative to the mesh extent")
+    cells = np.floor(scaled).astype(np.int64)
+
+    order = np.argsort(cells @ _HASH, kind="stable")
+    bucket_hash, bucket_start, bucket_count = np.unique(
+        (cells @ _HASH)[order], return_index=True, return_counts=True
+    )
+    firsts, seconds = [], []
+    for offset in _FORWARD_OFFSETS:
+        probe = (cells + offset) @ _HASH
+        target = np.minimum(np.searchsorted(bucket_hash, probe), len(bucket_hash) - 1)
+        found = bucket_hash[target] == probe
+        if not offset.any():
+            # Within its own cell a point only needs probing if it is not alone there.
+            found &= bucket_count[target] > 1
+        i, target = np.flatnonzero(found), target[found]
+        # Each probing point against every point of its target bucket, without a loop.
+        count = bucket_count[target]
+        rank = np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)
+        i = np.repeat(i, count)
+        j = order[np.repeat(bucket_start[target], count) + rank]
+        diff = points[i] - points[j]
+        keep = (i != j) & (np.einsum("ij,ij->i", diff, diff) <= tol * tol)
+        firsts.append(i[keep])
+        seconds.append(j[keep])
+    return np.concatenate(firsts), np.concatenate(seconds)
+
+
+def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices that lie within `tol` of each other.
+
+    Merging is transitive: chains of vertices each within `tol` of the next collapse into one.
+    A merged vertex takes the position of its lowest-index member, and welded vertices keep
+    the order of their first occurrence. The cost grows with the square of the number of
+    vertices per `tol`-sized cell, so `tol` should stay well below the mesh's edge lengths.
+
+    Parameters
+    ----------
+    positions : np.ndarray
+        (V, 3) float vertex positions.
+    faces : np.ndarray
+        (F, 3) integer vertex indices.
+    tol : float, optional
+        Euclidean merge distance. Defaults to 1e-6 times the bounding-box diagonal; 0 merges
+        exact duplicates only.
+
+    Returns
+    -------
+    positions : np.ndarray
+        (V', 3) float64 welded positions, V' <= V.
+    faces : np.ndarray
+        (F, 3) int64 faces remapped to the welded positions.
+    """
+    positions, faces = _check_mesh(positions, faces)
+    if len(positions) == 0:
+        return positions.copy(), faces
+    if tol is None:
+        tol = _REL_TOL * float(np.linalg.norm(np.ptp(positions, axis=0)))
+    elif not (np.isfinite(tol) and tol >= 0):
+        raise ValueError(f"tol must be a finite non-negative number, got {tol}")
+
+    # Exact duplicates first: triangle soups repeat every vertex several times, and collapsing
+    # them keeps the grid cells nearly empty for the near-duplicate search.
+    # Adding 0.0 turns -0.0 into 0.0, which row-unique would otherwise tell apart by bytes.
+    unique, inverse = np.unique(positions + 0.0, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    if tol > 0 and len(unique) > 1:
+        i, j = _close_pairs(unique, tol)
+        graph = sparse.coo_matrix((np.ones(len(i)), (i, j)), shape=(len(unique),) * 2)
+        _, label = csgraph.connected_components(graph, directed=False)
+    else:
+        label = np.arange(len(unique))
+
+    group = label[inverse]
+    # Number the groups by their first original vertex so the output order is stable.
+    group_first = np.full(group.max() + 1, len(positions), dtype=np.int64)
+    np.minimum.at(group_first, group, np.arange(len(positions)))
+    rank = np.empty_like(group_first)
+    rank[np.argsort(group_first, kind="stable")] = np.arange(len(group_first))
+    return positions[np.sort(group_first)], rank[group][faces]
+
+
+def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Flip flags and component ids from a breadth-first search over manifold edges.
+
+    `pair_faces` (M, 2) holds the two faces of each manifold edge and `pair_parity` (M,) is
+    True where they traverse it in the same direction, i.e. where one of them must flip. The
+    search starts from the lowest-index face of every component at once and expands whole
+    frontiers; a face takes its flip from the parent that first reaches it, so on
+    non-orientable surfaces the leftover inconsistency sits on non-tree edges.
+    """
+    # Duplicate triangles share several edges; one parity per face pair is enough, and
+    # duplicates would be summed by the sparse constructor.
+    lo, hi = pair_faces.min(axis=1), pair_faces.max(axis=1)
+    _, keep = np.unique(lo * num_faces + hi, return_index=True)
+    lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
+    # Stored as parity + 1 so that consistent pairs are not dropped as explicit zeros.
+    graph = sparse.csr_matrix(
+        (
+            np.concatenate([pair_parity, pair_parity]).astype(np.int8) + 1,
+            (np.concatenate([lo, hi]), np.concatenate([hi, lo])),
+        ),
+        shape=(num_faces, num_faces),
+    )
+    _, component = csgraph.connected_components(graph, directed=False)
+
+    indptr, indices, must_flip = graph.indptr, graph.indices, graph.data == 2
+    flipped = np.zeros(num_faces, dtype=bool)
+    visited = np.zeros(num_faces, dtype=bool)
+    frontier = np.unique(component, return_index=True)[1]
+    visited[frontier] = True
+    while len(frontier):
+        counts = indptr[frontier + 1] - indptr[frontier]
+        parent = np.repeat(frontier, counts)
+        slot = np.arange(counts.sum()) + np.repeat(indptr[frontier] - np.cumsum(counts) + counts, counts)
+        child = indices[slot]
+        fresh = ~visited[child]
+        child, parent, flip = child[fresh], parent[fresh], must_flip[slot[fresh]]
+        child, first = np.unique(child, return_index=True)
+        flipped[child] = flipped[parent[first]] ^ flip[first]
+        visited[child] = True
+        frontier = child
+    return flipped, component.astype(np.int64)
+
+
+def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | None = None) -> Adjacency:
+    """Weld a triangle soup, build its edge connectivity and make its winding consistent.
+
+    This is the view-independent preprocessing of the object-space silhouette method; time it
+    separately from the per-frame :func:`blueprint.silhouette.classify_edges`.
+
+    Parameters
+    ----------
+    positions : np.ndarray
+        (V, 3) float vertex positions.
+    faces : np.ndarray
+        (F, 3) integer vertex indices.
+    weld_tol : float, optional
+        Passed to :func:`weld` as `tol`.
+
+    Returns
+    -------
+    Adjacency
+        The welded, connected and oriented mesh.
+    """
+    positions, faces = weld(positions, faces, weld_tol)
+    num_faces, num_vertices = len(faces), max(len(positions), 1)
+
+    # Half-edge k of face f runs from corner k to corner k + 1.
+    start = faces.reshape(-1)
+    end = faces[:, [1, 2, 0]].reshape(-1)
+    half_face = np.repeat(np.arange(num_faces, dtype=np.int64), 3)
+    # A face with a repeated index is a line or a point: it bounds nothing, so its edges
+    # would only add false borders and break the two-face count of real edges.
+    proper = np.repeat(
+        (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0]),
+        3,
+    )
+    start, end, half_face = start[proper], end[proper], half_face[proper]
+
+    lo, hi = np.minimum(start, end), np.maximum(start, end)
+    keys, half_edge = np.unique(lo * num_vertices + hi, return_inverse=True)
+    half_edge = half_edge.reshape(-1)
+    edges = np.stack([keys // num_vertices, keys % num_vertices], axis=1)
+    order = np.lexsort((half_face, half_edge))
+    edge_faces = np.stack([half_edge[order], half_face[order]], axis=1)
+
+    # Manifold edges: exactly two incidences, adjacent after sorting by edge.
+    count = np.bincount(half_edge, minlength=len(edges))
+    manifold = order[count[half_edge[order]] == 2]
+    first, second = manifold[::2], manifold[1::2]
+    same_direction = start[first] == start[second]
+    flipped, component = _orient(
+        num_faces, np.stack([half_face[first], half_face[second]], axis=1), same_direction
+    )
+    faces = np.where(flipped[:, None], faces[:, [0, 2, 1]], faces)
+
+    corners = positions[faces]
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    area2 = np.linalg.norm(cross, axis=1)
+    longest2 = (np.diff(corners[:, [0, 1, 2, 0]], axis=1) ** 2).sum(axis=2).max(axis=1)
+    good = area2 > _DEGENERATE_REL_AREA * longest2
+    normals = np.zeros_like(cross)
+    normals[good] = cross[good] / area2[good, None]
+    return Adjacency(
+        positions=positions,
+        faces=faces,
+        flipped=flipped,
+        edges=edges.astype(np.int64),
+        edge_faces=edge_faces.astype(np.int64),
+        component=component,
+        face_normals=normals,
+    )
