@@ -1,7 +1,15 @@
 """GPU state: the context factory, the render-target pool and shader loading."""
 
 from blueprint.gpu.context import create_context, gl_info
-from blueprint.gpu.shaders import build_program, preprocess
+from blueprint.gpu.shaders import build_compute, build_program, preprocess
 from blueprint.gpu.targets import FORMATS, TargetPool
 
-__all__ = ["FORMATS", "TargetPool", "build_program", "create_context", "gl_info", "preprocess"]
+__all__ = [
+    "FORMATS",
+    "TargetPool",
+    "build_compute",
+    "build_program",
+    "create_context",
+    "gl_info",
+    "preprocess",
+]

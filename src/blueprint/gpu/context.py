@@ -28,12 +28,14 @@ def create_context(backend: str | None = None):
     import moderngl
 
     backend = os.environ.get("BLUEPRINT_GL_BACKEND", backend or "egl")
-    try:
-        ctx = moderngl.create_standalone_context(backend=backend, require=MIN_GL)
-    except Exception as exc:
-        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise GLUnavailableError(f"no usable OpenGL 3.3 context ({reason}): {_INSTALL_HINT}") from None
-    return ctx
+    reason = ""
+    # Some drivers give exactly the version asked for: ask for 4.3 (compute shaders) first.
+    for version in (430, MIN_GL):
+        try:
+            return moderngl.create_standalone_context(backend=backend, require=version)
+        except Exception as exc:
+            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    raise GLUnavailableError(f"no usable OpenGL 3.3 context ({reason}): {_INSTALL_HINT}")
 
 
 def gl_info(ctx) -> dict[str, str]:

@@ -9,6 +9,7 @@ from importlib import resources
 from blueprint.errors import ShaderError
 
 VERSION = "#version 330 core"
+COMPUTE_VERSION = "#version 430 core"
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 # Mesa: "0:12(3): error: ..."; NVIDIA: "0(12) : error ..."
 _LOCATION = re.compile(r"\b(\d+)(?::(\d+)\(\d+\)|\((\d+)\))")
@@ -30,7 +31,9 @@ def _resolve(ref: str) -> tuple[str, str]:
     return "blueprint.gpu", f"glsl/{ref}"
 
 
-def preprocess(ref: str, defines: dict[str, object] | None = None) -> tuple[str, list[str]]:
+def preprocess(
+    ref: str, defines: dict[str, object] | None = None, version: str = VERSION
+) -> tuple[str, list[str]]:
     """Expand includes and prepend the version and defines.
 
     Returns the source and the list of file names indexed by the GLSL source-string number
@@ -59,7 +62,7 @@ def preprocess(ref: str, defines: dict[str, object] | None = None) -> tuple[str,
                 out.append(line)
         return out
 
-    head = [VERSION] + [f"#define {k} {_literal(v)}" for k, v in (defines or {}).items()]
+    head = [version] + [f"#define {k} {_literal(v)}" for k, v in (defines or {}).items()]
     return "\n".join(head + expand(ref, ())) + "\n", files
 
 
@@ -103,3 +106,12 @@ def build_program(
         text = str(exc)
         files = fs_files if "fragment" in text.lower() else vs_files
         raise ShaderError(f"shader error: {_explain(text, files)}") from None
+
+
+def build_compute(ctx, ref: str, defines: dict[str, object] | None = None):
+    """Compile a compute shader (OpenGL 4.3) from a file reference; errors as ``build_program``."""
+    source, files = preprocess(ref, defines, COMPUTE_VERSION)
+    try:
+        return ctx.compute_shader(source)
+    except Exception as exc:
+        raise ShaderError(f"shader error: {_explain(str(exc), files)}") from None

@@ -20,7 +20,7 @@ FORMATS: dict[str, tuple[int, str]] = {
 @dataclass(frozen=True)
 class TargetKey:
     name: str
-    size: tuple[int, int]
+    size: tuple[int, ...]
     fmt: str
 
 
@@ -31,12 +31,12 @@ class TargetPool:
     def __init__(self, ctx) -> None:
         self.ctx = ctx
         self._textures: dict[str, tuple[TargetKey, object]] = {}
-        self._depth: dict[str, tuple[tuple[int, int], object]] = {}
         self._framebuffers: dict[tuple, object] = {}
 
-    def texture(self, name: str, size: tuple[int, int], fmt: str):
-        """The texture called ``name``, (re)created at ``size`` in format ``fmt``."""
-        key = TargetKey(name, tuple(size), fmt)
+    def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
+        """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
+        ``layers`` > 0 a 2D texture array of that many slices."""
+        key = TargetKey(name, (*size, layers) if layers else tuple(size), fmt)
         held = self._textures.get(name)
         if held is not None and held[0] == key:
             return held[1]
@@ -45,22 +45,29 @@ class TargetPool:
         if fmt not in FORMATS:
             raise ValueError(f"unknown target format {fmt!r} (choose {', '.join(FORMATS)})")
         components, dtype = FORMATS[fmt]
-        tex = self.ctx.texture(key.size, components, dtype=dtype)
+        if layers:
+            tex = self.ctx.texture_array((*size, layers), components, dtype=dtype)
+        else:
+            tex = self.ctx.texture(tuple(size), components, dtype=dtype)
         tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
         tex.repeat_x = tex.repeat_y = False
         self._textures[name] = (key, tex)
         return tex
 
     def depth(self, name: str, size: tuple[int, int]):
-        """A depth renderbuffer for the depth test of geometry passes."""
-        held = self._depth.get(name)
-        if held is not None and held[0] == tuple(size):
+        """A depth texture, readable by shaders (comparison off) as window depth in [0, 1]."""
+        key = TargetKey(name, tuple(size), "depth")
+        held = self._textures.get(name)
+        if held is not None and held[0] == key:
             return held[1]
         if held is not None:
             self._drop(name)
-        rb = self.ctx.depth_renderbuffer(tuple(size))
-        self._depth[name] = (tuple(size), rb)
-        return rb
+        tex = self.ctx.depth_texture(tuple(size))
+        tex.compare_func = ""
+        tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        tex.repeat_x = tex.repeat_y = False
+        self._textures[name] = (key, tex)
+        return tex
 
     def framebuffer(self, colors: tuple, depth=None):
         """A framebuffer over pool textures, cached while its attachments live."""
@@ -73,7 +80,7 @@ class TargetPool:
         return fbo[0]
 
     def _drop(self, name: str) -> None:
-        old = self._textures.pop(name, (None, None))[1] or self._depth.pop(name, (None, None))[1]
+        old = self._textures.pop(name)[1]
         for key, (fbo, colors, depth) in list(self._framebuffers.items()):
             if any(c is old for c in colors) or depth is old:
                 fbo.release()
@@ -85,8 +92,5 @@ class TargetPool:
             fbo.release()
         for _, tex in self._textures.values():
             tex.release()
-        for _, rb in self._depth.values():
-            rb.release()
         self._framebuffers.clear()
         self._textures.clear()
-        self._depth.clear()

@@ -47,6 +47,7 @@ class Op:
     output: str
     params: tuple[Param, ...] = ()
     doc: str = ""
+    compute: str | None = None
 
     def uniforms(self, **values) -> dict[str, float | bool]:
         """Validated parameter values, defaults filled in, keyed by uniform name (``u_<name>``)."""
@@ -62,13 +63,14 @@ class Op:
 EDGES = Op(
     name="edges",
     shader="blueprint.ops:glsl/edges.frag",
-    inputs={"depth": "r32f", "normal": "rgba16f", "ids": "rg32i"},
+    inputs={"depth": "depth", "normal": "rgba16f", "ids": "rg32i"},
     output="r8",
     params=(
         Param("depth_threshold", 4.0, 0.1, 1000.0, "depth jump, in pixel footprints, of a silhouette"),
         Param("part_edges", True, doc="draw boundaries between parts"),
     ),
     doc="edge intensity from coverage, part-ID, normal and depth discontinuities",
+    compute="blueprint.ops:glsl/edges.comp",
 )
 
 DILATE = Op(
@@ -78,6 +80,7 @@ DILATE = Op(
     output="r8",
     params=(Param("radius", 1.0, 0.0, 16.0, "disc radius in pixels"),),
     doc="grey-scale dilation by a disc with a soft rim",
+    compute="blueprint.ops:glsl/dilate.comp",
 )
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}

@@ -12,7 +12,7 @@ import numpy as np
 
 from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
-from blueprint.gpu import TargetPool, build_program, create_context, gl_info
+from blueprint.gpu import TargetPool, build_compute, build_program, create_context, gl_info
 from blueprint.ops import DILATE, EDGES
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
@@ -27,8 +27,14 @@ HARD_MAX_LAYERS = 256
 PEEL_EPSILON = 1e-5
 GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 PEEL_FRAG = "blueprint.render:glsl/peel.frag"
-# Window-depth push of back faces (16 steps of a 24-bit depth buffer), see peel.frag.
-BACK_BIAS = 16.0 / (1 << 24)
+# Touching solids have coincident faces of opposite winding (the top of one, the bottom of the
+# other). Drawing back faces in a second draw pushed back by this polygon offset (in steps of
+# the depth buffer) makes the front face win every pixel of the tie, instead of whichever
+# rounds nearer (speckle); it is far below the peeling tolerance, so both still peel as one.
+BACK_OFFSET = 16.0
+PART_TABLE_WIDTH = 4096
+# Edge maps are kept in texture arrays of this many slices (compute path).
+SLICES = 8
 
 
 @dataclass
@@ -70,23 +76,36 @@ class Layers:
 
 
 class _Mesh:
-    """A model's triangles on the GPU, one vertex per corner (flat IDs, crease-split normals)."""
+    """A model's triangles on the GPU: shared vertices (split only where crease-split normals
+    differ), every face in the index buffer in model order so ``gl_PrimitiveID`` is the face
+    index (degenerate faces rasterise to nothing), and a table of each face's part."""
 
     def __init__(self, ctx, program, model: Model, crease_angle: float) -> None:
-        keep = np.flatnonzero(~model.degenerate_faces())
-        faces = model.faces[keep]
-        data = np.empty((len(keep), 3), [("p", "f4", 3), ("n", "f4", 3), ("ids", "i4", 2)])
-        data["p"] = model.positions[faces]
-        data["n"] = corner_normals(model.positions, faces, crease_angle)
-        data["ids"][:, :, 0] = keep[:, None]
-        data["ids"][:, :, 1] = model.face_part[keep][:, None]
-        self.vertices = len(keep) * 3
+        faces = model.faces
+        normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
+        corner_vertex = faces.reshape(-1).astype(np.int64)
+        quantized = np.round(normals * 32767).astype(np.int64)
+        keys = np.column_stack([corner_vertex, quantized])
+        unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+        first = np.zeros(len(unique), np.int64)
+        first[inverse.reshape(-1)] = np.arange(len(keys))
+        data = np.empty(len(unique), [("p", "f4", 3), ("n", "f4", 3)])
+        data["p"] = model.positions[unique[:, 0]]
+        data["n"] = normals[first]
         self.vbo = ctx.buffer(data.tobytes())
-        self.vao = ctx.vertex_array(program, [(self.vbo, "3f 3f 2i", "in_position", "in_normal", "in_ids")])
+        self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
+        self.vao = ctx.vertex_array(
+            program, [(self.vbo, "3f 3f", "in_position", "in_normal")], index_buffer=self.ibo
+        )
+        rows = max(1, -(-len(faces) // PART_TABLE_WIDTH))
+        table = np.zeros(rows * PART_TABLE_WIDTH, np.int32)
+        table[: len(faces)] = model.face_part
+        self.parts = ctx.texture((PART_TABLE_WIDTH, rows), 1, table.tobytes(), dtype="i4")
+        self.parts.filter = (ctx.NEAREST, ctx.NEAREST)
 
     def release(self) -> None:
-        self.vao.release()
-        self.vbo.release()
+        for obj in (self.vao, self.vbo, self.ibo, self.parts):
+            obj.release()
 
 
 def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tuple[int, int]:
@@ -117,11 +136,18 @@ class Renderer:
         self.ctx = ctx if ctx is not None else create_context()
         self.pool = TargetPool(self.ctx)
         self._programs: dict[tuple, object] = {}
-        self._meshes: dict[tuple[int, float], tuple[Model, _Mesh]] = {}
+        self._meshes: dict[tuple, tuple[Model, _Mesh]] = {}
         self._queries: list = []
         self._fullscreen = {}
         self.info = gl_info(self.ctx)
         self.max_texture = int(self.info["max_texture_size"])
+        # Image-space passes run as compute shaders where OpenGL 4.3 allows: on GPUs built for
+        # compute (H100) only a few cores rasterise, while compute runs on all of them.
+        software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
+        self.use_compute = self.ctx.version_code >= 430 and not software
+        # A software rasteriser pays for every vertex twice in the two-draw tie-break, a GPU
+        # pays more for late depth tests when the shader writes depth: each gets its cheaper form.
+        self.back_bias_in_shader = software
 
     def __enter__(self) -> Renderer:
         return self
@@ -149,6 +175,13 @@ class Renderer:
             prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines)
         return prog
 
+    def compute(self, ref: str, defines=None):
+        key = ("compute", ref, tuple(sorted((defines or {}).items())))
+        prog = self._programs.get(key)
+        if prog is None:
+            prog = self._programs[key] = build_compute(self.ctx, ref, defines)
+        return prog
+
     def fullscreen(self, fragment: str):
         """(program, vertex array) of a full-screen pass drawing one triangle."""
         prog = self.program(fragment)
@@ -158,10 +191,11 @@ class Renderer:
         return prog, vao
 
     def mesh(self, model: Model, crease_angle: float) -> _Mesh:
-        key = (id(model), float(crease_angle))
+        # a vertex array belongs to one program, and the program depends on the tie-break form
+        prog = self._geometry_program()
+        key = (id(model), float(crease_angle), prog.glo)
         held = self._meshes.get(key)
         if held is None or held[0] is not model:
-            prog = self.program("blueprint.render:glsl/peel.frag", "blueprint.render:glsl/geometry.vert")
             held = self._meshes[key] = (model, _Mesh(self.ctx, prog, model, crease_angle))
         return held[1]
 
@@ -182,35 +216,60 @@ class Renderer:
 
     # -- peeling -------------------------------------------------------------------------------
     def _gbuffer(self, size: tuple[int, int]):
+        """Two depth textures (this layer and the previous one) plus normal and ID targets."""
         pool = self.pool
-        depth = (pool.texture("gb.depth0", size, "r32f"), pool.texture("gb.depth1", size, "r32f"))
+        depth = (pool.depth("gb.depth0", size), pool.depth("gb.depth1", size))
         normal = pool.texture("gb.normal", size, "rgba16f")
         ids = pool.texture("gb.ids", size, "rg32i")
-        z = pool.depth("gb.z", size)
-        fbos = tuple(pool.framebuffer((d, normal, ids), z) for d in depth)
-        return depth, normal, ids, fbos
+        fbos = tuple(pool.framebuffer((normal, ids), d) for d in depth)
+        clears = tuple(pool.framebuffer((), d) for d in depth)
+        return depth, normal, ids, fbos, clears
 
-    def _setup_geometry(self, camera: Camera, size: tuple[int, int], depth_textures) -> object:
-        prog = self.program("blueprint.render:glsl/peel.frag", "blueprint.render:glsl/geometry.vert")
+    def _geometry_program(self):
+        defines = {"BACK_BIAS_IN_SHADER": self.back_bias_in_shader}
+        return self.program(PEEL_FRAG, GEOMETRY_VERT, defines)
+
+    def _setup_geometry(self, camera: Camera, mesh: _Mesh, depth_textures) -> object:
+        prog = self._geometry_program()
         prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
         prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
         prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
         prog["u_ortho"].value = camera.ortho
-        prog["u_back_bias"].value = BACK_BIAS
+        prog["u_face_part"].value = 2
+        if self.back_bias_in_shader:
+            prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         depth_textures[0].use(0)
         depth_textures[1].use(1)
+        mesh.parts.use(2)
         return prog
 
-    def _peel(self, mesh: _Mesh, prog, fbos, i: int, query) -> None:
-        """Draw layer ``i`` into ``fbos[i % 2]``, counting its samples in ``query``."""
-        fbo = fbos[i % 2]
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
-        prog["u_peel"].value = i > 0
-        prog["u_prev_depth"].value = (i - 1) % 2
+    def _clear(self, clears, layer: int) -> None:
+        clears[layer % 2].use()
+        clears[layer % 2].clear(depth=1.0)
+
+    def _draw(self, mesh: _Mesh, prog, fbos, layer: int, query) -> None:
+        """Draw layer ``layer`` into ``fbos[layer % 2]``, counting its samples in ``query``:
+        front faces first, then back faces pushed back by ``BACK_OFFSET``."""
+        ctx = self.ctx
+        fbos[layer % 2].use()
+        prog["u_peel"].value = layer > 0
+        prog["u_prev_depth"].value = (layer - 1) % 2
+        if self.back_bias_in_shader:
+            ctx.enable(ctx.DEPTH_TEST)
+            with query:
+                mesh.vao.render()
+            ctx.disable(ctx.DEPTH_TEST)
+            return
+        ctx.enable(ctx.DEPTH_TEST | ctx.CULL_FACE)
         with query:
+            ctx.cull_face = "back"
             mesh.vao.render()
+            ctx.cull_face = "front"
+            ctx.polygon_offset = 0.0, BACK_OFFSET
+            mesh.vao.render()
+        ctx.polygon_offset = 0.0, 0.0
+        ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
 
     @staticmethod
     def _layer_count(counts: list[int], min_fraction: float) -> int:
@@ -281,59 +340,28 @@ class Renderer:
 
         mesh = self.mesh(model, crease_angle)
         stage("upload")
-
-        ctx.enable_only(ctx.DEPTH_TEST)
+        ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
-        depth_tex, normal, ids, fbos = self._gbuffer(ss)
-        geo = self._setup_geometry(camera, ss, depth_tex)
-        edge_prog, edge_vao = self.fullscreen(EDGES.shader)
-        edge_prog["u_depth_range"].value = geo["u_depth_range"].value
-        half = math.radians(crease_angle)
-        edge_prog["u_normal_cos"].value = (math.cos(0.5 * half), math.cos(0.8 * half))
-        edge_prog["u_pixel_angle"].value = camera.pixel_angle(ss[1])
-        for name, value in params.items():
-            edge_prog[name].value = value
-        normal.use(2)
-        ids.use(3)
-        edge_prog["u_normal"].value = 2
-        edge_prog["u_ids"].value = 3
-        dilate = None
-        if line_width > 1.0:
-            dilate, dilate_vao = self.fullscreen(DILATE.shader)
-            dilate["u_radius"].value = (line_width - 1.0) * supersample / 2
-            dilate["u_source"].value = 4
-            scratch = self.pool.texture("edges.scratch", ss, "r8")
-            scratch_fbo = self.pool.framebuffer((scratch,))
+        depth_tex, normal, ids, fbos, clears = self._gbuffer(ss)
+        geo = self._setup_geometry(camera, mesh, depth_tex)
+        edges = self._edge_stage(camera, ss, crease_angle, params, line_width, supersample)
+        normal.use(3)
+        ids.use(4)
 
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
-        edge_fbos: list = []
         peeled = 0
+        draws = 0
         while peeled < limit:
             end = min(limit, peeled + (max_layers or CHUNK))
-            while len(edge_fbos) < (end + 3) // 4:
-                tex = self.pool.texture(f"edges.{len(edge_fbos)}", ss, "rgba8")
-                fbo = self.pool.framebuffer((tex,))
-                fbo.color_mask = (True, True, True, True)
-                fbo.use()
-                fbo.clear()
-                edge_fbos.append(fbo)
+            edges.reserve(end)
             for layer in range(peeled, end):
-                # an empty layer skips the rest on the GPU, without the CPU waiting for it
+                self._clear(clears, layer)
+                # an empty layer skips its draws on the GPU, without the CPU waiting for it;
+                # its cleared depth then gives an empty edge map
                 guard = self._query(layer - 1).crender if layer else contextlib.nullcontext()
                 with guard:
-                    ctx.enable(ctx.DEPTH_TEST)
-                    self._peel(mesh, geo, fbos, layer, self._query(layer))
-                    ctx.disable(ctx.DEPTH_TEST)
-                    edge_prog["u_depth"].value = layer % 2
-                    target = edge_fbos[layer // 4]
-                    mask = tuple(c == layer % 4 for c in range(4))
-                    if dilate is not None:
-                        scratch_fbo.use()
-                        edge_vao.render(vertices=3)
-                        scratch.use(4)
-                    target.color_mask = mask
-                    target.use()
-                    (edge_vao if dilate is None else dilate_vao).render(vertices=3)
+                    self._draw(mesh, geo, fbos, layer, self._query(layer))
+                draws += 3 + edges.run(layer)
             peeled = end
             if max_layers is not None or self._query(peeled - 1).samples == 0:
                 break
@@ -341,55 +369,85 @@ class Renderer:
         stage("peel_edges")
         layers = self._layer_count(counts, min_fraction)
 
+        draws += edges.finish(layers)
         out = self.pool.texture("out.color", (w, h), "rgba8")
-        out_fbo = self.pool.framebuffer((out,))
-        out_fbo.use()
-        self._paper(style, out_fbo)
-        self._compose(style, edge_fbos, layers, supersample)
+        draws += self._compose(style, edges, layers, supersample, out)
         stage("compose")
-        raw = np.frombuffer(out_fbo.read(components=4), np.uint8).reshape(h, w, 4)
+        ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
+        raw = np.frombuffer(out.read(), np.uint8).reshape(h, w, 4)
         image = _straight_alpha(raw[::-1]) if style.paper is None else raw[::-1].copy()
         stage("read")
         ms = (time.perf_counter() - t0) * 1e3
-        draws = len(counts) * (2 if dilate is None else 3) + (layers + 7) // 8 + 1
         return Frame(image, layers, counts, camera, ms, draws, stages)
 
-    def _paper(self, style: Style, fbo) -> None:
+    def _edge_stage(self, camera, ss, crease_angle, params, line_width, supersample):
+        if self.use_compute:
+            prog = self.compute(EDGES.compute)
+        else:
+            prog = self.fullscreen(EDGES.shader)[0]
+        prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
+        half = math.radians(crease_angle)
+        prog["u_normal_cos"].value = (math.cos(0.5 * half), math.cos(0.8 * half))
+        prog["u_pixel_angle"].value = camera.pixel_angle(ss[1])
+        for name, value in params.items():
+            prog[name].value = value
+        prog["u_normal"].value = 3
+        prog["u_ids"].value = 4
+        radius = (line_width - 1.0) * supersample / 2
+        if self.use_compute:
+            return _ComputeEdges(self, prog, ss, radius)
+        return _FragmentEdges(self, prog, ss, radius)
+
+    def _compose(self, style: Style, edges, layers: int, supersample: int, out) -> int:
+        """Paper, then the edge layers back to front onto ``out``; returns the passes run."""
+        inks = style.layer_inks(max(layers, 1))
+        groups = list(range(((max(layers, 1) - 1) // 8) * 8, -1, -8))
+        if self.use_compute:
+            prog = self.compute("blueprint.compose:glsl/compose.comp")
+            _set_paper(prog, style)
+            prog["u_supersample"].value = supersample
+            prog["u_threshold"].value = style.threshold
+            prog["u_has_paper"].value = style.paper is not None
+            prog["u_edges"].value = 5
+            out.bind_to_image(0, read=True, write=True)
+            for first in groups:
+                count = min(8, layers - first) if layers else 0
+                edges.array(first).use(5)
+                prog["u_first"].value = first == groups[0]
+                prog["u_layers"].value = count
+                prog["u_ink"].write(_inks(inks, first, count))
+                prog.run(*_groups(out.size))
+                self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
+            return len(groups)
         ctx = self.ctx
+        fbo = self.pool.framebuffer((out,))
+        fbo.use()
         ctx.disable(ctx.BLEND)
         if style.paper is None:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
-            return
-        prog, vao = self.fullscreen("blueprint.compose:glsl/paper.frag")
-        prog["u_paper"].value = style.paper
-        prog["u_grid_color"].value = style.grid_color
-        prog["u_grid"].value = float(style.grid)
-        vao.render(vertices=3)
-
-    def _compose(self, style: Style, edge_fbos: list, layers: int, supersample: int) -> None:
+        else:
+            prog, vao = self.fullscreen("blueprint.compose:glsl/paper.frag")
+            _set_paper(prog, style)
+            vao.render(vertices=3)
         if layers == 0:
-            return
-        ctx = self.ctx
+            return 1
         prog, vao = self.fullscreen("blueprint.compose:glsl/compose.frag")
         prog["u_supersample"].value = supersample
         prog["u_threshold"].value = style.threshold
-        prog["u_edges0"].value = 4
-        prog["u_edges1"].value = 5
-        inks = style.layer_inks(layers)
+        prog["u_edges0"].value = 5
+        prog["u_edges1"].value = 6
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-        for first in range(((layers - 1) // 8) * 8, -1, -8):
+        for first in groups:
             count = min(8, layers - first)
-            g = first // 4
-            edge_fbos[g].color_attachments[0].use(4)
+            edges.texture(first).use(5)
             if count > 4:
-                edge_fbos[g + 1].color_attachments[0].use(5)
-            ink = np.zeros((8, 4), np.float32)
-            ink[:count] = inks[first : first + count]
-            prog["u_ink"].write(ink.tobytes())
+                edges.texture(first + 4).use(6)
+            prog["u_ink"].write(_inks(inks, first, count))
             prog["u_layers"].value = count
             vao.render(vertices=3)
         ctx.disable(ctx.BLEND)
+        return 1 + len(groups)
 
     # -- layers for other tools ----------------------------------------------------------------
     def peel(
@@ -413,45 +471,139 @@ class Renderer:
         camera = camera or self.camera_for(model, (w, h), view)
         ctx = self.ctx
         mesh = self.mesh(model, crease_angle)
-        ctx.enable_only(ctx.DEPTH_TEST)
+        ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
-        depth_tex, normal, ids, fbos = self._gbuffer((w, h))
-        geo = self._setup_geometry(camera, (w, h), depth_tex)
+        depth_tex, normal, ids, fbos, clears = self._gbuffer((w, h))
+        geo = self._setup_geometry(camera, mesh, depth_tex)
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
         depth, normals, tri, part, counts = [], [], [], [], []
         for i in range(limit):
             query = self._query(i)
-            self._peel(mesh, geo, fbos, i, query)
+            self._clear(clears, i)
+            self._draw(mesh, geo, fbos, i, query)
             counts.append(query.samples)
             if self._layer_count(counts, min_fraction) <= i:
                 break
-            z = np.frombuffer(depth_tex[i % 2].read(), np.float32).reshape(h, w)
-            n = np.frombuffer(normal.read(), np.float16).reshape(h, w, 4)
-            ij = np.frombuffer(ids.read(), np.int32).reshape(h, w, 2)
-            depth.append(np.where(z > 0, z, 1.0)[::-1])
-            normals.append(n[::-1, :, :3].astype(np.float32))
-            tri.append(ij[::-1, :, 0] - 1)
-            part.append(ij[::-1, :, 1] - 1)
-        if not depth:
-            empty = np.zeros((0, h, w), np.float32)
-            return Layers(
-                empty,
+            z = np.frombuffer(depth_tex[i % 2].read(), np.float32).reshape(h, w)[::-1]
+            n = np.frombuffer(normal.read(), np.float16).reshape(h, w, 4)[::-1, :, :3]
+            ij = np.frombuffer(ids.read(), np.int32).reshape(h, w, 2)[::-1]
+            covered = z < 1.0
+            depth.append(np.where(covered, z, 1.0).astype(np.float32))
+            normals.append(np.where(covered[..., None], n.astype(np.float32), 0.0))
+            tri.append(np.where(covered, ij[..., 0] - 1, -1).astype(np.int32))
+            part.append(np.where(covered, ij[..., 1] - 1, -1).astype(np.int32))
+        stack = (
+            (np.stack(a) for a in (depth, normals, tri, part))
+            if depth
+            else (
+                np.zeros((0, h, w), np.float32),
                 np.zeros((0, h, w, 3), np.float32),
-                empty.astype(np.int32),
-                empty.astype(np.int32),
-                camera.view_matrix(),
-                camera.projection_matrix(),
-                camera,
+                np.zeros((0, h, w), np.int32),
+                np.zeros((0, h, w), np.int32),
             )
-        return Layers(
-            np.stack(depth),
-            np.stack(normals),
-            np.stack(tri),
-            np.stack(part),
-            camera.view_matrix(),
-            camera.projection_matrix(),
-            camera,
         )
+        return Layers(*stack, camera.view_matrix(), camera.projection_matrix(), camera)
+
+
+class _ComputeEdges:
+    """Edge maps as slices of r8 texture arrays, written by compute shaders (GL 4.3)."""
+
+    def __init__(self, renderer: Renderer, prog, ss, radius: float) -> None:
+        self.r, self.prog, self.ss, self.radius = renderer, prog, ss, radius
+        self.arrays: list = []
+        self.dilated: list = []
+
+    def reserve(self, layers: int) -> None:
+        while len(self.arrays) * SLICES < layers:
+            k = len(self.arrays)
+            self.arrays.append(self.r.pool.texture(f"edges.{k}", self.ss, "r8", SLICES))
+
+    def run(self, layer: int) -> int:
+        self.arrays[layer // SLICES].bind_to_image(1, read=False, write=True)
+        self.prog["u_depth"].value = layer % 2
+        self.prog["u_layer"].value = layer % SLICES
+        self.prog.run(*_groups(self.ss))
+        return 1
+
+    def finish(self, layers: int) -> int:
+        ctx = self.r.ctx
+        ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
+        if self.radius <= 0 or layers == 0:
+            return 0
+        prog = self.r.compute(DILATE.compute)
+        prog["u_radius"].value = self.radius
+        prog["u_source"].value = 5
+        for k in range((layers + SLICES - 1) // SLICES):
+            target = self.r.pool.texture(f"edges.dilated.{k}", self.ss, "r8", SLICES)
+            self.arrays[k].use(5)
+            target.bind_to_image(1, read=False, write=True)
+            prog.run(*_groups(self.ss), SLICES)
+            self.dilated.append(target)
+        ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT)
+        return len(self.dilated)
+
+    def array(self, first_layer: int):
+        source = self.dilated or self.arrays
+        return source[first_layer // SLICES]
+
+
+class _FragmentEdges:
+    """Edge maps packed four layers to an RGBA8 texture, one channel per layer (GL 3.3)."""
+
+    def __init__(self, renderer: Renderer, prog, ss, radius: float) -> None:
+        self.r, self.prog, self.ss, self.radius = renderer, prog, ss, radius
+        self.fbos: list = []
+        self.vao = renderer.fullscreen(EDGES.shader)[1]
+        if radius > 0:
+            self.dilate, self.dilate_vao = renderer.fullscreen(DILATE.shader)
+            self.dilate["u_radius"].value = radius
+            self.dilate["u_source"].value = 6
+            self.scratch = renderer.pool.texture("edges.scratch", ss, "r8")
+            self.scratch_fbo = renderer.pool.framebuffer((self.scratch,))
+
+    def reserve(self, layers: int) -> None:
+        while len(self.fbos) * 4 < layers:
+            tex = self.r.pool.texture(f"edges.rgba.{len(self.fbos)}", self.ss, "rgba8")
+            fbo = self.r.pool.framebuffer((tex,))
+            fbo.color_mask = (True, True, True, True)
+            fbo.use()
+            fbo.clear()
+            self.fbos.append(fbo)
+
+    def run(self, layer: int) -> int:
+        self.prog["u_depth"].value = layer % 2
+        target = self.fbos[layer // 4]
+        mask = tuple(c == layer % 4 for c in range(4))
+        if self.radius > 0:
+            self.scratch_fbo.use()
+            self.vao.render(vertices=3)
+            self.scratch.use(6)
+        target.color_mask = mask
+        target.use()
+        (self.vao if self.radius <= 0 else self.dilate_vao).render(vertices=3)
+        return 1 if self.radius <= 0 else 2
+
+    def finish(self, layers: int) -> int:
+        return 0
+
+    def texture(self, first_layer: int):
+        return self.fbos[first_layer // 4].color_attachments[0]
+
+
+def _groups(size) -> tuple[int, int]:
+    return (size[0] + 7) // 8, (size[1] + 7) // 8
+
+
+def _inks(inks: np.ndarray, first: int, count: int) -> bytes:
+    block = np.zeros((8, 4), np.float32)
+    block[:count] = inks[first : first + count]
+    return block.tobytes()
+
+
+def _set_paper(prog, style: Style) -> None:
+    prog["u_paper"].value = style.paper or (0.0, 0.0, 0.0, 0.0)
+    prog["u_grid_color"].value = style.grid_color
+    prog["u_grid"].value = float(style.grid)
 
 
 def _check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:

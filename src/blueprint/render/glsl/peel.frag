@@ -1,8 +1,10 @@
 // Depth peeling: layer 0 is an ordinary depth test; layer i keeps only fragments behind layer
 // i-1 by more than u_peel_eps in eye depth, so coplanar and duplicate faces peel as one surface.
+// Coverage lives in the depth attachment (1.0: nothing), so only depth is cleared per layer.
 #include "depth.glsl"
 
 uniform sampler2D u_prev_depth;
+uniform isampler2D u_face_part;  // part index of face i at (i % 4096, i / 4096)
 uniform bool u_peel;
 uniform float u_peel_eps;
 uniform bool u_ortho;
@@ -10,17 +12,15 @@ uniform float u_back_bias;
 
 in vec3 v_eye;
 in vec3 v_normal;
-flat in ivec2 v_ids;
 
-layout(location = 0) out float o_depth;   // window depth, 0 where nothing was drawn
-layout(location = 1) out vec4 o_normal;   // eye-space normal facing the viewer, w = 1
-layout(location = 2) out ivec2 o_ids;     // (face + 1, part + 1), 0 where nothing was drawn
+layout(location = 0) out vec4 o_normal;   // eye-space normal facing the viewer
+layout(location = 1) out ivec2 o_ids;     // (face + 1, part + 1)
 
 void main() {
     float z = gl_FragCoord.z;
     if (u_peel) {
         float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;
-        if (prev <= 0.0 || eye_depth(z) <= eye_depth(prev) + u_peel_eps) {
+        if (prev >= 1.0 || eye_depth(z) <= eye_depth(prev) + u_peel_eps) {
             discard;
         }
     }
@@ -30,12 +30,11 @@ void main() {
     if (dot(n, to_eye) < 0.0) {
         n = -n;
     }
-    // Touching solids have coincident faces of opposite winding (the top of one, the bottom of
-    // the other): a tiny push of back faces makes the front face win every pixel of the tie,
-    // instead of whichever rounds nearer (speckle). Far below u_peel_eps, so both still peel
-    // as one surface.
+#if BACK_BIAS_IN_SHADER
+    // the single-draw form of the renderer's back-face offset (see BACK_OFFSET there)
     gl_FragDepth = gl_FrontFacing ? z : min(z + u_back_bias, 1.0);
-    o_depth = max(z, 1e-7);
+#endif
+    int face = gl_PrimitiveID;
     o_normal = vec4(n, 1.0);
-    o_ids = v_ids + 1;
+    o_ids = ivec2(face + 1, texelFetch(u_face_part, ivec2(face & 4095, face >> 12), 0).r + 1);
 }

@@ -1,0 +1,70 @@
+"""Time the renderer's alternative code paths on this machine, so the defaults are measured.
+
+Image-space passes as compute or fragment shaders; the back-face tie-break as two culled draws
+or one draw writing depth. Prints one JSON object per model, size and variant.
+
+    python benchmarks/variants.py MODEL... [--size 512 512] [--supersample 1] [--frames 30]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+from pathlib import Path
+
+from blueprint import Renderer, load_model
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("models", nargs="+")
+    parser.add_argument("--size", nargs=2, type=int, action="append")
+    parser.add_argument("--supersample", type=int, action="append")
+    parser.add_argument("--max-layers", type=int, default=5)
+    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--warmup", type=int, default=5)
+    args = parser.parse_args()
+    with Renderer() as r:
+        variants = [(c, b) for c in (True, False) for b in (True, False)]
+        if r.ctx.version_code < 430:
+            variants = [(False, b) for b in (True, False)]
+        for path in args.models:
+            model = load_model(path)
+            for size in [tuple(s) for s in (args.size or [[512, 512]])]:
+                camera = r.camera_for(model, size)
+                for ss in args.supersample or [1, 2]:
+                    for use_compute, in_shader in variants:
+                        r.use_compute, r.back_bias_in_shader = use_compute, in_shader
+                        options = dict(size=size, supersample=ss, max_layers=args.max_layers)
+                        for _ in range(args.warmup):
+                            r.render(model, camera, **options)
+                        times = [r.render(model, camera, **options).ms for _ in range(args.frames)]
+                        profiled = r.render(model, camera, profile=True, **options)
+                        ms = statistics.median(times)
+                        print(
+                            json.dumps(
+                                {
+                                    "renderer": r.info["renderer"],
+                                    "model": Path(path).name,
+                                    "triangles": model.triangle_count,
+                                    "width": size[0],
+                                    "height": size[1],
+                                    "supersample": ss,
+                                    "max_layers": args.max_layers,
+                                    "image_passes": "compute" if use_compute else "fragment",
+                                    "tie_break": "one draw, shader depth"
+                                    if in_shader
+                                    else "two culled draws",
+                                    "ms": round(ms, 3),
+                                    "fps": round(1000 / ms, 1),
+                                    "stages": {k: round(v, 3) for k, v in profiled.stages.items()},
+                                }
+                            ),
+                            flush=True,
+                        )
+                r.forget(model)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,42 @@
+// Depth-sprite composition of the edge array (up to 8 slices a dispatch), back to front, each
+// layer weighted by its ink's opacity; the box filter over the supersampled edge maps gives
+// anti-aliased lines. The first (back-most) dispatch starts from the paper, later ones blend
+// over what the earlier ones wrote. Premultiplied alpha throughout.
+layout(local_size_x = 8, local_size_y = 8) in;
+#include "paper.glsl"
+
+uniform sampler2DArray u_edges;
+layout(rgba8, binding = 0) uniform image2D u_out;
+uniform int u_layers;
+uniform int u_supersample;
+uniform bool u_threshold;   // wire-frame variant: binary edges
+uniform bool u_first;
+uniform bool u_has_paper;
+uniform vec4 u_ink[8];      // straight colour and opacity per layer
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThan(p, imageSize(u_out) - 1))) {
+        return;
+    }
+    vec4 color;
+    if (u_first) {
+        color = u_has_paper ? paper_color(vec2(p) + 0.5) : vec4(0.0);
+    } else {
+        color = imageLoad(u_out, p);
+    }
+    ivec2 base = p * u_supersample;
+    float norm = 1.0 / float(u_supersample * u_supersample);
+    for (int k = u_layers - 1; k >= 0; --k) {
+        float coverage = 0.0;
+        for (int y = 0; y < u_supersample; ++y) {
+            for (int x = 0; x < u_supersample; ++x) {
+                float e = texelFetch(u_edges, ivec3(base + ivec2(x, y), k), 0).r;
+                coverage += u_threshold ? step(0.5, e) : e;
+            }
+        }
+        float a = clamp(coverage * norm, 0.0, 1.0) * u_ink[k].a;
+        color = vec4(u_ink[k].rgb * a, a) + color * (1.0 - a);
+    }
+    imageStore(u_out, p, color);
+}

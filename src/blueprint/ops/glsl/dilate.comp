@@ -1,0 +1,24 @@
+// Grey-scale dilation by a disc, every slice of an edge array in one dispatch.
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+uniform sampler2DArray u_source;
+layout(r8, binding = 1) uniform writeonly image2DArray u_out;  // set by binding: moderngl cannot set image-array uniforms
+uniform float u_radius;
+
+void main() {
+    ivec3 p = ivec3(gl_GlobalInvocationID);
+    ivec2 last = textureSize(u_source, 0).xy - 1;
+    if (any(greaterThan(p.xy, last))) {
+        return;
+    }
+    int r = int(ceil(u_radius));
+    float v = 0.0;
+    for (int dy = -r; dy <= r; ++dy) {
+        for (int dx = -r; dx <= r; ++dx) {
+            float weight = clamp(u_radius + 1.0 - length(vec2(dx, dy)), 0.0, 1.0);
+            ivec2 q = clamp(p.xy + ivec2(dx, dy), ivec2(0), last);
+            v = max(v, weight * texelFetch(u_source, ivec3(q, p.z), 0).r);
+        }
+    }
+    imageStore(u_out, p, vec4(v));
+}

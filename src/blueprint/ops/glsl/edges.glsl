@@ -1,0 +1,57 @@
+// Edge intensity of one depth layer at a pixel: discontinuities of coverage (borders), part ID
+// (part boundaries), normal (creases) and depth (silhouettes). Each discontinuity between two
+// neighbouring pixels marks both of them, so lines are centred on the true boundary.
+#include "depth.glsl"
+
+uniform sampler2D u_depth;       // the layer's depth attachment, 1.0 where nothing was drawn
+uniform sampler2D u_normal;
+uniform isampler2D u_ids;
+uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos where they are full)
+uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
+uniform float u_pixel_angle;     // pixel footprint per unit depth (perspective) or per pixel (ortho)
+uniform bool u_part_edges;
+
+const ivec2 OFFSETS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
+
+float crease(vec3 a, vec3 b) {
+    return 1.0 - smoothstep(u_normal_cos.y, u_normal_cos.x, dot(a, b));
+}
+
+float edge_value(ivec2 p) {
+    ivec2 last = textureSize(u_depth, 0) - 1;
+    float zc = texelFetch(u_depth, p, 0).r;
+    float z[4];
+    bool covered[4];
+    bool any_covered = false;
+    for (int i = 0; i < 4; ++i) {
+        // outside the image counts as more of the same, so the frame draws no line
+        ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
+        z[i] = texelFetch(u_depth, q, 0).r;
+        covered[i] = z[i] < 1.0;
+        any_covered = any_covered || covered[i];
+    }
+    if (zc >= 1.0) {
+        return any_covered ? 1.0 : 0.0;
+    }
+    vec3 nc = texelFetch(u_normal, p, 0).xyz;
+    int part = texelFetch(u_ids, p, 0).y;
+    float e = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        if (!covered[i]) {
+            return 1.0;
+        }
+        ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
+        if (u_part_edges && texelFetch(u_ids, q, 0).y != part) {
+            return 1.0;
+        }
+        e = max(e, crease(nc, texelFetch(u_normal, q, 0).xyz));
+    }
+    // Window depth is affine in screen space on any plane, perspective or not, so its second
+    // difference is zero on planes and large across a jump; measured in eye-depth units and
+    // pixel footprints it means the same at every distance and zoom.
+    float dc = eye_depth(zc);
+    float footprint = u_depth_range.z > 0.5 ? u_pixel_angle : u_pixel_angle * dc;
+    float scale = eye_depth_slope(dc) / (footprint * u_depth_threshold);
+    float jump = max(abs(z[0] + z[1] - 2.0 * zc), abs(z[2] + z[3] - 2.0 * zc)) * scale;
+    return max(e, smoothstep(1.0, 2.0, jump));
+}
