@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 
 import numpy as np
 
-from blueprint.render.renderer import Frame, Layers, Renderer
+from blueprint.errors import InputError
+from blueprint.render.renderer import Frame, Layers, Renderer, check_size
 from blueprint.scene.camera import Camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 
 _renderer: Renderer | None = None
+
+#: The view name of a drawing sheet: top, front and right orthographic views plus an iso view.
+PLAN = "plan"
 
 
 def default_renderer() -> Renderer:
@@ -59,11 +64,46 @@ def render_frame(
     model = _as_model(model, up)
     renderer = renderer or default_renderer()
     size = tuple(int(v) for v in size)
-    from blueprint.render.renderer import check_size
-
     check_size(size, int(options.get("supersample", 2)), renderer.max_texture)
+    if view == PLAN and camera is None:
+        return _plan_frame(model, size, fov, renderer, options)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
     return renderer.render(model, cam, size=size, **options)
+
+
+def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Renderer, options) -> Frame:
+    """A drawing sheet in third-angle projection: top view above the front view, right view
+    beside it, all orthographic at one scale, and an iso view in the free corner."""
+    w, h = size[0] // 2, size[1] // 2
+    if w < 1 or h < 1:
+        raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
+    fitted = {
+        v: Camera.fit(model.positions, v, ortho=True, aspect=w / h, up=model.up, margin=0.08)
+        for v in ("top", "front", "right")
+    }
+    scale = max(c.height for c in fitted.values())
+    cameras = {v: replace(c, height=scale) for v, c in fitted.items()}
+    cameras["iso"] = Camera.fit(model.positions, "iso", fov=fov, aspect=w / h, up=model.up, margin=0.08)
+    cells = {"top": (0, 0), "iso": (1, 0), "front": (0, 1), "right": (1, 1)}
+    image = np.zeros((size[1], size[0], 4), np.uint8)
+    frames = {}
+    for name, (col, row) in cells.items():
+        frames[name] = renderer.render(model, cameras[name], size=(w, h), **options)
+        image[row * h : (row + 1) * h, col * w : (col + 1) * w] = frames[name].image
+    if size[0] % 2 or size[1] % 2:
+        # odd sizes leave a last row or column: continue the paper there
+        image[2 * h :, :] = image[2 * h - 1 : 2 * h, :]
+        image[:, 2 * w :] = image[:, 2 * w - 1 : 2 * w]
+    front = frames["front"]
+    return Frame(
+        image=image,
+        layers=max(f.layers for f in frames.values()),
+        layer_pixels=front.layer_pixels,
+        camera=cameras["front"],
+        ms=sum(f.ms for f in frames.values()),
+        draws=sum(f.draws for f in frames.values()),
+        stages={},
+    )
 
 
 def render(model: Model | str | os.PathLike, **kwargs) -> np.ndarray:
@@ -76,7 +116,8 @@ def render(model: Model | str | os.PathLike, **kwargs) -> np.ndarray:
     size : (int, int)
         Width and height in pixels (default 1024 x 1024).
     view : str
-        ``iso`` (default), ``front``, ``back``, ``left``, ``right``, ``top``, ``bottom``.
+        ``iso`` (default), ``front``, ``back``, ``left``, ``right``, ``top``, ``bottom``, or
+        ``plan``: a sheet of orthographic top, front and right views at one scale plus iso.
     azimuth, elevation, fov, ortho, up, camera
         Camera overrides (degrees; orthographic projection; model up axis; a ready Camera).
     style : str or Style
@@ -110,8 +151,6 @@ def peel(
     model = _as_model(model, up)
     renderer = renderer or default_renderer()
     size = tuple(int(v) for v in size)
-    from blueprint.render.renderer import check_size
-
     check_size(size, 1, renderer.max_texture)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
     return renderer.peel(model, cam, size=size, **options)

@@ -39,7 +39,12 @@ def camera_options(func):
             metavar="W H",
             help="Image width and height in pixels.",
         ),
-        click.option("--view", default="iso", show_default=True, help=f"Named view: {', '.join(VIEWS)}."),
+        click.option(
+            "--view",
+            default="iso",
+            show_default=True,
+            help=f"Named view: {', '.join(VIEWS)}; render also takes plan (a sheet of top, front, right).",
+        ),
         click.option(
             "--azimuth", type=float, default=None, help="Degrees from the front, towards the right."
         ),
@@ -64,9 +69,10 @@ def camera_options(func):
     return func
 
 
-def _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, default_size):
-    if view not in VIEWS:
-        raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
+def _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, default_size, plan=False):
+    names = [*VIEWS, "plan"] if plan else list(VIEWS)
+    if view not in names:
+        raise InputError(f"unknown view {view!r} (choose {', '.join(names)})")
     return dict(
         size=tuple(size) if size else default_size,
         view=view,
@@ -134,7 +140,7 @@ def render(
 
     output = check_output(output, (".png",))
     chosen = get_style(style, grid)
-    kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024))
+    kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
     loaded = load_model(model, up=kwargs.pop("up"))
     frame = render_frame(
         loaded,
