@@ -83,12 +83,19 @@ class TargetPool:
         old = self._textures.pop(name)[1]
         for key, (fbo, colors, depth) in list(self._framebuffers.items()):
             if any(c is old for c in colors) or depth is old:
+                self._unbind(fbo)
                 fbo.release()
                 del self._framebuffers[key]
         old.release()
 
+    def _unbind(self, fbo) -> None:
+        # moderngl re-binds its idea of the current framebuffer: never leave it a deleted one
+        if self.ctx.fbo is fbo:
+            self.ctx.detect_framebuffer(0).use()
+
     def release(self) -> None:
         for fbo, _, _ in self._framebuffers.values():
+            self._unbind(fbo)
             fbo.release()
         for _, tex in self._textures.values():
             tex.release()
