@@ -12,6 +12,7 @@ from blueprint.render.renderer import Frame, Layers, Renderer, check_size
 from blueprint.scene.camera import Camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
+from blueprint.scene.parts import select_parts, select_parts_like
 
 _renderer: Renderer | None = None
 
@@ -65,10 +66,25 @@ def render_frame(
     renderer = renderer or default_renderer()
     size = tuple(int(v) for v in size)
     check_size(size, int(options.get("supersample", 2)), renderer.max_texture)
+    if options.get("highlight") is not None:
+        options["highlight"] = designated_parts(model, options["highlight"])
     if view == PLAN and camera is None:
         return _plan_frame(model, size, fov, renderer, options)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
     return renderer.render(model, cam, size=size, **options)
+
+
+def designated_parts(model: Model, spec) -> np.ndarray:
+    """(P,) bool from a part spec: name globs and indices (a comma-separated string or a
+    sequence), a second Model in the same coordinates, or already a bool array."""
+    if isinstance(spec, Model):
+        return select_parts_like(model, spec)
+    array = np.asarray(spec) if not isinstance(spec, str) else None
+    if array is not None and array.dtype == bool:
+        if array.shape != (len(model.part_names),):
+            raise InputError(f"highlight needs one flag per part ({len(model.part_names)})")
+        return array
+    return select_parts(model, spec)
 
 
 def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Renderer, options) -> Frame:
@@ -124,6 +140,11 @@ def render(model: Model | str | os.PathLike, **kwargs) -> np.ndarray:
         ``blueprint`` (default), ``paper``, ``transparent`` or ``wireframe``.
     max_layers, min_fraction, crease_angle, line_width, supersample, depth_threshold, part_edges
         See ``Renderer.render``.
+    highlight : str, sequence, Model or (P,) bool, optional
+        Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
+        second model lying on the parts to designate.
+    reveal : float, optional
+        Depth masking: peel only until this fraction of the highlighted parts is uncovered.
 
     Returns
     -------

@@ -6,10 +6,11 @@ import statistics
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
+from rich.console import Console
 from rich.progress import Progress
 
 from blueprint.api import default_renderer
-from blueprint.render.renderer import Renderer
+from blueprint.render.renderer import Renderer, check_size
 from blueprint.scene.loader import load_model
 
 
@@ -47,7 +48,11 @@ def run_bench(
 ) -> Iterator[dict]:
     renderer = default_renderer()
     jobs = [(m, s, n) for m in models for s in sizes for n in layer_options]
-    with Progress(transient=True) as progress:
+    for size in sizes:
+        check_size(size, supersample, renderer.max_texture)
+    console = Console(stderr=True)
+    # only a terminal gets the bar: in a pipe it would leave blank lines around errors
+    with Progress(transient=True, console=console, disable=not console.is_terminal) as progress:
         task = progress.add_task("benchmark", total=len(jobs))
         loaded: dict = {}
         for path, size, max_layers in jobs:

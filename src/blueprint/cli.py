@@ -114,6 +114,19 @@ def cli() -> None:
 @click.option("--crease-angle", type=float, default=30.0, show_default=True, help="Degrees.")
 @click.option("--line-width", type=float, default=1.0, show_default=True, help="Pixels.")
 @click.option("--supersample", type=int, default=2, show_default=True, help="Anti-aliasing factor (1-4).")
+@click.option("--highlight", default=None, help="Parts to outline: name globs or indices, comma-separated.")
+@click.option(
+    "--highlight-model",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Outline the parts that this second model file lies on.",
+)
+@click.option(
+    "--reveal",
+    type=float,
+    default=None,
+    help="Depth masking: peel until this fraction of the highlighted parts shows.",
+)
 def render(
     model,
     output,
@@ -131,6 +144,9 @@ def render(
     crease_angle,
     line_width,
     supersample,
+    highlight,
+    highlight_model,
+    reveal,
 ):
     """Draw the blueprint of MODEL into a PNG."""
     from blueprint.api import default_renderer, render_frame
@@ -141,7 +157,11 @@ def render(
     output = check_output(output, (".png",))
     chosen = get_style(style, grid)
     kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
-    loaded = load_model(model, up=kwargs.pop("up"))
+    up_axis = kwargs.pop("up")
+    loaded = load_model(model, up=up_axis)
+    if highlight and highlight_model:
+        raise InputError("give --highlight or --highlight-model, not both")
+    designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight
     frame = render_frame(
         loaded,
         style=chosen,
@@ -150,13 +170,16 @@ def render(
         crease_angle=crease_angle,
         line_width=line_width,
         supersample=supersample,
+        highlight=designated,
+        reveal=reveal,
         **kwargs,
     )
     save_png(output, frame.image)
     info = default_renderer().info
+    shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
         f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles, "
-        f"{frame.layers} layers, {frame.ms:.1f} ms on {info['renderer']}"
+        f"{frame.layers} layers{shown}, {frame.ms:.1f} ms on {info['renderer']}"
     )
 
 
@@ -241,8 +264,10 @@ def info(model, as_json):
     multiple=True,
     help="Layers at most; 0 for all; repeat for several (default 5 and 0).",
 )
-@click.option("--frames", type=int, default=20, show_default=True, help="Timed frames per configuration.")
-@click.option("--warmup", type=int, default=3, show_default=True)
+@click.option(
+    "--frames", type=click.IntRange(1), default=20, show_default=True, help="Timed frames per configuration."
+)
+@click.option("--warmup", type=click.IntRange(0), default=3, show_default=True)
 @click.option("--supersample", type=int, default=2, show_default=True)
 @click.option("--style", default="blueprint", show_default=True)
 def bench(models, sizes, layer_options, frames, warmup, supersample, style):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -31,6 +32,7 @@ class Style:
     behind ``k`` surfaces) in ``hidden_ink`` at ``hidden_opacity * fade ** (k - 1)``.
     ``paper`` is ``None`` for a transparent background; ``grid`` is the minor grid spacing in
     pixels (0: none). ``threshold`` draws binary edges (the paper's wire-frame variant).
+    Highlighted parts are outlined in ``highlight`` ink, ``highlight_width`` times as wide.
     """
 
     name: str
@@ -42,13 +44,19 @@ class Style:
     grid: float = 0.0
     grid_color: RGBA = (1.0, 1.0, 1.0, 0.12)
     threshold: bool = False
+    highlight: RGBA = (1.0, 0.55, 0.1, 1.0)
+    highlight_width: float = 2.0
 
     def __post_init__(self) -> None:
         for label, value in (("hidden_opacity", self.hidden_opacity), ("fade", self.fade)):
             if not 0.0 <= value <= 1.0:
                 raise InputError(f"style {self.name}: {label} must be in [0, 1], got {value}")
-        if self.grid < 0:
+        if not math.isfinite(self.grid) or self.grid < 0:
             raise InputError(f"style {self.name}: grid spacing must be >= 0, got {self.grid}")
+        if not 1.0 <= self.highlight_width <= 8.0:
+            raise InputError(
+                f"style {self.name}: highlight_width must be in [1, 8], got {self.highlight_width}"
+            )
 
     def layer_inks(self, count: int) -> np.ndarray:
         """(count, 4) float32: colour and opacity for each layer, front first."""

@@ -10,6 +10,9 @@ from blueprint.errors import ShaderError
 
 VERSION = "#version 330 core"
 COMPUTE_VERSION = "#version 430 core"
+# Line numbers carry the file: line n of file k is numbered k * LINE_BASE + n, since some
+# compilers (Mesa, for undeclared names) report source-string 0 whatever #line said.
+LINE_BASE = 100_000
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 # Mesa: "0:12(3): error: ..."; NVIDIA: "0(12) : error ..."
 _LOCATION = re.compile(r"\b(\d+)(?::(\d+)\(\d+\)|\((\d+)\))")
@@ -36,8 +39,8 @@ def preprocess(
 ) -> tuple[str, list[str]]:
     """Expand includes and prepend the version and defines.
 
-    Returns the source and the list of file names indexed by the GLSL source-string number
-    used in ``#line`` directives, so compiler messages can be mapped back to files.
+    Returns the source and the list of file names, indexed as the ``#line`` directives number
+    them (see ``LINE_BASE``), so compiler messages can be mapped back to files.
     """
     files: list[str] = []
 
@@ -47,7 +50,7 @@ def preprocess(
         package, name = _resolve(ref)
         index = len(files)
         files.append(f"{package.replace('.', '/')}/{name}")
-        out = [f"#line 1 {index}"]
+        out = [f"#line {index * LINE_BASE + 1} {index}"]
         for number, line in enumerate(_read(package, name).splitlines(), start=1):
             match = _INCLUDE.match(line)
             if match:
@@ -57,7 +60,7 @@ def preprocess(
                     local = resources.files(package).joinpath(folder + target)
                     target = f"{package}:{folder}{target}" if local.is_file() else target
                 out += expand(target, (*stack, ref))
-                out.append(f"#line {number + 1} {index}")
+                out.append(f"#line {index * LINE_BASE + number + 1} {index}")
             else:
                 out.append(line)
         return out
@@ -74,8 +77,7 @@ def _literal(value: object) -> str:
 
 def _explain(message: str, files: list[str]) -> str:
     def name(match: re.Match) -> str:
-        index = int(match.group(1))
-        line = match.group(2) or match.group(3)
+        index, line = divmod(int(match.group(2) or match.group(3)), LINE_BASE)
         return f"{files[index]}:{line}" if index < len(files) else match.group(0)
 
     lines = [ln.strip() for ln in message.strip().splitlines() if ln.strip()]

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
+
+from blueprint.errors import InputError
 
 # (components, dtype) per format name; the G-buffer and the ops agree through these names
 FORMATS: dict[str, tuple[int, str]] = {
@@ -40,15 +43,16 @@ class TargetPool:
         held = self._textures.get(name)
         if held is not None and held[0] == key:
             return held[1]
-        if held is not None:
-            self._drop(name)
         if fmt not in FORMATS:
             raise ValueError(f"unknown target format {fmt!r} (choose {', '.join(FORMATS)})")
+        if held is not None:
+            self._drop(name)
         components, dtype = FORMATS[fmt]
-        if layers:
-            tex = self.ctx.texture_array((*size, layers), components, dtype=dtype)
-        else:
-            tex = self.ctx.texture(tuple(size), components, dtype=dtype)
+        with _allocating(size):
+            if layers:
+                tex = self.ctx.texture_array((*size, layers), components, dtype=dtype)
+            else:
+                tex = self.ctx.texture(tuple(size), components, dtype=dtype)
         tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
         tex.repeat_x = tex.repeat_y = False
         self._textures[name] = (key, tex)
@@ -62,7 +66,8 @@ class TargetPool:
             return held[1]
         if held is not None:
             self._drop(name)
-        tex = self.ctx.depth_texture(tuple(size))
+        with _allocating(size):
+            tex = self.ctx.depth_texture(tuple(size))
         tex.compare_func = ""
         tex.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
         tex.repeat_x = tex.repeat_y = False
@@ -74,7 +79,9 @@ class TargetPool:
         key = (tuple(id(c) for c in colors), id(depth) if depth is not None else None)
         fbo = self._framebuffers.get(key)
         if fbo is None:
-            fbo = self.ctx.framebuffer(color_attachments=list(colors), depth_attachment=depth)
+            size = (colors[0] if colors else depth).size
+            with _allocating(size):
+                fbo = self.ctx.framebuffer(color_attachments=list(colors), depth_attachment=depth)
             self._framebuffers[key] = (fbo, colors, depth)
             return fbo
         return fbo[0]
@@ -101,3 +108,18 @@ class TargetPool:
             tex.release()
         self._framebuffers.clear()
         self._textures.clear()
+
+
+@contextlib.contextmanager
+def _allocating(size):
+    """Turn a driver's refusal to allocate (out of memory, incomplete framebuffer) into a
+    user error naming the size."""
+    try:
+        yield
+    except (MemoryError, Exception) as exc:
+        if isinstance(exc, InputError | ValueError):
+            raise
+        w, h = size[0], size[1]
+        raise InputError(
+            f"size {w}x{h}: its render targets need more memory than the GPU has (try a smaller size)"
+        ) from None

@@ -35,6 +35,8 @@ BACK_OFFSET = 16.0
 PART_TABLE_WIDTH = 4096
 # Edge maps are kept in texture arrays of this many slices (compute path).
 SLICES = 8
+MASK_UNIT = 7
+MASK_FLAGS_UNIT = 8
 
 
 @dataclass
@@ -53,6 +55,7 @@ class Frame:
     ms: float
     draws: int
     stages: dict[str, float] = field(default_factory=dict)
+    revealed: float | None = None
 
 
 @dataclass
@@ -80,7 +83,8 @@ class _Mesh:
     differ), every face in the index buffer in model order so ``gl_PrimitiveID`` is the face
     index (degenerate faces rasterise to nothing), and a table of each face's part."""
 
-    def __init__(self, ctx, program, model: Model, crease_angle: float) -> None:
+    def __init__(self, ctx, model: Model, crease_angle: float) -> None:
+        self.ctx = ctx
         faces = model.faces
         normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
         corner_vertex = faces.reshape(-1).astype(np.int64)
@@ -94,17 +98,24 @@ class _Mesh:
         data["n"] = normals[first]
         self.vbo = ctx.buffer(data.tobytes())
         self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
-        self.vao = ctx.vertex_array(
-            program, [(self.vbo, "3f 3f", "in_position", "in_normal")], index_buffer=self.ibo
-        )
+        self._vaos: dict[int, object] = {}
         rows = max(1, -(-len(faces) // PART_TABLE_WIDTH))
         table = np.zeros(rows * PART_TABLE_WIDTH, np.int32)
         table[: len(faces)] = model.face_part
+        self.part_count = len(model.part_names)
         self.parts = ctx.texture((PART_TABLE_WIDTH, rows), 1, table.tobytes(), dtype="i4")
         self.parts.filter = (ctx.NEAREST, ctx.NEAREST)
 
+    def vao(self, program):
+        """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
+        vao = self._vaos.get(program.glo)
+        if vao is None:
+            layout = [(self.vbo, "3f 3f", "in_position", "in_normal")]
+            vao = self._vaos[program.glo] = self.ctx.vertex_array(program, layout, index_buffer=self.ibo)
+        return vao
+
     def release(self) -> None:
-        for obj in (self.vao, self.vbo, self.ibo, self.parts):
+        for obj in (*self._vaos.values(), self.vbo, self.ibo, self.parts):
             obj.release()
 
 
@@ -191,12 +202,10 @@ class Renderer:
         return prog, vao
 
     def mesh(self, model: Model, crease_angle: float) -> _Mesh:
-        # a vertex array belongs to one program, and the program depends on the tie-break form
-        prog = self._geometry_program()
-        key = (id(model), float(crease_angle), prog.glo)
+        key = (id(model), float(crease_angle))
         held = self._meshes.get(key)
         if held is None or held[0] is not model:
-            held = self._meshes[key] = (model, _Mesh(self.ctx, prog, model, crease_angle))
+            held = self._meshes[key] = (model, _Mesh(self.ctx, model, crease_angle))
         return held[1]
 
     def forget(self, model: Model) -> None:
@@ -225,12 +234,14 @@ class Renderer:
         clears = tuple(pool.framebuffer((), d) for d in depth)
         return depth, normal, ids, fbos, clears
 
-    def _geometry_program(self):
-        defines = {"BACK_BIAS_IN_SHADER": self.back_bias_in_shader}
+    def _geometry_program(self, selected_only: bool = False):
+        defines = {"BACK_BIAS_IN_SHADER": self.back_bias_in_shader, "SELECTED_ONLY": selected_only}
         return self.program(PEEL_FRAG, GEOMETRY_VERT, defines)
 
-    def _setup_geometry(self, camera: Camera, mesh: _Mesh, depth_textures) -> object:
-        prog = self._geometry_program()
+    def _setup_geometry(
+        self, camera: Camera, mesh: _Mesh, depth_textures, selected_only: bool = False
+    ) -> object:
+        prog = self._geometry_program(selected_only)
         prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
         prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
@@ -258,16 +269,16 @@ class Renderer:
         if self.back_bias_in_shader:
             ctx.enable(ctx.DEPTH_TEST)
             with query:
-                mesh.vao.render()
+                mesh.vao(prog).render()
             ctx.disable(ctx.DEPTH_TEST)
             return
         ctx.enable(ctx.DEPTH_TEST | ctx.CULL_FACE)
         with query:
             ctx.cull_face = "back"
-            mesh.vao.render()
+            mesh.vao(prog).render()
             ctx.cull_face = "front"
             ctx.polygon_offset = 0.0, BACK_OFFSET
-            mesh.vao.render()
+            mesh.vao(prog).render()
         ctx.polygon_offset = 0.0, 0.0
         ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
 
@@ -296,6 +307,8 @@ class Renderer:
         supersample: int = 2,
         depth_threshold: float = 4.0,
         part_edges: bool = True,
+        highlight: np.ndarray | None = None,
+        reveal: float | None = None,
         profile: bool = False,
     ) -> Frame:
         """Render a blueprint of ``model``.
@@ -317,6 +330,12 @@ class Renderer:
             Line width in output pixels.
         supersample : int
             G-buffer and edges are computed at this multiple of the size, then filtered down.
+        highlight : (P,) bool, optional
+            Designated parts (see ``blueprint.scene.parts.select_parts``): their whole outline
+            is drawn over everything in the style's highlight ink and width.
+        reveal : float, optional
+            Depth masking: stop peeling as soon as this fraction of the highlighted parts'
+            pixels is uncovered, so the clutter behind them is not drawn. Needs ``highlight``.
         profile : bool
             Synchronise after each stage to fill ``Frame.stages`` (slower).
         """
@@ -340,19 +359,29 @@ class Renderer:
 
         mesh = self.mesh(model, crease_angle)
         stage("upload")
+        if reveal is not None and highlight is None:
+            raise InputError("reveal needs parts to reveal: give highlight as well")
+        if reveal is not None and not 0.0 < reveal <= 1.0:
+            raise InputError(f"reveal must be in (0, 1], got {reveal}")
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
         depth_tex, normal, ids, fbos, clears = self._gbuffer(ss)
-        geo = self._setup_geometry(camera, mesh, depth_tex)
-        edges = self._edge_stage(camera, ss, crease_angle, params, line_width, supersample)
+        edges = self._edge_stage(camera, ss, crease_angle, params, line_width, supersample, style)
         normal.use(3)
         ids.use(4)
+        draws = 0
+        mask = None
+        if highlight is not None:
+            mask, wanted, passes = self._highlight(mesh, camera, ss, highlight, edges)
+            draws += passes
+        geo = self._setup_geometry(camera, mesh, depth_tex)
 
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
         peeled = 0
-        draws = 0
+        revealed = None
         while peeled < limit:
-            end = min(limit, peeled + (max_layers or CHUNK))
+            step = 1 if reveal is not None else (max_layers or CHUNK)
+            end = min(limit, peeled + step)
             edges.reserve(end)
             for layer in range(peeled, end):
                 self._clear(clears, layer)
@@ -363,7 +392,14 @@ class Renderer:
                     self._draw(mesh, geo, fbos, layer, self._query(layer))
                 draws += 3 + edges.run(layer)
             peeled = end
-            if max_layers is not None or self._query(peeled - 1).samples == 0:
+            if reveal is not None:
+                # the one rule that needs the CPU to look after every layer
+                shown = self._count_revealed(mask, layer % 2, camera, ss)
+                draws += 1
+                revealed = shown / wanted if wanted else 1.0
+                if revealed >= reveal or self._query(layer).samples == 0:
+                    break
+            elif max_layers is not None or self._query(peeled - 1).samples == 0:
                 break
         counts = [self._query(k).samples for k in range(peeled)]
         stage("peel_edges")
@@ -378,9 +414,50 @@ class Renderer:
         image = _straight_alpha(raw[::-1]) if style.paper is None else raw[::-1].copy()
         stage("read")
         ms = (time.perf_counter() - t0) * 1e3
-        return Frame(image, layers, counts, camera, ms, draws, stages)
+        return Frame(image, layers, counts, camera, ms, draws, stages, revealed)
 
-    def _edge_stage(self, camera, ss, crease_angle, params, line_width, supersample):
+    def _highlight(self, mesh: _Mesh, camera: Camera, ss, highlight: np.ndarray, edges):
+        """Draw only the designated parts into a depth mask and turn it into the highlight edge
+        map. Returns the mask texture, the number of its covered pixels and the passes run."""
+        highlight = np.asarray(highlight, bool)
+        if highlight.shape != (mesh.part_count,):
+            raise InputError(f"highlight needs one flag per part ({mesh.part_count}), got {highlight.shape}")
+        flags = self.ctx.texture((len(highlight), 1), 1, highlight.astype(np.int32).tobytes(), dtype="i4")
+        flags.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+        mask = self.pool.depth("gb.mask", ss)
+        normal = self.pool.texture("gb.normal", ss, "rgba16f")
+        ids = self.pool.texture("gb.ids", ss, "rg32i")
+        fbo = self.pool.framebuffer((normal, ids), mask)
+        fbo.use()
+        fbo.clear(depth=1.0)
+        prog = self._setup_geometry(camera, mesh, (mask, mask), selected_only=True)
+        flags.use(MASK_FLAGS_UNIT)
+        prog["u_selected"].value = MASK_FLAGS_UNIT
+        self._draw(mesh, prog, (fbo, fbo), 0, self._query(HARD_MAX_LAYERS))
+        flags.release()
+        mask.use(MASK_UNIT)
+        passes = 2 + edges.run_highlight(MASK_UNIT)
+        wanted = self._count_revealed(mask, None, camera, ss)
+        return mask, wanted, passes + 1
+
+    def _count_revealed(self, mask, layer_unit: int | None, camera: Camera, ss) -> int:
+        """Pixels of the mask whose surface is in layers peeled so far (all mask pixels when
+        ``layer_unit`` is None), counted by an occlusion query and read back."""
+        prog, vao = self.fullscreen("blueprint.render:glsl/reveal.frag")
+        prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
+        prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
+        prog["u_mask_depth"].value = MASK_UNIT
+        prog["u_layer_depth"].value = layer_unit if layer_unit is not None else MASK_UNIT
+        prog["u_count_all"].value = layer_unit is None
+        scratch = self.pool.texture("reveal.scratch", ss, "r8")
+        fbo = self.pool.framebuffer((scratch,))
+        fbo.use()
+        query = self._query(HARD_MAX_LAYERS + 1)
+        with query:
+            vao.render(vertices=3)
+        return query.samples
+
+    def _edge_stage(self, camera, ss, crease_angle, params, line_width, supersample, style):
         if self.use_compute:
             prog = self.compute(EDGES.compute)
         else:
@@ -394,9 +471,10 @@ class Renderer:
         prog["u_normal"].value = 3
         prog["u_ids"].value = 4
         radius = (line_width - 1.0) * supersample / 2
+        highlight_radius = (line_width * style.highlight_width - 1.0) * supersample / 2
         if self.use_compute:
-            return _ComputeEdges(self, prog, ss, radius)
-        return _FragmentEdges(self, prog, ss, radius)
+            return _ComputeEdges(self, prog, ss, radius, highlight_radius)
+        return _FragmentEdges(self, prog, ss, radius, highlight_radius)
 
     def _compose(self, style: Style, edges, layers: int, supersample: int, out) -> int:
         """Paper, then the edge layers back to front onto ``out``; returns the passes run."""
@@ -418,7 +496,14 @@ class Renderer:
                 prog["u_ink"].write(_inks(inks, first, count))
                 prog.run(*_groups(out.size))
                 self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
-            return len(groups)
+            if edges.highlight is not None:
+                edges.highlight.use(5)
+                prog["u_first"].value = False
+                prog["u_layers"].value = 1
+                prog["u_ink"].write(_inks(np.array([style.highlight]), 0, 1))
+                prog.run(*_groups(out.size))
+                self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
+            return len(groups) + (edges.highlight is not None)
         ctx = self.ctx
         fbo = self.pool.framebuffer((out,))
         fbo.use()
@@ -429,8 +514,6 @@ class Renderer:
             prog, vao = self.fullscreen("blueprint.compose:glsl/paper.frag")
             _set_paper(prog, style)
             vao.render(vertices=3)
-        if layers == 0:
-            return 1
         prog, vao = self.fullscreen("blueprint.compose:glsl/compose.frag")
         prog["u_supersample"].value = supersample
         prog["u_threshold"].value = style.threshold
@@ -438,16 +521,20 @@ class Renderer:
         prog["u_edges1"].value = 6
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-        for first in groups:
-            count = min(8, layers - first)
-            edges.texture(first).use(5)
+        sprites = [(edges.texture(f), edges.texture(f + 4), min(8, layers - f), inks[f:]) for f in groups]
+        if layers == 0:
+            sprites = []
+        if edges.highlight is not None:
+            sprites.append((edges.highlight, edges.highlight, 1, np.array([style.highlight])))
+        for first, second, count, ink in sprites:
+            first.use(5)
             if count > 4:
-                edges.texture(first + 4).use(6)
-            prog["u_ink"].write(_inks(inks, first, count))
+                second.use(6)
+            prog["u_ink"].write(_inks(ink, 0, count))
             prog["u_layers"].value = count
             vao.render(vertices=3)
         ctx.disable(ctx.BLEND)
-        return 1 + len(groups)
+        return 1 + len(sprites)
 
     # -- layers for other tools ----------------------------------------------------------------
     def peel(
@@ -508,39 +595,57 @@ class Renderer:
 class _ComputeEdges:
     """Edge maps as slices of r8 texture arrays, written by compute shaders (GL 4.3)."""
 
-    def __init__(self, renderer: Renderer, prog, ss, radius: float) -> None:
-        self.r, self.prog, self.ss, self.radius = renderer, prog, ss, radius
+    def __init__(self, renderer: Renderer, prog, ss, radius: float, highlight_radius: float) -> None:
+        self.r, self.prog, self.ss = renderer, prog, ss
+        self.radius, self.highlight_radius = radius, highlight_radius
         self.arrays: list = []
         self.dilated: list = []
+        self.highlight = None
 
     def reserve(self, layers: int) -> None:
         while len(self.arrays) * SLICES < layers:
             k = len(self.arrays)
             self.arrays.append(self.r.pool.texture(f"edges.{k}", self.ss, "r8", SLICES))
 
-    def run(self, layer: int) -> int:
-        self.arrays[layer // SLICES].bind_to_image(1, read=False, write=True)
-        self.prog["u_depth"].value = layer % 2
-        self.prog["u_layer"].value = layer % SLICES
+    def _edge(self, depth_unit: int, array, index: int) -> int:
+        array.bind_to_image(1, read=False, write=True)
+        self.prog["u_depth"].value = depth_unit
+        self.prog["u_layer"].value = index
         self.prog.run(*_groups(self.ss))
         return 1
+
+    def run(self, layer: int) -> int:
+        return self._edge(layer % 2, self.arrays[layer // SLICES], layer % SLICES)
+
+    def run_highlight(self, depth_unit: int) -> int:
+        self.highlight = self.r.pool.texture("edges.highlight", self.ss, "r8", 1)
+        return self._edge(depth_unit, self.highlight, 0)
+
+    def _dilate(self, source, name: str, radius: float, slices: int):
+        prog = self.r.compute(DILATE.compute)
+        prog["u_radius"].value = radius
+        prog["u_source"].value = 5
+        target = self.r.pool.texture(name, self.ss, "r8", slices)
+        source.use(5)
+        target.bind_to_image(1, read=False, write=True)
+        prog.run(*_groups(self.ss), slices)
+        return target
 
     def finish(self, layers: int) -> int:
         ctx = self.r.ctx
         ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
-        if self.radius <= 0 or layers == 0:
-            return 0
-        prog = self.r.compute(DILATE.compute)
-        prog["u_radius"].value = self.radius
-        prog["u_source"].value = 5
-        for k in range((layers + SLICES - 1) // SLICES):
-            target = self.r.pool.texture(f"edges.dilated.{k}", self.ss, "r8", SLICES)
-            self.arrays[k].use(5)
-            target.bind_to_image(1, read=False, write=True)
-            prog.run(*_groups(self.ss), SLICES)
-            self.dilated.append(target)
+        passes = 0
+        if self.radius > 0 and layers:
+            used = self.arrays[: (layers + SLICES - 1) // SLICES]
+            self.dilated = [
+                self._dilate(a, f"edges.dilated.{k}", self.radius, SLICES) for k, a in enumerate(used)
+            ]
+            passes += len(used)
+        if self.highlight is not None and self.highlight_radius > 0:
+            self.highlight = self._dilate(self.highlight, "edges.highlight.wide", self.highlight_radius, 1)
+            passes += 1
         ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT)
-        return len(self.dilated)
+        return passes
 
     def array(self, first_layer: int):
         source = self.dilated or self.arrays
@@ -550,44 +655,55 @@ class _ComputeEdges:
 class _FragmentEdges:
     """Edge maps packed four layers to an RGBA8 texture, one channel per layer (GL 3.3)."""
 
-    def __init__(self, renderer: Renderer, prog, ss, radius: float) -> None:
-        self.r, self.prog, self.ss, self.radius = renderer, prog, ss, radius
+    def __init__(self, renderer: Renderer, prog, ss, radius: float, highlight_radius: float) -> None:
+        self.r, self.prog, self.ss = renderer, prog, ss
+        self.radius, self.highlight_radius = radius, highlight_radius
         self.fbos: list = []
+        self.highlight = None
         self.vao = renderer.fullscreen(EDGES.shader)[1]
-        if radius > 0:
+        if max(radius, highlight_radius) > 0:
             self.dilate, self.dilate_vao = renderer.fullscreen(DILATE.shader)
-            self.dilate["u_radius"].value = radius
             self.dilate["u_source"].value = 6
             self.scratch = renderer.pool.texture("edges.scratch", ss, "r8")
             self.scratch_fbo = renderer.pool.framebuffer((self.scratch,))
 
+    def _target(self, name: str):
+        tex = self.r.pool.texture(name, self.ss, "rgba8")
+        fbo = self.r.pool.framebuffer((tex,))
+        fbo.color_mask = (True, True, True, True)
+        fbo.use()
+        fbo.clear()
+        return fbo
+
     def reserve(self, layers: int) -> None:
         while len(self.fbos) * 4 < layers:
-            tex = self.r.pool.texture(f"edges.rgba.{len(self.fbos)}", self.ss, "rgba8")
-            fbo = self.r.pool.framebuffer((tex,))
-            fbo.color_mask = (True, True, True, True)
-            fbo.use()
-            fbo.clear()
-            self.fbos.append(fbo)
+            self.fbos.append(self._target(f"edges.rgba.{len(self.fbos)}"))
 
-    def run(self, layer: int) -> int:
-        self.prog["u_depth"].value = layer % 2
-        target = self.fbos[layer // 4]
-        mask = tuple(c == layer % 4 for c in range(4))
-        if self.radius > 0:
+    def _edge(self, depth_unit: int, target, channel: int, radius: float) -> int:
+        self.prog["u_depth"].value = depth_unit
+        if radius > 0:
             self.scratch_fbo.use()
             self.vao.render(vertices=3)
             self.scratch.use(6)
-        target.color_mask = mask
+            self.dilate["u_radius"].value = radius
+        target.color_mask = tuple(c == channel for c in range(4))
         target.use()
-        (self.vao if self.radius <= 0 else self.dilate_vao).render(vertices=3)
-        return 1 if self.radius <= 0 else 2
+        (self.vao if radius <= 0 else self.dilate_vao).render(vertices=3)
+        return 1 if radius <= 0 else 2
+
+    def run(self, layer: int) -> int:
+        return self._edge(layer % 2, self.fbos[layer // 4], layer % 4, self.radius)
+
+    def run_highlight(self, depth_unit: int) -> int:
+        fbo = self._target("edges.rgba.highlight")
+        self.highlight = fbo.color_attachments[0]
+        return self._edge(depth_unit, fbo, 0, self.highlight_radius)
 
     def finish(self, layers: int) -> int:
         return 0
 
     def texture(self, first_layer: int):
-        return self.fbos[first_layer // 4].color_attachments[0]
+        return self.fbos[min(first_layer // 4, len(self.fbos) - 1)].color_attachments[0]
 
 
 def _groups(size) -> tuple[int, int]:

@@ -103,6 +103,9 @@ class Camera:
         """
         if view not in VIEWS:
             raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
+        for label, value in (("azimuth", azimuth), ("elevation", elevation)):
+            if value is not None and not math.isfinite(value):
+                raise InputError(f"{label} must be a finite number of degrees, got {value}")
         if not 0 < fov < 180:
             raise InputError(f"field of view must be between 0 and 180 degrees, got {fov}")
         if not 0 <= margin < 0.5:

@@ -15,6 +15,8 @@ from blueprint.scene.model import Model
 log = logging.getLogger("blueprint")
 
 # CAD and printing formats are Z-up by convention; glTF (by its spec), OBJ and scans are Y-up.
+# Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
+MAX_COORDINATE = 1e18
 _Z_UP = {"stl", "3mf", "3dxml", "step", "stp", "dae"}
 
 
@@ -63,6 +65,8 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     bad = ~np.isfinite(positions).all(axis=1)
     if bad.any():
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates")
+    if np.abs(positions).max() > MAX_COORDINATE:
+        raise InputError(f"{name}: coordinates beyond {MAX_COORDINATE:g} cannot be drawn")
     if faces.min() < 0 or faces.max() >= len(positions):
         raise InputError(f"{name}: faces refer to vertices that do not exist")
 
@@ -92,6 +96,8 @@ def _load_scene(path: Path):
             return trimesh.load_scene(str(path), process=False)
     except MemoryError:
         raise InputError(f"{path}: too large to load into memory") from None
+    except ImportError as exc:
+        raise InputError(f"{path}: reading this file needs the Python package '{exc.name}'") from None
     except Exception as exc:  # trimesh raises many types for broken files
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
         raise InputError(f"{path}: cannot read as {path.suffix.lstrip('.').upper()}: {detail}") from None

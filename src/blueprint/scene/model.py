@@ -42,6 +42,10 @@ class Model:
             raise ValueError(f"faces must be (F, 3), got {self.faces.shape}")
         if self.face_part.shape != (len(self.faces),):
             raise ValueError("face_part must have one entry per face")
+        if len(self.faces) and (self.faces.min() < 0 or self.faces.max() >= len(self.positions)):
+            raise ValueError("faces refer to vertices that do not exist")
+        if len(self.face_part) and (self.face_part.min() < 0 or self.face_part.max() >= len(self.part_names)):
+            raise ValueError("face_part refers to parts that do not exist")
         if self.up not in ("y", "z"):
             raise ValueError(f"up must be 'y' or 'z', got {self.up!r}")
 
@@ -89,5 +93,6 @@ class Model:
             scale = np.ptp(self.bounds, axis=0).max() if len(self.faces) else 1.0
             f = self.faces
             repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
-            self._cache["degenerate"] = repeated | (area2 <= (scale * 1e-12) ** 2)
+            # |cross|^2 is a length^4: compare with a relative area of 1e-12
+            self._cache["degenerate"] = repeated | (area2 <= (scale * scale * 1e-12) ** 2)
         return self._cache["degenerate"]

@@ -12,11 +12,12 @@ _MAX_DEGREE = 64
 def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
     """(F, 3) int64: vertex ids where vertices at the same position (within ``rel_tol`` of the
     bounding-box diagonal) share an id, so triangle soups smooth like indexed meshes."""
+    from blueprint.silhouette.mesh import weld
+
     used = positions[faces.reshape(-1)].astype(np.float64)
     diag = float(np.linalg.norm(np.ptp(used, axis=0))) or 1.0
-    keys = np.round(used / (diag * rel_tol)).astype(np.int64)
-    _, inverse = np.unique(keys, axis=0, return_inverse=True)
-    return inverse.reshape(-1, 3)
+    _, welded = weld(positions, faces, tol=diag * rel_tol)
+    return welded
 
 
 def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:

@@ -9,6 +9,9 @@ uniform bool u_peel;
 uniform float u_peel_eps;
 uniform bool u_ortho;
 uniform float u_back_bias;
+#if SELECTED_ONLY
+uniform isampler2D u_selected;  // 1 for each designated part (depth masking, highlight)
+#endif
 
 in vec3 v_eye;
 in vec3 v_normal;
@@ -35,6 +38,12 @@ void main() {
     gl_FragDepth = gl_FrontFacing ? z : min(z + u_back_bias, 1.0);
 #endif
     int face = gl_PrimitiveID;
+    int part = texelFetch(u_face_part, ivec2(face & 4095, face >> 12), 0).r;
+#if SELECTED_ONLY
+    if (texelFetch(u_selected, ivec2(part, 0), 0).r == 0) {
+        discard;
+    }
+#endif
     o_normal = vec4(n, 1.0);
-    o_ids = ivec2(face + 1, texelFetch(u_face_part, ivec2(face & 4095, face >> 12), 0).r + 1);
+    o_ids = ivec2(face + 1, part + 1);
 }

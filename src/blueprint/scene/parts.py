@@ -1,0 +1,67 @@
+"""Choosing parts of a model: by name pattern, by index, or by a second model in the same place."""
+
+from __future__ import annotations
+
+import difflib
+import fnmatch
+from collections.abc import Iterable
+
+import numpy as np
+
+from blueprint.errors import InputError
+from blueprint.scene.model import Model
+
+
+def select_parts(model: Model, patterns: str | Iterable[str | int]) -> np.ndarray:
+    """(P,) bool: the parts matching any of ``patterns``.
+
+    A pattern is a glob on the part name (``Piston*``, case-insensitive) or a part index; a
+    string may hold several, separated by commas.
+
+    Raises
+    ------
+    InputError
+        A pattern matches no part; the message lists the closest part names.
+    """
+    if isinstance(patterns, str):
+        patterns = [p.strip() for p in patterns.split(",") if p.strip()]
+    names = model.part_names
+    lowered = [n.lower() for n in names]
+    selected = np.zeros(len(names), bool)
+    for pattern in patterns:
+        if isinstance(pattern, int | np.integer) or (isinstance(pattern, str) and pattern.isdigit()):
+            index = int(pattern)
+            if not 0 <= index < len(names):
+                raise InputError(f"part index {index} is out of range (the model has {len(names)} parts)")
+            selected[index] = True
+            continue
+        hits = [i for i, n in enumerate(lowered) if fnmatch.fnmatchcase(n, str(pattern).lower())]
+        if not hits:
+            close = difflib.get_close_matches(str(pattern), names, n=5, cutoff=0.3)
+            hint = f"; closest: {', '.join(close)}" if close else f"; parts are e.g. {', '.join(names[:5])}"
+            raise InputError(f"no part matches {pattern!r}{hint}")
+        selected[hits] = True
+    if not selected.any():
+        raise InputError("no part pattern given")
+    return selected
+
+
+def select_parts_like(model: Model, other: Model, tolerance: float | None = None) -> np.ndarray:
+    """(P,) bool: the parts of ``model`` that ``other`` (a second file in the same coordinates)
+    covers: most of a part's vertices lie within ``tolerance`` of ``other``'s surface vertices
+    (default: 1e-4 of ``model``'s bounding-box diagonal)."""
+    from scipy.spatial import cKDTree
+
+    diag = float(np.linalg.norm(np.ptp(model.bounds, axis=0))) or 1.0
+    tolerance = diag * 1e-4 if tolerance is None else tolerance
+    tree = cKDTree(other.positions.astype(np.float64))
+    selected = np.zeros(len(model.part_names), bool)
+    for index in range(len(model.part_names)):
+        used = np.unique(model.faces[model.face_part == index])
+        if len(used) == 0:
+            continue
+        distance, _ = tree.query(model.positions[used].astype(np.float64), distance_upper_bound=tolerance)
+        selected[index] = np.mean(np.isfinite(distance)) > 0.5
+    if not selected.any():
+        raise InputError(f"{other.source}: lies on no part of {model.source or 'the model'}")
+    return selected
