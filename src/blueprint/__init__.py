@@ -1,6 +1,7 @@
 """blueprint: drawings of the visible and hidden edges of 3D models, computed on the GPU."""
 
 from blueprint.api import default_renderer, peel, render, render_frame
+from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
 from blueprint.compose.style import STYLES, Style
 from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
 from blueprint.render.renderer import Frame, Layers, Renderer
@@ -17,6 +18,7 @@ __all__ = [
     "Camera",
     "Frame",
     "GLUnavailableError",
+    "Glyphs",
     "InputError",
     "Layers",
     "Model",
@@ -24,8 +26,11 @@ __all__ = [
     "ShaderError",
     "Style",
     "default_renderer",
+    "draw_glyphs",
+    "load_glyphs",
     "load_model",
     "peel",
     "render",
     "render_frame",
+    "render_with_glyphs",
 ]

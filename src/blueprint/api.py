@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import os
+import time
 from dataclasses import replace
 
 import numpy as np
 
+from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame, Layers, Renderer, check_size
 from blueprint.scene.camera import Camera
@@ -68,10 +70,21 @@ def render_frame(
     check_size(size, int(options.get("supersample", 2)), renderer.max_texture)
     if options.get("highlight") is not None:
         options["highlight"] = designated_parts(model, options["highlight"])
+    glyphs = options.pop("glyphs", None)
+    if glyphs is not None and not isinstance(glyphs, Glyphs):
+        glyphs = load_glyphs(glyphs)
     if view == PLAN and camera is None:
+        if glyphs is not None:
+            raise InputError("glyphs need one view; the plan sheet draws four")
         return _plan_frame(model, size, fov, renderer, options)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
-    return renderer.render(model, cam, size=size, **options)
+    frame = renderer.render(model, cam, size=size, **options)
+    if glyphs is not None:
+        t0 = time.perf_counter()
+        image = render_with_glyphs(renderer, model, frame.camera, size, glyphs, frame.image)
+        spent = (time.perf_counter() - t0) * 1e3
+        frame = replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "glyphs": spent})
+    return frame
 
 
 def designated_parts(model: Model, spec) -> np.ndarray:
@@ -145,6 +158,10 @@ def render(model: Model | str | os.PathLike, **kwargs) -> np.ndarray:
         second model lying on the parts to designate.
     reveal : float, optional
         Depth masking: peel only until this fraction of the highlighted parts is uncovered.
+    glyphs : Glyphs, str or PathLike, optional
+        Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
+        ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where
+        a surface hides them.
 
     Returns
     -------

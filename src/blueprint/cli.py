@@ -122,6 +122,13 @@ def cli() -> None:
     help="Outline the parts that this second model file lies on.",
 )
 @click.option(
+    "--glyphs",
+    "glyph_file",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="TOML or JSON file of boxes, arrows, paths and labels in model coordinates.",
+)
+@click.option(
     "--reveal",
     type=float,
     default=None,
@@ -146,16 +153,19 @@ def render(
     supersample,
     highlight,
     highlight_model,
+    glyph_file,
     reveal,
 ):
     """Draw the blueprint of MODEL into a PNG."""
     from blueprint.api import default_renderer, render_frame
+    from blueprint.compose.glyphs import load_glyphs
     from blueprint.compose.style import get_style
     from blueprint.export.files import check_output, save_png
     from blueprint.scene.loader import load_model
 
     output = check_output(output, (".png",))
     chosen = get_style(style, grid)
+    glyphs = load_glyphs(glyph_file) if glyph_file else None
     kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
     up_axis = kwargs.pop("up")
     loaded = load_model(model, up=up_axis)
@@ -172,6 +182,7 @@ def render(
         supersample=supersample,
         highlight=designated,
         reveal=reveal,
+        glyphs=glyphs,
         **kwargs,
     )
     save_png(output, frame.image)

@@ -87,7 +87,7 @@ ANCHORS = (
 # Glyph segments are sampled this often (pixels along the screen) for the depth test.
 SAMPLE_STEP = 0.5
 # A sample is hidden when the front surface is nearer than its eye depth by more than this
-# fraction of it. The surface is taken as the farthest of the 3x3 pixels around the sample, so
+# fraction of it. The surface is taken as the farthest of the 3x3 pixels around the sample's, so
 # a glyph lying on a face (even one seen at a grazing angle) or along a silhouette never hides
 # itself; an occluder's outline lets the glyph through by at most a pixel.
 DEPTH_TOLERANCE = 1e-3
@@ -348,7 +348,9 @@ def _parse(data: Any, source: str) -> Glyphs:
     for kind in _KINDS:
         items = data.get(kind, [])
         if not isinstance(items, list):
-            raise InputError(f"{source}: {kind} must be a list of tables ([[{kind}]] in TOML), got a {_kind(items)}")
+            raise InputError(
+                f"{source}: {kind} must be a list of tables ([[{kind}]] in TOML), got a {_kind(items)}"
+            )
         lists[kind] = [
             _Entry(f"{source}: {kind} {i}", table, _KINDS[kind], _REQUIRED[kind])
             for i, table in enumerate(items, 1)
@@ -412,7 +414,7 @@ class _View:
     camera: Camera
     width: int
     height: int
-    surface: np.ndarray | None  # (H, W) farthest eye depth of the 3x3 front surfaces, inf: none
+    depth: np.ndarray | None  # (H, W) window depth of the front surface, 1.0: none
 
     def __post_init__(self) -> None:
         self.mvp = self.camera.projection_matrix() @ self.camera.view_matrix()
@@ -429,34 +431,32 @@ class _View:
         return np.stack([x, y], axis=-1), ndc[..., 2]
 
     def eye_depth(self, z_ndc: np.ndarray) -> np.ndarray:
+        """Distance along the view axis from NDC z (the inverse of the projection's z)."""
         n, f = self.camera.near, self.camera.far
         if self.camera.ortho:
             return (z_ndc * (f - n) + (f + n)) / 2
         return 2 * f * n / ((f + n) - z_ndc * (f - n))
 
     def hidden(self, xy: np.ndarray, eye: np.ndarray) -> np.ndarray:
-        """(N,) bool: a surface lies in front of these screen samples by more than the tolerance."""
-        if self.surface is None:
+        """(N,) bool: the front surface lies nearer than these (N, 2) screen samples at (N,) eye
+        depths by more than ``DEPTH_TOLERANCE``; the surface is the farthest of the 3x3 pixels
+        around the sample's pixel (window depth grows with eye depth, so the farthest window
+        depth is the farthest surface). Samples off the image are never hidden."""
+        if self.depth is None:
             return np.zeros(len(xy), bool)
         ix = np.floor(xy[:, 0]).astype(np.int64)
         iy = np.floor(xy[:, 1]).astype(np.int64)
         inside = (ix >= 0) & (ix < self.width) & (iy >= 0) & (iy < self.height)
+        ix, iy = ix[inside], iy[inside]
+        far = np.zeros(len(ix), np.float64)
+        for dy in (-1, 0, 1):
+            rows = np.clip(iy + dy, 0, self.height - 1)
+            for dx in (-1, 0, 1):
+                np.maximum(far, self.depth[rows, np.clip(ix + dx, 0, self.width - 1)], out=far)
         surface = np.full(len(xy), np.inf)
-        surface[inside] = self.surface[iy[inside], ix[inside]]
+        covered = far < 1.0
+        surface[np.flatnonzero(inside)[covered]] = self.eye_depth(2.0 * far[covered] - 1.0)
         return surface < eye * (1 - DEPTH_TOLERANCE)
-
-
-def _surface_map(depth: np.ndarray, view: _View) -> np.ndarray:
-    """Eye depth of the front surface, the farthest within each 3x3 neighbourhood; inf: none."""
-    covered = depth < 1.0
-    eye = np.where(covered, view.eye_depth(2.0 * depth.astype(np.float64) - 1.0), np.inf)
-    padded = np.pad(eye, 1, mode="edge")
-    h, w = eye.shape
-    out = eye.copy()
-    for dy in range(3):
-        for dx in range(3):
-            np.maximum(out, padded[dy : dy + h, dx : dx + w], out=out)
-    return out
 
 
 # -- glyph geometry --------------------------------------------------------------------------
@@ -610,16 +610,28 @@ def _stroke_pieces(stroke: _Stroke, view: _View, hidden: Hidden, scale: float):
     first = np.r_[True, (key[1:] != key[:-1]).any(axis=1)]
     run_start = np.flatnonzero(first)
     run_end = np.r_[run_start[1:], len(seg)] - 1
-    drawn = opacity[run_start] > 0
-    run_start, run_end = run_start[drawn], run_end[drawn]
+    t_a, t_b = lo[run_start], hi[run_end]
+    # Where a gap follows or precedes a run on its segment (a dash's end, or a cut where the
+    # glyph goes out of sight in mode none), pull the run's end in by the round cap's radius so
+    # the ink, not the centre line, stops there: gaps stay as long as the pattern says.
     s = seg[run_start]
-    a = xy[s, 0] + lo[run_start, None] * (xy[s, 1] - xy[s, 0])
-    b = xy[s, 0] + hi[run_end, None] * (xy[s, 1] - xy[s, 0])
-    return np.stack([a, b], axis=1), opacity[run_start]
+    gap_before = np.r_[False, (opacity[run_start[:-1]] == 0) & (s[:-1] == s[1:])]
+    gap_after = np.r_[(opacity[run_start[1:]] == 0) & (s[1:] == s[:-1]), False]
+    cap = stroke.width * scale / 2 / np.maximum(full[s], 1e-12)
+    t_a = t_a + np.where(gap_before, cap, 0.0)
+    t_b = t_b - np.where(gap_after, cap, 0.0)
+    short = t_a > t_b
+    t_a[short] = t_b[short] = (t_a[short] + t_b[short]) / 2
+    drawn = opacity[run_start] > 0
+    s, t_a, t_b = s[drawn], t_a[drawn], t_b[drawn]
+    a = xy[s, 0] + t_a[:, None] * (xy[s, 1] - xy[s, 0])
+    b = xy[s, 0] + t_b[:, None] * (xy[s, 1] - xy[s, 0])
+    return np.stack([a, b], axis=1), opacity[run_start[drawn]]
 
 
 def _composite(canvas: np.ndarray, x0: int, y0: int, coverage: np.ndarray, color: RGBA) -> None:
-    """Straight-alpha ``over`` of ``color`` at ``coverage`` onto float RGBA ``canvas`` in place."""
+    """Straight-alpha ``over`` of ``color`` at ``coverage`` (h, w) onto the uint8 RGBA
+    ``canvas`` at (x0, y0), in place; pixels without coverage keep their exact values."""
     h, w = coverage.shape
     region = canvas[y0 : y0 + h, x0 : x0 + w]
     alpha = coverage.astype(np.float64) * color[3]
@@ -627,11 +639,12 @@ def _composite(canvas: np.ndarray, x0: int, y0: int, coverage: np.ndarray, color
     if not touched.any():
         return
     a_s = alpha[touched][:, None]
-    dst = region[touched]
+    dst = region[touched].astype(np.float64)
     a_d = dst[:, 3:4] / 255.0
     a_o = a_s + a_d * (1 - a_s)
     rgb = (np.asarray(color[:3]) * 255.0 * a_s + dst[:, :3] * a_d * (1 - a_s)) / a_o
-    region[touched] = np.concatenate([rgb, a_o * 255.0], axis=1)
+    out = np.concatenate([rgb, a_o * 255.0], axis=1)
+    region[touched] = np.clip(np.rint(out), 0, 255).astype(np.uint8)
 
 
 def _draw_pieces(canvas: np.ndarray, pieces, opacity, color: RGBA, width: float) -> None:
@@ -769,16 +782,17 @@ def draw_glyphs(
     if not (math.isfinite(line_scale) and line_scale > 0):
         raise ValueError(f"line_scale must be a positive number, got {line_scale}")
     h, w = image.shape[:2]
-    view = _View(camera, w, h, None)
     if depth is not None:
         depth = np.asarray(depth)
         if depth.ndim == 3:
-            depth = depth[0] if len(depth) else np.ones((h, w), np.float32)
-        if depth.shape != (h, w):
-            raise ValueError(f"depth must be ({h}, {w}) like the image, got {depth.shape}")
-        view.surface = _surface_map(depth, view)
-    rgba = image if image.shape[2] == 4 else np.dstack([image, np.full((h, w), 255, np.uint8)])
-    canvas = rgba.astype(np.float64)
+            depth = depth[0] if len(depth) else None
+    if depth is not None and depth.shape != (h, w):
+        raise ValueError(f"depth must be ({h}, {w}) like the image, got {depth.shape}")
+    view = _View(camera, w, h, depth)
+    if image.shape[2] == 4:
+        canvas = image.copy()
+    else:
+        canvas = np.dstack([image, np.full((h, w), 255, np.uint8)])
     hidden = glyphs.hidden
 
     strokes = [_path_stroke(p) for p in glyphs.paths]
@@ -800,8 +814,7 @@ def draw_glyphs(
             opacity = hidden.opacity
         _draw_text(canvas, xy, text, color, size * line_scale, anchor, opacity)
 
-    out = np.clip(np.rint(canvas), 0, 255).astype(np.uint8)
-    return out if image.shape[2] == 4 else out[..., :3]
+    return canvas if image.shape[2] == 4 else canvas[..., :3].copy()
 
 
 def render_with_glyphs(
