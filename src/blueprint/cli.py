@@ -297,6 +297,12 @@ def bench(models, sizes, layer_options, frames, warmup, supersample, style):
         click.echo(json.dumps(record))
 
 
+# Commands of other packages import this module's shared options, so they are added last.
+from blueprint.viewer.command import view  # noqa: E402
+
+cli.add_command(view)
+
+
 def main(argv: list[str] | None = None) -> None:
     """Entry point: user errors become one line on stderr and exit code 2."""
     try:

@@ -1,0 +1,89 @@
+"""CPU-side pieces of the viewer: the backdrop, the heads-up lines, the help box, and
+screenshot names. Images are (H, W, 4) uint8 RGBA, row 0 at the top, straight alpha."""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+
+# What shows through where a style has no paper.
+BACKDROP = (200, 200, 200)
+LINE_HEIGHT = 17
+FONT_SIZE = 12
+HELP_LINES = (
+    "mouse  left drag: orbit   right drag / shift+left: pan   wheel: zoom",
+    "click  pick a part (again on the same spot: the part behind it; on paper: none)",
+    "D / shift+D  one layer more / fewer      A  all layers",
+    "S  next style      1-7  iso front back left right top bottom",
+    "M  depth mask: peel until the picked part shows",
+    "O  orthographic / perspective      T  turntable on / off",
+    "P  save a screenshot next to the model      H  this help      Esc  quit",
+)
+
+
+def on_backdrop(image: np.ndarray) -> np.ndarray:
+    """(H, W, 3) uint8: the image over an opaque backdrop (a no-op for opaque paper)."""
+    if image[..., 3].min() == 255:
+        return image[..., :3].copy()
+    a = image[..., 3:4].astype(np.float32) / 255.0
+    rgb = image[..., :3] * a + np.array(BACKDROP, np.float32) * (1.0 - a)
+    return np.clip(rgb + 0.5, 0, 255).astype(np.uint8)
+
+
+@functools.lru_cache(maxsize=4)
+def _font(size: int):
+    from PIL import ImageFont
+
+    try:
+        return ImageFont.load_default(size=size)
+    except TypeError:  # Pillow < 10.1: the fixed bitmap font
+        return ImageFont.load_default()
+
+
+def draw_hud(rgb: np.ndarray, lines: list[str], help_box: bool = False) -> np.ndarray:
+    """Draw the heads-up ``lines`` in a band at the top (and the help box) into a copy of
+    ``rgb`` (H, W, 3) uint8. The band is ``LINE_HEIGHT`` pixels per line."""
+    from PIL import Image, ImageDraw
+
+    picture = Image.fromarray(rgb)
+    draw = ImageDraw.Draw(picture, "RGBA")
+    font = _font(FONT_SIZE)
+    w, h = picture.size
+    if lines:
+        # drawn on a crop of the band and pasted back, so no glyph reaches below the band
+        band_h = min(h, LINE_HEIGHT * len(lines))
+        band = picture.crop((0, 0, w, band_h))
+        ink = ImageDraw.Draw(band, "RGBA")
+        ink.rectangle((0, 0, w, band_h), fill=(0, 0, 0, 170))
+        for i, line in enumerate(lines):
+            ink.text((6, i * LINE_HEIGHT + 2), line, fill=(255, 255, 255, 255), font=font)
+        picture.paste(band, (0, 0))
+    if help_box:
+        widths = [draw.textlength(line, font=font) for line in HELP_LINES]
+        box_w = int(max(widths)) + 24
+        box_h = LINE_HEIGHT * len(HELP_LINES) + 16
+        x0, y0 = max(0, (w - box_w) // 2), max(0, (h - box_h) // 2)
+        draw.rectangle((x0, y0, x0 + box_w, y0 + box_h), fill=(0, 0, 0, 200), outline=(255, 255, 255, 255))
+        for i, line in enumerate(HELP_LINES):
+            draw.text((x0 + 12, y0 + 8 + i * LINE_HEIGHT), line, fill=(255, 255, 255, 255), font=font)
+    return np.asarray(picture)
+
+
+def resize(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Scale an RGBA image to ``size`` (W, H), bilinear."""
+    if (image.shape[1], image.shape[0]) == tuple(size):
+        return image
+    from PIL import Image
+
+    return np.asarray(Image.fromarray(image).resize(tuple(size), Image.Resampling.BILINEAR))
+
+
+def screenshot_path(model_path: Path) -> Path:
+    """The first free ``NAME-N.png`` beside the model (N = 1, 2, ...): never an existing file."""
+    folder, stem = model_path.parent, model_path.stem
+    n = 1
+    while (folder / f"{stem}-{n}.png").exists():
+        n += 1
+    return folder / f"{stem}-{n}.png"
