@@ -4,6 +4,7 @@ turns each into an edge map and composes the blueprint."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 import time
 from dataclasses import dataclass, field
@@ -136,6 +137,18 @@ def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tup
     return w, h
 
 
+def _current(method):
+    """Make the renderer's context current for the call: a process may hold several contexts
+    (a viewer window and a default renderer, test fixtures), and GL calls go to the current one."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        with self.ctx:
+            return method(self, *args, **kwargs)
+
+    return wrapper
+
+
 class Renderer:
     """Owns one OpenGL context, its targets, programs and uploaded meshes.
 
@@ -167,15 +180,16 @@ class Renderer:
         self.release()
 
     def release(self) -> None:
-        for _, mesh in self._meshes.values():
-            mesh.release()
-        self._meshes.clear()
-        self.pool.release()
-        for vao in self._fullscreen.values():
-            vao.release()
-        for prog in self._programs.values():
-            prog.release()
-        self._programs.clear()
+        with self.ctx:
+            for _, mesh in self._meshes.values():
+                mesh.release()
+            self._meshes.clear()
+            self.pool.release()
+            for vao in self._fullscreen.values():
+                vao.release()
+            for prog in self._programs.values():
+                prog.release()
+            self._programs.clear()
         self.ctx.release()
 
     # -- resources ---------------------------------------------------------------------------
@@ -208,6 +222,7 @@ class Renderer:
             held = self._meshes[key] = (model, _Mesh(self.ctx, model, crease_angle))
         return held[1]
 
+    @_current
     def forget(self, model: Model) -> None:
         """Release the GPU copy of a model."""
         for key in [k for k, (m, _) in self._meshes.items() if m is model]:
@@ -292,6 +307,7 @@ class Renderer:
         return layers
 
     # -- blueprint -----------------------------------------------------------------------------
+    @_current
     def render(
         self,
         model: Model,
@@ -537,6 +553,7 @@ class Renderer:
         return 1 + len(sprites)
 
     # -- layers for other tools ----------------------------------------------------------------
+    @_current
     def peel(
         self,
         model: Model,
