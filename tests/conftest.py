@@ -6,6 +6,7 @@ from pathlib import Path
 
 import pytest
 
+import blueprint.api
 from blueprint import Renderer
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,18 +24,23 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 @pytest.fixture(scope="session")
 def renderer():
-    """One GL context for the session; every test using it must leave no GL error behind."""
+    """One GL context for the session, also the one ``blueprint.render`` and friends use, so
+    tests need not care which context is current; every test must leave no GL error behind."""
     with Renderer() as r:
+        previous, blueprint.api._renderer = blueprint.api._renderer, r
         yield r
+        blueprint.api._renderer = previous
 
 
 @pytest.fixture(autouse=True)
 def _no_gl_errors(request):
+    if "renderer" in request.fixturenames:
+        request.getfixturevalue("renderer").make_current()
     yield
     if "renderer" in request.fixturenames:
         r = request.getfixturevalue("renderer")
-        with r.ctx:
-            assert r.ctx.error == "GL_NO_ERROR"
+        r.make_current()
+        assert r.ctx.error == "GL_NO_ERROR"
 
 
 @pytest.fixture(scope="session")

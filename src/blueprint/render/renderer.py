@@ -138,13 +138,14 @@ def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tup
 
 
 def _current(method):
-    """Make the renderer's context current for the call: a process may hold several contexts
-    (a viewer window and a default renderer, test fixtures), and GL calls go to the current one."""
+    """Make the renderer's context current for the call, and leave it so: a process may hold
+    several contexts (a window, the API's default renderer, test fixtures), and GL calls go to
+    whichever is current."""
 
     @functools.wraps(method)
     def wrapper(self, *args, **kwargs):
-        with self.ctx:
-            return method(self, *args, **kwargs)
+        self.make_current()
+        return method(self, *args, **kwargs)
 
     return wrapper
 
@@ -179,17 +180,21 @@ class Renderer:
     def __exit__(self, *exc) -> None:
         self.release()
 
+    def make_current(self) -> None:
+        """Direct this thread's GL calls to this renderer's context."""
+        self.ctx.__enter__()
+
     def release(self) -> None:
-        with self.ctx:
-            for _, mesh in self._meshes.values():
-                mesh.release()
-            self._meshes.clear()
-            self.pool.release()
-            for vao in self._fullscreen.values():
-                vao.release()
-            for prog in self._programs.values():
-                prog.release()
-            self._programs.clear()
+        self.make_current()
+        for _, mesh in self._meshes.values():
+            mesh.release()
+        self._meshes.clear()
+        self.pool.release()
+        for vao in self._fullscreen.values():
+            vao.release()
+        for prog in self._programs.values():
+            prog.release()
+        self._programs.clear()
         self.ctx.release()
 
     # -- resources ---------------------------------------------------------------------------
