@@ -157,3 +157,36 @@ def test_cli_highlight_and_reveal(tmp_path):
     )
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "closest: gear" in bad.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_shaded_part_hides_what_is_behind_it_and_keeps_edges_in_front(renderer):
+    """Front view, orthographic: a plate behind a larger box. Opaque shading of the box hides
+    the plate's outline, keeps the box's own outline on top; translucent shading lets it through."""
+    from blueprint import Camera
+
+    plate = box((-1, -1, -3.1), (1, 1, -2.9))
+    near = box((-1.5, -1.5, 3.5), (1.5, 1.5, 4.5))
+    model = assemble({"plate": plate, "near": near})
+    camera = Camera.fit(model.positions, "front", ortho=True, aspect=1.0)
+    size = (128, 128)
+
+    def draw(**kw):
+        return renderer.render(model, camera, size=size, style="paper", **kw).image.astype(int)
+
+    plain, opaque = draw(), draw(shade=np.array([False, True]))
+    glass = draw(shade=np.array([False, True]), shade_opacity=0.4)
+    project = camera.projection_matrix() @ camera.view_matrix()
+
+    def pixel(x, y, z):
+        clip = project @ np.array([x, y, z, 1.0])
+        return int((1 - clip[1] / clip[3]) / 2 * size[1]), int((clip[0] / clip[3] + 1) / 2 * size[0])
+
+    row, plate_col = pixel(1.0, 0.0, -3.0)
+    _, box_col = pixel(1.5, 0.0, 4.5)
+    ink = lambda image, col: image[row, col - 1 : col + 2, :3].min()  # noqa: E731
+    assert ink(plain, plate_col) < 200, "the plate's hidden outline shows in the plain drawing"
+    centre = opaque[row, (plate_col + 64) // 2, :3]
+    assert (centre < 250).all(), "the box is shaded"
+    assert np.abs(opaque[row, plate_col - 1 : plate_col + 2, :3] - centre).max() <= 3, "outline hidden"
+    assert ink(opaque, box_col) < ink(plain, box_col) + 40 < 200, "the box's outline stays on top"
+    assert ink(glass, plate_col) < ink(opaque, plate_col) - 10, "translucent shading shows it"

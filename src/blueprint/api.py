@@ -68,8 +68,9 @@ def render_frame(
     renderer = renderer or default_renderer()
     size = tuple(int(v) for v in size)
     check_size(size, int(options.get("supersample", 2)), renderer.max_texture)
-    if options.get("highlight") is not None:
-        options["highlight"] = designated_parts(model, options["highlight"])
+    for key in ("highlight", "shade"):
+        if options.get(key) is not None:
+            options[key] = designated_parts(model, options[key])
     glyphs = options.pop("glyphs", None)
     if glyphs is not None and not isinstance(glyphs, Glyphs):
         glyphs = load_glyphs(glyphs)
@@ -158,6 +159,8 @@ def render(model: Model | str | os.PathLike, **kwargs) -> np.ndarray:
         second model lying on the parts to designate.
     reveal : float, optional
         Depth masking: peel only until this fraction of the highlighted parts is uncovered.
+    shade : str, sequence, Model or (P,) bool, optional
+        Parts drawn shaded inside the blueprint, in depth order (``shade_opacity`` 1: opaque).
     glyphs : Glyphs, str or PathLike, optional
         Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
         ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where

@@ -121,6 +121,10 @@ def cli() -> None:
     default=None,
     help="Outline the parts that this second model file lies on.",
 )
+@click.option("--shade", default=None, help="Parts to draw shaded inside the drawing: globs or indices.")
+@click.option(
+    "--shade-opacity", type=float, default=1.0, show_default=True, help="1 opaque, less see-through."
+)
 @click.option(
     "--glyphs",
     "glyph_file",
@@ -153,6 +157,8 @@ def render(
     supersample,
     highlight,
     highlight_model,
+    shade,
+    shade_opacity,
     glyph_file,
     reveal,
 ):
@@ -183,6 +189,8 @@ def render(
         highlight=designated,
         reveal=reveal,
         glyphs=glyphs,
+        shade=shade,
+        shade_opacity=shade_opacity,
         **kwargs,
     )
     save_png(output, frame.image)

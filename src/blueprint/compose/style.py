@@ -46,6 +46,7 @@ class Style:
     threshold: bool = False
     highlight: RGBA = (1.0, 0.55, 0.1, 1.0)
     highlight_width: float = 2.0
+    shade: RGBA = (0.86, 0.9, 0.95, 1.0)
 
     def __post_init__(self) -> None:
         for label, value in (("hidden_opacity", self.hidden_opacity), ("fade", self.fade)):

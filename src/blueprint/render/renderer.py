@@ -38,6 +38,8 @@ PART_TABLE_WIDTH = 4096
 SLICES = 8
 MASK_UNIT = 7
 MASK_FLAGS_UNIT = 8
+SHADE_UNIT = 9
+SHADE_MAPS_UNIT = 10  # shade.index, then shade.color at the next unit
 
 
 @dataclass
@@ -330,6 +332,8 @@ class Renderer:
         part_edges: bool = True,
         highlight: np.ndarray | None = None,
         reveal: float | None = None,
+        shade: np.ndarray | None = None,
+        shade_opacity: float = 1.0,
         profile: bool = False,
     ) -> Frame:
         """Render a blueprint of ``model``.
@@ -357,6 +361,12 @@ class Renderer:
         reveal : float, optional
             Depth masking: stop peeling as soon as this fraction of the highlighted parts'
             pixels is uncovered, so the clutter behind them is not drawn. Needs ``highlight``.
+        shade : (P,) bool, optional
+            Parts drawn shaded (Lambert, headlight) inside the blueprint, in depth order: edges
+            in front of them stay on top, the ones behind are hidden (``shade_opacity`` 1) or
+            seen through them.
+        shade_opacity : float
+            Opacity of the shading, in (0, 1].
         profile : bool
             Synchronise after each stage to fill ``Frame.stages`` (slower).
         """
@@ -395,6 +405,11 @@ class Renderer:
         if highlight is not None:
             mask, wanted, passes = self._highlight(mesh, camera, ss, highlight, edges)
             draws += passes
+        if shade is not None:
+            if not 0.0 < shade_opacity <= 1.0:
+                raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
+            self._shading(mesh, camera, ss, shade, (*style.shade[:3], shade_opacity))
+            draws += 3
         geo = self._setup_geometry(camera, mesh, depth_tex)
 
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
@@ -412,6 +427,9 @@ class Renderer:
                 with guard:
                     self._draw(mesh, geo, fbos, layer, self._query(layer))
                 draws += 3 + edges.run(layer)
+                if shade is not None:
+                    self._mark_shaded(layer, camera, ss)
+                    draws += 1
             peeled = end
             if reveal is not None:
                 # the one rule that needs the CPU to look after every layer
@@ -428,7 +446,7 @@ class Renderer:
 
         draws += edges.finish(layers)
         out = self.pool.texture("out.color", (w, h), "rgba8")
-        draws += self._compose(style, edges, layers, supersample, out)
+        draws += self._compose(style, edges, layers, supersample, out, shade is not None)
         stage("compose")
         ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
         raw = np.frombuffer(out.read(), np.uint8).reshape(h, w, 4)
@@ -437,29 +455,61 @@ class Renderer:
         ms = (time.perf_counter() - t0) * 1e3
         return Frame(image, layers, counts, camera, ms, draws, stages, revealed)
 
-    def _highlight(self, mesh: _Mesh, camera: Camera, ss, highlight: np.ndarray, edges):
-        """Draw only the designated parts into a depth mask and turn it into the highlight edge
-        map. Returns the mask texture, the number of its covered pixels and the passes run."""
-        highlight = np.asarray(highlight, bool)
-        if highlight.shape != (mesh.part_count,):
-            raise InputError(f"highlight needs one flag per part ({mesh.part_count}), got {highlight.shape}")
-        flags = self.ctx.texture((len(highlight), 1), 1, highlight.astype(np.int32).tobytes(), dtype="i4")
+    def _selected_surface(self, mesh: _Mesh, camera: Camera, ss, parts: np.ndarray, name: str, what: str):
+        """Draw only the flagged parts into the depth texture ``name`` (their front surface),
+        leaving its normals and IDs in the G-buffer's normal and ID targets."""
+        parts = np.asarray(parts, bool)
+        if parts.shape != (mesh.part_count,):
+            raise InputError(f"{what} needs one flag per part ({mesh.part_count}), got {parts.shape}")
+        flags = self.ctx.texture((len(parts), 1), 1, parts.astype(np.int32).tobytes(), dtype="i4")
         flags.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
-        mask = self.pool.depth("gb.mask", ss)
+        depth = self.pool.depth(name, ss)
         normal = self.pool.texture("gb.normal", ss, "rgba16f")
         ids = self.pool.texture("gb.ids", ss, "rg32i")
-        fbo = self.pool.framebuffer((normal, ids), mask)
+        fbo = self.pool.framebuffer((normal, ids), depth)
         fbo.use()
         fbo.clear(depth=1.0)
-        prog = self._setup_geometry(camera, mesh, (mask, mask), selected_only=True)
+        prog = self._setup_geometry(camera, mesh, (depth, depth), selected_only=True)
         flags.use(MASK_FLAGS_UNIT)
         prog["u_selected"].value = MASK_FLAGS_UNIT
         self._draw(mesh, prog, (fbo, fbo), 0, self._query(HARD_MAX_LAYERS))
         flags.release()
+        return depth
+
+    def _highlight(self, mesh: _Mesh, camera: Camera, ss, highlight: np.ndarray, edges):
+        """Draw only the designated parts into a depth mask and turn it into the highlight edge
+        map. Returns the mask texture, the number of its covered pixels and the passes run."""
+        mask = self._selected_surface(mesh, camera, ss, highlight, "gb.mask", "highlight")
         mask.use(MASK_UNIT)
         passes = 2 + edges.run_highlight(MASK_UNIT)
         wanted = self._count_revealed(mask, None, camera, ss)
         return mask, wanted, passes + 1
+
+    def _shading(self, mesh: _Mesh, camera: Camera, ss, shade: np.ndarray, color) -> None:
+        """Shade the flagged parts' front surface into ``shade.color`` and clear the map of the
+        layer that surface belongs to, ``shade.index``, which ``_mark_shaded`` fills."""
+        surface = self._selected_surface(mesh, camera, ss, shade, "gb.shade", "shade")
+        surface.use(SHADE_UNIT)
+        prog, vao = self.fullscreen("blueprint.compose:glsl/shade.frag")
+        prog["u_depth"].value = SHADE_UNIT
+        prog["u_normal"].value = 3
+        prog["u_color"].value = tuple(color)
+        target = self.pool.framebuffer((self.pool.texture("shade.color", ss, "rgba8"),))
+        target.use()
+        vao.render(vertices=3)
+        index = self.pool.framebuffer((self.pool.texture("shade.index", ss, "r8"),))
+        index.use()
+        index.clear()
+
+    def _mark_shaded(self, layer: int, camera: Camera, ss) -> None:
+        prog, vao = self.fullscreen("blueprint.render:glsl/shade_index.frag")
+        prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
+        prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
+        prog["u_shade_depth"].value = SHADE_UNIT
+        prog["u_layer_depth"].value = layer % 2
+        prog["u_layer"].value = layer
+        self.pool.framebuffer((self.pool.texture("shade.index", ss, "r8"),)).use()
+        vao.render(vertices=3)
 
     def _count_revealed(self, mask, layer_unit: int | None, camera: Camera, ss) -> int:
         """Pixels of the mask whose surface is in layers peeled so far (all mask pixels when
@@ -497,10 +547,20 @@ class Renderer:
             return _ComputeEdges(self, prog, ss, radius, highlight_radius)
         return _FragmentEdges(self, prog, ss, radius, highlight_radius)
 
-    def _compose(self, style: Style, edges, layers: int, supersample: int, out) -> int:
+    def _compose(self, style: Style, edges, layers: int, supersample: int, out, shaded: bool) -> int:
         """Paper, then the edge layers back to front onto ``out``; returns the passes run."""
         inks = style.layer_inks(max(layers, 1))
         groups = list(range(((max(layers, 1) - 1) // 8) * 8, -1, -8))
+
+        def shading(prog, first: int) -> None:
+            prog["u_shaded"].value = shaded
+            if shaded:
+                prog["u_first_layer"].value = first
+                prog["u_shade_index"].value = SHADE_MAPS_UNIT
+                prog["u_shade_color"].value = SHADE_MAPS_UNIT + 1
+                self.pool.texture("shade.index", edges.ss, "r8").use(SHADE_MAPS_UNIT)
+                self.pool.texture("shade.color", edges.ss, "rgba8").use(SHADE_MAPS_UNIT + 1)
+
         if self.use_compute:
             prog = self.compute("blueprint.compose:glsl/compose.comp")
             _set_paper(prog, style)
@@ -514,11 +574,13 @@ class Renderer:
                 edges.array(first).use(5)
                 prog["u_first"].value = first == groups[0]
                 prog["u_layers"].value = count
+                shading(prog, first)
                 prog["u_ink"].write(_inks(inks, first, count))
                 prog.run(*_groups(out.size))
                 self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             if edges.highlight is not None:
                 edges.highlight.use(5)
+                prog["u_shaded"].value = False
                 prog["u_first"].value = False
                 prog["u_layers"].value = 1
                 prog["u_ink"].write(_inks(np.array([style.highlight]), 0, 1))
@@ -542,15 +604,19 @@ class Renderer:
         prog["u_edges1"].value = 6
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-        sprites = [(edges.texture(f), edges.texture(f + 4), min(8, layers - f), inks[f:]) for f in groups]
+        sprites = [(edges.texture(f), edges.texture(f + 4), min(8, layers - f), inks[f:], f) for f in groups]
         if layers == 0:
             sprites = []
         if edges.highlight is not None:
-            sprites.append((edges.highlight, edges.highlight, 1, np.array([style.highlight])))
-        for first, second, count, ink in sprites:
+            sprites.append((edges.highlight, edges.highlight, 1, np.array([style.highlight]), None))
+        for first, second, count, ink, first_layer in sprites:
             first.use(5)
             if count > 4:
                 second.use(6)
+            if first_layer is None:
+                prog["u_shaded"].value = False
+            else:
+                shading(prog, first_layer)
             prog["u_ink"].write(_inks(ink, 0, count))
             prog["u_layers"].value = count
             vao.render(vertices=3)

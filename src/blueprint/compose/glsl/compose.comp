@@ -13,6 +13,14 @@ uniform bool u_threshold;   // wire-frame variant: binary edges
 uniform bool u_first;
 uniform bool u_has_paper;
 uniform vec4 u_ink[8];      // straight colour and opacity per layer
+uniform bool u_shaded;
+
+#include "shaded_layers.glsl"
+
+float edge_at(int k, ivec2 q) {
+    float v = texelFetch(u_edges, ivec3(q, k), 0).r;
+    return u_threshold ? step(0.5, v) : v;
+}
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -27,6 +35,18 @@ void main() {
     }
     ivec2 base = p * u_supersample;
     float norm = 1.0 / float(u_supersample * u_supersample);
+    if (u_shaded) {
+        vec4 sum = vec4(0.0);
+        for (int y = 0; y < u_supersample; ++y) {
+            for (int x = 0; x < u_supersample; ++x) {
+                vec4 sample_color;
+                SHADED_COMPOSITE(edge_at, u_layers, u_ink, base + ivec2(x, y), sample_color)
+                sum += sample_color;
+            }
+        }
+        imageStore(u_out, p, sum * norm + color * (1.0 - sum.a * norm));
+        return;
+    }
     for (int k = u_layers - 1; k >= 0; --k) {
         float coverage = 0.0;
         for (int y = 0; y < u_supersample; ++y) {

@@ -7,11 +7,32 @@ uniform int u_layers;        // layers of these two textures that take part
 uniform int u_supersample;
 uniform bool u_threshold;    // wire-frame variant: binary edges
 uniform vec4 u_ink[8];       // straight colour and opacity per layer
+uniform bool u_shaded;
 
 out vec4 o_color;
 
+#include "shaded_layers.glsl"
+
+float edge_at(int k, ivec2 q) {
+    vec4 e = k < 4 ? texelFetch(u_edges0, q, 0) : texelFetch(u_edges1, q, 0);
+    float v = e[k & 3];
+    return u_threshold ? step(0.5, v) : v;
+}
+
 void main() {
     ivec2 base = ivec2(gl_FragCoord.xy) * u_supersample;
+    if (u_shaded) {
+        vec4 sum = vec4(0.0);
+        for (int y = 0; y < u_supersample; ++y) {
+            for (int x = 0; x < u_supersample; ++x) {
+                vec4 sample_color;
+                SHADED_COMPOSITE(edge_at, u_layers, u_ink, base + ivec2(x, y), sample_color)
+                sum += sample_color;
+            }
+        }
+        o_color = sum / float(u_supersample * u_supersample);
+        return;
+    }
     vec4 c0 = vec4(0.0);
     vec4 c1 = vec4(0.0);
     for (int y = 0; y < u_supersample; ++y) {
