@@ -306,9 +306,11 @@ def bench(models, sizes, layer_options, frames, warmup, supersample, style):
 
 
 # Commands of other packages import this module's shared options, so they are added last.
+from blueprint.pipeline.command import ops, pipeline, turntable  # noqa: E402
 from blueprint.viewer.command import view  # noqa: E402
 
-cli.add_command(view)
+for command in (view, pipeline, ops, turntable):
+    cli.add_command(command)
 
 
 def main(argv: list[str] | None = None) -> None:

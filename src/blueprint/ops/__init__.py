@@ -6,6 +6,8 @@ its parameters with ranges; ``Op.uniforms`` validates values before any GPU work
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from blueprint.errors import InputError
@@ -85,4 +87,294 @@ DILATE = Op(
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}
 
-__all__ = ["DILATE", "EDGES", "OPS", "Op", "Param"]
+# -- the pipeline operation library (blueprint.pipeline) ------------------------------------------
+# Input formats are a format name ("r8": that kind of texture with at least its channels),
+# "float" (any non-integer target, depth included), "int" (an integer target) or "depth" (a depth
+# attribute only). An output of "same" takes the first input's format.
+
+
+@dataclass(frozen=True)
+class IntParam(Param):
+    """An integer uniform with a range."""
+
+    def check(self, op: str, value) -> int:
+        if isinstance(value, bool) or not isinstance(value, int | float) or int(value) != value:
+            raise InputError(f"{op}.{self.name} must be a whole number, got {value!r}")
+        super().check(op, value)
+        return int(value)
+
+
+@dataclass(frozen=True)
+class ChoiceParam(Param):
+    """One of a few names; the uniform gets the index of the choice."""
+
+    choices: tuple[str, ...] = ()
+
+    def check(self, op: str, value) -> int:
+        if value not in self.choices:
+            raise InputError(f"{op}.{self.name} must be one of {', '.join(self.choices)}, got {value!r}")
+        return self.choices.index(value)
+
+
+@dataclass(frozen=True)
+class PipelineOp(Op):
+    """An operation of the pipeline library.
+
+    ``kind`` says how the executor runs it: ``single`` (one full-screen pass), ``separable``
+    (a pass along x into a float scratch target, then along y) or ``composite`` (depth-sprite
+    composition of a stack of layers over the style's paper, eight layers a pass). ``stacks``
+    are inputs that take every depth layer of a per-layer pass; ``resample`` inputs may be an
+    integer multiple of the output's size (the others must match it). ``derive`` turns checked
+    parameter values into further uniforms; ``identity`` says when a pass does nothing, so the
+    executor can skip it.
+    """
+
+    kind: str = "single"
+    stacks: tuple[str, ...] = ()
+    resample: tuple[str, ...] = ()
+    derive: Callable[[dict], dict] | None = None
+    identity: Callable[[dict], bool] | None = None
+
+
+def _glsl(name: str) -> str:
+    return f"blueprint.ops:glsl/{name}.frag"
+
+
+def _light(values: dict) -> dict:
+    az, el = math.radians(values["u_azimuth"]), math.radians(values["u_elevation"])
+    return {"u_light": (math.cos(el) * math.sin(az), math.sin(el), math.cos(el) * math.cos(az))}
+
+
+def _gaussian(values: dict) -> dict:
+    sigma = values["u_sigma"]
+    radius = min(BLUR_MAX_RADIUS, math.ceil(3.0 * sigma))
+    weights = [math.exp(-(i * i) / (2.0 * sigma * sigma)) for i in range(radius + 1)]
+    total = weights[0] + 2.0 * sum(weights[1:])
+    padded = [w / total for w in weights] + [0.0] * (BLUR_MAX_RADIUS + 1 - len(weights))
+    return {"u_radius": radius, "u_weights": tuple(padded)}
+
+
+BLUR_MAX_RADIUS = 48
+_EDGE_PARAMS = (
+    Param(
+        "threshold", 0.0, 0.0, 100.0, "0: the gradient magnitude; above 0: 1 where the magnitude exceeds it"
+    ),
+    IntParam("channels", 3, 1, 4, "channels that take part (3: the xyz of a normal)"),
+    Param("invert", False, doc="dark edges on white (1 - value), as the paper draws them"),
+)
+_LIGHT_PARAMS = (
+    Param("azimuth", -30.0, -180.0, 180.0, "light direction in eye space, degrees right of the view axis"),
+    Param("elevation", 40.0, -90.0, 90.0, "light direction in eye space, degrees above the horizon"),
+    Param("ambient", 0.2, 0.0, 1.0, "light that reaches every surface"),
+    Param("background", 0.0, 0.0, 1.0, "grey where there is no surface (0: transparent)"),
+)
+
+ROBERTS = PipelineOp(
+    name="roberts",
+    shader=_glsl("roberts"),
+    inputs={"source": "float"},
+    output="r8",
+    params=_EDGE_PARAMS,
+    doc="Roberts cross: |f(x,y) - f(x+1,y+1)| + |f(x+1,y) - f(x,y+1)| over the chosen channels",
+)
+SOBEL = PipelineOp(
+    name="sobel",
+    shader=_glsl("sobel"),
+    inputs={"source": "float"},
+    output="r8",
+    params=_EDGE_PARAMS,
+    doc="Sobel gradient magnitude / 4 (a unit step gives 1) over the chosen channels",
+)
+ERODE = PipelineOp(
+    name="erode",
+    shader=_glsl("erode"),
+    inputs={"source": "r8"},
+    output="r8",
+    params=(Param("radius", 1.0, 0.0, 16.0, "disc radius in pixels"),),
+    doc="grey-scale erosion by a disc with a soft rim (the dual of dilate)",
+    identity=lambda v: v["u_radius"] <= 0.0,
+)
+BLUR = PipelineOp(
+    name="blur",
+    shader=_glsl("blur"),
+    inputs={"source": "float"},
+    output="same",
+    params=(
+        Param("sigma", 1.0, 0.3, 16.0, "standard deviation in pixels (taps out to 3 sigma, at most 48)"),
+    ),
+    doc="separable Gaussian blur: a pass along x into a float scratch target, then along y",
+    kind="separable",
+    derive=_gaussian,
+)
+DOWNSAMPLE = PipelineOp(
+    name="downsample",
+    shader=_glsl("downsample"),
+    inputs={"source": "float"},
+    output="same",
+    params=(
+        ChoiceParam(
+            "filter",
+            "box",
+            doc="box: mean of each block; gaussian: sigma = factor / 2",
+            choices=("box", "gaussian"),
+        ),
+    ),
+    doc="shrink by the integer ratio of input to output scale (supersampling)",
+    resample=("source",),
+)
+THRESHOLD = PipelineOp(
+    name="threshold",
+    shader=_glsl("threshold"),
+    inputs={"source": "float"},
+    output="same",
+    params=(
+        Param("level", 0.5, 0.0, 1.0, "values at or above it become 1, below it 0 (alpha kept)"),
+        Param("invert", False, doc="1 below the level, 0 at or above it"),
+    ),
+    doc="binary threshold of the colour channels",
+)
+INVERT = PipelineOp(
+    name="invert",
+    shader=_glsl("invert"),
+    inputs={"source": "float"},
+    output="same",
+    doc="1 - value in the colour channels (alpha kept)",
+)
+MIX = PipelineOp(
+    name="mix",
+    shader=_glsl("mix"),
+    inputs={"a": "float", "b": "float"},
+    output="same",
+    params=(
+        ChoiceParam(
+            "mode",
+            "mix",
+            doc="r(a, b): mix: b, multiply: a*b, add: a+b, subtract: a-b, min, max, screen: 1-(1-a)(1-b)",
+            choices=("mix", "multiply", "add", "subtract", "min", "max", "screen"),
+        ),
+        Param("factor", 0.5, 0.0, 1.0, "output = a + factor * (r(a, b) - a), all four channels"),
+    ),
+    doc="blend two images of one size (a one-channel input counts as grey)",
+)
+CONTRAST = PipelineOp(
+    name="contrast",
+    shader=_glsl("contrast"),
+    inputs={"source": "float"},
+    output="same",
+    params=(
+        Param("contrast", 1.5, 0.0, 16.0, "gain about mid-grey"),
+        Param("brightness", 0.0, -1.0, 1.0, "added after the gain"),
+    ),
+    doc="(value - 0.5) * contrast + 0.5 + brightness in the colour channels",
+)
+SCREEN = PipelineOp(
+    name="screen",
+    shader=_glsl("screen"),
+    inputs={"source": "float"},
+    output="r8",
+    params=(
+        Param("period", 6.0, 2.0, 64.0, "dot spacing in pixels"),
+        Param("angle", 45.0, -90.0, 90.0, "screen angle in degrees"),
+    ),
+    doc="halftone screening: 1 where the intensity (luminance, or the only channel) exceeds a dot screen",
+)
+LAMBERT = PipelineOp(
+    name="lambert",
+    shader=_glsl("lambert"),
+    inputs={"normal": "rgba16f", "depth": "depth", "color": "float"},
+    output="rgba8",
+    params=_LIGHT_PARAMS,
+    doc="deferred Lambert shading: colour * (ambient + (1 - ambient) max(n.l, 0)), opaque",
+    derive=_light,
+)
+TOON = PipelineOp(
+    name="toon",
+    shader=_glsl("toon"),
+    inputs={"normal": "rgba16f", "depth": "depth", "color": "float"},
+    output="rgba8",
+    params=(*_LIGHT_PARAMS, IntParam("bands", 3, 2, 16, "light levels")),
+    doc="deferred toon shading: the Lambert term quantised to bands levels",
+    derive=_light,
+)
+NORMAL_EDGES = PipelineOp(
+    name="normal_edges",
+    shader=_glsl("normal_edges"),
+    inputs={"normal": "rgba16f", "depth": "depth"},
+    output="r8",
+    params=(Param("angle", 30.0, 0.5, 180.0, "degrees between neighbouring normals that make an edge"),),
+    doc="1 at a covered pixel whose normal turns more than angle from a covered 4-neighbour's",
+    derive=lambda v: {"u_cos": math.cos(math.radians(v["u_angle"]))},
+)
+DEPTH_EDGES = PipelineOp(
+    name="depth_edges",
+    shader=_glsl("depth_edges"),
+    inputs={"depth": "float"},
+    output="r8",
+    params=(
+        Param(
+            "threshold", 0.001, 0.0, 1e6, "second difference of depth (in its own units) that makes an edge"
+        ),
+    ),
+    doc="1 where the second difference of depth along x or y exceeds threshold (planes: 0; border: 0)",
+)
+ID_EDGES = PipelineOp(
+    name="id_edges",
+    shader=_glsl("id_edges"),
+    inputs={"ids": "int"},
+    output="r8",
+    params=(IntParam("channel", 0, 0, 1, "which channel holds the ID (ids: 0 triangle, 1 part)"),),
+    doc="1 where a 4-neighbour has another ID (integer compare: exact)",
+)
+COMPOSITE = PipelineOp(
+    name="composite",
+    shader=_glsl("composite"),
+    inputs={"layers": "r8"},
+    output="rgba8",
+    params=(
+        ChoiceParam(
+            "style",
+            "blueprint",
+            doc="paper and inks",
+            choices=("blueprint", "paper", "transparent", "wireframe"),
+        ),
+    ),
+    doc="depth-sprite composite: the style's paper, then every layer's map back to front in its ink, "
+    "box-filtered down by the ratio of input to output size (premultiplied alpha)",
+    kind="composite",
+    stacks=("layers",),
+    resample=("layers",),
+)
+
+for _op in (
+    ROBERTS,
+    SOBEL,
+    ERODE,
+    BLUR,
+    DOWNSAMPLE,
+    THRESHOLD,
+    INVERT,
+    MIX,
+    CONTRAST,
+    SCREEN,
+    LAMBERT,
+    TOON,
+    NORMAL_EDGES,
+    DEPTH_EDGES,
+    ID_EDGES,
+    COMPOSITE,
+):
+    OPS[_op.name] = _op
+del _op
+
+__all__ = [
+    "BLUR",
+    "COMPOSITE",
+    "DILATE",
+    "EDGES",
+    "OPS",
+    "ChoiceParam",
+    "IntParam",
+    "Op",
+    "Param",
+    "PipelineOp",
+]

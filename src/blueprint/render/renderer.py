@@ -370,6 +370,27 @@ class Renderer:
         profile : bool
             Synchronise after each stage to fill ``Frame.stages`` (slower).
         """
+        if highlight is None and reveal is None and shade is None:
+            # the plain blueprint is the `blueprint` pipeline preset; designated and shaded
+            # parts are not expressed as pipeline passes yet and take the path below
+            from blueprint.pipeline.executor import render_blueprint
+
+            return render_blueprint(
+                self,
+                model,
+                camera,
+                size=size,
+                view=view,
+                style=style,
+                max_layers=max_layers,
+                min_fraction=min_fraction,
+                crease_angle=crease_angle,
+                line_width=line_width,
+                supersample=supersample,
+                depth_threshold=depth_threshold,
+                part_edges=part_edges,
+                profile=profile,
+            )
         style = get_style(style)
         _check_frame_args(max_layers, min_fraction, crease_angle, line_width)
         params = EDGES.uniforms(depth_threshold=depth_threshold, part_edges=part_edges)

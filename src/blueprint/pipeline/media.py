@@ -1,0 +1,175 @@
+"""Images and video in and out of pipelines: Pillow for images, imageio-ffmpeg for video.
+
+Arrays are (H, W, C) with row 0 at the top of the picture. Video files are written atomically
+(a temporary file in the same folder, renamed when the last frame is in); imageio-ffmpeg is
+imported only when a video is read or written, so it is needed only then.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from blueprint.errors import InputError
+from blueprint.gpu.targets import FORMATS
+
+VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
+
+
+def _ffmpeg():
+    try:
+        import imageio_ffmpeg
+    except ImportError:
+        raise InputError("video needs imageio-ffmpeg: pip install imageio-ffmpeg") from None
+    return imageio_ffmpeg
+
+
+def to_format(rgba: np.ndarray, fmt: str) -> np.ndarray:
+    """(H, W, 3 or 4) uint8 to the components and dtype of target format ``fmt``."""
+    if rgba.shape[-1] == 3:
+        rgba = np.concatenate([rgba, np.full(rgba.shape[:2] + (1,), 255, np.uint8)], axis=-1)
+    components, dtype = FORMATS[fmt]
+    if components == 1:
+        data = (rgba[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32))[..., None]
+        data = np.clip(np.round(data), 0, 255).astype(np.uint8) if dtype == "f1" else data / 255.0
+    else:
+        data = rgba if dtype == "f1" else rgba.astype(np.float32) / 255.0
+    return np.ascontiguousarray(data.astype({"f1": np.uint8, "f2": np.float16, "f4": np.float32}[dtype]))
+
+
+def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.ndarray:
+    """An image file as (H, W, C) in target format ``fmt``, resized to ``size`` if given."""
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as picture:
+            picture = picture.convert("RGBA")
+            if size is not None and picture.size != tuple(size):
+                picture = picture.resize(tuple(size), Image.Resampling.BILINEAR)
+            rgba = np.asarray(picture)
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such image file") from None
+    except (UnidentifiedImageError, OSError) as exc:
+        raise InputError(f"{path}: cannot read the image ({exc})") from None
+    return to_format(rgba, fmt)
+
+
+def image_size(path: Path) -> tuple[int, int]:
+    """(width, height) of an image or of a video's frames."""
+    if path.suffix.lower() in VIDEO_FORMATS or path.suffix.lower() in (".webm", ".gif"):
+        return video_info(path)[0]
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as picture:
+            return picture.size
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such image file") from None
+    except (UnidentifiedImageError, OSError) as exc:
+        raise InputError(f"{path}: cannot read the image ({exc})") from None
+
+
+def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
+    """(size, frames per second, frame count) of a video file."""
+    ffmpeg = _ffmpeg()
+    if not Path(path).is_file():
+        raise InputError(f"{path}: no such video file")
+    try:
+        reader = ffmpeg.read_frames(str(path))
+        meta = next(reader)
+        reader.close()
+        frames, _ = ffmpeg.count_frames_and_secs(str(path))
+    except (RuntimeError, OSError, StopIteration) as exc:
+        raise InputError(
+            f"{path}: cannot read the video ({str(exc).strip().splitlines()[0] if str(exc) else exc})"
+        ) from None
+    return tuple(meta["size"]), float(meta.get("fps") or 25.0), int(frames)
+
+
+def read_video(path: Path) -> Iterator[np.ndarray]:
+    """The frames of a video, each (H, W, 3) uint8."""
+    ffmpeg = _ffmpeg()
+    try:
+        reader = ffmpeg.read_frames(str(path))
+        meta = next(reader)
+    except (RuntimeError, OSError, StopIteration) as exc:
+        raise InputError(f"{path}: cannot read the video ({exc})") from None
+    w, h = meta["size"]
+    try:
+        for raw in reader:
+            yield np.frombuffer(raw, np.uint8).reshape(h, w, 3)
+    finally:
+        reader.close()
+
+
+class VideoWriter:
+    """Writes frames to a video file atomically: ``with VideoWriter(path, size, fps) as v:
+    v.write(frame)``; the file appears, complete, when the block ends without an error."""
+
+    def __init__(self, path: Path, size: tuple[int, int], fps: float = 25.0, crf: int = 18) -> None:
+        self.path = Path(path)
+        suffix = self.path.suffix.lower()
+        if suffix not in VIDEO_FORMATS:
+            raise InputError(f"{path}: a video must end in {', '.join(VIDEO_FORMATS)}")
+        self.size = tuple(int(v) for v in size)
+        self.fps = fps
+        self.crf = crf
+        self.frames = 0
+        self._container = VIDEO_FORMATS[suffix]
+        self._tmp: str | None = None
+        self._gen = None
+
+    def __enter__(self) -> VideoWriter:
+        ffmpeg = _ffmpeg()
+        folder = self.path.parent if str(self.path.parent) else Path(".")
+        fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name[:64]}.", suffix=".tmp", dir=folder)
+        os.close(fd)
+        w, h = self.size
+        # 4:2:0 (what players expect) needs even sizes; odd ones keep full chroma
+        pix_fmt = "yuv420p" if w % 2 == 0 and h % 2 == 0 else "yuv444p"
+        self._gen = ffmpeg.write_frames(
+            self._tmp,
+            self.size,
+            fps=self.fps,
+            codec="libx264",
+            pix_fmt_out=pix_fmt,
+            quality=None,
+            macro_block_size=1,
+            ffmpeg_log_level="error",
+            output_params=["-crf", str(self.crf), "-f", self._container],
+        )
+        self._gen.send(None)
+        return self
+
+    def write(self, frame: np.ndarray) -> None:
+        """Add an (H, W, 1, 3 or 4) uint8 frame, row 0 at the top (alpha is dropped)."""
+        if frame.ndim == 2:
+            frame = frame[..., None]
+        if frame.shape[:2] != (self.size[1], self.size[0]):
+            raise ValueError(
+                f"frame is {frame.shape[1]}x{frame.shape[0]}, video is {self.size[0]}x{self.size[1]}"
+            )
+        if frame.shape[2] == 1:
+            frame = np.repeat(frame, 3, axis=2)
+        self._gen.send(np.ascontiguousarray(frame[..., :3], dtype=np.uint8))
+        self.frames += 1
+
+    def __exit__(self, kind, exc, tb) -> None:
+        try:
+            if self._gen is not None:
+                with contextlib.suppress(StopIteration):
+                    self._gen.close()
+            if kind is None:
+                if self.frames == 0:
+                    raise InputError(f"{self.path}: no frames to write")
+                os.replace(self._tmp, self.path)
+        except OSError as error:
+            raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
+        finally:
+            if self._tmp and os.path.exists(self._tmp):
+                os.unlink(self._tmp)

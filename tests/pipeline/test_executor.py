@@ -1,0 +1,267 @@
+"""The executor on the GPU: user pipelines with user shaders, the attribute pass against the
+renderer's peel, the blueprint preset against Renderer.render, target reuse, texel sizes,
+dumps and image inputs."""
+
+from __future__ import annotations
+
+import textwrap
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from blueprint import examples
+from blueprint.errors import InputError, ShaderError
+from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
+from blueprint.pipeline.executor import part_color
+from blueprint.pipeline.run import run_pipeline
+
+MEAN_TOLERANCE = 1.0  # the golden images' tolerance (tests/test_golden.py)
+SIZE = (64, 48)
+
+
+@pytest.fixture(scope="module")
+def ex(renderer):
+    return executor_for(renderer)
+
+
+@pytest.fixture(scope="module")
+def gearbox(renderer):
+    model = examples.gearbox()
+    yield model
+    renderer.forget(model)
+
+
+def write(folder, name, text):
+    path = folder / name
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+# -- user pipelines --------------------------------------------------------------------------------
+USER_SHADER = """
+// a user's own pass: gain on the colour, and the texel sizes the executor sets
+#include "helpers.glsl"
+uniform sampler2D u_src;
+uniform float u_gain;
+uniform vec3 u_tint;
+uniform vec2 u_texel;
+uniform vec2 u_src_texel;
+out vec4 o_value;
+void main() {
+    vec4 c = texelFetch(u_src, ivec2(gl_FragCoord.xy), 0);
+    o_value = vec4(scaled(c.r, u_gain) * u_tint.r, u_texel.x, u_texel.y, u_src_texel.x);
+}
+"""
+
+USER_PIPELINE = """
+[pipeline]
+output = "tinted"
+[variables]
+gain = 0.5
+[images.photo]
+format = "rgba32f"
+[passes.tinted]
+shader = "tint.frag"
+inputs = { src = "photo" }
+format = "rgba32f"
+params = { gain = "= gain * 2", tint = [0.5, 1.0, 1.0] }
+[passes.tinted.uniforms]
+gain = { type = "float", default = 1.0, min = 0.0, max = 4.0 }
+tint = { type = "vec3", default = [1.0, 1.0, 1.0], min = 0.0, max = 1.0 }
+"""
+
+
+def test_user_pipeline_with_user_shader(tmp_path, ex):
+    write(tmp_path, "helpers.glsl", "float scaled(float v, float k) { return v * k; }\n")
+    write(tmp_path, "tint.frag", USER_SHADER)
+    spec = load_pipeline(str(write(tmp_path, "mine.toml", USER_PIPELINE)))
+    image = np.random.default_rng(1).integers(0, 256, (6, 8, 3), dtype=np.uint8)
+    out = ex.run(spec, images={"photo": image}).output
+    assert out.shape == (6, 8, 4) and out.dtype == np.float32
+    np.testing.assert_allclose(out[..., 0], image[..., 0] / 255.0 * 1.0 * 0.5, atol=1e-6)
+    np.testing.assert_allclose(out[..., 1:], np.broadcast_to([1 / 8, 1 / 6, 1 / 8], (6, 8, 3)), atol=1e-7)
+    # another size: the texel uniforms follow it
+    out = ex.run(spec, images={"photo": np.zeros((4, 16, 3), np.uint8)}, variables={"gain": 1.0}).output
+    np.testing.assert_allclose(out[0, 0, 1:], [1 / 16, 1 / 4, 1 / 16], atol=1e-7)
+    # the output at a given size, the image resized to it
+    out = ex.run(spec, images={"photo": image}, size=(4, 3)).output
+    assert out.shape == (3, 4, 4)
+
+
+def test_user_shader_compile_error_names_file_and_line(tmp_path, ex):
+    write(tmp_path, "helpers.glsl", "float scaled(float v, float k) { return v * k; }\n")
+    write(tmp_path, "tint.frag", USER_SHADER.replace("o_value = vec4(", "o_value = vec4(undeclared + "))
+    spec = load_pipeline(str(write(tmp_path, "mine.toml", USER_PIPELINE)))
+    with pytest.raises(ShaderError, match=r"tint\.frag:12: error"):
+        ex.run(spec, images={"photo": np.zeros((4, 4, 3), np.uint8)})
+
+
+def test_image_file_input_and_chain_reuse(tmp_path, ex, renderer):
+    rng = np.random.default_rng(2)
+    picture = rng.integers(0, 256, (10, 12, 3), dtype=np.uint8)
+    Image.fromarray(picture).save(tmp_path / "in.png")
+    text = "[pipeline]\noutput = 'p4'\n[images.photo]\nfile = 'in.png'\n"
+    previous = "photo"
+    for k in range(1, 5):
+        text += f'[passes.p{k}]\nop = "invert"\ninputs = {{ source = "{previous}" }}\n'
+        previous = f"p{k}"
+    spec = load_pipeline(str(write(tmp_path, "chain.toml", text)))
+    result = ex.run(spec, dumps=("p1",))
+    np.testing.assert_array_equal(result.output[..., :3], picture)  # inverted four times
+    np.testing.assert_array_equal(result.dumps["p1"][..., :3], 255 - picture)
+    names = {n for n in renderer.pool._textures if n.startswith("pipeline.F") and n.endswith(".rgba8.1")}
+    assert len(names) <= 3  # two ping-pong targets (and the pinned dump)
+
+
+def test_missing_model_and_image(tmp_path, ex):
+    with pytest.raises(InputError, match="give a model"):
+        ex.run(load_pipeline("edges-sobel"))
+    spec = load_pipeline(str(write(tmp_path, "p.toml", "[pipeline]\noutput='photo'\n[images.photo]\n")))
+    with pytest.raises(InputError, match="images.photo: no file given"):
+        ex.run(spec)
+
+
+# -- attributes --------------------------------------------------------------------------------------
+ATTRIBUTES = """
+[pipeline]
+output = "layer"
+layers = 3
+[attributes]
+depth = {}
+ids = {}
+triangle = {}
+part = {}
+layer = {}
+linear_depth = {}
+position = {}
+base_color = {}
+uv = {}
+[passes.mark]
+op = "id_edges"
+inputs = { ids = "triangle" }
+per_layer = true
+"""
+
+
+def test_attribute_pass_matches_the_peel(tmp_path, ex, renderer, gearbox):
+    spec = load_pipeline(str(write(tmp_path, "attrs.toml", ATTRIBUTES)))
+    camera = renderer.camera_for(gearbox, SIZE)
+    names = ("depth", "triangle", "part", "linear_depth", "position", "base_color", "uv", "ids", "mark")
+    result = ex.run(spec, gearbox, camera, size=SIZE, dumps=names)
+    peel = renderer.peel(gearbox, camera, size=SIZE, max_layers=3)
+    d = result.dumps
+    n = len(peel.depth)
+    assert n == 3 and result.layers == 3
+    np.testing.assert_array_equal(d["depth"][..., 0], peel.depth)
+    covered = peel.depth < 1
+    np.testing.assert_array_equal(d["triangle"][..., 0], peel.triangle)
+    np.testing.assert_array_equal(d["part"][..., 0], peel.part)
+    np.testing.assert_array_equal(result.output[..., 0], np.where(covered, np.arange(n)[:, None, None], -1))
+    np.testing.assert_array_equal(d["ids"][..., 0], np.where(covered, peel.triangle + 1, 0))
+    # linear depth and position against the window depth, through the camera's matrices
+    near, far = camera.near, camera.far
+    eye_depth = near * far / (far - peel.depth * (far - near))
+    np.testing.assert_allclose(d["linear_depth"][..., 0][covered], eye_depth[covered], rtol=2e-4)
+    assert (d["linear_depth"][~covered] == 0).all()
+    pos = d["position"]
+    assert (pos[..., 3][covered] == 1).all() and (pos[~covered] == 0).all()
+    clip = np.einsum("ij,...j->...i", peel.projection @ peel.view, pos[..., :4].astype(np.float64))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        window = (clip[..., 2] / clip[..., 3] + 1) / 2
+    np.testing.assert_allclose(window[covered], peel.depth[covered], atol=2e-5)
+    color = d["base_color"]
+    expected = np.round(part_color(peel.part) * 255)
+    assert np.abs(color[..., :3][covered].astype(int) - expected[covered]).max() <= 1
+    assert (color[..., 3][covered] == 255).all() and (color[~covered] == 0).all()
+    uv = d["uv"]
+    assert (uv[covered] >= -1e-6).all() and (uv[covered] <= 1 + 1e-6).all() and (uv[~covered] == 0).all()
+    # a per-layer pass ran on every layer: ID edges of each layer's triangles
+    assert d["mark"].shape == (3, SIZE[1], SIZE[0], 1) and d["mark"][1].any()
+
+
+def test_attributes_at_two_scales(tmp_path, ex, gearbox):
+    text = """
+    [pipeline]
+    output = "small"
+    [attributes]
+    depth = { scale = 2 }
+    base_color = { scale = 1 }
+    [passes.big]
+    op = "invert"
+    inputs = { source = "depth" }
+    [passes.small]
+    op = "downsample"
+    inputs = { source = "big" }
+    [passes.mixed]
+    op = "mix"
+    inputs = { a = "small", b = "base_color" }
+    """
+    spec = load_pipeline(
+        str(write(tmp_path, "two.toml", text.replace('output = "small"', 'output = "mixed"')))
+    )
+    result = ex.run(spec, gearbox, size=SIZE, dumps=("base_color", "small"))
+    assert result.output.shape == (SIZE[1], SIZE[0], 1)
+    covered_small = result.dumps["small"][..., 0] > 0.0
+    covered_color = result.dumps["base_color"][..., 3] > 0
+    assert (covered_small == covered_color).mean() > 0.97
+
+
+# -- the blueprint --------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "options",
+    [
+        {},
+        {"style": "paper"},
+        {"style": "transparent"},
+        {"style": "wireframe"},
+        {"line_width": 2.0},
+        {"supersample": 1, "max_layers": None},
+        {"crease_angle": 50.0, "depth_threshold": 8.0, "part_edges": False},
+    ],
+    ids=lambda o: ",".join(f"{k}={v}" for k, v in o.items()) or "default",
+)
+def test_blueprint_preset_equals_renderer_render(renderer, gearbox, options):
+    size = (96, 72)
+    expected = renderer.render(gearbox, size=size, **options)
+    actual = render_blueprint(renderer, gearbox, size=size, **options)
+    assert actual.layers == expected.layers and actual.layer_pixels == expected.layer_pixels
+    a, b = (f.image.astype(np.float64) for f in (actual, expected))
+    a[..., :3] *= a[..., 3:] / 255
+    b[..., :3] *= b[..., 3:] / 255
+    assert np.abs(a - b).mean(axis=(0, 1)).max() < MEAN_TOLERANCE
+    assert actual.draws == expected.draws
+
+
+def test_blueprint_file_run_writes_png_and_dumps(tmp_path, renderer, gearbox):
+    out = tmp_path / "bp.png"
+    model = tmp_path / "gearbox.glb"
+    model.write_bytes(examples.example_path().read_bytes())
+    result = run_pipeline("blueprint", model, out, size=SIZE, dump=("edges", "normal"), renderer=renderer)
+    image = np.asarray(Image.open(out))
+    assert image.shape == (SIZE[1], SIZE[0], 4)
+    layers = result.layers
+    assert sorted(p.name for p in tmp_path.glob("bp.edges.*.png")) == [
+        f"bp.edges.{k}.png" for k in range(layers)
+    ]
+    normal = np.load(tmp_path / "bp.normal.npz")
+    assert (
+        normal["data"].shape == (layers, SIZE[1] * 2, SIZE[0] * 2, 4) and str(normal["format"]) == "rgba16f"
+    )
+
+
+@pytest.mark.parametrize("options", [{}, {"line_width": 2.5, "max_layers": 10}, {"style": "transparent"}])
+def test_blueprint_compute_form_equals_renderer_render(renderer, gearbox, monkeypatch, options):
+    """Where the renderer runs image passes as compute shaders (GL 4.3 GPUs; forced here on
+    llvmpipe), the executor keeps the per-layer edges in 8-slice arrays and composes with the
+    renderer's compute shader: the same picture, the same number of passes."""
+    if renderer.ctx.version_code < 430:
+        pytest.skip("compute shaders need OpenGL 4.3")
+    monkeypatch.setattr(renderer, "use_compute", True)
+    size = (80, 60)
+    expected = renderer.render(gearbox, size=size, **options)
+    actual = render_blueprint(renderer, gearbox, size=size, **options)
+    assert executor_for(renderer)._arrays is not None
+    assert actual.layers == expected.layers and actual.draws == expected.draws
+    diff = np.abs(actual.image.astype(int) - expected.image.astype(int))
+    assert diff.mean(axis=(0, 1)).max() < MEAN_TOLERANCE
