@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # One device run: set up OpenGL and wheels, check a render, then time blueprint, its code-path
-# variants and the textbook baseline. Models come in .models/ (copied from ../shared/models).
-# Run on the device as: bash benchmarks/device.sh   (carry .gl .whl .models)
+# variants, the textbook baseline and the extra features. Models come in .models/ (copied from
+# ../shared/models). Run on the device as: bash benchmarks/device.sh   (carry .gl .whl .models)
 set -u
 for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
-python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .whl/*.whl || exit 1
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
 export PYTHONPATH=$PWD/src:/tmp/site PYTHONUNBUFFERED=1
 export __EGL_VENDOR_LIBRARY_FILENAMES=${__EGL_VENDOR_LIBRARY_FILENAMES:-/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json}
 bp() { python3 -c 'from blueprint.cli import main; main()' "$@"; }
@@ -12,8 +12,10 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 bp info || exit 1
 bp render src/blueprint/data/gearbox.glb -o $OUT/gearbox_gpu.png --size 1024 768
 bp render .models/2CylinderEngine.glb -o $OUT/engine_gpu.png --size 1024 1024 --max-layers 0
-python3 benchmarks/variants.py .models/rocker-arm.obj .models/cycloidal.glb --frames 30 | tee $OUT/variants.jsonl
 models=".models/rocker-arm.obj .models/featuretype.STL .models/stanford-bunny.obj .models/2CylinderEngine.glb .models/cycloidal.glb .models/dragon.ply"
-bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 0 --frames 30 --warmup 5 | tee $OUT/bench_ss2.jsonl
-bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --frames 30 --warmup 5 --supersample 1 | tee $OUT/bench_ss1.jsonl
-python3 benchmarks/textbook.py $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 256 --frames 30 --warmup 5 | tee $OUT/textbook.jsonl
+bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 0 --frames 30 --warmup 5 > $OUT/bench_ss2.jsonl
+bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --frames 30 --warmup 5 --supersample 1 > $OUT/bench_ss1.jsonl
+python3 benchmarks/textbook.py $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 256 --frames 30 --warmup 5 > $OUT/textbook.jsonl
+python3 benchmarks/features.py .models/2CylinderEngine.glb --highlight "Piston*" --size 1024 1024 > $OUT/features.jsonl
+python3 benchmarks/variants.py .models/rocker-arm.obj .models/cycloidal.glb --frames 30 > $OUT/variants.jsonl
+python3 benchmarks/summary.py $OUT/*.jsonl
