@@ -121,6 +121,10 @@ def cli() -> None:
     default=None,
     help="Outline the parts that this second model file lies on.",
 )
+@click.option(
+    "--scale", default=None, help="Vector plan views to scale, e.g. 1:50 (orthographic, page in mm)."
+)
+@click.option("--units", default=None, help="The model's length unit for --scale (mm, cm, m, in, ft).")
 @click.option("--shade", default=None, help="Parts to draw shaded inside the drawing: globs or indices.")
 @click.option(
     "--shade-opacity", type=float, default=1.0, show_default=True, help="1 opaque, less see-through."
@@ -157,19 +161,48 @@ def render(
     supersample,
     highlight,
     highlight_model,
+    scale,
+    units,
     shade,
     shade_opacity,
     glyph_file,
     reveal,
 ):
-    """Draw the blueprint of MODEL into a PNG."""
+    """Draw the blueprint of MODEL into a PNG, or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame
     from blueprint.compose.glyphs import load_glyphs
     from blueprint.compose.style import get_style
     from blueprint.export.files import check_output, save_png
     from blueprint.scene.loader import load_model
 
-    output = check_output(output, (".png",))
+    output = check_output(output, (".png", *VECTOR_SUFFIXES))
+    if output.suffix.lower() in VECTOR_SUFFIXES:
+        if glyph_file or shade or reveal is not None or highlight_model or view == "plan":
+            raise InputError(
+                f"{output}: vector drawings take no --glyphs, --shade, --reveal, "
+                "--highlight-model or --view plan yet; write a PNG for those"
+            )
+        _render_vector(
+            model,
+            output,
+            size,
+            view,
+            azimuth,
+            elevation,
+            fov,
+            ortho,
+            up,
+            style,
+            max_layers,
+            crease_angle,
+            line_width,
+            scale,
+            units,
+            highlight,
+        )
+        return
+    if scale or units:
+        raise InputError("--scale and --units are for vector drawings (.svg, .pdf, .dxf)")
     chosen = get_style(style, grid)
     glyphs = load_glyphs(glyph_file) if glyph_file else None
     kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
@@ -199,6 +232,52 @@ def render(
     click.echo(
         f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles, "
         f"{frame.layers} layers{shown}, {frame.ms:.1f} ms on {info['renderer']}"
+    )
+
+
+VECTOR_SUFFIXES = (".svg", ".pdf", ".dxf")
+
+
+def _render_vector(
+    model,
+    output,
+    size,
+    view,
+    azimuth,
+    elevation,
+    fov,
+    ortho,
+    up,
+    style,
+    max_layers,
+    crease_angle,
+    line_width,
+    scale,
+    units,
+    highlight,
+):
+    from blueprint.api import default_renderer
+    from blueprint.vector import render_vector_file
+
+    if style not in STYLE_NAMES:
+        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)})")
+    kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024))
+    summary = render_vector_file(
+        model,
+        output,
+        style=style,
+        max_layers=max_layers or None,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        scale=scale,
+        units=units,
+        highlight=highlight,
+        **kwargs,
+    )
+    levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
+    click.echo(
+        f"{output}: {summary['bytes']} bytes, polylines {levels or 'none'}, "
+        f"{sum(summary['seconds'].values()):.2f} s on {default_renderer().info['renderer']}"
     )
 
 

@@ -1,0 +1,32 @@
+"""True vector drawings: visible and hidden lines as SVG, PDF and DXF, styled by occlusion level.
+
+Lines are found in object space (silhouettes, borders, creases, part boundaries, intersections
+between parts) and each piece of line gets its occlusion level from the depth layers peeled on
+the GPU: how many surfaces lie in front of it.
+"""
+
+from .drawing import (
+    FORMATS,
+    UNITS_MM,
+    Drawing,
+    Page,
+    draw_vector,
+    parse_scale,
+    render_vector_file,
+    save_drawing,
+)
+from .style import LineStyle, VectorStyle, vector_style
+
+__all__ = [
+    "FORMATS",
+    "UNITS_MM",
+    "Drawing",
+    "LineStyle",
+    "Page",
+    "VectorStyle",
+    "draw_vector",
+    "parse_scale",
+    "render_vector_file",
+    "save_drawing",
+    "vector_style",
+]

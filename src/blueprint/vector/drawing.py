@@ -1,0 +1,507 @@
+"""Vector drawings: object-space lines, occlusion levels from peeled layers, files.
+
+``draw_vector`` builds a :class:`Drawing` (2D polylines in pixels, each with its part and its
+occlusion level); ``save_drawing`` writes it as SVG, PDF or DXF; ``render_vector_file`` is the
+whole way from a model file to a drawing file, for the command line.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import re
+import time
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from blueprint.compose.style import Style
+from blueprint.errors import InputError
+from blueprint.render.renderer import Layers, Renderer
+from blueprint.scene.camera import Camera
+from blueprint.scene.model import Model
+
+from .lines import join_polylines, model_segments
+from .occlusion import (
+    Pieces,
+    classify_samples,
+    face_planes,
+    sample_polylines,
+    split_by_level,
+    verify_creases,
+)
+from .simplify import douglas_peucker
+from .style import VectorStyle, vector_style
+
+log = logging.getLogger("blueprint")
+
+__all__ = [
+    "FORMATS",
+    "UNITS_MM",
+    "Drawing",
+    "Page",
+    "draw_vector",
+    "parse_scale",
+    "render_vector_file",
+    "save_drawing",
+]
+
+FORMATS = (".svg", ".pdf", ".dxf")
+# Millimetres per model unit.
+UNITS_MM: dict[str, float] = {
+    "um": 1e-3,
+    "mm": 1.0,
+    "cm": 10.0,
+    "m": 1000.0,
+    "km": 1e6,
+    "in": 25.4,
+    "ft": 304.8,
+}
+# Pen width of the base line on a drawing to scale, in paper millimetres (ISO 128 0.25 mm).
+SCALED_PEN_MM = 0.25
+# Polylines shorter than this on screen (edges seen end-on) are left out.
+_MIN_LENGTH_PX = 0.05
+
+
+@dataclass(frozen=True)
+class Page:
+    """Where pixels land on the page: ``page = pixel * factor`` in ``unit`` ('px' or 'mm').
+
+    ``scale`` is the denominator of a drawing to scale (1:scale), ``model_unit`` the length
+    unit of the model then; both ``None`` for a drawing in pixels.
+    """
+
+    width: float
+    height: float
+    unit: str = "px"
+    factor: float = 1.0
+    scale: float | None = None
+    model_unit: str | None = None
+
+    @property
+    def scale_label(self) -> str | None:
+        if self.scale is None:
+            return None
+        return f"1:{self.scale:g}" if self.scale >= 1 else f"{1 / self.scale:g}:1"
+
+
+@dataclass
+class Drawing:
+    """A vector drawing of one view.
+
+    Attributes
+    ----------
+    width, height : int
+        Image size in pixels; line coordinates are pixels (x right, y down, origin top-left).
+    points : (N, 2) float64
+        All polylines' points; polyline ``i`` is ``points[offsets[i]:offsets[i + 1]]``.
+    offsets : (P + 1,) int64
+    part : (P,) int32
+        Part index of each polyline (into ``part_names``).
+    level : (P,) int32
+        Occlusion level of each polyline: how many surfaces lie in front of it.
+    part_names : tuple of str
+    layers : int
+        Depth layers peeled: levels up to ``layers - 1`` are drawn.
+    style : VectorStyle
+    line_width : float
+        Base line width: pixels, or multiples of 0.25 mm on a drawing to scale.
+    page : Page
+    highlight : frozenset of int
+        Parts drawn in the highlight style.
+    title : str or None
+        Title line written under the drawing's lines (bottom left), if any.
+    camera : Camera
+    seconds : dict
+        Time per stage.
+    """
+
+    width: int
+    height: int
+    points: np.ndarray
+    offsets: np.ndarray
+    part: np.ndarray
+    level: np.ndarray
+    part_names: tuple[str, ...]
+    layers: int
+    style: VectorStyle
+    line_width: float
+    page: Page
+    camera: Camera
+    highlight: frozenset[int] = frozenset()
+    title: str | None = None
+    name: str = "drawing"
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.offsets) - 1
+
+    def lines_per_level(self) -> dict[int, int]:
+        """Polylines per occlusion level."""
+        levels, counts = np.unique(self.level, return_counts=True)
+        return {int(k): int(c) for k, c in zip(levels, counts, strict=True)}
+
+    def groups(self) -> Iterable[tuple[int, int, np.ndarray]]:
+        """(part, level, polyline indices) in drawing order: parts in model order, and within a
+        part the deepest level first so that visible lines lie on top."""
+        if len(self) == 0:
+            return
+        order = np.lexsort((-self.level, self.part))
+        key = np.stack([self.part[order], self.level[order]], axis=1)
+        cut = np.flatnonzero(np.any(key[1:] != key[:-1], axis=1)) + 1
+        for chunk in np.split(order, cut):
+            yield int(self.part[chunk[0]]), int(self.level[chunk[0]]), chunk
+
+    def polyline(self, i: int) -> np.ndarray:
+        return self.points[self.offsets[i] : self.offsets[i + 1]]
+
+    def page_width(self) -> float:
+        """Base line width in page units."""
+        return self.line_width * (SCALED_PEN_MM if self.page.unit == "mm" else 1.0)
+
+
+def parse_scale(scale: str | float | None) -> float | None:
+    """'1:50' (or '50', 50) to 50.0; '2:1' to 0.5; None stays None."""
+    if scale is None:
+        return None
+    if isinstance(scale, int | float):
+        value = float(scale)
+    else:
+        text = str(scale).strip()
+        match = re.fullmatch(r"\s*([0-9.]+)\s*[:/]\s*([0-9.]+)\s*", text)
+        try:
+            value = float(match.group(2)) / float(match.group(1)) if match else float(text)
+        except (ValueError, ZeroDivisionError):
+            raise InputError(f"scale must look like 1:50, got {scale!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"scale must look like 1:50, got {scale!r}")
+    return value
+
+
+def _default_units(model: Model) -> str:
+    source = (model.source or "").lower()
+    # glTF lengths are metres by specification; other formats carry none, and CAD exports
+    # (STL, 3MF, OBJ from CAD) are most often millimetres
+    return "m" if source.endswith((".glb", ".gltf")) else "mm"
+
+
+def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
+    w, h = size
+    denominator = parse_scale(scale)
+    if denominator is None:
+        return Page(float(w), float(h))
+    if not camera.ortho:
+        raise InputError("a drawing to scale needs an orthographic view (ortho=True)")
+    unit = units or _default_units(model)
+    if unit not in UNITS_MM:
+        raise InputError(f"unknown units {unit!r} (choose {', '.join(UNITS_MM)})")
+    model_per_px = camera.height / h
+    factor = model_per_px * UNITS_MM[unit] / denominator
+    page = Page(w * factor, h * factor, "mm", factor, denominator, unit)
+    if max(page.width, page.height) > 2000 or max(page.width, page.height) < 20:
+        log.warning(
+            "the page is %.4g x %.4g mm at %s with the model in %s: check the scale and units",
+            page.width,
+            page.height,
+            page.scale_label,
+            unit,
+        )
+    return page
+
+
+def _highlight(highlight, names: tuple[str, ...]) -> frozenset[int]:
+    if highlight is None:
+        return frozenset()
+    if isinstance(highlight, str):
+        # 'gear,shaft' names two parts, unless a part is called that
+        highlight = (
+            [highlight] if highlight in names else [h.strip() for h in highlight.split(",") if h.strip()]
+        )
+    elif isinstance(highlight, int):
+        highlight = [highlight]
+    chosen = set()
+    for item in highlight:
+        if isinstance(item, int | np.integer):
+            if not 0 <= int(item) < len(names):
+                raise InputError(f"highlight: no part {item} (the model has {len(names)})")
+            chosen.add(int(item))
+        elif item in names:
+            chosen.update(i for i, n in enumerate(names) if n == item)
+        else:
+            shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
+            raise InputError(f"highlight: no part named {item!r} (parts: {shown})")
+    return frozenset(chosen)
+
+
+def draw_vector(
+    model: Model,
+    camera: Camera | None = None,
+    size: tuple[int, int] = (1024, 1024),
+    *,
+    view: str = "iso",
+    style: str | Style | VectorStyle = "blueprint",
+    max_layers: int | None = 8,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    scale: str | float | None = None,
+    units: str | None = None,
+    highlight: Iterable[str | int] | str | int | None = None,
+    renderer: Renderer | None = None,
+    layers: Layers | None = None,
+    intersections: bool = True,
+    spacing: float = 1.0,
+    tolerance: float = 0.25,
+    depth_tolerance: float = 1.0,
+    title: str | None = None,
+) -> Drawing:
+    """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
+
+    Parameters
+    ----------
+    model : Model
+    camera : Camera, optional
+        Defaults to ``Camera.fit`` from ``view`` at the image's aspect.
+    size : (int, int)
+        Width and height in pixels: the resolution at which occlusion is decided.
+    style : str, Style or VectorStyle
+        A raster style's name or object (its inks become level styles) or a ``VectorStyle``.
+    max_layers : int or None
+        Depth layers to peel; lines behind more surfaces than that are left out.
+    crease_angle : float
+        Degrees: edges whose faces meet at a sharper angle are drawn as creases.
+    line_width : float
+        Base line width, pixels (or multiples of 0.25 mm on a drawing to scale).
+    scale, units : optional
+        '1:50' and the model's length unit ('mm', 'm', ...; default 'm' for glTF, else 'mm'):
+        the page is laid out in millimetres at that scale. Needs an orthographic camera.
+    highlight : part names or indices, optional
+        Parts drawn in the style's highlight colour.
+    renderer : Renderer, optional
+        Peels the layers (default: the shared renderer).
+    layers : Layers, optional
+        Layers already peeled for this camera and size (skips peeling).
+    intersections : bool
+        Draw the lines where parts cut through each other.
+    spacing : float
+        Pixels between occlusion samples along a line.
+    tolerance : float
+        Douglas–Peucker tolerance in pixels.
+    depth_tolerance : float
+        Surfaces closer than this many pixel footprints in depth do not hide a line.
+    title : str, optional
+        A title line; drawings to scale get "<model> — <view> — 1:50 (mm)" by default.
+    """
+    from blueprint.api import default_renderer
+    from blueprint.render.renderer import check_size
+
+    seconds: dict[str, float] = {}
+    clock = time.perf_counter()
+    if not (0.1 <= spacing <= 16):
+        raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
+    if not (0 <= tolerance <= 16):
+        raise InputError(f"tolerance must be in [0, 16] pixels, got {tolerance}")
+    if not 1.0 <= line_width <= 16.0:
+        raise InputError(f"line-width must be in [1, 16], got {line_width}")
+    vstyle = vector_style(style)
+    chosen = _highlight(highlight, model.part_names)
+    if layers is None:
+        renderer = renderer or default_renderer()
+        w, h = check_size(size, 1, renderer.max_texture)
+        if camera is None:
+            camera = Renderer.camera_for(model, (w, h), view)
+        layers = renderer.peel(model, camera, size=(w, h), max_layers=max_layers, crease_angle=crease_angle)
+    else:
+        h, w = layers.depth.shape[1:]
+        camera = camera or layers.camera
+    size = (int(w), int(h))
+    page = _page(size, camera, scale, units, model)
+    seconds["peel"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    view_m, proj = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
+    segments = model_segments(model, view_m, proj, size, crease_angle, intersections)
+    lines = join_polylines(segments)
+    seconds["lines"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    samples = sample_polylines(lines, view_m, proj, size, spacing)
+    ortho = bool(np.isclose(proj[3, 3], 1.0))
+    footprint = camera.pixel_angle(size[1])
+    planes = face_planes(model, view_m)
+    levels = classify_samples(samples, layers.triangle, planes, ortho, footprint, depth_tolerance)
+    levels = verify_creases(
+        samples,
+        levels,
+        layers.triangle,
+        planes,
+        model.face_part,
+        ortho,
+        footprint,
+        crease_angle,
+        depth_tolerance,
+    )
+    count = len(layers.depth)
+    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0))
+    seconds["occlusion"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
+    points, offsets, _ = douglas_peucker(pieces.points, pieces.offsets, tolerance)
+    # lines along the view direction project to points: nothing to draw
+    step = np.linalg.norm(np.diff(points, axis=0), axis=1) if len(points) > 1 else np.zeros(0)
+    within = np.ones(len(step), bool)
+    within[offsets[1:-1] - 1] = False  # steps between two polylines
+    length = (
+        np.add.reduceat(np.where(within, step, 0.0), offsets[:-1])
+        if len(step)
+        else np.zeros(len(offsets) - 1)
+    )
+    length[np.diff(offsets) < 2] = 0.0
+    keep = length > _MIN_LENGTH_PX
+    rows = np.repeat(keep, np.diff(offsets))
+    points = points[rows]
+    offsets = np.r_[0, np.cumsum(np.diff(offsets)[keep])].astype(np.int64)
+    pieces = Pieces(points, offsets, pieces.part[keep], pieces.level[keep])
+    seconds["simplify"] = time.perf_counter() - clock
+
+    if title is None and page.scale is not None:
+        name = Path(model.source).stem if model.source and model.source != "generated" else "model"
+        title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
+    return Drawing(
+        width=size[0],
+        height=size[1],
+        points=pieces.points,
+        offsets=pieces.offsets,
+        part=pieces.part,
+        level=pieces.level,
+        part_names=tuple(model.part_names),
+        layers=count,
+        style=vstyle,
+        line_width=float(line_width),
+        page=page,
+        camera=camera,
+        highlight=chosen,
+        title=title,
+        name=Path(model.source).stem if model.source else "drawing",
+        seconds=seconds,
+    )
+
+
+def save_drawing(path: str | os.PathLike, drawing: Drawing, format: str | None = None) -> Path:
+    """Write a drawing as SVG, PDF or DXF (from ``format`` or the file's suffix), atomically."""
+    from blueprint.export.files import atomic_write, check_output
+
+    path = Path(path)
+    suffix = ("." + format.lower().lstrip(".")) if format else path.suffix.lower()
+    if suffix not in FORMATS:
+        raise InputError(f"{path}: output must end in {' or '.join(FORMATS)}")
+    if format is None:
+        check_output(path, FORMATS)
+    if suffix == ".svg":
+        from .svg import svg_bytes
+
+        data = svg_bytes(drawing)
+        return atomic_write(path, lambda tmp: tmp.write_bytes(data))
+    if suffix == ".pdf":
+        from .pdf import pdf_bytes
+
+        data = pdf_bytes(drawing)
+        return atomic_write(path, lambda tmp: tmp.write_bytes(data))
+    from .dxf import write_dxf
+
+    return atomic_write(path, lambda tmp: write_dxf(drawing, tmp))
+
+
+def render_vector_file(
+    model: Model | str | os.PathLike,
+    output_path: str | os.PathLike,
+    *,
+    size: tuple[int, int] = (1024, 1024),
+    view: str = "iso",
+    azimuth: float | None = None,
+    elevation: float | None = None,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    style: str | Style | VectorStyle = "blueprint",
+    max_layers: int | None = 8,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    scale: str | float | None = None,
+    units: str | None = None,
+    highlight: Iterable[str | int] | str | int | None = None,
+    renderer: Renderer | None = None,
+) -> dict:
+    """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
+
+    Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
+    line with its occlusion level and writes the file atomically. A ``scale`` ('1:50') makes
+    the view orthographic and lays the page out in millimetres (``units``: the model's length
+    unit). ``max_layers`` None or 0 peels every layer.
+
+    Returns
+    -------
+    dict
+        ``path``, ``format``, ``bytes`` (file size), ``lines`` (polylines per occlusion level),
+        ``points``, ``layers`` (peeled), ``parts``, ``width``, ``height``, ``seconds`` (per stage
+        and ``total``).
+    """
+    from blueprint.api import default_renderer
+    from blueprint.export.files import check_output
+    from blueprint.render.renderer import check_size
+    from blueprint.scene.loader import load_model
+
+    start = time.perf_counter()
+    output = check_output(output_path, FORMATS)
+    if scale is not None:
+        parse_scale(scale)
+        ortho = True
+    if units is not None and units not in UNITS_MM:
+        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
+    vstyle = vector_style(style)
+    clock = time.perf_counter()
+    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    load_s = time.perf_counter() - clock
+    renderer = renderer or default_renderer()
+    size = check_size(size, 1, renderer.max_texture)
+    camera = Camera.fit(
+        loaded.positions,
+        view,
+        azimuth=azimuth,
+        elevation=elevation,
+        fov=fov,
+        ortho=ortho,
+        aspect=size[0] / size[1],
+        up=loaded.up,
+    )
+    drawing = draw_vector(
+        loaded,
+        camera,
+        size,
+        style=vstyle,
+        max_layers=max_layers or None,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        scale=scale,
+        units=units,
+        highlight=highlight,
+        renderer=renderer,
+    )
+    clock = time.perf_counter()
+    save_drawing(output, drawing)
+    seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}
+    seconds["total"] = time.perf_counter() - start
+    return {
+        "path": str(output),
+        "format": output.suffix.lower().lstrip("."),
+        "bytes": output.stat().st_size,
+        "lines": drawing.lines_per_level(),
+        "points": int(len(drawing.points)),
+        "layers": drawing.layers,
+        "parts": len(drawing.part_names),
+        "width": drawing.width,
+        "height": drawing.height,
+        "seconds": {k: round(v, 4) for k, v in seconds.items()},
+    }

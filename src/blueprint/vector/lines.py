@@ -1,0 +1,547 @@
+"""Object-space lines of a model for one view, joined into polylines.
+
+Edges come from the CPU silhouette module (silhouettes for the view, borders, creases above an
+angle) on a mesh welded within each part, plus two kinds that only exist between parts: *part
+boundaries* (borders of one part that coincide with borders of another: a surface split into
+parts) and *intersection lines* (where a triangle of one part cuts through a triangle of
+another). Everything stays in model space here; the segments carry
+the faces they lie on so that occlusion can tell a line's own surface from the ones in front.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from blueprint.scene.model import Model
+from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
+
+__all__ = [
+    "BORDER",
+    "CREASE",
+    "INTERSECTION",
+    "PART_BOUNDARY",
+    "SILHOUETTE",
+    "Polylines",
+    "Segments",
+    "adjacency",
+    "feature_segments",
+    "intersection_segments",
+    "join_polylines",
+    "model_segments",
+]
+
+PART_BOUNDARY = 4
+INTERSECTION = 5
+
+# Endpoints closer than this fraction of the model's diagonal are one point when joining.
+_JOIN_REL = 1e-6
+# Signed plane distances below this fraction of the diagonal count as zero (touching, not cutting).
+_TOUCH_REL = 1e-7
+# Cell entries of the intersection broad phase, per candidate triangle, before cells grow.
+_CELLS_PER_TRIANGLE = 8
+# Candidate triangle pairs examined per NumPy pass of the narrow phase.
+_PAIR_CHUNK = 1 << 19
+
+_ADJACENCY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_INTERSECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+@dataclass(frozen=True)
+class Segments:
+    """Model-space line segments of one view.
+
+    Attributes
+    ----------
+    points : (N, 2, 3) float64
+        Endpoints in model coordinates.
+    faces : (N, 2) int64
+        Faces the segment lies on (``-1`` where there is only one): the surfaces that can never
+        hide it.
+    part : (N,) int32
+        Part the segment is drawn with.
+    kind : (N,) uint8
+        ``SILHOUETTE``, ``BORDER``, ``CREASE``, ``PART_BOUNDARY`` or ``INTERSECTION``.
+    """
+
+    points: np.ndarray
+    faces: np.ndarray
+    part: np.ndarray
+    kind: np.ndarray
+
+    @classmethod
+    def empty(cls) -> Segments:
+        return cls(
+            np.zeros((0, 2, 3)), np.zeros((0, 2), np.int64), np.zeros(0, np.int32), np.zeros(0, np.uint8)
+        )
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @staticmethod
+    def concatenate(items: list[Segments]) -> Segments:
+        items = [s for s in items if len(s)] or [Segments.empty()]
+        return Segments(
+            np.concatenate([s.points for s in items]),
+            np.concatenate([s.faces for s in items]),
+            np.concatenate([s.part for s in items]).astype(np.int32),
+            np.concatenate([s.kind for s in items]).astype(np.uint8),
+        )
+
+
+@dataclass(frozen=True)
+class Polylines:
+    """Joined segments: polyline ``i`` is ``points[offsets[i]:offsets[i + 1]]``.
+
+    ``faces[j]`` and ``kind[j]`` belong to the segment from point ``j`` to point ``j + 1`` (the
+    rows of each polyline's last point are unused); ``part`` is per polyline.
+    """
+
+    points: np.ndarray
+    offsets: np.ndarray
+    faces: np.ndarray
+    part: np.ndarray
+    kind: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.offsets) - 1
+
+
+def _diagonal(points: np.ndarray) -> float:
+    if len(points) == 0:
+        return 1.0
+    return float(np.linalg.norm(np.ptp(points, axis=0))) or 1.0
+
+
+def adjacency(model: Model) -> Adjacency:
+    """Adjacency of a model welded within each part only, computed once per model object.
+
+    Parts never share edges: where two parts meet, each keeps its own edges there (a border
+    of an open part, a crease of a solid), so a seam between parts is drawn, and the faces of
+    two solids pressed together do not weld into non-manifold edges that would read as
+    silhouettes. The welding runs once for all parts: every part is moved along x by a distinct
+    multiple of a span larger than the model, so no two parts come within the weld tolerance,
+    and moved back afterwards.
+    """
+    held = _ADJACENCY.get(model)
+    if held is not None:
+        return held
+    positions = model.positions.astype(np.float64)
+    faces = model.faces.astype(np.int64)
+    part = model.face_part.astype(np.int64)
+    diagonal = _diagonal(positions[faces.reshape(-1)] if len(faces) else positions)
+    if len(model.part_names) <= 1 or len(faces) == 0 or np.all(part == part[0]):
+        held = build_adjacency(positions, faces)
+    else:
+        span = 4.0 * (float(np.ptp(positions, axis=0).max()) + diagonal)
+        # one vertex per (vertex, part) in use, moved by its part's multiple of the span
+        corner_part = np.repeat(part, 3)
+        key = faces.reshape(-1) * len(model.part_names) + corner_part
+        unique, inverse = np.unique(key, return_inverse=True)
+        moved = positions[unique // len(model.part_names)].copy()
+        moved[:, 0] += (unique % len(model.part_names)) * span
+        held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
+        vertex_part = np.zeros(len(held.positions), np.int64)
+        vertex_part[held.faces.reshape(-1)] = np.repeat(part, 3)
+        moved = held.positions.copy()
+        moved[:, 0] -= vertex_part * span
+        held = replace(held, positions=moved)
+    _ADJACENCY[model] = held
+    return held
+
+
+def feature_segments(
+    model: Model,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+    crease_angle: float = 30.0,
+) -> Segments:
+    """Silhouettes, borders and creases of every part (from ``classify_edges``).
+
+    Borders that coincide with a border of another part are part boundaries (a surface split
+    into parts) and come out with that kind.
+    """
+    adj = adjacency(model)
+    width, height = size
+    edges = classify_edges(adj, view, projection, width, height, crease_angle)
+    face_part = model.face_part.astype(np.int64)
+    part = face_part[np.maximum(edges.faces[:, 0], 0)]
+    kind = edges.kind.copy()
+    border = np.flatnonzero(kind == BORDER)
+    if len(border) > 1 and len(model.part_names) > 1:
+        ends = edges.segments3d[border].reshape(-1, 3)
+        ids = _point_ids(ends, _JOIN_REL * _diagonal(adj.positions)).reshape(-1, 2)
+        key = np.sort(ids, axis=1) @ np.array([int(ids.max()) + 1, 1])
+        order = np.lexsort((part[border], key))
+        key_sorted, part_sorted = key[order], part[border][order]
+        # a key held by more than one part: its first and last entries differ in part
+        first = np.r_[True, key_sorted[1:] != key_sorted[:-1]]
+        group = np.cumsum(first) - 1
+        lo = part_sorted[first]
+        hi = part_sorted[np.r_[np.flatnonzero(first)[1:] - 1, len(key_sorted) - 1]]
+        shared = (lo != hi)[group]
+        kind[border[order[shared]]] = PART_BOUNDARY
+    return Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind)
+
+
+# -- intersections between parts ------------------------------------------------------------------
+
+
+def _part_boxes(lo: np.ndarray, hi: np.ndarray, part: np.ndarray, parts: int):
+    box_lo = np.full((parts, 3), np.inf)
+    box_hi = np.full((parts, 3), -np.inf)
+    np.minimum.at(box_lo, part, lo)
+    np.maximum.at(box_hi, part, hi)
+    return box_lo, box_hi
+
+
+def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
+    """Triangles whose box meets the box of another part overlapping their own part."""
+    box_lo, box_hi = _part_boxes(lo, hi, part, parts)
+    used = np.isfinite(box_lo[:, 0])
+    overlap = np.all(
+        (box_lo[:, None] <= box_hi[None] + slack) & (box_hi[:, None] >= box_lo[None] - slack), axis=2
+    )
+    overlap &= used[:, None] & used[None]
+    np.fill_diagonal(overlap, False)
+    keep = np.zeros(len(lo), dtype=bool)
+    order = np.argsort(part, kind="stable")
+    bounds = np.searchsorted(part[order], np.arange(parts + 1))
+    for p in np.flatnonzero(overlap.any(axis=1)):
+        mine = order[bounds[p] : bounds[p + 1]]
+        others = np.flatnonzero(overlap[p])
+        # the region where part p can meet another part: the union of pairwise box overlaps
+        meet_lo = np.maximum(box_lo[p], box_lo[others]) - slack
+        meet_hi = np.minimum(box_hi[p], box_hi[others]) + slack
+        for start in range(0, len(others), 64):
+            ml, mh = meet_lo[start : start + 64], meet_hi[start : start + 64]
+            hit = np.all((lo[mine, None] <= mh[None]) & (hi[mine, None] >= ml[None]), axis=2).any(axis=1)
+            keep[mine[hit]] = True
+    return np.flatnonzero(keep)
+
+
+def _candidate_pairs(lo, hi, part, slack: float):
+    """Pairs (i, j) of triangles of different parts whose boxes overlap, through a uniform grid.
+
+    Each triangle is entered in every cell its box touches; a pair is reported only in the cell
+    at the componentwise maximum of the two boxes' first cells, which both touch, so no pair
+    comes out twice. Cells start at the median triangle size and double while the entries
+    would exceed a fixed multiple of the triangle count. Within a cell, entries are sorted by
+    part, so only pairs across parts are generated.
+    """
+    n = len(lo)
+    if n < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    origin = lo.min(axis=0)
+    extent = np.ptp(np.concatenate([lo, hi]), axis=0).max() or 1.0
+    cell = max(float(np.median((hi - lo).max(axis=1))), extent / 4096)
+    while True:
+        first = np.floor((lo - slack - origin) / cell).astype(np.int64)
+        last = np.floor((hi + slack - origin) / cell).astype(np.int64)
+        span = last - first + 1
+        entries = span.prod(axis=1)
+        if entries.sum() <= _CELLS_PER_TRIANGLE * n + 4096 or cell >= extent:
+            break
+        cell *= 2.0
+    owner = np.repeat(np.arange(n), entries)
+    rank = np.arange(len(owner)) - np.repeat(np.cumsum(entries) - entries, entries)
+    sx, sy = span[owner, 0], span[owner, 1]
+    cx = first[owner, 0] + rank % sx
+    cy = first[owner, 1] + (rank // sx) % sy
+    cz = first[owner, 2] + rank // (sx * sy)
+    dims = last.max(axis=0) + 2 - first.min(axis=0)
+    base = first.min(axis=0)
+
+    def cell_key(x, y, z):
+        return ((z - base[2]) * dims[1] + (y - base[1])) * dims[0] + (x - base[0])
+
+    key = cell_key(cx, cy, cz)
+    # entries by cell, then by part: an entry's partners from other parts are the rest of its
+    # cell after its own part's run, so only pairs across parts are ever generated
+    order = np.lexsort((part[owner], key))
+    key, owner = key[order], owner[order]
+    entry_part = part[owner]
+    new_cell = np.r_[True, key[1:] != key[:-1]]
+    new_group = new_cell | np.r_[True, entry_part[1:] != entry_part[:-1]]
+    cell_start = np.flatnonzero(new_cell)
+    group_start = np.flatnonzero(new_group)
+    cell_end = np.r_[cell_start[1:], len(key)][np.cumsum(new_cell) - 1]
+    group_end = np.r_[group_start[1:], len(key)][np.cumsum(new_group) - 1]
+    partners = cell_end - group_end
+    lo_axis = [np.ascontiguousarray(lo[:, a]) for a in range(3)]
+    hi_axis = [np.ascontiguousarray(hi[:, a]) for a in range(3)]
+    first_axis = [np.ascontiguousarray(first[:, a]) for a in range(3)]
+    pairs_i, pairs_j = [], []
+    batch = (np.cumsum(partners) - partners) // _PAIR_CHUNK
+    bounds = np.r_[0, np.flatnonzero(np.diff(batch)) + 1, len(partners)]
+    for lo_b, hi_b in zip(bounds[:-1], bounds[1:], strict=True):
+        m = partners[lo_b:hi_b]
+        if m.sum() == 0:
+            continue
+        ia = np.repeat(np.arange(lo_b, hi_b), m)
+        ib = np.repeat(group_end[lo_b:hi_b], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))
+        i, j = np.take(owner, ia), np.take(owner, ib)
+        # boxes overlap (axis by axis, keeping survivors), then report a pair only in the first
+        # cell both boxes touch
+        for axis in range(3):
+            keep = (np.take(lo_axis[axis], i) <= np.take(hi_axis[axis], j) + slack) & (
+                np.take(lo_axis[axis], j) <= np.take(hi_axis[axis], i) + slack
+            )
+            i, j, ia = i[keep], j[keep], ia[keep]
+        top = [np.maximum(np.take(first_axis[a], i), np.take(first_axis[a], j)) for a in range(3)]
+        keep = cell_key(*top) == key[ia]
+        pairs_i.append(i[keep])
+        pairs_j.append(j[keep])
+    if not pairs_i:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(pairs_i), np.concatenate(pairs_j)
+
+
+def _plane_cut(tri: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two points where triangles (M, 3, 3) meet a plane, given vertex distances (M, 3).
+
+    Callers guarantee a proper cut: signs are not all equal and at most one distance is zero,
+    so exactly two of the three edge crossings and vertex touches exist.
+    """
+    cand = []
+    valid = []
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        da, db = dist[:, a], dist[:, b]
+        cross = da * db < 0.0
+        t = np.divide(da, da - db, out=np.zeros_like(da), where=cross)
+        cand.append(tri[:, a] + t[:, None] * (tri[:, b] - tri[:, a]))
+        valid.append(cross)
+    for a in range(3):
+        cand.append(tri[:, a])
+        valid.append(dist[:, a] == 0.0)
+    cand = np.stack(cand, axis=1)
+    valid = np.stack(valid, axis=1)
+    pick = np.argsort(~valid, axis=1, kind="stable")[:, :2]
+    rows = np.arange(len(tri))[:, None]
+    both = cand[rows, pick]
+    return both[:, 0], both[:, 1]
+
+
+def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float):
+    """Intersection segments of triangle pairs (M, 3, 3) that properly cut through each other.
+
+    Returns the (K, 2, 3) segments and the (K,) indices of the pairs that produced them. Pairs
+    that are coplanar, only touch (a vertex or an edge lying in the other's plane) or miss give
+    nothing: their contact lines are mesh edges, drawn as such where they are features.
+    """
+
+    def proper(d):
+        zeros = (d == 0.0).sum(axis=1)
+        return (zeros <= 1) & ~(d >= 0.0).all(axis=1) & ~(d <= 0.0).all(axis=1)
+
+    def plane_distances(tri, other):
+        normal = np.cross(other[:, 1] - other[:, 0], other[:, 2] - other[:, 0])
+        length = np.linalg.norm(normal, axis=1)
+        normal = normal / np.where(length > 0, length, 1.0)[:, None]
+        dist = np.einsum("mij,mj->mi", tri - other[:, :1], normal)
+        dist[np.abs(dist) <= eps] = 0.0
+        return normal, dist, length > 0
+
+    # A's vertices against B's plane first: most pairs end there
+    nb, da, ok = plane_distances(ta, tb)
+    idx = np.flatnonzero(ok & proper(da))
+    na, db, ok = plane_distances(tb[idx], ta[idx])
+    keep = ok & proper(db)
+    idx, na, db, nb, da = idx[keep], na[keep], db[keep], nb[idx][keep], da[idx][keep]
+    if len(idx) == 0:
+        return np.zeros((0, 2, 3)), idx
+    a0, a1 = _plane_cut(ta[idx], da)
+    b0, b1 = _plane_cut(tb[idx], db)
+    direction = np.cross(na, nb)
+    sa0, sa1 = np.einsum("mi,mi->m", a0, direction), np.einsum("mi,mi->m", a1, direction)
+    sb0, sb1 = np.einsum("mi,mi->m", b0, direction), np.einsum("mi,mi->m", b1, direction)
+    swap = sa1 < sa0
+    a0, a1 = np.where(swap[:, None], a1, a0), np.where(swap[:, None], a0, a1)
+    sa0, sa1 = np.minimum(sa0, sa1), np.maximum(sa0, sa1)
+    lo = np.maximum(sa0, np.minimum(sb0, sb1))
+    hi = np.minimum(sa1, np.maximum(sb0, sb1))
+    span = sa1 - sa0
+    dlen = np.linalg.norm(direction, axis=1)
+    keep = (hi - lo) > eps * np.maximum(dlen, 1e-300)
+    keep &= span > 0
+    t0 = np.where(keep, (lo - sa0) / np.where(span > 0, span, 1.0), 0.0)
+    t1 = np.where(keep, (hi - sa0) / np.where(span > 0, span, 1.0), 0.0)
+    p0 = a0 + t0[:, None] * (a1 - a0)
+    p1 = a0 + t1[:, None] * (a1 - a0)
+    segments = np.stack([p0, p1], axis=1)[keep]
+    return segments, idx[keep]
+
+
+def intersection_segments(model: Model) -> Segments:
+    """Lines where triangles of different parts cut through each other (view-independent).
+
+    Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
+    triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
+    triangles, from each one's crossing of the other's plane, vectorised over pairs. Cached per
+    model object.
+    """
+    held = _INTERSECTIONS.get(model)
+    if held is not None:
+        return held
+    result = Segments.empty()
+    parts = len(model.part_names)
+    faces = model.faces.astype(np.int64)
+    if parts > 1 and len(faces):
+        positions = model.positions.astype(np.float64)
+        tri = positions[faces]
+        lo, hi = tri.min(axis=1), tri.max(axis=1)
+        part = model.face_part.astype(np.int64)
+        eps = _TOUCH_REL * _diagonal(positions)
+        area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        candidates = _candidate_triangles(lo, hi, part, parts, eps)
+        candidates = candidates[area[candidates] > 0]
+        ci, cj = _candidate_pairs(lo[candidates], hi[candidates], part[candidates], eps)
+        i, j = candidates[ci], candidates[cj]
+        found, fa, fb = [], [], []
+        for start in range(0, len(i), _PAIR_CHUNK):
+            a, b = i[start : start + _PAIR_CHUNK], j[start : start + _PAIR_CHUNK]
+            segments, which = _triangle_pairs_cut(tri[a], tri[b], eps)
+            found.append(segments)
+            fa.append(a[which])
+            fb.append(b[which])
+        if found and sum(len(s) for s in found):
+            a, b = np.concatenate(fa), np.concatenate(fb)
+            result = Segments(
+                np.concatenate(found),
+                np.stack([a, b], axis=1),
+                np.minimum(part[a], part[b]).astype(np.int32),
+                np.full(len(a), INTERSECTION, np.uint8),
+            )
+    _INTERSECTIONS[model] = result
+    return result
+
+
+def model_segments(
+    model: Model,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+    crease_angle: float = 30.0,
+    intersections: bool = True,
+) -> Segments:
+    """All lines of a model for one view: features, part boundaries and intersection lines."""
+    found = [feature_segments(model, view, projection, size, crease_angle)]
+    if intersections:
+        found.append(intersection_segments(model))
+    return Segments.concatenate(found)
+
+
+# -- joining ----------------------------------------------------------------------------------------
+
+
+def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
+    """Ids of points equal after rounding to ``quantum`` (one packed integer key per point)."""
+    if len(points) == 0:
+        return np.zeros(0, np.int64)
+    q = np.round((points - points.min(axis=0)) / quantum).astype(np.int64)
+    span = q.max(axis=0) + 1
+    if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
+        key = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
+        return np.unique(key, return_inverse=True)[1].reshape(-1)
+    return np.unique(q, axis=0, return_inverse=True)[1].reshape(-1)
+
+
+def join_polylines(segments: Segments) -> Polylines:
+    """Drop repeated segments and chain the rest into polylines, part by part.
+
+    A chain continues through an endpoint shared by exactly two segments of the same part and
+    stops at ends, junctions and part changes; closed loops come out closed (first point
+    repeated last).
+    """
+    n = len(segments)
+    if n == 0:
+        return Polylines(
+            np.zeros((0, 3)),
+            np.zeros(1, np.int64),
+            np.zeros((0, 2), np.int64),
+            np.zeros(0, np.int32),
+            np.zeros(0, np.uint8),
+        )
+    points = segments.points.reshape(-1, 3)
+    quantum = _JOIN_REL * _diagonal(points)
+    pid = _point_ids(points, quantum).reshape(n, 2)
+    # the same segment twice (an edge that is both a crease and a part boundary, ...): keep one
+    lo, hi = pid.min(axis=1), pid.max(axis=1)
+    proper = lo != hi
+    _, first = np.unique((lo * (int(pid.max()) + 1) + hi)[proper], return_index=True)
+    keep = np.flatnonzero(proper)[np.sort(first)]
+    seg_points = segments.points[keep]
+    seg_faces = segments.faces[keep]
+    seg_kind = segments.kind[keep]
+    seg_part = segments.part[keep].astype(np.int64)
+    pid = pid[keep]
+    n = len(keep)
+    # nodes: a point within one part
+    node_key = np.repeat(seg_part, 2) * (int(pid.max()) + 1) + pid.reshape(-1)
+    node = np.unique(node_key, return_inverse=True)[1].reshape(-1)
+    degree = np.bincount(node)
+    # half-edge h = 2 s + e leaves segment s's end e (0: start, 1: end); its twin is h ^ 1
+    order = np.argsort(node, kind="stable")
+    partner = np.full(2 * n, -1, np.int64)
+    starts = np.cumsum(degree) - degree
+    two = np.flatnonzero(degree == 2)
+    a, b = order[starts[two]], order[starts[two] + 1]
+    partner[a], partner[b] = b, a
+    # walking: arrive at the end e of segment s (half-end 2 s + e); continue from partner's segment
+    partner_list = partner.tolist()
+    visited = bytearray(n)
+    chains: list[list[int]] = []  # signed walk: (segment << 1) | reversed
+    open_ends = [h for h in range(2 * n) if partner_list[h] < 0]
+
+    def walk(end: int) -> list[int]:
+        # start leaving through the end `end` (the walk begins at that end of its segment)
+        out = []
+        h = end
+        while True:
+            s = h >> 1
+            if visited[s]:
+                break
+            visited[s] = 1
+            reverse = h & 1  # starting at end 1 means walking the segment backwards
+            out.append((s << 1) | reverse)
+            nxt = partner_list[h ^ 1]
+            if nxt < 0:
+                break
+            h = nxt
+        return out
+
+    for h in open_ends:
+        if not visited[h >> 1]:
+            chains.append(walk(h))
+    for s in range(n):
+        if not visited[s]:
+            chains.append(walk(s << 1))
+
+    lengths = np.array([len(c) for c in chains], np.int64)
+    flat = np.fromiter((x for c in chains for x in c), np.int64, count=int(lengths.sum()))
+    seg, rev = flat >> 1, (flat & 1).astype(bool)
+    tails = np.where(rev[:, None, None], seg_points[seg][:, ::-1], seg_points[seg])  # (K, 2, 3)
+    faces = seg_faces[seg]
+    # points of chain c: the first segment's start, then every segment's end
+    chain_start = np.cumsum(lengths) - lengths
+    out_len = lengths + 1
+    offsets = np.r_[0, np.cumsum(out_len)]
+    out_points = np.empty((offsets[-1], 3))
+    out_faces = np.full((offsets[-1], 2), -1, np.int64)
+    out_kind = np.zeros(offsets[-1], np.uint8)
+    chain_of = np.repeat(np.arange(len(chains)), lengths)
+    slot = offsets[chain_of] + (np.arange(len(seg)) - chain_start[chain_of])
+    out_points[slot] = tails[:, 0]
+    out_faces[slot] = faces
+    out_kind[slot] = seg_kind[seg]
+    out_points[offsets[1:] - 1] = tails[chain_start + lengths - 1, 1]
+    return Polylines(
+        out_points,
+        offsets.astype(np.int64),
+        out_faces,
+        seg_part[seg[chain_start]].astype(np.int32),
+        out_kind,
+    )

@@ -1,0 +1,159 @@
+"""SVG output: one group per part (an Inkscape layer), one path per occlusion level inside it."""
+
+from __future__ import annotations
+
+import math
+import re
+from xml.sax.saxutils import escape, quoteattr
+
+import numpy as np
+
+from .style import LineStyle
+
+__all__ = ["format_numbers", "path_data", "safe_id", "svg_bytes"]
+
+# Coordinates are written to a grid no coarser than this many pixels (well inside the
+# Douglas–Peucker tolerance).
+QUANTUM_PX = 0.1
+_ID_BAD = re.compile(r"[^A-Za-z0-9_.-]+")
+
+
+def safe_id(name: str, taken: set[str]) -> str:
+    """An XML id (NCName) from a part name, unique among ``taken`` (which it joins)."""
+    base = _ID_BAD.sub("_", name).strip("_.-") or "part"
+    if not (base[0].isalpha() or base[0] == "_"):
+        base = "p_" + base
+    candidate, k = base, 2
+    while candidate in taken:
+        candidate = f"{base}-{k}"
+        k += 1
+    taken.add(candidate)
+    return candidate
+
+
+def _decimals(factor: float) -> int:
+    """Decimals that put the page-unit grid at or below QUANTUM_PX pixels."""
+    return max(0, math.ceil(-math.log10(QUANTUM_PX * factor) - 1e-9))
+
+
+def format_numbers(values: np.ndarray, decimals: int) -> list[str]:
+    """Shortest decimal strings of numbers that are multiples of 10**-decimals."""
+    if decimals == 0:
+        return [str(v) for v in np.rint(values).astype(np.int64).tolist()]
+    text = [repr(v) for v in np.round(values, decimals).tolist()]
+    return [t[:-2] if t.endswith(".0") else t for t in text]
+
+
+def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: int) -> str:
+    """SVG path data of polylines: an absolute move to each start, relative lines after it.
+
+    Points are snapped to the output grid first and the relative steps taken between snapped
+    points, so rounding never accumulates. Repeated points and polylines that shrink to one
+    point are dropped.
+    """
+    unit = 10.0**decimals
+    grid = np.rint(points * factor * unit).astype(np.int64)
+    first = np.zeros(len(grid), bool)
+    first[offsets[:-1]] = True
+    step = np.diff(grid, axis=0, prepend=grid[:1])
+    keep = first | np.any(step != 0, axis=1)
+    owner = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    counts = np.bincount(owner[keep], minlength=len(offsets) - 1)
+    keep &= counts[owner] >= 2
+    grid, first, owner = grid[keep], first[keep], owner[keep]
+    if len(grid) == 0:
+        return ""
+    step = np.diff(grid, axis=0, prepend=grid[:1])
+    values = np.where(first[:, None], grid, step).reshape(-1) / unit
+    numbers = format_numbers(values, decimals)
+    starts = np.flatnonzero(first)
+    ends = np.r_[starts[1:], len(grid)]
+    parts = []
+    for s, e in zip(starts.tolist(), ends.tolist(), strict=True):
+        parts.append(f"M{numbers[2 * s]} {numbers[2 * s + 1]}l" + " ".join(numbers[2 * s + 2 : 2 * e]))
+    text = "".join(parts)
+    # a minus sign separates numbers by itself, and leading zeros are optional
+    text = text.replace(" -", "-").replace("-0.", "-.").replace(" 0.", " .").replace("l0.", "l.")
+    return text
+
+
+def _stroke(line: LineStyle, base: float) -> str:
+    attrs = [f'stroke="{line.hex}"', f'stroke-width="{line.width * base:.4g}"']
+    if line.opacity < 1.0:
+        attrs.append(f'stroke-opacity="{line.opacity:.3g}"')
+    if line.dash:
+        dash = " ".join(f"{d * base:.4g}" for d in line.dash)
+        attrs.append(f'stroke-dasharray="{dash}"')
+    return " ".join(attrs)
+
+
+def svg_bytes(drawing) -> bytes:
+    """The drawing as an SVG document (UTF-8).
+
+    The view box is the image in pixels, or the page in millimetres for a drawing to scale.
+    Every part is a group whose id is its sanitised name (and an Inkscape layer labelled with
+    the name itself); inside it one path per occlusion level, deepest first, with class
+    ``level-K`` and the level's stroke style.
+    """
+    page = drawing.page
+    factor = page.factor
+    decimals = _decimals(factor)
+    base = drawing.page_width()
+    width, height = page.width, page.height
+    size_unit = "mm" if page.unit == "mm" else ""
+    out = [
+        '<?xml version="1.0" encoding="UTF-8"?>\n',
+        '<svg xmlns="http://www.w3.org/2000/svg" '
+        'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" version="1.1" '
+        f'width="{width:.6g}{size_unit}" height="{height:.6g}{size_unit}" '
+        f'viewBox="0 0 {width:.6g} {height:.6g}">\n',
+        f"<title>{escape(drawing.title or drawing.name)}</title>\n",
+        f"<desc>{escape(_description(drawing))}</desc>\n",
+    ]
+    style = drawing.style
+    if style.paper is not None:
+        paper = LineStyle(style.paper).hex
+        out.append(
+            f'<rect id="paper" x="0" y="0" width="{width:.6g}" height="{height:.6g}" fill="{paper}"/>\n'
+        )
+    out.append('<g id="lines" fill="none" stroke-linecap="round" stroke-linejoin="round">\n')
+    taken = {"paper", "lines", "title"}
+    current = None
+    for part, level, index in drawing.groups():
+        if part != current:
+            if current is not None:
+                out.append("</g>\n")
+            name = drawing.part_names[part] if part < len(drawing.part_names) else f"part{part}"
+            gid = safe_id(name, taken)
+            out.append(
+                f'<g id="{gid}" inkscape:groupmode="layer" inkscape:label={quoteattr(name)} '
+                f"data-part={quoteattr(str(part))}>\n"
+            )
+            current = part
+        line = style.level(level, part in drawing.highlight)
+        lengths = drawing.offsets[index + 1] - drawing.offsets[index]
+        sub_offsets = np.r_[0, np.cumsum(lengths)]
+        rows = np.repeat(drawing.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
+        d = path_data(drawing.points[rows], sub_offsets, factor, decimals)
+        if d:
+            out.append(f'<path class="level-{level}" {_stroke(line, base)} d="{d}"/>\n')
+    if current is not None:
+        out.append("</g>\n")
+    out.append("</g>\n")
+    if drawing.title:
+        size = 0.022 * height
+        color = LineStyle(style.title_color).hex
+        out.append(
+            f'<text id="title" x="{0.02 * width:.6g}" y="{height - 0.02 * height:.6g}" '
+            f'font-family="sans-serif" font-size="{size:.4g}" fill="{color}">{escape(drawing.title)}</text>\n'
+        )
+    out.append("</svg>\n")
+    return "".join(out).encode("utf-8")
+
+
+def _description(drawing) -> str:
+    levels = ", ".join(f"level {k}: {n}" for k, n in drawing.lines_per_level().items()) or "no lines"
+    text = f"{drawing.name}, {drawing.camera.name} view, {drawing.width}x{drawing.height} px, {levels}"
+    if drawing.page.scale is not None:
+        text += f", scale {drawing.page.scale_label}, model unit {drawing.page.model_unit}"
+    return text

@@ -1,0 +1,145 @@
+"""Object-space lines: features per part, part boundaries, intersections between parts, joining."""
+
+import time
+
+import numpy as np
+import pytest
+
+from blueprint.examples import assemble, box
+from blueprint.scene.camera import Camera
+from blueprint.scene.model import Model
+from blueprint.vector.lines import (
+    BORDER,
+    CREASE,
+    INTERSECTION,
+    PART_BOUNDARY,
+    SILHOUETTE,
+    Segments,
+    _candidate_pairs,
+    feature_segments,
+    intersection_segments,
+    join_polylines,
+)
+
+SIZE = (128, 128)
+
+
+def _camera(model, **kwargs):
+    return Camera.fit(model.positions, "iso", aspect=1.0, **kwargs)
+
+
+def _kinds(segments):
+    return {k: int(n) for k, n in zip(*np.unique(segments.kind, return_counts=True), strict=True)}
+
+
+def test_cube_edges_silhouettes_and_creases():
+    model = assemble({"cube": box((-1, -1, -1), (1, 1, 1))})
+    cam = _camera(model)
+    found = feature_segments(model, cam.view_matrix(), cam.projection_matrix(), SIZE)
+    # iso view of a cube: the 6 edges of the outline are silhouettes, the 3 edges at the near
+    # corner and the 3 at the far corner are creases between two faces turned the same way
+    assert _kinds(found) == {SILHOUETTE: 6, CREASE: 6}
+    assert (found.part == 0).all()
+    assert len(join_polylines(found)) == 12  # every corner joins three edges: no chains
+
+
+def test_touching_solids_keep_their_own_edges_and_no_contact_diagonal():
+    # two unit boxes pressed together along x = 1: their shared square must not become
+    # non-manifold silhouettes, and its diagonal (an edge of both) must not be drawn at all
+    model = assemble({"a": box((0, 0, 0), (1, 1, 1)), "b": box((1, 0, 0), (2, 1, 1))})
+    cam = _camera(model)
+    found = feature_segments(model, cam.view_matrix(), cam.projection_matrix(), SIZE)
+    on_contact = np.all(np.isclose(found.points[:, :, 0], 1.0), axis=1)
+    diagonal = on_contact & ~np.any(np.isclose(np.abs(np.diff(found.points, axis=1))[:, 0, 1:], 0), axis=1)
+    assert not diagonal.any()
+    assert len(intersection_segments(model)) == 0  # touching is not cutting
+    # both boxes keep 12 edges each; joining drops the four that coincide
+    assert len(found) == 24
+    assert len(join_polylines(found)) == 20
+
+
+def test_surface_split_into_parts_draws_the_seam_once_as_part_boundary():
+    positions = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0]], float)
+    faces = np.array([[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]])
+    model = Model.from_arrays(positions, faces, np.array([0, 0, 1, 1]), ("left", "right"))
+    cam = Camera.fit(model.positions, "front", aspect=1.0)
+    found = feature_segments(model, cam.view_matrix(), cam.projection_matrix(), SIZE)
+    seam = np.all(np.isclose(found.points[:, :, 0], 1.0), axis=1)
+    assert seam.sum() == 2 and (found.kind[seam] == PART_BOUNDARY).all()
+    assert (found.kind[~seam] == BORDER).all()
+    lines = join_polylines(found)
+    # the outer rim of each half is one chain; the seam, shared by both parts, comes out once
+    total = sum(
+        np.linalg.norm(np.diff(lines.points[a:b], axis=0), axis=1).sum()
+        for a, b in zip(lines.offsets[:-1], lines.offsets[1:], strict=True)
+    )
+    assert total == pytest.approx(7.0)
+
+
+def test_intersection_lines_of_two_boxes_cutting_through_each_other():
+    # b pokes out of a through a's faces x = 1 and y = 1: on each face the crossing is a
+    # U of length 1 + 1 + 1 (b's faces y = 0 / x = 0 and z = +-0.5), 6 in all
+    model = assemble({"a": box((-1, -1, -1), (1, 1, 1)), "b": box((0, 0, -0.5), (2, 2, 0.5))})
+    found = intersection_segments(model)
+    assert (found.kind == INTERSECTION).all() and (found.part == 0).all()
+    length = np.linalg.norm(found.points[:, 1] - found.points[:, 0], axis=1).sum()
+    assert length == pytest.approx(6.0, abs=1e-9)
+    # every point lies on a's surface and on b's surface
+    p = found.points.reshape(-1, 3)
+
+    def on_box(lo, hi):
+        inside = np.all((p >= np.array(lo) - 1e-9) & (p <= np.array(hi) + 1e-9), axis=1)
+        face = np.any(np.isclose(p, lo) | np.isclose(p, hi), axis=1)
+        return inside & face
+
+    assert on_box((-1, -1, -1), (1, 1, 1)).all() and on_box((0, 0, -0.5), (2, 2, 0.5)).all()
+    # each face's U joins into one chain (the corners at x = y = 1 are shared by both)
+    lines = join_polylines(found)
+    assert 1 <= len(lines) <= 2
+
+
+def test_grid_broad_phase_finds_exactly_the_overlapping_boxes():
+    rng = np.random.default_rng(7)
+    n = 600
+    centre = rng.uniform(0, 10, (n, 3))
+    size = rng.uniform(0.05, 1.5, (n, 3)) ** 2
+    lo, hi = centre - size, centre + size
+    part = rng.integers(0, 5, n)
+    i, j = _candidate_pairs(lo, hi, part, 0.0)
+    got = {(min(a, b), max(a, b)) for a, b in zip(i.tolist(), j.tolist(), strict=True)}
+    assert len(got) == len(i)  # no pair twice
+    overlap = np.all((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None]), axis=2)
+    overlap &= part[:, None] != part[None]
+    a, b = np.nonzero(np.triu(overlap, 1))
+    assert got == set(zip(a.tolist(), b.tolist(), strict=True))
+
+
+def test_join_chains_and_closes_loops():
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    loop = np.stack([square, np.roll(square, -1, axis=0)], axis=1)
+    tail = np.array([[[1, 1, 0], [2, 2, 0]], [[2, 2, 0], [3, 2, 0]]], float)
+    # the loop's corner (1, 1) meets the tail: a junction of three, so the tail is one chain
+    segments = Segments(
+        np.concatenate([loop[[2, 0, 3, 1]], tail]),
+        np.full((6, 2), -1),
+        np.zeros(6, np.int32),
+        np.full(6, CREASE, np.uint8),
+    )
+    lines = join_polylines(segments)
+    lengths = sorted(np.diff(lines.offsets).tolist())
+    assert lengths == [3, 5]  # the tail (3 points) and the loop (4 edges, first point repeated)
+    loop_line = next(
+        lines.points[a:b] for a, b in zip(lines.offsets[:-1], lines.offsets[1:], strict=True) if b - a == 5
+    )
+    np.testing.assert_array_equal(loop_line[0], loop_line[-1])
+
+
+def test_intersections_stay_bounded_on_the_engine(shared_models):
+    from blueprint.scene.loader import load_model
+
+    model = load_model(shared_models / "glTF-Sample-Models" / "2CylinderEngine.glb")
+    start = time.perf_counter()
+    found = intersection_segments(model)
+    elapsed = time.perf_counter() - start
+    assert len(found) > 1000  # bolts through plates, pistons in cylinders, ...
+    assert elapsed < 15.0, f"{elapsed:.1f} s for {model.triangle_count} triangles"

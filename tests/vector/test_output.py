@@ -1,0 +1,167 @@
+"""SVG, PDF and DXF files: structure, groups per part and level, styles, scale, empty drawings."""
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from vector_helpers import SVG, svg_lines
+
+from blueprint.errors import InputError
+from blueprint.examples import assemble, box, gearbox
+from blueprint.scene.camera import Camera
+from blueprint.vector import (
+    LineStyle,
+    VectorStyle,
+    draw_vector,
+    parse_scale,
+    render_vector_file,
+    save_drawing,
+    vector_style,
+)
+from blueprint.vector.dxf import layer_name
+from blueprint.vector.svg import safe_id
+
+SIZE = (200, 160)
+
+
+@pytest.fixture(scope="module")
+def gear_drawing(renderer):
+    model = gearbox()
+    return draw_vector(model, size=SIZE, style="paper", highlight=["gear"], renderer=renderer)
+
+
+def test_svg_parses_with_the_image_as_view_box_and_groups_per_part(gear_drawing, tmp_path):
+    path = save_drawing(tmp_path / "gear.svg", gear_drawing)
+    root = ET.parse(path).getroot()
+    assert root.tag == f"{SVG}svg"
+    assert root.get("viewBox") == "0 0 200 160"
+    assert (root.get("width"), root.get("height")) == ("200", "160")
+    groups = {g.get("id"): g for g in root.iter(f"{SVG}g") if g.get("data-part") is not None}
+    assert set(groups) <= set(gear_drawing.part_names)
+    assert {"base", "gear", "shaft", "cover"} <= set(groups)
+    lines = svg_lines(path)
+    levels = {level for _, level in lines}
+    assert {0, 1, 2} <= levels
+    # every coordinate inside the view box, and as many polylines as the drawing has
+    points = np.concatenate([p for polylines in lines.values() for p in polylines])
+    assert points.min() >= -0.05 and points[:, 0].max() <= 200.05 and points[:, 1].max() <= 160.05
+    assert sum(len(v) for v in lines.values()) == len(gear_drawing)
+    # level 0 solid in the ink, deeper levels dashed and fading; the highlighted part orange
+    paths = {(g.get("id"), p.get("class")): p for g in groups.values() for p in g.findall(f"{SVG}path")}
+    base0, base1 = paths[("base", "level-0")], paths.get(("base", "level-1"))
+    assert base0.get("stroke") == "#0a1f44" and base0.get("stroke-dasharray") is None
+    deeper = [p for (gid, cls), p in paths.items() if cls != "level-0" and gid != "gear"]
+    assert deeper and all(p.get("stroke-dasharray") for p in deeper)
+    assert all(float(p.get("stroke-opacity")) < 1 for p in deeper)
+    if base1 is not None:
+        assert base1.get("stroke") == "#2f6bd0"
+    assert all(p.get("stroke") != "#0a1f44" for (gid, _), p in paths.items() if gid == "gear")
+
+
+def test_svg_parses_back_to_the_drawing_within_the_output_grid(gear_drawing, tmp_path):
+    path = save_drawing(tmp_path / "gear.svg", gear_drawing)
+    lines = svg_lines(path)
+    by_group = {}
+    for part, level, index in gear_drawing.groups():
+        by_group[(gear_drawing.part_names[part], level)] = [gear_drawing.polyline(i) for i in index]
+    for key, polylines in lines.items():
+        original = by_group[key]
+        assert len(polylines) == len(original)
+        for got, want in zip(polylines, original, strict=True):
+            # repeated points on the 0.1 px grid are dropped, the rest round to it
+            assert np.abs(got[0] - want[0]).max() <= 0.05 + 1e-9
+            assert np.abs(got[-1] - want[-1]).max() <= 0.05 + 1e-6
+
+
+def test_dxf_opens_with_one_layer_per_part_and_level(gear_drawing, tmp_path):
+    ezdxf = pytest.importorskip("ezdxf")
+    path = save_drawing(tmp_path / "gear.dxf", gear_drawing)
+    doc = ezdxf.readfile(path)
+    polylines = doc.modelspace().query("LWPOLYLINE")
+    assert len(polylines) == len(gear_drawing)
+    expected = {layer_name(gear_drawing.part_names[p], k) for p, k, _ in gear_drawing.groups()}
+    assert expected <= {layer.dxf.name for layer in doc.layers}
+    assert {e.dxf.layer for e in polylines} == expected
+    hidden = doc.layers.get(layer_name("base", 1))
+    assert hidden.dxf.linetype == "BP_L1" and hidden.transparency > 0
+    assert doc.layers.get(layer_name("base", 0)).dxf.linetype == "CONTINUOUS"
+    # y points up in DXF
+    ys = np.concatenate([np.array(e.get_points("xy"))[:, 1] for e in polylines])
+    assert ys.min() >= -0.05 and ys.max() <= 160.05
+
+
+def test_pdf_opens_with_the_drawing_size(gear_drawing, tmp_path):
+    pytest.importorskip("fpdf")
+    pypdf = pytest.importorskip("pypdf")
+    path = save_drawing(tmp_path / "gear.pdf", gear_drawing)
+    reader = pypdf.PdfReader(path)
+    assert len(reader.pages) == 1
+    box_ = reader.pages[0].mediabox
+    assert float(box_.width) == pytest.approx(200 * 0.75) and float(box_.height) == pytest.approx(160 * 0.75)
+    assert len(reader.pages[0].get_contents().get_data()) > 1000
+
+
+def test_plan_view_to_scale(renderer, tmp_path):
+    # a 1000 x 400 mm plate seen from the top at 1:50 is 20 x 8 mm on paper
+    model = assemble({"plate": box((0, 0, 0), (1000, 10, 400))})
+    summary = render_vector_file(
+        model, tmp_path / "plan.svg", size=(256, 256), view="top", scale="1:50", units="mm", renderer=renderer
+    )
+    # the outline (the bottom's edges lie right under it, one level down)
+    assert summary["format"] == "svg" and summary["lines"][0] == 4
+    root = ET.parse(tmp_path / "plan.svg").getroot()
+    width = float(root.get("width")[:-2])
+    assert root.get("width").endswith("mm") and root.get("viewBox") == f"0 0 {width:.6g} {width:.6g}"
+    points = np.concatenate([p for v in svg_lines(tmp_path / "plan.svg").values() for p in v])
+    extent = np.ptp(points, axis=0)
+    assert sorted(extent) == pytest.approx([8.0, 20.0], abs=0.02)
+    title = root.find(f"{SVG}text")
+    assert "top view" in title.text and "1:50" in title.text and "(mm)" in title.text
+
+
+def test_empty_drawing_writes_valid_files(renderer, tmp_path):
+    model = assemble({"cube": box((-1, -1, -1), (1, 1, 1))})
+    away = Camera(eye=(0, 0, 10), target=(0, 0, 20), up=(0, 1, 0), near=0.1, far=100.0)
+    drawing = draw_vector(model, away, (64, 48), renderer=renderer)
+    root = ET.parse(save_drawing(tmp_path / "empty.svg", drawing)).getroot()
+    assert root.get("viewBox") == "0 0 64 48" and not list(root.iter(f"{SVG}path"))
+    ezdxf = pytest.importorskip("ezdxf")
+    assert len(ezdxf.readfile(save_drawing(tmp_path / "empty.dxf", drawing)).modelspace()) == 0
+    pypdf = pytest.importorskip("pypdf")
+    assert len(pypdf.PdfReader(save_drawing(tmp_path / "empty.pdf", drawing)).pages) == 1
+
+
+def test_render_vector_file_summary_and_errors(renderer, tmp_path):
+    model = assemble({"cube": box((-1, -1, -1), (1, 1, 1))})
+    summary = render_vector_file(model, tmp_path / "cube.svg", size=(96, 96), renderer=renderer)
+    assert summary["lines"] == {0: 9, 1: 3}
+    assert summary["bytes"] == (tmp_path / "cube.svg").stat().st_size
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.svg"]  # no temporary files left
+    with pytest.raises(InputError, match="must end in"):
+        render_vector_file(model, tmp_path / "cube.png", renderer=renderer)
+    with pytest.raises(InputError, match="no part named"):
+        render_vector_file(model, tmp_path / "x.svg", size=(32, 32), highlight=["nope"], renderer=renderer)
+    with pytest.raises(InputError, match="units"):
+        render_vector_file(model, tmp_path / "x.svg", scale="1:10", units="furlong", renderer=renderer)
+    with pytest.raises(InputError, match="orthographic"):
+        draw_vector(model, Camera.fit(model.positions, "top"), (32, 32), scale="1:10", renderer=renderer)
+
+
+def test_scale_parsing_styles_and_names():
+    assert parse_scale("1:50") == 50 and parse_scale("2:1") == 0.5 and parse_scale(100) == 100
+    assert parse_scale(None) is None
+    with pytest.raises(InputError):
+        parse_scale("fifty")
+    style = vector_style("blueprint")
+    assert style.level(0).dash == () and style.level(0).hex == "#ffffff"
+    assert style.level(1).dash and style.level(2).opacity < style.level(1).opacity
+    assert style.level(9).opacity < style.level(3).opacity  # past the table: fading on
+    assert vector_style("wireframe", dashes=False).level(2).dash == ()
+    custom = VectorStyle(levels=(LineStyle("#ff0000", 2.0), LineStyle((0, 0, 1), 1.0, (2, 1), 0.5)))
+    assert custom.level(1, highlighted=True).width == pytest.approx(1.5)
+    with pytest.raises(InputError):
+        LineStyle("#ff0000", opacity=2.0)
+    taken = set()
+    assert safe_id("gear wheel", taken) == "gear_wheel" and safe_id("gear wheel", taken) == "gear_wheel-2"
+    assert safe_id("12 bolt", taken) == "p_12_bolt" and safe_id("<>", taken) == "part"
+    assert layer_name('a/b:"c"', 2) == "a_b_c_-L2"
