@@ -386,9 +386,10 @@ def bench(models, sizes, layer_options, frames, warmup, supersample, style):
 
 # Commands of other packages import this module's shared options, so they are added last.
 from blueprint.pipeline.command import ops, pipeline, turntable  # noqa: E402
+from blueprint.silhouette.command import silhouettes  # noqa: E402
 from blueprint.viewer.command import view  # noqa: E402
 
-for command in (view, pipeline, ops, turntable):
+for command in (view, pipeline, ops, turntable, silhouettes):
     cli.add_command(command)
 
 

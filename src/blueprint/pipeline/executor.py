@@ -467,7 +467,10 @@ class Executor:
         self._groups = groups
         self._by_attr = {n: g for g in groups for n in g.names}
         ctx.depth_func = "<"
-        geo = r._setup_geometry(camera, mesh, groups[0].depth)
+        # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
+        # the raw ID target) need them
+        face_ids = any(g.extra for g in groups) or clear_gb
+        geo = r._setup_geometry(camera, mesh, groups[0].depth, face_ids=face_ids)
         extras = None
         if any(g.extra for g in groups):
             extras = self._extras_programs(groups, camera, mesh)

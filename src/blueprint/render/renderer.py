@@ -33,7 +33,6 @@ PEEL_FRAG = "blueprint.render:glsl/peel.frag"
 # the depth buffer) makes the front face win every pixel of the tie, instead of whichever
 # rounds nearer (speckle); it is far below the peeling tolerance, so both still peel as one.
 BACK_OFFSET = 16.0
-PART_TABLE_WIDTH = 4096
 # Edge maps are kept in texture arrays of this many slices (compute path).
 SLICES = 8
 MASK_UNIT = 7
@@ -91,34 +90,36 @@ class _Mesh:
         faces = model.faces
         normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
         corner_vertex = faces.reshape(-1).astype(np.int64)
+        corner_part = np.repeat(model.face_part, 3).astype(np.int64)
         quantized = np.round(normals * 32767).astype(np.int64)
-        keys = np.column_stack([corner_vertex, quantized])
+        # a vertex is split where its normal or its part differs, so both can be attributes
+        keys = np.column_stack([corner_vertex, corner_part, quantized])
         unique, inverse = np.unique(keys, axis=0, return_inverse=True)
         first = np.zeros(len(unique), np.int64)
         first[inverse.reshape(-1)] = np.arange(len(keys))
-        data = np.empty(len(unique), [("p", "f4", 3), ("n", "f4", 3)])
+        data = np.empty(len(unique), [("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
         data["p"] = model.positions[unique[:, 0]]
         data["n"] = normals[first]
+        data["part"] = unique[:, 1]
         self.vbo = ctx.buffer(data.tobytes())
         self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
         self._vaos: dict[int, object] = {}
-        rows = max(1, -(-len(faces) // PART_TABLE_WIDTH))
-        table = np.zeros(rows * PART_TABLE_WIDTH, np.int32)
-        table[: len(faces)] = model.face_part
         self.part_count = len(model.part_names)
-        self.parts = ctx.texture((PART_TABLE_WIDTH, rows), 1, table.tobytes(), dtype="i4")
-        self.parts.filter = (ctx.NEAREST, ctx.NEAREST)
 
     def vao(self, program):
         """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
         vao = self._vaos.get(program.glo)
         if vao is None:
-            layout = [(self.vbo, "3f 3f", "in_position", "in_normal")]
+            # programs that read no part (pipeline attribute passes) skip its bytes
+            if "in_part" in program:
+                layout = [(self.vbo, "3f 3f 1i", "in_position", "in_normal", "in_part")]
+            else:
+                layout = [(self.vbo, "3f 3f 4x", "in_position", "in_normal")]
             vao = self._vaos[program.glo] = self.ctx.vertex_array(program, layout, index_buffer=self.ibo)
         return vao
 
     def release(self) -> None:
-        for obj in (*self._vaos.values(), self.vbo, self.ibo, self.parts):
+        for obj in (*self._vaos.values(), self.vbo, self.ibo):
             obj.release()
 
 
@@ -256,25 +257,30 @@ class Renderer:
         clears = tuple(pool.framebuffer((), d) for d in depth)
         return depth, normal, ids, fbos, clears
 
-    def _geometry_program(self, selected_only: bool = False):
-        defines = {"BACK_BIAS_IN_SHADER": self.back_bias_in_shader, "SELECTED_ONLY": selected_only}
+    def _geometry_program(self, selected_only: bool = False, face_ids: bool = True):
+        defines = {
+            "BACK_BIAS_IN_SHADER": self.back_bias_in_shader,
+            "SELECTED_ONLY": selected_only,
+            "FACE_IDS": face_ids,
+        }
         return self.program(PEEL_FRAG, GEOMETRY_VERT, defines)
 
     def _setup_geometry(
-        self, camera: Camera, mesh: _Mesh, depth_textures, selected_only: bool = False
+        self, camera: Camera, mesh: _Mesh, depth_textures, selected_only: bool = False, face_ids: bool = True
     ) -> object:
-        prog = self._geometry_program(selected_only)
+        """The geometry program, set up for ``camera``. Without ``face_ids`` the ID target's
+        face channel is left 0: the blueprint needs only parts, and a software rasteriser pays
+        for tracking primitive IDs."""
+        prog = self._geometry_program(selected_only, face_ids)
         prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
         prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
         prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
         prog["u_ortho"].value = camera.ortho
-        prog["u_face_part"].value = 2
         if self.back_bias_in_shader:
             prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         depth_textures[0].use(0)
         depth_textures[1].use(1)
-        mesh.parts.use(2)
         return prog
 
     def _clear(self, clears, layer: int) -> None:
@@ -431,7 +437,7 @@ class Renderer:
                 raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
             self._shading(mesh, camera, ss, shade, (*style.shade[:3], shade_opacity))
             draws += 3
-        geo = self._setup_geometry(camera, mesh, depth_tex)
+        geo = self._setup_geometry(camera, mesh, depth_tex, face_ids=False)
 
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
         peeled = 0

@@ -16,7 +16,9 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from .deform import Animation, Pose
 from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges
+from .idlist import IdLists, build_id_lists, id_lists_from_topology
 from .mesh import Adjacency, build_adjacency, weld
 from .raster import draw_segments
 
@@ -25,13 +27,31 @@ __all__ = [
     "CREASE",
     "SILHOUETTE",
     "Adjacency",
+    "Animation",
     "EdgeSet",
+    "GpuSilhouettes",
+    "IdLists",
+    "Pose",
+    "SoupMesh",
     "build_adjacency",
+    "build_id_lists",
     "classify_edges",
     "draw_segments",
+    "id_lists_from_topology",
     "silhouette_image",
     "weld",
 ]
+
+# The GPU side is loaded on first use: it needs the renderer, whose imports reach this package.
+_GPU_NAMES = ("GpuSilhouettes", "SoupMesh")
+
+
+def __getattr__(name: str):
+    if name in _GPU_NAMES:
+        from . import gpu
+
+        return getattr(gpu, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def silhouette_image(

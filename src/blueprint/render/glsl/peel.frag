@@ -4,7 +4,6 @@
 #include "depth.glsl"
 
 uniform sampler2D u_prev_depth;
-uniform isampler2D u_face_part;  // part index of face i at (i % 4096, i / 4096)
 uniform bool u_peel;
 uniform float u_peel_eps;
 uniform bool u_ortho;
@@ -15,6 +14,7 @@ uniform isampler2D u_selected;  // 1 for each designated part (depth masking, hi
 
 in vec3 v_eye;
 in vec3 v_normal;
+flat in int v_part;
 
 layout(location = 0) out vec4 o_normal;   // eye-space normal facing the viewer
 layout(location = 1) out ivec2 o_ids;     // (face + 1, part + 1)
@@ -37,8 +37,12 @@ void main() {
     // the single-draw form of the renderer's back-face offset (see BACK_OFFSET there)
     gl_FragDepth = gl_FrontFacing ? z : min(z + u_back_bias, 1.0);
 #endif
+#if FACE_IDS
     int face = gl_PrimitiveID;
-    int part = texelFetch(u_face_part, ivec2(face & 4095, face >> 12), 0).r;
+#else
+    int face = -1;
+#endif
+    int part = v_part;
 #if SELECTED_ONLY
     if (texelFetch(u_selected, ivec2(part, 0), 0).r == 0) {
         discard;
