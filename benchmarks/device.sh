@@ -13,9 +13,10 @@ bp info || exit 1
 bp render src/blueprint/data/gearbox.glb -o $OUT/gearbox_gpu.png --size 1024 768
 bp render .models/2CylinderEngine.glb -o $OUT/engine_gpu.png --size 1024 1024 --max-layers 0
 models=".models/rocker-arm.obj .models/featuretype.STL .models/stanford-bunny.obj .models/2CylinderEngine.glb .models/cycloidal.glb .models/dragon.ply"
-bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 0 --frames 30 --warmup 5 > $OUT/bench_ss2.jsonl
-bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --frames 30 --warmup 5 --supersample 1 > $OUT/bench_ss1.jsonl
-python3 benchmarks/textbook.py $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 256 --frames 30 --warmup 5 > $OUT/textbook.jsonl
+bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 0 --frames 20 --warmup 3 > $OUT/bench_ss2.jsonl
+bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --frames 20 --warmup 3 --supersample 1 > $OUT/bench_ss1.jsonl
+python3 benchmarks/textbook.py $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 256 --frames 20 --warmup 3 > $OUT/textbook.jsonl
 python3 benchmarks/features.py .models/2CylinderEngine.glb --highlight "Piston*" --size 1024 1024 > $OUT/features.jsonl
 python3 benchmarks/variants.py .models/rocker-arm.obj .models/cycloidal.glb --frames 30 > $OUT/variants.jsonl
+python3 benchmarks/table1.py --models-dir .models --frames 20 --cpu-frames 1 > $OUT/table1.jsonl
 python3 benchmarks/summary.py $OUT/*.jsonl
