@@ -173,9 +173,10 @@ class Renderer:
         # compute (H100) only a few cores rasterise, while compute runs on all of them.
         software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
         self.use_compute = self.ctx.version_code >= 430 and not software
-        # A software rasteriser pays for every vertex twice in the two-draw tie-break, a GPU
-        # pays more for late depth tests when the shader writes depth: each gets its cheaper form.
-        self.back_bias_in_shader = software
+        # The back-face tie-break as one draw writing depth, or two culled draws with a polygon
+        # offset: one draw measured faster on llvmpipe and on the H100 in 3 of 4 cases
+        # (benchmarks/variants.py), and never more than 10 % slower.
+        self.back_bias_in_shader = True
 
     def __enter__(self) -> Renderer:
         return self
