@@ -84,7 +84,31 @@ def _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, default_size,
     )
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Commands(click.Group):
+    """Commands of other packages, imported when first used: they import this module's shared
+    options, so importing them here would be circular."""
+
+    LAZY = {
+        "ops": "blueprint.pipeline.command:ops",
+        "pipeline": "blueprint.pipeline.command:pipeline",
+        "silhouettes": "blueprint.silhouette.command:silhouettes",
+        "turntable": "blueprint.pipeline.command:turntable",
+        "view": "blueprint.viewer.command:view",
+    }
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted({*super().list_commands(ctx), *self.LAZY})
+
+    def get_command(self, ctx: click.Context, name: str) -> click.Command | None:
+        if name in self.LAZY and name not in self.commands:
+            import importlib
+
+            module, attribute = self.LAZY[name].split(":")
+            self.add_command(getattr(importlib.import_module(module), attribute), name)
+        return super().get_command(ctx, name)
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="blueprint")
 def cli() -> None:
     """Blueprints of 3D models: the visible and hidden edges of every part, drawn on the GPU."""
@@ -382,15 +406,6 @@ def bench(models, sizes, layer_options, frames, warmup, supersample, style):
         style=style,
     ):
         click.echo(json.dumps(record))
-
-
-# Commands of other packages import this module's shared options, so they are added last.
-from blueprint.pipeline.command import ops, pipeline, turntable  # noqa: E402
-from blueprint.silhouette.command import silhouettes  # noqa: E402
-from blueprint.viewer.command import view  # noqa: E402
-
-for command in (view, pipeline, ops, turntable, silhouettes):
-    cli.add_command(command)
 
 
 def main(argv: list[str] | None = None) -> None:
