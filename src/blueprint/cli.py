@@ -410,8 +410,14 @@ def bench(models, sizes, layer_options, frames, warmup, supersample, style):
 
 def main(argv: list[str] | None = None) -> None:
     """Entry point: user errors become one line on stderr and exit code 2."""
+    run(cli, argv, "blueprint")
+
+
+def run(command: click.Command, argv: list[str] | None, prog_name: str) -> None:
+    """Run a click command as a program: user errors become one line on stderr and exit code 2."""
+    _setup_logging()
     try:
-        cli.main(args=argv, prog_name="blueprint", standalone_mode=False)
+        command.main(args=argv, prog_name=prog_name, standalone_mode=False)
     except click.exceptions.Abort:
         click.echo("blueprint: interrupted", err=True)
         sys.exit(130)

@@ -6,7 +6,6 @@ with the CLI's error handling (one line, exit code 2).
 
 from __future__ import annotations
 
-import sys
 import time
 from collections.abc import Iterable
 from pathlib import Path
@@ -14,8 +13,8 @@ from pathlib import Path
 import click
 import numpy as np
 
-from blueprint.cli import _setup_logging, camera_options
-from blueprint.errors import BlueprintError, InputError
+from blueprint.cli import camera_options
+from blueprint.errors import InputError
 from blueprint.scene.camera import VIEWS
 
 from .deform import KINDS
@@ -194,24 +193,10 @@ def silhouettes(
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``blueprint silhouettes`` on its own (until the CLI registers it): user errors become one
-    line on stderr and exit code 2."""
-    _setup_logging()
-    try:
-        silhouettes.main(args=argv, prog_name="blueprint silhouettes", standalone_mode=False)
-    except click.exceptions.Abort:
-        click.echo("blueprint: interrupted", err=True)
-        sys.exit(130)
-    except click.ClickException as exc:
-        click.echo(f"blueprint: error: {exc.format_message()}", err=True)
-        sys.exit(2)
-    except BlueprintError as exc:
-        click.echo(f"blueprint: error: {exc}", err=True)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        click.echo("blueprint: interrupted", err=True)
-        sys.exit(130)
-    sys.exit(0)
+    """``blueprint silhouettes`` as a program of its own."""
+    from blueprint.cli import run
+
+    run(silhouettes, argv, "blueprint silhouettes")
 
 
 if __name__ == "__main__":

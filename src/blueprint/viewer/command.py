@@ -4,13 +4,12 @@ a stand-alone entry point, ``main``, with the CLI's error handling."""
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import click
 
-from blueprint.cli import STYLE_NAMES, _setup_logging, camera_options
-from blueprint.errors import BlueprintError, InputError
+from blueprint.cli import STYLE_NAMES, camera_options
+from blueprint.errors import InputError
 from blueprint.scene.camera import VIEWS
 
 DEFAULT_SIZE = (800, 600)
@@ -117,24 +116,10 @@ def view(
 
 
 def main(argv: list[str] | None = None) -> None:
-    """``blueprint view`` on its own (until the CLI registers it): user errors become one line on
-    stderr and exit code 2, Esc exits 0."""
-    _setup_logging()
-    try:
-        view.main(args=argv, prog_name="blueprint view", standalone_mode=False)
-    except click.exceptions.Abort:
-        click.echo("blueprint: interrupted", err=True)
-        sys.exit(130)
-    except click.ClickException as exc:
-        click.echo(f"blueprint: error: {exc.format_message()}", err=True)
-        sys.exit(2)
-    except BlueprintError as exc:
-        click.echo(f"blueprint: error: {exc}", err=True)
-        sys.exit(2)
-    except KeyboardInterrupt:
-        click.echo("blueprint: interrupted", err=True)
-        sys.exit(130)
-    sys.exit(0)
+    """``blueprint view`` as a program of its own (the tests start it so)."""
+    from blueprint.cli import run
+
+    run(view, argv, "blueprint view")
 
 
 if __name__ == "__main__":
