@@ -206,23 +206,9 @@ def render(
                 f"{output}: vector drawings take no --glyphs, --shade, --reveal, "
                 "--highlight-model or --view plan yet; write a PNG for those"
             )
+        camera = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024))
         _render_vector(
-            model,
-            output,
-            size,
-            view,
-            azimuth,
-            elevation,
-            fov,
-            ortho,
-            up,
-            style,
-            max_layers,
-            crease_angle,
-            line_width,
-            scale,
-            units,
-            highlight,
+            model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight
         )
         return
     if scale or units:
@@ -263,29 +249,13 @@ VECTOR_SUFFIXES = (".svg", ".pdf", ".dxf")
 
 
 def _render_vector(
-    model,
-    output,
-    size,
-    view,
-    azimuth,
-    elevation,
-    fov,
-    ortho,
-    up,
-    style,
-    max_layers,
-    crease_angle,
-    line_width,
-    scale,
-    units,
-    highlight,
+    model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight
 ):
     from blueprint.api import default_renderer
     from blueprint.vector import render_vector_file
 
     if style not in STYLE_NAMES:
         raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)})")
-    kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024))
     summary = render_vector_file(
         model,
         output,
@@ -296,7 +266,7 @@ def _render_vector(
         scale=scale,
         units=units,
         highlight=highlight,
-        **kwargs,
+        **camera,
     )
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
