@@ -110,11 +110,11 @@ class _Mesh:
         """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
         vao = self._vaos.get(program.glo)
         if vao is None:
-            # programs that read no part (pipeline attribute passes) skip its bytes
-            if "in_part" in program:
-                layout = [(self.vbo, "3f 3f 1i", "in_position", "in_normal", "in_part")]
-            else:
-                layout = [(self.vbo, "3f 3f 4x", "in_position", "in_normal")]
+            # attributes a program does not read (pipeline attribute passes need no part, ID
+            # passes no normal) are skipped over
+            fields = [("3f", "in_position"), ("3f", "in_normal"), ("1i", "in_part")]
+            used = [(f, name) if name in program else (f"{4 * int(f[0])}x", None) for f, name in fields]
+            layout = [(self.vbo, " ".join(f for f, _ in used), *(name for _, name in used if name))]
             vao = self._vaos[program.glo] = self.ctx.vertex_array(program, layout, index_buffer=self.ibo)
         return vao
 
@@ -258,44 +258,64 @@ class Renderer:
         clears = tuple(pool.framebuffer((), d) for d in depth)
         return depth, normal, ids, fbos, clears
 
-    def _geometry_program(self, selected_only: bool = False, face_ids: bool = True):
+    def _geometry_program(self, selected_only: bool = False, face_ids: bool = True, normals: bool = True):
+        # ID passes (no normals) break no ties: silhouettes compare triangles, not parts
         defines = {
-            "BACK_BIAS_IN_SHADER": self.back_bias_in_shader,
+            "BACK_BIAS_IN_SHADER": self.back_bias_in_shader and normals,
             "SELECTED_ONLY": selected_only,
             "FACE_IDS": face_ids,
+            "NORMALS": normals,
         }
         return self.program(PEEL_FRAG, GEOMETRY_VERT, defines)
 
     def _setup_geometry(
-        self, camera: Camera, mesh: _Mesh, depth_textures, selected_only: bool = False, face_ids: bool = True
+        self,
+        camera: Camera,
+        mesh: _Mesh,
+        depth_textures,
+        selected_only: bool = False,
+        face_ids: bool = True,
+        normals: bool = True,
     ) -> object:
         """The geometry program, set up for ``camera``. Without ``face_ids`` the ID target's
         face channel is left 0: the blueprint needs only parts, and a software rasteriser pays
         for tracking primitive IDs."""
-        prog = self._geometry_program(selected_only, face_ids)
+        prog = self._geometry_program(selected_only, face_ids, normals)
         prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
         prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
         prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
-        prog["u_ortho"].value = camera.ortho
-        if self.back_bias_in_shader:
+        if normals:  # only the normal's orientation needs it
+            prog["u_ortho"].value = camera.ortho
+        if self.back_bias_in_shader and normals:
             prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         depth_textures[0].use(0)
         depth_textures[1].use(1)
         return prog
 
+    def _id_buffer(self, size: tuple[int, int]):
+        """Like ``_gbuffer`` without the normal target: what triangle-ID passes need, and half
+        the bytes per fragment (use ``_setup_geometry(..., normals=False)``)."""
+        pool = self.pool
+        depth = (pool.depth("idb.depth0", size), pool.depth("idb.depth1", size))
+        ids = pool.texture("idb.ids", size, "rg32i")
+        fbos = tuple(pool.framebuffer((ids,), d) for d in depth)
+        clears = tuple(pool.framebuffer((), d) for d in depth)
+        return depth, ids, fbos, clears
+
     def _clear(self, clears, layer: int) -> None:
         clears[layer % 2].use()
         clears[layer % 2].clear(depth=1.0)
 
-    def _draw(self, mesh: _Mesh, prog, fbos, layer: int, query) -> None:
+    def _draw(self, mesh: _Mesh, prog, fbos, layer: int, query, tie_break: bool = True) -> None:
         """Draw layer ``layer`` into ``fbos[layer % 2]``, counting its samples in ``query``:
-        front faces first, then back faces pushed back by ``BACK_OFFSET``."""
+        front faces first, then back faces pushed back by ``BACK_OFFSET`` (one draw where the
+        shader does it, or where no tie-break is wanted)."""
         ctx = self.ctx
         fbos[layer % 2].use()
         prog["u_peel"].value = layer > 0
         prog["u_prev_depth"].value = (layer - 1) % 2
-        if self.back_bias_in_shader:
+        if self.back_bias_in_shader or not tie_break:
             ctx.enable(ctx.DEPTH_TEST)
             with query:
                 mesh.vao(prog).render()

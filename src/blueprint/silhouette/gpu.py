@@ -446,8 +446,8 @@ class GpuSilhouettes:
 
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
-        depth, _, ids, fbos, clears = r._gbuffer((w, h))
-        geo = r._setup_geometry(camera, mesh, depth)
+        depth, ids, fbos, clears = r._id_buffer((w, h))
+        geo = r._setup_geometry(camera, mesh, depth, normals=False)
         ids.use(_IDS_UNIT)
         sil = self._pass(METHODS[method], (w, h), layers, corners, lists, tolerance)
         for layer in range(layers):
@@ -455,7 +455,7 @@ class GpuSilhouettes:
             # an empty layer skips the next one's draws on the GPU, without the CPU waiting
             guard = r._query(layer - 1).crender if layer else contextlib.nullcontext()
             with guard:
-                r._draw(mesh, geo, fbos, layer, r._query(layer))
+                r._draw(mesh, geo, fbos, layer, r._query(layer), tie_break=False)
             sil.run(layer)
         return sil.read() if read else None
 

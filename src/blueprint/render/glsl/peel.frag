@@ -16,8 +16,12 @@ in vec3 v_eye;
 in vec3 v_normal;
 flat in int v_part;
 
+#if NORMALS
 layout(location = 0) out vec4 o_normal;   // eye-space normal facing the viewer
 layout(location = 1) out ivec2 o_ids;     // (face + 1, part + 1)
+#else
+layout(location = 0) out ivec2 o_ids;     // an ID buffer alone (triangle-ID silhouettes)
+#endif
 
 void main() {
     float z = gl_FragCoord.z;
@@ -48,6 +52,8 @@ void main() {
         discard;
     }
 #endif
+#if NORMALS
     o_normal = vec4(n, 1.0);
+#endif
     o_ids = ivec2(face + 1, part + 1);
 }
