@@ -294,11 +294,11 @@ class Renderer:
         return prog
 
     def _id_buffer(self, size: tuple[int, int]):
-        """Like ``_gbuffer`` without the normal target: what triangle-ID passes need, and half
-        the bytes per fragment (use ``_setup_geometry(..., normals=False)``)."""
+        """Like ``_gbuffer`` with face IDs alone (r32i, face + 1): what triangle-ID passes need,
+        a quarter of the bytes per fragment (use ``_setup_geometry(..., normals=False)``)."""
         pool = self.pool
         depth = (pool.depth("idb.depth0", size), pool.depth("idb.depth1", size))
-        ids = pool.texture("idb.ids", size, "rg32i")
+        ids = pool.texture("idb.ids", size, "r32i")
         fbos = tuple(pool.framebuffer((ids,), d) for d in depth)
         clears = tuple(pool.framebuffer((), d) for d in depth)
         return depth, ids, fbos, clears

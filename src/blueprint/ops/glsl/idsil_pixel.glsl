@@ -10,7 +10,7 @@
 //   bool adjacent_to_own(int other);    whether `other` shares a vertex with it
 
 uniform sampler2D u_depth;   // the layer's depth attachment, 1.0 where nothing was drawn
-uniform isampler2D u_ids;    // (face + 1, part + 1); stale where the depth says empty
+uniform isampler2D u_ids;    // face + 1 in .x; stale where the depth says empty
 
 float idsil_value(ivec2 p) {
     ivec2 last = textureSize(u_depth, 0) - 1;

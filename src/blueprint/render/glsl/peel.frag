@@ -20,7 +20,7 @@ flat in int v_part;
 layout(location = 0) out vec4 o_normal;   // eye-space normal facing the viewer
 layout(location = 1) out ivec2 o_ids;     // (face + 1, part + 1)
 #else
-layout(location = 0) out ivec2 o_ids;     // an ID buffer alone (triangle-ID silhouettes)
+layout(location = 0) out int o_face;      // face + 1 alone: the ID buffer of triangle-ID silhouettes
 #endif
 
 void main() {
@@ -54,6 +54,8 @@ void main() {
 #endif
 #if NORMALS
     o_normal = vec4(n, 1.0);
-#endif
     o_ids = ivec2(face + 1, part + 1);
+#else
+    o_face = face + 1;
+#endif
 }
