@@ -149,6 +149,7 @@ def cli() -> None:
     "--scale", default=None, help="Vector plan views to scale, e.g. 1:50 (orthographic, page in mm)."
 )
 @click.option("--units", default=None, help="The model's length unit for --scale (mm, cm, m, in, ft).")
+@click.option("--id-silhouettes", is_flag=True, help="Add triangle-ID silhouettes to every layer's edges.")
 @click.option("--shade", default=None, help="Parts to draw shaded inside the drawing: globs or indices.")
 @click.option(
     "--shade-opacity", type=float, default=1.0, show_default=True, help="1 opaque, less see-through."
@@ -187,6 +188,7 @@ def render(
     highlight_model,
     scale,
     units,
+    id_silhouettes,
     shade,
     shade_opacity,
     glyph_file,
@@ -234,6 +236,7 @@ def render(
         glyphs=glyphs,
         shade=shade,
         shade_opacity=shade_opacity,
+        id_silhouettes=id_silhouettes,
         **kwargs,
     )
     save_png(output, frame.image)

@@ -70,6 +70,11 @@ EDGES = Op(
     params=(
         Param("depth_threshold", 4.0, 0.1, 1000.0, "depth jump, in pixel footprints, of a silhouette"),
         Param("part_edges", True, doc="draw boundaries between parts"),
+        Param(
+            "id_silhouettes",
+            False,
+            doc="also mark neighbours whose triangles share no vertex (paper 002); needs face IDs",
+        ),
     ),
     doc="edge intensity from coverage, part-ID, normal and depth discontinuities",
     compute="blueprint.ops:glsl/edges.comp",

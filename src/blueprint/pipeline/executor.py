@@ -41,6 +41,7 @@ from blueprint.pipeline.graph import Plan, plan
 from blueprint.pipeline.spec import Bound, PipelineSpec, user_source
 from blueprint.render.renderer import (
     CHUNK,
+    CORNERS_UNIT,
     HARD_MAX_LAYERS,
     Frame,
     Renderer,
@@ -343,6 +344,7 @@ class Executor:
         self._style = None if style is None else get_style(style)
         self._camera = camera
         self._crease = crease
+        self._mesh = None
         self._size_of = size_of
         self._pl = pl
         self._stacks: dict[str, list] = {}
@@ -355,7 +357,7 @@ class Executor:
         ctx.enable_only(ctx.NOTHING)
         counts: list[int] = []
         if pl.peel:
-            mesh = self.r.mesh(model, crease)
+            mesh = self._mesh = self.r.mesh(model, crease)
             counts = self._peel(pl, mesh, camera, max_layers, size_of)
             layers = self.r._layer_count(counts, min_fraction)
         else:
@@ -469,7 +471,7 @@ class Executor:
         ctx.depth_func = "<"
         # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
         # the raw ID target) need them
-        face_ids = any(g.extra for g in groups) or clear_gb
+        face_ids = any(g.extra for g in groups) or clear_gb or self._id_silhouettes(pl)
         geo = r._setup_geometry(camera, mesh, groups[0].depth, face_ids=face_ids)
         extras = None
         if any(g.extra for g in groups):
@@ -572,6 +574,14 @@ class Executor:
         slot = pl.slots[name]
         return self.r.pool.texture(slot.name, self._size_of(slot.scale), slot.format)
 
+    @staticmethod
+    def _id_silhouettes(pl: Plan) -> bool:
+        """Whether an edges pass draws triangle-ID silhouettes (they need face IDs)."""
+        return any(
+            p.op is not None and p.op.name == "edges" and p.uniforms.get("u_id_silhouettes")
+            for p in pl.bound.passes.values()
+        )
+
     def _frame_uniforms(self, prog, target, layer: int) -> None:
         w, h = target.size
         self._set(prog, "u_texel", (1.0 / w, 1.0 / h))
@@ -584,6 +594,8 @@ class Executor:
             self._set(prog, "u_pixel_angle", camera.pixel_angle(h))
             half = math.radians(self._crease)
             self._set(prog, "u_normal_cos", (math.cos(0.5 * half), math.cos(0.8 * half)))
+            if self._has(prog, "u_corners") and self._mesh is not None:
+                self._mesh.bind_corners(prog, CORNERS_UNIT)
             if self._has(prog, "u_view"):
                 self._set(prog, "u_view", camera.view_matrix().T.astype("f4").tobytes())
                 self._set(prog, "u_projection", camera.projection_matrix().T.astype("f4").tobytes())
@@ -957,6 +969,7 @@ def render_blueprint(
     supersample: int = 2,
     depth_threshold: float = 4.0,
     part_edges: bool = True,
+    id_silhouettes: bool = False,
     profile: bool = False,
 ) -> Frame:
     """``Renderer.render`` (without highlight and reveal) through the ``blueprint`` preset."""
@@ -973,6 +986,7 @@ def render_blueprint(
         "line_width": float(line_width),
         "depth_threshold": float(depth_threshold),
         "part_edges": bool(part_edges),
+        "id_silhouettes": bool(id_silhouettes),
     }
     result = executor_for(renderer).run(
         spec,

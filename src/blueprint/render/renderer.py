@@ -39,6 +39,7 @@ MASK_UNIT = 7
 MASK_FLAGS_UNIT = 8
 SHADE_UNIT = 9
 SHADE_MAPS_UNIT = 10  # shade.index, then shade.color at the next unit
+CORNERS_UNIT = 12
 
 
 @dataclass
@@ -104,6 +105,8 @@ class _Mesh:
         self.vbo = ctx.buffer(data.tobytes())
         self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
         self._vaos: dict[int, object] = {}
+        self._corners = None
+        self._model = model
         self.part_count = len(model.part_names)
 
     def vao(self, program):
@@ -118,9 +121,26 @@ class _Mesh:
             vao = self._vaos[program.glo] = self.ctx.vertex_array(program, layout, index_buffer=self.ibo)
         return vao
 
+    def bind_corners(self, prog, unit: int) -> None:
+        """Give an edge program the corner positions of every face (3 texels per face, rows of
+        4096) and the tolerance under which two corners are one vertex, for ID silhouettes."""
+        if self._corners is None:
+            corners = self._model.positions[self._model.faces].reshape(-1, 3).astype(np.float32)
+            rows = max(1, -(-len(corners) // 4096))
+            data = np.zeros((rows * 4096, 3), np.float32)
+            data[: len(corners)] = corners
+            self._corners = self.ctx.texture((4096, rows), 3, data.tobytes(), dtype="f4")
+            self._corners.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+            diag = float(np.linalg.norm(np.ptp(self._model.bounds, axis=0))) or 1.0
+            self._tolerance = diag * 1e-6
+        self._corners.use(unit)
+        prog["u_corners"].value = unit
+        prog["u_tolerance2"].value = self._tolerance**2
+
     def release(self) -> None:
-        for obj in (*self._vaos.values(), self.vbo, self.ibo):
-            obj.release()
+        for obj in (*self._vaos.values(), self.vbo, self.ibo, self._corners):
+            if obj is not None:
+                obj.release()
 
 
 def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tuple[int, int]:
@@ -357,6 +377,7 @@ class Renderer:
         supersample: int = 2,
         depth_threshold: float = 4.0,
         part_edges: bool = True,
+        id_silhouettes: bool = False,
         highlight: np.ndarray | None = None,
         reveal: float | None = None,
         shade: np.ndarray | None = None,
@@ -382,6 +403,9 @@ class Renderer:
             Line width in output pixels.
         supersample : int
             G-buffer and edges are computed at this multiple of the size, then filtered down.
+        id_silhouettes : bool
+            Also draw triangle-ID silhouettes (neighbouring pixels whose triangles share no
+            vertex, paper 002) in every layer's edge map.
         highlight : (P,) bool, optional
             Designated parts (see ``blueprint.scene.parts.select_parts``): their whole outline
             is drawn over everything in the style's highlight ink and width.
@@ -416,11 +440,14 @@ class Renderer:
                 supersample=supersample,
                 depth_threshold=depth_threshold,
                 part_edges=part_edges,
+                id_silhouettes=id_silhouettes,
                 profile=profile,
             )
         style = get_style(style)
         _check_frame_args(max_layers, min_fraction, crease_angle, line_width)
-        params = EDGES.uniforms(depth_threshold=depth_threshold, part_edges=part_edges)
+        params = EDGES.uniforms(
+            depth_threshold=depth_threshold, part_edges=part_edges, id_silhouettes=id_silhouettes
+        )
         w, h = check_size(size, supersample, self.max_texture)
         camera = camera or self.camera_for(model, (w, h), view)
         ss = (w * supersample, h * supersample)
@@ -446,6 +473,8 @@ class Renderer:
         ctx.depth_func = "<"
         depth_tex, normal, ids, fbos, clears = self._gbuffer(ss)
         edges = self._edge_stage(camera, ss, crease_angle, params, line_width, supersample, style)
+        if id_silhouettes:
+            mesh.bind_corners(edges.prog, CORNERS_UNIT)
         normal.use(3)
         ids.use(4)
         draws = 0
@@ -458,7 +487,7 @@ class Renderer:
                 raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
             self._shading(mesh, camera, ss, shade, (*style.shade[:3], shade_opacity))
             draws += 3
-        geo = self._setup_geometry(camera, mesh, depth_tex, face_ids=False)
+        geo = self._setup_geometry(camera, mesh, depth_tex, face_ids=id_silhouettes)
 
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
         peeled = 0

@@ -2,6 +2,7 @@
 // (part boundaries), normal (creases) and depth (silhouettes). Each discontinuity between two
 // neighbouring pixels marks both of them, so lines are centred on the true boundary.
 #include "depth.glsl"
+#include "idsil_vertex.glsl"
 
 uniform sampler2D u_depth;       // the layer's depth attachment, 1.0 where nothing was drawn
 uniform sampler2D u_normal;
@@ -10,6 +11,7 @@ uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos w
 uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
 uniform float u_pixel_angle;     // pixel footprint per unit depth (perspective) or per pixel (ortho)
 uniform bool u_part_edges;
+uniform bool u_id_silhouettes;   // triangle-ID silhouettes as one more edge source
 
 const ivec2 OFFSETS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 
@@ -34,7 +36,24 @@ float edge_value(ivec2 p) {
         return any_covered ? 1.0 : 0.0;
     }
     vec3 nc = texelFetch(u_normal, p, 0).xyz;
-    int part = texelFetch(u_ids, p, 0).y;
+    ivec2 own = texelFetch(u_ids, p, 0).xy;
+    int part = own.y;
+    if (u_id_silhouettes) {
+        bool loaded = false;
+        for (int i = 0; i < 4; ++i) {
+            ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
+            int other = texelFetch(u_ids, q, 0).x;
+            if (covered[i] && other != own.x) {
+                if (!loaded) {
+                    load_own(own.x - 1);
+                    loaded = true;
+                }
+                if (!adjacent_to_own(other - 1)) {
+                    return 1.0;
+                }
+            }
+        }
+    }
     float e = 0.0;
     for (int i = 0; i < 4; ++i) {
         if (!covered[i]) {
