@@ -222,11 +222,9 @@ class SoupMesh:
         points = corners.reshape(-1, 3).astype(np.float64)
         self.bounds = np.array([points.min(axis=0), points.max(axis=0)])
         self.tolerance = owner.tolerance * _diagonal(points)
-        # what the renderer's geometry pass needs of a mesh: vertex arrays and a part table
+        # what the renderer's geometry pass needs of a mesh: vertex arrays, the part per vertex
         self._vaos: dict[int, object] = {}
         parts = np.zeros(self.faces, np.int32) if face_part is None else np.asarray(face_part, np.int32)
-        # the part of every face, for geometry passes that read it from a table or per vertex
-        self.parts = _table(ctx, parts, "i4")
         self._corner_parts = ctx.buffer(np.repeat(parts, 3).astype(np.int32))
         self._first = corners
         self._topology = None if topology is None else tuple(topology)
@@ -276,7 +274,7 @@ class SoupMesh:
 
     @_on_gl
     def release(self) -> None:
-        for obj in (*self._vaos.values(), self.parts, self._corner_parts):
+        for obj in (*self._vaos.values(), self._corner_parts):
             obj.release()
         self._vaos.clear()
         self.corners.release()
