@@ -11,35 +11,7 @@ from pathlib import Path
 
 import click
 
-VIEW_NAMES = ("iso", "front", "back", "left", "right", "top", "bottom")
-
-
-def _camera_options(func):
-    options = [
-        click.option(
-            "--size",
-            nargs=2,
-            type=int,
-            default=None,
-            metavar="W H",
-            help="Output width and height in pixels.",
-        ),
-        click.option(
-            "--view", default="iso", show_default=True, help=f"Named view: {', '.join(VIEW_NAMES)}."
-        ),
-        click.option(
-            "--azimuth", type=float, default=None, help="Degrees from the front, towards the right."
-        ),
-        click.option("--elevation", type=float, default=None, help="Degrees above the horizon."),
-        click.option(
-            "--fov", type=float, default=30.0, show_default=True, help="Vertical field of view, degrees."
-        ),
-        click.option("--ortho", is_flag=True, help="Orthographic projection."),
-        click.option("--up", type=click.Choice(["y", "z"]), default=None, help="Model up axis."),
-    ]
-    for option in reversed(options):
-        func = option(func)
-    return func
+from blueprint.cli import camera_options
 
 
 @contextmanager
@@ -77,7 +49,7 @@ def pipeline() -> None:
 @click.option(
     "-o", "--output", type=click.Path(path_type=Path), required=True, help="PNG, NPZ or video to write."
 )
-@_camera_options
+@camera_options
 @click.option(
     "--set", "settings", multiple=True, metavar="NAME=VALUE", help="Override a variable of the file."
 )
