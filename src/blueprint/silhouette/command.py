@@ -26,48 +26,25 @@ DEFAULT_SIZE = (800, 600)
 def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float = 30.0) -> int:
     """Encode (H, W, 3) uint8 frames as H.264 MP4, written atomically; returns the frame count.
 
-    Odd widths and heights are padded by one pixel (H.264 in yuv420p needs even sizes) with the
-    colour of the frame's corner.
+    Odd widths and heights are padded by one pixel (players expect 4:2:0 chroma, which needs
+    even sizes) with the colour of the frame's edge.
     """
-    try:
-        import imageio.v3 as iio
-    except ImportError:
-        raise InputError(
-            "writing MP4 needs imageio and imageio-ffmpeg (pip install imageio imageio-ffmpeg)"
-        ) from None
-    from blueprint.export.files import atomic_write
+    from blueprint.pipeline.media import VideoWriter
 
-    count = 0
+    def even(frame: np.ndarray) -> np.ndarray:
+        h, w = frame.shape[:2]
+        return np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
 
-    def write(tmp: Path) -> None:
-        nonlocal count
-        # the temporary name has no .mp4 ending, so name the container explicitly
-        try:
-            handle = iio.imopen(tmp, "w", plugin="FFMPEG", extension=".mp4", legacy_mode=True)
-        except Exception as exc:  # imageio raises several types when its ffmpeg is missing
-            raise InputError(
-                f"cannot write MP4 ({str(exc).splitlines()[0]}): install imageio-ffmpeg"
-            ) from None
-        writer = handle.legacy_get_writer(
-            fps=fps,
-            codec="libx264",
-            pixelformat="yuv420p",
-            macro_block_size=1,
-            output_params=["-f", "mp4"],
-            ffmpeg_log_level="error",
-        )
-        try:
-            for frame in frames:
-                h, w = frame.shape[:2]
-                if h % 2 or w % 2:
-                    frame = np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
-                writer.append_data(frame)
-                count += 1
-        finally:
-            writer.close()
-
-    atomic_write(path, write)
-    return count
+    frames = iter(frames)
+    first = next(frames, None)
+    if first is None:
+        raise InputError(f"{path}: no frames to write")
+    first = even(first)
+    with VideoWriter(Path(path), (first.shape[1], first.shape[0]), fps) as video:
+        video.write(first)
+        for frame in frames:
+            video.write(even(frame))
+    return video.frames
 
 
 @click.command("silhouettes")
