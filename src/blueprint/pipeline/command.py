@@ -6,36 +6,11 @@ Registered in ``blueprint.cli``; a thin shell over ``blueprint.pipeline.run``.
 from __future__ import annotations
 
 import json
-from contextlib import contextmanager
 from pathlib import Path
 
 import click
 
-from blueprint.cli import camera_options
-
-
-@contextmanager
-def _progress(label: str):
-    """A rich progress bar on stderr (only on a terminal: in a pipe it would garble errors)."""
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
-    console = Console(stderr=True)
-    with Progress(
-        TextColumn("[progress.description]{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeRemainingColumn(),
-        console=console,
-        transient=True,
-        disable=not console.is_terminal,
-    ) as progress:
-        task = progress.add_task(label, total=None)
-
-        def update(done: int, total: int) -> None:
-            progress.update(task, completed=done, total=total)
-
-        yield update
+from blueprint.cli import camera_options, progress_bar
 
 
 @click.group("pipeline")
@@ -80,7 +55,7 @@ def run_command(
     from blueprint.api import default_renderer
     from blueprint.pipeline.run import parse_assignments, run_pipeline
 
-    with _progress("frames") as progress:
+    with progress_bar("frames") as progress:
         result = run_pipeline(
             file,
             input,
@@ -222,7 +197,7 @@ def turntable(
     from blueprint.pipeline.run import parse_assignments
     from blueprint.pipeline.run import turntable as make_turntable
 
-    with _progress("turntable") as progress:
+    with progress_bar("turntable") as progress:
         path = make_turntable(
             model,
             output,

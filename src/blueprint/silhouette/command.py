@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from blueprint.cli import camera_options
+from blueprint.cli import camera_options, progress_bar
 from blueprint.errors import InputError
 from blueprint.scene.camera import VIEWS
 
@@ -102,8 +102,6 @@ def silhouettes(
 ):
     """Draw MODEL's silhouettes from a triangle-ID buffer into a PNG, or, with --animate, the
     silhouettes of MODEL deforming (and splitting in two part-way) into an MP4."""
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     from blueprint.api import default_renderer
     from blueprint.export.files import check_output, save_png
@@ -152,15 +150,13 @@ def silhouettes(
         renderer=renderer,
         **camera,
     )
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
-    with Progress(*columns, console=Console(stderr=True), transient=True) as progress:
-        task = progress.add_task(f"{animate} {method}", total=frames)
+    with progress_bar(f"{animate} {method}") as progress:
 
         def tracked():
-            for image, ms in pictures:
+            for done, (image, ms) in enumerate(pictures, start=1):
                 times.append(ms)
                 yield image
-                progress.advance(task)
+                progress(done, frames)
 
         count = write_video(output, tracked(), fps)
     click.echo(
