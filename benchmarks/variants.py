@@ -1,7 +1,9 @@
 """Time the renderer's alternative code paths on this machine, so the defaults are measured.
 
 Image-space passes as compute or fragment shaders; the back-face tie-break as two culled draws
-or one draw writing depth. Prints one JSON object per model, size and variant.
+or one draw writing depth; layers peeled one geometry pass a layer or, where the driver has
+framebuffer fetch, several a pass (k-buffer, whatever the model's triangles per pixel). Prints
+one JSON object per model, size and variant.
 
     python benchmarks/variants.py MODEL... [--size 512 512] [--supersample 1] [--frames 30]
 """
@@ -26,16 +28,18 @@ def main() -> None:
     parser.add_argument("--warmup", type=int, default=5)
     args = parser.parse_args()
     with Renderer() as r:
-        variants = [(c, b) for c in (True, False) for b in (True, False)]
-        if r.ctx.version_code < 430:
-            variants = [(False, b) for b in (True, False)]
+        supported = r.kbuffer
+        computes = (True, False) if r.ctx.version_code >= 430 else (False,)
+        variants = [(c, b, False) for c in computes for b in (True, False)]
+        variants += [(c, True, True) for c in computes if supported]
         for path in args.models:
             model = load_model(path)
             for size in [tuple(s) for s in (args.size or [[512, 512]])]:
                 camera = r.camera_for(model, size)
                 for ss in args.supersample or [1, 2]:
-                    for use_compute, in_shader in variants:
+                    for use_compute, in_shader, kbuffer in variants:
                         r.use_compute, r.back_bias_in_shader = use_compute, in_shader
+                        r.kbuffer, r.kbuffer_density = kbuffer, 0.0
                         options = dict(size=size, supersample=ss, max_layers=args.max_layers)
                         for _ in range(args.warmup):
                             r.render(model, camera, **options)
@@ -56,6 +60,7 @@ def main() -> None:
                                     "tie_break": "one draw, shader depth"
                                     if in_shader
                                     else "two culled draws",
+                                    "peel": "k-buffer" if kbuffer else "a pass a layer",
                                     "ms": round(ms, 3),
                                     "fps": round(1000 / ms, 1),
                                     "stages": {k: round(v, 3) for k, v in profiled.stages.items()},

@@ -18,6 +18,8 @@ FORMATS: dict[str, tuple[int, str]] = {
     "r32i": (1, "i4"),
     "rg32i": (2, "i4"),
 }
+# formats of the renderer's own targets, not offered to pipelines (k-buffer surfaces)
+INTERNAL_FORMATS: dict[str, tuple[int, str]] = {"rgba32ui": (4, "u4")}
 
 
 @dataclass(frozen=True)
@@ -43,11 +45,12 @@ class TargetPool:
         held = self._textures.get(name)
         if held is not None and held[0] == key:
             return held[1]
-        if fmt not in FORMATS:
+        spec = FORMATS.get(fmt) or INTERNAL_FORMATS.get(fmt)
+        if spec is None:
             raise ValueError(f"unknown target format {fmt!r} (choose {', '.join(FORMATS)})")
         if held is not None:
             self._drop(name)
-        components, dtype = FORMATS[fmt]
+        components, dtype = spec
         with _allocating(size):
             if layers:
                 tex = self.ctx.texture_array((*size, layers), components, dtype=dtype)

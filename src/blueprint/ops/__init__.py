@@ -50,6 +50,13 @@ class Op:
     params: tuple[Param, ...] = ()
     doc: str = ""
     compute: str | None = None
+    # boolean parameters compiled in as defines (NAME in capitals) as well as set as uniforms:
+    # a software rasteriser runs a branch a uniform turns off on every pixel all the same
+    switches: tuple[str, ...] = ()
+
+    def defines(self, uniforms: dict[str, float | bool]) -> dict[str, bool]:
+        """Compile-time defines of checked uniform values (see ``switches``)."""
+        return {name.upper(): bool(uniforms[f"u_{name}"]) for name in self.switches}
 
     def uniforms(self, **values) -> dict[str, float | bool]:
         """Validated parameter values, defaults filled in, keyed by uniform name (``u_<name>``)."""
@@ -78,6 +85,7 @@ EDGES = Op(
     ),
     doc="edge intensity from coverage, part-ID, normal and depth discontinuities",
     compute="blueprint.ops:glsl/edges.comp",
+    switches=("id_silhouettes",),
 )
 
 DILATE = Op(

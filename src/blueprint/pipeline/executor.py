@@ -43,6 +43,7 @@ from blueprint.render.renderer import (
     CHUNK,
     CORNERS_UNIT,
     HARD_MAX_LAYERS,
+    KBUFFER_MAX,
     Frame,
     Renderer,
     _check_frame_args,
@@ -472,7 +473,9 @@ class Executor:
         # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
         # the raw ID target) need them
         face_ids = any(g.extra for g in groups) or clear_gb or self._id_silhouettes(pl)
-        geo = r._setup_geometry(camera, mesh, groups[0].depth, face_ids=face_ids)
+        geo = r._setup_geometry(
+            camera, mesh, groups[0].depth, face_ids=face_ids, batch=max_layers or KBUFFER_MAX
+        )
         extras = None
         if any(g.extra for g in groups):
             extras = self._extras_programs(groups, camera, mesh)
@@ -575,6 +578,10 @@ class Executor:
         return self.r.pool.texture(slot.name, self._size_of(slot.scale), slot.format)
 
     @staticmethod
+    def _defines(p) -> dict:
+        return p.op.defines(p.uniforms) if p.op.switches else {}
+
+    @staticmethod
     def _id_silhouettes(pl: Plan) -> bool:
         """Whether an edges pass draws triangle-ID silhouettes (they need face IDs)."""
         return any(
@@ -623,12 +630,17 @@ class Executor:
                     p, self._target(name, layer), pl.resolve(p.inputs[p.stacks[0]]), layers
                 )
                 return
-        if p.user is not None:
-            prog = self._user_program(p.user)
-        else:
-            prog = self._program(p.op.shader)
         target = self._target(name, layer)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
+        if p.user is not None:
+            prog = self._user_program(p.user)
+        elif p.kind == "composite":
+            # the box filter's size as a constant: its loops unroll
+            ((key, source),) = inputs.items()
+            factor = max(1, self._stacks[source][0].size[0] // target.size[0])
+            prog = self._program(p.op.shader, defines={f"{key.upper()}_FACTOR": factor})
+        else:
+            prog = self._program(p.op.shader, defines=self._defines(p))
         self._frame_uniforms(prog, target, layer)
         for uniform, value in p.uniforms.items():
             self._set(prog, uniform, value)
@@ -692,7 +704,7 @@ class Executor:
         return {"arrays": arrays, "slice": slices, "batch": batch}
 
     def _run_slice(self, name: str, p, layer: int) -> None:
-        prog = self.r.compute(p.op.compute, OWN)
+        prog = self.r.compute(p.op.compute, {**OWN, **self._defines(p)})
         array = self._stacks[name][layer // SLICES]
         size = array.size[:2]
         self._frame_uniforms(prog, _Sized(size), layer)
@@ -777,7 +789,6 @@ class Executor:
         self._set(prog, "u_threshold", bool(style.threshold))
         for k in range(8):
             self._set(prog, f"u_{key}{k}", BASE_UNIT + k)
-        self._set(prog, f"u_{key}_factor", max(1, stack[0].size[0] // target.size[0]))
         inks = style.layer_inks(max(layers, 1))
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA

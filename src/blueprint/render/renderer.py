@@ -40,6 +40,16 @@ MASK_FLAGS_UNIT = 8
 SHADE_UNIT = 9
 SHADE_MAPS_UNIT = 10  # shade.index, then shade.color at the next unit
 CORNERS_UNIT = 12
+KBUFFER_UNIT = 13
+KBUFFER_FRAG = "blueprint.render:glsl/kbuffer.frag"
+UNPACK_FRAG = "blueprint.render:glsl/unpack.frag"
+# Layers one k-buffer pass finds at most: the targets a fragment shader may write.
+KBUFFER_MAX = 8
+# The k-buffer saves geometry passes but adds a full-screen pass a layer: on llvmpipe it paid
+# from about this many triangles per G-buffer pixel (8 layers at 1024x1024 supersampled:
+# featuretype, 0.003, 16 % slower; rocker arm, 0.02, 8 % slower; bunny, 0.066, 21 % faster;
+# 2CylinderEngine, 0.12, 27 % faster; 5 layers of the rocker arm at 800x600, 0.04, 16 % faster).
+KBUFFER_MIN_DENSITY = 0.03
 
 
 @dataclass
@@ -108,6 +118,7 @@ class _Mesh:
         self._corners = None
         self._model = model
         self.part_count = len(model.part_names)
+        self.triangles = len(faces)
 
     def vao(self, program):
         """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
@@ -197,6 +208,17 @@ class Renderer:
         # offset: one draw measured faster on llvmpipe and on the H100 in 3 of 4 cases
         # (benchmarks/variants.py), and never more than 10 % slower.
         self.back_bias_in_shader = True
+        # Peeling several layers a geometry pass (_KBufferPeel) needs the fragments of a pixel
+        # to read what the ones before wrote: framebuffer fetch, which Mesa's drivers have
+        # (llvmpipe among them), used from KBUFFER_MIN_DENSITY triangles per pixel
+        # (benchmarks/variants.py compares both ways).
+        ext = self.ctx.extensions
+        self.kbuffer = (
+            "GL_EXT_shader_framebuffer_fetch" in ext
+            and (self.ctx.version_code >= 420 or "GL_ARB_shading_language_packing" in ext)
+            and self.ctx.info["GL_MAX_DRAW_BUFFERS"] >= KBUFFER_MAX
+        )
+        self.kbuffer_density = KBUFFER_MIN_DENSITY
 
     def __enter__(self) -> Renderer:
         return self
@@ -236,12 +258,12 @@ class Renderer:
             prog = self._programs[key] = build_compute(self.ctx, ref, defines)
         return prog
 
-    def fullscreen(self, fragment: str):
+    def fullscreen(self, fragment: str, defines=None):
         """(program, vertex array) of a full-screen pass drawing one triangle."""
-        prog = self.program(fragment)
-        vao = self._fullscreen.get(fragment)
+        prog = self.program(fragment, defines=defines)
+        vao = self._fullscreen.get(prog.glo)
         if vao is None:
-            vao = self._fullscreen[fragment] = self.ctx.vertex_array(prog, [])
+            vao = self._fullscreen[prog.glo] = self.ctx.vertex_array(prog, [])
         return prog, vao
 
     def mesh(self, model: Model, crease_angle: float) -> _Mesh:
@@ -296,11 +318,27 @@ class Renderer:
         selected_only: bool = False,
         face_ids: bool = True,
         normals: bool = True,
+        batch: int = 1,
     ) -> object:
-        """The geometry program, set up for ``camera``. Without ``face_ids`` the ID target's
-        face channel is left 0: the blueprint needs only parts, and a software rasteriser pays
-        for tracking primitive IDs."""
-        prog = self._geometry_program(selected_only, face_ids, normals)
+        """The geometry program, set up for ``camera``, for ``_draw``. Without ``face_ids``
+        the ID target's face channel is left 0: the blueprint needs only parts, and a software
+        rasteriser pays for tracking primitive IDs. With ``batch`` > 1, where the driver
+        allows, one geometry pass finds that many layers (``_KBufferPeel``)."""
+        batch = -(-batch // -(-batch // KBUFFER_MAX))  # as many to a pass as evenly fit
+        w, h = depth_textures[0].size
+        kbuffer = (
+            self.kbuffer
+            and batch > 1
+            and mesh.triangles >= self.kbuffer_density * w * h
+            and normals
+            and not selected_only
+            and self.back_bias_in_shader
+            and mesh.part_count < 0xFFFF
+        )
+        if kbuffer:
+            prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": batch, "FACE_IDS": face_ids})
+        else:
+            prog = self._geometry_program(selected_only, face_ids, normals)
         prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
         prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
@@ -311,7 +349,7 @@ class Renderer:
             prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         depth_textures[0].use(0)
         depth_textures[1].use(1)
-        return prog
+        return _KBufferPeel(self, prog, batch) if kbuffer else prog
 
     def _id_buffer(self, size: tuple[int, int]):
         """Like ``_gbuffer`` with face IDs alone (r32i, face + 1): what triangle-ID passes need,
@@ -331,6 +369,9 @@ class Renderer:
         """Draw layer ``layer`` into ``fbos[layer % 2]``, counting its samples in ``query``:
         front faces first, then back faces pushed back by ``BACK_OFFSET`` (one draw where the
         shader does it, or where no tie-break is wanted)."""
+        if isinstance(prog, _KBufferPeel):
+            prog.draw(mesh, fbos, layer, query)
+            return
         ctx = self.ctx
         fbos[layer % 2].use()
         prog["u_peel"].value = layer > 0
@@ -487,7 +528,9 @@ class Renderer:
                 raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
             self._shading(mesh, camera, ss, shade, (*style.shade[:3], shade_opacity))
             draws += 3
-        geo = self._setup_geometry(camera, mesh, depth_tex, face_ids=id_silhouettes)
+        geo = self._setup_geometry(
+            camera, mesh, depth_tex, face_ids=id_silhouettes, batch=max_layers or KBUFFER_MAX
+        )
 
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
         peeled = 0
@@ -606,23 +649,26 @@ class Renderer:
         return query.samples
 
     def _edge_stage(self, camera, ss, crease_angle, params, line_width, supersample, style):
+        defines = EDGES.defines(params)
+        vao = None
         if self.use_compute:
-            prog = self.compute(EDGES.compute)
+            prog = self.compute(EDGES.compute, defines)
         else:
-            prog = self.fullscreen(EDGES.shader)[0]
+            prog, vao = self.fullscreen(EDGES.shader, defines)
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
         half = math.radians(crease_angle)
         prog["u_normal_cos"].value = (math.cos(0.5 * half), math.cos(0.8 * half))
         prog["u_pixel_angle"].value = camera.pixel_angle(ss[1])
         for name, value in params.items():
-            prog[name].value = value
+            if name in prog:  # a switch's uniform is gone where its define turned it off
+                prog[name].value = value
         prog["u_normal"].value = 3
         prog["u_ids"].value = 4
         radius = (line_width - 1.0) * supersample / 2
         highlight_radius = (line_width * style.highlight_width - 1.0) * supersample / 2
         if self.use_compute:
             return _ComputeEdges(self, prog, ss, radius, highlight_radius)
-        return _FragmentEdges(self, prog, ss, radius, highlight_radius)
+        return _FragmentEdges(self, prog, vao, ss, radius, highlight_radius)
 
     def _compose(self, style: Style, edges, layers: int, supersample: int, out, shaded: bool) -> int:
         """Paper, then the edge layers back to front onto ``out``; returns the passes run."""
@@ -674,8 +720,7 @@ class Renderer:
             prog, vao = self.fullscreen("blueprint.compose:glsl/paper.frag")
             _set_paper(prog, style)
             vao.render(vertices=3)
-        prog, vao = self.fullscreen("blueprint.compose:glsl/compose.frag")
-        prog["u_supersample"].value = supersample
+        prog, vao = self.fullscreen("blueprint.compose:glsl/compose.frag", {"SUPERSAMPLE": supersample})
         prog["u_threshold"].value = style.threshold
         prog["u_edges0"].value = 5
         prog["u_edges1"].value = 6
@@ -726,7 +771,7 @@ class Renderer:
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
         depth_tex, normal, ids, fbos, clears = self._gbuffer((w, h))
-        geo = self._setup_geometry(camera, mesh, depth_tex)
+        geo = self._setup_geometry(camera, mesh, depth_tex, batch=max_layers or KBUFFER_MAX)
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
         depth, normals, tri, part, counts = [], [], [], [], []
         for i in range(limit):
@@ -755,6 +800,43 @@ class Renderer:
             )
         )
         return Layers(*stack, camera.view_matrix(), camera.projection_matrix(), camera)
+
+
+class _KBufferPeel:
+    """Depth peeling ``k`` layers a geometry pass. At every k-th layer one geometry pass
+    (kbuffer.frag) sorts the k nearest surfaces behind the previous layer into k integer
+    targets; each layer is then unpacked into the G-buffer by a full-screen pass, so whatever
+    reads layers sees what the one-pass-a-layer peel draws. The layer's occlusion query counts
+    its covered pixels."""
+
+    def __init__(self, renderer: Renderer, prog, k: int) -> None:
+        self.r, self.prog, self.k = renderer, prog, k
+        self.unpack, self.unpack_vao = renderer.fullscreen(UNPACK_FRAG)
+        self.unpack["u_surfaces"].value = KBUFFER_UNIT
+        self.unpack["u_back_bias"].value = BACK_OFFSET / (1 << 24)
+
+    def draw(self, mesh: _Mesh, fbos, layer: int, query) -> None:
+        r, ctx = self.r, self.r.ctx
+        size = fbos[0].size
+        # named by size too: pipelines peel G-buffers of several sizes in turn
+        name = f"kbuffer.{size[0]}x{size[1]}"
+        surfaces = [r.pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k)]
+        first = layer % self.k == 0
+        if first:
+            # the first target alone is cleared: kbuffer.frag keeps the rest valid
+            r.pool.framebuffer((surfaces[0],)).clear()
+            r.pool.framebuffer(tuple(surfaces)).use()
+            self.prog["u_peel"].value = layer > 0
+            self.prog["u_prev_depth"].value = (layer - 1) % 2
+            mesh.vao(self.prog).render()
+        fbos[layer % 2].use()
+        surfaces[layer % self.k].use(KBUFFER_UNIT)
+        self.unpack["u_first"].value = first
+        self.unpack["u_prev_depth"].value = (layer - 1) % 2
+        ctx.enable(ctx.DEPTH_TEST)
+        with query:
+            self.unpack_vao.render(vertices=3)
+        ctx.disable(ctx.DEPTH_TEST)
 
 
 class _ComputeEdges:
@@ -820,12 +902,11 @@ class _ComputeEdges:
 class _FragmentEdges:
     """Edge maps packed four layers to an RGBA8 texture, one channel per layer (GL 3.3)."""
 
-    def __init__(self, renderer: Renderer, prog, ss, radius: float, highlight_radius: float) -> None:
-        self.r, self.prog, self.ss = renderer, prog, ss
+    def __init__(self, renderer: Renderer, prog, vao, ss, radius: float, highlight_radius: float) -> None:
+        self.r, self.prog, self.vao, self.ss = renderer, prog, vao, ss
         self.radius, self.highlight_radius = radius, highlight_radius
         self.fbos: list = []
         self.highlight = None
-        self.vao = renderer.fullscreen(EDGES.shader)[1]
         if max(radius, highlight_radius) > 0:
             self.dilate, self.dilate_vao = renderer.fullscreen(DILATE.shader)
             self.dilate["u_source"].value = 6

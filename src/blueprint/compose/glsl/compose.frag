@@ -4,7 +4,7 @@
 uniform sampler2D u_edges0;
 uniform sampler2D u_edges1;
 uniform int u_layers;        // layers of these two textures that take part
-uniform int u_supersample;
+// SUPERSAMPLE (a define): edge-map pixels per output pixel along each axis, so loops unroll
 uniform bool u_threshold;    // wire-frame variant: binary edges
 uniform vec4 u_ink[8];       // straight colour and opacity per layer
 uniform bool u_shaded;
@@ -20,23 +20,23 @@ float edge_at(int k, ivec2 q) {
 }
 
 void main() {
-    ivec2 base = ivec2(gl_FragCoord.xy) * u_supersample;
+    ivec2 base = ivec2(gl_FragCoord.xy) * SUPERSAMPLE;
     if (u_shaded) {
         vec4 sum = vec4(0.0);
-        for (int y = 0; y < u_supersample; ++y) {
-            for (int x = 0; x < u_supersample; ++x) {
+        for (int y = 0; y < SUPERSAMPLE; ++y) {
+            for (int x = 0; x < SUPERSAMPLE; ++x) {
                 vec4 sample_color;
                 SHADED_COMPOSITE(edge_at, u_layers, u_ink, base + ivec2(x, y), sample_color)
                 sum += sample_color;
             }
         }
-        o_color = sum / float(u_supersample * u_supersample);
+        o_color = sum / float(SUPERSAMPLE * SUPERSAMPLE);
         return;
     }
     vec4 c0 = vec4(0.0);
     vec4 c1 = vec4(0.0);
-    for (int y = 0; y < u_supersample; ++y) {
-        for (int x = 0; x < u_supersample; ++x) {
+    for (int y = 0; y < SUPERSAMPLE; ++y) {
+        for (int x = 0; x < SUPERSAMPLE; ++x) {
             vec4 e0 = texelFetch(u_edges0, base + ivec2(x, y), 0);
             vec4 e1 = u_layers > 4 ? texelFetch(u_edges1, base + ivec2(x, y), 0) : vec4(0.0);
             if (u_threshold) {
@@ -47,7 +47,7 @@ void main() {
             c1 += e1;
         }
     }
-    float norm = 1.0 / float(u_supersample * u_supersample);
+    float norm = 1.0 / float(SUPERSAMPLE * SUPERSAMPLE);
     float coverage[8] = float[8](c0.x, c0.y, c0.z, c0.w, c1.x, c1.y, c1.z, c1.w);
     vec3 color = vec3(0.0);
     float alpha = 0.0;

@@ -1,5 +1,5 @@
 // Depth-sprite composite of up to 8 layer maps (one texture each), back to front, each
-// weighted by its ink's opacity; a box filter over each u_layers_factor^2 block gives
+// weighted by its ink's opacity; a box filter over each LAYERS_FACTOR^2 block gives
 // anti-aliased lines. Premultiplied output, blended by the executor over what is there (the
 // paper and farther groups). The same arithmetic as the renderer's compose.frag.
 uniform sampler2D u_layers0;
@@ -11,7 +11,7 @@ uniform sampler2D u_layers5;
 uniform sampler2D u_layers6;
 uniform sampler2D u_layers7;
 uniform int u_layers_count;   // layers of this group
-uniform int u_layers_factor;  // input pixels per output pixel along each axis
+// LAYERS_FACTOR (a define): input pixels per output pixel along each axis
 uniform bool u_threshold;     // wire-frame variant: binary edges
 uniform vec4 u_ink[8];        // straight colour and opacity per layer of the group
 
@@ -19,8 +19,8 @@ out vec4 o_value;
 
 float coverage(sampler2D s, ivec2 base) {
     float c = 0.0;
-    for (int y = 0; y < u_layers_factor; ++y) {
-        for (int x = 0; x < u_layers_factor; ++x) {
+    for (int y = 0; y < LAYERS_FACTOR; ++y) {
+        for (int x = 0; x < LAYERS_FACTOR; ++x) {
             float e = texelFetch(s, base + ivec2(x, y), 0).r;
             c += u_threshold ? step(0.5, e) : e;
         }
@@ -29,7 +29,7 @@ float coverage(sampler2D s, ivec2 base) {
 }
 
 void main() {
-    ivec2 base = ivec2(gl_FragCoord.xy) * u_layers_factor;
+    ivec2 base = ivec2(gl_FragCoord.xy) * LAYERS_FACTOR;
     float c[8] = float[8](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     c[0] = coverage(u_layers0, base);
     if (u_layers_count > 1) c[1] = coverage(u_layers1, base);
@@ -39,7 +39,7 @@ void main() {
     if (u_layers_count > 5) c[5] = coverage(u_layers5, base);
     if (u_layers_count > 6) c[6] = coverage(u_layers6, base);
     if (u_layers_count > 7) c[7] = coverage(u_layers7, base);
-    float norm = 1.0 / float(u_layers_factor * u_layers_factor);
+    float norm = 1.0 / float(LAYERS_FACTOR * LAYERS_FACTOR);
     vec3 color = vec3(0.0);
     float alpha = 0.0;
     for (int k = 7; k >= 0; --k) {

@@ -2,7 +2,12 @@
 // (part boundaries), normal (creases) and depth (silhouettes). Each discontinuity between two
 // neighbouring pixels marks both of them, so lines are centred on the true boundary.
 #include "depth.glsl"
+#ifndef ID_SILHOUETTES
+#define ID_SILHOUETTES 0
+#endif
+#if ID_SILHOUETTES
 #include "idsil_vertex.glsl"
+#endif
 
 uniform sampler2D u_depth;       // the layer's depth attachment, 1.0 where nothing was drawn
 uniform sampler2D u_normal;
@@ -11,7 +16,8 @@ uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos w
 uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
 uniform float u_pixel_angle;     // pixel footprint per unit depth (perspective) or per pixel (ortho)
 uniform bool u_part_edges;
-uniform bool u_id_silhouettes;   // triangle-ID silhouettes as one more edge source
+// Triangle-ID silhouettes as one more edge source: compiled in only where asked for (the
+// ID_SILHOUETTES define), since a software rasteriser pays for the dead branch on every pixel.
 
 const ivec2 OFFSETS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 
@@ -38,7 +44,8 @@ float edge_value(ivec2 p) {
     vec3 nc = texelFetch(u_normal, p, 0).xyz;
     ivec2 own = texelFetch(u_ids, p, 0).xy;
     int part = own.y;
-    if (u_id_silhouettes) {
+#if ID_SILHOUETTES
+    {
         bool loaded = false;
         for (int i = 0; i < 4; ++i) {
             ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
@@ -54,6 +61,7 @@ float edge_value(ivec2 p) {
             }
         }
     }
+#endif
     float e = 0.0;
     for (int i = 0; i < 4; ++i) {
         if (!covered[i]) {

@@ -1,0 +1,34 @@
+// One surface of the k-buffer in a uvec4: (window depth bits, with bit 31 set for a back face;
+// the normal's x and y as halves; its z as a half in the low 16 bits and part + 1 in the high
+// 16; face + 1). All zero where there is none: part + 1 is never 0.
+const uint KB_BACK = 0x80000000u;
+
+uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
+    return uvec4(
+        floatBitsToUint(z) | (back ? KB_BACK : 0u),
+        packHalf2x16(n.xy),
+        (packHalf2x16(vec2(n.z, 0.0)) & 0xffffu) | (uint(part + 1) << 16),
+        uint(face + 1));
+}
+
+bool kb_empty(uvec4 s) {
+    return s.z < 0x10000u;
+}
+
+float kb_raw(uvec4 s) {
+    return uintBitsToFloat(s.x & ~KB_BACK);
+}
+
+// the depth the peel writes: back faces pushed back by the bias (see BACK_OFFSET)
+float kb_depth(uvec4 s, float back_bias) {
+    float z = kb_raw(s);
+    return (s.x & KB_BACK) != 0u ? min(z + back_bias, 1.0) : z;
+}
+
+vec3 kb_normal(uvec4 s) {
+    return vec3(unpackHalf2x16(s.y), unpackHalf2x16(s.z & 0xffffu).x);
+}
+
+ivec2 kb_ids(uvec4 s) {
+    return ivec2(int(s.w), int(s.z >> 16));
+}

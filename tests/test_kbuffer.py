@@ -1,0 +1,136 @@
+"""The k-buffer peel (several layers a geometry pass, render/glsl/kbuffer.frag) finds the same
+layers as the peel that draws the model once a layer: same depths, normals, triangles and parts,
+in whatever order the triangles come, and over more layers than one pass holds. The ray-casting
+oracle checks both ways against the geometry (test_layers_oracle.py); this checks them against
+each other, normals included, and the drawings they make."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
+
+import blueprint
+from blueprint import examples
+from blueprint.render.renderer import KBUFFER_MAX
+
+
+@pytest.fixture
+def kbuffer(renderer):
+    """Switches the renderer between both ways; the k-buffer is forced whatever the density."""
+    if not renderer.kbuffer:
+        pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
+    saved = renderer.kbuffer, renderer.kbuffer_density
+
+    def use(on: bool) -> None:
+        renderer.kbuffer, renderer.kbuffer_density = on, 0.0
+
+    yield use
+    renderer.kbuffer, renderer.kbuffer_density = saved
+
+
+def _both(renderer, kbuffer, model, **options):
+    kbuffer(True)
+    fast = blueprint.peel(model, renderer=renderer, **options)
+    kbuffer(False)
+    plain = blueprint.peel(model, renderer=renderer, **options)
+    return fast, plain
+
+
+def _planes(order: list[int]) -> blueprint.Model:
+    """Squares at z = 0, -1, -2 facing the viewer, drawn in ``order``."""
+    positions, faces = [], []
+    for z in order:
+        b = len(positions)
+        positions += [(-1, -1, -z), (1, -1, -z), (1, 1, -z), (-1, 1, -z)]
+        faces += [(b, b + 1, b + 2), (b, b + 2, b + 3)]
+    return blueprint.Model.from_arrays(np.array(positions, np.float32), np.array(faces, np.int32))
+
+
+@pytest.mark.parametrize("order", [[0, 1, 2], [2, 1, 0], [1, 0, 2], [2, 0, 1]])
+def test_any_drawing_order_gives_the_layers_front_to_back(renderer, kbuffer, order):
+    model = _planes(order)
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    kbuffer(True)
+    layers = renderer.peel(model, camera, size=(32, 32), max_layers=4)
+    assert len(layers.depth) == 3
+    for k, z in enumerate((0, 1, 2)):
+        first_face = 2 * order.index(z)
+        assert set(np.unique(layers.triangle[k])) - {-1} == {first_face, first_face + 1}
+    inside = layers.depth[0] < 1.0
+    assert (np.diff(layers.depth[:, inside], axis=0) > 0).all()
+
+
+CASES = {
+    "nested-boxes": (nested_boxes, {}),
+    "nested-round": (nested_round, dict(azimuth=20.0, elevation=35.0)),
+    "sphere-in-cube": (sphere_in_cube, {}),
+    "gearbox": (examples.gearbox, {}),
+    "gearbox-ortho": (examples.gearbox, dict(view="front", ortho=True)),
+}
+
+
+@pytest.mark.parametrize("max_layers", [None, 3, 10], ids=["all", "3", "10"])
+@pytest.mark.parametrize("name", list(CASES))
+def test_same_layers_as_a_pass_a_layer(renderer, kbuffer, name, max_layers):
+    make, camera = CASES[name]
+    fast, plain = _both(renderer, kbuffer, make(), size=(160, 120), max_layers=max_layers, **camera)
+    assert fast.depth.shape == plain.depth.shape
+    covered = plain.depth < 1.0
+    assert covered.sum() > 0
+    # normals pass through halves either way, rounded by the shader here and by the driver's
+    # store there: they may differ in the last place
+    same = (
+        (fast.depth == plain.depth)
+        & (fast.triangle == plain.triangle)
+        & (fast.part == plain.part)
+        & (np.abs(fast.normal - plain.normal) <= 1e-3).all(axis=-1)
+    )
+    # two surfaces about one peeling tolerance apart may be merged either way: a handful of pixels
+    assert (~same).sum() <= max(2, 1e-4 * covered.sum()), f"{(~same).sum()} of {covered.sum()} differ"
+
+
+def test_more_layers_than_one_pass_holds(renderer, kbuffer):
+    """Up to ten surfaces a ray: the second pass starts behind the first pass's last layer."""
+    fast, plain = _both(renderer, kbuffer, nested_round(), size=(96, 96), azimuth=20.0, elevation=35.0)
+    assert len(plain.depth) > KBUFFER_MAX
+    assert np.array_equal(fast.depth, plain.depth)
+    assert np.array_equal(fast.triangle, plain.triangle)
+
+
+def test_layer_counts_are_covered_pixels(renderer, kbuffer):
+    model = examples.gearbox()
+    kbuffer(True)
+    frame = renderer.render(model, size=(128, 96), max_layers=None, supersample=1)
+    layers = renderer.peel(model, size=(128, 96), max_layers=None)
+    assert frame.layers == len(layers.depth)
+    assert frame.layer_pixels[: frame.layers] == [int(c) for c in (layers.depth < 1.0).sum(axis=(1, 2))]
+    assert frame.layer_pixels[frame.layers :] in ([], [0])
+
+
+@pytest.mark.parametrize("style", ["blueprint", "paper"])
+def test_same_drawing(renderer, kbuffer, style):
+    model = examples.gearbox()
+    images = []
+    for on in (True, False):
+        kbuffer(on)
+        images.append(blueprint.render(model, size=(200, 150), style=style, max_layers=6).astype(int))
+    diff = np.abs(images[0] - images[1]).max(axis=-1)
+    assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
+
+
+def test_used_only_where_it_pays(renderer):
+    """From KBUFFER_MIN_DENSITY triangles per G-buffer pixel, and never for one layer."""
+    if not renderer.kbuffer:
+        pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
+    from blueprint.render.renderer import _KBufferPeel
+
+    model = examples.gearbox()
+    mesh = renderer.mesh(model, 30.0)
+    camera = renderer.camera_for(model, (64, 64))
+    side = int(np.sqrt(mesh.triangles / renderer.kbuffer_density)) + 2
+    small = renderer.pool.depth("test.small", (64, 64)), renderer.pool.depth("test.small1", (64, 64))
+    large = renderer.pool.depth("test.large", (side, side)), renderer.pool.depth("test.large1", (side, side))
+    assert isinstance(renderer._setup_geometry(camera, mesh, small, batch=5), _KBufferPeel)
+    assert not isinstance(renderer._setup_geometry(camera, mesh, small, batch=1), _KBufferPeel)
+    assert not isinstance(renderer._setup_geometry(camera, mesh, large, batch=5), _KBufferPeel)
