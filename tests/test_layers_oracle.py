@@ -121,9 +121,10 @@ CASES = [
     Case("engine-assembly", "glTF-Sample-Models/2CylinderEngine.glb"),
 ]
 
-# The two ways the renderer peels: a geometry pass a layer, and a k-buffer (several layers a
-# pass, where the driver has framebuffer fetch), forced here whatever the model's size.
-METHODS = ["pass-a-layer", "k-buffer"]
+# The ways the renderer peels: a geometry pass a layer, a k-buffer (several layers a pass,
+# where the driver has framebuffer fetch; forced here whatever the model's size), and the lean
+# pass of vector drawings (no normals: depth and triangle IDs alone).
+METHODS = ["pass-a-layer", "k-buffer", "ids-only"]
 
 
 @pytest.fixture(params=METHODS)
@@ -146,7 +147,11 @@ def _peel_and_cast(case: Case, renderer, request, method: str = "pass-a-layer"):
     key = (case.name, method)
     if key not in _LAYERS:
         model = case.model(request)
-        _LAYERS[key] = blueprint.peel(model, size=case.size, renderer=renderer, **case.camera)
+        normals = method != "ids-only"
+        _LAYERS[key] = blueprint.peel(
+            model, size=case.size, renderer=renderer, normals=normals, **case.camera
+        )
+        assert (_LAYERS[key].normal is None) != normals
     layers = _LAYERS[key]
     if case.name not in _ORACLES:
         model = case.model(request)

@@ -76,14 +76,15 @@ class Layers:
     """Depth layers read back from the GPU.
 
     depth : (L, H, W) float32, window depth in [0, 1], 1.0 where there is no surface
-    normal : (L, H, W, 3) float32, eye-space normal facing the viewer, 0 where none
+    normal : (L, H, W, 3) float32, eye-space normal facing the viewer, 0 where none; None
+        where not asked for
     triangle : (L, H, W) int32, face index in the model, -1 where none
     part : (L, H, W) int32, part index, -1 where none
     view, projection : (4, 4) float64
     """
 
     depth: np.ndarray
-    normal: np.ndarray
+    normal: np.ndarray | None
     triangle: np.ndarray
     part: np.ndarray
     view: np.ndarray
@@ -94,24 +95,34 @@ class Layers:
 class _Mesh:
     """A model's triangles on the GPU: shared vertices (split only where crease-split normals
     differ), every face in the index buffer in model order so ``gl_PrimitiveID`` is the face
-    index (degenerate faces rasterise to nothing), and a table of each face's part."""
+    index (degenerate faces rasterise to nothing), and a table of each face's part. Without a
+    crease angle the normals are left zero, for passes that draw no normals (ID buffers): the
+    smoothing is most of the time of an upload."""
 
-    def __init__(self, ctx, model: Model, crease_angle: float) -> None:
+    def __init__(self, ctx, model: Model, crease_angle: float | None) -> None:
         self.ctx = ctx
         faces = model.faces
-        normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
         corner_vertex = faces.reshape(-1).astype(np.int64)
         corner_part = np.repeat(model.face_part, 3).astype(np.int64)
-        quantized = np.round(normals * 32767).astype(np.int64)
         # a vertex is split where its normal or its part differs, so both can be attributes
-        keys = np.column_stack([corner_vertex, corner_part, quantized])
-        unique, inverse = np.unique(keys, axis=0, return_inverse=True)
-        first = np.zeros(len(unique), np.int64)
-        first[inverse.reshape(-1)] = np.arange(len(keys))
-        data = np.empty(len(unique), [("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
-        data["p"] = model.positions[unique[:, 0]]
-        data["n"] = normals[first]
-        data["part"] = unique[:, 1]
+        if crease_angle is None:
+            normals = None
+            key = corner_vertex * max(len(model.part_names), 1) + corner_part
+            _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+            vertex, part = corner_vertex[first], corner_part[first]
+        else:
+            normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
+            quantized = np.round(normals * 32767).astype(np.int64)
+            keys = np.column_stack([corner_vertex, corner_part, quantized])
+            unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+            first = np.zeros(len(unique), np.int64)
+            first[inverse.reshape(-1)] = np.arange(len(keys))
+            vertex, part = unique[:, 0], unique[:, 1]
+        data = np.zeros(len(first), [("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
+        data["p"] = model.positions[vertex]
+        if normals is not None:
+            data["n"] = normals[first]
+        data["part"] = part
         self.vbo = ctx.buffer(data.tobytes())
         self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
         self._vaos: dict[int, object] = {}
@@ -266,8 +277,9 @@ class Renderer:
             vao = self._fullscreen[prog.glo] = self.ctx.vertex_array(prog, [])
         return prog, vao
 
-    def mesh(self, model: Model, crease_angle: float) -> _Mesh:
-        key = (id(model), float(crease_angle))
+    def mesh(self, model: Model, crease_angle: float | None) -> _Mesh:
+        """``model`` on the GPU, uploaded once per crease angle (None: no normals)."""
+        key = (id(model), None if crease_angle is None else float(crease_angle))
         held = self._meshes.get(key)
         if held is None or held[0] is not model:
             held = self._meshes[key] = (model, _Mesh(self.ctx, model, crease_angle))
@@ -300,10 +312,14 @@ class Renderer:
         clears = tuple(pool.framebuffer((), d) for d in depth)
         return depth, normal, ids, fbos, clears
 
-    def _geometry_program(self, selected_only: bool = False, face_ids: bool = True, normals: bool = True):
-        # ID passes (no normals) break no ties: silhouettes compare triangles, not parts
+    def _geometry_program(
+        self, selected_only: bool = False, face_ids: bool = True, normals: bool = True, tie_break=None
+    ):
+        # ID passes (no normals) break no ties unless asked: silhouettes compare triangles, not
+        # parts, but layers handed out must be the ones the G-buffer gets
+        tie_break = normals if tie_break is None else tie_break
         defines = {
-            "BACK_BIAS_IN_SHADER": self.back_bias_in_shader and normals,
+            "BACK_BIAS_IN_SHADER": self.back_bias_in_shader and tie_break,
             "SELECTED_ONLY": selected_only,
             "FACE_IDS": face_ids,
             "NORMALS": normals,
@@ -319,6 +335,7 @@ class Renderer:
         face_ids: bool = True,
         normals: bool = True,
         batch: int = 1,
+        tie_break: bool | None = None,
     ) -> object:
         """The geometry program, set up for ``camera``, for ``_draw``. Without ``face_ids``
         the ID target's face channel is left 0: the blueprint needs only parts, and a software
@@ -338,14 +355,14 @@ class Renderer:
         if kbuffer:
             prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": batch, "FACE_IDS": face_ids})
         else:
-            prog = self._geometry_program(selected_only, face_ids, normals)
+            prog = self._geometry_program(selected_only, face_ids, normals, tie_break)
         prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
         prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
         prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
         prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
         if normals:  # only the normal's orientation needs it
             prog["u_ortho"].value = camera.ortho
-        if self.back_bias_in_shader and normals:
+        if self.back_bias_in_shader and (normals if tie_break is None else tie_break):
             prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         depth_textures[0].use(0)
         depth_textures[1].use(1)
@@ -757,23 +774,31 @@ class Renderer:
         max_layers: int | None = None,
         min_fraction: float = 0.0,
         crease_angle: float = 30.0,
+        normals: bool = True,
     ) -> Layers:
         """Peel depth layers and read each one back (see ``Layers``).
 
         Peels until a pass draws nothing, ``max_layers`` are done, or a layer covers fewer than
-        ``min_fraction`` of layer 0's pixels.
+        ``min_fraction`` of layer 0's pixels. Without ``normals`` the layers are the same but
+        ``Layers.normal`` is None: no normals are smoothed, drawn or read (vector drawings need
+        only depths and triangles).
         """
         _check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
         w, h = check_size(size, 1, self.max_texture)
         camera = camera or self.camera_for(model, (w, h), view)
         ctx = self.ctx
-        mesh = self.mesh(model, crease_angle)
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
-        depth_tex, normal, ids, fbos, clears = self._gbuffer((w, h))
-        geo = self._setup_geometry(camera, mesh, depth_tex, batch=max_layers or KBUFFER_MAX)
+        if normals:
+            mesh = self.mesh(model, crease_angle)
+            depth_tex, normal, ids, fbos, clears = self._gbuffer((w, h))
+            geo = self._setup_geometry(camera, mesh, depth_tex, batch=max_layers or KBUFFER_MAX)
+        else:
+            mesh = self.mesh(model, None)
+            depth_tex, ids, fbos, clears = self._id_buffer((w, h))
+            geo = self._setup_geometry(camera, mesh, depth_tex, normals=False, tie_break=True)
         limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
-        depth, normals, tri, part, counts = [], [], [], [], []
+        depth, normal_maps, tri, counts = [], [], [], []
         for i in range(limit):
             query = self._query(i)
             self._clear(clears, i)
@@ -782,24 +807,27 @@ class Renderer:
             if self._layer_count(counts, min_fraction) <= i:
                 break
             z = np.frombuffer(depth_tex[i % 2].read(), np.float32).reshape(h, w)[::-1]
-            n = np.frombuffer(normal.read(), np.float16).reshape(h, w, 4)[::-1, :, :3]
-            ij = np.frombuffer(ids.read(), np.int32).reshape(h, w, 2)[::-1]
             covered = z < 1.0
             depth.append(np.where(covered, z, 1.0).astype(np.float32))
-            normals.append(np.where(covered[..., None], n.astype(np.float32), 0.0))
-            tri.append(np.where(covered, ij[..., 0] - 1, -1).astype(np.int32))
-            part.append(np.where(covered, ij[..., 1] - 1, -1).astype(np.int32))
-        stack = (
-            (np.stack(a) for a in (depth, normals, tri, part))
-            if depth
-            else (
-                np.zeros((0, h, w), np.float32),
-                np.zeros((0, h, w, 3), np.float32),
-                np.zeros((0, h, w), np.int32),
-                np.zeros((0, h, w), np.int32),
-            )
+            if normals:
+                n = np.frombuffer(normal.read(), np.float16).reshape(h, w, 4)[::-1, :, :3]
+                normal_maps.append(np.where(covered[..., None], n.astype(np.float32), 0.0))
+                face = np.frombuffer(ids.read(), np.int32).reshape(h, w, 2)[::-1, :, 0]
+            else:
+                face = np.frombuffer(ids.read(), np.int32).reshape(h, w)[::-1]
+            tri.append(np.where(covered, face - 1, -1).astype(np.int32))
+        if depth:
+            depths, triangles = np.stack(depth), np.stack(tri)
+        else:
+            depths, triangles = np.zeros((0, h, w), np.float32), np.zeros((0, h, w), np.int32)
+        parts = np.where(triangles >= 0, model.face_part[np.maximum(triangles, 0)], -1).astype(np.int32)
+        if normals:
+            normal_stack = np.stack(normal_maps) if normal_maps else np.zeros((0, h, w, 3), np.float32)
+        else:
+            normal_stack = None
+        return Layers(
+            depths, normal_stack, triangles, parts, camera.view_matrix(), camera.projection_matrix(), camera
         )
-        return Layers(*stack, camera.view_matrix(), camera.projection_matrix(), camera)
 
 
 class _KBufferPeel:

@@ -312,7 +312,10 @@ def draw_vector(
         w, h = check_size(size, 1, renderer.max_texture)
         if camera is None:
             camera = Renderer.camera_for(model, (w, h), view)
-        layers = renderer.peel(model, camera, size=(w, h), max_layers=max_layers, crease_angle=crease_angle)
+        # occlusion needs only each layer's triangles
+        layers = renderer.peel(
+            model, camera, size=(w, h), max_layers=max_layers, crease_angle=crease_angle, normals=False
+        )
     else:
         h, w = layers.depth.shape[1:]
         camera = camera or layers.camera
