@@ -160,3 +160,37 @@ def test_seam_between_touching_solids_of_one_part_is_not_drawn(renderer):
     assert sum(
         _length(p) for p in visible if point_segment_distance(p, top[None]).max() < 0.5
     ) == pytest.approx(_length(top), abs=1.0)
+
+
+def test_layers_gathered_at_the_probed_pixels_give_the_same_drawing(renderer):
+    """A drawing peels its layers' triangles only at the pixels occlusion probes
+    (``Renderer.triangles_at``); with every pixel of the layers it comes out the same."""
+    import blueprint
+    from blueprint import examples
+
+    model = examples.gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    layers = blueprint.peel(model, camera=camera, size=SIZE, max_layers=8, renderer=renderer, normals=False)
+    gathered = draw_vector(model, camera, SIZE, renderer=renderer)
+    full = draw_vector(model, camera, SIZE, renderer=renderer, layers=layers)
+    assert len(gathered) > 50 and gathered.layers == full.layers == len(layers.depth)
+    assert np.array_equal(gathered.level, full.level)
+    assert np.array_equal(gathered.offsets, full.offsets)
+    assert np.array_equal(gathered.points, full.points)
+
+
+def test_triangles_at_pixels_are_the_peeled_layers_there(renderer):
+    import blueprint
+    from blueprint import examples
+
+    model = examples.gearbox()
+    camera = Camera.fit(model.positions, "front", aspect=4 / 3)
+    size = (96, 72)
+    layers = blueprint.peel(model, camera=camera, size=size, renderer=renderer, normals=False)
+    pixels = np.random.default_rng(1).choice(size[0] * size[1], 500, replace=False)
+    faces = renderer.triangles_at(model, camera, pixels, size=size)
+    expected = layers.triangle.reshape(len(layers.depth), -1)[:, pixels]
+    assert faces.shape == expected.shape and (faces >= 0).any()
+    assert np.array_equal(faces, expected)
+    with pytest.raises(blueprint.BlueprintError):
+        renderer.triangles_at(model, camera, [size[0] * size[1]], size=size)

@@ -783,30 +783,13 @@ class Renderer:
         ``Layers.normal`` is None: no normals are smoothed, drawn or read (vector drawings need
         only depths and triangles).
         """
-        _check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
         w, h = check_size(size, 1, self.max_texture)
         camera = camera or self.camera_for(model, (w, h), view)
-        ctx = self.ctx
-        ctx.enable_only(ctx.NOTHING)
-        ctx.depth_func = "<"
-        if normals:
-            mesh = self.mesh(model, crease_angle)
-            depth_tex, normal, ids, fbos, clears = self._gbuffer((w, h))
-            geo = self._setup_geometry(camera, mesh, depth_tex, batch=max_layers or KBUFFER_MAX)
-        else:
-            mesh = self.mesh(model, None)
-            depth_tex, ids, fbos, clears = self._id_buffer((w, h))
-            geo = self._setup_geometry(camera, mesh, depth_tex, normals=False, tie_break=True)
-        limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
-        depth, normal_maps, tri, counts = [], [], [], []
-        for i in range(limit):
-            query = self._query(i)
-            self._clear(clears, i)
-            self._draw(mesh, geo, fbos, i, query)
-            counts.append(query.samples)
-            if self._layer_count(counts, min_fraction) <= i:
-                break
-            z = np.frombuffer(depth_tex[i % 2].read(), np.float32).reshape(h, w)[::-1]
+        depth, normal_maps, tri = [], [], []
+        for depth_tex, normal, ids in self._peeled(
+            model, camera, (w, h), max_layers, min_fraction, crease_angle, normals
+        ):
+            z = np.frombuffer(depth_tex.read(), np.float32).reshape(h, w)[::-1]
             covered = z < 1.0
             depth.append(np.where(covered, z, 1.0).astype(np.float32))
             if normals:
@@ -828,6 +811,61 @@ class Renderer:
         return Layers(
             depths, normal_stack, triangles, parts, camera.view_matrix(), camera.projection_matrix(), camera
         )
+
+    @_current
+    def triangles_at(
+        self,
+        model: Model,
+        camera: Camera,
+        pixels: np.ndarray,
+        *,
+        size: tuple[int, int],
+        max_layers: int | None = None,
+        min_fraction: float = 0.0,
+    ) -> np.ndarray:
+        """(L, N) int32: the face of every peeled layer at ``pixels`` (N flat indices
+        ``y * width + x``, row 0 at the top), -1 where none. The layers are ``peel``'s without
+        normals; only the pixels asked for leave the GPU's copy, so a vector drawing does not
+        pay for whole images."""
+        w, h = check_size(size, 1, self.max_texture)
+        pixels = np.asarray(pixels, np.int64)
+        if len(pixels) and (pixels.min() < 0 or pixels.max() >= w * h):
+            raise InputError(f"pixels must be flat indices into {w}x{h}")
+        # the same pixels in OpenGL's rows, bottom up
+        gl = (h - 1 - pixels // w) * w + pixels % w
+        out = []
+        for depth_tex, _, ids in self._peeled(model, camera, (w, h), max_layers, min_fraction, 30.0, False):
+            z = np.frombuffer(depth_tex.read(), np.float32)[gl]
+            face = np.frombuffer(ids.read(), np.int32)[gl]
+            out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
+        return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
+
+    def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals):
+        """Peel layer after layer; after each one that counts, yield its depth texture, normal
+        texture (None without ``normals``) and ID texture (face + 1; with normals, part + 1 too)."""
+        _check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
+        ctx = self.ctx
+        ctx.enable_only(ctx.NOTHING)
+        ctx.depth_func = "<"
+        if normals:
+            mesh = self.mesh(model, crease_angle)
+            depth_tex, normal, ids, fbos, clears = self._gbuffer(size)
+            geo = self._setup_geometry(camera, mesh, depth_tex, batch=max_layers or KBUFFER_MAX)
+        else:
+            mesh = self.mesh(model, None)
+            normal = None
+            depth_tex, ids, fbos, clears = self._id_buffer(size)
+            geo = self._setup_geometry(camera, mesh, depth_tex, normals=False, tie_break=True)
+        limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
+        counts = []
+        for i in range(limit):
+            query = self._query(i)
+            self._clear(clears, i)
+            self._draw(mesh, geo, fbos, i, query)
+            counts.append(query.samples)
+            if self._layer_count(counts, min_fraction) <= i:
+                break
+            yield depth_tex[i % 2], normal, ids
 
 
 class _KBufferPeel:

@@ -27,8 +27,10 @@ from blueprint.scene.model import Model
 from .lines import join_polylines, model_segments
 from .occlusion import (
     Pieces,
+    PixelLayers,
     classify_samples,
     face_planes,
+    probe_pixels,
     sample_polylines,
     split_by_level,
     verify_creases,
@@ -298,7 +300,6 @@ def draw_vector(
     from blueprint.render.renderer import check_size
 
     seconds: dict[str, float] = {}
-    clock = time.perf_counter()
     if not (0.1 <= spacing <= 16):
         raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
     if not (0 <= tolerance <= 16):
@@ -312,33 +313,42 @@ def draw_vector(
         w, h = check_size(size, 1, renderer.max_texture)
         if camera is None:
             camera = Renderer.camera_for(model, (w, h), view)
-        # occlusion needs only each layer's triangles
-        layers = renderer.peel(
-            model, camera, size=(w, h), max_layers=max_layers, crease_angle=crease_angle, normals=False
-        )
+        view_m = np.asarray(camera.view_matrix(), np.float64)
+        proj = np.asarray(camera.projection_matrix(), np.float64)
     else:
         h, w = layers.depth.shape[1:]
         camera = camera or layers.camera
+        view_m, proj = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
     size = (int(w), int(h))
     page = _page(size, camera, scale, units, model)
-    seconds["peel"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
-    view_m, proj = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
     segments = model_segments(model, view_m, proj, size, crease_angle, intersections)
     lines = join_polylines(segments)
+    samples = sample_polylines(lines, view_m, proj, size, spacing)
     seconds["lines"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
-    samples = sample_polylines(lines, view_m, proj, size, spacing)
+    if layers is None:
+        # occlusion needs only the layers' triangles, and only at the pixels it probes
+        pixels = probe_pixels(samples, size)
+        faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
+        count = len(faces)
+        peeled = PixelLayers(pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w)
+    else:
+        count = len(layers.depth)
+        peeled = PixelLayers.from_layers(layers.triangle)
+    seconds["peel"] = time.perf_counter() - clock
+
+    clock = time.perf_counter()
     ortho = bool(np.isclose(proj[3, 3], 1.0))
     footprint = camera.pixel_angle(size[1])
     planes = face_planes(model, view_m)
-    levels = classify_samples(samples, layers.triangle, planes, ortho, footprint, depth_tolerance)
+    levels = classify_samples(samples, peeled, planes, ortho, footprint, depth_tolerance)
     levels = verify_creases(
         samples,
         levels,
-        layers.triangle,
+        peeled,
         planes,
         model.face_part,
         ortho,
@@ -346,7 +356,6 @@ def draw_vector(
         crease_angle,
         depth_tolerance,
     )
-    count = len(layers.depth)
     pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0))
     seconds["occlusion"] = time.perf_counter() - clock
 

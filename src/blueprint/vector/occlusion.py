@@ -30,6 +30,7 @@ shorter than two pixels take their neighbours' level.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,7 +41,9 @@ from .lines import BORDER, CREASE, SILHOUETTE, Polylines
 
 __all__ = [
     "Pieces",
+    "PixelLayers",
     "classify_samples",
+    "probe_pixels",
     "face_planes",
     "sample_polylines",
     "split_by_level",
@@ -90,6 +93,82 @@ class Pieces:
     @classmethod
     def empty(cls) -> Pieces:
         return cls(np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32))
+
+
+@dataclass(frozen=True)
+class PixelLayers:
+    """Triangle IDs of the peeled layers at the pixels the occlusion tests look at.
+
+    ``stacks[i, k]`` is the face of layer ``k`` at pixel ``pixels[i]`` (flat index
+    ``y * width + x``, row 0 at the top), -1 where none; layers hold surfaces from the front,
+    so the first ``count[i]`` are surfaces. ``pixels`` None stands for every pixel in order.
+    """
+
+    pixels: np.ndarray | None
+    stacks: np.ndarray
+    count: np.ndarray
+    layers: int
+    height: int
+    width: int
+
+    @classmethod
+    def from_layers(cls, triangle: np.ndarray) -> PixelLayers:
+        """Every pixel of (L, H, W) triangle layers."""
+        layers, height, width = triangle.shape
+        stacks = np.ascontiguousarray(triangle.reshape(layers, -1).T)
+        return cls(None, stacks, (stacks >= 0).sum(axis=1), layers, height, width)
+
+    def at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(len(q), L) faces and (len(q),) surface counts at flat pixel indices ``q``, which
+        must be among ``pixels``."""
+        rows = q if self.pixels is None else np.take(self._rows, q)
+        return np.take(self.stacks, rows, axis=0), self.count[rows]
+
+    @functools.cached_property
+    def _rows(self) -> np.ndarray:
+        """Row of ``stacks`` for every flat pixel index (-1 where not kept): one gather a lookup."""
+        rows = np.full(self.height * self.width, -1, np.int64)
+        rows[self.pixels] = np.arange(len(self.pixels))
+        return rows
+
+
+def _flat(spot: np.ndarray, height: int, width: int) -> np.ndarray:
+    """Flat indices of (N, 2) integer pixel positions, clamped to the image."""
+    return np.clip(spot[..., 1], 0, height - 1) * width + np.clip(spot[..., 0], 0, width - 1)
+
+
+def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -> np.ndarray:
+    """Sorted flat indices of every pixel that :func:`classify_samples` and
+    :func:`verify_creases` look at for these samples: what a peel must keep of its layers."""
+    width, height = size
+    probed = np.zeros(height * width, bool)
+    inside = np.flatnonzero(samples.inside)
+    px = np.floor(samples.pixel[inside]).astype(np.int64)
+    for step in _NEIGHBOURS:
+        probed[_flat(px + step, height, width)] = True
+    rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
+    rows, across = _across(samples, rows)
+    for side in (1.0, -1.0):
+        spot = np.floor(samples.pixel[rows] + side * offset * across).astype(np.int64)
+        probed[_flat(spot, height, width)] = True
+    return np.flatnonzero(probed)
+
+
+def _across(samples: Samples, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows whose line has a screen direction there (from the neighbouring samples on the
+    same line), and the unit vectors across it."""
+    line, pixel = samples.line, samples.pixel
+    if len(rows) == 0:
+        return rows, np.zeros((0, 2))
+    nxt = np.minimum(rows + 1, len(line) - 1)
+    prv = np.maximum(rows - 1, 0)
+    ahead = np.where((line[nxt] == line[rows])[:, None], pixel[nxt], pixel[rows])
+    behind = np.where((line[prv] == line[rows])[:, None], pixel[prv], pixel[rows])
+    tangent = ahead - behind
+    length = np.linalg.norm(tangent, axis=1)
+    good = length > 0
+    rows, tangent = rows[good], tangent[good] / length[good, None]
+    return rows, np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
 
 
 def _to_pixels(clip: np.ndarray, size: tuple[int, int]) -> np.ndarray:
@@ -188,7 +267,7 @@ def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
 
 def classify_samples(
     samples: Samples,
-    triangle: np.ndarray,
+    triangle: PixelLayers,
     planes: np.ndarray,
     ortho: bool,
     footprint: float,
@@ -199,8 +278,8 @@ def classify_samples(
     Parameters
     ----------
     samples : Samples
-    triangle : (L, H, W) int32
-        Face index of each peeled layer, -1 where none.
+    triangle : PixelLayers
+        Face index of each peeled layer, -1 where none, at least at ``probe_pixels``.
     planes : (F + 1, 4) float64
         From :func:`face_planes`.
     ortho : bool
@@ -215,7 +294,7 @@ def classify_samples(
     (S,) int32
         Number of layers in front of each sample, the minimum over its 3 x 3 pixels.
     """
-    layers, height, width = triangle.shape
+    layers, height, width = triangle.layers, triangle.height, triangle.width
     count = len(samples.line)
     level = np.full(count, -1, np.int32)
     inside = np.flatnonzero(samples.inside)
@@ -227,10 +306,6 @@ def classify_samples(
     # float32 halves the memory traffic of the gathers; depths are compared at a relative
     # tolerance of ~1e-4 or coarser, far above float32 rounding
     planes = planes.astype(np.float32)
-    # per pixel: how many layers hold a surface (they are packed from the front)
-    depth_count = (triangle >= 0).sum(axis=0).reshape(-1)
-    # each pixel's layers side by side, so one gather fetches all of them
-    by_pixel = np.ascontiguousarray(triangle.reshape(layers, -1).T)
     limit = np.float32(tolerance * footprint)  # orthographic: model units; perspective: relative
     for start in range(0, len(inside), _CHUNK):
         idx = inside[start : start + _CHUNK]
@@ -243,10 +318,10 @@ def classify_samples(
         solid = ~np.isin(samples.kind[idx], (SILHOUETTE, BORDER))
         best = np.full(len(idx), np.iinfo(np.int32).max, np.int32)
         for dx, dy in _NEIGHBOURS.tolist():
-            q = np.clip(px[:, 1] + dy, 0, height - 1) * width + np.clip(px[:, 0] + dx, 0, width - 1)
+            q = _flat(px + np.array([dx, dy]), height, width)
             front = np.zeros(len(idx), np.int32)
-            stack = np.take(by_pixel, q, axis=0)
-            for k in range(int(depth_count[q].max())):
+            stack, depth_count = triangle.at(q)
+            for k in range(int(depth_count.max())):
                 tri = stack[:, k]  # -1 (no surface) picks the all-zero last plane
                 plane = np.take(planes, tri, axis=0)
                 dot = plane[:, 0] * ex + plane[:, 1] * ey + plane[:, 2] * ez
@@ -260,7 +335,7 @@ def classify_samples(
                     ahead = (c * dot > 0) & (np.abs(c) < np.abs(dot) * (1 - limit))
                 ahead &= (tri != own0) & (tri != own1)
                 front += ahead
-            front[solid & (depth_count[q] == 0)] = np.iinfo(np.int32).max
+            front[solid & (depth_count == 0)] = np.iinfo(np.int32).max
             np.minimum(best, front, out=best)
         best[best == np.iinfo(np.int32).max] = 0
         level[idx] = best
@@ -280,7 +355,7 @@ def _in_front(plane: np.ndarray, eye: np.ndarray, ortho: bool, limit: float) -> 
 def verify_creases(
     samples: Samples,
     level: np.ndarray,
-    triangle: np.ndarray,
+    triangle: PixelLayers,
     planes: np.ndarray,
     face_part: np.ndarray,
     ortho: bool,
@@ -302,38 +377,27 @@ def verify_creases(
     """
     level = level.copy()
     rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & (level >= 0))
-    layers, height, width = triangle.shape
+    layers, height, width = triangle.layers, triangle.height, triangle.width
     if len(rows) == 0 or layers == 0:
         return level
-    line, pixel = samples.line, samples.pixel
+    pixel = samples.pixel
     # screen direction of the line at each sample, from its neighbours on the same line
-    nxt = np.minimum(rows + 1, len(line) - 1)
-    prv = np.maximum(rows - 1, 0)
-    ahead = np.where((line[nxt] == line[rows])[:, None], pixel[nxt], pixel[rows])
-    behind = np.where((line[prv] == line[rows])[:, None], pixel[prv], pixel[rows])
-    tangent = ahead - behind
-    length = np.linalg.norm(tangent, axis=1)
-    good = length > 0
-    rows, tangent = rows[good], tangent[good] / length[good, None]
-    across = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+    rows, across = _across(samples, rows)
     eye = samples.eye[rows].astype(np.float32)
     own0, own1 = samples.faces[rows, 0], samples.faces[rows, 1]
     planes32 = planes.astype(np.float32)
-    by_pixel = np.ascontiguousarray(triangle.reshape(layers, -1).T)
-    depth_count = (triangle >= 0).sum(axis=0).reshape(-1)
     limit = np.float32(tolerance * footprint)
     seen = []
     for side in (1.0, -1.0):
-        spot = np.floor(pixel[rows] + side * offset * across).astype(np.int64)
-        q = np.clip(spot[:, 1], 0, height - 1) * width + np.clip(spot[:, 0], 0, width - 1)
-        stack = np.take(by_pixel, q, axis=0)
+        q = _flat(np.floor(pixel[rows] + side * offset * across).astype(np.int64), height, width)
+        stack, depth_count = triangle.at(q)
         front = np.zeros(len(rows), np.int64)
-        for k in range(int(depth_count[q].max(initial=0))):
+        for k in range(int(depth_count.max(initial=0))):
             tri = stack[:, k]
             ahead_k = _in_front(np.take(planes32, tri, axis=0), eye, ortho, limit)
             front += ahead_k & (tri != own0) & (tri != own1)
         index = np.minimum(front, layers - 1)
-        tri = np.where(front < depth_count[q], stack[np.arange(len(rows)), index], -1)
+        tri = np.where(front < depth_count, stack[np.arange(len(rows)), index], -1)
         seen.append(tri)
     tri_a, tri_b = seen
     plane_a, plane_b = planes[tri_a], planes[tri_b]  # -1 picks the empty last row
