@@ -77,8 +77,11 @@ class Model:
     @property
     def bounds(self) -> np.ndarray:
         """(2, 3) float64: minimum and maximum corner of the used vertices."""
-        used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
-        return np.array([used.min(axis=0), used.max(axis=0)], dtype=np.float64)
+        # every camera fit asks (the viewer: every frame), and a model's arrays do not change
+        if "bounds" not in self._cache:
+            used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
+            self._cache["bounds"] = np.array([used.min(axis=0), used.max(axis=0)], dtype=np.float64)
+        return self._cache["bounds"].copy()
 
     def part_triangle_counts(self) -> np.ndarray:
         """(P,) int64: triangles per part."""
