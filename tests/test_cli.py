@@ -11,6 +11,7 @@ import json
 import re
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -353,3 +354,15 @@ def test_nested_node_transforms_compose(tmp_path):
     path.write_bytes(scene.export(file_type="glb"))
     model = load_model(path)
     np.testing.assert_allclose(model.bounds, [[20, 0, 0], [22, 4, 6]], atol=1e-5)
+
+
+def test_render_svg_reports_its_own_time(tmp_path, gl):
+    """The seconds printed are the drawing's, not the sum of its stages and their total."""
+    target = tmp_path / "gear.svg"
+    start = time.perf_counter()
+    stdout = ok(run("render", EXAMPLE, "-o", target, "--size", 96, 64))
+    wall = time.perf_counter() - start
+    match = re.fullmatch(r".+: (\d+) bytes, polylines .+, (\d+\.\d+) s on .+", stdout.strip())
+    assert match, stdout
+    assert int(match[1]) == target.stat().st_size
+    assert 0 < float(match[2]) <= wall

@@ -300,7 +300,7 @@ def _render_vector(
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
         f"{output}: {summary['bytes']} bytes, polylines {levels or 'none'}, "
-        f"{sum(summary['seconds'].values()):.2f} s on {default_renderer().info['renderer']}"
+        f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
     )
 
 
