@@ -179,18 +179,32 @@ def test_layers_gathered_at_the_probed_pixels_give_the_same_drawing(renderer):
     assert np.array_equal(gathered.points, full.points)
 
 
-def test_triangles_at_pixels_are_the_peeled_layers_there(renderer):
+@pytest.mark.parametrize("max_layers", [None, 3, 8])
+@pytest.mark.parametrize("kbuffer", [True, False], ids=["k-buffer", "a-pass-a-layer"])
+def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, kbuffer, max_layers):
+    """Up to eight layers come from one k-buffer pass where the driver has one, read as the
+    pass leaves them; the same faces as the layers peeled one at a time."""
     import blueprint
     from blueprint import examples
 
+    if kbuffer and not renderer.kbuffer:
+        pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
     model = examples.gearbox()
     camera = Camera.fit(model.positions, "front", aspect=4 / 3)
     size = (96, 72)
-    layers = blueprint.peel(model, camera=camera, size=size, renderer=renderer, normals=False)
+    saved = renderer.kbuffer
+    renderer.kbuffer = False
+    layers = blueprint.peel(
+        model, camera=camera, size=size, renderer=renderer, normals=False, max_layers=max_layers
+    )
     pixels = np.random.default_rng(1).choice(size[0] * size[1], 500, replace=False)
-    faces = renderer.triangles_at(model, camera, pixels, size=size)
+    renderer.kbuffer = kbuffer
+    try:
+        faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
+    finally:
+        renderer.kbuffer = saved
     expected = layers.triangle.reshape(len(layers.depth), -1)[:, pixels]
-    assert faces.shape == expected.shape and (faces >= 0).any()
+    assert faces.shape == expected.shape and (faces[:3] >= 0).any(axis=1).all()
     assert np.array_equal(faces, expected)
     with pytest.raises(blueprint.BlueprintError):
         renderer.triangles_at(model, camera, [size[0] * size[1]], size=size)

@@ -19,7 +19,7 @@ FORMATS: dict[str, tuple[int, str]] = {
     "rg32i": (2, "i4"),
 }
 # formats of the renderer's own targets, not offered to pipelines (k-buffer surfaces)
-INTERNAL_FORMATS: dict[str, tuple[int, str]] = {"rgba32ui": (4, "u4")}
+INTERNAL_FORMATS: dict[str, tuple[int, str]] = {"rgba32ui": (4, "u4"), "rg32ui": (2, "u4")}
 
 
 @dataclass(frozen=True)

@@ -833,12 +833,45 @@ class Renderer:
             raise InputError(f"pixels must be flat indices into {w}x{h}")
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
+        if self.kbuffer and max_layers is not None and 1 < max_layers <= KBUFFER_MAX:
+            return self._kbuffer_faces(model, camera, (w, h), max_layers, min_fraction, gl)
         out = []
         for depth_tex, _, ids in self._peeled(model, camera, (w, h), max_layers, min_fraction, 30.0, False):
             z = np.frombuffer(depth_tex.read(), np.float32)[gl]
             face = np.frombuffer(ids.read(), np.int32)[gl]
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
+
+    def _kbuffer_faces(self, model, camera, size, k, min_fraction, gl) -> np.ndarray:
+        """``triangles_at`` in one k-buffer pass of depths and faces alone: no layer is
+        unpacked, the k targets are read as they are (a pixel's surfaces run up to the first
+        empty one, kbuffer.frag) and gathered at the OpenGL pixel indices ``gl``."""
+        _check_frame_args(k, min_fraction, 0.0, 1.0)
+        ctx, pool = self.ctx, self.pool
+        mesh = self.mesh(model, None)
+        prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": k, "FACE_IDS": True, "IDS_ONLY": True})
+        prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
+        prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
+        prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
+        prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
+        prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
+        prog["u_peel"].value = False
+        name = f"kbuffer.faces.{size[0]}x{size[1]}"
+        surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
+        pool.framebuffer((surfaces[0],)).clear()
+        pool.framebuffer(tuple(surfaces)).use()
+        ctx.enable_only(ctx.NOTHING)
+        mesh.vao(prog).render()
+        valid = np.ones(size[0] * size[1], bool)
+        out, counts = [], []
+        for tex in surfaces:
+            face = np.frombuffer(tex.read(), np.uint32)[1::2]
+            valid &= face != 0
+            counts.append(int(np.count_nonzero(valid)))
+            if self._layer_count(counts, min_fraction) < len(counts):
+                break
+            out.append(np.where(valid[gl], face[gl].astype(np.int64) - 1, -1).astype(np.int32))
+        return np.stack(out) if out else np.zeros((0, len(gl)), np.int32)
 
     def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals):
         """Peel layer after layer; after each one that counts, yield its depth texture, normal

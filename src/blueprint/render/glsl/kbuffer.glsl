@@ -1,7 +1,25 @@
 // One surface of the k-buffer in a uvec4: (window depth bits, with bit 31 set for a back face;
 // the normal's x and y as halves; its z as a half in the low 16 bits and part + 1 in the high
-// 16; face + 1). All zero where there is none: part + 1 is never 0.
+// 16; face + 1). All zero where there is none: part + 1 is never 0. With IDS_ONLY a uvec2 of
+// the depth bits and face + 1 (never 0 then: faces are always tracked).
 const uint KB_BACK = 0x80000000u;
+
+#ifndef IDS_ONLY
+#define IDS_ONLY 0
+#endif
+
+#if IDS_ONLY
+#define KB_T uvec2
+
+uvec2 kb_pack(float z, bool back, vec3 n, int face, int part) {
+    return uvec2(floatBitsToUint(z) | (back ? KB_BACK : 0u), uint(face + 1));
+}
+
+bool kb_empty(uvec2 s) {
+    return s.y == 0u;
+}
+#else
+#define KB_T uvec4
 
 uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
     return uvec4(
@@ -14,13 +32,14 @@ uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
 bool kb_empty(uvec4 s) {
     return s.z < 0x10000u;
 }
+#endif
 
-float kb_raw(uvec4 s) {
+float kb_raw(KB_T s) {
     return uintBitsToFloat(s.x & ~KB_BACK);
 }
 
 // the depth the peel writes: back faces pushed back by the bias (see BACK_OFFSET)
-float kb_depth(uvec4 s, float back_bias) {
+float kb_depth(KB_T s, float back_bias) {
     float z = kb_raw(s);
     return (s.x & KB_BACK) != 0u ? min(z + back_bias, 1.0) : z;
 }
