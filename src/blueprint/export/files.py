@@ -30,13 +30,26 @@ def check_output(path: str | os.PathLike, suffixes: tuple[str, ...]) -> Path:
     return path
 
 
+def publish(tmp: str | os.PathLike, path: Path) -> None:
+    """Rename a finished temporary file onto ``path``, with the permissions the file would have
+    had if written directly: temporary files are private (0600), a drawing is not."""
+    try:
+        mode = os.stat(path).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode = 0o666 & ~umask
+    os.chmod(tmp, mode)
+    os.replace(tmp, path)
+
+
 @contextlib.contextmanager
 def _temporary(path: Path) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:64]}.", suffix=".tmp", dir=path.parent or ".")
     os.close(fd)
     try:
         yield Path(tmp)
-        os.replace(tmp, path)
+        publish(tmp, path)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)

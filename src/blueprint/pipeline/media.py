@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.export.files import publish
 from blueprint.gpu.targets import FORMATS
 
 VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
@@ -167,7 +168,7 @@ class VideoWriter:
             if kind is None:
                 if self.frames == 0:
                     raise InputError(f"{self.path}: no frames to write")
-                os.replace(self._tmp, self.path)
+                publish(self._tmp, self.path)
         except OSError as error:
             raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
         finally:
