@@ -57,8 +57,9 @@ class Frame:
     """One rendered blueprint.
 
     ``image`` is (H, W, 4) uint8 RGBA, row 0 at the top, straight alpha. ``layer_pixels`` holds
-    the covered samples of every layer peeled (at the supersampled size), ``layers`` how many
-    of them were drawn.
+    for every layer peeled (at the supersampled size) the samples its occlusion query counted:
+    its covered pixels where a k-buffer peels, those plus the fragments drawn over again where a
+    geometry pass peels it. ``layers`` is how many of them were drawn.
     """
 
     image: np.ndarray
