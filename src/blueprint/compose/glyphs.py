@@ -40,13 +40,10 @@ that layer itself. No GPU here except through ``render_with_glyphs``.
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
 from functools import lru_cache
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -54,6 +51,7 @@ import numpy as np
 from blueprint.compose.style import RGBA, hex_color
 from blueprint.errors import InputError
 from blueprint.scene.camera import Camera
+from blueprint.settings import Entry, read_settings, show
 from blueprint.silhouette.raster import draw_segments
 
 __all__ = [
@@ -189,34 +187,7 @@ class Glyphs:
 
 def load_glyphs(path: str | os.PathLike) -> Glyphs:
     """Read a glyph file: ``.toml`` or ``.json``. Raises ``InputError`` on any problem."""
-    path = Path(path)
-    name = str(path)
-    suffix = path.suffix.lower()
-    if suffix not in (".toml", ".json"):
-        raise InputError(f"{name}: glyph file must end in .toml or .json")
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a directory") from None
-    except OSError as exc:
-        raise InputError(f"{name}: cannot read ({exc.strerror or exc})") from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise InputError(f"{name}: not UTF-8 text") from None
-    if suffix == ".toml":
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise InputError(f"{name}: not valid TOML ({_one_line(exc)})") from None
-    else:
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InputError(f"{name}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
-    return _parse(data, name)
+    return _parse(read_settings(path, "glyph file"), str(path))
 
 
 # -- validation ------------------------------------------------------------------------------
@@ -231,100 +202,11 @@ _HIDDEN_KEYS = ("mode", "opacity", "dash")
 _TOP = (*sorted(_KINDS), "hidden")
 
 
-def _one_line(exc: Exception) -> str:
-    return " ".join(str(exc).split())
+class _Entry(Entry):
+    """A glyph's table: colours default to ``DEFAULT_COLOR``, widths are pixels."""
 
-
-def _show(value: Any) -> str:
-    text = _one_line(repr(value)) if not isinstance(value, str) else repr(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-class _Entry:
-    """One table of the file: checks its keys and values, naming ``where`` in every error."""
-
-    def __init__(self, where: str, table: Any, allowed: tuple[str, ...], required=()) -> None:
-        self.where = where
-        if not isinstance(table, dict):
-            raise InputError(f"{where}: must be a table of keys, got {_show(table)}")
-        for key in table:
-            if key not in allowed:
-                raise InputError(f"{where}: unknown key {key!r} (allowed: {', '.join(allowed)})")
-        for key in required:
-            if key not in table:
-                raise InputError(f"{where}: {key} is missing")
-        self.table = table
-
-    def fail(self, message: str) -> InputError:
-        return InputError(f"{self.where}: {message}")
-
-    def number(self, key: str, default: float, lo: float, hi: float, lo_open: bool = False) -> float:
-        value = self.table.get(key, default)
-        if not _is_number(value):
-            raise self.fail(f"{key} must be a number, got {_show(value)}")
-        if not math.isfinite(value):
-            raise self.fail(f"{key} must be a finite number, got {_show(value)}")
-        if value < lo or value > hi or (lo_open and value == lo):
-            bracket = "(" if lo_open else "["
-            raise self.fail(f"{key} must be in {bracket}{lo:g}, {hi:g}], got {value:g}")
-        return float(value)
-
-    def point(self, key: str, value: Any = None) -> tuple[float, float, float]:
-        value = self.table[key] if value is None else value
-        if not isinstance(value, list | tuple) or len(value) != 3 or not all(map(_is_number, value)):
-            raise self.fail(f"{key} must be 3 numbers, got {_show(value)}")
-        if not all(math.isfinite(v) for v in value):
-            raise self.fail(f"{key} must be finite numbers, got {_show(value)}")
-        return tuple(float(v) for v in value)
-
-    def color(self, key: str = "color") -> RGBA:
-        value = self.table.get(key, DEFAULT_COLOR)
-        if not isinstance(value, str):
-            raise self.fail(f"{key} must be a string #rrggbb, got {_show(value)}")
-        try:
-            return hex_color(value)
-        except InputError:
-            raise self.fail(f"{key} {value!r} is not of the form #rrggbb") from None
-
-    def string(self, key: str, default: str, nonempty: bool = False) -> str:
-        value = self.table.get(key, default)
-        if not isinstance(value, str):
-            raise self.fail(f"{key} must be a string, got {_show(value)}")
-        if nonempty and not value.strip():
-            raise self.fail(f"{key} must not be empty")
-        return value
-
-    def choice(self, key: str, default: str, allowed: tuple[str, ...]) -> str:
-        value = self.table.get(key, default)
-        if value not in allowed:
-            raise self.fail(f"{key} must be one of {', '.join(allowed)}, got {_show(value)}")
-        return value
-
-    def boolean(self, key: str, default: bool) -> bool:
-        value = self.table.get(key, default)
-        if not isinstance(value, bool):
-            raise self.fail(f"{key} must be true or false, got {_show(value)}")
-        return value
-
-    def dash(self, key: str = "dash", default=None) -> tuple[float, ...] | None:
-        value = self.table.get(key, default)
-        if value is None:
-            return None
-        message = f"{key} must be an even count (2 to 16) of positive lengths in pixels (on, off, ...)"
-        if (
-            not isinstance(value, list | tuple)
-            or not 2 <= len(value) <= 16
-            or len(value) % 2
-            or not all(map(_is_number, value))
-        ):
-            raise self.fail(f"{message}, got {_show(value)}")
-        if not all(math.isfinite(v) and 0 < v <= 1000 for v in value):
-            raise self.fail(f"{message}, got {_show(value)}")
-        return tuple(float(v) for v in value)
+    def color(self, key: str = "color", default: str = DEFAULT_COLOR) -> RGBA:
+        return super().color(key, default)
 
     def width(self) -> float:
         return self.number("width", 2.0, 0.0, _MAX_WIDTH, lo_open=True)
@@ -332,7 +214,7 @@ class _Entry:
 
 def _parse(data: Any, source: str) -> Glyphs:
     if not isinstance(data, dict):
-        raise InputError(f"{source}: must be a table of glyph lists ({', '.join(_TOP)}), got {_show(data)}")
+        raise InputError(f"{source}: must be a table of glyph lists ({', '.join(_TOP)}), got {show(data)}")
     for key in data:
         if key not in _TOP:
             raise InputError(f"{source}: unknown entry {key!r} (allowed: {', '.join(_TOP)})")
@@ -388,7 +270,7 @@ def _arrow(e: _Entry) -> Arrow:
 def _path(e: _Entry) -> Path3D:
     points = e.table["points"]
     if not isinstance(points, list | tuple) or not 2 <= len(points) <= _MAX_POINTS:
-        raise e.fail(f"points must be a list of 2 to {_MAX_POINTS} points [x, y, z], got {_show(points)}")
+        raise e.fail(f"points must be a list of 2 to {_MAX_POINTS} points [x, y, z], got {show(points)}")
     checked = []
     for k, p in enumerate(points, 1):
         checked.append(e.point(f"point {k}", p))
