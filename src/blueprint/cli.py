@@ -145,7 +145,13 @@ def cli() -> None:
 @click.argument("model", type=click.Path(path_type=Path))
 @click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="PNG file to write.")
 @camera_options
-@click.option("--style", default="blueprint", show_default=True, help=f"One of {', '.join(STYLE_NAMES)}.")
+@click.option(
+    "--style",
+    default="blueprint",
+    show_default=True,
+    help=f"One of {', '.join(STYLE_NAMES)}; for .svg, .pdf and .dxf also a line style file "
+    "(.toml or .json: colour, width, dash and opacity per occlusion level).",
+)
 @click.option("--grid", type=float, default=None, help="Grid spacing in pixels (0: none).")
 @click.option(
     "--max-layers",
@@ -241,6 +247,11 @@ def render(
         return
     if scale or units:
         raise InputError("--scale and --units are for vector drawings (.svg, .pdf, .dxf)")
+    if _is_style_file(style):
+        raise InputError(
+            f"{style}: line style files are for vector drawings (.svg, .pdf, .dxf); "
+            f"a PNG takes one of {', '.join(STYLE_NAMES)}"
+        )
     chosen = get_style(style, grid)
     glyphs = load_glyphs(glyph_file) if glyph_file else None
     kwargs = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
@@ -277,14 +288,22 @@ def render(
 VECTOR_SUFFIXES = (".svg", ".pdf", ".dxf")
 
 
+def _is_style_file(style: str) -> bool:
+    return Path(style).suffix.lower() in (".toml", ".json")
+
+
 def _render_vector(
     model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight
 ):
     from blueprint.api import default_renderer
     from blueprint.vector import render_vector_file
 
-    if style not in STYLE_NAMES:
-        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)})")
+    if _is_style_file(style):
+        from blueprint.vector import load_vector_style
+
+        style = load_vector_style(style)
+    elif style not in STYLE_NAMES:
+        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)} or a line style file)")
     summary = render_vector_file(
         model,
         output,

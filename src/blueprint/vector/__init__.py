@@ -15,7 +15,7 @@ from .drawing import (
     render_vector_file,
     save_drawing,
 )
-from .style import LineStyle, VectorStyle, vector_style
+from .style import LineStyle, VectorStyle, load_vector_style, vector_style
 
 __all__ = [
     "FORMATS",
@@ -25,6 +25,7 @@ __all__ = [
     "Page",
     "VectorStyle",
     "draw_vector",
+    "load_vector_style",
     "parse_scale",
     "render_vector_file",
     "save_drawing",

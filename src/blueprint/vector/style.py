@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 from blueprint.compose.style import Style, get_style, hex_color
 from blueprint.errors import InputError
 
-__all__ = ["LineStyle", "VectorStyle", "vector_style"]
+__all__ = ["LineStyle", "VectorStyle", "load_vector_style", "vector_style"]
 
 RGB = tuple[float, float, float]
 
@@ -130,4 +132,72 @@ def vector_style(style: str | Style | VectorStyle = "blueprint", dashes: bool = 
         fade=raster.fade,
         highlight_color=(1.0, 0.55, 0.1) if paper is not None and sum(paper) < 1.5 else (0.9, 0.3, 0.0),
         title_color=raster.ink[:3],
+    )
+
+
+_STYLE_KEYS = ("base", "paper", "fade", "highlight_color", "highlight_width", "title_color", "levels")
+_LEVEL_KEYS = ("color", "width", "dash", "opacity")
+
+
+def load_vector_style(path: str | os.PathLike) -> VectorStyle:
+    """A vector style from a ``.toml`` or ``.json`` file; every key is optional::
+
+        base = "paper"              # the named style it starts from (default: blueprint)
+        paper = "#ffffff"           # or "none": a transparent page
+        fade = 0.8                  # opacity factor per level past the last one listed
+        highlight_color = "#e05a00"
+        highlight_width = 1.5       # times the level's width
+        title_color = "#000000"
+
+        [[levels]]                  # level 0: visible lines
+        color = "#000000"
+        width = 1.0                 # times the drawing's line width
+        dash = []                   # solid
+
+        [[levels]]                  # level 1: behind one surface
+        color = "#1d4f91"
+        dash = [6, 3]               # on, off, ... in line widths
+        opacity = 0.8
+
+    A level leaves out what it takes from the base's level at the same depth; ``levels``
+    left out keeps the base's. Raises ``InputError`` naming the file and the entry.
+    """
+    from blueprint.compose.style import STYLES
+    from blueprint.settings import Entry, read_settings, show
+
+    name = str(path)
+    top = Entry(name, read_settings(path, "line style file"), _STYLE_KEYS)
+    base = vector_style(top.choice("base", "blueprint", tuple(STYLES)))
+
+    def rgb(entry: Entry, key: str, default: RGB) -> RGB:
+        return entry.color(key, "#000000")[:3] if key in entry.table else default
+
+    paper = None if top.table.get("paper") == "none" else rgb(top, "paper", base.paper)
+
+    raw = top.table.get("levels")
+    if raw is None:
+        levels = base.levels
+    elif not isinstance(raw, list) or not raw:
+        raise top.fail(f"levels must be a non-empty list of tables ([[levels]] in TOML), got {show(raw)}")
+    else:
+        levels = []
+        for k, table in enumerate(raw):
+            entry = Entry(f"{name}: levels {k}", table, _LEVEL_KEYS)
+            like = base.level(k)
+            levels.append(
+                LineStyle(
+                    color=rgb(entry, "color", like.color),
+                    width=entry.number("width", like.width, 0.0, 16.0, lo_open=True),
+                    dash=entry.dash("dash", list(like.dash), unit="line widths", solid_ok=True),
+                    opacity=entry.number("opacity", like.opacity, 0.0, 1.0),
+                )
+            )
+    return VectorStyle(
+        name=Path(path).stem,
+        paper=paper,
+        levels=tuple(levels),
+        fade=top.number("fade", base.fade, 0.0, 1.0),
+        highlight_color=rgb(top, "highlight_color", base.highlight_color),
+        highlight_width=top.number("highlight_width", base.highlight_width, 0.0, 16.0, lo_open=True),
+        title_color=rgb(top, "title_color", base.title_color),
     )
