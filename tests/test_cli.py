@@ -366,3 +366,10 @@ def test_render_svg_reports_its_own_time(tmp_path, gl):
     assert match, stdout
     assert int(match[1]) == target.stat().st_size
     assert 0 < float(match[2]) <= wall
+
+
+def test_render_plan_sheet_as_vectors(tmp_path, gl):
+    out = tmp_path / "sheet.dxf"
+    stdout = ok(run("render", EXAMPLE, "-o", out, "--size", 160, 120, "--view", "plan"))
+    assert stdout.startswith(f"{out}: ") and "polylines level 0" in stdout
+    assert out.stat().st_size > 1000

@@ -11,7 +11,7 @@ import numpy as np
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame, Layers, Renderer, check_size
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import select_parts, select_parts_like
@@ -107,17 +107,10 @@ def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Rende
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
-    fitted = {
-        v: Camera.fit(model.positions, v, ortho=True, aspect=w / h, up=model.up, margin=0.08)
-        for v in ("top", "front", "right")
-    }
-    scale = max(c.height for c in fitted.values())
-    cameras = {v: replace(c, height=scale) for v, c in fitted.items()}
-    cameras["iso"] = Camera.fit(model.positions, "iso", fov=fov, aspect=w / h, up=model.up, margin=0.08)
-    cells = {"top": (0, 0), "iso": (1, 0), "front": (0, 1), "right": (1, 1)}
+    cameras = sheet_cameras(model.positions, w / h, fov, model.up)
     image = np.zeros((size[1], size[0], 4), np.uint8)
     frames = {}
-    for name, (col, row) in cells.items():
+    for name, (col, row) in SHEET_CELLS.items():
         frames[name] = renderer.render(model, cameras[name], size=(w, h), **options)
         image[row * h : (row + 1) * h, col * w : (col + 1) * w] = frames[name].image
     if size[0] % 2 or size[1] % 2:

@@ -235,12 +235,12 @@ def render(
 
     output = check_output(output, (".png", *VECTOR_SUFFIXES))
     if output.suffix.lower() in VECTOR_SUFFIXES:
-        if glyph_file or shade or reveal is not None or highlight_model or view == "plan":
+        if glyph_file or shade or reveal is not None or highlight_model:
             raise InputError(
-                f"{output}: vector drawings take no --glyphs, --shade, --reveal, "
-                "--highlight-model or --view plan yet; write a PNG for those"
+                f"{output}: vector drawings take no --glyphs, --shade, --reveal or "
+                "--highlight-model yet; write a PNG for those"
             )
-        camera = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024))
+        camera = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
         _render_vector(
             model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight
         )

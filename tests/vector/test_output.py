@@ -165,3 +165,54 @@ def test_scale_parsing_styles_and_names():
     assert safe_id("gear wheel", taken) == "gear_wheel" and safe_id("gear wheel", taken) == "gear_wheel-2"
     assert safe_id("12 bolt", taken) == "p_12_bolt" and safe_id("<>", taken) == "part"
     assert layer_name('a/b:"c"', 2) == "a_b_c_-L2"
+
+
+def test_plan_sheet_is_four_views_in_their_cells(renderer):
+    """Top above front, right beside it, iso in the free corner, as the raster sheet lays them
+    out: every cell holds exactly the lines of its view drawn alone, moved into place."""
+    from blueprint.scene.camera import SHEET_CELLS, sheet_cameras
+    from blueprint.vector import draw_vector_sheet
+
+    model = gearbox()
+    size = (320, 240)
+    sheet = draw_vector_sheet(model, size, renderer=renderer)
+    w, h = size[0] // 2, size[1] // 2
+    cameras = sheet_cameras(model.positions, w / h, 30.0, model.up)
+    assert (sheet.width, sheet.height) == size and sheet.camera == cameras["front"]
+    start = 0
+    for name, (col, row) in SHEET_CELLS.items():
+        alone = draw_vector(model, cameras[name], (w, h), renderer=renderer)
+        count = len(alone)
+        assert count > 10, name
+        chunk = slice(sheet.offsets[start], sheet.offsets[start + count])
+        points = sheet.points[chunk]
+        np.testing.assert_array_equal(points, alone.points + [col * w, row * h])
+        assert (points >= [col * w - 0.5, row * h - 0.5]).all() and (
+            points <= [(col + 1) * w + 0.5, (row + 1) * h + 0.5]
+        ).all()
+        np.testing.assert_array_equal(sheet.level[start : start + count], alone.level)
+        start += count
+    assert start == len(sheet)
+    # the three orthographic views share one scale
+    assert cameras["top"].height == cameras["front"].height == cameras["right"].height
+
+
+def test_plan_sheet_to_scale(renderer, tmp_path):
+    model = gearbox()
+    summary = render_vector_file(
+        model,
+        tmp_path / "sheet.svg",
+        size=(400, 300),
+        view="plan",
+        scale="1:2",
+        units="mm",
+        renderer=renderer,
+    )
+    assert summary["lines"]
+    root = ET.parse(tmp_path / "sheet.svg").getroot()
+    from blueprint.scene.camera import sheet_cameras
+
+    mm_per_px = sheet_cameras(model.positions, 200 / 150, 30.0, model.up)["front"].height / 150 / 2
+    assert float(root.get("width").removesuffix("mm")) == pytest.approx(400 * mm_per_px, rel=1e-5)
+    assert float(root.get("height").removesuffix("mm")) == pytest.approx(300 * mm_per_px, rel=1e-5)
+    assert "1:2" in "".join(root.itertext())

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -165,3 +165,21 @@ class Camera:
             height=float(height),
             name=view,
         )
+
+
+# A drawing sheet in third-angle projection: (column, row) of each view in a 2 x 2 grid, the
+# top view above the front view, the right view beside it, an iso view in the free corner.
+SHEET_CELLS: dict[str, tuple[int, int]] = {"top": (0, 0), "iso": (1, 0), "front": (0, 1), "right": (1, 1)}
+
+
+def sheet_cameras(points: np.ndarray, aspect: float, fov: float = 30.0, up: str = "y") -> dict[str, Camera]:
+    """The cameras of a sheet's cells (``SHEET_CELLS``) of one aspect: the three orthographic
+    views at one scale (the largest any of them needs), the iso view fitted on its own."""
+    fitted = {
+        v: Camera.fit(points, v, ortho=True, aspect=aspect, up=up, margin=0.08)
+        for v in ("top", "front", "right")
+    }
+    height = max(c.height for c in fitted.values())
+    cameras = {v: replace(c, height=height) for v, c in fitted.items()}
+    cameras["iso"] = Camera.fit(points, "iso", fov=fov, aspect=aspect, up=up, margin=0.08)
+    return cameras

@@ -13,7 +13,7 @@ import os
 import re
 import time
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +21,7 @@ import numpy as np
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Layers, Renderer
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
 from blueprint.scene.model import Model
 
 from .lines import join_polylines, model_segments
@@ -46,6 +46,7 @@ __all__ = [
     "Drawing",
     "Page",
     "draw_vector",
+    "draw_vector_sheet",
     "parse_scale",
     "render_vector_file",
     "save_drawing",
@@ -401,6 +402,59 @@ def draw_vector(
     )
 
 
+def draw_vector_sheet(
+    model: Model,
+    size: tuple[int, int] = (1024, 1024),
+    *,
+    fov: float = 30.0,
+    scale: str | float | None = None,
+    units: str | None = None,
+    title: str | None = None,
+    **options,
+) -> Drawing:
+    """A drawing sheet as ``render(view="plan")`` draws it: the orthographic top view above the
+    front view, the right view beside it, all at one scale, and an iso view in the free corner,
+    each a quarter of ``size``. ``scale`` and ``units`` lay the page out in millimetres with the
+    orthographic views to scale; ``options`` go to :func:`draw_vector` for every view.
+    """
+    w, h = size[0] // 2, size[1] // 2
+    if w < 1 or h < 1:
+        raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
+    cameras = sheet_cameras(model.positions, w / h, fov, model.up)
+    cells = []
+    for name, (col, row) in SHEET_CELLS.items():
+        cell = draw_vector(model, cameras[name], (w, h), **options)
+        cells.append((cell, np.array([col * w, row * h], np.float64)))
+    first = cells[0][0]
+    counts = [len(c.points) for c, _ in cells]
+    starts = np.cumsum([0, *counts[:-1]])
+    ends = [c.offsets[1:] + start for (c, _), start in zip(cells, starts, strict=True)]
+    offsets = np.concatenate([[0], *ends])
+    seconds: dict[str, float] = {}
+    for cell, _ in cells:
+        for stage, spent in cell.seconds.items():
+            seconds[stage] = seconds.get(stage, 0.0) + spent
+    quarter = _page((w, h), cameras["front"], scale, units, model)
+    page = replace(quarter, width=size[0] * quarter.factor, height=size[1] * quarter.factor)
+    if title is None and page.scale is not None:
+        name = Path(model.source).stem if model.source and model.source != "generated" else "model"
+        title = f"{name} — top, front, right — {page.scale_label} ({page.model_unit}); iso not to scale"
+    return replace(
+        first,
+        width=int(size[0]),
+        height=int(size[1]),
+        points=np.concatenate([c.points + shift for c, shift in cells]).reshape(-1, 2),
+        offsets=offsets.astype(np.int64),
+        part=np.concatenate([c.part for c, _ in cells]),
+        level=np.concatenate([c.level for c, _ in cells]),
+        layers=max(c.layers for c, _ in cells),
+        page=page,
+        camera=cameras["front"],
+        title=title,
+        seconds=seconds,
+    )
+
+
 def save_drawing(path: str | os.PathLike, drawing: Drawing, format: str | None = None) -> Path:
     """Write a drawing as SVG, PDF or DXF (from ``format`` or the file's suffix), atomically."""
     from blueprint.export.files import atomic_write, check_output
@@ -478,29 +532,28 @@ def render_vector_file(
     load_s = time.perf_counter() - clock
     renderer = renderer or default_renderer()
     size = check_size(size, 1, renderer.max_texture)
-    camera = Camera.fit(
-        loaded.positions,
-        view,
-        azimuth=azimuth,
-        elevation=elevation,
-        fov=fov,
-        ortho=ortho,
-        aspect=size[0] / size[1],
-        up=loaded.up,
-    )
-    drawing = draw_vector(
-        loaded,
-        camera,
-        size,
+    options = dict(
         style=vstyle,
         max_layers=max_layers or None,
         crease_angle=crease_angle,
         line_width=line_width,
-        scale=scale,
-        units=units,
         highlight=highlight,
         renderer=renderer,
     )
+    if view == "plan":
+        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
+    else:
+        camera = Camera.fit(
+            loaded.positions,
+            view,
+            azimuth=azimuth,
+            elevation=elevation,
+            fov=fov,
+            ortho=ortho,
+            aspect=size[0] / size[1],
+            up=loaded.up,
+        )
+        drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
     save_drawing(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}
