@@ -6,6 +6,8 @@ each other, normals included, and the drawings they make."""
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
@@ -119,8 +121,9 @@ def test_same_drawing(renderer, kbuffer, style):
     assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
 
 
-def test_used_only_where_it_pays(renderer):
-    """From KBUFFER_MIN_DENSITY triangles per G-buffer pixel, and never for one layer."""
+def test_used_only_where_it_pays(renderer, monkeypatch):
+    """From KBUFFER_MIN_DENSITY triangles per G-buffer pixel, never for one layer, and not where
+    its targets would take more than KBUFFER_MAX_BYTES."""
     if not renderer.kbuffer:
         pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
     from blueprint.render.renderer import _KBufferPeel
@@ -134,3 +137,6 @@ def test_used_only_where_it_pays(renderer):
     assert isinstance(renderer._setup_geometry(camera, mesh, small, batch=5), _KBufferPeel)
     assert not isinstance(renderer._setup_geometry(camera, mesh, small, batch=1), _KBufferPeel)
     assert not isinstance(renderer._setup_geometry(camera, mesh, large, batch=5), _KBufferPeel)
+    module = importlib.import_module("blueprint.render.renderer")  # blueprint.render is a function too
+    monkeypatch.setattr(module, "KBUFFER_MAX_BYTES", 16 * 5 * 64 * 64 - 1)
+    assert not isinstance(renderer._setup_geometry(camera, mesh, small, batch=5), _KBufferPeel)

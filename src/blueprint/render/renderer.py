@@ -50,6 +50,10 @@ KBUFFER_MAX = 8
 # featuretype, 0.003, 16 % slower; rocker arm, 0.02, 8 % slower; bunny, 0.066, 21 % faster;
 # 2CylinderEngine, 0.12, 27 % faster; 5 layers of the rocker arm at 800x600, 0.04, 16 % faster).
 KBUFFER_MIN_DENSITY = 0.03
+# The k-buffer's targets hold 16 bytes a pixel a layer (8 for triangle IDs alone); above this
+# many bytes the layers are peeled a pass each instead (8 layers at 2048x2048 supersampled
+# would take 2 GiB).
+KBUFFER_MAX_BYTES = 1 << 29
 
 
 @dataclass
@@ -348,6 +352,7 @@ class Renderer:
             self.kbuffer
             and batch > 1
             and mesh.triangles >= self.kbuffer_density * w * h
+            and 16 * batch * w * h <= KBUFFER_MAX_BYTES
             and normals
             and not selected_only
             and self.back_bias_in_shader
@@ -834,7 +839,12 @@ class Renderer:
             raise InputError(f"pixels must be flat indices into {w}x{h}")
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
-        if self.kbuffer and max_layers is not None and 1 < max_layers <= KBUFFER_MAX:
+        if (
+            self.kbuffer
+            and max_layers is not None
+            and 1 < max_layers <= KBUFFER_MAX
+            and 8 * max_layers * w * h <= KBUFFER_MAX_BYTES
+        ):
             return self._kbuffer_faces(model, camera, (w, h), max_layers, min_fraction, gl)
         out = []
         for depth_tex, _, ids in self._peeled(model, camera, (w, h), max_layers, min_fraction, 30.0, False):
