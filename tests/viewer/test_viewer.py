@@ -21,6 +21,7 @@ from PIL import Image
 
 import blueprint
 from blueprint.scene.camera import VIEWS
+from blueprint.viewer.overlay import BACKDROP
 
 ROOT = Path(__file__).resolve().parents[2]
 GEARBOX = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
@@ -208,6 +209,13 @@ def test_keys_mouse_and_escape_under_xvfb(xdisplay, tmp_path, renderer):
         viewer.key("s")
         paper = viewer.wait_for(lambda r: r["style"] == "paper")
         assert tuple(viewer.image(paper)[-1, 0]) == (255, 255, 255)
+        # and round: no paper (the backdrop shows through), wire-frame, blueprint, paper again
+        viewer.key("s")
+        clear = viewer.wait_for(lambda r: r["style"] == "transparent")
+        assert tuple(viewer.image(clear)[-1, 0]) == BACKDROP
+        for style in ("wireframe", "blueprint", "paper"):
+            viewer.key("s")
+            viewer.wait_for(lambda r, style=style: r["style"] == style)
 
         # 2: the front view, exactly as `blueprint render --view front --style paper`
         viewer.key("2")

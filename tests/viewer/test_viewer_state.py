@@ -7,7 +7,7 @@ import pytest
 
 from blueprint import VIEWS, Camera, InputError, Model
 from blueprint.cli import STYLE_NAMES
-from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT, draw_hud, on_backdrop, screenshot_path
+from blueprint.viewer.overlay import LINE_HEIGHT, hud_overlay, screenshot_path
 from blueprint.viewer.state import VIEW_KEYS, ViewState
 
 
@@ -145,25 +145,14 @@ def test_turntable_spins_the_azimuth():
     assert state.azimuth == pytest.approx(-150.0)
 
 
-def test_backdrop_shows_through_transparent_paper_only():
-    image = np.array([[[255, 0, 0, 255], [0, 0, 255, 0], [0, 0, 255, 51]]], np.uint8)
-    out = on_backdrop(image)
-    assert out.shape == (1, 3, 3)
-    assert out[0, 0].tolist() == [255, 0, 0]
-    assert out[0, 1].tolist() == list(BACKDROP)
-    assert out[0, 2].tolist() == [160, 160, 211]  # 0.2 blue over 0.8 grey, rounded
-    opaque = np.full((2, 2, 4), 255, np.uint8)
-    np.testing.assert_array_equal(on_backdrop(opaque), opaque[..., :3])
-
-
-def test_hud_draws_only_in_its_band():
-    rgb = np.full((120, 300, 3), 40, np.uint8)
-    out = draw_hud(rgb, ["12.0 fps | 5 layers", "part 1: gear"])
+def test_hud_overlay_covers_only_its_band_and_the_help_box():
+    out = hud_overlay((300, 120), ["12.0 fps | 5 layers", "part 1: gear"])
     band = LINE_HEIGHT * 2
-    assert (out[:band] != 40).any()
-    np.testing.assert_array_equal(out[band:], rgb[band:])
-    with_help = draw_hud(rgb, [], help_box=True)
-    assert (with_help[band:] != 40).any()
+    assert out.shape == (120, 300, 4)
+    assert (out[:band, :, 3] >= 170).all() and (out[:band, :, :3] == 255).any()
+    assert (out[band:] == 0).all()
+    with_help = hud_overlay((800, 400), [], help_box=True)
+    assert (with_help[LINE_HEIGHT:, :, 3] > 0).any() and (with_help[0, :, 3] == 0).all()
 
 
 def test_screenshot_names_never_overwrite(tmp_path):

@@ -1,12 +1,14 @@
 """The interactive window: GLFW opens it and delivers the events; every picture comes from the
-same ``Renderer.render`` as ``blueprint render``, read back, annotated on the CPU, uploaded as a
-texture and copied to the window.
+same ``Renderer.render`` as ``blueprint render``, uploaded as a texture and drawn to the window
+over the backdrop, scaled up where it is a draft, with the heads-up lines (drawn on the CPU) as
+a second texture over it.
 
 Frames are drawn only when something changed. While the view moves (drag, wheel, turntable)
 frames are drafts: supersample 1 and, when that is slower than 30 fps, a lower resolution
 scaled up; once the view rests for ``REFINE_DELAY`` seconds one full-quality frame follows.
-``BLUEPRINT_VIEWER_DUMP=FOLDER`` writes every presented frame as a PNG plus one JSON line of
-state to ``FOLDER/frames.jsonl`` (for tests and bug reports).
+``BLUEPRINT_VIEWER_DUMP=FOLDER`` writes every presented frame as a PNG (read back from the
+window: what is shown) plus one JSON line of state to ``FOLDER/frames.jsonl`` (for tests and bug
+reports).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from blueprint.errors import BlueprintError, InputError
 from blueprint.export.files import save_png
 from blueprint.render.renderer import Renderer, check_size
 from blueprint.scene.model import Model
-from blueprint.viewer.overlay import LINE_HEIGHT, draw_hud, on_backdrop, resize, screenshot_path
+from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT, hud_overlay, screenshot_path
 from blueprint.viewer.state import VIEW_KEYS, ViewState
 
 log = logging.getLogger("blueprint")
@@ -115,9 +117,9 @@ class Viewer:
             self.close()
             raise
         # what is on screen
-        self._rgb: np.ndarray | None = None  # the picture without the heads-up lines
+        self._picture: np.ndarray | None = None  # the last drawing, draft or not (RGBA)
         self._drawing: np.ndarray | None = None  # the last full-quality drawing (RGBA)
-        self._texture = None
+        self._textures: dict[str, object] = {}
         self._last: dict = {}
         self._status = ""
         self._status_time = 0.0
@@ -184,9 +186,9 @@ class Viewer:
         """Release the GL objects, the window and GLFW."""
         glfw = self.glfw
         if self.renderer is not None:
-            if self._texture is not None:
-                self._texture.release()
-                self._texture = None
+            for texture in self._textures.values():
+                texture.release()
+            self._textures.clear()
             self.renderer.release()
             self.renderer = None
         if self.window is not None:
@@ -481,7 +483,7 @@ class Viewer:
         )
         drawing = frame.image
         self._drawing = None if draft else drawing
-        self._rgb = on_backdrop(resize(drawing, (w, h)))
+        self._picture = drawing
         ms = (time.perf_counter() - t0) * 1e3
         if draft:
             self._adapt(ms)
@@ -528,32 +530,50 @@ class Viewer:
         return lines
 
     def _present(self) -> None:
-        """Heads-up lines onto the picture, upload, copy to the window, swap."""
+        """The drawing over the backdrop, scaled to the window, the heads-up lines over it; swap."""
         self._needs_present = False
-        if self._rgb is None:
+        if self._picture is None:
             self._needs_render = True
             return
+        w, h = self._size()
+        if w < 1 or h < 1:
+            return
         lines = self._hud_lines()
-        image = draw_hud(self._rgb, lines, self.state.help)
-        h, w = image.shape[:2]
         ctx = self.renderer.ctx
-        if self._texture is None or self._texture.size != (w, h):
-            if self._texture is not None:
-                self._texture.release()
-            self._texture = ctx.texture((w, h), 3, alignment=1)
-            self._texture.filter = (ctx.NEAREST, ctx.NEAREST)
-        self._texture.write(np.ascontiguousarray(image[::-1]).tobytes())
+        picture = self._upload("picture", self._picture)
+        overlay = self._upload("overlay", hud_overlay((w, h), lines, self.state.help))
         prog, vao = self.renderer.fullscreen(PRESENT_FRAG)
         ctx.screen.use()
         ctx.viewport = (0, 0, w, h)
         ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
-        self._texture.use(0)
-        prog["u_image"].value = 0
+        picture.use(0)
+        overlay.use(1)
+        prog["u_picture"].value = 0
+        prog["u_overlay"].value = 1
+        prog["u_window"].value = (float(w), float(h))
+        prog["u_backdrop"].value = tuple(c / 255.0 for c in BACKDROP)
         vao.render(vertices=3)
-        self.glfw.swap_buffers(self.window)
         self._frames += 1
-        if self.dump is not None:
-            self._dump(image, lines)
+        if self.dump is not None:  # read before the swap leaves the back buffer undefined
+            shown = np.frombuffer(ctx.screen.read((0, 0, w, h), components=3, alignment=1), np.uint8)
+            self._dump(shown.reshape(h, w, 3)[::-1], lines)
+        self.glfw.swap_buffers(self.window)
+
+    def _upload(self, name: str, image: np.ndarray):
+        """``image`` (H, W, 4) uint8, row 0 at the top, in the texture ``name`` (kept between
+        frames, remade when the size changes)."""
+        h, w = image.shape[:2]
+        ctx = self.renderer.ctx
+        texture = self._textures.get(name)
+        if texture is None or texture.size != (w, h):
+            if texture is not None:
+                texture.release()
+            texture = self._textures[name] = ctx.texture((w, h), 4, alignment=1)
+            # drafts are scaled up bilinearly; a full-size picture lands on texel centres
+            texture.filter = (ctx.LINEAR, ctx.LINEAR)
+            texture.repeat_x = texture.repeat_y = False
+        texture.write(np.ascontiguousarray(image[::-1]).tobytes())
+        return texture
 
     def _dump(self, image: np.ndarray, lines: list[str]) -> None:
         self.dump.mkdir(parents=True, exist_ok=True)

@@ -1,4 +1,4 @@
-"""CPU-side pieces of the viewer: the backdrop, the heads-up lines, the help box, and
+"""CPU-side pieces of the viewer: the heads-up lines and the help box as an overlay, and
 screenshot names. Images are (H, W, 4) uint8 RGBA, row 0 at the top, straight alpha."""
 
 from __future__ import annotations
@@ -23,15 +23,6 @@ HELP_LINES = (
 )
 
 
-def on_backdrop(image: np.ndarray) -> np.ndarray:
-    """(H, W, 3) uint8: the image over an opaque backdrop (a no-op for opaque paper)."""
-    if image[..., 3].min() == 255:
-        return image[..., :3].copy()
-    a = image[..., 3:4].astype(np.float32) / 255.0
-    rgb = image[..., :3] * a + np.array(BACKDROP, np.float32) * (1.0 - a)
-    return np.clip(rgb + 0.5, 0, 255).astype(np.uint8)
-
-
 @functools.lru_cache(maxsize=4)
 def _font(size: int):
     from PIL import ImageFont
@@ -42,25 +33,24 @@ def _font(size: int):
         return ImageFont.load_default()
 
 
-def draw_hud(rgb: np.ndarray, lines: list[str], help_box: bool = False) -> np.ndarray:
-    """Draw the heads-up ``lines`` in a band at the top (and the help box) into a copy of
-    ``rgb`` (H, W, 3) uint8. The band is ``LINE_HEIGHT`` pixels per line."""
+def hud_overlay(size: tuple[int, int], lines: list[str], help_box: bool = False) -> np.ndarray:
+    """(H, W, 4) uint8 straight-alpha overlay of window ``size`` (W, H): the heads-up ``lines``
+    in a band at the top, ``LINE_HEIGHT`` pixels a line, and the help box; clear elsewhere."""
     from PIL import Image, ImageDraw
 
-    picture = Image.fromarray(rgb)
-    draw = ImageDraw.Draw(picture, "RGBA")
+    w, h = size
+    picture = Image.new("RGBA", (w, h), (0, 0, 0, 0))
     font = _font(FONT_SIZE)
-    w, h = picture.size
     if lines:
-        # drawn on a crop of the band and pasted back, so no glyph reaches below the band
+        # drawn on a band of its own and pasted, so no glyph reaches below the band
         band_h = min(h, LINE_HEIGHT * len(lines))
-        band = picture.crop((0, 0, w, band_h))
+        band = Image.new("RGBA", (w, band_h), (0, 0, 0, 170))
         ink = ImageDraw.Draw(band, "RGBA")
-        ink.rectangle((0, 0, w, band_h), fill=(0, 0, 0, 170))
         for i, line in enumerate(lines):
             ink.text((6, i * LINE_HEIGHT + 2), line, fill=(255, 255, 255, 255), font=font)
         picture.paste(band, (0, 0))
     if help_box:
+        draw = ImageDraw.Draw(picture, "RGBA")
         widths = [draw.textlength(line, font=font) for line in HELP_LINES]
         box_w = int(max(widths)) + 24
         box_h = LINE_HEIGHT * len(HELP_LINES) + 16
@@ -69,15 +59,6 @@ def draw_hud(rgb: np.ndarray, lines: list[str], help_box: bool = False) -> np.nd
         for i, line in enumerate(HELP_LINES):
             draw.text((x0 + 12, y0 + 8 + i * LINE_HEIGHT), line, fill=(255, 255, 255, 255), font=font)
     return np.asarray(picture)
-
-
-def resize(image: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    """Scale an RGBA image to ``size`` (W, H), bilinear."""
-    if (image.shape[1], image.shape[0]) == tuple(size):
-        return image
-    from PIL import Image
-
-    return np.asarray(Image.fromarray(image).resize(tuple(size), Image.Resampling.BILINEAR))
 
 
 def screenshot_path(model_path: Path) -> Path:

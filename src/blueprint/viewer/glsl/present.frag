@@ -1,9 +1,16 @@
-// The viewer's frame: the image the renderer returned (with the heads-up lines drawn on the
-// CPU), uploaded as a texture of the window's size and copied pixel for pixel to the window.
-uniform sampler2D u_image;
+// The viewer's frame: the drawing (straight alpha) over the backdrop, scaled to the window
+// (bilinear: a draft is smaller; a full-size drawing samples texel centres, pixel for pixel),
+// then the heads-up overlay (straight alpha) over that.
+uniform sampler2D u_picture;
+uniform sampler2D u_overlay;
+uniform vec2 u_window;
+uniform vec3 u_backdrop;
 
 out vec4 o_color;
 
 void main() {
-    o_color = vec4(texelFetch(u_image, ivec2(gl_FragCoord.xy), 0).rgb, 1.0);
+    vec4 picture = texture(u_picture, gl_FragCoord.xy / u_window);
+    vec3 color = mix(u_backdrop, picture.rgb, picture.a);
+    vec4 overlay = texelFetch(u_overlay, ivec2(gl_FragCoord.xy), 0);
+    o_color = vec4(mix(color, overlay.rgb, overlay.a), 1.0);
 }
