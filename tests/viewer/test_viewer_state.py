@@ -7,7 +7,7 @@ import pytest
 
 from blueprint import VIEWS, Camera, InputError, Model
 from blueprint.cli import STYLE_NAMES
-from blueprint.viewer.overlay import LINE_HEIGHT, hud_overlay, screenshot_path
+from blueprint.viewer.overlay import LINE_HEIGHT, band_overlay, help_overlay, screenshot_path
 from blueprint.viewer.state import VIEW_KEYS, ViewState
 
 
@@ -145,14 +145,18 @@ def test_turntable_spins_the_azimuth():
     assert state.azimuth == pytest.approx(-150.0)
 
 
-def test_hud_overlay_covers_only_its_band_and_the_help_box():
-    out = hud_overlay((300, 120), ["12.0 fps | 5 layers", "part 1: gear"])
+def test_overlay_covers_only_the_band_and_the_help_box():
+    clear = help_overlay((300, 120), False)
+    assert clear.shape == (120, 300, 4) and (clear == 0).all()
     band = LINE_HEIGHT * 2
-    assert out.shape == (120, 300, 4)
-    assert (out[:band, :, 3] >= 170).all() and (out[:band, :, :3] == 255).any()
-    assert (out[band:] == 0).all()
-    with_help = hud_overlay((800, 400), [], help_box=True)
+    top = band_overlay(clear[:50], ["12.0 fps | 5 layers", "part 1: gear"])
+    assert top.shape == (50, 300, 4)
+    assert (top[:band, :, 3] >= 170).all() and (top[:band, :, :3] == 255).any()
+    assert (top[band:] == 0).all()
+    with_help = help_overlay((800, 400), True)
     assert (with_help[LINE_HEIGHT:, :, 3] > 0).any() and (with_help[0, :, 3] == 0).all()
+    # a band drawn over the help box keeps the box below it
+    assert np.array_equal(band_overlay(with_help[:100], ["x"])[LINE_HEIGHT:], with_help[LINE_HEIGHT:100])
 
 
 def test_screenshot_names_never_overwrite(tmp_path):

@@ -28,7 +28,7 @@ from blueprint.errors import BlueprintError, InputError
 from blueprint.export.files import save_png
 from blueprint.render.renderer import Renderer, check_size
 from blueprint.scene.model import Model
-from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT, hud_overlay, screenshot_path
+from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT, band_overlay, help_overlay, screenshot_path
 from blueprint.viewer.state import VIEW_KEYS, ViewState
 
 log = logging.getLogger("blueprint")
@@ -120,6 +120,9 @@ class Viewer:
         self._picture: np.ndarray | None = None  # the last drawing, draft or not (RGBA)
         self._drawing: np.ndarray | None = None  # the last full-quality drawing (RGBA)
         self._textures: dict[str, object] = {}
+        self._overlay_key: tuple | None = None
+        self._overlay_base: np.ndarray | None = None
+        self._band_rows = 0
         self._last: dict = {}
         self._status = ""
         self._status_time = 0.0
@@ -541,7 +544,7 @@ class Viewer:
         lines = self._hud_lines()
         ctx = self.renderer.ctx
         picture = self._upload("picture", self._picture)
-        overlay = self._upload("overlay", hud_overlay((w, h), lines, self.state.help))
+        overlay = self._overlay((w, h), lines)
         prog, vao = self.renderer.fullscreen(PRESENT_FRAG)
         ctx.screen.use()
         ctx.viewport = (0, 0, w, h)
@@ -558,6 +561,23 @@ class Viewer:
             shown = np.frombuffer(ctx.screen.read((0, 0, w, h), components=3, alignment=1), np.uint8)
             self._dump(shown.reshape(h, w, 3)[::-1], lines)
         self.glfw.swap_buffers(self.window)
+
+    def _overlay(self, size: tuple[int, int], lines: list[str]):
+        """The overlay texture: the help box redrawn when it or the window changes, the band of
+        heads-up lines every frame (rows written down to the lower of this band and the last)."""
+        w, h = size
+        key = (w, h, self.state.help)
+        if self._overlay_key != key:
+            self._overlay_base = help_overlay(size, self.state.help)
+            self._upload("overlay", self._overlay_base)
+            self._overlay_key, self._band_rows = key, 0
+        rows = min(h, max(self._band_rows, LINE_HEIGHT * len(lines)))
+        texture = self._textures["overlay"]
+        if rows:
+            top = band_overlay(self._overlay_base[:rows], lines)
+            texture.write(np.ascontiguousarray(top[::-1]).tobytes(), viewport=(0, h - rows, w, rows))
+        self._band_rows = LINE_HEIGHT * len(lines)
+        return texture
 
     def _upload(self, name: str, image: np.ndarray):
         """``image`` (H, W, 4) uint8, row 0 at the top, in the texture ``name`` (kept between

@@ -33,23 +33,15 @@ def _font(size: int):
         return ImageFont.load_default()
 
 
-def hud_overlay(size: tuple[int, int], lines: list[str], help_box: bool = False) -> np.ndarray:
-    """(H, W, 4) uint8 straight-alpha overlay of window ``size`` (W, H): the heads-up ``lines``
-    in a band at the top, ``LINE_HEIGHT`` pixels a line, and the help box; clear elsewhere."""
+def help_overlay(size: tuple[int, int], help_box: bool) -> np.ndarray:
+    """(H, W, 4) uint8 straight-alpha overlay of window ``size`` (W, H): clear, with the help
+    box in the middle if asked."""
     from PIL import Image, ImageDraw
 
     w, h = size
     picture = Image.new("RGBA", (w, h), (0, 0, 0, 0))
-    font = _font(FONT_SIZE)
-    if lines:
-        # drawn on a band of its own and pasted, so no glyph reaches below the band
-        band_h = min(h, LINE_HEIGHT * len(lines))
-        band = Image.new("RGBA", (w, band_h), (0, 0, 0, 170))
-        ink = ImageDraw.Draw(band, "RGBA")
-        for i, line in enumerate(lines):
-            ink.text((6, i * LINE_HEIGHT + 2), line, fill=(255, 255, 255, 255), font=font)
-        picture.paste(band, (0, 0))
     if help_box:
+        font = _font(FONT_SIZE)
         draw = ImageDraw.Draw(picture, "RGBA")
         widths = [draw.textlength(line, font=font) for line in HELP_LINES]
         box_w = int(max(widths)) + 24
@@ -58,6 +50,24 @@ def hud_overlay(size: tuple[int, int], lines: list[str], help_box: bool = False)
         draw.rectangle((x0, y0, x0 + box_w, y0 + box_h), fill=(0, 0, 0, 200), outline=(255, 255, 255, 255))
         for i, line in enumerate(HELP_LINES):
             draw.text((x0 + 12, y0 + 8 + i * LINE_HEIGHT), line, fill=(255, 255, 255, 255), font=font)
+    return np.asarray(picture)
+
+
+def band_overlay(rows: np.ndarray, lines: list[str]) -> np.ndarray:
+    """The top ``rows`` (R, W, 4) of an overlay with the heads-up ``lines`` drawn over them in a
+    band of ``LINE_HEIGHT`` pixels a line (cut to R rows): what changes from frame to frame."""
+    from PIL import Image, ImageDraw
+
+    picture = Image.fromarray(np.ascontiguousarray(rows), "RGBA")
+    band_h = min(rows.shape[0], LINE_HEIGHT * len(lines))
+    if band_h:
+        # drawn on a band of its own and pasted, so no glyph reaches below the band
+        band = Image.new("RGBA", (rows.shape[1], band_h), (0, 0, 0, 170))
+        ink = ImageDraw.Draw(band, "RGBA")
+        font = _font(FONT_SIZE)
+        for i, line in enumerate(lines):
+            ink.text((6, i * LINE_HEIGHT + 2), line, fill=(255, 255, 255, 255), font=font)
+        picture.paste(band, (0, 0))
     return np.asarray(picture)
 
 
