@@ -80,13 +80,11 @@ def test_same_layers_as_a_pass_a_layer(renderer, kbuffer, name, max_layers):
     assert fast.depth.shape == plain.depth.shape
     covered = plain.depth < 1.0
     assert covered.sum() > 0
-    # normals pass through halves either way, rounded by the shader here and by the driver's
-    # store there: they may differ in the last place
     same = (
         (fast.depth == plain.depth)
         & (fast.triangle == plain.triangle)
         & (fast.part == plain.part)
-        & (np.abs(fast.normal - plain.normal) <= 1e-3).all(axis=-1)
+        & (np.abs(fast.normal - plain.normal) <= _normal_tolerance(renderer)).all(axis=-1)
     )
     # two surfaces about one peeling tolerance apart may be merged either way: a handful of pixels
     assert (~same).sum() <= max(2, 1e-4 * covered.sum()), f"{(~same).sum()} of {covered.sum()} differ"
@@ -110,14 +108,25 @@ def test_layer_counts_are_covered_pixels(renderer, kbuffer):
     assert frame.layer_pixels[frame.layers :] in ([], [0])
 
 
+def _normal_tolerance(renderer) -> float:
+    """Normals pass through halves either way: kbuffer.glsl rounds them toward zero as
+    llvmpipe's half-float targets do (the same bits there); another driver may round to
+    nearest, a last-place difference."""
+    return 0.0 if "llvmpipe" in renderer.info["renderer"] else 1e-3
+
+
+@pytest.mark.parametrize("supersample", [1, 2])
 @pytest.mark.parametrize("style", ["blueprint", "paper"])
-def test_same_drawing(renderer, kbuffer, style):
+def test_same_drawing(renderer, kbuffer, style, supersample):
     model = examples.gearbox()
     images = []
     for on in (True, False):
         kbuffer(on)
-        images.append(blueprint.render(model, size=(200, 150), style=style, max_layers=6).astype(int))
+        options = dict(size=(200, 150), style=style, max_layers=6, supersample=supersample)
+        images.append(blueprint.render(model, **options).astype(int))
     diff = np.abs(images[0] - images[1]).max(axis=-1)
+    if _normal_tolerance(renderer) == 0.0:
+        assert (diff == 0).all(), f"{(diff > 0).sum()} pixels differ"
     assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
 
 

@@ -21,11 +21,24 @@ bool kb_empty(uvec2 s) {
 #else
 #define KB_T uvec4
 
+// A unit vector's component as a half, rounded toward zero: how llvmpipe stores a float into
+// the G-buffer's half-float normals (packHalf2x16 rounds to nearest), so both ways of peeling
+// give the same bits. Magnitudes below the smallest normal half become zero.
+uint kb_half(float v) {
+    uint bits = floatBitsToUint(v);
+    uint sign = (bits >> 16) & 0x8000u;
+    int exponent = int((bits >> 23) & 0xffu) - 127 + 15;
+    if (exponent <= 0) {
+        return sign;
+    }
+    return sign | (uint(min(exponent, 30)) << 10) | ((bits >> 13) & 0x3ffu);
+}
+
 uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
     return uvec4(
         floatBitsToUint(z) | (back ? KB_BACK : 0u),
-        packHalf2x16(n.xy),
-        (packHalf2x16(vec2(n.z, 0.0)) & 0xffffu) | (uint(part + 1) << 16),
+        kb_half(n.x) | (kb_half(n.y) << 16),
+        kb_half(n.z) | (uint(part + 1) << 16),
         uint(face + 1));
 }
 
