@@ -14,7 +14,7 @@ from blueprint.render.renderer import Frame, Layers, Renderer, check_size
 from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
-from blueprint.scene.parts import select_parts, select_parts_like
+from blueprint.scene.parts import designated_parts
 
 _renderer: Renderer | None = None
 
@@ -86,19 +86,6 @@ def render_frame(
         spent = (time.perf_counter() - t0) * 1e3
         frame = replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "glyphs": spent})
     return frame
-
-
-def designated_parts(model: Model, spec) -> np.ndarray:
-    """(P,) bool from a part spec: name globs and indices (a comma-separated string or a
-    sequence), a second Model in the same coordinates, or already a bool array."""
-    if isinstance(spec, Model):
-        return select_parts_like(model, spec)
-    array = np.asarray(spec) if not isinstance(spec, str) else None
-    if array is not None and array.dtype == bool:
-        if array.shape != (len(model.part_names),):
-            raise InputError(f"highlight needs one flag per part ({len(model.part_names)})")
-        return array
-    return select_parts(model, spec)
 
 
 def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Renderer, options) -> Frame:

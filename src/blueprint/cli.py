@@ -235,14 +235,28 @@ def render(
 
     output = check_output(output, (".png", *VECTOR_SUFFIXES))
     if output.suffix.lower() in VECTOR_SUFFIXES:
-        if glyph_file or shade or reveal is not None or highlight_model:
+        if glyph_file or shade:
             raise InputError(
-                f"{output}: vector drawings take no --glyphs, --shade, --reveal or "
-                "--highlight-model yet; write a PNG for those"
+                f"{output}: vector drawings take no --glyphs or --shade yet; write a PNG for those"
             )
         camera = _camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
+        if highlight and highlight_model:
+            raise InputError("give --highlight or --highlight-model, not both")
+        if highlight_model:
+            model = load_model(model, up=camera["up"])
+            highlight = load_model(highlight_model, up=camera["up"])
         _render_vector(
-            model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight
+            model,
+            output,
+            camera,
+            style,
+            max_layers,
+            crease_angle,
+            line_width,
+            scale,
+            units,
+            highlight,
+            reveal,
         )
         return
     if scale or units:
@@ -293,7 +307,7 @@ def _is_style_file(style: str) -> bool:
 
 
 def _render_vector(
-    model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight
+    model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
 ):
     from blueprint.api import default_renderer
     from blueprint.vector import render_vector_file
@@ -314,6 +328,7 @@ def _render_vector(
         scale=scale,
         units=units,
         highlight=highlight,
+        reveal=reveal,
         **camera,
     )
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))

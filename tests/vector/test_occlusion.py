@@ -1,14 +1,15 @@
 """Occlusion levels checked edge by edge on shapes whose answer is known by hand."""
 
 import math
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from vector_helpers import box_edges, boxes_in_front, point_segment_distance, project
+from vector_helpers import SVG, box_edges, boxes_in_front, point_segment_distance, project
 
 from blueprint.examples import assemble, box, prism
 from blueprint.scene.camera import Camera
-from blueprint.vector import draw_vector
+from blueprint.vector import draw_vector, vector_style
 
 SIZE = (256, 256)
 
@@ -208,3 +209,53 @@ def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, kbuffer, max_
     assert np.array_equal(faces, expected)
     with pytest.raises(blueprint.BlueprintError):
         renderer.triangles_at(model, camera, [size[0] * size[1]], size=size)
+
+
+def test_depth_masking_peels_only_until_the_parts_show(renderer):
+    """reveal: the same layers as the raster's depth masking, and no line deeper than them."""
+    from blueprint import examples
+    from blueprint.api import render_frame
+    from blueprint.errors import InputError
+
+    model = examples.gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    full = draw_vector(model, camera, SIZE, renderer=renderer)
+    masked = draw_vector(model, camera, SIZE, highlight="gea*", reveal=0.6, renderer=renderer)
+    frame = render_frame(
+        model, camera=camera, size=SIZE, supersample=1, highlight="gear", reveal=0.6, renderer=renderer
+    )
+    assert masked.layers == frame.layers < full.layers
+    assert masked.level.max() == masked.layers - 1 < full.level.max()
+    assert masked.highlight == {model.part_names.index("gear")}
+    with pytest.raises(InputError, match="reveal needs parts"):
+        draw_vector(model, camera, SIZE, reveal=0.6, renderer=renderer)
+    with pytest.raises(InputError, match=r"reveal must be in \(0, 1\]"):
+        draw_vector(model, camera, SIZE, highlight="gear", reveal=1.5, renderer=renderer)
+
+
+def test_highlight_by_a_second_model_on_the_command_line(tmp_path):
+    """--highlight-model: the parts a second file lies on, drawn in the highlight colour."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import trimesh
+
+    from blueprint import examples
+
+    model = examples.gearbox()
+    index = model.part_names.index("gear")
+    trimesh.Trimesh(model.positions, model.faces[model.face_part == index]).export(tmp_path / "gear.stl")
+    out = tmp_path / "hl.svg"
+    exe = Path(sys.executable).with_name("blueprint")
+    args = [exe, "render", examples.example_path(), "-o", out, "--size", "160", "120"]
+    done = subprocess.run(
+        [*args, "--highlight-model", tmp_path / "gear.stl", "--up", "y"], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    root = ET.parse(out).getroot()
+    group = next(g for g in root.iter(f"{SVG}g") if g.get("id") == "gear")
+    colour = "#" + "".join(f"{round(c * 255):02x}" for c in vector_style("blueprint").highlight_color)
+    assert {p.get("stroke") for p in group.iter(f"{SVG}path")} == {colour}
+    other = next(g for g in root.iter(f"{SVG}g") if g.get("id") == "cover")
+    assert colour not in {p.get("stroke") for p in other.iter(f"{SVG}path")}

@@ -139,7 +139,7 @@ def test_render_vector_file_summary_and_errors(renderer, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.svg"]  # no temporary files left
     with pytest.raises(InputError, match="must end in"):
         render_vector_file(model, tmp_path / "cube.png", renderer=renderer)
-    with pytest.raises(InputError, match="no part named"):
+    with pytest.raises(InputError, match="no part matches .nope."):
         render_vector_file(model, tmp_path / "x.svg", size=(32, 32), highlight=["nope"], renderer=renderer)
     with pytest.raises(InputError, match="units"):
         render_vector_file(model, tmp_path / "x.svg", scale="1:10", units="furlong", renderer=renderer)

@@ -65,3 +65,16 @@ def select_parts_like(model: Model, other: Model, tolerance: float | None = None
     if not selected.any():
         raise InputError(f"{other.source}: lies on no part of {model.source or 'the model'}")
     return selected
+
+
+def designated_parts(model: Model, spec) -> np.ndarray:
+    """(P,) bool from a part spec: name globs and indices (a comma-separated string or a
+    sequence), a second Model in the same coordinates, or already a bool array."""
+    if isinstance(spec, Model):
+        return select_parts_like(model, spec)
+    array = np.asarray(spec) if not isinstance(spec, str) else None
+    if array is not None and array.dtype == bool:
+        if array.shape != (len(model.part_names),):
+            raise InputError(f"highlight needs one flag per part ({len(model.part_names)})")
+        return array
+    return select_parts(model, spec)

@@ -23,6 +23,7 @@ from blueprint.errors import InputError
 from blueprint.render.renderer import Layers, Renderer
 from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
 from blueprint.scene.model import Model
+from blueprint.scene.parts import designated_parts
 
 from .lines import join_polylines, model_segments
 from .occlusion import (
@@ -215,28 +216,27 @@ def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
     return page
 
 
-def _highlight(highlight, names: tuple[str, ...]) -> frozenset[int]:
+def _revealing_layers(renderer, model, camera, size, chosen, reveal, max_layers) -> int:
+    """How many layers the renderer's depth masking peels to uncover ``reveal`` of the parts."""
+    if not chosen:
+        raise InputError("reveal needs parts to reveal: give highlight as well")
+    flags = np.zeros(len(model.part_names), bool)
+    flags[sorted(chosen)] = True
+    frame = renderer.render(
+        model, camera, size=size, supersample=1, max_layers=max_layers, highlight=flags, reveal=reveal
+    )
+    return max(frame.layers, 1)
+
+
+def _highlight(highlight, model: Model) -> frozenset[int]:
+    """Part indices from a part spec (globs, names, indices, a second model, or flags)."""
     if highlight is None:
         return frozenset()
-    if isinstance(highlight, str):
-        # 'gear,shaft' names two parts, unless a part is called that
-        highlight = (
-            [highlight] if highlight in names else [h.strip() for h in highlight.split(",") if h.strip()]
-        )
-    elif isinstance(highlight, int):
-        highlight = [highlight]
-    chosen = set()
-    for item in highlight:
-        if isinstance(item, int | np.integer):
-            if not 0 <= int(item) < len(names):
-                raise InputError(f"highlight: no part {item} (the model has {len(names)})")
-            chosen.add(int(item))
-        elif item in names:
-            chosen.update(i for i, n in enumerate(names) if n == item)
-        else:
-            shown = ", ".join(names[:8]) + (", ..." if len(names) > 8 else "")
-            raise InputError(f"highlight: no part named {item!r} (parts: {shown})")
-    return frozenset(chosen)
+    if isinstance(highlight, int | np.integer):
+        highlight = [int(highlight)]
+    elif isinstance(highlight, set | frozenset):
+        highlight = sorted(highlight)
+    return frozenset(int(i) for i in np.flatnonzero(designated_parts(model, highlight)))
 
 
 def draw_vector(
@@ -251,7 +251,8 @@ def draw_vector(
     line_width: float = 1.0,
     scale: str | float | None = None,
     units: str | None = None,
-    highlight: Iterable[str | int] | str | int | None = None,
+    highlight: Iterable[str | int] | str | int | Model | None = None,
+    reveal: float | None = None,
     renderer: Renderer | None = None,
     layers: Layers | None = None,
     intersections: bool = True,
@@ -280,8 +281,11 @@ def draw_vector(
     scale, units : optional
         '1:50' and the model's length unit ('mm', 'm', ...; default 'm' for glTF, else 'mm'):
         the page is laid out in millimetres at that scale. Needs an orthographic camera.
-    highlight : part names or indices, optional
+    highlight : part name globs, indices, a second Model or (P,) bool, optional
         Parts drawn in the style's highlight colour.
+    reveal : float, optional
+        Depth masking: peel only until this fraction of the highlighted parts is uncovered (as
+        ``Renderer.render`` does), so lines behind more surfaces than that are left out.
     renderer : Renderer, optional
         Peels the layers (default: the shared renderer).
     layers : Layers, optional
@@ -308,7 +312,7 @@ def draw_vector(
     if not 1.0 <= line_width <= 16.0:
         raise InputError(f"line-width must be in [1, 16], got {line_width}")
     vstyle = vector_style(style)
-    chosen = _highlight(highlight, model.part_names)
+    chosen = _highlight(highlight, model)
     if layers is None:
         renderer = renderer or default_renderer()
         w, h = check_size(size, 1, renderer.max_texture)
@@ -316,6 +320,10 @@ def draw_vector(
             camera = Renderer.camera_for(model, (w, h), view)
         view_m = np.asarray(camera.view_matrix(), np.float64)
         proj = np.asarray(camera.projection_matrix(), np.float64)
+        if reveal is not None:
+            max_layers = _revealing_layers(renderer, model, camera, (w, h), chosen, reveal, max_layers)
+    elif reveal is not None:
+        raise InputError("reveal decides how many layers to peel: give no layers with it")
     else:
         h, w = layers.depth.shape[1:]
         camera = camera or layers.camera
@@ -497,7 +505,8 @@ def render_vector_file(
     line_width: float = 1.0,
     scale: str | float | None = None,
     units: str | None = None,
-    highlight: Iterable[str | int] | str | int | None = None,
+    highlight: Iterable[str | int] | str | int | Model | None = None,
+    reveal: float | None = None,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -538,6 +547,7 @@ def render_vector_file(
         crease_angle=crease_angle,
         line_width=line_width,
         highlight=highlight,
+        reveal=reveal,
         renderer=renderer,
     )
     if view == "plan":
