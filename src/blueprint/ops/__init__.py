@@ -50,7 +50,7 @@ class Op:
     params: tuple[Param, ...] = ()
     doc: str = ""
     compute: str | None = None
-    # boolean parameters compiled in as defines (NAME in capitals) as well as set as uniforms:
+    # boolean parameters compiled in as defines (NAME in capitals) instead of set as uniforms:
     # a software rasteriser runs a branch a uniform turns off on every pixel all the same
     switches: tuple[str, ...] = ()
 

@@ -362,10 +362,7 @@ class Renderer:
             prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": batch, "FACE_IDS": face_ids})
         else:
             prog = self._geometry_program(selected_only, face_ids, normals, tie_break)
-        prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
-        prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
-        prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
-        prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
+        _peel_uniforms(prog, camera)
         if normals:  # only the normal's orientation needs it
             prog["u_ortho"].value = camera.ortho
         if self.back_bias_in_shader and (normals if tie_break is None else tie_break):
@@ -682,8 +679,9 @@ class Renderer:
         half = math.radians(crease_angle)
         prog["u_normal_cos"].value = (math.cos(0.5 * half), math.cos(0.8 * half))
         prog["u_pixel_angle"].value = camera.pixel_angle(ss[1])
+        switched = {f"u_{name}" for name in EDGES.switches}  # defines, not uniforms
         for name, value in params.items():
-            if name in prog:  # a switch's uniform is gone where its define turned it off
+            if name not in switched:
                 prog[name].value = value
         prog["u_normal"].value = 3
         prog["u_ids"].value = 4
@@ -861,10 +859,7 @@ class Renderer:
         ctx, pool = self.ctx, self.pool
         mesh = self.mesh(model, None)
         prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": k, "FACE_IDS": True, "IDS_ONLY": True})
-        prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
-        prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
-        prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
-        prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
+        _peel_uniforms(prog, camera)
         prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         prog["u_peel"].value = False
         name = f"kbuffer.faces.{size[0]}x{size[1]}"
@@ -924,18 +919,30 @@ class _KBufferPeel:
         self.unpack, self.unpack_vao = renderer.fullscreen(UNPACK_FRAG)
         self.unpack["u_surfaces"].value = KBUFFER_UNIT
         self.unpack["u_back_bias"].value = BACK_OFFSET / (1 << 24)
+        self._targets: dict[tuple[int, int], tuple] = {}
+
+    def _surfaces(self, size: tuple[int, int]) -> tuple:
+        """(targets, their framebuffer, the first one's) at ``size``: pipelines peel G-buffers
+        of several sizes in turn, so the targets are named by size too."""
+        held = self._targets.get(size)
+        if held is None:
+            pool, name = self.r.pool, f"kbuffer.{size[0]}x{size[1]}"
+            surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k))
+            held = self._targets[size] = (
+                surfaces,
+                pool.framebuffer(surfaces),
+                pool.framebuffer(surfaces[:1]),
+            )
+        return held
 
     def draw(self, mesh: _Mesh, fbos, layer: int, query) -> None:
-        r, ctx = self.r, self.r.ctx
-        size = fbos[0].size
-        # named by size too: pipelines peel G-buffers of several sizes in turn
-        name = f"kbuffer.{size[0]}x{size[1]}"
-        surfaces = [r.pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k)]
+        ctx = self.r.ctx
+        surfaces, target, first_target = self._surfaces(tuple(fbos[0].size))
         first = layer % self.k == 0
         if first:
             # the first target alone is cleared: kbuffer.frag keeps the rest valid
-            r.pool.framebuffer((surfaces[0],)).clear()
-            r.pool.framebuffer(tuple(surfaces)).use()
+            first_target.clear()
+            target.use()
             self.prog["u_peel"].value = layer > 0
             self.prog["u_prev_depth"].value = (layer - 1) % 2
             mesh.vao(self.prog).render()
@@ -1060,6 +1067,14 @@ class _FragmentEdges:
 
     def texture(self, first_layer: int):
         return self.fbos[min(first_layer // 4, len(self.fbos) - 1)].color_attachments[0]
+
+
+def _peel_uniforms(prog, camera: Camera) -> None:
+    """What every geometry pass of the peel takes from the camera."""
+    prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
+    prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
+    prog["u_depth_range"].value = (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
+    prog["u_peel_eps"].value = PEEL_EPSILON * (camera.far - camera.near)
 
 
 def _groups(size) -> tuple[int, int]:
