@@ -553,15 +553,8 @@ def render_vector_file(
     if view == "plan":
         drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
     else:
-        camera = Camera.fit(
-            loaded.positions,
-            view,
-            azimuth=azimuth,
-            elevation=elevation,
-            fov=fov,
-            ortho=ortho,
-            aspect=size[0] / size[1],
-            up=loaded.up,
+        camera = Renderer.camera_for(
+            loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho
         )
         drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
