@@ -117,9 +117,8 @@ class Viewer:
             self.close()
             raise
         # what is on screen
-        self._picture: np.ndarray | None = None  # the last drawing, draft or not (RGBA)
         self._drawing: np.ndarray | None = None  # the last full-quality drawing (RGBA)
-        self._textures: dict[str, object] = {}
+        self._textures: dict[str, object] = {}  # the drawing on screen, the overlay
         self._overlay_key: tuple | None = None
         self._overlay_base: np.ndarray | None = None
         self._band_rows = 0
@@ -486,7 +485,8 @@ class Viewer:
         )
         drawing = frame.image
         self._drawing = None if draft else drawing
-        self._picture = drawing
+        # uploaded once a drawing; presenting again (heads-up lines, exposure) reuses it
+        self._upload("picture", drawing)
         ms = (time.perf_counter() - t0) * 1e3
         if draft:
             self._adapt(ms)
@@ -535,7 +535,8 @@ class Viewer:
     def _present(self) -> None:
         """The drawing over the backdrop, scaled to the window, the heads-up lines over it; swap."""
         self._needs_present = False
-        if self._picture is None:
+        picture = self._textures.get("picture")
+        if picture is None:
             self._needs_render = True
             return
         w, h = self._size()
@@ -543,7 +544,6 @@ class Viewer:
             return
         lines = self._hud_lines()
         ctx = self.renderer.ctx
-        picture = self._upload("picture", self._picture)
         overlay = self._overlay((w, h), lines)
         prog, vao = self.renderer.fullscreen(PRESENT_FRAG)
         ctx.screen.use()
