@@ -1,42 +1,73 @@
-"""Golden images of the generated gearbox at 256x192, one per style and option.
+"""Golden frames at 256x192, one per style and option: the generated gearbox and sleeve
+(tests/golden_helpers.py has the cases, the models and the tolerances).
 
-Compared only on the pinned software rasterizer (Mesa llvmpipe) with explicit tolerances:
-the mean absolute difference of every channel below ``MEAN_TOLERANCE`` (0-255 scale) and fewer
-than ``PIXEL_FRACTION`` of the pixels differing by more than ``PIXEL_TOLERANCE`` in any channel.
+Compared only on the pinned software rasterizer (Mesa llvmpipe) with explicit tolerances: the
+mean absolute difference of every channel below ``MEAN_TOLERANCE`` (0-255 scale) and fewer than
+``PIXEL_FRACTION`` of the pixels differing by more than ``PIXEL_TOLERANCE`` in any channel.
 Colour is compared premultiplied by alpha, so the colour of invisible pixels does not count.
+Each frame's layer count and the samples of its layers are pinned exactly in
+tests/golden/frames.json.
 
 Regenerate with ``pytest tests/test_golden.py --regen-goldens``, then look at the images. On a
 mismatch the actual image, the golden and an amplified difference are saved in the ``artifacts``
 folder (tests/_artifacts). Property tests beside the goldens check what the images must show
-on any renderer: paper colours, alpha, the grid's period, thicker lines.
+on any renderer: paper colours, alpha, the grid's period, thicker lines, four views on the
+plan sheet, and that the options pinned change the picture beyond the tolerance.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
+from golden_helpers import (
+    CASES,
+    GOLDEN,
+    MODELS,
+    PINNED,
+    SIZE,
+    assert_frame_pinned,
+    assert_like_golden,
+    case,
+    compare,
+    frame_record,
+    golden_path,
+    pinned_frames,
+    skip_unless_pinned,
+    within_tolerance,
+    write_pinned_frames,
+)
 from PIL import Image
 
-from blueprint import examples, render_frame
+from blueprint import render_frame
 from blueprint.compose.style import STYLES, get_style
 
-GOLDEN = Path(__file__).parent / "golden"
-SIZE = (256, 192)
-PINNED = "llvmpipe"
-MEAN_TOLERANCE = 1.0
-PIXEL_TOLERANCE = 32
-PIXEL_FRACTION = 0.005
-
-CASES = {
-    "blueprint": dict(style="blueprint"),
-    "paper": dict(style="paper"),
-    "transparent": dict(style="transparent"),
-    "wireframe": dict(style="wireframe"),
-    "blueprint_grid16": dict(style=get_style("blueprint", 16)),
-    "blueprint_line2": dict(style="blueprint", line_width=2.0),
+# Where depth masking stopped today, written here rather than in frames.json so that
+# --regen-goldens cannot move it: (layers, share of the highlighted parts uncovered).
+REVEALED = {
+    "paper_reveal90": (5, 0.9522422092728655),
+    "paper_reveal50": (3, 0.800101342791994),
+    "sleeve_reveal100": (5, 1.0),
 }
+
+# (case, the case without its option): the option must change the picture beyond the
+# tolerance, or its golden could not tell the option was lost
+OPTION_CHANGES = [
+    ("blueprint_ss1_all_layers", "blueprint"),
+    ("blueprint_layers10_line2_5", "blueprint_line2"),
+    ("sleeve_crease50_all_layers", "sleeve_paper_all_layers"),
+    ("blueprint_highlight", "blueprint"),
+    ("paper_highlight", "paper"),
+    ("paper_reveal90", "paper_highlight"),
+    ("paper_reveal50", "paper_reveal90"),
+    ("paper_shade", "paper"),
+    ("paper_shade50", "paper_shade"),
+    ("paper_shade_highlight", "paper_shade"),
+    ("paper_shade_highlight", "paper_highlight"),
+    ("paper_id_silhouettes", "paper"),
+    ("blueprint_glyphs", "blueprint"),
+    ("blueprint_glyphs_highlight", "blueprint_glyphs"),
+    ("blueprint_glyphs_highlight", "blueprint_highlight"),
+]
 
 
 def rgba8(color) -> np.ndarray:
@@ -44,62 +75,59 @@ def rgba8(color) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def images(renderer) -> dict[str, np.ndarray]:
-    """Every case rendered once: (H, W, 4) uint8."""
-    model = examples.gearbox()
+def frames(renderer, request) -> dict:
+    """Every case rendered once; with --regen-goldens (on the pinned rasterizer) also written
+    as the goldens and frames.json."""
+    models = {name: build() for name, build in MODELS.items()}
     out = {}
-    for name, options in CASES.items():
-        frame = render_frame(model, size=SIZE, renderer=renderer, **options)
+    for name in CASES:
+        model, options = case(name)
+        frame = render_frame(models[model], size=SIZE, renderer=renderer, **options)
         assert frame.layers >= 2, f"{name}: hidden layers missing"
-        out[name] = frame.image
-    renderer.forget(model)
+        out[name] = frame
+    for model in models.values():
+        renderer.forget(model)
+    if request.config.getoption("--regen-goldens") and renderer.info["renderer"].startswith(PINNED):
+        GOLDEN.mkdir(exist_ok=True)
+        for name, frame in out.items():
+            Image.fromarray(frame.image).save(golden_path(name))
+        write_pinned_frames({name: frame_record(frame) for name, frame in out.items()})
     return out
 
 
-def _comparable(image: np.ndarray) -> np.ndarray:
-    f = image.astype(np.float64)
-    f[..., :3] *= f[..., 3:4] / 255.0
-    return f
-
-
-def compare(actual: np.ndarray, expected: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-    """(mean absolute difference per channel, fraction of differing pixels, |difference|)."""
-    diff = np.abs(_comparable(actual) - _comparable(expected))
-    return diff.mean(axis=(0, 1)), float((diff.max(axis=-1) > PIXEL_TOLERANCE).mean()), diff
-
-
-def _save_failure(folder: Path, name: str, actual: np.ndarray, expected: np.ndarray, diff) -> list[Path]:
-    paths = [folder / f"{name}.actual.png", folder / f"{name}.golden.png", folder / f"{name}.diff.png"]
-    Image.fromarray(actual).save(paths[0])
-    Image.fromarray(expected).save(paths[1])
-    amplified = np.clip(diff.max(axis=-1) * 4, 0, 255).astype(np.uint8)
-    visible = np.stack([amplified, amplified // 4, amplified // 4, np.full_like(amplified, 255)], axis=-1)
-    Image.fromarray(visible).save(paths[2])
-    return paths
+@pytest.fixture(scope="module")
+def images(frames) -> dict[str, np.ndarray]:
+    """(H, W, 4) uint8 of every case."""
+    return {name: frame.image for name, frame in frames.items()}
 
 
 @pytest.mark.parametrize("name", list(CASES))
-def test_golden_image(name, images, renderer, request, artifacts):
-    if not renderer.info["renderer"].startswith(PINNED):
-        pytest.skip(f"goldens are made on {PINNED}, this is {renderer.info['renderer']}")
-    actual = images[name]
-    path = GOLDEN / f"{name}.png"
-    if request.config.getoption("--regen-goldens"):
-        GOLDEN.mkdir(exist_ok=True)
-        Image.fromarray(actual).save(path)
-    if not path.exists():
-        pytest.fail(f"no golden image {path}: run pytest --regen-goldens and look at it")
-    with Image.open(path) as picture:
-        expected = np.asarray(picture.convert("RGBA"))
-    assert expected.shape == actual.shape, f"golden is {expected.shape}, rendered {actual.shape}"
-    mean, fraction, diff = compare(actual, expected)
-    if mean.max() >= MEAN_TOLERANCE or fraction >= PIXEL_FRACTION:
-        saved = _save_failure(artifacts, name, actual, expected, diff)
-        pytest.fail(
-            f"{name}: mean abs difference per channel {np.round(mean, 3).tolist()} (limit "
-            f"{MEAN_TOLERANCE}), {fraction:.3%} pixels differ by > {PIXEL_TOLERANCE} (limit "
-            f"{PIXEL_FRACTION:.1%}); see {', '.join(str(p) for p in saved)}"
-        )
+def test_golden_image(name, images, renderer, artifacts):
+    skip_unless_pinned(renderer)
+    assert_like_golden(name, images[name], artifacts)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_golden_layers(name, frames, renderer):
+    skip_unless_pinned(renderer)
+    assert_frame_pinned(name, frames[name])
+
+
+def test_frames_json_has_every_case_and_no_other():
+    assert list(pinned_frames()) == list(CASES)
+
+
+@pytest.mark.parametrize("name", list(REVEALED))
+def test_depth_masking_stops_where_it_did(name, frames, renderer):
+    skip_unless_pinned(renderer)
+    layers, revealed = REVEALED[name]
+    assert frames[name].layers == layers
+    assert frames[name].revealed == pytest.approx(revealed, abs=1e-6)
+
+
+@pytest.mark.parametrize(("name", "without"), OPTION_CHANGES, ids=lambda n: n)
+def test_each_option_changes_the_picture(images, name, without):
+    assert not within_tolerance(images[name], images[without]), compare(images[name], images[without])[:2]
 
 
 def test_compare_exact_values():
@@ -123,10 +151,21 @@ def _corners(image: np.ndarray) -> np.ndarray:
     return np.stack([image[0, 0], image[0, -1], image[-1, 0], image[-1, -1]])
 
 
-@pytest.mark.parametrize("name", ["blueprint", "paper", "wireframe", "blueprint_line2"])
+@pytest.mark.parametrize("name", ["blueprint", "paper", "wireframe", "blueprint_line2", "paper_plan"])
 def test_paper_colour_at_the_corners(images, name):
     paper = rgba8(get_style(CASES[name]["style"]).paper)
     np.testing.assert_array_equal(_corners(images[name]), np.tile(paper, (4, 1)))
+
+
+def test_plan_sheet_has_four_views(images):
+    """Top, iso, front and right view, each inside its quarter of the sheet."""
+    image = images["paper_plan"].astype(int)
+    ink = np.abs(image - image[0, 0]).max(axis=-1) > 8
+    h, w = ink.shape[0] // 2, ink.shape[1] // 2
+    for row in (0, 1):
+        for col in (0, 1):
+            assert ink[row * h : (row + 1) * h, col * w : (col + 1) * w].mean() > 0.02, (row, col)
+    assert not ink[h - 1 : h + 1].any() and not ink[:, w - 1 : w + 1].any()
 
 
 def test_transparent_has_alpha(images):

@@ -1,13 +1,16 @@
 """The executor on the GPU: user pipelines with user shaders, the attribute pass against the
-renderer's peel, the blueprint preset against Renderer.render, target reuse, texel sizes,
-dumps and image inputs."""
+renderer's peel, the blueprint preset and Renderer.render against the golden frames, target
+reuse, texel sizes, dumps and image inputs."""
 
 from __future__ import annotations
 
+import functools
 import textwrap
 
 import numpy as np
 import pytest
+from golden_helpers import MODELS, assert_frame_pinned, assert_like_golden, case, skip_unless_pinned
+from golden_helpers import SIZE as SIZE_GOLDEN
 from PIL import Image
 
 from blueprint import examples
@@ -16,7 +19,6 @@ from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
 from blueprint.pipeline.executor import part_color
 from blueprint.pipeline.run import run_pipeline
 
-MEAN_TOLERANCE = 1.0  # the golden images' tolerance (tests/test_golden.py)
 SIZE = (64, 48)
 
 
@@ -208,29 +210,43 @@ def test_attributes_at_two_scales(tmp_path, ex, gearbox):
 
 
 # -- the blueprint --------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def golden_models(renderer):
+    models = {name: build() for name, build in MODELS.items()}
+    yield models
+    for model in models.values():
+        renderer.forget(model)
+
+
+def render_golden_case(render, golden_models, name):
+    model, options = case(name)
+    return render(golden_models[model], size=SIZE_GOLDEN, **options)
+
+
 @pytest.mark.parametrize(
-    "options",
+    "name",
     [
-        {},
-        {"style": "paper"},
-        {"style": "transparent"},
-        {"style": "wireframe"},
-        {"line_width": 2.0},
-        {"supersample": 1, "max_layers": None},
-        {"crease_angle": 50.0, "depth_threshold": 8.0, "part_edges": False},
+        "blueprint",
+        "paper",
+        "transparent",
+        "wireframe",
+        "blueprint_line2",
+        "blueprint_ss1_all_layers",
+        "blueprint_crease50",
+        "sleeve_crease50_all_layers",
     ],
-    ids=lambda o: ",".join(f"{k}={v}" for k, v in o.items()) or "default",
 )
-def test_blueprint_preset_equals_renderer_render(renderer, gearbox, options):
-    size = (96, 72)
-    expected = renderer.render(gearbox, size=size, **options)
-    actual = render_blueprint(renderer, gearbox, size=size, **options)
-    assert actual.layers == expected.layers and actual.layer_pixels == expected.layer_pixels
-    a, b = (f.image.astype(np.float64) for f in (actual, expected))
-    a[..., :3] *= a[..., 3:] / 255
-    b[..., :3] *= b[..., 3:] / 255
-    assert np.abs(a - b).mean(axis=(0, 1)).max() < MEAN_TOLERANCE
-    assert actual.draws == expected.draws
+@pytest.mark.parametrize("form", ["Renderer.render", "preset"])
+def test_blueprint_matches_its_golden_frame(renderer, golden_models, artifacts, name, form):
+    """Renderer.render and the `blueprint` preset against the frames today's code drew
+    (tests/test_golden.py), not against each other: the same picture, the same layers."""
+    skip_unless_pinned(renderer)
+    if form == "preset":
+        frame = render_golden_case(functools.partial(render_blueprint, renderer), golden_models, name)
+    else:
+        frame = render_golden_case(renderer.render, golden_models, name)
+    assert_frame_pinned(name, frame)
+    assert_like_golden(name, frame.image, artifacts, label=f"{name}.{form}")
 
 
 def test_blueprint_file_run_writes_png_and_dumps(tmp_path, renderer, gearbox):
@@ -250,18 +266,18 @@ def test_blueprint_file_run_writes_png_and_dumps(tmp_path, renderer, gearbox):
     )
 
 
-@pytest.mark.parametrize("options", [{}, {"line_width": 2.5, "max_layers": 10}, {"style": "transparent"}])
-def test_blueprint_compute_form_equals_renderer_render(renderer, gearbox, monkeypatch, options):
+@pytest.mark.parametrize("name", ["blueprint", "blueprint_layers10_line2_5", "transparent"])
+def test_blueprint_compute_form_matches_its_golden_frame(
+    renderer, golden_models, monkeypatch, artifacts, name
+):
     """Where the renderer runs image passes as compute shaders (GL 4.3 GPUs; forced here on
     llvmpipe), the executor keeps the per-layer edges in 8-slice arrays and composes with the
-    renderer's compute shader: the same picture, the same number of passes."""
+    renderer's compute shader: the picture and the layers of the fragment passes' golden."""
     if renderer.ctx.version_code < 430:
         pytest.skip("compute shaders need OpenGL 4.3")
+    skip_unless_pinned(renderer)
     monkeypatch.setattr(renderer, "use_compute", True)
-    size = (80, 60)
-    expected = renderer.render(gearbox, size=size, **options)
-    actual = render_blueprint(renderer, gearbox, size=size, **options)
+    frame = render_golden_case(functools.partial(render_blueprint, renderer), golden_models, name)
     assert executor_for(renderer)._arrays is not None
-    assert actual.layers == expected.layers and actual.draws == expected.draws
-    diff = np.abs(actual.image.astype(int) - expected.image.astype(int))
-    assert diff.mean(axis=(0, 1)).max() < MEAN_TOLERANCE
+    assert_frame_pinned(name, frame)
+    assert_like_golden(name, frame.image, artifacts, label=f"{name}.compute")
