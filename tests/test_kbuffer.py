@@ -6,15 +6,14 @@ each other, normals included, and the drawings they make."""
 
 from __future__ import annotations
 
-import importlib
-
 import numpy as np
 import pytest
 from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
 
 import blueprint
 from blueprint import examples
-from blueprint.render.renderer import KBUFFER_MAX
+from blueprint.render import capture
+from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
 
 
 @pytest.fixture
@@ -135,17 +134,18 @@ def test_used_only_where_it_pays(renderer, monkeypatch):
     its targets would take more than KBUFFER_MAX_BYTES."""
     if not renderer.kbuffer:
         pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
-    from blueprint.render.renderer import _KBufferPeel
-
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
     camera = renderer.camera_for(model, (64, 64))
     side = int(np.sqrt(mesh.triangles / renderer.kbuffer_density)) + 2
-    small = renderer.pool.depth("test.small", (64, 64)), renderer.pool.depth("test.small1", (64, 64))
-    large = renderer.pool.depth("test.large", (side, side)), renderer.pool.depth("test.large1", (side, side))
-    assert isinstance(renderer._setup_geometry(camera, mesh, small, batch=5), _KBufferPeel)
-    assert not isinstance(renderer._setup_geometry(camera, mesh, small, batch=1), _KBufferPeel)
-    assert not isinstance(renderer._setup_geometry(camera, mesh, large, batch=5), _KBufferPeel)
-    module = importlib.import_module("blueprint.render.renderer")  # blueprint.render is a function too
-    monkeypatch.setattr(module, "KBUFFER_MAX_BYTES", 16 * 5 * 64 * 64 - 1)
-    assert not isinstance(renderer._setup_geometry(camera, mesh, small, batch=5), _KBufferPeel)
+    small = gbuffer(renderer.pool, (64, 64), "test.small")
+    large = gbuffer(renderer.pool, (side, side), "test.large")
+
+    def kbuffered(gb, batch: int) -> bool:
+        return Capture(renderer, mesh, camera, gb, batch=batch).kbuffer is not None
+
+    assert kbuffered(small, 5)
+    assert not kbuffered(small, 1)
+    assert not kbuffered(large, 5)
+    monkeypatch.setattr(capture, "KBUFFER_MAX_BYTES", 16 * 5 * 64 * 64 - 1)
+    assert not kbuffered(small, 5)

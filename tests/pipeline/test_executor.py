@@ -281,3 +281,67 @@ def test_blueprint_compute_form_matches_its_golden_frame(
     assert executor_for(renderer)._arrays is not None
     assert_frame_pinned(name, frame)
     assert_like_golden(name, frame.image, artifacts, label=f"{name}.compute")
+
+
+# -- attributes of chosen parts, accumulating passes, stop rules ------------------------------------
+PARTS_PIPELINE = """
+[pipeline]
+output = "index"
+layers = 0
+[attributes]
+depth = {}
+shaft = { of = "depth", parts = "shaft" }
+[passes.index]
+op = "shade_layer"
+inputs = { surface = "shaft", depth = "depth" }
+per_layer = true
+accumulate = true
+"""
+
+
+def test_shade_layer_accumulates_the_layer_each_surface_lies_in(tmp_path, renderer, ex, gearbox):
+    """An accumulating pass over every layer against the peel read back: where the shaft's own
+    front surface (drawn alone) is layer k of the whole model, the pass holds 1 + k."""
+    spec = load_pipeline(str(write(tmp_path, "parts.toml", PARTS_PIPELINE)))
+    shaft = np.array([n == "shaft" for n in gearbox.part_names])
+    result = ex.run(spec, gearbox, size=SIZE, parts={"shaft": shaft}, dumps=("shaft",))
+    index = np.round(result.output[..., 0].astype(np.float64)).astype(int)
+    surface = result.dumps["shaft"][..., 0]
+    layers = renderer.peel(gearbox, result.camera, size=SIZE)
+    assert result.layers == len(layers.depth)
+    cam = result.camera
+
+    def eye(z):
+        ndc = 2.0 * z.astype(np.float64) - 1.0
+        return 2.0 * cam.near * cam.far / (cam.far + cam.near - ndc * (cam.far - cam.near))
+
+    eps = 1e-5 * (cam.far - cam.near)
+    near = np.abs(eye(layers.depth) - eye(surface)[None]) <= eps
+    near &= (layers.depth < 1.0) & (surface < 1.0)[None]
+    expected = np.where(near.any(axis=0), near.argmax(axis=0) + 1, 0)
+    # the layer is the last one within the tolerance (each layer overwrites): ties are few
+    last = np.where(near.any(axis=0), len(near) - near[::-1].argmax(axis=0), 0)
+    assert ((index == expected) | (index == last)).all()
+    assert (index > 0).sum() == (surface < 1.0).sum() > 50
+    assert len(set(np.unique(index)) - {0}) >= 3  # hidden behind the cover, the blocks and bearings
+
+
+def test_parts_must_be_given(tmp_path, ex, gearbox):
+    spec = load_pipeline(str(write(tmp_path, "parts.toml", PARTS_PIPELINE)))
+    with pytest.raises(InputError, match=r"attributes\.shaft: give the parts 'shaft'"):
+        ex.run(spec, gearbox, size=SIZE)
+
+
+def test_reveal_stop_rule_of_a_pipeline(tmp_path, renderer, ex, gearbox):
+    """A declared reveal rule peels as Renderer.render's depth masking does."""
+    text = PARTS_PIPELINE.replace("layers = 0", "layers = 0\n") + (
+        '[stop.reveal]\ndepth = "shaft"\nfraction = 0.9\n'
+    )
+    spec = load_pipeline(str(write(tmp_path, "reveal.toml", text)))
+    shaft = np.array([n == "shaft" for n in gearbox.part_names])
+    result = ex.run(spec, gearbox, size=SIZE, parts={"shaft": shaft})
+    frame = renderer.render(gearbox, result.camera, size=SIZE, supersample=1, highlight=shaft, reveal=0.9)
+    assert result.layers == frame.layers and result.revealed == pytest.approx(frame.revealed)
+    assert (
+        0.9 <= result.revealed and result.layers < renderer.render(gearbox, size=SIZE, max_layers=None).layers
+    )

@@ -75,7 +75,9 @@ def test_every_op_has_a_shader_file_and_is_tested():
         "depth_edges",
         "id_edges",
         "composite",
+        "shade",
     }
+    tested.add("shade_layer")  # accumulates over a peel: tests/pipeline/test_executor.py
     assert set(OPS) == tested
 
 
@@ -384,6 +386,26 @@ def test_lambert(ex):
         formats={"depth": "depth"},
     )
     assert (out[:2, :, :3] == 128).all() and (out[:2, :, 3] == 255).all()
+
+
+@pytest.mark.parametrize("style", ["blueprint", "paper"])
+def test_shade_in_the_styles_colour(ex, style):
+    """Headlight Lambert in the style's shade colour (0.35 ambient), premultiplied by the
+    opacity; nothing where there is no surface."""
+    n, normal, depth, _ = _shading_inputs()
+    shade = np.array(STYLES[style].shade[:3])
+    light = 0.35 + 0.65 * np.clip(n[..., 2], 0.0, 1.0)
+    ref = np.dstack([shade * light[..., None] * 0.6, np.full((H, W), 0.6)])
+    ref[:2] = 0.0
+    out = ex.run_op(
+        "shade",
+        {"depth": depth, "normal": normal},
+        {"opacity": 0.6},
+        formats={"depth": "depth"},
+        output="rgba32f",
+        style=style,
+    )
+    np.testing.assert_allclose(out, ref, atol=1e-5)
 
 
 def test_toon(ex):

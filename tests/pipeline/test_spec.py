@@ -188,6 +188,48 @@ CASES = [
         ["letters, digits and _"],
     ),
     (
+        "part attribute without parts",
+        BASE + '[attributes.mine]\nof = "depth"\n',
+        ["attributes.mine", "gives both of (what) and parts (which)"],
+    ),
+    (
+        "part attribute of what",
+        BASE + '[attributes.mine]\nof = "uv"\nparts = "p"\n',
+        ["attributes.mine.of", "one of depth, normal, ids"],
+    ),
+    ("when type", BASE + 'when = "on"\n', ["passes.e.when", "true, false or a number, got 'on'"]),
+    (
+        "input is off",
+        BASE.replace('output = "e"', 'output = "f"')
+        + "when = false\n"
+        + '[passes.f]\nop = "invert"\ninputs = { source = "e" }\n',
+        ["passes.f.inputs.source: 'e' is off here"],
+    ),
+    ("output is off", BASE + "when = 0\n", ["pipeline.output: 'e' is off here"]),
+    (
+        "accumulate once",
+        BASE + "accumulate = true\n",
+        ["passes.e.accumulate", "only a per-layer pass accumulates"],
+    ),
+    (
+        "stop rule name",
+        BASE + '[stop.halfway]\ndepth = "normal"\nfraction = 0.5\n',
+        ["stop.halfway: unknown stop rule", "choose reveal"],
+    ),
+    (
+        "reveal of a plain attribute",
+        BASE.replace("normal = {}", "normal = {}\ndepth = {}")
+        + '[stop.reveal]\ndepth = "depth"\nfraction = 0.5\n',
+        ["stop.reveal.depth: 'depth' is not a depth attribute of chosen parts"],
+    ),
+    (
+        "reveal fraction",
+        BASE
+        + '[attributes.mine]\nof = "depth"\nparts = "p"\n'
+        + '[stop.reveal]\ndepth = "mine"\nfraction = 0\n',
+        ["stop.reveal.fraction: must be above 0"],
+    ),
+    (
         "image file kind",
         BASE + '[images.photo]\nfile = "photo.txt"\n',
         ["images.photo.file: unknown kind of file", ".png", ".mp4"],
@@ -331,6 +373,34 @@ def test_blueprint_plan_is_per_layer_edges_then_composite():
     pl = plan(load_pipeline("blueprint").bind({"line_width": 2.0}))
     assert pl.per_layer == ["edges", "lines"] and pl.stacked == {"lines"}
     assert pl.bound.passes["lines"].uniforms["u_radius"] == 1.0
+
+
+def test_blueprint_highlight_shade_and_reveal_are_passes_of_the_preset():
+    """Off by default: no attribute of chosen parts is read and no stop rule peels."""
+    pl = plan(load_pipeline("blueprint").bind())
+    assert pl.parts == [] and pl.accumulated == [] and pl.bound.stops == ()
+    bound = load_pipeline("blueprint").bind({"highlight": True, "reveal": 0.9, "shade": True})
+    pl = plan(bound)
+    assert pl.parts == ["highlight_depth", "highlight_ids", "highlight_normal", "shade_depth", "shade_normal"]
+    assert [(s.rule, s.depth, s.fraction) for s in bound.stops] == [("reveal", "highlight_depth", 0.9)]
+    assert pl.per_layer == ["edges", "shade_layers"] and pl.accumulated == ["shade_layers"]
+    assert pl.slots["shade_layers"].space == "A" and "shade_layers" not in pl.stacked
+    assert set(pl.iteration0) >= {"highlight_edges", "shading"} and pl.after == ["drawing"]
+    drawing = bound.passes["drawing"].inputs
+    assert drawing == {
+        "layers": "lines",
+        "highlight": "highlight_lines",
+        "shade_color": "shading",
+        "shade_index": "shade_layers",
+    }
+    # the highlight's lines are the style's highlight width times the line width
+    assert bound.passes["highlight_lines"].uniforms["u_radius"] == (1.0 * 2.0 - 1) * 2 / 2
+    # the optional inputs of passes that are off are left unwired
+    assert load_pipeline("blueprint").bind({"shade": True}).passes["drawing"].inputs.keys() == {
+        "layers",
+        "shade_color",
+        "shade_index",
+    }
 
 
 def test_targets_are_reused_once_read(tmp_path):

@@ -41,7 +41,16 @@ class Param:
 
 @dataclass(frozen=True)
 class Op:
-    """An image-space pass over G-buffer attributes or earlier results."""
+    """An image-space pass over G-buffer attributes or earlier results.
+
+    ``kind`` says how the executor runs it: ``single`` (one full-screen pass), ``separable``
+    (a pass along x into a float scratch target, then along y) or ``composite`` (depth-sprite
+    composition of a stack of layers over the style's paper, eight layers a pass). ``stacks``
+    are inputs that take every depth layer of a per-layer pass; ``resample`` inputs may be an
+    integer multiple of the output's size (the others must match it); ``optional`` inputs may
+    be left unwired. ``derive`` turns checked parameter values into further uniforms;
+    ``identity`` says when a pass does nothing, so the executor can skip it.
+    """
 
     name: str
     shader: str
@@ -53,6 +62,12 @@ class Op:
     # boolean parameters compiled in as defines (NAME in capitals) instead of set as uniforms:
     # a software rasteriser runs a branch a uniform turns off on every pixel all the same
     switches: tuple[str, ...] = ()
+    kind: str = "single"
+    stacks: tuple[str, ...] = ()
+    resample: tuple[str, ...] = ()
+    optional: tuple[str, ...] = ()
+    derive: Callable[[dict], dict] | None = None
+    identity: Callable[[dict], bool] | None = None
 
     def defines(self, uniforms: dict[str, float | bool]) -> dict[str, bool]:
         """Compile-time defines of checked uniform values (see ``switches``)."""
@@ -96,6 +111,7 @@ DILATE = Op(
     params=(Param("radius", 1.0, 0.0, 16.0, "disc radius in pixels"),),
     doc="grey-scale dilation by a disc with a soft rim",
     compute="blueprint.ops:glsl/dilate.comp",
+    identity=lambda u: u["u_radius"] <= 0.0,
 )
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}
@@ -127,26 +143,6 @@ class ChoiceParam(Param):
         if value not in self.choices:
             raise InputError(f"{op}.{self.name} must be one of {', '.join(self.choices)}, got {value!r}")
         return self.choices.index(value)
-
-
-@dataclass(frozen=True)
-class PipelineOp(Op):
-    """An operation of the pipeline library.
-
-    ``kind`` says how the executor runs it: ``single`` (one full-screen pass), ``separable``
-    (a pass along x into a float scratch target, then along y) or ``composite`` (depth-sprite
-    composition of a stack of layers over the style's paper, eight layers a pass). ``stacks``
-    are inputs that take every depth layer of a per-layer pass; ``resample`` inputs may be an
-    integer multiple of the output's size (the others must match it). ``derive`` turns checked
-    parameter values into further uniforms; ``identity`` says when a pass does nothing, so the
-    executor can skip it.
-    """
-
-    kind: str = "single"
-    stacks: tuple[str, ...] = ()
-    resample: tuple[str, ...] = ()
-    derive: Callable[[dict], dict] | None = None
-    identity: Callable[[dict], bool] | None = None
 
 
 def _glsl(name: str) -> str:
@@ -182,7 +178,7 @@ _LIGHT_PARAMS = (
     Param("background", 0.0, 0.0, 1.0, "grey where there is no surface (0: transparent)"),
 )
 
-ROBERTS = PipelineOp(
+ROBERTS = Op(
     name="roberts",
     shader=_glsl("roberts"),
     inputs={"source": "float"},
@@ -190,7 +186,7 @@ ROBERTS = PipelineOp(
     params=_EDGE_PARAMS,
     doc="Roberts cross: |f(x,y) - f(x+1,y+1)| + |f(x+1,y) - f(x,y+1)| over the chosen channels",
 )
-SOBEL = PipelineOp(
+SOBEL = Op(
     name="sobel",
     shader=_glsl("sobel"),
     inputs={"source": "float"},
@@ -198,7 +194,7 @@ SOBEL = PipelineOp(
     params=_EDGE_PARAMS,
     doc="Sobel gradient magnitude / 4 (a unit step gives 1) over the chosen channels",
 )
-ERODE = PipelineOp(
+ERODE = Op(
     name="erode",
     shader=_glsl("erode"),
     inputs={"source": "r8"},
@@ -207,7 +203,7 @@ ERODE = PipelineOp(
     doc="grey-scale erosion by a disc with a soft rim (the dual of dilate)",
     identity=lambda v: v["u_radius"] <= 0.0,
 )
-BLUR = PipelineOp(
+BLUR = Op(
     name="blur",
     shader=_glsl("blur"),
     inputs={"source": "float"},
@@ -219,7 +215,7 @@ BLUR = PipelineOp(
     kind="separable",
     derive=_gaussian,
 )
-DOWNSAMPLE = PipelineOp(
+DOWNSAMPLE = Op(
     name="downsample",
     shader=_glsl("downsample"),
     inputs={"source": "float"},
@@ -235,7 +231,7 @@ DOWNSAMPLE = PipelineOp(
     doc="shrink by the integer ratio of input to output scale (supersampling)",
     resample=("source",),
 )
-THRESHOLD = PipelineOp(
+THRESHOLD = Op(
     name="threshold",
     shader=_glsl("threshold"),
     inputs={"source": "float"},
@@ -246,14 +242,14 @@ THRESHOLD = PipelineOp(
     ),
     doc="binary threshold of the colour channels",
 )
-INVERT = PipelineOp(
+INVERT = Op(
     name="invert",
     shader=_glsl("invert"),
     inputs={"source": "float"},
     output="same",
     doc="1 - value in the colour channels (alpha kept)",
 )
-MIX = PipelineOp(
+MIX = Op(
     name="mix",
     shader=_glsl("mix"),
     inputs={"a": "float", "b": "float"},
@@ -269,7 +265,7 @@ MIX = PipelineOp(
     ),
     doc="blend two images of one size (a one-channel input counts as grey)",
 )
-CONTRAST = PipelineOp(
+CONTRAST = Op(
     name="contrast",
     shader=_glsl("contrast"),
     inputs={"source": "float"},
@@ -280,7 +276,7 @@ CONTRAST = PipelineOp(
     ),
     doc="(value - 0.5) * contrast + 0.5 + brightness in the colour channels",
 )
-SCREEN = PipelineOp(
+SCREEN = Op(
     name="screen",
     shader=_glsl("screen"),
     inputs={"source": "float"},
@@ -291,7 +287,7 @@ SCREEN = PipelineOp(
     ),
     doc="halftone screening: 1 where the intensity (luminance, or the only channel) exceeds a dot screen",
 )
-LAMBERT = PipelineOp(
+LAMBERT = Op(
     name="lambert",
     shader=_glsl("lambert"),
     inputs={"normal": "rgba16f", "depth": "depth", "color": "float"},
@@ -300,7 +296,7 @@ LAMBERT = PipelineOp(
     doc="deferred Lambert shading: colour * (ambient + (1 - ambient) max(n.l, 0)), opaque",
     derive=_light,
 )
-TOON = PipelineOp(
+TOON = Op(
     name="toon",
     shader=_glsl("toon"),
     inputs={"normal": "rgba16f", "depth": "depth", "color": "float"},
@@ -309,7 +305,7 @@ TOON = PipelineOp(
     doc="deferred toon shading: the Lambert term quantised to bands levels",
     derive=_light,
 )
-NORMAL_EDGES = PipelineOp(
+NORMAL_EDGES = Op(
     name="normal_edges",
     shader=_glsl("normal_edges"),
     inputs={"normal": "rgba16f", "depth": "depth"},
@@ -318,7 +314,7 @@ NORMAL_EDGES = PipelineOp(
     doc="1 at a covered pixel whose normal turns more than angle from a covered 4-neighbour's",
     derive=lambda v: {"u_cos": math.cos(math.radians(v["u_angle"]))},
 )
-DEPTH_EDGES = PipelineOp(
+DEPTH_EDGES = Op(
     name="depth_edges",
     shader=_glsl("depth_edges"),
     inputs={"depth": "float"},
@@ -330,7 +326,7 @@ DEPTH_EDGES = PipelineOp(
     ),
     doc="1 where the second difference of depth along x or y exceeds threshold (planes: 0; border: 0)",
 )
-ID_EDGES = PipelineOp(
+ID_EDGES = Op(
     name="id_edges",
     shader=_glsl("id_edges"),
     inputs={"ids": "int"},
@@ -338,10 +334,26 @@ ID_EDGES = PipelineOp(
     params=(IntParam("channel", 0, 0, 1, "which channel holds the ID (ids: 0 triangle, 1 part)"),),
     doc="1 where a 4-neighbour has another ID (integer compare: exact)",
 )
-COMPOSITE = PipelineOp(
+SHADE = Op(
+    name="shade",
+    shader=_glsl("shade"),
+    inputs={"depth": "depth", "normal": "rgba16f"},
+    output="rgba8",
+    params=(Param("opacity", 1.0, 0.0, 1.0, "opacity of the shading"),),
+    doc="Lambert shading (headlight and ambient) of a surface in the style's shade colour, premultiplied",
+)
+SHADE_LAYER = Op(
+    name="shade_layer",
+    shader=_glsl("shade_layer"),
+    inputs={"surface": "depth", "depth": "depth"},
+    output="r8",
+    doc="per layer, accumulating: 1 + the layer's index where the surface lies in it "
+    "(where a composite puts shading between layers)",
+)
+COMPOSITE = Op(
     name="composite",
-    shader=_glsl("composite"),
-    inputs={"layers": "r8"},
+    shader="blueprint.compose:glsl/composite.frag",
+    inputs={"layers": "r8", "highlight": "r8", "shade_color": "rgba8", "shade_index": "r8"},
     output="rgba8",
     params=(
         ChoiceParam(
@@ -352,10 +364,12 @@ COMPOSITE = PipelineOp(
         ),
     ),
     doc="depth-sprite composite: the style's paper, then every layer's map back to front in its ink, "
-    "box-filtered down by the ratio of input to output size (premultiplied alpha)",
+    "box-filtered down by the ratio of input to output size (premultiplied alpha); optionally "
+    "shading between the layers (shade_color, shade_index) and a highlight map over everything",
     kind="composite",
     stacks=("layers",),
-    resample=("layers",),
+    resample=("layers", "highlight", "shade_color", "shade_index"),
+    optional=("highlight", "shade_color", "shade_index"),
 )
 
 for _op in (
@@ -374,6 +388,8 @@ for _op in (
     NORMAL_EDGES,
     DEPTH_EDGES,
     ID_EDGES,
+    SHADE,
+    SHADE_LAYER,
     COMPOSITE,
 ):
     OPS[_op.name] = _op
@@ -389,5 +405,4 @@ __all__ = [
     "IntParam",
     "Op",
     "Param",
-    "PipelineOp",
 ]

@@ -1,31 +1,32 @@
 """Runs bound pipelines on a Renderer's context, with targets from its pool.
 
-Per frame: upload image inputs; if any attribute is read, peel the model with the renderer's
-own peel (``_gbuffer``/``_setup_geometry``/``_clear``/``_draw``, its occlusion queries and
-termination rules), one G-buffer per attribute scale, plus this package's attribute pass for
-the attributes the renderer's G-buffer lacks; run the per-layer passes after each layer (and
-the once-passes at layer 0); then the passes that need every layer (composite); read back the
-output and any dumps.
+Per frame: upload image inputs; capture the front surface of the chosen parts that attributes
+ask for; if any other attribute is read, peel the model in the one peel loop
+(``blueprint.render.capture.peel``, with its stop rules), one G-buffer per attribute scale,
+plus this package's attribute pass for the attributes the renderer's G-buffer lacks; run the
+per-layer passes after each layer (and the once-passes at layer 0); then the passes that need
+every layer (the compositor); read back the output and any dumps.
 
 Every pass is a full-screen triangle into its target. Inputs are bound to texture units from
-``BASE_UNIT`` up (the peel keeps its own textures on units 0-2 across the loop). Uniforms the
-executor sets whenever a program declares them:
+``units.INPUTS`` up (the peel keeps its depth textures on its own units across the loop).
+Uniforms the executor sets whenever a program declares them:
 
 ``u_texel``, ``u_size``                     1 / size and size of the target, in pixels
 ``u_<input>_texel``, ``u_<input>_size``      the same for each input
 ``u_<input>_components``                     channels of the input's format
 ``u_<input>_factor``                         input size / target size (resampling inputs)
 ``u_depth_range``, ``u_pixel_angle``         camera depth range, pixel footprint (see depth.glsl)
+``u_peel_eps``                               the peel's tolerance in eye depth
 ``u_normal_cos``                             crease thresholds from the crease angle (edges)
 ``u_view``, ``u_projection``                 camera matrices
 ``u_layer``, ``u_frame``                     depth layer of a per-layer pass; frame of a video
+``u_shade_ink``                              the style's colour of shaded parts
 
 A uniform is written only when its value changed since the program last got it.
 """
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time
 import weakref
@@ -33,33 +34,34 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from blueprint.compose.compositor import Compositor, Shading
 from blueprint.compose.style import STYLES, Style, get_style
 from blueprint.errors import InputError, ShaderError
+from blueprint.gpu import units
 from blueprint.gpu.shaders import VERSION, _explain, preprocess
 from blueprint.gpu.targets import FORMATS
 from blueprint.pipeline.graph import Plan, plan
 from blueprint.pipeline.spec import Bound, PipelineSpec, user_source
-from blueprint.render.renderer import (
-    CHUNK,
-    CORNERS_UNIT,
-    HARD_MAX_LAYERS,
+from blueprint.render.capture import (
     KBUFFER_MAX,
-    Frame,
-    Renderer,
-    _check_frame_args,
-    _inks,
-    _set_paper,
-    _straight_alpha,
-    check_size,
+    Capture,
+    GBuffer,
+    capture_parts,
+    depth_range,
+    gbuffer,
+    peel,
+    peel_eps,
+    revealed_pixels,
 )
+from blueprint.render.renderer import Renderer, check_frame_args, check_size, straight_alpha
+from blueprint.render.stop import Reveal, StopRule, standard_rules
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
-BASE_UNIT = 9
+BASE_UNIT = units.INPUTS
 FULLSCREEN = "fullscreen.vert"
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
-PAPER_FRAG = "blueprint.compose:glsl/paper.frag"
 EXTRA = ("linear_depth", "position", "uv", "base_color", "triangle", "part", "layer")
 # programs of the pipeline are built with this define, so they are instances of their own and
 # the uniform cache is never fooled by the renderer setting the same program's uniforms
@@ -70,7 +72,6 @@ _UNSET = object()
 SLICE_OPS = {"edges"}
 ARRAY_OPS = {"dilate"}
 SLICES = 8
-COMPOSE_COMP = "blueprint.compose:glsl/compose.comp"
 
 
 @dataclass
@@ -84,6 +85,8 @@ class Result:
         The output is premultiplied colour (composite); ``image`` gives straight alpha.
     dumps : dict
         Name -> array like ``output`` for every ``dumps`` name asked for.
+    revealed : float or None
+        Where a ``reveal`` stop rule peeled: the fraction of its parts uncovered.
     """
 
     output: np.ndarray
@@ -96,6 +99,7 @@ class Result:
     draws: int
     stages: dict[str, float] = field(default_factory=dict)
     dumps: dict[str, np.ndarray] = field(default_factory=dict)
+    revealed: float | None = None
 
     @property
     def image(self) -> np.ndarray:
@@ -104,30 +108,24 @@ class Result:
         if out.dtype != np.uint8:
             raise InputError(f"the output is {self.format}, not an 8-bit image: write it as .npz")
         if self.premultiplied and out.shape[-1] == 4:
-            return _straight_alpha(out)
+            return straight_alpha(out)
         return out
 
 
 class _Group:
-    """The G-buffer of one attribute scale: the renderer's (depth pair, normal, ids) plus the
-    attribute pass's targets."""
+    """The G-buffer of one attribute scale, its geometry passes and queries, plus the attribute
+    pass's targets."""
 
     def __init__(
         self, ex: Executor, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
     ):
         r = ex.r
         self.scale, self.size, self.names = scale, size, names
-        if primary:
-            self.depth, self.normal, self.ids, self.fbos, self.clears = r._gbuffer(size)
-        else:
-            pool, tag = r.pool, f"pipeline.gb{scale:g}"
-            self.depth = (pool.depth(f"{tag}.depth0", size), pool.depth(f"{tag}.depth1", size))
-            self.normal = pool.texture(f"{tag}.normal", size, "rgba16f")
-            self.ids = pool.texture(f"{tag}.ids", size, "rg32i")
-            self.fbos = tuple(pool.framebuffer((self.normal, self.ids), d) for d in self.depth)
-            self.clears = tuple(pool.framebuffer((), d) for d in self.depth)
+        self.gb: GBuffer = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
+        self.queries = r.queries("peel" if primary else f"peel.pipeline.gb{scale:g}")
         self.primary = primary
-        self.attr_clear = r.pool.framebuffer((self.normal, self.ids)) if clear_gb else None
+        self.capture: Capture | None = None
+        self.attr_clear = r.pool.framebuffer((self.gb.normal, self.gb.ids)) if clear_gb else None
         self.extra = [n for n in EXTRA if n in names]
         self.textures = {}
         for name in self.extra:
@@ -136,28 +134,15 @@ class _Group:
         self.extra_fbo = (
             r.pool.framebuffer(tuple(self.textures[n] for n in self.extra)) if self.extra else None
         )
-        self.queries: list = []
-
-    def query(self, ex: Executor, layer: int):
-        if self.primary:
-            return ex.r._query(layer)
-        while len(self.queries) <= layer:
-            self.queries.append(ex.ctx.query(samples=True))
-        return self.queries[layer]
 
     def texture(self, name: str, layer: int):
         if name == "depth":
-            return self.depth[layer % 2]
+            return self.gb.layer_depth(layer)
         if name == "normal":
-            return self.normal
+            return self.gb.normal
         if name == "ids":
-            return self.ids
+            return self.gb.ids
         return self.textures[name]
-
-    def release(self) -> None:
-        for q in self.queries:
-            q.release()
-        self.queries.clear()
 
 
 class Executor:
@@ -172,9 +157,10 @@ class Executor:
         self._user: dict[tuple, object] = {}
         self._images: dict[str, tuple[tuple, object]] = {}
         self._plans: dict[tuple, Plan] = {}
-        self._groups: list[_Group] = []
+        self._parts: dict[str, object] = {}
         self._frame = 0
         self.draws = 0
+        self.compositor = Compositor(renderer)
 
     def release(self) -> None:
         """Programs and queries of user shaders (pool targets belong to the renderer)."""
@@ -182,8 +168,6 @@ class Executor:
             prog.release()
         for vao in self._vaos.values():
             vao.release()
-        for group in self._groups:
-            group.release()
         self._user.clear()
         self._vaos.clear()
         self._images.clear()
@@ -263,6 +247,7 @@ class Executor:
         max_layers=_UNSET,
         min_fraction: float | None = None,
         crease_angle: float | None = None,
+        parts: dict[str, np.ndarray] | None = None,
         dumps: tuple[str, ...] = (),
         profile: bool = False,
         frame: int | None = None,
@@ -285,6 +270,9 @@ class Executor:
             Paper and inks of every composite pass (default: the pass's ``style`` parameter).
         max_layers, min_fraction, crease_angle
             Override the file's peeling settings (``max_layers=None``: every layer).
+        parts : dict, optional
+            Sets of parts by name, (P,) bool each, for the attributes of chosen parts
+            (``{ of = "depth", parts = "NAME" }``) that the pipeline reads.
         dumps : names whose targets are read back into ``Result.dumps``.
         """
         t0 = clock = time.perf_counter()
@@ -332,7 +320,14 @@ class Executor:
             max_layers = 1
         min_fraction = bound.min_fraction if min_fraction is None else min_fraction
         crease = bound.crease_angle if crease_angle is None else crease_angle
-        _check_frame_args(max_layers, min_fraction, crease, 1.0)
+        check_frame_args(max_layers, min_fraction, crease, 1.0)
+        parts = dict(parts or {})
+        for name in pl.parts:
+            wanted = bound.attributes[name].parts
+            if parts.get(wanted) is None:
+                raise InputError(
+                    f"{bound.source}: attributes.{name}: give the parts {wanted!r} (run it with parts)"
+                )
         if pl.peel:
             if model is None:
                 raise InputError(
@@ -343,6 +338,7 @@ class Executor:
         self.draws = 0
         self._frame = self._frame + 1 if frame is None else frame
         self._style = None if style is None else get_style(style)
+        self._shade_ink = (self._style or _named_style(bound)).shade
         self._camera = camera
         self._crease = crease
         self._mesh = None
@@ -350,17 +346,25 @@ class Executor:
         self._pl = pl
         self._stacks: dict[str, list] = {}
         self._arrays = self._array_plan(pl)
-        self._attr_dumps: dict[str, list] = {n: [] for n in pl.readback if n in bound.attributes}
+        self._attr_dumps: dict[str, list] = {
+            n: [] for n in pl.readback if n in bound.attributes and bound.attributes[n].parts is None
+        }
         for name in pl.images:
             self._upload(bound, name, images.get(name), size_of(bound.images[name].scale))
         stage("upload")
 
         ctx.enable_only(ctx.NOTHING)
         counts: list[int] = []
+        revealed = None
         if pl.peel:
             mesh = self._mesh = self.r.mesh(model, crease)
-            counts = self._peel(pl, mesh, camera, max_layers, size_of)
-            layers = self.r._layer_count(counts, min_fraction)
+            self._capture_parts(pl, mesh, camera, parts, size_of)
+            rules = standard_rules(max_layers, min_fraction)
+            reveal = self._reveal_rule(pl, camera)
+            if reveal is not None:
+                rules.append(reveal)
+            counts, layers = self._peel(pl, mesh, camera, max_layers, size_of, rules)
+            revealed = None if reveal is None else reveal.shown
         else:
             self._ensure_stacks(1)
             for name in pl.iteration0:
@@ -386,7 +390,7 @@ class Executor:
         result_dumps = {d: dumps_out[pl.resolve(d)] for d in dumps}
         ms = (time.perf_counter() - t0) * 1e3
         return Result(
-            output, fmt, premultiplied, layers, counts, camera, ms, self.draws, stages, result_dumps
+            output, fmt, premultiplied, layers, counts, camera, ms, self.draws, stages, result_dumps, revealed
         )
 
     def _output_size(self, pl: Plan, size, images) -> tuple[int, int]:
@@ -452,11 +456,62 @@ class Executor:
         self._images[name] = (key, tex)
 
     # -- the peel ------------------------------------------------------------------------------
-    def _peel(self, pl: Plan, mesh, camera: Camera, max_layers, size_of) -> list[int]:
+    def _capture_parts(self, pl: Plan, mesh, camera: Camera, parts: dict, size_of) -> None:
+        """The front surface of every set of chosen parts an attribute reads, once a frame,
+        before the peel."""
+        bound = pl.bound
+        self._parts = {}
+        held: dict[tuple[str, float], GBuffer] = {}
+        for name in pl.parts:
+            spec = bound.attributes[name]
+            key = (spec.parts, spec.scale)
+            if key not in held:
+                held[key] = capture_parts(
+                    self.r,
+                    mesh,
+                    camera,
+                    size_of(spec.scale),
+                    parts[spec.parts],
+                    f"parts.{spec.parts}.{spec.scale:g}",
+                    spec.parts,
+                )
+                self.draws += 1
+            gb = held[key]
+            self._parts[name] = {"depth": gb.depth[0], "normal": gb.normal, "ids": gb.ids}[spec.of]
+
+    def _reveal_rule(self, pl: Plan, camera: Camera) -> StopRule | None:
+        """Depth masking, where the pipeline declares it: counts the chosen parts' pixels now,
+        and after every layer those the layers peeled so far uncovered."""
+        (stop,) = [s for s in pl.bound.stops if s.rule == "reveal"] or [None]
+        if stop is None:
+            return None
+        mask = self._parts[stop.depth]
+        primary_scale = pl.bound.attributes["depth"].scale if "depth" in pl.bound.attributes else None
+        if primary_scale is not None and abs(pl.bound.attributes[stop.depth].scale - primary_scale) > 1e-9:
+            raise InputError(
+                f"{pl.bound.source}: stop.reveal.depth: {stop.depth!r} must be at the scale of depth"
+            )
+        wanted = revealed_pixels(self.r, camera, mask)
+        self.draws += 1
+
+        def revealed(layer: int) -> int:
+            self.draws += 1
+            return revealed_pixels(self.r, camera, mask, self._groups[0].gb.layer_depth(layer))
+
+        return Reveal(stop.fraction, wanted, revealed)
+
+    def _peel(self, pl: Plan, mesh, camera: Camera, max_layers, size_of, rules) -> tuple[list[int], int]:
         r, ctx, bound = self.r, self.ctx, pl.bound
         by_scale: dict[float, list[str]] = {}
         for name in pl.attributes:
-            by_scale.setdefault(bound.attributes[name].scale, []).append(name)
+            if bound.attributes[name].parts is None:
+                by_scale.setdefault(bound.attributes[name].scale, []).append(name)
+        if not by_scale:  # attributes of chosen parts alone: nothing to peel
+            self._groups = []
+            self._ensure_stacks(1)
+            for name in pl.iteration0:
+                self._run_pass(name, 0, 1)
+            return [], 1
         primary_scale = bound.attributes["depth"].scale if "depth" in pl.attributes else next(iter(by_scale))
         # normal and ids are left as they were where a layer has no surface; clear them unless
         # every reader looks at depth first (the edges operation)
@@ -473,44 +528,34 @@ class Executor:
         # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
         # the raw ID target) need them
         face_ids = any(g.extra for g in groups) or clear_gb or self._id_silhouettes(pl)
-        geo = r._setup_geometry(
-            camera, mesh, groups[0].depth, face_ids=face_ids, batch=max_layers or KBUFFER_MAX
-        )
-        extras = None
-        if any(g.extra for g in groups):
-            extras = self._extras_programs(groups, camera, mesh)
-        limit = max_layers if max_layers is not None else HARD_MAX_LAYERS
-        peeled = 0
-        primary = groups[0]
-        while peeled < limit:
-            end = min(limit, peeled + (max_layers or CHUNK))
-            self._ensure_stacks(end)
-            for layer in range(peeled, end):
-                for g in groups:
-                    if len(groups) > 1:
-                        g.depth[0].use(0)
-                        g.depth[1].use(1)
-                    r._clear(g.clears, layer)
-                    if g.attr_clear is not None:
-                        g.attr_clear.clear()
-                    guard = g.query(self, layer - 1).crender if layer else contextlib.nullcontext()
-                    with guard:
-                        r._draw(mesh, geo, g.fbos, layer, g.query(self, layer))
-                    self.draws += 3
-                    if g.extra:
-                        self._extras(g, layer, extras, mesh)
-                for name, held in self._attr_dumps.items():
-                    held.append(
-                        self._read_texture(
-                            self._by_attr[name].texture(name, layer), bound.attributes[name].format
-                        )
+        for g in groups:
+            g.capture = Capture(r, mesh, camera, g.gb, face_ids=face_ids, batch=max_layers or KBUFFER_MAX)
+        extras = self._extras_programs(groups, camera, mesh) if any(g.extra for g in groups) else None
+        for name in pl.accumulated:
+            self.r.pool.framebuffer((self._target(name, 0),)).clear()
+
+        def draw(layer: int, query, guard) -> None:
+            self._ensure_stacks(layer + 1)
+            for g in groups:
+                if g.attr_clear is not None:
+                    g.attr_clear.clear()
+                if g.primary:
+                    g.capture.draw(layer, query, guard)
+                else:
+                    g.capture.draw(layer, g.queries[layer], g.queries[layer - 1] if layer else None)
+                self.draws += 3
+                if g.extra:
+                    self._extras(g, layer, extras, mesh)
+            for name, held in self._attr_dumps.items():
+                held.append(
+                    self._read_texture(
+                        self._by_attr[name].texture(name, layer), bound.attributes[name].format
                     )
-                for name in pl.iteration0 if layer == 0 else pl.per_layer:
-                    self._run_pass(name, layer, end)
-            peeled = end
-            if max_layers is not None or primary.query(self, peeled - 1).samples == 0:
-                break
-        return [primary.query(self, k).samples for k in range(peeled)]
+                )
+            for name in pl.iteration0 if layer == 0 else pl.per_layer:
+                self._run_pass(name, layer, layer + 1)
+
+        return peel(draw, groups[0].queries, rules)
 
     def _extras_programs(self, groups, camera: Camera, mesh):
         progs = {}
@@ -534,8 +579,8 @@ class Executor:
         draw, clear = progs[g.scale]
         g.extra_fbo.use()
         self._vao(clear).render(vertices=3)
-        g.depth[layer % 2].use(BASE_UNIT)
-        g.ids.use(BASE_UNIT + 1)
+        g.gb.layer_depth(layer).use(BASE_UNIT)
+        g.gb.ids.use(BASE_UNIT + 1)
         self._set(draw, "u_layer", layer)
         mesh.vao(draw).render()
         self.draws += 2
@@ -559,6 +604,8 @@ class Executor:
     def _value(self, name: str, layer: int):
         """The texture holding ``name`` for a pass at ``layer``."""
         pl, bound = self._pl, self._pl.bound
+        if name in self._parts:
+            return self._parts[name]
         if name in bound.attributes:
             return self._by_attr[name].texture(name, layer)
         if name in bound.images:
@@ -597,12 +644,15 @@ class Executor:
         self._set(prog, "u_frame", self._frame)
         camera = self._camera
         if camera is not None:
-            self._set(prog, "u_depth_range", (camera.near, camera.far, 1.0 if camera.ortho else 0.0))
+            self._set(prog, "u_depth_range", depth_range(camera))
+            self._set(prog, "u_peel_eps", peel_eps(camera))
             self._set(prog, "u_pixel_angle", camera.pixel_angle(h))
             half = math.radians(self._crease)
             self._set(prog, "u_normal_cos", (math.cos(0.5 * half), math.cos(0.8 * half)))
             if self._has(prog, "u_corners") and self._mesh is not None:
-                self._mesh.bind_corners(prog, CORNERS_UNIT)
+                self._mesh.bind_corners(prog, units.CORNERS)
+        if self._has(prog, "u_shade_ink"):
+            self._set(prog, "u_shade_ink", tuple(self._shade_ink))
             if self._has(prog, "u_view"):
                 self._set(prog, "u_view", camera.view_matrix().T.astype("f4").tobytes())
                 self._set(prog, "u_projection", camera.projection_matrix().T.astype("f4").tobytes())
@@ -625,28 +675,18 @@ class Executor:
             if name in self._arrays["slice"]:
                 self._run_slice(name, p, layer)
                 return
-            if p.kind == "composite" and pl.resolve(p.inputs[p.stacks[0]]) in self._arrays["arrays"]:
-                self._composite_compute(
-                    p, self._target(name, layer), pl.resolve(p.inputs[p.stacks[0]]), layers
-                )
-                return
+        if p.kind == "composite":
+            self._composite(p, self._target(name, layer), layers)
+            return
         target = self._target(name, layer)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
         if p.user is not None:
             prog = self._user_program(p.user)
-        elif p.kind == "composite":
-            # the box filter's size as a constant: its loops unroll
-            ((key, source),) = inputs.items()
-            factor = max(1, self._stacks[source][0].size[0] // target.size[0])
-            prog = self._program(p.op.shader, defines={f"{key.upper()}_FACTOR": factor})
         else:
             prog = self._program(p.op.shader, defines=self._defines(p))
         self._frame_uniforms(prog, target, layer)
         for uniform, value in p.uniforms.items():
             self._set(prog, uniform, value)
-        if p.kind == "composite":
-            self._composite(p, prog, target, inputs, layers)
-            return
         unit = BASE_UNIT
         for key, source in inputs.items():
             self._bind_input(prog, key, self._value(source, layer), unit, target)
@@ -679,6 +719,8 @@ class Executor:
         slices, batch = [], []
         for name in pl.per_layer:
             p = b.passes[name]
+            if p.accumulate:
+                continue  # a fragment pass into its own target, in either form
             sources = [pl.resolve(t) for t in p.inputs.values()]
             if p.user is not None or p.format != "r8" or p.op.compute is None:
                 return None
@@ -739,73 +781,35 @@ class Executor:
                 self.draws += 1
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
-    def _composite_compute(self, p, target, source: str, layers: int) -> None:
-        ctx = self.ctx
+    def _composite(self, p, target, layers: int) -> None:
+        """The compositor over the pass's stack of layers, with the shading and highlight
+        maps wired to it; in compute form where the layers live in 8-slice arrays."""
+        pl = self._pl
         style = self._style or STYLES[p.op.params[0].choices[p.uniforms["u_style"]]]
-        prog = self.r.compute(COMPOSE_COMP, OWN)
-        arrays = self._stacks[source]
-        _set_paper(prog, style)
-        for name in ("u_paper", "u_grid_color", "u_grid"):
-            self._values.pop((prog.glo, name), None)
-        self._set(prog, "u_supersample", max(1, arrays[0].size[0] // target.size[0]))
-        self._set(prog, "u_threshold", bool(style.threshold))
-        self._set(prog, "u_has_paper", style.paper is not None)
-        self._set(prog, "u_shaded", False)
-        self._set(prog, "u_edges", BASE_UNIT)
-        target.bind_to_image(0, read=True, write=True)
-        inks = style.layer_inks(max(layers, 1))
-        groups = list(range(((max(layers, 1) - 1) // SLICES) * SLICES, -1, -SLICES))
-        for first in groups:
-            count = min(SLICES, layers - first) if layers else 0
-            arrays[first // SLICES].use(BASE_UNIT)
-            self._set(prog, "u_first", first == groups[0])
-            self._set(prog, "u_layers", count)
-            self._set(prog, "u_ink", _inks(inks, first, count))
-            prog.run((target.size[0] + 7) // 8, (target.size[1] + 7) // 8)
-            ctx.memory_barrier(ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
-            self.draws += 1
-        ctx.memory_barrier(
-            ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT
-        )
-
-    def _composite(self, p, prog, target, inputs, layers: int) -> None:
-        ctx = self.ctx
-        style = self._style or STYLES[p.op.params[0].choices[p.uniforms["u_style"]]]
-        ((key, source),) = inputs.items()
-        stack = self._stacks[source]
-        fbo = self.r.pool.framebuffer((target,))
-        fbo.use()
-        ctx.disable(ctx.BLEND)
-        if style.paper is None:
-            fbo.clear(0.0, 0.0, 0.0, 0.0)
+        wired = {key: pl.resolve(t) for key, t in p.inputs.items()}
+        highlight = self._value(wired["highlight"], 0) if "highlight" in wired else None
+        shading = None
+        if "shade_color" in wired or "shade_index" in wired:
+            if not ("shade_color" in wired and "shade_index" in wired):
+                raise InputError(
+                    f"{pl.bound.source}: passes.{p.name}.inputs: give shade_color and shade_index together"
+                )
+            shading = Shading(self._value(wired["shade_index"], 0), self._value(wired["shade_color"], 0))
+        source = wired[p.stacks[0]]
+        if self._arrays is not None and source in self._arrays["arrays"]:
+            self.draws += self.compositor.compute(
+                target, self._stacks[source], layers, style, highlight=highlight, shading=shading
+            )
         else:
-            paper = self._program(PAPER_FRAG)
-            _set_paper(paper, style)
-            self._values = {k: v for k, v in self._values.items() if k[0] != paper.glo}
-            self._vao(paper).render(vertices=3)
-        self.draws += 1
-        if layers == 0:
-            return
-        self._set(prog, "u_threshold", bool(style.threshold))
-        for k in range(8):
-            self._set(prog, f"u_{key}{k}", BASE_UNIT + k)
-        inks = style.layer_inks(max(layers, 1))
-        ctx.enable(ctx.BLEND)
-        ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-        vao = self._vao(prog)
-        for first in range(((layers - 1) // 8) * 8, -1, -8):
-            count = min(8, layers - first)
-            for k in range(count):
-                stack[first + k].use(BASE_UNIT + k)
-            self._set(prog, f"u_{key}_count", count)
-            self._set(prog, "u_ink", _inks(inks, first, count))
-            vao.render(vertices=3)
-            self.draws += 1
-        ctx.disable(ctx.BLEND)
+            self.draws += self.compositor.fragment(
+                target, self._stacks[source], layers, style, highlight=highlight, shading=shading
+            )
 
     # -- read back -----------------------------------------------------------------------------
     def _read(self, name: str, layers: int) -> np.ndarray:
         pl, bound = self._pl, self._pl.bound
+        if name in self._parts:
+            return self._read_texture(self._parts[name], bound.attributes[name].format)
         if name in bound.attributes:
             held = self._attr_dumps[name]
             return np.stack(held[: max(layers, 1)]) if pl.layered else held[0]
@@ -853,7 +857,7 @@ class Executor:
         from blueprint.pipeline.spec import BoundPass, ImageSpec, _check_params
 
         op = OPS[op_name]
-        stacks = getattr(op, "stacks", ())
+        stacks = op.stacks
         formats = dict(formats or {})
         images, wiring, arrays = {}, {}, {}
         for key, value in inputs.items():
@@ -883,13 +887,11 @@ class Executor:
         pl = plan(bound)
         first = arrays[next(iter(arrays))][0]
         fh, fw = first.shape[:2]
-        self._pl, self._camera, self._crease, self._style = (
-            pl,
-            None,
-            30.0,
-            None if style is None else get_style(style),
-        )
-        self._stacks, self._by_attr, self._frame, self._arrays = {}, {}, 0, None
+        self._pl, self._camera, self._crease = pl, camera, crease_angle
+        self._style = None if style is None else get_style(style)
+        self._shade_ink = (self._style or STYLES["blueprint"]).shade
+        self._stacks, self._by_attr, self._parts, self._frame, self._arrays = {}, {}, {}, 0, None
+        self._mesh = None
         self._size_of = lambda s: (max(1, round(fw * s)), max(1, round(fh * s)))
         self._current()
         self.ctx.enable_only(self.ctx.NOTHING)
@@ -953,7 +955,6 @@ def part_color(part: np.ndarray) -> np.ndarray:
     return 0.9 * (1.0 + (np.clip(p - 1.0, 0.0, 1.0) - 1.0) * 0.45)
 
 
-# -- the blueprint, for Renderer.render --------------------------------------------------------------
 _executors: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -965,57 +966,7 @@ def executor_for(renderer: Renderer) -> Executor:
     return ex
 
 
-def render_blueprint(
-    renderer: Renderer,
-    model: Model,
-    camera: Camera | None = None,
-    *,
-    size: tuple[int, int] = (1024, 1024),
-    view: str = "iso",
-    style: str | Style = "blueprint",
-    max_layers: int | None = 8,
-    min_fraction: float = 0.0,
-    crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    supersample: int = 2,
-    depth_threshold: float = 4.0,
-    part_edges: bool = True,
-    id_silhouettes: bool = False,
-    profile: bool = False,
-) -> Frame:
-    """``Renderer.render`` (without highlight and reveal) through the ``blueprint`` preset."""
-    from blueprint.pipeline.spec import load_pipeline
-
-    style = get_style(style)
-    _check_frame_args(max_layers, min_fraction, crease_angle, line_width)
-    w, h = check_size(size, supersample, renderer.max_texture)
-    spec = _PRESET.get("blueprint")
-    if spec is None:
-        spec = _PRESET["blueprint"] = load_pipeline("blueprint")
-    variables = {
-        "supersample": int(supersample),
-        "line_width": float(line_width),
-        "depth_threshold": float(depth_threshold),
-        "part_edges": bool(part_edges),
-        "id_silhouettes": bool(id_silhouettes),
-    }
-    result = executor_for(renderer).run(
-        spec,
-        model,
-        camera,
-        size=(w, h),
-        view=view,
-        variables=variables,
-        style=style,
-        max_layers=max_layers,
-        min_fraction=min_fraction,
-        crease_angle=crease_angle,
-        profile=profile,
-    )
-    image = result.image if style.paper is None else result.output
-    return Frame(
-        image, result.layers, result.layer_pixels, result.camera, result.ms, result.draws, result.stages
-    )
-
-
-_PRESET: dict[str, PipelineSpec] = {}
+def _named_style(bound: Bound) -> Style:
+    """The style a pipeline names in its ``style`` variable, else the blueprint's."""
+    name = bound.variables.get("style")
+    return STYLES[name] if name in STYLES else STYLES["blueprint"]

@@ -12,6 +12,8 @@ Every other result takes a slot, a pool target of its (format, scale), as late a
 gives it back after its last reader, so a chain of passes ping-pongs between a few targets.
 Per-layer results and once-results take slots from separate sets: a per-layer result is
 rewritten at every layer, so it must never share a slot with a result that is still read later.
+An accumulating per-layer pass writes every layer into one target of its own, held all frame.
+Attributes of chosen parts are captured once, before the peel, and live all frame too.
 Plans are GPU-free and computed once per bound pipeline.
 """
 
@@ -21,8 +23,6 @@ from dataclasses import dataclass, field
 
 from blueprint.pipeline.spec import Bound, fail
 
-# identity tests for operations that are plain ``Op``s without an ``identity`` field
-IDENTITY = {"dilate": lambda u: u["u_radius"] <= 0.0}
 SCRATCH_FORMAT = "rgba32f"
 
 
@@ -56,6 +56,8 @@ class Plan:
     peel: bool
     layered: bool
     free_after: dict[str, list[str]] = field(default_factory=dict)
+    parts: list[str] = field(default_factory=list)  # attributes of chosen parts read
+    accumulated: list[str] = field(default_factory=list)
 
     def resolve(self, name: str) -> str:
         while name in self.aliases:
@@ -65,7 +67,7 @@ class Plan:
 
 def _identity(bound: Bound, name: str) -> bool:
     p = bound.passes[name]
-    test = getattr(p.op, "identity", None) or IDENTITY.get(p.op.name)
+    test = p.op.identity
     if p.user is not None or test is None or not test(p.uniforms):
         return False
     (target,) = p.inputs.values()
@@ -112,10 +114,13 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
         stack += [t for _, t in inputs(name) if t in bound.passes]
     passes = [n for n in order if n in live]
 
+    accumulated = [n for n in passes if bound.passes[n].accumulate]
     after: set[str] = set()
     for name in passes:
         p = bound.passes[name]
-        needs_all = any(k in p.stacks for k, _ in inputs(name)) or any(t in after for _, t in inputs(name))
+        needs_all = any(k in p.stacks for k, _ in inputs(name)) or any(
+            t in after or (t in accumulated and not p.per_layer) for _, t in inputs(name)
+        )
         if needs_all:
             if p.per_layer:
                 culprit = next(t for _, t in inputs(name) if t in after)
@@ -133,23 +138,25 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
             if key in p.stacks:
                 stacked.add(target)
             elif name in after:
-                if target in bound.attributes:
+                if target in bound.attributes and bound.attributes[target].parts is None:
                     raise fail(
                         src,
                         f"passes.{name}.inputs.{key}",
                         f"attribute {target!r} is gone once every layer is peeled, and this pass needs every "
                         f"layer; read {target!r} through a pass of its own (without per_layer) instead",
                     )
-                if target in bound.passes and bound.passes[target].per_layer:
+                if target in bound.passes and bound.passes[target].per_layer and target not in accumulated:
                     stacked.add(target)  # read as layer 0 after the peel
     for name in readback:
-        if name in bound.passes and bound.passes[name].per_layer:
+        if name in bound.passes and bound.passes[name].per_layer and name not in accumulated:
             stacked.add(name)
 
     attributes = sorted(
         {t for n in passes for _, t in inputs(n) if t in bound.attributes}
         | {n for n in readback if n in bound.attributes}
+        | {stop.depth for stop in bound.stops}
     )
+    parts = [n for n in attributes if bound.attributes[n].parts is not None]
     images = sorted(
         {t for n in passes for _, t in inputs(n) if t in bound.images}
         | {n for n in readback if n in bound.images}
@@ -167,7 +174,7 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
     last: dict[str, float] = {}
     for name in timeline:
         for _, target in inputs(name):
-            if target not in bound.passes or target in stacked:
+            if target not in bound.passes or target in stacked or target in accumulated:
                 continue
             use = position[name]
             if not bound.passes[target].per_layer and bound.passes[name].per_layer and layered:
@@ -192,12 +199,15 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
     def give(slot: Slot) -> None:
         free.setdefault((slot.space, slot.format, round(slot.scale, 9)), []).append(slot)
 
+    for index, name in enumerate(accumulated):
+        p = bound.passes[name]
+        slots[name] = Slot("A", p.format, p.scale, index)
     for name in timeline:
         p = bound.passes[name]
         space = "L" if p.per_layer else "F"
         if p.kind == "separable":
             scratch[name] = take(space, SCRATCH_FORMAT, p.scale)
-        if name not in stacked:
+        if name not in stacked and name not in accumulated:
             slots[name] = take(space, p.format, p.scale)
         if name in scratch:
             give(scratch[name])
@@ -205,7 +215,7 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
         for target in done:
             give(slots[target])
             del last[target]
-        if name in slots and name not in last:
+        if name in slots and name not in last and name not in accumulated:
             give(slots[name])  # nobody reads it (cannot happen for live passes, kept for safety)
         free_after[name] = done
         if name == (iteration0[-1] if iteration0 else None):
@@ -231,6 +241,8 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
         peel=bool(attributes),
         layered=layered,
         free_after=free_after,
+        parts=parts,
+        accumulated=accumulated,
     )
 
 

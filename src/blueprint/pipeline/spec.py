@@ -33,6 +33,22 @@ output::
     op = "dilate"
     inputs = { source = "edges" }
     params = { radius = "= width" }   # "= expression" over [variables]: + - * / ( ) min max
+    when = "= wide"              # the pass exists only where this is true (or a non-zero number)
+
+Parts chosen at run time (``Executor.run(parts={"mine": flags})``) have G-buffer attributes of
+their own: their front surface alone, captured once before the peel and readable all frame::
+
+    [attributes]
+    mine_depth = { of = "depth", parts = "mine" }    # of: depth, normal or ids
+
+A per-layer pass with ``accumulate = true`` writes every layer into one target, cleared once a
+frame (its shader discards where it has nothing to add). Stop rules beyond ``layers`` and
+``min_fraction``::
+
+    [stop.reveal]                # depth masking: stop once this fraction of the parts whose
+    depth = "mine_depth"         # front depth this is is uncovered
+    fraction = "= reveal"
+    when = "= reveal"
 
 Errors name the file, the key and the allowed values, in one line.
 """
@@ -50,7 +66,7 @@ from pathlib import Path
 
 from blueprint.errors import InputError
 from blueprint.gpu.targets import FORMATS
-from blueprint.ops import OPS, IntParam, Op, Param, PipelineOp
+from blueprint.ops import OPS, IntParam, Op, Param
 
 # name: (default format, allowed formats, from the renderer's G-buffer, what it holds)
 ATTRIBUTES: dict[str, tuple[str, tuple[str, ...], bool, str]] = {
@@ -81,9 +97,24 @@ MAX_LAYERS = 256
 PRESETS = "blueprint.pipeline:presets"
 
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_SECTIONS = ("pipeline", "variables", "attributes", "images", "passes")
+_SECTIONS = ("pipeline", "variables", "attributes", "images", "passes", "stop")
 _PIPELINE_KEYS = ("name", "description", "output", "layers", "min_fraction", "crease_angle", "size")
-_PASS_KEYS = ("op", "shader", "inputs", "params", "uniforms", "format", "scale", "per_layer")
+_PASS_KEYS = (
+    "op",
+    "shader",
+    "inputs",
+    "params",
+    "uniforms",
+    "format",
+    "scale",
+    "per_layer",
+    "accumulate",
+    "when",
+)
+# attributes of the G-buffer that may be captured for chosen parts alone (``of`` and ``parts``)
+PART_ATTRIBUTES = ("depth", "normal", "ids")
+# stop rules a pipeline may declare, with their keys
+_STOP_RULES = {"reveal": ("depth", "fraction", "when")}
 _UNIFORM_KEYS = ("type", "default", "min", "max")
 
 
@@ -223,6 +254,8 @@ class PassSpec:
     format: object
     scale: object
     per_layer: object
+    accumulate: object = False
+    when: object = True
 
 
 @dataclass(frozen=True)
@@ -239,6 +272,7 @@ class PipelineSpec:
     attributes: dict[str, dict]
     images: dict[str, dict]
     passes: dict[str, PassSpec]
+    stops: dict[str, dict] = field(default_factory=dict)
     _bound: dict = field(default_factory=dict, repr=False, compare=False)
 
     def bind(self, variables: dict | None = None) -> Bound:
@@ -259,9 +293,14 @@ class PipelineSpec:
 
 @dataclass(frozen=True)
 class AttributeSpec:
+    """``of``: the G-buffer attribute it holds (its own name but for part attributes);
+    ``parts``: the run-time part set whose front surface alone it holds, or None (every layer)."""
+
     name: str
     format: str
     scale: float
+    of: str = ""
+    parts: str | None = None
 
 
 @dataclass(frozen=True)
@@ -286,14 +325,15 @@ class BoundPass:
     scale: float
     per_layer: bool
     user: Path | None = None
+    accumulate: bool = False
 
     @property
     def kind(self) -> str:
-        return getattr(self.op, "kind", "single")
+        return self.op.kind
 
     @property
     def stacks(self) -> tuple[str, ...]:
-        return getattr(self.op, "stacks", ())
+        return self.op.stacks
 
 
 @dataclass(frozen=True)
@@ -311,6 +351,7 @@ class Bound:
     images: dict[str, ImageSpec]
     passes: dict[str, BoundPass]
     variables: dict
+    stops: tuple[StopSpec, ...] = ()
 
     def format_of(self, name: str) -> str:
         for table in (self.attributes, self.images, self.passes):
@@ -323,6 +364,15 @@ class Bound:
             if name in table:
                 return table[name].scale
         raise KeyError(name)
+
+
+@dataclass(frozen=True)
+class StopSpec:
+    """A declared stop rule: ``rule`` (``reveal``), the part attribute it reads, its fraction."""
+
+    rule: str
+    depth: str
+    fraction: float
 
 
 # -- loading ---------------------------------------------------------------------------------------
@@ -409,10 +459,18 @@ def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
     attributes = {}
     for name, entry in _table(source, "attributes", data.get("attributes", {})).items():
         key = f"attributes.{name}"
-        if name not in ATTRIBUTES:
-            raise fail(source, key, f"unknown attribute (choose {', '.join(ATTRIBUTES)})")
         entry = _table(source, key, entry)
-        _only(source, key, entry, ("format", "scale"))
+        _only(source, key, entry, ("format", "scale", "of", "parts"))
+        if ("of" in entry) != ("parts" in entry):
+            raise fail(source, key, "an attribute of chosen parts gives both of (what) and parts (which)")
+        if "of" in entry:
+            if entry["of"] not in PART_ATTRIBUTES:
+                raise fail(source, f"{key}.of", f"must be one of {', '.join(PART_ATTRIBUTES)}")
+            if not isinstance(entry["parts"], str):
+                raise fail(source, f"{key}.parts", "must name a set of parts given at run time")
+            _name(source, f"{key}.parts", entry["parts"])
+        elif name not in ATTRIBUTES:
+            raise fail(source, key, f"unknown attribute (choose {', '.join(ATTRIBUTES)})")
         claim(name, key)
         attributes[name] = entry
     images = {}
@@ -461,7 +519,20 @@ def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
             entry.get("format"),
             entry.get("scale"),
             entry.get("per_layer", False),
+            entry.get("accumulate", False),
+            entry.get("when", True),
         )
+    stops = {}
+    for rule, entry in _table(source, "stop", data.get("stop", {})).items():
+        key = f"stop.{rule}"
+        if rule not in _STOP_RULES:
+            raise fail(source, key, f"unknown stop rule (choose {', '.join(_STOP_RULES)})")
+        entry = _table(source, key, entry)
+        _only(source, key, entry, _STOP_RULES[rule])
+        for needed in ("depth", "fraction"):
+            if needed not in entry:
+                raise fail(source, f"{key}.{needed}", "missing")
+        stops[rule] = dict(entry)
     settings = {k: head[k] for k in ("layers", "min_fraction", "crease_angle", "size") if k in head}
     return PipelineSpec(
         source,
@@ -474,6 +545,7 @@ def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
         attributes,
         images,
         passes,
+        stops,
     )
 
 
@@ -528,7 +600,7 @@ def _describe(declared: str) -> str:
     return f"{declared} or wider ({', '.join(fits)})"
 
 
-def _user_op(spec: PipelineSpec, p: PassSpec, values: dict) -> PipelineOp:
+def _user_op(spec: PipelineSpec, p: PassSpec, values: dict) -> Op:
     key = f"passes.{p.name}"
     assert p.shader is not None
     if not p.shader.is_file():
@@ -583,7 +655,7 @@ def _user_op(spec: PipelineSpec, p: PassSpec, values: dict) -> PipelineOp:
         except InputError as exc:
             raise fail(spec.source, f"{ukey}.default", str(exc)) from None
         params.append(param)
-    return PipelineOp(
+    return Op(
         name=f"shader {p.shader.name}",
         shader=str(p.shader),
         inputs=inputs,
@@ -611,7 +683,7 @@ def _check_params(source: str, key: str, op: Op, raw: dict, variables: dict) -> 
     for p in op.params:
         if f"u_{p.name}" not in out:
             out[f"u_{p.name}"] = p.check(op.name, p.default)
-    derive = getattr(op, "derive", None)
+    derive = op.derive
     if derive is not None:
         out.update(derive(out))
     return out
@@ -650,11 +722,11 @@ def _bind(spec: PipelineSpec, values: dict) -> Bound:
     attributes = {}
     for name, entry in spec.attributes.items():
         key = f"attributes.{name}"
-        default, allowed, _, _ = ATTRIBUTES[name]
+        of = entry.get("of", name)
+        default, allowed, _, _ = ATTRIBUTES[of]
         fmt = _format(ev(entry.get("format", default), f"{key}.format"), src, f"{key}.format", allowed)
-        attributes[name] = AttributeSpec(
-            name, fmt, _scale(ev(entry.get("scale", 1), f"{key}.scale"), src, f"{key}.scale")
-        )
+        scale = _scale(ev(entry.get("scale", 1), f"{key}.scale"), src, f"{key}.scale")
+        attributes[name] = AttributeSpec(name, fmt, scale, of, entry.get("parts"))
     images = {}
     for name, entry in spec.images.items():
         key = f"images.{name}"
@@ -679,9 +751,14 @@ def _bind(spec: PipelineSpec, values: dict) -> Bound:
 
     passes: dict[str, BoundPass] = {}
     available = [*attributes, *images, *spec.passes]
+    active = {
+        n for n, p in spec.passes.items() if _switch(ev(p.when, f"passes.{n}.when"), src, f"passes.{n}.when")
+    }
     # formats and scales of passes depend on their inputs: settle them in dependency order
     order = _order(spec)
     for name in order:
+        if name not in active:
+            continue
         p = spec.passes[name]
         key = f"passes.{name}"
         if p.op is not None:
@@ -697,8 +774,16 @@ def _bind(spec: PipelineSpec, values: dict) -> Bound:
                     f"{key}.inputs.{input_name}",
                     f"{op.name} has no input {input_name!r} (choose {', '.join(op.inputs)})",
                 )
+        wiring = {}
+        for input_name, target in p.inputs.items():
+            if target in spec.passes and target not in active:
+                if input_name in op.optional:
+                    continue  # an optional input of a pass that is off here is left unwired
+                raise fail(src, f"{key}.inputs.{input_name}", f"{target!r} is off here (its when is false)")
+            wiring[input_name] = target
+        p = replace(p, inputs=wiring)
         for input_name in op.inputs:
-            if input_name not in p.inputs:
+            if input_name not in p.inputs and input_name not in op.optional:
                 raise fail(
                     src,
                     f"{key}.inputs",
@@ -707,8 +792,13 @@ def _bind(spec: PipelineSpec, values: dict) -> Bound:
         per_layer = ev(p.per_layer, f"{key}.per_layer")
         if not isinstance(per_layer, bool):
             raise fail(src, f"{key}.per_layer", f"must be true or false, got {per_layer!r}")
-        stacks = getattr(op, "stacks", ())
-        resample = getattr(op, "resample", ())
+        accumulate = ev(p.accumulate, f"{key}.accumulate")
+        if not isinstance(accumulate, bool):
+            raise fail(src, f"{key}.accumulate", f"must be true or false, got {accumulate!r}")
+        if accumulate and not per_layer:
+            raise fail(src, f"{key}.accumulate", "only a per-layer pass accumulates its layers")
+        stacks = op.stacks
+        resample = op.resample
         first_format = None
         first_scale = None
         for input_name, target in p.inputs.items():
@@ -774,7 +864,7 @@ def _bind(spec: PipelineSpec, values: dict) -> Bound:
         allowed = [
             f
             for f in FORMATS
-            if is_int_format(f) == kind_int and (getattr(op, "kind", "") != "composite" or channels(f) == 4)
+            if is_int_format(f) == kind_int and (op.kind != "composite" or channels(f) == 4)
         ]
         fmt = (
             default
@@ -782,17 +872,56 @@ def _bind(spec: PipelineSpec, values: dict) -> Bound:
             else _format(ev(p.format, f"{key}.format"), src, f"{key}.format", allowed)
         )
         uniforms = _check_params(src, f"{key}.params", op, p.params, values)
-        passes[name] = BoundPass(name, op, dict(p.inputs), uniforms, fmt, scale, per_layer, p.shader)
+        passes[name] = BoundPass(
+            name, op, dict(p.inputs), uniforms, fmt, scale, per_layer, p.shader, accumulate
+        )
     output = spec.output
     if output not in available:
         raise fail(src, "pipeline.output", f"unknown name {output!r} (choose {', '.join(available)})")
+    if output in spec.passes and output not in active:
+        raise fail(src, "pipeline.output", f"{output!r} is off here (its when is false)")
+    stops = []
+    for rule, entry in spec.stops.items():
+        key = f"stop.{rule}"
+        if not _switch(ev(entry.get("when", True), f"{key}.when"), src, f"{key}.when"):
+            continue
+        depth = entry["depth"]
+        held = attributes.get(depth)
+        if held is None or held.parts is None or held.of != "depth":
+            raise fail(
+                src, f"{key}.depth", f'{depth!r} is not a depth attribute of chosen parts (of = "depth")'
+            )
+        fraction = _number(ev(entry["fraction"], f"{key}.fraction"), src, f"{key}.fraction", 0, 1)
+        if fraction <= 0:
+            raise fail(src, f"{key}.fraction", "must be above 0")
+        stops.append(StopSpec(rule, depth, fraction))
     bound = Bound(
-        src, spec.name, output, layers, min_fraction, crease, size, attributes, images, passes, values
+        src,
+        spec.name,
+        output,
+        layers,
+        min_fraction,
+        crease,
+        size,
+        attributes,
+        images,
+        passes,
+        values,
+        tuple(stops),
     )
     from blueprint.pipeline.graph import plan
 
     plan(bound)
     return bound
+
+
+def _switch(value, source: str, key: str) -> bool:
+    """A ``when``: true/false, or a number (on where not 0)."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int | float):
+        return value != 0
+    raise fail(source, key, f"must be true, false or a number, got {value!r}")
 
 
 def _order(spec: PipelineSpec) -> list[str]:

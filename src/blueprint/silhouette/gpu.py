@@ -35,8 +35,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.gpu import units
 from blueprint.ops import Op, Param
+from blueprint.render.capture import Capture, gbuffer, peel
 from blueprint.render.renderer import Renderer, check_size
+from blueprint.render.stop import MaxLayers
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
@@ -88,7 +91,7 @@ MAX_LAYERS = 64
 # The renderer's crease angle, so the ID pass shares the renderer's upload of a model.
 _CREASE = 30.0
 # Texture units of the pass (the G-buffer pass holds 0-2; the renderer's edges use 3-4).
-_IDS_UNIT, _TABLE_UNIT = 4, 5
+_IDS_UNIT, _TABLE_UNIT = units.SILHOUETTE_IDS, units.SILHOUETTE_IDS + 1
 
 
 def _on_gl(method):
@@ -444,17 +447,17 @@ class GpuSilhouettes:
 
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
-        depth, ids, fbos, clears = r._id_buffer((w, h))
-        geo = r._setup_geometry(camera, mesh, depth, normals=False)
-        ids.use(_IDS_UNIT)
+        gb = gbuffer(r.pool, (w, h), "idb", normals=False)
+        capture = Capture(r, mesh, camera, gb, tie_break=False)
+        gb.ids.use(_IDS_UNIT)
         sil = self._pass(METHODS[method], (w, h), layers, corners, lists, tolerance)
-        for layer in range(layers):
-            r._clear(clears, layer)
+
+        def draw(layer: int, query, guard) -> None:
             # an empty layer skips the next one's draws on the GPU, without the CPU waiting
-            guard = r._query(layer - 1).crender if layer else contextlib.nullcontext()
-            with guard:
-                r._draw(mesh, geo, fbos, layer, r._query(layer), tie_break=False)
+            capture.draw(layer, query, guard)
             sil.run(layer)
+
+        peel(draw, r.queries("peel"), [MaxLayers(layers)], look=read)
         return sil.read() if read else None
 
     def _pass(self, op: Op, size, layers, corners: _Corners, lists, tolerance):

@@ -1,11 +1,18 @@
 // Depth-sprite composition of the edge array (up to 8 slices a dispatch), back to front, each
 // layer weighted by its ink's opacity; the box filter over the supersampled edge maps gives
 // anti-aliased lines. The first (back-most) dispatch starts from the paper, later ones blend
-// over what the earlier ones wrote. Premultiplied alpha throughout.
+// over what the earlier ones wrote. Premultiplied alpha throughout. With OVERLAY the edges are
+// one 2D map (the highlighted parts' outline) laid over everything.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "paper.glsl"
 
+#if OVERLAY
+uniform sampler2D u_edges;
+#define EDGE(q, k) texelFetch(u_edges, q, 0).r
+#else
 uniform sampler2DArray u_edges;
+#define EDGE(q, k) texelFetch(u_edges, ivec3(q, k), 0).r
+#endif
 layout(rgba8, binding = 0) uniform image2D u_out;
 uniform int u_layers;
 uniform int u_supersample;
@@ -18,7 +25,7 @@ uniform bool u_shaded;
 #include "shaded_layers.glsl"
 
 float edge_at(int k, ivec2 q) {
-    float v = texelFetch(u_edges, ivec3(q, k), 0).r;
+    float v = EDGE(q, k);
     return u_threshold ? step(0.5, v) : v;
 }
 
@@ -51,7 +58,7 @@ void main() {
         float coverage = 0.0;
         for (int y = 0; y < u_supersample; ++y) {
             for (int x = 0; x < u_supersample; ++x) {
-                float e = texelFetch(u_edges, ivec3(base + ivec2(x, y), k), 0).r;
+                float e = EDGE(base + ivec2(x, y), k);
                 coverage += u_threshold ? step(0.5, e) : e;
             }
         }

@@ -1,0 +1,157 @@
+"""The one compositor: the style's paper, then every layer's edge map back to front in its ink
+(depth sprites), shaded parts between the layers they lie in, and the highlighted parts'
+outline over everything. Fragment passes (8 layers a pass, one texture a layer) or, where the
+image passes run as compute shaders, dispatches over 8-slice texture arrays."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from blueprint.compose.style import Style
+from blueprint.gpu import units
+
+PAPER_FRAG = "blueprint.compose:glsl/paper.frag"
+COMPOSITE_FRAG = "blueprint.compose:glsl/composite.frag"
+COMPOSE_COMP = "blueprint.compose:glsl/compose.comp"
+GROUP = 8  # layers a pass composes
+SHADE_INDEX_UNIT = units.INPUTS
+SHADE_COLOR_UNIT = units.INPUTS + 1
+LAYER_UNITS = units.INPUTS + 2  # the group's layer maps, 8 units from here
+
+
+@dataclass
+class Shading:
+    """Shaded parts for the compositor: ``index`` (r8, 1 + the layer their surface lies in,
+    0 where none) and ``color`` (premultiplied rgba8), at the edge maps' size."""
+
+    index: object
+    color: object
+
+
+def inks(all_inks: np.ndarray, first: int, count: int) -> bytes:
+    """``u_ink`` of a group: 8 straight colours with opacity, the group's first."""
+    block = np.zeros((GROUP, 4), np.float32)
+    block[:count] = all_inks[first : first + count]
+    return block.tobytes()
+
+
+def set_paper(prog, style: Style) -> None:
+    prog["u_paper"].value = style.paper or (0.0, 0.0, 0.0, 0.0)
+    prog["u_grid_color"].value = style.grid_color
+    prog["u_grid"].value = float(style.grid)
+
+
+def _groups(layers: int) -> list[int]:
+    """First layers of the groups, back-most first."""
+    return list(range(((max(layers, 1) - 1) // GROUP) * GROUP, -1, -GROUP))
+
+
+class Compositor:
+    """Composes onto ``target`` (rgba8, premultiplied) with ``r``'s programs and pool."""
+
+    def __init__(self, r) -> None:
+        self.r = r
+
+    def fragment(
+        self,
+        target,
+        stack: Sequence,
+        layers: int,
+        style: Style,
+        *,
+        highlight=None,
+        shading: Shading | None = None,
+    ) -> int:
+        """Compose the first ``layers`` maps of ``stack`` (one texture a layer); returns the
+        passes run."""
+        r, ctx = self.r, self.r.ctx
+        fbo = r.pool.framebuffer((target,))
+        fbo.use()
+        ctx.disable(ctx.BLEND)
+        if style.paper is None:
+            fbo.clear(0.0, 0.0, 0.0, 0.0)
+        else:
+            prog, vao = r.fullscreen(PAPER_FRAG)
+            set_paper(prog, style)
+            vao.render(vertices=3)
+        passes = 1
+        sprites = []
+        if layers:
+            all_inks = style.layer_inks(layers)
+            for first in _groups(layers):
+                count = min(GROUP, layers - first)
+                sprites.append((stack[first : first + count], inks(all_inks, first, count), first, shading))
+        if highlight is not None:
+            sprites.append(([highlight], inks(np.array([style.highlight]), 0, 1), 0, None))
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
+        for maps, ink, first, shaded in sprites:
+            factor = max(1, maps[0].size[0] // target.size[0])
+            defines = {"LAYERS_FACTOR": factor, "SHADED": shaded is not None}
+            prog, vao = r.fullscreen(COMPOSITE_FRAG, defines)
+            prog["u_threshold"].value = bool(style.threshold)
+            for k, tex in enumerate(maps):
+                tex.use(LAYER_UNITS + k)
+                prog[f"u_layers{k}"].value = LAYER_UNITS + k
+            prog["u_layers_count"].value = len(maps)
+            prog["u_ink"].write(ink)
+            if shaded is not None:
+                self._bind_shading(prog, shaded, first)
+            vao.render(vertices=3)
+            passes += 1
+        ctx.disable(ctx.BLEND)
+        return passes
+
+    def compute(
+        self,
+        target,
+        arrays: Sequence,
+        layers: int,
+        style: Style,
+        *,
+        highlight=None,
+        shading: Shading | None = None,
+    ) -> int:
+        """Compose the first ``layers`` slices of ``arrays`` (8-slice r8 texture arrays) by
+        compute dispatches; returns the dispatches run."""
+        r, ctx = self.r, self.r.ctx
+        target.bind_to_image(0, read=True, write=True)
+        groups = _groups(layers)
+        all_inks = style.layer_inks(max(layers, 1))
+        supersample = max(1, arrays[0].size[0] // target.size[0])
+        dispatches = [(arrays[f // GROUP], min(GROUP, layers - f) if layers else 0, f, False) for f in groups]
+        if highlight is not None:
+            dispatches.append((highlight, 1, 0, True))
+        for maps, count, first, overlay in dispatches:
+            prog = r.compute(COMPOSE_COMP, {"OVERLAY": overlay})
+            set_paper(prog, style)
+            prog["u_supersample"].value = supersample
+            prog["u_threshold"].value = bool(style.threshold)
+            prog["u_has_paper"].value = style.paper is not None
+            maps.use(LAYER_UNITS)
+            prog["u_edges"].value = LAYER_UNITS
+            prog["u_first"].value = first == groups[0] and not overlay
+            prog["u_layers"].value = count
+            ink = inks(np.array([style.highlight]), 0, 1) if overlay else inks(all_inks, first, count)
+            prog["u_ink"].write(ink)
+            shaded = shading is not None and not overlay
+            prog["u_shaded"].value = shaded
+            if shaded:
+                self._bind_shading(prog, shading, first)
+            prog.run((target.size[0] + 7) // 8, (target.size[1] + 7) // 8)
+            ctx.memory_barrier(ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
+        ctx.memory_barrier(
+            ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT
+        )
+        return len(dispatches)
+
+    @staticmethod
+    def _bind_shading(prog, shading: Shading, first: int) -> None:
+        shading.index.use(SHADE_INDEX_UNIT)
+        shading.color.use(SHADE_COLOR_UNIT)
+        prog["u_shade_index"].value = SHADE_INDEX_UNIT
+        prog["u_shade_color"].value = SHADE_COLOR_UNIT
+        prog["u_first_layer"].value = first

@@ -1,0 +1,105 @@
+"""The blueprint frame: ``Renderer.render``'s arguments as the ``blueprint`` preset's variables
+and part sets, run by the executor. Highlight, depth masking (reveal), shading and triangle-ID
+silhouettes are passes, attributes and a stop rule of the preset, not code of their own."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from blueprint.compose.style import Style, get_style
+from blueprint.errors import InputError
+from blueprint.pipeline.executor import executor_for
+from blueprint.pipeline.spec import PipelineSpec, load_pipeline
+from blueprint.render.renderer import Frame, Renderer, check_frame_args, check_size
+from blueprint.scene.camera import Camera
+from blueprint.scene.model import Model
+
+_PRESETS: dict[str, PipelineSpec] = {}
+
+
+def blueprint_preset() -> PipelineSpec:
+    """The ``blueprint`` preset, parsed once."""
+    spec = _PRESETS.get("blueprint")
+    if spec is None:
+        spec = _PRESETS["blueprint"] = load_pipeline("blueprint")
+    return spec
+
+
+def render_blueprint(
+    renderer: Renderer,
+    model: Model,
+    camera: Camera | None = None,
+    *,
+    size: tuple[int, int] = (1024, 1024),
+    view: str = "iso",
+    style: str | Style = "blueprint",
+    max_layers: int | None = 8,
+    min_fraction: float = 0.0,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    supersample: int = 2,
+    depth_threshold: float = 4.0,
+    part_edges: bool = True,
+    id_silhouettes: bool = False,
+    highlight: np.ndarray | None = None,
+    reveal: float | None = None,
+    shade: np.ndarray | None = None,
+    shade_opacity: float = 1.0,
+    profile: bool = False,
+) -> Frame:
+    """``Renderer.render`` through the ``blueprint`` preset (see there for the arguments)."""
+    style = get_style(style)
+    check_frame_args(max_layers, min_fraction, crease_angle, line_width)
+    w, h = check_size(size, supersample, renderer.max_texture)
+    if reveal is not None and highlight is None:
+        raise InputError("reveal needs parts to reveal: give highlight as well")
+    if reveal is not None and not 0.0 < reveal <= 1.0:
+        raise InputError(f"reveal must be in (0, 1], got {reveal}")
+    if shade is not None and not 0.0 < shade_opacity <= 1.0:
+        raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
+    parts = {}
+    for name, flags in (("highlight", highlight), ("shade", shade)):
+        if flags is not None:
+            flags = np.asarray(flags, bool)
+            if flags.shape != (len(model.part_names),):
+                raise InputError(
+                    f"{name} needs one flag per part ({len(model.part_names)}), got {flags.shape}"
+                )
+            parts[name] = flags
+    variables = {
+        "supersample": int(supersample),
+        "line_width": float(line_width),
+        "depth_threshold": float(depth_threshold),
+        "part_edges": bool(part_edges),
+        "id_silhouettes": bool(id_silhouettes),
+        "highlight": highlight is not None,
+        "highlight_width": float(style.highlight_width),
+        "reveal": float(reveal or 0.0),
+        "shade": shade is not None,
+        "shade_opacity": float(shade_opacity),
+    }
+    result = executor_for(renderer).run(
+        blueprint_preset(),
+        model,
+        camera,
+        size=(w, h),
+        view=view,
+        variables=variables,
+        style=style,
+        max_layers=max_layers,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        parts=parts,
+        profile=profile,
+    )
+    image = result.image if style.paper is None else result.output
+    return Frame(
+        image,
+        result.layers,
+        result.layer_pixels,
+        result.camera,
+        result.ms,
+        result.draws,
+        result.stages,
+        result.revealed,
+    )

@@ -1,0 +1,81 @@
+"""A model's triangles on the GPU."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from blueprint.scene.model import Model
+from blueprint.scene.normals import corner_normals
+
+
+class GpuMesh:
+    """A model's triangles on the GPU: shared vertices (split only where crease-split normals
+    differ), every face in the index buffer in model order so ``gl_PrimitiveID`` is the face
+    index (degenerate faces rasterise to nothing), and each vertex's part. Without a
+    crease angle the normals are left zero, for passes that draw no normals (ID buffers): the
+    smoothing is most of the time of an upload."""
+
+    def __init__(self, ctx, model: Model, crease_angle: float | None) -> None:
+        self.ctx = ctx
+        faces = model.faces
+        corner_vertex = faces.reshape(-1).astype(np.int64)
+        corner_part = np.repeat(model.face_part, 3).astype(np.int64)
+        # a vertex is split where its normal or its part differs, so both can be attributes
+        if crease_angle is None:
+            normals = None
+            key = corner_vertex * max(len(model.part_names), 1) + corner_part
+            _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+            vertex, part = corner_vertex[first], corner_part[first]
+        else:
+            normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
+            quantized = np.round(normals * 32767).astype(np.int64)
+            keys = np.column_stack([corner_vertex, corner_part, quantized])
+            unique, inverse = np.unique(keys, axis=0, return_inverse=True)
+            first = np.zeros(len(unique), np.int64)
+            first[inverse.reshape(-1)] = np.arange(len(keys))
+            vertex, part = unique[:, 0], unique[:, 1]
+        data = np.zeros(len(first), [("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
+        data["p"] = model.positions[vertex]
+        if normals is not None:
+            data["n"] = normals[first]
+        data["part"] = part
+        self.vbo = ctx.buffer(data.tobytes())
+        self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
+        self._vaos: dict[int, object] = {}
+        self._corners = None
+        self._model = model
+        self.part_count = len(model.part_names)
+        self.triangles = len(faces)
+
+    def vao(self, program):
+        """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
+        vao = self._vaos.get(program.glo)
+        if vao is None:
+            # attributes a program does not read (pipeline attribute passes need no part, ID
+            # passes no normal) are skipped over
+            fields = [("3f", "in_position"), ("3f", "in_normal"), ("1i", "in_part")]
+            used = [(f, name) if name in program else (f"{4 * int(f[0])}x", None) for f, name in fields]
+            layout = [(self.vbo, " ".join(f for f, _ in used), *(name for _, name in used if name))]
+            vao = self._vaos[program.glo] = self.ctx.vertex_array(program, layout, index_buffer=self.ibo)
+        return vao
+
+    def bind_corners(self, prog, unit: int) -> None:
+        """Give an edge program the corner positions of every face (3 texels per face, rows of
+        4096) and the tolerance under which two corners are one vertex, for ID silhouettes."""
+        if self._corners is None:
+            corners = self._model.positions[self._model.faces].reshape(-1, 3).astype(np.float32)
+            rows = max(1, -(-len(corners) // 4096))
+            data = np.zeros((rows * 4096, 3), np.float32)
+            data[: len(corners)] = corners
+            self._corners = self.ctx.texture((4096, rows), 3, data.tobytes(), dtype="f4")
+            self._corners.filter = (self.ctx.NEAREST, self.ctx.NEAREST)
+            diag = float(np.linalg.norm(np.ptp(self._model.bounds, axis=0))) or 1.0
+            self._tolerance = diag * 1e-6
+        self._corners.use(unit)
+        prog["u_corners"].value = unit
+        prog["u_tolerance2"].value = self._tolerance**2
+
+    def release(self) -> None:
+        for obj in (*self._vaos.values(), self.vbo, self.ibo, self._corners):
+            if obj is not None:
+                obj.release()
