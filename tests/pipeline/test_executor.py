@@ -278,7 +278,7 @@ def test_blueprint_compute_form_matches_its_golden_frame(
     skip_unless_pinned(renderer)
     monkeypatch.setattr(renderer, "use_compute", True)
     frame = render_golden_case(functools.partial(render_blueprint, renderer), golden_models, name)
-    assert executor_for(renderer)._arrays is not None
+    assert executor_for(renderer).last_run.arrays is not None
     assert_frame_pinned(name, frame)
     assert_like_golden(name, frame.image, artifacts, label=f"{name}.compute")
 

@@ -1,10 +1,12 @@
-"""Shader sources as package files: ``#include``, defines, and errors that name file and line."""
+"""Shader sources, the package's files and users' own: ``#include``, defines, and errors that
+name file and line. The one preprocessor of the package."""
 
 from __future__ import annotations
 
 import re
 from functools import cache
 from importlib import resources
+from pathlib import Path
 
 from blueprint.errors import ShaderError
 
@@ -34,38 +36,72 @@ def _resolve(ref: str) -> tuple[str, str]:
     return "blueprint.gpu", f"glsl/{ref}"
 
 
+def _source(ref: str | Path) -> tuple[str, str, object]:
+    """(name for messages, text, where its includes are looked for first: a folder on disk, or
+    the package and folder it lies in) of a file reference or a user's file."""
+    if isinstance(ref, Path):
+        if not ref.is_file():
+            raise ShaderError(f"shader file {ref} not found")
+        try:
+            text = ref.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ShaderError(f"cannot read shader {ref}: {exc}") from None
+        return str(ref), text, ref.parent
+    package, name = _resolve(ref)
+    folder = name.rsplit("/", 1)[0] + "/" if "/" in name else ""
+    return f"{package.replace('.', '/')}/{name}", _read(package, name), (package, folder)
+
+
+def _include(target: str, here: object) -> str | Path:
+    """An ``#include``'s file: beside the including file first, else blueprint's own
+    ``gpu/glsl`` files (``depth.glsl``...)."""
+    if ":" in target:
+        return target
+    if isinstance(here, Path):
+        local = here / target
+        if local.is_file():
+            return local
+        if not resources.files("blueprint.gpu").joinpath(f"glsl/{target}").is_file():
+            raise ShaderError(f"shader file {local} not found")
+        return target
+    package, folder = here
+    if package != "blueprint.gpu" and resources.files(package).joinpath(folder + target).is_file():
+        return f"{package}:{folder}{target}"
+    return target
+
+
 def preprocess(
-    ref: str, defines: dict[str, object] | None = None, version: str = VERSION
+    ref: str | Path, defines: dict[str, object] | None = None, version: str | None = VERSION
 ) -> tuple[str, list[str]]:
-    """Expand includes and prepend the version and defines.
+    """Expand includes and prepend the version (None: none) and defines. ``ref`` is a file
+    reference (``"package:path"``, or a bare name in ``blueprint/gpu/glsl``) or a user's file
+    (a Path, whose own ``#version`` lines are dropped).
 
     Returns the source and the list of file names, indexed as the ``#line`` directives number
     them (see ``LINE_BASE``), so compiler messages can be mapped back to files.
     """
     files: list[str] = []
 
-    def expand(ref: str, stack: tuple[str, ...]) -> list[str]:
-        if ref in stack:
-            raise ShaderError(f"{ref}: #include cycle through {' -> '.join(stack)}")
-        package, name = _resolve(ref)
+    def expand(ref: str | Path, stack: tuple[str, ...]) -> list[str]:
+        name, text, here = _source(ref)
+        if name in stack:
+            raise ShaderError(f"#include cycle through {' -> '.join((*stack, name))}")
         index = len(files)
-        files.append(f"{package.replace('.', '/')}/{name}")
+        files.append(name)
         out = [f"#line {index * LINE_BASE + 1} {index}"]
-        for number, line in enumerate(_read(package, name).splitlines(), start=1):
+        for number, line in enumerate(text.splitlines(), start=1):
             match = _INCLUDE.match(line)
             if match:
-                target = match.group(1)
-                if ":" not in target and package != "blueprint.gpu":
-                    folder = name.rsplit("/", 1)[0] + "/" if "/" in name else ""
-                    local = resources.files(package).joinpath(folder + target)
-                    target = f"{package}:{folder}{target}" if local.is_file() else target
-                out += expand(target, (*stack, ref))
+                out += expand(_include(match.group(1), here), (*stack, name))
                 out.append(f"#line {index * LINE_BASE + number + 1} {index}")
+            elif line.lstrip().startswith("#version"):
+                out.append("")
             else:
                 out.append(line)
         return out
 
-    head = [version] + [f"#define {k} {_literal(v)}" for k, v in (defines or {}).items()]
+    head = [version] if version else []
+    head += [f"#define {k} {_literal(v)}" for k, v in (defines or {}).items()]
     return "\n".join(head + expand(ref, ())) + "\n", files
 
 

@@ -87,7 +87,7 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
     for name in dumps:
         if name not in known:
             raise fail(src, "--dump", f"unknown name {name!r} (choose {', '.join(known)})")
-    order = _topological(bound)
+    order = list(bound.passes)  # bind settles them in dependency order
     aliases = {}
     for name in order:
         if _identity(bound, name):
@@ -244,21 +244,3 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
         parts=parts,
         accumulated=accumulated,
     )
-
-
-def _topological(bound: Bound) -> list[str]:
-    order: list[str] = []
-    seen: set[str] = set()
-
-    def visit(name: str) -> None:
-        if name in seen:
-            return
-        seen.add(name)
-        for target in bound.passes[name].inputs.values():
-            if target in bound.passes:
-                visit(target)
-        order.append(name)
-
-    for name in bound.passes:
-        visit(name)
-    return order

@@ -64,7 +64,8 @@ from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
-from blueprint.errors import InputError
+from blueprint.errors import InputError, ShaderError
+from blueprint.gpu.shaders import preprocess
 from blueprint.gpu.targets import FORMATS
 from blueprint.ops import OPS, IntParam, Op, Param
 
@@ -182,47 +183,16 @@ def evaluate(value, variables: dict, source: str, key: str):
 
 # -- user shaders ----------------------------------------------------------------------------------
 _UNIFORM = re.compile(r"\buniform\s+(?:(?:lowp|mediump|highp)\s+)?(\w+)\s+(\w+)\s*(\[[^\]]*\])?\s*;")
-_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 
 
 def user_source(path: Path, source: str, key: str) -> tuple[str, list[str]]:
     """A user's shader with its includes expanded (next to it first, then blueprint's own
-    ``gpu/glsl`` files such as ``depth.glsl``), each file's lines tagged for error messages as
-    ``blueprint.gpu.shaders`` does. Returns the text (without ``#version``) and the file names."""
-    from blueprint.gpu.shaders import LINE_BASE
-
-    files: list[str] = []
-
-    def read(target: str, folder: Path | None, stack: tuple[str, ...]) -> list[str]:
-        local = (folder / target) if folder is not None else None
-        if local is not None and local.is_file():
-            name, text, here = str(local), local.read_text(encoding="utf-8"), local.parent
-        else:
-            packaged = resources.files("blueprint.gpu").joinpath(f"glsl/{target}")
-            if folder is not None and not packaged.is_file():
-                raise fail(source, key, f"shader file {folder / target} not found")
-            name, text, here = f"blueprint/gpu/glsl/{target}", packaged.read_text(encoding="utf-8"), None
-        if name in stack:
-            raise fail(source, key, f"#include cycle through {' -> '.join((*stack, name))}")
-        index = len(files)
-        files.append(name)
-        out = [f"#line {index * LINE_BASE + 1} {index}"]
-        for number, line in enumerate(text.splitlines(), start=1):
-            match = _INCLUDE.match(line)
-            if match:
-                out += read(match.group(1), here, (*stack, name))
-                out.append(f"#line {index * LINE_BASE + number + 1} {index}")
-            elif line.lstrip().startswith("#version"):
-                out.append("")
-            else:
-                out.append(line)
-        return out
-
+    ``gpu/glsl`` files such as ``depth.glsl``) by the package's preprocessor. Returns the text
+    (without ``#version``) and the file names its ``#line`` directives number."""
     try:
-        lines = read(path.name, path.parent, ())
-    except (OSError, UnicodeDecodeError) as exc:
-        raise fail(source, key, f"cannot read shader {path}: {exc}") from None
-    return "\n".join(lines) + "\n", files
+        return preprocess(Path(path), version=None)
+    except ShaderError as exc:
+        raise fail(source, key, str(exc)) from None
 
 
 def declared_uniforms(text: str) -> dict[str, str]:
@@ -338,7 +308,8 @@ class BoundPass:
 
 @dataclass(frozen=True)
 class Bound:
-    """A pipeline with every value concrete and checked; the graph module plans it."""
+    """A pipeline with every value concrete and checked; the graph module plans it. ``passes``
+    are in dependency order (every pass after the passes it reads)."""
 
     source: str
     name: str

@@ -46,6 +46,7 @@ class GpuMesh:
         self._model = model
         self.part_count = len(model.part_names)
         self.triangles = len(faces)
+        self.bounds = model.bounds  # (2, 3): its used vertices' corners
 
     def vao(self, program):
         """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
