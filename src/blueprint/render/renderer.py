@@ -3,13 +3,12 @@ and turns them into frames (through the pipeline executor) and depth layers for 
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from blueprint.errors import InputError
-from blueprint.gpu import Queries, TargetPool, build_compute, build_program, create_context, gl_info
+from blueprint.gpu.device import Device, current
 from blueprint.render.capture import (
     BACK_OFFSET,
     GEOMETRY_VERT,
@@ -88,102 +87,35 @@ def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tup
     return w, h
 
 
-def _current(method):
-    """Make the renderer's context current for the call, and leave it so: a process may hold
-    several contexts (a window, the API's default renderer, test fixtures), and GL calls go to
-    whichever is current."""
-
-    @functools.wraps(method)
-    def wrapper(self, *args, **kwargs):
-        self.make_current()
-        return method(self, *args, **kwargs)
-
-    return wrapper
-
-
-class Renderer:
-    """Owns one OpenGL context, its targets, programs, queries and uploaded meshes.
+class Renderer(Device):
+    """A device (context, targets, queries, programs) with the models uploaded to it: draws
+    blueprint frames and peels depth layers for other tools.
 
     Use as a context manager or call ``release()``. Models, cameras and styles stay GPU-free;
     the renderer uploads a model once per (model, crease angle).
     """
 
     def __init__(self, ctx=None) -> None:
-        self.ctx = ctx if ctx is not None else create_context()
-        self.pool = TargetPool(self.ctx)
-        self.queries = Queries(self.ctx)
-        self._programs: dict[tuple, object] = {}
+        super().__init__(ctx)
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
-        self._fullscreen = {}
-        self.info = gl_info(self.ctx)
-        self.max_texture = int(self.info["max_texture_size"])
-        # Image-space passes run as compute shaders where OpenGL 4.3 allows: on GPUs built for
-        # compute (H100) only a few cores rasterise, while compute runs on all of them.
-        software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
-        self.use_compute = self.ctx.version_code >= 430 and not software
         # The back-face tie-break as one draw writing depth, or two culled draws with a polygon
         # offset: one draw measured faster on llvmpipe and on the H100 in 3 of 4 cases
         # (benchmarks/variants.py), and never more than 10 % slower.
         self.back_bias_in_shader = True
-        # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
-        # pixel to read what the ones before wrote: framebuffer fetch, which Mesa's drivers
-        # have (llvmpipe among them), used from KBUFFER_MIN_DENSITY triangles per pixel
-        # (benchmarks/variants.py compares both ways).
-        ext = self.ctx.extensions
-        self.kbuffer = (
-            "GL_EXT_shader_framebuffer_fetch" in ext
-            and (self.ctx.version_code >= 420 or "GL_ARB_shading_language_packing" in ext)
-            and self.ctx.info["GL_MAX_DRAW_BUFFERS"] >= KBUFFER_MAX
-        )
+        # Peeling several layers a geometry pass (capture._KBuffer) needs framebuffer fetch
+        # (Mesa's drivers, llvmpipe among them) and a target a layer; used from
+        # KBUFFER_MIN_DENSITY triangles per pixel (benchmarks/variants.py compares both ways).
+        self.kbuffer = self.framebuffer_fetch and self.max_draw_buffers >= KBUFFER_MAX
         self.kbuffer_density = KBUFFER_MIN_DENSITY
-
-    def __enter__(self) -> Renderer:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.release()
-
-    def make_current(self) -> None:
-        """Direct this thread's GL calls to this renderer's context."""
-        self.ctx.__enter__()
 
     def release(self) -> None:
         self.make_current()
         for _, mesh in self._meshes.values():
             mesh.release()
         self._meshes.clear()
-        self.pool.release()
-        self.queries.release()
-        for vao in self._fullscreen.values():
-            vao.release()
-        for prog in self._programs.values():
-            prog.release()
-        self._programs.clear()
-        self.ctx.release()
+        super().release()
 
-    # -- resources ---------------------------------------------------------------------------
-    def program(self, fragment: str, vertex: str = "fullscreen.vert", defines=None):
-        key = (vertex, fragment, tuple(sorted((defines or {}).items())))
-        prog = self._programs.get(key)
-        if prog is None:
-            prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines)
-        return prog
-
-    def compute(self, ref: str, defines=None):
-        key = ("compute", ref, tuple(sorted((defines or {}).items())))
-        prog = self._programs.get(key)
-        if prog is None:
-            prog = self._programs[key] = build_compute(self.ctx, ref, defines)
-        return prog
-
-    def fullscreen(self, fragment: str, defines=None):
-        """(program, vertex array) of a full-screen pass drawing one triangle."""
-        prog = self.program(fragment, defines=defines)
-        vao = self._fullscreen.get(prog.glo)
-        if vao is None:
-            vao = self._fullscreen[prog.glo] = self.ctx.vertex_array(prog, [])
-        return prog, vao
-
+    # -- models --------------------------------------------------------------------------------
     def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh:
         """``model`` on the GPU, uploaded once per crease angle (None: no normals)."""
         key = (id(model), None if crease_angle is None else float(crease_angle))
@@ -192,7 +124,7 @@ class Renderer:
             held = self._meshes[key] = (model, GpuMesh(self.ctx, model, crease_angle))
         return held[1]
 
-    @_current
+    @current
     def forget(self, model: Model) -> None:
         """Release the GPU copy of a model."""
         for key in [k for k, (m, _) in self._meshes.items() if m is model]:
@@ -204,7 +136,7 @@ class Renderer:
         return Camera.fit(model.positions, view, aspect=size[0] / size[1], up=model.up, **kwargs)
 
     # -- the blueprint -------------------------------------------------------------------------
-    @_current
+    @current
     def render(
         self,
         model: Model,
@@ -290,7 +222,7 @@ class Renderer:
         )
 
     # -- layers for other tools ----------------------------------------------------------------
-    @_current
+    @current
     def peel(
         self,
         model: Model,
@@ -340,7 +272,7 @@ class Renderer:
             depths, normal_stack, triangles, parts, camera.view_matrix(), camera.projection_matrix(), camera
         )
 
-    @_current
+    @current
     def triangles_at(
         self,
         model: Model,

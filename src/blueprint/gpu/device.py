@@ -1,0 +1,94 @@
+"""The device: one OpenGL context and everything held on it by name (the target pool, query
+sets, compiled programs), with what the context can do."""
+
+from __future__ import annotations
+
+import functools
+
+from blueprint.gpu.context import create_context, gl_info
+from blueprint.gpu.queries import Queries
+from blueprint.gpu.shaders import build_compute, build_program
+from blueprint.gpu.targets import TargetPool
+
+
+def current(method):
+    """Make the device's context current for the call, and leave it so: a process may hold
+    several contexts (a window, the API's default renderer, test fixtures), and GL calls go to
+    whichever is current."""
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        self.make_current()
+        return method(self, *args, **kwargs)
+
+    return wrapper
+
+
+class Device:
+    """Owns one OpenGL context (headless unless ``ctx`` is a window's), its targets, queries
+    and programs. Use as a context manager or call ``release()``.
+
+    ``use_compute``: image passes run as compute shaders (OpenGL 4.3 on a GPU).
+    ``framebuffer_fetch``: a fragment may read what the ones before it wrote to its pixel.
+    """
+
+    def __init__(self, ctx=None) -> None:
+        self.ctx = ctx if ctx is not None else create_context()
+        self.pool = TargetPool(self.ctx)
+        self.queries = Queries(self.ctx)
+        self._programs: dict[tuple, object] = {}
+        self._fullscreen: dict[int, object] = {}
+        self.info = gl_info(self.ctx)
+        self.max_texture = int(self.info["max_texture_size"])
+        # on GPUs built for compute (H100, H200) only a few cores rasterise, while compute
+        # shaders run on all of them
+        software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
+        self.use_compute = self.ctx.version_code >= 430 and not software
+        ext = self.ctx.extensions
+        self.framebuffer_fetch = "GL_EXT_shader_framebuffer_fetch" in ext and (
+            self.ctx.version_code >= 420 or "GL_ARB_shading_language_packing" in ext
+        )
+        self.max_draw_buffers = int(self.ctx.info["GL_MAX_DRAW_BUFFERS"])
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    def make_current(self) -> None:
+        """Direct this thread's GL calls to this device's context."""
+        self.ctx.__enter__()
+
+    def release(self) -> None:
+        self.make_current()
+        self.pool.release()
+        self.queries.release()
+        for vao in self._fullscreen.values():
+            vao.release()
+        for prog in self._programs.values():
+            prog.release()
+        self._programs.clear()
+        self.ctx.release()
+
+    def program(self, fragment: str, vertex: str = "fullscreen.vert", defines=None):
+        key = (vertex, fragment, tuple(sorted((defines or {}).items())))
+        prog = self._programs.get(key)
+        if prog is None:
+            prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines)
+        return prog
+
+    def compute(self, ref: str, defines=None):
+        key = ("compute", ref, tuple(sorted((defines or {}).items())))
+        prog = self._programs.get(key)
+        if prog is None:
+            prog = self._programs[key] = build_compute(self.ctx, ref, defines)
+        return prog
+
+    def fullscreen(self, fragment: str, defines=None):
+        """(program, vertex array) of a full-screen pass drawing one triangle."""
+        prog = self.program(fragment, defines=defines)
+        vao = self._fullscreen.get(prog.glo)
+        if vao is None:
+            vao = self._fullscreen[prog.glo] = self.ctx.vertex_array(prog, [])
+        return prog, vao
