@@ -10,7 +10,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from blueprint.compose.style import RGBA, hex_color
+from blueprint.color import RGBA, hex_color
 from blueprint.errors import InputError
 
 __all__ = ["Entry", "is_number", "one_line", "read_settings", "show"]
