@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.scene.weld import weld
+
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
 _MAX_DEGREE = 64
@@ -12,8 +14,6 @@ _MAX_DEGREE = 64
 def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
     """(F, 3) int64: vertex ids where vertices at the same position (within ``rel_tol`` of the
     bounding-box diagonal) share an id, so triangle soups smooth like indexed meshes."""
-    from blueprint.silhouette.mesh import weld
-
     used = positions[faces.reshape(-1)].astype(np.float64)
     diag = float(np.linalg.norm(np.ptp(used, axis=0))) or 1.0
     _, welded = weld(positions, faces, tol=diag * rel_tol)

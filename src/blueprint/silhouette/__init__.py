@@ -16,10 +16,12 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from blueprint.scene.weld import weld
+
 from .deform import Animation, Pose
 from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges
 from .idlist import IdLists, build_id_lists, id_lists_from_topology
-from .mesh import Adjacency, build_adjacency, weld
+from .mesh import Adjacency, build_adjacency
 from .raster import draw_segments
 
 __all__ = [

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .mesh import weld
+from blueprint.scene.weld import weld
 
 __all__ = ["IdLists", "build_id_lists", "id_lists_from_topology"]
 
