@@ -7,7 +7,9 @@ The method has two timed stages, kept as separate calls so a benchmark can time 
 * per-frame extraction, :func:`classify_edges`: facing tests and edge classification for one
   camera, followed by drawing with :func:`draw_segments`.
 
-:func:`silhouette_image` chains all three.
+:func:`silhouette_image` chains all three. The GPU method, triangle-ID silhouettes, is
+:mod:`blueprint.silhouette.gpu`: it draws with the renderer, so it lies in a layer above this
+package's (numpy only) and is imported by name where it is used.
 """
 
 from __future__ import annotations
@@ -31,10 +33,8 @@ __all__ = [
     "Adjacency",
     "Animation",
     "EdgeSet",
-    "GpuSilhouettes",
     "IdLists",
     "Pose",
-    "SoupMesh",
     "build_adjacency",
     "build_id_lists",
     "classify_edges",
@@ -43,17 +43,6 @@ __all__ = [
     "silhouette_image",
     "weld",
 ]
-
-# The GPU side is loaded on first use: it needs the renderer, whose imports reach this package.
-_GPU_NAMES = ("GpuSilhouettes", "SoupMesh")
-
-
-def __getattr__(name: str):
-    if name in _GPU_NAMES:
-        from . import gpu
-
-        return getattr(gpu, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def silhouette_image(
