@@ -14,7 +14,7 @@ import pytest
 from blueprint import examples
 from blueprint.compose.style import STYLES, Style, get_style, hex_color
 from blueprint.errors import InputError
-from blueprint.scene.camera import VIEWS, Camera
+from blueprint.scene.camera import SHEET_CELLS, VIEWS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, weld_ids
 
@@ -176,6 +176,30 @@ def test_azimuth_and_elevation_override_the_view(gearbox_points):
     np.testing.assert_allclose(view_direction(cam), (1, 0, 0), atol=1e-12)
     cam = Camera.fit(gearbox_points, "front", elevation=90.0)
     np.testing.assert_allclose(view_direction(cam), (0, 1, 0), atol=1e-12)
+
+
+def test_fit_camera_is_camera_fit_at_the_image_aspect_and_the_model_up_axis():
+    """The one camera fit of drawings: a model's positions and up axis, an image's aspect; bare
+    points are Y-up unless told."""
+    model = examples.gearbox()
+    zup = Model.from_arrays(model.positions, model.faces, up="z")
+    for m in (model, zup):
+        assert fit_camera(m, (300, 200), "front", azimuth=10.0, elevation=5.0, fov=40.0) == Camera.fit(
+            m.positions, "front", azimuth=10.0, elevation=5.0, fov=40.0, aspect=1.5, up=m.up
+        )
+    assert fit_camera(zup.positions, (100, 400), "top", ortho=True) == Camera.fit(
+        zup.positions, "top", ortho=True, aspect=0.25, up="y"
+    )
+    assert fit_camera(model, (64, 64), margin=0.2, up="z") == Camera.fit(model.positions, margin=0.2, up="z")
+
+
+def test_sheet_cameras_share_one_orthographic_scale():
+    model = examples.gearbox()
+    cameras = sheet_cameras(model, (200, 150))
+    assert set(cameras) == set(SHEET_CELLS)
+    heights = {cameras[v].height for v in ("top", "front", "right")}
+    assert len(heights) == 1 and all(cameras[v].ortho for v in ("top", "front", "right"))
+    assert cameras["iso"] == fit_camera(model, (200, 150), "iso", margin=0.08)
 
 
 def test_fit_rejects_bad_arguments(gearbox_points):

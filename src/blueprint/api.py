@@ -11,7 +11,7 @@ import numpy as np
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame, Layers, Renderer, check_size
-from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
+from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
@@ -37,16 +37,7 @@ def _as_model(model: Model | str | os.PathLike, up: str | None) -> Model:
 def _camera(model: Model, size, view, azimuth, elevation, fov, ortho, camera) -> Camera | None:
     if camera is not None:
         return camera
-    return Camera.fit(
-        model.positions,
-        view,
-        azimuth=azimuth,
-        elevation=elevation,
-        fov=fov,
-        ortho=ortho,
-        aspect=size[0] / size[1] if size[1] else 1.0,
-        up=model.up,
-    )
+    return fit_camera(model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
 
 
 def render_frame(
@@ -94,7 +85,7 @@ def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Rende
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
-    cameras = sheet_cameras(model.positions, w / h, fov, model.up)
+    cameras = sheet_cameras(model, (w, h), fov)
     image = np.zeros((size[1], size[0], 4), np.uint8)
     frames = {}
     for name, (col, row) in SHEET_CELLS.items():

@@ -11,6 +11,7 @@ from rich.progress import Progress
 
 from blueprint.api import default_renderer
 from blueprint.render.renderer import Renderer, check_size
+from blueprint.scene.camera import fit_camera
 from blueprint.scene.loader import load_model
 
 
@@ -61,7 +62,7 @@ def run_bench(
                     renderer.forget(old)
                 loaded = {path: load_model(path)}
             model = loaded[path]
-            camera = renderer.camera_for(model, size)
+            camera = fit_camera(model, size)
             progress.update(task, description=f"{Path(path).name} {size[0]}x{size[1]}")
             record = {
                 "renderer": renderer.info["renderer"],

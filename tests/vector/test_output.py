@@ -177,7 +177,7 @@ def test_plan_sheet_is_four_views_in_their_cells(renderer):
     size = (320, 240)
     sheet = draw_vector_sheet(model, size, renderer=renderer)
     w, h = size[0] // 2, size[1] // 2
-    cameras = sheet_cameras(model.positions, w / h, 30.0, model.up)
+    cameras = sheet_cameras(model, (w, h), 30.0)
     assert (sheet.width, sheet.height) == size and sheet.camera == cameras["front"]
     start = 0
     for name, (col, row) in SHEET_CELLS.items():
@@ -212,7 +212,7 @@ def test_plan_sheet_to_scale(renderer, tmp_path):
     root = ET.parse(tmp_path / "sheet.svg").getroot()
     from blueprint.scene.camera import sheet_cameras
 
-    mm_per_px = sheet_cameras(model.positions, 200 / 150, 30.0, model.up)["front"].height / 150 / 2
+    mm_per_px = sheet_cameras(model, (200, 150), 30.0)["front"].height / 150 / 2
     assert float(root.get("width").removesuffix("mm")) == pytest.approx(400 * mm_per_px, rel=1e-5)
     assert float(root.get("height").removesuffix("mm")) == pytest.approx(300 * mm_per_px, rel=1e-5)
     assert "1:2" in "".join(root.itertext())

@@ -19,7 +19,7 @@ from blueprint.export.files import atomic_write, check_output, save_png
 from blueprint.pipeline.executor import Result, executor_for
 from blueprint.pipeline.media import VIDEO_FORMATS, VideoWriter, read_video, video_info
 from blueprint.pipeline.spec import PipelineSpec, load_pipeline, with_file
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import Camera, fit_camera
 
 PICTURE_SUFFIXES = (".png", ".npz")
 
@@ -160,16 +160,7 @@ def run_pipeline(
     camera = None
     if model is not None:
         w, h = size or bound.size or (1024, 1024)
-        camera = Camera.fit(
-            model.positions,
-            view,
-            azimuth=azimuth,
-            elevation=elevation,
-            fov=fov,
-            ortho=ortho,
-            aspect=w / h,
-            up=model.up,
-        )
+        camera = fit_camera(model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
         size = (w, h)
     if videos:
         return _run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
@@ -237,18 +228,10 @@ def orbit(
     farthest any single view needs), so the model neither grows nor shrinks as it turns."""
     if frames < 1:
         raise InputError(f"frames must be at least 1, got {frames}")
-    aspect = size[0] / size[1]
     el = elevation if elevation is not None else 25.0
     cams = [
-        Camera.fit(
-            model.positions,
-            "front",
-            azimuth=azimuth + 360.0 * i / frames,
-            elevation=el,
-            fov=fov,
-            ortho=ortho,
-            aspect=aspect,
-            up=model.up,
+        fit_camera(
+            model, size, "front", azimuth=azimuth + 360.0 * i / frames, elevation=el, fov=fov, ortho=ortho
         )
         for i in range(frames)
     ]

@@ -1,4 +1,7 @@
-"""Cameras: named views, auto-fit to a model, OpenGL view and projection matrices."""
+"""Cameras: named views, auto-fit to a model, OpenGL view and projection matrices.
+
+``fit_camera`` is the one way a drawing gets its camera from a view name and an image size.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +11,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.scene.model import Model
 
 # (azimuth, elevation) in degrees; azimuth turns from the front towards the right.
 VIEWS: dict[str, tuple[float, float]] = {
@@ -167,19 +171,56 @@ class Camera:
         )
 
 
+def fit_camera(
+    model: Model | np.ndarray,
+    size: tuple[int, int],
+    view: str = "iso",
+    *,
+    azimuth: float | None = None,
+    elevation: float | None = None,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    margin: float = 0.05,
+) -> Camera:
+    """The camera of a drawing of ``size`` (width, height in pixels): ``Camera.fit`` on a model's
+    positions (or on (N, 3) points) from a named view, at the image's aspect.
+
+    ``up`` is the model's up axis: by default the model's own, or ``"y"`` for bare points.
+    """
+    if isinstance(model, Model):
+        points, up = model.positions, up or model.up
+    else:
+        points, up = model, up or "y"
+    width, height = size
+    return Camera.fit(
+        points,
+        view,
+        azimuth=azimuth,
+        elevation=elevation,
+        fov=fov,
+        ortho=ortho,
+        aspect=width / height if height else 1.0,
+        margin=margin,
+        up=up,
+    )
+
+
 # A drawing sheet in third-angle projection: (column, row) of each view in a 2 x 2 grid, the
 # top view above the front view, the right view beside it, an iso view in the free corner.
 SHEET_CELLS: dict[str, tuple[int, int]] = {"top": (0, 0), "iso": (1, 0), "front": (0, 1), "right": (1, 1)}
 
 
-def sheet_cameras(points: np.ndarray, aspect: float, fov: float = 30.0, up: str = "y") -> dict[str, Camera]:
-    """The cameras of a sheet's cells (``SHEET_CELLS``) of one aspect: the three orthographic
-    views at one scale (the largest any of them needs), the iso view fitted on its own."""
+def sheet_cameras(
+    model: Model | np.ndarray, size: tuple[int, int], fov: float = 30.0, up: str | None = None
+) -> dict[str, Camera]:
+    """The cameras of a sheet's cells (``SHEET_CELLS``), each ``size`` pixels: the three
+    orthographic views at one scale (the largest any of them needs), the iso view fitted on its
+    own. ``up`` as for ``fit_camera``."""
     fitted = {
-        v: Camera.fit(points, v, ortho=True, aspect=aspect, up=up, margin=0.08)
-        for v in ("top", "front", "right")
+        v: fit_camera(model, size, v, ortho=True, up=up, margin=0.08) for v in ("top", "front", "right")
     }
     height = max(c.height for c in fitted.values())
     cameras = {v: replace(c, height=height) for v, c in fitted.items()}
-    cameras["iso"] = Camera.fit(points, "iso", fov=fov, aspect=aspect, up=up, margin=0.08)
+    cameras["iso"] = fit_camera(model, size, "iso", fov=fov, up=up, margin=0.08)
     return cameras

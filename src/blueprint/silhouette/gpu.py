@@ -40,7 +40,7 @@ from blueprint.ops import Op, Param
 from blueprint.render.capture import Capture, gbuffer, peel
 from blueprint.render.renderer import Renderer, check_size
 from blueprint.render.stop import MaxLayers
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
 from .deform import Animation
@@ -406,7 +406,7 @@ class GpuSilhouettes:
             A static model (uploaded once, shared with the renderer's blueprints) or a
             deforming mesh from :meth:`soup`.
         camera : Camera, optional
-            Defaults to ``Camera.fit`` from `view` at the image's aspect.
+            Defaults to ``fit_camera`` from `view` at the image's size.
         size : (int, int)
             Width and height in pixels.
         layers : int
@@ -435,13 +435,13 @@ class GpuSilhouettes:
             mesh, corners, tolerance = model, model.corners, model.tolerance
             lists = model.id_lists() if method == "idlist" else None
             if camera is None:
-                camera = Camera.fit(_box_corners(model.bounds), view, aspect=w / h)
+                camera = fit_camera(_box_corners(model.bounds), (w, h), view)
         elif isinstance(model, Model):
             mesh = r.mesh(model, _CREASE)
             held = self._entry(model)
             corners, tolerance = held.corners, held.tolerance
             lists = self._model_lists(model) if method == "idlist" else None
-            camera = camera or r.camera_for(model, (w, h), view)
+            camera = camera or fit_camera(model, (w, h), view)
         else:
             raise InputError(f"expected a Model or a SoupMesh, got {type(model).__name__}")
 
@@ -564,19 +564,6 @@ def _cpu_image(positions, faces, camera: Camera, size) -> np.ndarray:
     return draw_segments(edge_set.segments2d[chosen], w, h)[None]
 
 
-def _fit(points, size, up: str, view, azimuth, elevation, fov, ortho) -> Camera:
-    return Camera.fit(
-        points,
-        view,
-        azimuth=azimuth,
-        elevation=elevation,
-        fov=fov,
-        ortho=ortho,
-        aspect=size[0] / size[1],
-        up=up,
-    )
-
-
 def render_silhouettes(
     model: Model,
     *,
@@ -596,7 +583,7 @@ def render_silhouettes(
     ``method`` is ``gpu-vertex``, ``gpu-idlist`` or ``cpu`` (the object-space method: weld,
     connect, orient, classify, draw; it has no visibility, so it draws hidden silhouettes in
     full ink and ignores `layers`). The camera is `camera`, or one fitted from `view`,
-    `azimuth`, `elevation` (degrees), `fov` and `ortho` as ``Camera.fit`` does.
+    `azimuth`, `elevation` (degrees), `fov` and `ortho` as ``fit_camera`` does.
     """
     if method not in STILL_METHODS:
         raise InputError(f"unknown method {method!r} (choose {', '.join(STILL_METHODS)})")
@@ -604,7 +591,9 @@ def render_silhouettes(
 
     renderer = renderer or default_renderer()
     w, h = check_size(size, 1, renderer.max_texture)
-    camera = camera or _fit(model.positions, (w, h), model.up, view, azimuth, elevation, fov, ortho)
+    camera = camera or fit_camera(
+        model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho
+    )
     if method == "cpu":
         return composite(_cpu_image(model.positions, model.faces, camera, (w, h)))
     with GpuSilhouettes(renderer) as sil:
@@ -644,7 +633,16 @@ def animate_silhouettes(
     renderer = renderer or default_renderer()
     w, h = check_size(size, 1, renderer.max_texture)
     if camera is None:
-        camera = _fit(_box_corners(anim.bounds()), (w, h), model.up, view, azimuth, elevation, fov, ortho)
+        camera = fit_camera(
+            _box_corners(anim.bounds()),
+            (w, h),
+            view,
+            azimuth=azimuth,
+            elevation=elevation,
+            fov=fov,
+            ortho=ortho,
+            up=model.up,
+        )
     if method == "cpu":
         for i in range(anim.frames):
             pose = anim.pose(i)

@@ -21,7 +21,7 @@ import numpy as np
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Layers, Renderer
-from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
+from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 
@@ -267,7 +267,7 @@ def draw_vector(
     ----------
     model : Model
     camera : Camera, optional
-        Defaults to ``Camera.fit`` from ``view`` at the image's aspect.
+        Defaults to ``fit_camera`` from ``view`` at the image's size.
     size : (int, int)
         Width and height in pixels: the resolution at which occlusion is decided.
     style : str, Style or VectorStyle
@@ -317,7 +317,7 @@ def draw_vector(
         renderer = renderer or default_renderer()
         w, h = check_size(size, 1, renderer.max_texture)
         if camera is None:
-            camera = Renderer.camera_for(model, (w, h), view)
+            camera = fit_camera(model, (w, h), view)
         view_m = np.asarray(camera.view_matrix(), np.float64)
         proj = np.asarray(camera.projection_matrix(), np.float64)
         if reveal is not None:
@@ -428,7 +428,7 @@ def draw_vector_sheet(
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
-    cameras = sheet_cameras(model.positions, w / h, fov, model.up)
+    cameras = sheet_cameras(model, (w, h), fov)
     cells = []
     for name, (col, row) in SHEET_CELLS.items():
         cell = draw_vector(model, cameras[name], (w, h), **options)
@@ -553,9 +553,7 @@ def render_vector_file(
     if view == "plan":
         drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
     else:
-        camera = Renderer.camera_for(
-            loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho
-        )
+        camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
         drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
     save_drawing(output, drawing)
