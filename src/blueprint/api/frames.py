@@ -1,4 +1,4 @@
-"""The Python API: ``render`` and ``peel`` on a file or a Model, with a shared renderer."""
+"""Frames: ``render``, ``render_frame`` and ``peel`` on a file or a Model, plan sheets included."""
 
 from __future__ import annotations
 
@@ -16,18 +16,19 @@ from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 
-_renderer: Renderer | None = None
-
 #: The view name of a drawing sheet: top, front and right orthographic views plus an iso view.
 PLAN = "plan"
 
 
-def default_renderer() -> Renderer:
-    """The renderer ``render`` and ``peel`` use when none is given (created on first use)."""
-    global _renderer
-    if _renderer is None:
-        _renderer = Renderer()
-    return _renderer
+def shared(renderer: Renderer | None) -> Renderer:
+    """``renderer``, or the shared one when it is None (``blueprint.api.default_renderer``)."""
+    if renderer is not None:
+        return renderer
+    # looked up when called: the package holds the shared renderer (where callers swap it) and
+    # imports this module
+    from blueprint.api import default_renderer
+
+    return default_renderer()
 
 
 def _as_model(model: Model | str | os.PathLike, up: str | None) -> Model:
@@ -56,7 +57,7 @@ def render_frame(
 ) -> Frame:
     """Like ``render`` but returns the whole ``Frame`` (image, layers used, timings)."""
     model = _as_model(model, up)
-    renderer = renderer or default_renderer()
+    renderer = shared(renderer)
     size = tuple(int(v) for v in size)
     check_size(size, int(options.get("supersample", 2)), renderer.max_texture)
     for key in ("highlight", "shade"):
@@ -161,7 +162,7 @@ def peel(
 ) -> Layers:
     """Peel the depth layers of a model and return them (see ``Layers``)."""
     model = _as_model(model, up)
-    renderer = renderer or default_renderer()
+    renderer = shared(renderer)
     size = tuple(int(v) for v in size)
     check_size(size, 1, renderer.max_texture)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)

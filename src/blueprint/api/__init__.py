@@ -1,0 +1,44 @@
+"""The Python API: frames (``render``, ``peel``: ``blueprint.api.frames``), drawn with a renderer
+shared by every call that is given none."""
+
+from blueprint.api.frames import PLAN, peel, render, render_frame
+from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
+from blueprint.errors import InputError
+from blueprint.render.renderer import Frame, Layers, Renderer, check_size
+from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
+from blueprint.scene.loader import load_model
+from blueprint.scene.model import Model
+from blueprint.scene.parts import designated_parts
+
+__all__ = [
+    "PLAN",
+    "SHEET_CELLS",
+    "Camera",
+    "Frame",
+    "Glyphs",
+    "InputError",
+    "Layers",
+    "Model",
+    "Renderer",
+    "check_size",
+    "default_renderer",
+    "designated_parts",
+    "load_glyphs",
+    "load_model",
+    "peel",
+    "render",
+    "render_frame",
+    "render_with_glyphs",
+    "sheet_cameras",
+]
+
+# Here, in the package, so that callers (the tests) can swap it: blueprint.api._renderer = r.
+_renderer: Renderer | None = None
+
+
+def default_renderer() -> Renderer:
+    """The renderer ``render`` and ``peel`` use when none is given (created on first use)."""
+    global _renderer
+    if _renderer is None:
+        _renderer = Renderer()
+    return _renderer
