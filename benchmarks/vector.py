@@ -20,8 +20,8 @@ import tempfile
 from pathlib import Path
 
 from blueprint.api import default_renderer
+from blueprint.api.files import render_vector_file
 from blueprint.scene.loader import load_model
-from blueprint.vector import render_vector_file
 
 ROOT = Path(__file__).resolve().parents[1]
 # model path under the models folder -> Blender Line Art seconds, file to PNG at 512 x 512

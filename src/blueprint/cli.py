@@ -310,7 +310,7 @@ def _render_vector(
     model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
 ):
     from blueprint.api import default_renderer
-    from blueprint.vector import render_vector_file
+    from blueprint.api.files import render_vector_file
 
     if _is_style_file(style):
         from blueprint.vector import load_vector_style

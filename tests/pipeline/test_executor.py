@@ -14,10 +14,10 @@ from golden_helpers import SIZE as SIZE_GOLDEN
 from PIL import Image
 
 from blueprint import examples
+from blueprint.api.files import run_pipeline
 from blueprint.errors import InputError, ShaderError
 from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
 from blueprint.pipeline.executor import part_color
-from blueprint.pipeline.run import run_pipeline
 
 SIZE = (64, 48)
 

@@ -10,9 +10,10 @@ import pytest
 from PIL import Image
 
 from blueprint import examples
+from blueprint.api.files import run_pipeline, turntable
 from blueprint.errors import InputError
 from blueprint.pipeline.media import VideoWriter, read_video, video_info
-from blueprint.pipeline.run import orbit, run_pipeline, turntable
+from blueprint.pipeline.run import orbit
 
 pytest.importorskip("imageio_ffmpeg")
 

@@ -9,8 +9,9 @@ import trimesh
 from click.testing import CliRunner
 
 from blueprint import Camera, InputError, Model
+from blueprint.pipeline.media import write_video
 from blueprint.silhouette import build_adjacency, classify_edges, draw_segments
-from blueprint.silhouette.command import silhouettes, write_video
+from blueprint.silhouette.command import silhouettes
 from blueprint.silhouette.deform import Animation
 from blueprint.silhouette.gpu import GpuSilhouettes, animate_silhouettes
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from vector_helpers import SVG, svg_lines
 
+from blueprint.api.files import render_vector_file
 from blueprint.errors import InputError
 from blueprint.examples import assemble, box, gearbox
 from blueprint.scene.camera import Camera
@@ -14,7 +15,6 @@ from blueprint.vector import (
     VectorStyle,
     draw_vector,
     parse_scale,
-    render_vector_file,
     save_drawing,
     vector_style,
 )

@@ -1,5 +1,6 @@
-"""The Python API: frames (``render``, ``peel``: ``blueprint.api.frames``), drawn with a renderer
-shared by every call that is given none."""
+"""The Python API: frames (``render``, ``peel``: ``blueprint.api.frames``) and the file
+workflows (a model, image or video file in, a picture, drawing, video or data file out:
+``blueprint.api.files``), drawn with a renderer shared by every call that is given none."""
 
 from blueprint.api.frames import PLAN, peel, render, render_frame
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
@@ -37,7 +38,8 @@ _renderer: Renderer | None = None
 
 
 def default_renderer() -> Renderer:
-    """The renderer ``render`` and ``peel`` use when none is given (created on first use)."""
+    """The renderer ``render``, ``peel`` and the file workflows use when none is given (created
+    on first use)."""
     global _renderer
     if _renderer is None:
         _renderer = Renderer()

@@ -53,7 +53,8 @@ def run_command(
 ):
     """Run pipeline FILE (a .toml file or a preset name) on INPUT (a model, image or video)."""
     from blueprint.api import default_renderer
-    from blueprint.pipeline.run import parse_assignments, run_pipeline
+    from blueprint.api.files import run_pipeline
+    from blueprint.pipeline.run import parse_assignments
 
     with progress_bar("frames") as progress:
         result = run_pipeline(
@@ -194,8 +195,8 @@ def turntable(
     model, output, frames, fps, size, pipeline_file, elevation, azimuth, fov, ortho, up, settings, crf
 ):
     """Orbit the camera around MODEL and write a video of a pipeline (the blueprint by default)."""
+    from blueprint.api.files import turntable as make_turntable
     from blueprint.pipeline.run import parse_assignments
-    from blueprint.pipeline.run import turntable as make_turntable
 
     with progress_bar("turntable") as progress:
         path = make_turntable(

@@ -10,7 +10,7 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -174,3 +174,26 @@ class VideoWriter:
         finally:
             if self._tmp and os.path.exists(self._tmp):
                 os.unlink(self._tmp)
+
+
+def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float = 30.0) -> int:
+    """Encode (H, W, 3) uint8 frames as H.264 MP4, written atomically; returns the frame count.
+
+    Odd widths and heights are padded by one pixel (players expect 4:2:0 chroma, which needs
+    even sizes) with the colour of the frame's edge.
+    """
+
+    def even(frame: np.ndarray) -> np.ndarray:
+        h, w = frame.shape[:2]
+        return np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+
+    frames = iter(frames)
+    first = next(frames, None)
+    if first is None:
+        raise InputError(f"{path}: no frames to write")
+    first = even(first)
+    with VideoWriter(Path(path), (first.shape[1], first.shape[0]), fps) as video:
+        video.write(first)
+        for frame in frames:
+            video.write(even(frame))
+    return video.frames

@@ -43,6 +43,7 @@ from blueprint.render.stop import MaxLayers
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
+from . import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments
 from .deform import Animation
 from .idlist import IdLists, build_id_lists, id_lists_from_topology
 
@@ -554,8 +555,6 @@ STILL_METHODS = ("gpu-vertex", "gpu-idlist", "cpu")
 
 
 def _cpu_image(positions, faces, camera: Camera, size) -> np.ndarray:
-    from . import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments
-
     w, h = size
     edge_set = classify_edges(
         build_adjacency(positions, faces), camera.view_matrix(), camera.projection_matrix(), w, h
@@ -576,20 +575,18 @@ def render_silhouettes(
     fov: float = 30.0,
     ortho: bool = False,
     camera: Camera | None = None,
-    renderer: Renderer | None = None,
+    renderer: Renderer,
 ) -> np.ndarray:
     """A picture of a model's silhouettes (see :func:`composite`), (H, W, 3) uint8.
 
     ``method`` is ``gpu-vertex``, ``gpu-idlist`` or ``cpu`` (the object-space method: weld,
     connect, orient, classify, draw; it has no visibility, so it draws hidden silhouettes in
     full ink and ignores `layers`). The camera is `camera`, or one fitted from `view`,
-    `azimuth`, `elevation` (degrees), `fov` and `ortho` as ``fit_camera`` does.
+    `azimuth`, `elevation` (degrees), `fov` and `ortho` as ``fit_camera`` does. `renderer`
+    draws them (``blueprint.api.files.render_silhouettes_file`` defaults to the shared one).
     """
     if method not in STILL_METHODS:
         raise InputError(f"unknown method {method!r} (choose {', '.join(STILL_METHODS)})")
-    from blueprint.api import default_renderer
-
-    renderer = renderer or default_renderer()
     w, h = check_size(size, 1, renderer.max_texture)
     camera = camera or fit_camera(
         model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho
@@ -616,21 +613,19 @@ def animate_silhouettes(
     fov: float = 30.0,
     ortho: bool = False,
     camera: Camera | None = None,
-    renderer: Renderer | None = None,
+    renderer: Renderer,
 ) -> Iterator[tuple[np.ndarray, float]]:
     """Pictures of a deforming model's silhouettes, frame by frame: ``(image, ms)`` pairs, the
     image (H, W, 3) uint8 and `ms` the time to get its silhouettes from the frame's positions.
 
     ``gpu-vertex`` uploads the new positions and does nothing else per frame; ``gpu-idlist``
     rebuilds its lists when the topology changes (once, at the split); ``cpu`` redoes the whole
-    object-space preprocessing every frame, as the paper's comparison does.
+    object-space preprocessing every frame, as the paper's comparison does. `renderer` draws
+    them, as for :func:`render_silhouettes`.
     """
     if method not in STILL_METHODS:
         raise InputError(f"unknown method {method!r} (choose {', '.join(STILL_METHODS)})")
-    from blueprint.api import default_renderer
-
     anim = Animation(model, animate, frames, split_at)
-    renderer = renderer or default_renderer()
     w, h = check_size(size, 1, renderer.max_texture)
     if camera is None:
         camera = fit_camera(

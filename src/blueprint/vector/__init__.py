@@ -13,7 +13,6 @@ from .drawing import (
     draw_vector,
     draw_vector_sheet,
     parse_scale,
-    render_vector_file,
     save_drawing,
 )
 from .style import LineStyle, VectorStyle, load_vector_style, vector_style
@@ -29,7 +28,6 @@ __all__ = [
     "draw_vector_sheet",
     "load_vector_style",
     "parse_scale",
-    "render_vector_file",
     "save_drawing",
     "vector_style",
 ]

@@ -1,8 +1,8 @@
 """Vector drawings: object-space lines, occlusion levels from peeled layers, files.
 
 ``draw_vector`` builds a :class:`Drawing` (2D polylines in pixels, each with its part and its
-occlusion level); ``save_drawing`` writes it as SVG, PDF or DXF; ``render_vector_file`` is the
-whole way from a model file to a drawing file, for the command line.
+occlusion level); ``save_drawing`` writes it as SVG, PDF or DXF. The whole way from a model file
+to a drawing file is ``blueprint.api.files.render_vector_file``.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
-from blueprint.render.renderer import Layers, Renderer
+from blueprint.render.renderer import Layers, Renderer, check_size
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
@@ -49,7 +49,6 @@ __all__ = [
     "draw_vector",
     "draw_vector_sheet",
     "parse_scale",
-    "render_vector_file",
     "save_drawing",
 ]
 
@@ -253,7 +252,7 @@ def draw_vector(
     units: str | None = None,
     highlight: Iterable[str | int] | str | int | Model | None = None,
     reveal: float | None = None,
-    renderer: Renderer | None = None,
+    renderer: Renderer,
     layers: Layers | None = None,
     intersections: bool = True,
     spacing: float = 1.0,
@@ -286,8 +285,8 @@ def draw_vector(
     reveal : float, optional
         Depth masking: peel only until this fraction of the highlighted parts is uncovered (as
         ``Renderer.render`` does), so lines behind more surfaces than that are left out.
-    renderer : Renderer, optional
-        Peels the layers (default: the shared renderer).
+    renderer : Renderer
+        Peels the layers (unless ``layers`` are given).
     layers : Layers, optional
         Layers already peeled for this camera and size (skips peeling).
     intersections : bool
@@ -301,9 +300,6 @@ def draw_vector(
     title : str, optional
         A title line; drawings to scale get "<model> — <view> — 1:50 (mm)" by default.
     """
-    from blueprint.api import default_renderer
-    from blueprint.render.renderer import check_size
-
     seconds: dict[str, float] = {}
     if not (0.1 <= spacing <= 16):
         raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
@@ -314,7 +310,6 @@ def draw_vector(
     vstyle = vector_style(style)
     chosen = _highlight(highlight, model)
     if layers is None:
-        renderer = renderer or default_renderer()
         w, h = check_size(size, 1, renderer.max_texture)
         if camera is None:
             camera = fit_camera(model, (w, h), view)
@@ -486,88 +481,3 @@ def save_drawing(path: str | os.PathLike, drawing: Drawing, format: str | None =
     from .dxf import write_dxf
 
     return atomic_write(path, lambda tmp: write_dxf(drawing, tmp))
-
-
-def render_vector_file(
-    model: Model | str | os.PathLike,
-    output_path: str | os.PathLike,
-    *,
-    size: tuple[int, int] = (1024, 1024),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    style: str | Style | VectorStyle = "blueprint",
-    max_layers: int | None = 8,
-    crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    scale: str | float | None = None,
-    units: str | None = None,
-    highlight: Iterable[str | int] | str | int | Model | None = None,
-    reveal: float | None = None,
-    renderer: Renderer | None = None,
-) -> dict:
-    """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
-
-    Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
-    line with its occlusion level and writes the file atomically. A ``scale`` ('1:50') makes
-    the view orthographic and lays the page out in millimetres (``units``: the model's length
-    unit). ``max_layers`` None or 0 peels every layer.
-
-    Returns
-    -------
-    dict
-        ``path``, ``format``, ``bytes`` (file size), ``lines`` (polylines per occlusion level),
-        ``points``, ``layers`` (peeled), ``parts``, ``width``, ``height``, ``seconds`` (per stage
-        and ``total``).
-    """
-    from blueprint.api import default_renderer
-    from blueprint.export.files import check_output
-    from blueprint.render.renderer import check_size
-    from blueprint.scene.loader import load_model
-
-    start = time.perf_counter()
-    output = check_output(output_path, FORMATS)
-    if scale is not None:
-        parse_scale(scale)
-        ortho = True
-    if units is not None and units not in UNITS_MM:
-        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
-    vstyle = vector_style(style)
-    clock = time.perf_counter()
-    loaded = model if isinstance(model, Model) else load_model(model, up=up)
-    load_s = time.perf_counter() - clock
-    renderer = renderer or default_renderer()
-    size = check_size(size, 1, renderer.max_texture)
-    options = dict(
-        style=vstyle,
-        max_layers=max_layers or None,
-        crease_angle=crease_angle,
-        line_width=line_width,
-        highlight=highlight,
-        reveal=reveal,
-        renderer=renderer,
-    )
-    if view == "plan":
-        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
-    else:
-        camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-        drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
-    clock = time.perf_counter()
-    save_drawing(output, drawing)
-    seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}
-    seconds["total"] = time.perf_counter() - start
-    return {
-        "path": str(output),
-        "format": output.suffix.lower().lstrip("."),
-        "bytes": output.stat().st_size,
-        "lines": drawing.lines_per_level(),
-        "points": int(len(drawing.points)),
-        "layers": drawing.layers,
-        "parts": len(drawing.part_names),
-        "width": drawing.width,
-        "height": drawing.height,
-        "seconds": {k: round(v, 4) for k, v in seconds.items()},
-    }

@@ -1,0 +1,337 @@
+"""File workflows: a model, an image or a video file in; a picture, drawing, video or data file
+out. Each draws with ``renderer``, or with the shared one (``blueprint.api.default_renderer``)
+when it is None. The command line is a thin shell over these: every option is an argument of
+the same name.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+import numpy as np
+
+from blueprint.api.frames import shared
+from blueprint.compose.style import Style
+from blueprint.errors import InputError
+from blueprint.export.files import check_output, save_png
+from blueprint.pipeline.executor import Result, executor_for
+from blueprint.pipeline.media import VIDEO_FORMATS, VideoWriter, write_video
+from blueprint.pipeline.run import (
+    PICTURE_SUFFIXES,
+    orbit,
+    parse_variables,
+    run_video,
+    save_result,
+    with_images,
+)
+from blueprint.pipeline.spec import with_file
+from blueprint.render.renderer import Renderer, check_size
+from blueprint.scene.camera import VIEWS, fit_camera
+from blueprint.scene.loader import load_model
+from blueprint.scene.model import Model
+from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
+from blueprint.vector.drawing import (
+    FORMATS,
+    UNITS_MM,
+    draw_vector,
+    draw_vector_sheet,
+    parse_scale,
+    save_drawing,
+)
+from blueprint.vector.style import VectorStyle, vector_style
+
+__all__ = ["render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
+
+
+def run_pipeline(
+    pipeline,
+    input: str | os.PathLike | None = None,
+    output: str | os.PathLike | None = None,
+    *,
+    size: tuple[int, int] | None = None,
+    view: str = "iso",
+    azimuth: float | None = None,
+    elevation: float | None = None,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    set: dict | None = None,
+    image: dict[str, str] | None = None,
+    dump: tuple[str, ...] = (),
+    max_layers: int | None = None,
+    frames: int | None = None,
+    renderer: Renderer | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Result:
+    """Run a pipeline file (or preset) on a model, an image or a video and write the output.
+
+    ``input`` is the model when the pipeline renders attributes; otherwise it fills the first
+    image the pipeline declares without a file. A video input is filtered frame by frame into
+    a video ``output`` (at most ``frames`` frames). ``set`` overrides variables, ``image``
+    gives image files by name, ``dump`` names targets to write beside the output. Returns the
+    last frame's result.
+    """
+    images = {k: str(v) for k, v in (image or {}).items()}
+    spec = with_images(pipeline, images)
+    variables = parse_variables(set)
+    ex = executor_for(shared(renderer))
+    plan = ex.plan(spec, variables, tuple(dump))
+    model = None
+    if input is not None:
+        if plan.peel:
+            model = load_model(input, up=up)
+        else:
+            free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
+            if not free:
+                raise InputError(
+                    f"{spec.source}: this pipeline takes no input file "
+                    "(it reads no attributes and names its images)"
+                )
+            spec = with_file(spec, free[0], Path(input))
+            plan = ex.plan(spec, variables, tuple(dump))
+    elif plan.peel:
+        raise InputError(
+            f"{spec.source}: this pipeline renders attributes ({', '.join(plan.attributes)}): give a model"
+        )
+    bound = plan.bound
+    videos = [n for n in plan.images if bound.images[n].video]
+    if output is None:
+        raise InputError("give an output file (-o)")
+    output = check_output(output, tuple(VIDEO_FORMATS) if videos else PICTURE_SUFFIXES)
+    formats = {d: bound.format_of(plan.resolve(d)) for d in dump}
+    if max_layers is not None and not 0 <= max_layers <= 256:
+        raise InputError(f"max-layers must be between 0 (all) and 256, got {max_layers}")
+    options = dict(variables=variables, dumps=tuple(dump))
+    if max_layers is not None:
+        options["max_layers"] = max_layers or None
+    camera = None
+    if model is not None:
+        w, h = size or bound.size or (1024, 1024)
+        camera = fit_camera(model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+        size = (w, h)
+    if videos:
+        return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
+    result = ex.run(spec, model, camera, size=size, **options)
+    save_result(result, output, formats)
+    return result
+
+
+def turntable(
+    model,
+    output: str | os.PathLike,
+    *,
+    frames: int = 60,
+    fps: float = 30.0,
+    size: tuple[int, int] = (640, 480),
+    pipeline="blueprint",
+    elevation: float | None = None,
+    azimuth: float = 0.0,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    set: dict | None = None,
+    crf: int = 18,
+    renderer: Renderer | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Path:
+    """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
+    (default: the blueprint) as a video, atomically."""
+    output = check_output(output, tuple(VIDEO_FORMATS))
+    if not 0 < fps <= 240:
+        raise InputError(f"fps must be in (0, 240], got {fps}")
+    if not 0 <= crf <= 51:
+        raise InputError(f"crf must be in [0, 51], got {crf}")
+    renderer = shared(renderer)
+    spec = with_images(pipeline, {})
+    variables = parse_variables(set)
+    ex = executor_for(renderer)
+    plan = ex.plan(spec, variables)
+    if not plan.peel:
+        raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
+    model = model if isinstance(model, Model) else load_model(model, up=up)
+    size = tuple(int(v) for v in size)
+    check_size(size, 1, renderer.max_texture)
+    cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
+    with VideoWriter(output, size, fps=fps, crf=crf) as writer:
+        for index, camera in enumerate(cameras):
+            result = ex.run(spec, model, camera, size=size, variables=variables, frame=index)
+            picture = result.image
+            picture = picture[0] if picture.ndim == 4 else picture
+            if picture.shape[-1] == 4:
+                # composite over white where the pipeline leaves the background transparent
+                alpha = picture[..., 3:4].astype(np.float32) / 255.0
+                picture = np.round(picture[..., :3] * alpha + 255.0 * (1.0 - alpha)).astype(np.uint8)
+            writer.write(picture)
+            if progress is not None:
+                progress(index + 1, frames)
+    return output
+
+
+def render_vector_file(
+    model: Model | str | os.PathLike,
+    output_path: str | os.PathLike,
+    *,
+    size: tuple[int, int] = (1024, 1024),
+    view: str = "iso",
+    azimuth: float | None = None,
+    elevation: float | None = None,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    style: str | Style | VectorStyle = "blueprint",
+    max_layers: int | None = 8,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    scale: str | float | None = None,
+    units: str | None = None,
+    highlight: Iterable[str | int] | str | int | Model | None = None,
+    reveal: float | None = None,
+    renderer: Renderer | None = None,
+) -> dict:
+    """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
+
+    Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
+    line with its occlusion level and writes the file atomically. A ``scale`` ('1:50') makes
+    the view orthographic and lays the page out in millimetres (``units``: the model's length
+    unit). ``max_layers`` None or 0 peels every layer.
+
+    Returns
+    -------
+    dict
+        ``path``, ``format``, ``bytes`` (file size), ``lines`` (polylines per occlusion level),
+        ``points``, ``layers`` (peeled), ``parts``, ``width``, ``height``, ``seconds`` (per stage
+        and ``total``).
+    """
+    start = time.perf_counter()
+    output = check_output(output_path, FORMATS)
+    if scale is not None:
+        parse_scale(scale)
+        ortho = True
+    if units is not None and units not in UNITS_MM:
+        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
+    vstyle = vector_style(style)
+    clock = time.perf_counter()
+    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    load_s = time.perf_counter() - clock
+    renderer = shared(renderer)
+    size = check_size(size, 1, renderer.max_texture)
+    options = dict(
+        style=vstyle,
+        max_layers=max_layers or None,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        highlight=highlight,
+        reveal=reveal,
+        renderer=renderer,
+    )
+    if view == "plan":
+        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
+    else:
+        camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+        drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
+    clock = time.perf_counter()
+    save_drawing(output, drawing)
+    seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}
+    seconds["total"] = time.perf_counter() - start
+    return {
+        "path": str(output),
+        "format": output.suffix.lower().lstrip("."),
+        "bytes": output.stat().st_size,
+        "lines": drawing.lines_per_level(),
+        "points": int(len(drawing.points)),
+        "layers": drawing.layers,
+        "parts": len(drawing.part_names),
+        "width": drawing.width,
+        "height": drawing.height,
+        "seconds": {k: round(v, 4) for k, v in seconds.items()},
+    }
+
+
+def render_silhouettes_file(
+    model: Model | str | os.PathLike,
+    output: str | os.PathLike,
+    *,
+    method: str = "gpu-vertex",
+    layers: int = 1,
+    size: tuple[int, int] = (800, 600),
+    view: str = "iso",
+    azimuth: float | None = None,
+    elevation: float | None = None,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    animate: str | None = None,
+    frames: int = 60,
+    fps: float = 30.0,
+    split_at: float = 0.5,
+    renderer: Renderer | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict:
+    """From a model (file or ``Model``) to a PNG of its triangle-ID silhouettes or, with
+    ``animate`` (``twist`` or ``wave``), to an MP4 of ``frames`` frames of them as the model
+    deforms, splitting in two after ``split_at`` of the animation (see
+    ``blueprint.silhouette.gpu.render_silhouettes`` and ``animate_silhouettes``). Arguments
+    are checked before the model is loaded or the GPU touched.
+
+    Returns
+    -------
+    dict
+        ``path``, ``frames``, ``width``, ``height``, ``triangles``, ``method`` and ``ms``: the
+        still's time, or the median time of a frame's silhouettes.
+    """
+    if view not in VIEWS:
+        raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
+    if animate is None and Path(output).suffix.lower() == ".mp4":
+        raise InputError(f"{output}: a video needs --animate twist or --animate wave")
+    output = check_output(output, (".mp4",) if animate else (".png",))
+    if frames < 1:
+        raise InputError(f"frames must be at least 1, got {frames}")
+    if not 0 < fps <= 240:
+        raise InputError(f"fps must be in (0, 240], got {fps:g}")
+    if not 1 <= layers <= MAX_LAYERS:
+        raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
+    size = tuple(size)
+    camera = dict(view=view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    renderer = shared(renderer)
+    summary = {
+        "path": str(output),
+        "width": size[0],
+        "height": size[1],
+        "triangles": loaded.triangle_count,
+        "method": method,
+    }
+    if animate is None:
+        t0 = time.perf_counter()
+        image = render_silhouettes(
+            loaded, method=method, layers=layers, size=size, renderer=renderer, **camera
+        )
+        ms = (time.perf_counter() - t0) * 1e3
+        save_png(output, image)
+        return {**summary, "frames": 1, "ms": ms}
+
+    times: list[float] = []
+    pictures = animate_silhouettes(
+        loaded,
+        animate=animate,
+        frames=frames,
+        split_at=split_at,
+        method=method,
+        layers=layers,
+        size=size,
+        renderer=renderer,
+        **camera,
+    )
+
+    def tracked():
+        for done, (image, ms) in enumerate(pictures, start=1):
+            times.append(ms)
+            yield image
+            if progress is not None:
+                progress(done, frames)
+
+    count = write_video(output, tracked(), fps)
+    return {**summary, "frames": count, "ms": float(np.median(times))}
