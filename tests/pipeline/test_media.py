@@ -107,13 +107,8 @@ def test_turntable(tmp_path, renderer):
 # -- the command line -----------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def cli():
-    """blueprint.cli.main with the pipeline commands registered (as the lead wires them)."""
+    """blueprint.cli.main in this process."""
     from blueprint import cli as cli_module
-    from blueprint.pipeline.command import ops, pipeline, turntable
-
-    for command in (pipeline, ops, turntable):
-        if command.name not in cli_module.cli.commands:
-            cli_module.cli.add_command(command)
 
     def call(*args):
         with pytest.raises(SystemExit) as info:

@@ -9,9 +9,9 @@ import trimesh
 from click.testing import CliRunner
 
 from blueprint import Camera, InputError, Model
+from blueprint.cli.silhouettes import silhouettes
 from blueprint.pipeline.media import write_video
 from blueprint.silhouette import build_adjacency, classify_edges, draw_segments
-from blueprint.silhouette.command import silhouettes
 from blueprint.silhouette.deform import Animation
 from blueprint.silhouette.gpu import GpuSilhouettes, animate_silhouettes
 
@@ -170,7 +170,7 @@ def run_command(*args) -> subprocess.CompletedProcess:
     """The command in its own process: it draws with the default renderer, a second GL context
     that must not become current in the test process (the session renderer's)."""
     return subprocess.run(
-        [sys.executable, "-m", "blueprint.silhouette.command", *map(str, args)],
+        [sys.executable, "-c", "from blueprint.cli.silhouettes import main; main()", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=120,

@@ -25,7 +25,7 @@ from blueprint.viewer.overlay import BACKDROP
 
 ROOT = Path(__file__).resolve().parents[2]
 GEARBOX = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
-ENTRY = "from blueprint.viewer.command import main; main()"
+ENTRY = "from blueprint.cli.view import main; main()"
 SIZE = (320, 240)
 HIGHLIGHT = np.round(np.array(blueprint.STYLES["paper"].highlight[:3]) * 255)
 TIMEOUT = 30.0

@@ -1,5 +1,5 @@
-"""``blueprint view MODEL``: the click command (registered in ``blueprint.cli`` by the lead) and
-a stand-alone entry point, ``main``, with the CLI's error handling."""
+"""``blueprint view MODEL``: the click command over ``blueprint.viewer`` and a stand-alone entry
+point, ``main``, with the CLI's error handling."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from blueprint.cli import STYLE_NAMES, camera_options
+from blueprint.cli.options import STYLE_NAMES, camera_options, run
 from blueprint.errors import InputError
 from blueprint.scene.camera import VIEWS
 
@@ -117,10 +117,4 @@ def view(
 
 def main(argv: list[str] | None = None) -> None:
     """``blueprint view`` as a program of its own (the tests start it so)."""
-    from blueprint.cli import run
-
     run(view, argv, "blueprint view")
-
-
-if __name__ == "__main__":
-    main()

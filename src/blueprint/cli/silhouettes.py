@@ -1,7 +1,6 @@
-"""``blueprint silhouettes MODEL``: triangle-ID silhouettes of a still model or of a deforming one.
-
-The click command is registered in ``blueprint.cli`` by the lead; ``main`` runs it on its own
-with the CLI's error handling (one line, exit code 2).
+"""``blueprint silhouettes MODEL``: triangle-ID silhouettes of a still model or of a deforming one,
+a thin shell over ``blueprint.api.files.render_silhouettes_file``; ``main`` runs the command on
+its own with the CLI's error handling (one line, exit code 2).
 """
 
 from __future__ import annotations
@@ -10,10 +9,9 @@ from pathlib import Path
 
 import click
 
-from blueprint.cli import camera_options, progress_bar
-
-from .deform import KINDS
-from .gpu import STILL_METHODS
+from blueprint.cli.options import camera_options, progress_bar, run
+from blueprint.silhouette.deform import KINDS
+from blueprint.silhouette.gpu import STILL_METHODS
 
 DEFAULT_SIZE = (800, 600)
 
@@ -107,10 +105,4 @@ def silhouettes(
 
 def main(argv: list[str] | None = None) -> None:
     """``blueprint silhouettes`` as a program of its own."""
-    from blueprint.cli import run
-
     run(silhouettes, argv, "blueprint silhouettes")
-
-
-if __name__ == "__main__":
-    main()

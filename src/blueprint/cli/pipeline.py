@@ -1,7 +1,5 @@
-"""Command line: ``blueprint pipeline run|check``, ``blueprint ops``, ``blueprint turntable``.
-
-Registered in ``blueprint.cli``; a thin shell over ``blueprint.pipeline.run``.
-"""
+"""``blueprint pipeline run|check``, ``blueprint ops``, ``blueprint turntable``: a thin shell over
+``blueprint.api.files.run_pipeline`` and ``turntable``, the pipeline specs and the ops."""
 
 from __future__ import annotations
 
@@ -10,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from blueprint.cli import camera_options, progress_bar
+from blueprint.cli.options import camera_options, progress_bar
 
 
 @click.group("pipeline")

@@ -1,0 +1,91 @@
+"""``blueprint info`` (the OpenGL renderer, or a model's parts) and ``blueprint bench`` (timings)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+@click.command()
+@click.argument("model", required=False, type=click.Path(path_type=Path))
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def info(model, as_json):
+    """Without MODEL: the OpenGL renderer. With MODEL: its parts, triangles and bounds."""
+    if model is None:
+        from blueprint.gpu import create_context, gl_info
+
+        ctx = create_context()
+        data = gl_info(ctx)
+        ctx.release()
+        if as_json:
+            click.echo(json.dumps(data))
+        else:
+            click.echo(f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}")
+        return
+    from blueprint.scene.loader import load_model
+
+    loaded = load_model(model)
+    counts = loaded.part_triangle_counts()
+    lo, hi = loaded.bounds
+    if as_json:
+        click.echo(
+            json.dumps(
+                {
+                    "file": str(model),
+                    "triangles": loaded.triangle_count,
+                    "up": loaded.up,
+                    "bounds": [lo.tolist(), hi.tolist()],
+                    "parts": [
+                        {"index": i, "name": n, "triangles": int(c)}
+                        for i, (n, c) in enumerate(zip(loaded.part_names, counts, strict=True))
+                    ],
+                }
+            )
+        )
+        return
+    click.echo(f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, up {loaded.up}")
+    click.echo(f"bounds: [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] - [{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
+    for i, (name, count) in enumerate(zip(loaded.part_names, counts, strict=True)):
+        click.echo(f"  {i:4d}  {count:9d}  {name}")
+
+
+@click.command()
+@click.argument("models", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option(
+    "--size",
+    "sizes",
+    nargs=2,
+    type=int,
+    multiple=True,
+    metavar="W H",
+    help="Image size; repeat for several (default 512 512 and 1024 1024).",
+)
+@click.option(
+    "--max-layers",
+    "layer_options",
+    type=int,
+    multiple=True,
+    help="Layers at most; 0 for all; repeat for several (default 5 and 0).",
+)
+@click.option(
+    "--frames", type=click.IntRange(1), default=20, show_default=True, help="Timed frames per configuration."
+)
+@click.option("--warmup", type=click.IntRange(0), default=3, show_default=True)
+@click.option("--supersample", type=int, default=2, show_default=True)
+@click.option("--style", default="blueprint", show_default=True)
+def bench(models, sizes, layer_options, frames, warmup, supersample, style):
+    """Time whole frames (image read back) and print one JSON object per configuration."""
+    from blueprint.bench import run_bench
+
+    for record in run_bench(
+        models,
+        sizes=[tuple(s) for s in sizes] or [(512, 512), (1024, 1024)],
+        layer_options=[n or None for n in layer_options] or [5, None],
+        frames=frames,
+        warmup=warmup,
+        supersample=supersample,
+        style=style,
+    ):
+        click.echo(json.dumps(record))

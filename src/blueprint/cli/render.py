@@ -1,0 +1,227 @@
+"""``blueprint render`` (PNG, or vector lines as SVG, PDF, DXF) and ``blueprint layers`` (NPZ)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
+from blueprint.errors import InputError
+
+
+@click.command()
+@click.argument("model", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="PNG file to write.")
+@camera_options
+@click.option(
+    "--style",
+    default="blueprint",
+    show_default=True,
+    help=f"One of {', '.join(STYLE_NAMES)}; for .svg, .pdf and .dxf also a line style file "
+    "(.toml or .json: colour, width, dash and opacity per occlusion level).",
+)
+@click.option("--grid", type=float, default=None, help="Grid spacing in pixels (0: none).")
+@click.option(
+    "--max-layers",
+    type=int,
+    default=8,
+    show_default=True,
+    help="Depth layers to peel at most (0: all).",
+)
+@click.option(
+    "--min-fraction",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="Stop when a layer covers less than this fraction of the first.",
+)
+@click.option("--crease-angle", type=float, default=30.0, show_default=True, help="Degrees.")
+@click.option("--line-width", type=float, default=1.0, show_default=True, help="Pixels.")
+@click.option("--supersample", type=int, default=2, show_default=True, help="Anti-aliasing factor (1-4).")
+@click.option("--highlight", default=None, help="Parts to outline: name globs or indices, comma-separated.")
+@click.option(
+    "--highlight-model",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="Outline the parts that this second model file lies on.",
+)
+@click.option(
+    "--scale", default=None, help="Vector plan views to scale, e.g. 1:50 (orthographic, page in mm)."
+)
+@click.option("--units", default=None, help="The model's length unit for --scale (mm, cm, m, in, ft).")
+@click.option("--id-silhouettes", is_flag=True, help="Add triangle-ID silhouettes to every layer's edges.")
+@click.option("--shade", default=None, help="Parts to draw shaded inside the drawing: globs or indices.")
+@click.option(
+    "--shade-opacity", type=float, default=1.0, show_default=True, help="1 opaque, less see-through."
+)
+@click.option(
+    "--glyphs",
+    "glyph_file",
+    type=click.Path(path_type=Path),
+    default=None,
+    help="TOML or JSON file of boxes, arrows, paths and labels in model coordinates.",
+)
+@click.option(
+    "--reveal",
+    type=float,
+    default=None,
+    help="Depth masking: peel until this fraction of the highlighted parts shows.",
+)
+def render(
+    model,
+    output,
+    size,
+    view,
+    azimuth,
+    elevation,
+    fov,
+    ortho,
+    up,
+    style,
+    grid,
+    max_layers,
+    min_fraction,
+    crease_angle,
+    line_width,
+    supersample,
+    highlight,
+    highlight_model,
+    scale,
+    units,
+    id_silhouettes,
+    shade,
+    shade_opacity,
+    glyph_file,
+    reveal,
+):
+    """Draw the blueprint of MODEL into a PNG, or as vector lines into SVG, PDF or DXF."""
+    from blueprint.api import default_renderer, render_frame
+    from blueprint.compose.glyphs import load_glyphs
+    from blueprint.compose.style import get_style
+    from blueprint.export.files import check_output, save_png
+    from blueprint.scene.loader import load_model
+
+    output = check_output(output, (".png", *VECTOR_SUFFIXES))
+    if output.suffix.lower() in VECTOR_SUFFIXES:
+        if glyph_file or shade:
+            raise InputError(
+                f"{output}: vector drawings take no --glyphs or --shade yet; write a PNG for those"
+            )
+        camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
+        if highlight and highlight_model:
+            raise InputError("give --highlight or --highlight-model, not both")
+        if highlight_model:
+            model = load_model(model, up=camera["up"])
+            highlight = load_model(highlight_model, up=camera["up"])
+        _render_vector(
+            model,
+            output,
+            camera,
+            style,
+            max_layers,
+            crease_angle,
+            line_width,
+            scale,
+            units,
+            highlight,
+            reveal,
+        )
+        return
+    if scale or units:
+        raise InputError("--scale and --units are for vector drawings (.svg, .pdf, .dxf)")
+    if _is_style_file(style):
+        raise InputError(
+            f"{style}: line style files are for vector drawings (.svg, .pdf, .dxf); "
+            f"a PNG takes one of {', '.join(STYLE_NAMES)}"
+        )
+    chosen = get_style(style, grid)
+    glyphs = load_glyphs(glyph_file) if glyph_file else None
+    kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
+    up_axis = kwargs.pop("up")
+    loaded = load_model(model, up=up_axis)
+    if highlight and highlight_model:
+        raise InputError("give --highlight or --highlight-model, not both")
+    designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight
+    frame = render_frame(
+        loaded,
+        style=chosen,
+        max_layers=max_layers or None,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        supersample=supersample,
+        highlight=designated,
+        reveal=reveal,
+        glyphs=glyphs,
+        shade=shade,
+        shade_opacity=shade_opacity,
+        id_silhouettes=id_silhouettes,
+        **kwargs,
+    )
+    save_png(output, frame.image)
+    info = default_renderer().info
+    shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
+    click.echo(
+        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles, "
+        f"{frame.layers} layers{shown}, {frame.ms:.1f} ms on {info['renderer']}"
+    )
+
+
+VECTOR_SUFFIXES = (".svg", ".pdf", ".dxf")
+
+
+def _is_style_file(style: str) -> bool:
+    return Path(style).suffix.lower() in (".toml", ".json")
+
+
+def _render_vector(
+    model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
+):
+    from blueprint.api import default_renderer
+    from blueprint.api.files import render_vector_file
+
+    if _is_style_file(style):
+        from blueprint.vector import load_vector_style
+
+        style = load_vector_style(style)
+    elif style not in STYLE_NAMES:
+        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)} or a line style file)")
+    summary = render_vector_file(
+        model,
+        output,
+        style=style,
+        max_layers=max_layers or None,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        scale=scale,
+        units=units,
+        highlight=highlight,
+        reveal=reveal,
+        **camera,
+    )
+    levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
+    click.echo(
+        f"{output}: {summary['bytes']} bytes, polylines {levels or 'none'}, "
+        f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
+    )
+
+
+@click.command()
+@click.argument("model", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="NPZ file to write.")
+@camera_options
+@click.option("--max-layers", type=int, default=0, show_default=True, help="Layers at most (0: all).")
+@click.option("--min-fraction", type=float, default=0.0, show_default=True)
+def layers(model, output, size, view, azimuth, elevation, fov, ortho, up, max_layers, min_fraction):
+    """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
+    from blueprint.api import peel
+    from blueprint.export.files import check_output, save_layers
+    from blueprint.scene.loader import load_model
+
+    output = check_output(output, (".npz",))
+    kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (512, 512))
+    loaded = load_model(model, up=kwargs.pop("up"))
+    result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)
+    save_layers(output, result)
+    click.echo(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")
