@@ -22,6 +22,7 @@ from pathlib import Path
 from blueprint import examples
 from blueprint.api import default_renderer
 from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
+from blueprint.scene.camera import fit_camera
 from blueprint.scene.loader import load_model
 
 # (case, preset, size, the paper's fps)
@@ -61,7 +62,7 @@ def main(argv=None) -> None:
     if not args.skip_paper:
         for case, preset, size, paper_fps in PAPER_CASES:
             spec = load_pipeline(preset)
-            camera = renderer.camera_for(model, size)
+            camera = fit_camera(model, size)
             last = {}
 
             def run(spec=spec, camera=camera, size=size, last=last):
@@ -83,7 +84,7 @@ def main(argv=None) -> None:
             }
             print(json.dumps(record), flush=True)
     for size in [tuple(s) for s in args.blueprint_size or [(512, 512), (1024, 1024)]]:
-        camera = renderer.camera_for(model, size)
+        camera = fit_camera(model, size)
         frames = {}
 
         def old(size=size, camera=camera, frames=frames):

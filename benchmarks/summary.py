@@ -1,6 +1,6 @@
 """Markdown tables from the JSON lines the benchmarks print.
 
-    python benchmarks/summary.py results/*.jsonl
+python benchmarks/summary.py results/*.jsonl
 """
 
 from __future__ import annotations

@@ -16,6 +16,7 @@ import statistics
 from pathlib import Path
 
 from blueprint import Renderer, load_model
+from blueprint.scene.camera import fit_camera
 
 
 def main() -> None:
@@ -35,7 +36,7 @@ def main() -> None:
         for path in args.models:
             model = load_model(path)
             for size in [tuple(s) for s in (args.size or [[512, 512]])]:
-                camera = r.camera_for(model, size)
+                camera = fit_camera(model, size)
                 for ss in args.supersample or [1, 2]:
                     for use_compute, in_shader, kbuffer in variants:
                         r.use_compute, r.back_bias_in_shader = use_compute, in_shader

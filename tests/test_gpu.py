@@ -14,8 +14,8 @@ import blueprint
 from blueprint import examples
 from blueprint.errors import GLUnavailableError, InputError, ShaderError
 from blueprint.gpu import TargetPool, build_program, create_context, gl_info, preprocess
+from blueprint.gpu.device import check_size
 from blueprint.gpu.shaders import _explain
-from blueprint.render.renderer import check_size
 
 # -- a throw-away shader package ------------------------------------------------------------------
 # build_program loads "package:path" references through importlib.resources, so a package made in

@@ -14,6 +14,7 @@ import blueprint
 from blueprint import examples
 from blueprint.render import capture
 from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
+from blueprint.scene.camera import fit_camera
 
 
 @pytest.fixture
@@ -136,7 +137,7 @@ def test_used_only_where_it_pays(renderer, monkeypatch):
         pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
-    camera = renderer.camera_for(model, (64, 64))
+    camera = fit_camera(model, (64, 64))
     side = int(np.sqrt(mesh.triangles / renderer.kbuffer_density)) + 2
     small = gbuffer(renderer.pool, (64, 64), "test.small")
     large = gbuffer(renderer.pool, (side, side), "test.large")

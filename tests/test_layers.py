@@ -9,9 +9,8 @@ An AST walk over ``src/blueprint`` finds every import, function-level ones inclu
 * no import cycle joins two members (packages, or modules placed on their own);
 * only cli/ and viewer/ import the GUI libraries (click, glfw).
 
-Violations in code being rewritten elsewhere are listed in ``KNOWN``; a pair that no longer
-occurs fails too, so the list can only shrink. The checker itself is tested at the bottom on tiny
-fake packages, so that it cannot pass by finding nothing.
+The checker itself is tested at the bottom on tiny fake packages, so that it cannot pass by
+finding nothing.
 """
 
 from __future__ import annotations
@@ -60,13 +59,6 @@ ONLY = {"blueprint.export": ("blueprint.errors", "blueprint.scene")}
 
 GUI_LIBRARIES = ("click", "glfw")
 GUI_MEMBERS = ("blueprint.cli", "blueprint.viewer")
-
-# (importer, imported) modules that break the rules today, in the frame path that is being
-# redesigned. Remove a pair when its import goes.
-KNOWN = {
-    # Renderer.render hands every frame to the blueprint preset, a pipeline (lazily)
-    ("blueprint.render.renderer", "blueprint.pipeline.blueprint"),
-}
 
 
 # -- the checker -----------------------------------------------------------------------------------
@@ -191,14 +183,13 @@ def violations(imports, layers=LAYERS, only=ONLY) -> list[tuple[Import, str]]:
     return out
 
 
-def member_cycles(imports, layers=LAYERS, known=frozenset()) -> list[list[Import]]:
-    """Import cycles between members, one per strongly connected component of the member graph
-    (imports in ``known`` left out): the shortest cycle through the component's first member,
-    as the imports that make it."""
+def member_cycles(imports, layers=LAYERS) -> list[list[Import]]:
+    """Import cycles between members, one per strongly connected component of the member graph:
+    the shortest cycle through the component's first member, as the imports that make it."""
     edges: dict[tuple[str, str], Import] = {}
     for imp in imports:
         a, b = member_of(imp.importer, layers), member_of(imp.imported, layers)
-        if a and b and a != b and (imp.importer, imp.imported) not in known:
+        if a and b and a != b:
             edges.setdefault((a, b), imp)
     graph: dict[str, list[str]] = {}
     for a, b in sorted(edges):
@@ -264,25 +255,15 @@ def member_cycles(imports, layers=LAYERS, known=frozenset()) -> list[list[Import
     return cycles
 
 
-def problems(imports, layers=LAYERS, only=ONLY, known=KNOWN) -> list[str]:
-    """Every broken rule as one line naming the file, the line and the rule, plus every
-    ``known`` pair that no longer breaks a rule."""
-    lines = []
-    seen = set()
-    for imp, rule in violations(imports, layers, only):
-        pair = (imp.importer, imp.imported)
-        if pair in known:
-            seen.add(pair)
-            continue
-        lines.append(f"{imp.where()}: {rule}")
-    for cycle in member_cycles(imports, layers, known):
+def problems(imports, layers=LAYERS, only=ONLY) -> list[str]:
+    """Every broken rule as one line naming the file, the line and the rule."""
+    lines = [f"{imp.where()}: {rule}" for imp, rule in violations(imports, layers, only)]
+    for cycle in member_cycles(imports, layers):
         members = " -> ".join(
             [member_of(imp.importer, layers) for imp in cycle] + [member_of(cycle[0].importer, layers)]
         )
         closing = "; ".join(imp.where() for imp in cycle)
         lines.append(f"import cycle {members}: {closing}")
-    for importer, imported in sorted(set(known) - seen):
-        lines.append(f"KNOWN pair ({importer}, {imported}) no longer breaks a rule: remove it from KNOWN")
     return lines
 
 
@@ -361,14 +342,14 @@ def test_checker_passes_a_clean_fake_package():
 
 def test_checker_fails_an_upward_import_inside_a_function():
     imports = fake({"pkg.base": "def f():\n    from pkg.app import run\n    return run", "pkg.app": ""})
-    assert problems(imports, FAKE, {}, set()) == [
+    assert problems(imports, FAKE, {}) == [
         "pkg/base.py:2: pkg.base imports pkg.app: upward: layer low imports layer high above it"
     ]
 
 
 def test_checker_fails_a_sibling_import():
     imports = fake({"pkg.left": "import pkg.right.deep", "pkg.right.__init__": "", "pkg.right.deep": ""})
-    assert problems(imports, FAKE, {}, set()) == [
+    assert problems(imports, FAKE, {}) == [
         "pkg/left.py:1: pkg.left imports pkg.right.deep: sideways: pkg.left and pkg.right are siblings "
         "in layer mid"
     ]
@@ -383,13 +364,13 @@ def test_checker_fails_a_cycle_within_a_layer_through_a_lazy_import():
             "pkg.app.main": "",
         }
     )
-    assert problems(imports, FAKE, {}, set()) == [
+    assert problems(imports, FAKE, {}) == [
         "import cycle pkg.app -> pkg.tool -> pkg.app: pkg/app/__init__.py:1: pkg.app imports pkg.tool; "
         "pkg/tool.py:5: pkg.tool imports pkg.app.main"
     ]
 
 
-def test_checker_finds_every_member_of_a_longer_cycle_and_leaves_known_imports_out():
+def test_checker_finds_every_member_of_a_longer_cycle():
     three = (Layer("one", ("pkg.a", "pkg.b", "pkg.c", "pkg.d")),)
     imports = fake(
         {
@@ -405,22 +386,13 @@ def test_checker_finds_every_member_of_a_longer_cycle_and_leaves_known_imports_o
         ("pkg.b", "pkg.c"),
         ("pkg.c", "pkg.a"),
     ]
-    assert member_cycles(imports, three, known={("pkg.c", "pkg.a")}) == []
-
-
-def test_checker_silences_known_pairs_and_fails_stale_ones():
-    imports = fake({"pkg.base": "import pkg.app", "pkg.app": ""})
-    assert problems(imports, FAKE, {}, {("pkg.base", "pkg.app")}) == []
-    assert problems(imports, FAKE, {}, {("pkg.base", "pkg.app"), ("pkg.left", "pkg.right")}) == [
-        "KNOWN pair (pkg.left, pkg.right) no longer breaks a rule: remove it from KNOWN"
-    ]
 
 
 def test_checker_fails_an_import_outside_an_only_list_and_a_module_without_a_layer():
     imports = fake(
         {"pkg.tool": "from pkg import base, left", "pkg.base": "", "pkg.left": "", "pkg.extra": "import os"}
     )
-    assert problems(imports, FAKE, {"pkg.tool": ("pkg.base",)}, set()) == [
+    assert problems(imports, FAKE, {"pkg.tool": ("pkg.base",)}) == [
         "pkg/tool.py:1: pkg.tool imports pkg.left: pkg.tool may import only pkg.base",
         "pkg/extra.py:1: pkg.extra imports os: pkg.extra is in no layer: add it to LAYERS",
     ]

@@ -9,6 +9,7 @@ from oracle import raycast_layers
 from blueprint import InputError, load_model
 from blueprint.api import designated_parts, render_frame
 from blueprint.examples import assemble, box, gearbox
+from blueprint.scene.camera import fit_camera
 from blueprint.scene.parts import select_parts, select_parts_like
 
 SIZE = (80, 80)
@@ -32,7 +33,7 @@ def predicted_layers(model, camera, selected, fraction):
 
 def check_stop(renderer, model, pattern, fractions):
     selected = select_parts(model, pattern)
-    camera = renderer.camera_for(model, SIZE)
+    camera = fit_camera(model, SIZE)
     checked = 0
     for fraction in fractions:
         expected, shares = predicted_layers(model, camera, selected, fraction)

@@ -1,10 +1,11 @@
 """blueprint: drawings of the visible and hidden edges of 3D models, computed on the GPU."""
 
 from blueprint.api import default_renderer, peel, render, render_frame
+from blueprint.api.renderer import Renderer
 from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
 from blueprint.compose.style import STYLES, Style
 from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
-from blueprint.render.renderer import Frame, Layers, Renderer
+from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import VIEWS, Camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model

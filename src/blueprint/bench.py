@@ -10,7 +10,8 @@ from rich.console import Console
 from rich.progress import Progress
 
 from blueprint.api import default_renderer
-from blueprint.render.renderer import Renderer, check_size
+from blueprint.api.renderer import Renderer
+from blueprint.gpu.device import check_size
 from blueprint.scene.camera import fit_camera
 from blueprint.scene.loader import load_model
 

@@ -18,6 +18,7 @@ from blueprint.api.files import run_pipeline
 from blueprint.errors import InputError, ShaderError
 from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
 from blueprint.pipeline.executor import part_color
+from blueprint.scene.camera import fit_camera
 
 SIZE = (64, 48)
 
@@ -148,7 +149,7 @@ per_layer = true
 
 def test_attribute_pass_matches_the_peel(tmp_path, ex, renderer, gearbox):
     spec = load_pipeline(str(write(tmp_path, "attrs.toml", ATTRIBUTES)))
-    camera = renderer.camera_for(gearbox, SIZE)
+    camera = fit_camera(gearbox, SIZE)
     names = ("depth", "triangle", "part", "linear_depth", "position", "base_color", "uv", "ids", "mark")
     result = ex.run(spec, gearbox, camera, size=SIZE, dumps=names)
     peel = renderer.peel(gearbox, camera, size=SIZE, max_layers=3)

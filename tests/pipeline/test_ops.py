@@ -17,6 +17,7 @@ from blueprint import examples
 from blueprint.compose.style import STYLES
 from blueprint.ops import BLUR, OPS
 from blueprint.pipeline.executor import executor_for
+from blueprint.scene.camera import fit_camera
 
 H, W = 11, 13
 rng = np.random.default_rng(4)
@@ -200,7 +201,7 @@ def test_edges_coverage_and_part_boundaries(ex, renderer):
     for dx, dy in ((-1, 0), (1, 0), (0, -1), (0, 1)):
         expected |= shift(cov, dx, dy) != cov
         expected |= cov & (shift(ids[..., 1], dx, dy) != ids[..., 1])
-    camera = renderer.camera_for(examples.gearbox(), (W, H))
+    camera = fit_camera(examples.gearbox(), (W, H))
     out = ex.run_op(
         "edges", {"depth": depth, "normal": normal, "ids": ids}, formats={"depth": "depth"}, camera=camera
     )

@@ -11,6 +11,7 @@ from click.testing import CliRunner
 from blueprint import Camera, InputError, Model
 from blueprint.cli.silhouettes import silhouettes
 from blueprint.pipeline.media import write_video
+from blueprint.scene.camera import fit_camera
 from blueprint.silhouette import build_adjacency, classify_edges, draw_segments
 from blueprint.silhouette.deform import Animation
 from blueprint.silhouette.gpu import GpuSilhouettes, animate_silhouettes
@@ -127,7 +128,7 @@ def test_id_lists_follow_the_split_when_told(renderer):
     # the split at 0.4 falls between frames: where the pieces still touch (gap 0), positions say
     # "one surface" and the lists "two pieces", and both are right
     anim = Animation(model, "wave", frames=3, split_at=0.4)
-    camera = renderer.camera_for(model, SIZE, "front")
+    camera = fit_camera(model, SIZE, "front")
     with GpuSilhouettes(renderer) as sil:
         first = anim.pose(0)
         soup = sil.soup(first.corners(), topology=(first.faces, len(first.positions)))

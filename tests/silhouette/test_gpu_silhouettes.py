@@ -7,6 +7,7 @@ from scipy import ndimage
 
 from blueprint import InputError, Model, load_model
 from blueprint.examples import box, gearbox, prism
+from blueprint.scene.camera import fit_camera
 from blueprint.silhouette import BORDER, SILHOUETTE, build_adjacency, classify_edges
 from blueprint.silhouette.gpu import GpuSilhouettes, composite, render_silhouettes
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
@@ -116,7 +117,7 @@ def part_boundaries(part0: np.ndarray) -> np.ndarray:
 def agreement(sil, renderer, model: Model, size, view="iso", method="vertex") -> tuple[float, float]:
     """(share of visible CPU edge pixels within 1 px of a GPU pixel, share of GPU pixels within
     1 px of a visible CPU edge pixel)."""
-    camera = renderer.camera_for(model, size, view)
+    camera = fit_camera(model, size, view)
     gpu = sil.render(model, camera, size, method=method)[0] > 0
     layer0 = renderer.peel(model, camera, size=size, max_layers=1)
     cpu = visible_cpu_pixels(model, camera, size, layer0.depth[0])
@@ -151,7 +152,7 @@ def test_matches_cpu_method_on_shared_models(sil, renderer, shared_models, path)
 @pytest.mark.parametrize("method", ["vertex", "idlist"])
 def test_soup_with_mixed_winding_changes_nothing(sil, renderer, make, method):
     model = make()
-    camera = renderer.camera_for(model, SIZE)
+    camera = fit_camera(model, SIZE)
     welded = sil.render(model, camera, SIZE, layers=3, method=method)
     soup = sil.render(soup_of(model), camera, SIZE, layers=3, method=method)
     assert welded[0].sum() > 100
@@ -163,7 +164,7 @@ def test_soup_with_mixed_winding_changes_nothing_visible_on_an_assembly(sil, ren
     breaks their depth ties by winding (front faces win), so reversing windings may swap which
     face of a touching pair a deeper layer shows."""
     model = gearbox()
-    camera = renderer.camera_for(model, SIZE)
+    camera = fit_camera(model, SIZE)
     for method in ("vertex", "idlist"):
         welded = sil.render(model, camera, SIZE, method=method)
         np.testing.assert_array_equal(sil.render(soup_of(model, 1), camera, SIZE, method=method), welded)
@@ -193,7 +194,7 @@ def test_non_manifold_axis_gives_the_cylinder_outline(sil, renderer, view):
     plain, finned = finned_cylinder()
     assert np.bincount(build_adjacency(finned.positions, finned.faces).edge_faces[:, 0]).max() == 16
     assert sorted(sil.id_lists(finned).pointers[:, 1])[-2:] == [48, 64]
-    camera = renderer.camera_for(plain, SIZE, view)
+    camera = fit_camera(plain, SIZE, view)
     expected = sil.render(plain, camera, SIZE)[0]
     assert expected.sum() > 500
     for method in ("vertex", "idlist"):
@@ -205,7 +206,7 @@ def test_non_manifold_axis_gives_the_cylinder_outline(sil, renderer, view):
 @pytest.mark.parametrize("make", [sphere, cylinder, open_gearbox], ids=["sphere", "cylinder", "gearbox"])
 def test_vertex_storage_equals_id_lists(sil, renderer, make):
     model = make()
-    camera = renderer.camera_for(model, SIZE, "front")
+    camera = fit_camera(model, SIZE, "front")
     vertex = sil.render(model, camera, SIZE, layers=4, method="vertex")
     assert vertex[1].sum() > 100
     np.testing.assert_array_equal(sil.render(model, camera, SIZE, layers=4, method="idlist"), vertex)
@@ -213,14 +214,14 @@ def test_vertex_storage_equals_id_lists(sil, renderer, make):
 
 def test_vertex_storage_equals_id_lists_on_a_shared_model(sil, renderer, shared_models):
     model = load_model(shared_models / "common-3d-test-models/cow.obj")
-    camera = renderer.camera_for(model, SIZE)
+    camera = fit_camera(model, SIZE)
     vertex = sil.render(model, camera, SIZE, layers=2, method="vertex")
     np.testing.assert_array_equal(sil.render(model, camera, SIZE, layers=2, method="idlist"), vertex)
 
 
 def test_compute_pass_equals_fragment_pass(renderer):
     model, camera = open_gearbox(), None
-    camera = renderer.camera_for(model, SIZE)
+    camera = fit_camera(model, SIZE)
     with GpuSilhouettes(renderer, compute=False) as frag, GpuSilhouettes(renderer, compute=True) as comp:
         for method in ("vertex", "idlist"):
             expected = frag.render(model, camera, SIZE, layers=3, method=method)
@@ -243,7 +244,7 @@ def test_fan_around_one_vertex_draws_only_its_outline(sil, renderer, method):
     own only at that vertex. A cylinder from straight above shows its cap, a fan of 48
     triangles around its centre: exactly the outline is drawn, no dots at the centre."""
     model = cylinder()
-    camera = renderer.camera_for(model, (96, 96), "top")
+    camera = fit_camera(model, (96, 96), "top")
     edges = sil.render(model, camera, (96, 96), method=method)[0]
     layer = renderer.peel(model, camera, size=(96, 96), max_layers=1)
     assert len(np.unique(layer.triangle[0])) > 40
@@ -255,7 +256,7 @@ def test_bow_tie_touching_at_a_vertex(sil, renderer):
     drawn, only the outline against the background."""
     positions = np.array([[0, 0, 0], [-1, -1, 0], [-1, 1, 0], [1, 1, 0], [1, -1, 0]], float)
     model = Model.from_arrays(positions, [[0, 2, 1], [0, 4, 3]])
-    camera = renderer.camera_for(model, (64, 64), "front")
+    camera = fit_camera(model, (64, 64), "front")
     edges = sil.render(model, camera, (64, 64))[0]
     layer = renderer.peel(model, camera, size=(64, 64), max_layers=1)
     np.testing.assert_array_equal(edges > 0, coverage_outline(layer.triangle[0]))

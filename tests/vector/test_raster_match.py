@@ -27,6 +27,7 @@ from vector_helpers import svg_lines
 
 from blueprint.compose.style import Style
 from blueprint.examples import gearbox
+from blueprint.scene.camera import fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.vector import draw_vector, save_drawing
 
@@ -73,7 +74,7 @@ def _near(points, others):
 
 
 def compare(renderer, model, tmp_path):
-    camera = renderer.camera_for(model, SIZE, "iso")
+    camera = fit_camera(model, SIZE, "iso")
     drawing = draw_vector(model, camera, SIZE, renderer=renderer, style="paper")
     svg = save_drawing(tmp_path / "drawing.svg", drawing)
     raster = raster_levels(renderer, model, camera)
@@ -135,7 +136,7 @@ def test_svg_rendered_by_cairosvg_overlays_the_raster(renderer, tmp_path):
     from blueprint.vector import vector_style
 
     model = gearbox()
-    camera = renderer.camera_for(model, SIZE, "iso")
+    camera = fit_camera(model, SIZE, "iso")
     style = vector_style("transparent", dashes=False)
     drawing = draw_vector(model, camera, SIZE, renderer=renderer, style=style)
     svg = save_drawing(tmp_path / "solid.svg", drawing)

@@ -3,9 +3,11 @@ workflows (a model, image or video file in, a picture, drawing, video or data fi
 ``blueprint.api.files``), drawn with a renderer shared by every call that is given none."""
 
 from blueprint.api.frames import PLAN, peel, render, render_frame
+from blueprint.api.renderer import Renderer
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.errors import InputError
-from blueprint.render.renderer import Frame, Layers, Renderer, check_size
+from blueprint.gpu.device import check_size
+from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model

@@ -14,9 +14,11 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.api.frames import shared
+from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.export.files import check_output, save_png
+from blueprint.gpu.device import check_size
 from blueprint.pipeline.executor import Result, executor_for
 from blueprint.pipeline.media import VIDEO_FORMATS, VideoWriter, write_video
 from blueprint.pipeline.run import (
@@ -28,7 +30,6 @@ from blueprint.pipeline.run import (
     with_images,
 )
 from blueprint.pipeline.spec import with_file
-from blueprint.render.renderer import Renderer, check_size
 from blueprint.scene.camera import VIEWS, fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model

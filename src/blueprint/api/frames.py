@@ -8,9 +8,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from blueprint.api.renderer import Renderer
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.errors import InputError
-from blueprint.render.renderer import Frame, Layers, Renderer, check_size
+from blueprint.gpu.device import check_size
+from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model

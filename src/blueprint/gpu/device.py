@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import functools
 
+from blueprint.errors import InputError
 from blueprint.gpu.context import create_context, gl_info
 from blueprint.gpu.queries import Queries
 from blueprint.gpu.shaders import build_compute, build_program
@@ -92,3 +93,20 @@ class Device:
         if vao is None:
             vao = self._fullscreen[prog.glo] = self.ctx.vertex_array(prog, [])
         return prog, vao
+
+
+def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in size)
+    except (TypeError, ValueError):
+        raise InputError(f"size must be two integers W H, got {size!r}") from None
+    if w < 1 or h < 1:
+        raise InputError(f"size must be at least 1x1 pixels, got {w}x{h}")
+    if not 1 <= supersample <= 4:
+        raise InputError(f"supersample must be 1, 2, 3 or 4, got {supersample}")
+    if max(w, h) * supersample > max_texture:
+        limit = max_texture // supersample
+        raise InputError(
+            f"size {w}x{h} is too large: at supersample {supersample} this GPU allows {limit} pixels per side"
+        )
+    return w, h

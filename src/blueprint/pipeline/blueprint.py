@@ -8,9 +8,10 @@ import numpy as np
 
 from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
+from blueprint.gpu.device import check_size
 from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.spec import PipelineSpec, load_pipeline
-from blueprint.render.renderer import Frame, Renderer, check_frame_args, check_size
+from blueprint.render.renderer import Frame, LayerRenderer, check_frame_args
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
@@ -26,7 +27,7 @@ def blueprint_preset() -> PipelineSpec:
 
 
 def render_blueprint(
-    renderer: Renderer,
+    renderer: LayerRenderer,
     model: Model,
     camera: Camera | None = None,
     *,

@@ -1,4 +1,4 @@
-"""Runs bound pipelines on a Renderer's context, with targets from its pool.
+"""Runs bound pipelines on a layer renderer's context, with targets from its pool.
 
 Per frame: upload image inputs; capture the front surface of the chosen parts that attributes
 ask for; if any other attribute is read, peel the model in the one peel loop
@@ -57,9 +57,9 @@ from blueprint.render.capture import (
     peel_eps,
     revealed_pixels,
 )
-from blueprint.render.renderer import Renderer, check_frame_args, straight_alpha
+from blueprint.render.renderer import LayerRenderer, check_frame_args, straight_alpha
 from blueprint.render.stop import Reveal, StopRule, standard_rules
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
 BASE_UNIT = units.INPUTS
@@ -112,7 +112,7 @@ class _Group:
     pass's targets."""
 
     def __init__(
-        self, r: Renderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
+        self, r: LayerRenderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
     ):
         self.scale, self.size, self.names = scale, size, names
         self.gb: GBuffer = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
@@ -163,7 +163,7 @@ class RunState:
 class Executor:
     """Runs pipelines on ``renderer`` (its context, pool, programs and peel)."""
 
-    def __init__(self, renderer: Renderer) -> None:
+    def __init__(self, renderer: LayerRenderer) -> None:
         self.r = renderer
         self.ctx = renderer.ctx
         self.programs = Programs(renderer)
@@ -289,7 +289,7 @@ class Executor:
                     f"{bound.source}: this pipeline renders attributes ({', '.join(pl.attributes)}): "
                     "give a model"
                 )
-            camera = camera or self.r.camera_for(model, (w, h), view)
+            camera = camera or fit_camera(model, (w, h), view)
         self._frame = self._frame + 1 if frame is None else frame
         chosen = None if style is None else get_style(style)
         st = self.last_run = RunState(
@@ -736,7 +736,7 @@ def part_color(part: np.ndarray) -> np.ndarray:
 _executors: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def executor_for(renderer: Renderer) -> Executor:
+def executor_for(renderer: LayerRenderer) -> Executor:
     """One executor per renderer (it holds caches of programs and plans)."""
     ex = _executors.get(renderer)
     if ex is None:

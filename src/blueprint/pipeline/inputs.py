@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.gpu.device import check_size
 from blueprint.gpu.targets import FORMATS
 from blueprint.pipeline.spec import Bound
 
@@ -58,7 +59,7 @@ class ImageInputs:
             if spec.video:
                 raise InputError(
                     f"{bound.source}: images.{name}: {path} is a video: "
-                    "run it frame by frame (blueprint.pipeline.run.run_pipeline)"
+                    "run it frame by frame (blueprint.api.files.run_pipeline)"
                 )
             try:
                 stamp = path.stat().st_mtime_ns
@@ -77,7 +78,6 @@ class ImageInputs:
 def output_size(bound: Bound, image_names, size, images: dict, max_texture: int) -> tuple[int, int]:
     """A run's output size: ``size``, else the file's, else the first image input's, else 1024²."""
     from blueprint.pipeline.media import image_size
-    from blueprint.render.renderer import check_size
 
     if size is not None:
         return check_size(size, 1, max_texture)

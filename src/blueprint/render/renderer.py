@@ -1,5 +1,5 @@
-"""The renderer: owns the GL context, the target pool, programs, queries and uploaded meshes,
-and turns them into frames (through the pipeline executor) and depth layers for other tools."""
+"""The layer renderer: a device with models uploaded to it, peeling depth layers and reading
+them back; and the values frames and layers come back in."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from blueprint.errors import InputError
-from blueprint.gpu.device import Device, current
+from blueprint.gpu.device import Device, check_size, current
 from blueprint.render.capture import (
     BACK_OFFSET,
     GEOMETRY_VERT,
@@ -23,7 +23,7 @@ from blueprint.render.capture import (
 )
 from blueprint.render.mesh import GpuMesh
 from blueprint.render.stop import HARD_MAX_LAYERS, standard_rules
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
 
@@ -70,26 +70,10 @@ class Layers:
     camera: Camera
 
 
-def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in size)
-    except (TypeError, ValueError):
-        raise InputError(f"size must be two integers W H, got {size!r}") from None
-    if w < 1 or h < 1:
-        raise InputError(f"size must be at least 1x1 pixels, got {w}x{h}")
-    if not 1 <= supersample <= 4:
-        raise InputError(f"supersample must be 1, 2, 3 or 4, got {supersample}")
-    if max(w, h) * supersample > max_texture:
-        limit = max_texture // supersample
-        raise InputError(
-            f"size {w}x{h} is too large: at supersample {supersample} this GPU allows {limit} pixels per side"
-        )
-    return w, h
-
-
-class Renderer(Device):
-    """A device (context, targets, queries, programs) with the models uploaded to it: draws
-    blueprint frames and peels depth layers for other tools.
+class LayerRenderer(Device):
+    """A device (context, targets, queries, programs) with the models uploaded to it, that
+    peels depth layers in the one peel loop and reads them back for other tools (the API's
+    ``Renderer`` draws blueprint frames on it).
 
     Use as a context manager or call ``release()``. Models, cameras and styles stay GPU-free;
     the renderer uploads a model once per (model, crease angle).
@@ -130,97 +114,6 @@ class Renderer(Device):
         for key in [k for k, (m, _) in self._meshes.items() if m is model]:
             self._meshes.pop(key)[1].release()
 
-    # -- camera --------------------------------------------------------------------------------
-    @staticmethod
-    def camera_for(model: Model, size: tuple[int, int], view: str = "iso", **kwargs) -> Camera:
-        return Camera.fit(model.positions, view, aspect=size[0] / size[1], up=model.up, **kwargs)
-
-    # -- the blueprint -------------------------------------------------------------------------
-    @current
-    def render(
-        self,
-        model: Model,
-        camera: Camera | None = None,
-        *,
-        size: tuple[int, int] = (1024, 1024),
-        view: str = "iso",
-        style="blueprint",
-        max_layers: int | None = 8,
-        min_fraction: float = 0.0,
-        crease_angle: float = 30.0,
-        line_width: float = 1.0,
-        supersample: int = 2,
-        depth_threshold: float = 4.0,
-        part_edges: bool = True,
-        id_silhouettes: bool = False,
-        highlight: np.ndarray | None = None,
-        reveal: float | None = None,
-        shade: np.ndarray | None = None,
-        shade_opacity: float = 1.0,
-        profile: bool = False,
-    ) -> Frame:
-        """Render a blueprint of ``model``: the ``blueprint`` pipeline preset.
-
-        Parameters
-        ----------
-        model : Model
-        camera : Camera, optional
-            Defaults to ``Camera.fit`` from ``view`` at the image's aspect.
-        size : (int, int)
-            Output width and height in pixels.
-        style : str or Style
-        max_layers : int or None
-            Depth layers to peel at most; ``None`` peels until a pass draws nothing.
-        min_fraction : float
-            Stop once a layer covers fewer than this fraction of layer 0's pixels.
-        crease_angle : float
-            Degrees: normals are smoothed across smaller angles, larger ones draw creases.
-        line_width : float
-            Line width in output pixels.
-        supersample : int
-            G-buffer and edges are computed at this multiple of the size, then filtered down.
-        id_silhouettes : bool
-            Also draw triangle-ID silhouettes (neighbouring pixels whose triangles share no
-            vertex, paper 002) in every layer's edge map.
-        highlight : (P,) bool, optional
-            Designated parts (see ``blueprint.scene.parts.select_parts``): their whole outline
-            is drawn over everything in the style's highlight ink and width.
-        reveal : float, optional
-            Depth masking: stop peeling as soon as this fraction of the highlighted parts'
-            pixels is uncovered, so the clutter behind them is not drawn. Needs ``highlight``.
-        shade : (P,) bool, optional
-            Parts drawn shaded (Lambert, headlight) inside the blueprint, in depth order: edges
-            in front of them stay on top, the ones behind are hidden (``shade_opacity`` 1) or
-            seen through them.
-        shade_opacity : float
-            Opacity of the shading, in (0, 1].
-        profile : bool
-            Synchronise after each stage to fill ``Frame.stages`` (slower).
-        """
-        from blueprint.pipeline.blueprint import render_blueprint
-
-        return render_blueprint(
-            self,
-            model,
-            camera,
-            size=size,
-            view=view,
-            style=style,
-            max_layers=max_layers,
-            min_fraction=min_fraction,
-            crease_angle=crease_angle,
-            line_width=line_width,
-            supersample=supersample,
-            depth_threshold=depth_threshold,
-            part_edges=part_edges,
-            id_silhouettes=id_silhouettes,
-            highlight=highlight,
-            reveal=reveal,
-            shade=shade,
-            shade_opacity=shade_opacity,
-            profile=profile,
-        )
-
     # -- layers for other tools ----------------------------------------------------------------
     @current
     def peel(
@@ -243,7 +136,7 @@ class Renderer(Device):
         only depths and triangles).
         """
         w, h = check_size(size, 1, self.max_texture)
-        camera = camera or self.camera_for(model, (w, h), view)
+        camera = camera or fit_camera(model, (w, h), view)
         depth, normal_maps, tri = [], [], []
 
         def read(gb, layer: int) -> None:

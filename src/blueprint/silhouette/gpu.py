@@ -36,9 +36,10 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu import units
+from blueprint.gpu.device import check_size
 from blueprint.ops import Op, Param
 from blueprint.render.capture import Capture, gbuffer, peel
-from blueprint.render.renderer import Renderer, check_size
+from blueprint.render.renderer import LayerRenderer
 from blueprint.render.stop import MaxLayers
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
@@ -306,7 +307,7 @@ class GpuSilhouettes:
 
     Parameters
     ----------
-    renderer : Renderer
+    renderer : LayerRenderer
         Lends its context, target pool, programs and model uploads. Release this object
         before the renderer.
     compute : bool, optional
@@ -317,7 +318,9 @@ class GpuSilhouettes:
         are one vertex (the vertex method compares positions; the ID-list method welds with it).
     """
 
-    def __init__(self, renderer: Renderer, *, compute: bool | None = None, tolerance: float = 1e-6) -> None:
+    def __init__(
+        self, renderer: LayerRenderer, *, compute: bool | None = None, tolerance: float = 1e-6
+    ) -> None:
         if not 0.0 <= tolerance < 0.01:
             raise InputError(f"tolerance must be in [0, 0.01) of the model's size, got {tolerance}")
         self.renderer = renderer
@@ -488,7 +491,7 @@ class GpuSilhouettes:
 
 
 class _ComputePass:
-    def __init__(self, r: Renderer, prog, target, size) -> None:
+    def __init__(self, r: LayerRenderer, prog, target, size) -> None:
         self.r, self.prog, self.target, self.size = r, prog, target, size
 
     def run(self, layer: int) -> None:
@@ -506,7 +509,7 @@ class _ComputePass:
 
 
 class _FragmentPass:
-    def __init__(self, r: Renderer, prog, vao, size, layers: int) -> None:
+    def __init__(self, r: LayerRenderer, prog, vao, size, layers: int) -> None:
         self.prog, self.vao = prog, vao
         self.targets = [r.pool.texture(f"idsil.edge.{k}", size, "r8") for k in range(layers)]
         self.fbos = [r.pool.framebuffer((t,)) for t in self.targets]
@@ -575,7 +578,7 @@ def render_silhouettes(
     fov: float = 30.0,
     ortho: bool = False,
     camera: Camera | None = None,
-    renderer: Renderer,
+    renderer: LayerRenderer,
 ) -> np.ndarray:
     """A picture of a model's silhouettes (see :func:`composite`), (H, W, 3) uint8.
 
@@ -613,7 +616,7 @@ def animate_silhouettes(
     fov: float = 30.0,
     ortho: bool = False,
     camera: Camera | None = None,
-    renderer: Renderer,
+    renderer: LayerRenderer,
 ) -> Iterator[tuple[np.ndarray, float]]:
     """Pictures of a deforming model's silhouettes, frame by frame: ``(image, ms)`` pairs, the
     image (H, W, 3) uint8 and `ms` the time to get its silhouettes from the frame's positions.

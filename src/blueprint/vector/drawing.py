@@ -20,7 +20,9 @@ import numpy as np
 
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
-from blueprint.render.renderer import Layers, Renderer, check_size
+from blueprint.gpu.device import check_size
+from blueprint.pipeline.blueprint import render_blueprint
+from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
@@ -221,8 +223,15 @@ def _revealing_layers(renderer, model, camera, size, chosen, reveal, max_layers)
         raise InputError("reveal needs parts to reveal: give highlight as well")
     flags = np.zeros(len(model.part_names), bool)
     flags[sorted(chosen)] = True
-    frame = renderer.render(
-        model, camera, size=size, supersample=1, max_layers=max_layers, highlight=flags, reveal=reveal
+    frame = render_blueprint(
+        renderer,
+        model,
+        camera,
+        size=size,
+        supersample=1,
+        max_layers=max_layers,
+        highlight=flags,
+        reveal=reveal,
     )
     return max(frame.layers, 1)
 
@@ -252,7 +261,7 @@ def draw_vector(
     units: str | None = None,
     highlight: Iterable[str | int] | str | int | Model | None = None,
     reveal: float | None = None,
-    renderer: Renderer,
+    renderer: LayerRenderer,
     layers: Layers | None = None,
     intersections: bool = True,
     spacing: float = 1.0,
@@ -285,7 +294,7 @@ def draw_vector(
     reveal : float, optional
         Depth masking: peel only until this fraction of the highlighted parts is uncovered (as
         ``Renderer.render`` does), so lines behind more surfaces than that are left out.
-    renderer : Renderer
+    renderer : LayerRenderer
         Peels the layers (unless ``layers`` are given).
     layers : Layers, optional
         Layers already peeled for this camera and size (skips peeling).

@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.api.renderer import Renderer
 from blueprint.compose.style import get_style
 from blueprint.errors import BlueprintError, InputError
 from blueprint.export.files import save_png
-from blueprint.render.renderer import Renderer, check_size
+from blueprint.gpu.device import check_size
 from blueprint.scene.model import Model
 from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT, band_overlay, help_overlay, screenshot_path
 from blueprint.viewer.state import VIEW_KEYS, ViewState
