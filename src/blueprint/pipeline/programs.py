@@ -7,7 +7,7 @@ from pathlib import Path
 
 from blueprint.errors import ShaderError
 from blueprint.gpu.shaders import VERSION, _explain, preprocess
-from blueprint.pipeline.spec import user_source
+from blueprint.pipeline.user import user_source
 
 FULLSCREEN = "fullscreen.vert"
 # programs of the pipeline are built with this define, so they are instances of their own and

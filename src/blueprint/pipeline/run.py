@@ -15,9 +15,9 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.export.files import atomic_write, save_png
-from blueprint.pipeline.executor import Result
 from blueprint.pipeline.media import VideoWriter, read_video, video_info
 from blueprint.pipeline.spec import PipelineSpec, load_pipeline, with_file
+from blueprint.pipeline.state import Result
 from blueprint.scene.camera import Camera, fit_camera
 
 PICTURE_SUFFIXES = (".png", ".npz")

@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.ops import OPS
+from blueprint.pipeline.bind import check_params
 from blueprint.pipeline.inputs import default_format
-from blueprint.pipeline.spec import Bound, BoundPass, ImageSpec, _check_params
+from blueprint.pipeline.spec import Bound, BoundPass, ImageSpec
 
 
 def single_op(
@@ -32,7 +33,7 @@ def single_op(
     fmt = output or op.output
     if fmt == "same":
         fmt = "r32f" if first_fmt == "depth" else first_fmt
-    uniforms = _check_params(f"run_op {op_name}", "params", op, params or {}, {})
+    uniforms = check_params(f"run_op {op_name}", "params", op, params or {}, {})
     bound = Bound(
         f"run_op {op_name}",
         op_name,

@@ -1,0 +1,370 @@
+"""Binding a parsed pipeline: variables substituted, every value, format, scale, input and
+stop rule checked, passes that are off dropped, and the graph planned once to prove it runs;
+all before any GPU work, each error one line naming the file and the key."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+from blueprint.errors import InputError
+from blueprint.ops import OPS, Op
+from blueprint.pipeline.expressions import evaluate
+from blueprint.pipeline.spec import (
+    ALL_FORMATS,
+    ATTRIBUTES,
+    FORMATS,
+    IMAGE_FORMATS,
+    IMAGE_SUFFIXES,
+    MAX_LAYERS,
+    MAX_SCALE,
+    VIDEO_SUFFIXES,
+    AttributeSpec,
+    Bound,
+    BoundPass,
+    ImageSpec,
+    PipelineSpec,
+    StopSpec,
+    channels,
+    fail,
+    is_int_format,
+)
+from blueprint.pipeline.user import user_op
+
+
+def _number(value, source: str, key: str, low: float, high: float, integer: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise fail(source, key, f"must be a number in [{low:g}, {high:g}], got {value!r}")
+    if integer and int(value) != value:
+        raise fail(source, key, f"must be a whole number in [{low:g}, {high:g}], got {value!r}")
+    if not low <= value <= high:
+        raise fail(source, key, f"must be in [{low:g}, {high:g}], got {value:g}")
+    return int(value) if integer else float(value)
+
+
+def _scale(value, source: str, key: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not 0 < value <= MAX_SCALE:
+        raise fail(
+            source,
+            key,
+            f"scale must be a number in (0, {MAX_SCALE:g}] (times the output size), got {value!r}",
+        )
+    return float(value)
+
+
+def _format(value, source: str, key: str, allowed) -> str:
+    if value not in allowed:
+        raise fail(source, key, f"format {value!r} is not allowed here (choose {', '.join(allowed)})")
+    return value
+
+
+def _accepts(declared: str, fmt: str) -> bool:
+    """Whether a target of format ``fmt`` can feed an input declared as ``declared``."""
+    if declared == "depth":
+        return fmt == "depth"
+    if declared == "int":
+        return is_int_format(fmt)
+    if declared == "float":
+        return not is_int_format(fmt)
+    if is_int_format(declared) != is_int_format(fmt):
+        return False
+    return channels(fmt) >= channels(declared)
+
+
+def _describe(declared: str) -> str:
+    if declared == "depth":
+        return "the depth attribute"
+    if declared == "int":
+        return f"an integer format ({', '.join(f for f in ALL_FORMATS if is_int_format(f))})"
+    if declared == "float":
+        return f"a non-integer format ({', '.join(f for f in ALL_FORMATS if not is_int_format(f))})"
+    fits = [f for f in ALL_FORMATS if f != "depth" and _accepts(declared, f)]
+    return f"{declared} or wider ({', '.join(fits)})"
+
+
+def check_params(source: str, key: str, op: Op, raw: dict, variables: dict) -> dict:
+    known = {p.name: p for p in op.params}
+    out = {}
+    for name, value in raw.items():
+        if name not in known:
+            raise fail(
+                source,
+                f"{key}.{name}",
+                f"unknown parameter of {op.name} (choose {', '.join(known) or 'none'})",
+            )
+        value = evaluate(value, variables, source, f"{key}.{name}")
+        try:
+            out[f"u_{name}"] = known[name].check(op.name, value)
+        except InputError as exc:
+            raise fail(source, f"{key}.{name}", str(exc)) from None
+    for p in op.params:
+        if f"u_{p.name}" not in out:
+            out[f"u_{p.name}"] = p.check(op.name, p.default)
+    derive = op.derive
+    if derive is not None:
+        out.update(derive(out))
+    return out
+
+
+def bind(spec: PipelineSpec, values: dict) -> Bound:
+    src = spec.source
+
+    def ev(value, key):
+        return evaluate(value, values, src, key)
+
+    layers = ev(spec.settings.get("layers"), "pipeline.layers")
+    if layers is not None:
+        layers = _number(layers, src, "pipeline.layers", 0, MAX_LAYERS, integer=True)
+    min_fraction = _number(
+        ev(spec.settings.get("min_fraction", 0.0), "pipeline.min_fraction"),
+        src,
+        "pipeline.min_fraction",
+        0,
+        1,
+    )
+    crease = _number(
+        ev(spec.settings.get("crease_angle", 30.0), "pipeline.crease_angle"),
+        src,
+        "pipeline.crease_angle",
+        0,
+        180,
+    )
+    size = spec.settings.get("size")
+    if size is not None:
+        if not (isinstance(size, list) and len(size) == 2):
+            raise fail(src, "pipeline.size", "must be [width, height] in pixels")
+        size = tuple(
+            _number(ev(v, "pipeline.size"), src, "pipeline.size", 1, 16384, integer=True) for v in size
+        )
+    attributes = {}
+    for name, entry in spec.attributes.items():
+        key = f"attributes.{name}"
+        of = entry.get("of", name)
+        default, allowed, _, _ = ATTRIBUTES[of]
+        fmt = _format(ev(entry.get("format", default), f"{key}.format"), src, f"{key}.format", allowed)
+        scale = _scale(ev(entry.get("scale", 1), f"{key}.scale"), src, f"{key}.scale")
+        attributes[name] = AttributeSpec(name, fmt, scale, of, entry.get("parts"))
+    images = {}
+    for name, entry in spec.images.items():
+        key = f"images.{name}"
+        fmt = _format(ev(entry.get("format", "rgba8"), f"{key}.format"), src, f"{key}.format", IMAGE_FORMATS)
+        file = ev(entry.get("file"), f"{key}.file")
+        path = None
+        if file is not None:
+            if not isinstance(file, str):
+                raise fail(src, f"{key}.file", "must be a file name")
+            path = Path(file)
+            if not path.is_absolute():
+                path = (spec.folder or Path.cwd()) / path
+            if path.suffix.lower() not in (*IMAGE_SUFFIXES, *VIDEO_SUFFIXES):
+                raise fail(
+                    src,
+                    f"{key}.file",
+                    f"unknown kind of file (choose {', '.join(IMAGE_SUFFIXES + VIDEO_SUFFIXES)})",
+                )
+        images[name] = ImageSpec(
+            name, path, fmt, _scale(ev(entry.get("scale", 1), f"{key}.scale"), src, f"{key}.scale")
+        )
+
+    passes: dict[str, BoundPass] = {}
+    available = [*attributes, *images, *spec.passes]
+    active = {
+        n for n, p in spec.passes.items() if _switch(ev(p.when, f"passes.{n}.when"), src, f"passes.{n}.when")
+    }
+    # formats and scales of passes depend on their inputs: settle them in dependency order
+    order = _order(spec)
+    for name in order:
+        if name not in active:
+            continue
+        p = spec.passes[name]
+        key = f"passes.{name}"
+        if p.op is not None:
+            if p.op not in OPS:
+                raise fail(src, f"{key}.op", f"unknown operation {p.op!r} (choose {', '.join(OPS)})")
+            op = OPS[p.op]
+        else:
+            op = user_op(spec, p, values)
+        for input_name in p.inputs:
+            if input_name not in op.inputs:
+                raise fail(
+                    src,
+                    f"{key}.inputs.{input_name}",
+                    f"{op.name} has no input {input_name!r} (choose {', '.join(op.inputs)})",
+                )
+        wiring = {}
+        for input_name, target in p.inputs.items():
+            if target in spec.passes and target not in active:
+                if input_name in op.optional:
+                    continue  # an optional input of a pass that is off here is left unwired
+                raise fail(src, f"{key}.inputs.{input_name}", f"{target!r} is off here (its when is false)")
+            wiring[input_name] = target
+        p = replace(p, inputs=wiring)
+        for input_name in op.inputs:
+            if input_name not in p.inputs and input_name not in op.optional:
+                raise fail(
+                    src,
+                    f"{key}.inputs",
+                    f"missing input {input_name!r} of {op.name} (it needs {', '.join(op.inputs)})",
+                )
+        per_layer = ev(p.per_layer, f"{key}.per_layer")
+        if not isinstance(per_layer, bool):
+            raise fail(src, f"{key}.per_layer", f"must be true or false, got {per_layer!r}")
+        accumulate = ev(p.accumulate, f"{key}.accumulate")
+        if not isinstance(accumulate, bool):
+            raise fail(src, f"{key}.accumulate", f"must be true or false, got {accumulate!r}")
+        if accumulate and not per_layer:
+            raise fail(src, f"{key}.accumulate", "only a per-layer pass accumulates its layers")
+        stacks = op.stacks
+        resample = op.resample
+        first_format = None
+        first_scale = None
+        for input_name, target in p.inputs.items():
+            ikey = f"{key}.inputs.{input_name}"
+            if target not in available:
+                raise fail(
+                    src,
+                    ikey,
+                    f"unknown name {target!r} (choose {', '.join(n for n in available if n != name)})",
+                )
+            if target in spec.attributes and target not in attributes:
+                raise fail(src, ikey, f"attribute {target!r} is not declared")
+            fmt = (attributes.get(target) or images.get(target) or passes[target]).format
+            scale = (attributes.get(target) or images.get(target) or passes[target]).scale
+            declared = op.inputs[input_name]
+            if input_name in stacks:
+                if target not in passes or not passes[target].per_layer:
+                    raise fail(
+                        src,
+                        ikey,
+                        f"{op.name} takes every depth layer of a per-layer pass; {target!r} is not one "
+                        "(set per_layer = true on it)",
+                    )
+                if per_layer:
+                    raise fail(
+                        src,
+                        f"{key}.per_layer",
+                        f"{op.name} reads all layers at once, so it cannot run per layer",
+                    )
+            if not _accepts(declared, fmt):
+                raise fail(
+                    src, ikey, f"{target!r} is {fmt}, but {op.name}.{input_name} needs {_describe(declared)}"
+                )
+            if first_format is None:
+                first_format, first_scale = fmt, scale
+        if p.scale is None:
+            scale = 1.0 if resample else first_scale if first_scale is not None else 1.0
+        else:
+            scale = _scale(ev(p.scale, f"{key}.scale"), src, f"{key}.scale")
+        for input_name, target in p.inputs.items():
+            in_scale = (attributes.get(target) or images.get(target) or passes[target]).scale
+            ikey = f"{key}.inputs.{input_name}"
+            if input_name in resample:
+                ratio = in_scale / scale
+                if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6 or round(ratio) > 8:
+                    raise fail(
+                        src,
+                        ikey,
+                        f"{target!r} is at scale {in_scale:g} and this pass at {scale:g}: "
+                        f"{op.name} needs a whole ratio from 1 to 8",
+                    )
+            elif abs(in_scale - scale) > 1e-9:
+                raise fail(
+                    src,
+                    ikey,
+                    f"{target!r} is at scale {in_scale:g} but this pass is at {scale:g}; "
+                    f"{op.name} needs equal scales (choose scale = {in_scale:g}, or downsample first)",
+                )
+        default = op.output
+        if default == "same":
+            default = "r32f" if first_format == "depth" else first_format
+        kind_int = is_int_format(default)
+        allowed = [
+            f
+            for f in FORMATS
+            if is_int_format(f) == kind_int and (op.kind != "composite" or channels(f) == 4)
+        ]
+        fmt = (
+            default
+            if p.format is None
+            else _format(ev(p.format, f"{key}.format"), src, f"{key}.format", allowed)
+        )
+        uniforms = check_params(src, f"{key}.params", op, p.params, values)
+        passes[name] = BoundPass(
+            name, op, dict(p.inputs), uniforms, fmt, scale, per_layer, p.shader, accumulate
+        )
+    output = spec.output
+    if output not in available:
+        raise fail(src, "pipeline.output", f"unknown name {output!r} (choose {', '.join(available)})")
+    if output in spec.passes and output not in active:
+        raise fail(src, "pipeline.output", f"{output!r} is off here (its when is false)")
+    stops = []
+    for rule, entry in spec.stops.items():
+        key = f"stop.{rule}"
+        if not _switch(ev(entry.get("when", True), f"{key}.when"), src, f"{key}.when"):
+            continue
+        depth = entry["depth"]
+        held = attributes.get(depth)
+        if held is None or held.parts is None or held.of != "depth":
+            raise fail(
+                src, f"{key}.depth", f'{depth!r} is not a depth attribute of chosen parts (of = "depth")'
+            )
+        fraction = _number(ev(entry["fraction"], f"{key}.fraction"), src, f"{key}.fraction", 0, 1)
+        if fraction <= 0:
+            raise fail(src, f"{key}.fraction", "must be above 0")
+        stops.append(StopSpec(rule, depth, fraction))
+    bound = Bound(
+        src,
+        spec.name,
+        output,
+        layers,
+        min_fraction,
+        crease,
+        size,
+        attributes,
+        images,
+        passes,
+        values,
+        tuple(stops),
+    )
+    from blueprint.pipeline.graph import plan
+
+    plan(bound)
+    return bound
+
+
+def _switch(value, source: str, key: str) -> bool:
+    """A ``when``: true/false, or a number (on where not 0)."""
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int | float):
+        return value != 0
+    raise fail(source, key, f"must be true, false or a number, got {value!r}")
+
+
+def _order(spec: PipelineSpec) -> list[str]:
+    """Passes in dependency order; a cycle is an error naming it."""
+    state: dict[str, int] = {}
+    order: list[str] = []
+
+    def visit(name: str, path: tuple[str, ...]) -> None:
+        mark = state.get(name)
+        if mark == 2:
+            return
+        if mark == 1:
+            cycle = path[path.index(name) :] + (name,)
+            raise fail(
+                spec.source,
+                f"passes.{name}.inputs",
+                f"cycle {' -> '.join(cycle)} (passes must form a graph without loops)",
+            )
+        state[name] = 1
+        for target in spec.passes[name].inputs.values():
+            if target in spec.passes:
+                visit(target, (*path, name))
+        state[name] = 2
+        order.append(name)
+
+    for name in spec.passes:
+        visit(name, ())
+    return order

@@ -1,0 +1,112 @@
+"""What a pipeline run holds and gives back: the G-buffer of each attribute scale, the run's
+state (made anew each run), and its result."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from blueprint.compose.style import Style
+from blueprint.errors import InputError
+from blueprint.pipeline.arrays import ArrayPlan
+from blueprint.pipeline.graph import Plan
+from blueprint.pipeline.spec import Bound
+from blueprint.render.capture import Capture, GBuffer, gbuffer
+from blueprint.render.renderer import LayerRenderer, straight_alpha
+from blueprint.scene.camera import Camera
+
+# attributes the attribute pass draws (the rest are the renderer's G-buffer)
+EXTRA = ("linear_depth", "position", "uv", "base_color", "triangle", "part", "layer")
+
+
+@dataclass
+class Result:
+    """What a pipeline run produced.
+
+    output : ndarray
+        (H, W, C) for a once-result, (L, H, W, C) for a per-layer one (every layer); uint8 for
+        8-bit formats, float32 or int32 otherwise; row 0 at the top.
+    premultiplied : bool
+        The output is premultiplied colour (composite); ``image`` gives straight alpha.
+    dumps : dict
+        Name -> array like ``output`` for every ``dumps`` name asked for.
+    revealed : float or None
+        Where a ``reveal`` stop rule peeled: the fraction of its parts uncovered.
+    """
+
+    output: np.ndarray
+    format: str
+    premultiplied: bool
+    layers: int
+    layer_pixels: list[int]
+    camera: Camera | None
+    ms: float
+    draws: int
+    stages: dict[str, float] = field(default_factory=dict)
+    dumps: dict[str, np.ndarray] = field(default_factory=dict)
+    revealed: float | None = None
+
+    @property
+    def image(self) -> np.ndarray:
+        """The output as an 8-bit picture: straight alpha, row 0 at the top."""
+        out = self.output
+        if out.dtype != np.uint8:
+            raise InputError(f"the output is {self.format}, not an 8-bit image: write it as .npz")
+        if self.premultiplied and out.shape[-1] == 4:
+            return straight_alpha(out)
+        return out
+
+
+class Group:
+    """The G-buffer of one attribute scale, its geometry passes and queries, plus the attribute
+    pass's targets."""
+
+    def __init__(
+        self, r: LayerRenderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
+    ):
+        self.scale, self.size, self.names = scale, size, names
+        self.gb: GBuffer = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
+        self.queries = r.queries("peel" if primary else f"peel.pipeline.gb{scale:g}")
+        self.primary = primary
+        self.capture: Capture | None = None
+        self.attr_clear = r.pool.framebuffer((self.gb.normal, self.gb.ids)) if clear_gb else None
+        self.extra = [n for n in EXTRA if n in names]
+        self.textures = {}
+        for name in self.extra:
+            fmt = bound.attributes[name].format
+            self.textures[name] = r.pool.texture(f"pipeline.attr{scale:g}.{name}", size, fmt)
+        self.extra_fbo = (
+            r.pool.framebuffer(tuple(self.textures[n] for n in self.extra)) if self.extra else None
+        )
+
+    def texture(self, name: str, layer: int):
+        if name == "depth":
+            return self.gb.layer_depth(layer)
+        if name == "normal":
+            return self.gb.normal
+        if name == "ids":
+            return self.gb.ids
+        return self.textures[name]
+
+
+@dataclass
+class RunState:
+    """What one run of a pipeline holds, from its plan to the passes it ran."""
+
+    pl: Plan
+    camera: Camera | None
+    crease: float
+    style: Style | None  # overrides every composite's own
+    shade_ink: tuple
+    size_of: Callable[[float], tuple[int, int]]
+    frame: int
+    arrays: ArrayPlan | None  # the compute form, where it runs
+    mesh: object = None
+    stacks: dict[str, list] = field(default_factory=dict)
+    attr_dumps: dict[str, list] = field(default_factory=dict)
+    groups: list[Group] = field(default_factory=list)
+    by_attr: dict[str, Group] = field(default_factory=dict)
+    parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
+    draws: int = 0
