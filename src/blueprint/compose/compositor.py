@@ -66,18 +66,19 @@ class Compositor:
         shading: Shading | None = None,
     ) -> int:
         """Compose the first ``layers`` maps of ``stack`` (one texture a layer); returns the
-        passes run."""
+        draw calls issued."""
         r, ctx = self.r, self.r.ctx
         fbo = r.pool.framebuffer((target,))
         fbo.use()
         ctx.disable(ctx.BLEND)
+        passes = 0
         if style.paper is None:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         else:
             prog, vao = r.fullscreen(PAPER_FRAG)
             set_paper(prog, style)
             vao.render(vertices=3)
-        passes = 1
+            passes += 1
         sprites = []
         if layers:
             all_inks = style.layer_inks(layers)

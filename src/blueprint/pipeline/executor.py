@@ -344,10 +344,11 @@ class Executor:
                 if g.attr_clear is not None:
                     g.attr_clear.clear()
                 if g.primary:
-                    g.capture.draw(layer, query, guard)
+                    st.draws += g.capture.draw(layer, query, guard)
                 else:
-                    g.capture.draw(layer, g.queries[layer], g.queries[layer - 1] if layer else None)
-                st.draws += 3
+                    st.draws += g.capture.draw(
+                        layer, g.queries[layer], g.queries[layer - 1] if layer else None
+                    )
                 if g.extra:
                     self._extras(st, g, layer, extras)
             for name, held in st.attr_dumps.items():

@@ -161,10 +161,11 @@ class Capture:
             self._flags.release()
             self._flags = None
 
-    def draw(self, layer: int, query, guard=None) -> None:
+    def draw(self, layer: int, query, guard=None) -> int:
         """Clear and draw layer ``layer`` into ``gb.depth[layer % 2]``, its samples counted by
         ``query``; with a ``guard`` query (the layer before's), an empty layer skips its draws
-        on the GPU without the CPU waiting (conditional rendering)."""
+        on the GPU without the CPU waiting (conditional rendering). Returns the draw calls
+        issued."""
         gb, ctx = self.gb, self.r.ctx
         gb.clears[layer % 2].use()
         gb.clears[layer % 2].clear(depth=1.0)
@@ -174,8 +175,7 @@ class Capture:
             self._flags.use(units.SELECTED)
         with guard.crender if guard is not None else contextlib.nullcontext():
             if self.kbuffer is not None:
-                self.kbuffer.draw(self.mesh, gb.fbos, layer, query)
-                return
+                return self.kbuffer.draw(self.mesh, gb.fbos, layer, query)
             gb.fbos[layer % 2].use()
             self.prog["u_peel"].value = layer > 0
             self.prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
@@ -185,7 +185,7 @@ class Capture:
                 with query:
                     vao.render()
                 ctx.disable(ctx.DEPTH_TEST)
-                return
+                return 1
             ctx.enable(ctx.DEPTH_TEST | ctx.CULL_FACE)
             with query:
                 ctx.cull_face = "back"
@@ -195,6 +195,7 @@ class Capture:
                 vao.render()
             ctx.polygon_offset = 0.0, 0.0
             ctx.disable(ctx.DEPTH_TEST | ctx.CULL_FACE)
+            return 2
 
 
 class _KBuffer:
@@ -217,7 +218,7 @@ class _KBuffer:
         surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k))
         return surfaces, pool.framebuffer(surfaces), pool.framebuffer(surfaces[:1])
 
-    def draw(self, mesh, fbos, layer: int, query) -> None:
+    def draw(self, mesh, fbos, layer: int, query) -> int:
         ctx = self.r.ctx
         surfaces, target, first_target = self._surfaces(tuple(fbos[0].size))
         first = layer % self.k == 0
@@ -236,6 +237,7 @@ class _KBuffer:
         with query:
             self.unpack_vao.render(vertices=3)
         ctx.disable(ctx.DEPTH_TEST)
+        return 2 if first else 1
 
 
 def capture_parts(r, mesh, camera: Camera, size: tuple[int, int], parts: np.ndarray, name: str, what: str):

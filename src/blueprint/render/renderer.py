@@ -34,8 +34,9 @@ class Frame:
     ``image`` is (H, W, 4) uint8 RGBA, row 0 at the top, straight alpha. ``layer_pixels`` holds
     for every layer peeled (at the supersampled size) the samples its occlusion query counted:
     its covered pixels where a k-buffer peels, those plus the fragments drawn over again where a
-    geometry pass peels it. ``layers`` is how many of them were drawn; ``draws`` the passes
-    (geometry passes, full-screen passes and compute dispatches) the frame issued;
+    geometry pass peels it. ``layers`` is how many of them were drawn; ``draws`` the GL draw
+    calls and compute dispatches the frame issued (those skipped on the GPU by conditional
+    rendering included);
     ``revealed`` the fraction of the highlighted parts uncovered where depth masking peeled.
     """
 
