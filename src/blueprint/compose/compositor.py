@@ -38,10 +38,10 @@ def inks(all_inks: np.ndarray, first: int, count: int) -> bytes:
     return block.tobytes()
 
 
-def set_paper(prog, style: Style) -> None:
-    prog["u_paper"].value = style.paper or (0.0, 0.0, 0.0, 0.0)
-    prog["u_grid_color"].value = style.grid_color
-    prog["u_grid"].value = float(style.grid)
+def set_paper(uniforms, prog, style: Style) -> None:
+    uniforms.set(prog, "u_paper", tuple(style.paper or (0.0, 0.0, 0.0, 0.0)))
+    uniforms.set(prog, "u_grid_color", tuple(style.grid_color))
+    uniforms.set(prog, "u_grid", float(style.grid))
 
 
 def _groups(layers: int) -> list[int]:
@@ -68,6 +68,7 @@ class Compositor:
         """Compose the first ``layers`` maps of ``stack`` (one texture a layer); returns the
         draw calls issued."""
         r, ctx = self.r, self.r.ctx
+        put = r.uniforms.set
         fbo = r.pool.framebuffer((target,))
         fbo.use()
         ctx.disable(ctx.BLEND)
@@ -76,7 +77,7 @@ class Compositor:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         else:
             prog, vao = r.fullscreen(PAPER_FRAG)
-            set_paper(prog, style)
+            set_paper(r.uniforms, prog, style)
             vao.render(vertices=3)
             passes += 1
         sprites = []
@@ -93,12 +94,12 @@ class Compositor:
             factor = max(1, maps[0].size[0] // target.size[0])
             defines = {"LAYERS_FACTOR": factor, "SHADED": shaded is not None}
             prog, vao = r.fullscreen(COMPOSITE_FRAG, defines)
-            prog["u_threshold"].value = bool(style.threshold)
+            put(prog, "u_threshold", bool(style.threshold))
             for k, tex in enumerate(maps):
                 tex.use(LAYER_UNITS + k)
-                prog[f"u_layers{k}"].value = LAYER_UNITS + k
-            prog["u_layers_count"].value = len(maps)
-            prog["u_ink"].write(ink)
+                put(prog, f"u_layers{k}", LAYER_UNITS + k)
+            put(prog, "u_layers_count", len(maps))
+            put(prog, "u_ink", ink)
             if shaded is not None:
                 self._bind_shading(prog, shaded, first)
             vao.render(vertices=3)
@@ -119,6 +120,7 @@ class Compositor:
         """Compose the first ``layers`` slices of ``arrays`` (8-slice r8 texture arrays) by
         compute dispatches; returns the dispatches run."""
         r, ctx = self.r, self.r.ctx
+        put = r.uniforms.set
         target.bind_to_image(0, read=True, write=True)
         groups = _groups(layers)
         all_inks = style.layer_inks(max(layers, 1))
@@ -128,18 +130,18 @@ class Compositor:
             dispatches.append((highlight, 1, 0, True))
         for maps, count, first, overlay in dispatches:
             prog = r.compute(COMPOSE_COMP, {"OVERLAY": overlay})
-            set_paper(prog, style)
-            prog["u_supersample"].value = supersample
-            prog["u_threshold"].value = bool(style.threshold)
-            prog["u_has_paper"].value = style.paper is not None
+            set_paper(r.uniforms, prog, style)
+            put(prog, "u_supersample", supersample)
+            put(prog, "u_threshold", bool(style.threshold))
+            put(prog, "u_has_paper", style.paper is not None)
             maps.use(LAYER_UNITS)
-            prog["u_edges"].value = LAYER_UNITS
-            prog["u_first"].value = first == groups[0] and not overlay
-            prog["u_layers"].value = count
+            put(prog, "u_edges", LAYER_UNITS)
+            put(prog, "u_first", first == groups[0] and not overlay)
+            put(prog, "u_layers", count)
             ink = inks(np.array([style.highlight]), 0, 1) if overlay else inks(all_inks, first, count)
-            prog["u_ink"].write(ink)
+            put(prog, "u_ink", ink)
             shaded = shading is not None and not overlay
-            prog["u_shaded"].value = shaded
+            put(prog, "u_shaded", shaded)
             if shaded:
                 self._bind_shading(prog, shading, first)
             prog.run((target.size[0] + 7) // 8, (target.size[1] + 7) // 8)
@@ -149,10 +151,10 @@ class Compositor:
         )
         return len(dispatches)
 
-    @staticmethod
-    def _bind_shading(prog, shading: Shading, first: int) -> None:
+    def _bind_shading(self, prog, shading: Shading, first: int) -> None:
+        put = self.r.uniforms.set
         shading.index.use(SHADE_INDEX_UNIT)
         shading.color.use(SHADE_COLOR_UNIT)
-        prog["u_shade_index"].value = SHADE_INDEX_UNIT
-        prog["u_shade_color"].value = SHADE_COLOR_UNIT
-        prog["u_first_layer"].value = first
+        put(prog, "u_shade_index", SHADE_INDEX_UNIT)
+        put(prog, "u_shade_color", SHADE_COLOR_UNIT)
+        put(prog, "u_first_layer", first)

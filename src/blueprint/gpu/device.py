@@ -10,6 +10,7 @@ from blueprint.gpu.context import create_context, gl_info
 from blueprint.gpu.queries import Queries
 from blueprint.gpu.shaders import build_compute, build_program
 from blueprint.gpu.targets import TargetPool
+from blueprint.gpu.uniforms import Uniforms
 
 
 def current(method):
@@ -37,6 +38,9 @@ class Device:
         self.ctx = ctx if ctx is not None else create_context()
         self.pool = TargetPool(self.ctx)
         self.queries = Queries(self.ctx)
+        self.uniforms = Uniforms()
+        # which capture last bound the peel's texture units (render.capture)
+        self.peel_units_held_by: object | None = None
         self._programs: dict[tuple, object] = {}
         self._fullscreen: dict[int, object] = {}
         self.info = gl_info(self.ctx)

@@ -431,19 +431,12 @@ class Executor:
         put(prog, "u_layer", layer)
         put(prog, "u_frame", st.frame)
         put(prog, "u_shade_ink", st.shade_ink)
-        camera = st.camera
-        if camera is None:
+        if st.camera is None:
             return
-        put(prog, "u_depth_range", depth_range(camera))
-        put(prog, "u_peel_eps", peel_eps(camera))
-        put(prog, "u_pixel_angle", camera.pixel_angle(h))
-        half = math.radians(st.crease)
-        put(prog, "u_normal_cos", (math.cos(0.5 * half), math.cos(0.8 * half)))
-        if self.programs.has(prog, "u_corners") and st.mesh is not None:
+        for name, value in _camera_uniforms(st, h).items():
+            put(prog, name, value)
+        if st.mesh is not None and self.programs.has(prog, "u_corners"):
             st.mesh.bind_corners(prog, units.CORNERS)
-        if self.programs.has(prog, "u_view"):
-            put(prog, "u_view", camera.view_matrix().T.astype("f4").tobytes())
-            put(prog, "u_projection", camera.projection_matrix().T.astype("f4").tobytes())
 
     def _bind_input(self, prog, key: str, tex, unit: int, size) -> None:
         put = self.programs.set
@@ -619,6 +612,24 @@ class Executor:
         count = len(arrays[op.stacks[0]]) if op.stacks else 1
         self._run_pass(st, "out", 0, count)
         return read_texture(self._target(st, "out", 0), bound.passes["out"].format)[::-1]
+
+
+def _camera_uniforms(st: RunState, height: int) -> dict:
+    """The uniforms a pass takes from the run's camera, for targets ``height`` pixels high
+    (computed once a run and height: a frame runs dozens of passes)."""
+    held = st.camera_uniforms.get(height)
+    if held is None:
+        camera = st.camera
+        half = math.radians(st.crease)
+        held = st.camera_uniforms[height] = {
+            "u_depth_range": depth_range(camera),
+            "u_peel_eps": peel_eps(camera),
+            "u_pixel_angle": camera.pixel_angle(height),
+            "u_normal_cos": (math.cos(0.5 * half), math.cos(0.8 * half)),
+            "u_view": camera.view_matrix().T.astype("f4").tobytes(),
+            "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
+        }
+    return held
 
 
 def _defines(p) -> dict:

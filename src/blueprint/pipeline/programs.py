@@ -1,5 +1,6 @@
 """The executor's programs: full-screen passes of the library's operations and of users' own
-shaders, their vertex arrays, and a cache of the uniform values each program last got."""
+shaders and their vertex arrays; uniforms go through the device's cache of the values each
+program last got."""
 
 from __future__ import annotations
 
@@ -18,12 +19,12 @@ OWN = {"BLUEPRINT_PIPELINE": 1}
 class Programs:
     """Programs on ``r``'s context (library shaders through ``r``'s cache, user shaders here,
     rebuilt when their file changes); ``set`` writes a uniform only when its value changed
-    and only where the program declares it."""
+    and only where the program declares it (``gpu.uniforms``)."""
 
     def __init__(self, r) -> None:
         self.r, self.ctx = r, r.ctx
-        self._values: dict[tuple[int, str], object] = {}
-        self._members: dict[int, set[str]] = {}
+        # the device's cache itself, not a method of ours around it: a frame sets hundreds
+        self.has, self.set = r.uniforms.has, r.uniforms.set
         self._vaos: dict[int, object] = {}
         self._user: dict[tuple, object] = {}
 
@@ -60,22 +61,3 @@ class Programs:
         if vao is None:
             vao = self._vaos[prog.glo] = self.ctx.vertex_array(prog, [])
         return vao
-
-    def has(self, prog, name: str) -> bool:
-        members = self._members.get(prog.glo)
-        if members is None:
-            members = self._members[prog.glo] = set(prog)
-        return name in members
-
-    def set(self, prog, name: str, value) -> None:
-        if not self.has(prog, name):
-            return
-        key = (prog.glo, name)
-        if self._values.get(key) == value:
-            return
-        self._values[key] = value
-        member = prog[name]
-        if isinstance(value, bytes):
-            member.write(value)
-        else:
-            member.value = value

@@ -109,4 +109,5 @@ class RunState:
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
+    camera_uniforms: dict[int, dict] = field(default_factory=dict)  # by target height
     draws: int = 0

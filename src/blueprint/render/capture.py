@@ -169,10 +169,14 @@ class Capture:
         gb, ctx = self.gb, self.r.ctx
         gb.clears[layer % 2].use()
         gb.clears[layer % 2].clear(depth=1.0)
-        gb.depth[0].use(units.PEEL_DEPTH)
-        gb.depth[1].use(units.PEEL_DEPTH + 1)
-        if self._flags is not None:
-            self._flags.use(units.SELECTED)
+        # the peel's units are this frame's captures' alone: bind them for a frame's first
+        # layer, and again only where another capture (another scale) bound its own
+        if layer == 0 or self.r.peel_units_held_by is not self:
+            gb.depth[0].use(units.PEEL_DEPTH)
+            gb.depth[1].use(units.PEEL_DEPTH + 1)
+            if self._flags is not None:
+                self._flags.use(units.SELECTED)
+            self.r.peel_units_held_by = self
         with guard.crender if guard is not None else contextlib.nullcontext():
             if self.kbuffer is not None:
                 return self.kbuffer.draw(self.mesh, gb.fbos, layer, query)
@@ -210,13 +214,21 @@ class _KBuffer:
         self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG)
         self.unpack["u_surfaces"].value = units.KBUFFER
         self.unpack["u_back_bias"].value = BACK_OFFSET / (1 << 24)
+        self._targets: dict[tuple[int, int], tuple] = {}
 
     def _surfaces(self, size: tuple[int, int]) -> tuple:
         """(targets, their framebuffer, the first one's) at ``size``: pipelines peel G-buffers
         of several sizes in turn, so the targets are named by size too."""
-        pool, name = self.r.pool, f"kbuffer.{size[0]}x{size[1]}"
-        surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k))
-        return surfaces, pool.framebuffer(surfaces), pool.framebuffer(surfaces[:1])
+        held = self._targets.get(size)
+        if held is None:
+            pool, name = self.r.pool, f"kbuffer.{size[0]}x{size[1]}"
+            surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k))
+            held = self._targets[size] = (
+                surfaces,
+                pool.framebuffer(surfaces),
+                pool.framebuffer(surfaces[:1]),
+            )
+        return held
 
     def draw(self, mesh, fbos, layer: int, query) -> int:
         ctx = self.r.ctx
@@ -289,8 +301,8 @@ def peel(
         end = min(limit, peeled + step)
         for layer in range(peeled, end):
             draw(layer, queries[layer], queries[layer - 1] if layer else None)
+        counts += [queries[k].samples for k in range(peeled, end)]
         peeled = end
-        counts = [queries[k].samples for k in range(peeled)]
         counted = min(r.count(counts) for r in rules) if rules else len(counts)
         if on_counted is not None and counted == peeled:
             on_counted(peeled - 1)
