@@ -102,7 +102,6 @@ def classify_samples(
         idx = inside[start : start + _CHUNK]
         px = np.floor(samples.pixel[idx]).astype(np.int64)
         eye = samples.eye[idx].astype(np.float32)
-        ex, ey, ez = eye[:, 0], eye[:, 1], eye[:, 2]
         own0, own1 = samples.faces[idx, 0], samples.faces[idx, 1]
         # off a contour the line's own surfaces surround it: a pixel showing no surface at all
         # only says that the pixel lies past the object's outline, not what is in front
@@ -114,16 +113,7 @@ def classify_samples(
             stack, depth_count = triangle.at(q)
             for k in range(int(depth_count.max())):
                 tri = stack[:, k]  # -1 (no surface) picks the all-zero last plane
-                plane = np.take(planes, tri, axis=0)
-                dot = plane[:, 0] * ex + plane[:, 1] * ey + plane[:, 2] * ez
-                c = plane[:, 3]
-                if ortho:
-                    # the plane meets the ray x = eye + u (0, 0, 1) at u = (c - n . eye) / n_z
-                    nz = plane[:, 2]
-                    ahead = (c - dot) * np.sign(nz) > limit * np.abs(nz)
-                else:
-                    # the ray t * eye meets the plane at t = c / (n . eye); in front: 0 < t < 1 - limit
-                    ahead = (c * dot > 0) & (np.abs(c) < np.abs(dot) * (1 - limit))
+                ahead = _in_front(np.take(planes, tri, axis=0), eye, ortho, limit)
                 ahead &= (tri != own0) & (tri != own1)
                 front += ahead
             front[solid & (depth_count == 0)] = np.iinfo(np.int32).max
@@ -138,8 +128,10 @@ def _in_front(plane: np.ndarray, eye: np.ndarray, ortho: bool, limit: float) -> 
     dot = plane[:, 0] * eye[:, 0] + plane[:, 1] * eye[:, 1] + plane[:, 2] * eye[:, 2]
     c = plane[:, 3]
     if ortho:
+        # the plane meets the ray x = eye + u (0, 0, 1) at u = (c - n . eye) / n_z
         nz = plane[:, 2]
         return (c - dot) * np.sign(nz) > limit * np.abs(nz)
+    # the ray t * eye meets the plane at t = c / (n . eye); in front: 0 < t < 1 - limit
     return (c * dot > 0) & (np.abs(c) < np.abs(dot) * (1 - limit))
 
 
