@@ -1,0 +1,62 @@
+"""Glyphs: boxes, arrows, paths and text labels in model coordinates, drawn into a blueprint
+with the same depth test as its edges, so that what lies behind a surface is drawn as a hidden
+line (dimmed or dashed) or left out.
+
+A glyph file is TOML or JSON (chosen by extension)::
+
+    [hidden]                      # how glyph pieces behind a surface are drawn
+    mode = "dim"                  # "dim" (lower opacity), "dashed" or "none"
+    opacity = 0.35                # dim mode
+    dash = [4, 3]                 # dashed mode: on, off lengths in pixels
+
+    [[box]]
+    min = [-7, 14, -26]
+    max = [7, 66, 26]
+    color = "#ff8800"             # optional, every glyph; default DEFAULT_COLOR
+    width = 2                     # optional: line width in pixels
+    label = "gear"                # optional: text at the box's top corner on screen
+
+    [[arrow]]
+    from = [-45, 90, 40]
+    to = [-45, 52, 0]
+    head = 0.1                    # head length, fraction of the arrow's length
+
+    [[path]]
+    points = [[0, 0, 0], [1, 0, 0], [1, 1, 0]]
+    closed = false
+    dash = [6, 4]                 # optional for box, arrow and path: on, off in pixels
+
+    [[label]]
+    at = [0, 80, 0]
+    text = "gear"
+    size = 14                     # pixels
+    anchor = "left"               # which side of the text sits at the point
+
+``load_glyphs`` reads a file and ``Glyphs.from_dict`` validates plain data (both raise
+``InputError`` with one line naming the file and the entry); ``draw_glyphs`` draws them over an
+image, given the camera and the blueprint's front depth layer; ``render_with_glyphs`` peels
+that layer itself. No GPU here except through ``render_with_glyphs``.
+
+The modules, in the order a drawing goes through them: ``values`` (the glyph types),
+``parse`` (files and plain data into them), ``projection`` (to the screen, clipping, the depth
+test), ``strokes`` (line glyphs into screen pieces), ``raster`` (pieces and texts into pixels),
+``draw`` (the two entries above).
+"""
+
+from blueprint.compose.glyphs.draw import draw_glyphs, render_with_glyphs
+from blueprint.compose.glyphs.parse import load_glyphs
+from blueprint.compose.glyphs.values import ANCHORS, HIDDEN_MODES, Arrow, Box, Glyphs, Hidden, Label, Path3D
+
+__all__ = [
+    "ANCHORS",
+    "HIDDEN_MODES",
+    "Arrow",
+    "Box",
+    "Glyphs",
+    "Hidden",
+    "Label",
+    "Path3D",
+    "draw_glyphs",
+    "load_glyphs",
+    "render_with_glyphs",
+]

@@ -1,0 +1,130 @@
+"""Glyph files (TOML or JSON) and plain data into ``Glyphs``, checked: any problem is one
+``InputError`` line naming the file, the entry (``box 2``) and what is wrong."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from blueprint.color import RGBA
+from blueprint.compose.glyphs.values import (
+    ANCHORS,
+    DEFAULT_COLOR,
+    HIDDEN_MODES,
+    Arrow,
+    Box,
+    Glyphs,
+    Hidden,
+    Label,
+    Path3D,
+)
+from blueprint.errors import InputError
+from blueprint.settings import Entry, read_settings, show
+
+__all__ = ["load_glyphs", "parse_glyphs"]
+
+_MAX_WIDTH = 64.0
+_SIZE_RANGE = (4.0, 256.0)
+_MAX_POINTS = 100_000
+
+_KINDS = {
+    "arrow": ("from", "to", "head", "color", "width", "dash", "label"),
+    "box": ("min", "max", "color", "width", "dash", "label"),
+    "label": ("at", "text", "color", "size", "anchor"),
+    "path": ("points", "closed", "color", "width", "dash", "label"),
+}
+_REQUIRED = {"arrow": ("from", "to"), "box": ("min", "max"), "label": ("at", "text"), "path": ("points",)}
+_HIDDEN_KEYS = ("mode", "opacity", "dash")
+_TOP = (*sorted(_KINDS), "hidden")
+
+
+def load_glyphs(path: str | os.PathLike) -> Glyphs:
+    """Read a glyph file: ``.toml`` or ``.json``. Raises ``InputError`` on any problem."""
+    return parse_glyphs(read_settings(path, "glyph file"), str(path))
+
+
+class _Entry(Entry):
+    """A glyph's table: colours default to ``DEFAULT_COLOR``, widths are pixels."""
+
+    def color(self, key: str = "color", default: str = DEFAULT_COLOR) -> RGBA:
+        return super().color(key, default)
+
+    def width(self) -> float:
+        return self.number("width", 2.0, 0.0, _MAX_WIDTH, lo_open=True)
+
+
+def parse_glyphs(data: Any, source: str) -> Glyphs:
+    """``Glyphs`` from a parsed document; ``source`` names it in errors."""
+    if not isinstance(data, dict):
+        raise InputError(f"{source}: must be a table of glyph lists ({', '.join(_TOP)}), got {show(data)}")
+    for key in data:
+        if key not in _TOP:
+            raise InputError(f"{source}: unknown entry {key!r} (allowed: {', '.join(_TOP)})")
+    hidden = Hidden()
+    if "hidden" in data:
+        entry = _Entry(f"{source}: hidden", data["hidden"], _HIDDEN_KEYS)
+        hidden = Hidden(
+            mode=entry.choice("mode", hidden.mode, HIDDEN_MODES),
+            opacity=entry.number("opacity", hidden.opacity, 0.0, 1.0),
+            dash=entry.dash("dash", list(hidden.dash)),
+        )
+    lists: dict[str, list] = {}
+    for kind in _KINDS:
+        items = data.get(kind, [])
+        if not isinstance(items, list):
+            raise InputError(
+                f"{source}: {kind} must be a list of tables ([[{kind}]] in TOML), got a {_kind(items)}"
+            )
+        lists[kind] = [
+            _Entry(f"{source}: {kind} {i}", table, _KINDS[kind], _REQUIRED[kind])
+            for i, table in enumerate(items, 1)
+        ]
+    return Glyphs(
+        boxes=tuple(_box(e) for e in lists["box"]),
+        arrows=tuple(_arrow(e) for e in lists["arrow"]),
+        paths=tuple(_path(e) for e in lists["path"]),
+        labels=tuple(_label(e) for e in lists["label"]),
+        hidden=hidden,
+        source=source,
+    )
+
+
+def _kind(value: Any) -> str:
+    return {dict: "table", str: "string", bool: "boolean"}.get(type(value), type(value).__name__)
+
+
+def _box(e: _Entry) -> Box:
+    lo, hi = e.point("min"), e.point("max")
+    for axis, a, b in zip("xyz", lo, hi, strict=True):
+        if a > b:
+            raise e.fail(f"min must not exceed max ({axis}: {a:g} > {b:g})")
+    return Box(lo, hi, e.color(), e.width(), e.dash(), e.string("label", ""))
+
+
+def _arrow(e: _Entry) -> Arrow:
+    start, end = e.point("from"), e.point("to")
+    if start == end:
+        raise e.fail("from and to are the same point")
+    head = e.number("head", 0.1, 0.0, 1.0)
+    return Arrow(start, end, head, e.color(), e.width(), e.dash(), e.string("label", ""))
+
+
+def _path(e: _Entry) -> Path3D:
+    points = e.table["points"]
+    if not isinstance(points, list | tuple) or not 2 <= len(points) <= _MAX_POINTS:
+        raise e.fail(f"points must be a list of 2 to {_MAX_POINTS} points [x, y, z], got {show(points)}")
+    checked = []
+    for k, p in enumerate(points, 1):
+        checked.append(e.point(f"point {k}", p))
+    closed = e.boolean("closed", False)
+    return Path3D(tuple(checked), closed, e.color(), e.width(), e.dash(), e.string("label", ""))
+
+
+def _label(e: _Entry) -> Label:
+    return Label(
+        e.point("at"),
+        e.string("text", "", nonempty=True),
+        e.color(),
+        e.number("size", 14.0, *_SIZE_RANGE),
+        e.choice("anchor", "left", ANCHORS),
+    )

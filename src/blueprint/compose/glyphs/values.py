@@ -1,0 +1,125 @@
+"""The glyph value types: boxes, arrows, paths and labels in model coordinates, and how the
+pieces of them behind a surface are drawn. Plain frozen data, checked where it is read (``parse``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from blueprint.color import RGBA, hex_color
+
+__all__ = [
+    "ANCHORS",
+    "DEFAULT_COLOR",
+    "HIDDEN_MODES",
+    "Arrow",
+    "Box",
+    "Glyphs",
+    "Hidden",
+    "Label",
+    "Path3D",
+]
+
+DEFAULT_COLOR = "#e53935"
+HIDDEN_MODES = ("dim", "dashed", "none")
+# which point of the text's box lies at the anchor (matplotlib's and SVG's sense)
+ANCHORS = (
+    "left",
+    "right",
+    "center",
+    "top",
+    "bottom",
+    "top-left",
+    "top-right",
+    "bottom-left",
+    "bottom-right",
+)
+# what errors name when the glyphs come from no file
+_DEFAULT_SOURCE = "glyphs"
+
+
+@dataclass(frozen=True)
+class Hidden:
+    """How glyph pieces behind a surface are drawn: ``dim`` at ``opacity``, ``dashed`` with
+    ``dash`` (on, off, ... pixels; hidden labels, which cannot be dashed, at ``opacity``), or
+    ``none`` (left out)."""
+
+    mode: str = "dim"
+    opacity: float = 0.35
+    dash: tuple[float, ...] = (4.0, 3.0)
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned box: its 12 edges. ``label`` goes at its topmost corner on screen."""
+
+    min: tuple[float, float, float]
+    max: tuple[float, float, float]
+    color: RGBA = hex_color(DEFAULT_COLOR)
+    width: float = 2.0
+    dash: tuple[float, ...] | None = None
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Arrow:
+    """A shaft from ``start`` to ``end`` with a head at ``end`` (``head``: its length as a
+    fraction of the arrow's), drawn across the line of sight. ``label`` goes at the tail."""
+
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    head: float = 0.1
+    color: RGBA = hex_color(DEFAULT_COLOR)
+    width: float = 2.0
+    dash: tuple[float, ...] | None = None
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Path3D:
+    """A polyline through ``points`` (N >= 2), closed back to the first if ``closed``.
+    ``label`` goes at the first point."""
+
+    points: tuple[tuple[float, float, float], ...]
+    closed: bool = False
+    color: RGBA = hex_color(DEFAULT_COLOR)
+    width: float = 2.0
+    dash: tuple[float, ...] | None = None
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Label:
+    """Text at a point; ``anchor`` names the point of the text's box that sits there."""
+
+    at: tuple[float, float, float]
+    text: str
+    color: RGBA = hex_color(DEFAULT_COLOR)
+    size: float = 14.0
+    anchor: str = "left"
+
+
+@dataclass(frozen=True)
+class Glyphs:
+    """Everything in one glyph file. Drawn in this order: paths, boxes, arrows, labels."""
+
+    boxes: tuple[Box, ...] = ()
+    arrows: tuple[Arrow, ...] = ()
+    paths: tuple[Path3D, ...] = ()
+    labels: tuple[Label, ...] = ()
+    hidden: Hidden = field(default_factory=Hidden)
+    source: str = _DEFAULT_SOURCE
+
+    def __len__(self) -> int:
+        return len(self.boxes) + len(self.arrows) + len(self.paths) + len(self.labels)
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = _DEFAULT_SOURCE) -> Glyphs:
+        """Validate plain data (a parsed TOML or JSON document) into ``Glyphs``.
+
+        Raises ``InputError`` naming ``source``, the entry (``box 2``) and the problem.
+        """
+        # the parser builds these types, so it can only be imported once they exist
+        from blueprint.compose.glyphs.parse import parse_glyphs
+
+        return parse_glyphs(data, str(source))

@@ -1,0 +1,34 @@
+"""Occlusion level of lines against peeled depth layers.
+
+Each polyline is sampled along its screen projection about a pixel apart, its own vertices
+always among the samples (``samples``). A sample's level is the number of peeled surfaces in
+front of it, found from the planes of the layers' triangles on the sample's own view ray, the
+minimum over the 3 x 3 pixels around it (``levels``); a peel keeps its layers' triangle IDs only
+at the pixels those tests look at (``pixels``).
+
+Two more passes clean what pixels cannot tell: :func:`verify_creases` drops mesh edges where
+the surfaces to both sides of the line are one flat surface of one part (solids of one part
+pressed together), and :func:`suppress_coincident` (``coincident``) drops stretches that lie on
+a line of lower level (the bottom outline of a plate under its top outline in a plan view). A
+polyline is then cut where its level changes, halfway between the two samples that differ;
+stretches of one level shorter than two pixels take their neighbours' level (``runs``).
+"""
+
+from .coincident import suppress_coincident
+from .levels import classify_samples, face_planes, verify_creases
+from .pixels import PixelLayers, probe_pixels
+from .runs import Pieces, split_by_level
+from .samples import Samples, sample_polylines
+
+__all__ = [
+    "Pieces",
+    "PixelLayers",
+    "Samples",
+    "classify_samples",
+    "probe_pixels",
+    "face_planes",
+    "sample_polylines",
+    "split_by_level",
+    "suppress_coincident",
+    "verify_creases",
+]

@@ -1,0 +1,106 @@
+"""Samples that lie on another line of lower level, left out: a line drawn over another one
+comes out once, at the lower level."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .samples import Samples
+
+__all__ = ["suppress_coincident"]
+
+
+def suppress_coincident(
+    samples: Samples,
+    level: np.ndarray,
+    distance: float = 0.5,
+    angle: float = 10.0,
+    min_run: float = 2.0,
+) -> np.ndarray:
+    """Leave out samples that lie on another line of lower level (or of the same level and an
+    earlier polyline): within ``distance`` pixels across it and running within ``angle`` degrees
+    of it. Hidden lines right under visible ones (the bottom outline of a plate under its top
+    outline in a plan view) and lines drawn twice at one level come out once. Left-out samples
+    get level -1; what remains of a line between left-out stretches must be ``min_run``
+    pixels long.
+    """
+    level = level.copy()
+    live = np.flatnonzero(level >= 0)
+    if len(live) < 2:
+        return level
+    pixel, line = samples.pixel, samples.line
+    # every sample stands for the stretch to the next sample of its line
+    has_next = np.r_[line[1:] == line[:-1], False]
+    forward = np.zeros_like(pixel)
+    forward[has_next] = pixel[1:][has_next[:-1]] - pixel[:-1][has_next[:-1]]
+    length = np.linalg.norm(forward, axis=1)
+    unit = forward / np.where(length > 0, length, 1.0)[:, None]
+    # a stretch that is hidden deeper or left out covers nothing
+    covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
+    sin_limit = np.sin(np.radians(angle))
+    rank = level.astype(np.int64) * (int(line.max()) + 1) + line
+    # the direction of each sample's own line there (its last sample looks back)
+    direction = np.where(has_next[:, None], unit, np.r_[unit[:1], unit[:-1]]).astype(np.float32)
+    unit32, forward32 = unit.astype(np.float32), forward.astype(np.float32)
+    inv_length2 = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0).astype(np.float32)
+    pixel32 = pixel.astype(np.float32)
+    # a dense grid of 1-pixel cells, one cell of margin all round; the stretches sorted by cell
+    origin = np.floor(pixel[live].min(axis=0)).astype(np.int64) - 1
+    span = np.floor(pixel[live].max(axis=0)).astype(np.int64) - origin + 2
+    source = np.flatnonzero(covers)
+
+    def cell_of(rows):
+        c = np.floor(pixel[rows]).astype(np.int64) - origin
+        return np.clip(c[:, 1], 0, span[1] - 1) * span[0] + np.clip(c[:, 0], 0, span[0] - 1)
+
+    src_key = cell_of(source)
+    order = np.argsort(src_key, kind="stable")
+    source = source[order]
+    cell_count = np.bincount(src_key, minlength=int(span[0] * span[1]))
+    cell_start = np.cumsum(cell_count) - cell_count
+    key = cell_of(live)
+    drop = np.zeros(len(live), bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            probe = key + dy * span[0] + dx  # the margin keeps probes inside the grid
+            lo, count = cell_start[probe], cell_count[probe]
+            for start in range(0, len(live), 1 << 16):
+                c = count[start : start + (1 << 16)]
+                total = int(c.sum())
+                if total == 0:
+                    continue
+                index = np.repeat(np.arange(start, start + len(c)), c)
+                within = np.arange(total) - np.repeat(np.cumsum(c) - c, c)
+                other = np.take(source, np.repeat(lo[start : start + len(c)], c) + within)
+                mine = np.take(live, index)
+                ok = (np.take(rank, other) < np.take(rank, mine)) & (
+                    np.take(line, other) != np.take(line, mine)
+                )
+                index, mine, other = index[ok], mine[ok], other[ok]
+                # distance from the sample to the other stretch, and the angle between them
+                rel = np.take(pixel32, mine, axis=0) - np.take(pixel32, other, axis=0)
+                f = np.take(forward32, other, axis=0)
+                t = np.clip((rel[:, 0] * f[:, 0] + rel[:, 1] * f[:, 1]) * np.take(inv_length2, other), 0, 1)
+                gx, gy = rel[:, 0] - t * f[:, 0], rel[:, 1] - t * f[:, 1]
+                d, u = np.take(direction, mine, axis=0), np.take(unit32, other, axis=0)
+                turn = np.abs(d[:, 0] * u[:, 1] - d[:, 1] * u[:, 0])
+                hit = (gx * gx + gy * gy <= distance * distance) & (turn <= sin_limit)
+                drop[index[hit]] = True
+    if not drop.any():
+        return level
+    level[live[drop]] = -1
+    # short leftovers between left-out stretches go too
+    n = len(level)
+    change = np.r_[True, (line[1:] != line[:-1]) | ((level[1:] >= 0) != (level[:-1] >= 0))]
+    start = np.flatnonzero(change)
+    end = np.r_[start[1:], n]
+    step = np.r_[np.linalg.norm(np.diff(pixel, axis=0), axis=1), 0.0]
+    step[np.r_[line[1:] != line[:-1], True]] = 0.0
+    along_line = np.r_[0.0, np.cumsum(step)]
+    length = along_line[end - 1] - along_line[start] + 1.0
+    kept = level[start] >= 0
+    before = np.r_[False, (line[start[1:]] == line[start[1:] - 1])] & ~np.r_[True, kept[:-1]]
+    after = np.r_[(line[end[:-1] - 1] == line[end[:-1]]), False] & ~np.r_[kept[1:], True]
+    lone = kept & (length < min_run) & (before | after)
+    level[np.repeat(lone, end - start)] = -1
+    return level

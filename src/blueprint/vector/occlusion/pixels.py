@@ -1,0 +1,92 @@
+"""The pixels occlusion looks at: which ones a peel must keep for the samples of a drawing, and
+the peeled layers' triangle IDs kept there."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..lines import BORDER, CREASE, SILHOUETTE
+from .samples import Samples
+
+__all__ = ["NEIGHBOURS", "PixelLayers", "across_line", "flat_index", "probe_pixels"]
+
+NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], np.int64)
+
+
+@dataclass(frozen=True)
+class PixelLayers:
+    """Triangle IDs of the peeled layers at the pixels the occlusion tests look at.
+
+    ``stacks[i, k]`` is the face of layer ``k`` at pixel ``pixels[i]`` (flat index
+    ``y * width + x``, row 0 at the top), -1 where none; layers hold surfaces from the front,
+    so the first ``count[i]`` are surfaces. ``pixels`` None stands for every pixel in order.
+    """
+
+    pixels: np.ndarray | None
+    stacks: np.ndarray
+    count: np.ndarray
+    layers: int
+    height: int
+    width: int
+
+    @classmethod
+    def from_layers(cls, triangle: np.ndarray) -> PixelLayers:
+        """Every pixel of (L, H, W) triangle layers."""
+        layers, height, width = triangle.shape
+        stacks = np.ascontiguousarray(triangle.reshape(layers, -1).T)
+        return cls(None, stacks, (stacks >= 0).sum(axis=1), layers, height, width)
+
+    def at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(len(q), L) faces and (len(q),) surface counts at flat pixel indices ``q``, which
+        must be among ``pixels``."""
+        rows = q if self.pixels is None else np.take(self._rows, q)
+        return np.take(self.stacks, rows, axis=0), self.count[rows]
+
+    @functools.cached_property
+    def _rows(self) -> np.ndarray:
+        """Row of ``stacks`` for every flat pixel index (-1 where not kept): one gather a lookup."""
+        rows = np.full(self.height * self.width, -1, np.int64)
+        rows[self.pixels] = np.arange(len(self.pixels))
+        return rows
+
+
+def flat_index(spot: np.ndarray, height: int, width: int) -> np.ndarray:
+    """Flat indices of (N, 2) integer pixel positions, clamped to the image."""
+    return np.clip(spot[..., 1], 0, height - 1) * width + np.clip(spot[..., 0], 0, width - 1)
+
+
+def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -> np.ndarray:
+    """Sorted flat indices of every pixel that ``levels.classify_samples`` and
+    ``levels.verify_creases`` look at for these samples: what a peel must keep of its layers."""
+    width, height = size
+    probed = np.zeros(height * width, bool)
+    inside = np.flatnonzero(samples.inside)
+    px = np.floor(samples.pixel[inside]).astype(np.int64)
+    for step in NEIGHBOURS:
+        probed[flat_index(px + step, height, width)] = True
+    rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
+    rows, across = across_line(samples, rows)
+    for side in (1.0, -1.0):
+        spot = np.floor(samples.pixel[rows] + side * offset * across).astype(np.int64)
+        probed[flat_index(spot, height, width)] = True
+    return np.flatnonzero(probed)
+
+
+def across_line(samples: Samples, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The rows whose line has a screen direction there (from the neighbouring samples on the
+    same line), and the unit vectors across it."""
+    line, pixel = samples.line, samples.pixel
+    if len(rows) == 0:
+        return rows, np.zeros((0, 2))
+    nxt = np.minimum(rows + 1, len(line) - 1)
+    prv = np.maximum(rows - 1, 0)
+    ahead = np.where((line[nxt] == line[rows])[:, None], pixel[nxt], pixel[rows])
+    behind = np.where((line[prv] == line[rows])[:, None], pixel[prv], pixel[rows])
+    tangent = ahead - behind
+    length = np.linalg.norm(tangent, axis=1)
+    good = length > 0
+    rows, tangent = rows[good], tangent[good] / length[good, None]
+    return rows, np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)

@@ -1,0 +1,109 @@
+"""Points along the lines to draw, about a pixel apart on screen: where occlusion is decided."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..lines import Polylines
+
+__all__ = ["Samples", "sample_polylines"]
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Points along polylines.
+
+    eye : (S, 3) float64, eye coordinates
+    pixel : (S, 2) float64, pixel coordinates (x right, y down, origin top-left)
+    faces : (S, 2) int64, faces of the segment each sample lies on
+    kind : (S,) uint8, kind of the segment each sample lies on (``lines.SILHOUETTE``, ...)
+    line : (S,) int64, polyline of each sample
+    vertex : (S,) bool, True where the sample is a vertex of its polyline
+    inside : (S,) bool, True where the sample lies inside the view volume
+    """
+
+    eye: np.ndarray
+    pixel: np.ndarray
+    faces: np.ndarray
+    kind: np.ndarray
+    line: np.ndarray
+    vertex: np.ndarray
+    inside: np.ndarray
+
+
+def _to_pixels(clip: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    w = clip[..., 3:4]
+    ndc = clip[..., :2] / np.where(np.abs(w) > 0, w, 1.0)
+    return np.stack([(ndc[..., 0] + 1.0) * 0.5 * size[0], (1.0 - ndc[..., 1]) * 0.5 * size[1]], -1)
+
+
+def sample_polylines(
+    lines: Polylines,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+    spacing: float = 1.0,
+) -> Samples:
+    """Samples about ``spacing`` pixels apart along every segment, its vertices included.
+
+    Points are interpolated in model space, so on screen they fall on the projected segment
+    (a straight line in perspective as well), a little unevenly spaced.
+    """
+    points, offsets = lines.points, lines.offsets
+    if len(points) == 0:
+        z = np.zeros((0, 2))
+        none = np.zeros(0, bool)
+        return Samples(
+            np.zeros((0, 3)),
+            z,
+            np.zeros((0, 2), np.int64),
+            np.zeros(0, np.uint8),
+            np.zeros(0, np.int64),
+            none,
+            none,
+        )
+    mvp = projection @ view
+    homogeneous = np.concatenate([points, np.ones((len(points), 1))], axis=1)
+    clip = homogeneous @ mvp.T
+    pix = _to_pixels(clip, size)
+    line_of_point = np.repeat(np.arange(len(lines)), np.diff(offsets))
+    is_last = np.zeros(len(points), bool)
+    is_last[offsets[1:] - 1] = True
+    starts = np.flatnonzero(~is_last)  # segment j runs from point j to point j + 1
+    # in front of the eye at both ends: the screen length is meaningful
+    w = clip[:, 3]
+    length = np.linalg.norm(pix[starts + 1] - pix[starts], axis=1)
+    length = np.where((w[starts] > 0) & (w[starts + 1] > 0) & np.isfinite(length), length, 0.0)
+    count = np.maximum(np.ceil(length / spacing), 1).astype(np.int64)
+    count = np.minimum(count, 1 << 16)
+    seg = np.repeat(starts, count)
+    k = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
+    t = k / count[np.searchsorted(starts, seg)]
+    model = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
+    faces = lines.faces[seg]
+    kind = lines.kind[seg]
+    vertex = k == 0
+    # each polyline's last point, inserted after its last segment's samples
+    lasts = offsets[1:] - 1
+    model = np.concatenate([model, points[lasts]])
+    faces = np.concatenate([faces, lines.faces[np.maximum(lasts - 1, 0)]])
+    kind = np.concatenate([kind, lines.kind[np.maximum(lasts - 1, 0)]])
+    vertex = np.concatenate([vertex, np.ones(len(lasts), bool)])
+    line = np.concatenate([line_of_point[seg], np.arange(len(lines))])
+    position = np.concatenate([seg + t, lasts.astype(np.float64)])
+    order = np.lexsort((position, line))
+    model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
+    kind = kind[order]
+    homogeneous = np.concatenate([model, np.ones((len(model), 1))], axis=1)
+    eye = homogeneous @ view.T
+    clip = eye @ projection.T
+    inside = (
+        (clip[:, 3] > 0)
+        & (clip[:, 2] >= -clip[:, 3])
+        & (clip[:, 2] <= clip[:, 3])
+        & (np.abs(clip[:, 0]) <= clip[:, 3])
+        & (np.abs(clip[:, 1]) <= clip[:, 3])
+    )
+    return Samples(eye[:, :3], _to_pixels(clip, size), faces, kind, line, vertex, inside)
