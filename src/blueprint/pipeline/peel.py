@@ -1,0 +1,166 @@
+"""A run's layer capture: the front surface of chosen parts, depth masking's stop rule, one
+G-buffer (and the attribute pass's targets) a scale, and the one peel loop, running the
+executor's per-layer passes after each layer."""
+
+from __future__ import annotations
+
+from blueprint.errors import InputError
+from blueprint.gpu import units
+from blueprint.pipeline.inputs import read_texture
+from blueprint.pipeline.programs import FULLSCREEN
+from blueprint.pipeline.state import EXTRA, Group, RunState
+from blueprint.render.capture import KBUFFER_MAX, Capture, GBuffer, capture_parts, revealed_pixels
+from blueprint.render.capture import peel as peel_layers
+from blueprint.render.stop import Reveal, StopRule
+
+ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
+ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
+BASE_UNIT = units.INPUTS
+
+
+class LayerCapture:
+    """The capture side of ``ex``'s runs (its renderer, programs, passes and targets)."""
+
+    def __init__(self, ex) -> None:
+        self.ex, self.r, self.programs = ex, ex.r, ex.programs
+
+    def capture_parts(self, st: RunState, parts: dict) -> None:
+        """The front surface of every set of chosen parts an attribute reads, once a frame,
+        before the peel."""
+        bound = st.pl.bound
+        held: dict[tuple[str, float], GBuffer] = {}
+        for name in st.pl.parts:
+            spec = bound.attributes[name]
+            key = (spec.parts, spec.scale)
+            if key not in held:
+                held[key] = capture_parts(
+                    self.r,
+                    st.mesh,
+                    st.camera,
+                    st.size_of(spec.scale),
+                    parts[spec.parts],
+                    f"parts.{spec.parts}.{spec.scale:g}",
+                    spec.parts,
+                )
+                st.draws += 1
+            gb = held[key]
+            st.parts[name] = {"depth": gb.depth[0], "normal": gb.normal, "ids": gb.ids}[spec.of]
+
+    def reveal_rule(self, st: RunState) -> StopRule | None:
+        """Depth masking, where the pipeline declares it: counts the chosen parts' pixels now,
+        and after every layer those the layers peeled so far uncovered."""
+        bound = st.pl.bound
+        stops = [s for s in bound.stops if s.rule == "reveal"]
+        if not stops:
+            return None
+        stop = stops[0]
+        mask = st.parts[stop.depth]
+        if (
+            "depth" in bound.attributes
+            and abs(bound.attributes[stop.depth].scale - bound.attributes["depth"].scale) > 1e-9
+        ):
+            raise InputError(
+                f"{bound.source}: stop.reveal.depth: {stop.depth!r} must be at the scale of depth"
+            )
+        wanted = revealed_pixels(self.r, st.camera, mask)
+        st.draws += 1
+
+        def revealed(layer: int) -> int:
+            st.draws += 1
+            return revealed_pixels(self.r, st.camera, mask, st.groups[0].gb.layer_depth(layer))
+
+        return Reveal(stop.fraction, wanted, revealed)
+
+    def peel(self, st: RunState, max_layers, rules) -> tuple[list[int], int]:
+        r, ctx, pl = self.r, self.r.ctx, st.pl
+        bound = pl.bound
+        by_scale: dict[float, list[str]] = {}
+        for name in pl.attributes:
+            if bound.attributes[name].parts is None:
+                by_scale.setdefault(bound.attributes[name].scale, []).append(name)
+        if not by_scale:  # attributes of chosen parts alone: nothing to peel
+            self.ex._ensure_stacks(st, 1)
+            for name in pl.iteration0:
+                self.ex._run_pass(st, name, 0, 1)
+            return [], 1
+        primary_scale = bound.attributes["depth"].scale if "depth" in pl.attributes else next(iter(by_scale))
+        # normal and ids are left as they were where a layer has no surface; clear them unless
+        # every reader looks at depth first (the edges operation)
+        readers = {
+            (t, bound.passes[n].op.name) for n in pl.passes for t in bound.passes[n].inputs.values()
+        } | {(n, "readback") for n in pl.readback}
+        clear_gb = any(t in ("normal", "ids") and op != "edges" for t, op in readers)
+        for scale, names in sorted(by_scale.items(), key=lambda kv: kv[0] != primary_scale):
+            st.groups.append(
+                Group(r, scale, st.size_of(scale), names, scale == primary_scale, bound, clear_gb)
+            )
+        groups = st.groups
+        st.by_attr = {n: g for g in groups for n in g.names}
+        ctx.depth_func = "<"
+        # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
+        # the raw ID target) need them
+        face_ids = any(g.extra for g in groups) or clear_gb or _id_silhouettes(pl)
+        for g in groups:
+            g.capture = Capture(
+                r, st.mesh, st.camera, g.gb, face_ids=face_ids, batch=max_layers or KBUFFER_MAX
+            )
+        extras = self._attribute_programs(st) if any(g.extra for g in groups) else None
+        for name in pl.accumulated:
+            r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
+
+        def draw(layer: int, query, guard) -> None:
+            self.ex._ensure_stacks(st, layer + 1)
+            for g in groups:
+                if g.attr_clear is not None:
+                    g.attr_clear.clear()
+                if g.primary:
+                    st.draws += g.capture.draw(layer, query, guard)
+                else:
+                    st.draws += g.capture.draw(
+                        layer, g.queries[layer], g.queries[layer - 1] if layer else None
+                    )
+                if g.extra:
+                    self._attributes(st, g, layer, extras)
+            for name, held in st.attr_dumps.items():
+                tex = st.by_attr[name].texture(name, layer)
+                held.append(read_texture(tex, bound.attributes[name].format))
+            for name in pl.iteration0 if layer == 0 else pl.per_layer:
+                self.ex._run_pass(st, name, layer, layer + 1)
+
+        return peel_layers(draw, groups[0].queries, rules)
+
+    def _attribute_programs(self, st: RunState) -> dict:
+        progs = {}
+        camera, lo, hi = st.camera, *st.mesh.bounds
+        for g in st.groups:
+            if not g.extra:
+                continue
+            defines = {f"OUT_{n.upper()}": (g.extra.index(n) if n in g.extra else -1) for n in EXTRA}
+            draw = self.programs.library(ATTR_FRAG, ATTR_VERT, {**defines, "CLEAR": 0})
+            clear = self.programs.library(ATTR_FRAG, FULLSCREEN, {**defines, "CLEAR": 1})
+            self.programs.set(draw, "u_view", camera.view_matrix().T.astype("f4").tobytes())
+            self.programs.set(draw, "u_projection", camera.projection_matrix().T.astype("f4").tobytes())
+            self.programs.set(draw, "u_bounds_lo", tuple(float(v) for v in lo))
+            self.programs.set(draw, "u_bounds_size", tuple(float(max(v, 1e-30)) for v in hi - lo))
+            self.programs.set(draw, "u_layer_depth", BASE_UNIT)
+            self.programs.set(draw, "u_ids", BASE_UNIT + 1)
+            progs[g.scale] = (draw, clear)
+        return progs
+
+    def _attributes(self, st: RunState, g: Group, layer: int, progs) -> None:
+        draw, clear = progs[g.scale]
+        g.extra_fbo.use()
+        self.programs.vao(clear).render(vertices=3)
+        g.gb.layer_depth(layer).use(BASE_UNIT)
+        g.gb.ids.use(BASE_UNIT + 1)
+        self.programs.set(draw, "u_layer", layer)
+        st.mesh.vao(draw).render()
+        st.draws += 2
+
+
+def _id_silhouettes(pl) -> bool:
+    """Whether an edges pass draws triangle-ID silhouettes (they need face IDs)."""
+    return any(
+        p.op is not None and p.op.name == "edges" and p.uniforms.get("u_id_silhouettes")
+        for p in pl.bound.passes.values()
+    )
