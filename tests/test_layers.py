@@ -291,7 +291,7 @@ def test_the_walk_sees_function_level_and_relative_imports():
     found = {(i.importer, i.imported) for i in package_imports()}
     assert ("blueprint.cli.render", "blueprint.api") in found  # inside the command's function
     assert ("blueprint.silhouette.edges", "blueprint.silhouette.mesh") in found  # from .mesh import
-    assert ("blueprint.viewer.app", "glfw") in found  # inside a function, another distribution
+    assert ("blueprint.viewer.window", "glfw") in found  # inside a function, another distribution
 
 
 # -- the checker on tiny fake packages ---------------------------------------------------------------

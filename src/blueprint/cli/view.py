@@ -83,7 +83,8 @@ def view(
     (iso front back left right top bottom), O orthographic / perspective, M depth mask on the
     picked part, P screenshot beside the model, T turntable, H help, Esc quit.
     """
-    from blueprint.viewer.app import Options, run_viewer
+    from blueprint.viewer.app import run_viewer
+    from blueprint.viewer.loop import Options
 
     if view not in VIEWS:
         raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")

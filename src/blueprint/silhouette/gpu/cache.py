@@ -1,0 +1,67 @@
+"""The tables of static models, uploaded on a model's first drawing and kept until it is
+forgotten, so that drawing a model again uploads nothing."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from blueprint.scene.model import Model
+from blueprint.silhouette.idlist import build_id_lists
+
+from .tables import Corners, ListTextures, diagonal
+
+
+@dataclass
+class Held:
+    """What a static model holds on the GPU besides the renderer's upload."""
+
+    model: Model
+    corners: Corners
+    tolerance: float
+    lists: ListTextures | None = None
+
+    def release(self) -> None:
+        self.corners.release()
+        if self.lists is not None:
+            self.lists.release()
+
+
+class ModelTables:
+    """Corner and ID-list tables per static model, on the context `ctx`.
+
+    Models are told apart by identity. `tolerance` is a fraction of each model's bounding-box
+    diagonal. Call with the context current.
+    """
+
+    def __init__(self, ctx, tolerance: float) -> None:
+        self.ctx = ctx
+        self.tolerance = tolerance
+        self._held: dict[int, Held] = {}
+
+    def entry(self, model: Model) -> Held:
+        """The model's corners and welding tolerance, uploaded on first use."""
+        held = self._held.get(id(model))
+        if held is None or held.model is not model:
+            corners = model.positions[model.faces]
+            store = Corners(self.ctx, len(model.faces))
+            store.write(corners)
+            tolerance = self.tolerance * diagonal(corners)
+            held = self._held[id(model)] = Held(model, store, tolerance)
+        return held
+
+    def lists(self, model: Model) -> ListTextures:
+        """The model's ID lists, built (welded with its tolerance) on first use."""
+        held = self.entry(model)
+        if held.lists is None:
+            lists = build_id_lists(model.positions, model.faces, held.tolerance)
+            held.lists = ListTextures(self.ctx, lists)
+        return held.lists
+
+    def forget(self, model: Model) -> None:
+        held = self._held.pop(id(model), None)
+        if held is not None:
+            held.release()
+
+    def release(self) -> None:
+        for model in [held.model for held in self._held.values()]:
+            self.forget(model)

@@ -1,0 +1,159 @@
+"""Triangle-ID silhouettes of a model or a deforming mesh, drawn with a renderer: each depth
+layer is peeled into the renderer's ID buffer, then the silhouette pass marks where adjacent
+pixels show triangles that share no vertex."""
+
+from __future__ import annotations
+
+import contextlib
+
+import numpy as np
+
+from blueprint.errors import InputError
+from blueprint.gpu.device import check_size
+from blueprint.render.capture import Capture, gbuffer, peel
+from blueprint.render.renderer import LayerRenderer
+from blueprint.render.stop import MaxLayers
+from blueprint.scene.camera import Camera, fit_camera
+from blueprint.scene.model import Model
+from blueprint.silhouette.idlist import IdLists
+
+from .cache import ModelTables
+from .context import CurrentContext, on_gl
+from .ops import METHODS
+from .passes import IDS_UNIT, silhouette_pass
+from .soup import SoupMesh, box_corners
+
+MAX_LAYERS = 64
+# The renderer's crease angle, so the ID pass shares the renderer's upload of a model.
+_CREASE = 30.0
+
+
+class GpuSilhouettes:
+    """Triangle-ID silhouettes drawn with a renderer's context, G-buffer pass and targets.
+
+    Parameters
+    ----------
+    renderer : LayerRenderer
+        Lends its context, target pool, programs and model uploads. Release this object
+        before the renderer.
+    compute : bool, optional
+        Run the silhouette pass as a compute shader (storage buffer of corners) rather than a
+        full-screen fragment pass; defaults to ``renderer.use_compute``.
+    tolerance : float
+        Distance, as a fraction of the model's bounding-box diagonal, under which two corners
+        are one vertex (the vertex method compares positions; the ID-list method welds with it).
+    """
+
+    def __init__(
+        self, renderer: LayerRenderer, *, compute: bool | None = None, tolerance: float = 1e-6
+    ) -> None:
+        if not 0.0 <= tolerance < 0.01:
+            raise InputError(f"tolerance must be in [0, 0.01) of the model's size, got {tolerance}")
+        self.renderer = renderer
+        self.compute = renderer.use_compute if compute is None else bool(compute)
+        self.tolerance = float(tolerance)
+        self._tables = ModelTables(renderer.ctx, self.tolerance)
+        self._current = CurrentContext(renderer)
+
+    def current(self) -> contextlib.AbstractContextManager[None]:
+        """Make the renderer's context current for a block (see :class:`CurrentContext`)."""
+        return self._current()
+
+    def __enter__(self) -> GpuSilhouettes:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+    @on_gl
+    def release(self) -> None:
+        self._tables.release()
+
+    @on_gl
+    def forget(self, model: Model) -> None:
+        """Release what was uploaded for `model` (its corners and ID lists)."""
+        self._tables.forget(model)
+
+    def soup(self, corners, face_part=None, topology=None) -> SoupMesh:
+        """A deforming mesh on the GPU from (F, 3, 3) corner positions (see :class:`SoupMesh`)."""
+        return SoupMesh(self, corners, face_part, topology)
+
+    @on_gl
+    def id_lists(self, model: Model) -> IdLists:
+        """The ID lists of a static model (built, welded, on first use, then kept)."""
+        return self._tables.lists(model).lists
+
+    @on_gl
+    def render(
+        self,
+        model: Model | SoupMesh,
+        camera: Camera | None = None,
+        size: tuple[int, int] = (1024, 1024),
+        layers: int = 1,
+        method: str = "vertex",
+        view: str = "iso",
+        read: bool = True,
+    ) -> np.ndarray | None:
+        """Silhouette images of the first `layers` depth layers.
+
+        Parameters
+        ----------
+        model : Model or SoupMesh
+            A static model (uploaded once, shared with the renderer's blueprints) or a
+            deforming mesh from :meth:`soup`.
+        camera : Camera, optional
+            Defaults to ``fit_camera`` from `view` at the image's size.
+        size : (int, int)
+            Width and height in pixels.
+        layers : int
+            Depth layers, 1 to 64; layer 0 is what is visible. Layers past the last surface
+            come back empty.
+        method : {"vertex", "idlist"}
+        read : bool
+            Read the images back (waits for the GPU). Without, nothing waits and the images
+            stay in the renderer's target pool for GPU-side use: ``idsil.edges``, an r8 array
+            with one slice per layer (compute path), or ``idsil.edge.<k>``, one r8 texture per
+            layer (fragment path); row 0 at the bottom, as GL stores them.
+
+        Returns
+        -------
+        np.ndarray or None
+            (layers, H, W) float32, 1.0 on silhouette pixels, 0.0 elsewhere, row 0 at the top;
+            None when `read` is false.
+        """
+        if method not in METHODS:
+            raise InputError(f"unknown silhouette method {method!r} (choose {', '.join(METHODS)})")
+        if int(layers) != layers or not 1 <= layers <= MAX_LAYERS:
+            raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
+        r, ctx = self.renderer, self.renderer.ctx
+        w, h = check_size(size, 1, r.max_texture)
+        if isinstance(model, SoupMesh):
+            mesh, corners, tolerance = model, model.corners, model.tolerance
+            lists = model.id_lists() if method == "idlist" else None
+            if camera is None:
+                camera = fit_camera(box_corners(model.bounds), (w, h), view)
+        elif isinstance(model, Model):
+            mesh = r.mesh(model, _CREASE)
+            held = self._tables.entry(model)
+            corners, tolerance = held.corners, held.tolerance
+            lists = self._tables.lists(model) if method == "idlist" else None
+            camera = camera or fit_camera(model, (w, h), view)
+        else:
+            raise InputError(f"expected a Model or a SoupMesh, got {type(model).__name__}")
+
+        ctx.enable_only(ctx.NOTHING)
+        ctx.depth_func = "<"
+        gb = gbuffer(r.pool, (w, h), "idb", normals=False)
+        capture = Capture(r, mesh, camera, gb, tie_break=False)
+        gb.ids.use(IDS_UNIT)
+        sil = silhouette_pass(
+            r, METHODS[method], (w, h), layers, corners, lists, tolerance, compute=self.compute
+        )
+
+        def draw(layer: int, query, guard) -> None:
+            # an empty layer skips the next one's draws on the GPU, without the CPU waiting
+            capture.draw(layer, query, guard)
+            sil.run(layer)
+
+        peel(draw, r.queries("peel"), [MaxLayers(layers)], look=read)
+        return sil.read() if read else None

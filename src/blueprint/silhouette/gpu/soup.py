@@ -1,0 +1,124 @@
+"""A deforming mesh on the GPU, drawn as a triangle soup whose corners are replaced each frame."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from blueprint.errors import InputError
+from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
+
+from .context import on_gl
+from .tables import Corners, ListTextures, diagonal
+
+if TYPE_CHECKING:
+    from .draw import GpuSilhouettes
+
+
+class SoupMesh:
+    """A deforming triangle mesh on the GPU, drawn as a soup: F triangles whose corner
+    positions are replaced every frame.
+
+    Create it with :meth:`GpuSilhouettes.soup`. :meth:`update` uploads new positions, one
+    buffer write and nothing else: the same buffer is the vertex buffer of the ID pass and the
+    vertex storage of the silhouette pass. The number of triangles is fixed; the topology may
+    change freely (the ``"vertex"`` method never looks at it). For the ``"idlist"`` method pass
+    the connectivity as `topology` whenever it changes; without one, the lists are built once by
+    welding the first positions.
+
+    Attributes
+    ----------
+    bounds : np.ndarray
+        (2, 3) float64 box of the positions given at creation (used to fit a camera).
+    tolerance : float
+        Model-space distance under which two corners are one vertex, fixed at creation.
+    """
+
+    def current(self):
+        return self.owner.current()
+
+    def __init__(self, owner: GpuSilhouettes, corners, face_part=None, topology=None) -> None:
+        self.owner = owner
+        with self.current():
+            self._create(owner, corners, face_part, topology)
+
+    def _create(self, owner: GpuSilhouettes, corners, face_part, topology) -> None:
+        corners = np.asarray(corners, dtype=np.float32)
+        if corners.ndim != 3 or corners.shape[1:] != (3, 3) or len(corners) == 0:
+            raise InputError(f"corners must have shape (F, 3, 3) with F > 0, got {corners.shape}")
+        if not np.isfinite(corners).all():
+            raise InputError("corner positions must be finite")
+        ctx = owner.renderer.ctx
+        self.faces = len(corners)
+        self.corners = Corners(ctx, self.faces)
+        self.corners.write(corners)
+        points = corners.reshape(-1, 3).astype(np.float64)
+        self.bounds = np.array([points.min(axis=0), points.max(axis=0)])
+        self.tolerance = owner.tolerance * diagonal(points)
+        # what the renderer's geometry pass needs of a mesh: vertex arrays, the part per vertex
+        self._vaos: dict[int, object] = {}
+        parts = np.zeros(self.faces, np.int32) if face_part is None else np.asarray(face_part, np.int32)
+        self._corner_parts = ctx.buffer(np.repeat(parts, 3).astype(np.int32))
+        self._first = corners
+        self._topology = None if topology is None else tuple(topology)
+        self._lists: ListTextures | None = None
+
+    @property
+    def triangle_count(self) -> int:
+        return self.faces
+
+    def vao(self, program):
+        """The soup drawn with `program` (the renderer's geometry pass): corner 3f + k is vertex
+        3f + k, so ``gl_PrimitiveID`` is the face index. No normals: the pass's normal target
+        is not read by the silhouette pass."""
+        vao = self._vaos.get(program.glo)
+        if vao is None:
+            layout = [(self.corners.buffer, "3f", "in_position")]
+            if "in_part" in program:
+                layout.append((self._corner_parts, "1i", "in_part"))
+            vao = self._vaos[program.glo] = self.owner.renderer.ctx.vertex_array(program, layout)
+            vao.vertices = 3 * self.faces
+        return vao
+
+    @on_gl
+    def update(self, corners, topology=None) -> None:
+        """Replace the corner positions, (F, 3, 3) float; `topology`, ``(faces, vertices)``
+        of the new connectivity, only where it changed and only for the ``"idlist"`` method."""
+        self.corners.write(corners)
+        if topology is not None:
+            self._topology = tuple(topology)
+            if self._lists is not None:
+                self._lists.release()
+                self._lists = None
+
+    @on_gl
+    def id_lists(self) -> ListTextures:
+        if self._lists is None:
+            if self._topology is not None:
+                faces, vertices = self._topology
+                lists = id_lists_from_topology(faces, vertices)
+            else:
+                flat = self._first.reshape(-1, 3)
+                lists = build_id_lists(flat, np.arange(len(flat)).reshape(-1, 3), self.tolerance)
+            if len(lists.face_vertices) != self.faces:
+                raise InputError(f"topology has {len(lists.face_vertices)} faces, the mesh {self.faces}")
+            self._lists = ListTextures(self.owner.renderer.ctx, lists)
+        return self._lists
+
+    @on_gl
+    def release(self) -> None:
+        for obj in (*self._vaos.values(), self._corner_parts):
+            obj.release()
+        self._vaos.clear()
+        self.corners.release()
+        if self._lists is not None:
+            self._lists.release()
+
+
+def box_corners(bounds: np.ndarray) -> np.ndarray:
+    """The 8 corners, (8, 3), of a (2, 3) box, for fitting a camera to it."""
+    lo, hi = bounds
+    return np.array(
+        [[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)]
+    )

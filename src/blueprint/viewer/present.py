@@ -1,0 +1,128 @@
+"""Presenting: the drawing, uploaded once as a texture, drawn to the window over the backdrop
+(scaled up where it is a draft), with the overlay (help box and heads-up lines, drawn on the
+CPU) as a second texture over it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from blueprint.scene.model import Model
+from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT, band_overlay, help_overlay
+from blueprint.viewer.state import ViewState
+from blueprint.viewer.window import Window
+
+PRESENT_FRAG = "blueprint.viewer:glsl/present.frag"
+
+
+def hud_lines(state: ViewState, model: Model, last: dict, renderer_name: str, status: str) -> list[str]:
+    """The heads-up lines: frame rate, layers, model, renderer, style and view; then the picked
+    part and `status` (a passing message), where there are any. `last` describes the last
+    frame drawn (its ``ms``, ``layers``, ``quality``, ``scale`` and ``revealed``)."""
+    ms = last.get("ms", 0.0)
+    fps = 1000.0 / ms if ms > 0 else 0.0
+    limit = "all" if state.max_layers is None else str(state.max_layers)
+    view = state.view if state.at_fit() else f"{state.view} (orbited)"
+    quality = "" if last.get("quality") == "full" else f" | draft {last.get('scale', 1):g}"
+    lines = [
+        f"{fps:.1f} fps | {last.get('layers', 0)} layers (max {limit}) | "
+        f"{model.triangle_count:,} triangles | {renderer_name} | {state.style} | "
+        f"{view} {'ortho' if state.ortho else 'persp'}{quality} | H: help"
+    ]
+    extra = []
+    if state.part is not None:
+        count = int(np.count_nonzero(model.face_part == state.part))
+        line = f"part {state.part}: {model.part_names[state.part]} ({count:,} triangles)"
+        revealed = last.get("revealed")
+        if state.mask and revealed is not None:
+            line += f" | depth mask: {revealed:.0%} shown"
+        extra.append(line)
+    if status:
+        extra.append(status)
+    if extra:
+        lines.append("   ".join(extra))
+    return lines
+
+
+class Presenter:
+    """The window's textures (the picture, the overlay) and the pass that shows them."""
+
+    def __init__(self, window: Window) -> None:
+        self.window = window
+        self._textures: dict[str, object] = {}
+        self._overlay_key: tuple | None = None
+        self._overlay_base: np.ndarray | None = None
+        self._band_rows = 0
+
+    @property
+    def has_picture(self) -> bool:
+        return "picture" in self._textures
+
+    def show(self, image: np.ndarray) -> None:
+        """Make ``image``, (H, W, 4) uint8, row 0 at the top, the picture presented from now on;
+        presenting again (heads-up lines, exposure) reuses the upload."""
+        self._upload("picture", image)
+
+    def draw(self, size: tuple[int, int], lines: list[str], show_help: bool) -> None:
+        """The picture over the backdrop, scaled to the window's `size`, the heads-up `lines` and
+        (with `show_help`) the help box over it, into the back buffer."""
+        w, h = size
+        renderer = self.window.renderer
+        ctx = renderer.ctx
+        overlay = self._overlay(size, lines, show_help)
+        prog, vao = renderer.fullscreen(PRESENT_FRAG)
+        ctx.screen.use()
+        ctx.viewport = (0, 0, w, h)
+        ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
+        self._textures["picture"].use(0)
+        overlay.use(1)
+        prog["u_picture"].value = 0
+        prog["u_overlay"].value = 1
+        prog["u_window"].value = (float(w), float(h))
+        prog["u_backdrop"].value = tuple(c / 255.0 for c in BACKDROP)
+        vao.render(vertices=3)
+
+    def read(self, size: tuple[int, int]) -> np.ndarray:
+        """What the back buffer shows, (H, W, 3) uint8, row 0 at the top; read it before the
+        swap, which leaves the back buffer undefined."""
+        w, h = size
+        ctx = self.window.renderer.ctx
+        shown = np.frombuffer(ctx.screen.read((0, 0, w, h), components=3, alignment=1), np.uint8)
+        return shown.reshape(h, w, 3)[::-1]
+
+    def _overlay(self, size: tuple[int, int], lines: list[str], show_help: bool):
+        """The overlay texture: the help box redrawn when it or the window changes, the band of
+        heads-up lines every frame (rows written down to the lower of this band and the last)."""
+        w, h = size
+        key = (w, h, show_help)
+        if self._overlay_key != key:
+            self._overlay_base = help_overlay(size, show_help)
+            self._upload("overlay", self._overlay_base)
+            self._overlay_key, self._band_rows = key, 0
+        rows = min(h, max(self._band_rows, LINE_HEIGHT * len(lines)))
+        texture = self._textures["overlay"]
+        if rows:
+            top = band_overlay(self._overlay_base[:rows], lines)
+            texture.write(np.ascontiguousarray(top[::-1]).tobytes(), viewport=(0, h - rows, w, rows))
+        self._band_rows = LINE_HEIGHT * len(lines)
+        return texture
+
+    def _upload(self, name: str, image: np.ndarray):
+        """``image`` (H, W, 4) uint8, row 0 at the top, in the texture ``name`` (kept between
+        frames, remade when the size changes)."""
+        h, w = image.shape[:2]
+        ctx = self.window.renderer.ctx
+        texture = self._textures.get(name)
+        if texture is None or texture.size != (w, h):
+            if texture is not None:
+                texture.release()
+            texture = self._textures[name] = ctx.texture((w, h), 4, alignment=1)
+            # drafts are scaled up bilinearly; a full-size picture lands on texel centres
+            texture.filter = (ctx.LINEAR, ctx.LINEAR)
+            texture.repeat_x = texture.repeat_y = False
+        texture.write(np.ascontiguousarray(image[::-1]).tobytes())
+        return texture
+
+    def release(self) -> None:
+        for texture in self._textures.values():
+            texture.release()
+        self._textures.clear()
