@@ -2,7 +2,7 @@
 
 ``blueprint view MODEL`` (the command is ``blueprint.cli.view``); from Python
 ``run_viewer(path, ...)``. The state and camera rules (``state.py``) and the CPU overlays
-(``overlay.py``) need neither a window nor a GPU; ``app.py`` imports the windowing library
+(``overlay.py``) need neither a window nor a GPU; ``window.py`` imports the windowing library
 (glfw) only when a window is opened.
 """
 
