@@ -8,9 +8,20 @@ import functools
 from blueprint.errors import InputError
 from blueprint.gpu.context import create_context, gl_info
 from blueprint.gpu.queries import Queries
-from blueprint.gpu.shaders import build_compute, build_program
+from blueprint.gpu.shaders import COMPUTE_VERSION, VERSION, build_compute, build_program
 from blueprint.gpu.targets import TargetPool
 from blueprint.gpu.uniforms import Uniforms
+
+INTERLOCK_PROBE = """#version 430 core
+#extension GL_ARB_fragment_shader_interlock : require
+layout(pixel_interlock_ordered) in;
+layout(binding = 0, r32ui) coherent uniform uimage2D u_count;
+void main() {
+    beginInvocationInterlockARB();
+    imageStore(u_count, ivec2(gl_FragCoord.xy), imageLoad(u_count, ivec2(gl_FragCoord.xy)) + 1u);
+    endInvocationInterlockARB();
+}
+"""
 
 
 def current(method):
@@ -32,6 +43,8 @@ class Device:
 
     ``use_compute``: image passes run as compute shaders (OpenGL 4.3 on a GPU).
     ``framebuffer_fetch``: a fragment may read what the ones before it wrote to its pixel.
+    ``fragment_interlock``: fragments of one pixel may run a critical section one after
+    another in primitive order (GL_ARB_fragment_shader_interlock; probed by compiling one).
     """
 
     def __init__(self, ctx=None) -> None:
@@ -54,6 +67,11 @@ class Device:
             self.ctx.version_code >= 420 or "GL_ARB_shading_language_packing" in ext
         )
         self.max_draw_buffers = int(self.ctx.info["GL_MAX_DRAW_BUFFERS"])
+        self.fragment_interlock = (
+            self.ctx.version_code >= 430
+            and "GL_ARB_fragment_shader_interlock" in ext
+            and self._compiles(INTERLOCK_PROBE)
+        )
 
     def __enter__(self):
         return self
@@ -76,12 +94,24 @@ class Device:
         self._programs.clear()
         self.ctx.release()
 
-    def program(self, fragment: str, vertex: str = "fullscreen.vert", defines=None):
-        key = (vertex, fragment, tuple(sorted((defines or {}).items())))
+    def program(self, fragment: str, vertex: str = "fullscreen.vert", defines=None, modern: bool = False):
+        """A program from shader files, built once; ``modern``: GLSL 4.30 (image load/store)."""
+        key = (vertex, fragment, tuple(sorted((defines or {}).items())), modern)
         prog = self._programs.get(key)
         if prog is None:
-            prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines)
+            version = COMPUTE_VERSION if modern else VERSION
+            prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines, version)
         return prog
+
+    def _compiles(self, fragment_source: str) -> bool:
+        """Whether the driver builds a full-screen program of this fragment shader: an
+        extension listed is not always one that works."""
+        vertex = "#version 430 core\nvoid main() { gl_Position = vec4(0.0, 0.0, 0.0, 1.0); }\n"
+        try:
+            self.ctx.program(vertex_shader=vertex, fragment_shader=fragment_source).release()
+        except Exception:
+            return False
+        return True
 
     def compute(self, ref: str, defines=None):
         key = ("compute", ref, tuple(sorted((defines or {}).items())))

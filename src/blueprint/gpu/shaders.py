@@ -126,8 +126,9 @@ def build_program(
     vertex: str,
     fragment: str,
     defines: dict[str, object] | None = None,
+    version: str = VERSION,
 ):
-    """Compile and link a program from shader file references.
+    """Compile and link a program from shader file references (GLSL ``version``).
 
     References are ``"package:path"`` or a bare name in ``blueprint/gpu/glsl``.
 
@@ -136,8 +137,8 @@ def build_program(
     ShaderError
         One line naming the file and line the compiler complained about.
     """
-    vs, vs_files = preprocess(vertex, defines)
-    fs, fs_files = preprocess(fragment, defines)
+    vs, vs_files = preprocess(vertex, defines, version)
+    fs, fs_files = preprocess(fragment, defines, version)
     try:
         return ctx.program(vertex_shader=vs, fragment_shader=fs)
     except Exception as exc:

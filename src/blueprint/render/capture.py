@@ -133,7 +133,8 @@ class Capture:
             and mesh.part_count < 0xFFFF
         )
         if use_kbuffer:
-            prog = r.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": batch, "FACE_IDS": face_ids})
+            defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock}
+            prog = r.program(KBUFFER_FRAG, GEOMETRY_VERT, defines, modern=r.kbuffer_interlock)
         else:
             defines = {
                 "BACK_BIAS_IN_SHADER": self.shader_bias,
@@ -179,7 +180,7 @@ class Capture:
             self.r.peel_units_held_by = self
         with guard.crender if guard is not None else contextlib.nullcontext():
             if self.kbuffer is not None:
-                return self.kbuffer.draw(self.mesh, gb.fbos, layer, query)
+                return self.kbuffer.draw(self.mesh, gb, layer, query)
             gb.fbos[layer % 2].use()
             self.prog["u_peel"].value = layer > 0
             self.prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
@@ -230,18 +231,27 @@ class _KBuffer:
             )
         return held
 
-    def draw(self, mesh, fbos, layer: int, query) -> int:
+    def draw(self, mesh, gb: GBuffer, layer: int, query) -> int:
         ctx = self.r.ctx
-        surfaces, target, first_target = self._surfaces(tuple(fbos[0].size))
+        surfaces, target, first_target = self._surfaces(gb.size)
         first = layer % self.k == 0
         if first:
             # the first target alone is cleared: kbuffer.frag keeps the rest valid
             first_target.clear()
-            target.use()
             self.prog["u_peel"].value = layer > 0
             self.prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
-            mesh.vao(self.prog).render()
-        fbos[layer % 2].use()
+            if self.r.kbuffer_interlock:
+                # the surfaces as images; the pass rasterises into this layer's depth (not the
+                # previous layer's, which it samples), writing nothing there: no depth test
+                for unit, tex in enumerate(surfaces):
+                    tex.bind_to_image(unit, read=True, write=True)
+                gb.clears[layer % 2].use()
+                mesh.vao(self.prog).render()
+                ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
+            else:
+                target.use()
+                mesh.vao(self.prog).render()
+        gb.fbos[layer % 2].use()
         surfaces[layer % self.k].use(units.KBUFFER)
         self.unpack["u_first"].value = first
         self.unpack["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2

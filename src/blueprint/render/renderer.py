@@ -87,10 +87,14 @@ class LayerRenderer(Device):
         # offset: one draw measured faster on llvmpipe and on the H100 in 3 of 4 cases
         # (benchmarks/variants.py), and never more than 10 % slower.
         self.back_bias_in_shader = True
-        # Peeling several layers a geometry pass (capture._KBuffer) needs framebuffer fetch
-        # (Mesa's drivers, llvmpipe among them) and a target a layer; used from
-        # KBUFFER_MIN_DENSITY triangles per pixel (benchmarks/variants.py compares both ways).
-        self.kbuffer = self.framebuffer_fetch and self.max_draw_buffers >= KBUFFER_MAX
+        # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
+        # pixel to read and write its surfaces one after another: framebuffer fetch (Mesa's
+        # drivers, llvmpipe among them) with a target a layer, else fragment shader interlock
+        # on images (NVIDIA's); used from KBUFFER_MIN_DENSITY triangles per pixel
+        # (benchmarks/variants.py compares both ways).
+        fetch = self.framebuffer_fetch and self.max_draw_buffers >= KBUFFER_MAX
+        self.kbuffer = fetch or self.fragment_interlock
+        self.kbuffer_interlock = not fetch and self.fragment_interlock
         self.kbuffer_density = KBUFFER_MIN_DENSITY
 
     def release(self) -> None:
@@ -212,16 +216,25 @@ class LayerRenderer(Device):
         rules = standard_rules(None, min_fraction)
         ctx, pool = self.ctx, self.pool
         mesh = self.mesh(model, None)
-        prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, {"K": k, "FACE_IDS": True, "IDS_ONLY": True})
+        interlock = self.kbuffer_interlock
+        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True, "INTERLOCK": interlock}
+        prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, defines, modern=interlock)
         peel_uniforms(prog, camera)
         prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         prog["u_peel"].value = False
         name = f"kbuffer.faces.{size[0]}x{size[1]}"
         surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
         pool.framebuffer((surfaces[0],)).clear()
-        pool.framebuffer(tuple(surfaces)).use()
         ctx.enable_only(ctx.NOTHING)
-        mesh.vao(prog).render()
+        if interlock:
+            for unit, tex in enumerate(surfaces):
+                tex.bind_to_image(unit, read=True, write=True)
+            pool.framebuffer((), pool.depth(f"{name}.raster", size)).use()
+            mesh.vao(prog).render()
+            ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
+        else:
+            pool.framebuffer(tuple(surfaces)).use()
+            mesh.vao(prog).render()
         valid = np.ones(size[0] * size[1], bool)
         out, counts = [], []
         for tex in surfaces:

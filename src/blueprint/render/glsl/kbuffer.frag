@@ -1,12 +1,18 @@
 // Depth peeling K layers in one geometry pass (a k-buffer). Every fragment behind the last layer
-// of the previous pass is inserted among the K nearest surfaces found so far at its pixel, kept
-// sorted in K integer targets that the shader reads back through framebuffer fetch: the driver
-// runs the fragments of one pixel one after another, in primitive order. The rules are those of
-// peel.frag, so both give the same layers: back faces lie u_back_bias behind, a fragment no
-// more than u_peel_eps (eye depth) behind a surface is that surface (coplanar faces, touching
-// parts), and of two fragments at one depth the first drawn stays. With IDS_ONLY a surface is
-// its depth and face alone (kbuffer.glsl), for passes that need no normals.
+// of the previous pass is inserted among the K nearest surfaces found so far at its pixel
+// (kb_place), kept sorted in K integer targets that the fragments of one pixel read and write
+// one after another, in primitive order: through framebuffer fetch (Mesa's drivers), or with
+// INTERLOCK as images inside a critical section ordered per pixel (fragment shader interlock,
+// NVIDIA's). The rules are those of peel.frag, so both give the same layers: back faces lie
+// u_back_bias behind, a fragment no more than u_peel_eps (eye depth) behind a surface is that
+// surface (coplanar faces, touching parts), and of two fragments at one depth the first drawn
+// stays. With IDS_ONLY a surface is its depth and face alone (kbuffer.glsl), for passes that
+// need no normals.
+#if INTERLOCK
+#extension GL_ARB_fragment_shader_interlock : require
+#else
 #extension GL_EXT_shader_framebuffer_fetch : require
+#endif
 #extension GL_ARB_shading_language_packing : require
 #include "depth.glsl"
 #include "kbuffer.glsl"
@@ -21,6 +27,40 @@ in vec3 v_eye;
 in vec3 v_normal;
 flat in int v_part;
 
+#if INTERLOCK
+layout(pixel_interlock_ordered) in;
+#if IDS_ONLY
+#define KB_FORMAT rg32ui
+#define KB_SWIZZLE .xy
+#define KB_WIDEN , 0u, 0u
+#else
+#define KB_FORMAT rgba32ui
+#define KB_SWIZZLE
+#define KB_WIDEN
+#endif
+layout(binding = 0, KB_FORMAT) coherent uniform uimage2D u_s0;
+#if K > 1
+layout(binding = 1, KB_FORMAT) coherent uniform uimage2D u_s1;
+#endif
+#if K > 2
+layout(binding = 2, KB_FORMAT) coherent uniform uimage2D u_s2;
+#endif
+#if K > 3
+layout(binding = 3, KB_FORMAT) coherent uniform uimage2D u_s3;
+#endif
+#if K > 4
+layout(binding = 4, KB_FORMAT) coherent uniform uimage2D u_s4;
+#endif
+#if K > 5
+layout(binding = 5, KB_FORMAT) coherent uniform uimage2D u_s5;
+#endif
+#if K > 6
+layout(binding = 6, KB_FORMAT) coherent uniform uimage2D u_s6;
+#endif
+#if K > 7
+layout(binding = 7, KB_FORMAT) coherent uniform uimage2D u_s7;
+#endif
+#else
 layout(location = 0) inout KB_T o_s0;
 #if K > 1
 layout(location = 1) inout KB_T o_s1;
@@ -43,14 +83,14 @@ layout(location = 6) inout KB_T o_s6;
 #if K > 7
 layout(location = 7) inout KB_T o_s7;
 #endif
+#endif
 
 void main() {
     float z = gl_FragCoord.z;
+    bool keep = true;
     if (u_peel) {
         float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;
-        if (prev >= 1.0 || eye_depth(z) <= eye_depth(prev) + u_peel_eps) {
-            discard;
-        }
+        keep = prev < 1.0 && eye_depth(z) > eye_depth(prev) + u_peel_eps;
     }
 #if IDS_ONLY
     vec3 n = vec3(0.0);
@@ -68,8 +108,66 @@ void main() {
 #endif
     KB_T c = kb_pack(z, !gl_FrontFacing, n, face, v_part);
     float cb = kb_depth(c, u_back_bias);
-
     KB_T s[K];
+    bool same;
+    int held;
+#if INTERLOCK
+    // the critical section is entered by every fragment, in main's own flow (the extension's
+    // rule): fragments left out only skip the writes
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    beginInvocationInterlockARB();
+    s[0] = KB_T(imageLoad(u_s0, p)KB_SWIZZLE);
+#if K > 1
+    s[1] = KB_T(imageLoad(u_s1, p)KB_SWIZZLE);
+#endif
+#if K > 2
+    s[2] = KB_T(imageLoad(u_s2, p)KB_SWIZZLE);
+#endif
+#if K > 3
+    s[3] = KB_T(imageLoad(u_s3, p)KB_SWIZZLE);
+#endif
+#if K > 4
+    s[4] = KB_T(imageLoad(u_s4, p)KB_SWIZZLE);
+#endif
+#if K > 5
+    s[5] = KB_T(imageLoad(u_s5, p)KB_SWIZZLE);
+#endif
+#if K > 6
+    s[6] = KB_T(imageLoad(u_s6, p)KB_SWIZZLE);
+#endif
+#if K > 7
+    s[7] = KB_T(imageLoad(u_s7, p)KB_SWIZZLE);
+#endif
+    int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held);
+    if (keep && at < K) {
+        imageStore(u_s0, p, uvec4(KB_SHIFTED(s, c, at, held, same, 0, 0)KB_WIDEN));
+#if K > 1
+        imageStore(u_s1, p, uvec4(KB_SHIFTED(s, c, at, held, same, 1, 0)KB_WIDEN));
+#endif
+#if K > 2
+        imageStore(u_s2, p, uvec4(KB_SHIFTED(s, c, at, held, same, 2, 1)KB_WIDEN));
+#endif
+#if K > 3
+        imageStore(u_s3, p, uvec4(KB_SHIFTED(s, c, at, held, same, 3, 2)KB_WIDEN));
+#endif
+#if K > 4
+        imageStore(u_s4, p, uvec4(KB_SHIFTED(s, c, at, held, same, 4, 3)KB_WIDEN));
+#endif
+#if K > 5
+        imageStore(u_s5, p, uvec4(KB_SHIFTED(s, c, at, held, same, 5, 4)KB_WIDEN));
+#endif
+#if K > 6
+        imageStore(u_s6, p, uvec4(KB_SHIFTED(s, c, at, held, same, 6, 5)KB_WIDEN));
+#endif
+#if K > 7
+        imageStore(u_s7, p, uvec4(KB_SHIFTED(s, c, at, held, same, 7, 6)KB_WIDEN));
+#endif
+    }
+    endInvocationInterlockARB();
+#else
+    if (!keep) {
+        discard;
+    }
     s[0] = o_s0;
 #if K > 1
     s[1] = o_s1;
@@ -92,60 +190,31 @@ void main() {
 #if K > 7
     s[7] = o_s7;
 #endif
-    // The surfaces held come first, and the place after them is empty: only the first target
-    // is cleared before a pass, the rest of a pixel's targets are read only up to there.
-    int count = K;
-    for (int k = 0; k < K; ++k) {
-        if (count == K && kb_empty(s[k])) {
-            count = k;
-        }
-    }
-    // where the fragment goes: before the first surface it lies in front of (in its place
-    // when that surface is within the tolerance behind), or after them all
-    int at = count;
-    bool same = false;
-    for (int k = 0; k < K; ++k) {
-        if (k >= count || at < count) {
-            continue;
-        }
-        float sb = kb_depth(s[k], u_back_bias);
-        if (cb >= sb) {
-            // at or behind this surface: part of it, or on to the next one
-            if (eye_depth(z) <= eye_depth(sb) + u_peel_eps) {
-                discard;
-            }
-            continue;
-        }
-        // in front of it: the peel would take this fragment first and then skip the surface
-        // if it lies within the tolerance behind
-        at = k;
-        same = eye_depth(kb_raw(s[k])) <= eye_depth(cb) + u_peel_eps;
-    }
+    int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held);
     if (at == K) {
-        discard;  // behind all K surfaces
+        discard;
     }
-    int held = same ? count : count + 1;
-    // constant indices only: llvmpipe miscompiled writes through a computed index
-    o_s0 = at == 0 ? c : (0 < held ? s[0] : KB_T(0u));
+    o_s0 = KB_SHIFTED(s, c, at, held, same, 0, 0);
 #if K > 1
-    o_s1 = 1 < at ? s[1] : (1 == at ? c : (1 < held ? (same ? s[1] : s[0]) : KB_T(0u)));
+    o_s1 = KB_SHIFTED(s, c, at, held, same, 1, 0);
 #endif
 #if K > 2
-    o_s2 = 2 < at ? s[2] : (2 == at ? c : (2 < held ? (same ? s[2] : s[1]) : KB_T(0u)));
+    o_s2 = KB_SHIFTED(s, c, at, held, same, 2, 1);
 #endif
 #if K > 3
-    o_s3 = 3 < at ? s[3] : (3 == at ? c : (3 < held ? (same ? s[3] : s[2]) : KB_T(0u)));
+    o_s3 = KB_SHIFTED(s, c, at, held, same, 3, 2);
 #endif
 #if K > 4
-    o_s4 = 4 < at ? s[4] : (4 == at ? c : (4 < held ? (same ? s[4] : s[3]) : KB_T(0u)));
+    o_s4 = KB_SHIFTED(s, c, at, held, same, 4, 3);
 #endif
 #if K > 5
-    o_s5 = 5 < at ? s[5] : (5 == at ? c : (5 < held ? (same ? s[5] : s[4]) : KB_T(0u)));
+    o_s5 = KB_SHIFTED(s, c, at, held, same, 5, 4);
 #endif
 #if K > 6
-    o_s6 = 6 < at ? s[6] : (6 == at ? c : (6 < held ? (same ? s[6] : s[5]) : KB_T(0u)));
+    o_s6 = KB_SHIFTED(s, c, at, held, same, 6, 5);
 #endif
 #if K > 7
-    o_s7 = 7 < at ? s[7] : (7 == at ? c : (7 < held ? (same ? s[7] : s[6]) : KB_T(0u)));
+    o_s7 = KB_SHIFTED(s, c, at, held, same, 7, 6);
+#endif
 #endif
 }

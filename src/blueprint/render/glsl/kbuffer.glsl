@@ -64,3 +64,46 @@ vec3 kb_normal(uvec4 s) {
 ivec2 kb_ids(uvec4 s) {
     return ivec2(int(s.w), int(s.z >> 16));
 }
+
+#ifdef K
+// Where a fragment ``c`` (biased depth ``cb``, eye depth of its raw depth ``ze``) goes among a
+// pixel's held surfaces ``s``, by the rules of peel.frag: before the first surface it lies in
+// front of (taking that surface's place when it lies within the tolerance behind: ``same``),
+// or after them all; K where it is part of a held surface or behind all K. ``held`` is how
+// many surfaces the pixel holds after it goes in.
+int kb_place(KB_T s[K], float ze, float cb, float back_bias, float eps, out bool same, out int held) {
+    // The surfaces held come first, and the place after them is empty: only the first target
+    // is cleared before a pass, the rest of a pixel's targets are read only up to there.
+    int count = K;
+    for (int k = 0; k < K; ++k) {
+        if (count == K && kb_empty(s[k])) {
+            count = k;
+        }
+    }
+    int at = count;
+    same = false;
+    bool part_of_one = false;
+    for (int k = 0; k < K; ++k) {
+        if (k >= count || at < count || part_of_one) {
+            continue;
+        }
+        float sb = kb_depth(s[k], back_bias);
+        if (cb >= sb) {
+            // at or behind this surface: part of it, or on to the next one
+            part_of_one = ze <= eye_depth(sb) + eps;
+            continue;
+        }
+        // in front of it: the peel would take this fragment first and then skip the surface
+        // if it lies within the tolerance behind
+        at = k;
+        same = eye_depth(kb_raw(s[k])) <= eye_depth(cb) + eps;
+    }
+    held = same ? count : count + 1;
+    return part_of_one ? K : at;
+}
+
+// Surface k of the pixel once the fragment is placed (constant k only: llvmpipe miscompiled
+// writes through a computed index); ``prev`` is k - 1 (0 for k = 0, where it is never read).
+#define KB_SHIFTED(s, c, at, held, same, k, prev) \
+    ((k) < (at) ? s[k] : ((k) == (at) ? (c) : ((k) < (held) ? ((same) ? s[k] : s[prev]) : KB_T(0u))))
+#endif
