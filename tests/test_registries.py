@@ -1,0 +1,150 @@
+"""The registry of output writers (blueprint.export.writers): a suffix picks its writer, an
+unknown one is a one-line error naming the allowed ones, and the command line chooses through it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+import blueprint.api.files as api_files
+import blueprint.vector.drawing as drawing
+from blueprint import examples
+from blueprint.api.files import choose_writer
+from blueprint.cli.render import layers as layers_command
+from blueprint.cli.render import render as render_command
+from blueprint.errors import InputError
+from blueprint.export.files import save_layers, save_png
+from blueprint.export.writers import WRITERS, Kind, Writers
+
+
+def _writes(tag: str):
+    def write(path: Path, value) -> Path:
+        path.write_text(f"{tag} {value}")
+        return path
+
+    return write
+
+
+# -- the registry, on one of its own --------------------------------------------------------------
+@pytest.fixture
+def writers() -> Writers:
+    own = Writers()
+    own.add(".png", Kind.IMAGE, _writes("png"))
+    own.add(".svg", Kind.DRAWING, _writes("svg"))
+    own.add(".pdf", Kind.DRAWING, _writes("pdf"))
+    own.add(".npz", Kind.LAYERS, _writes("npz"))
+    return own
+
+
+def test_a_suffix_picks_its_writer(writers, tmp_path):
+    path, writer = writers.choose(tmp_path / "plan.PDF", Kind.IMAGE, Kind.DRAWING)
+    assert path == tmp_path / "plan.PDF"
+    assert (writer.suffix, writer.kind) == (".pdf", Kind.DRAWING)
+    assert writer(path, 7) == path and path.read_text() == "pdf 7"
+
+
+def test_suffixes_come_in_the_order_of_the_kinds_asked(writers):
+    assert writers.suffixes(Kind.IMAGE, Kind.DRAWING) == (".png", ".svg", ".pdf")
+    assert writers.suffixes(Kind.DRAWING, Kind.IMAGE) == (".svg", ".pdf", ".png")
+    assert writers.suffixes(Kind.VIDEO) == ()
+
+
+def test_an_unknown_suffix_is_one_line_naming_the_allowed_ones(writers, tmp_path):
+    with pytest.raises(InputError) as caught:
+        writers.choose(tmp_path / "x.jpg", Kind.IMAGE, Kind.DRAWING)
+    assert str(caught.value) == f"{tmp_path / 'x.jpg'}: output must end in .png or .svg or .pdf"
+    # a suffix another kind writes is not allowed either
+    with pytest.raises(InputError) as caught:
+        writers.choose(tmp_path / "x.npz", Kind.IMAGE)
+    assert str(caught.value) == f"{tmp_path / 'x.npz'}: output must end in .png"
+
+
+def test_a_format_given_overrides_the_suffix(writers, tmp_path):
+    path, writer = writers.choose(tmp_path / "drawing.out", Kind.DRAWING, suffix=".svg")
+    assert (path, writer.suffix) == (tmp_path / "drawing.out", ".svg")
+
+
+def test_unwritable_paths_fail_before_any_work(writers, tmp_path):
+    with pytest.raises(InputError, match="does not exist"):
+        writers.choose(tmp_path / "missing" / "x.png", Kind.IMAGE)
+    (tmp_path / "folder.png").mkdir()
+    with pytest.raises(InputError, match="is a directory"):
+        writers.choose(tmp_path / "folder.png", Kind.IMAGE)
+
+
+def test_registering_mistakes_are_bugs(writers):
+    with pytest.raises(ValueError, match="registered already"):
+        writers.add(".png", Kind.IMAGE, _writes("again"))
+    for suffix in ("png", ".PNG", "."):
+        with pytest.raises(ValueError, match="suffix"):
+            writers.add(suffix, Kind.IMAGE, _writes("bad"))
+    with pytest.raises(LookupError, match="no writer of video frames"):
+        writers.choose("x.mp4", Kind.VIDEO)
+
+
+def test_one_suffix_may_have_a_writer_per_kind(writers, tmp_path):
+    writers.add(".npz", Kind.IMAGE, _writes("image npz"))
+    assert writers.choose(tmp_path / "x.npz", Kind.LAYERS)[1].kind == Kind.LAYERS
+    assert writers.choose(tmp_path / "x.npz", Kind.IMAGE, Kind.LAYERS)[1].kind == Kind.IMAGE
+
+
+# -- the package's registry ---------------------------------------------------------------------------
+def test_every_format_and_its_writer():
+    """Once blueprint.api.files is imported (this module does), every layer has registered."""
+    table = {(w.kind, w.suffix): w.write for w in WRITERS._writers.values()}
+    assert table == {
+        (Kind.IMAGE, ".png"): save_png,
+        (Kind.LAYERS, ".npz"): save_layers,
+        (Kind.DRAWING, ".svg"): drawing._write_svg,
+        (Kind.DRAWING, ".pdf"): drawing._write_pdf,
+        (Kind.DRAWING, ".dxf"): drawing._write_dxf,
+        **{(Kind.VIDEO, s): api_files._write_video for s in (".mp4", ".mov", ".mkv", ".avi", ".m4v")},
+    }
+    assert drawing.FORMATS == (".svg", ".pdf", ".dxf")
+
+
+def test_the_commands_choices(tmp_path):
+    path, writer = choose_writer(tmp_path / "a.Svg", Kind.IMAGE, Kind.DRAWING)
+    assert writer.write is drawing._write_svg
+    with pytest.raises(InputError) as caught:
+        choose_writer(tmp_path / "a.jpg", Kind.IMAGE, Kind.DRAWING)
+    assert str(caught.value) == f"{tmp_path / 'a.jpg'}: output must end in .png or .svg or .pdf or .dxf"
+
+
+def test_a_format_added_in_one_line_is_chosen_by_the_command_line(renderer, tmp_path, monkeypatch):
+    """A PPM writer and the one line that registers it: ``blueprint render -o x.ppm`` writes
+    through it, and the message for an unknown suffix names it."""
+    monkeypatch.setattr(WRITERS, "_writers", dict(WRITERS._writers))
+
+    def save_ppm(path: Path, image: np.ndarray) -> Path:
+        path.write_bytes(b"P6 %d %d 255\n" % (image.shape[1], image.shape[0]) + image[..., :3].tobytes())
+        return path
+
+    WRITERS.add(".ppm", Kind.IMAGE, save_ppm)
+    model = str(examples.example_path())
+    out = tmp_path / "x.ppm"
+    result = CliRunner().invoke(render_command, [model, "-o", str(out), "--size", "16", "12"])
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes().startswith(b"P6 16 12 255\n") and len(out.read_bytes()) == 13 + 16 * 12 * 3
+    result = CliRunner().invoke(render_command, [model, "-o", str(tmp_path / "x.gif")], standalone_mode=False)
+    assert str(result.exception).endswith("output must end in .png or .ppm or .svg or .pdf or .dxf")
+
+
+def test_layers_take_only_their_writers(tmp_path):
+    model = str(examples.example_path())
+    result = CliRunner().invoke(layers_command, [model, "-o", str(tmp_path / "x.png")], standalone_mode=False)
+    assert isinstance(result.exception, InputError)
+    assert str(result.exception) == f"{tmp_path / 'x.png'}: output must end in .npz"
+
+
+def test_a_video_suffix_without_animation_asks_for_it(tmp_path):
+    from blueprint.api.files import render_silhouettes_file
+
+    with pytest.raises(InputError, match="a video needs --animate"):
+        render_silhouettes_file("unread.glb", tmp_path / "x.mkv")
+    with pytest.raises(InputError, match=r"output must end in \.mp4 or \.mov or \.mkv or \.avi or \.m4v"):
+        render_silhouettes_file("unread.glb", tmp_path / "x.png", animate="twist")
