@@ -1,5 +1,5 @@
-"""The registry of output writers (blueprint.export.writers): a suffix picks its writer, an
-unknown one is a one-line error naming the allowed ones, and the command line chooses through it.
+"""The registries: output writers by suffix (export.writers) and raster styles by name
+(compose.style.STYLES).
 """
 
 from __future__ import annotations
@@ -14,11 +14,18 @@ import blueprint.api.files as api_files
 import blueprint.vector.drawing as drawing
 from blueprint import examples
 from blueprint.api.files import choose_writer
+from blueprint.cli import STYLE_NAMES
 from blueprint.cli.render import layers as layers_command
 from blueprint.cli.render import render as render_command
+from blueprint.compose.style import STYLES
 from blueprint.errors import InputError
 from blueprint.export.files import save_layers, save_png
 from blueprint.export.writers import WRITERS, Kind, Writers
+from blueprint.ops import COMPOSITE
+from blueprint.vector.style import is_style_file, vector_style
+
+ROOT = Path(__file__).resolve().parents[1]
+LINE_STYLE = ROOT / "examples" / "lines.toml"
 
 
 def _writes(tag: str):
@@ -148,3 +155,28 @@ def test_a_video_suffix_without_animation_asks_for_it(tmp_path):
         render_silhouettes_file("unread.glb", tmp_path / "x.mkv")
     with pytest.raises(InputError, match=r"output must end in \.mp4 or \.mov or \.mkv or \.avi or \.m4v"):
         render_silhouettes_file("unread.glb", tmp_path / "x.png", animate="twist")
+
+
+# -- styles ------------------------------------------------------------------------------------------
+def test_one_list_of_raster_styles():
+    assert STYLE_NAMES == tuple(STYLES) == ("blueprint", "paper", "transparent", "wireframe")
+    # the composite op lies below compose and lists them for pipelines: it must keep up
+    [style] = [p for p in COMPOSITE.params if p.name == "style"]
+    assert style.choices == tuple(STYLES)
+
+
+def test_vector_styles_by_name_file_or_object(tmp_path):
+    assert vector_style("paper").name == "paper"
+    from_file = vector_style(str(LINE_STYLE))
+    assert from_file.name == "lines" and vector_style(LINE_STYLE) == from_file
+    assert vector_style(from_file) is from_file
+    assert vector_style(STYLES["wireframe"]).name == "wireframe"
+    with pytest.raises(InputError) as caught:
+        vector_style("neon")
+    assert str(caught.value) == (
+        "unknown style 'neon' (choose blueprint, paper, transparent, wireframe or a line style file)"
+    )
+    with pytest.raises(InputError, match="line style file must end in .toml or .json"):
+        vector_style(tmp_path / "lines.yaml")
+    assert is_style_file("a/b.TOML") and is_style_file(Path("b.json"))
+    assert not is_style_file("paper") and not is_style_file(STYLES["paper"])

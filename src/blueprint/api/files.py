@@ -216,7 +216,7 @@ def render_vector_file(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
-    style: str | Style | VectorStyle = "blueprint",
+    style: str | os.PathLike | Style | VectorStyle = "blueprint",
     max_layers: int | None = 8,
     crease_angle: float = 30.0,
     line_width: float = 1.0,
@@ -229,9 +229,10 @@ def render_vector_file(
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
 
     Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
-    line with its occlusion level and writes the file atomically. A ``scale`` ('1:50') makes
-    the view orthographic and lays the page out in millimetres (``units``: the model's length
-    unit). ``max_layers`` None or 0 peels every layer.
+    line with its occlusion level and writes the file atomically. ``style`` is a raster style's
+    name, a line style file or a ``VectorStyle`` (see ``blueprint.vector.style.vector_style``).
+    A ``scale`` ('1:50') makes the view orthographic and lays the page out in millimetres
+    (``units``: the model's length unit). ``max_layers`` None or 0 peels every layer.
 
     Returns
     -------

@@ -10,6 +10,7 @@ from blueprint.api.files import choose_writer
 from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
 from blueprint.errors import InputError
 from blueprint.export.writers import WRITERS, Kind
+from blueprint.vector.style import FILE_SUFFIXES, is_style_file
 
 # the formats as the registry has them (blueprint.api.files has registered every one)
 PICTURES = ", ".join(WRITERS.suffixes(Kind.IMAGE))
@@ -31,7 +32,7 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     default="blueprint",
     show_default=True,
     help=f"One of {', '.join(STYLE_NAMES)}; for vector lines ({DRAWINGS}) also a line style file "
-    "(.toml or .json: colour, width, dash and opacity per occlusion level).",
+    f"({' or '.join(FILE_SUFFIXES)}: colour, width, dash and opacity per occlusion level).",
 )
 @click.option("--grid", type=float, default=None, help="Grid spacing in pixels (0: none).")
 @click.option(
@@ -141,7 +142,7 @@ def render(
         return
     if scale or units:
         raise InputError(f"--scale and --units are for vector drawings ({DRAWINGS})")
-    if _is_style_file(style):
+    if is_style_file(style):
         raise InputError(
             f"{style}: line style files are for vector drawings ({DRAWINGS}); "
             f"a picture takes one of {', '.join(STYLE_NAMES)}"
@@ -176,22 +177,12 @@ def render(
     )
 
 
-def _is_style_file(style: str) -> bool:
-    return Path(style).suffix.lower() in (".toml", ".json")
-
-
 def _render_vector(
     model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
 ):
     from blueprint.api import default_renderer
     from blueprint.api.files import render_vector_file
 
-    if _is_style_file(style):
-        from blueprint.vector import load_vector_style
-
-        style = load_vector_style(style)
-    elif style not in STYLE_NAMES:
-        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)} or a line style file)")
     summary = render_vector_file(
         model,
         output,
