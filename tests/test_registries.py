@@ -1,9 +1,10 @@
-"""The registries: output writers by suffix (export.writers) and raster styles by name
-(compose.style.STYLES).
+"""The registries: output writers by suffix (export.writers), raster styles by name
+(compose.style.STYLES), and the API's typed keywords, which the command line's options map to.
 """
 
 from __future__ import annotations
 
+import inspect
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +14,10 @@ from click.testing import CliRunner
 import blueprint.api.files as api_files
 import blueprint.vector.drawing as drawing
 from blueprint import examples
-from blueprint.api.files import choose_writer
+from blueprint.api import peel, render, render_frame
+from blueprint.api.files import choose_writer, render_vector_file
+from blueprint.api.renderer import Renderer
+from blueprint.bench import time_frames
 from blueprint.cli import STYLE_NAMES
 from blueprint.cli.render import layers as layers_command
 from blueprint.cli.render import render as render_command
@@ -180,3 +184,31 @@ def test_vector_styles_by_name_file_or_object(tmp_path):
         vector_style(tmp_path / "lines.yaml")
     assert is_style_file("a/b.TOML") and is_style_file(Path("b.json"))
     assert not is_style_file("paper") and not is_style_file(STYLES["paper"])
+
+
+# -- the API's keywords --------------------------------------------------------------------------------
+def _keywords(function) -> dict[str, object]:
+    params = inspect.signature(function).parameters.values()
+    assert not [p for p in params if p.kind is p.VAR_KEYWORD], f"{function.__name__} takes **kwargs"
+    return {p.name: p.default for p in params if p.kind is p.KEYWORD_ONLY}
+
+
+def test_frames_take_every_renderer_argument_by_name_with_its_default():
+    frame = _keywords(render_frame)
+    assert _keywords(render) == frame
+    renderer = _keywords(Renderer.render)
+    assert {k: frame[k] for k in renderer} == renderer
+    layers = _keywords(Renderer.peel)
+    assert {k: v for k, v in _keywords(peel).items() if k in layers} == layers
+    assert set(_keywords(time_frames)) == {"size", "max_layers", "supersample", "style", "frames", "warmup"}
+
+
+def test_every_render_option_is_an_api_argument():
+    """``--highlight-model`` is the one exception: it loads a model for ``highlight``."""
+    frame, vector = set(_keywords(render_frame)), set(_keywords(render_vector_file))
+    for param in render_command.params:
+        if param.name in ("model", "output", "highlight_model"):
+            continue
+        assert param.name in frame | vector, f"--{param.name} is no argument of the API"
+    assert {p.name for p in layers_command.params} - {"model", "output"} <= set(_keywords(peel))
+    assert "output" in inspect.signature(render_vector_file).parameters

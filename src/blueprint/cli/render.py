@@ -70,7 +70,6 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
 )
 @click.option(
     "--glyphs",
-    "glyph_file",
     type=click.Path(path_type=Path),
     default=None,
     help="TOML or JSON file of boxes, arrows, paths and labels in model coordinates.",
@@ -105,13 +104,11 @@ def render(
     id_silhouettes,
     shade,
     shade_opacity,
-    glyph_file,
+    glyphs,
     reveal,
 ):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame
-    from blueprint.compose.glyphs import load_glyphs
-    from blueprint.compose.style import get_style
     from blueprint.scene.loader import load_model
 
     output, write = choose_writer(output, Kind.IMAGE, Kind.DRAWING)
@@ -119,7 +116,7 @@ def render(
         raise InputError("give --highlight or --highlight-model, not both")
     camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
     if write.kind is Kind.DRAWING:
-        if glyph_file or shade:
+        if glyphs or shade:
             raise InputError(
                 f"{output}: vector drawings take no --glyphs or --shade yet; write a picture for those"
             )
@@ -147,14 +144,13 @@ def render(
             f"{style}: line style files are for vector drawings ({DRAWINGS}); "
             f"a picture takes one of {', '.join(STYLE_NAMES)}"
         )
-    chosen = get_style(style, grid)
-    glyphs = load_glyphs(glyph_file) if glyph_file else None
     up_axis = camera.pop("up")
     loaded = load_model(model, up=up_axis)
     designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight
     frame = render_frame(
         loaded,
-        style=chosen,
+        style=style,
+        grid=grid,
         max_layers=max_layers or None,
         min_fraction=min_fraction,
         crease_angle=crease_angle,
