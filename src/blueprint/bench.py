@@ -11,22 +11,55 @@ from rich.progress import Progress
 
 from blueprint.api import default_renderer
 from blueprint.api.renderer import Renderer
+from blueprint.compose.style import Style
 from blueprint.gpu.device import check_size
-from blueprint.scene.camera import fit_camera
+from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.loader import load_model
+from blueprint.scene.model import Model
 
 
-def time_frames(renderer: Renderer, model, *, frames: int, warmup: int, **options) -> dict:
+def time_frames(
+    renderer: Renderer,
+    model: Model,
+    camera: Camera,
+    *,
+    size: tuple[int, int],
+    max_layers: int | None,
+    supersample: int,
+    style: str | Style,
+    frames: int,
+    warmup: int,
+) -> dict:
     """Median and spread of ``frames`` timed renders after ``warmup`` untimed ones, plus one
-    profiled frame (synchronised after every stage) for the per-stage split."""
+    profiled frame (synchronised after every stage) for the per-stage split.
+
+    Parameters
+    ----------
+    renderer : Renderer
+    model : Model
+    camera : Camera
+    size, max_layers, supersample, style
+        The frame, as ``Renderer.render`` takes them.
+    frames : int
+        Timed frames, at least 1.
+    warmup : int
+        Untimed frames before them.
+
+    Returns
+    -------
+    dict
+        ``layers``, ``ms`` (median), ``ms_min``, ``ms_max``, ``fps``, ``draws`` and ``stages``
+        (ms per stage of the profiled frame).
+    """
+    options = dict(size=size, max_layers=max_layers, supersample=supersample, style=style)
     for _ in range(warmup):
-        renderer.render(model, **options)
+        renderer.render(model, camera, **options)
     times = []
     frame = None
     for _ in range(frames):
-        frame = renderer.render(model, **options)
+        frame = renderer.render(model, camera, **options)
         times.append(frame.ms)
-    profiled = renderer.render(model, profile=True, **options)
+    profiled = renderer.render(model, camera, profile=True, **options)
     return {
         "layers": frame.layers,
         "ms": round(statistics.median(times), 3),
@@ -48,6 +81,10 @@ def run_bench(
     supersample: int = 2,
     style: str = "blueprint",
 ) -> Iterator[dict]:
+    """Time every model at every size and layer limit (None: all layers) with the shared
+    renderer; yields one record a configuration (``blueprint bench`` prints them as JSON):
+    ``renderer``, ``model``, ``triangles``, ``width``, ``height``, ``max_layers``,
+    ``supersample`` and ``time_frames``' figures."""
     renderer = default_renderer()
     jobs = [(m, s, n) for m in models for s in sizes for n in layer_options]
     for size in sizes:
@@ -78,7 +115,7 @@ def run_bench(
                 time_frames(
                     renderer,
                     model,
-                    camera=camera,
+                    camera,
                     size=size,
                     max_layers=max_layers,
                     frames=frames,

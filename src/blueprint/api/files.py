@@ -2,6 +2,10 @@
 out. Each draws with ``renderer``, or with the shared one (``blueprint.api.default_renderer``)
 when it is None. The command line is a thin shell over these: every option is an argument of
 the same name.
+
+Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``.
+This module imports every module that registers writers (vector drawings) and registers video
+itself, so ``choose_writer`` here knows every format.
 """
 
 from __future__ import annotations
@@ -17,10 +21,11 @@ from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
-from blueprint.export.files import check_output, save_png
+from blueprint.export.files import check_output
+from blueprint.export.writers import WRITERS, Kind, Writer
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.executor import Result, executor_for
-from blueprint.pipeline.media import VIDEO_FORMATS, VideoWriter, write_video
+from blueprint.pipeline.media import VIDEO_FORMATS, VideoWriter
 from blueprint.pipeline.run import (
     PICTURE_SUFFIXES,
     orbit,
@@ -34,17 +39,39 @@ from blueprint.scene.camera import VIEWS, fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
-from blueprint.vector.drawing import (
-    FORMATS,
-    UNITS_MM,
-    draw_vector,
-    draw_vector_sheet,
-    parse_scale,
-    save_drawing,
-)
+from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
 from blueprint.vector.style import VectorStyle, vector_style
 
-__all__ = ["render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
+__all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
+
+
+def choose_writer(output: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
+    """The writer of ``output``'s suffix among those that take ``kinds`` (in that order), the
+    path checked writable first: how the API and the command line pick every output format.
+
+    Raises ``InputError`` in one line naming the suffixes allowed where there is none.
+    """
+    return WRITERS.choose(output, *kinds)
+
+
+def _write_video(path: Path, frames: Iterable[np.ndarray], *, fps: float = 30.0, crf: int = 18) -> Path:
+    """H.264 frames, each (H, W, 3 or 4) uint8 of the first one's size, in the container the
+    suffix names, written atomically."""
+    frames = iter(frames)
+    first = next(frames, None)
+    if first is None:
+        raise InputError(f"{path}: no frames to write")
+    with VideoWriter(path, (first.shape[1], first.shape[0]), fps=fps, crf=crf) as video:
+        video.write(first)
+        for frame in frames:
+            video.write(frame)
+    return path
+
+
+# Registered here, not in export/: the encoder is the pipeline's (media.VideoWriter), a layer above.
+for _suffix in VIDEO_FORMATS:
+    WRITERS.add(_suffix, Kind.VIDEO, _write_video)
+del _suffix
 
 
 def run_pipeline(
@@ -101,7 +128,12 @@ def run_pipeline(
     videos = [n for n in plan.images if bound.images[n].video]
     if output is None:
         raise InputError("give an output file (-o)")
-    output = check_output(output, tuple(VIDEO_FORMATS) if videos else PICTURE_SUFFIXES)
+    # pipeline results are written by the pipeline (save_result, run_video), whose stills take
+    # only its own suffixes
+    if videos:
+        output, _ = choose_writer(output, Kind.VIDEO)
+    else:
+        output = check_output(output, PICTURE_SUFFIXES)
     formats = {d: bound.format_of(plan.resolve(d)) for d in dump}
     if max_layers is not None and not 0 <= max_layers <= 256:
         raise InputError(f"max-layers must be between 0 (all) and 256, got {max_layers}")
@@ -140,7 +172,7 @@ def turntable(
 ) -> Path:
     """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
     (default: the blueprint) as a video, atomically."""
-    output = check_output(output, tuple(VIDEO_FORMATS))
+    output, write = choose_writer(output, Kind.VIDEO)
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
@@ -156,7 +188,8 @@ def turntable(
     size = tuple(int(v) for v in size)
     check_size(size, 1, renderer.max_texture)
     cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
-    with VideoWriter(output, size, fps=fps, crf=crf) as writer:
+
+    def pictures():
         for index, camera in enumerate(cameras):
             result = ex.run(spec, model, camera, size=size, variables=variables, frame=index)
             picture = result.image
@@ -165,15 +198,16 @@ def turntable(
                 # composite over white where the pipeline leaves the background transparent
                 alpha = picture[..., 3:4].astype(np.float32) / 255.0
                 picture = np.round(picture[..., :3] * alpha + 255.0 * (1.0 - alpha)).astype(np.uint8)
-            writer.write(picture)
+            yield picture
             if progress is not None:
                 progress(index + 1, frames)
-    return output
+
+    return write(output, pictures(), fps=fps, crf=crf)
 
 
 def render_vector_file(
     model: Model | str | os.PathLike,
-    output_path: str | os.PathLike,
+    output: str | os.PathLike,
     *,
     size: tuple[int, int] = (1024, 1024),
     view: str = "iso",
@@ -182,7 +216,7 @@ def render_vector_file(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
-    style: str | Style | VectorStyle = "blueprint",
+    style: str | os.PathLike | Style | VectorStyle = "blueprint",
     max_layers: int | None = 8,
     crease_angle: float = 30.0,
     line_width: float = 1.0,
@@ -195,9 +229,10 @@ def render_vector_file(
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
 
     Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
-    line with its occlusion level and writes the file atomically. A ``scale`` ('1:50') makes
-    the view orthographic and lays the page out in millimetres (``units``: the model's length
-    unit). ``max_layers`` None or 0 peels every layer.
+    line with its occlusion level and writes the file atomically. ``style`` is a raster style's
+    name, a line style file or a ``VectorStyle`` (see ``blueprint.vector.style.vector_style``).
+    A ``scale`` ('1:50') makes the view orthographic and lays the page out in millimetres
+    (``units``: the model's length unit). ``max_layers`` None or 0 peels every layer.
 
     Returns
     -------
@@ -207,7 +242,7 @@ def render_vector_file(
         and ``total``).
     """
     start = time.perf_counter()
-    output = check_output(output_path, FORMATS)
+    output, write = choose_writer(output, Kind.DRAWING)
     if scale is not None:
         parse_scale(scale)
         ortho = True
@@ -234,7 +269,7 @@ def render_vector_file(
         camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
         drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
-    save_drawing(output, drawing)
+    write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}
     seconds["total"] = time.perf_counter() - start
     return {
@@ -285,9 +320,9 @@ def render_silhouettes_file(
     """
     if view not in VIEWS:
         raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
-    if animate is None and Path(output).suffix.lower() == ".mp4":
+    if animate is None and WRITERS.find(Path(output).suffix, Kind.VIDEO):
         raise InputError(f"{output}: a video needs --animate twist or --animate wave")
-    output = check_output(output, (".mp4",) if animate else (".png",))
+    output, write = choose_writer(output, Kind.VIDEO if animate else Kind.IMAGE)
     if frames < 1:
         raise InputError(f"frames must be at least 1, got {frames}")
     if not 0 < fps <= 240:
@@ -311,7 +346,7 @@ def render_silhouettes_file(
             loaded, method=method, layers=layers, size=size, renderer=renderer, **camera
         )
         ms = (time.perf_counter() - t0) * 1e3
-        save_png(output, image)
+        write(output, image)
         return {**summary, "frames": 1, "ms": ms}
 
     times: list[float] = []
@@ -330,9 +365,12 @@ def render_silhouettes_file(
     def tracked():
         for done, (image, ms) in enumerate(pictures, start=1):
             times.append(ms)
-            yield image
+            # odd sizes padded by one pixel with the edge's colour: players expect 4:2:0 chroma,
+            # which needs even sizes
+            h, w = image.shape[:2]
+            yield np.pad(image, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
             if progress is not None:
                 progress(done, frames)
 
-    count = write_video(output, tracked(), fps)
-    return {**summary, "frames": count, "ms": float(np.median(times))}
+    write(output, tracked(), fps=fps)
+    return {**summary, "frames": len(times), "ms": float(np.median(times))}

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from blueprint.api.renderer import Renderer
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
+from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
@@ -20,6 +22,10 @@ from blueprint.scene.parts import designated_parts
 
 #: The view name of a drawing sheet: top, front and right orthographic views plus an iso view.
 PLAN = "plan"
+
+#: Parts chosen by name globs and indices (a comma-separated string or a sequence), by a second
+#: model lying on them, or as one flag per part (see ``blueprint.scene.parts.designated_parts``).
+PartSpec = str | int | Sequence[str | int] | Model | np.ndarray
 
 
 def shared(renderer: Renderer | None) -> Renderer:
@@ -54,20 +60,113 @@ def render_frame(
     ortho: bool = False,
     up: str | None = None,
     camera: Camera | None = None,
+    style: str | Style = "blueprint",
+    grid: float | None = None,
+    max_layers: int | None = 8,
+    min_fraction: float = 0.0,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    supersample: int = 2,
+    depth_threshold: float = 4.0,
+    part_edges: bool = True,
+    id_silhouettes: bool = False,
+    highlight: PartSpec | None = None,
+    reveal: float | None = None,
+    shade: PartSpec | None = None,
+    shade_opacity: float = 1.0,
+    glyphs: Glyphs | str | os.PathLike | None = None,
+    profile: bool = False,
     renderer: Renderer | None = None,
-    **options,
 ) -> Frame:
-    """Like ``render`` but returns the whole ``Frame`` (image, layers used, timings)."""
+    """Draw the blueprint of a model, as ``render`` does, and return the whole frame.
+
+    Parameters
+    ----------
+    model : Model, str or PathLike
+        A loaded model or a model file.
+    size : (int, int)
+        Width and height in pixels.
+    view : str
+        ``iso``, ``front``, ``back``, ``left``, ``right``, ``top``, ``bottom``, or ``plan``: a
+        sheet of orthographic top, front and right views at one scale plus iso, each a quarter
+        of ``size``.
+    azimuth, elevation : float, optional
+        Degrees from the front towards the right, and above the horizon, overriding ``view``'s.
+    fov : float
+        Vertical field of view in degrees.
+    ortho : bool
+        Orthographic projection.
+    up : {'y', 'z'}, optional
+        The model file's up axis (default: z for STL and 3MF, y otherwise).
+    camera : Camera, optional
+        A ready camera; the view arguments are then unused.
+    style : str or Style
+        A style of ``blueprint.compose.style.STYLES`` by name (``blueprint``, ``paper``,
+        ``transparent``, ``wireframe``), or a ``Style``.
+    grid : float, optional
+        The style's grid spacing in pixels, overridden (0: no grid).
+    max_layers : int or None
+        Depth layers to peel at most; None peels until a pass draws nothing.
+    min_fraction : float
+        Stop once a layer covers fewer than this fraction of layer 0's pixels.
+    crease_angle : float
+        Degrees: normals are smoothed across smaller angles, larger ones draw creases.
+    line_width : float
+        Line width in output pixels, in [1, 16].
+    supersample : int
+        G-buffer and edges are computed at this multiple of ``size``, then filtered down.
+    depth_threshold : float
+        The depth jump, in pixel footprints, that draws a silhouette edge, in [0.1, 1000].
+    part_edges : bool
+        Draw the boundaries between parts.
+    id_silhouettes : bool
+        Also draw triangle-ID silhouettes in every layer's edge map.
+    highlight : str, int, sequence, Model or (P,) bool, optional
+        Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
+        second model lying on the parts to designate.
+    reveal : float, optional
+        Depth masking: peel only until this fraction of the highlighted parts is uncovered.
+    shade : str, int, sequence, Model or (P,) bool, optional
+        Parts drawn shaded inside the blueprint, in depth order.
+    shade_opacity : float
+        Opacity of the shading, in (0, 1]: 1 hides the edges behind the shaded parts.
+    glyphs : Glyphs, str or PathLike, optional
+        Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
+        ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where
+        a surface hides them. Not on a plan sheet.
+    profile : bool
+        Synchronise after each stage to fill ``Frame.stages`` (slower).
+    renderer : Renderer, optional
+        Draw with this renderer instead of the shared one.
+
+    Returns
+    -------
+    Frame
+        The (H, W, 4) uint8 image, the layers drawn, the camera and the timings.
+    """
+    if glyphs is not None and not isinstance(glyphs, Glyphs):
+        glyphs = load_glyphs(glyphs)
+    chosen = get_style(style, grid)
     model = _as_model(model, up)
     renderer = shared(renderer)
     size = tuple(int(v) for v in size)
-    check_size(size, int(options.get("supersample", 2)), renderer.max_texture)
-    for key in ("highlight", "shade"):
-        if options.get(key) is not None:
-            options[key] = designated_parts(model, options[key])
-    glyphs = options.pop("glyphs", None)
-    if glyphs is not None and not isinstance(glyphs, Glyphs):
-        glyphs = load_glyphs(glyphs)
+    check_size(size, int(supersample), renderer.max_texture)
+    options = dict(
+        style=chosen,
+        max_layers=max_layers,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        supersample=supersample,
+        depth_threshold=depth_threshold,
+        part_edges=part_edges,
+        id_silhouettes=id_silhouettes,
+        highlight=None if highlight is None else designated_parts(model, highlight),
+        reveal=reveal,
+        shade=None if shade is None else designated_parts(model, shade),
+        shade_opacity=shade_opacity,
+        profile=profile,
+    )
     if view == PLAN and camera is None:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")
@@ -110,42 +209,103 @@ def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Rende
     )
 
 
-def render(model: Model | str | os.PathLike, **kwargs) -> np.ndarray:
+def render(
+    model: Model | str | os.PathLike,
+    *,
+    size: tuple[int, int] = (1024, 1024),
+    view: str = "iso",
+    azimuth: float | None = None,
+    elevation: float | None = None,
+    fov: float = 30.0,
+    ortho: bool = False,
+    up: str | None = None,
+    camera: Camera | None = None,
+    style: str | Style = "blueprint",
+    grid: float | None = None,
+    max_layers: int | None = 8,
+    min_fraction: float = 0.0,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    supersample: int = 2,
+    depth_threshold: float = 4.0,
+    part_edges: bool = True,
+    id_silhouettes: bool = False,
+    highlight: PartSpec | None = None,
+    reveal: float | None = None,
+    shade: PartSpec | None = None,
+    shade_opacity: float = 1.0,
+    glyphs: Glyphs | str | os.PathLike | None = None,
+    profile: bool = False,
+    renderer: Renderer | None = None,
+) -> np.ndarray:
     """Draw the blueprint of a model: every visible and hidden edge of every part.
 
     Parameters
     ----------
     model : Model, str or PathLike
         A loaded model or a model file.
-    size : (int, int)
-        Width and height in pixels (default 1024 x 1024).
-    view : str
-        ``iso`` (default), ``front``, ``back``, ``left``, ``right``, ``top``, ``bottom``, or
-        ``plan``: a sheet of orthographic top, front and right views at one scale plus iso.
-    azimuth, elevation, fov, ortho, up, camera
-        Camera overrides (degrees; orthographic projection; model up axis; a ready Camera).
-    style : str or Style
-        ``blueprint`` (default), ``paper``, ``transparent`` or ``wireframe``.
-    max_layers, min_fraction, crease_angle, line_width, supersample, depth_threshold, part_edges
-        See ``Renderer.render``.
-    highlight : str, sequence, Model or (P,) bool, optional
+    size, view, azimuth, elevation, fov, ortho, up, camera
+        Where the camera looks from (see ``render_frame``); ``view="plan"`` draws a sheet of
+        orthographic top, front and right views at one scale plus iso.
+    style, grid
+        A style of ``blueprint.compose.style.STYLES`` by name or a ``Style``, and its grid
+        spacing in pixels, overridden.
+    max_layers, min_fraction, crease_angle, line_width, supersample
+        How many layers are peeled and how their edges are drawn (see ``render_frame``).
+    depth_threshold, part_edges, id_silhouettes
+        Which edges are drawn: silhouettes from this depth jump, boundaries between parts,
+        triangle-ID silhouettes (see ``render_frame``).
+    highlight : str, int, sequence, Model or (P,) bool, optional
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.
     reveal : float, optional
         Depth masking: peel only until this fraction of the highlighted parts is uncovered.
-    shade : str, sequence, Model or (P,) bool, optional
+    shade : str, int, sequence, Model or (P,) bool, optional
         Parts drawn shaded inside the blueprint, in depth order (``shade_opacity`` 1: opaque).
+    shade_opacity : float
+        Opacity of the shading, in (0, 1].
     glyphs : Glyphs, str or PathLike, optional
         Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
         ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where
         a surface hides them.
+    profile : bool
+        Synchronise after each stage (for timings; slower).
+    renderer : Renderer, optional
+        Draw with this renderer instead of the shared one.
 
     Returns
     -------
     (H, W, 4) uint8
         RGBA image, row 0 at the top.
     """
-    return render_frame(model, **kwargs).image
+    return render_frame(
+        model,
+        size=size,
+        view=view,
+        azimuth=azimuth,
+        elevation=elevation,
+        fov=fov,
+        ortho=ortho,
+        up=up,
+        camera=camera,
+        style=style,
+        grid=grid,
+        max_layers=max_layers,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        supersample=supersample,
+        depth_threshold=depth_threshold,
+        part_edges=part_edges,
+        id_silhouettes=id_silhouettes,
+        highlight=highlight,
+        reveal=reveal,
+        shade=shade,
+        shade_opacity=shade_opacity,
+        glyphs=glyphs,
+        profile=profile,
+        renderer=renderer,
+    ).image
 
 
 def peel(
@@ -159,13 +319,48 @@ def peel(
     ortho: bool = False,
     up: str | None = None,
     camera: Camera | None = None,
+    max_layers: int | None = None,
+    min_fraction: float = 0.0,
+    crease_angle: float = 30.0,
+    normals: bool = True,
     renderer: Renderer | None = None,
-    **options,
 ) -> Layers:
-    """Peel the depth layers of a model and return them (see ``Layers``)."""
+    """Peel the depth layers of a model and read them back.
+
+    Parameters
+    ----------
+    model : Model, str or PathLike
+        A loaded model or a model file.
+    size, view, azimuth, elevation, fov, ortho, up, camera
+        Where the camera looks from, as for ``render_frame`` (no plan sheet).
+    max_layers : int or None
+        Layers to peel at most; None peels until a pass draws nothing.
+    min_fraction : float
+        Stop once a layer covers fewer than this fraction of layer 0's pixels.
+    crease_angle : float
+        Degrees: normals are smoothed across smaller angles.
+    normals : bool
+        Read the layers' normals too; without them ``Layers.normal`` is None.
+    renderer : Renderer, optional
+        Peel with this renderer instead of the shared one.
+
+    Returns
+    -------
+    Layers
+        depth (L, H, W) float32, triangle and part (L, H, W) int32, normal (L, H, W, 3) float32
+        or None, and the view and projection matrices (4, 4) float64.
+    """
     model = _as_model(model, up)
     renderer = shared(renderer)
     size = tuple(int(v) for v in size)
     check_size(size, 1, renderer.max_texture)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
-    return renderer.peel(model, cam, size=size, **options)
+    return renderer.peel(
+        model,
+        cam,
+        size=size,
+        max_layers=max_layers,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        normals=normals,
+    )

@@ -9,10 +9,11 @@ import sys
 
 import click
 
+from blueprint.compose.style import STYLES
 from blueprint.errors import BlueprintError, InputError
 from blueprint.scene.camera import VIEWS
 
-STYLE_NAMES = ("blueprint", "paper", "transparent", "wireframe")
+STYLE_NAMES = tuple(STYLES)
 
 
 class _OneLine(logging.Handler):

@@ -6,20 +6,33 @@ from pathlib import Path
 
 import click
 
+from blueprint.api.files import choose_writer
 from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
 from blueprint.errors import InputError
+from blueprint.export.writers import WRITERS, Kind
+from blueprint.vector.style import FILE_SUFFIXES, is_style_file
+
+# the formats as the registry has them (blueprint.api.files has registered every one)
+PICTURES = ", ".join(WRITERS.suffixes(Kind.IMAGE))
+DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
 
 
 @click.command()
 @click.argument("model", type=click.Path(path_type=Path))
-@click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="PNG file to write.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path),
+    required=True,
+    help=f"File to write: a picture ({PICTURES}) or vector lines ({DRAWINGS}).",
+)
 @camera_options
 @click.option(
     "--style",
     default="blueprint",
     show_default=True,
-    help=f"One of {', '.join(STYLE_NAMES)}; for .svg, .pdf and .dxf also a line style file "
-    "(.toml or .json: colour, width, dash and opacity per occlusion level).",
+    help=f"One of {', '.join(STYLE_NAMES)}; for vector lines ({DRAWINGS}) also a line style file "
+    f"({' or '.join(FILE_SUFFIXES)}: colour, width, dash and opacity per occlusion level).",
 )
 @click.option("--grid", type=float, default=None, help="Grid spacing in pixels (0: none).")
 @click.option(
@@ -57,7 +70,6 @@ from blueprint.errors import InputError
 )
 @click.option(
     "--glyphs",
-    "glyph_file",
     type=click.Path(path_type=Path),
     default=None,
     help="TOML or JSON file of boxes, arrows, paths and labels in model coordinates.",
@@ -92,25 +104,22 @@ def render(
     id_silhouettes,
     shade,
     shade_opacity,
-    glyph_file,
+    glyphs,
     reveal,
 ):
-    """Draw the blueprint of MODEL into a PNG, or as vector lines into SVG, PDF or DXF."""
+    """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame
-    from blueprint.compose.glyphs import load_glyphs
-    from blueprint.compose.style import get_style
-    from blueprint.export.files import check_output, save_png
     from blueprint.scene.loader import load_model
 
-    output = check_output(output, (".png", *VECTOR_SUFFIXES))
-    if output.suffix.lower() in VECTOR_SUFFIXES:
-        if glyph_file or shade:
+    output, write = choose_writer(output, Kind.IMAGE, Kind.DRAWING)
+    if highlight and highlight_model:
+        raise InputError("give --highlight or --highlight-model, not both")
+    camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
+    if write.kind is Kind.DRAWING:
+        if glyphs or shade:
             raise InputError(
-                f"{output}: vector drawings take no --glyphs or --shade yet; write a PNG for those"
+                f"{output}: vector drawings take no --glyphs or --shade yet; write a picture for those"
             )
-        camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
-        if highlight and highlight_model:
-            raise InputError("give --highlight or --highlight-model, not both")
         if highlight_model:
             model = load_model(model, up=camera["up"])
             highlight = load_model(highlight_model, up=camera["up"])
@@ -129,23 +138,19 @@ def render(
         )
         return
     if scale or units:
-        raise InputError("--scale and --units are for vector drawings (.svg, .pdf, .dxf)")
-    if _is_style_file(style):
+        raise InputError(f"--scale and --units are for vector drawings ({DRAWINGS})")
+    if is_style_file(style):
         raise InputError(
-            f"{style}: line style files are for vector drawings (.svg, .pdf, .dxf); "
-            f"a PNG takes one of {', '.join(STYLE_NAMES)}"
+            f"{style}: line style files are for vector drawings ({DRAWINGS}); "
+            f"a picture takes one of {', '.join(STYLE_NAMES)}"
         )
-    chosen = get_style(style, grid)
-    glyphs = load_glyphs(glyph_file) if glyph_file else None
-    kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
-    up_axis = kwargs.pop("up")
+    up_axis = camera.pop("up")
     loaded = load_model(model, up=up_axis)
-    if highlight and highlight_model:
-        raise InputError("give --highlight or --highlight-model, not both")
     designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight
     frame = render_frame(
         loaded,
-        style=chosen,
+        style=style,
+        grid=grid,
         max_layers=max_layers or None,
         min_fraction=min_fraction,
         crease_angle=crease_angle,
@@ -157,9 +162,9 @@ def render(
         shade=shade,
         shade_opacity=shade_opacity,
         id_silhouettes=id_silhouettes,
-        **kwargs,
+        **camera,
     )
-    save_png(output, frame.image)
+    write(output, frame.image)
     info = default_renderer().info
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
@@ -168,25 +173,12 @@ def render(
     )
 
 
-VECTOR_SUFFIXES = (".svg", ".pdf", ".dxf")
-
-
-def _is_style_file(style: str) -> bool:
-    return Path(style).suffix.lower() in (".toml", ".json")
-
-
 def _render_vector(
     model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
 ):
     from blueprint.api import default_renderer
     from blueprint.api.files import render_vector_file
 
-    if _is_style_file(style):
-        from blueprint.vector import load_vector_style
-
-        style = load_vector_style(style)
-    elif style not in STYLE_NAMES:
-        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLE_NAMES)} or a line style file)")
     summary = render_vector_file(
         model,
         output,
@@ -209,19 +201,24 @@ def _render_vector(
 
 @click.command()
 @click.argument("model", type=click.Path(path_type=Path))
-@click.option("-o", "--output", type=click.Path(path_type=Path), required=True, help="NPZ file to write.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path),
+    required=True,
+    help=f"File to write ({', '.join(WRITERS.suffixes(Kind.LAYERS))}).",
+)
 @camera_options
 @click.option("--max-layers", type=int, default=0, show_default=True, help="Layers at most (0: all).")
 @click.option("--min-fraction", type=float, default=0.0, show_default=True)
 def layers(model, output, size, view, azimuth, elevation, fov, ortho, up, max_layers, min_fraction):
     """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
     from blueprint.api import peel
-    from blueprint.export.files import check_output, save_layers
     from blueprint.scene.loader import load_model
 
-    output = check_output(output, (".npz",))
+    output, write = choose_writer(output, Kind.LAYERS)
     kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (512, 512))
     loaded = load_model(model, up=kwargs.pop("up"))
     result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)
-    save_layers(output, result)
+    write(output, result)
     click.echo(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")

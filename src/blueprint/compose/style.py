@@ -61,6 +61,11 @@ class Style:
         return replace(self, **changes)
 
 
+#: The raster styles by name: the one list that the API, the command line (``--style``), the
+#: viewer's style cycle and vector drawings (``blueprint.vector.vector_style``) choose from. A new
+#: style is one entry here; line style files for vector drawings stay files. The composite op
+#: (blueprint.ops, a layer below, which cannot import this) lists the same names for pipelines'
+#: ``style`` parameter: tests/test_registries.py keeps the two equal.
 STYLES: dict[str, Style] = {
     "blueprint": Style(
         "blueprint",
@@ -100,7 +105,7 @@ STYLES: dict[str, Style] = {
 
 
 def get_style(style: str | Style, grid: float | None = None) -> Style:
-    """A named style or a Style; ``grid`` overrides its grid spacing (pixels)."""
+    """A style of ``STYLES`` by name, or a Style; ``grid`` overrides its grid spacing (pixels)."""
     if isinstance(style, str):
         if style not in STYLES:
             raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)})")

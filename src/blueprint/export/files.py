@@ -1,4 +1,4 @@
-"""PNG images and NPZ layer stacks, written atomically."""
+"""PNG images and NPZ layer stacks, written atomically; the checks an output path passes first."""
 
 from __future__ import annotations
 
@@ -13,10 +13,12 @@ import numpy as np
 from blueprint.errors import InputError
 
 
-def check_output(path: str | os.PathLike, suffixes: tuple[str, ...]) -> Path:
-    """Fail early, before any rendering, on an output path that cannot be written."""
+def check_output(path: str | os.PathLike, suffixes: tuple[str, ...], suffix: str | None = None) -> Path:
+    """Fail early, before any rendering, on an output path that cannot be written: its suffix
+    (or ``suffix``, the format it is to be written in whatever its name) not among
+    ``suffixes``, a directory, or in a folder that is missing or read-only."""
     path = Path(path)
-    if path.suffix.lower() not in suffixes:
+    if (suffix or path.suffix).lower() not in suffixes:
         raise InputError(f"{path}: output must end in {' or '.join(suffixes)}")
     if path.is_dir():
         raise InputError(f"{path}: is a directory")

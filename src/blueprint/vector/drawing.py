@@ -20,6 +20,8 @@ import numpy as np
 
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
+from blueprint.export.files import atomic_write
+from blueprint.export.writers import WRITERS, Kind
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.blueprint import render_blueprint
 from blueprint.render.renderer import LayerRenderer, Layers
@@ -27,6 +29,7 @@ from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_camera
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 
+from .dxf import write_dxf
 from .lines import join_polylines, model_segments
 from .occlusion import (
     Pieces,
@@ -38,8 +41,10 @@ from .occlusion import (
     split_by_level,
     verify_creases,
 )
+from .pdf import pdf_bytes
 from .simplify import douglas_peucker
 from .style import VectorStyle, vector_style
+from .svg import svg_bytes
 
 log = logging.getLogger("blueprint")
 
@@ -54,7 +59,6 @@ __all__ = [
     "save_drawing",
 ]
 
-FORMATS = (".svg", ".pdf", ".dxf")
 # Millimetres per model unit.
 UNITS_MM: dict[str, float] = {
     "um": 1e-3,
@@ -469,24 +473,26 @@ def draw_vector_sheet(
 
 def save_drawing(path: str | os.PathLike, drawing: Drawing, format: str | None = None) -> Path:
     """Write a drawing as SVG, PDF or DXF (from ``format`` or the file's suffix), atomically."""
-    from blueprint.export.files import atomic_write, check_output
+    suffix = "." + format.lower().lstrip(".") if format else None
+    path, writer = WRITERS.choose(path, Kind.DRAWING, suffix=suffix)
+    return writer(path, drawing)
 
-    path = Path(path)
-    suffix = ("." + format.lower().lstrip(".")) if format else path.suffix.lower()
-    if suffix not in FORMATS:
-        raise InputError(f"{path}: output must end in {' or '.join(FORMATS)}")
-    if format is None:
-        check_output(path, FORMATS)
-    if suffix == ".svg":
-        from .svg import svg_bytes
 
-        data = svg_bytes(drawing)
-        return atomic_write(path, lambda tmp: tmp.write_bytes(data))
-    if suffix == ".pdf":
-        from .pdf import pdf_bytes
+def _write_svg(path: Path, drawing: Drawing) -> Path:
+    data = svg_bytes(drawing)
+    return atomic_write(path, lambda tmp: tmp.write_bytes(data))
 
-        data = pdf_bytes(drawing)
-        return atomic_write(path, lambda tmp: tmp.write_bytes(data))
-    from .dxf import write_dxf
 
+def _write_pdf(path: Path, drawing: Drawing) -> Path:
+    data = pdf_bytes(drawing)
+    return atomic_write(path, lambda tmp: tmp.write_bytes(data))
+
+
+def _write_dxf(path: Path, drawing: Drawing) -> Path:
     return atomic_write(path, lambda tmp: write_dxf(drawing, tmp))
+
+
+WRITERS.add(".svg", Kind.DRAWING, _write_svg)
+WRITERS.add(".pdf", Kind.DRAWING, _write_pdf)
+WRITERS.add(".dxf", Kind.DRAWING, _write_dxf)
+FORMATS = WRITERS.suffixes(Kind.DRAWING)

@@ -6,10 +6,13 @@ import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from blueprint.compose.style import Style, get_style, hex_color
+from blueprint.compose.style import STYLES, Style, get_style, hex_color
 from blueprint.errors import InputError
 
-__all__ = ["LineStyle", "VectorStyle", "load_vector_style", "vector_style"]
+__all__ = ["FILE_SUFFIXES", "LineStyle", "VectorStyle", "is_style_file", "load_vector_style", "vector_style"]
+
+#: A style that ends in one of these is a line style file (``load_vector_style``), not a name.
+FILE_SUFFIXES = (".toml", ".json")
 
 RGB = tuple[float, float, float]
 
@@ -104,15 +107,28 @@ class VectorStyle:
 DASHES: tuple[tuple[float, ...], ...] = ((), (6.0, 3.0), (3.0, 3.0), (1.5, 3.0))
 
 
-def vector_style(style: str | Style | VectorStyle = "blueprint", dashes: bool = True) -> VectorStyle:
-    """The vector counterpart of a raster style (or a ``VectorStyle`` as it is).
+def is_style_file(style: str | os.PathLike | Style | VectorStyle) -> bool:
+    """Whether ``style`` names a line style file rather than a style of ``STYLES``."""
+    return isinstance(style, str | os.PathLike) and Path(style).suffix.lower() in FILE_SUFFIXES
 
-    Level 0 is drawn in the style's ink; level ``k >= 1`` in its hidden ink at
+
+def vector_style(
+    style: str | os.PathLike | Style | VectorStyle = "blueprint", dashes: bool = True
+) -> VectorStyle:
+    """The vector style ``style`` names: a ``VectorStyle`` as it is, a line style file (a path,
+    or a name ending in ``.toml`` or ``.json``: see ``load_vector_style``), or the vector
+    counterpart of a raster style (a ``Style`` or a name in ``blueprint.compose.style.STYLES``).
+
+    The counterpart draws level 0 in the style's ink; level ``k >= 1`` in its hidden ink at
     ``hidden_opacity * fade ** (k - 1)``, as the raster composes them, and with dashes
     (``dashes=False`` keeps every level solid, like the raster).
     """
     if isinstance(style, VectorStyle):
         return style
+    if isinstance(style, os.PathLike) or is_style_file(style):
+        return load_vector_style(style)
+    if isinstance(style, str) and style not in STYLES:
+        raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)} or a line style file)")
     raster = get_style(style)
     levels = [LineStyle(raster.ink[:3], 1.0, (), raster.ink[3])]
     for k in range(1, len(DASHES)):
@@ -162,7 +178,6 @@ def load_vector_style(path: str | os.PathLike) -> VectorStyle:
     A level leaves out what it takes from the base's level at the same depth; ``levels``
     left out keeps the base's. Raises ``InputError`` naming the file and the entry.
     """
-    from blueprint.compose.style import STYLES
     from blueprint.settings import Entry, read_settings, show
 
     name = str(path)
