@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-import blueprint.api.files as api_files
 import blueprint.vector.drawing as drawing
 from blueprint import examples
 from blueprint.api import peel, render, render_frame
@@ -26,6 +25,7 @@ from blueprint.errors import InputError
 from blueprint.export.files import save_layers, save_png
 from blueprint.export.writers import WRITERS, Kind, Writers
 from blueprint.ops import COMPOSITE
+from blueprint.pipeline.media import write_video
 from blueprint.vector.style import is_style_file, vector_style
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -113,7 +113,7 @@ def test_every_format_and_its_writer():
         (Kind.DRAWING, ".svg"): drawing._write_svg,
         (Kind.DRAWING, ".pdf"): drawing._write_pdf,
         (Kind.DRAWING, ".dxf"): drawing._write_dxf,
-        **{(Kind.VIDEO, s): api_files._write_video for s in (".mp4", ".mov", ".mkv", ".avi", ".m4v")},
+        **{(Kind.VIDEO, s): write_video for s in (".mp4", ".mov", ".mkv", ".avi", ".m4v")},
     }
     assert drawing.FORMATS == (".svg", ".pdf", ".dxf")
 

@@ -25,7 +25,7 @@ from blueprint.export.files import check_output
 from blueprint.export.writers import WRITERS, Kind, Writer
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.executor import Result, executor_for
-from blueprint.pipeline.media import VIDEO_FORMATS, VideoWriter
+from blueprint.pipeline.media import VIDEO_FORMATS, write_video
 from blueprint.pipeline.run import (
     PICTURE_SUFFIXES,
     orbit,
@@ -54,23 +54,9 @@ def choose_writer(output: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer
     return WRITERS.choose(output, *kinds)
 
 
-def _write_video(path: Path, frames: Iterable[np.ndarray], *, fps: float = 30.0, crf: int = 18) -> Path:
-    """H.264 frames, each (H, W, 3 or 4) uint8 of the first one's size, in the container the
-    suffix names, written atomically."""
-    frames = iter(frames)
-    first = next(frames, None)
-    if first is None:
-        raise InputError(f"{path}: no frames to write")
-    with VideoWriter(path, (first.shape[1], first.shape[0]), fps=fps, crf=crf) as video:
-        video.write(first)
-        for frame in frames:
-            video.write(frame)
-    return path
-
-
-# Registered here, not in export/: the encoder is the pipeline's (media.VideoWriter), a layer above.
+# Registered here, not in export/: the encoder is the pipeline's (media.write_video), a layer above.
 for _suffix in VIDEO_FORMATS:
-    WRITERS.add(_suffix, Kind.VIDEO, _write_video)
+    WRITERS.add(_suffix, Kind.VIDEO, write_video)
 del _suffix
 
 
@@ -365,10 +351,7 @@ def render_silhouettes_file(
     def tracked():
         for done, (image, ms) in enumerate(pictures, start=1):
             times.append(ms)
-            # odd sizes padded by one pixel with the edge's colour: players expect 4:2:0 chroma,
-            # which needs even sizes
-            h, w = image.shape[:2]
-            yield np.pad(image, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+            yield image
             if progress is not None:
                 progress(done, frames)
 

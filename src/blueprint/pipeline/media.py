@@ -176,8 +176,9 @@ class VideoWriter:
                 os.unlink(self._tmp)
 
 
-def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float = 30.0) -> int:
-    """Encode (H, W, 3) uint8 frames as H.264 MP4, written atomically; returns the frame count.
+def write_video(path: str | Path, frames: Iterable[np.ndarray], *, fps: float = 30.0, crf: int = 18) -> Path:
+    """Encode (H, W, 3 or 4) uint8 frames of one size as H.264 in the container the suffix
+    names, written atomically; returns the path.
 
     Odd widths and heights are padded by one pixel (players expect 4:2:0 chroma, which needs
     even sizes) with the colour of the frame's edge.
@@ -192,8 +193,8 @@ def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float = 30.
     if first is None:
         raise InputError(f"{path}: no frames to write")
     first = even(first)
-    with VideoWriter(Path(path), (first.shape[1], first.shape[0]), fps) as video:
+    with VideoWriter(Path(path), (first.shape[1], first.shape[0]), fps, crf) as video:
         video.write(first)
         for frame in frames:
             video.write(even(frame))
-    return video.frames
+    return Path(path)

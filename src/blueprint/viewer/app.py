@@ -6,7 +6,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from blueprint.compose.style import get_style
+from blueprint.compose.style import STYLES, get_style
 from blueprint.viewer.loop import Options, Viewer
 from blueprint.viewer.snapshots import DUMP_ENV
 from blueprint.viewer.state import ViewState
@@ -24,7 +24,7 @@ def run_viewer(
     ortho: bool = False,
     up: str | None = None,
     style: str = "blueprint",
-    styles: tuple[str, ...] = ("blueprint", "paper", "transparent", "wireframe"),
+    styles: tuple[str, ...] = tuple(STYLES),
     max_layers: int | None = 5,
     options: Options | None = None,
     frames: int = 0,
