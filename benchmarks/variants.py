@@ -2,8 +2,8 @@
 
 Image-space passes as compute or fragment shaders; the back-face tie-break as two culled draws
 or one draw writing depth; layers peeled one geometry pass a layer or, where the driver has
-framebuffer fetch, several a pass (k-buffer, whatever the model's triangles per pixel). Prints
-one JSON object per model, size and variant.
+framebuffer fetch or fragment shader interlock, several a pass (k-buffer, whatever the
+model's triangles per pixel). Prints one JSON object per model, size and variant.
 
     python benchmarks/variants.py MODEL... [--size 512 512] [--supersample 1] [--frames 30]
 """
@@ -61,7 +61,11 @@ def main() -> None:
                                     "tie_break": "one draw, shader depth"
                                     if in_shader
                                     else "two culled draws",
-                                    "peel": "k-buffer" if kbuffer else "a pass a layer",
+                                    "peel": (
+                                        ("k-buffer, interlock" if r.kbuffer_interlock else "k-buffer, fetch")
+                                        if kbuffer
+                                        else "a pass a layer"
+                                    ),
                                     "ms": round(ms, 3),
                                     "fps": round(1000 / ms, 1),
                                     "stages": {k: round(v, 3) for k, v in profiled.stages.items()},

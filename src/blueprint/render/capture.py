@@ -38,6 +38,12 @@ KBUFFER_MAX = 8
 # featuretype, 0.003, 16 % slower; rocker arm, 0.02, 8 % slower; bunny, 0.066, 21 % faster;
 # 2CylinderEngine, 0.12, 27 % faster; 5 layers of the rocker arm at 800x600, 0.04, 16 % faster).
 KBUFFER_MIN_DENSITY = 0.03
+# Under fragment shader interlock (the H200) it paid only from about this many: 5 layers of the
+# 377K-triangle cycloidal at 0.36 triangles per G-buffer pixel, 9.4 against 11.6 ms a frame
+# and 8.0 against 10.0, at 1.44, 4.3 against 5.8 ms; the 20K-triangle rocker arm at 0.076,
+# 2.3 against 2.7 ms but 4.4 against 2.9 at 0.019; the bunny, 5 layers at 0.067, 5.5 against
+# 4.1 ms; the cycloidal, all 36 layers at 0.09, 144 against 116 ms (benchmarks/variants.py).
+KBUFFER_INTERLOCK_MIN_DENSITY = 0.3
 # The k-buffer's targets hold 16 bytes a pixel a layer (8 for triangle IDs alone); above this
 # many bytes the layers are peeled a pass each instead (8 layers at 2048x2048 supersampled
 # would take 2 GiB).

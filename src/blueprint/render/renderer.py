@@ -13,6 +13,7 @@ from blueprint.render.capture import (
     BACK_OFFSET,
     GEOMETRY_VERT,
     KBUFFER_FRAG,
+    KBUFFER_INTERLOCK_MIN_DENSITY,
     KBUFFER_MAX,
     KBUFFER_MAX_BYTES,
     KBUFFER_MIN_DENSITY,
@@ -90,12 +91,14 @@ class LayerRenderer(Device):
         # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
         # pixel to read and write its surfaces one after another: framebuffer fetch (Mesa's
         # drivers, llvmpipe among them) with a target a layer, else fragment shader interlock
-        # on images (NVIDIA's); used from KBUFFER_MIN_DENSITY triangles per pixel
-        # (benchmarks/variants.py compares both ways).
+        # on images (NVIDIA's); used from the density of triangles per pixel where each way was
+        # measured to pay (benchmarks/variants.py compares both ways).
         fetch = self.framebuffer_fetch and self.max_draw_buffers >= KBUFFER_MAX
         self.kbuffer = fetch or self.fragment_interlock
         self.kbuffer_interlock = not fetch and self.fragment_interlock
-        self.kbuffer_density = KBUFFER_MIN_DENSITY
+        self.kbuffer_density = (
+            KBUFFER_INTERLOCK_MIN_DENSITY if self.kbuffer_interlock else KBUFFER_MIN_DENSITY
+        )
 
     def release(self) -> None:
         self.make_current()
@@ -191,8 +194,10 @@ class LayerRenderer(Device):
             raise InputError(f"pixels must be flat indices into {w}x{h}")
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
+        # the faces-only k-buffer was measured only under framebuffer fetch (llvmpipe)
         if (
             self.kbuffer
+            and not self.kbuffer_interlock
             and max_layers is not None
             and 1 < max_layers <= KBUFFER_MAX
             and 8 * max_layers * w * h <= KBUFFER_MAX_BYTES
@@ -216,25 +221,17 @@ class LayerRenderer(Device):
         rules = standard_rules(None, min_fraction)
         ctx, pool = self.ctx, self.pool
         mesh = self.mesh(model, None)
-        interlock = self.kbuffer_interlock
-        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True, "INTERLOCK": interlock}
-        prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, defines, modern=interlock)
+        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True}
+        prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, defines)
         peel_uniforms(prog, camera)
         prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         prog["u_peel"].value = False
         name = f"kbuffer.faces.{size[0]}x{size[1]}"
         surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
         pool.framebuffer((surfaces[0],)).clear()
+        pool.framebuffer(tuple(surfaces)).use()
         ctx.enable_only(ctx.NOTHING)
-        if interlock:
-            for unit, tex in enumerate(surfaces):
-                tex.bind_to_image(unit, read=True, write=True)
-            pool.framebuffer((), pool.depth(f"{name}.raster", size)).use()
-            mesh.vao(prog).render()
-            ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
-        else:
-            pool.framebuffer(tuple(surfaces)).use()
-            mesh.vao(prog).render()
+        mesh.vao(prog).render()
         valid = np.ones(size[0] * size[1], bool)
         out, counts = [], []
         for tex in surfaces:

@@ -6,8 +6,8 @@
 // NVIDIA's). The rules are those of peel.frag, so both give the same layers: back faces lie
 // u_back_bias behind, a fragment no more than u_peel_eps (eye depth) behind a surface is that
 // surface (coplanar faces, touching parts), and of two fragments at one depth the first drawn
-// stays. With IDS_ONLY a surface is its depth and face alone (kbuffer.glsl), for passes that
-// need no normals.
+// stays. With IDS_ONLY (through framebuffer fetch) a surface is its depth and face alone
+// (kbuffer.glsl), for passes that need no normals.
 #if INTERLOCK
 #extension GL_ARB_fragment_shader_interlock : require
 #else
@@ -29,36 +29,27 @@ flat in int v_part;
 
 #if INTERLOCK
 layout(pixel_interlock_ordered) in;
-#if IDS_ONLY
-#define KB_FORMAT rg32ui
-#define KB_SWIZZLE .xy
-#define KB_WIDEN , 0u, 0u
-#else
-#define KB_FORMAT rgba32ui
-#define KB_SWIZZLE
-#define KB_WIDEN
-#endif
-layout(binding = 0, KB_FORMAT) coherent uniform uimage2D u_s0;
+layout(binding = 0, rgba32ui) coherent uniform uimage2D u_s0;
 #if K > 1
-layout(binding = 1, KB_FORMAT) coherent uniform uimage2D u_s1;
+layout(binding = 1, rgba32ui) coherent uniform uimage2D u_s1;
 #endif
 #if K > 2
-layout(binding = 2, KB_FORMAT) coherent uniform uimage2D u_s2;
+layout(binding = 2, rgba32ui) coherent uniform uimage2D u_s2;
 #endif
 #if K > 3
-layout(binding = 3, KB_FORMAT) coherent uniform uimage2D u_s3;
+layout(binding = 3, rgba32ui) coherent uniform uimage2D u_s3;
 #endif
 #if K > 4
-layout(binding = 4, KB_FORMAT) coherent uniform uimage2D u_s4;
+layout(binding = 4, rgba32ui) coherent uniform uimage2D u_s4;
 #endif
 #if K > 5
-layout(binding = 5, KB_FORMAT) coherent uniform uimage2D u_s5;
+layout(binding = 5, rgba32ui) coherent uniform uimage2D u_s5;
 #endif
 #if K > 6
-layout(binding = 6, KB_FORMAT) coherent uniform uimage2D u_s6;
+layout(binding = 6, rgba32ui) coherent uniform uimage2D u_s6;
 #endif
 #if K > 7
-layout(binding = 7, KB_FORMAT) coherent uniform uimage2D u_s7;
+layout(binding = 7, rgba32ui) coherent uniform uimage2D u_s7;
 #endif
 #else
 layout(location = 0) inout KB_T o_s0;
@@ -116,51 +107,51 @@ void main() {
     // rule): fragments left out only skip the writes
     ivec2 p = ivec2(gl_FragCoord.xy);
     beginInvocationInterlockARB();
-    s[0] = KB_T(imageLoad(u_s0, p)KB_SWIZZLE);
+    s[0] = imageLoad(u_s0, p);
 #if K > 1
-    s[1] = KB_T(imageLoad(u_s1, p)KB_SWIZZLE);
+    s[1] = imageLoad(u_s1, p);
 #endif
 #if K > 2
-    s[2] = KB_T(imageLoad(u_s2, p)KB_SWIZZLE);
+    s[2] = imageLoad(u_s2, p);
 #endif
 #if K > 3
-    s[3] = KB_T(imageLoad(u_s3, p)KB_SWIZZLE);
+    s[3] = imageLoad(u_s3, p);
 #endif
 #if K > 4
-    s[4] = KB_T(imageLoad(u_s4, p)KB_SWIZZLE);
+    s[4] = imageLoad(u_s4, p);
 #endif
 #if K > 5
-    s[5] = KB_T(imageLoad(u_s5, p)KB_SWIZZLE);
+    s[5] = imageLoad(u_s5, p);
 #endif
 #if K > 6
-    s[6] = KB_T(imageLoad(u_s6, p)KB_SWIZZLE);
+    s[6] = imageLoad(u_s6, p);
 #endif
 #if K > 7
-    s[7] = KB_T(imageLoad(u_s7, p)KB_SWIZZLE);
+    s[7] = imageLoad(u_s7, p);
 #endif
     int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held);
     if (keep && at < K) {
-        imageStore(u_s0, p, uvec4(KB_SHIFTED(s, c, at, held, same, 0, 0)KB_WIDEN));
+        imageStore(u_s0, p, KB_SHIFTED(s, c, at, held, same, 0, 0));
 #if K > 1
-        imageStore(u_s1, p, uvec4(KB_SHIFTED(s, c, at, held, same, 1, 0)KB_WIDEN));
+        imageStore(u_s1, p, KB_SHIFTED(s, c, at, held, same, 1, 0));
 #endif
 #if K > 2
-        imageStore(u_s2, p, uvec4(KB_SHIFTED(s, c, at, held, same, 2, 1)KB_WIDEN));
+        imageStore(u_s2, p, KB_SHIFTED(s, c, at, held, same, 2, 1));
 #endif
 #if K > 3
-        imageStore(u_s3, p, uvec4(KB_SHIFTED(s, c, at, held, same, 3, 2)KB_WIDEN));
+        imageStore(u_s3, p, KB_SHIFTED(s, c, at, held, same, 3, 2));
 #endif
 #if K > 4
-        imageStore(u_s4, p, uvec4(KB_SHIFTED(s, c, at, held, same, 4, 3)KB_WIDEN));
+        imageStore(u_s4, p, KB_SHIFTED(s, c, at, held, same, 4, 3));
 #endif
 #if K > 5
-        imageStore(u_s5, p, uvec4(KB_SHIFTED(s, c, at, held, same, 5, 4)KB_WIDEN));
+        imageStore(u_s5, p, KB_SHIFTED(s, c, at, held, same, 5, 4));
 #endif
 #if K > 6
-        imageStore(u_s6, p, uvec4(KB_SHIFTED(s, c, at, held, same, 6, 5)KB_WIDEN));
+        imageStore(u_s6, p, KB_SHIFTED(s, c, at, held, same, 6, 5));
 #endif
 #if K > 7
-        imageStore(u_s7, p, uvec4(KB_SHIFTED(s, c, at, held, same, 7, 6)KB_WIDEN));
+        imageStore(u_s7, p, KB_SHIFTED(s, c, at, held, same, 7, 6));
 #endif
     }
     endInvocationInterlockARB();
