@@ -312,3 +312,18 @@ def test_render_smoke_tiny_box(renderer):
     # the silhouette is at 5 % margin: columns 1..2 and 29..30 carry ink on the middle row
     row = frame.image[16, :, 0].astype(int)
     assert row[:4].max() > 150 and row[-4:].max() > 150
+
+
+def test_capability_probes_compile_what_they_claim(renderer):
+    """A feature counts only where the driver builds a shader using it: an extension name
+    alone is not enough, and a shader it cannot build is no capability."""
+    from blueprint.gpu.device import INTERLOCK_PROBE
+
+    trivial = "#version 430 core\nout vec4 o;\nvoid main() { o = vec4(1.0); }\n"
+    broken = "#version 430 core\nvoid main() { undeclared = 1; }\n"
+    assert renderer._compiles(trivial) == (renderer.ctx.version_code >= 430)
+    assert not renderer._compiles(broken)
+    listed = "GL_ARB_fragment_shader_interlock" in renderer.ctx.extensions
+    assert renderer.fragment_interlock == (listed and renderer._compiles(INTERLOCK_PROBE))
+    # where both exist, framebuffer fetch holds the k-buffer; interlock only where fetch is missing
+    assert renderer.kbuffer_interlock == (renderer.fragment_interlock and not renderer.framebuffer_fetch)

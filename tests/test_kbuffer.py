@@ -21,7 +21,7 @@ from blueprint.scene.camera import fit_camera
 def kbuffer(renderer):
     """Switches the renderer between both ways; the k-buffer is forced whatever the density."""
     if not renderer.kbuffer:
-        pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
+        pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
     saved = renderer.kbuffer, renderer.kbuffer_density
 
     def use(on: bool) -> None:
@@ -134,7 +134,7 @@ def test_used_only_where_it_pays(renderer, monkeypatch):
     """From KBUFFER_MIN_DENSITY triangles per G-buffer pixel, never for one layer, and not where
     its targets would take more than KBUFFER_MAX_BYTES."""
     if not renderer.kbuffer:
-        pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
+        pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
     camera = fit_camera(model, (64, 64))

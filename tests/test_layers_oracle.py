@@ -131,7 +131,7 @@ METHODS = ["pass-a-layer", "k-buffer", "ids-only"]
 def method(request, renderer):
     kbuffer = request.param == "k-buffer"
     if kbuffer and not renderer.kbuffer:
-        pytest.skip("this driver has no framebuffer fetch, so no k-buffer")
+        pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
     saved = renderer.kbuffer, renderer.kbuffer_density
     renderer.kbuffer, renderer.kbuffer_density = kbuffer, 0.0
     yield request.param
