@@ -13,7 +13,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.render.renderer import HARD_MAX_LAYERS
-from blueprint.scene.camera import VIEWS, Camera
+from blueprint.scene.camera import VIEWS, Camera, fit_camera
 from blueprint.scene.model import Model
 
 # Keys 1-7 in this order.
@@ -51,7 +51,7 @@ class ViewState:
     part: int | None = None
     mask: bool = False
     # the angles the named view (or the command line) started from: at these, with no zoom and
-    # no pan, the camera is exactly ``Camera.fit`` -- the same picture as ``blueprint render``
+    # no pan, the camera is exactly ``fit_camera``'s -- the same picture as ``blueprint render``
     base_azimuth: float = 0.0
     base_elevation: float = 0.0
     _fits: dict = field(default_factory=dict, repr=False, compare=False)
@@ -167,22 +167,22 @@ class ViewState:
         if cam is None:
             if len(self._fits) > 16:
                 self._fits.clear()
-            cam = self._fits[key] = Camera.fit(
-                model.positions,
+            # a window's aspect as a size: the camera depends on the ratio alone
+            cam = self._fits[key] = fit_camera(
+                model,
+                (aspect, 1.0),
                 self.view,
                 azimuth=self.base_azimuth,
                 elevation=self.base_elevation,
                 fov=self.fov,
                 ortho=self.ortho,
-                aspect=aspect,
-                up=model.up,
             )
         return cam
 
     def camera(self, model: Model, aspect: float) -> Camera:
         """The camera for a window of ``aspect`` (width / height).
 
-        At the named view it is ``Camera.fit`` itself; orbiting keeps that fit's target as the
+        At the named view it is the fitted camera itself; orbiting keeps that fit's target as the
         pivot and its distance (or view height), zoom scales them, pan moves the target across
         the view. Near and far planes enclose the model's bounding sphere.
         """
@@ -193,16 +193,16 @@ class ViewState:
         center = (lo + hi) / 2
         radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-9)
         corners = np.stack(np.meshgrid(*zip(lo, hi, strict=True), indexing="ij"), -1).reshape(-1, 3)
-        # Camera.fit on the box corners gives the orientation for these angles (and handles the
+        # a fit on the box corners gives the orientation for these angles (and handles the
         # model's up axis) at almost no cost
-        turned = Camera.fit(
+        turned = fit_camera(
             corners,
+            (aspect, 1.0),
             "iso",
             azimuth=self.azimuth,
             elevation=self.elevation,
             fov=self.fov,
             ortho=self.ortho,
-            aspect=aspect,
             up=model.up,
         )
         back = np.asarray(turned.eye) - np.asarray(turned.target)
