@@ -1,4 +1,5 @@
-"""Benchmark: median whole-frame time (image read back) after warm-up, as JSON records."""
+"""Benchmark: median whole-frame time (image read back) after warm-up, as JSON records; and the
+frame interval when frames stream (each read back while the next is drawn)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from blueprint.api import default_renderer
 from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
 from blueprint.gpu.device import check_size
+from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
@@ -30,8 +32,9 @@ def time_frames(
     frames: int,
     warmup: int,
 ) -> dict:
-    """Median and spread of ``frames`` timed renders after ``warmup`` untimed ones, plus one
-    profiled frame (synchronised after every stage) for the per-stage split.
+    """Median and spread of ``frames`` timed renders after ``warmup`` untimed ones, the median
+    frame interval of as many streamed (``stream_blueprint``), and one profiled frame
+    (synchronised after every stage) for the per-stage split.
 
     Parameters
     ----------
@@ -48,8 +51,9 @@ def time_frames(
     Returns
     -------
     dict
-        ``layers``, ``ms`` (median), ``ms_min``, ``ms_max``, ``fps``, ``draws`` and ``stages``
-        (ms per stage of the profiled frame).
+        ``layers``, ``ms`` (median), ``ms_min``, ``ms_max``, ``fps``, ``ms_streamed`` (median
+        interval), ``fps_streamed``, ``draws`` and ``stages`` (ms per stage of the profiled
+        frame).
     """
     options = dict(size=size, max_layers=max_layers, supersample=supersample, style=style)
     for _ in range(warmup):
@@ -59,6 +63,8 @@ def time_frames(
     for _ in range(frames):
         frame = renderer.render(model, camera, **options)
         times.append(frame.ms)
+    streamed = [f.ms for f in stream_blueprint(renderer, model, [camera] * (warmup + frames), **options)]
+    streamed = streamed[warmup:]
     profiled = renderer.render(model, camera, profile=True, **options)
     return {
         "layers": frame.layers,
@@ -66,6 +72,8 @@ def time_frames(
         "ms_min": round(min(times), 3),
         "ms_max": round(max(times), 3),
         "fps": round(1000.0 / statistics.median(times), 1),
+        "ms_streamed": round(statistics.median(streamed), 3),
+        "fps_streamed": round(1000.0 / statistics.median(streamed), 1),
         "draws": frame.draws,
         "stages": {k: round(v, 3) for k, v in profiled.stages.items()},
     }

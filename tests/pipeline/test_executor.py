@@ -346,3 +346,35 @@ def test_reveal_stop_rule_of_a_pipeline(tmp_path, renderer, ex, gearbox):
     assert (
         0.9 <= result.revealed and result.layers < renderer.render(gearbox, size=SIZE, max_layers=None).layers
     )
+
+
+# -- streams ------------------------------------------------------------------------------------------
+def test_stream_gives_what_single_runs_give(ex, gearbox):
+    """Frames read back while the next is drawn: the same pictures and layers, in order."""
+    from blueprint.scene.camera import fit_camera
+
+    spec = load_pipeline("blueprint")
+    cameras = [fit_camera(gearbox, SIZE, azimuth=a) for a in (0.0, 40.0, 80.0)]
+    single = [ex.run(spec, gearbox, c, size=SIZE) for c in cameras]
+    streamed = list(ex.stream(spec, gearbox, ({"camera": c} for c in cameras), size=SIZE))
+    assert len(streamed) == 3
+    for a, b in zip(single, streamed, strict=True):
+        assert b.pending is None and b.camera == a.camera
+        np.testing.assert_array_equal(a.output, b.output)
+        assert (a.layers, a.layer_pixels) == (b.layers, b.layer_pixels)
+        assert b.ms > 0
+    assert not np.array_equal(streamed[0].output, streamed[1].output)
+    # smaller frames through the pixel buffers the larger ones left
+    (small,) = ex.stream(spec, gearbox, [{"camera": cameras[0]}], size=(32, 24))
+    np.testing.assert_array_equal(small.output, ex.run(spec, gearbox, cameras[0], size=(32, 24)).output)
+
+
+def test_a_run_read_later_holds_its_output_until_collected(tmp_path, ex, gearbox):
+    spec = load_pipeline(str(write(tmp_path, "parts.toml", PARTS_PIPELINE)))
+    shaft = np.array([n == "shaft" for n in gearbox.part_names])
+    buffer = ex.ctx.buffer(reserve=SIZE[0] * SIZE[1])
+    later = ex.run(spec, gearbox, size=SIZE, parts={"shaft": shaft}, read_later=lambda tex: buffer)
+    now = ex.run(spec, gearbox, size=SIZE, parts={"shaft": shaft})
+    assert later.output is None and later.pending is not None
+    np.testing.assert_array_equal(later.collected().output, now.output)
+    buffer.release()

@@ -176,8 +176,9 @@ def turntable(
     cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
 
     def pictures():
-        for index, camera in enumerate(cameras):
-            result = ex.run(spec, model, camera, size=size, variables=variables, frame=index)
+        # streamed: a frame is read back while the next one is drawn
+        views = ({"camera": camera, "frame": index} for index, camera in enumerate(cameras))
+        for index, result in enumerate(ex.stream(spec, model, views, size=size, variables=variables)):
             picture = result.image
             picture = picture[0] if picture.ndim == 4 else picture
             if picture.shape[-1] == 4:

@@ -4,6 +4,8 @@ silhouettes are passes, attributes and a stop rule of the preset, not code of th
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
+
 import numpy as np
 
 from blueprint.compose.style import Style, get_style
@@ -49,6 +51,63 @@ def render_blueprint(
     profile: bool = False,
 ) -> Frame:
     """``Renderer.render`` through the ``blueprint`` preset (see there for the arguments)."""
+    style, arguments = _run_arguments(
+        renderer,
+        model,
+        size=size,
+        view=view,
+        style=style,
+        max_layers=max_layers,
+        min_fraction=min_fraction,
+        crease_angle=crease_angle,
+        line_width=line_width,
+        supersample=supersample,
+        depth_threshold=depth_threshold,
+        part_edges=part_edges,
+        id_silhouettes=id_silhouettes,
+        highlight=highlight,
+        reveal=reveal,
+        shade=shade,
+        shade_opacity=shade_opacity,
+    )
+    result = executor_for(renderer).run(blueprint_preset(), model, camera, profile=profile, **arguments)
+    return _frame(result, style)
+
+
+def stream_blueprint(
+    renderer: LayerRenderer, model: Model, cameras: Iterable[Camera], **options
+) -> Iterator[Frame]:
+    """Frames of ``model`` from each of ``cameras`` with ``render_blueprint``'s other options,
+    streamed: a frame's picture is read back while the next one is drawn (``Executor.stream``),
+    and ``Frame.ms`` is the interval between frames."""
+    style, arguments = _run_arguments(renderer, model, **options)
+    frames = ({"camera": camera} for camera in cameras)
+    for result in executor_for(renderer).stream(blueprint_preset(), model, frames, **arguments):
+        yield _frame(result, style)
+
+
+def _run_arguments(
+    renderer: LayerRenderer,
+    model: Model,
+    *,
+    size: tuple[int, int] = (1024, 1024),
+    view: str = "iso",
+    style: str | Style = "blueprint",
+    max_layers: int | None = 8,
+    min_fraction: float = 0.0,
+    crease_angle: float = 30.0,
+    line_width: float = 1.0,
+    supersample: int = 2,
+    depth_threshold: float = 4.0,
+    part_edges: bool = True,
+    id_silhouettes: bool = False,
+    highlight: np.ndarray | None = None,
+    reveal: float | None = None,
+    shade: np.ndarray | None = None,
+    shade_opacity: float = 1.0,
+) -> tuple[Style, dict]:
+    """The checked style and ``Executor.run``'s arguments of a blueprint frame: the options as
+    the preset's variables and part sets."""
     style = get_style(style)
     check_frame_args(max_layers, min_fraction, crease_angle, line_width)
     w, h = check_size(size, supersample, renderer.max_texture)
@@ -79,20 +138,19 @@ def render_blueprint(
         "shade": shade is not None,
         "shade_opacity": float(shade_opacity),
     }
-    result = executor_for(renderer).run(
-        blueprint_preset(),
-        model,
-        camera,
-        size=(w, h),
-        view=view,
-        variables=variables,
-        style=style,
-        max_layers=max_layers,
-        min_fraction=min_fraction,
-        crease_angle=crease_angle,
-        parts=parts,
-        profile=profile,
-    )
+    return style, {
+        "size": (w, h),
+        "view": view,
+        "variables": variables,
+        "style": style,
+        "max_layers": max_layers,
+        "min_fraction": min_fraction,
+        "crease_angle": crease_angle,
+        "parts": parts,
+    }
+
+
+def _frame(result, style: Style) -> Frame:
     image = result.image if style.paper is None else result.output
     return Frame(
         image,

@@ -32,6 +32,8 @@ from __future__ import annotations
 import math
 import time
 import weakref
+from collections.abc import Iterable, Iterator
+from dataclasses import replace
 
 import numpy as np
 
@@ -41,7 +43,13 @@ from blueprint.errors import InputError
 from blueprint.gpu import units
 from blueprint.pipeline.arrays import SLICES, array_plan
 from blueprint.pipeline.graph import Plan, plan
-from blueprint.pipeline.inputs import ImageInputs, output_size, read_texture
+from blueprint.pipeline.inputs import (
+    ImageInputs,
+    output_size,
+    read_texture,
+    read_texture_later,
+    texture_bytes,
+)
 from blueprint.pipeline.peel import LayerCapture
 from blueprint.pipeline.programs import Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
@@ -73,12 +81,16 @@ class Executor:
         self.capture = LayerCapture(self)
         self._plans: dict[tuple, Plan] = {}
         self._frame = 0
+        self._buffers: dict[int, object] = {}
         self.last_run: RunState | None = None
 
     def release(self) -> None:
-        """Programs of user shaders (pool targets belong to the renderer)."""
+        """Programs of user shaders and pixel buffers (pool targets belong to the renderer)."""
         self.programs.release()
         self.images.clear()
+        for buffer in self._buffers.values():
+            buffer.release()
+        self._buffers.clear()
 
     # -- plans ---------------------------------------------------------------------------------
     def plan(self, pipeline: PipelineSpec | Bound, variables=None, dumps=()) -> Plan:
@@ -108,6 +120,7 @@ class Executor:
         dumps: tuple[str, ...] = (),
         profile: bool = False,
         frame: int | None = None,
+        read_later=None,
     ) -> Result:
         """Run a pipeline once.
 
@@ -131,6 +144,9 @@ class Executor:
             Sets of parts by name, (P,) bool each, for the attributes of chosen parts
             (``{ of = "depth", parts = "NAME" }``) that the pipeline reads.
         dumps : names whose targets are read back into ``Result.dumps``.
+        read_later : pixel buffer, optional
+            Copy a one-texture output into it instead of reading it back (``stream``): the
+            result comes with ``pending`` set and ``output`` None.
         """
         t0 = clock = time.perf_counter()
         ctx = self.ctx
@@ -237,17 +253,69 @@ class Executor:
         ctx.disable(ctx.BLEND)
         if self.r.use_compute:
             ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
-        dumps_out = {name: self._read(st, name, layers) for name in pl.readback}
-        stage("read")
         out_name = pl.output
-        output = dumps_out[out_name]
+        pending = None
+        if read_later is not None and out_name in pl.bound.passes and out_name not in pl.stacked:
+            tex = self._value(st, out_name, 0)
+            pending = read_texture_later(tex, bound.format_of(out_name), read_later(tex))
+        dumps_out = {
+            name: self._read(st, name, layers) for name in pl.readback if pending is None or name != out_name
+        }
+        stage("read")
+        output = dumps_out.get(out_name)
         fmt = bound.format_of(out_name)
         premultiplied = out_name in bound.passes and bound.passes[out_name].kind == "composite"
         result_dumps = {d: dumps_out[pl.resolve(d)] for d in dumps}
         ms = (time.perf_counter() - t0) * 1e3
         return Result(
-            output, fmt, premultiplied, layers, counts, camera, ms, st.draws, stages, result_dumps, revealed
+            output,
+            fmt,
+            premultiplied,
+            layers,
+            counts,
+            camera,
+            ms,
+            st.draws,
+            stages,
+            result_dumps,
+            revealed,
+            pending,
         )
+
+    def stream(
+        self, pipeline: PipelineSpec | Bound, model: Model | None, frames: Iterable[dict], **options
+    ) -> Iterator[Result]:
+        """Run a pipeline once for each entry of ``frames`` (the arguments of ``run`` that change
+        from frame to frame: ``camera``, ``frame``, ``images``...; ``options`` hold the rest),
+        yielding the results in order. Each frame's output is copied into a pixel buffer and
+        read back only once the next frame is issued, so the transfer overlaps the GPU's work.
+        ``Result.ms`` is a frame's share of the stream: from its start to the next frame's
+        (the last one's: to its read-back), so the times add up to the stream's."""
+        pending: tuple[Result, float] | None = None
+        for k, arguments in enumerate(frames):
+            start = time.perf_counter()
+            result = self.run(
+                pipeline,
+                model,
+                **{**options, **arguments},
+                read_later=lambda t, k=k: self._pixel_buffer(k % 2, t),
+            )
+            if pending is not None:
+                yield replace(pending[0].collected(), ms=(start - pending[1]) * 1e3)
+            pending = result, start
+        if pending is not None:
+            done = pending[0].collected()
+            yield replace(done, ms=(time.perf_counter() - pending[1]) * 1e3)
+
+    def _pixel_buffer(self, slot: int, tex):
+        """Pixel buffer ``slot`` of two (frames alternate), large enough for ``tex``."""
+        need = texture_bytes(tex)
+        held = self._buffers.get(slot)
+        if held is None or held.size < need:
+            if held is not None:
+                held.release()
+            held = self._buffers[slot] = self.ctx.buffer(reserve=need)
+        return held
 
     # -- targets -------------------------------------------------------------------------------
     def _ensure_stacks(self, st: RunState, layers: int) -> None:

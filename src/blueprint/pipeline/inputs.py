@@ -3,6 +3,7 @@ to the run, arrays uploaded in a target format, and targets read back as arrays.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -97,15 +98,44 @@ def output_size(bound: Bound, image_names, size, images: dict, max_texture: int)
 
 def read_texture(tex, fmt: str) -> np.ndarray:
     """(H, W, C) of a target, row 0 at the top; uint8 for 8-bit formats, float32 or int32."""
-    w, h = tex.size[:2]
+    return _decode(tex.read(), tuple(tex.size[:2]), fmt)
+
+
+def _decode(data: bytes, size: tuple[int, int], fmt: str) -> np.ndarray:
+    w, h = size
     if fmt == "depth":
-        data = np.frombuffer(tex.read(), np.float32).reshape(h, w, 1)
+        array = np.frombuffer(data, np.float32).reshape(h, w, 1)
     else:
         components, dtype = FORMATS[fmt]
-        data = np.frombuffer(tex.read(), _DTYPES[dtype]).reshape(h, w, components)
-        if data.dtype == np.float16:
-            data = data.astype(np.float32)
-    return np.ascontiguousarray(data[::-1])
+        array = np.frombuffer(data, _DTYPES[dtype]).reshape(h, w, components)
+        if array.dtype == np.float16:
+            array = array.astype(np.float32)
+    return np.ascontiguousarray(array[::-1])
+
+
+@dataclass
+class PendingRead:
+    """A target copied into a pixel buffer on the GPU, not yet brought back: ``collect`` waits
+    only for that copy, so frames issued after it overlap the transfer."""
+
+    buffer: object
+    size: tuple[int, int]
+    fmt: str
+    nbytes: int
+
+    def collect(self) -> np.ndarray:
+        return _decode(self.buffer.read(size=self.nbytes), self.size, self.fmt)
+
+
+def texture_bytes(tex) -> int:
+    """Bytes of a 2D texture's pixels as ``read`` returns them."""
+    return tex.size[0] * tex.size[1] * tex.components * int(tex.dtype[1:])
+
+
+def read_texture_later(tex, fmt: str, buffer) -> PendingRead:
+    """Start bringing ``tex`` back through ``buffer`` (at least ``texture_bytes(tex)`` long)."""
+    tex.read_into(buffer)
+    return PendingRead(buffer, tuple(tex.size[:2]), fmt, texture_bytes(tex))
 
 
 def upload_array(pool, name: str, array: np.ndarray, fmt: str):

@@ -4,7 +4,7 @@ state (made anew each run), and its result."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -12,6 +12,7 @@ from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
+from blueprint.pipeline.inputs import PendingRead
 from blueprint.pipeline.spec import Bound
 from blueprint.render.capture import Capture, GBuffer, gbuffer
 from blueprint.render.renderer import LayerRenderer, straight_alpha
@@ -34,6 +35,9 @@ class Result:
         Name -> array like ``output`` for every ``dumps`` name asked for.
     revealed : float or None
         Where a ``reveal`` stop rule peeled: the fraction of its parts uncovered.
+    pending : PendingRead or None
+        Where a stream issued the next frame before reading this one's output back: the output
+        is None until ``collected()``.
     """
 
     output: np.ndarray
@@ -47,6 +51,13 @@ class Result:
     stages: dict[str, float] = field(default_factory=dict)
     dumps: dict[str, np.ndarray] = field(default_factory=dict)
     revealed: float | None = None
+    pending: PendingRead | None = field(default=None, repr=False)
+
+    def collected(self) -> Result:
+        """This result with its output brought back (itself where nothing is pending)."""
+        if self.pending is None:
+            return self
+        return replace(self, output=self.pending.collect(), pending=None)
 
     @property
     def image(self) -> np.ndarray:
