@@ -13,7 +13,7 @@ from golden_helpers import MODELS, assert_frame_pinned, assert_like_golden, case
 from golden_helpers import SIZE as SIZE_GOLDEN
 from PIL import Image
 
-from blueprint import examples
+from blueprint import examples, render
 from blueprint.api.files import run_pipeline
 from blueprint.errors import InputError, ShaderError
 from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
@@ -378,3 +378,25 @@ def test_a_run_read_later_holds_its_output_until_collected(tmp_path, ex, gearbox
     assert later.output is None and later.pending is not None
     np.testing.assert_array_equal(later.collected().output, now.output)
     buffer.release()
+
+
+def test_pipeline_file_run_takes_parts_as_renderer_render_does(tmp_path, renderer, capsys):
+    """``pipeline run blueprint --set highlight=true --set reveal=0.9 --parts highlight=gear``
+    draws what ``blueprint.render(highlight=..., reveal=0.9)`` draws."""
+    from blueprint.cli import main
+
+    model = tmp_path / "gearbox.glb"
+    model.write_bytes(examples.example_path().read_bytes())
+    out = tmp_path / "masked.png"
+    args = ["pipeline", "run", "blueprint", str(model), "-o", str(out), "--size", "96", "72"]
+    args += ["--set", "highlight=true", "--set", "reveal=0.9", "--parts", "highlight=gear"]
+    with pytest.raises(SystemExit) as done:
+        main(args)
+    assert done.value.code == 0 and "5 layers" in capsys.readouterr().out
+    expected = render(str(model), size=(96, 72), highlight="gear", reveal=0.9, renderer=renderer)
+    np.testing.assert_array_equal(np.asarray(Image.open(out)), expected)
+    with pytest.raises(SystemExit) as failed:
+        main([*args[:-2], "-o", str(tmp_path / "none.png")])
+    error = capsys.readouterr().err
+    assert failed.value.code == 2 and "--parts highlight=GLOBS" in error and error.count("\n") == 1
+    assert not (tmp_path / "none.png").exists()

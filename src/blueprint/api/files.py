@@ -38,6 +38,7 @@ from blueprint.pipeline.spec import with_file
 from blueprint.scene.camera import VIEWS, fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
+from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
 from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
 from blueprint.vector.style import VectorStyle, vector_style
@@ -74,6 +75,7 @@ def run_pipeline(
     up: str | None = None,
     set: dict | None = None,
     image: dict[str, str] | None = None,
+    parts: dict[str, str] | None = None,
     dump: tuple[str, ...] = (),
     max_layers: int | None = None,
     frames: int | None = None,
@@ -85,8 +87,9 @@ def run_pipeline(
     ``input`` is the model when the pipeline renders attributes; otherwise it fills the first
     image the pipeline declares without a file. A video input is filtered frame by frame into
     a video ``output`` (at most ``frames`` frames). ``set`` overrides variables, ``image``
-    gives image files by name, ``dump`` names targets to write beside the output. Returns the
-    last frame's result.
+    gives image files by name, ``parts`` the sets of parts that attributes of chosen parts
+    name (``{"highlight": "gear*"}``: name globs or indices, as ``--highlight`` takes them),
+    ``dump`` names targets to write beside the output. Returns the last frame's result.
     """
     images = {k: str(v) for k, v in (image or {}).items()}
     spec = with_images(pipeline, images)
@@ -124,6 +127,10 @@ def run_pipeline(
     if max_layers is not None and not 0 <= max_layers <= 256:
         raise InputError(f"max-layers must be between 0 (all) and 256, got {max_layers}")
     options = dict(variables=variables, dumps=tuple(dump))
+    if parts:
+        if model is None:
+            raise InputError(f"{spec.source}: parts are parts of a model: give a model")
+        options["parts"] = {name: designated_parts(model, chosen) for name, chosen in parts.items()}
     if max_layers is not None:
         options["max_layers"] = max_layers or None
     camera = None

@@ -28,6 +28,14 @@ def pipeline() -> None:
 )
 @click.option("--image", "images", multiple=True, metavar="NAME=PATH", help="Give an image input its file.")
 @click.option(
+    "--parts",
+    "part_sets",
+    multiple=True,
+    metavar="NAME=PARTS",
+    help="A set of parts the file's attributes name (name globs or indices, comma-separated), "
+    "e.g. highlight='gear*' with --set highlight=true for the blueprint preset.",
+)
+@click.option(
     "--dump", multiple=True, metavar="NAME", help="Also write this target beside the output (PNG or NPZ)."
 )
 @click.option("--max-layers", type=int, default=None, help="Depth layers to peel at most (0: all).")
@@ -45,6 +53,7 @@ def run_command(
     up,
     settings,
     images,
+    part_sets,
     dump,
     max_layers,
     frames,
@@ -68,6 +77,7 @@ def run_command(
             up=up,
             set=parse_assignments(settings, "--set"),
             image=parse_assignments(images, "--image"),
+            parts=parse_assignments(part_sets, "--parts"),
             dump=tuple(dump),
             max_layers=max_layers,
             frames=frames,

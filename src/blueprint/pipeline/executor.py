@@ -199,7 +199,8 @@ class Executor:
             wanted = bound.attributes[name].parts
             if parts.get(wanted) is None:
                 raise InputError(
-                    f"{bound.source}: attributes.{name}: give the parts {wanted!r} (run it with parts)"
+                    f"{bound.source}: attributes.{name}: give the parts {wanted!r} "
+                    f"(--parts {wanted}=GLOBS; parts= in Python)"
                 )
         if pl.peel:
             if model is None:
