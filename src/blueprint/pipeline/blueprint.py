@@ -29,47 +29,11 @@ def blueprint_preset() -> PipelineSpec:
 
 
 def render_blueprint(
-    renderer: LayerRenderer,
-    model: Model,
-    camera: Camera | None = None,
-    *,
-    size: tuple[int, int] = (1024, 1024),
-    view: str = "iso",
-    style: str | Style = "blueprint",
-    max_layers: int | None = 8,
-    min_fraction: float = 0.0,
-    crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    supersample: int = 2,
-    depth_threshold: float = 4.0,
-    part_edges: bool = True,
-    id_silhouettes: bool = False,
-    highlight: np.ndarray | None = None,
-    reveal: float | None = None,
-    shade: np.ndarray | None = None,
-    shade_opacity: float = 1.0,
-    profile: bool = False,
+    renderer: LayerRenderer, model: Model, camera: Camera | None = None, *, profile: bool = False, **options
 ) -> Frame:
-    """``Renderer.render`` through the ``blueprint`` preset (see there for the arguments)."""
-    style, arguments = _run_arguments(
-        renderer,
-        model,
-        size=size,
-        view=view,
-        style=style,
-        max_layers=max_layers,
-        min_fraction=min_fraction,
-        crease_angle=crease_angle,
-        line_width=line_width,
-        supersample=supersample,
-        depth_threshold=depth_threshold,
-        part_edges=part_edges,
-        id_silhouettes=id_silhouettes,
-        highlight=highlight,
-        reveal=reveal,
-        shade=shade,
-        shade_opacity=shade_opacity,
-    )
+    """``Renderer.render`` through the ``blueprint`` preset; ``options`` are its drawing options
+    (``size``, ``style``, ``highlight``...: see there), checked by ``_run_arguments``."""
+    style, arguments = _run_arguments(renderer, model, **options)
     result = executor_for(renderer).run(blueprint_preset(), model, camera, profile=profile, **arguments)
     return _frame(result, style)
 
