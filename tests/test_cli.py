@@ -63,6 +63,15 @@ def test_info_prints_renderer_and_gl_version(gl):
     major, minor = (int(v) for v in re.match(r"(\d+)\.(\d+)", gl["version"]).groups())
     assert (major, minor) >= (3, 3)
     assert int(gl["max_texture_size"]) >= 1024
+    # the ways it draws, as the renderer chose them for this driver
+    from blueprint.render.renderer import LayerRenderer
+
+    with LayerRenderer() as r:
+        passes = "compute shaders" if r.use_compute else "fragment passes"
+        way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
+        held = f"{way}, from {r.kbuffer_density:g} triangles per pixel" if r.kbuffer else "none"
+    assert lines[3] == f"image passes: {passes}" and gl["image_passes"] == passes
+    assert lines[4].startswith(f"k-buffer: {held}") and gl["kbuffer"].startswith(held)
 
 
 def test_info_model_lists_parts(gearbox_parts):

@@ -12,17 +12,26 @@ import click
 @click.argument("model", required=False, type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def info(model, as_json):
-    """Without MODEL: the OpenGL renderer. With MODEL: its parts, triangles and bounds."""
+    """Without MODEL: the OpenGL renderer and the ways it draws. With MODEL: its parts,
+    triangles and bounds."""
     if model is None:
-        from blueprint.gpu import create_context, gl_info
+        from blueprint.render.renderer import LayerRenderer
 
-        ctx = create_context()
-        data = gl_info(ctx)
-        ctx.release()
+        with LayerRenderer() as r:
+            data = dict(r.info)
+            data["image_passes"] = "compute shaders" if r.use_compute else "fragment passes"
+            if not r.kbuffer:
+                data["kbuffer"] = "none (a geometry pass a layer)"
+            else:
+                way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
+                data["kbuffer"] = f"{way}, from {r.kbuffer_density:g} triangles per pixel"
         if as_json:
             click.echo(json.dumps(data))
         else:
-            click.echo(f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}")
+            click.echo(
+                f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}\n"
+                f"image passes: {data['image_passes']}\nk-buffer: {data['kbuffer']}"
+            )
         return
     from blueprint.scene.loader import load_model
 
