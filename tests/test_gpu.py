@@ -166,7 +166,7 @@ def test_explain_maps_mesa_and_nvidia_locations():
     assert _explain(mesa, files) == "pkg/b.glsl:7: error: `x' undeclared"
     assert _explain("0:12(3): error: syntax error", files) == "pkg/a.frag:12: error: syntax error"
     nvidia = '0(100012) : error C1008: undefined variable "x"'
-    assert _explain(nvidia, files) == 'pkg/b.glsl:12 : error C1008: undefined variable "x"'
+    assert _explain(nvidia, files) == 'pkg/b.glsl:12: error C1008: undefined variable "x"'
     # a file number the preprocessor never issued is left as it is
     assert _explain("0:500002(1): error: odd", files) == "0:500002(1): error: odd"
 

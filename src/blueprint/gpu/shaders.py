@@ -17,7 +17,8 @@ COMPUTE_VERSION = "#version 430 core"
 LINE_BASE = 100_000
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$')
 # Mesa: "0:12(3): error: ..."; NVIDIA: "0(12) : error ..."
-_LOCATION = re.compile(r"\b(\d+)(?::(\d+)\(\d+\)|\((\d+)\))")
+# NVIDIA's form swallows the space before its colon, so both read "file:line: error ..."
+_LOCATION = re.compile(r"\b(\d+)(?::(\d+)\(\d+\)|\((\d+)\) ?(?=:))")
 
 
 @cache
