@@ -1,18 +1,26 @@
-"""Hostile input (issue 17): every failure is one line whatever the file's name holds.
+"""Hostile input (issue 17): every file a user gives, or a model references, is read only if
+``stat`` says it is a regular file within its size limit, and every failure is one line whatever
+the file's name holds.
 
-The CLI runs in a subprocess with a timeout, so that input that makes it hang fails its test
-instead of hanging the suite.
+The CLI runs in a subprocess with a timeout, so that a FIFO that blocks fails its test instead
+of hanging the suite: opening a FIFO for reading waits for a writer that never comes.
 """
 
 from __future__ import annotations
 
 import os
+import socket
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+import trimesh
+
 import blueprint
-from blueprint.errors import printable
+from blueprint import examples, settings
+from blueprint.errors import InputError, printable
+from blueprint.settings import check_file, read_file, read_settings
 
 TIMEOUT = 30  # seconds: a refusal takes well under one; only a hang reaches this
 
@@ -46,6 +54,57 @@ def one_line(proc: subprocess.CompletedProcess) -> str:
     return stderr[len("blueprint: error: ") : -1]
 
 
+def _box() -> trimesh.Trimesh:
+    return trimesh.Trimesh(*examples.box((0, 0, 0), (1, 2, 3)), process=False)
+
+
+# -- special files, through the command ------------------------------------------------------------
+
+
+def test_fifo_as_a_glyph_file(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    os.mkfifo(tmp_path / "marks.toml")
+    line = one_line(
+        run(
+            "render", "box.stl", "-o", "out.png", "--size", "32", "32", "--glyphs", "marks.toml", cwd=tmp_path
+        )
+    )
+    assert line == "marks.toml: not a regular file (a FIFO)"
+
+
+def test_fifo_as_a_line_style_file(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    os.mkfifo(tmp_path / "lines.toml")
+    line = one_line(run("render", "box.stl", "-o", "out.svg", "--style", "lines.toml", cwd=tmp_path))
+    assert line == "lines.toml: not a regular file (a FIFO)"
+
+
+INVERT = """
+[pipeline]
+output = "out"
+[images.picture]
+[passes.out]
+op = "invert"
+inputs = { source = "picture" }
+"""
+
+
+def test_fifo_as_a_pipeline_file(tmp_path):
+    os.mkfifo(tmp_path / "style.toml")
+    line = one_line(run("pipeline", "run", "style.toml", "-o", "out.png", cwd=tmp_path))
+    assert line == "style.toml: not a regular file (a FIFO)"
+
+
+def test_fifo_as_a_pipeline_image_input(tmp_path):
+    (tmp_path / "invert.toml").write_text(INVERT)
+    os.mkfifo(tmp_path / "picture.png")
+    proc = run(
+        "pipeline", "run", "invert.toml", "-o", "out.png", "--image", "picture=picture.png", cwd=tmp_path
+    )
+    assert one_line(proc).endswith("picture.png: not a regular file (a FIFO)")
+    assert not (tmp_path / "out.png").exists()
+
+
 # -- names that would break the line -------------------------------------------------------------------
 def test_a_name_with_a_newline_stays_on_one_line(tmp_path):
     (tmp_path / "two\nlines.obj").write_bytes(b"v 0 0 0\n")
@@ -56,3 +115,55 @@ def test_a_name_with_a_newline_stays_on_one_line(tmp_path):
 def test_printable_escapes_what_would_break_a_line():
     name = os.fsdecode(b"a\xfe\n\r\tb\x1b[2J\xe2\x80\xa8c")  # U+2028 separates lines too
     assert printable(name + " é") == "a\\xfe\\n\\r\\tb\\x1b[2J\\u2028c é"
+
+
+# -- sizes, checked before reading ---------------------------------------------------------------------
+@pytest.fixture
+def no_open(monkeypatch):
+    """Fails the test if a file is opened: a size over the limit must be refused by stat."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError(f"opened {args[0]!r}")
+
+    monkeypatch.setattr(settings.os, "open", refuse)
+
+
+def test_an_oversized_settings_file_is_refused_before_reading(tmp_path, monkeypatch, no_open):
+    path = tmp_path / "marks.toml"
+    path.write_bytes(b"#" * 3000)
+    monkeypatch.setattr(settings, "SETTINGS_FILE_LIMIT", 2048)
+    with pytest.raises(InputError) as error:
+        read_settings(path, "glyph file")
+    assert str(error.value) == f"{path}: 2.93 KiB is over the limit of 2 KiB for a glyph file"
+
+
+def test_a_sparse_file_is_refused_by_its_size(tmp_path, no_open):
+    path = tmp_path / "huge.bin"
+    with open(path, "wb") as fh:
+        fh.truncate(3 << 30)  # sparse: takes no disk
+    with pytest.raises(InputError) as error:
+        check_file(path, 2 << 30, "a model file")
+    assert str(error.value) == f"{path}: 3 GiB is over the limit of 2 GiB for a model file"
+
+
+def test_read_file_checks_the_open_file_too(tmp_path, monkeypatch):
+    """A FIFO put where a regular file was stat'ed is refused without blocking."""
+    path = tmp_path / "f"
+    os.mkfifo(path)
+    regular = os.stat(__file__)
+    real_stat = os.stat
+    monkeypatch.setattr(
+        settings.os, "stat", lambda p, *a, **k: regular if p == path else real_stat(p, *a, **k)
+    )
+    with pytest.raises(InputError) as error:
+        read_file(path, 1 << 20)
+    assert str(error.value) == f"{path}: not a regular file (a FIFO)"
+
+
+def test_a_socket_is_refused(tmp_path):
+    path = tmp_path / "s"
+    with socket.socket(socket.AF_UNIX) as server:
+        server.bind(str(path))
+        with pytest.raises(InputError) as error:
+            check_file(path, None)
+    assert str(error.value) == f"{path}: not a regular file (a socket)"
