@@ -20,9 +20,12 @@ import trimesh
 import blueprint
 from blueprint import examples, settings
 from blueprint.errors import InputError, printable
+from blueprint.scene import loader
 from blueprint.settings import check_file, read_file, read_settings
 
 TIMEOUT = 30  # seconds: a refusal takes well under one; only a hang reaches this
+
+TRIANGLE_OBJ = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
 
 # the package under test, whatever the folder the command runs in (a relative PYTHONPATH would not)
 ENV = {
@@ -59,6 +62,22 @@ def _box() -> trimesh.Trimesh:
 
 
 # -- special files, through the command ------------------------------------------------------------
+def test_fifo_as_the_model(tmp_path):
+    os.mkfifo(tmp_path / "model.stl")
+    line = one_line(run("render", "model.stl", "-o", "out.png", "--size", "32", "32", cwd=tmp_path))
+    assert line == "model.stl: not a regular file (a FIFO)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.stl"]
+
+
+def test_directory_as_the_model(tmp_path):
+    (tmp_path / "model.obj").mkdir()
+    line = one_line(run("info", "model.obj", cwd=tmp_path))
+    assert line == "model.obj: not a regular file (a directory)"
+
+
+def test_character_device_as_the_model(tmp_path):
+    line = one_line(run("info", "/dev/null", cwd=tmp_path))
+    assert line == "/dev/null: not a regular file (a character device)"
 
 
 def test_fifo_as_a_glyph_file(tmp_path):
@@ -77,6 +96,42 @@ def test_fifo_as_a_line_style_file(tmp_path):
     os.mkfifo(tmp_path / "lines.toml")
     line = one_line(run("render", "box.stl", "-o", "out.svg", "--style", "lines.toml", cwd=tmp_path))
     assert line == "lines.toml: not a regular file (a FIFO)"
+
+
+def test_fifo_as_an_obj_mtllib(tmp_path):
+    (tmp_path / "model.obj").write_bytes(b"mtllib materials.mtl\n" + TRIANGLE_OBJ)
+    os.mkfifo(tmp_path / "materials.mtl")
+    line = one_line(run("info", "model.obj", cwd=tmp_path))
+    assert line == f"model.obj: {tmp_path / 'materials.mtl'}: not a regular file (a FIFO)"
+
+
+def test_fifo_as_an_obj_texture(tmp_path):
+    (tmp_path / "materials.mtl").write_bytes(b"newmtl a\nKd 1 0 0\nmap_Kd picture.png\n")
+    (tmp_path / "model.obj").write_bytes(
+        b"mtllib materials.mtl\nusemtl a\nvt 0 0\nvt 1 0\nvt 0 1\n"
+        + TRIANGLE_OBJ.replace(b"f 1 2 3", b"f 1/1 2/2 3/3")
+    )
+    os.mkfifo(tmp_path / "picture.png")
+    line = one_line(run("info", "model.obj", cwd=tmp_path))
+    assert line == f"model.obj: {tmp_path / 'picture.png'}: not a regular file (a FIFO)"
+
+
+def test_fifo_as_a_gltf_buffer(tmp_path):
+    for name, data in _box().export(file_type="gltf").items():
+        (tmp_path / name).write_bytes(data)
+    buffer = tmp_path / "gltf_buffer_0.bin"
+    buffer.unlink()
+    os.mkfifo(buffer)
+    line = one_line(run("info", "model.gltf", cwd=tmp_path))
+    assert line == f"model.gltf: {buffer}: not a regular file (a FIFO)"
+
+
+def test_a_missing_mtllib_is_still_no_error(tmp_path):
+    """Only refusals stop a model: a material file that is not there never did."""
+    (tmp_path / "model.obj").write_bytes(b"mtllib missing.mtl\n" + TRIANGLE_OBJ)
+    proc = run("info", "model.obj", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert b"1 triangles" in proc.stdout
 
 
 INVERT = """
@@ -112,6 +167,21 @@ def test_a_name_with_a_newline_stays_on_one_line(tmp_path):
     assert line == "two\\nlines.obj: no triangles in the file"
 
 
+def test_a_name_that_is_not_utf8_is_escaped(tmp_path):
+    name = b"bad\xff.obj"
+    Path(os.fsdecode(os.fsencode(tmp_path) + b"/" + name)).write_bytes(b"v 0 0 0\n")
+    line = one_line(run("info", name, cwd=tmp_path))
+    assert line == "bad\\xff.obj: no triangles in the file"
+
+
+def test_a_model_whose_name_is_not_utf8_loads(tmp_path):
+    """trimesh names meshes after the file and hashes the names as UTF-8."""
+    path = Path(os.fsdecode(os.fsencode(tmp_path) + b"/bad\xff.stl"))
+    _box().export(path)
+    model = loader.load_model(path)
+    assert len(model.faces) == 12
+
+
 def test_printable_escapes_what_would_break_a_line():
     name = os.fsdecode(b"a\xfe\n\r\tb\x1b[2J\xe2\x80\xa8c")  # U+2028 separates lines too
     assert printable(name + " é") == "a\\xfe\\n\\r\\tb\\x1b[2J\\u2028c é"
@@ -135,6 +205,28 @@ def test_an_oversized_settings_file_is_refused_before_reading(tmp_path, monkeypa
     with pytest.raises(InputError) as error:
         read_settings(path, "glyph file")
     assert str(error.value) == f"{path}: 2.93 KiB is over the limit of 2 KiB for a glyph file"
+
+
+def test_an_oversized_model_is_refused_before_reading(tmp_path, monkeypatch):
+    path = tmp_path / "box.stl"
+    _box().export(path)
+    monkeypatch.setattr(loader, "MODEL_FILE_LIMIT", 100)
+    monkeypatch.setattr(loader, "_load_scene", lambda *a: pytest.fail("the model was read"))
+    with pytest.raises(InputError) as error:
+        loader.load_model(path)
+    assert str(error.value) == f"{path}: 684 bytes is over the limit of 100 bytes for a model file"
+
+
+def test_an_oversized_file_a_model_references_is_refused(tmp_path, monkeypatch):
+    (tmp_path / "model.obj").write_bytes(b"mtllib materials.mtl\n" + TRIANGLE_OBJ)
+    (tmp_path / "materials.mtl").write_bytes(b"newmtl a\nKd 1 0 0\n" * 100)
+    monkeypatch.setattr(loader, "MODEL_FILE_LIMIT", 1000)
+    with pytest.raises(InputError) as error:
+        loader.load_model(tmp_path / "model.obj")
+    assert str(error.value) == (
+        f"{tmp_path / 'model.obj'}: {tmp_path / 'materials.mtl'}: 1.76 KiB is over the limit of "
+        "1000 bytes for a file a model references"
+    )
 
 
 def test_a_sparse_file_is_refused_by_its_size(tmp_path, no_open):
