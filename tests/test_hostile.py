@@ -259,3 +259,10 @@ def test_a_socket_is_refused(tmp_path):
         with pytest.raises(InputError) as error:
             check_file(path, None)
     assert str(error.value) == f"{path}: not a regular file (a socket)"
+
+
+def test_a_model_name_too_long_for_the_file_system(tmp_path):
+    path = tmp_path / ("a" * 300 + ".obj")
+    with pytest.raises(InputError) as error:
+        loader.load_model(path)
+    assert str(error.value) == f"{path}: cannot read (File name too long)"
