@@ -1,19 +1,117 @@
 """Files of settings a user writes (glyphs, line styles): TOML or JSON, read and checked with one
-line per problem naming the file and the entry."""
+line per problem naming the file and the entry; and ``check_file`` / ``read_file``, through
+which every file a user gives (models and what they reference, settings, pipelines, images) is
+read: regular files only, of a bounded size, both known from ``stat`` before anything is opened.
+"""
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
+import stat
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from blueprint.color import RGBA, hex_color
 from blueprint.errors import InputError
 
-__all__ = ["Entry", "is_number", "one_line", "read_settings", "show"]
+__all__ = [
+    "IMAGE_FILE_LIMIT",
+    "MODEL_FILE_LIMIT",
+    "SETTINGS_FILE_LIMIT",
+    "Entry",
+    "check_file",
+    "is_number",
+    "one_line",
+    "open_file",
+    "read_file",
+    "read_settings",
+    "show",
+]
+
+# Largest files read, in bytes: they are read whole into memory (trimesh, Pillow, the TOML and
+# JSON parsers), so a sparse or endless file must be refused before it is read, not while.
+MODEL_FILE_LIMIT = 2 << 30  # a model, or a file it references: materials, textures, buffers
+IMAGE_FILE_LIMIT = 1 << 30  # a pipeline's image input
+SETTINGS_FILE_LIMIT = 16 << 20  # settings, line style, glyph and pipeline files
+
+_NOT_REGULAR = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a FIFO"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+    (stat.S_ISSOCK, "a socket"),
+)
+
+
+def _size(n: int) -> str:
+    for unit, scale in (("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
+        if n >= scale:
+            return f"{n / scale:.3g} {unit}"
+    return f"{n} bytes"
+
+
+def _checked(name: str, info: os.stat_result, limit: int | None, what: str) -> os.stat_result:
+    if not stat.S_ISREG(info.st_mode):
+        kind = next((k for test, k in _NOT_REGULAR if test(info.st_mode)), "a special file")
+        raise InputError(f"{name}: not a regular file ({kind})")
+    if limit is not None and info.st_size > limit:
+        raise InputError(f"{name}: {_size(info.st_size)} is over the limit of {_size(limit)} for {what}")
+    return info
+
+
+def check_file(path: str | os.PathLike, limit: int | None, what: str = "a file") -> os.stat_result:
+    """``path``'s ``stat`` if it is a regular file of at most ``limit`` bytes (``None``: any size;
+    ``what`` names the file's role in the message: "a model file"), else a one-line InputError.
+
+    Nothing is opened: opening a FIFO for reading blocks until a writer comes, a device reads
+    without end and a sparse file can be far larger than memory, so a reader that cannot bound
+    its reads itself (trimesh, Pillow, ffmpeg) calls this first."""
+    name = str(path)
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise InputError(f"{name}: no such file") from None
+    except OSError as exc:  # a name too long, a path through a file, a loop of links
+        raise InputError(f"{name}: cannot read ({exc.strerror or exc})") from None
+    return _checked(name, info, limit, what)
+
+
+def open_file(path: str | os.PathLike, limit: int, what: str = "a file") -> BinaryIO:
+    """``path`` open for reading, checked as ``check_file`` does, and again on the open file,
+    which might have been swapped for a FIFO in between (opened without blocking for that
+    reason)."""
+    check_file(path, limit, what)
+    name = str(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+    except OSError as exc:
+        if exc.errno == errno.ENOENT:
+            raise InputError(f"{name}: no such file") from None
+        raise InputError(f"{name}: cannot read ({exc.strerror or exc})") from None
+    fh = os.fdopen(fd, "rb")
+    try:
+        _checked(name, os.fstat(fd), limit, what)
+    except InputError:
+        fh.close()
+        raise
+    return fh
+
+
+def read_file(path: str | os.PathLike, limit: int, what: str = "a file") -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes (see ``open_file``); no more than
+    ``limit`` bytes are ever read, should the file grow after the check."""
+    with open_file(path, limit, what) as fh:
+        try:
+            data = fh.read(limit + 1)
+        except OSError as exc:
+            raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    if len(data) > limit:
+        raise InputError(f"{path}: over the limit of {_size(limit)} for {what}")
+    return data
 
 
 def read_settings(path: str | os.PathLike, what: str) -> Any:
@@ -23,14 +121,7 @@ def read_settings(path: str | os.PathLike, what: str) -> Any:
     suffix = path.suffix.lower()
     if suffix not in (".toml", ".json"):
         raise InputError(f"{name}: {what} must end in .toml or .json")
-    try:
-        raw = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{name}: is a directory") from None
-    except OSError as exc:
-        raise InputError(f"{name}: cannot read ({exc.strerror or exc})") from None
+    raw = read_file(path, SETTINGS_FILE_LIMIT, f"a {what}")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

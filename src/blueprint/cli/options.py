@@ -10,7 +10,7 @@ import sys
 import click
 
 from blueprint.compose.style import STYLES
-from blueprint.errors import BlueprintError, InputError
+from blueprint.errors import BlueprintError, InputError, printable
 from blueprint.scene.camera import VIEWS
 
 STYLE_NAMES = tuple(STYLES)
@@ -18,7 +18,7 @@ STYLE_NAMES = tuple(STYLES)
 
 class _OneLine(logging.Handler):
     def emit(self, record: logging.LogRecord) -> None:
-        click.echo(f"blueprint: warning: {record.getMessage()}", err=True)
+        click.echo(f"blueprint: warning: {printable(record.getMessage())}", err=True)
 
 
 def setup_logging() -> None:
@@ -119,10 +119,11 @@ def run(command: click.Command, argv: list[str] | None, prog_name: str) -> None:
         click.echo("blueprint: interrupted", err=True)
         sys.exit(130)
     except click.ClickException as exc:
-        click.echo(f"blueprint: error: {exc.format_message()}", err=True)
+        click.echo(f"blueprint: error: {printable(exc.format_message())}", err=True)
         sys.exit(2)
     except BlueprintError as exc:
-        click.echo(f"blueprint: error: {exc}", err=True)
+        # file names in messages may hold newlines and bytes that are not UTF-8
+        click.echo(f"blueprint: error: {printable(str(exc))}", err=True)
         sys.exit(2)
     except MemoryError:
         click.echo("blueprint: error: out of memory (try a smaller --size)", err=True)

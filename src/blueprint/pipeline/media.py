@@ -18,6 +18,7 @@ import numpy as np
 from blueprint.errors import InputError
 from blueprint.export.files import publish
 from blueprint.gpu.targets import FORMATS
+from blueprint.settings import IMAGE_FILE_LIMIT, check_file
 
 VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
 
@@ -43,10 +44,25 @@ def to_format(rgba: np.ndarray, fmt: str) -> np.ndarray:
     return np.ascontiguousarray(data.astype({"f1": np.uint8, "f2": np.float16, "f4": np.float32}[dtype]))
 
 
+def _check_image(path: Path) -> None:
+    """Pillow opens the path itself: a FIFO would block it, so refuse one first."""
+    if not os.path.exists(path):
+        raise InputError(f"{path}: no such image file")
+    check_file(path, IMAGE_FILE_LIMIT, "an image file")
+
+
+def _check_video(path: Path) -> None:
+    """ffmpeg opens the path itself: a FIFO would block it. No size limit: frames are streamed."""
+    if not os.path.exists(path):
+        raise InputError(f"{path}: no such video file")
+    check_file(path, None)
+
+
 def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.ndarray:
     """An image file as (H, W, C) in target format ``fmt``, resized to ``size`` if given."""
     from PIL import Image, UnidentifiedImageError
 
+    _check_image(path)
     try:
         with Image.open(path) as picture:
             picture = picture.convert("RGBA")
@@ -66,6 +82,7 @@ def image_size(path: Path) -> tuple[int, int]:
         return video_info(path)[0]
     from PIL import Image, UnidentifiedImageError
 
+    _check_image(path)
     try:
         with Image.open(path) as picture:
             return picture.size
@@ -78,8 +95,7 @@ def image_size(path: Path) -> tuple[int, int]:
 def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
     """(size, frames per second, frame count) of a video file."""
     ffmpeg = _ffmpeg()
-    if not Path(path).is_file():
-        raise InputError(f"{path}: no such video file")
+    _check_video(path)
     try:
         reader = ffmpeg.read_frames(str(path))
         meta = next(reader)
@@ -95,6 +111,7 @@ def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
 def read_video(path: Path) -> Iterator[np.ndarray]:
     """The frames of a video, each (H, W, 3) uint8."""
     ffmpeg = _ffmpeg()
+    _check_video(path)
     try:
         reader = ffmpeg.read_frames(str(path))
         meta = next(reader)

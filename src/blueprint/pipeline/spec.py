@@ -64,6 +64,7 @@ from pathlib import Path
 from blueprint.errors import InputError
 from blueprint.gpu.targets import FORMATS
 from blueprint.ops import OPS, Op
+from blueprint.settings import SETTINGS_FILE_LIMIT, read_file
 
 # name: (default format, allowed formats, from the renderer's G-buffer, what it holds)
 ATTRIBUTES: dict[str, tuple[str, tuple[str, ...], bool, str]] = {
@@ -287,12 +288,12 @@ def load_pipeline(name_or_path) -> PipelineSpec:
     else:
         if text_path.suffix.lower() != ".toml":
             raise InputError(f"{text_path}: a pipeline file must end in .toml")
-        if not text_path.is_file():
+        if not text_path.exists():
             raise InputError(f"{text_path}: no such pipeline file")
         try:
-            text = text_path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputError(f"{text_path}: cannot read ({exc})") from None
+            text = read_file(text_path, SETTINGS_FILE_LIMIT, "a pipeline file").decode("utf-8")
+        except UnicodeDecodeError:
+            raise InputError(f"{text_path}: not UTF-8 text") from None
         spec = parse(text, str(text_path), text_path.resolve().parent)
     spec.bind()
     return spec

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import warnings
@@ -11,6 +12,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
+from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
 log = logging.getLogger("blueprint")
 
@@ -44,21 +46,18 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     """
     path = Path(path)
     name = str(path)
-    if not path.exists():
-        raise InputError(f"{name}: no such file")
-    if path.is_dir():
-        raise InputError(f"{name}: is a directory, not a model file")
+    info = check_file(path, MODEL_FILE_LIMIT, "a model file")
     ext = path.suffix.lower().lstrip(".")
     formats = supported_formats()
     if ext not in formats:
         known = ", ".join(f for f in ("obj", "stl", "ply", "off", "glb", "gltf", "3mf") if f in formats)
         raise InputError(f"{name}: unknown model format '.{ext}' (supported: {known} and more)")
-    if path.stat().st_size == 0:
+    if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
     if up is not None and up not in ("y", "z"):
         raise InputError(f"unknown up axis {up!r} (choose y or z)")
 
-    scene = _load_scene(path)
+    scene = _load_scene(path, ext)
     positions, faces, face_part, names = _flatten(scene, path.stem)
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
@@ -86,21 +85,67 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     return model
 
 
-def _load_scene(path: Path):
+def _load_scene(path: Path, ext: str):
     import trimesh
 
+    resolver = _resolver_type()(str(path))
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             logging.getLogger("trimesh").setLevel(logging.ERROR)
-            return trimesh.load_scene(str(path), process=False)
+            # an open file, not the name: trimesh names meshes after a file name and hashes
+            # the names as UTF-8, which the bytes of a name that are not UTF-8 cannot be
+            with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
+                scene = trimesh.load_scene(fh, file_type=ext, process=False, resolver=resolver)
     except MemoryError:
         raise InputError(f"{path}: too large to load into memory") from None
     except ImportError as exc:
         raise InputError(f"{path}: reading this file needs the Python package '{exc.name}'") from None
     except Exception as exc:  # trimesh raises many types for broken files
-        detail = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise InputError(f"{path}: cannot read as {path.suffix.lstrip('.').upper()}: {detail}") from None
+        if not resolver.refused:  # else the refusal below, which trimesh may have wrapped
+            detail = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise InputError(f"{path}: cannot read as {path.suffix.lstrip('.').upper()}: {detail}") from None
+    if resolver.refused:
+        # also where trimesh went on without the file: its OBJ loader drops materials it cannot
+        # read, whatever the reason, but a reference to a FIFO or a device is a hostile file
+        raise InputError(f"{path}: {resolver.refused[0]}")
+    return scene
+
+
+@functools.cache
+def _resolver_type():
+    """trimesh's resolver of the files a model references (OBJ materials and textures, glTF
+    buffers and images), reading each through ``read_file``: regular files only, each within
+    the limit of a model file, and every refusal kept in ``refused``. Made on first use, as
+    trimesh is imported on first use."""
+    from trimesh.resolvers import FilePathResolver
+
+    class CheckedResolver(FilePathResolver):
+        def __init__(self, source: str, refused: list[InputError] | None = None) -> None:
+            super().__init__(source)
+            # trimesh's OBJ loader names meshes after this name: UTF-8 for the reason in _load_scene
+            self.file_name = os.fsencode(self.file_name).decode("utf-8", "backslashreplace")
+            self.refused = [] if refused is None else refused
+
+        def get(self, name: str) -> bytes:
+            # the names trimesh's own resolver tries, in its order
+            for candidate in (name.strip(), name.strip().lstrip("/"), os.path.split(name)[-1]):
+                try:
+                    target = self.absolute(candidate)
+                except ValueError:
+                    continue
+                if target.exists():
+                    try:
+                        return read_file(target, MODEL_FILE_LIMIT, "a file a model references")
+                    except InputError as exc:
+                        self.refused.append(exc)
+                        raise
+            return super().get(name)  # not found, or outside the model's folder: trimesh's error
+
+        def namespaced(self, namespace: str):
+            return CheckedResolver(os.path.join(self.parent, namespace), self.refused)
+
+    return CheckedResolver
 
 
 def _flatten(scene, stem: str):

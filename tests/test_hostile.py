@@ -1,0 +1,268 @@
+"""Hostile input (issue 17): every file a user gives, or a model references, is read only if
+``stat`` says it is a regular file within its size limit, and every failure is one line whatever
+the file's name holds.
+
+The CLI runs in a subprocess with a timeout, so that a FIFO that blocks fails its test instead
+of hanging the suite: opening a FIFO for reading waits for a writer that never comes.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import trimesh
+
+import blueprint
+from blueprint import examples, settings
+from blueprint.errors import InputError, printable
+from blueprint.scene import loader
+from blueprint.settings import check_file, read_file, read_settings
+
+TIMEOUT = 30  # seconds: a refusal takes well under one; only a hang reaches this
+
+TRIANGLE_OBJ = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+# the package under test, whatever the folder the command runs in (a relative PYTHONPATH would not)
+ENV = {
+    **os.environ,
+    "PYTHONPATH": os.pathsep.join(
+        [str(Path(blueprint.__file__).parents[1]), os.environ.get("PYTHONPATH", "")]
+    ),
+}
+
+
+def run(*args, cwd: Path) -> subprocess.CompletedProcess:
+    """The blueprint command in a subprocess; arguments may be bytes (names that are not UTF-8)."""
+    return subprocess.run(
+        [sys.executable, "-m", "blueprint.cli", *args],
+        capture_output=True,
+        cwd=cwd,
+        env=ENV,
+        timeout=TIMEOUT,
+    )
+
+
+def one_line(proc: subprocess.CompletedProcess) -> str:
+    """The one error line of a failed run: exit 2, nothing on stdout, one line on stderr."""
+    stderr = proc.stderr.decode("utf-8")  # strict: the line must be valid UTF-8 too
+    assert proc.returncode == 2, (proc.returncode, stderr)
+    assert proc.stdout == b"", proc.stdout
+    assert stderr.endswith("\n") and stderr.count("\n") == 1, f"not one line: {stderr!r}"
+    assert stderr.startswith("blueprint: error: "), stderr
+    return stderr[len("blueprint: error: ") : -1]
+
+
+def _box() -> trimesh.Trimesh:
+    return trimesh.Trimesh(*examples.box((0, 0, 0), (1, 2, 3)), process=False)
+
+
+# -- special files, through the command ------------------------------------------------------------
+def test_fifo_as_the_model(tmp_path):
+    os.mkfifo(tmp_path / "model.stl")
+    line = one_line(run("render", "model.stl", "-o", "out.png", "--size", "32", "32", cwd=tmp_path))
+    assert line == "model.stl: not a regular file (a FIFO)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["model.stl"]
+
+
+def test_directory_as_the_model(tmp_path):
+    (tmp_path / "model.obj").mkdir()
+    line = one_line(run("info", "model.obj", cwd=tmp_path))
+    assert line == "model.obj: not a regular file (a directory)"
+
+
+def test_character_device_as_the_model(tmp_path):
+    line = one_line(run("info", "/dev/null", cwd=tmp_path))
+    assert line == "/dev/null: not a regular file (a character device)"
+
+
+def test_fifo_as_a_glyph_file(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    os.mkfifo(tmp_path / "marks.toml")
+    line = one_line(
+        run(
+            "render", "box.stl", "-o", "out.png", "--size", "32", "32", "--glyphs", "marks.toml", cwd=tmp_path
+        )
+    )
+    assert line == "marks.toml: not a regular file (a FIFO)"
+
+
+def test_fifo_as_a_line_style_file(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    os.mkfifo(tmp_path / "lines.toml")
+    line = one_line(run("render", "box.stl", "-o", "out.svg", "--style", "lines.toml", cwd=tmp_path))
+    assert line == "lines.toml: not a regular file (a FIFO)"
+
+
+def test_fifo_as_an_obj_mtllib(tmp_path):
+    (tmp_path / "model.obj").write_bytes(b"mtllib materials.mtl\n" + TRIANGLE_OBJ)
+    os.mkfifo(tmp_path / "materials.mtl")
+    line = one_line(run("info", "model.obj", cwd=tmp_path))
+    assert line == f"model.obj: {tmp_path / 'materials.mtl'}: not a regular file (a FIFO)"
+
+
+def test_fifo_as_an_obj_texture(tmp_path):
+    (tmp_path / "materials.mtl").write_bytes(b"newmtl a\nKd 1 0 0\nmap_Kd picture.png\n")
+    (tmp_path / "model.obj").write_bytes(
+        b"mtllib materials.mtl\nusemtl a\nvt 0 0\nvt 1 0\nvt 0 1\n"
+        + TRIANGLE_OBJ.replace(b"f 1 2 3", b"f 1/1 2/2 3/3")
+    )
+    os.mkfifo(tmp_path / "picture.png")
+    line = one_line(run("info", "model.obj", cwd=tmp_path))
+    assert line == f"model.obj: {tmp_path / 'picture.png'}: not a regular file (a FIFO)"
+
+
+def test_fifo_as_a_gltf_buffer(tmp_path):
+    for name, data in _box().export(file_type="gltf").items():
+        (tmp_path / name).write_bytes(data)
+    buffer = tmp_path / "gltf_buffer_0.bin"
+    buffer.unlink()
+    os.mkfifo(buffer)
+    line = one_line(run("info", "model.gltf", cwd=tmp_path))
+    assert line == f"model.gltf: {buffer}: not a regular file (a FIFO)"
+
+
+def test_a_missing_mtllib_is_still_no_error(tmp_path):
+    """Only refusals stop a model: a material file that is not there never did."""
+    (tmp_path / "model.obj").write_bytes(b"mtllib missing.mtl\n" + TRIANGLE_OBJ)
+    proc = run("info", "model.obj", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert b"1 triangles" in proc.stdout
+
+
+INVERT = """
+[pipeline]
+output = "out"
+[images.picture]
+[passes.out]
+op = "invert"
+inputs = { source = "picture" }
+"""
+
+
+def test_fifo_as_a_pipeline_file(tmp_path):
+    os.mkfifo(tmp_path / "style.toml")
+    line = one_line(run("pipeline", "run", "style.toml", "-o", "out.png", cwd=tmp_path))
+    assert line == "style.toml: not a regular file (a FIFO)"
+
+
+def test_fifo_as_a_pipeline_image_input(tmp_path):
+    (tmp_path / "invert.toml").write_text(INVERT)
+    os.mkfifo(tmp_path / "picture.png")
+    proc = run(
+        "pipeline", "run", "invert.toml", "-o", "out.png", "--image", "picture=picture.png", cwd=tmp_path
+    )
+    assert one_line(proc).endswith("picture.png: not a regular file (a FIFO)")
+    assert not (tmp_path / "out.png").exists()
+
+
+# -- names that would break the line -------------------------------------------------------------------
+def test_a_name_with_a_newline_stays_on_one_line(tmp_path):
+    (tmp_path / "two\nlines.obj").write_bytes(b"v 0 0 0\n")
+    line = one_line(run("info", "two\nlines.obj", cwd=tmp_path))
+    assert line == "two\\nlines.obj: no triangles in the file"
+
+
+def test_a_name_that_is_not_utf8_is_escaped(tmp_path):
+    name = b"bad\xff.obj"
+    Path(os.fsdecode(os.fsencode(tmp_path) + b"/" + name)).write_bytes(b"v 0 0 0\n")
+    line = one_line(run("info", name, cwd=tmp_path))
+    assert line == "bad\\xff.obj: no triangles in the file"
+
+
+def test_a_model_whose_name_is_not_utf8_loads(tmp_path):
+    """trimesh names meshes after the file and hashes the names as UTF-8."""
+    path = Path(os.fsdecode(os.fsencode(tmp_path) + b"/bad\xff.stl"))
+    _box().export(path)
+    model = loader.load_model(path)
+    assert len(model.faces) == 12
+
+
+def test_printable_escapes_what_would_break_a_line():
+    name = os.fsdecode(b"a\xfe\n\r\tb\x1b[2J\xe2\x80\xa8c")  # U+2028 separates lines too
+    assert printable(name + " é") == "a\\xfe\\n\\r\\tb\\x1b[2J\\u2028c é"
+
+
+# -- sizes, checked before reading ---------------------------------------------------------------------
+@pytest.fixture
+def no_open(monkeypatch):
+    """Fails the test if a file is opened: a size over the limit must be refused by stat."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError(f"opened {args[0]!r}")
+
+    monkeypatch.setattr(settings.os, "open", refuse)
+
+
+def test_an_oversized_settings_file_is_refused_before_reading(tmp_path, monkeypatch, no_open):
+    path = tmp_path / "marks.toml"
+    path.write_bytes(b"#" * 3000)
+    monkeypatch.setattr(settings, "SETTINGS_FILE_LIMIT", 2048)
+    with pytest.raises(InputError) as error:
+        read_settings(path, "glyph file")
+    assert str(error.value) == f"{path}: 2.93 KiB is over the limit of 2 KiB for a glyph file"
+
+
+def test_an_oversized_model_is_refused_before_reading(tmp_path, monkeypatch):
+    path = tmp_path / "box.stl"
+    _box().export(path)
+    monkeypatch.setattr(loader, "MODEL_FILE_LIMIT", 100)
+    monkeypatch.setattr(loader, "_load_scene", lambda *a: pytest.fail("the model was read"))
+    with pytest.raises(InputError) as error:
+        loader.load_model(path)
+    assert str(error.value) == f"{path}: 684 bytes is over the limit of 100 bytes for a model file"
+
+
+def test_an_oversized_file_a_model_references_is_refused(tmp_path, monkeypatch):
+    (tmp_path / "model.obj").write_bytes(b"mtllib materials.mtl\n" + TRIANGLE_OBJ)
+    (tmp_path / "materials.mtl").write_bytes(b"newmtl a\nKd 1 0 0\n" * 100)
+    monkeypatch.setattr(loader, "MODEL_FILE_LIMIT", 1000)
+    with pytest.raises(InputError) as error:
+        loader.load_model(tmp_path / "model.obj")
+    assert str(error.value) == (
+        f"{tmp_path / 'model.obj'}: {tmp_path / 'materials.mtl'}: 1.76 KiB is over the limit of "
+        "1000 bytes for a file a model references"
+    )
+
+
+def test_a_sparse_file_is_refused_by_its_size(tmp_path, no_open):
+    path = tmp_path / "huge.bin"
+    with open(path, "wb") as fh:
+        fh.truncate(3 << 30)  # sparse: takes no disk
+    with pytest.raises(InputError) as error:
+        check_file(path, 2 << 30, "a model file")
+    assert str(error.value) == f"{path}: 3 GiB is over the limit of 2 GiB for a model file"
+
+
+def test_read_file_checks_the_open_file_too(tmp_path, monkeypatch):
+    """A FIFO put where a regular file was stat'ed is refused without blocking."""
+    path = tmp_path / "f"
+    os.mkfifo(path)
+    regular = os.stat(__file__)
+    real_stat = os.stat
+    monkeypatch.setattr(
+        settings.os, "stat", lambda p, *a, **k: regular if p == path else real_stat(p, *a, **k)
+    )
+    with pytest.raises(InputError) as error:
+        read_file(path, 1 << 20)
+    assert str(error.value) == f"{path}: not a regular file (a FIFO)"
+
+
+def test_a_socket_is_refused(tmp_path):
+    path = tmp_path / "s"
+    with socket.socket(socket.AF_UNIX) as server:
+        server.bind(str(path))
+        with pytest.raises(InputError) as error:
+            check_file(path, None)
+    assert str(error.value) == f"{path}: not a regular file (a socket)"
+
+
+def test_a_model_name_too_long_for_the_file_system(tmp_path):
+    path = tmp_path / ("a" * 300 + ".obj")
+    with pytest.raises(InputError) as error:
+        loader.load_model(path)
+    assert str(error.value) == f"{path}: cannot read (File name too long)"
