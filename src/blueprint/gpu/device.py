@@ -52,8 +52,6 @@ class Device:
         self.pool = TargetPool(self.ctx)
         self.queries = Queries(self.ctx)
         self.uniforms = Uniforms()
-        # which capture last bound the peel's texture units (render.capture)
-        self.peel_units_held_by: object | None = None
         self._programs: dict[tuple, object] = {}
         self._fullscreen: dict[int, object] = {}
         self.info = gl_info(self.ctx)

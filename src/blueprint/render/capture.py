@@ -176,14 +176,10 @@ class Capture:
         gb, ctx = self.gb, self.r.ctx
         gb.clears[layer % 2].use()
         gb.clears[layer % 2].clear(depth=1.0)
-        # the peel's units are this frame's captures' alone: bind them for a frame's first
-        # layer, and again only where another capture (another scale) bound its own
-        if layer == 0 or self.r.peel_units_held_by is not self:
-            gb.depth[0].use(units.PEEL_DEPTH)
-            gb.depth[1].use(units.PEEL_DEPTH + 1)
-            if self._flags is not None:
-                self._flags.use(units.SELECTED)
-            self.r.peel_units_held_by = self
+        gb.depth[0].use(units.PEEL_DEPTH)
+        gb.depth[1].use(units.PEEL_DEPTH + 1)
+        if self._flags is not None:
+            self._flags.use(units.SELECTED)
         with guard.crender if guard is not None else contextlib.nullcontext():
             if self.kbuffer is not None:
                 return self.kbuffer.draw(self.mesh, gb, layer, query)
