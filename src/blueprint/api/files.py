@@ -98,7 +98,7 @@ def run_pipeline(
     plan = ex.plan(spec, variables, tuple(dump))
     model = None
     if input is not None:
-        if plan.peel:
+        if plan.needs_model:
             model = load_model(input, up=up)
         else:
             free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
@@ -109,7 +109,7 @@ def run_pipeline(
                 )
             spec = with_file(spec, free[0], Path(input))
             plan = ex.plan(spec, variables, tuple(dump))
-    elif plan.peel:
+    elif plan.needs_model:
         raise InputError(
             f"{spec.source}: this pipeline renders attributes ({', '.join(plan.attributes)}): give a model"
         )
@@ -175,7 +175,7 @@ def turntable(
     variables = parse_variables(set)
     ex = executor_for(renderer)
     plan = ex.plan(spec, variables)
-    if not plan.peel:
+    if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
     model = model if isinstance(model, Model) else load_model(model, up=up)
     size = tuple(int(v) for v in size)

@@ -202,7 +202,7 @@ class Executor:
                     f"{bound.source}: attributes.{name}: give the parts {wanted!r} "
                     f"(--parts {wanted}=GLOBS; parts= in Python)"
                 )
-        if pl.peel:
+        if pl.needs_model:
             if model is None:
                 raise InputError(
                     f"{bound.source}: this pipeline renders attributes ({', '.join(pl.attributes)}): "
@@ -231,9 +231,10 @@ class Executor:
         ctx.enable_only(ctx.NOTHING)
         counts: list[int] = []
         revealed = None
-        if pl.peel:
+        if pl.needs_model:
             st.mesh = self.r.mesh(model, crease)
             self.capture.capture_parts(st, parts)
+        if pl.peel:
             rules = standard_rules(max_layers, min_fraction)
             reveal = self.capture.reveal_rule(st)
             if reveal is not None:

@@ -53,9 +53,10 @@ class Plan:
     attributes: list[str]  # attributes read
     images: list[str]  # images read
     readback: list[str]  # output and dumps (resolved names)
-    peel: bool
+    peel: bool  # attributes of every layer are read: the model is peeled
     layered: bool
     free_after: dict[str, list[str]] = field(default_factory=dict)
+    needs_model: bool = False  # any attribute is read, of every layer or of chosen parts
     parts: list[str] = field(default_factory=list)  # attributes of chosen parts read
     accumulated: list[str] = field(default_factory=list)
 
@@ -238,7 +239,8 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
         attributes=attributes,
         images=images,
         readback=readback,
-        peel=bool(attributes),
+        peel=any(bound.attributes[n].parts is None for n in attributes),
+        needs_model=bool(attributes),
         layered=layered,
         free_after=free_after,
         parts=parts,

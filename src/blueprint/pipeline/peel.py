@@ -78,11 +78,6 @@ class LayerCapture:
         for name in pl.attributes:
             if bound.attributes[name].parts is None:
                 by_scale.setdefault(bound.attributes[name].scale, []).append(name)
-        if not by_scale:  # attributes of chosen parts alone: nothing to peel
-            self.ex._ensure_stacks(st, 1)
-            for name in pl.iteration0:
-                self.ex._run_pass(st, name, 0, 1)
-            return [], 1
         primary_scale = bound.attributes["depth"].scale if "depth" in pl.attributes else next(iter(by_scale))
         # normal and ids are left as they were where a layer has no surface; clear them unless
         # every reader looks at depth first (the edges operation)
