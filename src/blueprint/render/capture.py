@@ -26,6 +26,7 @@ GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 PEEL_FRAG = "blueprint.render:glsl/peel.frag"
 KBUFFER_FRAG = "blueprint.render:glsl/kbuffer.frag"
 UNPACK_FRAG = "blueprint.render:glsl/unpack.frag"
+REVEAL_FRAG = "blueprint.render:glsl/reveal.frag"
 # Touching solids have coincident faces of opposite winding (the top of one, the bottom of the
 # other). Drawing back faces in a second draw pushed back by this polygon offset (in steps of
 # the depth buffer) makes the front face win every pixel of the tie, instead of whichever
@@ -307,7 +308,7 @@ def peel(
         for layer in range(limit):
             draw(layer, queries[layer], queries[layer - 1] if layer else None)
         return [], limit
-    peeled = 0
+    peeled = counted = 0
     counts: list[int] = []
     while peeled < limit:
         end = min(limit, peeled + step)
@@ -315,17 +316,14 @@ def peel(
             draw(layer, queries[layer], queries[layer - 1] if layer else None)
         counts += [queries[k].samples for k in range(peeled, end)]
         peeled = end
-        counted = min(r.count(counts) for r in rules) if rules else len(counts)
+        counted = min((r.count(counts) for r in rules), default=len(counts))
         if on_counted is not None and counted == peeled:
             on_counted(peeled - 1)
         # every rule looks (depth masking counts what the last layer uncovered), then any stops
         finished = [r.done(counts) for r in rules]
         if counted < peeled or any(finished):
             break
-    return counts, min(r.count(counts) for r in rules) if rules else len(counts)
-
-
-REVEAL_FRAG = "blueprint.render:glsl/reveal.frag"
+    return counts, counted
 
 
 def revealed_pixels(r, camera: Camera, mask, layer_depth=None) -> int:

@@ -23,7 +23,7 @@ from blueprint.render.capture import (
     peel_uniforms,
 )
 from blueprint.render.mesh import GpuMesh
-from blueprint.render.stop import HARD_MAX_LAYERS, standard_rules
+from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
@@ -263,10 +263,8 @@ class LayerRenderer(Device):
 
 
 def check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:
-    if max_layers is not None and not 1 <= int(max_layers) <= HARD_MAX_LAYERS:
-        raise InputError(f"max-layers must be between 1 and {HARD_MAX_LAYERS}, got {max_layers}")
-    if not 0.0 <= min_fraction <= 1.0:
-        raise InputError(f"min-fraction must be in [0, 1], got {min_fraction}")
+    """A frame's arguments, checked before any GPU work (the stop rules check their own)."""
+    standard_rules(max_layers, min_fraction)
     if not 0.0 <= crease_angle <= 180.0:
         raise InputError(f"crease-angle must be in [0, 180] degrees, got {crease_angle}")
     if not 1.0 <= line_width <= 16.0:
