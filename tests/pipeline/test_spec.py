@@ -230,6 +230,13 @@ CASES = [
         ["stop.reveal.fraction: must be above 0"],
     ),
     (
+        "reveal without the layers' depth",
+        BASE
+        + '[attributes.mine]\nof = "depth"\nparts = "p"\n'
+        + '[stop.reveal]\ndepth = "mine"\nfraction = 0.5\n',
+        ["stop.reveal.depth: 'mine' is compared with every layer's depth", "declare the depth attribute"],
+    ),
+    (
         "image file kind",
         BASE + '[images.photo]\nfile = "photo.txt"\n',
         ["images.photo.file: unknown kind of file", ".png", ".mp4"],

@@ -312,6 +312,13 @@ def bind(spec: PipelineSpec, values: dict) -> Bound:
         fraction = _number(ev(entry["fraction"], f"{key}.fraction"), src, f"{key}.fraction", 0, 1)
         if fraction <= 0:
             raise fail(src, f"{key}.fraction", "must be above 0")
+        of_layers = attributes.get("depth")
+        if of_layers is None or abs(of_layers.scale - held.scale) > 1e-9:
+            raise fail(
+                src,
+                f"{key}.depth",
+                f"{depth!r} is compared with every layer's depth: declare the depth attribute at its scale",
+            )
         stops.append(StopSpec(rule, depth, fraction))
     bound = Bound(
         src,

@@ -155,7 +155,7 @@ def plan(bound: Bound, dumps: tuple[str, ...] = ()) -> Plan:
     attributes = sorted(
         {t for n in passes for _, t in inputs(n) if t in bound.attributes}
         | {n for n in readback if n in bound.attributes}
-        | {stop.depth for stop in bound.stops}
+        | {name for stop in bound.stops for name in (stop.depth, "depth")}  # layers against parts
     )
     parts = [n for n in attributes if bound.attributes[n].parts is not None]
     images = sorted(
