@@ -15,8 +15,6 @@ from blueprint.errors import InputError
 from blueprint.pipeline.media import VideoWriter, read_video, video_info
 from blueprint.pipeline.run import orbit
 
-pytest.importorskip("imageio_ffmpeg")
-
 INVERT = """
 [pipeline]
 output = "out"

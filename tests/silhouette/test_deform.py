@@ -179,7 +179,6 @@ def run_command(*args) -> subprocess.CompletedProcess:
 
 
 def test_command_writes_a_video(column_file, tmp_path):
-    pytest.importorskip("imageio_ffmpeg")
     out = tmp_path / "twist.mp4"
     done = run_command(column_file, "-o", out, "--animate", "twist", "--frames", "4", "--size", 65, 48)
     assert done.returncode == 0, done.stderr
@@ -231,7 +230,6 @@ def test_command_bad_input_is_one_line(column_file, tmp_path, args, message):
 
 
 def test_write_video_pads_odd_sizes(tmp_path):
-    pytest.importorskip("imageio_ffmpeg")
     frames = (np.full((5, 7, 3), 40 * k, np.uint8) for k in range(3))
     assert write_video(tmp_path / "odd.mp4", frames, fps=10) == tmp_path / "odd.mp4"
     assert _read_ffmpeg(tmp_path / "odd.mp4").shape[1:3] == (6, 8)

@@ -74,7 +74,8 @@ def test_svg_parses_back_to_the_drawing_within_the_output_grid(gear_drawing, tmp
 
 
 def test_dxf_opens_with_one_layer_per_part_and_level(gear_drawing, tmp_path):
-    ezdxf = pytest.importorskip("ezdxf")
+    import ezdxf
+
     path = save_drawing(tmp_path / "gear.dxf", gear_drawing)
     doc = ezdxf.readfile(path)
     polylines = doc.modelspace().query("LWPOLYLINE")
@@ -91,8 +92,8 @@ def test_dxf_opens_with_one_layer_per_part_and_level(gear_drawing, tmp_path):
 
 
 def test_pdf_opens_with_the_drawing_size(gear_drawing, tmp_path):
-    pytest.importorskip("fpdf")
-    pypdf = pytest.importorskip("pypdf")
+    import pypdf
+
     path = save_drawing(tmp_path / "gear.pdf", gear_drawing)
     reader = pypdf.PdfReader(path)
     assert len(reader.pages) == 1
@@ -125,9 +126,11 @@ def test_empty_drawing_writes_valid_files(renderer, tmp_path):
     drawing = draw_vector(model, away, (64, 48), renderer=renderer)
     root = ET.parse(save_drawing(tmp_path / "empty.svg", drawing)).getroot()
     assert root.get("viewBox") == "0 0 64 48" and not list(root.iter(f"{SVG}path"))
-    ezdxf = pytest.importorskip("ezdxf")
+    import ezdxf
+
     assert len(ezdxf.readfile(save_drawing(tmp_path / "empty.dxf", drawing)).modelspace()) == 0
-    pypdf = pytest.importorskip("pypdf")
+    import pypdf
+
     assert len(pypdf.PdfReader(save_drawing(tmp_path / "empty.pdf", drawing)).pages) == 1
 
 

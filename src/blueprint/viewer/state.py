@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from blueprint.errors import InputError
-from blueprint.render.renderer import HARD_MAX_LAYERS
+from blueprint.render.stop import HARD_MAX_LAYERS
 from blueprint.scene.camera import VIEWS, Camera, fit_camera
 from blueprint.scene.model import Model
 
