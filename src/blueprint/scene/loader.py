@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import io
 import logging
 import os
 import warnings
@@ -12,6 +13,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
+from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
 log = logging.getLogger("blueprint")
@@ -26,7 +28,7 @@ def supported_formats() -> list[str]:
     """File extensions trimesh can load here, lower case without the dot."""
     import trimesh
 
-    return sorted(trimesh.available_formats())
+    return sorted(set(trimesh.available_formats()) | set(STEP_SUFFIXES))
 
 
 def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
@@ -50,7 +52,8 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     ext = path.suffix.lower().lstrip(".")
     formats = supported_formats()
     if ext not in formats:
-        known = ", ".join(f for f in ("obj", "stl", "ply", "off", "glb", "gltf", "3mf") if f in formats)
+        common = ("obj", "stl", "ply", "off", "glb", "gltf", "3mf", "step")
+        known = ", ".join(f for f in common if f in formats)
         raise InputError(f"{name}: unknown model format '.{ext}' (supported: {known} and more)")
     if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
@@ -88,6 +91,15 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
 def _load_scene(path: Path, ext: str):
     import trimesh
 
+    if ext in STEP_SUFFIXES:
+        glb = step_to_glb(path, read_file(path, STEP_FILE_LIMIT, "a STEP file"))
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return trimesh.load_scene(io.BytesIO(glb), file_type="glb", process=False)
+        except Exception as exc:  # OpenCASCADE wrote a GLB trimesh cannot read
+            detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+            raise InputError(f"{path}: cannot read the mesh OpenCASCADE made of it: {detail}") from None
     resolver = _resolver_type()(str(path))
     try:
         with warnings.catch_warnings():
