@@ -12,13 +12,14 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
+from blueprint.api.sections import section_of
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.export.files import check_output
@@ -218,6 +219,9 @@ def render_vector_file(
     units: str | None = None,
     highlight: Iterable[str | int] | str | int | Model | None = None,
     reveal: float | None = None,
+    section: str | None = None,
+    section_plane: str | Sequence[float] | None = None,
+    section_keep: Iterable[str | int] | str | int | Model | None = None,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -227,6 +231,8 @@ def render_vector_file(
     name, a line style file or a ``VectorStyle`` (see ``blueprint.vector.style.vector_style``).
     A ``scale`` ('1:50') makes the view orthographic and lays the page out in millimetres
     (``units``: the model's length unit). ``max_layers`` None or 0 peels every layer.
+    ``section``, ``section_plane`` and ``section_keep`` draw a section view (as
+    ``blueprint.render_frame`` does), its hatching and cut outline a group of their own.
 
     Returns
     -------
@@ -257,11 +263,17 @@ def render_vector_file(
         reveal=reveal,
         renderer=renderer,
     )
+    cut = section_of(loaded, section, section_plane, section_keep)
     if view == "plan":
-        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
+        plane = None if cut is None else (cut.plane, cut.keep)
+        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, section=plane, **options)
     else:
         camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-        drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
+        if cut is not None:
+            made = cut.cut(loaded, camera)
+            drawing = draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
+        else:
+            drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
     write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}

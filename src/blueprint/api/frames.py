@@ -10,6 +10,7 @@ from dataclasses import replace
 import numpy as np
 
 from blueprint.api.renderer import Renderer
+from blueprint.api.sections import Section, render_section, section_of
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
@@ -75,6 +76,9 @@ def render_frame(
     shade: PartSpec | None = None,
     shade_opacity: float = 1.0,
     glyphs: Glyphs | str | os.PathLike | None = None,
+    section: str | None = None,
+    section_plane: str | Sequence[float] | None = None,
+    section_keep: PartSpec | None = None,
     profile: bool = False,
     renderer: Renderer | None = None,
 ) -> Frame:
@@ -134,6 +138,14 @@ def render_frame(
         Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
         ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where
         a surface hides them. Not on a plan sheet.
+    section : str, optional
+        A section view: ``"x=VALUE"`` (or ``y=``, ``z=``, model units) removes the model in front
+        of that plane as the camera sees it; the cut faces are hatched, outlined heavy.
+    section_plane : str or 6 floats, optional
+        A section by any plane: a point of it and a normal towards the side removed
+        (``"PX,PY,PZ,NX,NY,NZ"``).
+    section_keep : str, int, sequence, Model or (P,) bool, optional
+        Parts drawn whole in a section (shafts, bolts, pins).
     profile : bool
         Synchronise after each stage to fill ``Frame.stages`` (slower).
     renderer : Renderer, optional
@@ -167,12 +179,16 @@ def render_frame(
         shade_opacity=shade_opacity,
         profile=profile,
     )
+    cut = section_of(model, section, section_plane, section_keep)
     if view == PLAN and camera is None:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")
-        return _plan_frame(model, size, fov, renderer, options)
+        return _plan_frame(model, size, fov, renderer, options, cut)
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
-    frame = renderer.render(model, cam, size=size, **options)
+    if cut is not None:
+        frame = render_section(renderer, model, cam, size, cut, options)
+    else:
+        frame = renderer.render(model, cam, size=size, **options)
     if glyphs is not None:
         t0 = time.perf_counter()
         image = render_with_glyphs(renderer, model, frame.camera, size, glyphs, frame.image)
@@ -181,17 +197,25 @@ def render_frame(
     return frame
 
 
-def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Renderer, options) -> Frame:
+def _plan_frame(
+    model: Model, size: tuple[int, int], fov: float, renderer: Renderer, options, section: Section | None
+) -> Frame:
     """A drawing sheet in third-angle projection: top view above the front view, right view
-    beside it, all orthographic at one scale, and an iso view in the free corner."""
+    beside it, all orthographic at one scale, and an iso view in the free corner; a section
+    cuts the model as the front view sees it, in every view."""
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
     cameras = sheet_cameras(model, (w, h), fov)
     image = np.zeros((size[1], size[0], 4), np.uint8)
     frames = {}
+    if section is not None:
+        section = Section(section.plane.facing(cameras["front"].eye, cameras["front"].target), section.keep)
     for name, (col, row) in SHEET_CELLS.items():
-        frames[name] = renderer.render(model, cameras[name], size=(w, h), **options)
+        if section is not None:
+            frames[name] = render_section(renderer, model, cameras[name], (w, h), section, options)
+        else:
+            frames[name] = renderer.render(model, cameras[name], size=(w, h), **options)
         image[row * h : (row + 1) * h, col * w : (col + 1) * w] = frames[name].image
     if size[0] % 2 or size[1] % 2:
         # odd sizes leave a last row or column: continue the paper there
@@ -235,6 +259,9 @@ def render(
     shade: PartSpec | None = None,
     shade_opacity: float = 1.0,
     glyphs: Glyphs | str | os.PathLike | None = None,
+    section: str | None = None,
+    section_plane: str | Sequence[float] | None = None,
+    section_keep: PartSpec | None = None,
     profile: bool = False,
     renderer: Renderer | None = None,
 ) -> np.ndarray:
@@ -268,6 +295,9 @@ def render(
         Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
         ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where
         a surface hides them.
+    section, section_plane, section_keep : optional
+        A section view: the plane (``"x=VALUE"``, or a point and a normal towards the side
+        removed) and the parts left uncut (see ``render_frame``).
     profile : bool
         Synchronise after each stage (for timings; slower).
     renderer : Renderer, optional
@@ -303,6 +333,9 @@ def render(
         shade=shade,
         shade_opacity=shade_opacity,
         glyphs=glyphs,
+        section=section,
+        section_plane=section_plane,
+        section_keep=section_keep,
         profile=profile,
         renderer=renderer,
     ).image

@@ -80,6 +80,18 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     default=None,
     help="Depth masking: peel until this fraction of the highlighted parts shows.",
 )
+@click.option(
+    "--section",
+    default=None,
+    help="Section view: x=VALUE, y=VALUE or z=VALUE (model units); the side facing the camera is removed.",
+)
+@click.option(
+    "--section-plane",
+    default=None,
+    metavar="PX,PY,PZ,NX,NY,NZ",
+    help="Section by any plane: a point of it and a normal towards the side removed.",
+)
+@click.option("--section-keep", default=None, help="Parts drawn uncut in a section: globs or indices.")
 def render(
     model,
     output,
@@ -106,6 +118,9 @@ def render(
     shade_opacity,
     glyphs,
     reveal,
+    section,
+    section_plane,
+    section_keep,
 ):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame
@@ -135,6 +150,7 @@ def render(
             units,
             highlight,
             reveal,
+            dict(section=section, section_plane=section_plane, section_keep=section_keep),
         )
         return
     if scale or units:
@@ -162,6 +178,9 @@ def render(
         shade=shade,
         shade_opacity=shade_opacity,
         id_silhouettes=id_silhouettes,
+        section=section,
+        section_plane=section_plane,
+        section_keep=section_keep,
         **camera,
     )
     write(output, frame.image)
@@ -174,7 +193,18 @@ def render(
 
 
 def _render_vector(
-    model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
+    model,
+    output,
+    camera,
+    style,
+    max_layers,
+    crease_angle,
+    line_width,
+    scale,
+    units,
+    highlight,
+    reveal,
+    section,
 ):
     from blueprint.api import default_renderer
     from blueprint.api.files import render_vector_file
@@ -190,6 +220,7 @@ def _render_vector(
         units=units,
         highlight=highlight,
         reveal=reveal,
+        **section,
         **camera,
     )
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))

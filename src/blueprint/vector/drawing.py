@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
@@ -28,6 +29,7 @@ from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
+from blueprint.scene.section import Cut, SectionPlane, cut_model
 
 from .dxf import write_dxf
 from .lines import join_polylines, model_segments
@@ -42,6 +44,7 @@ from .occlusion import (
     verify_creases,
 )
 from .pdf import pdf_bytes
+from .section import SectionLines, section_lines
 from .simplify import douglas_peucker
 from .style import VectorStyle, vector_style
 from .svg import svg_bytes
@@ -71,6 +74,8 @@ UNITS_MM: dict[str, float] = {
 }
 # Pen width of the base line on a drawing to scale, in paper millimetres (ISO 128 0.25 mm).
 SCALED_PEN_MM = 0.25
+# Hatch line spacing of a section on a drawing to scale, in paper millimetres (ISO 128-50).
+SECTION_HATCH_MM = 2.5
 # Polylines shorter than this on screen (edges seen end-on) are left out.
 _MIN_LENGTH_PX = 0.05
 
@@ -123,6 +128,8 @@ class Drawing:
         Parts drawn in the highlight style.
     title : str or None
         Title line written under the drawing's lines (bottom left), if any.
+    section : SectionLines or None
+        A section's hatching and cut outline, drawn as their own group.
     camera : Camera
     seconds : dict
         Time per stage.
@@ -142,6 +149,7 @@ class Drawing:
     camera: Camera
     highlight: frozenset[int] = frozenset()
     title: str | None = None
+    section: SectionLines | None = None
     name: str = "drawing"
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -272,6 +280,7 @@ def draw_vector(
     tolerance: float = 0.25,
     depth_tolerance: float = 1.0,
     title: str | None = None,
+    section: Cut | None = None,
 ) -> Drawing:
     """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
 
@@ -312,6 +321,9 @@ def draw_vector(
         Surfaces closer than this many pixel footprints in depth do not hide a line.
     title : str, optional
         A title line; drawings to scale get "<model> — <view> — 1:50 (mm)" by default.
+    section : Cut, optional
+        The cut that made ``model`` (``blueprint.scene.section.cut_model``): its cut faces are
+        hatched (2.5 mm apart on a drawing to scale) and outlined heavy.
     """
     seconds: dict[str, float] = {}
     if not (0.1 <= spacing <= 16):
@@ -395,6 +407,13 @@ def draw_vector(
     pieces = Pieces(points, offsets, pieces.part[keep], pieces.level[keep])
     seconds["simplify"] = time.perf_counter() - clock
 
+    hatching = None
+    if section is not None:
+        spacing_px = (
+            SECTION_HATCH_MM / page.factor if page.unit == "mm" else hatch_spacing_px(size, line_width)
+        )
+        hatching = section_lines(section, view_m, proj, size, spacing_px)
+
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
         title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
@@ -413,6 +432,7 @@ def draw_vector(
         camera=camera,
         highlight=chosen,
         title=title,
+        section=hatching,
         name=Path(model.source).stem if model.source else "drawing",
         seconds=seconds,
     )
@@ -426,20 +446,30 @@ def draw_vector_sheet(
     scale: str | float | None = None,
     units: str | None = None,
     title: str | None = None,
+    section: tuple[SectionPlane, np.ndarray] | None = None,
     **options,
 ) -> Drawing:
     """A drawing sheet as ``render(view="plan")`` draws it: the orthographic top view above the
     front view, the right view beside it, all at one scale, and an iso view in the free corner,
     each a quarter of ``size``. ``scale`` and ``units`` lay the page out in millimetres with the
     orthographic views to scale; ``options`` go to :func:`draw_vector` for every view.
+    ``section`` (a plane and the parts kept whole, (P,) bool) cuts the model as the front view
+    sees it, in every view.
     """
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
     cameras = sheet_cameras(model, (w, h), fov)
+    cut = None
+    if section is not None:
+        plane, keep = section
+        cut = cut_model(model, plane.facing(cameras["front"].eye, cameras["front"].target), keep)
     cells = []
     for name, (col, row) in SHEET_CELLS.items():
-        cell = draw_vector(model, cameras[name], (w, h), **options)
+        if cut is not None:
+            cell = draw_vector(cut.model, cameras[name], (w, h), section=cut, **options)
+        else:
+            cell = draw_vector(model, cameras[name], (w, h), **options)
         cells.append((cell, np.array([col * w, row * h], np.float64)))
     first = cells[0][0]
     counts = [len(c.points) for c, _ in cells]
@@ -467,6 +497,7 @@ def draw_vector_sheet(
         page=page,
         camera=cameras["front"],
         title=title,
+        section=None if cut is None else SectionLines.concatenate([c.section.shifted(at) for c, at in cells]),
         seconds=seconds,
     )
 

@@ -12,6 +12,7 @@ import re
 
 import numpy as np
 
+from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .svg import _decimals
 
 __all__ = ["layer_name", "write_dxf"]
@@ -110,6 +111,18 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
             chunk = points[offsets[i] : offsets[i + 1]]
             if len(chunk) >= 2 and np.ptp(chunk, axis=0).any():
                 msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+    if drawing.section is not None:
+        section_layer = doc.layers.add("SECTION")
+        section_layer.rgb = tuple(round(c * 255) for c in style.level(0).color)
+        for segments, width in (
+            (drawing.section.hatch, SECTION_HATCH_WIDTH),
+            (drawing.section.outline, SECTION_OUTLINE_WIDTH),
+        ):
+            ends = segments.reshape(-1, 2) * page.factor
+            ends[:, 1] = page.height - ends[:, 1]
+            attribs = {"layer": "SECTION", "lineweight": _lineweight(width * base_mm)}
+            for start, end in ends.reshape(-1, 2, 2).tolist():
+                msp.add_line(start, end, dxfattribs=attribs)
     if drawing.title:
         title_layer = doc.layers.add("TITLE")
         title_layer.rgb = tuple(round(c * 255) for c in style.title_color)

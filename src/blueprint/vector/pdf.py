@@ -8,6 +8,8 @@ lines come together, deepest level first.
 
 from __future__ import annotations
 
+from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
+
 __all__ = ["pdf_bytes"]
 
 PT_PER_PX = 0.75
@@ -16,6 +18,20 @@ PT_PER_PX = 0.75
 def _latin1(text: str) -> str:
     text = text.replace("\u2014", "-").replace("\u2013", "-")
     return text.encode("latin-1", "replace").decode("latin-1")
+
+
+def _section(pdf, drawing, to_page: float, base: float) -> None:
+    """A section's hatching and heavy cut outline in a graphics state group of their own."""
+    color = tuple(round(c * 255) for c in drawing.style.level(0).color)
+    for segments, width in (
+        (drawing.section.hatch, SECTION_HATCH_WIDTH),
+        (drawing.section.outline, SECTION_OUTLINE_WIDTH),
+    ):
+        with pdf.local_context():
+            pdf.set_draw_color(*color)
+            pdf.set_line_width(width * base)
+            for (x0, y0), (x1, y1) in (segments * to_page).tolist():
+                pdf.line(x0, y0, x1, y1)
 
 
 def pdf_bytes(drawing) -> bytes:
@@ -63,6 +79,8 @@ def pdf_bytes(drawing) -> bytes:
                 if len(chunk) >= 2:
                     pdf.polyline([tuple(p) for p in chunk.tolist()], style="D")
     pdf.set_dash_pattern()
+    if drawing.section is not None:
+        _section(pdf, drawing, to_page, base)
     if drawing.title:
         size_pt = 0.022 * drawing.height * to_page * (72 / 25.4 if unit == "mm" else 1.0)
         pdf.set_font("helvetica", size=size_pt)

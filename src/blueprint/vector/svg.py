@@ -8,6 +8,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .style import LineStyle
 
 __all__ = ["format_numbers", "path_data", "safe_id", "svg_bytes"]
@@ -140,6 +141,8 @@ def svg_bytes(drawing) -> bytes:
     if current is not None:
         out.append("</g>\n")
     out.append("</g>\n")
+    if drawing.section is not None:
+        out.append(_section_group(drawing, factor, decimals, base))
     if drawing.title:
         size = 0.022 * height
         color = LineStyle(style.title_color).hex
@@ -149,6 +152,23 @@ def svg_bytes(drawing) -> bytes:
         )
     out.append("</svg>\n")
     return "".join(out).encode("utf-8")
+
+
+def _section_group(drawing, factor: float, decimals: int, base: float) -> str:
+    """A section's hatching (thin) and cut outline (heavy) as the group ``section``."""
+    section = drawing.section
+    color = drawing.style.level(0).hex
+    out = [f'<g id="section" class="section" fill="none" stroke="{color}" stroke-linecap="round">\n']
+    for name, segments, width in (
+        ("section-hatch", section.hatch, SECTION_HATCH_WIDTH),
+        ("section-outline", section.outline, SECTION_OUTLINE_WIDTH),
+    ):
+        offsets = np.arange(0, 2 * len(segments) + 1, 2)
+        d = path_data(segments.reshape(-1, 2), offsets, factor, decimals)
+        if d:
+            out.append(f'<path class="{name}" stroke-width="{width * base:.4g}" d="{d}"/>\n')
+    out.append("</g>\n")
+    return "".join(out)
 
 
 def _description(drawing) -> str:

@@ -1,0 +1,81 @@
+"""Section views as the API draws them: the model cut on the CPU (``blueprint.scene.section``),
+drawn by the usual frame, then hatched where the first layer shows a cut face
+(``blueprint.compose.hatch``)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from blueprint.api.renderer import Renderer
+from blueprint.compose.hatch import hatch_overlay
+from blueprint.compose.style import Style
+from blueprint.errors import InputError
+from blueprint.render.renderer import Frame
+from blueprint.scene.camera import Camera
+from blueprint.scene.model import Model
+from blueprint.scene.parts import designated_parts
+from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
+
+__all__ = ["Section", "section_of"]
+
+
+@dataclass(frozen=True)
+class Section:
+    """A section the user asked for: the plane, and the parts drawn whole ((P,) bool)."""
+
+    plane: SectionPlane
+    keep: np.ndarray
+
+    def cut(self, model: Model, camera: Camera) -> Cut:
+        """``model`` cut as ``camera`` sees it: an axis cut removes the side facing it."""
+        return cut_model(model, self.plane.facing(camera.eye, camera.target), self.keep)
+
+
+def section_of(
+    model: Model,
+    section: str | None,
+    section_plane: str | Sequence[float] | None,
+    section_keep,
+) -> Section | None:
+    """The ``Section`` of ``render_frame``'s arguments, None when no plane is given."""
+    plane = parse_section(section, section_plane)
+    if plane is None:
+        if section_keep is not None:
+            raise InputError("--section-keep names parts left uncut: give --section or --section-plane")
+        return None
+    keep = np.zeros(len(model.part_names), bool)
+    if section_keep is not None:
+        keep = designated_parts(model, section_keep)
+    return Section(plane, keep)
+
+
+def render_section(
+    renderer: Renderer,
+    model: Model,
+    camera: Camera,
+    size: tuple[int, int],
+    section: Section,
+    options: dict,
+) -> Frame:
+    """Cut ``model``, draw the rest with ``options`` (``Renderer.render``'s) and hatch the cut."""
+    cut = section.cut(model, camera)
+    frame = renderer.render(cut.model, camera, size=size, **options)
+    t0 = time.perf_counter()
+    style: Style = options["style"]
+    s = int(options.get("supersample", 1))
+    front = renderer.peel(cut.model, camera, size=(size[0] * s, size[1] * s), max_layers=1, normals=False)
+    image = hatch_overlay(
+        frame.image,
+        front.triangle[0],
+        cut.model.face_part,
+        cut.cap,
+        style.ink,
+        supersample=s,
+        line_width=float(options.get("line_width", 1.0)),
+    )
+    spent = (time.perf_counter() - t0) * 1e3
+    return replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "section": spent})

@@ -1,0 +1,227 @@
+"""Section views on the CPU: a plane cuts every part, the material in front of it is removed and
+each part's cut face is capped, so that the ordinary peel draws what lies behind the cut (and its
+hidden lines) while the cap triangles, marked, are where the hatching goes.
+
+``--section x=VALUE`` (``y=``, ``z=``) cuts across an axis and removes the side facing the camera;
+``--section-plane PX,PY,PZ,NX,NY,NZ`` gives a point of the plane and a normal pointing at the side
+removed. Parts matched by ``--section-keep`` are drawn whole and uncut, as drawings show shafts,
+bolts and pins.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from blueprint.errors import InputError
+from blueprint.scene.model import Model
+
+__all__ = ["Cut", "SectionPlane", "cut_model", "parse_section"]
+
+log = logging.getLogger("blueprint")
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+_SECTION_FORMS = "x=VALUE, y=VALUE or z=VALUE (model units)"
+_PLANE_FORMS = "PX,PY,PZ,NX,NY,NZ: a point of the plane and a normal towards the side removed"
+
+
+@dataclass(frozen=True, eq=False)
+class SectionPlane:
+    """A cutting plane.
+
+    Attributes
+    ----------
+    point : (3,) float64
+        A point of the plane, in model coordinates.
+    normal : (3,) float64
+        Unit normal pointing at the side that is removed.
+    axis : {"x", "y", "z"} or None
+        Set for a cut across an axis whose normal is yet to be turned towards the camera that
+        draws it (``facing``); None once turned, and for a plane given by its normal.
+    text : str
+        The plane as the user gave it, for messages.
+    """
+
+    point: np.ndarray
+    normal: np.ndarray
+    axis: str | None
+    text: str
+
+    def facing(self, eye: Sequence[float], target: Sequence[float]) -> SectionPlane:
+        """This plane with an axis cut's normal turned towards the eye (the side in front of the
+        plane as the camera sees it is removed), for good; a plane seen edge-on removes the
+        positive side."""
+        if self.axis is None:
+            return self
+        toward = np.asarray(eye, np.float64) - np.asarray(target, np.float64)
+        along = float(toward[_AXES[self.axis]])
+        sign = -1.0 if along < -1e-9 * float(np.linalg.norm(toward)) else 1.0
+        normal = np.zeros(3)
+        normal[_AXES[self.axis]] = sign
+        return SectionPlane(self.point, normal, None, self.text)
+
+
+def _numbers(text: str, count: int, what: str, forms: str) -> list[float]:
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise InputError(f"{what} {text!r} is not {count} numbers (give {forms})")
+    return values
+
+
+def parse_section(
+    section: str | None = None, plane: str | Sequence[float] | None = None
+) -> SectionPlane | None:
+    """The cutting plane of ``--section`` (``"x=12.5"``) or ``--section-plane``
+    (``"0,0,5,0,0,1"`` or six numbers); None when neither is given.
+
+    Raises
+    ------
+    InputError
+        Both are given, or either is malformed: the message names the accepted forms.
+    """
+    if section is not None and plane is not None:
+        raise InputError("give --section or --section-plane, not both")
+    if section is not None:
+        match = re.fullmatch(r"\s*([xyzXYZ])\s*=\s*(\S+)\s*", str(section))
+        value = None
+        if match:
+            try:
+                value = float(match.group(2))
+            except ValueError:
+                value = None
+        if value is None or not math.isfinite(value):
+            raise InputError(f"section {section!r} is not of the form {_SECTION_FORMS}")
+        axis = match.group(1).lower()
+        point = np.zeros(3)
+        point[_AXES[axis]] = value
+        normal = np.zeros(3)
+        normal[_AXES[axis]] = 1.0
+        return SectionPlane(point, normal, axis, f"{axis}={value:g}")
+    if plane is not None:
+        text = plane if isinstance(plane, str) else ",".join(str(v) for v in plane)
+        values = _numbers(text, 6, "section plane", _PLANE_FORMS)
+        normal = np.array(values[3:], np.float64)
+        length = float(np.linalg.norm(normal))
+        if length == 0.0 or not math.isfinite(length):
+            raise InputError(f"section plane {text!r} has no normal (give {_PLANE_FORMS})")
+        return SectionPlane(np.array(values[:3], np.float64), normal / length, None, text)
+    return None
+
+
+@dataclass(frozen=True, eq=False)
+class Cut:
+    """A model cut by a section plane.
+
+    Attributes
+    ----------
+    model : Model
+        What is left behind the plane, each cut part capped; the same parts (and part indices)
+        as the model cut, a part wholly in front of the plane having no faces.
+    cap : (F,) bool
+        The faces of ``model`` that close a cut: the section's cut faces.
+    plane : SectionPlane
+        The plane, its normal pointing at the side removed.
+    """
+
+    model: Model
+    cap: np.ndarray
+    plane: SectionPlane
+
+    def cap_parts(self) -> np.ndarray:
+        """Indices of the parts with a cut face, ascending."""
+        return np.unique(self.model.face_part[self.cap])
+
+    def cap_area(self) -> float:
+        """Area of the cut faces in model units squared."""
+        tri = self.model.positions[self.model.faces[self.cap]].astype(np.float64)
+        return float(
+            0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+        )
+
+
+def cut_model(model: Model, plane: SectionPlane, keep: np.ndarray | None = None) -> Cut:
+    """Cut every part of ``model`` by ``plane``, removing the side its normal points at, and
+    cap each cut part; parts flagged in ``keep`` ((P,) bool) stay whole.
+
+    Raises
+    ------
+    InputError
+        The plane cuts none of the parts (it misses the model, or cuts only parts kept whole).
+    """
+    import trimesh
+
+    keep = np.zeros(len(model.part_names), bool) if keep is None else np.asarray(keep, bool)
+    extent = float(np.ptp(model.bounds, axis=0).max()) or 1.0
+    eps = 1e-6 * extent
+    good = ~model.degenerate_faces()
+    positions, faces, parts, caps = [], [], [], []
+    offset = 0
+    for part in range(len(model.part_names)):
+        chosen = good & (model.face_part == part)
+        if not chosen.any():
+            continue
+        vertices = model.positions.astype(np.float64)
+        mesh = trimesh.Trimesh(vertices, model.faces[chosen], process=True)
+        mesh.remove_unreferenced_vertices()
+        if not keep[part]:
+            mesh = _slice(mesh, plane, model.part_names[part])
+        if mesh is None or len(mesh.faces) == 0:
+            continue
+        v = np.asarray(mesh.vertices, np.float64)
+        f = np.asarray(mesh.faces, np.int64)
+        cap = np.zeros(len(f), bool)
+        if not keep[part]:
+            height = (v - plane.point) @ plane.normal
+            normals = np.asarray(mesh.face_normals, np.float64)
+            # a cap lies in the plane and faces the side removed, that is, the camera
+            cap = (np.abs(height[f]) <= eps).all(axis=1) & (normals @ plane.normal > 0.99)
+        positions.append(v)
+        faces.append(f + offset)
+        parts.append(np.full(len(f), part, np.int32))
+        caps.append(cap)
+        offset += len(v)
+    cap = np.concatenate(caps) if caps else np.zeros(0, bool)
+    if not cap.any():
+        low, high = model.bounds
+        raise InputError(
+            f"section {plane.text} misses the model (or cuts only parts kept whole): the model lies "
+            f"within x {low[0]:g} to {high[0]:g}, y {low[1]:g} to {high[1]:g}, z {low[2]:g} to {high[2]:g}"
+        )
+    cut = Model(
+        np.ascontiguousarray(np.concatenate(positions), np.float32),
+        np.ascontiguousarray(np.concatenate(faces), np.int32),
+        np.concatenate(parts),
+        model.part_names,
+        model.up,
+        model.source,
+    )
+    return Cut(cut, cap, plane)
+
+
+def _slice(mesh, plane: SectionPlane, name: str):
+    """The part behind the plane, capped; uncapped, with a warning, where the part is not a
+    closed surface (its cut then has no inside to fill)."""
+    import trimesh
+
+    origin, inward = plane.point, -plane.normal
+    height = (np.asarray(mesh.vertices) - origin) @ plane.normal
+    if (height <= 0).all():
+        return mesh
+    if (height >= 0).all():
+        return None
+    if mesh.is_watertight:
+        try:
+            return trimesh.intersections.slice_mesh_plane(mesh, inward, origin, cap=True)
+        except ValueError:
+            pass  # a cut outline earcut cannot triangulate: cut without the cap
+    log.warning("part %s is not a closed surface: its cut is not hatched", name)
+    return trimesh.intersections.slice_mesh_plane(mesh, inward, origin, cap=False)
