@@ -171,8 +171,9 @@ def test_scale_parsing_styles_and_names():
 
 
 def test_plan_sheet_is_four_views_in_their_cells(renderer):
-    """Top above front, right beside it, iso in the free corner, as the raster sheet lays them
-    out: every cell holds exactly the lines of its view drawn alone, moved into place."""
+    """Top above front, right beside it, iso in the free corner: every view holds exactly the
+    lines of its view drawn alone, moved into place, the projections kept aligned (top over
+    front, right beside front) and the views apart by one gap."""
     from blueprint.scene.camera import SHEET_CELLS, sheet_cameras
     from blueprint.vector import draw_vector_sheet
 
@@ -181,21 +182,25 @@ def test_plan_sheet_is_four_views_in_their_cells(renderer):
     sheet = draw_vector_sheet(model, size, renderer=renderer)
     w, h = size[0] // 2, size[1] // 2
     cameras = sheet_cameras(model, (w, h), 30.0)
-    assert (sheet.width, sheet.height) == size and sheet.camera == cameras["front"]
-    start = 0
-    for name, (col, row) in SHEET_CELLS.items():
+    assert sheet.camera == cameras["front"]
+    start, shifts, boxes = 0, {}, {}
+    for name in SHEET_CELLS:
         alone = draw_vector(model, cameras[name], (w, h), renderer=renderer)
         count = len(alone)
         assert count > 10, name
         chunk = slice(sheet.offsets[start], sheet.offsets[start + count])
         points = sheet.points[chunk]
-        np.testing.assert_array_equal(points, alone.points + [col * w, row * h])
-        assert (points >= [col * w - 0.5, row * h - 0.5]).all() and (
-            points <= [(col + 1) * w + 0.5, (row + 1) * h + 0.5]
-        ).all()
+        shifts[name] = points[0] - alone.points[0]
+        np.testing.assert_allclose(points, alone.points + shifts[name], atol=1e-9)
         np.testing.assert_array_equal(sheet.level[start : start + count], alone.level)
+        boxes[name] = (points.min(axis=0), points.max(axis=0))
         start += count
     assert start == len(sheet)
+    assert shifts["top"][0] == pytest.approx(shifts["front"][0])
+    assert shifts["front"][1] == pytest.approx(shifts["right"][1])
+    assert shifts["top"][1] == pytest.approx(shifts["iso"][1])
+    # third angle: the top view above the front view, the right view to its right
+    assert boxes["top"][1][1] < boxes["front"][0][1] and boxes["front"][1][0] < boxes["right"][0][0]
     # the three orthographic views share one scale
     assert cameras["top"].height == cameras["front"].height == cameras["right"].height
 
@@ -214,8 +219,11 @@ def test_plan_sheet_to_scale(renderer, tmp_path):
     assert summary["lines"]
     root = ET.parse(tmp_path / "sheet.svg").getroot()
     from blueprint.scene.camera import sheet_cameras
+    from blueprint.vector import draw_vector_sheet
 
     mm_per_px = sheet_cameras(model, (200, 150), 30.0)["front"].height / 150 / 2
-    assert float(root.get("width").removesuffix("mm")) == pytest.approx(400 * mm_per_px, rel=1e-5)
-    assert float(root.get("height").removesuffix("mm")) == pytest.approx(300 * mm_per_px, rel=1e-5)
+    sheet = draw_vector_sheet(model, (400, 300), scale="1:2", units="mm", renderer=renderer)
+    assert sheet.page.factor == pytest.approx(mm_per_px, rel=1e-9)
+    assert float(root.get("width").removesuffix("mm")) == pytest.approx(sheet.page.width, rel=1e-5)
+    assert float(root.get("height").removesuffix("mm")) == pytest.approx(sheet.page.height, rel=1e-5)
     assert "1:2" in "".join(root.itertext())

@@ -222,6 +222,8 @@ def render_vector_file(
     section: str | None = None,
     section_plane: str | Sequence[float] | None = None,
     section_keep: Iterable[str | int] | str | int | Model | None = None,
+    sheet: str | None = None,
+    title: str | None = None,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -233,6 +235,8 @@ def render_vector_file(
     (``units``: the model's length unit). ``max_layers`` None or 0 peels every layer.
     ``section``, ``section_plane`` and ``section_keep`` draw a section view (as
     ``blueprint.render_frame`` does), its hatching and cut outline a group of their own.
+    A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
+    default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper.
 
     Returns
     -------
@@ -264,9 +268,14 @@ def render_vector_file(
         renderer=renderer,
     )
     cut = section_of(loaded, section, section_plane, section_keep)
+    if sheet is not None and view != "plan":
+        raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
+    options["title"] = title
     if view == "plan":
         plane = None if cut is None else (cut.plane, cut.keep)
-        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, section=plane, **options)
+        drawing = draw_vector_sheet(
+            loaded, size, fov=fov, scale=scale, units=units, sheet=sheet, section=plane, **options
+        )
     else:
         camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
         if cut is not None:

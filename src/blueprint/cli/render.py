@@ -92,6 +92,14 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     help="Section by any plane: a point of it and a normal towards the side removed.",
 )
 @click.option("--section-keep", default=None, help="Parts drawn uncut in a section: globs or indices.")
+@click.option(
+    "--sheet",
+    default=None,
+    help="Paper of a vector plan sheet: A4, A3, A2, A1 or A0 (landscape); the scale fits it unless --scale.",
+)
+@click.option(
+    "--title", default=None, help="Title of a vector plan sheet's title block (default: the model's name)."
+)
 def render(
     model,
     output,
@@ -121,6 +129,8 @@ def render(
     section,
     section_plane,
     section_keep,
+    sheet,
+    title,
 ):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame
@@ -150,11 +160,17 @@ def render(
             units,
             highlight,
             reveal,
-            dict(section=section, section_plane=section_plane, section_keep=section_keep),
+            dict(
+                section=section,
+                section_plane=section_plane,
+                section_keep=section_keep,
+                sheet=sheet,
+                title=title,
+            ),
         )
         return
-    if scale or units:
-        raise InputError(f"--scale and --units are for vector drawings ({DRAWINGS})")
+    if scale or units or sheet or title:
+        raise InputError(f"--scale, --units, --sheet and --title are for vector drawings ({DRAWINGS})")
     if is_style_file(style):
         raise InputError(
             f"{style}: line style files are for vector drawings ({DRAWINGS}); "

@@ -45,6 +45,19 @@ from .occlusion import (
 )
 from .pdf import pdf_bytes
 from .section import SectionLines, section_lines
+from .sheet import (
+    BORDER_MM,
+    LABEL_MM,
+    TEXT_MM,
+    TITLE_BLOCK_MM,
+    Marks,
+    Text,
+    fit_scale,
+    paper_size,
+    place_views,
+    sheet_marks,
+    today,
+)
 from .simplify import douglas_peucker
 from .style import VectorStyle, vector_style
 from .svg import svg_bytes
@@ -130,6 +143,8 @@ class Drawing:
         Title line written under the drawing's lines (bottom left), if any.
     section : SectionLines or None
         A section's hatching and cut outline, drawn as their own group.
+    marks : Marks or None
+        A sheet's border, title block and view labels, drawn as their own group.
     camera : Camera
     seconds : dict
         Time per stage.
@@ -150,6 +165,7 @@ class Drawing:
     highlight: frozenset[int] = frozenset()
     title: str | None = None
     section: SectionLines | None = None
+    marks: Marks | None = None
     name: str = "drawing"
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -446,60 +462,130 @@ def draw_vector_sheet(
     scale: str | float | None = None,
     units: str | None = None,
     title: str | None = None,
+    sheet: str | None = None,
     section: tuple[SectionPlane, np.ndarray] | None = None,
     **options,
 ) -> Drawing:
-    """A drawing sheet as ``render(view="plan")`` draws it: the orthographic top view above the
-    front view, the right view beside it, all at one scale, and an iso view in the free corner,
-    each a quarter of ``size``. ``scale`` and ``units`` lay the page out in millimetres with the
-    orthographic views to scale; ``options`` go to :func:`draw_vector` for every view.
-    ``section`` (a plane and the parts kept whole, (P,) bool) cuts the model as the front view
-    sees it, in every view.
+    """A drawing sheet: the orthographic top view above the front view, the right view beside
+    it, all at one scale, and an iso view in the free corner, each drawn at a quarter of
+    ``size``, labelled, and laid out with even gaps fitted to their sizes inside a border with
+    a title block (ISO 7200: ``title``, default the model's name; scale; units; date; sheet).
+
+    ``scale`` and ``units`` lay the page out in millimetres with the orthographic views to
+    scale; ``sheet`` ('A4' ... 'A0', landscape) sets the paper, the scale then being the largest
+    standard one at which the views fit unless ``scale`` gives it. ``section`` (a plane and the
+    parts kept whole, (P,) bool) cuts the model as the front view sees it, in every view.
+    ``options`` go to :func:`draw_vector` for every view.
     """
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
+    paper = None if sheet is None else paper_size(sheet)
     cameras = sheet_cameras(model, (w, h), fov)
     cut = None
     if section is not None:
         plane, keep = section
         cut = cut_model(model, plane.facing(cameras["front"].eye, cameras["front"].target), keep)
-    cells = []
-    for name, (col, row) in SHEET_CELLS.items():
+    cells: dict[str, Drawing] = {}
+    for name in SHEET_CELLS:
         if cut is not None:
-            cell = draw_vector(cut.model, cameras[name], (w, h), section=cut, **options)
+            cells[name] = draw_vector(cut.model, cameras[name], (w, h), section=cut, **options)
         else:
-            cell = draw_vector(model, cameras[name], (w, h), **options)
-        cells.append((cell, np.array([col * w, row * h], np.float64)))
-    first = cells[0][0]
-    counts = [len(c.points) for c, _ in cells]
-    starts = np.cumsum([0, *counts[:-1]])
-    ends = [c.offsets[1:] + start for (c, _), start in zip(cells, starts, strict=True)]
-    offsets = np.concatenate([[0], *ends])
+            cells[name] = draw_vector(model, cameras[name], (w, h), **options)
+    first = cells["top"]
     seconds: dict[str, float] = {}
-    for cell, _ in cells:
+    for cell in cells.values():
         for stage, spent in cell.seconds.items():
             seconds[stage] = seconds.get(stage, 0.0) + spent
+
+    if paper is not None and scale is None:
+        scale = _sheet_scale(cells, cameras["front"], (w, h), paper, units, model)
     quarter = _page((w, h), cameras["front"], scale, units, model)
-    page = replace(quarter, width=size[0] * quarter.factor, height=size[1] * quarter.factor)
-    if title is None and page.scale is not None:
-        name = Path(model.source).stem if model.source and model.source != "generated" else "model"
-        title = f"{name} — top, front, right — {page.scale_label} ({page.model_unit}); iso not to scale"
+    mm_per_px = quarter.factor if quarter.unit == "mm" else None
+    per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
+    gap = 10.0 * per_mm if mm_per_px else 0.06 * min(w, h)
+    label = LABEL_MM * per_mm if mm_per_px else 0.045 * min(w, h)
+    extents = {name: _view_extent(cell, (w, h)) for name, cell in cells.items()}
+    shifts, (views_w, views_h) = place_views(extents, SHEET_CELLS, gap, 1.4 * label)
+    border = (BORDER_MM[0] * per_mm, BORDER_MM[1] * per_mm) if mm_per_px else (0.03 * min(w, h),) * 2
+    block_h = 5 * 1.8 * min(TEXT_MM * per_mm, 0.6 * TITLE_BLOCK_MM[1] * per_mm / 5 * 2)
+    if paper is not None:
+        width, height = paper[0] * per_mm, paper[1] * per_mm
+        room_w, room_h = width - border[0] - border[1], height - 2 * border[1] - block_h
+        origin = np.array([border[0] + (room_w - views_w) / 2, border[1] + max(room_h - views_h, 0) / 2])
+    else:
+        width = border[0] + border[1] + max(views_w, TITLE_BLOCK_MM[0] * per_mm if mm_per_px else 0)
+        height = 2 * border[1] + views_h + block_h
+        origin = np.array([border[0], border[1]])
+    shifts = {name: shift + origin for name, shift in shifts.items()}
+    labels = []
+    for name in cells:
+        (x0, _), (x1, y1) = extents[name] + shifts[name]
+        labels.append(Text((x0 + x1) / 2, y1 + 1.2 * label, label, name.upper(), "middle"))
+
+    page = replace(quarter, width=width * quarter.factor, height=height * quarter.factor)
+    name = Path(model.source).stem if model.source and model.source != "generated" else "model"
+    heading = title if title is not None else name
+    fields = {
+        "title": heading,
+        "scale": f"{page.scale_label} (iso not to scale)" if page.scale is not None else "not to scale",
+        "units": page.model_unit or "px",
+        "date": today(),
+        "sheet": sheet.strip().upper() if sheet else f"{width:.0f} x {height:.0f} px",
+    }
+    marks = sheet_marks(width, height, mm_per_px, labels, fields)
+    order = list(cells)
+    counts = [len(cells[n].points) for n in order]
+    starts = np.cumsum([0, *counts[:-1]])
+    ends = [cells[n].offsets[1:] + start for n, start in zip(order, starts, strict=True)]
     return replace(
         first,
-        width=int(size[0]),
-        height=int(size[1]),
-        points=np.concatenate([c.points + shift for c, shift in cells]).reshape(-1, 2),
-        offsets=offsets.astype(np.int64),
-        part=np.concatenate([c.part for c, _ in cells]),
-        level=np.concatenate([c.level for c, _ in cells]),
-        layers=max(c.layers for c, _ in cells),
+        width=int(math.ceil(width)),
+        height=int(math.ceil(height)),
+        points=np.concatenate([cells[n].points + shifts[n] for n in order]).reshape(-1, 2),
+        offsets=np.concatenate([[0], *ends]).astype(np.int64),
+        part=np.concatenate([cells[n].part for n in order]),
+        level=np.concatenate([cells[n].level for n in order]),
+        layers=max(c.layers for c in cells.values()),
         page=page,
         camera=cameras["front"],
-        title=title,
-        section=None if cut is None else SectionLines.concatenate([c.section.shifted(at) for c, at in cells]),
+        title=None,
+        name=heading,
+        marks=marks,
+        section=None
+        if cut is None
+        else SectionLines.concatenate([cells[n].section.shifted(shifts[n]) for n in order]),
         seconds=seconds,
     )
+
+
+def _view_extent(cell: Drawing, size: tuple[int, int]) -> np.ndarray:
+    """A view's lines' extent in its cell, its section's outline included."""
+    points = cell.points
+    if cell.section is not None and len(cell.section.outline):
+        points = np.concatenate([points, cell.section.outline.reshape(-1, 2)])
+    if len(points) == 0:
+        centre = np.array(size, np.float64) / 2
+        return np.array([centre, centre])
+    return np.array([points.min(axis=0), points.max(axis=0)])
+
+
+def _sheet_scale(cells, camera: Camera, size, paper, units, model) -> float:
+    """The largest standard scale at which a sheet's views fit on ``paper`` (mm)."""
+    unit = units or _default_units(model)
+    if unit not in UNITS_MM:
+        raise InputError(f"unknown units {unit!r} (choose {', '.join(UNITS_MM)})")
+    spans = {name: np.ptp(_view_extent(cell, size), axis=0) for name, cell in cells.items()}
+    content_w = max(spans["top"][0], spans["front"][0]) + max(spans["right"][0], spans["iso"][0])
+    content_h = max(spans["top"][1], spans["iso"][1]) + max(spans["front"][1], spans["right"][1])
+    # the border, the title block, three gaps and two labels a way, in mm
+    room_w = paper[0] - BORDER_MM[0] - BORDER_MM[1] - 3 * 10.0
+    room_h = paper[1] - 2 * BORDER_MM[1] - 5 * 1.8 * TEXT_MM - 3 * 10.0 - 2 * 1.4 * LABEL_MM
+    if room_w <= 0 or room_h <= 0:
+        raise InputError(f"the sheet {paper[0]:g} x {paper[1]:g} mm has no room for views")
+    factor = min(room_w / max(content_w, 1e-9), room_h / max(content_h, 1e-9))
+    model_per_px = camera.height / size[1]
+    return fit_scale(model_per_px * UNITS_MM[unit] / factor)
 
 
 def save_drawing(path: str | os.PathLike, drawing: Drawing, format: str | None = None) -> Path:

@@ -58,6 +58,28 @@ def _lineweight(mm: float) -> int:
     return min(_WEIGHTS, key=lambda w: abs(w - value))
 
 
+def _sheet(doc, msp, drawing, base_mm: float) -> None:
+    """A sheet's border, title block and view labels on the layer SHEET."""
+    page = drawing.page
+    layer = doc.layers.add("SHEET")
+    layer.rgb = tuple(round(c * 255) for c in drawing.style.title_color)
+    marks = drawing.marks
+    ends = marks.lines.reshape(-1, 2) * page.factor
+    ends[:, 1] = page.height - ends[:, 1]
+    for (start, end), width in zip(ends.reshape(-1, 2, 2).tolist(), marks.widths.tolist(), strict=True):
+        msp.add_line(start, end, dxfattribs={"layer": "SHEET", "lineweight": _lineweight(width * base_mm)})
+    for text in marks.texts:
+        entity = msp.add_text(text.text, height=text.height * page.factor, dxfattribs={"layer": "SHEET"})
+        align = "BOTTOM_CENTER" if text.anchor == "middle" else "BOTTOM_LEFT"
+        entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
+
+
+def _align(name: str):
+    from ezdxf.enums import TextEntityAlignment
+
+    return TextEntityAlignment[name]
+
+
 def write_dxf(drawing, path: str | os.PathLike) -> None:
     """Write the drawing as a DXF R2010 file."""
     try:
@@ -123,6 +145,8 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
             attribs = {"layer": "SECTION", "lineweight": _lineweight(width * base_mm)}
             for start, end in ends.reshape(-1, 2, 2).tolist():
                 msp.add_line(start, end, dxfattribs=attribs)
+    if drawing.marks is not None:
+        _sheet(doc, msp, drawing, base_mm)
     if drawing.title:
         title_layer = doc.layers.add("TITLE")
         title_layer.rgb = tuple(round(c * 255) for c in style.title_color)

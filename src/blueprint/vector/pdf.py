@@ -8,11 +8,44 @@ lines come together, deepest level first.
 
 from __future__ import annotations
 
+import os
+
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 
 __all__ = ["pdf_bytes"]
 
 PT_PER_PX = 0.75
+
+
+# Fonts with the glyphs of Unicode text, where the system has one: PDF's own fonts have Latin-1.
+UNICODE_FONTS = (
+    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/TTF/DejaVuSans.ttf",
+    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+    "/usr/share/fonts/truetype/freefont/FreeSans.ttf",
+    "/System/Library/Fonts/Supplemental/Arial Unicode.ttf",
+    "C:/Windows/Fonts/arial.ttf",
+)
+
+
+def unicode_font() -> str | None:
+    """The first of ``UNICODE_FONTS`` that exists, else None (text then falls back to Latin-1)."""
+    return next((path for path in UNICODE_FONTS if os.path.isfile(path)), None)
+
+
+def _font(pdf, size_pt: float) -> None:
+    path = unicode_font()
+    if path is None:
+        _font(pdf, size_pt)
+        return
+    if "unicode" not in pdf.fonts:
+        pdf.add_font("unicode", fname=path)
+    pdf.set_font("unicode", size=size_pt)
+
+
+def _text(pdf, text: str) -> str:
+    """``text`` as the current font can show it."""
+    return text if pdf.font_family == "unicode" else _latin1(text)
 
 
 def _latin1(text: str) -> str:
@@ -34,6 +67,28 @@ def _section(pdf, drawing, to_page: float, base: float) -> None:
                 pdf.line(x0, y0, x1, y1)
 
 
+def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
+    """A sheet's border, title block and view labels, in a graphics state group of their own."""
+    marks = drawing.marks
+    color = tuple(round(c * 255) for c in drawing.style.title_color)
+    points_per_unit = 72 / 25.4 if unit == "mm" else 1.0
+    with pdf.local_context():
+        pdf.set_draw_color(*color)
+        pdf.set_text_color(*color)
+        for ((x0, y0), (x1, y1)), width in zip(
+            (marks.lines * to_page).tolist(), marks.widths.tolist(), strict=True
+        ):
+            pdf.set_line_width(width * base)
+            pdf.line(x0, y0, x1, y1)
+        for text in marks.texts:
+            _font(pdf, text.height * to_page * points_per_unit)
+            value = _text(pdf, text.text)
+            x = text.x * to_page
+            if text.anchor == "middle":
+                x -= pdf.get_string_width(value) / 2
+            pdf.text(x, text.y * to_page, value)
+
+
 def pdf_bytes(drawing) -> bytes:
     """The drawing as a one-page PDF document."""
     try:
@@ -50,12 +105,13 @@ def pdf_bytes(drawing) -> bytes:
     else:
         unit, to_page = "pt", PT_PER_PX
         base = drawing.line_width * PT_PER_PX
-    width, height = drawing.width * to_page, drawing.height * to_page
+    # the page's own size: a sheet's paper is not a whole number of pixels
+    width, height = page.width / page.factor * to_page, page.height / page.factor * to_page
     pdf = FPDF(unit=unit, format=(width, height))
     pdf.set_auto_page_break(False)
     pdf.set_margin(0)
     pdf.set_creator("blueprint")
-    pdf.set_title(_latin1(drawing.title or drawing.name))
+    pdf.set_title(drawing.title or drawing.name)
     pdf.add_page()
     style = drawing.style
     if style.paper is not None:
@@ -81,9 +137,11 @@ def pdf_bytes(drawing) -> bytes:
     pdf.set_dash_pattern()
     if drawing.section is not None:
         _section(pdf, drawing, to_page, base)
+    if drawing.marks is not None:
+        _sheet(pdf, drawing, to_page, base, unit)
     if drawing.title:
         size_pt = 0.022 * drawing.height * to_page * (72 / 25.4 if unit == "mm" else 1.0)
-        pdf.set_font("helvetica", size=size_pt)
+        _font(pdf, size_pt)
         pdf.set_text_color(*(round(c * 255) for c in style.title_color))
-        pdf.text(0.02 * width, height - 0.02 * height, _latin1(drawing.title))
+        pdf.text(0.02 * width, height - 0.02 * height, _text(pdf, drawing.title))
     return bytes(pdf.output())

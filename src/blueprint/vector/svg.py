@@ -143,6 +143,8 @@ def svg_bytes(drawing) -> bytes:
     out.append("</g>\n")
     if drawing.section is not None:
         out.append(_section_group(drawing, factor, decimals, base))
+    if drawing.marks is not None:
+        out.append(_sheet_group(drawing, factor, decimals, base))
     if drawing.title:
         size = 0.022 * height
         color = LineStyle(style.title_color).hex
@@ -167,6 +169,25 @@ def _section_group(drawing, factor: float, decimals: int, base: float) -> str:
         d = path_data(segments.reshape(-1, 2), offsets, factor, decimals)
         if d:
             out.append(f'<path class="{name}" stroke-width="{width * base:.4g}" d="{d}"/>\n')
+    out.append("</g>\n")
+    return "".join(out)
+
+
+def _sheet_group(drawing, factor: float, decimals: int, base: float) -> str:
+    """A sheet's border, title block and view labels as the group ``sheet``."""
+    marks = drawing.marks
+    color = LineStyle(drawing.style.title_color).hex
+    out = [f'<g id="sheet" class="sheet" fill="none" stroke="{color}" stroke-linecap="square">\n']
+    for width in np.unique(marks.widths).tolist():
+        segments = marks.lines[marks.widths == width]
+        d = path_data(segments.reshape(-1, 2), np.arange(0, 2 * len(segments) + 1, 2), factor, decimals)
+        out.append(f'<path stroke-width="{width * base:.4g}" d="{d}"/>\n')
+    for text in marks.texts:
+        out.append(
+            f'<text x="{text.x * factor:.6g}" y="{text.y * factor:.6g}" font-family="sans-serif" '
+            f'font-size="{text.height * factor:.4g}" text-anchor="{text.anchor}" fill="{color}" '
+            f'stroke="none">{escape(text.text)}</text>\n'
+        )
     out.append("</g>\n")
     return "".join(out)
 

@@ -1,0 +1,167 @@
+"""The layout of a vector plan sheet: views placed with even gaps fitted to their sizes (third
+angle: top above front, right beside front, iso in the free corner), each labelled, inside a
+border with a title block after ISO 7200 (title, scale, units, date, sheet size).
+
+Everything here is in the drawing's pixels; the writers turn them into page units.
+"""
+
+from __future__ import annotations
+
+import datetime
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from blueprint.errors import InputError
+
+__all__ = ["PAPER_MM", "Marks", "Text", "fit_scale", "paper_size", "place_views", "sheet_marks", "today"]
+
+#: ISO 216 paper, landscape, in millimetres.
+PAPER_MM: dict[str, tuple[float, float]] = {
+    "A4": (297.0, 210.0),
+    "A3": (420.0, 297.0),
+    "A2": (594.0, 420.0),
+    "A1": (841.0, 594.0),
+    "A0": (1189.0, 841.0),
+}
+# ISO 5457: a 20 mm filing margin on the left, 10 mm elsewhere; ISO 7200's block is 180 mm wide.
+BORDER_MM = (20.0, 10.0)
+TITLE_BLOCK_MM = (180.0, 20.0)
+LABEL_MM = 5.0
+TEXT_MM = 3.5
+# widths in base line widths: the border heavy (0.7 mm), the title block's rules medium
+BORDER_WIDTH = 2.8
+RULE_WIDTH = 1.4
+
+
+@dataclass(frozen=True)
+class Text:
+    """A line of text at ``(x, y)`` pixels (its baseline), ``height`` pixels high; ``anchor``
+    'start' or 'middle'."""
+
+    x: float
+    y: float
+    height: float
+    text: str
+    anchor: str = "start"
+
+
+@dataclass(frozen=True)
+class Marks:
+    """The sheet's own lines and texts: ``lines`` (K, 2, 2) pixels with ``widths`` (K,) in base
+    line widths, and ``texts``."""
+
+    lines: np.ndarray
+    widths: np.ndarray
+    texts: tuple[Text, ...]
+
+
+def paper_size(sheet: str) -> tuple[float, float]:
+    """Width and height in mm of ``sheet`` ('A4' ... 'A0', landscape)."""
+    key = str(sheet).strip().upper()
+    if key not in PAPER_MM:
+        raise InputError(f"unknown sheet {sheet!r} (choose {', '.join(PAPER_MM)})")
+    return PAPER_MM[key]
+
+
+def fit_scale(needed: float) -> float:
+    """The smallest standard scale denominator (ISO 5455: 1, 2, 5 times a power of ten, or
+    enlargements 2:1, 5:1, 10:1 ...) at least ``needed``."""
+    if needed <= 0 or not math.isfinite(needed):
+        return 1.0
+    k = math.floor(math.log10(needed))
+    for step in (1.0, 2.0, 5.0, 10.0):
+        candidate = step * 10.0**k
+        if candidate >= needed * (1 - 1e-9):
+            return candidate
+    return 10.0 ** (k + 1)
+
+
+def place_views(
+    extents: dict[str, np.ndarray], cells: dict[str, tuple[int, int]], gap: float, label: float
+) -> tuple[dict[str, np.ndarray], tuple[float, float]]:
+    """Where each view's cell goes so that the views lie ``gap`` pixels apart and from the
+    sheet's edge, with room for a label ``label`` pixels high under each: the columns and rows
+    keep the views of the third-angle projection aligned (top over front, right beside front).
+
+    Parameters
+    ----------
+    extents : dict of view name to (2, 2) float
+        Each view's extent in its own cell's pixels.
+    cells : dict of view name to (column, row)
+    gap, label : float
+
+    Returns
+    -------
+    shifts : dict of view name to (2,) float
+        What to add to a view's pixels.
+    size : (float, float)
+        The width and height the views take, gaps around included.
+    """
+    columns = sorted({c for c, _ in cells.values()})
+    rows = sorted({r for _, r in cells.values()})
+    spans_x = {c: _union([extents[n][:, 0] for n, (cc, _) in cells.items() if cc == c]) for c in columns}
+    spans_y = {r: _union([extents[n][:, 1] for n, (_, rr) in cells.items() if rr == r]) for r in rows}
+    x, starts_x = gap, {}
+    for c in columns:
+        starts_x[c] = x - spans_x[c][0]
+        x += spans_x[c][1] - spans_x[c][0] + gap
+    y, starts_y = gap, {}
+    for r in rows:
+        starts_y[r] = y - spans_y[r][0]
+        y += spans_y[r][1] - spans_y[r][0] + label + gap
+    shifts = {n: np.array([starts_x[c], starts_y[r]]) for n, (c, r) in cells.items()}
+    return shifts, (x, y)
+
+
+def _union(spans: list[np.ndarray]) -> tuple[float, float]:
+    return float(min(s[0] for s in spans)), float(max(s[1] for s in spans))
+
+
+def sheet_marks(
+    width: float,
+    height: float,
+    mm_per_px: float | None,
+    labels: list[Text],
+    fields: dict[str, str],
+) -> Marks:
+    """The border, the title block (bottom right, its ``fields`` in rows) and the views' labels
+    of a sheet ``width`` x ``height`` pixels; ``mm_per_px`` None for a sheet in pixels, where the
+    measures of ISO 5457 and 7200 are taken at 96 pixels an inch."""
+    per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
+    left, other = BORDER_MM[0] * per_mm, BORDER_MM[1] * per_mm
+    if mm_per_px is None:  # a picture has no filing margin
+        left = other = min(BORDER_MM[1] * per_mm, 0.03 * min(width, height))
+    x0, y0, x1, y1 = left, other, width - other, height - other
+    lines = [
+        [[x0, y0], [x1, y0]],
+        [[x1, y0], [x1, y1]],
+        [[x1, y1], [x0, y1]],
+        [[x0, y1], [x0, y0]],
+    ]
+    widths = [BORDER_WIDTH] * 4
+    block_w = min(TITLE_BLOCK_MM[0] * per_mm, 0.6 * (x1 - x0))
+    rows = len(fields)
+    text = min(TEXT_MM * per_mm, 0.6 * TITLE_BLOCK_MM[1] * per_mm / max(rows, 1) * 2)
+    row_h = 1.8 * text
+    bx, by = x1 - block_w, y1 - rows * row_h
+    lines.append([[bx, by], [x1, by]])
+    lines.append([[bx, by], [bx, y1]])
+    widths += [RULE_WIDTH, RULE_WIDTH]
+    texts = []
+    for i, (key, value) in enumerate(fields.items()):
+        top = by + i * row_h
+        if i:
+            lines.append([[bx, top], [x1, top]])
+            widths.append(RULE_WIDTH / 2)
+        texts.append(Text(bx + 0.4 * text, top + 1.35 * text, 0.6 * text, key.upper()))
+        texts.append(Text(bx + 0.28 * block_w, top + 1.35 * text, text, value))
+    lines.append([[bx + 0.25 * block_w, by], [bx + 0.25 * block_w, y1]])
+    widths.append(RULE_WIDTH / 2)
+    return Marks(np.asarray(lines, np.float64), np.asarray(widths, np.float64), (*labels, *texts))
+
+
+def today() -> str:
+    """The date of a sheet, ISO 8601."""
+    return datetime.date.today().isoformat()
