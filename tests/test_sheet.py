@@ -4,6 +4,7 @@ block, --sheet paper with a standard scale that fits, Unicode text in PDF."""
 from __future__ import annotations
 
 import datetime
+import re
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -76,7 +77,7 @@ def test_sheet_paper_and_fitted_scale(renderer, tmp_path, shared_models):
     root = ET.parse(path).getroot()
     assert (root.get("width"), root.get("height")) == ("420mm", "297mm")
     texts = _texts(root)
-    assert "A3" in texts and "in" in texts
+    assert "A3" in texts and "mm (model in in)" in texts
     # 127 mm + 63.5 mm of views and the iso view fit A3 at 1:1, not at 2:1
     assert "1:1 (iso not to scale)" in texts
     sheet = draw_vector_sheet(load_model(model), (1024, 1024), units="in", sheet="A0", renderer=renderer)
@@ -117,3 +118,48 @@ def test_bad_sheet(tmp_path, args, mentions):
     proc = run("render", model, "--size", 64, 64, *args)
     one_error(proc, *mentions)
     no_output(folder)
+
+
+def test_dimensions_of_featuretype_to_scale_in_inches(tmp_path, shared_models):
+    model = shared_models / "trimesh" / "featuretype.STL"  # 5 x 2.5 x 1.375 in
+    path = tmp_path / "dims.svg"
+    proc = run(
+        "render", model, "-o", path, "--view", "plan", "--units", "in", "--sheet", "A3", "--dimensions"
+    )
+    assert proc.returncode == 0, proc.stderr
+    texts = _texts(ET.parse(path).getroot())
+    # width and depth on top, width and height on front, depth and height on right
+    assert sorted(t for t in texts if re.fullmatch(r"[0-9.]+", t)) == sorted(
+        ["127", "63.5", "127", "34.9", "63.5", "34.9"]
+    )
+
+
+def test_dimension_lines_span_the_view(renderer, shared_models):
+    from blueprint.scene.camera import fit_camera
+    from blueprint.vector import draw_vector
+
+    model = load_model(shared_models / "trimesh" / "featuretype.STL")
+    size = (400, 300)
+    camera = fit_camera(model, size, "front", ortho=True)
+    drawing = draw_vector(model, camera, size, renderer=renderer, dimensions=True, scale="1:1", units="in")
+    assert [t.text for t in drawing.marks.texts] == ["127", "34.9"]
+    assert drawing.marks.texts[1].angle == 90.0
+    # the dimension line under the view runs between the extension lines at the model's ends
+    per_px = camera.height / size[1]
+    lines = drawing.marks.lines
+    horizontal = lines[np.isclose(lines[:, 0, 1], lines[:, 1, 1])]
+    longest = np.abs(horizontal[:, 1, 0] - horizontal[:, 0, 0]).max()
+    assert longest * per_px == pytest.approx(5.0, rel=1e-6)
+    span = np.ptp(drawing.points[:, 0])
+    assert longest == pytest.approx(span, abs=0.6)
+
+
+@pytest.mark.parametrize(
+    "args, mentions",
+    [
+        (["-o", "x.svg", "--view", "iso", "--dimensions"], ["dimensions need an orthographic view"]),
+        (["-o", "x.png", "--view", "front", "--dimensions"], ["for vector drawings"]),
+    ],
+)
+def test_bad_dimensions(tmp_path, args, mentions):
+    test_bad_sheet(tmp_path, args, mentions)

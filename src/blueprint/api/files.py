@@ -224,6 +224,7 @@ def render_vector_file(
     section_keep: Iterable[str | int] | str | int | Model | None = None,
     sheet: str | None = None,
     title: str | None = None,
+    dimensions: bool = False,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -236,7 +237,8 @@ def render_vector_file(
     ``section``, ``section_plane`` and ``section_keep`` draw a section view (as
     ``blueprint.render_frame`` does), its hatching and cut outline a group of their own.
     A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
-    default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper.
+    default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper. ``dimensions`` draws
+    the overall width and height of orthographic views (ISO 129, in mm).
 
     Returns
     -------
@@ -271,6 +273,7 @@ def render_vector_file(
     if sheet is not None and view != "plan":
         raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
     options["title"] = title
+    options["dimensions"] = dimensions
     if view == "plan":
         plane = None if cut is None else (cut.plane, cut.keep)
         drawing = draw_vector_sheet(

@@ -98,6 +98,9 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     help="Paper of a vector plan sheet: A4, A3, A2, A1 or A0 (landscape); the scale fits it unless --scale.",
 )
 @click.option(
+    "--dimensions", is_flag=True, help="Overall dimensions of orthographic vector views (ISO 129, mm)."
+)
+@click.option(
     "--title", default=None, help="Title of a vector plan sheet's title block (default: the model's name)."
 )
 def render(
@@ -131,6 +134,7 @@ def render(
     section_keep,
     sheet,
     title,
+    dimensions,
 ):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame
@@ -166,11 +170,14 @@ def render(
                 section_keep=section_keep,
                 sheet=sheet,
                 title=title,
+                dimensions=dimensions,
             ),
         )
         return
-    if scale or units or sheet or title:
-        raise InputError(f"--scale, --units, --sheet and --title are for vector drawings ({DRAWINGS})")
+    if scale or units or sheet or title or dimensions:
+        raise InputError(
+            f"--scale, --units, --sheet, --title and --dimensions are for vector drawings ({DRAWINGS})"
+        )
     if is_style_file(style):
         raise InputError(
             f"{style}: line style files are for vector drawings ({DRAWINGS}); "

@@ -31,6 +31,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
 
+from .dimension import dimension_marks
 from .dxf import write_dxf
 from .lines import join_polylines, model_segments
 from .occlusion import (
@@ -297,6 +298,7 @@ def draw_vector(
     depth_tolerance: float = 1.0,
     title: str | None = None,
     section: Cut | None = None,
+    dimensions: bool = False,
 ) -> Drawing:
     """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
 
@@ -340,6 +342,8 @@ def draw_vector(
     section : Cut, optional
         The cut that made ``model`` (``blueprint.scene.section.cut_model``): its cut faces are
         hatched (2.5 mm apart on a drawing to scale) and outlined heavy.
+    dimensions : bool
+        Draw the view's overall width and height (ISO 129, values in mm); orthographic views only.
     """
     seconds: dict[str, float] = {}
     if not (0.1 <= spacing <= 16):
@@ -430,6 +434,15 @@ def draw_vector(
         )
         hatching = section_lines(section, view_m, proj, size, spacing_px)
 
+    marks = None
+    if dimensions:
+        if not camera.ortho:
+            raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
+        unit = page.model_unit or _default_units(model)
+        used = model.positions[model.faces.reshape(-1)].astype(np.float64)
+        mm_per_px = page.factor if page.unit == "mm" else None
+        marks = dimension_marks(used, view_m, proj, size, UNITS_MM[unit], mm_per_px)
+
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
         title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
@@ -449,6 +462,7 @@ def draw_vector(
         highlight=chosen,
         title=title,
         section=hatching,
+        marks=marks,
         name=Path(model.source).stem if model.source else "drawing",
         seconds=seconds,
     )
@@ -487,6 +501,7 @@ def draw_vector_sheet(
         plane, keep = section
         cut = cut_model(model, plane.facing(cameras["front"].eye, cameras["front"].target), keep)
     cells: dict[str, Drawing] = {}
+    dimensions = options.pop("dimensions", False)
     for name in SHEET_CELLS:
         if cut is not None:
             cells[name] = draw_vector(cut.model, cameras[name], (w, h), section=cut, **options)
@@ -502,6 +517,15 @@ def draw_vector_sheet(
         scale = _sheet_scale(cells, cameras["front"], (w, h), paper, units, model)
     quarter = _page((w, h), cameras["front"], scale, units, model)
     mm_per_px = quarter.factor if quarter.unit == "mm" else None
+    if dimensions:
+        # on the orthographic views, sized for the sheet's scale, known only now
+        unit = quarter.model_unit or units or _default_units(model)
+        drawn = cut.model if cut is not None else model
+        used = drawn.positions[drawn.faces.reshape(-1)].astype(np.float64)
+        for name in ("top", "front", "right"):
+            view_m, proj = cameras[name].view_matrix(), cameras[name].projection_matrix()
+            marks = dimension_marks(used, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px)
+            cells[name] = replace(cells[name], marks=marks)
     per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
     gap = 10.0 * per_mm if mm_per_px else 0.06 * min(w, h)
     label = LABEL_MM * per_mm if mm_per_px else 0.045 * min(w, h)
@@ -529,11 +553,14 @@ def draw_vector_sheet(
     fields = {
         "title": heading,
         "scale": f"{page.scale_label} (iso not to scale)" if page.scale is not None else "not to scale",
-        "units": page.model_unit or "px",
+        "units": _units_field(page.model_unit),
         "date": today(),
         "sheet": sheet.strip().upper() if sheet else f"{width:.0f} x {height:.0f} px",
     }
-    marks = sheet_marks(width, height, mm_per_px, labels, fields)
+    marks = Marks.concatenate(
+        [sheet_marks(width, height, mm_per_px, labels, fields)]
+        + [cells[n].marks.shifted(shifts[n]) for n in cells if cells[n].marks is not None]
+    )
     order = list(cells)
     counts = [len(cells[n].points) for n in order]
     starts = np.cumsum([0, *counts[:-1]])
@@ -559,11 +586,20 @@ def draw_vector_sheet(
     )
 
 
+def _units_field(model_unit: str | None) -> str:
+    """A title block's units: the drawing's millimetres, and the model's unit where it differs."""
+    if model_unit is None:
+        return "px (not to scale)"
+    return "mm" if model_unit == "mm" else f"mm (model in {model_unit})"
+
+
 def _view_extent(cell: Drawing, size: tuple[int, int]) -> np.ndarray:
     """A view's lines' extent in its cell, its section's outline included."""
     points = cell.points
     if cell.section is not None and len(cell.section.outline):
         points = np.concatenate([points, cell.section.outline.reshape(-1, 2)])
+    if cell.marks is not None:
+        points = np.concatenate([points, cell.marks.lines.reshape(-1, 2)])
     if len(points) == 0:
         centre = np.array(size, np.float64) / 2
         return np.array([centre, centre])

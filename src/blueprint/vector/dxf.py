@@ -69,7 +69,8 @@ def _sheet(doc, msp, drawing, base_mm: float) -> None:
     for (start, end), width in zip(ends.reshape(-1, 2, 2).tolist(), marks.widths.tolist(), strict=True):
         msp.add_line(start, end, dxfattribs={"layer": "SHEET", "lineweight": _lineweight(width * base_mm)})
     for text in marks.texts:
-        entity = msp.add_text(text.text, height=text.height * page.factor, dxfattribs={"layer": "SHEET"})
+        attribs = {"layer": "SHEET", "rotation": text.angle}
+        entity = msp.add_text(text.text, height=text.height * page.factor, dxfattribs=attribs)
         align = "BOTTOM_CENTER" if text.anchor == "middle" else "BOTTOM_LEFT"
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
 

@@ -83,10 +83,10 @@ def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
         for text in marks.texts:
             _font(pdf, text.height * to_page * points_per_unit)
             value = _text(pdf, text.text)
-            x = text.x * to_page
-            if text.anchor == "middle":
-                x -= pdf.get_string_width(value) / 2
-            pdf.text(x, text.y * to_page, value)
+            x, y = text.x * to_page, text.y * to_page
+            shift = pdf.get_string_width(value) / 2 if text.anchor == "middle" else 0.0
+            with pdf.rotation(text.angle, x, y):
+                pdf.text(x - shift, y, value)
 
 
 def pdf_bytes(drawing) -> bytes:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import datetime
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -38,13 +38,14 @@ RULE_WIDTH = 1.4
 @dataclass(frozen=True)
 class Text:
     """A line of text at ``(x, y)`` pixels (its baseline), ``height`` pixels high; ``anchor``
-    'start' or 'middle'."""
+    'start' or 'middle'; ``angle`` degrees anticlockwise on the page."""
 
     x: float
     y: float
     height: float
     text: str
     anchor: str = "start"
+    angle: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,20 @@ class Marks:
     lines: np.ndarray
     widths: np.ndarray
     texts: tuple[Text, ...]
+
+    def shifted(self, by: np.ndarray) -> Marks:
+        """The same marks moved by ``by`` (2,) pixels."""
+        dx, dy = (float(v) for v in by)
+        texts = tuple(replace(t, x=t.x + dx, y=t.y + dy) for t in self.texts)
+        return Marks(self.lines + np.array([dx, dy]), self.widths, texts)
+
+    @staticmethod
+    def concatenate(items: list[Marks]) -> Marks:
+        return Marks(
+            np.concatenate([m.lines for m in items]).reshape(-1, 2, 2),
+            np.concatenate([m.widths for m in items]),
+            tuple(t for m in items for t in m.texts),
+        )
 
 
 def paper_size(sheet: str) -> tuple[float, float]:

@@ -183,8 +183,10 @@ def _sheet_group(drawing, factor: float, decimals: int, base: float) -> str:
         d = path_data(segments.reshape(-1, 2), np.arange(0, 2 * len(segments) + 1, 2), factor, decimals)
         out.append(f'<path stroke-width="{width * base:.4g}" d="{d}"/>\n')
     for text in marks.texts:
+        x, y = text.x * factor, text.y * factor
+        turn = f' transform="rotate({-text.angle:g} {x:.6g} {y:.6g})"' if text.angle else ""
         out.append(
-            f'<text x="{text.x * factor:.6g}" y="{text.y * factor:.6g}" font-family="sans-serif" '
+            f'<text x="{x:.6g}" y="{y:.6g}"{turn} font-family="sans-serif" '
             f'font-size="{text.height * factor:.4g}" text-anchor="{text.anchor}" fill="{color}" '
             f'stroke="none">{escape(text.text)}</text>\n'
         )
