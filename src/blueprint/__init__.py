@@ -9,6 +9,7 @@ from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import VIEWS, Camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
+from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
 
 __version__ = "0.1.0"
 
@@ -17,6 +18,7 @@ __all__ = [
     "VIEWS",
     "BlueprintError",
     "Camera",
+    "Cut",
     "Frame",
     "GLUnavailableError",
     "Glyphs",
@@ -24,12 +26,15 @@ __all__ = [
     "Layers",
     "Model",
     "Renderer",
+    "SectionPlane",
     "ShaderError",
     "Style",
+    "cut_model",
     "default_renderer",
     "draw_glyphs",
     "load_glyphs",
     "load_model",
+    "parse_section",
     "peel",
     "render",
     "render_frame",
