@@ -77,7 +77,7 @@ def test_info_prints_renderer_and_gl_version(gl):
 def test_info_model_lists_parts(gearbox_parts):
     assert sum(gearbox_parts.values()) == 2144 and len(gearbox_parts) == 13
     lines = ok(run("info", EXAMPLE)).splitlines()
-    assert lines[0] == f"{EXAMPLE}: 2144 triangles, 13 parts, up y"
+    assert lines[0] == f"{EXAMPLE}: 2144 triangles, 13 parts, up y (by the format)"
     assert lines[1] == "bounds: [-70, 0, -35] - [70, 73.5, 35]"
     rows = [re.fullmatch(r"\s*(\d+)\s+(\d+)\s+(\S+)", line) for line in lines[2:]]
     assert all(rows), lines[2:]

@@ -10,6 +10,7 @@ itself, so ``choose_writer`` here knows every format.
 
 from __future__ import annotations
 
+import logging
 import os
 import time
 from collections.abc import Callable, Iterable
@@ -42,6 +43,8 @@ from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
 from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
 from blueprint.vector.style import VectorStyle, vector_style
+
+log = logging.getLogger("blueprint")
 
 __all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
 
@@ -232,13 +235,21 @@ def render_vector_file(
     -------
     dict
         ``path``, ``format``, ``bytes`` (file size), ``lines`` (polylines per occlusion level),
-        ``points``, ``layers`` (peeled), ``parts``, ``width``, ``height``, ``seconds`` (per stage
+        ``points``, ``layers`` (peeled), ``up`` and ``up_reason`` (the model's up axis and where
+        it came from), ``parts``, ``width``, ``height``, ``seconds`` (per stage
         and ``total``).
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
     if scale is not None:
         parse_scale(scale)
+        if not ortho and view != "plan":
+            # one scale across the page needs parallel projection: said, not done silently
+            log.warning(
+                "--scale %s draws the %s view orthographic (a drawing to scale has no perspective)",
+                scale,
+                view,
+            )
         ortho = True
     if units is not None and units not in UNITS_MM:
         raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
@@ -273,6 +284,8 @@ def render_vector_file(
         "lines": drawing.lines_per_level(),
         "points": int(len(drawing.points)),
         "layers": drawing.layers,
+        "up": loaded.up,
+        "up_reason": loaded.up_reason,
         "parts": len(drawing.part_names),
         "width": drawing.width,
         "height": drawing.height,

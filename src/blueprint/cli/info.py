@@ -45,6 +45,7 @@ def info(model, as_json):
                     "file": str(model),
                     "triangles": loaded.triangle_count,
                     "up": loaded.up,
+                    "up_reason": loaded.up_reason,
                     "bounds": [lo.tolist(), hi.tolist()],
                     "parts": [
                         {"index": i, "name": n, "triangles": int(c)}
@@ -54,7 +55,10 @@ def info(model, as_json):
             )
         )
         return
-    click.echo(f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, up {loaded.up}")
+    click.echo(
+        f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, "
+        f"up {loaded.up} ({loaded.up_reason})"
+    )
     click.echo(f"bounds: [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] - [{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
     for i, (name, count) in enumerate(zip(loaded.part_names, counts, strict=True)):
         click.echo(f"  {i:4d}  {count:9d}  {name}")

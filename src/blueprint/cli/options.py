@@ -87,7 +87,7 @@ def camera_options(func):
             "--up",
             type=click.Choice(["y", "z"]),
             default=None,
-            help="Model up axis (default: z for STL/3MF, y otherwise).",
+            help="Model up axis (default: z for STL/3MF, y for glTF; OBJ/PLY/OFF: guessed from a flat base).",
         ),
     ]
     for option in reversed(options):

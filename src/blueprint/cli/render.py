@@ -10,6 +10,7 @@ from blueprint.api.files import choose_writer
 from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
 from blueprint.errors import InputError
 from blueprint.export.writers import WRITERS, Kind
+from blueprint.scene.up import guessed_up
 from blueprint.vector.style import FILE_SUFFIXES, is_style_file
 
 # the formats as the registry has them (blueprint.api.files has registered every one)
@@ -24,7 +25,8 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     "--output",
     type=click.Path(path_type=Path),
     required=True,
-    help=f"File to write: a picture ({PICTURES}) or vector lines ({DRAWINGS}).",
+    help=f"File to write: a picture ({PICTURES}) or vector lines ({DRAWINGS}); "
+    "depth layers (.npz) come from blueprint layers.",
 )
 @camera_options
 @click.option(
@@ -168,8 +170,9 @@ def render(
     info = default_renderer().info
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
-        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles, "
-        f"{frame.layers} layers{shown}, {frame.ms:.1f} ms on {info['renderer']}"
+        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"
+        f"{guessed_up(loaded.up, loaded.up_reason)}, {frame.layers} layers{shown}, {frame.ms:.1f} ms "
+        f"on {info['renderer']}"
     )
 
 
@@ -194,7 +197,8 @@ def _render_vector(
     )
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
-        f"{output}: {summary['bytes']} bytes, polylines {levels or 'none'}, "
+        f"{output}: {summary['bytes']} bytes{guessed_up(summary['up'], summary['up_reason'])}, "
+        f"polylines {levels or 'none'}, "
         f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
     )
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
+from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
 log = logging.getLogger("blueprint")
@@ -20,6 +21,8 @@ log = logging.getLogger("blueprint")
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
 MAX_COORDINATE = 1e18
 _Z_UP = {"stl", "3mf", "3dxml", "step", "stp", "dae"}
+# Formats with no up axis of their own: the shape decides (blueprint.scene.up).
+_GUESS_UP = {"obj", "ply", "off"}
 
 
 def supported_formats() -> list[str]:
@@ -69,13 +72,15 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     if faces.min() < 0 or faces.max() >= len(positions):
         raise InputError(f"{name}: faces refer to vertices that do not exist")
 
+    chosen = up_of(up, "z" if ext in _Z_UP else "y", ext in _GUESS_UP, positions, faces)
     model = Model(
         np.ascontiguousarray(positions, np.float32),
         np.ascontiguousarray(faces, np.int32),
         np.ascontiguousarray(face_part, np.int32),
         tuple(names),
-        up or ("z" if ext in _Z_UP else "y"),
+        chosen.axis,
         name,
+        chosen.reason,
     )
     degenerate = model.degenerate_faces()
     if degenerate.all():
