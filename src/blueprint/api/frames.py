@@ -125,7 +125,8 @@ def render_frame(
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.
     reveal : float, optional
-        Depth masking: peel only until this fraction of the highlighted parts is uncovered.
+        Depth masking: peel only until this fraction of the highlighted parts is uncovered, as
+        deep as that takes (``max_layers`` does not cap it).
     shade : str, int, sequence, Model or (P,) bool, optional
         Parts drawn shaded inside the blueprint, in depth order.
     shade_opacity : float
@@ -198,9 +199,11 @@ def _plan_frame(model: Model, size: tuple[int, int], fov: float, renderer: Rende
         image[2 * h :, :] = image[2 * h - 1 : 2 * h, :]
         image[:, 2 * w :] = image[:, 2 * w - 1 : 2 * w]
     front = frames["front"]
+    layers = max(f.layers for f in frames.values())
     return Frame(
         image=image,
-        layers=max(f.layers for f in frames.values()),
+        layers=layers,
+        layers_left=max(f.layers + f.layers_left for f in frames.values()) - layers,
         layer_pixels=front.layer_pixels,
         camera=cameras["front"],
         ms=sum(f.ms for f in frames.values()),

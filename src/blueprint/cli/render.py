@@ -42,7 +42,7 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     type=int,
     default=8,
     show_default=True,
-    help="Depth layers to peel at most (0: all).",
+    help="Depth layers to peel at most (0: all; --reveal peels as deep as it needs).",
 )
 @click.option(
     "--min-fraction",
@@ -171,7 +171,7 @@ def render(
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
         f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"
-        f"{guessed_up(loaded.up, loaded.up_reason)}, {frame.layers} layers{shown}, {frame.ms:.1f} ms "
+        f"{guessed_up(loaded.up, loaded.up_reason)}, {frame.layers_shown}{shown}, {frame.ms:.1f} ms "
         f"on {info['renderer']}"
     )
 
