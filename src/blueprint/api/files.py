@@ -37,6 +37,7 @@ from blueprint.pipeline.run import (
 )
 from blueprint.pipeline.spec import with_file
 from blueprint.scene.camera import VIEWS, fit_camera
+from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
@@ -76,6 +77,8 @@ def run_pipeline(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     set: dict | None = None,
     image: dict[str, str] | None = None,
     parts: dict[str, str] | None = None,
@@ -102,7 +105,7 @@ def run_pipeline(
     model = None
     if input is not None:
         if plan.needs_model:
-            model = load_model(input, up=up)
+            model = load_model(input, up=up, include=include, exclude=exclude)
         else:
             free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
             if not free:
@@ -161,6 +164,8 @@ def turntable(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     set: dict | None = None,
     crf: int = 18,
     renderer: Renderer | None = None,
@@ -180,7 +185,7 @@ def turntable(
     plan = ex.plan(spec, variables)
     if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
-    model = model if isinstance(model, Model) else load_model(model, up=up)
+    model = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     size = tuple(int(v) for v in size)
     check_size(size, 1, renderer.max_texture)
     cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
@@ -213,6 +218,8 @@ def render_vector_file(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     style: str | os.PathLike | Style | VectorStyle = "blueprint",
     max_layers: int | None = 8,
     crease_angle: float = 30.0,
@@ -255,7 +262,7 @@ def render_vector_file(
         raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
     vstyle = vector_style(style)
     clock = time.perf_counter()
-    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     load_s = time.perf_counter() - clock
     renderer = shared(renderer)
     size = check_size(size, 1, renderer.max_texture)
@@ -306,6 +313,8 @@ def render_silhouettes_file(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     animate: str | None = None,
     frames: int = 60,
     fps: float = 30.0,
@@ -338,7 +347,7 @@ def render_silhouettes_file(
         raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
     size = tuple(size)
     camera = dict(view=view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     renderer = shared(renderer)
     summary = {
         "path": str(output),

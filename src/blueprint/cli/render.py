@@ -92,6 +92,8 @@ def render(
     fov,
     ortho,
     up,
+    include,
+    exclude,
     style,
     grid,
     max_layers,
@@ -123,7 +125,7 @@ def render(
                 f"{output}: vector drawings take no --glyphs or --shade yet; write a picture for those"
             )
         if highlight_model:
-            model = load_model(model, up=camera["up"])
+            model = load_model(model, up=camera["up"], include=include, exclude=exclude)
             highlight = load_model(highlight_model, up=camera["up"])
         _render_vector(
             model,
@@ -137,6 +139,8 @@ def render(
             units,
             highlight,
             reveal,
+            include,
+            exclude,
         )
         return
     if scale or units:
@@ -147,7 +151,7 @@ def render(
             f"a picture takes one of {', '.join(STYLE_NAMES)}"
         )
     up_axis = camera.pop("up")
-    loaded = load_model(model, up=up_axis)
+    loaded = load_model(model, up=up_axis, include=include, exclude=exclude)
     designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight
     frame = render_frame(
         loaded,
@@ -177,7 +181,19 @@ def render(
 
 
 def _render_vector(
-    model, output, camera, style, max_layers, crease_angle, line_width, scale, units, highlight, reveal
+    model,
+    output,
+    camera,
+    style,
+    max_layers,
+    crease_angle,
+    line_width,
+    scale,
+    units,
+    highlight,
+    reveal,
+    include,
+    exclude,
 ):
     from blueprint.api import default_renderer
     from blueprint.api.files import render_vector_file
@@ -193,6 +209,8 @@ def _render_vector(
         units=units,
         highlight=highlight,
         reveal=reveal,
+        include=include,
+        exclude=exclude,
         **camera,
     )
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
@@ -215,14 +233,16 @@ def _render_vector(
 @camera_options
 @click.option("--max-layers", type=int, default=0, show_default=True, help="Layers at most (0: all).")
 @click.option("--min-fraction", type=float, default=0.0, show_default=True)
-def layers(model, output, size, view, azimuth, elevation, fov, ortho, up, max_layers, min_fraction):
+def layers(
+    model, output, size, view, azimuth, elevation, fov, ortho, up, include, exclude, max_layers, min_fraction
+):
     """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
     from blueprint.api import peel
     from blueprint.scene.loader import load_model
 
     output, write = choose_writer(output, Kind.LAYERS)
     kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (512, 512))
-    loaded = load_model(model, up=kwargs.pop("up"))
+    loaded = load_model(model, up=kwargs.pop("up"), include=include, exclude=exclude)
     result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)
     write(output, result)
     click.echo(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.model import Model
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
@@ -32,7 +33,9 @@ def supported_formats() -> list[str]:
     return sorted(trimesh.available_formats())
 
 
-def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
+def load_model(
+    path: str | os.PathLike, up: str | None = None, include: PartGlobs = None, exclude: PartGlobs = None
+) -> Model:
     """Load a model file as one part per mesh instance, node transforms applied.
 
     Parameters
@@ -41,6 +44,10 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
         OBJ, STL (ASCII or binary), PLY, OFF, GLB/glTF, 3MF or any other format trimesh loads.
     up : {"y", "z"} or None
         Up axis for the named views; ``None`` guesses from the format.
+    include, exclude : str or sequence of str and int, optional
+        Parts to keep, and parts to leave out (name globs or indices); without ``include``,
+        environment meshes (skyboxes, domes, huge ground planes) are left out, with a warning
+        (see ``blueprint.scene.environment``).
 
     Raises
     ------
@@ -87,7 +94,7 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
         raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
-    return model
+    return choose_parts(model, include, exclude)
 
 
 def _load_scene(path: Path, ext: str):
