@@ -7,8 +7,10 @@ from blueprint.compose.style import STYLES, Style
 from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import VIEWS, Camera
+from blueprint.scene.environment import choose_parts, environment_parts
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
+from blueprint.scene.up import guess_up
 
 __version__ = "0.1.0"
 
@@ -26,8 +28,11 @@ __all__ = [
     "Renderer",
     "ShaderError",
     "Style",
+    "choose_parts",
     "default_renderer",
     "draw_glyphs",
+    "environment_parts",
+    "guess_up",
     "load_glyphs",
     "load_model",
     "peel",
