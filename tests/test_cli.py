@@ -77,7 +77,7 @@ def test_info_prints_renderer_and_gl_version(gl):
 def test_info_model_lists_parts(gearbox_parts):
     assert sum(gearbox_parts.values()) == 2144 and len(gearbox_parts) == 13
     lines = ok(run("info", EXAMPLE)).splitlines()
-    assert lines[0] == f"{EXAMPLE}: 2144 triangles, 13 parts, up y"
+    assert lines[0] == f"{EXAMPLE}: 2144 triangles, 13 parts, up y (by the format)"
     assert lines[1] == "bounds: [-70, 0, -35] - [70, 73.5, 35]"
     rows = [re.fullmatch(r"\s*(\d+)\s+(\d+)\s+(\S+)", line) for line in lines[2:]]
     assert all(rows), lines[2:]
@@ -97,7 +97,8 @@ def test_info_model_json(gearbox_parts):
 # -- render ---------------------------------------------------------------------------------------
 
 RENDER_LINE = re.compile(
-    r"(?P<file>.+): (?P<w>\d+)x(?P<h>\d+), (?P<tri>\d+) triangles, (?P<layers>\d+) layers, "
+    r"(?P<file>.+): (?P<w>\d+)x(?P<h>\d+), (?P<tri>\d+) triangles, "
+    r"(?P<layers>\d+)(?: of (?P<total>\d+))? layers, "
     r"(?P<ms>\d+\.\d) ms on (?P<renderer>.+)"
 )
 
@@ -112,7 +113,13 @@ def test_render_writes_png_of_requested_size(tmp_path, gl):
     assert match, stdout
     assert match["file"] == str(target) and (match["w"], match["h"]) == ("96", "64")
     assert int(match["tri"]) == 2144 and match["renderer"] == gl["renderer"]
-    assert 2 <= int(match["layers"]) <= 8 and float(match["ms"]) > 0
+    assert int(match["layers"]) == 8 and float(match["ms"]) > 0
+    # the default cap of 8 says what it left: at least as many as a peel without the cap draws
+    # (the count takes the touching faces of two parts, which the peel merges, as two)
+    every = RENDER_LINE.fullmatch(
+        ok(run("render", EXAMPLE, "-o", target, "--size", 96, 64, "--max-layers", 0)).strip()
+    )
+    assert every["total"] is None and int(every["layers"]) <= int(match["total"]) <= int(every["layers"]) + 1
     assert sorted(p.name for p in out.iterdir()) == ["gear.png"]  # no temporary file left
     with Image.open(target) as picture:
         assert picture.format == "PNG" and picture.size == (96, 64) and picture.mode == "RGBA"

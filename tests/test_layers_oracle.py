@@ -118,6 +118,8 @@ CASES = [
     Case("fandisk", "common-3d-test-models/fandisk.obj"),
     Case("bunny-ortho", "libigl-tutorial-data/bunny.off", camera=dict(ortho=True, view="left")),
     Case("featuretype", "trimesh/featuretype.STL", (112, 128), dict(azimuth=-30.0, elevation=40.0)),
+    # plan view: hole and pocket walls edge-on, their rims seen head-on
+    Case("featuretype-top-ortho", "trimesh/featuretype.STL", (256, 256), dict(view="top", ortho=True)),
     Case("rod-assembly", "trimesh/converted/rod.glb"),
     Case("engine-assembly", "glTF-Sample-Models/2CylinderEngine.glb"),
 ]
@@ -217,6 +219,33 @@ def test_oracle_merges_coincident_faces():
     assert set(np.unique(counts)) <= {0, 2, 3}
     assert (counts == 3).sum() > 50
     assert (hits.gap[hits.gap < MERGE_TOL] >= 0).all() and (hits.gap < 1e-9).any()
+
+
+def test_oracle_accepts_either_side_of_a_step_through_the_centre():
+    """Two slabs side by side, one higher, seen from above: two surfaces at every pixel on either
+    side, so the layer count does not change at the step; the front surface's depth does. Where
+    the step passes through a pixel centre, the depth of either side is right (the rasterizer's
+    snapping decides); half a pixel from it, only the centre's side is."""
+    model = examples.assemble(
+        {"low": examples.box((-1, -1, -1), (0, 1, 0)), "high": examples.box((0, -1, -1), (1, 1, 0.5))}
+    )
+    view = np.eye(4)
+    view[2, 3] = -5.0  # eye at z = 5 looking down -z onto both tops
+    proj = np.diag([1 / 1.6, 1 / 1.6, -2 / (8 - 2), 1.0])
+    proj[2, 3] = -(8 + 2) / (8 - 2)
+    # 40 px over x in [-1.6, 1.6], moved 0.4 px: the step at x = 0 passes a tenth of a pixel
+    # beside column 20's centre (not through it: a ray in the walls' plane meets them), more
+    # than half a pixel from columns 19 and 21
+    proj[0, 3] = 0.4 / 20
+    oracle = cast_oracle(model.positions, model.faces, view, proj, 40, 8)
+    assert set(layer_count(oracle.depth)[4, 8:32].tolist()) == {2} and not oracle.boundary[4, 19:22].any()
+    low, high = oracle.depth[0, 4, 19], oracle.depth[0, 4, 21]
+    assert high < low
+    for col, other in ((20, high if oracle.depth[0, 4, 20] == low else low), (19, high), (21, low)):
+        depth = oracle.depth.copy()
+        depth[0, 4, col] = other
+        result = compare_layers(depth, oracle)
+        assert result.agree[4, col] == (col == 20), (col, result.describe())
 
 
 # -- GPU against the oracle ----------------------------------------------------------------------

@@ -7,9 +7,11 @@ from blueprint.compose.style import STYLES, Style
 from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import VIEWS, Camera
+from blueprint.scene.environment import choose_parts, environment_parts
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
+from blueprint.scene.up import guess_up
 
 __version__ = "0.1.0"
 
@@ -30,8 +32,11 @@ __all__ = [
     "ShaderError",
     "Style",
     "cut_model",
+    "choose_parts",
     "default_renderer",
     "draw_glyphs",
+    "environment_parts",
+    "guess_up",
     "load_glyphs",
     "load_model",
     "parse_section",

@@ -10,6 +10,7 @@ itself, so ``choose_writer`` here knows every format.
 
 from __future__ import annotations
 
+import logging
 import os
 import time
 from collections.abc import Callable, Iterable, Sequence
@@ -37,12 +38,15 @@ from blueprint.pipeline.run import (
 )
 from blueprint.pipeline.spec import with_file
 from blueprint.scene.camera import VIEWS, fit_camera
+from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
 from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
 from blueprint.vector.style import VectorStyle, vector_style
+
+log = logging.getLogger("blueprint")
 
 __all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
 
@@ -74,6 +78,8 @@ def run_pipeline(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     set: dict | None = None,
     image: dict[str, str] | None = None,
     parts: dict[str, str] | None = None,
@@ -100,7 +106,7 @@ def run_pipeline(
     model = None
     if input is not None:
         if plan.needs_model:
-            model = load_model(input, up=up)
+            model = load_model(input, up=up, include=include, exclude=exclude)
         else:
             free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
             if not free:
@@ -159,6 +165,8 @@ def turntable(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     set: dict | None = None,
     crf: int = 18,
     renderer: Renderer | None = None,
@@ -178,7 +186,7 @@ def turntable(
     plan = ex.plan(spec, variables)
     if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
-    model = model if isinstance(model, Model) else load_model(model, up=up)
+    model = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     size = tuple(int(v) for v in size)
     check_size(size, 1, renderer.max_texture)
     cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
@@ -211,6 +219,8 @@ def render_vector_file(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     style: str | os.PathLike | Style | VectorStyle = "blueprint",
     max_layers: int | None = 8,
     crease_angle: float = 30.0,
@@ -244,19 +254,27 @@ def render_vector_file(
     -------
     dict
         ``path``, ``format``, ``bytes`` (file size), ``lines`` (polylines per occlusion level),
-        ``points``, ``layers`` (peeled), ``parts``, ``width``, ``height``, ``seconds`` (per stage
+        ``points``, ``layers`` (peeled), ``up`` and ``up_reason`` (the model's up axis and where
+        it came from), ``parts``, ``width``, ``height``, ``seconds`` (per stage
         and ``total``).
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
     if scale is not None:
         parse_scale(scale)
+        if not ortho and view != "plan":
+            # one scale across the page needs parallel projection: said, not done silently
+            log.warning(
+                "--scale %s draws the %s view orthographic (a drawing to scale has no perspective)",
+                scale,
+                view,
+            )
         ortho = True
     if units is not None and units not in UNITS_MM:
         raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
     vstyle = vector_style(style)
     clock = time.perf_counter()
-    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     load_s = time.perf_counter() - clock
     renderer = shared(renderer)
     size = check_size(size, 1, renderer.max_texture)
@@ -297,6 +315,8 @@ def render_vector_file(
         "lines": drawing.lines_per_level(),
         "points": int(len(drawing.points)),
         "layers": drawing.layers,
+        "up": loaded.up,
+        "up_reason": loaded.up_reason,
         "parts": len(drawing.part_names),
         "width": drawing.width,
         "height": drawing.height,
@@ -317,6 +337,8 @@ def render_silhouettes_file(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     animate: str | None = None,
     frames: int = 60,
     fps: float = 30.0,
@@ -349,7 +371,7 @@ def render_silhouettes_file(
         raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
     size = tuple(size)
     camera = dict(view=view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-    loaded = model if isinstance(model, Model) else load_model(model, up=up)
+    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     renderer = shared(renderer)
     summary = {
         "path": str(output),

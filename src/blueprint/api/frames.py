@@ -17,6 +17,7 @@ from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
+from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
@@ -40,8 +41,8 @@ def shared(renderer: Renderer | None) -> Renderer:
     return default_renderer()
 
 
-def _as_model(model: Model | str | os.PathLike, up: str | None) -> Model:
-    return model if isinstance(model, Model) else load_model(model, up=up)
+def _as_model(model: Model | str | os.PathLike, up: str | None, include=None, exclude=None) -> Model:
+    return model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
 
 
 def _camera(model: Model, size, view, azimuth, elevation, fov, ortho, camera) -> Camera | None:
@@ -60,6 +61,8 @@ def render_frame(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     camera: Camera | None = None,
     style: str | Style = "blueprint",
     grid: float | None = None,
@@ -101,7 +104,11 @@ def render_frame(
     ortho : bool
         Orthographic projection.
     up : {'y', 'z'}, optional
-        The model file's up axis (default: z for STL and 3MF, y otherwise).
+        The model file's up axis (default: z for STL and 3MF, y for glTF, guessed from the
+        shape for OBJ, PLY and OFF).
+    include, exclude : str or sequence, optional
+        A model file's parts to keep and to leave out (name globs or indices); without
+        ``include`` its environment meshes (skyboxes, huge ground planes) are left out.
     camera : Camera, optional
         A ready camera; the view arguments are then unused.
     style : str or Style
@@ -129,7 +136,8 @@ def render_frame(
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.
     reveal : float, optional
-        Depth masking: peel only until this fraction of the highlighted parts is uncovered.
+        Depth masking: peel only until this fraction of the highlighted parts is uncovered, as
+        deep as that takes (``max_layers`` does not cap it).
     shade : str, int, sequence, Model or (P,) bool, optional
         Parts drawn shaded inside the blueprint, in depth order.
     shade_opacity : float
@@ -159,7 +167,7 @@ def render_frame(
     if glyphs is not None and not isinstance(glyphs, Glyphs):
         glyphs = load_glyphs(glyphs)
     chosen = get_style(style, grid)
-    model = _as_model(model, up)
+    model = _as_model(model, up, include, exclude)
     renderer = shared(renderer)
     size = tuple(int(v) for v in size)
     check_size(size, int(supersample), renderer.max_texture)
@@ -222,9 +230,11 @@ def _plan_frame(
         image[2 * h :, :] = image[2 * h - 1 : 2 * h, :]
         image[:, 2 * w :] = image[:, 2 * w - 1 : 2 * w]
     front = frames["front"]
+    layers = max(f.layers for f in frames.values())
     return Frame(
         image=image,
-        layers=max(f.layers for f in frames.values()),
+        layers=layers,
+        layers_left=max(f.layers + f.layers_left for f in frames.values()) - layers,
         layer_pixels=front.layer_pixels,
         camera=cameras["front"],
         ms=sum(f.ms for f in frames.values()),
@@ -243,6 +253,8 @@ def render(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     camera: Camera | None = None,
     style: str | Style = "blueprint",
     grid: float | None = None,
@@ -317,6 +329,8 @@ def render(
         fov=fov,
         ortho=ortho,
         up=up,
+        include=include,
+        exclude=exclude,
         camera=camera,
         style=style,
         grid=grid,
@@ -351,6 +365,8 @@ def peel(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
     camera: Camera | None = None,
     max_layers: int | None = None,
     min_fraction: float = 0.0,
@@ -383,7 +399,7 @@ def peel(
         depth (L, H, W) float32, triangle and part (L, H, W) int32, normal (L, H, W, 3) float32
         or None, and the view and projection matrices (4, 4) float64.
     """
-    model = _as_model(model, up)
+    model = _as_model(model, up, include, exclude)
     renderer = shared(renderer)
     size = tuple(int(v) for v in size)
     check_size(size, 1, renderer.max_texture)

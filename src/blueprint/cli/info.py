@@ -33,9 +33,12 @@ def info(model, as_json):
                 f"image passes: {data['image_passes']}\nk-buffer: {data['kbuffer']}"
             )
         return
+    from blueprint.scene.environment import environment_parts
     from blueprint.scene.loader import load_model
 
-    loaded = load_model(model)
+    # every part, environment meshes marked: the names to give --include and --exclude
+    loaded = load_model(model, include="*")
+    environment = environment_parts(loaded)
     counts = loaded.part_triangle_counts()
     lo, hi = loaded.bounds
     if as_json:
@@ -45,19 +48,26 @@ def info(model, as_json):
                     "file": str(model),
                     "triangles": loaded.triangle_count,
                     "up": loaded.up,
+                    "up_reason": loaded.up_reason,
                     "bounds": [lo.tolist(), hi.tolist()],
                     "parts": [
-                        {"index": i, "name": n, "triangles": int(c)}
-                        for i, (n, c) in enumerate(zip(loaded.part_names, counts, strict=True))
+                        {"index": i, "name": n, "triangles": int(c), "environment": bool(e)}
+                        for i, (n, c, e) in enumerate(
+                            zip(loaded.part_names, counts, environment, strict=True)
+                        )
                     ],
                 }
             )
         )
         return
-    click.echo(f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, up {loaded.up}")
+    click.echo(
+        f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, "
+        f"up {loaded.up} ({loaded.up_reason})"
+    )
     click.echo(f"bounds: [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] - [{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
-    for i, (name, count) in enumerate(zip(loaded.part_names, counts, strict=True)):
-        click.echo(f"  {i:4d}  {count:9d}  {name}")
+    for i, (name, count, around) in enumerate(zip(loaded.part_names, counts, environment, strict=True)):
+        note = "  (environment: left out unless --include names it)" if around else ""
+        click.echo(f"  {i:4d}  {count:9d}  {name}{note}")
 
 
 @click.command()

@@ -84,10 +84,22 @@ def camera_options(func):
         ),
         click.option("--ortho", is_flag=True, help="Orthographic projection (plan views)."),
         click.option(
+            "--include",
+            default=None,
+            metavar="GLOBS",
+            help="Draw only these parts (name globs or indices, comma-separated); keeps environment meshes.",
+        ),
+        click.option(
+            "--exclude",
+            default=None,
+            metavar="GLOBS",
+            help="Leave these parts out (environment meshes like skyboxes are left out by default).",
+        ),
+        click.option(
             "--up",
             type=click.Choice(["y", "z"]),
             default=None,
-            help="Model up axis (default: z for STL/3MF, y otherwise).",
+            help="Model up axis (default: z for STL/3MF, y for glTF; OBJ/PLY/OFF: guessed from a flat base).",
         ),
     ]
     for option in reversed(options):

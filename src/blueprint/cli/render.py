@@ -10,6 +10,7 @@ from blueprint.api.files import choose_writer
 from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
 from blueprint.errors import InputError
 from blueprint.export.writers import WRITERS, Kind
+from blueprint.scene.up import guessed_up
 from blueprint.vector.style import FILE_SUFFIXES, is_style_file
 
 # the formats as the registry has them (blueprint.api.files has registered every one)
@@ -24,7 +25,8 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     "--output",
     type=click.Path(path_type=Path),
     required=True,
-    help=f"File to write: a picture ({PICTURES}) or vector lines ({DRAWINGS}).",
+    help=f"File to write: a picture ({PICTURES}) or vector lines ({DRAWINGS}); "
+    "depth layers (.npz) come from blueprint layers.",
 )
 @camera_options
 @click.option(
@@ -40,7 +42,7 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     type=int,
     default=8,
     show_default=True,
-    help="Depth layers to peel at most (0: all).",
+    help="Depth layers to peel at most (0: all; --reveal peels as deep as it needs).",
 )
 @click.option(
     "--min-fraction",
@@ -113,6 +115,8 @@ def render(
     fov,
     ortho,
     up,
+    include,
+    exclude,
     style,
     grid,
     max_layers,
@@ -150,7 +154,7 @@ def render(
                 f"{output}: vector drawings take no --glyphs or --shade yet; write a picture for those"
             )
         if highlight_model:
-            model = load_model(model, up=camera["up"])
+            model = load_model(model, up=camera["up"], include=include, exclude=exclude)
             highlight = load_model(highlight_model, up=camera["up"])
         _render_vector(
             model,
@@ -172,6 +176,8 @@ def render(
                 title=title,
                 dimensions=dimensions,
             ),
+            include,
+            exclude,
         )
         return
     if scale or units or sheet or title or dimensions:
@@ -184,7 +190,7 @@ def render(
             f"a picture takes one of {', '.join(STYLE_NAMES)}"
         )
     up_axis = camera.pop("up")
-    loaded = load_model(model, up=up_axis)
+    loaded = load_model(model, up=up_axis, include=include, exclude=exclude)
     designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight
     frame = render_frame(
         loaded,
@@ -210,8 +216,9 @@ def render(
     info = default_renderer().info
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
-        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles, "
-        f"{frame.layers} layers{shown}, {frame.ms:.1f} ms on {info['renderer']}"
+        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"
+        f"{guessed_up(loaded.up, loaded.up_reason)}, {frame.layers_shown}{shown}, {frame.ms:.1f} ms "
+        f"on {info['renderer']}"
     )
 
 
@@ -228,6 +235,8 @@ def _render_vector(
     highlight,
     reveal,
     section,
+    include,
+    exclude,
 ):
     from blueprint.api import default_renderer
     from blueprint.api.files import render_vector_file
@@ -244,11 +253,14 @@ def _render_vector(
         highlight=highlight,
         reveal=reveal,
         **section,
+        include=include,
+        exclude=exclude,
         **camera,
     )
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
-        f"{output}: {summary['bytes']} bytes, polylines {levels or 'none'}, "
+        f"{output}: {summary['bytes']} bytes{guessed_up(summary['up'], summary['up_reason'])}, "
+        f"polylines {levels or 'none'}, "
         f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
     )
 
@@ -265,14 +277,16 @@ def _render_vector(
 @camera_options
 @click.option("--max-layers", type=int, default=0, show_default=True, help="Layers at most (0: all).")
 @click.option("--min-fraction", type=float, default=0.0, show_default=True)
-def layers(model, output, size, view, azimuth, elevation, fov, ortho, up, max_layers, min_fraction):
+def layers(
+    model, output, size, view, azimuth, elevation, fov, ortho, up, include, exclude, max_layers, min_fraction
+):
     """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
     from blueprint.api import peel
     from blueprint.scene.loader import load_model
 
     output, write = choose_writer(output, Kind.LAYERS)
     kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (512, 512))
-    loaded = load_model(model, up=kwargs.pop("up"))
+    loaded = load_model(model, up=kwargs.pop("up"), include=include, exclude=exclude)
     result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)
     write(output, result)
     click.echo(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")

@@ -125,4 +125,5 @@ def _frame(result, style: Style) -> Frame:
         result.draws,
         result.stages,
         result.revealed,
+        result.layers_left,
     )

@@ -230,17 +230,19 @@ class Executor:
 
         ctx.enable_only(ctx.NOTHING)
         counts: list[int] = []
-        revealed = None
+        revealed, left = None, 0
         if pl.needs_model:
             st.mesh = self.r.mesh(model, crease)
             self.capture.capture_parts(st, parts)
         if pl.peel:
-            rules = standard_rules(max_layers, min_fraction)
             reveal = self.capture.reveal_rule(st)
+            # depth masking peels as deep as it needs: the cap would stop it short silently
+            rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
             if reveal is not None:
                 rules.append(reveal)
             counts, layers = self.capture.peel(st, max_layers, rules)
             revealed = None if reveal is None else reveal.shown
+            left = self.capture.left(st, rules, counts, layers)
         else:
             self._ensure_stacks(st, 1)
             for name in pl.iteration0:
@@ -281,6 +283,7 @@ class Executor:
             stages,
             result_dumps,
             revealed,
+            left,
             pending,
         )
 

@@ -10,7 +10,8 @@ from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
 from blueprint.render.capture import KBUFFER_MAX, Capture, GBuffer, capture_parts, revealed_pixels
 from blueprint.render.capture import peel as peel_layers
-from blueprint.render.stop import Reveal, StopRule
+from blueprint.render.remaining import layers_left
+from blueprint.render.stop import MaxLayers, Reveal, StopRule
 
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
@@ -115,6 +116,16 @@ class LayerCapture:
                 self.ex._run_pass(st, name, layer, layer + 1)
 
         return peel_layers(draw, groups[0].queries, rules)
+
+    def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
+        """Layers left behind the last one where the peel stopped at its cap with the last layer
+        still covering pixels (one counting pass, see ``blueprint.render.remaining``); else 0,
+        at no cost."""
+        caps = [rule.layers for rule in rules if isinstance(rule, MaxLayers)]
+        if not caps or layers < min(caps) or not counts or counts[layers - 1] == 0:
+            return 0
+        st.draws += 1
+        return layers_left(self.r, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
 
     def _attribute_programs(self, st: RunState) -> dict:
         progs = {}

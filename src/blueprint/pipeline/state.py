@@ -35,6 +35,9 @@ class Result:
         Name -> array like ``output`` for every ``dumps`` name asked for.
     revealed : float or None
         Where a ``reveal`` stop rule peeled: the fraction of its parts uncovered.
+    layers_left : int
+        Where the peel stopped at ``max_layers`` with surfaces left behind its last layer: how
+        many more layers a peel without the cap would draw (at most); 0 otherwise.
     pending : PendingRead or None
         Where a stream issued the next frame before reading this one's output back: the output
         is None until ``collected()``.
@@ -51,6 +54,7 @@ class Result:
     stages: dict[str, float] = field(default_factory=dict)
     dumps: dict[str, np.ndarray] = field(default_factory=dict)
     revealed: float | None = None
+    layers_left: int = 0
     pending: PendingRead | None = field(default=None, repr=False)
 
     def collected(self) -> Result:

@@ -38,7 +38,10 @@ class Frame:
     geometry pass peels it. ``layers`` is how many of them were drawn; ``draws`` the GL draw
     calls and compute dispatches the frame issued (those skipped on the GPU by conditional
     rendering included);
-    ``revealed`` the fraction of the highlighted parts uncovered where depth masking peeled.
+    ``revealed`` the fraction of the highlighted parts uncovered where depth masking peeled;
+    ``layers_left``, where the peel stopped at its ``max_layers`` with surfaces left behind the
+    last layer, how many more layers a peel without the cap would have drawn (at most: surfaces
+    closer than the peel's tolerance count apart), else 0.
     """
 
     image: np.ndarray
@@ -49,6 +52,14 @@ class Frame:
     draws: int
     stages: dict[str, float] = field(default_factory=dict)
     revealed: float | None = None
+    layers_left: int = 0
+
+    @property
+    def layers_shown(self) -> str:
+        """``"8 layers"``, or ``"8 of 40 layers"`` where the cap left layers undrawn."""
+        if self.layers_left:
+            return f"{self.layers} of {self.layers + self.layers_left} layers"
+        return f"{self.layers} layers"
 
 
 @dataclass

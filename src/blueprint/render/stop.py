@@ -89,8 +89,9 @@ class Reveal(StopRule):
 
 
 def standard_rules(max_layers: int | None, min_fraction: float) -> list[StopRule]:
-    """The rules every peel has: an empty pass ends it; then ``max_layers`` (None: no cap)
-    and ``min_fraction``."""
+    """The rules every peel has: an empty pass ends it; then ``max_layers`` (None: no cap
+    but ``HARD_MAX_LAYERS``; depth masking passes None, as it peels as deep as it needs) and
+    ``min_fraction``."""
     rules: list[StopRule] = [EmptyLayer(), MinFraction(min_fraction)]
     if max_layers is not None:
         rules.append(MaxLayers(max_layers))

@@ -12,8 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.model import Model
 from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
+from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
 log = logging.getLogger("blueprint")
@@ -22,6 +24,8 @@ log = logging.getLogger("blueprint")
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
 MAX_COORDINATE = 1e18
 _Z_UP = {"stl", "3mf", "3dxml", "step", "stp", "dae"}
+# Formats with no up axis of their own: the shape decides (blueprint.scene.up).
+_GUESS_UP = {"obj", "ply", "off"}
 
 
 def supported_formats() -> list[str]:
@@ -31,7 +35,9 @@ def supported_formats() -> list[str]:
     return sorted(set(trimesh.available_formats()) | set(STEP_SUFFIXES))
 
 
-def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
+def load_model(
+    path: str | os.PathLike, up: str | None = None, include: PartGlobs = None, exclude: PartGlobs = None
+) -> Model:
     """Load a model file as one part per mesh instance, node transforms applied.
 
     Parameters
@@ -40,6 +46,10 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
         OBJ, STL (ASCII or binary), PLY, OFF, GLB/glTF, 3MF or any other format trimesh loads.
     up : {"y", "z"} or None
         Up axis for the named views; ``None`` guesses from the format.
+    include, exclude : str or sequence of str and int, optional
+        Parts to keep, and parts to leave out (name globs or indices); without ``include``,
+        environment meshes (skyboxes, domes, huge ground planes) are left out, with a warning
+        (see ``blueprint.scene.environment``).
 
     Raises
     ------
@@ -72,20 +82,22 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     if faces.min() < 0 or faces.max() >= len(positions):
         raise InputError(f"{name}: faces refer to vertices that do not exist")
 
+    chosen = up_of(up, "z" if ext in _Z_UP else "y", ext in _GUESS_UP, positions, faces)
     model = Model(
         np.ascontiguousarray(positions, np.float32),
         np.ascontiguousarray(faces, np.int32),
         np.ascontiguousarray(face_part, np.int32),
         tuple(names),
-        up or ("z" if ext in _Z_UP else "y"),
+        chosen.axis,
         name,
+        chosen.reason,
     )
     degenerate = model.degenerate_faces()
     if degenerate.all():
         raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
-    return model
+    return choose_parts(model, include, exclude)
 
 
 def _load_scene(path: Path, ext: str):

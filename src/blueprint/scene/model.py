@@ -25,6 +25,9 @@ class Model:
         The model's up axis, used by the named views.
     source : str or None
         The file it came from, for messages.
+    up_reason : str
+        Where ``up`` came from ("given", "by the format", or how the shape decided it), for
+        ``blueprint info`` and printed lines.
     """
 
     positions: np.ndarray
@@ -33,6 +36,7 @@ class Model:
     part_names: tuple[str, ...]
     up: str = "y"
     source: str | None = None
+    up_reason: str = "given"
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:

@@ -23,6 +23,8 @@ def run_viewer(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
+    include: str | None = None,
+    exclude: str | None = None,
     style: str = "blueprint",
     styles: tuple[str, ...] = tuple(STYLES),
     max_layers: int | None = 5,
@@ -36,6 +38,6 @@ def run_viewer(
     state = ViewState.start(styles, style, view, azimuth, elevation, fov, ortho, max_layers)
     options = options or Options()
     get_style(style, options.grid)
-    model = load_model(model_path, up=up)
+    model = load_model(model_path, up=up, include=include, exclude=exclude)
     viewer = Viewer(model, Path(model_path), state, size=size, options=options, dump=os.environ.get(DUMP_ENV))
     return viewer.run(frames=frames)

@@ -1,0 +1,42 @@
+"""How many layers a capped peel left: one geometry pass, only on frames that hit the cap.
+
+A peel stopped by ``max_layers`` whose last layer still covered pixels may have more behind
+it. Peeling on to count them would cost the full peel the cap was there to save; instead one
+pass draws the mesh with no depth test, adding one per fragment behind the last layer into a
+float target, and the largest count is read back (a W x H float read, once). Frames that stop
+on their own (an empty layer, ``min_fraction``, depth masking) never run it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from blueprint.gpu import units
+from blueprint.render.capture import GEOMETRY_VERT, peel_uniforms
+from blueprint.scene.camera import Camera
+
+REMAINING_FRAG = "blueprint.render:glsl/remaining.frag"
+
+
+def layers_left(r, mesh, camera: Camera, last_depth) -> int:
+    """The most surfaces any pixel has behind ``last_depth`` (the depth texture of the last
+    layer peeled): the layers a peel without its cap would still draw. Coincident surfaces,
+    which the peel takes as one, count apart here, so this is an upper bound. Waits for the
+    GPU (one read-back); leaves depth test, blending and culling off."""
+    ctx = r.ctx
+    size = tuple(last_depth.size)
+    counts = r.pool.texture("remaining.count", size, "r32f")
+    fbo = r.pool.framebuffer((counts,))
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 0.0)
+    prog = r.program(REMAINING_FRAG, GEOMETRY_VERT)
+    peel_uniforms(prog, camera)
+    last_depth.use(units.PEEL_DEPTH)
+    prog["u_prev_depth"].value = units.PEEL_DEPTH
+    ctx.enable_only(ctx.BLEND)
+    ctx.blend_func = ctx.ONE, ctx.ONE
+    ctx.blend_equation = ctx.FUNC_ADD
+    mesh.vao(prog).render()
+    ctx.enable_only(ctx.NOTHING)
+    # float32 counts are exact far beyond HARD_MAX_LAYERS
+    return int(np.frombuffer(counts.read(), np.float32).max(initial=0.0))

@@ -1,0 +1,144 @@
+"""Environment meshes: parts that surround the scene rather than belong to it.
+
+Game and city models often sit inside a skybox (an inward-facing box or sphere), under a dome
+or on a ground plane far larger than everything else. Fitted to, such a part makes the scene
+a speck in the middle of the picture, and as the nearest surface at every pixel it hides the
+whole scene behind it. A part is taken for environment when the rest of the model lies
+inside its bounding box and either it faces inwards (most of its area turned towards its own
+centre: a skybox or dome seen from inside) or it is flat and many times wider than the rest
+(a ground plane). Models of one part have none.
+
+:func:`choose_parts` is what loading applies: explicit ``include`` / ``exclude`` name globs
+first, then, where ``include`` is not given, the environment left out with a warning naming it.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterable
+
+import numpy as np
+
+from blueprint.errors import InputError
+from blueprint.scene.model import Model
+from blueprint.scene.parts import select_parts
+from blueprint.scene.up import AXES
+
+log = logging.getLogger("blueprint")
+
+# Inward-facing: this fraction of the part's area faces its centre.
+_INWARD = 0.8
+# The rest must lie inside the part's bounding box, grown by this fraction of its size.
+_INSIDE = 1e-3
+# A ground plane: thinner than this fraction of its width, and wider than the rest by this
+# factor along both horizontal axes.
+_FLAT = 0.01
+_WIDER = 4.0
+
+PartGlobs = str | Iterable[str | int] | None
+
+
+def _part_bounds(model: Model, mask: np.ndarray) -> np.ndarray:
+    used = model.positions[model.faces[mask].reshape(-1)].astype(np.float64)
+    return np.array([used.min(axis=0), used.max(axis=0)])
+
+
+def _inward_fraction(model: Model, mask: np.ndarray, centre: np.ndarray) -> float:
+    tri = model.positions[model.faces[mask]].astype(np.float64)
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = np.linalg.norm(cross, axis=1)
+    towards = np.einsum("ij,ij->i", cross, centre - tri.mean(axis=1)) > 0
+    total = area.sum()
+    return float(area[towards].sum() / total) if total > 0 else 0.0
+
+
+def environment_parts(model: Model) -> np.ndarray:
+    """(P,) bool: the parts that enclose the rest of the model (inward-facing boxes, spheres,
+    domes) or lie under it as a ground plane far wider than the rest."""
+    found = np.zeros(len(model.part_names), bool)
+    if len(model.part_names) < 2:
+        return found
+    up = AXES[model.up]
+    across = [a for a in range(3) if a != up]
+    # twice: a skybox found first no longer counts as the rest a ground plane must span
+    for part in [*range(len(model.part_names))] * 2:
+        mask = model.face_part == part
+        if found[part]:
+            continue
+        rest = ~mask & ~found[model.face_part]
+        if not mask.any() or not rest.any():
+            continue
+        box, others = _part_bounds(model, mask), _part_bounds(model, rest)
+        size = box[1] - box[0]
+        grow = _INSIDE * size.max()
+        inside = (others[0] >= box[0] - grow).all() and (others[1] <= box[1] + grow).all()
+        other_size = others[1] - others[0]
+        if inside and _inward_fraction(model, mask, box.mean(axis=0)) >= _INWARD:
+            found[part] = True
+            continue
+        # the ground: flat across the up axis, at or below the rest, and far wider than it
+        flat = size[up] <= _FLAT * size[across].max()
+        below = box[1, up] <= others[0, up] + grow
+        wider = all(size[a] >= _WIDER * max(other_size[a], 1e-30) for a in across)
+        within = all(box[0, a] <= others[0, a] and box[1, a] >= others[1, a] for a in across)
+        if flat and below and wider and within:
+            found[part] = True
+    return found
+
+
+def choose_parts(model: Model, include: PartGlobs = None, exclude: PartGlobs = None) -> Model:
+    """The model with only the parts to draw: those matching ``include`` (every part where
+    None; environment parts then left out, see :func:`environment_parts`, with a warning
+    naming them), less those matching ``exclude``. Patterns are name globs or part indices, a
+    string may hold several separated by commas (as ``--highlight``).
+
+    Raises
+    ------
+    InputError
+        A pattern matches no part, or nothing is left to draw; the message names the file.
+    """
+    name = model.source or "the model"
+    keep = _matching(model, include, "--include", True)
+    keep &= ~_matching(model, exclude, "--exclude", False)
+    if include is None:
+        environment = environment_parts(model) & keep
+        if environment.any() and environment.sum() < keep.sum():
+            names = ", ".join(model.part_names[i] for i in np.flatnonzero(environment))
+            log.warning(
+                "%s: left out %s, which surround%s the scene (--include to keep)",
+                name,
+                names,
+                "s" if environment.sum() == 1 else "",
+            )
+            keep &= ~environment
+    if not keep.any():
+        raise InputError(f"{name}: --include/--exclude leave no part to draw")
+    if keep.all():
+        return model
+    return subset(model, keep)
+
+
+def _matching(model: Model, patterns: PartGlobs, option: str, empty: bool) -> np.ndarray:
+    if patterns is None:
+        return np.full(len(model.part_names), empty)
+    try:
+        return select_parts(model, patterns)
+    except InputError as exc:
+        raise InputError(f"{model.source or 'the model'}: {option}: {exc}") from None
+
+
+def subset(model: Model, keep: np.ndarray) -> Model:
+    """The model with the parts flagged in ``keep`` (P,) bool alone, renumbered in order."""
+    faces = keep[model.face_part]
+    # only the vertices the kept faces use: camera fits look at every vertex
+    used, kept_faces = np.unique(model.faces[faces], return_inverse=True)
+    number = np.cumsum(keep) - 1
+    return Model(
+        np.ascontiguousarray(model.positions[used]),
+        np.ascontiguousarray(kept_faces.reshape(-1, 3), np.int32),
+        np.ascontiguousarray(number[model.face_part[faces]], np.int32),
+        tuple(n for n, k in zip(model.part_names, keep, strict=True) if k),
+        model.up,
+        model.source,
+        model.up_reason,
+    )
