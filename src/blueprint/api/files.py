@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.api.draw import vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
@@ -40,7 +41,6 @@ from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
-from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
 from blueprint.vector.style import VectorStyle, vector_style
 
 __all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
@@ -237,31 +237,28 @@ def render_vector_file(
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
-    if scale is not None:
-        parse_scale(scale)
-        ortho = True
-    if units is not None and units not in UNITS_MM:
-        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
-    vstyle = vector_style(style)
+    vector_style(style)
     clock = time.perf_counter()
     loaded = model if isinstance(model, Model) else load_model(model, up=up)
     load_s = time.perf_counter() - clock
-    renderer = shared(renderer)
-    size = check_size(size, 1, renderer.max_texture)
-    options = dict(
-        style=vstyle,
-        max_layers=max_layers or None,
+    drawing = vector_drawing(
+        loaded,
+        size=size,
+        view=view,
+        azimuth=azimuth,
+        elevation=elevation,
+        fov=fov,
+        ortho=ortho,
+        style=style,
+        max_layers=max_layers,
         crease_angle=crease_angle,
         line_width=line_width,
         highlight=highlight,
         reveal=reveal,
+        scale=scale,
+        units=units,
         renderer=renderer,
     )
-    if view == "plan":
-        drawing = draw_vector_sheet(loaded, size, fov=fov, scale=scale, units=units, **options)
-    else:
-        camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-        drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
     write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}

@@ -6,6 +6,7 @@ import functools
 import logging
 import os
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +62,77 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     positions, faces, face_part, names = _flatten(scene, path.stem)
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
+    return _checked(positions, faces, face_part, names, up or ("z" if ext in _Z_UP else "y"), name)
+
+
+def model_from_object(obj, up: str | None = None, name: str | None = None) -> Model:
+    """A model from an object of the Python ecosystem, checked as ``load_model`` checks files.
+
+    Parameters
+    ----------
+    obj : Model, trimesh.Trimesh, trimesh.Scene or (vertices, faces)
+        A ``trimesh.Scene`` gives one part per mesh instance, named from its node and geometry
+        names, node transforms applied; a mesh or a pair of arrays ((V, 3) floats and (F, 3)
+        vertex indices) gives one part.
+    up : {"y", "z"} or None
+        Up axis for the named views (default y; a Model keeps its own unless given).
+    name : str, optional
+        What messages call the object (default: its type).
+
+    Raises
+    ------
+    InputError
+        In one line: an object that is not a mesh (a point cloud, a path), an empty scene,
+        faces out of range, NaN or infinite vertices, only degenerate faces.
+    """
+    if up is not None and up not in ("y", "z"):
+        raise InputError(f"unknown up axis {up!r} (choose y or z)")
+    if isinstance(obj, Model):
+        return obj if up is None or up == obj.up else replace(obj, up=up, _cache={})
+    import trimesh
+
+    if isinstance(obj, trimesh.Scene):
+        label = name or "trimesh.Scene"
+        positions, faces, face_part, names = _flatten(obj, None)
+        if len(faces) == 0:
+            raise InputError(f"{label}: no triangles in the scene (it holds no meshes with faces)")
+    elif isinstance(obj, trimesh.Trimesh):
+        label = name or "trimesh.Trimesh"
+        positions, faces = np.asarray(obj.vertices, np.float64), np.asarray(obj.faces, np.int64)
+        face_part, names = np.zeros(len(faces), np.int32), [str(obj.metadata.get("name") or "mesh")]
+    elif isinstance(obj, trimesh.PointCloud):
+        raise InputError(f"{name or 'trimesh.PointCloud'}: a point cloud has no triangles to draw")
+    elif isinstance(obj, tuple | list) and len(obj) == 2:
+        label = name or "(vertices, faces)"
+        positions, faces = _pair(obj, label)
+        face_part, names = np.zeros(len(faces), np.int32), ["mesh"]
+    else:
+        raise InputError(
+            f"{name or type(obj).__name__}: cannot draw this object "
+            "(give a file, a Model, a trimesh.Trimesh or trimesh.Scene, or (vertices, faces) arrays)"
+        )
+    if len(faces) == 0:
+        raise InputError(f"{label}: no triangles")
+    return _checked(positions, faces, face_part, names, up or "y", label)
+
+
+def _pair(obj, label: str) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        positions = np.asarray(obj[0], dtype=np.float64)
+        faces = np.asarray(obj[1])
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: vertices and faces must be arrays of numbers") from None
+    if positions.ndim != 2 or positions.shape[1] != 3:
+        raise InputError(f"{label}: vertices must be a (V, 3) array, got shape {positions.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or (faces.size and faces.dtype.kind not in "iu"):
+        raise InputError(
+            f"{label}: faces must be a (F, 3) array of vertex indices, got {faces.dtype} {faces.shape}"
+        )
+    return positions, faces.astype(np.int64)
+
+
+def _checked(positions, faces, face_part, names, up: str, name: str) -> Model:
+    """The checks every model passes, whether from a file or an object, named ``name``."""
     bad = ~np.isfinite(positions).all(axis=1)
     if bad.any():
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates")
@@ -74,7 +146,7 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
         np.ascontiguousarray(faces, np.int32),
         np.ascontiguousarray(face_part, np.int32),
         tuple(names),
-        up or ("z" if ext in _Z_UP else "y"),
+        up,
         name,
     )
     degenerate = model.degenerate_faces()
@@ -148,8 +220,9 @@ def _resolver_type():
     return CheckedResolver
 
 
-def _flatten(scene, stem: str):
-    """Concatenate every mesh instance of a trimesh Scene in graph order."""
+def _flatten(scene, stem: str | None):
+    """Concatenate every mesh instance of a trimesh Scene in graph order; a scene of one mesh
+    names its part ``stem`` (a file's), or after its node where ``stem`` is None."""
     import trimesh
 
     positions, faces, parts, names = [], [], [], []
@@ -166,10 +239,11 @@ def _flatten(scene, stem: str):
         positions.append(vertices)
         faces.append(np.asarray(mesh.faces, dtype=np.int64) + offset)
         parts.append(np.full(len(mesh.faces), len(names), np.int32))
-        names.append(stem if len(nodes) == 1 else _part_name(str(node), str(geometry_name), names))
+        single = len(nodes) == 1 and stem is not None
+        names.append(stem if single else _part_name(str(node), str(geometry_name), names))
         offset += len(vertices)
     if not faces:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem]
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     return np.concatenate(positions), np.concatenate(faces), np.concatenate(parts), names
 
 
