@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import click
 
-from blueprint.cli import info, pipeline, render, silhouettes, view
+from blueprint.cli import batch, info, pipeline, render, silhouettes, view
 from blueprint.cli.options import STYLE_NAMES, camera_options, progress_bar, run, setup_logging
 
 __all__ = ["STYLE_NAMES", "camera_options", "cli", "main", "progress_bar", "run"]
@@ -31,6 +31,7 @@ for command in (
     pipeline.turntable,
     silhouettes.silhouettes,
     view.view,
+    batch.batch,
 ):
     cli.add_command(command)
 
