@@ -1,6 +1,7 @@
 """blueprint: drawings of the visible and hidden edges of 3D models, computed on the GPU."""
 
 from blueprint.api import default_renderer, peel, render, render_frame
+from blueprint.api.draw import Drawing, draw
 from blueprint.api.renderer import Renderer
 from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
 from blueprint.compose.style import STYLES, Style
@@ -17,6 +18,7 @@ __all__ = [
     "VIEWS",
     "BlueprintError",
     "Camera",
+    "Drawing",
     "Frame",
     "GLUnavailableError",
     "Glyphs",
@@ -27,6 +29,7 @@ __all__ = [
     "ShaderError",
     "Style",
     "default_renderer",
+    "draw",
     "draw_glyphs",
     "load_glyphs",
     "load_model",
