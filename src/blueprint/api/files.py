@@ -41,6 +41,7 @@ from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
+from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
 from blueprint.vector.style import VectorStyle, vector_style
 
 __all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]

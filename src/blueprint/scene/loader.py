@@ -49,14 +49,22 @@ def load_model(path: str | os.PathLike, up: str | None = None) -> Model:
     name = str(path)
     info = check_file(path, MODEL_FILE_LIMIT, "a model file")
     ext = path.suffix.lower().lstrip(".")
+    if up is not None and up not in ("y", "z"):
+        raise InputError(f"unknown up axis {up!r} (choose y or z)")
+    triangles = _binary_stl(path, info.st_size) if ext == "stl" else None
+    if triangles is not None:
+        if len(triangles) == 0:
+            raise InputError(f"{name}: no triangles in the file")
+        # as trimesh loads an STL unprocessed: three vertices a triangle, in file order
+        faces = np.arange(3 * len(triangles), dtype=np.int64).reshape(-1, 3)
+        parts = np.zeros(len(triangles), np.int32)
+        return _checked(triangles.reshape(-1, 3), faces, parts, [path.stem], up or "z", name)
     formats = supported_formats()
     if ext not in formats:
         known = ", ".join(f for f in ("obj", "stl", "ply", "off", "glb", "gltf", "3mf") if f in formats)
         raise InputError(f"{name}: unknown model format '.{ext}' (supported: {known} and more)")
     if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
-    if up is not None and up not in ("y", "z"):
-        raise InputError(f"unknown up axis {up!r} (choose y or z)")
 
     scene = _load_scene(path, ext)
     positions, faces, face_part, names = _flatten(scene, path.stem)
@@ -89,6 +97,12 @@ def model_from_object(obj, up: str | None = None, name: str | None = None) -> Mo
         raise InputError(f"unknown up axis {up!r} (choose y or z)")
     if isinstance(obj, Model):
         return obj if up is None or up == obj.up else replace(obj, up=up, _cache={})
+    if isinstance(obj, tuple | list) and len(obj) == 2:
+        label = name or "(vertices, faces)"
+        positions, faces = _pair(obj, label)
+        if len(faces) == 0:
+            raise InputError(f"{label}: no triangles")
+        return _checked(positions, faces, np.zeros(len(faces), np.int32), ["mesh"], up or "y", label)
     import trimesh
 
     if isinstance(obj, trimesh.Scene):
@@ -102,10 +116,6 @@ def model_from_object(obj, up: str | None = None, name: str | None = None) -> Mo
         face_part, names = np.zeros(len(faces), np.int32), [str(obj.metadata.get("name") or "mesh")]
     elif isinstance(obj, trimesh.PointCloud):
         raise InputError(f"{name or 'trimesh.PointCloud'}: a point cloud has no triangles to draw")
-    elif isinstance(obj, tuple | list) and len(obj) == 2:
-        label = name or "(vertices, faces)"
-        positions, faces = _pair(obj, label)
-        face_part, names = np.zeros(len(faces), np.int32), ["mesh"]
     else:
         raise InputError(
             f"{name or type(obj).__name__}: cannot draw this object "
@@ -155,6 +165,24 @@ def _checked(positions, faces, face_part, names, up: str, name: str) -> Model:
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
     return model
+
+
+_STL_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
+
+
+def _binary_stl(path: Path, size: int) -> np.ndarray | None:
+    """(F, 3, 3) float32 triangles of a binary STL, read with numpy alone: trimesh, with the
+    scipy and networkx it imports, takes most of a small drawing's start. None where the
+    file is not binary STL (its size does not match its triangle count): trimesh reads it."""
+    if size < 84:
+        return None
+    with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
+        head = fh.read(84)
+        count = int.from_bytes(head[80:84], "little")
+        if size != 84 + _STL_RECORD.itemsize * count:
+            return None
+        records = np.frombuffer(fh.read(_STL_RECORD.itemsize * count), dtype=_STL_RECORD, count=count)
+    return records["triangle"]
 
 
 def _load_scene(path: Path, ext: str):
