@@ -4,6 +4,8 @@ that Jupyter shows and that saves by suffix; objects that cannot be drawn raise 
 from __future__ import annotations
 
 import io
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 
 import ezdxf
@@ -144,3 +146,29 @@ def test_objects_that_cannot_be_drawn_raise_one_line(obj, message):
     text = str(caught.value)
     assert text.startswith(message)
     assert "\n" not in text
+
+
+def _loaded_after(code: str) -> set[str]:
+    heavy = ["scipy", "networkx", "trimesh", "moderngl", "blueprint.silhouette", "blueprint.vector", "dask"]
+    probe = f"import sys\n{code}\nprint(' '.join(m for m in {heavy!r} if m in sys.modules))"
+    out = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True
+    )
+    return set(out.stdout.split())
+
+
+def test_import_blueprint_loads_nothing_heavy():
+    assert _loaded_after("import blueprint; blueprint.InputError; blueprint.__all__") == set()
+
+
+def test_a_binary_stl_drawing_loads_no_trimesh_scipy_or_networkx(tmp_path):
+    stl = tmp_path / "part.stl"
+    trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.4, sections=24).export(stl)
+    code = f"import blueprint\nblueprint.draw({str(stl)!r}, size=(64, 64)).save({str(tmp_path / 'p.png')!r})"
+    assert _loaded_after(code) == {"moderngl"}
+    # read without trimesh, the model is the one trimesh reads
+    fast = blueprint.load_model(stl)
+    loaded = trimesh.load(stl, process=False)
+    np.testing.assert_array_equal(fast.positions, np.asarray(loaded.vertices, np.float32))
+    np.testing.assert_array_equal(fast.faces, loaded.faces)
+    assert (fast.part_names, fast.up) == (("part",), "z")

@@ -7,6 +7,8 @@ line start fast: the GPU, trimesh and the vector packages load only for what dra
 from __future__ import annotations
 
 import importlib
+import sys
+import types
 from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
@@ -78,6 +80,18 @@ if TYPE_CHECKING:
     from blueprint.scene.camera import VIEWS, Camera
     from blueprint.scene.loader import load_model
     from blueprint.scene.model import Model
+
+
+class _Package(types.ModuleType):
+    def __setattr__(self, name: str, value) -> None:
+        # Importing a subpackage sets the package's attribute of its name to it; the subpackage
+        # blueprint.render must not hide the function blueprint.render (a name of _EXPORTS).
+        if isinstance(value, types.ModuleType) and name in _EXPORTS:
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name: str):

@@ -113,10 +113,13 @@ class Drawing:
     def save(self, path: str | os.PathLike) -> Path:
         """Write the drawing to ``path`` atomically, in the format its suffix names: a picture
         (``.png``) or vector lines (``.svg``, ``.pdf``, ``.dxf``). Returns the path written."""
-        from blueprint.api.files import choose_writer
-        from blueprint.export.writers import Kind
+        from blueprint.export.writers import WRITERS, Kind
 
-        path, write = choose_writer(path, Kind.IMAGE, Kind.DRAWING)
+        if WRITERS.find(Path(path).suffix.lower(), Kind.IMAGE) is None:
+            # the vector writers register with the vector package, loaded only for them
+            import blueprint.api.files  # noqa: F401
+
+        path, write = WRITERS.choose(path, Kind.IMAGE, Kind.DRAWING)
         if write.kind is Kind.DRAWING:
             return write(path, self.lines)
         given = [k for k in _VECTOR_ONLY if self.options.get(k) is not None]
