@@ -23,7 +23,12 @@ SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "models"
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--models", type=Path, default=SHARED if SHARED.is_dir() else None)
-    parser.add_argument("--copies", type=int, default=8, help="Copies of the example model without --models.")
+    parser.add_argument(
+        "--copies",
+        type=int,
+        default=0,
+        help="Draw this many copies of the example model instead of --models.",
+    )
     parser.add_argument("--views", default="iso,top,front,right")
     parser.add_argument("--formats", default="png,svg")
     parser.add_argument("--size", nargs=2, type=int, default=(512, 512))
@@ -32,10 +37,10 @@ def main() -> None:
     devices = choose_devices("all")
     many = len(devices) if len(devices) > 1 else 2
     with tempfile.TemporaryDirectory() as tmp:
-        if args.models is None:
+        if args.copies or args.models is None:
             folder = Path(tmp) / "models"
             folder.mkdir()
-            for k in range(args.copies):
+            for k in range(args.copies or 8):
                 shutil.copy(example_path(), folder / f"gearbox{k}.glb")
             inputs = [folder]
         else:
