@@ -157,6 +157,19 @@ class Drawing:
         )
 
 
+def check_vector_options(style, scale: str | float | None, units: str | None):
+    """The ``VectorStyle`` that ``style`` names, with ``scale`` and ``units`` checked: what a
+    vector drawing can refuse before any model is read. Raises ``InputError``."""
+    from blueprint.vector.drawing import UNITS_MM, parse_scale
+    from blueprint.vector.style import vector_style
+
+    if scale is not None:
+        parse_scale(scale)
+    if units is not None and units not in UNITS_MM:
+        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
+    return vector_style(style)
+
+
 def vector_drawing(
     model: Model,
     *,
@@ -179,18 +192,14 @@ def vector_drawing(
     """The vector lines of ``model`` as ``render_vector_file`` draws them (one view or the
     plan sheet), not written anywhere: a ``blueprint.vector.drawing.Drawing``."""
     from blueprint.gpu.device import check_size
-    from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
-    from blueprint.vector.style import vector_style
+    from blueprint.vector.drawing import draw_vector, draw_vector_sheet
 
-    if scale is not None:
-        parse_scale(scale)
-        ortho = True
-    if units is not None and units not in UNITS_MM:
-        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
+    vstyle = check_vector_options(style, scale, units)
+    ortho = ortho or scale is not None
     renderer = shared(renderer)
     size = check_size(size, 1, renderer.max_texture)
     options = dict(
-        style=vector_style(style),
+        style=vstyle,
         max_layers=max_layers or None,
         crease_angle=crease_angle,
         line_width=line_width,

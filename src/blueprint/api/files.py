@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from blueprint.api.draw import vector_drawing
+from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
@@ -42,7 +42,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
 from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
-from blueprint.vector.style import VectorStyle, vector_style
+from blueprint.vector.style import VectorStyle
 
 __all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
 
@@ -238,7 +238,7 @@ def render_vector_file(
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
-    vector_style(style)
+    style = check_vector_options(style, scale, units)
     clock = time.perf_counter()
     loaded = model if isinstance(model, Model) else load_model(model, up=up)
     load_s = time.perf_counter() - clock
