@@ -51,7 +51,7 @@ LAYERS = (
     Layer("api", ("blueprint.api", "blueprint")),
     Layer("tools", ("blueprint.bench",)),
     Layer("viewer", ("blueprint.viewer",)),
-    Layer("cli", ("blueprint.cli",)),
+    Layer("cli", ("blueprint.cli", "blueprint.__main__")),
 )
 
 # Members that may import only these members (besides their own modules).

@@ -1,26 +1,58 @@
-"""blueprint: drawings of the visible and hidden edges of 3D models, computed on the GPU."""
+"""blueprint: drawings of the visible and hidden edges of 3D models, computed on the GPU.
 
-from blueprint.api import default_renderer, peel, render, render_frame
-from blueprint.api.renderer import Renderer
-from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
-from blueprint.compose.style import STYLES, Style
-from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
-from blueprint.render.renderer import Frame, Layers
-from blueprint.scene.camera import VIEWS, Camera
-from blueprint.scene.environment import choose_parts, environment_parts
-from blueprint.scene.loader import load_model
-from blueprint.scene.model import Model
-from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
-from blueprint.scene.up import guess_up
+Names are imported when first used (PEP 562), so that ``import blueprint`` and the command
+line start fast: the GPU, trimesh and the vector packages load only for what draws.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import types
+from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
+# public name -> the module that defines it
+_EXPORTS = {
+    "default_renderer": "blueprint.api",
+    "peel": "blueprint.api",
+    "render": "blueprint.api",
+    "render_frame": "blueprint.api",
+    "Drawing": "blueprint.api.draw",
+    "draw": "blueprint.api.draw",
+    "batch": "blueprint.api.batch",
+    "Renderer": "blueprint.api.renderer",
+    "Glyphs": "blueprint.compose.glyphs",
+    "draw_glyphs": "blueprint.compose.glyphs",
+    "load_glyphs": "blueprint.compose.glyphs",
+    "render_with_glyphs": "blueprint.compose.glyphs",
+    "STYLES": "blueprint.compose.style",
+    "Style": "blueprint.compose.style",
+    "BlueprintError": "blueprint.errors",
+    "GLUnavailableError": "blueprint.errors",
+    "InputError": "blueprint.errors",
+    "ShaderError": "blueprint.errors",
+    "Frame": "blueprint.render.renderer",
+    "Layers": "blueprint.render.renderer",
+    "VIEWS": "blueprint.scene.camera",
+    "Camera": "blueprint.scene.camera",
+    "load_model": "blueprint.scene.loader",
+    "Model": "blueprint.scene.model",
+    "choose_parts": "blueprint.scene.environment",
+    "environment_parts": "blueprint.scene.environment",
+    "guess_up": "blueprint.scene.up",
+    "Cut": "blueprint.scene.section",
+    "SectionPlane": "blueprint.scene.section",
+    "cut_model": "blueprint.scene.section",
+    "parse_section": "blueprint.scene.section",
+}
+
 __all__ = [
-    "STYLES",
-    "VIEWS",
     "BlueprintError",
     "Camera",
     "Cut",
+    "Drawing",
     "Frame",
     "GLUnavailableError",
     "Glyphs",
@@ -28,12 +60,16 @@ __all__ = [
     "Layers",
     "Model",
     "Renderer",
+    "STYLES",
     "SectionPlane",
     "ShaderError",
     "Style",
-    "cut_model",
+    "VIEWS",
+    "batch",
     "choose_parts",
+    "cut_model",
     "default_renderer",
+    "draw",
     "draw_glyphs",
     "environment_parts",
     "guess_up",
@@ -45,3 +81,44 @@ __all__ = [
     "render_frame",
     "render_with_glyphs",
 ]
+
+if TYPE_CHECKING:
+    from blueprint.api import default_renderer, peel, render, render_frame
+    from blueprint.api.batch import batch
+    from blueprint.api.draw import Drawing, draw
+    from blueprint.api.renderer import Renderer
+    from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
+    from blueprint.compose.style import STYLES, Style
+    from blueprint.errors import BlueprintError, GLUnavailableError, InputError, ShaderError
+    from blueprint.render.renderer import Frame, Layers
+    from blueprint.scene.camera import VIEWS, Camera
+    from blueprint.scene.environment import choose_parts, environment_parts
+    from blueprint.scene.loader import load_model
+    from blueprint.scene.model import Model
+    from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
+    from blueprint.scene.up import guess_up
+
+
+class _Package(types.ModuleType):
+    def __setattr__(self, name: str, value) -> None:
+        # Importing a subpackage sets the package's attribute of its name to it; the subpackage
+        # blueprint.render must not hide the function blueprint.render (a name of _EXPORTS).
+        if isinstance(value, types.ModuleType) and name in _EXPORTS:
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'blueprint' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

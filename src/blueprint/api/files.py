@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
-from blueprint.api.sections import section_of
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.export.files import check_output
@@ -43,8 +43,8 @@ from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
-from blueprint.vector.drawing import UNITS_MM, draw_vector, draw_vector_sheet, parse_scale
-from blueprint.vector.style import VectorStyle, vector_style
+from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
+from blueprint.vector.style import VectorStyle
 
 log = logging.getLogger("blueprint")
 
@@ -260,50 +260,34 @@ def render_vector_file(
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
-    if scale is not None:
-        parse_scale(scale)
-        if not ortho and view != "plan":
-            # one scale across the page needs parallel projection: said, not done silently
-            log.warning(
-                "--scale %s draws the %s view orthographic (a drawing to scale has no perspective)",
-                scale,
-                view,
-            )
-        ortho = True
-    if units is not None and units not in UNITS_MM:
-        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
-    vstyle = vector_style(style)
+    style = check_vector_options(style, scale, units)
     clock = time.perf_counter()
     loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
     load_s = time.perf_counter() - clock
-    renderer = shared(renderer)
-    size = check_size(size, 1, renderer.max_texture)
-    options = dict(
-        style=vstyle,
-        max_layers=max_layers or None,
+    drawing = vector_drawing(
+        loaded,
+        size=size,
+        view=view,
+        azimuth=azimuth,
+        elevation=elevation,
+        fov=fov,
+        ortho=ortho,
+        style=style,
+        max_layers=max_layers,
         crease_angle=crease_angle,
         line_width=line_width,
         highlight=highlight,
         reveal=reveal,
+        scale=scale,
+        units=units,
+        section=section,
+        section_plane=section_plane,
+        section_keep=section_keep,
+        sheet=sheet,
+        title=title,
+        dimensions=dimensions,
         renderer=renderer,
     )
-    cut = section_of(loaded, section, section_plane, section_keep)
-    if sheet is not None and view != "plan":
-        raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
-    options["title"] = title
-    options["dimensions"] = dimensions
-    if view == "plan":
-        plane = None if cut is None else (cut.plane, cut.keep)
-        drawing = draw_vector_sheet(
-            loaded, size, fov=fov, scale=scale, units=units, sheet=sheet, section=plane, **options
-        )
-    else:
-        camera = fit_camera(loaded, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-        if cut is not None:
-            made = cut.cut(loaded, camera)
-            drawing = draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
-        else:
-            drawing = draw_vector(loaded, camera, size, scale=scale, units=units, **options)
     clock = time.perf_counter()
     write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}

@@ -8,14 +8,15 @@ from __future__ import annotations
 
 import click
 
-from blueprint.cli import info, pipeline, render, silhouettes, view
+from blueprint import __version__
+from blueprint.cli import batch, info, pipeline, render, silhouettes, view
 from blueprint.cli.options import STYLE_NAMES, camera_options, progress_bar, run, setup_logging
 
 __all__ = ["STYLE_NAMES", "camera_options", "cli", "main", "progress_bar", "run"]
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(package_name="blueprint")
+@click.version_option(version=__version__, prog_name="blueprint")
 def cli() -> None:
     """Blueprints of 3D models: the visible and hidden edges of every part, drawn on the GPU."""
     setup_logging()
@@ -31,6 +32,7 @@ for command in (
     pipeline.turntable,
     silhouettes.silhouettes,
     view.view,
+    batch.batch,
 ):
     cli.add_command(command)
 

@@ -12,9 +12,10 @@ import click
 @click.argument("model", required=False, type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def info(model, as_json):
-    """Without MODEL: the OpenGL renderer and the ways it draws. With MODEL: its parts,
-    triangles and bounds."""
+    """Without MODEL: the OpenGL renderer, the ways it draws and the EGL devices (for --gpus
+    and BLUEPRINT_GL_DEVICE). With MODEL: its parts, triangles and bounds."""
     if model is None:
+        from blueprint.gpu.context import egl_devices
         from blueprint.render.renderer import LayerRenderer
 
         with LayerRenderer() as r:
@@ -25,6 +26,7 @@ def info(model, as_json):
             else:
                 way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
                 data["kbuffer"] = f"{way}, from {r.kbuffer_density:g} triangles per pixel"
+        data["egl_devices"] = egl_devices()
         if as_json:
             click.echo(json.dumps(data))
         else:
@@ -32,6 +34,9 @@ def info(model, as_json):
                 f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}\n"
                 f"image passes: {data['image_passes']}\nk-buffer: {data['kbuffer']}"
             )
+            for device in data["egl_devices"]:
+                kind = "GPU" if device["gpu"] else "software"
+                click.echo(f"EGL device {device['index']}: {device['renderer']} ({kind})")
         return
     from blueprint.scene.environment import environment_parts
     from blueprint.scene.loader import load_model

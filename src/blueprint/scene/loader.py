@@ -7,6 +7,7 @@ import io
 import logging
 import os
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +61,26 @@ def load_model(
     name = str(path)
     info = check_file(path, MODEL_FILE_LIMIT, "a model file")
     ext = path.suffix.lower().lstrip(".")
+    if up is not None and up not in ("y", "z"):
+        raise InputError(f"unknown up axis {up!r} (choose y or z)")
+    triangles = _binary_stl(path, info.st_size) if ext == "stl" else None
+    if triangles is not None:
+        if len(triangles) == 0:
+            raise InputError(f"{name}: no triangles in the file")
+        # as trimesh loads an STL unprocessed: three vertices a triangle, in file order
+        faces = np.arange(3 * len(triangles), dtype=np.int64).reshape(-1, 3)
+        parts = np.zeros(len(triangles), np.int32)
+        return _checked(
+            triangles.reshape(-1, 3),
+            faces,
+            parts,
+            [path.stem],
+            name,
+            up,
+            "z",
+            include=include,
+            exclude=exclude,
+        )
     formats = supported_formats()
     if ext not in formats:
         common = ("obj", "stl", "ply", "off", "glb", "gltf", "3mf", "step")
@@ -67,13 +88,98 @@ def load_model(
         raise InputError(f"{name}: unknown model format '.{ext}' (supported: {known} and more)")
     if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
-    if up is not None and up not in ("y", "z"):
-        raise InputError(f"unknown up axis {up!r} (choose y or z)")
 
     scene = _load_scene(path, ext)
     positions, faces, face_part, names = _flatten(scene, path.stem)
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
+    default = "z" if ext in _Z_UP else "y"
+    return _checked(positions, faces, face_part, names, name, up, default, ext in _GUESS_UP, include, exclude)
+
+
+def model_from_object(obj, up: str | None = None, name: str | None = None) -> Model:
+    """A model from an object of the Python ecosystem, checked as ``load_model`` checks files.
+
+    Parameters
+    ----------
+    obj : Model, trimesh.Trimesh, trimesh.Scene or (vertices, faces)
+        A ``trimesh.Scene`` gives one part per mesh instance, named from its node and geometry
+        names, node transforms applied; a mesh or a pair of arrays ((V, 3) floats and (F, 3)
+        vertex indices) gives one part.
+    up : {"y", "z"} or None
+        Up axis for the named views (default y; a Model keeps its own unless given).
+    name : str, optional
+        What messages call the object (default: its type).
+
+    Raises
+    ------
+    InputError
+        In one line: an object that is not a mesh (a point cloud, a path), an empty scene,
+        faces out of range, NaN or infinite vertices, only degenerate faces.
+    """
+    if up is not None and up not in ("y", "z"):
+        raise InputError(f"unknown up axis {up!r} (choose y or z)")
+    if isinstance(obj, Model):
+        return obj if up is None or up == obj.up else replace(obj, up=up, _cache={})
+    if isinstance(obj, tuple | list) and len(obj) == 2:
+        label = name or "(vertices, faces)"
+        positions, faces = _pair(obj, label)
+        if len(faces) == 0:
+            raise InputError(f"{label}: no triangles")
+        return _checked(positions, faces, np.zeros(len(faces), np.int32), ["mesh"], label, up, "y")
+    import trimesh
+
+    if isinstance(obj, trimesh.Scene):
+        label = name or "trimesh.Scene"
+        positions, faces, face_part, names = _flatten(obj, None)
+        if len(faces) == 0:
+            raise InputError(f"{label}: no triangles in the scene (it holds no meshes with faces)")
+    elif isinstance(obj, trimesh.Trimesh):
+        label = name or "trimesh.Trimesh"
+        positions, faces = np.asarray(obj.vertices, np.float64), np.asarray(obj.faces, np.int64)
+        face_part, names = np.zeros(len(faces), np.int32), [str(obj.metadata.get("name") or "mesh")]
+    elif isinstance(obj, trimesh.PointCloud):
+        raise InputError(f"{name or 'trimesh.PointCloud'}: a point cloud has no triangles to draw")
+    else:
+        raise InputError(
+            f"{name or type(obj).__name__}: cannot draw this object "
+            "(give a file, a Model, a trimesh.Trimesh or trimesh.Scene, or (vertices, faces) arrays)"
+        )
+    if len(faces) == 0:
+        raise InputError(f"{label}: no triangles")
+    return _checked(positions, faces, face_part, names, label, up, "y")
+
+
+def _pair(obj, label: str) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        positions = np.asarray(obj[0], dtype=np.float64)
+        faces = np.asarray(obj[1])
+    except (TypeError, ValueError):
+        raise InputError(f"{label}: vertices and faces must be arrays of numbers") from None
+    if positions.ndim != 2 or positions.shape[1] != 3:
+        raise InputError(f"{label}: vertices must be a (V, 3) array, got shape {positions.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3 or (faces.size and faces.dtype.kind not in "iu"):
+        raise InputError(
+            f"{label}: faces must be a (F, 3) array of vertex indices, got {faces.dtype} {faces.shape}"
+        )
+    return positions, faces.astype(np.int64)
+
+
+def _checked(
+    positions,
+    faces,
+    face_part,
+    names,
+    name: str,
+    up: str | None,
+    default_up: str,
+    guess_up: bool = False,
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
+) -> Model:
+    """The checks every model passes, whether from a file or an object, named ``name``; its up
+    axis ``up`` where given, else guessed from the shape (``guess_up``) or ``default_up``; the
+    parts ``include`` and ``exclude`` choose."""
     bad = ~np.isfinite(positions).all(axis=1)
     if bad.any():
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates")
@@ -82,7 +188,7 @@ def load_model(
     if faces.min() < 0 or faces.max() >= len(positions):
         raise InputError(f"{name}: faces refer to vertices that do not exist")
 
-    chosen = up_of(up, "z" if ext in _Z_UP else "y", ext in _GUESS_UP, positions, faces)
+    chosen = up_of(up, default_up, guess_up, positions, faces)
     model = Model(
         np.ascontiguousarray(positions, np.float32),
         np.ascontiguousarray(faces, np.int32),
@@ -98,6 +204,24 @@ def load_model(
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
     return choose_parts(model, include, exclude)
+
+
+_STL_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
+
+
+def _binary_stl(path: Path, size: int) -> np.ndarray | None:
+    """(F, 3, 3) float32 triangles of a binary STL, read with numpy alone: trimesh, with the
+    scipy and networkx it imports, takes most of a small drawing's start. None where the
+    file is not binary STL (its size does not match its triangle count): trimesh reads it."""
+    if size < 84:
+        return None
+    with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
+        head = fh.read(84)
+        count = int.from_bytes(head[80:84], "little")
+        if size != 84 + _STL_RECORD.itemsize * count:
+            return None
+        records = np.frombuffer(fh.read(_STL_RECORD.itemsize * count), dtype=_STL_RECORD, count=count)
+    return records["triangle"]
 
 
 def _load_scene(path: Path, ext: str):
@@ -172,8 +296,9 @@ def _resolver_type():
     return CheckedResolver
 
 
-def _flatten(scene, stem: str):
-    """Concatenate every mesh instance of a trimesh Scene in graph order."""
+def _flatten(scene, stem: str | None):
+    """Concatenate every mesh instance of a trimesh Scene in graph order; a scene of one mesh
+    names its part ``stem`` (a file's), or after its node where ``stem`` is None."""
     import trimesh
 
     positions, faces, parts, names = [], [], [], []
@@ -190,10 +315,11 @@ def _flatten(scene, stem: str):
         positions.append(vertices)
         faces.append(np.asarray(mesh.faces, dtype=np.int64) + offset)
         parts.append(np.full(len(mesh.faces), len(names), np.int32))
-        names.append(stem if len(nodes) == 1 else _part_name(str(node), str(geometry_name), names))
+        single = len(nodes) == 1 and stem is not None
+        names.append(stem if single else _part_name(str(node), str(geometry_name), names))
         offset += len(vertices)
     if not faces:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem]
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     return np.concatenate(positions), np.concatenate(faces), np.concatenate(parts), names
 
 

@@ -7,8 +7,6 @@ Smoothing normals (``blueprint.scene.normals``) and the object-space silhouette 
 from __future__ import annotations
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
 
 __all__ = ["weld"]
 
@@ -78,6 +76,26 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     return np.concatenate(firsts), np.concatenate(seconds)
 
 
+def _components(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Connected components of the graph whose edges are the pairs (i, j): each vertex gets the
+    smallest vertex index of its component. Clusters of near-duplicates are a few vertices
+    across, so this takes a few rounds; in numpy, so that drawing does not load scipy.
+    Returns component numbers 0 to C-1."""
+    while True:
+        low = np.minimum(label[i], label[j])
+        before = label.copy()
+        np.minimum.at(label, i, low)
+        np.minimum.at(label, j, low)
+        # pointer jumping: follow labels to their roots
+        while True:
+            jumped = label[label]
+            if np.array_equal(jumped, label):
+                break
+            label = jumped
+        if np.array_equal(label, before):
+            return np.unique(label, return_inverse=True)[1].reshape(-1)
+
+
 def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Merge vertices that lie within `tol` of each other.
 
@@ -116,12 +134,10 @@ def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> 
     # Adding 0.0 turns -0.0 into 0.0, which row-unique would otherwise tell apart by bytes.
     unique, inverse = np.unique(positions + 0.0, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
+    label = np.arange(len(unique))
     if tol > 0 and len(unique) > 1:
         i, j = _close_pairs(unique, tol)
-        graph = sparse.coo_matrix((np.ones(len(i)), (i, j)), shape=(len(unique),) * 2)
-        _, label = csgraph.connected_components(graph, directed=False)
-    else:
-        label = np.arange(len(unique))
+        label = _components(label, np.asarray(i, np.int64), np.asarray(j, np.int64))
 
     group = label[inverse]
     # Number the groups by their first original vertex so the output order is stable.

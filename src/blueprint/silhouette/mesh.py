@@ -10,8 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
 
 from blueprint.scene.weld import weld
 
@@ -71,6 +69,10 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     lo, hi = pair_faces.min(axis=1), pair_faces.max(axis=1)
     _, keep = np.unique(lo * num_faces + hi, return_index=True)
     lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
+    # scipy loads here, not with the package: only the object-space method needs it
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
     # Stored as parity + 1 so that consistent pairs are not dropped as explicit zeros.
     graph = sparse.csr_matrix(
         (

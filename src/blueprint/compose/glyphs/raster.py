@@ -9,7 +9,6 @@ from functools import lru_cache
 import numpy as np
 
 from blueprint.color import RGBA
-from blueprint.silhouette.raster import draw_segments
 
 __all__ = ["LABEL_GAP", "draw_pieces", "draw_text"]
 
@@ -61,6 +60,9 @@ def draw_pieces(
     x1, y1 = min(hi[0], w), min(hi[1], h)
     if x1 <= x0 or y1 <= y0:
         return
+    # the silhouette package (and scipy with it) loads only when a drawing has glyphs
+    from blueprint.silhouette.raster import draw_segments
+
     coverage = draw_segments(pieces - [x0, y0], x1 - x0, y1 - y0, width, opacity)
     _composite(canvas, x0, y0, coverage, color)
 

@@ -1,0 +1,5 @@
+"""``python -m blueprint``: the ``blueprint`` command."""
+
+from blueprint.cli import main
+
+main()
