@@ -40,6 +40,7 @@ def main() -> None:
                 for ss in args.supersample or [1, 2]:
                     for use_compute, in_shader, kbuffer in variants:
                         r.use_compute, r.back_bias_in_shader = use_compute, in_shader
+                        r.culled_tie_break_from = None  # the variant's tie-break at every size
                         r.kbuffer, r.kbuffer_density = kbuffer, 0.0
                         options = dict(size=size, supersample=ss, max_layers=args.max_layers)
                         for _ in range(args.warmup):

@@ -124,10 +124,12 @@ CASES = [
     Case("engine-assembly", "glTF-Sample-Models/2CylinderEngine.glb"),
 ]
 
-# The ways the renderer peels: a geometry pass a layer, a k-buffer (several layers a pass,
-# where the driver has framebuffer fetch; forced here whatever the model's size), and the lean
-# pass of vector drawings (no normals: depth and triangle IDs alone).
-METHODS = ["pass-a-layer", "k-buffer", "ids-only"]
+# The ways the renderer peels: a geometry pass a layer (its back-face tie-break in the shader,
+# or as two culled draws: big frames of dense models on a GPU; both forced here whatever the
+# size), a k-buffer (several layers a pass, where the driver has framebuffer fetch or
+# interlock; forced whatever the model's size), and the lean pass of vector drawings (no
+# normals: depth and triangle IDs alone).
+METHODS = ["pass-a-layer", "two-culled-draws", "k-buffer", "ids-only"]
 
 
 @pytest.fixture(params=METHODS)
@@ -135,10 +137,11 @@ def method(request, renderer):
     kbuffer = request.param == "k-buffer"
     if kbuffer and not renderer.kbuffer:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    saved = renderer.kbuffer, renderer.kbuffer_density
+    saved = renderer.kbuffer, renderer.kbuffer_density, renderer.culled_tie_break_from
     renderer.kbuffer, renderer.kbuffer_density = kbuffer, 0.0
+    renderer.culled_tie_break_from = (0, 0) if request.param == "two-culled-draws" else None
     yield request.param
-    renderer.kbuffer, renderer.kbuffer_density = saved
+    renderer.kbuffer, renderer.kbuffer_density, renderer.culled_tie_break_from = saved
 
 
 # peeled Layers per (case, method) and the Oracle per case, shared by the depth and ID tests

@@ -41,6 +41,7 @@ class Device:
     """Owns one OpenGL context (headless unless ``ctx`` is a window's), its targets, queries
     and programs. Use as a context manager or call ``release()``.
 
+    ``software``: the renderer is a software rasteriser (llvmpipe, softpipe).
     ``use_compute``: image passes run as compute shaders (OpenGL 4.3 on a GPU).
     ``framebuffer_fetch``: a fragment may read what the ones before it wrote to its pixel.
     ``fragment_interlock``: fragments of one pixel may run a critical section one after
@@ -58,8 +59,8 @@ class Device:
         self.max_texture = int(self.info["max_texture_size"])
         # on GPUs built for compute (H100, H200) only a few cores rasterise, while compute
         # shaders run on all of them
-        software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
-        self.use_compute = self.ctx.version_code >= 430 and not software
+        self.software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
+        self.use_compute = self.ctx.version_code >= 430 and not self.software
         ext = self.ctx.extensions
         self.framebuffer_fetch = "GL_EXT_shader_framebuffer_fetch" in ext and (
             self.ctx.version_code >= 420 or "GL_ARB_shading_language_packing" in ext

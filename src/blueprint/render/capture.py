@@ -126,7 +126,6 @@ class Capture:
         self.r, self.mesh, self.gb = r, mesh, gb
         normals = gb.normal is not None
         self.tie_break = normals if tie_break is None else tie_break
-        self.shader_bias = r.back_bias_in_shader and self.tie_break
         batch = -(-batch // -(-batch // KBUFFER_MAX))  # as many to a pass as evenly fit
         w, h = gb.size
         use_kbuffer = (
@@ -139,6 +138,14 @@ class Capture:
             and r.back_bias_in_shader
             and mesh.part_count < 0xFFFF
         )
+        culled_from = r.culled_tie_break_from
+        culled = (
+            not use_kbuffer
+            and culled_from is not None
+            and mesh.triangles >= culled_from[0]
+            and w * h >= culled_from[1]
+        )
+        self.shader_bias = r.back_bias_in_shader and self.tie_break and not culled
         if use_kbuffer:
             defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock}
             prog = r.program(KBUFFER_FRAG, GEOMETRY_VERT, defines, modern=r.kbuffer_interlock)

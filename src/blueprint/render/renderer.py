@@ -99,6 +99,14 @@ class LayerRenderer(Device):
         # offset: one draw measured faster on llvmpipe and on the H100 in 3 of 4 cases
         # (benchmarks/variants.py), and never more than 10 % slower.
         self.back_bias_in_shader = True
+        # ...except for big frames of dense models on a GPU: a draw writing depth loses early
+        # depth tests, and there hidden fragments dominate. On the H200 (benchmarks/variants.py,
+        # 2048x2048 supersampled twice, compute image passes) two culled draws took 341 against
+        # 378 ms (cycloidal, 377K triangles, 36 layers) and 231 against 262 (2CylinderEngine,
+        # 121K, 40 layers), 107 against 119 for 5 layers; for the 70K-triangle bunny 90 against
+        # 86, and at 512x512 one draw won or tied but for 2CylinderEngine (31 against 32 ms).
+        # (triangles, G-buffer pixels) from which two culled draws are used; None: never.
+        self.culled_tie_break_from = None if self.software else (100_000, 1 << 22)
         # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
         # pixel to read and write its surfaces one after another: framebuffer fetch (Mesa's
         # drivers, llvmpipe among them) with a target a layer, else fragment shader interlock
