@@ -352,3 +352,16 @@ def test_an_image_declaring_too_many_pixels_is_one_line(tmp_path, width, height)
         read_image(tmp_path / "big.png", "rgba8")
     assert str(caught.value).startswith(f"{tmp_path / 'big.png'}: the image declares ")
     assert "pixels" in str(caught.value) and "Error" not in str(caught.value)
+
+
+# -- instanced scenes: named and sorted in one pass --------------------------------------------------
+def test_instances_of_one_mesh_are_numbered_in_order():
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(), geom_name="box", node_name="n0")
+    for i in range(1, 300):
+        matrix = trimesh.transformations.translation_matrix([3 * i, 0, 0])
+        scene.graph.update(frame_to=f"n{i}", frame_from=scene.graph.base_frame, geometry="box", matrix=matrix)
+    model = loader.model_from_object(scene)
+    assert list(model.part_names) == ["box"] + [f"box[{k}]" for k in range(2, 301)]
+    # a row of boxes: none encloses the rest or lies under it, so every one is drawn
+    assert len(model.part_names) == 300 and model.positions[:, 0].max() == pytest.approx(3 * 299 + 0.5)
