@@ -266,3 +266,102 @@ def test_a_model_name_too_long_for_the_file_system(tmp_path):
     with pytest.raises(InputError) as error:
         loader.load_model(path)
     assert str(error.value) == f"{path}: cannot read (File name too long)"
+
+
+# -- settings and pipeline files: nesting depth and number sizes ---------------------------------------
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        ("deep.json", "[" * 100_000 + "]" * 100_000, "tables or arrays nested deeper than 32"),
+        ("deep.toml", "a = " + "[" * 10_000 + "]" * 10_000, "tables or arrays nested deeper than 32"),
+        ("digits.json", '{"a": ' + "7" * 5000 + "}", "a number of 5000 digits (at most 100)"),
+        ("e400.json", '{"a": 1' + "0" * 400 + "}", "a number of 401 digits (at most 100)"),
+        ("digits.toml", "a = " + "7" * 5000, "a number of too many digits (at most 100)"),
+        ("wide.toml", "[t]\na = " + "7" * 200, "t.a: a number of too many digits (at most 100)"),
+        ("nested.json", '{"a": ' + "[" * 40 + "]" * 40 + "}", "a" + "[0]" * 32 + ": nested deeper than 32"),
+    ],
+)
+def test_settings_nesting_and_numbers_are_bounded(tmp_path, name, text, message):
+    (tmp_path / name).write_text(text)
+    with pytest.raises(InputError) as caught:
+        read_settings(tmp_path / name, "glyph file")
+    assert str(caught.value) == f"{tmp_path / name}: {message}"
+
+
+def test_settings_within_the_bounds_read_as_written(tmp_path):
+    (tmp_path / "ok.json").write_text('{"a": [1, 2.5, {"b": ' + "9" * 100 + "}]}")
+    assert read_settings(tmp_path / "ok.json", "glyph file") == {"a": [1, 2.5, {"b": int("9" * 100)}]}
+
+
+def test_a_pipeline_file_with_a_huge_number_is_one_line(tmp_path):
+    (tmp_path / "p.toml").write_text("[variables]\nn = " + "7" * 5000 + "\n" + INVERT)
+    line = one_line(
+        run("pipeline", "run", "p.toml", "-o", "out.png", "--image", "picture=x.png", cwd=tmp_path)
+    )
+    assert line == "p.toml: a number of too many digits (at most 100)"
+    assert not (tmp_path / "out.png").exists()
+
+
+# -- pipeline expressions --------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("expression", "message"),
+    [
+        ("= -s", "arithmetic on a non-number in '-s'"),
+        ("= max(1)", "max takes two or more numbers in 'max(1)'"),
+        ("= min(1, s)", "arithmetic on a non-number in 'min(1, s)'"),
+        ("= " + "-" * 5000 + "1", "an expression of 5001 characters (at most 1000)"),
+        ("= " + "-" * 990 + "1", "the expression nests too deeply"),
+    ],
+)
+def test_expression_errors_name_the_file_and_key(expression, message):
+    from blueprint.pipeline.expressions import evaluate
+
+    with pytest.raises(InputError) as caught:
+        evaluate(expression, {"s": "text"}, "p.toml", "passes.a.k")
+    assert message in str(caught.value) and str(caught.value).startswith("p.toml")
+    assert "passes.a.k" in str(caught.value)
+
+
+def test_expressions_still_evaluate():
+    from blueprint.pipeline.expressions import evaluate
+
+    assert evaluate("= max(x, 3, 1.5) - -1", {"x": 2}, "p.toml", "k") == 4
+
+
+# -- image inputs: the header's size before any pixel --------------------------------------------------
+def _png_header_only(path: Path, width: int, height: int) -> None:
+    """A PNG whose IHDR declares width x height, with no pixel data worth decoding."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, body: bytes) -> bytes:
+        return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
+    path.write_bytes(
+        b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(b"")) + chunk(b"IEND", b"")
+    )
+
+
+@pytest.mark.parametrize(("width", "height"), [(100_000, 100_000), (10_000, 10_000)])
+def test_an_image_declaring_too_many_pixels_is_one_line(tmp_path, width, height):
+    from blueprint.pipeline.media import read_image
+
+    _png_header_only(tmp_path / "big.png", width, height)
+    with pytest.raises(InputError) as caught:
+        read_image(tmp_path / "big.png", "rgba8")
+    assert str(caught.value).startswith(f"{tmp_path / 'big.png'}: the image declares ")
+    assert "pixels" in str(caught.value) and "Error" not in str(caught.value)
+
+
+# -- instanced scenes: named and sorted in one pass --------------------------------------------------
+def test_instances_of_one_mesh_are_numbered_in_order():
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(), geom_name="box", node_name="n0")
+    for i in range(1, 300):
+        matrix = trimesh.transformations.translation_matrix([3 * i, 0, 0])
+        scene.graph.update(frame_to=f"n{i}", frame_from=scene.graph.base_frame, geometry="box", matrix=matrix)
+    model = loader.model_from_object(scene)
+    assert list(model.part_names) == ["box"] + [f"box[{k}]" for k in range(2, 301)]
+    # a row of boxes: none encloses the rest or lies under it, so every one is drawn
+    assert len(model.part_names) == 300 and model.positions[:, 0].max() == pytest.approx(3 * 299 + 0.5)

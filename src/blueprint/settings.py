@@ -20,6 +20,7 @@ from blueprint.errors import InputError
 
 __all__ = [
     "IMAGE_FILE_LIMIT",
+    "IMAGE_PIXEL_LIMIT",
     "MODEL_FILE_LIMIT",
     "SETTINGS_FILE_LIMIT",
     "Entry",
@@ -27,6 +28,7 @@ __all__ = [
     "is_number",
     "one_line",
     "open_file",
+    "parse_text",
     "read_file",
     "read_settings",
     "show",
@@ -37,6 +39,14 @@ __all__ = [
 MODEL_FILE_LIMIT = 2 << 30  # a model, or a file it references: materials, textures, buffers
 IMAGE_FILE_LIMIT = 1 << 30  # a pipeline's image input
 SETTINGS_FILE_LIMIT = 16 << 20  # settings, line style, glyph and pipeline files
+# Pixels an image input may declare (256 MiB as RGBA): its header is read before any pixel, and
+# a few kilobytes of PNG can declare an image larger than memory.
+IMAGE_PIXEL_LIMIT = 1 << 26
+# Settings and pipeline files: how deep tables and arrays nest and how many digits a number has;
+# a 10^4-deep array or a 5000-digit integer is refused with the file and key named.
+SETTINGS_DEPTH_LIMIT = 32
+SETTINGS_DIGITS_LIMIT = 100
+_TOO_BIG = 10**SETTINGS_DIGITS_LIMIT
 
 _NOT_REGULAR = (
     (stat.S_ISDIR, "a directory"),
@@ -126,15 +136,52 @@ def read_settings(path: str | os.PathLike, what: str) -> Any:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:
         raise InputError(f"{name}: not UTF-8 text") from None
-    if suffix == ".toml":
-        try:
-            return tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise InputError(f"{name}: not valid TOML ({one_line(exc)})") from None
+    return parse_text(text, name, suffix[1:])
+
+
+def _number_text(name: str, kind: type):
+    def parse(digits: str):
+        if len(digits) > SETTINGS_DIGITS_LIMIT:
+            raise InputError(f"{name}: a number of {len(digits)} digits (at most {SETTINGS_DIGITS_LIMIT})")
+        return kind(digits)
+
+    return parse
+
+
+def parse_text(text: str, name: str, fmt: str) -> Any:
+    """The data of TOML or JSON ``text`` (``fmt`` "toml" or "json") from the file ``name``, with
+    nesting depth and number sizes bounded: a one-line InputError naming the file and the key."""
+    floats = _number_text(name, float)
     try:
-        return json.loads(text)
+        if fmt == "toml":
+            data = tomllib.loads(text, parse_float=floats)
+        else:
+            data = json.loads(text, parse_int=_number_text(name, int), parse_float=floats)
+    except RecursionError:
+        raise InputError(f"{name}: tables or arrays nested deeper than {SETTINGS_DEPTH_LIMIT}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{name}: not valid TOML ({one_line(exc)})") from None
     except json.JSONDecodeError as exc:
         raise InputError(f"{name}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    except ValueError:  # Python's own limit on the digits of an integer, met inside tomllib
+        raise InputError(f"{name}: a number of too many digits (at most {SETTINGS_DIGITS_LIMIT})") from None
+    _check_tree(data, name)
+    return data
+
+
+def _check_tree(data: Any, name: str) -> None:
+    # Walked with a stack, not recursion: the parsers' own recursion limit is far above ours.
+    stack = [(data, "", 0)]
+    while stack:
+        value, key, depth = stack.pop()
+        if depth > SETTINGS_DEPTH_LIMIT:
+            raise InputError(f"{name}: {key}: nested deeper than {SETTINGS_DEPTH_LIMIT}")
+        if isinstance(value, dict):
+            stack.extend((v, f"{key}.{k}" if key else str(k), depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, f"{key}[{i}]", depth + 1) for i, v in enumerate(value))
+        elif isinstance(value, int) and not isinstance(value, bool) and abs(value) >= _TOO_BIG:
+            raise InputError(f"{name}: {key}: a number of too many digits (at most {SETTINGS_DIGITS_LIMIT})")
 
 
 def one_line(exc: Exception) -> str:

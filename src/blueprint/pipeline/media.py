@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import os
 import tempfile
+import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import numpy as np
 from blueprint.errors import InputError
 from blueprint.export.files import publish
 from blueprint.gpu.targets import FORMATS
-from blueprint.settings import IMAGE_FILE_LIMIT, check_file
+from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file, one_line
 
 VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
 
@@ -58,21 +59,37 @@ def _check_video(path: Path) -> None:
     check_file(path, None)
 
 
+def _check_pixels(path: Path, size: tuple[int, int]) -> None:
+    """The header's size, read before any pixel is decoded: a small file may declare an image
+    far larger than memory."""
+    if size[0] * size[1] > IMAGE_PIXEL_LIMIT:
+        raise InputError(
+            f"{path}: the image declares {size[0]} x {size[1]} pixels, over the limit of {IMAGE_PIXEL_LIMIT}"
+        )
+
+
 def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.ndarray:
     """An image file as (H, W, C) in target format ``fmt``, resized to ``size`` if given."""
     from PIL import Image, UnidentifiedImageError
 
     _check_image(path)
     try:
-        with Image.open(path) as picture:
+        # the header's size is checked here, against our limit: Pillow's warning would be a second line
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            picture = Image.open(path)
+        with picture:
+            _check_pixels(path, picture.size)
             picture = picture.convert("RGBA")
             if size is not None and picture.size != tuple(size):
                 picture = picture.resize(tuple(size), Image.Resampling.BILINEAR)
             rgba = np.asarray(picture)
     except FileNotFoundError:
         raise InputError(f"{path}: no such image file") from None
-    except (UnidentifiedImageError, OSError) as exc:
-        raise InputError(f"{path}: cannot read the image ({exc})") from None
+    except Image.DecompressionBombError:
+        raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
+        raise InputError(f"{path}: cannot read the image ({one_line(exc)})") from None
     return to_format(rgba, fmt)
 
 
@@ -84,12 +101,18 @@ def image_size(path: Path) -> tuple[int, int]:
 
     _check_image(path)
     try:
-        with Image.open(path) as picture:
+        # the header's size is checked here, against our limit: Pillow's warning would be a second line
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            picture = Image.open(path)
+        with picture:
             return picture.size
     except FileNotFoundError:
         raise InputError(f"{path}: no such image file") from None
-    except (UnidentifiedImageError, OSError) as exc:
-        raise InputError(f"{path}: cannot read the image ({exc})") from None
+    except Image.DecompressionBombError:
+        raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
+        raise InputError(f"{path}: cannot read the image ({one_line(exc)})") from None
 
 
 def video_info(path: Path) -> tuple[tuple[int, int], float, int]:

@@ -56,7 +56,6 @@ Errors name the file, the key and the allowed values, in one line.
 from __future__ import annotations
 
 import re
-import tomllib
 from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
@@ -64,7 +63,7 @@ from pathlib import Path
 from blueprint.errors import InputError
 from blueprint.gpu.targets import FORMATS
 from blueprint.ops import OPS, Op
-from blueprint.settings import SETTINGS_FILE_LIMIT, read_file
+from blueprint.settings import SETTINGS_FILE_LIMIT, parse_text, read_file
 
 # name: (default format, allowed formats, from the renderer's G-buffer, what it holds)
 ATTRIBUTES: dict[str, tuple[str, tuple[str, ...], bool, str]] = {
@@ -322,10 +321,7 @@ def _name(source: str, key: str, name: str) -> str:
 
 def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
     """Parse pipeline TOML; structure only (``bind`` checks values and the graph)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{source}: not valid TOML ({exc})") from None
+    data = parse_text(text, source, "toml")
     _only(source, "", data, _SECTIONS)
     head = _table(source, "pipeline", data.get("pipeline", {}))
     _only(source, "pipeline", head, _PIPELINE_KEYS)

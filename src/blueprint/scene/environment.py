@@ -38,9 +38,27 @@ _WIDER = 4.0
 PartGlobs = str | Iterable[str | int] | None
 
 
-def _part_bounds(model: Model, mask: np.ndarray) -> np.ndarray:
-    used = model.positions[model.faces[mask].reshape(-1)].astype(np.float64)
-    return np.array([used.min(axis=0), used.max(axis=0)])
+def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(P, 3) lows and highs of every part's faces in one pass over the faces, and (P,) whether
+    the part has any: per part, a pass over every face would take minutes for 10^5 instances."""
+    count = len(model.part_names)
+    tri = model.positions[model.faces].astype(np.float64)
+    lo, hi = np.full((count, 3), np.inf), np.full((count, 3), -np.inf)
+    np.minimum.at(lo, model.face_part, tri.min(axis=1))
+    np.maximum.at(hi, model.face_part, tri.max(axis=1))
+    return lo, hi, np.bincount(model.face_part, minlength=count) > 0
+
+
+def _lowest_of_the_rest(values: np.ndarray, alive: np.ndarray) -> np.ndarray:
+    """(P, 3): for each part, the lowest of ``values`` over the other parts alive, by axis (the
+    lowest of all, or for the part that holds it the second lowest; inf where none)."""
+    axes = np.arange(values.shape[1])
+    v = np.where(alive[:, None], values, np.inf)
+    first = v.argmin(axis=0)
+    lowest = v[first, axes]
+    v[first, axes] = np.inf
+    second = v.min(axis=0)
+    return np.where(np.arange(len(values))[:, None] == first[None, :], second[None, :], lowest[None, :])
 
 
 def _inward_fraction(model: Model, mask: np.ndarray, centre: np.ndarray) -> float:
@@ -55,34 +73,48 @@ def _inward_fraction(model: Model, mask: np.ndarray, centre: np.ndarray) -> floa
 def environment_parts(model: Model) -> np.ndarray:
     """(P,) bool: the parts that enclose the rest of the model (inward-facing boxes, spheres,
     domes) or lie under it as a ground plane far wider than the rest."""
-    found = np.zeros(len(model.part_names), bool)
-    if len(model.part_names) < 2:
+    count = len(model.part_names)
+    found = np.zeros(count, bool)
+    if count < 2:
         return found
     up = AXES[model.up]
     across = [a for a in range(3) if a != up]
-    # twice: a skybox found first no longer counts as the rest a ground plane must span
-    for part in [*range(len(model.part_names))] * 2:
-        mask = model.face_part == part
-        if found[part]:
-            continue
-        rest = ~mask & ~found[model.face_part]
-        if not mask.any() or not rest.any():
-            continue
-        box, others = _part_bounds(model, mask), _part_bounds(model, rest)
-        size = box[1] - box[0]
-        grow = _INSIDE * size.max()
-        inside = (others[0] >= box[0] - grow).all() and (others[1] <= box[1] + grow).all()
-        other_size = others[1] - others[0]
-        if inside and _inward_fraction(model, mask, box.mean(axis=0)) >= _INWARD:
-            found[part] = True
-            continue
-        # the ground: flat across the up axis, at or below the rest, and far wider than it
-        flat = size[up] <= _FLAT * size[across].max()
-        below = box[1, up] <= others[0, up] + grow
-        wider = all(size[a] >= _WIDER * max(other_size[a], 1e-30) for a in across)
-        within = all(box[0, a] <= others[0, a] and box[1, a] >= others[1, a] for a in across)
-        if flat and below and wider and within:
-            found[part] = True
+    lo, hi, has = _bounds_by_part(model)
+    size = hi - lo
+    grow = _INSIDE * size.max(axis=1)
+    order = np.arange(count)
+    inward: dict[int, float] = {}
+    # Parts in order, each tested against the rest (the other parts not yet found), twice: a
+    # skybox found first no longer counts as the rest a ground plane must span. All parts are
+    # tested at once against the rest as it stands; it changes only where a part is found.
+    for _ in range(2):
+        start = 0
+        while start < count:
+            alive = has & ~found
+            others_lo = _lowest_of_the_rest(lo, alive)
+            others_hi = -_lowest_of_the_rest(-hi, alive)
+            other_size = others_hi - others_lo
+            eligible = alive & (alive.sum() - alive > 0) & (order >= start)
+            inside = (others_lo >= lo - grow[:, None]).all(axis=1) & (others_hi <= hi + grow[:, None]).all(
+                axis=1
+            )
+            flat = size[:, up] <= _FLAT * size[:, across].max(axis=1)
+            below = hi[:, up] <= others_lo[:, up] + grow
+            wider = (size[:, across] >= _WIDER * np.maximum(other_size[:, across], 1e-30)).all(axis=1)
+            within = ((lo[:, across] <= others_lo[:, across]) & (hi[:, across] >= others_hi[:, across])).all(
+                axis=1
+            )
+            ground = flat & below & wider & within
+            start = count
+            for part in np.flatnonzero(eligible & (inside | ground)):
+                part = int(part)
+                if not ground[part] and part not in inward:
+                    centre = (lo[part] + hi[part]) / 2
+                    inward[part] = _inward_fraction(model, model.face_part == part, centre)
+                if ground[part] or inward[part] >= _INWARD:
+                    found[part] = True
+                    start = part + 1
+                    break
     return found
 
 

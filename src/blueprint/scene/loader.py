@@ -302,6 +302,8 @@ def _flatten(scene, stem: str | None):
     import trimesh
 
     positions, faces, parts, names = [], [], [], []
+    taken: set[str] = set()
+    counts: dict[str, int] = {}
     offset = 0
     nodes = scene.graph.nodes_geometry
     for node in nodes:
@@ -316,20 +318,26 @@ def _flatten(scene, stem: str | None):
         faces.append(np.asarray(mesh.faces, dtype=np.int64) + offset)
         parts.append(np.full(len(mesh.faces), len(names), np.int32))
         single = len(nodes) == 1 and stem is not None
-        names.append(stem if single else _part_name(str(node), str(geometry_name), names))
+        names.append(stem if single else _part_name(str(node), str(geometry_name), taken, counts))
         offset += len(vertices)
     if not faces:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     return np.concatenate(positions), np.concatenate(faces), np.concatenate(parts), names
 
 
-def _part_name(node: str, geometry: str, taken: list[str]) -> str:
+def _part_name(node: str, geometry: str, taken: set[str], counts: dict[str, int]) -> str:
     """The node's name where it says more than its mesh's name (CAD instance paths), else the
-    mesh's name, numbered from the second instance on, so patterns like ``Piston*`` match."""
+    mesh's name, numbered from the second instance on, so patterns like ``Piston*`` match.
+
+    ``counts`` keeps the last number given per mesh, so that 10^5 instances of one mesh are
+    named in one pass, not by trying every number from 2 against every name given."""
     if node.startswith(geometry):
-        return node
-    name, k = geometry, 1
-    while name in taken:
-        k += 1
-        name = f"{geometry}[{k}]"
+        name = node
+    else:
+        name, k = geometry, counts.get(geometry, 1)
+        while name in taken:
+            k += 1
+            name = f"{geometry}[{k}]"
+        counts[geometry] = k
+    taken.add(name)
     return name
