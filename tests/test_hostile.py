@@ -365,3 +365,43 @@ def test_instances_of_one_mesh_are_numbered_in_order():
     assert list(model.part_names) == ["box"] + [f"box[{k}]" for k in range(2, 301)]
     # a row of boxes: none encloses the rest or lies under it, so every one is drawn
     assert len(model.part_names) == 300 and model.positions[:, 0].max() == pytest.approx(3 * 299 + 0.5)
+
+
+# -- header counts against the file's size ---------------------------------------------------------
+
+ASCII_PLY = (
+    "ply\nformat ascii 1.0\nelement vertex {v}\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face {f}\nproperty list uchar int vertex_indices\nend_header\n"
+    "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"
+)
+
+
+def test_ascii_ply_declaring_a_trillion_faces_is_refused_before_reading(tmp_path):
+    path = tmp_path / "lie.ply"
+    path.write_text(ASCII_PLY.format(v=3, f=10**12))
+    size = path.stat().st_size
+    with pytest.raises(InputError) as info:
+        blueprint.load_model(path)
+    assert str(info.value) == (
+        f"{path}: the header declares {10**12} face elements, more than the file's {size} bytes can hold"
+    )
+    proc = run("render", str(path), "-o", "out.png", "--size", "32", "32", cwd=tmp_path)
+    assert "declares 1000000000000 face elements" in one_line(proc)
+    assert not (tmp_path / "out.png").exists()
+
+
+def test_off_claiming_ten_times_its_faces_is_refused(tmp_path):
+    faces = "".join("3 0 1 2\n" for _ in range(20))
+    path = tmp_path / "lie.off"
+    path.write_text(f"OFF\n3 200 0\n0 0 0\n1 0 0\n0 1 0\n{faces}")
+    with pytest.raises(InputError, match=r"lie\.off: the header declares 200 faces, more than the file's"):
+        blueprint.load_model(path)
+
+
+def test_honest_headers_still_load(tmp_path):
+    ply = tmp_path / "ok.ply"
+    ply.write_text(ASCII_PLY.format(v=3, f=1))
+    off = tmp_path / "ok.off"
+    off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    assert blueprint.load_model(ply).triangle_count == 1
+    assert blueprint.load_model(off).triangle_count == 1

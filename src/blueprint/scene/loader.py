@@ -14,6 +14,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.environment import PartGlobs, choose_parts
+from blueprint.scene.headers import check_declared_counts
 from blueprint.scene.model import Model
 from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
 from blueprint.scene.up import up_of
@@ -88,6 +89,7 @@ def load_model(
         raise InputError(f"{name}: unknown model format '.{ext}' (supported: {known} and more)")
     if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
+    check_declared_counts(path, ext, info.st_size, MODEL_FILE_LIMIT)
 
     scene = _load_scene(path, ext)
     positions, faces, face_part, names = _flatten(scene, path.stem)
