@@ -159,25 +159,23 @@ def render(
         _render_vector(
             model,
             output,
-            camera,
-            style,
-            max_layers,
-            crease_angle,
-            line_width,
-            scale,
-            units,
-            highlight,
-            reveal,
-            dict(
-                section=section,
-                section_plane=section_plane,
-                section_keep=section_keep,
-                sheet=sheet,
-                title=title,
-                dimensions=dimensions,
-            ),
-            include,
-            exclude,
+            style=style,
+            max_layers=max_layers or None,
+            crease_angle=crease_angle,
+            line_width=line_width,
+            scale=scale,
+            units=units,
+            highlight=highlight,
+            reveal=reveal,
+            section=section,
+            section_plane=section_plane,
+            section_keep=section_keep,
+            sheet=sheet,
+            title=title,
+            dimensions=dimensions,
+            include=include,
+            exclude=exclude,
+            **camera,
         )
         return
     if scale or units or sheet or title or dimensions:
@@ -222,41 +220,12 @@ def render(
     )
 
 
-def _render_vector(
-    model,
-    output,
-    camera,
-    style,
-    max_layers,
-    crease_angle,
-    line_width,
-    scale,
-    units,
-    highlight,
-    reveal,
-    section,
-    include,
-    exclude,
-):
+def _render_vector(model, output, **options) -> None:
+    """Write the vector drawing (``render_vector_file``'s options) and print its line."""
     from blueprint.api import default_renderer
     from blueprint.api.files import render_vector_file
 
-    summary = render_vector_file(
-        model,
-        output,
-        style=style,
-        max_layers=max_layers or None,
-        crease_angle=crease_angle,
-        line_width=line_width,
-        scale=scale,
-        units=units,
-        highlight=highlight,
-        reveal=reveal,
-        **section,
-        include=include,
-        exclude=exclude,
-        **camera,
-    )
+    summary = render_vector_file(model, output, **options)
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
         f"{output}: {summary['bytes']} bytes{guessed_up(summary['up'], summary['up_reason'])}, "
