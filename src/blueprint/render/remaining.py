@@ -3,8 +3,8 @@
 A peel stopped by ``max_layers`` whose last layer still covered pixels may have more behind
 it. Peeling on to count them would cost the full peel the cap was there to save; instead one
 pass draws the mesh with no depth test, adding one per fragment behind the last layer into a
-float target, and the largest count, reduced on the GPU, is read back (a few texels). Frames that stop
-on their own (an empty layer, ``min_fraction``, depth masking) never run it.
+float target, and the largest count, reduced on the GPU, is read back (a few texels). Frames
+that stop on their own (an empty layer, ``min_fraction``, depth masking) never run it.
 """
 
 from __future__ import annotations
