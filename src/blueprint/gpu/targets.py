@@ -18,8 +18,13 @@ FORMATS: dict[str, tuple[int, str]] = {
     "r32i": (1, "i4"),
     "rg32i": (2, "i4"),
 }
-# formats of the renderer's own targets, not offered to pipelines (k-buffer surfaces)
-INTERNAL_FORMATS: dict[str, tuple[int, str]] = {"rgba32ui": (4, "u4"), "rg32ui": (2, "u4")}
+# formats of the renderer's own targets, not offered to pipelines (k-buffer surfaces, A-buffer
+# list heads)
+INTERNAL_FORMATS: dict[str, tuple[int, str]] = {
+    "rgba32ui": (4, "u4"),
+    "rg32ui": (2, "u4"),
+    "r32ui": (1, "u4"),
+}
 
 
 @dataclass(frozen=True)
@@ -37,6 +42,7 @@ class TargetPool:
         self.ctx = ctx
         self._textures: dict[str, tuple[TargetKey, object]] = {}
         self._framebuffers: dict[tuple, object] = {}
+        self._buffers: dict[str, object] = {}
 
     def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
         """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
@@ -98,6 +104,24 @@ class TargetPool:
                 del self._framebuffers[key]
         old.release()
 
+    def buffer(self, name: str, nbytes: int):
+        """The storage buffer called ``name`` holding at least ``nbytes``: kept while it is big
+        enough, replaced by one of the size asked for when it is not."""
+        held = self._buffers.get(name)
+        if held is not None and held.size >= nbytes:
+            return held
+        if held is not None:
+            held.release()
+            del self._buffers[name]
+        try:
+            buf = self.ctx.buffer(reserve=max(int(nbytes), 4))
+        except Exception:
+            raise InputError(
+                f"{name}: {nbytes / 2**20:.0f} MiB of GPU memory could not be allocated (try a smaller size)"
+            ) from None
+        self._buffers[name] = buf
+        return buf
+
     def _unbind(self, fbo) -> None:
         # moderngl re-binds its idea of the current framebuffer: never leave it a deleted one
         if self.ctx.fbo is fbo:
@@ -109,8 +133,11 @@ class TargetPool:
             fbo.release()
         for _, tex in self._textures.values():
             tex.release()
+        for buf in self._buffers.values():
+            buf.release()
         self._framebuffers.clear()
         self._textures.clear()
+        self._buffers.clear()
 
 
 @contextlib.contextmanager

@@ -491,7 +491,11 @@ class Executor:
         if name in pl.stacked and bound.passes[name].per_layer:
             count = max(1, min(layers, len(st.stacks[name])))
             return np.stack([read_texture(t, fmt) for t in st.stacks[name][:count]])
-        return read_texture(self._value(st, name, 0), fmt)
+        tex = self._value(st, name, 0)
+        # through a pixel buffer: a plain texture read took 6.7 against 5.5 ms for 2048x2048
+        # on the H200 (the copy into the buffer runs on the GPU's copy engine)
+        buffer = self.r.pool.buffer("pipeline.readback", texture_bytes(tex))
+        return read_texture_later(tex, fmt, buffer).collect()
 
     # -- single operations (tests, tools) --------------------------------------------------------
     def run_op(

@@ -115,7 +115,7 @@ class LayerCapture:
             for name in pl.iteration0 if layer == 0 else pl.per_layer:
                 self.ex._run_pass(st, name, layer, layer + 1)
 
-        return peel_layers(draw, groups[0].queries, rules)
+        return peel_layers(draw, groups[0].queries, rules, samples=groups[0].capture.samples)
 
     def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
         """Layers left behind the last one where the peel stopped at its cap with the last layer
@@ -124,6 +124,9 @@ class LayerCapture:
         caps = [rule.layers for rule in rules if isinstance(rule, MaxLayers)]
         if not caps or layers < min(caps) or not counts or counts[layers - 1] == 0:
             return 0
+        deepest = st.groups[0].capture.deepest()
+        if deepest is not None:
+            return max(0, deepest - layers)
         st.draws += 1
         return layers_left(self.r, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
 

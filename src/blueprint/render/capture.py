@@ -13,6 +13,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu import units
+from blueprint.render.abuffer import ABuffer
 from blueprint.render.stop import HARD_MAX_LAYERS, StopRule
 from blueprint.scene.camera import Camera
 
@@ -54,7 +55,8 @@ KBUFFER_MAX_BYTES = 1 << 29
 @dataclass
 class GBuffer:
     """The targets layers are peeled into: two depth textures that alternate (layer ``i`` in
-    ``depth[i % 2]``, the previous layer in the other), the normal target (None for ID-only
+    ``depth[i % 2]``, the previous layer in the other; in ``flat`` where the A-buffer
+    captured the layers: read them through ``layer_depth``), the normal target (None for ID-only
     buffers) and the ID target: (face + 1, part + 1) as rg32i, or face + 1 alone as r32i."""
 
     depth: tuple
@@ -62,13 +64,15 @@ class GBuffer:
     ids: object
     fbos: tuple
     clears: tuple
+    # float targets that hold the layers' depths instead, where the A-buffer captured them
+    flat: tuple | None = None
 
     @property
     def size(self) -> tuple[int, int]:
         return tuple(self.depth[0].size)
 
     def layer_depth(self, layer: int):
-        return self.depth[layer % 2]
+        return (self.flat or self.depth)[layer % 2]
 
 
 def gbuffer(pool, size: tuple[int, int], name: str = "gb", normals: bool = True) -> GBuffer:
@@ -108,7 +112,8 @@ class Capture:
     primitive IDs, and the blueprint needs only parts). ``tie_break`` pushes back faces behind
     coincident front faces (see ``BACK_OFFSET``); ID-only passes break no ties unless asked.
     ``batch`` > 1 lets one geometry pass find that many layers where the driver allows
-    (``_KBuffer``). ``selected`` (P,) bool draws only those parts.
+    (``_KBuffer``), or every layer (``ABuffer``, where the renderer takes it). ``selected``
+    (P,) bool draws only those parts.
     """
 
     def __init__(
@@ -138,6 +143,27 @@ class Capture:
             and r.back_bias_in_shader
             and mesh.part_count < 0xFFFF
         )
+        uniforms = {
+            "u_view": camera.view_matrix().T.astype("f4").tobytes(),
+            "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
+            "u_ortho": camera.ortho,
+            "u_depth_range": depth_range(camera),
+            "u_peel_eps": peel_eps(camera),
+        }
+        self.abuffer = None
+        if (
+            r.abuffer_max_bytes
+            and batch > 1
+            and normals
+            and selected is None
+            and r.back_bias_in_shader
+            and mesh.part_count < 0xFFFF
+        ):
+            self.abuffer = ABuffer(r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes)
+            if not self.abuffer.fits((w, h)):
+                self.abuffer = None
+            else:
+                use_kbuffer = False
         culled_from = r.culled_tie_break_from
         culled = (
             not use_kbuffer
@@ -171,6 +197,19 @@ class Capture:
             self._flags.filter = (r.ctx.NEAREST, r.ctx.NEAREST)
             prog["u_selected"].value = units.SELECTED
 
+    def samples(self, layer: int, query) -> int:
+        """Layer ``layer``'s covered pixels: what its occlusion ``query`` counted, or what the
+        A-buffer counted where it drew the layer."""
+        if self.abuffer is not None:
+            pixels = self.abuffer.layer_pixels
+            return pixels[layer] if layer < len(pixels) else 0
+        return query.samples
+
+    def deepest(self) -> int | None:
+        """The most layers any pixel has where the A-buffer captured them (None otherwise): the
+        layers a capped peel left, without a counting pass."""
+        return self.abuffer.deepest() if self.abuffer is not None else None
+
     def release(self) -> None:
         if self._flags is not None:
             self._flags.release()
@@ -182,6 +221,14 @@ class Capture:
         on the GPU without the CPU waiting (conditional rendering). Returns the draw calls
         issued."""
         gb, ctx = self.gb, self.r.ctx
+        if self.abuffer is not None:
+            drawn = self.abuffer.draw(gb, layer)
+            if drawn is not None:
+                gb.flat = self.abuffer.flat(gb.size)
+                return drawn
+            # more fragments than the lists may hold: peeled a pass a layer
+            self.abuffer = None
+        gb.flat = None
         gb.clears[layer % 2].use()
         gb.clears[layer % 2].clear(depth=1.0)
         gb.depth[0].use(units.PEEL_DEPTH)
@@ -293,6 +340,7 @@ def peel(
     rules: Sequence[StopRule],
     on_counted: Callable[[int], None] | None = None,
     look: bool = True,
+    samples: Callable[[int, object], int] | None = None,
 ) -> tuple[list[int], int]:
     """The one peel loop. ``draw(layer, query, guard)`` issues layer ``layer``'s geometry pass
     (counting its samples in ``query``, skipped on the GPU when ``guard``, the layer before's
@@ -303,8 +351,11 @@ def peel(
     reads each counted layer back (``on_counted``, called once the layer is known to count);
     else once per ``CHUNK`` layers, or once at the end when a rule caps the layers. Without
     ``look`` (a capped peel whose caller reads nothing back) it never waits: every layer up to
-    the cap is issued, and the counts are left unread (returned empty).
+    the cap is issued, and the counts are left unread (returned empty). ``samples(layer,
+    query)`` reads a layer's count where not every layer is counted by its query
+    (``Capture.samples``).
     """
+    samples = samples or (lambda layer, query: query.samples)
     limits = [r.limit() for r in rules if r.limit() is not None]
     limit = min(limits) if limits else HARD_MAX_LAYERS
     every_layer = on_counted is not None or any(r.every_layer for r in rules)
@@ -321,7 +372,7 @@ def peel(
         end = min(limit, peeled + step)
         for layer in range(peeled, end):
             draw(layer, queries[layer], queries[layer - 1] if layer else None)
-        counts += [queries[k].samples for k in range(peeled, end)]
+        counts += [samples(k, queries[k]) for k in range(peeled, end)]
         peeled = end
         counted = min((r.count(counts) for r in rules), default=len(counts))
         if on_counted is not None and counted == peeled:

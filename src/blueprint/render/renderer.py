@@ -9,6 +9,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
+from blueprint.render.abuffer import default_max_bytes
 from blueprint.render.capture import (
     BACK_OFFSET,
     GEOMETRY_VERT,
@@ -118,6 +119,12 @@ class LayerRenderer(Device):
         self.kbuffer_density = (
             KBUFFER_INTERLOCK_MIN_DENSITY if self.kbuffer_interlock else KBUFFER_MIN_DENSITY
         )
+        # Every layer from one geometry pass (render.abuffer) on GPUs: the most bytes its lists
+        # may take a frame (0: layers are peeled), and the fragments the last frame of each
+        # G-buffer size drew, the room the next one starts with.
+        self.abuffer_max_bytes = default_max_bytes(self) if self.use_compute else 0
+        self.abuffer_room: dict[tuple[int, int], int] = {}
+        self.abuffer_subgroup = False
 
     def release(self) -> None:
         self.make_current()
@@ -278,7 +285,9 @@ class LayerRenderer(Device):
             gb = gbuffer(self.pool, size, "idb", normals=False)
             capture = Capture(self, mesh, camera, gb, tie_break=True)
         rules = standard_rules(max_layers, min_fraction)
-        peel(capture.draw, self.queries("peel"), rules, lambda layer: read(gb, layer))
+        peel(
+            capture.draw, self.queries("peel"), rules, lambda layer: read(gb, layer), samples=capture.samples
+        )
 
 
 def check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:

@@ -1,0 +1,199 @@
+"""Every depth layer from one geometry pass: an A-buffer of per-pixel fragment lists.
+
+Depth peeling draws the whole mesh once a layer. Here one geometry pass appends every
+fragment to its pixel's list (storage buffers and an atomic counter, OpenGL 4.3), a compute
+pass sorts each pixel's list into the layers the peel would draw (its rules: the depth
+buffer's precision, back faces pushed back, the peel's tolerance, the first drawn winning a
+tie), and each layer is then unpacked into the G-buffer by a full-screen pass, so whatever
+reads layers sees what the peel draws. The lists' room comes from the fragments the last frame
+of that size drew; a pass that finds too little room is drawn again with enough, and one whose
+fragments would not fit ``max_bytes`` says so and the caller peels instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
+ABUFFER_FRAG = "blueprint.render:glsl/abuffer.frag"
+CLEAR_COMP = "blueprint.render:glsl/abuffer_clear.comp"
+RESOLVE_COMP = "blueprint.render:glsl/abuffer_resolve.comp"
+UNPACK_COMP = "blueprint.render:glsl/abuffer_unpack.comp"
+# the histogram of layers a pixel has (abuffer.glsl)
+MOST_LAYERS = 256
+# bytes a fragment holds: its surface (16), its link in the pixel's list, its link in the
+# pixel's layers
+NODE_BYTES = 24
+# room for this many fragments a pixel before a first frame has counted them
+FIRST_ROOM = 4
+# a quarter of the GPU's memory where the driver tells it, else this
+DEFAULT_MAX_BYTES = 1 << 30
+
+
+class ABuffer:
+    """The A-buffer capture of one frame's layers (see the module's docstring): ``draw`` at
+    layer 0 captures and sorts every layer, then unpacks layer 0; at each later layer it
+    unpacks that layer. ``uniforms`` are the camera's: ``u_view``, ``u_projection`` (bytes),
+    ``u_ortho``, ``u_depth_range``, ``u_peel_eps``; ``back_bias`` the peel's for back faces."""
+
+    def __init__(self, r, mesh, uniforms: dict, back_bias: float, max_bytes: int) -> None:
+        self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
+        subgroup = r.abuffer_subgroup
+        self.geometry = r.program(
+            ABUFFER_FRAG,
+            GEOMETRY_VERT,
+            {"SUBGROUP": subgroup},
+            version="#version 450 core" if subgroup else None,
+            modern=True,
+        )
+        self.resolve = r.compute(RESOLVE_COMP)
+        for prog, names in (
+            (self.geometry, ("u_view", "u_projection", "u_ortho")),
+            (self.resolve, ("u_depth_range", "u_peel_eps")),
+        ):
+            for name in names:
+                if isinstance(uniforms[name], bytes):
+                    prog[name].write(uniforms[name])
+                else:
+                    prog[name].value = uniforms[name]
+        self.resolve["u_back_bias"].value = back_bias
+        self.clear = r.compute(CLEAR_COMP)
+        self.unpack = r.compute(UNPACK_COMP)
+        self.unpack["u_back_bias"].value = back_bias
+        self.fragments = 0
+        # pixels covered by each layer, known once layer 0 is drawn
+        self.layer_pixels: list[int] = []
+
+    def deepest(self) -> int:
+        """The most layers any pixel has, once layer 0 is drawn."""
+        return len(self.layer_pixels)
+
+    def fits(self, size: tuple[int, int]) -> bool:
+        """Whether a frame of ``size`` with the fragments of the last one there would fit."""
+        return self._room(size) * NODE_BYTES <= self.max_bytes
+
+    def _room(self, size: tuple[int, int]) -> int:
+        held = self.r.abuffer_room.get(tuple(size))
+        return held if held is not None else FIRST_ROOM * size[0] * size[1]
+
+    def draw(self, gb, layer: int) -> int | None:
+        """Layer ``layer`` into ``gb``: its depth into ``flat[layer % 2]``, two float targets
+        standing in for the G-buffer's depth textures (``layer_pixels[layer]`` then tells its
+        covered pixels); the draw calls and dispatches issued, or None where layer 0 found more
+        fragments than ``max_bytes`` holds (nothing is drawn then)."""
+        size = gb.size
+        name = f"abuffer.{size[0]}x{size[1]}"
+        calls = 0
+        if layer == 0:
+            calls = self._capture(gb, name)
+            if calls is None:
+                return None
+            self._resolve(name, size)
+            calls += 1
+        if layer >= len(self.layer_pixels):
+            # an empty layer, as the peel's would be
+            self.r.pool.framebuffer((self.flat(size)[layer % 2],)).clear(1.0, 1.0, 1.0, 1.0)
+            return calls
+        self._unpack(gb, name, layer)
+        return calls + 1
+
+    def flat(self, size: tuple[int, int]) -> tuple:
+        """The two float targets the layers' depths alternate in, at ``size``."""
+        name = f"abuffer.{size[0]}x{size[1]}"
+        return tuple(self.r.pool.texture(f"{name}.depth{i}", size, "r32f") for i in (0, 1))
+
+    def _buffers(self, name: str, room: int) -> tuple:
+        """(nodes, links, order, totals, depths) with room for ``room`` fragments, bound to their
+        storage blocks (abuffer.glsl)."""
+        pool = self.r.pool
+        held = (
+            pool.buffer(f"{name}.nodes", 16 * room),
+            pool.buffer(f"{name}.links", 4 * room),
+            pool.buffer(f"{name}.order", 4 * room),
+            pool.buffer(f"{name}.totals", 16),
+            pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1)),
+        )
+        for binding, buf in enumerate(held):
+            buf.bind_to_storage_buffer(binding)
+        return held
+
+    def _capture(self, gb, name: str) -> int | None:
+        """Every fragment into the lists: the geometry pass, again with more room where the
+        first found too little. The calls issued, or None where the fragments would take more
+        than ``max_bytes``."""
+        ctx, pool, size = self.r.ctx, self.r.pool, gb.size
+        head = pool.texture(f"{name}.head", size, "r32ui")
+        # the counts are copied out before they are read: a buffer the CPU reads may be moved
+        # where the GPU's atomics on it are slow
+        seen = pool.buffer(f"{name}.seen", 16)
+        calls = 0
+        while True:
+            room = self._room(size)
+            if room * NODE_BYTES > self.max_bytes:
+                return None
+            totals = self._buffers(name, room)[3]
+            head.bind_to_image(0, read=True, write=True)
+            self.clear["u_capacity"].value = room
+            self.clear.run(-(-size[0] // 8), -(-size[1] // 8))
+            ctx.memory_barrier()
+            gb.clears[0].use()
+            self.mesh.vao(self.geometry).render()
+            ctx.memory_barrier()
+            ctx.copy_buffer(seen, totals, 16)
+            drawn = int(np.frombuffer(seen.read(), np.uint32)[0])
+            calls += 2
+            self.fragments = drawn
+            if drawn <= room:
+                break
+            # more fragments than room: again, with room to spare for a model turning
+            self.r.abuffer_room[tuple(size)] = int(drawn * 1.25) + 1024
+        if self.r.abuffer_room.get(tuple(size), 0) < drawn:
+            self.r.abuffer_room[tuple(size)] = int(drawn * 1.25) + 1024
+        return calls
+
+    def _resolve(self, name: str, size: tuple[int, int]) -> None:
+        """Each pixel's list sorted into its layers (abuffer_resolve.comp)."""
+        pool = self.r.pool
+        pool.texture(f"{name}.head", size, "r32ui").bind_to_image(0, read=True, write=False)
+        pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=False, write=True)
+        self.resolve.run(-(-size[0] // 8), -(-size[1] // 8))
+        self.r.ctx.memory_barrier()
+        depths = pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1))
+        seen = pool.buffer(f"{name}.seen", depths.size)
+        self.r.ctx.copy_buffer(seen, depths, depths.size)
+        with_layers = np.frombuffer(seen.read(), np.uint32).astype(np.int64)
+        # pixels with at least k + 1 layers are those layer k covers
+        covered = np.cumsum(with_layers[::-1])[::-1][1:]
+        self.layer_pixels = [int(v) for v in covered if v > 0]
+
+    def _unpack(self, gb, name: str, layer: int) -> None:
+        """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""
+        ctx, pool, size = self.r.ctx, self.r.pool, gb.size
+        self._buffers(name, 1)
+        pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=True, write=True)
+        self.flat(size)[layer % 2].bind_to_image(2, read=False, write=True)
+        gb.normal.bind_to_image(3, read=False, write=True)
+        gb.ids.bind_to_image(4, read=False, write=True)
+        self.unpack.run(-(-size[0] // 8), -(-size[1] // 8))
+        ctx.memory_barrier()
+
+
+def gpu_memory_bytes(r) -> int | None:
+    """The GPU's memory where the driver tells it (NVIDIA's GL_NVX_gpu_memory_info), else None."""
+    if "GL_NVX_gpu_memory_info" not in r.ctx.extensions:
+        return None
+    import ctypes
+
+    try:
+        gl = ctypes.CDLL("libOpenGL.so.0")
+        value = ctypes.c_int(0)
+        gl.glGetIntegerv(0x9048, ctypes.byref(value))  # GPU_MEMORY_INFO_TOTAL_AVAILABLE_MEMORY_NVX, KiB
+    except (OSError, AttributeError):
+        return None
+    return value.value * 1024 if value.value > 0 else None
+
+
+def default_max_bytes(r) -> int:
+    """The most the lists of one frame may take: a quarter of the GPU's memory, or 1 GiB."""
+    total = gpu_memory_bytes(r)
+    return total // 4 if total else DEFAULT_MAX_BYTES

@@ -1,0 +1,47 @@
+// Geometry pass of the A-buffer: every fragment of the mesh, unordered, is appended to its
+// pixel's list (abuffer.glsl); nothing is tested, nothing drawn. Fragments beyond the nodes
+// held are counted and dropped: the capture sees the count and draws again with room for them.
+#extension GL_ARB_shading_language_packing : require
+#if SUBGROUP
+#extension GL_KHR_shader_subgroup_ballot : require
+#endif
+#include "depth.glsl"
+#include "kbuffer.glsl"
+#include "abuffer.glsl"
+
+layout(binding = 0, r32ui) coherent uniform uimage2D u_head;
+uniform bool u_ortho;
+
+in vec3 v_eye;
+in vec3 v_normal;
+flat in int v_part;
+
+void main() {
+    vec3 n = normalize(v_normal);
+    vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -v_eye;
+    // two-sided, as peel.frag
+    if (dot(n, to_eye) < 0.0) {
+        n = -n;
+    }
+    // faces cost a GPU nothing, and order the fragments of one depth as drawing them would
+    int face = gl_PrimitiveID;
+#if SUBGROUP
+    // one atomic on the count a subgroup instead of one a fragment; helper invocations (which
+    // write nothing) leave first, so that one that writes takes the subgroup's nodes
+    if (gl_HelperInvocation) {
+        return;
+    }
+    uvec4 voters = subgroupBallot(true);
+    uint base = 0u;
+    if (subgroupElect()) {
+        base = atomicAdd(drawn, subgroupBallotBitCount(voters));
+    }
+    uint node = subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(voters);
+#else
+    uint node = atomicAdd(drawn, 1u);
+#endif
+    if (node < capacity) {
+        nodes[node] = kb_pack(gl_FragCoord.z, !gl_FrontFacing, n, face, v_part);
+        links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
+    }
+}

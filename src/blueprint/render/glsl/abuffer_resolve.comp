@@ -1,0 +1,140 @@
+// Each pixel's fragments in the layers depth peeling would draw (peel.frag): sorted by their
+// depth as the depth buffer holds it (24 bits; back faces u_back_bias behind) and then by
+// primitive (the first drawn wins a tie), the first is layer 0, and each next layer is the
+// first fragment after it lying more than u_peel_eps (eye depth) behind it. The layers are
+// chained in order[] from u_cursor (node + 1; 0 ends the chain).
+#extension GL_ARB_shading_language_packing : require
+layout(local_size_x = 8, local_size_y = 8) in;
+#include "depth.glsl"
+#include "kbuffer.glsl"
+#include "abuffer.glsl"
+
+// lists up to this long are sorted in registers; longer ones are walked once a layer
+#define SORTED 48
+
+layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
+layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
+uniform float u_back_bias;
+uniform float u_peel_eps;
+
+shared uint group_pixels_with[MOST_LAYERS + 1];
+
+// the depth the depth buffer holds for a fragment: 24-bit fixed point
+uint held_depth(uvec4 s) {
+    return uint(kb_depth(s, u_back_bias) * 16777215.0 + 0.5);
+}
+
+// whether (depth a, face a) sorts before (depth b, face b)
+bool before(uint da, uint fa, uint db, uint fb) {
+    return da < db || (da == db && fa < fb);
+}
+
+// the eye depth behind which the next layer lies
+float next_after(uint held) {
+    return eye_depth(float(held) / 16777215.0) + u_peel_eps;
+}
+
+// the pixel's layers, chained from its cursor; how many
+uint chain(ivec2 p) {
+    uint node[SORTED];
+    uint key[SORTED];
+    uint face[SORTED];
+    uint n = 0u;
+    uint at = imageLoad(u_head, p).x;
+    uint head = at;
+    while (at != 0u && n < SORTED) {
+        uvec4 s = nodes[at - 1u];
+        uint k = held_depth(s);
+        // insertion in order
+        uint i = n;
+        while (i > 0u && before(k, s.w, key[i - 1u], face[i - 1u])) {
+            node[i] = node[i - 1u];
+            key[i] = key[i - 1u];
+            face[i] = face[i - 1u];
+            --i;
+        }
+        node[i] = at;
+        key[i] = k;
+        face[i] = s.w;
+        ++n;
+        at = links[at - 1u];
+    }
+    uint layers = 0u;
+    uint first = 0u;
+    uint last = 0u;
+    if (at == 0u) {
+        float behind = -1.0 / 0.0;
+        for (uint i = 0u; i < n; ++i) {
+            uvec4 s = nodes[node[i] - 1u];
+            if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
+                continue;
+            }
+            if (last == 0u) {
+                first = node[i];
+            } else {
+                order[last - 1u] = node[i];
+            }
+            last = node[i];
+            behind = next_after(key[i]);
+            ++layers;
+        }
+    } else {
+        // a long list: each layer is the least (depth, face) of the fragments behind the last
+        atomicAdd(long_lists, 1u);
+        float behind = -1.0 / 0.0;
+        while (true) {
+            uint best = 0u;
+            uint best_key = 0xffffffffu;
+            uint best_face = 0xffffffffu;
+            for (uint a = head; a != 0u; a = links[a - 1u]) {
+                uvec4 s = nodes[a - 1u];
+                if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
+                    continue;
+                }
+                uint k = held_depth(s);
+                if (best == 0u || before(k, s.w, best_key, best_face)) {
+                    best = a;
+                    best_key = k;
+                    best_face = s.w;
+                }
+            }
+            if (best == 0u) {
+                break;
+            }
+            if (last == 0u) {
+                first = best;
+            } else {
+                order[last - 1u] = best;
+            }
+            last = best;
+            behind = next_after(best_key);
+            ++layers;
+        }
+    }
+    if (last != 0u) {
+        order[last - 1u] = 0u;
+    }
+    imageStore(u_cursor, p, uvec4(first));
+    return layers;
+}
+
+void main() {
+    // the histogram of layers a pixel, counted in the group first: one global atomic a group
+    // and count instead of one a pixel
+    for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
+        group_pixels_with[i] = 0u;
+    }
+    barrier();
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (all(lessThan(p, imageSize(u_head)))) {
+        uint layers = chain(p);
+        atomicAdd(group_pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
+        atomicMax(deepest, layers);
+    }
+    barrier();
+    for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
+        if (i > 0u && group_pixels_with[i] > 0u) {
+            atomicAdd(pixels_with[i], group_pixels_with[i]);
+        }
+    }
+}

@@ -1,0 +1,33 @@
+// One layer of the A-buffer into the G-buffer, as the peel would have drawn it: at each pixel
+// the surface at its cursor (which then moves on to the pixel's next layer), its depth as the
+// depth buffer would hold it; depth 1 where the pixel has no more layers, normal and IDs then
+// left as they are (as a peel pass leaves them).
+#extension GL_ARB_shading_language_packing : require
+layout(local_size_x = 8, local_size_y = 8) in;
+#include "kbuffer.glsl"
+#include "abuffer.glsl"
+
+layout(binding = 1, r32ui) coherent uniform uimage2D u_cursor;
+layout(binding = 2, r32f) writeonly uniform image2D u_depth;
+layout(binding = 3, rgba16f) writeonly uniform image2D u_normal;
+layout(binding = 4, rg32i) writeonly uniform iimage2D u_ids;
+uniform float u_back_bias;
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, imageSize(u_cursor)))) {
+        return;
+    }
+    uint at = imageLoad(u_cursor, p).x;
+    if (at == 0u) {
+        imageStore(u_depth, p, vec4(1.0));
+        return;
+    }
+    uvec4 s = nodes[at - 1u];
+    imageStore(u_cursor, p, uvec4(order[at - 1u]));
+    // 24-bit fixed point, as the peel's depth buffer holds it
+    float z = float(uint(kb_depth(s, u_back_bias) * 16777215.0 + 0.5)) / 16777215.0;
+    imageStore(u_depth, p, vec4(z));
+    imageStore(u_normal, p, vec4(kb_normal(s), 1.0));
+    imageStore(u_ids, p, ivec4(kb_ids(s), 0, 0));
+}

@@ -1,0 +1,185 @@
+"""The A-buffer capture (every layer from one geometry pass, render/abuffer.py) finds the same
+layers as the peel that draws the model once a layer: same depths (as the depth buffer holds
+them), normals, triangles and parts, in whatever order the triangles come, for lists short
+enough to sort in registers and for longer ones, with too little room (drawn again) and with
+too little memory (peeled instead); and it counts the layers a capped frame left exactly. The
+ray-casting oracle checks the peel against the geometry (test_layers_oracle.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_kbuffer import CASES, _normal_tolerance, _planes
+from test_layers_oracle import nested_round
+
+import blueprint
+from blueprint import examples
+from blueprint.render.abuffer import NODE_BYTES
+from blueprint.render.capture import Capture, gbuffer
+from blueprint.scene.camera import fit_camera
+
+# one step of the 24-bit depth buffer: the peel reads its depths back from one, the A-buffer
+# rounds them to its steps itself
+DEPTH_STEP = 1.0 / (1 << 24) * 1.01
+
+
+@pytest.fixture
+def abuffer(renderer):
+    """Switches the renderer between the A-buffer and peeling (k-buffer off: a pass a layer)."""
+    if renderer.ctx.version_code < 430:
+        pytest.skip("the A-buffer needs OpenGL 4.3 (storage buffers in fragment shaders)")
+    saved = renderer.abuffer_max_bytes, renderer.kbuffer, dict(renderer.abuffer_room)
+
+    def use(on: bool, max_bytes: int = 1 << 28) -> None:
+        renderer.abuffer_max_bytes = max_bytes if on else 0
+        renderer.kbuffer = False
+
+    yield use
+    renderer.abuffer_max_bytes, renderer.kbuffer = saved[0], saved[1]
+    renderer.abuffer_room.clear()
+    renderer.abuffer_room.update(saved[2])
+
+
+def _both(renderer, abuffer, model, **options):
+    abuffer(True)
+    fast = blueprint.peel(model, renderer=renderer, **options)
+    abuffer(False)
+    plain = blueprint.peel(model, renderer=renderer, **options)
+    return fast, plain
+
+
+def _differ(fast, plain, renderer) -> np.ndarray:
+    same = (
+        (np.abs(fast.depth - plain.depth) <= DEPTH_STEP)
+        & (fast.triangle == plain.triangle)
+        & (fast.part == plain.part)
+        & (np.abs(fast.normal - plain.normal) <= _normal_tolerance(renderer)).all(axis=-1)
+    )
+    return ~same
+
+
+@pytest.mark.parametrize("order", [[0, 1, 2], [2, 1, 0], [1, 0, 2], [2, 0, 1]])
+def test_any_drawing_order_gives_the_layers_front_to_back(renderer, abuffer, order):
+    model = _planes(order)
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    abuffer(True)
+    layers = renderer.peel(model, camera, size=(32, 32), max_layers=4)
+    assert len(layers.depth) == 3
+    for k, z in enumerate((0, 1, 2)):
+        first_face = 2 * order.index(z)
+        assert set(np.unique(layers.triangle[k])) - {-1} == {first_face, first_face + 1}
+    inside = layers.depth[0] < 1.0
+    assert (np.diff(layers.depth[:, inside], axis=0) > 0).all()
+
+
+def test_of_coincident_faces_the_first_drawn_wins(renderer, abuffer):
+    """Two squares in one plane and a third behind: one layer of the first square's faces,
+    then the third, as a depth test that keeps the first of equal depths draws them."""
+    model = _planes([0, 0, 1])
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    fast, plain = [], []
+    for on, out in ((True, fast), (False, plain)):
+        abuffer(on)
+        out.append(renderer.peel(model, camera, size=(32, 32)))
+    assert len(fast[0].depth) == len(plain[0].depth) == 2
+    assert set(np.unique(fast[0].triangle[0])) - {-1} == {0, 1}
+    assert np.array_equal(fast[0].triangle, plain[0].triangle)
+
+
+@pytest.mark.parametrize("max_layers", [None, 3, 10], ids=["all", "3", "10"])
+@pytest.mark.parametrize("name", list(CASES))
+def test_same_layers_as_a_pass_a_layer(renderer, abuffer, name, max_layers):
+    make, camera = CASES[name]
+    fast, plain = _both(renderer, abuffer, make(), size=(160, 120), max_layers=max_layers, **camera)
+    assert fast.depth.shape == plain.depth.shape
+    covered = plain.depth < 1.0
+    assert covered.sum() > 0
+    differ = _differ(fast, plain, renderer)
+    # two surfaces about one peeling tolerance apart may be merged either way: a handful of pixels
+    assert differ.sum() <= max(2, 1e-4 * covered.sum()), f"{differ.sum()} of {covered.sum()} differ"
+
+
+def test_lists_too_long_to_sort_in_registers(renderer, abuffer):
+    """60 squares one behind the other: every list is longer than the resolve sorts in
+    registers (SORTED in abuffer_resolve.comp), so each layer is found by walking it."""
+    order = [int(v) for v in np.random.default_rng(3).permutation(60)]
+    model = _planes(order)
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    fast, plain = _both(renderer, abuffer, model, camera=camera, size=(24, 24), max_layers=None)
+    assert len(plain.depth) == 60
+    assert not _differ(fast, plain, renderer).any()
+
+
+def test_too_little_room_is_drawn_again(renderer, abuffer):
+    model = nested_round()
+    abuffer(True)
+    options = dict(size=(96, 96), azimuth=20.0, elevation=35.0, max_layers=None)
+    renderer.abuffer_room[(96, 96)] = 10
+    fast = blueprint.peel(model, renderer=renderer, **options)
+    room = renderer.abuffer_room[(96, 96)]
+    abuffer(False)
+    plain = blueprint.peel(model, renderer=renderer, **options)
+    assert room > (plain.depth < 1.0).sum()
+    assert not _differ(fast, plain, renderer).any()
+
+
+def test_more_than_the_memory_allows_is_peeled(renderer, abuffer):
+    """Lists that would take more than ``abuffer_max_bytes`` are not drawn: the frame is peeled
+    a pass a layer instead, the same layers."""
+    model = examples.gearbox()
+    mesh = renderer.mesh(model, 30.0)
+    camera = fit_camera(model, (64, 64))
+    abuffer(True, max_bytes=NODE_BYTES * 64 * 64 * 8)
+    renderer.abuffer_room[(64, 64)] = 64 * 64 * 4
+    assert Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).abuffer
+    # the gearbox has more fragments than 8 a pixel once counted
+    renderer.abuffer_room[(64, 64)] = 64 * 64 * 9
+    assert (
+        Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).abuffer is None
+    )
+    renderer.abuffer_room.pop((64, 64))
+    fast, plain = _both(renderer, lambda on: abuffer(on, max_bytes=NODE_BYTES * 10), model, size=(64, 64))
+    assert np.array_equal(fast.triangle, plain.triangle)
+
+
+def test_layer_counts_and_layers_left(renderer, abuffer):
+    """Each layer's count is its covered pixels, and a capped frame's layers left are those an
+    uncapped one draws (exact here: the lists hold them all)."""
+    model = examples.gearbox()
+    abuffer(True)
+    frame = renderer.render(model, size=(128, 96), max_layers=None, supersample=1)
+    layers = renderer.peel(model, size=(128, 96), max_layers=None)
+    assert frame.layers == len(layers.depth)
+    assert frame.layer_pixels[: frame.layers] == [int(c) for c in (layers.depth < 1.0).sum(axis=(1, 2))]
+    capped = renderer.render(model, size=(128, 96), max_layers=3, supersample=1)
+    assert capped.layers == 3
+    assert capped.layers + capped.layers_left == frame.layers
+    assert capped.layers_shown == f"3 of {frame.layers} layers"
+
+
+@pytest.mark.parametrize("supersample", [1, 2])
+@pytest.mark.parametrize("style", ["blueprint", "paper"])
+def test_same_drawing(renderer, abuffer, style, supersample):
+    model = examples.gearbox()
+    images = []
+    for on in (True, False):
+        abuffer(on)
+        options = dict(size=(200, 150), style=style, max_layers=6, supersample=supersample)
+        images.append(blueprint.render(model, **options).astype(int))
+    diff = np.abs(images[0] - images[1]).max(axis=-1)
+    assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
+
+
+def test_used_only_where_it_pays(renderer, abuffer):
+    """Not for one layer, nor for captures of chosen parts or without normals (ID passes)."""
+    model = examples.gearbox()
+    mesh = renderer.mesh(model, 30.0)
+    camera = fit_camera(model, (64, 64))
+    abuffer(True)
+    gb = gbuffer(renderer.pool, (64, 64), "test.ab")
+    assert Capture(renderer, mesh, camera, gb, batch=5).abuffer is not None
+    assert Capture(renderer, mesh, camera, gb, batch=1).abuffer is None
+    parts = np.ones(mesh.part_count, bool)
+    assert Capture(renderer, mesh, camera, gb, batch=5, selected=parts).abuffer is None
+    ids = gbuffer(renderer.pool, (64, 64), "test.ab.ids", normals=False)
+    assert Capture(renderer, renderer.mesh(model, None), camera, ids, batch=5).abuffer is None
