@@ -18,6 +18,7 @@ bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 0 -
 bp bench $models --size 512 512 --size 1024 1024 --max-layers 5 --frames 20 --warmup 3 --supersample 1 > $OUT/bench_ss1.jsonl
 python3 benchmarks/textbook.py $models --size 512 512 --size 1024 1024 --max-layers 5 --max-layers 256 --frames 20 --warmup 3 > $OUT/textbook.jsonl
 python3 benchmarks/features.py .models/2CylinderEngine.glb --highlight "Piston*" --size 1024 1024 > $OUT/features.jsonl
+python3 benchmarks/layers.py .models/rocker-arm.obj .models/cycloidal.glb .models/2CylinderEngine.glb > $OUT/layers.jsonl
 python3 benchmarks/variants.py .models/rocker-arm.obj .models/cycloidal.glb --frames 30 > $OUT/variants.jsonl
 python3 benchmarks/table1.py --models-dir .models --frames 20 --cpu-frames 1 > $OUT/table1.jsonl
 python3 benchmarks/vector.py --models-dir .models --runs 3 > $OUT/vector.jsonl

@@ -22,13 +22,14 @@ def kbuffer(renderer):
     """Switches the renderer between both ways; the k-buffer is forced whatever the density."""
     if not renderer.kbuffer:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    saved = renderer.kbuffer, renderer.kbuffer_density
+    saved = renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes
 
     def use(on: bool) -> None:
-        renderer.kbuffer, renderer.kbuffer_density = on, 0.0
+        # the A-buffer (test_abuffer.py) off: the other way is a pass a layer
+        renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = on, 0.0, 0
 
     yield use
-    renderer.kbuffer, renderer.kbuffer_density = saved
+    renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = saved
 
 
 def _both(renderer, kbuffer, model, **options):

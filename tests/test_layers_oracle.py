@@ -127,9 +127,10 @@ CASES = [
 # The ways the renderer peels: a geometry pass a layer (its back-face tie-break in the shader,
 # or as two culled draws: big frames of dense models on a GPU; both forced here whatever the
 # size), a k-buffer (several layers a pass, where the driver has framebuffer fetch or
-# interlock; forced whatever the model's size), and the lean pass of vector drawings (no
+# interlock; forced whatever the model's size), the A-buffer (every layer from one geometry
+# pass, OpenGL 4.3; forced whatever the layers), and the lean pass of vector drawings (no
 # normals: depth and triangle IDs alone).
-METHODS = ["pass-a-layer", "two-culled-draws", "k-buffer", "ids-only"]
+METHODS = ["pass-a-layer", "two-culled-draws", "k-buffer", "a-buffer", "ids-only"]
 
 
 @pytest.fixture(params=METHODS)
@@ -137,11 +138,27 @@ def method(request, renderer):
     kbuffer = request.param == "k-buffer"
     if kbuffer and not renderer.kbuffer:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    saved = renderer.kbuffer, renderer.kbuffer_density, renderer.culled_tie_break_from
+    if request.param == "a-buffer" and renderer.ctx.version_code < 430:
+        pytest.skip("the A-buffer needs OpenGL 4.3")
+    saved = (
+        renderer.kbuffer,
+        renderer.kbuffer_density,
+        renderer.culled_tie_break_from,
+        renderer.abuffer_max_bytes,
+        renderer.abuffer_min_layers,
+    )
     renderer.kbuffer, renderer.kbuffer_density = kbuffer, 0.0
     renderer.culled_tie_break_from = (0, 0) if request.param == "two-culled-draws" else None
+    renderer.abuffer_max_bytes = (1 << 30) if request.param == "a-buffer" else 0
+    renderer.abuffer_min_layers = 2
     yield request.param
-    renderer.kbuffer, renderer.kbuffer_density, renderer.culled_tie_break_from = saved
+    (
+        renderer.kbuffer,
+        renderer.kbuffer_density,
+        renderer.culled_tie_break_from,
+        renderer.abuffer_max_bytes,
+        renderer.abuffer_min_layers,
+    ) = saved
 
 
 # peeled Layers per (case, method) and the Oracle per case, shared by the depth and ID tests

@@ -26,13 +26,21 @@ def info(model, as_json):
             else:
                 way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
                 data["kbuffer"] = f"{way}, from {r.kbuffer_density:g} triangles per pixel"
+            if r.abuffer_max_bytes:
+                data["abuffer"] = (
+                    f"every layer in one geometry pass, from {r.abuffer_min_layers} layers a frame, "
+                    f"lists up to {r.abuffer_max_bytes / 2**30:.1f} GiB"
+                )
+            else:
+                data["abuffer"] = "none (needs OpenGL 4.3)"
         data["egl_devices"] = egl_devices()
         if as_json:
             click.echo(json.dumps(data))
         else:
             click.echo(
                 f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}\n"
-                f"image passes: {data['image_passes']}\nk-buffer: {data['kbuffer']}"
+                f"image passes: {data['image_passes']}\nk-buffer: {data['kbuffer']}\n"
+                f"A-buffer: {data['abuffer']}"
             )
             for device in data["egl_devices"]:
                 kind = "GPU" if device["gpu"] else "software"

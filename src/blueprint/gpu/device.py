@@ -93,20 +93,12 @@ class Device:
         self._programs.clear()
         self.ctx.release()
 
-    def program(
-        self,
-        fragment: str,
-        vertex: str = "fullscreen.vert",
-        defines=None,
-        modern: bool = False,
-        version: str | None = None,
-    ):
-        """A program from shader files, built once; ``modern``: GLSL 4.30 (image load/store),
-        or the ``version`` line given."""
-        version = version or (COMPUTE_VERSION if modern else VERSION)
-        key = (vertex, fragment, tuple(sorted((defines or {}).items())), version)
+    def program(self, fragment: str, vertex: str = "fullscreen.vert", defines=None, modern: bool = False):
+        """A program from shader files, built once; ``modern``: GLSL 4.30 (image load/store)."""
+        key = (vertex, fragment, tuple(sorted((defines or {}).items())), modern)
         prog = self._programs.get(key)
         if prog is None:
+            version = COMPUTE_VERSION if modern else VERSION
             prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines, version)
         return prog
 
@@ -127,9 +119,9 @@ class Device:
             prog = self._programs[key] = build_compute(self.ctx, ref, defines)
         return prog
 
-    def fullscreen(self, fragment: str, defines=None, modern: bool = False):
+    def fullscreen(self, fragment: str, defines=None):
         """(program, vertex array) of a full-screen pass drawing one triangle."""
-        prog = self.program(fragment, defines=defines, modern=modern)
+        prog = self.program(fragment, defines=defines)
         vao = self._fullscreen.get(prog.glo)
         if vao is None:
             vao = self._fullscreen[prog.glo] = self.ctx.vertex_array(prog, [])

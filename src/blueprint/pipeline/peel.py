@@ -8,7 +8,7 @@ from blueprint.gpu import units
 from blueprint.pipeline.inputs import read_texture
 from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
-from blueprint.render.capture import KBUFFER_MAX, Capture, GBuffer, capture_parts, revealed_pixels
+from blueprint.render.capture import Capture, GBuffer, capture_parts, revealed_pixels
 from blueprint.render.capture import peel as peel_layers
 from blueprint.render.remaining import layers_left
 from blueprint.render.stop import MaxLayers, Reveal, StopRule
@@ -89,9 +89,7 @@ class LayerCapture:
         # the raw ID target) need them
         face_ids = any(g.extra for g in groups) or clear_gb or _id_silhouettes(pl)
         for g in groups:
-            g.capture = Capture(
-                r, st.mesh, st.camera, g.gb, face_ids=face_ids, batch=max_layers or KBUFFER_MAX
-            )
+            g.capture = Capture(r, st.mesh, st.camera, g.gb, face_ids=face_ids, batch=max_layers)
         extras = self._attribute_programs(st) if any(g.extra for g in groups) else None
         for name in pl.accumulated:
             r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()

@@ -38,14 +38,7 @@ class ABuffer:
 
     def __init__(self, r, mesh, uniforms: dict, back_bias: float, max_bytes: int) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
-        subgroup = r.abuffer_subgroup
-        self.geometry = r.program(
-            ABUFFER_FRAG,
-            GEOMETRY_VERT,
-            {"SUBGROUP": subgroup},
-            version="#version 450 core" if subgroup else None,
-            modern=True,
-        )
+        self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
         self.resolve = r.compute(RESOLVE_COMP)
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),

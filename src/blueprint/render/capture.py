@@ -111,9 +111,9 @@ class Capture:
     ``face_ids`` false leaves the face channel 0 (a software rasteriser pays for tracking
     primitive IDs, and the blueprint needs only parts). ``tie_break`` pushes back faces behind
     coincident front faces (see ``BACK_OFFSET``); ID-only passes break no ties unless asked.
-    ``batch`` > 1 lets one geometry pass find that many layers where the driver allows
-    (``_KBuffer``), or every layer (``ABuffer``, where the renderer takes it). ``selected``
-    (P,) bool draws only those parts.
+    ``batch`` > 1 (the layers the frame draws at most; None: all of them) lets one geometry
+    pass find that many layers where the driver allows (``_KBuffer``), or every layer
+    (``ABuffer``, from ``abuffer_min_layers``). ``selected`` (P,) bool draws only those parts.
     """
 
     def __init__(
@@ -124,13 +124,15 @@ class Capture:
         gb: GBuffer,
         *,
         face_ids: bool = True,
-        batch: int = 1,
+        batch: int | None = 1,
         tie_break: bool | None = None,
         selected: np.ndarray | None = None,
     ) -> None:
         self.r, self.mesh, self.gb = r, mesh, gb
         normals = gb.normal is not None
         self.tie_break = normals if tie_break is None else tie_break
+        layers = batch  # None: every layer
+        batch = batch or KBUFFER_MAX
         batch = -(-batch // -(-batch // KBUFFER_MAX))  # as many to a pass as evenly fit
         w, h = gb.size
         use_kbuffer = (
@@ -153,7 +155,7 @@ class Capture:
         self.abuffer = None
         if (
             r.abuffer_max_bytes
-            and batch > 1
+            and (layers is None or layers >= max(2, r.abuffer_min_layers))
             and normals
             and selected is None
             and r.back_bias_in_shader

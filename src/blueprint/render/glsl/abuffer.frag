@@ -2,9 +2,6 @@
 // pixel's list (abuffer.glsl); nothing is tested, nothing drawn. Fragments beyond the nodes
 // held are counted and dropped: the capture sees the count and draws again with room for them.
 #extension GL_ARB_shading_language_packing : require
-#if SUBGROUP
-#extension GL_KHR_shader_subgroup_ballot : require
-#endif
 #include "depth.glsl"
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
@@ -25,21 +22,7 @@ void main() {
     }
     // faces cost a GPU nothing, and order the fragments of one depth as drawing them would
     int face = gl_PrimitiveID;
-#if SUBGROUP
-    // one atomic on the count a subgroup instead of one a fragment; helper invocations (which
-    // write nothing) leave first, so that one that writes takes the subgroup's nodes
-    if (gl_HelperInvocation) {
-        return;
-    }
-    uvec4 voters = subgroupBallot(true);
-    uint base = 0u;
-    if (subgroupElect()) {
-        base = atomicAdd(drawn, subgroupBallotBitCount(voters));
-    }
-    uint node = subgroupBroadcastFirst(base) + subgroupBallotExclusiveBitCount(voters);
-#else
     uint node = atomicAdd(drawn, 1u);
-#endif
     if (node < capacity) {
         nodes[node] = kb_pack(gl_FragCoord.z, !gl_FrontFacing, n, face, v_part);
         links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
