@@ -4,19 +4,22 @@
 // layer's surface where it is no farther than that layer's farthest depth among the 3x3 pixels
 // around (the empty background as infinitely far), plus u_margin: a silhouette lies where the
 // surface turns away, so the pixels beside it see past it, or a surface in front of it.
+// With u_split the pass also draws, into its second target, every edge behind this layer: the
+// last layer asked for, which needs no peel of its own.
 #include "depth.glsl"
 
 uniform sampler2D u_layer_depth;  // this layer's window depth, 1.0 where empty
 uniform sampler2D u_front_depth;  // the layer before's (unused on layer 0)
 uniform bool u_first;             // layer 0: nothing in front to be behind
-uniform bool u_deepest;           // the last layer drawn: everything behind the one before
+uniform bool u_split;             // edges behind this layer go to the second target
 uniform float u_reach;
 uniform float u_margin;           // eye-depth tolerance
 
 flat in vec4 g_ends;
 flat in vec2 g_depth;
 
-out vec4 o_edge;
+layout(location = 0) out vec4 o_edge;
+layout(location = 1) out vec4 o_behind;
 
 float farthest(sampler2D depth, ivec2 p) {
     ivec2 last = textureSize(depth, 0) - 1;
@@ -45,8 +48,10 @@ void main() {
     if (!u_first && z <= farthest(u_front_depth, pixel) + u_margin) {
         discard;  // on a surface of a layer in front
     }
-    if (!u_deepest && z > farthest(u_layer_depth, pixel) + u_margin) {
-        discard;  // behind this layer's surface
+    bool behind = z > farthest(u_layer_depth, pixel) + u_margin;
+    if (behind && !u_split) {
+        discard;
     }
-    o_edge = vec4(coverage);
+    o_edge = vec4(behind ? 0.0 : coverage);
+    o_behind = vec4(behind ? coverage : 0.0);
 }

@@ -183,5 +183,6 @@ class GpuSilhouettes:
                 capture.draw(layer, query, guard)
                 sil.run(layer)
 
-        peel(draw, r.queries("peel"), [MaxLayers(layers)], look=read)
+        peeled = sil.peeled if method == LINES else layers
+        peel(draw, r.queries("peel"), [MaxLayers(peeled)], look=read)
         return sil.read() if read else None

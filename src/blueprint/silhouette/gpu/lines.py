@@ -1,6 +1,8 @@
 """The line method's pass: the object-space silhouette and border edges of a mesh classified and
-drawn, anti-aliased, on the GPU, once per depth layer into that layer's r8 texture (max
-blending, so crossing lines keep the stronger coverage), and their read-back."""
+drawn, anti-aliased, on the GPU, once per peeled depth layer into that layer's r8 texture (max
+blending, so crossing lines keep the stronger coverage), and their read-back. The last layer
+asked for holds every edge behind the one before; the pass of that one before draws it too, so
+L layers take L - 1 geometry passes and as many line passes (the default 2: one of each)."""
 
 from __future__ import annotations
 
@@ -87,7 +89,12 @@ class LinePass:
         self.prog = prog
         self.vao = edges.vao(ctx, prog)
         self.targets = [r.pool.texture(f"idsil.line.{k}", size, "r8") for k in range(layers)]
-        self.fbos = [r.pool.framebuffer((t,)) for t in self.targets]
+        # the last layer peeled writes the layer after it too (see the module's docstring)
+        last = self.peeled - 1
+        self.fbos = [
+            r.pool.framebuffer(tuple(self.targets[k : k + 2]) if k == last else (self.targets[k],))
+            for k in range(self.peeled)
+        ]
         for fbo in self.fbos:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         corners.as_texture().use(CORNERS_UNIT)
@@ -104,17 +111,22 @@ class LinePass:
         prog["u_depth_range"].value = depth_range(camera)
         prog["u_margin"].value = MARGIN * diagonal
 
+    @property
+    def peeled(self) -> int:
+        """The depth layers to peel: one fewer than the layers drawn, at least one."""
+        return max(self.layers - 1, 1)
+
     def run(self, layer: int, guard=None) -> None:
         """Draw the edges on layer `layer` (its depth and the layer before's bound where the
-        peel holds them); with `guard`, the layer before's query, skipped on the GPU when that
-        layer was empty."""
+        peel holds them) and, on the last layer peeled, those behind it into the next layer;
+        with `guard`, the layer before's query, skipped on the GPU when that layer was empty."""
         if self.edges.count == 0:
             return
         ctx, prog = self.r.ctx, self.prog
         prog["u_layer_depth"].value = units.PEEL_DEPTH + layer % 2
         prog["u_front_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
         prog["u_first"].value = layer == 0
-        prog["u_deepest"].value = layer == self.layers - 1 and layer > 0
+        prog["u_split"].value = layer + 1 < self.layers and layer == self.peeled - 1
         self.fbos[layer].use()
         ctx.enable_only(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE
