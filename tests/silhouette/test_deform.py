@@ -144,7 +144,27 @@ def test_id_lists_follow_the_split_when_told(renderer):
             soup.release()
 
 
-@pytest.mark.parametrize("method", ["gpu-vertex", "gpu-idlist", "cpu"])
+@pytest.mark.parametrize("method", ["gpu-edges", "gpu-idlist"])
+def test_animating_an_unwelded_soup_draws_what_the_welded_model_does(renderer, method):
+    """An STL is a soup: every face has its own three vertices. The animation welds it, so the
+    methods that take their adjacency from a pose's faces see a surface, not separate triangles
+    whose every edge would be a border, before the split and after it."""
+    model = column()
+    corners = model.positions[model.faces].reshape(-1, 3)
+    soup = Model.from_arrays(corners, np.arange(len(corners)).reshape(-1, 3), up="y")
+    assert len(np.unique(Animation(soup, "twist", frames=4).pose(0).faces)) == len(model.positions)
+
+    def pictures(m: Model) -> list[np.ndarray]:
+        frames = animate_silhouettes(
+            m, animate="twist", frames=4, split_at=0.6, method=method, size=SIZE, renderer=renderer
+        )
+        return [image for image, _ in frames]
+
+    for of_soup, of_model in zip(pictures(soup), pictures(model), strict=True):
+        np.testing.assert_array_equal(of_soup, of_model)
+
+
+@pytest.mark.parametrize("method", ["gpu-edges", "gpu-vertex", "gpu-idlist", "cpu"])
 def test_animation_api_yields_every_frame(renderer, method):
     frames = list(
         animate_silhouettes(
