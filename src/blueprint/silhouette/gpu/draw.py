@@ -93,6 +93,12 @@ class GpuSilhouettes:
         return self._tables.lists(model).lists
 
     @on_gl
+    def edge_records(self, model: Model) -> np.ndarray:
+        """The edge records of a static model, (N, 4) int32 (built, welded, on first use, then
+        kept; see :mod:`blueprint.silhouette.edgerecords`)."""
+        return self._tables.edges(model).records
+
+    @on_gl
     def render(
         self,
         model: Model | SoupMesh,

@@ -46,9 +46,11 @@ def line_program(ctx):
 
 
 class EdgeBuffer:
-    """Edge records (``blueprint.silhouette.edgerecords``) of one topology in a GPU buffer."""
+    """Edge records (``blueprint.silhouette.edgerecords``) of one topology in a GPU buffer, and
+    on the CPU as `records`."""
 
     def __init__(self, ctx, records: np.ndarray) -> None:
+        self.records = records
         self.count = len(records)
         # a buffer cannot be empty; a mesh without edges draws no instance of it
         data = records if len(records) else np.zeros((1, 4), np.int32)
