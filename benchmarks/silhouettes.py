@@ -110,6 +110,9 @@ def main() -> None:
     args = parser.parse_args()
     dirs = args.models_dir or [p for p in (ROOT.parent / "shared" / "models", ROOT / ".models") if p.is_dir()]
     size = tuple(args.size)
+    # loaded on first use by the adjacency, whose first build would otherwise time the import
+    import scipy.sparse.csgraph  # noqa: F401
+
     with Renderer() as r, GpuSilhouettes(r) as sil:
         for name, file, how in MODELS:
             if args.model and name not in args.model:
