@@ -25,7 +25,8 @@ vec3 corner(int i) {
     return texelFetch(u_corners, ivec2(i & 4095, i >> 12), 0).xyz;
 }
 
-// +1 front-facing, -1 back-facing, 0 degenerate (a zero normal faces neither way)
+// +1 front-facing, -1 back-facing, 0 degenerate (a zero normal faces neither way); a face seen
+// exactly edge-on counts as back-facing, as on the CPU (an orthographic view along a wall)
 float facing(int code) {
     int f = abs(code) - 1;
     vec3 p0 = corner(3 * f);
@@ -36,7 +37,7 @@ float facing(int code) {
     if (length(n) <= 1e-12 * longest2) {
         return 0.0;
     }
-    return sign(dot(n, u_ortho ? u_toward : u_eye - p0));
+    return dot(n, u_ortho ? u_toward : u_eye - p0) > 0.0 ? 1.0 : -1.0;
 }
 
 bool drawn() {
