@@ -1,4 +1,4 @@
-"""Triangle-ID silhouettes on the GPU against the CPU object-space method, and their robustness."""
+"""GPU silhouettes (edge lines and triangle IDs) against the CPU object-space method, and their robustness."""
 
 import functools
 
@@ -7,12 +7,14 @@ import pytest
 import trimesh
 from scipy import ndimage
 
-from blueprint import InputError, Model, load_model
+from blueprint import InputError, Model, ShaderError, load_model
 from blueprint.examples import box, gearbox, prism
+from blueprint.gpu.shaders import build_program
 from blueprint.scene.camera import fit_camera
 from blueprint.silhouette import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments
 from blueprint.silhouette.edgerecords import edge_records
 from blueprint.silhouette.gpu import GpuSilhouettes, composite, render_silhouettes
+from blueprint.silhouette.gpu.lines import LINES_FRAG, LINES_VERT
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
 
 SIZE = (384, 288)
@@ -543,3 +545,14 @@ def test_edge_records_chain_the_faces_of_a_non_manifold_edge():
         + [[4, 5, 2, 0], [3, 5, 2, 0], [4, 3, 2, 3]]
         + [[6, 8, 3, 0], [7, 8, 3, 0]],
     )
+
+
+def test_a_geometry_shader_error_names_its_file_and_line(renderer, tmp_path):
+    """The line program is the package's one with a geometry shader: its compile errors name that
+    file and line, as vertex and fragment errors do."""
+    broken = tmp_path / "broken.geom"
+    lines = ["layout(points) in;", "layout(points, max_vertices = 1) out;", "void main() { nowhere(); }"]
+    broken.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ShaderError) as info:
+        build_program(renderer.ctx, LINES_VERT, LINES_FRAG, geometry=broken)
+    assert f"{broken}:3: " in str(info.value), str(info.value)

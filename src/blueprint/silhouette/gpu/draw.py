@@ -20,7 +20,7 @@ from blueprint.silhouette.idlist import IdLists
 
 from .cache import ModelTables
 from .context import CurrentContext, on_gl
-from .lines import LinePass, line_program
+from .lines import LinePass
 from .ops import METHODS
 from .passes import IDS_UNIT, silhouette_pass
 from .soup import SoupMesh, box_corners
@@ -60,7 +60,6 @@ class GpuSilhouettes:
         self.tolerance = float(tolerance)
         self._tables = ModelTables(renderer.ctx, self.tolerance)
         self._current = CurrentContext(renderer)
-        self._line_program = None
 
     def current(self) -> contextlib.AbstractContextManager[None]:
         """Make the renderer's context current for a block (see :class:`CurrentContext`)."""
@@ -75,9 +74,6 @@ class GpuSilhouettes:
     @on_gl
     def release(self) -> None:
         self._tables.release()
-        if self._line_program is not None:
-            self._line_program.release()
-            self._line_program = None
 
     @on_gl
     def forget(self, model: Model) -> None:
@@ -172,9 +168,7 @@ class GpuSilhouettes:
         gb = gbuffer(r.pool, (w, h), "idb", normals=False)
         capture = Capture(r, mesh, camera, gb, tie_break=False)
         if method == LINES:
-            if self._line_program is None:
-                self._line_program = line_program(ctx)
-            sil = LinePass(r, self._line_program, edges, corners, camera, (w, h), layers, size)
+            sil = LinePass(r, edges, corners, camera, (w, h), layers, size)
 
             def draw(layer: int, query, guard) -> None:
                 capture.draw(layer, query, guard)

@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.errors import ShaderError
 from blueprint.gpu import units
-from blueprint.gpu.shaders import preprocess
 from blueprint.render.capture import depth_range
 from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.camera import Camera
@@ -26,23 +24,6 @@ LINE_WIDTH = 1.0
 # well above the depth buffer's resolution, below the gap between surfaces that read as apart.
 MARGIN = 2e-3
 CORNERS_UNIT = units.SILHOUETTE_IDS + 1
-
-
-def line_program(ctx):
-    """The line method's program (vertex, geometry and fragment shaders; the device's program
-    cache builds vertex and fragment pairs only)."""
-    stages = {
-        name: preprocess(ref)[0]
-        for name, ref in (
-            ("vertex_shader", LINES_VERT),
-            ("geometry_shader", LINES_GEOM),
-            ("fragment_shader", LINES_FRAG),
-        )
-    }
-    try:
-        return ctx.program(**stages)
-    except Exception as exc:
-        raise ShaderError(f"shader error in the silhouette line program: {exc}") from None
 
 
 class EdgeBuffer:
@@ -72,13 +53,11 @@ class EdgeBuffer:
 
 class LinePass:
     """Draws the edges of `edges` over `corners` seen by `camera` into `layers` textures of
-    `size` with `prog` (:func:`line_program`), one :meth:`run` a peeled layer; `diagonal`
-    scales the depth tolerance."""
+    `size`, one :meth:`run` a peeled layer; `diagonal` scales the depth tolerance."""
 
     def __init__(
         self,
         r: LayerRenderer,
-        prog,
         edges: EdgeBuffer,
         corners: Corners,
         camera: Camera,
@@ -88,7 +67,7 @@ class LinePass:
     ) -> None:
         ctx = r.ctx
         self.r, self.edges, self.size, self.layers = r, edges, size, layers
-        self.prog = prog
+        self.prog = prog = r.program(LINES_FRAG, LINES_VERT, geometry=LINES_GEOM)
         self.vao = edges.vao(ctx, prog)
         self.targets = [r.pool.texture(f"idsil.line.{k}", size, "r8") for k in range(layers)]
         # the last layer peeled writes the layer after it too (see the module's docstring)
