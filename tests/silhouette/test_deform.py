@@ -225,6 +225,36 @@ def test_command_writes_a_still(column_file, tmp_path):
     assert Image.open(out).size == (64, 48)
 
 
+def test_command_draws_visible_and_hidden_edges_by_default(renderer, tmp_path):
+    """With no --method and no --layers the command draws gpu-edges in 2 layers: the picture of
+    ``render_silhouettes`` with those, which has the outline of the box hidden behind the other
+    that the visible layer alone lacks."""
+    import trimesh
+    from PIL import Image
+
+    from blueprint import load_model
+    from blueprint.examples import box
+    from blueprint.silhouette.gpu import render_silhouettes
+
+    (p0, f0), (p1, f1) = box((-1, -1, -1), (1, 1, 1)), box((-0.5, -0.5, -3.0), (0.5, 0.5, -2.0))
+    path = tmp_path / "boxes.stl"
+    trimesh.Trimesh(np.concatenate([p0, p1]), np.concatenate([f0, f1 + len(p0)]), process=False).export(path)
+    out = tmp_path / "default.png"
+    # Y up, told: the boxes lie one behind the other along Z, seen from the front
+    done = run_command(path, "-o", out, "--size", 96, 72, "--view", "front", "--up", "y")
+    assert done.returncode == 0, done.stderr
+    assert ", gpu-edges, " in done.stdout
+    model = load_model(path, up="y")
+
+    def picture(layers: int) -> np.ndarray:
+        return render_silhouettes(
+            model, method="gpu-edges", layers=layers, size=(96, 72), view="front", renderer=renderer
+        )
+
+    np.testing.assert_array_equal(np.asarray(Image.open(out).convert("RGB")), picture(2))
+    assert (picture(2) != picture(1)).any(axis=2).sum() > 50
+
+
 def test_command_error_exit_code(column_file, tmp_path):
     done = run_command(column_file, "-o", tmp_path / "x.png", "--method", "zbuffer")
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "zbuffer" in done.stderr
