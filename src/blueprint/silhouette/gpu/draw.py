@@ -111,7 +111,7 @@ class GpuSilhouettes:
         Parameters
         ----------
         model : Model or SoupMesh
-            A static model (uploaded once, shared with the renderer's blueprints) or a
+            A static model (uploaded once, without normals, and kept by the renderer) or a
             deforming mesh from :meth:`soup`.
         camera : Camera, optional
             Defaults to ``fit_camera`` from `view` at the image's size.
@@ -148,7 +148,7 @@ class GpuSilhouettes:
         r, ctx = self.renderer, self.renderer.ctx
         w, h = check_size(size, 1, r.max_texture)
         if isinstance(model, SoupMesh):
-            mesh, corners, tolerance, size = model, model.corners, model.tolerance, model.diagonal
+            mesh, corners, tolerance, diagonal = model, model.corners, model.tolerance, model.diagonal
             lists = model.id_lists() if method == "idlist" else None
             edges = model.edges() if method == LINES else None
             if camera is None:
@@ -156,7 +156,7 @@ class GpuSilhouettes:
         elif isinstance(model, Model):
             mesh = r.mesh(model, _CREASE)
             held = self._tables.entry(model)
-            corners, tolerance, size = held.corners, held.tolerance, held.diagonal
+            corners, tolerance, diagonal = held.corners, held.tolerance, held.diagonal
             lists = self._tables.lists(model) if method == "idlist" else None
             edges = self._tables.edges(model) if method == LINES else None
             camera = camera or fit_camera(model, (w, h), view)
@@ -168,7 +168,7 @@ class GpuSilhouettes:
         gb = gbuffer(r.pool, (w, h), "idb", normals=False)
         capture = Capture(r, mesh, camera, gb, tie_break=False)
         if method == LINES:
-            sil = LinePass(r, edges, corners, camera, (w, h), layers, size)
+            sil = LinePass(r, edges, corners, camera, (w, h), layers, diagonal)
 
             def draw(layer: int, query, guard) -> None:
                 capture.draw(layer, query, guard)
