@@ -10,6 +10,9 @@ one core of a 3 GHz dual-core CPU):
   storage and by ID lists (``idlist_pre_ms``: welding and building the lists, once);
   ``gpu_vertex_noread_ms``: the static vertex-storage frame without reading the image back
   (``ctx.finish()`` instead), as the blueprint's own passes would consume it;
+* ``gpu_edges_fps``: the default of ``blueprint silhouettes`` (not the paper's method): the CPU
+  method's edges classified and drawn on the GPU, visible and hidden (2 layers), read back;
+  ``gpu_edges_noread_ms`` the same left on the GPU (``benchmarks/silhouettes.py`` has more);
 * ``cpu_pre_ms``: the object-space preprocessing (weld, connect, orient; ``build_adjacency``);
 * ``cpu_fps``: its per-frame part alone (``classify_edges`` + ``draw_segments``);
 * ``cpu_deform_fps``: both every frame, the paper's "CPU-FPS" (its worst case: a mesh that
@@ -109,6 +112,19 @@ def measure(r: Renderer, sil: GpuSilhouettes, model: Model, size, args) -> dict:
         record[f"gpu_{method}_ms"] = round(ms, 3)
         record[f"gpu_{method}_fps"] = fps(ms)
 
+    def edges_frame() -> None:
+        sil.render(model, camera, size, layers=2, method="edges")
+
+    ms = median_ms(edges_frame, args.frames, args.warmup)
+    record["gpu_edges_ms"], record["gpu_edges_fps"] = round(ms, 3), fps(ms)
+
+    def edges_unread() -> None:
+        sil.render(model, camera, size, layers=2, method="edges", read=False)
+        with sil.current():
+            r.ctx.finish()
+
+    record["gpu_edges_noread_ms"] = round(median_ms(edges_unread, args.frames, args.warmup), 3)
+
     def unread() -> None:
         sil.render(model, camera, size, method="vertex", read=False)
         with sil.current():
@@ -177,12 +193,13 @@ def markdown(records: list[dict], renderer: str) -> str:
         "| model | triangles | GPU vertex fps, upload every frame | GPU vertex fps, static "
         "| GPU ID-list fps | ID-list prep ms | GPU vertex ms, not read back "
         "| CPU fps (classify + draw) | CPU fps incl. prep "
-        "| CPU prep ms | edge share | paper: model | GPU fps | CPU fps | CPU prep ms |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|",
+        "| CPU prep ms | edge share | GPU edges fps (default) | paper: model | GPU fps | CPU fps "
+        "| CPU prep ms |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|",
     ]
     for rec in records:
         if "skipped" in rec:
-            lines.append(f"| {rec['model']} | – | skipped: {rec['skipped']} |" + " |" * 12)
+            lines.append(f"| {rec['model']} | – | skipped: {rec['skipped']} |" + " |" * 13)
             continue
         paper = rec.get("paper") or ["–", None, None, None]
         lines.append(
@@ -200,6 +217,7 @@ def markdown(records: list[dict], renderer: str) -> str:
                     cell(rec.get("cpu_deform_fps"), 2),
                     cell(rec.get("cpu_pre_ms")),
                     cell(rec["edge_share"], 3),
+                    cell(rec["gpu_edges_fps"]),
                     str(paper[0]),
                     cell(paper[1], 0),
                     cell(paper[2]),

@@ -144,7 +144,27 @@ def test_id_lists_follow_the_split_when_told(renderer):
             soup.release()
 
 
-@pytest.mark.parametrize("method", ["gpu-vertex", "gpu-idlist", "cpu"])
+@pytest.mark.parametrize("method", ["gpu-edges", "gpu-idlist"])
+def test_animating_an_unwelded_soup_draws_what_the_welded_model_does(renderer, method):
+    """An STL is a soup: every face has its own three vertices. The animation welds it, so the
+    methods that take their adjacency from a pose's faces see a surface, not separate triangles
+    whose every edge would be a border, before the split and after it."""
+    model = column()
+    corners = model.positions[model.faces].reshape(-1, 3)
+    soup = Model.from_arrays(corners, np.arange(len(corners)).reshape(-1, 3), up="y")
+    assert len(np.unique(Animation(soup, "twist", frames=4).pose(0).faces)) == len(model.positions)
+
+    def pictures(m: Model) -> list[np.ndarray]:
+        frames = animate_silhouettes(
+            m, animate="twist", frames=4, split_at=0.6, method=method, size=SIZE, renderer=renderer
+        )
+        return [image for image, _ in frames]
+
+    for of_soup, of_model in zip(pictures(soup), pictures(model), strict=True):
+        np.testing.assert_array_equal(of_soup, of_model)
+
+
+@pytest.mark.parametrize("method", ["gpu-edges", "gpu-vertex", "gpu-idlist", "cpu"])
 def test_animation_api_yields_every_frame(renderer, method):
     frames = list(
         animate_silhouettes(
@@ -203,6 +223,36 @@ def test_command_writes_a_still(column_file, tmp_path):
     from PIL import Image
 
     assert Image.open(out).size == (64, 48)
+
+
+def test_command_draws_visible_and_hidden_edges_by_default(renderer, tmp_path):
+    """With no --method and no --layers the command draws gpu-edges in 2 layers: the picture of
+    ``render_silhouettes`` with those, which has the outline of the box hidden behind the other
+    that the visible layer alone lacks."""
+    import trimesh
+    from PIL import Image
+
+    from blueprint import load_model
+    from blueprint.examples import box
+    from blueprint.silhouette.gpu import render_silhouettes
+
+    (p0, f0), (p1, f1) = box((-1, -1, -1), (1, 1, 1)), box((-0.5, -0.5, -3.0), (0.5, 0.5, -2.0))
+    path = tmp_path / "boxes.stl"
+    trimesh.Trimesh(np.concatenate([p0, p1]), np.concatenate([f0, f1 + len(p0)]), process=False).export(path)
+    out = tmp_path / "default.png"
+    # Y up, told: the boxes lie one behind the other along Z, seen from the front
+    done = run_command(path, "-o", out, "--size", 96, 72, "--view", "front", "--up", "y")
+    assert done.returncode == 0, done.stderr
+    assert ", gpu-edges, " in done.stdout
+    model = load_model(path, up="y")
+
+    def picture(layers: int) -> np.ndarray:
+        return render_silhouettes(
+            model, method="gpu-edges", layers=layers, size=(96, 72), view="front", renderer=renderer
+        )
+
+    np.testing.assert_array_equal(np.asarray(Image.open(out).convert("RGB")), picture(2))
+    assert (picture(2) != picture(1)).any(axis=2).sum() > 50
 
 
 def test_command_error_exit_code(column_file, tmp_path):

@@ -42,7 +42,13 @@ from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
-from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
+from blueprint.silhouette.gpu import (
+    DEFAULT_LAYERS,
+    DEFAULT_METHOD,
+    MAX_LAYERS,
+    animate_silhouettes,
+    render_silhouettes,
+)
 from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
 from blueprint.vector.style import VectorStyle
 
@@ -312,8 +318,8 @@ def render_silhouettes_file(
     model: Model | str | os.PathLike,
     output: str | os.PathLike,
     *,
-    method: str = "gpu-vertex",
-    layers: int = 1,
+    method: str = DEFAULT_METHOD,
+    layers: int = DEFAULT_LAYERS,
     size: tuple[int, int] = (800, 600),
     view: str = "iso",
     azimuth: float | None = None,
@@ -330,7 +336,7 @@ def render_silhouettes_file(
     renderer: Renderer | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict:
-    """From a model (file or ``Model``) to a PNG of its triangle-ID silhouettes or, with
+    """From a model (file or ``Model``) to a PNG of its silhouettes or, with
     ``animate`` (``twist`` or ``wave``), to an MP4 of ``frames`` frames of them as the model
     deforms, splitting in two after ``split_at`` of the animation (see
     ``blueprint.silhouette.gpu.render_silhouettes`` and ``animate_silhouettes``). Arguments

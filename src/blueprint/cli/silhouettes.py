@@ -1,4 +1,4 @@
-"""``blueprint silhouettes MODEL``: triangle-ID silhouettes of a still model or of a deforming one,
+"""``blueprint silhouettes MODEL``: GPU (or CPU) silhouettes of a still model or of a deforming one,
 a thin shell over ``blueprint.api.files.render_silhouettes_file``; ``main`` runs the command on
 its own with the CLI's error handling (one line, exit code 2).
 """
@@ -11,7 +11,7 @@ import click
 
 from blueprint.cli.options import camera_options, progress_bar, run
 from blueprint.silhouette.deform import KINDS
-from blueprint.silhouette.gpu import STILL_METHODS
+from blueprint.silhouette.gpu import DEFAULT_LAYERS, DEFAULT_METHOD, STILL_METHODS
 
 DEFAULT_SIZE = (800, 600)
 
@@ -29,18 +29,20 @@ DEFAULT_SIZE = (800, 600)
 @click.option(
     "--method",
     type=click.Choice(STILL_METHODS),
-    default="gpu-vertex",
+    default=DEFAULT_METHOD,
     show_default=True,
-    help="gpu-vertex: triangle IDs + vertex storage (no preprocessing); gpu-idlist: triangle IDs + "
+    help="gpu-edges: the object-space silhouette edges classified and drawn anti-aliased on the GPU; "
+    "gpu-vertex: triangle IDs + vertex storage (no preprocessing); gpu-idlist: triangle IDs + "
     "precomputed adjacency lists; cpu: object-space edges (weld, connect, orient, classify), "
     "hidden ones included.",
 )
 @click.option(
     "--layers",
     type=int,
-    default=1,
+    default=DEFAULT_LAYERS,
     show_default=True,
-    help="Depth layers (GPU methods): 1 draws what is visible, more add hidden silhouettes, fainter.",
+    help="Depth layers (GPU methods): 1 draws what is visible, more add hidden silhouettes, fainter; "
+    "with gpu-edges the last layer holds every silhouette behind the one before.",
 )
 @click.option("--animate", type=click.Choice(KINDS), default=None, help="Deform the model every frame.")
 @click.option("--frames", type=int, default=60, show_default=True, help="Frames of the animation.")
@@ -71,7 +73,7 @@ def silhouettes(
     fps,
     split_at,
 ):
-    """Draw MODEL's silhouettes from a triangle-ID buffer into a PNG, or, with --animate, the
+    """Draw MODEL's silhouettes into a PNG, or, with --animate, the
     silhouettes of MODEL deforming (and splitting in two part-way) into an MP4."""
     from blueprint.api import default_renderer
     from blueprint.api.files import render_silhouettes_file

@@ -93,13 +93,21 @@ class Device:
         self._programs.clear()
         self.ctx.release()
 
-    def program(self, fragment: str, vertex: str = "fullscreen.vert", defines=None, modern: bool = False):
-        """A program from shader files, built once; ``modern``: GLSL 4.30 (image load/store)."""
-        key = (vertex, fragment, tuple(sorted((defines or {}).items())), modern)
+    def program(
+        self,
+        fragment: str,
+        vertex: str = "fullscreen.vert",
+        defines=None,
+        modern: bool = False,
+        geometry: str | None = None,
+    ):
+        """A program from shader files, built once; ``modern``: GLSL 4.30 (image load/store);
+        ``geometry``: a geometry shader between the two."""
+        key = (vertex, fragment, tuple(sorted((defines or {}).items())), modern, geometry)
         prog = self._programs.get(key)
         if prog is None:
             version = COMPUTE_VERSION if modern else VERSION
-            prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines, version)
+            prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines, version, geometry)
         return prog
 
     def _compiles(self, fragment_source: str) -> bool:

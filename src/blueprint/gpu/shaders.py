@@ -128,8 +128,10 @@ def build_program(
     fragment: str,
     defines: dict[str, object] | None = None,
     version: str = VERSION,
+    geometry: str | None = None,
 ):
-    """Compile and link a program from shader file references (GLSL ``version``).
+    """Compile and link a program from shader file references (GLSL ``version``), with a
+    geometry shader where ``geometry`` names one.
 
     References are ``"package:path"`` or a bare name in ``blueprint/gpu/glsl``.
 
@@ -140,11 +142,13 @@ def build_program(
     """
     vs, vs_files = preprocess(vertex, defines, version)
     fs, fs_files = preprocess(fragment, defines, version)
+    gs, gs_files = preprocess(geometry, defines, version) if geometry else (None, [])
     try:
-        return ctx.program(vertex_shader=vs, fragment_shader=fs)
+        return ctx.program(vertex_shader=vs, fragment_shader=fs, geometry_shader=gs)
     except Exception as exc:
         text = str(exc)
-        files = fs_files if "fragment" in text.lower() else vs_files
+        lowered = text.lower()
+        files = fs_files if "fragment" in lowered else gs_files if "geometry" in lowered else vs_files
         raise ShaderError(f"shader error: {_explain(text, files)}") from None
 
 

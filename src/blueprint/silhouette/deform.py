@@ -20,6 +20,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
+from blueprint.scene.weld import weld
 
 __all__ = ["KINDS", "Animation", "Pose"]
 
@@ -34,9 +35,10 @@ class Pose:
     Attributes
     ----------
     positions : np.ndarray
-        (V, 3) float32 vertex positions.
+        (V, 3) float32 vertex positions, the model's welded.
     faces : np.ndarray
-        (F, 3) int32 vertex indices; F never changes, the indices change once, at the split.
+        (F, 3) int32 vertex indices, in the model's face order; F never changes, the indices
+        change once, at the split.
     topology : int
         0 before the split, 1 after: the connectivity of `faces` is the same for equal values.
     """
@@ -75,8 +77,10 @@ class Animation:
         if not 0.0 <= split_at <= 1.0:
             raise InputError(f"split-at must be in [0, 1], got {split_at}")
         self.model, self.kind, self.frames, self.split_at = model, kind, int(frames), float(split_at)
-        rest = model.positions.astype(np.float64)
-        faces = model.faces.astype(np.int64)
+        # welded, so that a pose's faces say which corners are one vertex even for a soup (an
+        # STL): the methods that take the topology from it (ID lists, edge records) need that
+        rest, faces = weld(model.positions, model.faces)
+        self.faces = faces.astype(np.int32)
         used = rest[faces.reshape(-1)] if len(faces) else rest
         lo, hi = used.min(axis=0), used.max(axis=0)
         self.center = (lo + hi) / 2
@@ -137,7 +141,7 @@ class Animation:
             raise InputError(f"frame {frame} is outside the animation's {self.frames} frames")
         s = self.phase(frame)
         if not self.split(frame):
-            return Pose(self._deform(self._rest, s).astype(np.float32), self.model.faces, 0)
+            return Pose(self._deform(self._rest, s).astype(np.float32), self.faces, 0)
         moved = self._deform(self._rest[self.split_source], s)
         gap = 0.35 * self.extent * (s - self.split_at) / max(1.0 - self.split_at, 1e-9)
         moved[:, self.cut_axis] += 0.5 * gap * self.piece_sign

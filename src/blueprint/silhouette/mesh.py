@@ -13,7 +13,7 @@ import numpy as np
 
 from blueprint.scene.weld import weld
 
-__all__ = ["Adjacency", "build_adjacency", "weld"]
+__all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 
 # Faces whose doubled area is below this fraction of their longest edge squared get a zero
 # normal: their cross product is rounding noise and its direction would be arbitrary.
@@ -122,7 +122,28 @@ def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | 
     Adjacency
         The welded, connected and oriented mesh.
     """
-    positions, faces = weld(positions, faces, weld_tol)
+    return connect(*weld(positions, faces, weld_tol))
+
+
+def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
+    """Edge connectivity and consistent winding of a mesh whose topology is already known: the
+    faces' indices say which corners are one vertex, and nothing is welded (a mesh torn along
+    duplicated vertices stays torn).
+
+    Parameters
+    ----------
+    positions : np.ndarray
+        (V, 3) float vertex positions.
+    faces : np.ndarray
+        (F, 3) integer vertex indices into `positions`.
+
+    Returns
+    -------
+    Adjacency
+        The connected and oriented mesh; its `positions` are the given ones, as float64.
+    """
+    positions = np.asarray(positions, dtype=np.float64)
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     num_faces, num_vertices = len(faces), max(len(positions), 1)
 
     # Half-edge k of face f runs from corner k to corner k + 1.

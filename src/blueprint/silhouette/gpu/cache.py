@@ -6,8 +6,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from blueprint.scene.model import Model
+from blueprint.silhouette.edgerecords import edge_records
 from blueprint.silhouette.idlist import build_id_lists
+from blueprint.silhouette.mesh import build_adjacency
 
+from .lines import EdgeBuffer
 from .tables import Corners, ListTextures, diagonal
 
 
@@ -18,16 +21,19 @@ class Held:
     model: Model
     corners: Corners
     tolerance: float
+    diagonal: float
     lists: ListTextures | None = None
+    edges: EdgeBuffer | None = None
 
     def release(self) -> None:
         self.corners.release()
-        if self.lists is not None:
-            self.lists.release()
+        for held in (self.lists, self.edges):
+            if held is not None:
+                held.release()
 
 
 class ModelTables:
-    """Corner and ID-list tables per static model, on the context `ctx`.
+    """Corner, ID-list and edge tables per static model, on the context `ctx`.
 
     Models are told apart by identity. `tolerance` is a fraction of each model's bounding-box
     diagonal. Call with the context current.
@@ -45,8 +51,8 @@ class ModelTables:
             corners = model.positions[model.faces]
             store = Corners(self.ctx, len(model.faces))
             store.write(corners)
-            tolerance = self.tolerance * diagonal(corners)
-            held = self._held[id(model)] = Held(model, store, tolerance)
+            size = diagonal(corners)
+            held = self._held[id(model)] = Held(model, store, self.tolerance * size, size)
         return held
 
     def lists(self, model: Model) -> ListTextures:
@@ -56,6 +62,14 @@ class ModelTables:
             lists = build_id_lists(model.positions, model.faces, held.tolerance)
             held.lists = ListTextures(self.ctx, lists)
         return held.lists
+
+    def edges(self, model: Model) -> EdgeBuffer:
+        """The model's edge records, built (welded with its tolerance, oriented) on first use."""
+        held = self.entry(model)
+        if held.edges is None:
+            adjacency = build_adjacency(model.positions, model.faces, held.tolerance)
+            held.edges = EdgeBuffer(self.ctx, edge_records(adjacency))
+        return held.edges
 
     def forget(self, model: Model) -> None:
         held = self._held.pop(id(model), None)

@@ -1,6 +1,7 @@
-"""Triangle-ID silhouettes of a model or a deforming mesh, drawn with a renderer: each depth
-layer is peeled into the renderer's ID buffer, then the silhouette pass marks where adjacent
-pixels show triangles that share no vertex."""
+"""GPU silhouettes of a model or a deforming mesh, drawn with a renderer: each depth layer is
+peeled into the renderer's ID buffer, then either the line pass draws the object-space
+silhouette edges that lie on that layer, or the triangle-ID pass marks where adjacent pixels
+show triangles that share no vertex."""
 
 from __future__ import annotations
 
@@ -19,13 +20,18 @@ from blueprint.silhouette.idlist import IdLists
 
 from .cache import ModelTables
 from .context import CurrentContext, on_gl
+from .lines import LinePass
 from .ops import METHODS
 from .passes import IDS_UNIT, silhouette_pass
 from .soup import SoupMesh, box_corners
 
 MAX_LAYERS = 64
-# The renderer's crease angle, so the ID pass shares the renderer's upload of a model.
-_CREASE = 30.0
+# What render() draws with: object-space edges as lines, or one of the triangle-ID passes.
+LINES = "edges"
+DRAW_METHODS = (LINES, *METHODS)
+# The ID pass draws no normals, so its upload skips their smoothing (most of an upload's time:
+# 1.2 of the 1.9 s of a first drawing of the 70K-triangle bunny on llvmpipe).
+_CREASE = None
 
 
 class GpuSilhouettes:
@@ -84,6 +90,12 @@ class GpuSilhouettes:
         return self._tables.lists(model).lists
 
     @on_gl
+    def edge_records(self, model: Model) -> np.ndarray:
+        """The edge records of a static model, (N, 4) int32 (built, welded, on first use, then
+        kept; see :mod:`blueprint.silhouette.edgerecords`)."""
+        return self._tables.edges(model).records
+
+    @on_gl
     def render(
         self,
         model: Model | SoupMesh,
@@ -99,7 +111,7 @@ class GpuSilhouettes:
         Parameters
         ----------
         model : Model or SoupMesh
-            A static model (uploaded once, shared with the renderer's blueprints) or a
+            A static model (uploaded once, without normals, and kept by the renderer) or a
             deforming mesh from :meth:`soup`.
         camera : Camera, optional
             Defaults to ``fit_camera`` from `view` at the image's size.
@@ -107,36 +119,46 @@ class GpuSilhouettes:
             Width and height in pixels.
         layers : int
             Depth layers, 1 to 64; layer 0 is what is visible. Layers past the last surface
-            come back empty.
-        method : {"vertex", "idlist"}
+            come back empty, except with ``"edges"``, whose last layer (when there are at least
+            two) holds every silhouette behind the layer before it: 2 layers draw all of them,
+            visible and hidden, as the CPU method does.
+        method : {"edges", "vertex", "idlist"}
+            ``"edges"``: the CPU method's silhouette and border edges (front against back
+            faces), classified and drawn as anti-aliased lines, one pixel wide, on the GPU;
+            each layer's image holds the edges on that layer's surfaces. ``"vertex"`` and
+            ``"idlist"``: the triangle-ID test, per pixel (see the package's docstring). The
+            pictures (``render_silhouettes``, the command) default to ``"edges"``.
         read : bool
             Read the images back (waits for the GPU). Without, nothing waits and the images
-            stay in the renderer's target pool for GPU-side use: ``idsil.edges``, an r8 array
-            with one slice per layer (compute path), or ``idsil.edge.<k>``, one r8 texture per
-            layer (fragment path); row 0 at the bottom, as GL stores them.
+            stay in the renderer's target pool for GPU-side use: ``idsil.line.<k>``, one r8
+            texture per layer (``"edges"``), ``idsil.edges``, an r8 array with one slice per
+            layer (compute path), or ``idsil.edge.<k>``, one r8 texture per layer (fragment
+            path); row 0 at the bottom, as GL stores them.
 
         Returns
         -------
         np.ndarray or None
-            (layers, H, W) float32, 1.0 on silhouette pixels, 0.0 elsewhere, row 0 at the top;
-            None when `read` is false.
+            (layers, H, W) float32 in [0, 1], row 0 at the top: line coverage (``"edges"``),
+            or 1.0 on silhouette pixels and 0.0 elsewhere; None when `read` is false.
         """
-        if method not in METHODS:
-            raise InputError(f"unknown silhouette method {method!r} (choose {', '.join(METHODS)})")
+        if method not in DRAW_METHODS:
+            raise InputError(f"unknown silhouette method {method!r} (choose {', '.join(DRAW_METHODS)})")
         if int(layers) != layers or not 1 <= layers <= MAX_LAYERS:
             raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
         r, ctx = self.renderer, self.renderer.ctx
         w, h = check_size(size, 1, r.max_texture)
         if isinstance(model, SoupMesh):
-            mesh, corners, tolerance = model, model.corners, model.tolerance
+            mesh, corners, tolerance, diagonal = model, model.corners, model.tolerance, model.diagonal
             lists = model.id_lists() if method == "idlist" else None
+            edges = model.edges() if method == LINES else None
             if camera is None:
                 camera = fit_camera(box_corners(model.bounds), (w, h), view)
         elif isinstance(model, Model):
             mesh = r.mesh(model, _CREASE)
             held = self._tables.entry(model)
-            corners, tolerance = held.corners, held.tolerance
+            corners, tolerance, diagonal = held.corners, held.tolerance, held.diagonal
             lists = self._tables.lists(model) if method == "idlist" else None
+            edges = self._tables.edges(model) if method == LINES else None
             camera = camera or fit_camera(model, (w, h), view)
         else:
             raise InputError(f"expected a Model or a SoupMesh, got {type(model).__name__}")
@@ -145,15 +167,23 @@ class GpuSilhouettes:
         ctx.depth_func = "<"
         gb = gbuffer(r.pool, (w, h), "idb", normals=False)
         capture = Capture(r, mesh, camera, gb, tie_break=False)
-        gb.ids.use(IDS_UNIT)
-        sil = silhouette_pass(
-            r, METHODS[method], (w, h), layers, corners, lists, tolerance, compute=self.compute
-        )
+        if method == LINES:
+            sil = LinePass(r, edges, corners, camera, (w, h), layers, diagonal)
 
-        def draw(layer: int, query, guard) -> None:
-            # an empty layer skips the next one's draws on the GPU, without the CPU waiting
-            capture.draw(layer, query, guard)
-            sil.run(layer)
+            def draw(layer: int, query, guard) -> None:
+                capture.draw(layer, query, guard)
+                sil.run(layer, guard)
+        else:
+            gb.ids.use(IDS_UNIT)
+            sil = silhouette_pass(
+                r, METHODS[method], (w, h), layers, corners, lists, tolerance, compute=self.compute
+            )
 
-        peel(draw, r.queries("peel"), [MaxLayers(layers)], look=read)
+            def draw(layer: int, query, guard) -> None:
+                # an empty layer skips the next one's draws on the GPU, without the CPU waiting
+                capture.draw(layer, query, guard)
+                sil.run(layer)
+
+        peeled = sil.peeled if method == LINES else layers
+        peel(draw, r.queries("peel"), [MaxLayers(peeled)], look=read)
         return sil.read() if read else None

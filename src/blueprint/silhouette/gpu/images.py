@@ -39,7 +39,12 @@ def composite(edges: np.ndarray, hidden: float = 0.35) -> np.ndarray:
     return np.clip(paper + alpha * (ink - paper) + 0.5, 0, 255).astype(np.uint8)
 
 
-STILL_METHODS = ("gpu-vertex", "gpu-idlist", "cpu")
+STILL_METHODS = ("gpu-edges", "gpu-vertex", "gpu-idlist", "cpu")
+DEFAULT_METHOD = "gpu-edges"
+# Visible silhouettes and, in the second layer, every hidden one: the set the CPU method draws.
+DEFAULT_LAYERS = 2
+# GPU methods that draw from a topology, rebuilt when an animation changes it
+_TOPOLOGY_METHODS = ("gpu-edges", "gpu-idlist")
 
 
 def _cpu_image(positions, faces, camera: Camera, size) -> np.ndarray:
@@ -54,8 +59,8 @@ def _cpu_image(positions, faces, camera: Camera, size) -> np.ndarray:
 def render_silhouettes(
     model: Model,
     *,
-    method: str = "gpu-vertex",
-    layers: int = 1,
+    method: str = DEFAULT_METHOD,
+    layers: int = DEFAULT_LAYERS,
     size: tuple[int, int] = (800, 600),
     view: str = "iso",
     azimuth: float | None = None,
@@ -67,9 +72,12 @@ def render_silhouettes(
 ) -> np.ndarray:
     """A picture of a model's silhouettes (see :func:`composite`), (H, W, 3) uint8.
 
-    ``method`` is ``gpu-vertex``, ``gpu-idlist`` or ``cpu`` (the object-space method: weld,
-    connect, orient, classify, draw; it has no visibility, so it draws hidden silhouettes in
-    full ink and ignores `layers`). The camera is `camera`, or one fitted from `view`,
+    ``method`` is ``gpu-edges`` (the object-space silhouette and border edges, classified and
+    drawn anti-aliased on the GPU, each in the layer of the surfaces it lies on: with the default
+    2 layers, the visible ones in full ink and every hidden one fainter), ``gpu-vertex`` or
+    ``gpu-idlist`` (the triangle-ID test per pixel, layer by layer) or ``cpu`` (the object-space
+    method: weld, connect, orient, classify, draw; it has no visibility, so it draws hidden
+    silhouettes in full ink and ignores `layers`). The camera is `camera`, or one fitted from `view`,
     `azimuth`, `elevation` (degrees), `fov` and `ortho` as ``fit_camera`` does. `renderer`
     draws them (``blueprint.api.files.render_silhouettes_file`` defaults to the shared one).
     """
@@ -92,8 +100,8 @@ def animate_silhouettes(
     animate: str = "twist",
     frames: int = 60,
     split_at: float = 0.5,
-    method: str = "gpu-vertex",
-    layers: int = 1,
+    method: str = DEFAULT_METHOD,
+    layers: int = DEFAULT_LAYERS,
     size: tuple[int, int] = (800, 600),
     view: str = "iso",
     azimuth: float | None = None,
@@ -106,8 +114,9 @@ def animate_silhouettes(
     """Pictures of a deforming model's silhouettes, frame by frame: ``(image, ms)`` pairs, the
     image (H, W, 3) uint8 and `ms` the time to get its silhouettes from the frame's positions.
 
-    ``gpu-vertex`` uploads the new positions and does nothing else per frame; ``gpu-idlist``
-    rebuilds its lists when the topology changes (once, at the split); ``cpu`` redoes the whole
+    ``gpu-vertex`` uploads the new positions and does nothing else per frame; ``gpu-edges``
+    and ``gpu-idlist`` upload them too and rebuild their edge records or lists when the topology
+    changes (once, at the split); ``cpu`` redoes the whole
     object-space preprocessing every frame, as the paper's comparison does. `renderer` draws
     them, as for :func:`render_silhouettes`.
     """
@@ -142,7 +151,7 @@ def animate_silhouettes(
                 pose = anim.pose(i)
                 corners = pose.corners()
                 t0 = time.perf_counter()
-                changed = pose.topology != topology and method == "gpu-idlist"
+                changed = pose.topology != topology and method in _TOPOLOGY_METHODS
                 soup.update(corners, (pose.faces, len(pose.positions)) if changed else None)
                 topology = pose.topology
                 edges = sil.render(soup, camera, (w, h), layers, method.removeprefix("gpu-"))

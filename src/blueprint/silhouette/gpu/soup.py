@@ -7,9 +7,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.silhouette.edgerecords import edge_records
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
+from blueprint.silhouette.mesh import build_adjacency, connect
 
 from .context import on_gl
+from .lines import EdgeBuffer
 from .tables import Corners, ListTextures, diagonal
 
 if TYPE_CHECKING:
@@ -23,9 +26,9 @@ class SoupMesh:
     Create it with :meth:`GpuSilhouettes.soup`. :meth:`update` uploads new positions, one
     buffer write and nothing else: the same buffer is the vertex buffer of the ID pass and the
     vertex storage of the silhouette pass. The number of triangles is fixed; the topology may
-    change freely (the ``"vertex"`` method never looks at it). For the ``"idlist"`` method pass
-    the connectivity as `topology` whenever it changes; without one, the lists are built once by
-    welding the first positions.
+    change freely (the ``"vertex"`` method never looks at it). For the ``"idlist"`` and
+    ``"edges"`` methods pass the connectivity as `topology` whenever it changes; without one,
+    their tables are built once by welding the first positions.
 
     Attributes
     ----------
@@ -33,6 +36,8 @@ class SoupMesh:
         (2, 3) float64 box of the positions given at creation (used to fit a camera).
     tolerance : float
         Model-space distance under which two corners are one vertex, fixed at creation.
+    diagonal : float
+        Length of the diagonal of `bounds`.
     """
 
     def current(self):
@@ -55,7 +60,8 @@ class SoupMesh:
         self.corners.write(corners)
         points = corners.reshape(-1, 3).astype(np.float64)
         self.bounds = np.array([points.min(axis=0), points.max(axis=0)])
-        self.tolerance = owner.tolerance * diagonal(points)
+        self.diagonal = diagonal(points)
+        self.tolerance = owner.tolerance * self.diagonal
         # what the renderer's geometry pass needs of a mesh: vertex arrays, the part per vertex
         self._vaos: dict[int, object] = {}
         parts = np.zeros(self.faces, np.int32) if face_part is None else np.asarray(face_part, np.int32)
@@ -63,6 +69,7 @@ class SoupMesh:
         self._first = corners
         self._topology = None if topology is None else tuple(topology)
         self._lists: ListTextures | None = None
+        self._edges: EdgeBuffer | None = None
 
     @property
     def triangle_count(self) -> int:
@@ -84,13 +91,18 @@ class SoupMesh:
     @on_gl
     def update(self, corners, topology=None) -> None:
         """Replace the corner positions, (F, 3, 3) float; `topology`, ``(faces, vertices)``
-        of the new connectivity, only where it changed and only for the ``"idlist"`` method."""
+        of the new connectivity, only where it changed and only for the ``"idlist"`` and
+        ``"edges"`` methods."""
         self.corners.write(corners)
         if topology is not None:
             self._topology = tuple(topology)
-            if self._lists is not None:
-                self._lists.release()
-                self._lists = None
+            self._drop_tables()
+
+    def _drop_tables(self) -> None:
+        for held in (self._lists, self._edges):
+            if held is not None:
+                held.release()
+        self._lists = self._edges = None
 
     @on_gl
     def id_lists(self) -> ListTextures:
@@ -107,13 +119,31 @@ class SoupMesh:
         return self._lists
 
     @on_gl
+    def edges(self) -> EdgeBuffer:
+        """The edge records of the current topology (see :mod:`blueprint.silhouette.edgerecords`)."""
+        if self._edges is None:
+            flat = self._first.reshape(-1, 3).astype(np.float64)
+            if self._topology is not None:
+                faces, vertices = self._topology
+                faces = np.asarray(faces, np.int64).reshape(-1, 3)
+                if len(faces) != self.faces:
+                    raise InputError(f"topology has {len(faces)} faces, the mesh {self.faces}")
+                # only the corner order matters to the records, not where the vertices lie
+                positions = np.zeros((int(vertices), 3))
+                positions[faces.reshape(-1)] = flat
+                adjacency = connect(positions, faces)
+            else:
+                adjacency = build_adjacency(flat, np.arange(len(flat)).reshape(-1, 3), self.tolerance)
+            self._edges = EdgeBuffer(self.owner.renderer.ctx, edge_records(adjacency))
+        return self._edges
+
+    @on_gl
     def release(self) -> None:
         for obj in (*self._vaos.values(), self._corner_parts):
             obj.release()
         self._vaos.clear()
         self.corners.release()
-        if self._lists is not None:
-            self._lists.release()
+        self._drop_tables()
 
 
 def box_corners(bounds: np.ndarray) -> np.ndarray:
