@@ -14,9 +14,9 @@ from test_bad_input import no_output, one_error, run
 from blueprint import load_model
 from blueprint.api.files import render_vector_file
 from blueprint.examples import gearbox
+from blueprint.scene.sheet import PAPER_MM, fit_scale, place_views
 from blueprint.vector import draw_vector_sheet
 from blueprint.vector.pdf import unicode_font
-from blueprint.vector.sheet import PAPER_MM, fit_scale, place_views
 
 SVG = "{http://www.w3.org/2000/svg}"
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .sheet import Marks, Text
+from blueprint.scene.sheet import Marks, Text
 
 __all__ = ["dimension_marks", "format_value"]
 
