@@ -142,7 +142,8 @@ def test_dimension_lines_span_the_view(renderer, shared_models):
     size = (400, 300)
     camera = fit_camera(model, size, "front", ortho=True)
     drawing = draw_vector(model, camera, size, renderer=renderer, dimensions=True, scale="1:1", units="in")
-    assert [t.text for t in drawing.marks.texts] == ["127", "34.9"]
+    # the overall width and height, and the hole seen along its axis from the front
+    assert [t.text for t in drawing.marks.texts] == ["127", "34.9", "Ø 9.9"]
     assert drawing.marks.texts[1].angle == 90.0
     # the dimension line under the view runs between the extension lines at the model's ends
     per_px = camera.height / size[1]

@@ -27,6 +27,8 @@ from blueprint.gpu.device import check_size
 from blueprint.pipeline.blueprint import render_blueprint
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
+from blueprint.scene.dimension import UNITS_MM
+from blueprint.scene.dimension import default_units as _default_units
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
@@ -74,16 +76,6 @@ __all__ = [
     "save_drawing",
 ]
 
-# Millimetres per model unit.
-UNITS_MM: dict[str, float] = {
-    "um": 1e-3,
-    "mm": 1.0,
-    "cm": 10.0,
-    "m": 1000.0,
-    "km": 1e6,
-    "in": 25.4,
-    "ft": 304.8,
-}
 # Pen width of the base line on a drawing to scale, in paper millimetres (ISO 128 0.25 mm).
 SCALED_PEN_MM = 0.25
 # Hatch line spacing of a section on a drawing to scale, in paper millimetres (ISO 128-50).
@@ -211,13 +203,6 @@ def parse_scale(scale: str | float | None) -> float | None:
     if not (math.isfinite(value) and value > 0):
         raise InputError(f"scale must look like 1:50, got {scale!r}")
     return value
-
-
-def _default_units(model: Model) -> str:
-    source = (model.source or "").lower()
-    # glTF lengths are metres by specification; other formats carry none, and CAD exports
-    # (STL, 3MF, OBJ from CAD) are most often millimetres
-    return "m" if source.endswith((".glb", ".gltf")) else "mm"
 
 
 def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
@@ -437,9 +422,8 @@ def draw_vector(
         if not camera.ortho:
             raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
         unit = page.model_unit or _default_units(model)
-        used = model.positions[model.faces.reshape(-1)].astype(np.float64)
         mm_per_px = page.factor if page.unit == "mm" else None
-        marks = dimension_marks(used, view_m, proj, size, UNITS_MM[unit], mm_per_px)
+        marks = dimension_marks(model, view_m, proj, size, UNITS_MM[unit], mm_per_px, crease_angle)
 
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
@@ -519,10 +503,10 @@ def draw_vector_sheet(
         # on the orthographic views, sized for the sheet's scale, known only now
         unit = quarter.model_unit or units or _default_units(model)
         drawn = cut.model if cut is not None else model
-        used = drawn.positions[drawn.faces.reshape(-1)].astype(np.float64)
         for name in ("top", "front", "right"):
             view_m, proj = cameras[name].view_matrix(), cameras[name].projection_matrix()
-            marks = dimension_marks(used, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px)
+            crease = options.get("crease_angle", 30.0)
+            marks = dimension_marks(drawn, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px, crease)
             cells[name] = replace(cells[name], marks=marks)
     extents = {name: _view_extent(cell, (w, h)) for name, cell in cells.items()}
     per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
