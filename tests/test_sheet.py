@@ -159,7 +159,9 @@ def test_dimension_lines_span_the_view(renderer, shared_models):
     "args, mentions",
     [
         (["-o", "x.svg", "--view", "iso", "--dimensions"], ["dimensions need an orthographic view"]),
-        (["-o", "x.png", "--view", "front", "--dimensions"], ["for vector drawings"]),
+        (["-o", "x.png", "--view", "front", "--dimensions"], ["dimensions need an orthographic view"]),
+        (["-o", "x.png", "--view", "front", "--title", "T"], ["--title", "--view plan"]),
+        (["-o", "x.png", "--view", "plan", "--units", "parsec"], ["unknown units 'parsec'", "mm, cm, m"]),
     ],
 )
 def test_bad_dimensions(tmp_path, args, mentions):

@@ -13,7 +13,7 @@ import numpy as np
 
 from blueprint.api.frames import PLAN, PartSpec, render_frame, shared
 from blueprint.api.renderer import Renderer
-from blueprint.compose.glyphs import Glyphs
+from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
@@ -196,11 +196,12 @@ def vector_drawing(
     sheet: str | None = None,
     title: str | None = None,
     dimensions: bool = False,
+    glyphs: Glyphs | str | os.PathLike | None = None,
     renderer: Renderer | None = None,
 ):
     """The vector lines of ``model`` as ``render_vector_file`` draws them (one view or the
-    plan sheet, cut by a section where asked), not written anywhere: a
-    ``blueprint.vector.drawing.Drawing``."""
+    plan sheet, cut by a section where asked, a glyph file's dimensions added), not written
+    anywhere: a ``blueprint.vector.drawing.Drawing``."""
     from blueprint.api.sections import section_of
     from blueprint.gpu.device import check_size
     from blueprint.vector.drawing import draw_vector, draw_vector_sheet
@@ -228,7 +229,11 @@ def vector_drawing(
     cut = section_of(model, section, section_plane, section_keep)
     if sheet is not None and view != PLAN:
         raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
+    if glyphs is not None and not isinstance(glyphs, Glyphs):
+        glyphs = load_glyphs(glyphs)
     if view == PLAN:
+        if glyphs is not None:
+            raise InputError("glyphs need one view; the plan sheet draws four")
         plane = None if cut is None else (cut.plane, cut.keep)
         return draw_vector_sheet(
             model, size, fov=fov, scale=scale, units=units, sheet=sheet, section=plane, **options
@@ -236,8 +241,15 @@ def vector_drawing(
     camera = fit_camera(model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
     if cut is not None:
         made = cut.cut(model, camera)
-        return draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
-    return draw_vector(model, camera, size, scale=scale, units=units, **options)
+        drawing = draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
+    else:
+        drawing = draw_vector(model, camera, size, scale=scale, units=units, **options)
+    if glyphs is not None:
+        from blueprint.scene.dimension import UNITS_MM, default_units
+        from blueprint.vector.dimension import with_dimension_glyphs
+
+        drawing = with_dimension_glyphs(drawing, glyphs, UNITS_MM[units or default_units(model)])
+    return drawing
 
 
 def draw(

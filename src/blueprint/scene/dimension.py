@@ -163,16 +163,20 @@ def overall_dimensions(
     )
 
 
-def diameter_marks(centre: np.ndarray, radius: float, text: str, per_mm: float) -> Marks:
+def diameter_marks(
+    centre: np.ndarray, radius: float, text: str, per_mm: float, toward: str = "right"
+) -> Marks:
     """A diameter after ISO 129: a line at 45° through ``centre`` (2,) pixels across the circle
     of ``radius`` pixels, arrowheads on the circle pointing out, and ``text`` ("Ø 12") on a
-    shoulder beyond the circle's upper right, long enough for it."""
+    shoulder beyond the circle's upper right (or upper left, ``toward="left"``), long enough
+    for it."""
     _, _, _, arrow, height = _measures(per_mm)
     centre = np.asarray(centre, np.float64)
-    u = np.array([1.0, -1.0]) / math.sqrt(2.0)  # up and to the right on a picture
+    across = 1.0 if toward == "right" else -1.0
+    u = np.array([across, -1.0]) / math.sqrt(2.0)  # up and to that side on a picture
     near, far = centre - u * radius, centre + u * radius
     knee = far + u * (arrow + height)
-    shoulder = knee + np.array([0.6 * height * len(text), 0.0])
+    shoulder = knee + np.array([across * 0.6 * height * len(text), 0.0])
     lines = [[near, far], [far, knee], [knee, shoulder]]
     lines += _arrow(far, u, arrow)
     lines += _arrow(near, -u, arrow)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import datetime
 import math
+import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -28,6 +29,7 @@ __all__ = [
     "fit_scale",
     "lay_out_sheet",
     "paper_size",
+    "picture_per_mm",
     "place_views",
     "model_name",
     "sheet_fields",
@@ -192,6 +194,14 @@ class SheetLayout:
         return sheet_marks(self.frame, self.per_mm, list(self.labels), fields)
 
 
+def picture_per_mm(size: tuple[float, float] | None = None) -> float:
+    """Pixels a millimetre of ISO's measures (text heights, the title block, dimensions' arrows)
+    on a picture of ``size`` pixels: 96 pixels an inch, less on a picture too small to hold
+    100 mm (an A6 card's width, about) across its shorter side at that."""
+    dpi = 96.0 / 25.4
+    return dpi if size is None else min(dpi, min(size) / 100.0)
+
+
 def lay_out_sheet(
     extents: dict[str, np.ndarray],
     rows: int,
@@ -213,12 +223,12 @@ def lay_out_sheet(
         A cell's size in pixels: on a sheet in pixels the gaps and labels are fractions of it.
     mm_per_px : float, optional
         Page millimetres per pixel of a sheet to scale; None for a sheet in pixels, where the
-        measures of ISO 5457 and 7200 are taken at 96 pixels an inch.
+        measures of ISO 5457 and 7200 are taken as ``picture_per_mm`` has them.
     paper : (float, float), optional
         The sheet's size in pixels (a paper size, or a picture's); the views are centred in the
         room the border and title block leave. None: the sheet is as large as its views need.
     """
-    per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
+    per_mm = 1.0 / mm_per_px if mm_per_px else picture_per_mm(paper)
     small = min(cell)
     gap = 10.0 * per_mm if mm_per_px else 0.06 * small
     label = LABEL_MM * per_mm if mm_per_px else 0.045 * small
@@ -289,7 +299,11 @@ def sheet_marks(frame: np.ndarray, per_mm: float, labels: list[Text], fields: di
 
 
 def today() -> str:
-    """The date of a sheet, ISO 8601."""
+    """The date of a sheet, ISO 8601: today's, or that of ``SOURCE_DATE_EPOCH`` (seconds since
+    1970, UTC) where it is set, so that builds can reproduce a sheet to the byte."""
+    epoch = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if epoch.isdigit():
+        return datetime.datetime.fromtimestamp(int(epoch), datetime.UTC).date().isoformat()
     return datetime.date.today().isoformat()
 
 

@@ -9,17 +9,20 @@ The values come from the model's vertices in model coordinates, exact, not from 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from blueprint.compose.glyphs import Glyphs
+from blueprint.compose.glyphs.marks import dimension_glyph_marks
+from blueprint.errors import InputError
 from blueprint.scene.dimension import diameter_marks, format_value, overall_dimensions, screen_points
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks
 
 from .lines import join_polylines, model_segments
 
-__all__ = ["Circle", "dimension_marks", "find_circles"]
+__all__ = ["Circle", "dimension_marks", "find_circles", "with_dimension_glyphs"]
 
 # A chain is a circle when its points lie this close (relative to the radius) to a circle in a
 # plane: a tessellated circle's vertices lie on it exactly, up to float32 rounding.
@@ -112,6 +115,7 @@ def dimension_marks(
     mm_per_model: float,
     mm_per_px: float | None,
     crease_angle: float = 30.0,
+    circles: list[Circle] | None = None,
 ) -> Marks:
     """The overall width (below the view) and height (right of it) of ``model``'s used vertices
     as an orthographic camera sees them, and the diameter of every circle the lines find,
@@ -131,6 +135,8 @@ def dimension_marks(
         measures taken at 96 pixels an inch).
     crease_angle : float
         Degrees: the lines' creases, as the drawing has them.
+    circles : list of Circle, optional
+        The circles ``find_circles`` finds for this camera's direction, if already found.
     """
     per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
     view, projection = np.asarray(view, np.float64), np.asarray(projection, np.float64)
@@ -139,16 +145,51 @@ def dimension_marks(
     # circles seen on screen once: a through hole's two rims lie on one circle there
     seen: dict[str, list[tuple[np.ndarray, float]]] = {}
     model_per_px = 2.0 / (float(projection[1, 1]) * size[1])
-    for circle in find_circles(model, view, projection, size, crease_angle):
+    if circles is None:
+        circles = find_circles(model, view, projection, size, crease_angle)
+    for circle in circles:
         centre = screen_points(circle.centre[None], view, projection, size)[0]
         radius = circle.radius / model_per_px
         value = format_value(2.0 * circle.radius * mm_per_model)
         places = seen.setdefault(value, [])
         if not any(np.linalg.norm(c - centre) < 0.5 and abs(r - radius) < 0.5 for c, r in places):
             places.append((centre, radius))
+    marked: list[np.ndarray] = []
     for value, places in seen.items():
-        # the top-left circle carries the value for all of its size
-        centre, radius = min(places, key=lambda p: (round(p[0][1], 3), p[0][0]))
+        # the top-left circle carries the value for all of its size, unless one of another size
+        # around the same centre (a counterbore's) carries its own: then the next one does, or,
+        # with none left, the same one on its other side
+        places = sorted(places, key=lambda p: (round(float(p[0][1]), 3), float(p[0][0])))
+        free = [p for p in places if not any(np.linalg.norm(p[0] - c) < 0.5 for c in marked)]
+        centre, radius = (free or places)[0]
         count = f"{len(places)}× " if len(places) > 1 else ""
-        marks.append(diameter_marks(centre, radius, f"{count}Ø {value}", per_mm))
+        toward = "right" if free else "left"
+        marks.append(diameter_marks(centre, radius, f"{count}Ø {value}", per_mm, toward))
+        marked.append(centre)
     return Marks.concatenate(marks)
+
+
+def with_dimension_glyphs(drawing, glyphs: Glyphs, mm_per_model: float):
+    """``drawing`` (a one-view ``Drawing``) with the dimensions of ``glyphs`` added to its marks,
+    as a picture draws them (``blueprint.compose.glyphs.marks``), in mm from ``mm_per_model``.
+
+    Raises ``InputError`` where ``glyphs`` has boxes, arrows, paths or labels, which vector
+    drawings do not take.
+    """
+    if len(glyphs) != len(glyphs.dimensions):
+        raise InputError(
+            f"{glyphs.source}: vector drawings take only the glyph file's [[dimension]] entries; "
+            "write a picture for boxes, arrows, paths and labels"
+        )
+    if not glyphs.dimensions:
+        return drawing
+    camera = drawing.camera
+    view, projection = camera.view_matrix(), camera.projection_matrix()
+    size = (drawing.width, drawing.height)
+    per_mm = 1.0 / drawing.page.factor if drawing.page.unit == "mm" else 96.0 / 25.4
+    marks = [
+        dimension_glyph_marks(d, view, projection, size, mm_per_model, per_mm) for d in glyphs.dimensions
+    ]
+    if drawing.marks is not None:
+        marks.insert(0, drawing.marks)
+    return replace(drawing, marks=Marks.concatenate(marks))

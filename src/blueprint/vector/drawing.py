@@ -421,7 +421,7 @@ def draw_vector(
     if dimensions:
         if not camera.ortho:
             raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
-        unit = page.model_unit or _default_units(model)
+        unit = page.model_unit or units or _default_units(model)
         mm_per_px = page.factor if page.unit == "mm" else None
         marks = dimension_marks(model, view_m, proj, size, UNITS_MM[unit], mm_per_px, crease_angle)
 
