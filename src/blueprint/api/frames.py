@@ -238,7 +238,9 @@ def render_frame(
         image = frame.image.copy()
         draw_marks(image, marks, chosen.ink, line_width)
         spent = (time.perf_counter() - t0) * 1e3
-        frame = replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "dimensions": spent})
+        frame = replace(
+            frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "dimensions": spent}, marks=marks
+        )
     return frame
 
 
@@ -373,7 +375,8 @@ def _plan_frame(
         over(image, frames[name].image[y0:y1, x0:x1], x0 + int(shift[0]), y0 + int(shift[1]))
         if name in marks:
             all_marks.append(marks[name].shifted(shift.astype(np.float64)))
-    draw_marks(image, Marks.concatenate(all_marks), style.ink, float(options["line_width"]))
+    drawn_marks = Marks.concatenate(all_marks)
+    draw_marks(image, drawn_marks, style.ink, float(options["line_width"]))
     front = frames["front"]
     layers = max(f.layers for f in frames.values())
     return Frame(
@@ -385,6 +388,7 @@ def _plan_frame(
         ms=sum(f.ms for f in frames.values()),
         draws=sum(f.draws for f in frames.values()),
         stages={},
+        marks=drawn_marks,
     )
 
 
