@@ -85,6 +85,7 @@ class Marks:
 
     @staticmethod
     def concatenate(items: list[Marks]) -> Marks:
+        """All of ``items``' lines and texts as one ``Marks``, in their order."""
         return Marks(
             np.concatenate([m.lines for m in items]).reshape(-1, 2, 2),
             np.concatenate([m.widths for m in items]),
