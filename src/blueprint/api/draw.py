@@ -18,6 +18,7 @@ from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
 from blueprint.scene.camera import fit_camera
+from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin
 from blueprint.scene.loader import load_model, model_from_object
 from blueprint.scene.model import Model
 
@@ -238,14 +239,17 @@ def vector_drawing(
         return draw_vector_sheet(
             model, size, fov=fov, scale=scale, units=units, sheet=sheet, section=plane, **options
         )
-    camera = fit_camera(model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+    # room for the dimensions below and right of the model
+    margin = dimension_margin(size, 96.0 / 25.4) if dimensions else 0.05
+    camera = fit_camera(
+        model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho, margin=margin
+    )
     if cut is not None:
         made = cut.cut(model, camera)
         drawing = draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
     else:
         drawing = draw_vector(model, camera, size, scale=scale, units=units, **options)
     if glyphs is not None:
-        from blueprint.scene.dimension import UNITS_MM, default_units
         from blueprint.vector.dimension import with_dimension_glyphs
 
         drawing = with_dimension_glyphs(drawing, glyphs, UNITS_MM[units or default_units(model)])

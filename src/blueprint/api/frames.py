@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -19,7 +19,7 @@ from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
-from blueprint.scene.dimension import UNITS_MM, default_units, screen_points
+from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin, screen_points
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
@@ -49,10 +49,12 @@ def _as_model(model: Model | str | os.PathLike, up: str | None, include=None, ex
     return model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
 
 
-def _camera(model: Model, size, view, azimuth, elevation, fov, ortho, camera) -> Camera | None:
+def _camera(model: Model, size, view, azimuth, elevation, fov, ortho, camera, margin=0.05) -> Camera | None:
     if camera is not None:
         return camera
-    return fit_camera(model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+    return fit_camera(
+        model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho, margin=margin
+    )
 
 
 def render_frame(
@@ -205,17 +207,18 @@ def render_frame(
         profile=profile,
     )
     section_asked = section_of(model, section, section_plane, section_keep)
-    mm_per_model = UNITS_MM[_units(model, units)]
+    unit = _units(model, units)
     if view == PLAN and camera is None:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")
-        sheet = dict(
-            dimensions=dimensions, mm_per_model=mm_per_model, title=title, units=_units(model, units)
-        )
+        sheet = _SheetAsked(dimensions, unit, title)
         return _plan_frame(model, size, fov, renderer, options, section_asked, sheet)
     if title is not None:
         raise InputError("--title names a plan sheet's title block: give --view plan")
-    cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
+    mm_per_model = UNITS_MM[unit]
+    # room for the dimensions below and right of the model
+    margin = dimension_margin(size, picture_per_mm(size)) if dimensions else 0.05
+    cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera, margin)
     if dimensions and not cam.ortho:
         raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
     drawn = model
@@ -267,6 +270,20 @@ def _dimensions(
     return marks, circles
 
 
+@dataclass(frozen=True)
+class _SheetAsked:
+    """What a plan sheet draws beyond its views: dimensions (values in mm from the model's
+    ``unit``) and its title (None: the model's name)."""
+
+    dimensions: bool
+    unit: str
+    title: str | None
+
+    @property
+    def mm_per_model(self) -> float:
+        return UNITS_MM[self.unit]
+
+
 def _units(model: Model, units: str | None) -> str:
     """The model's length unit: ``units``, checked, or the file format's default."""
     unit = units or default_units(model)
@@ -297,7 +314,9 @@ def _crop_boxes(drawn: Model, cameras: dict[str, Camera], cell: tuple[int, int])
     return boxes
 
 
-def _plan_layout(model: Model, drawn: Model, size, fov: float, sheet: dict, rows: int, crease_angle: float):
+def _plan_layout(
+    model: Model, drawn: Model, size, fov: float, sheet: _SheetAsked, rows: int, crease_angle: float
+):
     """The cell size, cameras, crop boxes, dimension marks and layout of a plan sheet ``size``
     pixels large: the views are drawn at one cell size, scaled until, laid out, they fill the
     room the border and title block leave (the gaps, labels and border scale with the cell;
@@ -309,10 +328,10 @@ def _plan_layout(model: Model, drawn: Model, size, fov: float, sheet: dict, rows
         boxes = _crop_boxes(drawn, cameras, cell)
         extents = dict(boxes)
         marks = {}
-        if sheet["dimensions"]:
+        if sheet.dimensions:
             for name in ("top", "front", "right"):
                 marks[name], circles[name] = _dimensions(
-                    drawn, cameras[name], cell, sheet["mm_per_model"], crease_angle, circles.get(name), size
+                    drawn, cameras[name], cell, sheet.mm_per_model, crease_angle, circles.get(name), size
                 )
                 lines = np.concatenate([boxes[name], marks[name].lines.reshape(-1, 2)])
                 extents[name] = np.array([lines.min(axis=0), lines.max(axis=0)])
@@ -341,7 +360,7 @@ def _plan_frame(
     renderer: Renderer,
     options,
     section: Section | None,
-    sheet: dict,
+    sheet: _SheetAsked,
 ) -> Frame:
     """A drawing sheet in third-angle projection: top view above the front view, right view
     beside it, all orthographic at one scale, and an iso view in the free corner, laid out by
@@ -355,8 +374,8 @@ def _plan_frame(
         front = sheet_cameras(model, (size[0] // 2, size[1] // 2), fov)["front"]
         cut = section.cut(model, front)
     drawn = model if cut is None else cut.model
-    title = sheet["title"] if sheet["title"] is not None else model_name(model)
-    fields = sheet_fields(title, None, sheet["units"], f"{size[0]} x {size[1]} px")
+    title = sheet.title if sheet.title is not None else model_name(model)
+    fields = sheet_fields(title, None, sheet.unit, f"{size[0]} x {size[1]} px")
     crease = float(options["crease_angle"])
     cell, cameras, boxes, marks, layout = _plan_layout(model, drawn, size, fov, sheet, len(fields), crease)
 

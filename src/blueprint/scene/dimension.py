@@ -21,6 +21,7 @@ __all__ = [
     "UNITS_MM",
     "default_units",
     "diameter_marks",
+    "dimension_margin",
     "format_value",
     "linear_dimension",
     "overall_dimensions",
@@ -53,6 +54,14 @@ def default_units(model: Model) -> str:
 GAP_MM, OVERSHOOT_MM, OFFSET_MM, ARROW_MM, TEXT_MM = 1.0, 2.0, 8.0, 3.0, 3.5
 #: Thin lines, in base line widths: the hatch pen (0.18 mm against 0.25 mm).
 DIMENSION_WIDTH = 0.7
+
+
+def dimension_margin(size: tuple[int, int], per_mm: float, margin: float = 0.05) -> float:
+    """The fit margin (``Camera.fit``'s, a fraction of the picture a side) of a view of ``size``
+    pixels that leaves room past ``margin`` for its overall dimensions below and right of the
+    model (ISO 129's offset and overshoot, ``per_mm`` pixels a mm), at most 0.4."""
+    room = (OFFSET_MM + OVERSHOOT_MM + 1.0) * per_mm
+    return min(margin + room / max(min(size), 1), 0.4)
 
 
 def format_value(mm: float) -> str:
