@@ -503,9 +503,9 @@ def draw_vector_sheet(
         # on the orthographic views, sized for the sheet's scale, known only now
         unit = quarter.model_unit or units or _default_units(model)
         drawn = cut.model if cut is not None else model
+        crease = options.get("crease_angle", 30.0)
         for name in ("top", "front", "right"):
             view_m, proj = cameras[name].view_matrix(), cameras[name].projection_matrix()
-            crease = options.get("crease_angle", 30.0)
             marks = dimension_marks(drawn, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px, crease)
             cells[name] = replace(cells[name], marks=marks)
     extents = {name: _view_extent(cell, (w, h)) for name, cell in cells.items()}
