@@ -331,7 +331,10 @@ def test_shipped_example_marks_the_gearbox(renderer):
 
 
 BAD = [
-    ("[[circle]]\nat = [0, 0, 0]\n", "unknown entry 'circle' (allowed: arrow, box, label, path, hidden)"),
+    (
+        "[[circle]]\nat = [0, 0, 0]\n",
+        "unknown entry 'circle' (allowed: arrow, box, dimension, label, path, hidden)",
+    ),
     ("[box]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n", "box must be a list of tables"),
     (
         "[[box]]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n[[box]]\nmin = [0, 0, 0]\nmax = [1, 1]\n",

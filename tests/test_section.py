@@ -306,3 +306,35 @@ def test_cli_bad_section(two_parts, tmp_path, args, mentions, suffix):
     proc = run("render", two_parts, "--up", "z", "-o", folder / f"x{suffix}", "--size", 64, 64, *args)
     one_error(proc, *mentions)
     no_output(folder)
+
+
+def test_a_part_kept_whole_does_not_clip_the_hatching_of_the_parts_cut(renderer):
+    """A washer (radius 12, kept whole) lies on the block above its hole (radius 8): from the
+    top it covers the ring 8 < r < 12 of the block's cut face at z = 10, which is hatched all
+    the same, as in the vector drawing."""
+    washer = trimesh.creation.cylinder(radius=12.0, height=4.0, sections=96)
+    washer.apply_translation((0.0, 0.0, H + 2.0))
+    block = block_with_hole()
+    positions = np.concatenate([block.vertices, washer.vertices])
+    faces = np.concatenate([block.faces, washer.faces + len(block.vertices)])
+    parts = np.r_[np.zeros(len(block.faces), np.int32), np.ones(len(washer.faces), np.int32)]
+    model = Model(positions.astype(np.float32), faces.astype(np.int32), parts, ("block", "washer"), "z")
+    size = (400, 400)
+    camera = fit_camera(model, size, "top", ortho=True)
+    hatched = blueprint.render(
+        model, camera=camera, size=size, section="z=10", section_keep="washer", renderer=renderer
+    )
+    keep = np.array([False, True])
+    unhatched = blueprint.render(
+        top_cut(model, 10.0, keep).model, camera=camera, size=size, renderer=renderer
+    )
+    changed = np.abs(hatched.astype(int) - unhatched.astype(int)).max(axis=2) > 40
+    # pixel centres in model units, the camera looking down on the origin
+    per_px = camera.height / size[1]
+    y, x = (np.mgrid[0 : size[1], 0 : size[0]] + 0.5 - np.array(size[::-1])[:, None, None] / 2) * per_px
+    r = np.hypot(x, y)
+    ring = (r > 9.0) & (r < 11.0)  # under the washer, away from its outline and the hole's
+    spacing = max(5.0, 400 / 90)
+    assert changed[ring].mean() > 0.6 / spacing
+    # and the washer itself, above the plane, is not hatched
+    assert changed[r < 7.0].mean() == 0.0

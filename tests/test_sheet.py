@@ -14,9 +14,9 @@ from test_bad_input import no_output, one_error, run
 from blueprint import load_model
 from blueprint.api.files import render_vector_file
 from blueprint.examples import gearbox
+from blueprint.scene.sheet import PAPER_MM, fit_scale, place_views
 from blueprint.vector import draw_vector_sheet
 from blueprint.vector.pdf import unicode_font
-from blueprint.vector.sheet import PAPER_MM, fit_scale, place_views
 
 SVG = "{http://www.w3.org/2000/svg}"
 
@@ -142,7 +142,8 @@ def test_dimension_lines_span_the_view(renderer, shared_models):
     size = (400, 300)
     camera = fit_camera(model, size, "front", ortho=True)
     drawing = draw_vector(model, camera, size, renderer=renderer, dimensions=True, scale="1:1", units="in")
-    assert [t.text for t in drawing.marks.texts] == ["127", "34.9"]
+    # the overall width and height, and the hole seen along its axis from the front
+    assert [t.text for t in drawing.marks.texts] == ["127", "34.9", "Ø 9.9"]
     assert drawing.marks.texts[1].angle == 90.0
     # the dimension line under the view runs between the extension lines at the model's ends
     per_px = camera.height / size[1]
@@ -158,7 +159,9 @@ def test_dimension_lines_span_the_view(renderer, shared_models):
     "args, mentions",
     [
         (["-o", "x.svg", "--view", "iso", "--dimensions"], ["dimensions need an orthographic view"]),
-        (["-o", "x.png", "--view", "front", "--dimensions"], ["for vector drawings"]),
+        (["-o", "x.png", "--view", "front", "--dimensions"], ["dimensions need an orthographic view"]),
+        (["-o", "x.png", "--view", "front", "--title", "T"], ["--title", "--view plan"]),
+        (["-o", "x.png", "--view", "plan", "--units", "parsec"], ["unknown units 'parsec'", "mm, cm, m"]),
     ],
 )
 def test_bad_dimensions(tmp_path, args, mentions):

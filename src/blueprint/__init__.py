@@ -46,6 +46,8 @@ _EXPORTS = {
     "SectionPlane": "blueprint.scene.section",
     "cut_model": "blueprint.scene.section",
     "parse_section": "blueprint.scene.section",
+    "Marks": "blueprint.scene.sheet",
+    "lay_out_sheet": "blueprint.scene.sheet",
 }
 
 __all__ = [
@@ -58,6 +60,7 @@ __all__ = [
     "Glyphs",
     "InputError",
     "Layers",
+    "Marks",
     "Model",
     "Renderer",
     "STYLES",
@@ -73,6 +76,7 @@ __all__ = [
     "draw_glyphs",
     "environment_parts",
     "guess_up",
+    "lay_out_sheet",
     "load_glyphs",
     "load_model",
     "parse_section",
@@ -96,6 +100,7 @@ if TYPE_CHECKING:
     from blueprint.scene.loader import load_model
     from blueprint.scene.model import Model
     from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
+    from blueprint.scene.sheet import Marks, lay_out_sheet
     from blueprint.scene.up import guess_up
 
 

@@ -13,11 +13,12 @@ import numpy as np
 
 from blueprint.api.frames import PLAN, PartSpec, render_frame, shared
 from blueprint.api.renderer import Renderer
-from blueprint.compose.glyphs import Glyphs
+from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
 from blueprint.scene.camera import fit_camera
+from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin
 from blueprint.scene.loader import load_model, model_from_object
 from blueprint.scene.model import Model
 
@@ -196,11 +197,12 @@ def vector_drawing(
     sheet: str | None = None,
     title: str | None = None,
     dimensions: bool = False,
+    glyphs: Glyphs | str | os.PathLike | None = None,
     renderer: Renderer | None = None,
 ):
     """The vector lines of ``model`` as ``render_vector_file`` draws them (one view or the
-    plan sheet, cut by a section where asked), not written anywhere: a
-    ``blueprint.vector.drawing.Drawing``."""
+    plan sheet, cut by a section where asked, a glyph file's dimensions added), not written
+    anywhere: a ``blueprint.vector.drawing.Drawing``."""
     from blueprint.api.sections import section_of
     from blueprint.gpu.device import check_size
     from blueprint.vector.drawing import draw_vector, draw_vector_sheet
@@ -228,16 +230,30 @@ def vector_drawing(
     cut = section_of(model, section, section_plane, section_keep)
     if sheet is not None and view != PLAN:
         raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
+    if glyphs is not None and not isinstance(glyphs, Glyphs):
+        glyphs = load_glyphs(glyphs)
     if view == PLAN:
+        if glyphs is not None:
+            raise InputError("glyphs need one view; the plan sheet draws four")
         plane = None if cut is None else (cut.plane, cut.keep)
         return draw_vector_sheet(
             model, size, fov=fov, scale=scale, units=units, sheet=sheet, section=plane, **options
         )
-    camera = fit_camera(model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+    # room for the dimensions below and right of the model
+    margin = dimension_margin(size, 96.0 / 25.4) if dimensions else 0.05
+    camera = fit_camera(
+        model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho, margin=margin
+    )
     if cut is not None:
         made = cut.cut(model, camera)
-        return draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
-    return draw_vector(model, camera, size, scale=scale, units=units, **options)
+        drawing = draw_vector(made.model, camera, size, scale=scale, units=units, section=made, **options)
+    else:
+        drawing = draw_vector(model, camera, size, scale=scale, units=units, **options)
+    if glyphs is not None:
+        from blueprint.vector.dimension import with_dimension_glyphs
+
+        drawing = with_dimension_glyphs(drawing, glyphs, UNITS_MM[units or default_units(model)])
+    return drawing
 
 
 def draw(

@@ -5,22 +5,26 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from blueprint.api.renderer import Renderer
 from blueprint.api.sections import Section, render_section, section_of
 from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
+from blueprint.compose.glyphs.marks import draw_marks
+from blueprint.compose.sheet import over, paper_image
 from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
+from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin, screen_points
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
+from blueprint.scene.sheet import Marks, lay_out_sheet, model_name, picture_per_mm, sheet_fields
 
 #: The view name of a drawing sheet: top, front and right orthographic views plus an iso view.
 PLAN = "plan"
@@ -45,10 +49,12 @@ def _as_model(model: Model | str | os.PathLike, up: str | None, include=None, ex
     return model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
 
 
-def _camera(model: Model, size, view, azimuth, elevation, fov, ortho, camera) -> Camera | None:
+def _camera(model: Model, size, view, azimuth, elevation, fov, ortho, camera, margin=0.05) -> Camera | None:
     if camera is not None:
         return camera
-    return fit_camera(model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
+    return fit_camera(
+        model, size, view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho, margin=margin
+    )
 
 
 def render_frame(
@@ -82,6 +88,9 @@ def render_frame(
     section: str | None = None,
     section_plane: str | Sequence[float] | None = None,
     section_keep: PartSpec | None = None,
+    dimensions: bool = False,
+    units: str | None = None,
+    title: str | None = None,
     profile: bool = False,
     renderer: Renderer | None = None,
 ) -> Frame:
@@ -95,8 +104,8 @@ def render_frame(
         Width and height in pixels.
     view : str
         ``iso``, ``front``, ``back``, ``left``, ``right``, ``top``, ``bottom``, or ``plan``: a
-        sheet of orthographic top, front and right views at one scale plus iso, each a quarter
-        of ``size``.
+        sheet of orthographic top, front and right views at one scale plus iso, labelled and
+        laid out with even gaps fitted to their sizes, with a border and a title block.
     azimuth, elevation : float, optional
         Degrees from the front towards the right, and above the horizon, overriding ``view``'s.
     fov : float
@@ -145,7 +154,8 @@ def render_frame(
     glyphs : Glyphs, str or PathLike, optional
         Boxes, arrows, paths and labels in model coordinates (a TOML or JSON file, see
         ``blueprint.compose.glyphs``), drawn depth-correctly: dimmed, dashed or left out where
-        a surface hides them. Not on a plan sheet.
+        a surface hides them; ``[[dimension]]`` entries are drawn after ISO 129 on top. Not on a
+        plan sheet.
     section : str, optional
         A section view: ``"x=VALUE"`` (or ``y=``, ``z=``, model units) removes the model in front
         of that plane as the camera sees it; the cut faces are hatched, outlined heavy.
@@ -154,6 +164,15 @@ def render_frame(
         (``"PX,PY,PZ,NX,NY,NZ"``).
     section_keep : str, int, sequence, Model or (P,) bool, optional
         Parts drawn whole in a section (shafts, bolts, pins).
+    dimensions : bool
+        Draw the overall width and height of an orthographic view (or of a plan sheet's
+        orthographic views) and the diameters of the circles its lines find, after ISO 129,
+        in millimetres: the vector drawing's marks and numbers.
+    units : str, optional
+        The model's length unit (``mm``, ``in``, ``m`` ...; default ``m`` for glTF, else
+        ``mm``): the dimensions' values (glyph file dimensions' too) and a plan sheet's units.
+    title : str, optional
+        A plan sheet's title (default: the model's name).
     profile : bool
         Synchronise after each stage to fill ``Frame.stages`` (slower).
     renderer : Renderer, optional
@@ -187,48 +206,196 @@ def render_frame(
         shade_opacity=shade_opacity,
         profile=profile,
     )
-    cut = section_of(model, section, section_plane, section_keep)
+    section_asked = section_of(model, section, section_plane, section_keep)
+    unit = _units(model, units)
     if view == PLAN and camera is None:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")
-        return _plan_frame(model, size, fov, renderer, options, cut)
-    cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera)
-    if cut is not None:
-        frame = render_section(renderer, model, cam, size, cut, options)
+        sheet = _SheetAsked(dimensions, unit, title)
+        return _plan_frame(model, size, fov, renderer, options, section_asked, sheet)
+    if title is not None:
+        raise InputError("--title names a plan sheet's title block: give --view plan")
+    mm_per_model = UNITS_MM[unit]
+    # room for the dimensions below and right of the model
+    margin = dimension_margin(size, picture_per_mm(size)) if dimensions else 0.05
+    cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera, margin)
+    if dimensions and not cam.ortho:
+        raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
+    drawn = model
+    if section_asked is not None:
+        cut = section_asked.cut(model, cam)
+        drawn = cut.model
+        frame = render_section(renderer, cut, cam, size, options)
     else:
         frame = renderer.render(model, cam, size=size, **options)
     if glyphs is not None:
         t0 = time.perf_counter()
-        image = render_with_glyphs(renderer, model, frame.camera, size, glyphs, frame.image)
+        image = render_with_glyphs(
+            renderer, model, frame.camera, size, glyphs, frame.image, mm_per_model=mm_per_model
+        )
         spent = (time.perf_counter() - t0) * 1e3
         frame = replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "glyphs": spent})
+    if dimensions:
+        t0 = time.perf_counter()
+        marks, _ = _dimensions(drawn, cam, size, mm_per_model, crease_angle)
+        image = frame.image.copy()
+        draw_marks(image, marks, chosen.ink, line_width)
+        spent = (time.perf_counter() - t0) * 1e3
+        frame = replace(
+            frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "dimensions": spent}, marks=marks
+        )
     return frame
 
 
+def _dimensions(
+    model: Model,
+    camera: Camera,
+    size,
+    mm_per_model: float,
+    crease_angle: float,
+    circles=None,
+    sheet_size=None,
+):
+    """The dimensions of an orthographic view in its pixels (``Marks``), as the vector drawing
+    has them, and the circles its lines find."""
+    # the vector lines find the circles; they load only where a drawing has dimensions
+    from blueprint.vector.dimension import dimension_marks, find_circles
+
+    view, projection = camera.view_matrix(), camera.projection_matrix()
+    if circles is None:
+        circles = find_circles(model, view, projection, size, crease_angle)
+    # on a picture, ISO's measures as its sheet takes them
+    mm_per_px = 1.0 / picture_per_mm(sheet_size or size)
+    marks = dimension_marks(model, view, projection, size, mm_per_model, mm_per_px, crease_angle, circles)
+    return marks, circles
+
+
+@dataclass(frozen=True)
+class _SheetAsked:
+    """What a plan sheet draws beyond its views: dimensions (values in mm from the model's
+    ``unit``) and its title (None: the model's name)."""
+
+    dimensions: bool
+    unit: str
+    title: str | None
+
+    @property
+    def mm_per_model(self) -> float:
+        return UNITS_MM[self.unit]
+
+
+def _units(model: Model, units: str | None) -> str:
+    """The model's length unit: ``units``, checked, or the file format's default."""
+    unit = units or default_units(model)
+    if unit not in UNITS_MM:
+        raise InputError(f"unknown units {unit!r} (choose {', '.join(UNITS_MM)})")
+    return unit
+
+
+# Pixels of paper left around a view's lines where a plan sheet crops its picture: the lines'
+# half width and their anti-aliasing.
+_CROP_PAD = 3
+# A plan sheet's cells grow or shrink until its views fill at least this much of the room the
+# border and title block leave them, in so many steps at most.
+_FILL = 0.97
+_FIT_STEPS = 8
+
+
+def _crop_boxes(drawn: Model, cameras: dict[str, Camera], cell: tuple[int, int]) -> dict[str, np.ndarray]:
+    """Each view's box in its cell's pixels: its model's used vertices projected, a few pixels
+    around them, within the cell."""
+    used = drawn.positions[np.unique(drawn.faces)].astype(np.float64)
+    boxes = {}
+    for name, cam in cameras.items():
+        px = screen_points(used, cam.view_matrix(), cam.projection_matrix(), cell)
+        lo = np.clip(np.floor(px.min(axis=0)) - _CROP_PAD, 0, cell)
+        hi = np.clip(np.ceil(px.max(axis=0)) + _CROP_PAD, 0, cell)
+        boxes[name] = np.array([lo, hi])
+    return boxes
+
+
+def _plan_layout(
+    model: Model, drawn: Model, size, fov: float, sheet: _SheetAsked, rows: int, crease_angle: float
+):
+    """The cell size, cameras, crop boxes, dimension marks and layout of a plan sheet ``size``
+    pixels large: the views are drawn at one cell size, scaled until, laid out, they fill the
+    room the border and title block leave (the gaps, labels and border scale with the cell;
+    the title block and the dimensions' measures do not, hence the steps)."""
+    circles: dict[str, list] = {}
+
+    def attempt(cell):
+        cameras = sheet_cameras(model, cell, fov)
+        boxes = _crop_boxes(drawn, cameras, cell)
+        extents = dict(boxes)
+        marks = {}
+        if sheet.dimensions:
+            for name in ("top", "front", "right"):
+                marks[name], circles[name] = _dimensions(
+                    drawn, cameras[name], cell, sheet.mm_per_model, crease_angle, circles.get(name), size
+                )
+                lines = np.concatenate([boxes[name], marks[name].lines.reshape(-1, 2)])
+                extents[name] = np.array([lines.min(axis=0), lines.max(axis=0)])
+        return cell, cameras, boxes, marks, lay_out_sheet(extents, rows, cell, None, size)
+
+    tried = attempt((max(size[0] // 2, 1), max(size[1] // 2, 1)))
+    for _ in range(_FIT_STEPS):
+        cell, overflow = tried[0], tried[-1].overflow
+        if overflow <= 1.0 and (overflow >= _FILL or cell == tuple(size)):
+            break
+        # a little under what fits where it does not, at most twice as large where it does
+        factor = min((0.99 if overflow > 1.0 else 1.0) / overflow, 2.0)
+        scaled = tuple(int(min(max(v * factor, 1), limit)) for v, limit in zip(cell, size, strict=True))
+        if scaled == cell:
+            break
+        tried = attempt(scaled)
+    while tried[-1].overflow > 1.0 and min(tried[0]) > 1:
+        tried = attempt(tuple(max(int(v * 0.95), 1) for v in tried[0]))
+    return tried
+
+
 def _plan_frame(
-    model: Model, size: tuple[int, int], fov: float, renderer: Renderer, options, section: Section | None
+    model: Model,
+    size: tuple[int, int],
+    fov: float,
+    renderer: Renderer,
+    options,
+    section: Section | None,
+    sheet: _SheetAsked,
 ) -> Frame:
     """A drawing sheet in third-angle projection: top view above the front view, right view
-    beside it, all orthographic at one scale, and an iso view in the free corner; a section
-    cuts the model as the front view sees it, in every view."""
-    w, h = size[0] // 2, size[1] // 2
-    if w < 1 or h < 1:
+    beside it, all orthographic at one scale, and an iso view in the free corner, laid out by
+    ``blueprint.scene.sheet.lay_out_sheet`` (as the vector sheet is) with their labels, a border
+    and a title block; a section cuts the model as the front view sees it, in every view."""
+    if size[0] < 2 or size[1] < 2:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
-    cameras = sheet_cameras(model, (w, h), fov)
-    image = np.zeros((size[1], size[0], 4), np.uint8)
-    frames = {}
+    style: Style = options["style"]
+    cut = None
     if section is not None:
-        section = Section(section.plane.facing(cameras["front"].eye, cameras["front"].target), section.keep)
-    for name, (col, row) in SHEET_CELLS.items():
-        if section is not None:
-            frames[name] = render_section(renderer, model, cameras[name], (w, h), section, options)
+        front = sheet_cameras(model, (size[0] // 2, size[1] // 2), fov)["front"]
+        cut = section.cut(model, front)
+    drawn = model if cut is None else cut.model
+    title = sheet.title if sheet.title is not None else model_name(model)
+    fields = sheet_fields(title, None, sheet.unit, f"{size[0]} x {size[1]} px")
+    crease = float(options["crease_angle"])
+    cell, cameras, boxes, marks, layout = _plan_layout(model, drawn, size, fov, sheet, len(fields), crease)
+
+    # the views are drawn on no paper and laid over the sheet's, so that its grid runs on
+    clear = dict(options, style=replace(style, paper=None, grid=0.0))
+    image = paper_image(style, size)
+    frames = {}
+    all_marks = [layout.marks(fields)]
+    for name in SHEET_CELLS:
+        if cut is not None:
+            frames[name] = render_section(renderer, cut, cameras[name], cell, clear)
         else:
-            frames[name] = renderer.render(model, cameras[name], size=(w, h), **options)
-        image[row * h : (row + 1) * h, col * w : (col + 1) * w] = frames[name].image
-    if size[0] % 2 or size[1] % 2:
-        # odd sizes leave a last row or column: continue the paper there
-        image[2 * h :, :] = image[2 * h - 1 : 2 * h, :]
-        image[:, 2 * w :] = image[:, 2 * w - 1 : 2 * w]
+            frames[name] = renderer.render(model, cameras[name], size=cell, **clear)
+        (x0, y0), (x1, y1) = boxes[name].astype(int)
+        shift = np.round(layout.shifts[name]).astype(int)
+        over(image, frames[name].image[y0:y1, x0:x1], x0 + int(shift[0]), y0 + int(shift[1]))
+        if name in marks:
+            all_marks.append(marks[name].shifted(shift.astype(np.float64)))
+    drawn_marks = Marks.concatenate(all_marks)
+    draw_marks(image, drawn_marks, style.ink, float(options["line_width"]))
     front = frames["front"]
     layers = max(f.layers for f in frames.values())
     return Frame(
@@ -240,6 +407,7 @@ def _plan_frame(
         ms=sum(f.ms for f in frames.values()),
         draws=sum(f.draws for f in frames.values()),
         stages={},
+        marks=drawn_marks,
     )
 
 
@@ -274,6 +442,9 @@ def render(
     section: str | None = None,
     section_plane: str | Sequence[float] | None = None,
     section_keep: PartSpec | None = None,
+    dimensions: bool = False,
+    units: str | None = None,
+    title: str | None = None,
     profile: bool = False,
     renderer: Renderer | None = None,
 ) -> np.ndarray:
@@ -310,6 +481,9 @@ def render(
     section, section_plane, section_keep : optional
         A section view: the plane (``"x=VALUE"``, or a point and a normal towards the side
         removed) and the parts left uncut (see ``render_frame``).
+    dimensions, units, title : optional
+        ISO 129 dimensions of orthographic views, the model's length unit, a plan sheet's
+        title (see ``render_frame``).
     profile : bool
         Synchronise after each stage (for timings; slower).
     renderer : Renderer, optional
@@ -350,6 +524,9 @@ def render(
         section=section,
         section_plane=section_plane,
         section_keep=section_keep,
+        dimensions=dimensions,
+        units=units,
+        title=title,
         profile=profile,
         renderer=renderer,
     ).image

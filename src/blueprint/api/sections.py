@@ -20,7 +20,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
 
-__all__ = ["Section", "section_of"]
+__all__ = ["Section", "render_section", "section_of"]
 
 
 @dataclass(frozen=True)
@@ -54,25 +54,28 @@ def section_of(
 
 
 def render_section(
-    renderer: Renderer,
-    model: Model,
-    camera: Camera,
-    size: tuple[int, int],
-    section: Section,
-    options: dict,
+    renderer: Renderer, cut: Cut, camera: Camera, size: tuple[int, int], options: dict
 ) -> Frame:
-    """Cut ``model``, draw the rest with ``options`` (``Renderer.render``'s) and hatch the cut."""
-    cut = section.cut(model, camera)
+    """Draw the model ``cut`` left with ``options`` (``Renderer.render``'s) and hatch its cut
+    faces where the first layer of the parts cut shows them: parts kept whole, in front of the
+    plane, do not hide the hatching (as in the vector drawing)."""
     frame = renderer.render(cut.model, camera, size=size, **options)
     t0 = time.perf_counter()
     style: Style = options["style"]
     s = int(options.get("supersample", 1))
-    front = renderer.peel(cut.model, camera, size=(size[0] * s, size[1] * s), max_layers=1, normals=False)
+    model, cap = cut.model, cut.cap
+    if cut.keep is not None and cut.keep.any():
+        cut_faces = ~cut.keep[model.face_part]
+        model = Model(
+            model.positions, model.faces[cut_faces], model.face_part[cut_faces], model.part_names, model.up
+        )
+        cap = cap[cut_faces]
+    front = renderer.peel(model, camera, size=(size[0] * s, size[1] * s), max_layers=1, normals=False)
     image = hatch_overlay(
         frame.image,
         front.triangle[0],
-        cut.model.face_part,
-        cut.cap,
+        model.face_part,
+        cap,
         style.ink,
         supersample=s,
         line_width=float(options.get("line_width", 1.0)),

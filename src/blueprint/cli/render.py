@@ -64,7 +64,9 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
 @click.option(
     "--scale", default=None, help="Vector plan views to scale, e.g. 1:50 (orthographic, page in mm)."
 )
-@click.option("--units", default=None, help="The model's length unit for --scale (mm, cm, m, in, ft).")
+@click.option(
+    "--units", default=None, help="The model's length unit for --scale and dimensions (mm, cm, m, in, ft)."
+)
 @click.option("--id-silhouettes", is_flag=True, help="Add triangle-ID silhouettes to every layer's edges.")
 @click.option("--shade", default=None, help="Parts to draw shaded inside the drawing: globs or indices.")
 @click.option(
@@ -74,7 +76,7 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     "--glyphs",
     type=click.Path(path_type=Path),
     default=None,
-    help="TOML or JSON file of boxes, arrows, paths and labels in model coordinates.",
+    help="TOML or JSON file of boxes, arrows, paths, labels and dimensions in model coordinates.",
 )
 @click.option(
     "--reveal",
@@ -100,10 +102,12 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     help="Paper of a vector plan sheet: A4, A3, A2, A1 or A0 (landscape); the scale fits it unless --scale.",
 )
 @click.option(
-    "--dimensions", is_flag=True, help="Overall dimensions of orthographic vector views (ISO 129, mm)."
+    "--dimensions",
+    is_flag=True,
+    help="Overall dimensions and circle diameters of orthographic views and plan sheets (ISO 129, mm).",
 )
 @click.option(
-    "--title", default=None, help="Title of a vector plan sheet's title block (default: the model's name)."
+    "--title", default=None, help="Title of a plan sheet's title block (default: the model's name)."
 )
 def render(
     model,
@@ -149,10 +153,8 @@ def render(
         raise InputError("give --highlight or --highlight-model, not both")
     camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
     if write.kind is Kind.DRAWING:
-        if glyphs or shade:
-            raise InputError(
-                f"{output}: vector drawings take no --glyphs or --shade yet; write a picture for those"
-            )
+        if shade:
+            raise InputError(f"{output}: vector drawings take no --shade yet; write a picture for that")
         if highlight_model:
             model = load_model(model, up=camera["up"], include=include, exclude=exclude)
             highlight = load_model(highlight_model, up=camera["up"])
@@ -173,15 +175,14 @@ def render(
             sheet=sheet,
             title=title,
             dimensions=dimensions,
+            glyphs=glyphs,
             include=include,
             exclude=exclude,
             **camera,
         )
         return
-    if scale or units or sheet or title or dimensions:
-        raise InputError(
-            f"--scale, --units, --sheet, --title and --dimensions are for vector drawings ({DRAWINGS})"
-        )
+    if scale or sheet:
+        raise InputError(f"--scale and --sheet are for vector drawings ({DRAWINGS})")
     if is_style_file(style):
         raise InputError(
             f"{style}: line style files are for vector drawings ({DRAWINGS}); "
@@ -208,6 +209,9 @@ def render(
         section=section,
         section_plane=section_plane,
         section_keep=section_keep,
+        dimensions=dimensions,
+        units=units,
+        title=title,
         **camera,
     )
     write(output, frame.image)

@@ -27,6 +27,7 @@ from blueprint.render.mesh import GpuMesh
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
+from blueprint.scene.sheet import Marks
 
 # llvmpipe's A-buffer frames: from this many layers (see LayerRenderer.abuffer_min_layers)
 ABUFFER_SOFTWARE_MIN_LAYERS = 16
@@ -46,6 +47,8 @@ class Frame:
     ``layers_left``, where the peel stopped at its ``max_layers`` with surfaces left behind the
     last layer, how many more layers a peel without the cap would have drawn (at most: surfaces
     closer than the peel's tolerance count apart), else 0.
+    ``marks``: the sheet marks drawn over the image (a plan sheet's border, title block and
+    labels, dimensions; ``blueprint.scene.sheet.Marks``, in the image's pixels), if any.
     """
 
     image: np.ndarray
@@ -57,6 +60,7 @@ class Frame:
     stages: dict[str, float] = field(default_factory=dict)
     revealed: float | None = None
     layers_left: int = 0
+    marks: Marks | None = None
 
     @property
     def layers_shown(self) -> str:

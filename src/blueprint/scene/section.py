@@ -130,11 +130,14 @@ class Cut:
         The faces of ``model`` that close a cut: the section's cut faces.
     plane : SectionPlane
         The plane, its normal pointing at the side removed.
+    keep : (P,) bool or None
+        The parts left whole (drawn uncut by convention); None: none.
     """
 
     model: Model
     cap: np.ndarray
     plane: SectionPlane
+    keep: np.ndarray | None = None
 
     def cap_parts(self) -> np.ndarray:
         """Indices of the parts with a cut face, ascending."""
@@ -204,7 +207,7 @@ def cut_model(model: Model, plane: SectionPlane, keep: np.ndarray | None = None)
         model.up,
         model.source,
     )
-    return Cut(cut, cap, plane)
+    return Cut(cut, cap, plane, keep)
 
 
 def _slice(mesh, plane: SectionPlane, name: str):

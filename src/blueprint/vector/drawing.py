@@ -27,9 +27,22 @@ from blueprint.gpu.device import check_size
 from blueprint.pipeline.blueprint import render_blueprint
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
+from blueprint.scene.dimension import UNITS_MM
+from blueprint.scene.dimension import default_units as _default_units
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
+from blueprint.scene.sheet import (
+    BORDER_MM,
+    LABEL_MM,
+    TEXT_MM,
+    Marks,
+    fit_scale,
+    lay_out_sheet,
+    model_name,
+    paper_size,
+    sheet_fields,
+)
 
 from .dimension import dimension_marks
 from .dxf import write_dxf
@@ -46,19 +59,6 @@ from .occlusion import (
 )
 from .pdf import pdf_bytes
 from .section import SectionLines, section_lines
-from .sheet import (
-    BORDER_MM,
-    LABEL_MM,
-    TEXT_MM,
-    TITLE_BLOCK_MM,
-    Marks,
-    Text,
-    fit_scale,
-    paper_size,
-    place_views,
-    sheet_marks,
-    today,
-)
 from .simplify import douglas_peucker
 from .style import VectorStyle, vector_style
 from .svg import svg_bytes
@@ -76,16 +76,6 @@ __all__ = [
     "save_drawing",
 ]
 
-# Millimetres per model unit.
-UNITS_MM: dict[str, float] = {
-    "um": 1e-3,
-    "mm": 1.0,
-    "cm": 10.0,
-    "m": 1000.0,
-    "km": 1e6,
-    "in": 25.4,
-    "ft": 304.8,
-}
 # Pen width of the base line on a drawing to scale, in paper millimetres (ISO 128 0.25 mm).
 SCALED_PEN_MM = 0.25
 # Hatch line spacing of a section on a drawing to scale, in paper millimetres (ISO 128-50).
@@ -213,13 +203,6 @@ def parse_scale(scale: str | float | None) -> float | None:
     if not (math.isfinite(value) and value > 0):
         raise InputError(f"scale must look like 1:50, got {scale!r}")
     return value
-
-
-def _default_units(model: Model) -> str:
-    source = (model.source or "").lower()
-    # glTF lengths are metres by specification; other formats carry none, and CAD exports
-    # (STL, 3MF, OBJ from CAD) are most often millimetres
-    return "m" if source.endswith((".glb", ".gltf")) else "mm"
 
 
 def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
@@ -438,10 +421,9 @@ def draw_vector(
     if dimensions:
         if not camera.ortho:
             raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
-        unit = page.model_unit or _default_units(model)
-        used = model.positions[model.faces.reshape(-1)].astype(np.float64)
+        unit = page.model_unit or units or _default_units(model)
         mm_per_px = page.factor if page.unit == "mm" else None
-        marks = dimension_marks(used, view_m, proj, size, UNITS_MM[unit], mm_per_px)
+        marks = dimension_marks(model, view_m, proj, size, UNITS_MM[unit], mm_per_px, crease_angle)
 
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
@@ -521,44 +503,24 @@ def draw_vector_sheet(
         # on the orthographic views, sized for the sheet's scale, known only now
         unit = quarter.model_unit or units or _default_units(model)
         drawn = cut.model if cut is not None else model
-        used = drawn.positions[drawn.faces.reshape(-1)].astype(np.float64)
+        crease = options.get("crease_angle", 30.0)
         for name in ("top", "front", "right"):
             view_m, proj = cameras[name].view_matrix(), cameras[name].projection_matrix()
-            marks = dimension_marks(used, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px)
+            marks = dimension_marks(drawn, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px, crease)
             cells[name] = replace(cells[name], marks=marks)
-    per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
-    gap = 10.0 * per_mm if mm_per_px else 0.06 * min(w, h)
-    label = LABEL_MM * per_mm if mm_per_px else 0.045 * min(w, h)
     extents = {name: _view_extent(cell, (w, h)) for name, cell in cells.items()}
-    shifts, (views_w, views_h) = place_views(extents, SHEET_CELLS, gap, 1.4 * label)
-    border = (BORDER_MM[0] * per_mm, BORDER_MM[1] * per_mm) if mm_per_px else (0.03 * min(w, h),) * 2
-    block_h = 5 * 1.8 * min(TEXT_MM * per_mm, 0.6 * TITLE_BLOCK_MM[1] * per_mm / 5 * 2)
-    if paper is not None:
-        width, height = paper[0] * per_mm, paper[1] * per_mm
-        room_w, room_h = width - border[0] - border[1], height - 2 * border[1] - block_h
-        origin = np.array([border[0] + (room_w - views_w) / 2, border[1] + max(room_h - views_h, 0) / 2])
-    else:
-        width = border[0] + border[1] + max(views_w, TITLE_BLOCK_MM[0] * per_mm if mm_per_px else 0)
-        height = 2 * border[1] + views_h + block_h
-        origin = np.array([border[0], border[1]])
-    shifts = {name: shift + origin for name, shift in shifts.items()}
-    labels = []
-    for name in cells:
-        (x0, _), (x1, y1) = extents[name] + shifts[name]
-        labels.append(Text((x0 + x1) / 2, y1 + 1.2 * label, label, name.upper(), "middle"))
+    per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
+    room = None if paper is None else (paper[0] * per_mm, paper[1] * per_mm)
+    layout = lay_out_sheet(extents, 5, (w, h), mm_per_px, room)
+    width, height, shifts = layout.width, layout.height, layout.shifts
 
     page = replace(quarter, width=width * quarter.factor, height=height * quarter.factor)
-    name = Path(model.source).stem if model.source and model.source != "generated" else "model"
-    heading = title if title is not None else name
-    fields = {
-        "title": heading,
-        "scale": f"{page.scale_label} (iso not to scale)" if page.scale is not None else "not to scale",
-        "units": _units_field(page.model_unit),
-        "date": today(),
-        "sheet": sheet.strip().upper() if sheet else f"{width:.0f} x {height:.0f} px",
-    }
+    heading = title if title is not None else model_name(model)
+    fields = sheet_fields(
+        heading, page.scale_label, page.model_unit, sheet or f"{width:.0f} x {height:.0f} px"
+    )
     marks = Marks.concatenate(
-        [sheet_marks(width, height, mm_per_px, labels, fields)]
+        [layout.marks(fields)]
         + [cells[n].marks.shifted(shifts[n]) for n in cells if cells[n].marks is not None]
     )
     order = list(cells)
@@ -584,13 +546,6 @@ def draw_vector_sheet(
         else SectionLines.concatenate([cells[n].section.shifted(shifts[n]) for n in order]),
         seconds=seconds,
     )
-
-
-def _units_field(model_unit: str | None) -> str:
-    """A title block's units: the drawing's millimetres, and the model's unit where it differs."""
-    if model_unit is None:
-        return "px (not to scale)"
-    return "mm" if model_unit == "mm" else f"mm (model in {model_unit})"
 
 
 def _view_extent(cell: Drawing, size: tuple[int, int]) -> np.ndarray:

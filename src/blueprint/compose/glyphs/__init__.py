@@ -32,6 +32,12 @@ A glyph file is TOML or JSON (chosen by extension)::
     size = 14                     # pixels
     anchor = "left"               # which side of the text sits at the point
 
+    [[dimension]]                 # after ISO 129, drawn over everything
+    from = [-45, 0, 0]
+    to = [45, 0, 0]
+    text = "90 h7"                # optional: default the distance in mm (see units)
+    offset = 12                   # optional, model units, left of from -> to on screen
+
 ``load_glyphs`` reads a file and ``Glyphs.from_dict`` validates plain data (both raise
 ``InputError`` with one line naming the file and the entry); ``draw_glyphs`` draws them over an
 image, given the camera and the blueprint's front depth layer; ``render_with_glyphs`` peels
@@ -45,13 +51,24 @@ test), ``strokes`` (line glyphs into screen pieces), ``raster`` (pieces and text
 
 from blueprint.compose.glyphs.draw import draw_glyphs, render_with_glyphs
 from blueprint.compose.glyphs.parse import load_glyphs
-from blueprint.compose.glyphs.values import ANCHORS, HIDDEN_MODES, Arrow, Box, Glyphs, Hidden, Label, Path3D
+from blueprint.compose.glyphs.values import (
+    ANCHORS,
+    HIDDEN_MODES,
+    Arrow,
+    Box,
+    Dimension,
+    Glyphs,
+    Hidden,
+    Label,
+    Path3D,
+)
 
 __all__ = [
     "ANCHORS",
     "HIDDEN_MODES",
     "Arrow",
     "Box",
+    "Dimension",
     "Glyphs",
     "Hidden",
     "Label",

@@ -9,6 +9,7 @@ import os
 import numpy as np
 
 from blueprint.color import RGBA
+from blueprint.compose.glyphs.marks import dimension_glyph_marks, draw_marks
 from blueprint.compose.glyphs.parse import load_glyphs
 from blueprint.compose.glyphs.projection import View
 from blueprint.compose.glyphs.raster import draw_pieces, draw_text
@@ -17,6 +18,7 @@ from blueprint.compose.glyphs.values import Glyphs
 from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
+from blueprint.scene.sheet import picture_per_mm
 
 __all__ = ["draw_glyphs", "render_with_glyphs"]
 
@@ -60,6 +62,7 @@ def draw_glyphs(
     depth: np.ndarray | None,
     *,
     line_scale: float = 1.0,
+    mm_per_model: float = 1.0,
 ) -> np.ndarray:
     """Draw glyphs over a blueprint, hidden where the blueprint's front surface covers them.
 
@@ -81,6 +84,8 @@ def draw_glyphs(
         ``None``: nothing hides the glyphs.
     line_scale : float
         Multiplies line widths, dash lengths and text sizes (e.g. for larger prints).
+    mm_per_model : float
+        Millimetres per model unit: the values of the dimensions (drawn on top, never hidden).
 
     Returns
     -------
@@ -125,6 +130,12 @@ def draw_glyphs(
             opacity = hidden.opacity
         draw_text(canvas, xy, text, color, size * line_scale, anchor, opacity)
 
+    per_mm = picture_per_mm((w, h)) * line_scale
+    view_m, projection = camera.view_matrix(), camera.projection_matrix()
+    for dimension in glyphs.dimensions:
+        marks = dimension_glyph_marks(dimension, view_m, projection, (w, h), mm_per_model, per_mm)
+        draw_marks(canvas, marks, dimension.color, dimension.width * line_scale)
+
     return canvas if image.shape[2] == 4 else canvas[..., :3].copy()
 
 
@@ -137,10 +148,12 @@ def render_with_glyphs(
     frame_image: np.ndarray,
     *,
     line_scale: float = 1.0,
+    mm_per_model: float = 1.0,
 ) -> np.ndarray:
     """Peel the front depth layer of ``model`` at ``camera`` and ``size`` and draw ``glyphs``
     (a ``Glyphs`` or a glyph file) over ``frame_image`` (the blueprint drawn with the same
-    camera and size). Returns a new (H, W, 4) uint8 image."""
+    camera and size); dimensions' values in mm from ``mm_per_model``. Returns a new
+    (H, W, 4) uint8 image."""
     if not isinstance(glyphs, Glyphs):
         glyphs = load_glyphs(glyphs)
     w, h = (int(v) for v in size)
@@ -148,4 +161,4 @@ def render_with_glyphs(
         raise ValueError(f"frame_image is {frame_image.shape[1]}x{frame_image.shape[0]}, size is {w}x{h}")
     layers = renderer.peel(model, camera, size=(w, h), max_layers=1)
     depth = layers.depth[0] if len(layers.depth) else None
-    return draw_glyphs(frame_image, glyphs, camera, depth, line_scale=line_scale)
+    return draw_glyphs(frame_image, glyphs, camera, depth, line_scale=line_scale, mm_per_model=mm_per_model)

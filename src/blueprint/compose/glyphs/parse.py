@@ -13,13 +13,14 @@ from blueprint.compose.glyphs.values import (
     HIDDEN_MODES,
     Arrow,
     Box,
+    Dimension,
     Glyphs,
     Hidden,
     Label,
     Path3D,
 )
 from blueprint.errors import InputError
-from blueprint.settings import Entry, read_settings, show
+from blueprint.settings import Entry, is_number, read_settings, show
 
 __all__ = ["load_glyphs", "parse_glyphs"]
 
@@ -30,10 +31,19 @@ _MAX_POINTS = 100_000
 _KINDS = {
     "arrow": ("from", "to", "head", "color", "width", "dash", "label"),
     "box": ("min", "max", "color", "width", "dash", "label"),
+    "dimension": ("from", "to", "text", "offset", "color", "width"),
     "label": ("at", "text", "color", "size", "anchor"),
     "path": ("points", "closed", "color", "width", "dash", "label"),
 }
-_REQUIRED = {"arrow": ("from", "to"), "box": ("min", "max"), "label": ("at", "text"), "path": ("points",)}
+_REQUIRED = {
+    "arrow": ("from", "to"),
+    "box": ("min", "max"),
+    "dimension": ("from", "to"),
+    "label": ("at", "text"),
+    "path": ("points",),
+}
+# a dimension's offset from its points, in model units, either way
+_MAX_OFFSET = 1e12
 _HIDDEN_KEYS = ("mode", "opacity", "dash")
 _TOP = (*sorted(_KINDS), "hidden")
 
@@ -86,6 +96,7 @@ def parse_glyphs(data: Any, source: str) -> Glyphs:
         labels=tuple(_label(e) for e in lists["label"]),
         hidden=hidden,
         source=source,
+        dimensions=tuple(_dimension(e) for e in lists["dimension"]),
     )
 
 
@@ -128,3 +139,21 @@ def _label(e: _Entry) -> Label:
         e.number("size", 14.0, *_SIZE_RANGE),
         e.choice("anchor", "left", ANCHORS),
     )
+
+
+def _model_point(e: _Entry, key: str) -> tuple[float, float, float]:
+    value = e.table[key]
+    if not isinstance(value, list | tuple) or len(value) != 3 or not all(map(is_number, value)):
+        raise e.fail(f"{key} must be 3 numbers [x, y, z] in model coordinates, got {show(value)}")
+    return e.point(key)
+
+
+def _dimension(e: _Entry) -> Dimension:
+    start, end = _model_point(e, "from"), _model_point(e, "to")
+    if start == end:
+        raise e.fail("from and to are the same point: a dimension measures between two")
+    offset = None
+    if "offset" in e.table:
+        offset = e.number("offset", 0.0, -_MAX_OFFSET, _MAX_OFFSET)
+    width = e.number("width", 1.0, 0.0, _MAX_WIDTH, lo_open=True)
+    return Dimension(start, end, e.string("text", ""), offset, e.color(), width)

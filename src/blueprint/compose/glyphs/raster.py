@@ -10,7 +10,7 @@ import numpy as np
 
 from blueprint.color import RGBA
 
-__all__ = ["LABEL_GAP", "draw_pieces", "draw_text"]
+__all__ = ["LABEL_GAP", "composite", "draw_pieces", "draw_text"]
 
 # gap between a label and its anchor point, as a fraction of the text size
 LABEL_GAP = 0.3
@@ -28,7 +28,7 @@ _ANCHOR_SIDES = {  # anchor -> (horizontal, vertical) position of the point on t
 }
 
 
-def _composite(canvas: np.ndarray, x0: int, y0: int, coverage: np.ndarray, color: RGBA) -> None:
+def composite(canvas: np.ndarray, x0: int, y0: int, coverage: np.ndarray, color: RGBA) -> None:
     """Straight-alpha ``over`` of ``color`` at ``coverage`` (h, w) onto the uint8 RGBA
     ``canvas`` at (x0, y0), in place; pixels without coverage keep their exact values."""
     h, w = coverage.shape
@@ -64,7 +64,7 @@ def draw_pieces(
     from blueprint.silhouette.raster import draw_segments
 
     coverage = draw_segments(pieces - [x0, y0], x1 - x0, y1 - y0, width, opacity)
-    _composite(canvas, x0, y0, coverage, color)
+    composite(canvas, x0, y0, coverage, color)
 
 
 @lru_cache(maxsize=32)
@@ -109,4 +109,4 @@ def draw_text(
         (round(x) - cx0, round(y) - cy0), text, fill=255, font=font, anchor="la"
     )
     coverage = np.asarray(mask, np.float64) / 255.0 * opacity
-    _composite(canvas, cx0, cy0, coverage, color)
+    composite(canvas, cx0, cy0, coverage, color)

@@ -14,6 +14,7 @@ __all__ = [
     "HIDDEN_MODES",
     "Arrow",
     "Box",
+    "Dimension",
     "Glyphs",
     "Hidden",
     "Label",
@@ -100,8 +101,26 @@ class Label:
 
 
 @dataclass(frozen=True)
+class Dimension:
+    """A dimension between two model points after ISO 129: extension lines, a dimension line
+    with arrowheads, and ``text`` above it (default: the distance from ``start`` to ``end`` in
+    millimetres). ``offset`` is the dimension line's distance from the points in model units,
+    to the left of ``start`` -> ``end`` on screen where positive; None: ISO 129's 8 mm on
+    paper. Drawn over everything, as drawings show dimensions; ``width`` is the base line
+    width in pixels (dimension lines are thin: 0.7 of it)."""
+
+    start: tuple[float, float, float]
+    end: tuple[float, float, float]
+    text: str = ""
+    offset: float | None = None
+    color: RGBA = hex_color(DEFAULT_COLOR)
+    width: float = 1.0
+
+
+@dataclass(frozen=True)
 class Glyphs:
-    """Everything in one glyph file. Drawn in this order: paths, boxes, arrows, labels."""
+    """Everything in one glyph file. Drawn in this order: paths, boxes, arrows, labels,
+    dimensions."""
 
     boxes: tuple[Box, ...] = ()
     arrows: tuple[Arrow, ...] = ()
@@ -109,9 +128,10 @@ class Glyphs:
     labels: tuple[Label, ...] = ()
     hidden: Hidden = field(default_factory=Hidden)
     source: str = _DEFAULT_SOURCE
+    dimensions: tuple[Dimension, ...] = ()
 
     def __len__(self) -> int:
-        return len(self.boxes) + len(self.arrows) + len(self.paths) + len(self.labels)
+        return len(self.boxes) + len(self.arrows) + len(self.paths) + len(self.labels) + len(self.dimensions)
 
     @classmethod
     def from_dict(cls, data: Any, source: str = _DEFAULT_SOURCE) -> Glyphs:
