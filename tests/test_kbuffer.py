@@ -136,6 +136,7 @@ def test_used_only_where_it_pays(renderer, monkeypatch):
     its targets would take more than KBUFFER_MAX_BYTES."""
     if not renderer.kbuffer:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
+    monkeypatch.setattr(renderer, "abuffer_max_bytes", 0)  # else preferred (test_abuffer.py)
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
     camera = fit_camera(model, (64, 64))

@@ -49,10 +49,11 @@ class ABuffer:
                     prog[name].write(uniforms[name])
                 else:
                     prog[name].value = uniforms[name]
-        self.resolve["u_back_bias"].value = back_bias
         self.clear = r.compute(CLEAR_COMP)
         self.unpack = r.compute(UNPACK_COMP)
-        self.unpack["u_back_bias"].value = back_bias
+        for prog in (self.resolve, self.unpack):
+            prog["u_back_bias"].value = back_bias
+            prog["u_depth_steps"].value = r.depth_steps
         self.fragments = 0
         # pixels covered by each layer, known once layer 0 is drawn
         self.layer_pixels: list[int] = []

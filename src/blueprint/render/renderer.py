@@ -138,6 +138,7 @@ class LayerRenderer(Device):
         # layers: 0.90 against 0.75)
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 2
         self.abuffer_room: dict[tuple[int, int], int] = {}
+        self.depth_steps = depth_steps(self.ctx)
 
     def release(self) -> None:
         self.make_current()
@@ -301,6 +302,28 @@ class LayerRenderer(Device):
         peel(
             capture.draw, self.queries("peel"), rules, lambda layer: read(gb, layer), samples=capture.samples
         )
+
+
+def depth_steps(ctx) -> float:
+    """What a 24-bit depth buffer's steps are read back in: step / (2^24 - 1), as OpenGL says
+    (llvmpipe), or step / 2^24 (NVIDIA's drivers); the divisor. A depth of one half is stored as
+    step 2^23 (the nearest) and read back as exactly 0.5 only in the second case. The A-buffer rounds its
+    depths as the peel's depth buffer does, so that both peel alike."""
+    previous = ctx.fbo
+    tex = ctx.depth_texture((1, 1))
+    fbo = ctx.framebuffer(depth_attachment=tex)
+    try:
+        fbo.clear(depth=0.5)
+        half = float(np.frombuffer(tex.read(), np.float32)[0])
+    finally:
+        # moderngl re-binds its idea of the current framebuffer: never leave it a deleted one
+        if previous is not None:
+            previous.use()
+        elif ctx.fbo is fbo:
+            ctx.detect_framebuffer(0).use()
+        fbo.release()
+        tex.release()
+    return float(1 << 24) if half == 0.5 else float((1 << 24) - 1)
 
 
 def check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:

@@ -16,6 +16,9 @@ layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 uniform float u_back_bias;
 uniform float u_peel_eps;
+// what a depth buffer's steps are read back as: step / (2^24 - 1) as OpenGL says, step / 2^24
+// on NVIDIA's drivers; the divisor (a float holds both exactly, not their inverses)
+uniform float u_depth_steps;
 
 shared uint group_pixels_with[MOST_LAYERS + 1];
 
@@ -31,7 +34,7 @@ bool before(uint da, uint fa, uint db, uint fb) {
 
 // the eye depth behind which the next layer lies
 float next_after(uint held) {
-    return eye_depth(float(held) / 16777215.0) + u_peel_eps;
+    return eye_depth(float(held) / u_depth_steps) + u_peel_eps;
 }
 
 // the pixel's layers, chained from its cursor; how many

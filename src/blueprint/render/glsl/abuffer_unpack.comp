@@ -12,6 +12,7 @@ layout(binding = 2, r32f) writeonly uniform image2D u_depth;
 layout(binding = 3, rgba16f) writeonly uniform image2D u_normal;
 layout(binding = 4, rg32i) writeonly uniform iimage2D u_ids;
 uniform float u_back_bias;
+uniform float u_depth_steps;  // as abuffer_resolve.comp's
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -25,8 +26,8 @@ void main() {
     }
     uvec4 s = nodes[at - 1u];
     imageStore(u_cursor, p, uvec4(order[at - 1u]));
-    // 24-bit fixed point, as the peel's depth buffer holds it
-    float z = float(uint(kb_depth(s, u_back_bias) * 16777215.0 + 0.5)) / 16777215.0;
+    // 24-bit fixed point, as the peel's depth buffer holds it and reads it back
+    float z = float(uint(kb_depth(s, u_back_bias) * 16777215.0 + 0.5)) / u_depth_steps;
     imageStore(u_depth, p, vec4(z));
     imageStore(u_normal, p, vec4(kb_normal(s), 1.0));
     imageStore(u_ids, p, ivec4(kb_ids(s), 0, 0));
