@@ -15,6 +15,7 @@ import statistics
 from pathlib import Path
 
 from blueprint import Renderer, load_model
+from blueprint.render.abuffer import default_max_bytes
 from blueprint.scene.camera import fit_camera
 
 
@@ -30,7 +31,7 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     with Renderer() as r:
-        wanted = r.abuffer_max_bytes or 1 << 30
+        wanted = r.abuffer_max_bytes or default_max_bytes(r)
         min_layers = r.abuffer_min_layers
         for path in args.models:
             model = load_model(path)

@@ -19,7 +19,7 @@ from blueprint.render.capture import Capture, gbuffer
 from blueprint.scene.camera import fit_camera
 
 # one step of the 24-bit depth buffer: the peel reads its depths back from one, the A-buffer
-# rounds them to its steps itself
+# keeps them whole (abuffer_resolve.comp)
 DEPTH_STEP = 1.0 / (1 << 24) * 1.01
 
 

@@ -31,8 +31,10 @@ def info(model, as_json):
                     f"every layer in one geometry pass, from {r.abuffer_min_layers} layers a frame, "
                     f"lists up to {r.abuffer_max_bytes / 2**30:.1f} GiB"
                 )
-            else:
+            elif r.ctx.version_code < 430:
                 data["abuffer"] = "none (needs OpenGL 4.3)"
+            else:
+                data["abuffer"] = "off on this driver (its drawings are not yet checked here)"
         data["egl_devices"] = egl_devices()
         if as_json:
             click.echo(json.dumps(data))

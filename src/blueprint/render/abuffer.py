@@ -53,7 +53,6 @@ class ABuffer:
         self.unpack = r.compute(UNPACK_COMP)
         for prog in (self.resolve, self.unpack):
             prog["u_back_bias"].value = back_bias
-            prog["u_depth_steps"].value = r.depth_steps
         self.fragments = 0
         # pixels covered by each layer, known once layer 0 is drawn
         self.layer_pixels: list[int] = []
@@ -86,6 +85,7 @@ class ABuffer:
             calls += 1
         if layer >= len(self.layer_pixels):
             # an empty layer, as the peel's would be
+            self.r.ctx.memory_barrier()
             self.r.pool.framebuffer((self.flat(size)[layer % 2],)).clear(1.0, 1.0, 1.0, 1.0)
             return calls
         self._unpack(gb, name, layer)
@@ -163,6 +163,9 @@ class ABuffer:
     def _unpack(self, gb, name: str, layer: int) -> None:
         """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""
         ctx, pool, size = self.r.ctx, self.r.pool, gb.size
+        # the layer before's passes may still be reading the normal and ID targets this
+        # overwrites (a GPU runs dispatches side by side; llvmpipe one after another)
+        ctx.memory_barrier()
         self._buffers(name, 1)
         pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=True, write=True)
         self.flat(size)[layer % 2].bind_to_image(2, read=False, write=True)

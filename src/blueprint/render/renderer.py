@@ -126,10 +126,17 @@ class LayerRenderer(Device):
         self.kbuffer_density = (
             KBUFFER_INTERLOCK_MIN_DENSITY if self.kbuffer_interlock else KBUFFER_MIN_DENSITY
         )
-        # Every layer from one geometry pass (render.abuffer) on GPUs: the most bytes its lists
-        # may take a frame (0: layers are peeled), and the fragments the last frame of each
-        # G-buffer size drew, the room the next one starts with.
-        self.abuffer_max_bytes = default_max_bytes(self) if self.ctx.version_code >= 430 else 0
+        # Every layer from one geometry pass (render.abuffer): the most bytes its lists may
+        # take a frame (0: layers are peeled), and the fragments the last frame of each G-buffer
+        # size drew, the room the next one starts with. On by default only where its drawings
+        # were checked against the peel's (llvmpipe, in the tests). On the H200 its layers
+        # matched the peel's (faces and parts exactly, depths within a step of the depth
+        # buffer) but a drawing did not (a tiled pattern of false edges on planes); a barrier
+        # now keeps each layer's unpack from overwriting the normals and IDs the layer before's
+        # passes may still read, not yet checked there. Set it to use the A-buffer on a GPU
+        # (benchmarks/layers.py --capture abuffer does).
+        verified = self.software and self.ctx.version_code >= 430
+        self.abuffer_max_bytes = default_max_bytes(self) if verified else 0
         # ...for frames of at least this many layers (None: all of them): on the H200 it was
         # faster from 2 (the rocker arm, 256x256 and 512x512: 1.15 against 1.64 ms and 1.31
         # against 1.77); llvmpipe pays for sorting every fragment on the CPU, and was faster
@@ -138,7 +145,6 @@ class LayerRenderer(Device):
         # layers: 0.90 against 0.75)
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 2
         self.abuffer_room: dict[tuple[int, int], int] = {}
-        self.depth_steps = depth_steps(self.ctx)
 
     def release(self) -> None:
         self.make_current()
@@ -302,28 +308,6 @@ class LayerRenderer(Device):
         peel(
             capture.draw, self.queries("peel"), rules, lambda layer: read(gb, layer), samples=capture.samples
         )
-
-
-def depth_steps(ctx) -> float:
-    """What a 24-bit depth buffer's steps are read back in: step / (2^24 - 1), as OpenGL says
-    (llvmpipe), or step / 2^24 (NVIDIA's drivers); the divisor. A depth of one half is stored as
-    step 2^23 (the nearest) and read back as exactly 0.5 only in the second case. The A-buffer rounds its
-    depths as the peel's depth buffer does, so that both peel alike."""
-    previous = ctx.fbo
-    tex = ctx.depth_texture((1, 1))
-    fbo = ctx.framebuffer(depth_attachment=tex)
-    try:
-        fbo.clear(depth=0.5)
-        half = float(np.frombuffer(tex.read(), np.float32)[0])
-    finally:
-        # moderngl re-binds its idea of the current framebuffer: never leave it a deleted one
-        if previous is not None:
-            previous.use()
-        elif ctx.fbo is fbo:
-            ctx.detect_framebuffer(0).use()
-        fbo.release()
-        tex.release()
-    return float(1 << 24) if half == 0.5 else float((1 << 24) - 1)
 
 
 def check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:

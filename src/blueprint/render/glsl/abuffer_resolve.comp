@@ -1,7 +1,9 @@
 // Each pixel's fragments in the layers depth peeling would draw (peel.frag): sorted by their
-// depth as the depth buffer holds it (24 bits; back faces u_back_bias behind) and then by
-// primitive (the first drawn wins a tie), the first is layer 0, and each next layer is the
-// first fragment after it lying more than u_peel_eps (eye depth) behind it. The layers are
+// depth as a 24-bit depth buffer holds it (back faces u_back_bias behind) and then by primitive
+// (the first drawn wins a tie), the first is layer 0, and each next layer is the first fragment
+// after it lying more than u_peel_eps (eye depth) behind it. Its own depth is kept whole, not
+// rounded to the depth buffer's steps: a rounding that differs from the driver's by a step here
+// and there is noise to the edges' second differences of depth. The layers are
 // chained in order[] from u_cursor (node + 1; 0 ends the chain).
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -16,9 +18,6 @@ layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 uniform float u_back_bias;
 uniform float u_peel_eps;
-// what a depth buffer's steps are read back as: step / (2^24 - 1) as OpenGL says, step / 2^24
-// on NVIDIA's drivers; the divisor (a float holds both exactly, not their inverses)
-uniform float u_depth_steps;
 
 shared uint group_pixels_with[MOST_LAYERS + 1];
 
@@ -32,9 +31,9 @@ bool before(uint da, uint fa, uint db, uint fb) {
     return da < db || (da == db && fa < fb);
 }
 
-// the eye depth behind which the next layer lies
-float next_after(uint held) {
-    return eye_depth(float(held) / u_depth_steps) + u_peel_eps;
+// the eye depth behind which the layer after surface s lies
+float next_after(uvec4 s) {
+    return eye_depth(kb_depth(s, u_back_bias)) + u_peel_eps;
 }
 
 // the pixel's layers, chained from its cursor; how many
@@ -78,7 +77,7 @@ uint chain(ivec2 p) {
                 order[last - 1u] = node[i];
             }
             last = node[i];
-            behind = next_after(key[i]);
+            behind = next_after(s);
             ++layers;
         }
     } else {
@@ -110,7 +109,7 @@ uint chain(ivec2 p) {
                 order[last - 1u] = best;
             }
             last = best;
-            behind = next_after(best_key);
+            behind = next_after(nodes[best - 1u]);
             ++layers;
         }
     }

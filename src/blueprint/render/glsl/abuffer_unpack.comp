@@ -1,6 +1,6 @@
 // One layer of the A-buffer into the G-buffer, as the peel would have drawn it: at each pixel
-// the surface at its cursor (which then moves on to the pixel's next layer), its depth as the
-// depth buffer would hold it; depth 1 where the pixel has no more layers, normal and IDs then
+// the surface at its cursor (which then moves on to the pixel's next layer), its depth whole
+// (see abuffer_resolve.comp); depth 1 where the pixel has no more layers, normal and IDs then
 // left as they are (as a peel pass leaves them).
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -12,7 +12,6 @@ layout(binding = 2, r32f) writeonly uniform image2D u_depth;
 layout(binding = 3, rgba16f) writeonly uniform image2D u_normal;
 layout(binding = 4, rg32i) writeonly uniform iimage2D u_ids;
 uniform float u_back_bias;
-uniform float u_depth_steps;  // as abuffer_resolve.comp's
 
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
@@ -26,9 +25,7 @@ void main() {
     }
     uvec4 s = nodes[at - 1u];
     imageStore(u_cursor, p, uvec4(order[at - 1u]));
-    // 24-bit fixed point, as the peel's depth buffer holds it and reads it back
-    float z = float(uint(kb_depth(s, u_back_bias) * 16777215.0 + 0.5)) / u_depth_steps;
-    imageStore(u_depth, p, vec4(z));
+    imageStore(u_depth, p, vec4(kb_depth(s, u_back_bias)));
     imageStore(u_normal, p, vec4(kb_normal(s), 1.0));
     imageStore(u_ids, p, ivec4(kb_ids(s), 0, 0));
 }
