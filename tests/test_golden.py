@@ -194,13 +194,14 @@ def test_hidden_lines_are_drawn(images):
 
 
 def test_wireframe_is_binary_before_filtering(images):
-    """Wireframe thresholds the edge samples, so with 2x2 supersampling each layer covers a pixel
-    by 0, 1/4, 1/2, 3/4 or all of it, and black ink over white composes to grey levels
-    255 * 0.75^a * 0.5^b (give or take rounding)."""
+    """Wireframe thresholds the edge samples, so with 2x2 supersampling each of a pixel's four
+    samples is paper, a hidden line (black at 0.5) or a visible one (black), the strongest line
+    of the sample's layers: the pixel is 255 * (1 - j / 8) for a whole j from 0 to 8 (give or
+    take rounding)."""
     image = images["wireframe"]
     assert (image[..., 0] == image[..., 1]).all() and (image[..., 1] == image[..., 2]).all()
     assert (image[..., 3] == 255).all()
-    allowed = {round(255 * 0.75**a * 0.5**b) + d for a in range(24) for b in range(10) for d in (-1, 0, 1)}
+    allowed = {round(255 * (1 - j / 8)) + d for j in range(9) for d in (-1, 0, 1)}
     levels = set(np.unique(image[..., 0]).tolist())
     assert levels <= allowed, sorted(levels - allowed)
     assert {0, 255} <= levels

@@ -490,7 +490,7 @@ def test_layer_inks_exact():
         atol=1e-7,
     )
     assert inks.dtype == np.float32 and inks.shape == (3, 4)
-    assert STYLES["wireframe"].layer_inks(4)[:, 3].tolist() == [1, 1, 1, 1]
+    assert STYLES["wireframe"].layer_inks(4)[:, 3].tolist() == [1, 0.5, 0.5, 0.5]
 
 
 def test_get_style():

@@ -97,7 +97,8 @@ STYLES: dict[str, Style] = {
         paper=hex_color("#ffffff"),
         ink=hex_color("#000000"),
         hidden_ink=hex_color("#000000"),
-        hidden_opacity=1.0,
+        # binary lines still tell hidden from visible: half-strength grey, never the full ink
+        hidden_opacity=0.5,
         fade=1.0,
         threshold=True,
     ),
