@@ -1,5 +1,6 @@
-"""How strong lines are drawn: coincident lines of several layers are one line (the strongest
-ink, not the sum), hidden lines stay clearly fainter than visible ones in every style.
+"""How strong and wide lines are drawn: coincident lines of several layers are one line (the
+strongest ink, not the sum), hidden lines stay clearly fainter than visible ones in every style,
+and narrower (ISO 128: half the width of visible lines).
 
 A square tube lying across the view, seen from the top orthographically, has its inner walls
 edge-on: their rims at the inner half-width are hidden edges of three layers (the tube's inner
@@ -117,11 +118,11 @@ def test_coincident_hidden_lines_are_one_line_fainter_than_visible(renderer, mon
     vis_a, vis_b = _project(full, np.array([[x0, 0.0, OUTER + 0.031], [x1, 0.0, OUTER + 0.031]]))
     hidden = line_ink(ink, hidden_a, hidden_b)
     visible = line_ink(ink, vis_a, vis_b)
-    # one line of layer 1, not three summed: its ink per unit length is at most layer 1's ink
-    # over one line's width (1 px at line width 1; the 2 % are the 8-bit rounding)
-    strongest = single_line_ink(style, 1)
-    assert hidden <= strongest * 1.02 + 0.01, (hidden, strongest)
-    assert hidden > 0.3 * strongest, (hidden, strongest)
+    # one line of layer 1, not three summed: its ink per unit length is layer 1's ink over one
+    # hidden line's width (style.hidden_width px at line width 1; 8-bit rounding aside)
+    strongest = single_line_ink(style, 1) * min(style.hidden_width / style.width, 1.0)
+    assert hidden == pytest.approx(strongest, rel=0.06, abs=0.01), (hidden, strongest)
+    assert visible == pytest.approx(single_line_ink(style, 0), rel=0.06), visible
     assert hidden <= 0.85 * visible, (hidden, visible)
     # at its brightest, a hidden-only pixel stays below the visible ink at full coverage
     only = _hidden_only(ink, front_ink)
@@ -142,3 +143,26 @@ def test_featuretype_plan_hidden_lines_dimmer_than_visible(renderer, shared_mode
         assert only.sum() > 500, name
         assert ink[only].max() <= 0.85, (name, ink[only].max())
         assert ink[only].max() <= single_line_ink(style, 1) + 0.02, (name, ink[only].max())
+
+
+@pytest.mark.parametrize("compute", [False, True], ids=["fragment", "compute"])
+@pytest.mark.parametrize("line_width", [1.0, 4.0])
+def test_hidden_lines_are_half_as_wide(renderer, monkeypatch, line_width, compute):
+    """ISO 128's 2:1: in the paper style a visible line is ``line_width`` px wide, a hidden one
+    half that; measured as ink per unit length over the ink of a line at full coverage."""
+    if compute and renderer.ctx.version_code < 430:
+        pytest.skip("compute shaders need OpenGL 4.3")
+    monkeypatch.setattr(renderer, "use_compute", compute)
+    style = STYLES["paper"]
+    assert style.hidden_width == 0.5 * style.width
+    model = square_tube()
+    full, _ = _frames(renderer, model, "paper", line_width=line_width)
+    ink = ink_of(full.image, style)
+    x0, x1 = -HALF_LENGTH + 0.013, HALF_LENGTH + 0.013
+    hidden_a, hidden_b = _project(full, np.array([[x0, 0.0, INNER + 0.031], [x1, 0.0, INNER + 0.031]]))
+    vis_a, vis_b = _project(full, np.array([[x0, 0.0, OUTER + 0.031], [x1, 0.0, OUTER + 0.031]]))
+    band = line_width + 2.0
+    visible_width = line_ink(ink, vis_a, vis_b, band) / single_line_ink(style, 0)
+    hidden_width = line_ink(ink, hidden_a, hidden_b, band) / single_line_ink(style, 1)
+    assert visible_width == pytest.approx(line_width, rel=0.12), visible_width
+    assert hidden_width == pytest.approx(0.5 * line_width, rel=0.12), hidden_width

@@ -486,7 +486,7 @@ def test_layer_inks_exact():
     hidden = hex_color("#bfe0ff")
     np.testing.assert_allclose(
         inks,
-        [(1, 1, 1, 1), (*hidden[:3], 0.75), (*hidden[:3], 0.75 * 0.8)],
+        [(1, 1, 1, 1), (*hidden[:3], 0.9), (*hidden[:3], 0.9 * 0.85)],
         atol=1e-7,
     )
     assert inks.dtype == np.float32 and inks.shape == (3, 4)
