@@ -25,7 +25,9 @@ FRAMES = GOLDEN / "frames.json"
 MARKS = Path(__file__).resolve().parents[1] / "examples" / "marks.toml"
 SIZE = (256, 192)
 PINNED = "llvmpipe"
-MEAN_TOLERANCE = 1.0
+# hidden lines half as wide as visible ones change a picture by little on average: an option
+# that only adds or drops hidden lines (id silhouettes, depth masking) must still show
+MEAN_TOLERANCE = 0.25
 PIXEL_TOLERANCE = 32
 PIXEL_FRACTION = 0.005
 

@@ -19,8 +19,9 @@ from blueprint import examples
 SIZE = (256, 256)
 STYLE = blueprint.STYLES["paper"]
 # an ink pixel differs from the paper by at least this much in some channel (of 255); a hidden
-# line at half coverage reaches about 0.8 * 208 / 2 = 83
-INK = 40
+# line (half as wide as a visible one: a third of a pixel at supersample 3) straddling two
+# pixels reaches about 0.9 * 176 / 6 = 26
+INK = 20
 # "paper" pixels may differ by at most this much (exactly 0 with a correct renderer)
 PAPER_NOISE = 2
 

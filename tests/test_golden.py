@@ -189,25 +189,29 @@ def test_transparent_has_alpha(images):
 
 
 def test_hidden_lines_are_drawn(images):
-    """Paper style: the visible ink (#0a1f44) and the lighter hidden ink (#2f6bd0) both appear."""
+    """Paper style: the visible ink (#0a1f44) and the lighter hidden ink (#4f5d75) both appear."""
     image = images["paper"][..., :3].astype(int)
-    visible = rgba8(STYLES["paper"].ink)[:3]
-    hidden = rgba8(STYLES["paper"].hidden_ink)[:3]
+    style = STYLES["paper"]
+    visible = rgba8(style.ink)[:3]
+    hidden = rgba8(style.hidden_ink)[:3]
     near_visible = (np.abs(image - visible).max(axis=-1) <= 12).sum()
-    # hidden ink at opacity 0.8 over white, give or take anti-aliasing
-    hidden_on_white = np.round(0.8 * hidden + 0.2 * 255).astype(int)
+    # a hidden line of layer 1 over white where it covers a pixel, its width a share of it,
+    # give or take anti-aliasing
+    share = style.hidden_opacity * style.hidden_width / style.width
+    hidden_on_white = np.round(share * hidden + (1 - share) * 255).astype(int)
     near_hidden = (np.abs(image - hidden_on_white).max(axis=-1) <= 24).sum()
     assert near_visible > 100 and near_hidden > 100, (near_visible, near_hidden)
 
 
 def test_wireframe_is_binary_before_filtering(images):
-    """Wireframe thresholds the edge samples, so with 2x2 supersampling each layer covers a pixel
-    by 0, 1/4, 1/2, 3/4 or all of it, and black ink over white composes to grey levels
-    255 * 0.75^a * 0.5^b (give or take rounding)."""
+    """Wireframe thresholds the edge samples, so with 2x2 supersampling each of a pixel's four
+    samples is paper, a hidden line (black at 0.5) or a visible one (black), the strongest line
+    of the sample's layers: the pixel is 255 * (1 - j / 8) for a whole j from 0 to 8 (give or
+    take rounding)."""
     image = images["wireframe"]
     assert (image[..., 0] == image[..., 1]).all() and (image[..., 1] == image[..., 2]).all()
     assert (image[..., 3] == 255).all()
-    allowed = {round(255 * 0.75**a * 0.5**b) + d for a in range(24) for b in range(10) for d in (-1, 0, 1)}
+    allowed = {round(255 * (1 - j / 8)) + d for j in range(9) for d in (-1, 0, 1)}
     levels = set(np.unique(image[..., 0]).tolist())
     assert levels <= allowed, sorted(levels - allowed)
     assert {0, 255} <= levels
@@ -228,11 +232,13 @@ def test_grid_has_a_period_of_16_pixels(images):
 
 @pytest.mark.parametrize("name", [n for n in CASES if n != "blueprint_grid16"])
 def test_no_speckle(images, name):
-    """Every mark belongs to a line: no blob of ink of one or two pixels on its own."""
+    """Every mark belongs to a line: no blob of ink of one or two pixels on its own. Any ink
+    counts (4 levels of 255 off the paper): a faint hidden line half a pixel wide alternates
+    between a pixel it covers and two it straddles, and a higher cut would chop it into dots."""
     from scipy import ndimage
 
     image = images[name].astype(int)
-    ink = np.abs(image - image[0, 0]).max(axis=-1) > 8
+    ink = np.abs(image - image[0, 0]).max(axis=-1) > 4
     labels, count = ndimage.label(ink, structure=np.ones((3, 3)))
     sizes = ndimage.sum(ink, labels, range(1, count + 1))
     assert count >= 1 and (sizes > 2).all(), sorted(sizes)[:10]

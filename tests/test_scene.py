@@ -486,11 +486,11 @@ def test_layer_inks_exact():
     hidden = hex_color("#bfe0ff")
     np.testing.assert_allclose(
         inks,
-        [(1, 1, 1, 1), (*hidden[:3], 0.75), (*hidden[:3], 0.75 * 0.8)],
+        [(1, 1, 1, 1), (*hidden[:3], 0.9), (*hidden[:3], 0.9 * 0.85)],
         atol=1e-7,
     )
     assert inks.dtype == np.float32 and inks.shape == (3, 4)
-    assert STYLES["wireframe"].layer_inks(4)[:, 3].tolist() == [1, 1, 1, 1]
+    assert STYLES["wireframe"].layer_inks(4)[:, 3].tolist() == [1, 0.5, 0.5, 0.5]
 
 
 def test_get_style():

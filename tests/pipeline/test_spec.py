@@ -375,11 +375,16 @@ def test_presets_are_valid():
 
 def test_blueprint_plan_is_per_layer_edges_then_composite():
     pl = plan(load_pipeline("blueprint").bind())
-    assert pl.per_layer == ["edges"] and pl.after == ["drawing"] and pl.stacked == {"edges"}
-    assert pl.aliases == {"lines": "edges"}  # no dilation at line width 1
+    # at line width 1 visible lines keep the edges' width and hidden ones are narrowed to half
+    assert pl.per_layer == ["edges", "lines"] and pl.after == ["drawing"] and pl.stacked == {"lines"}
+    assert pl.bound.passes["lines"].uniforms == {"u_radius": 0.0, "u_hidden_width": 0.5}
+    # hidden lines as wide as visible ones at line width 1: nothing to dilate
+    pl = plan(load_pipeline("blueprint").bind({"hidden_width": 1.0}))
+    assert pl.per_layer == ["edges"] and pl.stacked == {"edges"}
+    assert pl.aliases == {"lines": "edges"}
     pl = plan(load_pipeline("blueprint").bind({"line_width": 2.0}))
     assert pl.per_layer == ["edges", "lines"] and pl.stacked == {"lines"}
-    assert pl.bound.passes["lines"].uniforms["u_radius"] == 1.0
+    assert pl.bound.passes["lines"].uniforms == {"u_radius": 1.0, "u_hidden_width": 0.5}
 
 
 def test_blueprint_highlight_shade_and_reveal_are_passes_of_the_preset():
@@ -390,7 +395,7 @@ def test_blueprint_highlight_shade_and_reveal_are_passes_of_the_preset():
     pl = plan(bound)
     assert pl.parts == ["highlight_depth", "highlight_ids", "highlight_normal", "shade_depth", "shade_normal"]
     assert [(s.rule, s.depth, s.fraction) for s in bound.stops] == [("reveal", "highlight_depth", 0.9)]
-    assert pl.per_layer == ["edges", "shade_layers"] and pl.accumulated == ["shade_layers"]
+    assert pl.per_layer == ["edges", "lines", "shade_layers"] and pl.accumulated == ["shade_layers"]
     assert pl.slots["shade_layers"].space == "A" and "shade_layers" not in pl.stacked
     assert set(pl.iteration0) >= {"highlight_edges", "shading"} and pl.after == ["drawing"]
     drawing = bound.passes["drawing"].inputs

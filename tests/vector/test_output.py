@@ -53,8 +53,10 @@ def test_svg_parses_with_the_image_as_view_box_and_groups_per_part(gear_drawing,
     deeper = [p for (gid, cls), p in paths.items() if cls != "level-0" and gid != "gear"]
     assert deeper and all(p.get("stroke-dasharray") for p in deeper)
     assert all(float(p.get("stroke-opacity")) < 1 for p in deeper)
+    # hidden lines half as wide as visible ones (ISO 128)
+    assert all(float(p.get("stroke-width")) == 0.5 * float(base0.get("stroke-width")) for p in deeper)
     if base1 is not None:
-        assert base1.get("stroke") == "#2f6bd0"
+        assert base1.get("stroke") == "#4f5d75"
     assert all(p.get("stroke") != "#0a1f44" for (gid, _), p in paths.items() if gid == "gear")
 
 

@@ -1,5 +1,5 @@
-"""Line style files (TOML or JSON): per-level colour, width, dash and opacity for vector drawings,
-from the command line too."""
+"""Line style files (TOML or JSON): per-level colour, width, dash and opacity for vector drawings
+and pictures, from the command line too."""
 
 from __future__ import annotations
 
@@ -9,7 +9,9 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import numpy as np
 import pytest
+from PIL import Image
 from vector_helpers import SVG
 
 from blueprint.errors import InputError
@@ -27,7 +29,8 @@ def test_the_example_file():
     assert style.fade == 0.75 and style.highlight_width == 2.0
     assert len(style.levels) == 4
     assert style.levels[0] == LineStyle("#000000", 1.4, (), 1.0)
-    assert style.levels[1] == LineStyle("#1d4f91", 1.0, (6.0, 3.0), 0.85)
+    assert style.levels[1] == LineStyle("#1d4f91", 0.7, (6.0, 3.0), 0.85)
+    assert style.levels[2] == LineStyle("#1d4f91", 0.5, (3.0, 3.0), 0.6)
     # past the last level listed: the last one, fading
     assert style.level(5).opacity == pytest.approx(0.4 * 0.75**2)
 
@@ -100,9 +103,61 @@ def test_command_line(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     assert 'stroke="#1d4f91"' in svg.read_text()
+
+
+def test_a_picture_takes_the_file_too(tmp_path):
+    """``--style lines.toml`` for a PNG: the file's paper exactly, visible lines in level 0's
+    colour (the darkest pixels), hidden ones in level 1's at its opacity."""
+    model = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
     png = tmp_path / "g.png"
     done = subprocess.run(
-        [BLUEPRINT, "render", model, "-o", png, "--style", EXAMPLE], capture_output=True, text=True
+        [BLUEPRINT, "render", model, "-o", png, "--size", "256", "192", "--style", EXAMPLE],
+        capture_output=True,
+        text=True,
+    )
+    assert done.returncode == 0, done.stderr
+    image = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    assert (image[0] == 255).all()  # paper "#ffffff" along the top margin
+    assert (image.min(axis=(0, 1)) <= 2).all()  # level 0 black where a line covers a pixel
+    # level 1 "#1d4f91" at 0.85 over white, give or take anti-aliasing, on many pixels
+    hidden = np.round(0.85 * np.array([0x1D, 0x4F, 0x91]) + 0.15 * 255)
+    tinted = (image[..., 2] - image[..., 0] > 20).sum()
+    assert tinted > 100
+    assert (image[..., 2] - image[..., 0]).max() <= hidden[2] - hidden[0] + 2
+
+
+def test_a_picture_refuses_a_bad_file_in_one_line(tmp_path):
+    model = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[[levels]]\nwidth = 'wide'\n")
+    png = tmp_path / "g.png"
+    done = subprocess.run(
+        [BLUEPRINT, "render", model, "-o", png, "--style", bad], capture_output=True, text=True
     )
     assert done.returncode == 2 and not png.exists()
-    assert done.stderr.strip().count("\n") == 0 and "line style files are for vector drawings" in done.stderr
+    assert done.stderr.strip().count("\n") == 0
+    assert f"{bad}: levels 0: width must be a number" in done.stderr, done.stderr
+
+
+def test_a_pictures_style_follows_the_levels():
+    """The raster style of the example file: each layer's ink is the file's level (colour and
+    opacity, fading past the last) as the vector drawing strokes it; level 0's and 1's widths."""
+    from blueprint.compose.linestyle import load_raster_style
+
+    raster, vector = load_raster_style(EXAMPLE), load_vector_style(EXAMPLE)
+    inks = raster.layer_inks(7)
+    for k in range(7):
+        line = vector.level(k)
+        np.testing.assert_allclose(inks[k], (*line.color, line.opacity), atol=1e-6)
+    assert raster.paper == (1.0, 1.0, 1.0, 1.0) and raster.width == 1.4 and raster.hidden_width == 0.7
+    assert raster.highlight[:3] == vector.highlight_color and raster.highlight_width == 2.0
+
+
+def test_a_pictures_highlight_width_is_checked_with_the_file_named(tmp_path):
+    from blueprint.compose.linestyle import load_raster_style
+
+    path = tmp_path / "thin.toml"
+    path.write_text("highlight_width = 0.5\n")
+    load_vector_style(path)  # a vector drawing takes it
+    with pytest.raises(InputError, match=r"thin.toml: .*highlight_width must be in \[1, 8\]"):
+        load_raster_style(path)

@@ -33,8 +33,8 @@ DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
     "--style",
     default="blueprint",
     show_default=True,
-    help=f"One of {', '.join(STYLE_NAMES)}; for vector lines ({DRAWINGS}) also a line style file "
-    f"({' or '.join(FILE_SUFFIXES)}: colour, width, dash and opacity per occlusion level).",
+    help=f"One of {', '.join(STYLE_NAMES)}, or a line style file ({' or '.join(FILE_SUFFIXES)}: "
+    "colour, width, dash and opacity per occlusion level; pictures draw no dashes).",
 )
 @click.option("--grid", type=float, default=None, help="Grid spacing in pixels (0: none).")
 @click.option(
@@ -184,10 +184,10 @@ def render(
     if scale or sheet:
         raise InputError(f"--scale and --sheet are for vector drawings ({DRAWINGS})")
     if is_style_file(style):
-        raise InputError(
-            f"{style}: line style files are for vector drawings ({DRAWINGS}); "
-            f"a picture takes one of {', '.join(STYLE_NAMES)}"
-        )
+        # read before the model, so a bad file is refused at once
+        from blueprint.compose.linestyle import load_raster_style
+
+        style = load_raster_style(style)
     up_axis = camera.pop("up")
     loaded = load_model(model, up=up_axis, include=include, exclude=exclude)
     designated = load_model(highlight_model, up=up_axis) if highlight_model else highlight

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -16,7 +17,11 @@ class Style:
     """How the edge layers become a picture.
 
     Layer 0 (visible edges) is drawn in ``ink`` at full strength; layer ``k >= 1`` (edges hidden
-    behind ``k`` surfaces) in ``hidden_ink`` at ``hidden_opacity * fade ** (k - 1)``.
+    behind ``k`` surfaces) in ``hidden_ink`` at ``hidden_opacity * fade ** (k - 1)``, unless
+    ``level_inks`` lists the colour and opacity of the first layers (a line style file's
+    levels: past the last, its opacity fades by ``fade`` a layer). Visible lines are ``width``
+    times the frame's line width, hidden ones ``hidden_width`` times (ISO 128: hidden lines
+    narrow, half the wide ones; a raster never draws them wider than the visible ones).
     ``paper`` is ``None`` for a transparent background; ``grid`` is the minor grid spacing in
     pixels (0: none). ``threshold`` draws binary edges (the paper's wire-frame variant).
     Highlighted parts are outlined in ``highlight`` ink, ``highlight_width`` times as wide.
@@ -34,8 +39,14 @@ class Style:
     highlight: RGBA = (1.0, 0.55, 0.1, 1.0)
     highlight_width: float = 2.0
     shade: RGBA = (0.86, 0.9, 0.95, 1.0)
+    width: float = 1.0
+    hidden_width: float = 0.5
+    level_inks: tuple[RGBA, ...] = ()
 
     def __post_init__(self) -> None:
+        for label, value in (("width", self.width), ("hidden_width", self.hidden_width)):
+            if not 0.0 < value <= 16.0:
+                raise InputError(f"style {self.name}: {label} must be in (0, 16], got {value}")
         for label, value in (("hidden_opacity", self.hidden_opacity), ("fade", self.fade)):
             if not 0.0 <= value <= 1.0:
                 raise InputError(f"style {self.name}: {label} must be in [0, 1], got {value}")
@@ -49,8 +60,12 @@ class Style:
     def layer_inks(self, count: int) -> np.ndarray:
         """(count, 4) float32: colour and opacity for each layer, front first."""
         inks = np.empty((count, 4), np.float32)
+        listed = len(self.level_inks)
         for k in range(count):
-            if k == 0:
+            if listed:
+                *rgb, opacity = self.level_inks[min(k, listed - 1)]
+                inks[k] = (*rgb, opacity * self.fade ** max(0, k - listed + 1))
+            elif k == 0:
                 inks[k] = self.ink
             else:
                 opacity = self.hidden_opacity * self.fade ** (k - 1)
@@ -63,7 +78,7 @@ class Style:
 
 #: The raster styles by name: the one list that the API, the command line (``--style``), the
 #: viewer's style cycle and vector drawings (``blueprint.vector.vector_style``) choose from. A new
-#: style is one entry here; line style files for vector drawings stay files. The composite op
+#: style is one entry here; line style files (``blueprint.compose.linestyle``) stay files. The composite op
 #: (blueprint.ops, a layer below, which cannot import this) lists the same names for pipelines'
 #: ``style`` parameter: tests/test_registries.py keeps the two equal.
 STYLES: dict[str, Style] = {
@@ -72,41 +87,52 @@ STYLES: dict[str, Style] = {
         paper=hex_color("#12457a"),
         ink=hex_color("#ffffff"),
         hidden_ink=hex_color("#bfe0ff"),
-        hidden_opacity=0.75,
-        fade=0.8,
+        # hidden lines are half as wide, hence fainter already: stronger ink, gentler fading
+        hidden_opacity=0.9,
+        fade=0.85,
         grid=0.0,
     ),
     "paper": Style(
         "paper",
         paper=hex_color("#ffffff"),
         ink=hex_color("#0a1f44"),
-        hidden_ink=hex_color("#2f6bd0"),
-        hidden_opacity=0.8,
-        fade=0.8,
+        # a quiet slate: hidden lines read as hidden, not as saturated blue that draws the eye
+        hidden_ink=hex_color("#4f5d75"),
+        hidden_opacity=0.9,
+        fade=0.85,
     ),
     "transparent": Style(
         "transparent",
         paper=None,
         ink=hex_color("#0a1f44"),
-        hidden_ink=hex_color("#2f6bd0"),
-        hidden_opacity=0.8,
-        fade=0.8,
+        hidden_ink=hex_color("#4f5d75"),
+        hidden_opacity=0.9,
+        fade=0.85,
     ),
     "wireframe": Style(
         "wireframe",
         paper=hex_color("#ffffff"),
         ink=hex_color("#000000"),
         hidden_ink=hex_color("#000000"),
-        hidden_opacity=1.0,
+        # binary lines still tell hidden from visible: half-strength grey, never the full ink;
+        # as wide as the visible ones, since a thresholded sample cannot be half a line
+        hidden_opacity=0.5,
+        hidden_width=1.0,
         fade=1.0,
         threshold=True,
     ),
 }
 
 
-def get_style(style: str | Style, grid: float | None = None) -> Style:
-    """A style of ``STYLES`` by name, or a Style; ``grid`` overrides its grid spacing (pixels)."""
-    if isinstance(style, str):
+def get_style(style: str | os.PathLike | Style, grid: float | None = None) -> Style:
+    """A style of ``STYLES`` by name, a line style file (a path, or a name ending in ``.toml``
+    or ``.json``: ``blueprint.compose.linestyle.load_raster_style``), or a Style; ``grid``
+    overrides its grid spacing (pixels)."""
+    from blueprint.compose.linestyle import is_style_file, load_raster_style
+
+    if isinstance(style, os.PathLike) or is_style_file(style):
+        style = load_raster_style(style)
+    elif isinstance(style, str):
         if style not in STYLES:
             raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)})")
         style = STYLES[style]

@@ -108,10 +108,20 @@ DILATE = Op(
     shader="blueprint.ops:glsl/dilate.frag",
     inputs={"source": "r8"},
     output="r8",
-    params=(Param("radius", 1.0, 0.0, 16.0, "disc radius in pixels"),),
-    doc="grey-scale dilation by a disc with a soft rim",
+    params=(
+        Param("radius", 1.0, 0.0, 16.0, "disc radius in pixels (of layer 0's lines in a per-layer pass)"),
+        Param(
+            "hidden_width",
+            1.0,
+            0.05,
+            1.0,
+            "width of the lines of layers >= 1 of a per-layer pass over layer 0's; below the "
+            "edges' own width they keep that share of their ink",
+        ),
+    ),
+    doc="grey-scale dilation by a disc with a soft rim; hidden layers' lines narrower",
     compute="blueprint.ops:glsl/dilate.comp",
-    identity=lambda u: u["u_radius"] <= 0.0,
+    identity=lambda u: u["u_radius"] <= 0.0 and u["u_hidden_width"] >= 1.0,
 )
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}

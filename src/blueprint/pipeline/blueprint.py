@@ -93,6 +93,8 @@ def _run_arguments(
     variables = {
         "supersample": int(supersample),
         "line_width": float(line_width),
+        "visible_width": float(style.width),
+        "hidden_width": float(style.hidden_width),
         "depth_threshold": float(depth_threshold),
         "part_edges": bool(part_edges),
         "id_silhouettes": bool(id_silhouettes),

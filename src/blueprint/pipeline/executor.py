@@ -452,6 +452,7 @@ class Executor:
             for k in range(used):
                 src, dst = st.stacks[source][k], st.stacks[name][k]
                 src.use(BASE_UNIT)
+                self.programs.set(prog, "u_layer", k * SLICES)  # the depth layer of slice 0
                 dst.bind_to_image(1, read=False, write=True)
                 prog.run((dst.size[0] + 7) // 8, (dst.size[1] + 7) // 8, SLICES)
                 st.draws += 1

@@ -1,8 +1,9 @@
 // Depth-sprite composition of the edge array (up to 8 slices a dispatch), back to front, each
-// layer weighted by its ink's opacity; the box filter over the supersampled edge maps gives
-// anti-aliased lines. The first (back-most) dispatch starts from the paper, later ones blend
-// over what the earlier ones wrote. Premultiplied alpha throughout. With OVERLAY the edges are
-// one 2D map (the highlighted parts' outline) laid over everything.
+// layer weighted by its ink's opacity; at each supersample the strongest line wins
+// (lines.glsl), and the box filter over the supersampled edge maps gives anti-aliased lines.
+// The first (back-most) dispatch starts from the paper, later ones blend over what the earlier
+// ones wrote. Premultiplied alpha throughout. With OVERLAY the edges are one 2D map (the
+// highlighted parts' outline) laid over everything. The same arithmetic as composite.frag.
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "paper.glsl"
 
@@ -22,6 +23,7 @@ uniform bool u_has_paper;
 uniform vec4 u_ink[8];      // straight colour and opacity per layer
 uniform bool u_shaded;
 
+#include "lines.glsl"
 #include "shaded_layers.glsl"
 
 float edge_at(int k, ivec2 q) {
@@ -54,16 +56,17 @@ void main() {
         imageStore(u_out, p, sum * norm + color * (1.0 - sum.a * norm));
         return;
     }
-    for (int k = u_layers - 1; k >= 0; --k) {
-        float coverage = 0.0;
-        for (int y = 0; y < u_supersample; ++y) {
-            for (int x = 0; x < u_supersample; ++x) {
-                float e = EDGE(base + ivec2(x, y), k);
-                coverage += u_threshold ? step(0.5, e) : e;
+    vec4 lines = vec4(0.0);
+    for (int y = 0; y < u_supersample; ++y) {
+        for (int x = 0; x < u_supersample; ++x) {
+            vec4 union_ = vec4(0.0);
+            for (int k = u_layers - 1; k >= 0; --k) {
+                float a = clamp(edge_at(k, base + ivec2(x, y)), 0.0, 1.0) * u_ink[k].a;
+                union_ = strongest(union_, u_ink[k].rgb, a);
             }
+            lines += union_;
         }
-        float a = clamp(coverage * norm, 0.0, 1.0) * u_ink[k].a;
-        color = vec4(u_ink[k].rgb * a, a) + color * (1.0 - a);
     }
-    imageStore(u_out, p, color);
+    lines *= norm;
+    imageStore(u_out, p, lines + color * (1.0 - lines.a));
 }

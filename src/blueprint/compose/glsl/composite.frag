@@ -1,9 +1,9 @@
 // Depth-sprite composite of up to 8 layer maps (one texture each), back to front, each
-// weighted by its ink's opacity; a box filter over each LAYERS_FACTOR^2 block gives
-// anti-aliased lines. Premultiplied output, blended over what is there (the paper and farther
-// groups). With SHADED, the shaded parts' colour goes in at each sample just behind the edges
-// of the layer their surface belongs to (shaded_layers.glsl). The same arithmetic as
-// compose.comp, the compute form.
+// weighted by its ink's opacity; at each sample the strongest line wins (lines.glsl), and a box
+// filter over each LAYERS_FACTOR^2 block gives anti-aliased lines. Premultiplied output,
+// blended over what is there (the paper and farther groups). With SHADED, the shaded parts'
+// colour goes in at each sample just behind the edges of the layer their surface belongs to
+// (shaded_layers.glsl). The same arithmetic as compose.comp, the compute form.
 uniform sampler2D u_layers0;
 uniform sampler2D u_layers1;
 uniform sampler2D u_layers2;
@@ -18,6 +18,8 @@ uniform bool u_threshold;     // wire-frame variant: binary edges
 uniform vec4 u_ink[8];        // straight colour and opacity per layer of the group
 
 out vec4 o_value;
+
+#include "lines.glsl"
 
 float edge_at(int k, ivec2 q) {
     float e;
@@ -48,38 +50,21 @@ void main() {
     o_value = sum / float(LAYERS_FACTOR * LAYERS_FACTOR);
 }
 #else
-float coverage(sampler2D s, ivec2 base) {
-    float c = 0.0;
-    for (int y = 0; y < LAYERS_FACTOR; ++y) {
-        for (int x = 0; x < LAYERS_FACTOR; ++x) {
-            float e = texelFetch(s, base + ivec2(x, y), 0).r;
-            c += u_threshold ? step(0.5, e) : e;
-        }
-    }
-    return c;
-}
-
 void main() {
     ivec2 base = ivec2(gl_FragCoord.xy) * LAYERS_FACTOR;
-    float c[8] = float[8](0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    c[0] = coverage(u_layers0, base);
-    if (u_layers_count > 1) c[1] = coverage(u_layers1, base);
-    if (u_layers_count > 2) c[2] = coverage(u_layers2, base);
-    if (u_layers_count > 3) c[3] = coverage(u_layers3, base);
-    if (u_layers_count > 4) c[4] = coverage(u_layers4, base);
-    if (u_layers_count > 5) c[5] = coverage(u_layers5, base);
-    if (u_layers_count > 6) c[6] = coverage(u_layers6, base);
-    if (u_layers_count > 7) c[7] = coverage(u_layers7, base);
-    float norm = 1.0 / float(LAYERS_FACTOR * LAYERS_FACTOR);
-    vec3 color = vec3(0.0);
-    float alpha = 0.0;
-    for (int k = 7; k >= 0; --k) {
-        if (k < u_layers_count) {
-            float a = clamp(c[k] * norm, 0.0, 1.0) * u_ink[k].a;
-            color = u_ink[k].rgb * a + color * (1.0 - a);
-            alpha = a + alpha * (1.0 - a);
+    vec4 lines = vec4(0.0);
+    for (int y = 0; y < LAYERS_FACTOR; ++y) {
+        for (int x = 0; x < LAYERS_FACTOR; ++x) {
+            vec4 union_ = vec4(0.0);
+            for (int k = 7; k >= 0; --k) {
+                if (k < u_layers_count) {
+                    float a = clamp(edge_at(k, base + ivec2(x, y)), 0.0, 1.0) * u_ink[k].a;
+                    union_ = strongest(union_, u_ink[k].rgb, a);
+                }
+            }
+            lines += union_;
         }
     }
-    o_value = vec4(color, alpha);
+    o_value = lines / float(LAYERS_FACTOR * LAYERS_FACTOR);
 }
 #endif

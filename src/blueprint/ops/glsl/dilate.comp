@@ -1,9 +1,11 @@
-// Grey-scale dilation by a disc, every slice of an edge array in one dispatch.
+// Grey-scale dilation by a disc, every slice of an edge array in one dispatch; narrower
+// (fainter) lines on hidden layers (_widths.glsl).
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+#include "_widths.glsl"
 
 uniform sampler2DArray u_source;
 layout(r8, binding = 1) uniform writeonly image2DArray u_out;  // set by binding: moderngl cannot set image-array uniforms
-uniform float u_radius;
+uniform int u_layer;  // the depth layer of slice 0
 
 void main() {
     ivec3 p = ivec3(gl_GlobalInvocationID);
@@ -11,14 +13,15 @@ void main() {
     if (any(greaterThan(p.xy, last))) {
         return;
     }
-    int r = int(ceil(u_radius));
+    vec2 width = layer_width(u_layer + p.z);
+    int r = int(ceil(width.x));
     float v = 0.0;
     for (int dy = -r; dy <= r; ++dy) {
         for (int dx = -r; dx <= r; ++dx) {
-            float weight = clamp(u_radius + 1.0 - length(vec2(dx, dy)), 0.0, 1.0);
+            float weight = clamp(width.x + 1.0 - length(vec2(dx, dy)), 0.0, 1.0);
             ivec2 q = clamp(p.xy + ivec2(dx, dy), ivec2(0), last);
             v = max(v, weight * texelFetch(u_source, ivec3(q, p.z), 0).r);
         }
     }
-    imageStore(u_out, p, vec4(v));
+    imageStore(u_out, p, vec4(v * width.y));
 }
