@@ -108,8 +108,8 @@ def test_plan_view_to_scale(renderer, tmp_path):
     summary = render_vector_file(
         model, tmp_path / "plan.svg", size=(256, 256), view="top", scale="1:50", units="mm", renderer=renderer
     )
-    # the outline (the bottom's edges lie right under it, one level down)
-    assert summary["format"] == "svg" and summary["lines"][0] == 4
+    # the outline, one closed line (the bottom's edges lie right under it, one level down)
+    assert summary["format"] == "svg" and summary["lines"][0] == 1
     root = ET.parse(tmp_path / "plan.svg").getroot()
     width = float(root.get("width")[:-2])
     assert root.get("width").endswith("mm") and root.get("viewBox") == f"0 0 {width:.6g} {width:.6g}"
@@ -137,7 +137,9 @@ def test_empty_drawing_writes_valid_files(renderer, tmp_path):
 def test_render_vector_file_summary_and_errors(renderer, tmp_path):
     model = assemble({"cube": box((-1, -1, -1), (1, 1, 1))})
     summary = render_vector_file(model, tmp_path / "cube.svg", size=(96, 96), renderer=renderer)
-    assert summary["lines"] == {0: 9, 1: 3}
+    # visible: the outline as one closed line, the 3 near edges as 2 (two chain through the
+    # corner); the 3 hidden edges stop short of the far corner, which the near one covers
+    assert summary["lines"] == {0: 3, 1: 3}
     assert summary["bytes"] == (tmp_path / "cube.svg").stat().st_size
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.svg"]  # no temporary files left
     with pytest.raises(InputError, match="must end in"):

@@ -31,6 +31,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
 
+from .chain import chain_pieces
 from .dimension import dimension_marks
 from .dxf import write_dxf
 from .lines import join_polylines, model_segments
@@ -406,6 +407,10 @@ def draw_vector(
         depth_tolerance,
     )
     pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0))
+    points, offsets, first = chain_pieces(
+        pieces.points, pieces.offsets, pieces.part.astype(np.int64) * (count + 1) + pieces.level
+    )
+    pieces = Pieces(points, offsets, pieces.part[first], pieces.level[first])
     seconds["occlusion"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
