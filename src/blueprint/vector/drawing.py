@@ -39,7 +39,9 @@ from .occlusion import (
     Pieces,
     PixelLayers,
     classify_samples,
+    drop_phantoms,
     face_planes,
+    gpu_levels,
     probe_pixels,
     sample_polylines,
     split_by_level,
@@ -379,33 +381,65 @@ def draw_vector(
     seconds["lines"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
-    if layers is None:
-        # occlusion needs only the layers' triangles, and only at the pixels it probes
-        pixels = probe_pixels(samples, size)
-        faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
-        count = len(faces)
-        peeled = PixelLayers(pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w)
-    else:
-        count = len(layers.depth)
-        peeled = PixelLayers.from_layers(layers.triangle)
-    seconds["peel"] = time.perf_counter() - clock
-
-    clock = time.perf_counter()
     ortho = bool(np.isclose(proj[3, 3], 1.0))
     footprint = camera.pixel_angle(size[1])
     planes = face_planes(model, view_m)
-    levels = classify_samples(samples, peeled, planes, ortho, footprint, depth_tolerance)
-    levels = verify_creases(
-        samples,
-        levels,
-        peeled,
-        planes,
-        model.face_part,
-        ortho,
-        footprint,
-        crease_angle,
-        depth_tolerance,
-    )
+    on_gpu = None
+    if layers is None:
+        on_gpu = gpu_levels(
+            renderer,
+            model,
+            camera,
+            samples,
+            planes,
+            size,
+            max_layers=max_layers,
+            ortho=ortho,
+            footprint=footprint,
+            tolerance=depth_tolerance,
+        )
+    if on_gpu is not None:
+        count = on_gpu.layers
+        rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))
+        levels = drop_phantoms(
+            samples,
+            on_gpu.level,
+            rows,
+            on_gpu.sides[rows, 0],
+            on_gpu.sides[rows, 1],
+            planes,
+            model.face_part,
+            ortho,
+            footprint,
+            crease_angle,
+            depth_tolerance,
+        )
+        seconds["peel"] = on_gpu.peel_seconds
+        clock += on_gpu.peel_seconds
+    else:
+        if layers is None:
+            # occlusion needs only the layers' triangles, and only at the pixels it probes
+            pixels = probe_pixels(samples, size)
+            faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
+            count = len(faces)
+            peeled = PixelLayers(pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w)
+        else:
+            count = len(layers.depth)
+            peeled = PixelLayers.from_layers(layers.triangle)
+        seconds["peel"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        levels = classify_samples(samples, peeled, planes, ortho, footprint, depth_tolerance)
+        levels = verify_creases(
+            samples,
+            levels,
+            peeled,
+            planes,
+            model.face_part,
+            ortho,
+            footprint,
+            crease_angle,
+            depth_tolerance,
+        )
     pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0))
     points, offsets, first = chain_pieces(
         pieces.points, pieces.offsets, pieces.part.astype(np.int64) * (count + 1) + pieces.level

@@ -16,18 +16,22 @@ first (``runs``).
 """
 
 from .coincident import suppress_coincident
-from .levels import classify_samples, face_planes, verify_creases
+from .gpu import GpuLevels, gpu_levels
+from .levels import classify_samples, drop_phantoms, face_planes, verify_creases
 from .pixels import PixelLayers, probe_pixels
 from .runs import Pieces, split_by_level
 from .samples import Samples, sample_polylines
 
 __all__ = [
+    "GpuLevels",
     "Pieces",
     "PixelLayers",
     "Samples",
     "classify_samples",
+    "drop_phantoms",
     "probe_pixels",
     "face_planes",
+    "gpu_levels",
     "sample_polylines",
     "split_by_level",
     "suppress_coincident",
