@@ -10,7 +10,6 @@ the faces they lie on so that occlusion can tell a line's own surface from the o
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -18,6 +17,7 @@ import numpy as np
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
 
+from .cache import ModelCache
 from .chain import chain_order, pair_ends
 
 __all__ = [
@@ -47,8 +47,8 @@ _CELLS_PER_TRIANGLE = 8
 # Candidate triangle pairs examined per NumPy pass of the narrow phase.
 _PAIR_CHUNK = 1 << 19
 
-_ADJACENCY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-_INTERSECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+ADJACENCY = ModelCache()
+INTERSECTIONS = ModelCache()
 
 
 @dataclass(frozen=True)
@@ -118,7 +118,7 @@ def _diagonal(points: np.ndarray) -> float:
 
 
 def adjacency(model: Model) -> Adjacency:
-    """Adjacency of a model welded within each part only, computed once per model object.
+    """Adjacency of a model welded within each part only, computed once per mesh (``cache``).
 
     Parts never share edges: where two parts meet, each keeps its own edges there (a border
     of an open part, a crease of a solid), so a seam between parts is drawn, and the faces of
@@ -127,9 +127,10 @@ def adjacency(model: Model) -> Adjacency:
     multiple of a span larger than the model, so no two parts come within the weld tolerance,
     and moved back afterwards.
     """
-    held = _ADJACENCY.get(model)
-    if held is not None:
-        return held
+    return ADJACENCY.get(model, lambda: _welded_adjacency(model))
+
+
+def _welded_adjacency(model: Model) -> Adjacency:
     positions = model.positions.astype(np.float64)
     faces = model.faces.astype(np.int64)
     part = model.face_part.astype(np.int64)
@@ -150,7 +151,6 @@ def adjacency(model: Model) -> Adjacency:
         moved = held.positions.copy()
         moved[:, 0] -= vertex_part * span
         held = replace(held, positions=moved)
-    _ADJACENCY[model] = held
     return held
 
 
@@ -383,11 +383,12 @@ def intersection_segments(model: Model) -> Segments:
     Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
     triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
     triangles, from each one's crossing of the other's plane, vectorised over pairs. Cached per
-    model object.
+    mesh (``cache``).
     """
-    held = _INTERSECTIONS.get(model)
-    if held is not None:
-        return held
+    return INTERSECTIONS.get(model, lambda: _intersections(model))
+
+
+def _intersections(model: Model) -> Segments:
     result = Segments.empty()
     parts = len(model.part_names)
     faces = model.faces.astype(np.int64)
@@ -417,7 +418,6 @@ def intersection_segments(model: Model) -> Segments:
                 np.minimum(part[a], part[b]).astype(np.int32),
                 np.full(len(a), INTERSECTION, np.uint8),
             )
-    _INTERSECTIONS[model] = result
     return result
 
 
