@@ -39,8 +39,9 @@ _VECTOR_OPTIONS = (
     "line_width",
     "highlight",
     "reveal",
+    "glyphs",
 )
-_RASTER_ONLY = ("glyphs", "shade")
+_RASTER_ONLY = ("shade",)
 _VECTOR_ONLY = ("scale", "units")
 
 
@@ -196,6 +197,7 @@ def vector_drawing(
     sheet: str | None = None,
     title: str | None = None,
     dimensions: bool = False,
+    glyphs: Glyphs | str | os.PathLike | None = None,
     renderer: Renderer | None = None,
 ):
     """The vector lines of ``model`` as ``render_vector_file`` draws them (one view or the
@@ -224,6 +226,7 @@ def vector_drawing(
         renderer=renderer,
         title=title,
         dimensions=dimensions,
+        glyphs=glyphs,
     )
     cut = section_of(model, section, section_plane, section_keep)
     if sheet is not None and view != PLAN:
@@ -318,7 +321,7 @@ def draw(
     shade_opacity : float
         Opacity of the shading, in (0, 1].
     glyphs : Glyphs, str or PathLike, optional
-        Boxes, arrows, paths and labels in model coordinates (raster only).
+        Boxes, arrows, paths and labels in model coordinates (in vectors: dashed or dimmed where hidden).
     scale, units : optional
         ``'1:50'`` and the model's length unit: a vector page laid out in millimetres.
     renderer : Renderer, optional

@@ -21,6 +21,7 @@ import numpy as np
 from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
+from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.export.files import check_output
@@ -235,6 +236,7 @@ def render_vector_file(
     sheet: str | None = None,
     title: str | None = None,
     dimensions: bool = False,
+    glyphs: Glyphs | str | os.PathLike | None = None,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -248,7 +250,8 @@ def render_vector_file(
     ``blueprint.render_frame`` does), its hatching and cut outline a group of their own.
     A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
     default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper. ``dimensions`` draws
-    the overall width and height of orthographic views (ISO 129, in mm).
+    the overall width and height of orthographic views (ISO 129, in mm). ``glyphs`` (a
+    ``Glyphs`` or a glyph file) are drawn over one view, dashed or dimmed where hidden.
 
     Returns
     -------
@@ -286,6 +289,7 @@ def render_vector_file(
         sheet=sheet,
         title=title,
         dimensions=dimensions,
+        glyphs=glyphs,
         renderer=renderer,
     )
     clock = time.perf_counter()

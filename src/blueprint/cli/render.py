@@ -149,10 +149,8 @@ def render(
         raise InputError("give --highlight or --highlight-model, not both")
     camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
     if write.kind is Kind.DRAWING:
-        if glyphs or shade:
-            raise InputError(
-                f"{output}: vector drawings take no --glyphs or --shade yet; write a picture for those"
-            )
+        if shade:
+            raise InputError(f"{output}: vector drawings take no --shade yet; write a picture for that")
         if highlight_model:
             model = load_model(model, up=camera["up"], include=include, exclude=exclude)
             highlight = load_model(highlight_model, up=camera["up"])
@@ -173,6 +171,7 @@ def render(
             sheet=sheet,
             title=title,
             dimensions=dimensions,
+            glyphs=glyphs,
             include=include,
             exclude=exclude,
             **camera,

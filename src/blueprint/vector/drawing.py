@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
@@ -34,6 +35,7 @@ from blueprint.scene.section import Cut, SectionPlane, cut_model
 from .chain import chain_pieces
 from .dimension import dimension_marks
 from .dxf import write_dxf
+from .glyphs import GlyphLines, glyph_lines
 from .lines import join_polylines, model_segments
 from .occlusion import (
     Pieces,
@@ -149,6 +151,8 @@ class Drawing:
         A section's hatching and cut outline, drawn as their own group.
     marks : Marks or None
         A sheet's border, title block and view labels, drawn as their own group.
+    glyphs : GlyphLines or None
+        Boxes, arrows, paths and labels, drawn as their own group over the lines.
     camera : Camera
     seconds : dict
         Time per stage.
@@ -170,6 +174,7 @@ class Drawing:
     title: str | None = None
     section: SectionLines | None = None
     marks: Marks | None = None
+    glyphs: GlyphLines | None = None
     name: str = "drawing"
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -302,6 +307,7 @@ def draw_vector(
     title: str | None = None,
     section: Cut | None = None,
     dimensions: bool = False,
+    glyphs: Glyphs | str | os.PathLike | None = None,
 ) -> Drawing:
     """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
 
@@ -347,8 +353,14 @@ def draw_vector(
         hatched (2.5 mm apart on a drawing to scale) and outlined heavy.
     dimensions : bool
         Draw the view's overall width and height (ISO 129, values in mm); orthographic views only.
+    glyphs : Glyphs, str or PathLike, optional
+        Boxes, arrows, paths and labels in model coordinates (a ``Glyphs`` or a glyph file, see
+        ``blueprint.compose.glyphs``), drawn over the lines; their stretches behind the model's
+        front surface are their own polylines, drawn as the glyphs' ``[hidden]`` mode says.
     """
     seconds: dict[str, float] = {}
+    if glyphs is not None and not isinstance(glyphs, Glyphs):
+        glyphs = load_glyphs(glyphs)
     if not (0.1 <= spacing <= 16):
         raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
     if not (0 <= tolerance <= 16):
@@ -482,6 +494,19 @@ def draw_vector(
         mm_per_px = page.factor if page.unit == "mm" else None
         marks = dimension_marks(used, view_m, proj, size, UNITS_MM[unit], mm_per_px)
 
+    glyph_drawing = None
+    if glyphs is not None:
+        clock = time.perf_counter()
+        # the front surface is all the depth test of glyphs needs
+        front = (
+            layers
+            if layers is not None
+            else renderer.peel(model, camera, size=size, max_layers=1, normals=False)
+        )
+        depth = front.depth[0] if len(front.depth) else None
+        glyph_drawing = glyph_lines(glyphs, camera, size, depth)
+        seconds["glyphs"] = time.perf_counter() - clock
+
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
         title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
@@ -502,6 +527,7 @@ def draw_vector(
         title=title,
         section=hatching,
         marks=marks,
+        glyphs=glyph_drawing,
         name=Path(model.source).stem if model.source else "drawing",
         seconds=seconds,
     )
@@ -530,6 +556,8 @@ def draw_vector_sheet(
     parts kept whole, (P,) bool) cuts the model as the front view sees it, in every view.
     ``options`` go to :func:`draw_vector` for every view.
     """
+    if options.get("glyphs") is not None:
+        raise InputError("glyphs are drawn on one view, not on a plan sheet: give another --view")
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")

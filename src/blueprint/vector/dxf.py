@@ -75,6 +75,47 @@ def _sheet(doc, msp, drawing, base_mm: float) -> None:
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
 
 
+def _glyphs(doc, msp, drawing) -> None:
+    """Glyphs on the layer GLYPHS, each polyline in its glyph's colour; the stretches behind
+    the model on GLYPHS-HIDDEN, dashed or dimmed as the glyphs' hidden mode says."""
+    glyphs, page = drawing.glyphs, drawing.page
+    px_mm = page.factor if page.unit == "mm" else 25.4 / 96
+    doc.layers.add("GLYPHS")
+    hidden_layer = doc.layers.add("GLYPHS-HIDDEN")
+    if glyphs.mode.mode == "dashed":
+        on, off = glyphs.mode.dash[0] * page.factor, glyphs.mode.dash[-1] * page.factor
+        doc.linetypes.add(
+            "BP_GLYPH_HIDDEN", pattern=[on + off, on, -off], description="glyphs behind the model"
+        )
+        hidden_layer.dxf.linetype = "BP_GLYPH_HIDDEN"
+    elif glyphs.mode.mode == "dim":
+        hidden_layer.transparency = 1.0 - glyphs.mode.opacity
+    points = glyphs.points * page.factor
+    points[:, 1] = page.height - points[:, 1]
+    for i in range(len(glyphs)):
+        color, width, _, _ = glyphs.style(i)
+        chunk = points[glyphs.offsets[i] : glyphs.offsets[i + 1]]
+        attribs = {
+            "layer": "GLYPHS-HIDDEN" if glyphs.hidden[i] else "GLYPHS",
+            "true_color": _true_color(color),
+            "lineweight": _lineweight(width * px_mm),
+        }
+        msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+    for text in glyphs.texts:
+        attribs = {
+            "layer": "GLYPHS-HIDDEN" if text.hidden else "GLYPHS",
+            "true_color": _true_color(text.color),
+        }
+        entity = msp.add_text(text.text, height=0.72 * text.size * page.factor, dxfattribs=attribs)
+        entity.set_placement((text.x * page.factor, page.height - text.y * page.factor))
+
+
+def _true_color(color) -> int:
+    from ezdxf import colors
+
+    return colors.rgb2int(tuple(round(c * 255) for c in color[:3]))
+
+
 def _align(name: str):
     from ezdxf.enums import TextEntityAlignment
 
@@ -148,6 +189,8 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
                 msp.add_line(start, end, dxfattribs=attribs)
     if drawing.marks is not None:
         _sheet(doc, msp, drawing, base_mm)
+    if drawing.glyphs is not None:
+        _glyphs(doc, msp, drawing)
     if drawing.title:
         title_layer = doc.layers.add("TITLE")
         title_layer.rgb = tuple(round(c * 255) for c in style.title_color)

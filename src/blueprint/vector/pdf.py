@@ -15,6 +15,8 @@ from __future__ import annotations
 import io
 import os
 
+from blueprint.compose.glyphs.raster import ANCHOR_SIDES
+
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 
 __all__ = ["level_name", "pdf_bytes"]
@@ -145,6 +147,38 @@ def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
                 pdf.text(x - shift, y, value)
 
 
+def _glyphs(pdf, glyphs, to_page: float, unit: str) -> None:
+    """Glyph polylines in their styles (dashed or dimmed behind the model), then the labels."""
+    points = glyphs.points * to_page
+    for i in range(len(glyphs)):
+        color, width, dash, opacity = glyphs.style(i)
+        chunk = points[glyphs.offsets[i] : glyphs.offsets[i + 1]]
+        if len(chunk) < 2:
+            continue
+        with pdf.local_context(stroke_opacity=opacity * color[3]):
+            pdf.set_draw_color(*(round(c * 255) for c in color[:3]))
+            pdf.set_line_width(width * to_page)
+            if dash:
+                pdf.set_dash_pattern(dash=dash[0] * to_page, gap=dash[-1 if len(dash) > 1 else 0] * to_page)
+            else:
+                pdf.set_dash_pattern()
+            pdf.polyline([tuple(p) for p in chunk.tolist()], style="D")
+    pdf.set_dash_pattern()
+    points_per_unit = 72 / 25.4 if unit == "mm" else 1.0
+    for text in glyphs.texts:
+        alpha = (glyphs.mode.opacity if text.hidden and glyphs.mode.mode == "dim" else 1.0) * text.color[3]
+        size = text.size * to_page
+        with pdf.local_context(fill_opacity=alpha):
+            _font(pdf, size * points_per_unit)
+            pdf.set_text_color(*(round(c * 255) for c in text.color[:3]))
+            value = _text(pdf, text.text)
+            fx, fy = ANCHOR_SIDES[text.anchor]
+            # fpdf2 places text by its baseline: a capital stands about 0.72 of the size above it
+            x = text.x * to_page - fx * pdf.get_string_width(value)
+            y = text.y * to_page + (1 - fy) * 0.72 * size
+            pdf.text(x, y, value)
+
+
 def pdf_bytes(drawing) -> bytes:
     """The drawing as a one-page PDF document."""
     try:
@@ -209,6 +243,12 @@ def pdf_bytes(drawing) -> bytes:
         order.append("SHEET")
         _begin(pdf, "SHEET")
         _sheet(pdf, drawing, to_page, base, unit)
+        _end(pdf)
+    if drawing.glyphs is not None:
+        layers["GLYPHS"] = "glyphs"
+        order.append("GLYPHS")
+        _begin(pdf, "GLYPHS")
+        _glyphs(pdf, drawing.glyphs, to_page, unit)
         _end(pdf)
     if drawing.title:
         size_pt = 0.022 * drawing.height * to_page * (72 / 25.4 if unit == "mm" else 1.0)

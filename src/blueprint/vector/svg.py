@@ -8,6 +8,8 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from blueprint.compose.glyphs.raster import ANCHOR_SIDES
+
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .style import LineStyle
 
@@ -145,6 +147,8 @@ def svg_bytes(drawing) -> bytes:
         out.append(_section_group(drawing, factor, decimals, base))
     if drawing.marks is not None:
         out.append(_sheet_group(drawing, factor, decimals, base))
+    if drawing.glyphs is not None:
+        out.append(_glyph_group(drawing.glyphs, factor, decimals))
     if drawing.title:
         size = 0.022 * height
         color = LineStyle(style.title_color).hex
@@ -192,6 +196,46 @@ def _sheet_group(drawing, factor: float, decimals: int, base: float) -> str:
         )
     out.append("</g>\n")
     return "".join(out)
+
+
+def _glyph_group(glyphs, factor: float, decimals: int) -> str:
+    """Glyphs as the layer ``glyphs``: one path per polyline in its glyph's style, class
+    ``glyph-hidden`` where it runs behind the model (dashed or dimmed there), then the labels."""
+    out = [
+        '<g id="glyphs" inkscape:groupmode="layer" inkscape:label="glyphs" fill="none" '
+        'stroke-linecap="round" stroke-linejoin="round">\n'
+    ]
+    for i in range(len(glyphs)):
+        color, width, dash, opacity = glyphs.style(i)
+        a, b = glyphs.offsets[i], glyphs.offsets[i + 1]
+        d = path_data(glyphs.points[a:b], np.array([0, b - a]), factor, decimals)
+        if not d:
+            continue
+        attrs = [f'stroke="{LineStyle(color[:3]).hex}"', f'stroke-width="{width * factor:.4g}"']
+        if dash:
+            attrs.append(f'stroke-dasharray="{" ".join(f"{v * factor:.4g}" for v in dash)}"')
+        alpha = opacity * (color[3] if len(color) > 3 else 1.0)
+        if alpha < 1:
+            attrs.append(f'stroke-opacity="{alpha:.3g}"')
+        kind = "glyph-hidden" if glyphs.hidden[i] else "glyph"
+        out.append(f'<path class="{kind}" {" ".join(attrs)} d="{d}"/>\n')
+    for text in glyphs.texts:
+        fx, fy = ANCHOR_SIDES[text.anchor]
+        alpha = (glyphs.mode.opacity if text.hidden and glyphs.mode.mode == "dim" else 1.0) * text.color[3]
+        opacity = f' fill-opacity="{alpha:.3g}"' if alpha < 1 else ""
+        out.append(
+            f'<text class="{"glyph-hidden" if text.hidden else "glyph"}" x="{text.x * factor:.6g}" '
+            f'y="{text.y * factor:.6g}" font-family="sans-serif" font-size="{text.size * factor:.4g}" '
+            f'text-anchor="{_HORIZONTAL[fx]}" dominant-baseline="{_VERTICAL[fy]}" '
+            f'fill="{LineStyle(text.color[:3]).hex}"{opacity} stroke="none">{escape(text.text)}</text>\n'
+        )
+    out.append("</g>\n")
+    return "".join(out)
+
+
+# where a label's anchor point sits on the text: ANCHOR_SIDES' fractions as SVG's words
+_HORIZONTAL = {0: "start", 0.5: "middle", 1: "end"}
+_VERTICAL = {0: "hanging", 0.5: "central", 1: "alphabetic"}
 
 
 def _description(drawing) -> str:
