@@ -237,6 +237,8 @@ def render_vector_file(
     title: str | None = None,
     dimensions: bool = False,
     glyphs: Glyphs | str | os.PathLike | None = None,
+    shade: Iterable[str | int] | str | int | Model | None = None,
+    shade_opacity: float = 1.0,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -251,7 +253,9 @@ def render_vector_file(
     A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
     default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper. ``dimensions`` draws
     the overall width and height of orthographic views (ISO 129, in mm). ``glyphs`` (a
-    ``Glyphs`` or a glyph file) are drawn over one view, dashed or dimmed where hidden.
+    ``Glyphs`` or a glyph file) are drawn over one view, dashed or dimmed where hidden;
+    ``shade`` parts are filled polygons in depth order (``shade_opacity``), over the lines
+    behind them.
 
     Returns
     -------
@@ -290,6 +294,8 @@ def render_vector_file(
         title=title,
         dimensions=dimensions,
         glyphs=glyphs,
+        shade=shade,
+        shade_opacity=shade_opacity,
         renderer=renderer,
     )
     clock = time.perf_counter()

@@ -75,6 +75,52 @@ def _sheet(doc, msp, drawing, base_mm: float) -> None:
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
 
 
+def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: float, base_mm: float) -> None:
+    """The lines of ``groups`` (``Drawing.groups``) as LWPOLYLINEs, a layer per part and
+    level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists)."""
+    style, names, offsets = drawing.style, drawing.part_names, drawing.offsets
+    for part, level, index in groups:
+        line = style.level(level, part in drawing.highlight)
+        linetype = "CONTINUOUS"
+        if line.dash:
+            linetype = f"BP_L{level}"
+            if linetype not in made_linetypes:
+                on = line.dash[0] * base
+                off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
+                doc.linetypes.add(
+                    linetype, pattern=[on + off, on, -off], description=f"blueprint level {level}"
+                )
+                made_linetypes.add(linetype)
+        name = layers.get((part, level))
+        if name is None:
+            name = layer_name(names[part] if part < len(names) else f"part{part}", level)
+            while name in layers.values():  # two parts whose names sanitise alike
+                name = name[: name.rfind("-L")] + f"_{part}-L{level}"
+            layers[(part, level)] = name
+            layer = doc.layers.add(name)
+            layer.rgb = tuple(round(c * 255) for c in line.color)
+            layer.dxf.linetype = linetype
+            layer.dxf.lineweight = _lineweight(line.width * base_mm)
+            layer.transparency = 1.0 - line.opacity
+        attribs = {"layer": name}
+        for i in index.tolist():
+            chunk = points[offsets[i] : offsets[i + 1]]
+            if len(chunk) >= 2 and np.ptp(chunk, axis=0).any():
+                msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+
+
+def _shading(doc, msp, drawing) -> None:
+    """Shaded faces as SOLID triangles on the layer SHADING, back to front."""
+    page, shading = drawing.page, drawing.shading
+    layer = doc.layers.add("SHADING")
+    layer.transparency = 1.0 - shading.opacity
+    corners = shading.points * page.factor
+    corners[..., 1] = page.height - corners[..., 1]
+    for (a, b, c), color in zip(corners.tolist(), shading.color.tolist(), strict=True):
+        # SOLID's corners run in a Z: the third and fourth are one point for a triangle
+        msp.add_solid([a, b, c, c], dxfattribs={"layer": "SHADING", "true_color": _true_color(color)})
+
+
 def _glyphs(doc, msp, drawing) -> None:
     """Glyphs on the layer GLYPHS, each polyline in its glyph's colour; the stretches behind
     the model on GLYPHS-HIDDEN, dashed or dimmed as the glyphs' hidden mode says."""
@@ -144,37 +190,16 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
     points[:, 1] = page.height - points[:, 1]
     # the SVG writer's grid (a tenth of a pixel or finer): shorter numbers, same drawing
     points = np.round(points, _decimals(page.factor))
-    offsets = drawing.offsets.tolist()
-    names = drawing.part_names
-    made_linetypes = set()
-    used: set[str] = set()
-    for part, level, index in drawing.groups():
-        highlighted = part in drawing.highlight
-        line = style.level(level, highlighted)
-        linetype = "CONTINUOUS"
-        if line.dash:
-            linetype = f"BP_L{level}"
-            if linetype not in made_linetypes:
-                on = line.dash[0] * base
-                off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
-                doc.linetypes.add(
-                    linetype, pattern=[on + off, on, -off], description=f"blueprint level {level}"
-                )
-                made_linetypes.add(linetype)
-        name = layer_name(names[part] if part < len(names) else f"part{part}", level)
-        while name in used:  # two parts whose names sanitise alike
-            name = name[: name.rfind("-L")] + f"_{part}-L{level}"
-        used.add(name)
-        layer = doc.layers.add(name)
-        layer.rgb = tuple(round(c * 255) for c in line.color)
-        layer.dxf.linetype = linetype
-        layer.dxf.lineweight = _lineweight(line.width * base_mm)
-        layer.transparency = 1.0 - line.opacity
-        attribs = {"layer": name}
-        for i in index.tolist():
-            chunk = points[offsets[i] : offsets[i + 1]]
-            if len(chunk) >= 2 and np.ptp(chunk, axis=0).any():
-                msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+    made_linetypes: set[str] = set()
+    layers: dict[tuple[int, int], str] = {}
+    if drawing.shading is None:
+        _lines(doc, msp, drawing, drawing.groups(), points, layers, made_linetypes, base, base_mm)
+    else:
+        # lines behind the shaded parts, the shading over them, then the rest (CAD programs
+        # draw entities in the order written)
+        _lines(doc, msp, drawing, drawing.groups(True), points, layers, made_linetypes, base, base_mm)
+        _shading(doc, msp, drawing)
+        _lines(doc, msp, drawing, drawing.groups(False), points, layers, made_linetypes, base, base_mm)
     if drawing.section is not None:
         section_layer = doc.layers.add("SECTION")
         section_layer.rgb = tuple(round(c * 255) for c in style.level(0).color)

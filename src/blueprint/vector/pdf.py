@@ -147,6 +147,41 @@ def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
                 pdf.text(x - shift, y, value)
 
 
+def _lines(pdf, drawing, groups, points, offsets, base: float) -> None:
+    """The lines of ``groups`` (``Drawing.groups``), each group marked as content of its
+    part's layer and its level's."""
+    style = drawing.style
+    for part, level, index in groups:
+        line = style.level(level, part in drawing.highlight)
+        _begin(pdf, f"P{part}", f"L{level}")
+        with pdf.local_context(stroke_opacity=line.opacity):
+            pdf.set_draw_color(*(round(c * 255) for c in line.color))
+            pdf.set_line_width(line.width * base)
+            if line.dash:
+                on = line.dash[0] * base
+                off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
+                pdf.set_dash_pattern(dash=on, gap=off)
+            else:
+                pdf.set_dash_pattern()
+            for i in index.tolist():
+                chunk = points[offsets[i] : offsets[i + 1]]
+                if len(chunk) >= 2:
+                    pdf.polyline([tuple(p) for p in chunk.tolist()], style="D")
+        _end(pdf, 2)
+
+
+def _shading(pdf, shading, to_page: float) -> None:
+    """Shaded faces filled back to front (each at the shading's opacity)."""
+    with pdf.local_context(fill_opacity=shading.opacity, stroke_opacity=shading.opacity):
+        pdf.set_line_width(0.5 * to_page)
+        for corners, color in zip((shading.points * to_page).tolist(), shading.color.tolist(), strict=True):
+            rgb = tuple(round(c * 255) for c in color)
+            pdf.set_fill_color(*rgb)
+            # the fill's own colour as a hairline too, so that neighbours leave no seam
+            pdf.set_draw_color(*rgb)
+            pdf.polygon([tuple(p) for p in corners], style="DF")
+
+
 def _glyphs(pdf, glyphs, to_page: float, unit: str) -> None:
     """Glyph polylines in their styles (dashed or dimmed behind the model), then the labels."""
     points = glyphs.points * to_page
@@ -214,23 +249,17 @@ def pdf_bytes(drawing) -> bytes:
     layers = {f"P{p}": drawing.part_names[p] for p in parts}
     layers.update({f"L{k}": level_name(k) for k in levels})
     order: list = [["parts", *(f"P{p}" for p in parts)], ["levels", *(f"L{k}" for k in levels)]]
-    for part, level, index in drawing.groups():
-        line = style.level(level, part in drawing.highlight)
-        _begin(pdf, f"P{part}", f"L{level}")
-        with pdf.local_context(stroke_opacity=line.opacity):
-            pdf.set_draw_color(*(round(c * 255) for c in line.color))
-            pdf.set_line_width(line.width * base)
-            if line.dash:
-                on = line.dash[0] * base
-                off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
-                pdf.set_dash_pattern(dash=on, gap=off)
-            else:
-                pdf.set_dash_pattern()
-            for i in index.tolist():
-                chunk = points[offsets[i] : offsets[i + 1]]
-                if len(chunk) >= 2:
-                    pdf.polyline([tuple(p) for p in chunk.tolist()], style="D")
-        _end(pdf, 2)
+    if drawing.shading is None:
+        _lines(pdf, drawing, drawing.groups(), points, offsets, base)
+    else:
+        # lines behind the shaded parts, the shading over them, then the rest
+        _lines(pdf, drawing, drawing.groups(True), points, offsets, base)
+        layers["SHADING"] = "shading"
+        order.append("SHADING")
+        _begin(pdf, "SHADING")
+        _shading(pdf, drawing.shading, to_page)
+        _end(pdf)
+        _lines(pdf, drawing, drawing.groups(False), points, offsets, base)
     pdf.set_dash_pattern()
     if drawing.section is not None:
         layers["SECTION"] = "section"

@@ -119,30 +119,16 @@ def svg_bytes(drawing) -> bytes:
         out.append(
             f'<rect id="paper" x="0" y="0" width="{width:.6g}" height="{height:.6g}" fill="{paper}"/>\n'
         )
-    out.append('<g id="lines" fill="none" stroke-linecap="round" stroke-linejoin="round">\n')
-    taken = {"paper", "lines", "title"}
-    current = None
-    for part, level, index in drawing.groups():
-        if part != current:
-            if current is not None:
-                out.append("</g>\n")
-            name = drawing.part_names[part] if part < len(drawing.part_names) else f"part{part}"
-            gid = safe_id(name, taken)
-            out.append(
-                f'<g id="{gid}" inkscape:groupmode="layer" inkscape:label={quoteattr(name)} '
-                f"data-part={quoteattr(str(part))}>\n"
-            )
-            current = part
-        line = style.level(level, part in drawing.highlight)
-        lengths = drawing.offsets[index + 1] - drawing.offsets[index]
-        sub_offsets = np.r_[0, np.cumsum(lengths)]
-        rows = np.repeat(drawing.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
-        d = path_data(drawing.points[rows], sub_offsets, factor, decimals)
-        if d:
-            out.append(f'<path class="level-{level}" {_stroke(line, base)} d="{d}"/>\n')
-    if current is not None:
-        out.append("</g>\n")
-    out.append("</g>\n")
+    taken = {"paper", "lines", "title", "shading", "lines-behind-shading", "glyphs"}
+    if drawing.shading is None:
+        out.append(_line_group(drawing, "lines", drawing.groups(), taken, factor, decimals, base))
+    else:
+        # lines behind the shaded parts, the shading over them, then the rest
+        out.append(
+            _line_group(drawing, "lines-behind-shading", drawing.groups(True), taken, factor, decimals, base)
+        )
+        out.append(_shading_group(drawing.shading, factor, decimals))
+        out.append(_line_group(drawing, "lines", drawing.groups(False), taken, factor, decimals, base))
     if drawing.section is not None:
         out.append(_section_group(drawing, factor, decimals, base))
     if drawing.marks is not None:
@@ -158,6 +144,55 @@ def svg_bytes(drawing) -> bytes:
         )
     out.append("</svg>\n")
     return "".join(out).encode("utf-8")
+
+
+def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decimals: int, base: float) -> str:
+    """The lines of ``groups`` (``Drawing.groups``) as the group ``gid``: a layer per part, a
+    path per level."""
+    style = drawing.style
+    out = [f'<g id="{gid}" fill="none" stroke-linecap="round" stroke-linejoin="round">\n']
+    current = None
+    for part, level, index in groups:
+        if part != current:
+            if current is not None:
+                out.append("</g>\n")
+            name = drawing.part_names[part] if part < len(drawing.part_names) else f"part{part}"
+            part_id = safe_id(name, taken)
+            out.append(
+                f'<g id="{part_id}" inkscape:groupmode="layer" inkscape:label={quoteattr(name)} '
+                f"data-part={quoteattr(str(part))}>\n"
+            )
+            current = part
+        line = style.level(level, part in drawing.highlight)
+        lengths = drawing.offsets[index + 1] - drawing.offsets[index]
+        sub_offsets = np.r_[0, np.cumsum(lengths)]
+        rows = np.repeat(drawing.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
+        d = path_data(drawing.points[rows], sub_offsets, factor, decimals)
+        if d:
+            out.append(f'<path class="level-{level}" {_stroke(line, base)} d="{d}"/>\n')
+    if current is not None:
+        out.append("</g>\n")
+    out.append("</g>\n")
+    return "".join(out)
+
+
+def _shading_group(shading, factor: float, decimals: int) -> str:
+    """Shaded faces as the layer ``shading``: filled triangles, back to front."""
+    out = [
+        '<g id="shading" inkscape:groupmode="layer" inkscape:label="shading" stroke="none"'
+        + (f' opacity="{shading.opacity:.3g}"' if shading.opacity < 1 else "")
+        + ">\n"
+    ]
+    corners = np.round(shading.points * factor, decimals).reshape(-1, 6)
+    for (x0, y0, x1, y1, x2, y2), color in zip(corners.tolist(), shading.color.tolist(), strict=True):
+        fill = "#" + "".join(f"{round(c * 255):02x}" for c in color)
+        # the fill's own colour as a hairline too, so that neighbours leave no seam between them
+        out.append(
+            f'<path fill="{fill}" stroke="{fill}" stroke-width="{0.5 * factor:.3g}" '
+            f'd="M{x0:g} {y0:g}L{x1:g} {y1:g}L{x2:g} {y2:g}z"/>\n'
+        )
+    out.append("</g>\n")
+    return "".join(out)
 
 
 def _section_group(drawing, factor: float, decimals: int, base: float) -> str:

@@ -14,19 +14,27 @@ __all__ = ["Pieces", "split_by_level"]
 
 @dataclass(frozen=True)
 class Pieces:
-    """2D polylines of one level each: piece ``i`` is ``points[offsets[i]:offsets[i + 1]]``."""
+    """2D polylines of one level each: piece ``i`` is ``points[offsets[i]:offsets[i + 1]]``;
+    ``behind`` marks pieces behind a shaded part's surface (all False without shading)."""
 
     points: np.ndarray
     offsets: np.ndarray
     part: np.ndarray
     level: np.ndarray
+    behind: np.ndarray
 
     def __len__(self) -> int:
         return len(self.offsets) - 1
 
     @classmethod
     def empty(cls) -> Pieces:
-        return cls(np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32))
+        return cls(
+            np.zeros((0, 2)),
+            np.zeros(1, np.int64),
+            np.zeros(0, np.int32),
+            np.zeros(0, np.int32),
+            np.zeros(0, bool),
+        )
 
 
 def _run_lengths(level, line, pixel):
@@ -106,6 +114,7 @@ def split_by_level(
     max_level: int,
     min_run: float = 2.5,
     coincident: float = 0.5,
+    behind: np.ndarray | None = None,
 ) -> Pieces:
     """Cut the sampled polylines into 2D pieces of one level each.
 
@@ -115,11 +124,17 @@ def split_by_level(
     the straight segments between them). Samples outside the view or deeper than
     ``max_level`` are dropped, and so are samples on a line of lower level (see
     :func:`suppress_coincident`, within ``coincident`` pixels; 0 keeps them). A level change
-    must hold for ``min_run`` pixels (see :func:`_smooth`).
+    must hold for ``min_run`` pixels (see :func:`_smooth`). ``behind`` (S,) bool, samples
+    behind a shaded part's surface, cuts pieces too (a change must hold as long).
     """
     n = len(level)
     if n == 0:
         return Pieces.empty()
+    behind = (
+        np.zeros(n, bool)
+        if behind is None
+        else _smooth(behind.astype(np.int32), samples.line, samples.pixel, min_run) > 0
+    )
     level = _smooth(level, samples.line, samples.pixel, min_run)
     level = np.where(level <= max_level, level, -1)
     if coincident > 0:
@@ -129,8 +144,8 @@ def split_by_level(
     level = _drop_slivers(level, samples, min_run)
     line, pixel = samples.line, samples.pixel
     keep = (level >= 0) & (level <= max_level)
-    # runs: consecutive samples of one line with one level
-    change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
+    # runs: consecutive samples of one line with one level (and one side of the shading)
+    change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1]) | (behind[1:] != behind[:-1])]
     run = np.cumsum(change) - 1
     run_start = np.flatnonzero(change)
     run_end = np.r_[run_start[1:], n]  # exclusive
@@ -166,4 +181,5 @@ def split_by_level(
         offsets,
         part[line[run_start[pieces]]].astype(np.int32),
         level[run_start[pieces]].astype(np.int32),
+        behind[run_start[pieces]],
     )
