@@ -15,7 +15,13 @@ import numpy as np
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .svg import _decimals
 
-__all__ = ["layer_name", "write_dxf"]
+__all__ = ["ARC_SAGITTA", "ARC_TOLERANCE", "fit_arc", "layer_name", "write_dxf"]
+
+# A line is drawn as a circle or an arc where its vertices lie this close to one (pixels) and
+# no chord strays from its arc by more than ARC_SAGITTA: what the simplified polyline of a
+# finely tessellated rim is (Douglas-Peucker at 0.25 px leaves chords of about that sagitta).
+ARC_TOLERANCE = 0.1
+ARC_SAGITTA = 0.5
 
 _BAD = re.compile(r'[<>/\\":;?*|=`,\x00-\x1f]+')
 # DXF lineweights, 1/100 mm.
@@ -75,10 +81,53 @@ def _sheet(doc, msp, drawing, base_mm: float) -> None:
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
 
 
+def fit_arc(points: np.ndarray, tolerance: float, sagitta: float, min_points: int = 6):
+    """The circle or arc a polyline (N, 2) draws, where it is one at the drawing's resolution:
+    every vertex within ``tolerance`` of one circle, every chord within ``sagitta`` of its
+    arc (a hexagon is no circle), turning one way by less than a full turn. Returns
+    (cx, cy, r, None, None) for a closed polyline, (cx, cy, r, start, end) in degrees
+    counterclockwise for an open one, else None."""
+    if len(points) < min_points:
+        return None
+    # algebraic least squares: x^2 + y^2 + D x + E y + F = 0, around the centroid
+    mean = points.mean(axis=0)
+    p = points - mean
+    system = np.column_stack([p, np.ones(len(p))])
+    (d, e, f), *_ = np.linalg.lstsq(system, -(p**2).sum(axis=1), rcond=None)
+    centre = np.array([-d / 2, -e / 2])
+    r2 = centre @ centre - f
+    if not np.isfinite(r2) or r2 <= 0:
+        return None
+    radius = float(np.sqrt(r2))
+    if np.abs(np.linalg.norm(p - centre, axis=1) - radius).max() > tolerance:
+        return None
+    chord = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    if chord.max() >= 2 * radius:
+        return None
+    if radius - np.sqrt(radius**2 - (chord.max() / 2) ** 2) > sagitta:
+        return None
+    angle = np.arctan2(p[:, 1] - centre[1], p[:, 0] - centre[0])
+    turn = (np.diff(angle) + np.pi) % (2 * np.pi) - np.pi
+    if not (np.all(turn > 0) or np.all(turn < 0)):
+        return None
+    cx, cy = (centre + mean).tolist()
+    closed = np.allclose(points[0], points[-1], atol=tolerance)
+    if closed:
+        return (cx, cy, radius, None, None) if abs(abs(turn.sum()) - 2 * np.pi) < 1e-6 else None
+    if abs(turn.sum()) >= 2 * np.pi:
+        return None
+    first, last = np.degrees(angle[0]) % 360, np.degrees(angle[-1]) % 360
+    # an ARC runs counterclockwise from its start to its end
+    return (cx, cy, radius, first, last) if turn.sum() > 0 else (cx, cy, radius, last, first)
+
+
 def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: float, base_mm: float) -> None:
     """The lines of ``groups`` (``Drawing.groups``) as LWPOLYLINEs, a layer per part and
-    level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists)."""
+    level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists); lines
+    that are circles or arcs at the drawing's resolution (``fit_arc``: the rims of round
+    holes and shafts seen square on) as CIRCLE and ARC entities."""
     style, names, offsets = drawing.style, drawing.part_names, drawing.offsets
+    page_per_px = drawing.page.factor
     for part, level, index in groups:
         line = style.level(level, part in drawing.highlight)
         linetype = "CONTINUOUS"
@@ -105,8 +154,15 @@ def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: floa
         attribs = {"layer": name}
         for i in index.tolist():
             chunk = points[offsets[i] : offsets[i + 1]]
-            if len(chunk) >= 2 and np.ptp(chunk, axis=0).any():
+            if len(chunk) < 2 or not np.ptp(chunk, axis=0).any():
+                continue
+            arc = fit_arc(chunk, ARC_TOLERANCE * page_per_px, ARC_SAGITTA * page_per_px)
+            if arc is None:
                 msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+            elif arc[3] is None:
+                msp.add_circle(arc[:2], arc[2], dxfattribs=attribs)
+            else:
+                msp.add_arc(arc[:2], arc[2], arc[3], arc[4], dxfattribs=attribs)
 
 
 def _shading(doc, msp, drawing) -> None:
