@@ -65,7 +65,8 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
 
 
 def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Walk the pieces into chains: open chains from their free ends first, then closed loops.
+    """Walk the pieces into chains: pieces paired at neither end first, then open chains from
+    their free ends, then closed loops.
 
     Returns
     -------
@@ -76,9 +77,10 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     lengths : (C,) int64
         Pieces per chain, in order.
     """
-    n = len(partner) // 2
+    # pieces paired at neither end are chains of their own, found without walking
+    alone = (partner[0::2] < 0) & (partner[1::2] < 0)
     partner_list = partner.tolist()
-    visited = bytearray(n)
+    visited = bytearray(alone.astype(np.uint8).tobytes())
     walked: list[int] = []  # (piece << 1) | reversed
     lengths: list[int] = []
 
@@ -97,14 +99,19 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
                 break
         lengths.append(count)
 
-    for h in range(2 * n):
-        if partner_list[h] < 0 and not visited[h >> 1]:
+    for h in np.flatnonzero((partner < 0) & ~np.repeat(alone, 2)).tolist():
+        if not visited[h >> 1]:
             walk(h)
-    for s in range(n):
+    for s in np.flatnonzero(~alone).tolist():
         if not visited[s]:
             walk(s << 1)
     flat = np.array(walked, np.int64)
-    return flat >> 1, (flat & 1).astype(bool), np.array(lengths, np.int64)
+    single = np.flatnonzero(alone)
+    return (
+        np.concatenate([single, flat >> 1]),
+        np.concatenate([np.zeros(len(single), bool), (flat & 1).astype(bool)]),
+        np.concatenate([np.ones(len(single), np.int64), np.array(lengths, np.int64)]),
+    )
 
 
 def chain_pieces(
