@@ -23,6 +23,15 @@ from blueprint.vector.occlusion import (
 SIZE = (256, 256)
 
 
+@pytest.fixture(params=["k-buffer", "a-pass-a-layer"])
+def source(request, renderer, monkeypatch):
+    """Where the pass reads the faces: the faces k-buffer, or layers peeled a pass a layer and
+    copied on the GPU (what a renderer without the k-buffer does)."""
+    if request.param == "a-pass-a-layer":
+        monkeypatch.setattr(renderer, "face_kbuffer", lambda *a, **k: None)
+    return request.param
+
+
 def _setup(renderer, model, camera):
     view, proj = camera.view_matrix(), camera.projection_matrix()
     lines = join_polylines(model_segments(model, view, proj, SIZE))
@@ -40,7 +49,7 @@ def _setup(renderer, model, camera):
 
 
 @pytest.mark.parametrize("ortho", [False, True], ids=["perspective", "orthographic"])
-def test_gpu_levels_equal_the_cpu_reference(renderer, ortho):
+def test_gpu_levels_equal_the_cpu_reference(renderer, source, ortho):
     model = gearbox()
     camera = Camera.fit(model.positions, "iso", aspect=1.0, ortho=ortho)
     samples, planes, footprint, got = _setup(renderer, model, camera)
@@ -70,7 +79,7 @@ def test_gpu_levels_equal_the_cpu_reference(renderer, ortho):
     np.testing.assert_array_equal(gpu_final, cpu_final)
 
 
-def test_gpu_levels_match_ray_casting_at_sample_points(renderer):
+def test_gpu_levels_match_ray_casting_at_sample_points(renderer, source):
     """At every sample whose answer does not change within 1.5 pixels (off the outlines of
     occluders, where the 3 x 3 minimum decides), the level is the number of surfaces a ray from
     the sample towards the eye crosses, found by trimesh's ray caster in float64."""
@@ -108,18 +117,18 @@ def test_gpu_levels_match_ray_casting_at_sample_points(renderer):
     assert agree.mean() >= 0.98, f"{(~agree).sum()} of {stable.sum()} samples disagree"
 
 
-def test_a_drawing_reads_back_levels_only(renderer, monkeypatch):
-    """With the faces k-buffer no layer leaves the GPU: ``triangles_at`` is never asked, and the
-    drawing is the one the CPU reference makes."""
+def test_a_drawing_reads_back_levels_only(renderer, source, monkeypatch):
+    """No layer leaves the GPU: ``triangles_at`` is never asked, and the drawing is the one the
+    CPU reference makes."""
+    import blueprint.vector.drawing
+
     model = gearbox()
     camera = Camera.fit(model.positions, "iso", aspect=1.0)
-    if renderer.face_kbuffer(model, camera, size=SIZE, max_layers=8) is None:
-        pytest.skip("this renderer draws no faces k-buffer: occlusion runs on the CPU")
     with monkeypatch.context() as patch:
         patch.setattr(renderer, "triangles_at", lambda *a, **k: pytest.fail("layers were read back"))
         on_gpu = draw_vector(model, camera, SIZE, renderer=renderer)
     with monkeypatch.context() as patch:
-        patch.setattr(renderer, "face_kbuffer", lambda *a, **k: None)
+        patch.setattr(blueprint.vector.drawing, "gpu_levels", lambda *a, **k: None)
         on_cpu = draw_vector(model, camera, SIZE, renderer=renderer)
     assert len(on_gpu) > 100 and on_gpu.layers == on_cpu.layers
     np.testing.assert_array_equal(on_gpu.offsets, on_cpu.offsets)

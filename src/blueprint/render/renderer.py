@@ -247,6 +247,32 @@ class LayerRenderer(Device):
             return None
         return self._kbuffer_face_targets(model, camera, (w, h), max_layers)
 
+    def each_face_layer(
+        self,
+        model: Model,
+        camera: Camera,
+        visit,
+        *,
+        size: tuple[int, int],
+        max_layers: int | None = None,
+        min_fraction: float = 0.0,
+    ) -> None:
+        """Peel a pass a layer, as ``triangles_at`` does there, and hand every layer that counts
+        to ``visit(ids, depth, layer)`` while it is on the GPU: ``ids`` the ``r32i`` target of
+        face + 1, ``depth`` the layer's window depth (1.0 where it has no surface), OpenGL rows.
+        Nothing is read back."""
+        w, h = check_size(size, 1, self.max_texture)
+        self._peeled(
+            model,
+            camera,
+            (w, h),
+            max_layers,
+            min_fraction,
+            30.0,
+            False,
+            lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
+        )
+
     def _kbuffer_face_targets(self, model, camera, size, k) -> list:
         """One k-buffer pass of depths and faces alone into ``k`` targets (kbuffer.frag)."""
         ctx, pool = self.ctx, self.pool

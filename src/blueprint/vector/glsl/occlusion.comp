@@ -7,7 +7,17 @@
 // around the sample, where off contours a pixel with no surface at all does not take part.
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
+// With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
+// r32i, face + 1, 0 where none).
 layout(local_size_x = 64) in;
+
+#if LAYERED
+#define SAMPLER isampler2D
+#define FACE1(S, q) texelFetch(S, q, 0).r
+#else
+#define SAMPLER usampler2D
+#define FACE1(S, q) int(texelFetch(S, q, 0).y)
+#endif
 
 struct Sample {
     vec4 eye;      // eye coordinates, w unused
@@ -19,27 +29,27 @@ layout(std430, binding = 0) readonly buffer Samples { Sample samples[]; };
 layout(std430, binding = 1) readonly buffer Planes { vec4 planes[]; };  // n, c; last row: none
 layout(std430, binding = 2) writeonly buffer Levels { ivec4 result[]; };  // level, side faces
 
-uniform usampler2D u_s0;
+uniform SAMPLER u_s0;
 #if K > 1
-uniform usampler2D u_s1;
+uniform SAMPLER u_s1;
 #endif
 #if K > 2
-uniform usampler2D u_s2;
+uniform SAMPLER u_s2;
 #endif
 #if K > 3
-uniform usampler2D u_s3;
+uniform SAMPLER u_s3;
 #endif
 #if K > 4
-uniform usampler2D u_s4;
+uniform SAMPLER u_s4;
 #endif
 #if K > 5
-uniform usampler2D u_s5;
+uniform SAMPLER u_s5;
 #endif
 #if K > 6
-uniform usampler2D u_s6;
+uniform SAMPLER u_s6;
 #endif
 #if K > 7
-uniform usampler2D u_s7;
+uniform SAMPLER u_s7;
 #endif
 uniform int u_count;     // samples
 uniform int u_layers;    // layers that count (the peel's stop rules), at most K
@@ -52,32 +62,32 @@ const int BIG = 0x7fffffff;
 
 // face of surface k at pixel q (OpenGL rows), -1 where there is none
 int face_at(int k, ivec2 q) {
-    uint f = 0u;
+    int f = 0;
     switch (k) {
-    case 0: f = texelFetch(u_s0, q, 0).y; break;
+    case 0: f = FACE1(u_s0, q); break;
 #if K > 1
-    case 1: f = texelFetch(u_s1, q, 0).y; break;
+    case 1: f = FACE1(u_s1, q); break;
 #endif
 #if K > 2
-    case 2: f = texelFetch(u_s2, q, 0).y; break;
+    case 2: f = FACE1(u_s2, q); break;
 #endif
 #if K > 3
-    case 3: f = texelFetch(u_s3, q, 0).y; break;
+    case 3: f = FACE1(u_s3, q); break;
 #endif
 #if K > 4
-    case 4: f = texelFetch(u_s4, q, 0).y; break;
+    case 4: f = FACE1(u_s4, q); break;
 #endif
 #if K > 5
-    case 5: f = texelFetch(u_s5, q, 0).y; break;
+    case 5: f = FACE1(u_s5, q); break;
 #endif
 #if K > 6
-    case 6: f = texelFetch(u_s6, q, 0).y; break;
+    case 6: f = FACE1(u_s6, q); break;
 #endif
 #if K > 7
-    case 7: f = texelFetch(u_s7, q, 0).y; break;
+    case 7: f = FACE1(u_s7, q); break;
 #endif
     }
-    return int(f) - 1;
+    return f - 1;
 }
 
 bool in_front(vec4 plane, vec3 eye) {
@@ -104,7 +114,7 @@ ivec2 texel(ivec2 p) {
 // too once ``bound`` surfaces are in front (the caller wants no more)
 #define SURFACE(S)                                                                  \
     if (count < u_layers) {                                                         \
-        int tri = int(texelFetch(S, q, 0).y) - 1;                                   \
+        int tri = FACE1(S, q) - 1;                                                  \
         if (tri < 0) return ivec2(front, count);                                    \
         ++count;                                                                    \
         if (tri != own0 && tri != own1 && in_front(planes[tri], eye)) ++front;      \

@@ -23,6 +23,11 @@ __all__ = ["GpuLevels", "gpu_levels"]
 
 OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
 LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
+COPY_FACES_COMP = "blueprint.vector:glsl/copy_faces.comp"
+# The layers one pass reads at most (texture units of a compute shader: 16 at least).
+MAX_LAYERS = 8
+# Units the copy pass binds inside a peel, clear of the ones the peel's own passes use.
+_COPY_UNITS = (14, 15)
 _GROUP = 64
 _MAX_GROUPS = 65535
 
@@ -69,6 +74,31 @@ def _layer_count(renderer: LayerRenderer, surfaces, size, min_fraction: float) -
     return min(rule.count(per_layer) for rule in standard_rules(None, min_fraction))
 
 
+def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min_fraction) -> list:
+    """Peel a pass a layer and copy every layer's faces into a texture of its own on the GPU
+    (copy_faces.comp), for renderers without the faces k-buffer."""
+    ctx, pool = renderer.ctx, renderer.pool
+    prog = renderer.compute(COPY_FACES_COMP)
+    copies: list = []
+
+    def visit(ids, depth, layer: int) -> None:
+        target = pool.texture(f"vector.faces.{size[0]}x{size[1]}.{layer}", size, "r32i")
+        ids.use(location=_COPY_UNITS[0])
+        depth.use(location=_COPY_UNITS[1])
+        renderer.uniforms.set(prog, "u_ids", _COPY_UNITS[0])
+        renderer.uniforms.set(prog, "u_depth", _COPY_UNITS[1])
+        renderer.uniforms.set(prog, "u_size", tuple(size))
+        target.bind_to_image(7, read=False, write=True)
+        prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        ctx.memory_barrier()
+        copies.append(target)
+
+    renderer.each_face_layer(
+        model, camera, visit, size=size, max_layers=max_layers, min_fraction=min_fraction
+    )
+    return copies
+
+
 def gpu_levels(
     renderer: LayerRenderer,
     model: Model,
@@ -84,17 +114,24 @@ def gpu_levels(
     min_fraction: float = 0.0,
     offset: float = 1.0,
 ) -> GpuLevels | None:
-    """Peel the faces k-buffer and classify every sample on the GPU; None where the renderer
-    has no faces k-buffer for these layers (then ``triangles_at`` and ``classify_samples``).
+    """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
+    draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
+    than ``MAX_LAYERS`` layers (then ``triangles_at`` and ``classify_samples``).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases``; ``planes`` from
     ``levels.face_planes``; ``size`` (width, height) in pixels.
     """
     clock = time.perf_counter()
     surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
-    if surfaces is None:
+    layered = surfaces is None
+    if not layered:
+        layers = _layer_count(renderer, surfaces, size, min_fraction)  # reading the counts waits
+    elif max_layers is None or max_layers > MAX_LAYERS:
         return None
-    layers = _layer_count(renderer, surfaces, size, min_fraction)  # reading the counts waits
+    else:
+        # the peel's stop rules decided which layers count: those it handed over
+        surfaces = _copied_layers(renderer, model, camera, size, max_layers, min_fraction)
+        layers = len(surfaces)
     peel_seconds = time.perf_counter() - clock
     count = len(samples.line)
     level = np.full(count, -1, np.int32)
@@ -121,7 +158,7 @@ def gpu_levels(
     packed["own"][:, 2] = flags[inside]
 
     ctx = renderer.ctx
-    prog = renderer.compute(OCCLUSION_COMP, {"K": len(surfaces)})
+    prog = renderer.compute(OCCLUSION_COMP, {"K": len(surfaces), "LAYERED": layered})
     _bind_surfaces(renderer, prog, surfaces)
     put = renderer.uniforms.set
     put(prog, "u_count", len(inside))
