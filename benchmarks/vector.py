@@ -1,12 +1,14 @@
 """Seconds from a model file to a vector drawing, next to Blender Line Art's file-to-PNG times.
 
 Every run starts from the file (load, peel, lines, occlusion, simplify, write), with the GL
-context already made; the model is loaded anew each time, so nothing cached from a previous
-run helps. Prints one JSON object per model: median seconds of ``--runs`` runs, the stages of
-the median run, ``same_model_seconds`` (a further view of a model already loaded, whose
-view-independent work is cached), file sizes of SVG, PDF and DXF, and the reference figure
-measured for Blender 5.2 Line Art at 512 x 512 on a 2-core machine without a GPU
-(../shared/reference/README.md).
+context already made; the model is loaded anew each time and the caches of view-independent
+line work are emptied first, so nothing from a previous run helps. Prints one JSON object per
+model: median wall seconds of ``--runs`` runs and their process CPU seconds (every thread,
+llvmpipe's included: the figure to trust on a loaded machine), the stages of the median run,
+``same_model_seconds`` and ``same_model_cpu_seconds`` (a further view of the same mesh, whose
+adjacency and intersection lines are cached: a viewer, a batch, a turntable), file sizes of
+SVG, PDF and DXF, and the reference figure measured for Blender 5.2 Line Art at 512 x 512 on a
+2-core machine without a GPU (../shared/reference/README.md).
 
     python benchmarks/vector.py [--models-dir ../shared/models] [--size 1024 1024] [--runs 3]
 """
@@ -17,11 +19,21 @@ import argparse
 import json
 import statistics
 import tempfile
+import time
 from pathlib import Path
 
 from blueprint.api import default_renderer
 from blueprint.api.files import render_vector_file
 from blueprint.scene.loader import load_model
+from blueprint.vector.lines import ADJACENCY, INTERSECTIONS
+
+
+def timed(*args, **kwargs) -> tuple[dict, float]:
+    """``render_vector_file`` and the process CPU seconds it took."""
+    clock = time.process_time()
+    summary = render_vector_file(*args, **kwargs)
+    return summary, time.process_time() - clock
+
 
 ROOT = Path(__file__).resolve().parents[1]
 # model path under the models folder -> Blender Line Art seconds, file to PNG at 512 x 512
@@ -53,22 +65,20 @@ def main() -> None:
                 print(json.dumps({"model": name, "skipped": f"not found under {args.models_dir}"}))
                 continue
             stem = path.stem
-            runs = []
+            runs, cpu = [], []
             for _ in range(max(args.runs, 1)):
-                runs.append(
-                    render_vector_file(
-                        path,
-                        out_dir / f"{stem}.svg",
-                        size=size,
-                        max_layers=args.max_layers,
-                        renderer=renderer,
-                    )
+                ADJACENCY.clear()
+                INTERSECTIONS.clear()
+                summary, spent = timed(
+                    path, out_dir / f"{stem}.svg", size=size, max_layers=args.max_layers, renderer=renderer
                 )
-            # the same Model object again: the view-independent work (upload, welding, the
-            # intersections between parts) is cached per model, as in a viewer or a batch of views
+                runs.append(summary)
+                cpu.append(spent)
+            # the same mesh again: its view-independent work (welding, the intersections between
+            # parts) is cached, as in a viewer or a batch of views
             loaded = load_model(path)
-            warm = [
-                render_vector_file(
+            warm, warm_cpu = [
+                timed(
                     loaded, out_dir / f"{stem}.svg", size=size, max_layers=args.max_layers, renderer=renderer
                 )
                 for _ in range(2)
@@ -93,13 +103,16 @@ def main() -> None:
                         "layers": median["layers"],
                         "seconds": round(seconds, 3),
                         "runs": [round(t, 3) for t in totals],
+                        "cpu_seconds": round(statistics.median(cpu), 3),
                         "same_model_seconds": warm["seconds"]["total"],
+                        "same_model_cpu_seconds": round(warm_cpu, 3),
                         "stages": median["seconds"],
                         "lines_per_level": median["lines"],
                         "points": median["points"],
                         "bytes": sizes,
                         "blender_lineart_512_s": blender_s,
                         "speedup_vs_blender": round(blender_s / seconds, 2),
+                        "cpu_speedup_vs_blender": round(blender_s / statistics.median(cpu), 2),
                     }
                 ),
                 flush=True,

@@ -18,7 +18,6 @@ import blueprint
 from blueprint.api.files import render_vector_file
 from blueprint.compose.glyphs import Dimension, Glyphs
 from blueprint.compose.glyphs.marks import dimension_glyph_marks
-from blueprint.errors import InputError
 from blueprint.scene.camera import fit_camera
 from blueprint.scene.dimension import diameter_marks, format_value, linear_dimension
 from blueprint.scene.model import Model
@@ -220,22 +219,23 @@ def test_glyph_file_dimensions_in_picture_and_vectors(renderer, tmp_path):
     assert "1270" in texts and "10 h7" in texts
 
 
-def test_vector_drawings_take_only_dimension_glyphs(renderer, tmp_path):
+def test_vector_drawings_take_dimensions_beside_other_glyphs(renderer, tmp_path):
+    """A glyph file's labels are drawn by the vector glyphs, its dimensions as dimensions: both
+    in one drawing."""
     model = _model(trimesh.creation.box((50.0, 20.0, 10.0)))
-    glyphs = Glyphs.from_dict({"label": [{"at": [0, 0, 0], "text": "x"}]}, "marks.toml")
-    with pytest.raises(
-        InputError, match=r"marks.toml: vector drawings take only the glyph file's \[\[dimension\]\]"
-    ):
-        render_vector_file(
-            model,
-            tmp_path / "x.svg",
-            size=(64, 64),
-            view="front",
-            ortho=True,
-            glyphs=glyphs,
-            renderer=renderer,
-        )
-    assert not list(tmp_path.iterdir())
+    glyphs = Glyphs.from_dict(
+        {
+            "label": [{"at": [0, 0, 5], "text": "lid"}],
+            "dimension": [{"from": [-25, -10, 5], "to": [25, -10, 5], "text": "50 h7"}],
+        },
+        "marks.toml",
+    )
+    path = tmp_path / "front.svg"
+    render_vector_file(
+        model, path, size=(200, 120), view="front", ortho=True, glyphs=glyphs, renderer=renderer
+    )
+    texts = [t.text for t in ET.parse(path).getroot().iter(f"{SVG}text")]
+    assert "lid" in texts and "50 h7" in texts
 
 
 @pytest.mark.parametrize(
@@ -284,4 +284,4 @@ def test_featuretype_plan_picture_shows_the_extents_in_mm(renderer, shared_model
     )
     numbers = sorted(t.text for t in frame.marks.texts if re.fullmatch(r"[0-9.]+", t.text))
     assert numbers == sorted(["127", "63.5", "127", "34.9", "63.5", "34.9"])
-    assert {"Ø 9.9", "8× Ø 6.8", "7× Ø 11.1"} <= {t.text for t in frame.marks.texts}
+    assert {"Ø 9.9", "8× Ø 6.8", "8× Ø 11.1"} <= {t.text for t in frame.marks.texts}

@@ -143,3 +143,19 @@ def test_intersections_stay_bounded_on_the_engine(shared_models):
     elapsed = time.perf_counter() - start
     assert len(found) > 1000  # bolts through plates, pistons in cylinders, ...
     assert elapsed < 15.0, f"{elapsed:.1f} s for {model.triangle_count} triangles"
+
+
+def test_view_independent_lines_are_found_again_for_the_same_mesh():
+    """A second Model of the same mesh (a batch loading a file again) reuses the adjacency and
+    the intersection lines; a mesh moved by a hair does not."""
+    from blueprint.vector.lines import adjacency
+
+    def two_boxes(shift=0.0):
+        return assemble({"a": box((0, 0, 0), (2, 2, 2)), "b": box((1 + shift, 1, 1), (3, 3, 3))})
+
+    first, again, moved = two_boxes(), two_boxes(), two_boxes(1e-3)
+    assert first is not again
+    assert intersection_segments(again) is intersection_segments(first)
+    assert adjacency(again) is adjacency(first)
+    assert len(intersection_segments(first)) > 0
+    assert intersection_segments(moved) is not intersection_segments(first)

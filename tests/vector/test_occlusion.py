@@ -5,7 +5,14 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from vector_helpers import SVG, box_edges, boxes_in_front, point_segment_distance, project
+from vector_helpers import (
+    SVG,
+    box_edges,
+    boxes_in_front,
+    point_segment_distance,
+    project,
+    split_at_corners,
+)
 
 from blueprint.examples import assemble, box, prism
 from blueprint.scene.camera import Camera
@@ -15,10 +22,12 @@ SIZE = (256, 256)
 
 
 def _pieces(drawing):
-    """(part name, level, points) of every polyline."""
+    """(part name, level, points) of every stretch of polyline between corners: lines chain
+    through corners, the checks below look edge by edge."""
     return [
-        (drawing.part_names[drawing.part[i]], int(drawing.level[i]), drawing.polyline(i))
+        (drawing.part_names[drawing.part[i]], int(drawing.level[i]), stretch)
         for i in range(len(drawing))
+        for stretch in split_at_corners(drawing.polyline(i))
     ]
 
 

@@ -93,6 +93,42 @@ def test_dxf_opens_with_one_layer_per_part_and_level(gear_drawing, tmp_path):
     assert ys.min() >= -0.05 and ys.max() <= 160.05
 
 
+def test_pdf_has_a_layer_per_part_and_per_level_as_the_svg_has(gear_drawing, tmp_path):
+    """pypdf lists the optional content groups: every part drawn and every level, named as
+    the SVG's part layers and level classes; every group of lines is marked as content of its
+    part's layer and its level's, and holds that group's polylines, no more and no less."""
+    import re
+
+    import pypdf
+
+    reader = pypdf.PdfReader(save_drawing(tmp_path / "gear.pdf", gear_drawing))
+    properties = reader.trailer["/Root"]["/OCProperties"]
+    names = [group.get_object()["/Name"] for group in properties["/OCGs"]]
+    drawn_parts = sorted(set(gear_drawing.part.tolist()))
+    drawn_levels = sorted(set(gear_drawing.level.tolist()))
+    assert names == [gear_drawing.part_names[p] for p in drawn_parts] + [
+        "visible" if k == 0 else f"hidden {k}" for k in drawn_levels
+    ]
+    assert len(drawn_parts) == 13 and len(drawn_levels) >= 6
+    # the SVG's groups carry the same names and levels
+    svg = svg_lines(save_drawing(tmp_path / "gear.svg", gear_drawing))
+    assert {level for _, level in svg} == set(drawn_levels)
+    # the viewer's panel: parts, then levels
+    order = properties["/D"]["/Order"]
+    assert [branch[0] for branch in order] == ["parts", "levels"]
+    assert len(order[0]) == 1 + len(drawn_parts) and len(order[1]) == 1 + len(drawn_levels)
+    page = reader.pages[0]
+    keys = page["/Resources"]["/Properties"]
+    assert keys["/P6"].get_object()["/Name"] == "gear" and keys["/L0"].get_object()["/Name"] == "visible"
+    content = page.get_contents().get_data().decode("latin-1")
+    marked = re.findall(r"/OC /P(\d+) BDC\n/OC /L(\d+) BDC\n(.*?)EMC\nEMC", content, re.S)
+    assert len(marked) == len(list(gear_drawing.groups()))
+    for (part, level, index), (p, k, body) in zip(gear_drawing.groups(), marked, strict=True):
+        assert (int(p), int(k)) == (part, level)
+        strokes = len(re.findall(r"^ ?S$", body, re.M))
+        assert strokes == len(index)
+
+
 def test_pdf_opens_with_the_drawing_size(gear_drawing, tmp_path):
     import pypdf
 
@@ -110,8 +146,8 @@ def test_plan_view_to_scale(renderer, tmp_path):
     summary = render_vector_file(
         model, tmp_path / "plan.svg", size=(256, 256), view="top", scale="1:50", units="mm", renderer=renderer
     )
-    # the outline (the bottom's edges lie right under it, one level down)
-    assert summary["format"] == "svg" and summary["lines"][0] == 4
+    # the outline, one closed line (the bottom's edges lie right under it, one level down)
+    assert summary["format"] == "svg" and summary["lines"][0] == 1
     root = ET.parse(tmp_path / "plan.svg").getroot()
     width = float(root.get("width")[:-2])
     assert root.get("width").endswith("mm") and root.get("viewBox") == f"0 0 {width:.6g} {width:.6g}"
@@ -139,7 +175,9 @@ def test_empty_drawing_writes_valid_files(renderer, tmp_path):
 def test_render_vector_file_summary_and_errors(renderer, tmp_path):
     model = assemble({"cube": box((-1, -1, -1), (1, 1, 1))})
     summary = render_vector_file(model, tmp_path / "cube.svg", size=(96, 96), renderer=renderer)
-    assert summary["lines"] == {0: 9, 1: 3}
+    # visible: the outline as one closed line, the 3 near edges as 2 (two chain through the
+    # corner); the 3 hidden edges stop short of the far corner, which the near one covers
+    assert summary["lines"] == {0: 3, 1: 3}
     assert summary["bytes"] == (tmp_path / "cube.svg").stat().st_size
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cube.svg"]  # no temporary files left
     with pytest.raises(InputError, match="must end in"):

@@ -58,6 +58,21 @@ def segments_of(polylines: list[np.ndarray]) -> np.ndarray:
     return np.concatenate(parts) if parts else np.zeros((0, 2, 2))
 
 
+def split_at_corners(points: np.ndarray, angle: float = 30.0) -> list[np.ndarray]:
+    """A 2D polyline cut at every vertex where it turns by more than ``angle`` degrees: lines
+    chained through a corner, back to one straight-ish stretch per edge."""
+    step = np.diff(points, axis=0)
+    length = np.linalg.norm(step, axis=1)
+    step = step[length > 1e-9] / length[length > 1e-9, None]
+    points = points[np.r_[True, length > 1e-9]]
+    if len(step) < 2:
+        return [points]
+    turn = np.einsum("ij,ij->i", step[:-1], step[1:]) < np.cos(np.radians(angle))
+    cuts = np.flatnonzero(turn) + 1
+    bounds = np.r_[0, cuts, len(points) - 1]
+    return [points[a : b + 1] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
 def point_segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """(P, N) distances from 2D points to 2D segments."""
     a = segments[None, :, 0]

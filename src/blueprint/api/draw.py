@@ -40,8 +40,10 @@ _VECTOR_OPTIONS = (
     "line_width",
     "highlight",
     "reveal",
+    "glyphs",
+    "shade",
+    "shade_opacity",
 )
-_RASTER_ONLY = ("glyphs", "shade")
 _VECTOR_ONLY = ("scale", "units")
 
 
@@ -99,11 +101,6 @@ class Drawing:
         """The vector drawing (``blueprint.vector.drawing.Drawing``: polylines with their
         occlusion levels and parts), drawn on first use with this drawing's options."""
         if self._lines is None:
-            given = [k for k in _RASTER_ONLY if self.options.get(k) is not None]
-            if given:
-                raise InputError(
-                    f"vector drawings take no {' or '.join(given)} yet; save a picture (.png) for those"
-                )
             self._lines = vector_drawing(self.model, renderer=self._renderer, **self._vector_options())
         return self._lines
 
@@ -198,6 +195,8 @@ def vector_drawing(
     title: str | None = None,
     dimensions: bool = False,
     glyphs: Glyphs | str | os.PathLike | None = None,
+    shade: PartSpec | None = None,
+    shade_opacity: float = 1.0,
     renderer: Renderer | None = None,
 ):
     """The vector lines of ``model`` as ``render_vector_file`` draws them (one view or the
@@ -226,6 +225,9 @@ def vector_drawing(
         renderer=renderer,
         title=title,
         dimensions=dimensions,
+        glyphs=glyphs,
+        shade=shade,
+        shade_opacity=shade_opacity,
     )
     cut = section_of(model, section, section_plane, section_keep)
     if sheet is not None and view != PLAN:
@@ -330,11 +332,11 @@ def draw(
     reveal : float, optional
         Depth masking: peel until this fraction of the highlighted parts shows.
     shade : str, int, sequence, Model or (P,) bool, optional
-        Parts drawn shaded inside the drawing (raster only).
+        Parts drawn shaded inside the drawing (in vectors: filled polygons in depth order).
     shade_opacity : float
         Opacity of the shading, in (0, 1].
     glyphs : Glyphs, str or PathLike, optional
-        Boxes, arrows, paths and labels in model coordinates (raster only).
+        Boxes, arrows, paths and labels in model coordinates (in vectors: dashed or dimmed where hidden).
     scale, units : optional
         ``'1:50'`` and the model's length unit: a vector page laid out in millimetres.
     renderer : Renderer, optional

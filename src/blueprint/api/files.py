@@ -243,6 +243,8 @@ def render_vector_file(
     title: str | None = None,
     dimensions: bool = False,
     glyphs: Glyphs | str | os.PathLike | None = None,
+    shade: Iterable[str | int] | str | int | Model | None = None,
+    shade_opacity: float = 1.0,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
@@ -257,8 +259,10 @@ def render_vector_file(
     A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
     default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper. ``dimensions`` draws
     the overall width and height of orthographic views and the diameters of the circles
-    their lines find (ISO 129, in mm); a glyph file's ``[[dimension]]`` entries are drawn too
-    (one view; its other glyphs are for pictures).
+    their lines find (ISO 129, in mm). ``glyphs`` (a ``Glyphs`` or a glyph file) are drawn over
+    one view, dashed or dimmed where hidden, its ``[[dimension]]`` entries as dimensions;
+    ``shade`` parts are filled polygons in depth order (``shade_opacity``), over the lines
+    behind them.
 
     Returns
     -------
@@ -297,6 +301,8 @@ def render_vector_file(
         title=title,
         dimensions=dimensions,
         glyphs=glyphs,
+        shade=shade,
+        shade_opacity=shade_opacity,
         renderer=renderer,
     )
     clock = time.perf_counter()

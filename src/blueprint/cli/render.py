@@ -153,8 +153,6 @@ def render(
         raise InputError("give --highlight or --highlight-model, not both")
     camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
     if write.kind is Kind.DRAWING:
-        if shade:
-            raise InputError(f"{output}: vector drawings take no --shade yet; write a picture for that")
         if highlight_model:
             model = load_model(model, up=camera["up"], include=include, exclude=exclude)
             highlight = load_model(highlight_model, up=camera["up"])
@@ -176,6 +174,8 @@ def render(
             title=title,
             dimensions=dimensions,
             glyphs=glyphs,
+            shade=shade,
+            shade_opacity=shade_opacity,
             include=include,
             exclude=exclude,
             **camera,

@@ -240,14 +240,7 @@ class LayerRenderer(Device):
             raise InputError(f"pixels must be flat indices into {w}x{h}")
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
-        # the faces-only k-buffer was measured only under framebuffer fetch (llvmpipe)
-        if (
-            self.kbuffer
-            and not self.kbuffer_interlock
-            and max_layers is not None
-            and 1 < max_layers <= KBUFFER_MAX
-            and 8 * max_layers * w * h <= KBUFFER_MAX_BYTES
-        ):
+        if self._faces_kbuffer_fits((w, h), max_layers):
             return self._kbuffer_faces(model, camera, (w, h), max_layers, min_fraction, gl)
         out = []
 
@@ -259,12 +252,56 @@ class LayerRenderer(Device):
         self._peeled(model, camera, (w, h), max_layers, min_fraction, 30.0, False, read)
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
 
-    def _kbuffer_faces(self, model, camera, size, k, min_fraction, gl) -> np.ndarray:
-        """``triangles_at`` in one k-buffer pass of depths and faces alone: no layer is
-        unpacked, the k targets are read as they are (a pixel's surfaces run up to the first
-        empty one, kbuffer.frag) and gathered at the OpenGL pixel indices ``gl``."""
-        check_frame_args(k, min_fraction, 0.0, 1.0)
-        rules = standard_rules(None, min_fraction)
+    def _faces_kbuffer_fits(self, size, max_layers) -> bool:
+        """Whether ``max_layers`` layers of faces at ``size`` come from one faces-only k-buffer
+        pass (measured only under framebuffer fetch, llvmpipe)."""
+        return bool(
+            self.kbuffer
+            and not self.kbuffer_interlock
+            and max_layers is not None
+            and 1 < max_layers <= KBUFFER_MAX
+            and 8 * max_layers * size[0] * size[1] <= KBUFFER_MAX_BYTES
+        )
+
+    def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):
+        """The ``max_layers`` nearest surfaces of every pixel left on the GPU, for passes that
+        read them there (vector occlusion): a list of ``rg32ui`` textures, surface ``k`` in the
+        ``k``-th, (window depth bits, face + 1), a pixel's surfaces running up to the first
+        with face 0, OpenGL rows (bottom up). None where this renderer gathers faces by peeling
+        a pass a layer (``triangles_at`` serves every renderer)."""
+        w, h = check_size(size, 1, self.max_texture)
+        if not self._faces_kbuffer_fits((w, h), max_layers):
+            return None
+        return self._kbuffer_face_targets(model, camera, (w, h), max_layers)
+
+    def each_face_layer(
+        self,
+        model: Model,
+        camera: Camera,
+        visit,
+        *,
+        size: tuple[int, int],
+        max_layers: int | None = None,
+        min_fraction: float = 0.0,
+    ) -> None:
+        """Peel a pass a layer, as ``triangles_at`` does there, and hand every layer that counts
+        to ``visit(ids, depth, layer)`` while it is on the GPU: ``ids`` the ``r32i`` target of
+        face + 1, ``depth`` the layer's window depth (1.0 where it has no surface), OpenGL rows.
+        Nothing is read back."""
+        w, h = check_size(size, 1, self.max_texture)
+        self._peeled(
+            model,
+            camera,
+            (w, h),
+            max_layers,
+            min_fraction,
+            30.0,
+            False,
+            lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
+        )
+
+    def _kbuffer_face_targets(self, model, camera, size, k) -> list:
+        """One k-buffer pass of depths and faces alone into ``k`` targets (kbuffer.frag)."""
         ctx, pool = self.ctx, self.pool
         mesh = self.mesh(model, None)
         defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True}
@@ -278,6 +315,15 @@ class LayerRenderer(Device):
         pool.framebuffer(tuple(surfaces)).use()
         ctx.enable_only(ctx.NOTHING)
         mesh.vao(prog).render()
+        return surfaces
+
+    def _kbuffer_faces(self, model, camera, size, k, min_fraction, gl) -> np.ndarray:
+        """``triangles_at`` in one k-buffer pass of depths and faces alone: no layer is
+        unpacked, the k targets are read as they are (a pixel's surfaces run up to the first
+        empty one, kbuffer.frag) and gathered at the OpenGL pixel indices ``gl``."""
+        check_frame_args(k, min_fraction, 0.0, 1.0)
+        rules = standard_rules(None, min_fraction)
+        surfaces = self._kbuffer_face_targets(model, camera, size, k)
         valid = np.ones(size[0] * size[1], bool)
         out, counts = [], []
         for tex in surfaces:

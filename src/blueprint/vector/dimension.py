@@ -15,7 +15,6 @@ import numpy as np
 
 from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.glyphs.marks import dimension_glyph_marks
-from blueprint.errors import InputError
 from blueprint.scene.dimension import diameter_marks, format_value, overall_dimensions, screen_points
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks
@@ -171,16 +170,9 @@ def dimension_marks(
 
 def with_dimension_glyphs(drawing, glyphs: Glyphs, mm_per_model: float):
     """``drawing`` (a one-view ``Drawing``) with the dimensions of ``glyphs`` added to its marks,
-    as a picture draws them (``blueprint.compose.glyphs.marks``), in mm from ``mm_per_model``.
-
-    Raises ``InputError`` where ``glyphs`` has boxes, arrows, paths or labels, which vector
-    drawings do not take.
+    as a picture draws them (``blueprint.compose.glyphs.marks``), in mm from ``mm_per_model``
+    (its boxes, arrows, paths and labels are the vector glyphs', ``blueprint.vector.glyphs``).
     """
-    if len(glyphs) != len(glyphs.dimensions):
-        raise InputError(
-            f"{glyphs.source}: vector drawings take only the glyph file's [[dimension]] entries; "
-            "write a picture for boxes, arrows, paths and labels"
-        )
     if not glyphs.dimensions:
         return drawing
     camera = drawing.camera

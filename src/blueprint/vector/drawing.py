@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.hatch import hatch_spacing_px
-from blueprint.compose.style import Style
+from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
 from blueprint.export.writers import WRITERS, Kind
@@ -44,14 +45,18 @@ from blueprint.scene.sheet import (
     sheet_fields,
 )
 
+from .chain import chain_pieces
 from .dimension import dimension_marks
 from .dxf import write_dxf
+from .glyphs import GlyphLines, glyph_lines
 from .lines import join_polylines, model_segments
 from .occlusion import (
     Pieces,
     PixelLayers,
     classify_samples,
+    drop_phantoms,
     face_planes,
+    gpu_levels,
     probe_pixels,
     sample_polylines,
     split_by_level,
@@ -59,6 +64,7 @@ from .occlusion import (
 )
 from .pdf import pdf_bytes
 from .section import SectionLines, section_lines
+from .shade import ShadedFaces, shaded_faces
 from .simplify import douglas_peucker
 from .style import VectorStyle, vector_style
 from .svg import svg_bytes
@@ -136,6 +142,12 @@ class Drawing:
         A section's hatching and cut outline, drawn as their own group.
     marks : Marks or None
         A sheet's border, title block and view labels, drawn as their own group.
+    glyphs : GlyphLines or None
+        Boxes, arrows, paths and labels, drawn as their own group over the lines.
+    shading : ShadedFaces or None
+        Shaded parts' faces, filled back to front after the lines behind them.
+    behind : (P,) bool or None
+        With shading: the polylines behind a shaded part's surface, drawn before the shading.
     camera : Camera
     seconds : dict
         Time per stage.
@@ -157,6 +169,9 @@ class Drawing:
     title: str | None = None
     section: SectionLines | None = None
     marks: Marks | None = None
+    glyphs: GlyphLines | None = None
+    shading: ShadedFaces | None = None
+    behind: np.ndarray | None = None
     name: str = "drawing"
     seconds: dict[str, float] = field(default_factory=dict)
 
@@ -168,12 +183,18 @@ class Drawing:
         levels, counts = np.unique(self.level, return_counts=True)
         return {int(k): int(c) for k, c in zip(levels, counts, strict=True)}
 
-    def groups(self) -> Iterable[tuple[int, int, np.ndarray]]:
+    def groups(self, behind: bool | None = None) -> Iterable[tuple[int, int, np.ndarray]]:
         """(part, level, polyline indices) in drawing order: parts in model order, and within a
-        part the deepest level first so that visible lines lie on top."""
+        part the deepest level first so that visible lines lie on top. ``behind`` True or
+        False keeps only the polylines behind the shading or only the others."""
         if len(self) == 0:
             return
         order = np.lexsort((-self.level, self.part))
+        if behind is not None:
+            flags = self.behind if self.behind is not None else np.zeros(len(self), bool)
+            order = order[flags[order] == behind]
+            if len(order) == 0:
+                return
         key = np.stack([self.part[order], self.level[order]], axis=1)
         cut = np.flatnonzero(np.any(key[1:] != key[:-1], axis=1)) + 1
         for chunk in np.split(order, cut):
@@ -282,6 +303,9 @@ def draw_vector(
     title: str | None = None,
     section: Cut | None = None,
     dimensions: bool = False,
+    glyphs: Glyphs | str | os.PathLike | None = None,
+    shade: Iterable[str | int] | str | int | Model | None = None,
+    shade_opacity: float = 1.0,
 ) -> Drawing:
     """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
 
@@ -327,8 +351,22 @@ def draw_vector(
         hatched (2.5 mm apart on a drawing to scale) and outlined heavy.
     dimensions : bool
         Draw the view's overall width and height (ISO 129, values in mm); orthographic views only.
+    glyphs : Glyphs, str or PathLike, optional
+        Boxes, arrows, paths and labels in model coordinates (a ``Glyphs`` or a glyph file, see
+        ``blueprint.compose.glyphs``), drawn over the lines; their stretches behind the model's
+        front surface are their own polylines, drawn as the glyphs' ``[hidden]`` mode says.
+    shade : part name globs, indices, a second Model or (P,) bool, optional
+        Parts drawn shaded: their faces as filled polygons, lit as the raster lights them, in
+        depth order; the lines behind their surfaces are drawn before them, the rest after.
+    shade_opacity : float
+        Opacity of the shading, in (0, 1]: 1 hides the lines behind the shaded parts.
     """
     seconds: dict[str, float] = {}
+    if not 0.0 < shade_opacity <= 1.0:
+        raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
+    shaded_parts = None if shade is None else designated_parts(model, shade)
+    if glyphs is not None and not isinstance(glyphs, Glyphs):
+        glyphs = load_glyphs(glyphs)
     if not (0.1 <= spacing <= 16):
         raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
     if not (0 <= tolerance <= 16):
@@ -361,34 +399,90 @@ def draw_vector(
     seconds["lines"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
-    if layers is None:
-        # occlusion needs only the layers' triangles, and only at the pixels it probes
-        pixels = probe_pixels(samples, size)
-        faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
-        count = len(faces)
-        peeled = PixelLayers(pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w)
-    else:
-        count = len(layers.depth)
-        peeled = PixelLayers.from_layers(layers.triangle)
-    seconds["peel"] = time.perf_counter() - clock
-
-    clock = time.perf_counter()
     ortho = bool(np.isclose(proj[3, 3], 1.0))
     footprint = camera.pixel_angle(size[1])
     planes = face_planes(model, view_m)
-    levels = classify_samples(samples, peeled, planes, ortho, footprint, depth_tolerance)
-    levels = verify_creases(
-        samples,
-        levels,
-        peeled,
-        planes,
-        model.face_part,
-        ortho,
-        footprint,
-        crease_angle,
-        depth_tolerance,
-    )
-    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0))
+    on_gpu = None
+    if layers is None:
+        on_gpu = gpu_levels(
+            renderer,
+            model,
+            camera,
+            samples,
+            planes,
+            size,
+            max_layers=max_layers,
+            ortho=ortho,
+            footprint=footprint,
+            tolerance=depth_tolerance,
+        )
+    if on_gpu is not None:
+        count = on_gpu.layers
+        rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))
+        levels = drop_phantoms(
+            samples,
+            on_gpu.level,
+            rows,
+            on_gpu.sides[rows, 0],
+            on_gpu.sides[rows, 1],
+            planes,
+            model.face_part,
+            ortho,
+            footprint,
+            crease_angle,
+            depth_tolerance,
+        )
+        seconds["peel"] = on_gpu.peel_seconds
+        clock += on_gpu.peel_seconds
+    else:
+        if layers is None:
+            # occlusion needs only the layers' triangles, and only at the pixels it probes
+            pixels = probe_pixels(samples, size)
+            faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
+            count = len(faces)
+            peeled = PixelLayers(pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w)
+        else:
+            count = len(layers.depth)
+            peeled = PixelLayers.from_layers(layers.triangle)
+        seconds["peel"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        levels = classify_samples(samples, peeled, planes, ortho, footprint, depth_tolerance)
+        levels = verify_creases(
+            samples,
+            levels,
+            peeled,
+            planes,
+            model.face_part,
+            ortho,
+            footprint,
+            crease_angle,
+            depth_tolerance,
+        )
+    behind = None
+    if shaded_parts is not None:
+        # the same count of surfaces in front, of the shaded parts' surfaces alone
+        only_shaded = planes.copy()
+        only_shaded[:-1][~shaded_parts[model.face_part]] = 0.0
+        if on_gpu is not None:
+            in_front = gpu_levels(
+                renderer,
+                model,
+                camera,
+                samples,
+                only_shaded,
+                size,
+                max_layers=max_layers,
+                ortho=ortho,
+                footprint=footprint,
+                tolerance=depth_tolerance,
+            ).level
+        else:
+            in_front = classify_samples(samples, peeled, only_shaded, ortho, footprint, depth_tolerance)
+        behind = in_front > 0
+    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind)
+    key = (pieces.part.astype(np.int64) * (count + 1) + pieces.level) * 2 + pieces.behind
+    points, offsets, first = chain_pieces(pieces.points, pieces.offsets, key)
+    pieces = Pieces(points, offsets, pieces.part[first], pieces.level[first], pieces.behind[first])
     seconds["occlusion"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
@@ -407,7 +501,7 @@ def draw_vector(
     rows = np.repeat(keep, np.diff(offsets))
     points = points[rows]
     offsets = np.r_[0, np.cumsum(np.diff(offsets)[keep])].astype(np.int64)
-    pieces = Pieces(points, offsets, pieces.part[keep], pieces.level[keep])
+    pieces = Pieces(points, offsets, pieces.part[keep], pieces.level[keep], pieces.behind[keep])
     seconds["simplify"] = time.perf_counter() - clock
 
     hatching = None
@@ -424,6 +518,24 @@ def draw_vector(
         unit = page.model_unit or units or _default_units(model)
         mm_per_px = page.factor if page.unit == "mm" else None
         marks = dimension_marks(model, view_m, proj, size, UNITS_MM[unit], mm_per_px, crease_angle)
+
+    shading = None
+    if shaded_parts is not None:
+        faces = np.flatnonzero(shaded_parts[model.face_part])
+        shading = shaded_faces(model, faces, view_m, proj, size, _shade_color(style), shade_opacity)
+
+    glyph_drawing = None
+    if glyphs is not None:
+        clock = time.perf_counter()
+        # the front surface is all the depth test of glyphs needs
+        front = (
+            layers
+            if layers is not None
+            else renderer.peel(model, camera, size=size, max_layers=1, normals=False)
+        )
+        depth = front.depth[0] if len(front.depth) else None
+        glyph_drawing = glyph_lines(glyphs, camera, size, depth)
+        seconds["glyphs"] = time.perf_counter() - clock
 
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
@@ -445,9 +557,21 @@ def draw_vector(
         title=title,
         section=hatching,
         marks=marks,
+        glyphs=glyph_drawing,
+        shading=shading,
+        behind=pieces.behind if shading is not None else None,
         name=Path(model.source).stem if model.source else "drawing",
         seconds=seconds,
     )
+
+
+def _shade_color(style) -> tuple[float, float, float]:
+    """The shade colour of the raster style a drawing's style is or stands for (the blueprint
+    style's for a line style of its own)."""
+    if isinstance(style, Style):
+        return style.shade[:3]
+    name = style.name if isinstance(style, VectorStyle) else style
+    return STYLES[name if isinstance(name, str) and name in STYLES else "blueprint"].shade[:3]
 
 
 def draw_vector_sheet(
@@ -473,6 +597,9 @@ def draw_vector_sheet(
     parts kept whole, (P,) bool) cuts the model as the front view sees it, in every view.
     ``options`` go to :func:`draw_vector` for every view.
     """
+    for option in ("glyphs", "shade"):
+        if options.get(option) is not None:
+            raise InputError(f"--{option} draws on one view, not on a plan sheet: give another --view")
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")

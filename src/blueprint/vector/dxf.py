@@ -15,7 +15,13 @@ import numpy as np
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .svg import _decimals
 
-__all__ = ["layer_name", "write_dxf"]
+__all__ = ["ARC_SAGITTA", "ARC_TOLERANCE", "fit_arc", "layer_name", "write_dxf"]
+
+# A line is drawn as a circle or an arc where its vertices lie this close to one (pixels) and
+# no chord strays from its arc by more than ARC_SAGITTA: what the simplified polyline of a
+# finely tessellated rim is (Douglas-Peucker at 0.25 px leaves chords of about that sagitta).
+ARC_TOLERANCE = 0.1
+ARC_SAGITTA = 0.5
 
 _BAD = re.compile(r'[<>/\\":;?*|=`,\x00-\x1f]+')
 # DXF lineweights, 1/100 mm.
@@ -75,6 +81,143 @@ def _sheet(doc, msp, drawing, base_mm: float) -> None:
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
 
 
+def fit_arc(points: np.ndarray, tolerance: float, sagitta: float, min_points: int = 6):
+    """The circle or arc a polyline (N, 2) draws, where it is one at the drawing's resolution:
+    every vertex within ``tolerance`` of one circle, every chord within ``sagitta`` of its
+    arc (a hexagon is no circle), turning one way by less than a full turn. Returns
+    (cx, cy, r, None, None) for a closed polyline, (cx, cy, r, start, end) in degrees
+    counterclockwise for an open one, else None."""
+    if len(points) < min_points:
+        return None
+    # algebraic least squares: x^2 + y^2 + D x + E y + F = 0, around the centroid
+    mean = points.mean(axis=0)
+    p = points - mean
+    system = np.column_stack([p, np.ones(len(p))])
+    (d, e, f), *_ = np.linalg.lstsq(system, -(p**2).sum(axis=1), rcond=None)
+    centre = np.array([-d / 2, -e / 2])
+    r2 = centre @ centre - f
+    if not np.isfinite(r2) or r2 <= 0:
+        return None
+    radius = float(np.sqrt(r2))
+    if np.abs(np.linalg.norm(p - centre, axis=1) - radius).max() > tolerance:
+        return None
+    chord = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    if chord.max() >= 2 * radius:
+        return None
+    if radius - np.sqrt(radius**2 - (chord.max() / 2) ** 2) > sagitta:
+        return None
+    angle = np.arctan2(p[:, 1] - centre[1], p[:, 0] - centre[0])
+    turn = (np.diff(angle) + np.pi) % (2 * np.pi) - np.pi
+    if not (np.all(turn > 0) or np.all(turn < 0)):
+        return None
+    cx, cy = (centre + mean).tolist()
+    closed = np.allclose(points[0], points[-1], atol=tolerance)
+    if closed:
+        return (cx, cy, radius, None, None) if abs(abs(turn.sum()) - 2 * np.pi) < 1e-6 else None
+    if abs(turn.sum()) >= 2 * np.pi:
+        return None
+    first, last = np.degrees(angle[0]) % 360, np.degrees(angle[-1]) % 360
+    # an ARC runs counterclockwise from its start to its end
+    return (cx, cy, radius, first, last) if turn.sum() > 0 else (cx, cy, radius, last, first)
+
+
+def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: float, base_mm: float) -> None:
+    """The lines of ``groups`` (``Drawing.groups``) as LWPOLYLINEs, a layer per part and
+    level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists); lines
+    that are circles or arcs at the drawing's resolution (``fit_arc``: the rims of round
+    holes and shafts seen square on) as CIRCLE and ARC entities."""
+    style, names, offsets = drawing.style, drawing.part_names, drawing.offsets
+    page_per_px = drawing.page.factor
+    for part, level, index in groups:
+        line = style.level(level, part in drawing.highlight)
+        linetype = "CONTINUOUS"
+        if line.dash:
+            linetype = f"BP_L{level}"
+            if linetype not in made_linetypes:
+                on = line.dash[0] * base
+                off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
+                doc.linetypes.add(
+                    linetype, pattern=[on + off, on, -off], description=f"blueprint level {level}"
+                )
+                made_linetypes.add(linetype)
+        name = layers.get((part, level))
+        if name is None:
+            name = layer_name(names[part] if part < len(names) else f"part{part}", level)
+            while name in layers.values():  # two parts whose names sanitise alike
+                name = name[: name.rfind("-L")] + f"_{part}-L{level}"
+            layers[(part, level)] = name
+            layer = doc.layers.add(name)
+            layer.rgb = tuple(round(c * 255) for c in line.color)
+            layer.dxf.linetype = linetype
+            layer.dxf.lineweight = _lineweight(line.width * base_mm)
+            layer.transparency = 1.0 - line.opacity
+        attribs = {"layer": name}
+        for i in index.tolist():
+            chunk = points[offsets[i] : offsets[i + 1]]
+            if len(chunk) < 2 or not np.ptp(chunk, axis=0).any():
+                continue
+            arc = fit_arc(chunk, ARC_TOLERANCE * page_per_px, ARC_SAGITTA * page_per_px)
+            if arc is None:
+                msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+            elif arc[3] is None:
+                msp.add_circle(arc[:2], arc[2], dxfattribs=attribs)
+            else:
+                msp.add_arc(arc[:2], arc[2], arc[3], arc[4], dxfattribs=attribs)
+
+
+def _shading(doc, msp, drawing) -> None:
+    """Shaded faces as SOLID triangles on the layer SHADING, back to front."""
+    page, shading = drawing.page, drawing.shading
+    layer = doc.layers.add("SHADING")
+    layer.transparency = 1.0 - shading.opacity
+    corners = shading.points * page.factor
+    corners[..., 1] = page.height - corners[..., 1]
+    for (a, b, c), color in zip(corners.tolist(), shading.color.tolist(), strict=True):
+        # SOLID's corners run in a Z: the third and fourth are one point for a triangle
+        msp.add_solid([a, b, c, c], dxfattribs={"layer": "SHADING", "true_color": _true_color(color)})
+
+
+def _glyphs(doc, msp, drawing) -> None:
+    """Glyphs on the layer GLYPHS, each polyline in its glyph's colour; the stretches behind
+    the model on GLYPHS-HIDDEN, dashed or dimmed as the glyphs' hidden mode says."""
+    glyphs, page = drawing.glyphs, drawing.page
+    px_mm = page.factor if page.unit == "mm" else 25.4 / 96
+    doc.layers.add("GLYPHS")
+    hidden_layer = doc.layers.add("GLYPHS-HIDDEN")
+    if glyphs.mode.mode == "dashed":
+        on, off = glyphs.mode.dash[0] * page.factor, glyphs.mode.dash[-1] * page.factor
+        doc.linetypes.add(
+            "BP_GLYPH_HIDDEN", pattern=[on + off, on, -off], description="glyphs behind the model"
+        )
+        hidden_layer.dxf.linetype = "BP_GLYPH_HIDDEN"
+    elif glyphs.mode.mode == "dim":
+        hidden_layer.transparency = 1.0 - glyphs.mode.opacity
+    points = glyphs.points * page.factor
+    points[:, 1] = page.height - points[:, 1]
+    for i in range(len(glyphs)):
+        color, width, _, _ = glyphs.style(i)
+        chunk = points[glyphs.offsets[i] : glyphs.offsets[i + 1]]
+        attribs = {
+            "layer": "GLYPHS-HIDDEN" if glyphs.hidden[i] else "GLYPHS",
+            "true_color": _true_color(color),
+            "lineweight": _lineweight(width * px_mm),
+        }
+        msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+    for text in glyphs.texts:
+        attribs = {
+            "layer": "GLYPHS-HIDDEN" if text.hidden else "GLYPHS",
+            "true_color": _true_color(text.color),
+        }
+        entity = msp.add_text(text.text, height=0.72 * text.size * page.factor, dxfattribs=attribs)
+        entity.set_placement((text.x * page.factor, page.height - text.y * page.factor))
+
+
+def _true_color(color) -> int:
+    from ezdxf import colors
+
+    return colors.rgb2int(tuple(round(c * 255) for c in color[:3]))
+
+
 def _align(name: str):
     from ezdxf.enums import TextEntityAlignment
 
@@ -103,37 +246,16 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
     points[:, 1] = page.height - points[:, 1]
     # the SVG writer's grid (a tenth of a pixel or finer): shorter numbers, same drawing
     points = np.round(points, _decimals(page.factor))
-    offsets = drawing.offsets.tolist()
-    names = drawing.part_names
-    made_linetypes = set()
-    used: set[str] = set()
-    for part, level, index in drawing.groups():
-        highlighted = part in drawing.highlight
-        line = style.level(level, highlighted)
-        linetype = "CONTINUOUS"
-        if line.dash:
-            linetype = f"BP_L{level}"
-            if linetype not in made_linetypes:
-                on = line.dash[0] * base
-                off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
-                doc.linetypes.add(
-                    linetype, pattern=[on + off, on, -off], description=f"blueprint level {level}"
-                )
-                made_linetypes.add(linetype)
-        name = layer_name(names[part] if part < len(names) else f"part{part}", level)
-        while name in used:  # two parts whose names sanitise alike
-            name = name[: name.rfind("-L")] + f"_{part}-L{level}"
-        used.add(name)
-        layer = doc.layers.add(name)
-        layer.rgb = tuple(round(c * 255) for c in line.color)
-        layer.dxf.linetype = linetype
-        layer.dxf.lineweight = _lineweight(line.width * base_mm)
-        layer.transparency = 1.0 - line.opacity
-        attribs = {"layer": name}
-        for i in index.tolist():
-            chunk = points[offsets[i] : offsets[i + 1]]
-            if len(chunk) >= 2 and np.ptp(chunk, axis=0).any():
-                msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+    made_linetypes: set[str] = set()
+    layers: dict[tuple[int, int], str] = {}
+    if drawing.shading is None:
+        _lines(doc, msp, drawing, drawing.groups(), points, layers, made_linetypes, base, base_mm)
+    else:
+        # lines behind the shaded parts, the shading over them, then the rest (CAD programs
+        # draw entities in the order written)
+        _lines(doc, msp, drawing, drawing.groups(True), points, layers, made_linetypes, base, base_mm)
+        _shading(doc, msp, drawing)
+        _lines(doc, msp, drawing, drawing.groups(False), points, layers, made_linetypes, base, base_mm)
     if drawing.section is not None:
         section_layer = doc.layers.add("SECTION")
         section_layer.rgb = tuple(round(c * 255) for c in style.level(0).color)
@@ -148,6 +270,8 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
                 msp.add_line(start, end, dxfattribs=attribs)
     if drawing.marks is not None:
         _sheet(doc, msp, drawing, base_mm)
+    if drawing.glyphs is not None:
+        _glyphs(doc, msp, drawing)
     if drawing.title:
         title_layer = doc.layers.add("TITLE")
         title_layer.rgb = tuple(round(c * 255) for c in style.title_color)

@@ -10,13 +10,15 @@ the faces they lie on so that occlusion can tell a line's own surface from the o
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
+
+from .cache import ModelCache
+from .chain import chain_order, pair_ends
 
 __all__ = [
     "BORDER",
@@ -45,8 +47,8 @@ _CELLS_PER_TRIANGLE = 8
 # Candidate triangle pairs examined per NumPy pass of the narrow phase.
 _PAIR_CHUNK = 1 << 19
 
-_ADJACENCY: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-_INTERSECTIONS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+ADJACENCY = ModelCache()
+INTERSECTIONS = ModelCache()
 
 
 @dataclass(frozen=True)
@@ -116,7 +118,7 @@ def _diagonal(points: np.ndarray) -> float:
 
 
 def adjacency(model: Model) -> Adjacency:
-    """Adjacency of a model welded within each part only, computed once per model object.
+    """Adjacency of a model welded within each part only, computed once per mesh (``cache``).
 
     Parts never share edges: where two parts meet, each keeps its own edges there (a border
     of an open part, a crease of a solid), so a seam between parts is drawn, and the faces of
@@ -125,9 +127,10 @@ def adjacency(model: Model) -> Adjacency:
     multiple of a span larger than the model, so no two parts come within the weld tolerance,
     and moved back afterwards.
     """
-    held = _ADJACENCY.get(model)
-    if held is not None:
-        return held
+    return ADJACENCY.get(model, lambda: _welded_adjacency(model))
+
+
+def _welded_adjacency(model: Model) -> Adjacency:
     positions = model.positions.astype(np.float64)
     faces = model.faces.astype(np.int64)
     part = model.face_part.astype(np.int64)
@@ -148,7 +151,6 @@ def adjacency(model: Model) -> Adjacency:
         moved = held.positions.copy()
         moved[:, 0] -= vertex_part * span
         held = replace(held, positions=moved)
-    _ADJACENCY[model] = held
     return held
 
 
@@ -381,11 +383,12 @@ def intersection_segments(model: Model) -> Segments:
     Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
     triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
     triangles, from each one's crossing of the other's plane, vectorised over pairs. Cached per
-    model object.
+    mesh (``cache``).
     """
-    held = _INTERSECTIONS.get(model)
-    if held is not None:
-        return held
+    return INTERSECTIONS.get(model, lambda: _intersections(model))
+
+
+def _intersections(model: Model) -> Segments:
     result = Segments.empty()
     parts = len(model.part_names)
     faces = model.faces.astype(np.int64)
@@ -415,7 +418,6 @@ def intersection_segments(model: Model) -> Segments:
                 np.minimum(part[a], part[b]).astype(np.int32),
                 np.full(len(a), INTERSECTION, np.uint8),
             )
-    _INTERSECTIONS[model] = result
     return result
 
 
@@ -449,12 +451,14 @@ def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
     return np.unique(q, axis=0, return_inverse=True)[1].reshape(-1)
 
 
-def join_polylines(segments: Segments) -> Polylines:
+def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     """Drop repeated segments and chain the rest into polylines, part by part.
 
-    A chain continues through an endpoint shared by exactly two segments of the same part and
-    stops at ends, junctions and part changes; closed loops come out closed (first point
-    repeated last).
+    A chain continues through an endpoint shared by exactly two segments of the same part, and
+    through a junction of more along the straightest pair of segments there that turn by at
+    most ``turn`` degrees (a line running on past a vertex where other edges meet it stays one
+    line); it stops at ends, at the rest of a junction and at part changes. Closed loops come
+    out closed (first point repeated last).
     """
     n = len(segments)
     if n == 0:
@@ -482,47 +486,13 @@ def join_polylines(segments: Segments) -> Polylines:
     # nodes: a point within one part
     node_key = np.repeat(seg_part, 2) * (int(pid.max()) + 1) + pid.reshape(-1)
     node = np.unique(node_key, return_inverse=True)[1].reshape(-1)
-    degree = np.bincount(node)
-    # half-edge h = 2 s + e leaves segment s's end e (0: start, 1: end); its twin is h ^ 1
-    order = np.argsort(node, kind="stable")
-    partner = np.full(2 * n, -1, np.int64)
-    starts = np.cumsum(degree) - degree
-    two = np.flatnonzero(degree == 2)
-    a, b = order[starts[two]], order[starts[two] + 1]
-    partner[a], partner[b] = b, a
-    # walking: arrive at the end e of segment s (half-end 2 s + e); continue from partner's segment
-    partner_list = partner.tolist()
-    visited = bytearray(n)
-    chains: list[list[int]] = []  # signed walk: (segment << 1) | reversed
-    open_ends = [h for h in range(2 * n) if partner_list[h] < 0]
-
-    def walk(end: int) -> list[int]:
-        # start leaving through the end `end` (the walk begins at that end of its segment)
-        out = []
-        h = end
-        while True:
-            s = h >> 1
-            if visited[s]:
-                break
-            visited[s] = 1
-            reverse = h & 1  # starting at end 1 means walking the segment backwards
-            out.append((s << 1) | reverse)
-            nxt = partner_list[h ^ 1]
-            if nxt < 0:
-                break
-            h = nxt
-        return out
-
-    for h in open_ends:
-        if not visited[h >> 1]:
-            chains.append(walk(h))
-    for s in range(n):
-        if not visited[s]:
-            chains.append(walk(s << 1))
-
-    lengths = np.array([len(c) for c in chains], np.int64)
-    flat = np.fromiter((x for c in chains for x in c), np.int64, count=int(lengths.sum()))
-    seg, rev = flat >> 1, (flat & 1).astype(bool)
+    # half-end h = 2 s + e is segment s's end e (0: start, 1: end)
+    leaving = seg_points[:, ::-1] - seg_points
+    leaving = (
+        leaving.reshape(-1, 3) / np.maximum(np.linalg.norm(leaving.reshape(-1, 3), axis=1), 1e-300)[:, None]
+    )
+    partner = pair_ends(node, leaving, np.cos(np.radians(turn)))
+    seg, rev, lengths = chain_order(partner)
     tails = np.where(rev[:, None, None], seg_points[seg][:, ::-1], seg_points[seg])  # (K, 2, 3)
     faces = seg_faces[seg]
     # points of chain c: the first segment's start, then every segment's end
@@ -532,7 +502,7 @@ def join_polylines(segments: Segments) -> Polylines:
     out_points = np.empty((offsets[-1], 3))
     out_faces = np.full((offsets[-1], 2), -1, np.int64)
     out_kind = np.zeros(offsets[-1], np.uint8)
-    chain_of = np.repeat(np.arange(len(chains)), lengths)
+    chain_of = np.repeat(np.arange(len(lengths)), lengths)
     slot = offsets[chain_of] + (np.arange(len(seg)) - chain_start[chain_of])
     out_points[slot] = tails[:, 0]
     out_faces[slot] = faces

@@ -8,6 +8,8 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
+from blueprint.compose.glyphs.raster import ANCHOR_SIDES
+
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .style import LineStyle
 
@@ -117,17 +119,47 @@ def svg_bytes(drawing) -> bytes:
         out.append(
             f'<rect id="paper" x="0" y="0" width="{width:.6g}" height="{height:.6g}" fill="{paper}"/>\n'
         )
-    out.append('<g id="lines" fill="none" stroke-linecap="round" stroke-linejoin="round">\n')
-    taken = {"paper", "lines", "title"}
+    taken = {"paper", "lines", "title", "shading", "lines-behind-shading", "glyphs"}
+    if drawing.shading is None:
+        out.append(_line_group(drawing, "lines", drawing.groups(), taken, factor, decimals, base))
+    else:
+        # lines behind the shaded parts, the shading over them, then the rest
+        out.append(
+            _line_group(drawing, "lines-behind-shading", drawing.groups(True), taken, factor, decimals, base)
+        )
+        out.append(_shading_group(drawing.shading, factor, decimals))
+        out.append(_line_group(drawing, "lines", drawing.groups(False), taken, factor, decimals, base))
+    if drawing.section is not None:
+        out.append(_section_group(drawing, factor, decimals, base))
+    if drawing.marks is not None:
+        out.append(_sheet_group(drawing, factor, decimals, base))
+    if drawing.glyphs is not None:
+        out.append(_glyph_group(drawing.glyphs, factor, decimals))
+    if drawing.title:
+        size = 0.022 * height
+        color = LineStyle(style.title_color).hex
+        out.append(
+            f'<text id="title" x="{0.02 * width:.6g}" y="{height - 0.02 * height:.6g}" '
+            f'font-family="sans-serif" font-size="{size:.4g}" fill="{color}">{escape(drawing.title)}</text>\n'
+        )
+    out.append("</svg>\n")
+    return "".join(out).encode("utf-8")
+
+
+def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decimals: int, base: float) -> str:
+    """The lines of ``groups`` (``Drawing.groups``) as the group ``gid``: a layer per part, a
+    path per level."""
+    style = drawing.style
+    out = [f'<g id="{gid}" fill="none" stroke-linecap="round" stroke-linejoin="round">\n']
     current = None
-    for part, level, index in drawing.groups():
+    for part, level, index in groups:
         if part != current:
             if current is not None:
                 out.append("</g>\n")
             name = drawing.part_names[part] if part < len(drawing.part_names) else f"part{part}"
-            gid = safe_id(name, taken)
+            part_id = safe_id(name, taken)
             out.append(
-                f'<g id="{gid}" inkscape:groupmode="layer" inkscape:label={quoteattr(name)} '
+                f'<g id="{part_id}" inkscape:groupmode="layer" inkscape:label={quoteattr(name)} '
                 f"data-part={quoteattr(str(part))}>\n"
             )
             current = part
@@ -141,19 +173,26 @@ def svg_bytes(drawing) -> bytes:
     if current is not None:
         out.append("</g>\n")
     out.append("</g>\n")
-    if drawing.section is not None:
-        out.append(_section_group(drawing, factor, decimals, base))
-    if drawing.marks is not None:
-        out.append(_sheet_group(drawing, factor, decimals, base))
-    if drawing.title:
-        size = 0.022 * height
-        color = LineStyle(style.title_color).hex
+    return "".join(out)
+
+
+def _shading_group(shading, factor: float, decimals: int) -> str:
+    """Shaded faces as the layer ``shading``: filled triangles, back to front."""
+    out = [
+        '<g id="shading" inkscape:groupmode="layer" inkscape:label="shading" stroke="none"'
+        + (f' opacity="{shading.opacity:.3g}"' if shading.opacity < 1 else "")
+        + ">\n"
+    ]
+    corners = np.round(shading.points * factor, decimals).reshape(-1, 6)
+    for (x0, y0, x1, y1, x2, y2), color in zip(corners.tolist(), shading.color.tolist(), strict=True):
+        fill = "#" + "".join(f"{round(c * 255):02x}" for c in color)
+        # the fill's own colour as a hairline too, so that neighbours leave no seam between them
         out.append(
-            f'<text id="title" x="{0.02 * width:.6g}" y="{height - 0.02 * height:.6g}" '
-            f'font-family="sans-serif" font-size="{size:.4g}" fill="{color}">{escape(drawing.title)}</text>\n'
+            f'<path fill="{fill}" stroke="{fill}" stroke-width="{0.5 * factor:.3g}" '
+            f'd="M{x0:g} {y0:g}L{x1:g} {y1:g}L{x2:g} {y2:g}z"/>\n'
         )
-    out.append("</svg>\n")
-    return "".join(out).encode("utf-8")
+    out.append("</g>\n")
+    return "".join(out)
 
 
 def _section_group(drawing, factor: float, decimals: int, base: float) -> str:
@@ -192,6 +231,46 @@ def _sheet_group(drawing, factor: float, decimals: int, base: float) -> str:
         )
     out.append("</g>\n")
     return "".join(out)
+
+
+def _glyph_group(glyphs, factor: float, decimals: int) -> str:
+    """Glyphs as the layer ``glyphs``: one path per polyline in its glyph's style, class
+    ``glyph-hidden`` where it runs behind the model (dashed or dimmed there), then the labels."""
+    out = [
+        '<g id="glyphs" inkscape:groupmode="layer" inkscape:label="glyphs" fill="none" '
+        'stroke-linecap="round" stroke-linejoin="round">\n'
+    ]
+    for i in range(len(glyphs)):
+        color, width, dash, opacity = glyphs.style(i)
+        a, b = glyphs.offsets[i], glyphs.offsets[i + 1]
+        d = path_data(glyphs.points[a:b], np.array([0, b - a]), factor, decimals)
+        if not d:
+            continue
+        attrs = [f'stroke="{LineStyle(color[:3]).hex}"', f'stroke-width="{width * factor:.4g}"']
+        if dash:
+            attrs.append(f'stroke-dasharray="{" ".join(f"{v * factor:.4g}" for v in dash)}"')
+        alpha = opacity * (color[3] if len(color) > 3 else 1.0)
+        if alpha < 1:
+            attrs.append(f'stroke-opacity="{alpha:.3g}"')
+        kind = "glyph-hidden" if glyphs.hidden[i] else "glyph"
+        out.append(f'<path class="{kind}" {" ".join(attrs)} d="{d}"/>\n')
+    for text in glyphs.texts:
+        fx, fy = ANCHOR_SIDES[text.anchor]
+        alpha = (glyphs.mode.opacity if text.hidden and glyphs.mode.mode == "dim" else 1.0) * text.color[3]
+        opacity = f' fill-opacity="{alpha:.3g}"' if alpha < 1 else ""
+        out.append(
+            f'<text class="{"glyph-hidden" if text.hidden else "glyph"}" x="{text.x * factor:.6g}" '
+            f'y="{text.y * factor:.6g}" font-family="sans-serif" font-size="{text.size * factor:.4g}" '
+            f'text-anchor="{_HORIZONTAL[fx]}" dominant-baseline="{_VERTICAL[fy]}" '
+            f'fill="{LineStyle(text.color[:3]).hex}"{opacity} stroke="none">{escape(text.text)}</text>\n'
+        )
+    out.append("</g>\n")
+    return "".join(out)
+
+
+# where a label's anchor point sits on the text: ANCHOR_SIDES' fractions as SVG's words
+_HORIZONTAL = {0: "start", 0.5: "middle", 1: "end"}
+_VERTICAL = {0: "hanging", 0.5: "central", 1: "alphabetic"}
 
 
 def _description(drawing) -> str:

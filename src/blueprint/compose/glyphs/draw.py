@@ -20,10 +20,10 @@ from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import picture_per_mm
 
-__all__ = ["draw_glyphs", "render_with_glyphs"]
+__all__ = ["draw_glyphs", "glyph_labels", "render_with_glyphs"]
 
 
-def _labels(glyphs: Glyphs, view: View) -> list[tuple[np.ndarray, str, RGBA, float, str]]:
+def glyph_labels(glyphs: Glyphs, view: View) -> list[tuple[np.ndarray, str, RGBA, float, str]]:
     """Every text to draw, including box, arrow and path labels: (point, text, colour, size, anchor)."""
     out = []
     for label in glyphs.labels:
@@ -118,7 +118,7 @@ def draw_glyphs(
         pieces, opacity = stroke_pieces(stroke, view, hidden, line_scale)
         draw_pieces(canvas, pieces, opacity, stroke.color, stroke.width * line_scale)
 
-    for point, text, color, size, anchor in _labels(glyphs, view):
+    for point, text, color, size, anchor in glyph_labels(glyphs, view):
         clip = view.clip(point)
         if clip[2] + clip[3] <= 0:
             continue

@@ -10,12 +10,12 @@ import numpy as np
 
 from blueprint.color import RGBA
 
-__all__ = ["LABEL_GAP", "composite", "draw_pieces", "draw_text"]
+__all__ = ["ANCHOR_SIDES", "LABEL_GAP", "composite", "draw_pieces", "draw_text"]
 
 # gap between a label and its anchor point, as a fraction of the text size
 LABEL_GAP = 0.3
 
-_ANCHOR_SIDES = {  # anchor -> (horizontal, vertical) position of the point on the text box
+ANCHOR_SIDES = {  # anchor -> (horizontal, vertical) position of the point on the text box
     "left": (0, 0.5),
     "right": (1, 0.5),
     "center": (0.5, 0.5),
@@ -93,7 +93,7 @@ def draw_text(
     font = _font(max(1, round(size)))
     probe = ImageDraw.Draw(Image.new("L", (1, 1)))
     left, top, right, bottom = probe.multiline_textbbox((0, 0), text, font=font, anchor="la")
-    fx, fy = _ANCHOR_SIDES[anchor]
+    fx, fy = ANCHOR_SIDES[anchor]
     gap = LABEL_GAP * size
     # the point sits at (fx, fy) of the text box, pushed out by the gap on the sides it touches
     x = xy[0] + gap * (0.5 - fx) * 2 * (fx != 0.5) - (left + fx * (right - left))

@@ -17,11 +17,13 @@ __all__ = [
     "HEAD_SPREAD",
     "SAMPLE_STEP",
     "Stroke",
+    "StrokeSamples",
     "arrow_stroke",
     "box_corners",
     "box_stroke",
     "path_stroke",
     "stroke_pieces",
+    "stroke_samples",
 ]
 
 # Glyph segments are sampled this often (pixels along the screen) for the depth test.
@@ -102,12 +104,29 @@ def _dash_on(arc: np.ndarray, pattern: tuple[float, ...], scale: float) -> np.nd
     return np.searchsorted(bounds, phase, side="right") % 2 == 0
 
 
-def stroke_pieces(stroke: Stroke, view: View, hidden: Hidden, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """The screen pieces of a stroke: (K, 2, 2) pixel segments and (K,) opacities."""
+@dataclass
+class StrokeSamples:
+    """A stroke on screen, sampled for the depth test: segment ``s`` runs from ``xy[s, 0]`` to
+    ``xy[s, 1]`` (pixels, ``full[s]`` long); sample ``i`` covers its parameters ``lo[i]`` to
+    ``hi[i]`` on segment ``seg[i]``, lies ``arc[i]`` pixels along its polyline and is
+    ``behind`` the front surface or not."""
+
+    xy: np.ndarray
+    full: np.ndarray
+    seg: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    arc: np.ndarray
+    behind: np.ndarray
+    polyline: np.ndarray
+
+
+def stroke_samples(stroke: Stroke, view: View, scale: float) -> StrokeSamples | None:
+    """The stroke projected, cut at the near plane and the image (with a margin of the line's
+    width), sampled every ``SAMPLE_STEP`` pixels and depth-tested; None where none of it shows."""
     clip, keep = near_clip(view.clip(stroke.segments))
-    empty = np.zeros((0, 2, 2)), np.zeros(0)
     if not len(clip):
-        return empty
+        return None
     xy, z = view.screen(clip)
     owner = stroke.polyline[keep]
     full = np.linalg.norm(xy[:, 1] - xy[:, 0], axis=1)
@@ -120,8 +139,9 @@ def stroke_pieces(stroke: Stroke, view: View, hidden: Hidden, scale: float) -> t
     t0, t1 = screen_range(xy[:, 0], xy[:, 1], -margin, view.width + margin, view.height + margin)
     live = t1 > t0
     if not live.any():
-        return empty
+        return None
     xy, z, full, start, t0, t1 = xy[live], z[live], full[live], start[live], t0[live], t1[live]
+    owner = owner[live]
 
     counts = np.maximum(np.ceil(full * (t1 - t0) / SAMPLE_STEP), 1).astype(np.int64)
     seg = np.repeat(np.arange(len(counts)), counts)
@@ -135,6 +155,16 @@ def stroke_pieces(stroke: Stroke, view: View, hidden: Hidden, scale: float) -> t
     eye = view.eye_depth(z[seg, 0] + mid * (z[seg, 1] - z[seg, 0]))
     behind = view.hidden(p, eye)
     arc = start[seg] + mid * full[seg]
+    return StrokeSamples(xy, full, seg, lo, hi, arc, behind, owner)
+
+
+def stroke_pieces(stroke: Stroke, view: View, hidden: Hidden, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """The screen pieces of a stroke: (K, 2, 2) pixel segments and (K,) opacities."""
+    sampled = stroke_samples(stroke, view, scale)
+    if sampled is None:
+        return np.zeros((0, 2, 2)), np.zeros(0)
+    xy, full, seg, lo, hi = sampled.xy, sampled.full, sampled.seg, sampled.lo, sampled.hi
+    arc, behind = sampled.arc, sampled.behind
 
     on = np.ones(len(seg), bool) if stroke.dash is None else _dash_on(arc, stroke.dash, scale)
     opacity = np.ones(len(seg))

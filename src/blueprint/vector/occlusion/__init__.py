@@ -10,23 +10,28 @@ Two more passes clean what pixels cannot tell: :func:`verify_creases` drops mesh
 the surfaces to both sides of the line are one flat surface of one part (solids of one part
 pressed together), and :func:`suppress_coincident` (``coincident``) drops stretches that lie on
 a line of lower level (the bottom outline of a plate under its top outline in a plan view). A
-polyline is then cut where its level changes, halfway between the two samples that differ;
-stretches of one level shorter than two pixels take their neighbours' level (``runs``).
+polyline is then cut where its level changes, halfway between the two samples that differ; a
+change must hold for 2.5 pixels, shorter stretches taking a neighbour's level, the shortest
+first (``runs``).
 """
 
 from .coincident import suppress_coincident
-from .levels import classify_samples, face_planes, verify_creases
+from .gpu import GpuLevels, gpu_levels
+from .levels import classify_samples, drop_phantoms, face_planes, verify_creases
 from .pixels import PixelLayers, probe_pixels
 from .runs import Pieces, split_by_level
 from .samples import Samples, sample_polylines
 
 __all__ = [
+    "GpuLevels",
     "Pieces",
     "PixelLayers",
     "Samples",
     "classify_samples",
+    "drop_phantoms",
     "probe_pixels",
     "face_planes",
+    "gpu_levels",
     "sample_polylines",
     "split_by_level",
     "suppress_coincident",

@@ -15,14 +15,12 @@ def suppress_coincident(
     level: np.ndarray,
     distance: float = 0.5,
     angle: float = 10.0,
-    min_run: float = 2.0,
 ) -> np.ndarray:
     """Leave out samples that lie on another line of lower level (or of the same level and an
     earlier polyline): within ``distance`` pixels across it and running within ``angle`` degrees
     of it. Hidden lines right under visible ones (the bottom outline of a plate under its top
     outline in a plan view) and lines drawn twice at one level come out once. Left-out samples
-    get level -1; what remains of a line between left-out stretches must be ``min_run``
-    pixels long.
+    get level -1.
     """
     level = level.copy()
     live = np.flatnonzero(level >= 0)
@@ -86,21 +84,5 @@ def suppress_coincident(
                 turn = np.abs(d[:, 0] * u[:, 1] - d[:, 1] * u[:, 0])
                 hit = (gx * gx + gy * gy <= distance * distance) & (turn <= sin_limit)
                 drop[index[hit]] = True
-    if not drop.any():
-        return level
     level[live[drop]] = -1
-    # short leftovers between left-out stretches go too
-    n = len(level)
-    change = np.r_[True, (line[1:] != line[:-1]) | ((level[1:] >= 0) != (level[:-1] >= 0))]
-    start = np.flatnonzero(change)
-    end = np.r_[start[1:], n]
-    step = np.r_[np.linalg.norm(np.diff(pixel, axis=0), axis=1), 0.0]
-    step[np.r_[line[1:] != line[:-1], True]] = 0.0
-    along_line = np.r_[0.0, np.cumsum(step)]
-    length = along_line[end - 1] - along_line[start] + 1.0
-    kept = level[start] >= 0
-    before = np.r_[False, (line[start[1:]] == line[start[1:] - 1])] & ~np.r_[True, kept[:-1]]
-    after = np.r_[(line[end[:-1] - 1] == line[end[:-1]]), False] & ~np.r_[kept[1:], True]
-    lone = kept & (length < min_run) & (before | after)
-    level[np.repeat(lone, end - start)] = -1
     return level

@@ -32,7 +32,7 @@ from ..lines import BORDER, CREASE, SILHOUETTE
 from .pixels import NEIGHBOURS, PixelLayers, across_line, flat_index
 from .samples import Samples
 
-__all__ = ["classify_samples", "face_planes", "verify_creases"]
+__all__ = ["classify_samples", "drop_phantoms", "face_planes", "verify_creases"]
 
 # Samples classified per NumPy pass (times 9 pixels times the layers at them).
 _CHUNK = 1 << 15
@@ -182,7 +182,29 @@ def verify_creases(
         index = np.minimum(front, layers - 1)
         tri = np.where(front < depth_count, stack[np.arange(len(rows)), index], -1)
         seen.append(tri)
-    tri_a, tri_b = seen
+    return drop_phantoms(
+        samples, level, rows, *seen, planes, face_part, ortho, footprint, crease_angle, tolerance
+    )
+
+
+def drop_phantoms(
+    samples: Samples,
+    level: np.ndarray,
+    rows: np.ndarray,
+    tri_a: np.ndarray,
+    tri_b: np.ndarray,
+    planes: np.ndarray,
+    face_part: np.ndarray,
+    ortho: bool,
+    footprint: float,
+    crease_angle: float = 30.0,
+    tolerance: float = 1.0,
+) -> np.ndarray:
+    """The second half of :func:`verify_creases`, given the faces ``tri_a`` and ``tri_b`` seen
+    at the line's depth to either side of the samples ``rows`` (-1 where none): their levels
+    set to -1 where both are one flat surface of one part through the line's point."""
+    level = level.copy()
+    eye = samples.eye[rows]
     plane_a, plane_b = planes[tri_a], planes[tri_b]  # -1 picks the empty last row
     # normals turned towards the eye
     to_eye = np.broadcast_to(np.array([0.0, 0.0, 1.0]), eye.shape) if ortho else -samples.eye[rows]

@@ -14,63 +14,97 @@ __all__ = ["Pieces", "split_by_level"]
 
 @dataclass(frozen=True)
 class Pieces:
-    """2D polylines of one level each: piece ``i`` is ``points[offsets[i]:offsets[i + 1]]``."""
+    """2D polylines of one level each: piece ``i`` is ``points[offsets[i]:offsets[i + 1]]``;
+    ``behind`` marks pieces behind a shaded part's surface (all False without shading)."""
 
     points: np.ndarray
     offsets: np.ndarray
     part: np.ndarray
     level: np.ndarray
+    behind: np.ndarray
 
     def __len__(self) -> int:
         return len(self.offsets) - 1
 
     @classmethod
     def empty(cls) -> Pieces:
-        return cls(np.zeros((0, 2)), np.zeros(1, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32))
+        return cls(
+            np.zeros((0, 2)),
+            np.zeros(1, np.int64),
+            np.zeros(0, np.int32),
+            np.zeros(0, np.int32),
+            np.zeros(0, bool),
+        )
+
+
+def _run_lengths(level, line, pixel):
+    """Runs of one level along each polyline: start (inclusive), end (exclusive) and length in
+    pixels, from halfway to the previous sample to halfway to the next one (the polyline's own
+    ends where there is none)."""
+    n = len(level)
+    change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
+    start = np.flatnonzero(change)
+    end = np.r_[start[1:], n]
+    step = np.r_[np.linalg.norm(np.diff(pixel, axis=0), axis=1), 0.0]
+    step[np.r_[line[1:] != line[:-1], True]] = 0.0
+    along = np.r_[0.0, np.cumsum(step)]
+    lo = np.where(start > 0, 0.5 * (along[start - 1] + along[start]), along[start])
+    hi = np.where(end < n, 0.5 * (along[end - 1] + along[end]), along[end - 1])
+    return start, end, hi - lo
 
 
 def _smooth(level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: float) -> np.ndarray:
-    """Absorb runs of one level shorter than ``min_run`` pixels: flicker below the resolution.
+    """Hysteresis along each polyline: a level holds until another one has lasted ``min_run``
+    pixels. Runs shorter than that (flicker where surfaces nearly coincide, a line's last pixel
+    seeing past an outline) take a neighbour's level, the shortest runs first.
 
-    A short run between two runs of one level takes their level; a short run at the end of a
-    polyline takes the level of the longer run beside it (the typical case: a hidden edge that
-    ends on an outline, whose last pixel sees past the outline).
+    Each round merges every short run whose length is a local minimum among its polyline's runs
+    into the longer of its neighbours (the one of equal level where both are equal), so a
+    staircase of short runs collapses from its shortest step outward and two runs never trade
+    places. Samples outside the view (level -1) neither take nor give a level.
     """
     level = level.copy()
     n = len(level)
     if n < 2 or min_run <= 0:
         return level
-    for _ in range(2):
-        change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
-        start = np.flatnonzero(change)
-        end = np.r_[start[1:], n]  # exclusive
+    while True:
+        start, end, length = _run_lengths(level, line, pixel)
         if len(start) < 2:
             break
-        # a run's length: from halfway to the previous sample to halfway to the next one
-        step = np.r_[np.linalg.norm(np.diff(pixel, axis=0), axis=1), 0.0]
-        step[np.r_[line[1:] != line[:-1], True]] = 0.0
-        along = np.r_[0.0, np.cumsum(step)]
-        lo = np.where(start > 0, 0.5 * (along[start - 1] + along[start]), along[start])
-        hi = np.where(end < n, 0.5 * (along[end - 1] + along[end]), along[end - 1])
-        hi = np.where(end < n, hi, along[end - 1])
-        length = hi - lo
-        run_line = line[start]
-        run_level = level[start]
-        has_prev = np.r_[False, run_line[1:] == run_line[:-1]]
-        has_next = np.r_[run_line[:-1] == run_line[1:], False]
-        prev_level = np.r_[-2, run_level[:-1]]
-        next_level = np.r_[run_level[1:], -2]
-        prev_len = np.r_[0.0, length[:-1]]
-        next_len = np.r_[length[1:], 0.0]
-        short = (length < min_run) & (run_level >= 0)
-        inner = short & has_prev & has_next & (prev_level == next_level) & (prev_level >= 0)
-        head = short & ~has_prev & has_next & (next_len > length) & (next_level >= 0)
-        tail = short & has_prev & ~has_next & (prev_len > length) & (prev_level >= 0)
-        target = np.where(inner | tail, prev_level, np.where(head, next_level, run_level))
-        if not (inner | head | tail).any():
+        run_line, run_level = line[start], level[start]
+        has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
+        has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
+        short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
+        if not short.any():
             break
+        # ties between equal lengths broken by a hash of the run, so plateaus merge in few rounds
+        key = length + 1e-6 * ((np.arange(len(start)) * 2654435761) % 1000) / 1000
+        prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
+        next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
+        merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
+        merge &= key < np.where(np.r_[short[1:], False], next_key, np.inf)
+        prev_len = np.where(has_prev, np.r_[0.0, length[:-1]], -1.0)
+        next_len = np.where(has_next, np.r_[length[1:], 0.0], -1.0)
+        prev_level = np.r_[-1, run_level[:-1]]
+        next_level = np.r_[run_level[1:], -1]
+        take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
+        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
         level = np.repeat(target, end - start).astype(level.dtype)
     return level
+
+
+def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float) -> np.ndarray:
+    """Leave out runs shorter than ``min_run`` pixels that border a left-out stretch of their
+    own polyline (a coincident line or an edge that is no edge, level -1 inside the view): what
+    a pixel test could not decide at the ends of such a stretch. A short line of its own, or
+    one running out of the view, stays."""
+    start, end, length = _run_lengths(level, samples.line, samples.pixel)
+    run_line, run_level = samples.line[start], level[start]
+    left_out = (run_level < 0) & samples.inside[start]
+    before = np.r_[False, (run_line[1:] == run_line[:-1]) & left_out[:-1]]
+    after = np.r_[(run_line[:-1] == run_line[1:]) & left_out[1:], False]
+    sliver = (run_level >= 0) & (length < min_run) & (before | after)
+    return np.where(np.repeat(sliver, end - start), -1, level).astype(level.dtype)
 
 
 def split_by_level(
@@ -78,8 +112,9 @@ def split_by_level(
     level: np.ndarray,
     part: np.ndarray,
     max_level: int,
-    min_run: float = 2.0,
+    min_run: float = 2.5,
     coincident: float = 0.5,
+    behind: np.ndarray | None = None,
 ) -> Pieces:
     """Cut the sampled polylines into 2D pieces of one level each.
 
@@ -88,19 +123,29 @@ def split_by_level(
     meet), and of its inner samples only the polyline's vertices are kept (the others lie on
     the straight segments between them). Samples outside the view or deeper than
     ``max_level`` are dropped, and so are samples on a line of lower level (see
-    :func:`suppress_coincident`, within ``coincident`` pixels; 0 keeps them).
+    :func:`suppress_coincident`, within ``coincident`` pixels; 0 keeps them). A level change
+    must hold for ``min_run`` pixels (see :func:`_smooth`). ``behind`` (S,) bool, samples
+    behind a shaded part's surface, cuts pieces too (a change must hold as long).
     """
     n = len(level)
     if n == 0:
         return Pieces.empty()
+    behind = (
+        np.zeros(n, bool)
+        if behind is None
+        else _smooth(behind.astype(np.int32), samples.line, samples.pixel, min_run) > 0
+    )
     level = _smooth(level, samples.line, samples.pixel, min_run)
     level = np.where(level <= max_level, level, -1)
     if coincident > 0:
-        level = suppress_coincident(samples, level, coincident, min_run=min_run)
+        level = suppress_coincident(samples, level, coincident)
+        # a left-out stretch can end inside a run and leave a sliver of it beside another level
+        level = _smooth(level, samples.line, samples.pixel, min_run)
+    level = _drop_slivers(level, samples, min_run)
     line, pixel = samples.line, samples.pixel
     keep = (level >= 0) & (level <= max_level)
-    # runs: consecutive samples of one line with one level
-    change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
+    # runs: consecutive samples of one line with one level (and one side of the shading)
+    change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1]) | (behind[1:] != behind[:-1])]
     run = np.cumsum(change) - 1
     run_start = np.flatnonzero(change)
     run_end = np.r_[run_start[1:], n]  # exclusive
@@ -136,4 +181,5 @@ def split_by_level(
         offsets,
         part[line[run_start[pieces]]].astype(np.int32),
         level[run_start[pieces]].astype(np.int32),
+        behind[run_start[pieces]],
     )

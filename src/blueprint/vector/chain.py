@@ -1,0 +1,167 @@
+"""Chaining pieces of line end to end: the graph walk shared by 3D segments (``lines``) and by
+the 2D pieces of one occlusion level (``chain_pieces``).
+
+A piece ``s`` has two half-ends, ``2 s`` (its start) and ``2 s + 1`` (its end). Half-ends at
+one node are paired: two at a node always, and at a junction of more the straightest pairs
+first. A chain walks from piece to piece through paired half-ends.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["chain_order", "chain_pieces", "pair_ends"]
+
+
+def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarray:
+    """Partner of every half-end (-1 where the chain stops there).
+
+    Parameters
+    ----------
+    node : (2 n,) int64
+        Node of each half-end; half-ends at one node meet there.
+    leaving : (2 n, d) float64
+        Unit direction in which each piece leaves its node through that half-end.
+    min_cos : float
+        At junctions of three or more, two half-ends pair only if the line turns between them
+        by an angle whose cosine is at least this (1: straight on only, -1: any turn).
+
+    Returns
+    -------
+    (2 n,) int64
+    """
+    partner = np.full(len(node), -1, np.int64)
+    if len(node) == 0:
+        return partner
+    degree = np.bincount(node)
+    order = np.argsort(node, kind="stable")
+    starts = np.cumsum(degree) - degree
+    two = np.flatnonzero(degree == 2)
+    a, b = order[starts[two]], order[starts[two] + 1]
+    partner[a], partner[b] = b, a
+    junction = np.flatnonzero(degree > 2)
+    if len(junction) == 0:
+        return partner
+    size = degree[junction]
+    # every pair (i < j) of half-ends at every junction
+    first_i, first_j = [], []
+    for k in np.unique(size).tolist():
+        i, j = np.triu_indices(k, 1)
+        base = starts[junction[size == k]]
+        first_i.append((base[:, None] + i[None]).reshape(-1))
+        first_j.append((base[:, None] + j[None]).reshape(-1))
+    ha, hb = order[np.concatenate(first_i)], order[np.concatenate(first_j)]
+    # straight on: the two pieces leave the node in opposite directions
+    straight = -np.einsum("ij,ij->i", leaving[ha], leaving[hb])
+    ok = straight >= min_cos
+    rank = np.argsort(-straight[ok], kind="stable")
+    used = bytearray(len(node))
+    for x, y in zip(ha[ok][rank].tolist(), hb[ok][rank].tolist(), strict=True):
+        if used[x] or used[y]:
+            continue
+        used[x] = used[y] = 1
+        partner[x], partner[y] = y, x
+    return partner
+
+
+def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Walk the pieces into chains: pieces paired at neither end first, then open chains from
+    their free ends, then closed loops.
+
+    Returns
+    -------
+    piece : (n,) int64
+        Pieces in walking order.
+    reverse : (n,) bool
+        Whether each piece is walked from its end to its start.
+    lengths : (C,) int64
+        Pieces per chain, in order.
+    """
+    # pieces paired at neither end are chains of their own, found without walking
+    alone = (partner[0::2] < 0) & (partner[1::2] < 0)
+    partner_list = partner.tolist()
+    visited = bytearray(alone.astype(np.uint8).tobytes())
+    walked: list[int] = []  # (piece << 1) | reversed
+    lengths: list[int] = []
+
+    def walk(h: int) -> None:
+        # leave through half-end h: the walk begins at that end of its piece
+        count = 0
+        while True:
+            s = h >> 1
+            if visited[s]:
+                break
+            visited[s] = 1
+            walked.append(h)  # starting at end 1 means walking the piece backwards
+            count += 1
+            h = partner_list[h ^ 1]
+            if h < 0:
+                break
+        lengths.append(count)
+
+    for h in np.flatnonzero((partner < 0) & ~np.repeat(alone, 2)).tolist():
+        if not visited[h >> 1]:
+            walk(h)
+    for s in np.flatnonzero(~alone).tolist():
+        if not visited[s]:
+            walk(s << 1)
+    flat = np.array(walked, np.int64)
+    single = np.flatnonzero(alone)
+    return (
+        np.concatenate([single, flat >> 1]),
+        np.concatenate([np.zeros(len(single), bool), (flat & 1).astype(bool)]),
+        np.concatenate([np.ones(len(single), np.int64), np.array(lengths, np.int64)]),
+    )
+
+
+def chain_pieces(
+    points: np.ndarray, offsets: np.ndarray, key: np.ndarray, quantum: float = 1e-3
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Chain 2D polylines of one key (part and occlusion level) that meet end to end.
+
+    Pieces of one level on lines that meet at a corner or a junction of the model's edges become
+    one polyline, turning there (at a junction the straightest pairs continue): a corner is
+    drawn as a join, not as two line ends, and no short edge between two junctions stands
+    alone. Ends meet when they round to the same multiple of ``quantum`` (pixels).
+
+    Parameters
+    ----------
+    points : (N, 2) float64
+    offsets : (P + 1,) int64
+        Polyline ``i`` is ``points[offsets[i]:offsets[i + 1]]``, at least two points each.
+    key : (P,) int64
+        Only polylines of one key chain.
+
+    Returns
+    -------
+    points, offsets, first : the chained polylines, and for each the index of its first piece
+    (whose key it has).
+    """
+    count = len(offsets) - 1
+    if count < 2:
+        return points, offsets, np.arange(count)
+    first_point, last_point = offsets[:-1], offsets[1:] - 1
+    ends = np.stack([points[first_point], points[last_point]], axis=1).reshape(-1, 2)
+    cell = np.round(ends / quantum).astype(np.int64)
+    node = np.unique(np.column_stack([np.repeat(key, 2), cell]), axis=0, return_inverse=True)[1].reshape(-1)
+    inward = np.stack([points[first_point + 1], points[last_point - 1]], axis=1).reshape(-1, 2)
+    leaving = inward - ends
+    leaving /= np.maximum(np.linalg.norm(leaving, axis=1), 1e-300)[:, None]
+    piece, reverse, lengths = chain_order(pair_ends(node, leaving, -1.0))
+    # each piece's points in walking order; a piece after the first drops its first point,
+    # which is the previous piece's last
+    size = np.diff(offsets)[piece]
+    within = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    index = np.where(
+        np.repeat(reverse, size),
+        np.repeat(offsets[1:][piece] - 1, size) - within,
+        np.repeat(offsets[:-1][piece], size) + within,
+    )
+    chain_start = np.cumsum(lengths) - lengths
+    is_first = np.zeros(len(piece), bool)
+    is_first[chain_start] = True
+    keep = (within > 0) | np.repeat(is_first, size)
+    out = points[index[keep]]
+    kept_per_piece = size - (~is_first).astype(np.int64)
+    per_chain = np.add.reduceat(kept_per_piece, chain_start) if len(piece) else np.zeros(0, np.int64)
+    return out, np.r_[0, np.cumsum(per_chain)].astype(np.int64), piece[chain_start]

@@ -1,0 +1,182 @@
+// Occlusion level of every sample of a drawing's lines, from the faces k-buffer left on the
+// GPU (kbuffer.frag with IDS_ONLY: surface k of a pixel in target k, face + 1 in .y, a pixel's
+// surfaces running up to the first with face 0). The rules are those of
+// vector/occlusion/levels.py, which is the reference: a surface is in front of a sample when
+// the plane of its triangle meets the sample's view ray nearer to the eye by more than
+// u_limit; the line's own faces never count; the level is the minimum over the 3 x 3 pixels
+// around the sample, where off contours a pixel with no surface at all does not take part.
+// For samples of mesh edges the surface seen at the line's depth a pixel to either side
+// (surface number "how many there are in front" there) is written too, for the crease check.
+// With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
+// r32i, face + 1, 0 where none).
+layout(local_size_x = 64) in;
+
+#if LAYERED
+#define SAMPLER isampler2D
+#define FACE1(S, q) texelFetch(S, q, 0).r
+#else
+#define SAMPLER usampler2D
+#define FACE1(S, q) int(texelFetch(S, q, 0).y)
+#endif
+
+struct Sample {
+    vec4 eye;      // eye coordinates, w unused
+    vec4 pixel;    // pixel x, y (y down), unit vector across the line x, y
+    ivec4 own;     // own faces (-1: none), flags (1: off contours, 2: check the sides), unused
+};
+
+layout(std430, binding = 0) readonly buffer Samples { Sample samples[]; };
+layout(std430, binding = 1) readonly buffer Planes { vec4 planes[]; };  // n, c; last row: none
+layout(std430, binding = 2) writeonly buffer Levels { ivec4 result[]; };  // level, side faces
+
+uniform SAMPLER u_s0;
+#if K > 1
+uniform SAMPLER u_s1;
+#endif
+#if K > 2
+uniform SAMPLER u_s2;
+#endif
+#if K > 3
+uniform SAMPLER u_s3;
+#endif
+#if K > 4
+uniform SAMPLER u_s4;
+#endif
+#if K > 5
+uniform SAMPLER u_s5;
+#endif
+#if K > 6
+uniform SAMPLER u_s6;
+#endif
+#if K > 7
+uniform SAMPLER u_s7;
+#endif
+uniform int u_count;     // samples
+uniform int u_layers;    // layers that count (the peel's stop rules), at most K
+uniform ivec2 u_size;
+uniform bool u_ortho;
+uniform float u_limit;   // tolerance times the pixel footprint
+uniform float u_offset;  // pixels to either side of a line for the crease check
+
+const int BIG = 0x7fffffff;
+
+// face of surface k at pixel q (OpenGL rows), -1 where there is none
+int face_at(int k, ivec2 q) {
+    int f = 0;
+    switch (k) {
+    case 0: f = FACE1(u_s0, q); break;
+#if K > 1
+    case 1: f = FACE1(u_s1, q); break;
+#endif
+#if K > 2
+    case 2: f = FACE1(u_s2, q); break;
+#endif
+#if K > 3
+    case 3: f = FACE1(u_s3, q); break;
+#endif
+#if K > 4
+    case 4: f = FACE1(u_s4, q); break;
+#endif
+#if K > 5
+    case 5: f = FACE1(u_s5, q); break;
+#endif
+#if K > 6
+    case 6: f = FACE1(u_s6, q); break;
+#endif
+#if K > 7
+    case 7: f = FACE1(u_s7, q); break;
+#endif
+    }
+    return f - 1;
+}
+
+bool in_front(vec4 plane, vec3 eye) {
+    precise float d = plane.x * eye.x + plane.y * eye.y + plane.z * eye.z;
+    float c = plane.w;
+    if (u_ortho) {
+        // the plane meets the ray eye + u (0, 0, 1) at u = (c - n . eye) / n_z
+        precise float ahead = (c - d) * sign(plane.z);
+        precise float bound = u_limit * abs(plane.z);
+        return ahead > bound;
+    }
+    // the ray t * eye meets the plane at t = c / (n . eye); in front: 0 < t < 1 - limit
+    precise float far = abs(d) * (1.0 - u_limit);
+    return c * d > 0.0 && abs(c) < far;
+}
+
+// pixel (x right, y down) clamped to the image, in OpenGL rows
+ivec2 texel(ivec2 p) {
+    p = clamp(p, ivec2(0), u_size - 1);
+    return ivec2(p.x, u_size.y - 1 - p.y);
+}
+
+// one surface of the stack: stop at the first empty one, count it in front or not; stop
+// too once ``bound`` surfaces are in front (the caller wants no more)
+#define SURFACE(S)                                                                  \
+    if (count < u_layers) {                                                         \
+        int tri = FACE1(S, q) - 1;                                                  \
+        if (tri < 0) return ivec2(front, count);                                    \
+        ++count;                                                                    \
+        if (tri != own0 && tri != own1 && in_front(planes[tri], eye)) ++front;      \
+        if (front >= bound) return ivec2(front, count);                             \
+    }
+
+// (surfaces counted in front, surfaces there), unrolled over the K targets; counting stops
+// at ``bound`` surfaces in front
+ivec2 stack_at(ivec2 q, vec3 eye, int own0, int own1, int bound) {
+    int front = 0;
+    int count = 0;
+    SURFACE(u_s0)
+#if K > 1
+    SURFACE(u_s1)
+#endif
+#if K > 2
+    SURFACE(u_s2)
+#endif
+#if K > 3
+    SURFACE(u_s3)
+#endif
+#if K > 4
+    SURFACE(u_s4)
+#endif
+#if K > 5
+    SURFACE(u_s5)
+#endif
+#if K > 6
+    SURFACE(u_s6)
+#endif
+#if K > 7
+    SURFACE(u_s7)
+#endif
+    return ivec2(front, count);
+}
+
+void main() {
+    int i = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
+    if (i >= u_count) return;
+    Sample s = samples[i];
+    vec3 eye = s.eye.xyz;
+    int own0 = s.own.x;
+    int own1 = s.own.y;
+    bool solid = (s.own.z & 1) != 0;
+    ivec2 px = ivec2(floor(s.pixel.xy));
+    int best = BIG;
+    // a pixel can only lower the minimum: its count stops at the best so far, and none
+    // goes below zero
+    for (int n = 0; n < 9 && best > 0; ++n) {
+        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, own0, own1, best);
+        int front = (solid && st.y == 0) ? BIG : st.x;
+        best = min(best, front);
+    }
+    if (best == BIG) best = 0;
+    ivec2 sides = ivec2(-1);
+    if ((s.own.z & 2) != 0) {
+        for (int side = 0; side < 2; ++side) {
+            vec2 spot = s.pixel.xy + (side == 0 ? 1.0 : -1.0) * u_offset * s.pixel.zw;
+            ivec2 q = texel(ivec2(floor(spot)));
+            ivec2 st = stack_at(q, eye, own0, own1, BIG);
+            sides[side] = st.x < st.y ? face_at(st.x, q) : -1;
+        }
+    }
+    result[i] = ivec4(best, sides, 0);
+}

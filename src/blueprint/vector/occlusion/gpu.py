@@ -1,0 +1,188 @@
+"""Occlusion levels on the GPU: one compute pass over a drawing's samples reads the faces
+k-buffer where it was drawn, and only each sample's level (and the faces to either side of a
+mesh edge, for the crease check) comes back. The rules are those of ``levels``, the reference
+that the CPU path runs where a renderer has no faces k-buffer (``occlusion.comp``)."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from blueprint.render.renderer import LayerRenderer
+from blueprint.render.stop import standard_rules
+from blueprint.scene.camera import Camera
+from blueprint.scene.model import Model
+
+from ..lines import BORDER, CREASE, SILHOUETTE
+from .pixels import across_line
+from .samples import Samples
+
+__all__ = ["GpuLevels", "gpu_levels"]
+
+OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
+LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
+COPY_FACES_COMP = "blueprint.vector:glsl/copy_faces.comp"
+# The layers one pass reads at most (texture units of a compute shader: 16 at least).
+MAX_LAYERS = 8
+# Units the copy pass binds inside a peel, clear of the ones the peel's own passes use.
+_COPY_UNITS = (14, 15)
+_GROUP = 64
+_MAX_GROUPS = 65535
+
+
+@dataclass(frozen=True)
+class GpuLevels:
+    """What the compute pass gives back.
+
+    level : (S,) int32, layers in front of each sample (-1 outside the view)
+    sides : (S, 2) int64, the face seen at the line's depth a pixel to either side of a mesh
+        edge's sample (-1 where none, or not asked: ``checked`` False)
+    checked : (S,) bool, samples of mesh edges with a direction on screen
+    layers : int, layers the peel's stop rules let count
+    peel_seconds : float, of the whole: drawing the k-buffer and counting its layers
+    """
+
+    level: np.ndarray
+    sides: np.ndarray
+    checked: np.ndarray
+    layers: int
+    peel_seconds: float
+
+
+def _bind_surfaces(renderer: LayerRenderer, prog, surfaces) -> None:
+    for unit, texture in enumerate(surfaces):
+        texture.use(location=unit)
+        renderer.uniforms.set(prog, f"u_s{unit}", unit)
+
+
+def _layer_count(renderer: LayerRenderer, surfaces, size, min_fraction: float) -> int:
+    """Layers that count under the peel's stop rules, from per-layer pixel counts made on the GPU."""
+    ctx, k = renderer.ctx, len(surfaces)
+    prog = renderer.compute(LAYER_COUNTS_COMP, {"K": k})
+    _bind_surfaces(renderer, prog, surfaces)
+    renderer.uniforms.set(prog, "u_size", tuple(size))
+    counts = ctx.buffer(np.zeros(k, np.uint32).tobytes())
+    try:
+        counts.bind_to_storage_buffer(3)
+        prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        ctx.memory_barrier()
+        per_layer = np.frombuffer(counts.read(), np.uint32).astype(np.int64).tolist()
+    finally:
+        counts.release()
+    return min(rule.count(per_layer) for rule in standard_rules(None, min_fraction))
+
+
+def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min_fraction) -> list:
+    """Peel a pass a layer and copy every layer's faces into a texture of its own on the GPU
+    (copy_faces.comp), for renderers without the faces k-buffer."""
+    ctx, pool = renderer.ctx, renderer.pool
+    prog = renderer.compute(COPY_FACES_COMP)
+    copies: list = []
+
+    def visit(ids, depth, layer: int) -> None:
+        target = pool.texture(f"vector.faces.{size[0]}x{size[1]}.{layer}", size, "r32i")
+        ids.use(location=_COPY_UNITS[0])
+        depth.use(location=_COPY_UNITS[1])
+        renderer.uniforms.set(prog, "u_ids", _COPY_UNITS[0])
+        renderer.uniforms.set(prog, "u_depth", _COPY_UNITS[1])
+        renderer.uniforms.set(prog, "u_size", tuple(size))
+        target.bind_to_image(7, read=False, write=True)
+        prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        ctx.memory_barrier()
+        copies.append(target)
+
+    renderer.each_face_layer(
+        model, camera, visit, size=size, max_layers=max_layers, min_fraction=min_fraction
+    )
+    return copies
+
+
+def gpu_levels(
+    renderer: LayerRenderer,
+    model: Model,
+    camera: Camera,
+    samples: Samples,
+    planes: np.ndarray,
+    size: tuple[int, int],
+    *,
+    max_layers: int | None,
+    ortho: bool,
+    footprint: float,
+    tolerance: float = 1.0,
+    min_fraction: float = 0.0,
+    offset: float = 1.0,
+) -> GpuLevels | None:
+    """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
+    draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
+    than ``MAX_LAYERS`` layers (then ``triangles_at`` and ``classify_samples``).
+
+    Parameters as ``levels.classify_samples`` and ``levels.verify_creases``; ``planes`` from
+    ``levels.face_planes``; ``size`` (width, height) in pixels.
+    """
+    clock = time.perf_counter()
+    surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
+    layered = surfaces is None
+    if not layered:
+        layers = _layer_count(renderer, surfaces, size, min_fraction)  # reading the counts waits
+    elif max_layers is None or max_layers > MAX_LAYERS:
+        return None
+    else:
+        # the peel's stop rules decided which layers count: those it handed over
+        surfaces = _copied_layers(renderer, model, camera, size, max_layers, min_fraction)
+        layers = len(surfaces)
+    peel_seconds = time.perf_counter() - clock
+    count = len(samples.line)
+    level = np.full(count, -1, np.int32)
+    sides = np.full((count, 2), -1, np.int64)
+    checked = np.zeros(count, bool)
+    inside = np.flatnonzero(samples.inside)
+    edge_rows, across = across_line(
+        samples, np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
+    )
+    checked[edge_rows] = True
+    if len(inside) == 0:
+        return GpuLevels(level, sides, checked, layers, peel_seconds)
+    if layers == 0:
+        level[inside] = 0
+        return GpuLevels(level, sides, checked, layers, peel_seconds)
+    across_all = np.zeros((count, 2))
+    across_all[edge_rows] = across
+    flags = (~np.isin(samples.kind, (SILHOUETTE, BORDER))).astype(np.int32) | (checked.astype(np.int32) << 1)
+    packed = np.zeros(len(inside), [("eye", "<f4", 4), ("pixel", "<f4", 4), ("own", "<i4", 4)])
+    packed["eye"][:, :3] = samples.eye[inside]
+    packed["pixel"][:, :2] = samples.pixel[inside]
+    packed["pixel"][:, 2:] = across_all[inside]
+    packed["own"][:, :2] = samples.faces[inside]
+    packed["own"][:, 2] = flags[inside]
+
+    ctx = renderer.ctx
+    prog = renderer.compute(OCCLUSION_COMP, {"K": len(surfaces), "LAYERED": layered})
+    _bind_surfaces(renderer, prog, surfaces)
+    put = renderer.uniforms.set
+    put(prog, "u_count", len(inside))
+    put(prog, "u_layers", layers)
+    put(prog, "u_size", tuple(size))
+    put(prog, "u_ortho", bool(ortho))
+    put(prog, "u_limit", float(np.float32(tolerance * footprint)))
+    put(prog, "u_offset", float(offset))
+    buffers = [
+        ctx.buffer(packed.tobytes()),
+        ctx.buffer(np.ascontiguousarray(planes, np.float32).tobytes()),
+        ctx.buffer(reserve=16 * len(inside)),
+    ]
+    try:
+        for binding, buffer in enumerate(buffers):
+            buffer.bind_to_storage_buffer(binding)
+        groups = -(-len(inside) // _GROUP)
+        gx = min(groups, _MAX_GROUPS)
+        prog.run(gx, -(-groups // gx))
+        ctx.memory_barrier()
+        result = np.frombuffer(buffers[2].read(), np.int32).reshape(-1, 4)
+    finally:
+        for buffer in buffers:
+            buffer.release()
+    level[inside] = result[:, 0]
+    sides[inside] = result[:, 1:3]
+    return GpuLevels(level, sides, checked, layers, peel_seconds)
