@@ -405,3 +405,209 @@ def test_honest_headers_still_load(tmp_path):
     off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
     assert blueprint.load_model(ply).triangle_count == 1
     assert blueprint.load_model(off).triangle_count == 1
+
+
+# -- compressed models: expanded with bounds ------------------------------------------------------
+def _bomb_bytes(size: int) -> bytes:
+    return b"\0" * size
+
+
+@pytest.mark.parametrize("kind", ["gz", "bz2", "xz"])
+def test_a_compressed_model_loads(tmp_path, kind):
+    import bz2
+    import gzip
+    import lzma
+
+    compress = {"gz": gzip.compress, "bz2": bz2.compress, "xz": lzma.compress}[kind]
+    path = tmp_path / f"box.stl.{kind}"
+    path.write_bytes(compress(_box().export(file_type="stl")))
+    model = loader.load_model(path)
+    assert model.triangle_count == 12 and model.up == "z"
+    assert model.positions.max(axis=0).tolist() == [1, 2, 3]
+
+
+@pytest.mark.parametrize("kind", ["gz", "bz2", "xz"])
+def test_a_compressed_bomb_is_refused_while_expanding(tmp_path, kind, monkeypatch):
+    import bz2
+    import gzip
+    import lzma
+
+    compress = {"gz": gzip.compress, "bz2": bz2.compress, "xz": lzma.compress}[kind]
+    path = tmp_path / f"bomb.stl.{kind}"
+    path.write_bytes(compress(_bomb_bytes(64 << 20)))
+    assert path.stat().st_size < 70_000
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value).startswith(
+        f"{path}: the compressed stream expands to more than 200 times its compressed size ("
+    )
+    monkeypatch.setattr(settings, "EXPANDED_LIMIT", 8 << 20)
+    monkeypatch.setattr(settings, "EXPANSION_RATIO_LIMIT", 10**6)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: the compressed stream expands to more than 8 MiB, the limit for a model's contents "
+        "(set from this machine's memory; BLUEPRINT_MEMORY_LIMIT changes it)"
+    )
+
+
+def _zip(path: Path, files: dict[str, bytes]) -> None:
+    import zipfile
+
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, data in files.items():
+            archive.writestr(name, data)
+
+
+@pytest.mark.parametrize("suffix", ["zip", "3mf", "3dxml"])
+def test_zip_bombs_are_refused_by_their_directory(tmp_path, suffix, monkeypatch):
+    path = tmp_path / f"bomb.{suffix}"
+    _zip(path, {"[Content_Types].xml": b"<Types/>", "3D/3dmodel.model": _bomb_bytes(32 << 20)})
+    read = []
+    monkeypatch.setattr(loader, "_trimesh_scene", lambda *a: read.append(a))
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert "expands to more than 200 times its compressed size" in str(caught.value)
+    assert str(caught.value).startswith(f"{path}: the archive ")
+    assert read == []
+
+
+def test_a_zip_of_models_loads_each(tmp_path):
+    path = tmp_path / "two.zip"
+    moved = _box()
+    moved.apply_translation([10, 0, 0])
+    _zip(path, {"a.stl": _box().export(file_type="stl"), "b.obj": moved.export(file_type="obj").encode()})
+    model = loader.load_model(path)
+    assert model.triangle_count == 24 and len(model.part_names) == 2
+    assert model.positions.min(axis=0).tolist() == [0, 0, 0]
+    assert model.positions.max(axis=0).tolist() == [11, 2, 3]
+
+
+def test_a_zip_without_models_is_one_line(tmp_path):
+    path = tmp_path / "notes.zip"
+    _zip(path, {"readme.txt": b"hello"})
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: the archive holds no model file (it holds: readme.txt)"
+
+
+# -- binary STL counts -----------------------------------------------------------------------------------
+def test_binary_stl_whose_count_lies_is_refused(tmp_path):
+    import struct
+
+    data = _box().export(file_type="stl")
+    path = tmp_path / "lie.stl"
+    path.write_bytes(data[:80] + struct.pack("<I", 10**9) + data[84:])
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: the header declares 1000000000 triangles, more than the file's 684 bytes can hold "
+        "(50000000084 bytes)"
+    )
+
+
+def test_binary_stl_over_the_triangle_limit_is_refused(tmp_path, monkeypatch):
+    path = tmp_path / "box.stl"
+    _box().export(path)
+    monkeypatch.setattr(settings, "TRIANGLE_LIMIT", 11)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: 12 triangles, over the limit of 11 (set from this machine's memory; "
+        "BLUEPRINT_MEMORY_LIMIT changes it)"
+    )
+
+
+# -- glTF node graphs: walked once ----------------------------------------------------------------------
+def _glb(path: Path, nodes: list, roots: list) -> None:
+    """A GLB of one triangle mesh placed by ``nodes`` (glTF node objects) under ``roots``."""
+    import json
+    import struct
+
+    import numpy as np
+
+    binary = (
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+        + np.arange(3, dtype="<u4").tobytes()
+    )
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": roots}],
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 12},
+        ],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 3,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            },
+            {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"},
+        ],
+    }
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    body = (
+        struct.pack("<II", len(text), 0x4E4F534A)
+        + text
+        + struct.pack("<II", len(binary), 0x004E4942)
+        + binary
+    )
+    path.write_bytes(struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body)
+
+
+@pytest.mark.parametrize(
+    ("nodes", "roots", "message"),
+    [
+        (
+            [{"mesh": 0, "children": [1]}, {"mesh": 0, "children": [0]}],
+            [0],
+            "its nodes form a cycle (0 → 1 → 0)",
+        ),
+        ([{"mesh": 0, "children": [0]}], [0], "its nodes form a cycle (0 → 0)"),
+        ([{"mesh": 0, "children": [5]}], [0], "node 0 refers to node 5, which does not exist"),
+        ([{"mesh": 0}], [3], "a scene refers to node 3, which does not exist"),
+        (
+            [{"mesh": 0, "children": [i + 1]} for i in range(10**4)] + [{"mesh": 0}],
+            [0],
+            "its nodes nest more than 256 deep (the limit)",
+        ),
+    ],
+)
+def test_broken_node_graphs_are_one_line(tmp_path, nodes, roots, message):
+    path = tmp_path / "graph.glb"
+    _glb(path, nodes, roots)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: {message}"
+
+
+def test_instance_and_triangle_limits_of_a_graph(tmp_path, monkeypatch):
+    path = tmp_path / "many.glb"
+    # a node placing a group twice: four instances of the mesh from three nodes
+    _glb(path, [{"children": [1, 1]}, {"mesh": 0, "children": [2]}, {"mesh": 0}], [0])
+    monkeypatch.setattr(settings, "INSTANCE_LIMIT", 3)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: its scene holds more than 3 mesh instances (the limit)"
+
+
+def test_many_instances_of_one_mesh_still_load(tmp_path):
+    path = tmp_path / "rows.glb"
+    count = 20_000
+    _glb(
+        path,
+        [{"mesh": 0, "translation": [2.0 * (i % 200), 2.0 * (i // 200), 0]} for i in range(count)],
+        list(range(count)),
+    )
+    model = loader.load_model(path)
+    assert model.triangle_count == count and len(model.part_names) == count
+    assert model.positions.max(axis=0).tolist() == [2.0 * 199 + 1, 2.0 * 99 + 1, 0]

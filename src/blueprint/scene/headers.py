@@ -4,6 +4,9 @@ it holds, is refused at once instead of being read (or silently drawn short)."""
 
 from __future__ import annotations
 
+import contextlib
+import io
+import json
 from pathlib import Path
 
 from blueprint.errors import InputError
@@ -19,15 +22,21 @@ _PLY_SIZES = {
 }
 # the fewest bytes an ASCII value takes: a digit and a separator
 _ASCII_VALUE = 2
+# levels of nodes a glTF scene may nest: CAD assemblies go a few dozen deep
+NODE_DEPTH_LIMIT = 256
 
 
-def check_declared_counts(path: Path, ext: str, size: int, limit: int) -> None:
+def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
     """Raise ``InputError`` where the header of a PLY or OFF file declares more elements than
-    ``size`` bytes can hold (other formats: nothing to check)."""
+    ``size`` bytes can hold (other formats: nothing to check). ``data``: the file's contents
+    where they are in memory already (a member of an archive), else the file is read."""
     if ext not in ("ply", "off"):
         return
-    with open_file(path, limit, "a model file") as fh:
-        head = fh.read(HEADER_BYTES)
+    if data is not None:
+        head = data[:HEADER_BYTES]
+    else:
+        with open_file(path, limit, "a model file") as fh:
+            head = fh.read(HEADER_BYTES)
     text = head.decode("latin-1")
     if ext == "ply":
         _check_ply(path, text, size)
@@ -99,3 +108,146 @@ def _check_off(path: Path, text: str, size: int) -> None:
         raise _refuse(path, vertices, "vertices", size)
     if vertices * 3 * _ASCII_VALUE + faces * 4 * _ASCII_VALUE > size:
         raise _refuse(path, faces, "faces", size)
+
+
+def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
+    """Raise ``InputError`` where a glTF or GLB file's node graph has a cycle (node 0 a child of
+    node 1 and node 1 of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT``
+    levels, more than ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT``
+    triangles in all. The graph is walked once, without recursion, before any loader follows
+    it: trimesh's walk of a cycle never ends, and of a deep chain takes time quadratic in its
+    depth. ``data`` as for ``check_declared_counts``."""
+    if ext not in ("glb", "gltf"):
+        return
+    doc = _gltf_json(path, ext, size, limit, data)
+    if doc is None:
+        return  # not a document we can read: the loader says what is wrong
+    nodes = doc.get("nodes")
+    if not isinstance(nodes, list) or not nodes:
+        return
+    triangles = _mesh_triangles(doc)
+    roots = _gltf_roots(doc, len(nodes))
+    _walk(path, nodes, roots, triangles)
+
+
+def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
+    with contextlib.ExitStack() as stack:
+        fh = (
+            io.BytesIO(data)
+            if data is not None
+            else stack.enter_context(open_file(path, limit, "a model file"))
+        )
+        if ext == "gltf":
+            raw = fh.read(limit + 1)
+        else:
+            head = fh.read(20)
+            if len(head) < 20 or head[:4] != b"glTF" or head[16:20] != b"JSON":
+                return None
+            length = int.from_bytes(head[12:16], "little")
+            if length > size - 20:
+                raise InputError(
+                    f"{path}: the header declares a JSON chunk of {length} bytes, more than the file's "
+                    f"{size} bytes can hold"
+                )
+            raw = fh.read(length)
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except RecursionError:
+        raise InputError(f"{path}: its JSON nests too deeply") from None
+    except (UnicodeDecodeError, ValueError):
+        return None  # not JSON: trimesh's message
+
+
+def _mesh_triangles(doc: dict) -> list[int]:
+    """Triangles of each of the document's meshes, as their accessors declare them."""
+    accessors = doc.get("accessors") if isinstance(doc.get("accessors"), list) else []
+    out = []
+    for mesh in doc.get("meshes") or []:
+        total = 0
+        for primitive in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
+            if not isinstance(primitive, dict):
+                continue
+            index = primitive.get("indices")
+            if index is None:
+                attributes = primitive.get("attributes")
+                index = attributes.get("POSITION") if isinstance(attributes, dict) else None
+            accessor = accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else None
+            count = accessor.get("count") if isinstance(accessor, dict) else None
+            if isinstance(count, int) and count > 0:
+                total += count // 3
+        out.append(total)
+    return out
+
+
+def _gltf_roots(doc: dict, count: int) -> list:
+    scenes = doc.get("scenes")
+    roots = []
+    if isinstance(scenes, list):
+        for scene in scenes:
+            if isinstance(scene, dict) and isinstance(scene.get("nodes"), list):
+                roots += scene["nodes"]
+    return roots if roots else list(range(count))
+
+
+def _walk(path: Path, nodes: list, roots: list, mesh_triangles: list[int]) -> None:
+    from blueprint import settings
+
+    instances: dict[int, int] = {}  # per node: mesh instances below it, itself included
+    triangles: dict[int, int] = {}
+    on_path: dict[int, int] = {}  # nodes of the current path, to their depth
+    for root in roots:
+        _node(path, nodes, root, None)
+        if root in instances:
+            continue
+        stack = [(root, iter(_children(path, nodes, root)))]
+        on_path[root] = 0
+        while stack:
+            node, pending = stack[-1]
+            child = next(pending, None)
+            if child is None:
+                stack.pop()
+                del on_path[node]
+                mesh = nodes[node].get("mesh")
+                own = isinstance(mesh, int) and 0 <= mesh < len(mesh_triangles)
+                kids = _children(path, nodes, node)
+                instances[node] = own + sum(instances[c] for c in kids)
+                triangles[node] = (mesh_triangles[mesh] if own else 0) + sum(triangles[c] for c in kids)
+                _limit(path, instances[node], settings.INSTANCE_LIMIT, "mesh instances")
+                _limit(path, triangles[node], settings.TRIANGLE_LIMIT, "triangles")
+                continue
+            if child in on_path:
+                chain = [n for n, _ in stack[on_path[child] :]] + [child]
+                shown = " → ".join(map(str, chain[:8])) + (" → ..." if len(chain) > 8 else "")
+                raise InputError(f"{path}: its nodes form a cycle ({shown})")
+            if child in instances:
+                continue
+            if len(stack) >= NODE_DEPTH_LIMIT:
+                raise InputError(f"{path}: its nodes nest more than {NODE_DEPTH_LIMIT} deep (the limit)")
+            on_path[child] = len(stack)
+            stack.append((child, iter(_children(path, nodes, child))))
+    _limit(path, sum(instances.get(r, 0) for r in set(roots)), settings.INSTANCE_LIMIT, "mesh instances")
+    _limit(path, sum(triangles.get(r, 0) for r in set(roots)), settings.TRIANGLE_LIMIT, "triangles")
+
+
+def _limit(path: Path, count: int, limit: int, what: str) -> None:
+    if count > limit:
+        raise InputError(f"{path}: its scene holds more than {limit} {what} (the limit)")
+
+
+def _node(path: Path, nodes: list, index, parent) -> dict:
+    if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < len(nodes):
+        where = f"node {parent}" if parent is not None else "a scene"
+        raise InputError(f"{path}: {where} refers to node {index!r}, which does not exist")
+    node = nodes[index]
+    if not isinstance(node, dict):
+        raise InputError(f"{path}: node {index} is not an object")
+    return node
+
+
+def _children(path: Path, nodes: list, index: int) -> list:
+    children = nodes[index].get("children") or []
+    if not isinstance(children, list):
+        raise InputError(f"{path}: the children of node {index} are not a list")
+    for child in children:
+        _node(path, nodes, child, index)
+    return children
