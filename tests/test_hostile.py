@@ -611,3 +611,62 @@ def test_many_instances_of_one_mesh_still_load(tmp_path):
     model = loader.load_model(path)
     assert model.triangle_count == count and len(model.part_names) == count
     assert model.positions.max(axis=0).tolist() == [2.0 * 199 + 1, 2.0 * 99 + 1, 0]
+
+
+# -- work bounded before it starts ------------------------------------------------------------------
+def test_off_face_with_a_billion_corners_is_refused(tmp_path):
+    path = tmp_path / "corners.off"
+    path.write_text("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n1000000000 0 1 2\n")
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: face 1 declares 1000000000 corners and lists 3"
+
+
+def test_one_triangle_over_and_over_is_refused(tmp_path):
+    path = tmp_path / "same.obj"
+    path.write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nv 6 5 5\nv 5 6 5\n" + "f 1 2 3\n" * 257 + "f 4 5 6\n"
+    )
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: 257 faces lie on one another (one triangle over and over), more than the 256 layers "
+        "a drawing can peel"
+    )
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + "f 1 2 3\n" * 256)
+    assert loader.load_model(path).triangle_count == 256
+
+
+def test_frames_glyph_counts_and_glyph_coordinates_are_bounded(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    line = one_line(
+        run(
+            "silhouettes",
+            "box.stl",
+            "-o",
+            "s.mp4",
+            "--animate",
+            "twist",
+            "--frames",
+            "1000000000",
+            cwd=tmp_path,
+        )
+    )
+    assert line == "frames must be from 1 to 100000, got 1000000000"
+    (tmp_path / "many.toml").write_text("[[box]]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n" * 10_001)
+    line = one_line(run("render", "box.stl", "-o", "out.png", "--glyphs", "many.toml", cwd=tmp_path))
+    assert line == "many.toml: 10001 glyphs, over the limit of 10000"
+    (tmp_path / "far.toml").write_text("[[box]]\nmin = [0, 0, 0]\nmax = [1e300, 1e308, 1]\n")
+    line = one_line(run("render", "box.stl", "-o", "out.png", "--glyphs", "far.toml", cwd=tmp_path))
+    assert line == "far.toml: box 1: max must be finite numbers within ±1e+18, got [1e+300, 1e+308, 1]"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.stl", "far.toml", "many.toml"]
+
+
+def test_the_memory_budget_is_set_from_the_environment(tmp_path):
+    code = "from blueprint import settings as s; print(s.MEMORY_BUDGET, s.MODEL_FILE_LIMIT, s.EXPANDED_LIMIT)"
+    for value, budget in (("64M", 64 << 20), ("1G", 1 << 30), ("123456789", 123456789)):
+        env = {**ENV, settings.MEMORY_ENV: value}
+        out = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, env=env, text=True, check=True
+        )
+        assert out.stdout.split() == [str(budget), str(budget // 4), str(budget // 4)]

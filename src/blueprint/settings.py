@@ -19,7 +19,11 @@ from blueprint.color import RGBA, hex_color
 from blueprint.errors import InputError
 
 __all__ = [
+    "COINCIDENT_LIMIT",
+    "COORDINATE_LIMIT",
     "EXPANDED_LIMIT",
+    "FRAME_LIMIT",
+    "GLYPH_LIMIT",
     "IMAGE_FILE_LIMIT",
     "IMAGE_PIXEL_LIMIT",
     "INSTANCE_LIMIT",
@@ -109,6 +113,14 @@ IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
 # hundred bytes a triangle; and mesh instances a scene may place (each is a part, with a name).
 TRIANGLE_LIMIT = MEMORY_BUDGET // 256
 INSTANCE_LIMIT = 200_000
+# Frames of a video (an hour at 30 frames a second would be 108 000), glyphs of a glyph file (each
+# is projected and stroked on the CPU), and the largest coordinate of a model or a glyph: beyond
+# it, view and projection matrices overflow the GPU's 32-bit floats.
+FRAME_LIMIT = 100_000
+# copies of one triangle a model may hold: each is a layer to the peel, which stops at 256
+COINCIDENT_LIMIT = 256
+GLYPH_LIMIT = 10_000
+COORDINATE_LIMIT = 1e18
 # Settings and pipeline files: how deep tables and arrays nest and how many digits a number has;
 # a 10^4-deep array or a 5000-digit integer is refused with the file and key named.
 SETTINGS_DEPTH_LIMIT = 32
@@ -301,8 +313,9 @@ class Entry:
         value = self.table[key] if value is None else value
         if not isinstance(value, list | tuple) or len(value) != 3 or not all(map(is_number, value)):
             raise self.fail(f"{key} must be 3 numbers, got {show(value)}")
-        if not all(math.isfinite(v) for v in value):
-            raise self.fail(f"{key} must be finite numbers, got {show(value)}")
+        # bounded as model coordinates are: beyond, a projection overflows
+        if not all(math.isfinite(v) and abs(v) <= COORDINATE_LIMIT for v in value):
+            raise self.fail(f"{key} must be finite numbers within ±{COORDINATE_LIMIT:g}, got {show(value)}")
         return tuple(float(v) for v in value)
 
     def color(self, key: str, default: str) -> RGBA:

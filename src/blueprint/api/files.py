@@ -42,6 +42,7 @@ from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
+from blueprint.settings import FRAME_LIMIT
 from blueprint.silhouette.gpu import MAX_LAYERS, animate_silhouettes, render_silhouettes
 from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
 from blueprint.vector.style import VectorStyle
@@ -175,6 +176,8 @@ def turntable(
     """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
     (default: the blueprint) as a video, atomically."""
     output, write = choose_writer(output, Kind.VIDEO)
+    if not 1 <= frames <= FRAME_LIMIT:
+        raise InputError(f"frames must be from 1 to {FRAME_LIMIT}, got {frames}")
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
@@ -347,8 +350,8 @@ def render_silhouettes_file(
     if animate is None and WRITERS.find(Path(output).suffix, Kind.VIDEO):
         raise InputError(f"{output}: a video needs --animate twist or --animate wave")
     output, write = choose_writer(output, Kind.VIDEO if animate else Kind.IMAGE)
-    if frames < 1:
-        raise InputError(f"frames must be at least 1, got {frames}")
+    if not 1 <= frames <= FRAME_LIMIT:
+        raise InputError(f"frames must be from 1 to {FRAME_LIMIT}, got {frames}")
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps:g}")
     if not 1 <= layers <= MAX_LAYERS:

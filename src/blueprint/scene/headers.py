@@ -40,8 +40,11 @@ def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: byt
     text = head.decode("latin-1")
     if ext == "ply":
         _check_ply(path, text, size)
-    else:
-        _check_off(path, text, size)
+    elif _check_off(path, text, size):
+        if data is None:
+            with open_file(path, limit, "a model file") as fh:
+                data = fh.read(limit + 1)
+        _check_off_faces(path, data)
 
 
 def _refuse(path: Path, count: int, what: str, size: int) -> InputError:
@@ -87,7 +90,8 @@ def _check_ply(path: Path, text: str, size: int) -> None:
             raise _refuse(path, count, f"{name} elements", size)
 
 
-def _check_off(path: Path, text: str, size: int) -> None:
+def _check_off(path: Path, text: str, size: int) -> bool:
+    """Whether ``text`` begins an OFF header whose counts ``size`` bytes can hold (refused if not)."""
     words: list[str] = []
     for line in text.splitlines():
         line = line.split("#", 1)[0].strip()
@@ -96,11 +100,11 @@ def _check_off(path: Path, text: str, size: int) -> None:
         if len(words) >= 4:
             break
     if not words or not words[0].endswith("OFF") or len(words) < 3:
-        return
+        return False
     try:
         vertices, faces = int(words[1]), int(words[2])
     except ValueError:
-        return
+        return False
     if vertices < 0 or faces < 0:
         raise InputError(f"{path}: the header declares a negative count ({vertices} vertices, {faces} faces)")
     # a vertex is at least three values, a face its corner count and three corners
@@ -108,6 +112,33 @@ def _check_off(path: Path, text: str, size: int) -> None:
         raise _refuse(path, vertices, "vertices", size)
     if vertices * 3 * _ASCII_VALUE + faces * 4 * _ASCII_VALUE > size:
         raise _refuse(path, faces, "faces", size)
+    return True
+
+
+def _check_off_faces(path: Path, data: bytes) -> None:
+    """Refuse an OFF face whose corner count is more than the values its line holds (a face
+    of 10^9 corners listing three): trimesh reads the first corners and says nothing."""
+    lines = (line.split(b"#", 1)[0].split() for line in data.splitlines())
+    lines = (words for words in lines if words)
+    header = next(lines, [])
+    counts = header[1:] if len(header) > 1 else next(lines, [])
+    try:
+        vertices, faces = int(counts[0]), int(counts[1])
+    except (ValueError, IndexError):
+        return  # the loader says what is wrong
+    for _ in range(vertices):
+        if next(lines, None) is None:
+            return
+    for index in range(faces):
+        words = next(lines, None)
+        if words is None:
+            return
+        try:
+            corners = int(words[0])
+        except ValueError:
+            raise InputError(f"{path}: face {index} does not begin with its corner count") from None
+        if corners < 1 or corners > len(words) - 1:
+            raise InputError(f"{path}: face {index} declares {corners} corners and lists {len(words) - 1}")
 
 
 def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:

@@ -26,7 +26,7 @@ log = logging.getLogger("blueprint")
 
 # CAD and printing formats are Z-up by convention; glTF (by its spec), OBJ and scans are Y-up.
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
-MAX_COORDINATE = 1e18
+MAX_COORDINATE = settings.COORDINATE_LIMIT
 _Z_UP = {"stl", "3mf", "3dxml", "step", "stp", "dae"}
 # Formats with no up axis of their own: the shape decides (blueprint.scene.up).
 _GUESS_UP = {"obj", "ply", "off"}
@@ -212,9 +212,31 @@ def _checked(
     degenerate = model.degenerate_faces()
     if degenerate.all():
         raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
+    _check_coincident(model, name)
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
     return choose_parts(model, include, exclude)
+
+
+def _check_coincident(model: Model, name: str) -> None:
+    """Refuse more than ``COINCIDENT_LIMIT`` copies of one triangle: each copy is a layer of
+    its own to the peel, every layer draws them all, so 10^6 copies would take hours to draw
+    and show one triangle. Copies are found by centroid and area, hashed to one number."""
+    limit = settings.COINCIDENT_LIMIT
+    if len(model.faces) <= limit:
+        return
+    tri = model.positions[model.faces].astype(np.float64)
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    key = tri.sum(axis=1) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
+        np.einsum("ij,ij->i", cross, cross)
+    ) * np.sqrt(2)
+    _, counts = np.unique(key, return_counts=True)
+    most = int(counts.max())
+    if most > limit:
+        raise InputError(
+            f"{name}: {most} faces lie on one another (one triangle over and over), more than the "
+            f"{limit} layers a drawing can peel"
+        )
 
 
 _STL_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
