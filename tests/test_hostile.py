@@ -14,6 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -670,3 +671,127 @@ def test_the_memory_budget_is_set_from_the_environment(tmp_path):
             [sys.executable, "-c", code], capture_output=True, env=env, text=True, check=True
         )
         assert out.stdout.split() == [str(budget), str(budget // 4), str(budget // 4)]
+
+
+# -- outputs: temporaries gone with the process, paths refused up front ----------------------------
+KILLED_WRITER = """
+import os, sys, time
+from blueprint.export import files
+if sys.argv[2] == "named":
+    del files.os.O_TMPFILE  # as on a system without unnamed files
+def write(tmp):
+    with open(tmp, "wb") as fh:
+        fh.write(b"half")
+        fh.flush()
+        print("writing", flush=True)
+        time.sleep(60)
+files.atomic_write(sys.argv[1], write)
+"""
+
+
+@pytest.mark.parametrize("mode", ["unnamed", "named"])
+def test_a_writer_killed_mid_write_leaves_nothing_where_the_user_looks(tmp_path, mode):
+    import signal
+
+    from blueprint.export import files
+
+    (tmp_path / "out.png").write_bytes(b"old")
+    child = subprocess.Popen(
+        [sys.executable, "-c", KILLED_WRITER, str(tmp_path / "out.png"), mode],
+        stdout=subprocess.PIPE,
+        env=ENV,
+    )
+    assert child.stdout.readline() == b"writing\n"
+    left = sorted(p.name for p in tmp_path.iterdir())
+    os.kill(child.pid, signal.SIGKILL)
+    child.wait(TIMEOUT)
+    child.stdout.close()
+    after = sorted(p.name for p in tmp_path.iterdir())
+    assert (tmp_path / "out.png").read_bytes() == b"old"
+    if mode == "unnamed":
+        # never named: nothing but the old file, during the write and after the kill
+        assert left == after == ["out.png"]
+        return
+    # named: ours, with the dead process's id, swept by the next write once it is stale
+    (stale,) = set(after) - {"out.png"}
+    assert stale.startswith(f".out.png.bp{child.pid}.") and stale.endswith(".tmp")
+    assert files.sweep_temporaries(tmp_path) == []  # written just now: it might be another host's
+    os.utime(tmp_path / stale, (0, 0))
+    (tmp_path / ".notes.bp1.x.txt").write_text("not ours")
+    files.save_png(tmp_path / "out.png", np.zeros((2, 2, 3), np.uint8))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".notes.bp1.x.txt", "out.png"]
+
+
+def test_output_written_in_place_has_the_usual_permissions(tmp_path):
+    from blueprint.export import files
+
+    files.save_png(tmp_path / "a.png", np.zeros((2, 2, 3), np.uint8))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o666 & ~umask
+    os.chmod(tmp_path / "a.png", 0o640)
+    files.save_png(tmp_path / "a.png", np.ones((2, 2, 3), np.uint8))
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o640
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png"]
+
+
+def test_outputs_that_cannot_be_written_are_one_line_before_any_work(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    long = "a" * 300 + ".png"
+    line = one_line(run("render", "box.stl", "-o", long, "--size", "32", "32", cwd=tmp_path))
+    assert line == f"{long}: cannot write (File name too long)"
+    line = one_line(run("turntable", "box.stl", "-o", "/proc/out.mp4", "--size", "32", "32", cwd=tmp_path))
+    assert line.startswith("/proc/out.mp4: folder /proc takes no new files (")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.stl"]
+
+
+def test_a_dump_that_cannot_be_written_leaves_no_output(tmp_path):
+    from PIL import Image
+
+    (tmp_path / "invert.toml").write_text(INVERT)
+    Image.new("RGB", (8, 8)).save(tmp_path / "picture.png")
+    (tmp_path / "out.out.png").mkdir()
+    proc = run(
+        "pipeline",
+        "run",
+        "invert.toml",
+        "-o",
+        "out.png",
+        "--image",
+        "picture=picture.png",
+        "--dump",
+        "out",
+        cwd=tmp_path,
+    )
+    assert one_line(proc) == "out.out.png: cannot write (Is a directory)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["invert.toml", "out.out.png", "picture.png"]
+
+
+def test_out_of_memory_names_the_pipeline(tmp_path, monkeypatch):
+    from PIL import Image
+
+    from blueprint.api import files
+    from blueprint.pipeline.executor import Executor
+
+    (tmp_path / "invert.toml").write_text(INVERT)
+    Image.new("RGB", (8, 8)).save(tmp_path / "picture.png")
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(Executor, "run", exhausted)
+    with pytest.raises(InputError) as caught:
+        files.run_pipeline(
+            tmp_path / "invert.toml", None, tmp_path / "out.png", image={"picture": tmp_path / "picture.png"}
+        )
+    assert str(caught.value) == f"{tmp_path / 'invert.toml'}: out of memory (try a smaller --size)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["invert.toml", "picture.png"]
+
+
+def test_numpy_warnings_are_our_one_line_warnings():
+    code = (
+        "import numpy as np\nfrom blueprint.cli.options import setup_logging\nsetup_logging()\n"
+        "np.array([1e308]) * 10\nnp.array([1e308]) * 10\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, env=ENV, text=True)
+    assert proc.stderr == "blueprint: warning: numeric trouble: overflow encountered in multiply\n"

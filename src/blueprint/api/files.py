@@ -22,7 +22,7 @@ from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
-from blueprint.errors import InputError
+from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
 from blueprint.export.writers import WRITERS, Kind, Writer
 from blueprint.gpu.device import check_size
@@ -146,9 +146,10 @@ def run_pipeline(
         w, h = size or bound.size or (1024, 1024)
         camera = fit_camera(model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
         size = (w, h)
-    if videos:
-        return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
-    result = ex.run(spec, model, camera, size=size, **options)
+    with out_of_memory(str(spec.source)):
+        if videos:
+            return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
+        result = ex.run(spec, model, camera, size=size, **options)
     save_result(result, output, formats)
     return result
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -17,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.errors import InputError
-from blueprint.export.files import publish
+from blueprint.export.files import temporary
 from blueprint.gpu.targets import FORMATS
 from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file, one_line
 
@@ -167,9 +166,11 @@ class VideoWriter:
 
     def __enter__(self) -> VideoWriter:
         ffmpeg = _ffmpeg()
-        folder = self.path.parent if str(self.path.parent) else Path(".")
-        fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name[:64]}.", suffix=".tmp", dir=folder)
-        os.close(fd)
+        self._stack = contextlib.ExitStack()
+        try:
+            self._tmp = str(self._stack.enter_context(temporary(self.path)))
+        except OSError as error:
+            raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
         w, h = self.size
         # 4:2:0 (what players expect) needs even sizes; odd ones keep full chroma
         pix_fmt = "yuv420p" if w % 2 == 0 and h % 2 == 0 else "yuv444p"
@@ -205,15 +206,16 @@ class VideoWriter:
             if self._gen is not None:
                 with contextlib.suppress(StopIteration):
                     self._gen.close()
-            if kind is None:
-                if self.frames == 0:
-                    raise InputError(f"{self.path}: no frames to write")
-                publish(self._tmp, self.path)
+            if kind is None and self.frames == 0:
+                raise InputError(f"{self.path}: no frames to write")
+        except BaseException as error:
+            self._stack.__exit__(type(error), error, error.__traceback__)
+            raise
+        try:
+            # published only where the block ended without an error
+            self._stack.__exit__(kind, exc, tb)
         except OSError as error:
             raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
-        finally:
-            if self._tmp and os.path.exists(self._tmp):
-                os.unlink(self._tmp)
 
 
 def write_video(path: str | Path, frames: Iterable[np.ndarray], *, fps: float = 30.0, crf: int = 18) -> Path:

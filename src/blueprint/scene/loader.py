@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import settings
-from blueprint.errors import InputError
+from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, members
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.headers import check_declared_counts, check_scene_graph
@@ -60,7 +60,11 @@ def load_model(
     InputError
         The file is missing, unreadable, of an unknown format, or holds no usable triangles.
     """
-    path = Path(path)
+    with out_of_memory(str(path), "the model is too large for this machine's memory"):
+        return _load_model(Path(path), up, include, exclude)
+
+
+def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlobs) -> Model:
     name = str(path)
     info = check_file(path, MODEL_FILE_LIMIT, "a model file")
     ext = path.suffix.lower().lstrip(".")
