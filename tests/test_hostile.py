@@ -579,7 +579,7 @@ def _glb(path: Path, nodes: list, roots: list) -> None:
         (
             [{"mesh": 0, "children": [i + 1]} for i in range(10**4)] + [{"mesh": 0}],
             [0],
-            "its nodes nest more than 256 deep (the limit)",
+            "its nodes nest more than 64 deep (the limit)",
         ),
     ],
 )
@@ -795,3 +795,78 @@ def test_numpy_warnings_are_our_one_line_warnings():
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, env=ENV, text=True)
     assert proc.stderr == "blueprint: warning: numeric trouble: overflow encountered in multiply\n"
+
+
+# -- the corpus of benchmarks/hostile.py: a fast subset --------------------------------------------
+def _corpus():
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "hostile.py"
+    spec = importlib.util.spec_from_file_location("hostile_corpus", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    return module
+
+
+FAST = (
+    "FIFO mtllib",
+    "sparse 8 GiB OBJ",
+    "zip of no model",
+    "OFF face with 10^9 corners",
+    "GLB nodes 0 -> 1 -> 0",
+    "GLB 10^5 nested nodes",
+    "pipeline digits.toml",
+    "image claiming 100000 x 100000",
+    "model name with a newline",
+    "OBJ nan vertex",
+)
+
+
+def test_a_fast_subset_of_the_hostile_corpus_runs_clean(tmp_path):
+    """The same generator as the whole run (``python benchmarks/hostile.py``): a few cases of
+    every cheap kind, and mutated files; each clean, or the reason it is not."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    corpus = _corpus()
+    kinds = ("special", "sparse", "bomb", "header", "graph", "settings", "pipeline", "names", "numbers")
+    chosen = [c for c in corpus.generate(17, 0, kinds) if c.label in FAST]
+    chosen += corpus.generate(17, 6, ("mutated",))
+    assert len(chosen) == len(FAST) + 6
+    with ThreadPoolExecutor(2) as pool:
+        outcomes = list(
+            pool.map(lambda ic: corpus.run_case(ic[1], tmp_path / str(ic[0]), TIMEOUT), enumerate(chosen))
+        )
+    assert [(o.case.label, o.reason) for o in outcomes if not o.clean] == []
+    assert all(o.case.valid or o.reason == "refused" for o in outcomes)
+
+
+def _threemf(path: Path, components: int) -> None:
+    corpus = _corpus()
+    path.write_bytes(corpus.threemf(components))
+
+
+def test_a_deep_chain_of_3mf_components_is_refused(tmp_path):
+    path = tmp_path / "chain.3mf"
+    _threemf(path, 10**4)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: its objects nest more than 64 deep (the limit)"
+    _threemf(path, 20)
+    model = loader.load_model(path)
+    assert model.triangle_count == 12 and model.positions.max(axis=0).tolist() == [1, 2, 3]
+
+
+def test_a_cycle_of_3mf_components_is_refused(tmp_path):
+    path = tmp_path / "cycle.3mf"
+    _threemf(path, 3)
+    import zipfile
+
+    with zipfile.ZipFile(path) as archive:
+        model = archive.read("3D/3dmodel.model").replace(
+            b'<component objectid="1"/>', b'<component objectid="4"/>'
+        )
+    _zip(path, {"[Content_Types].xml": b"<Types/>", "3D/3dmodel.model": model})
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: its objects form a cycle (4 → 3 → 2 → 4)"

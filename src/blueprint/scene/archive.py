@@ -53,13 +53,14 @@ def _check_total(path: Path, expanded: int, compressed: int, what: str) -> None:
         )
 
 
-def check_zip(path: Path) -> None:
+def check_zip(path: Path, data: bytes | None = None) -> None:
     """Refuse a zip archive whose members, by the sizes its central directory declares, expand
     beyond the limits. Those sizes bound what can be read: Python's zipfile stops a member at
     its declared size (and a member that holds more fails its checksum), so a lie cannot
-    expand further."""
+    expand further. ``data``: the archive's bytes where they are in memory (a member of
+    another archive), else the file is read."""
     limit = settings.MODEL_FILE_LIMIT
-    with open_file(path, limit, "a model file") as fh:
+    with io.BytesIO(data) if data is not None else open_file(path, limit, "a model file") as fh:
         try:
             with zipfile.ZipFile(fh) as archive:
                 infos = archive.infolist()

@@ -22,8 +22,9 @@ _PLY_SIZES = {
 }
 # the fewest bytes an ASCII value takes: a digit and a separator
 _ASCII_VALUE = 2
-# levels of nodes a glTF scene may nest: CAD assemblies go a few dozen deep
-NODE_DEPTH_LIMIT = 256
+# levels of nodes a glTF scene, or of components a 3MF object, may nest: CAD assemblies go a
+# dozen or two deep, and trimesh's 3MF loader takes time cubic in the depth (40 s for 500)
+NODE_DEPTH_LIMIT = 64
 
 
 def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
@@ -148,6 +149,9 @@ def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes |
     triangles in all. The graph is walked once, without recursion, before any loader follows
     it: trimesh's walk of a cycle never ends, and of a deep chain takes time quadratic in its
     depth. ``data`` as for ``check_declared_counts``."""
+    if ext == "3mf":
+        _check_3mf(path, limit, data)
+        return
     if ext not in ("glb", "gltf"):
         return
     doc = _gltf_json(path, ext, size, limit, data)
@@ -158,7 +162,81 @@ def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes |
         return
     triangles = _mesh_triangles(doc)
     roots = _gltf_roots(doc, len(nodes))
-    _walk(path, nodes, roots, triangles)
+    for root in roots:
+        _node(path, nodes, root, None)
+
+    def own(node: int) -> tuple[int, int]:
+        mesh = nodes[node].get("mesh")
+        if isinstance(mesh, int) and not isinstance(mesh, bool) and 0 <= mesh < len(triangles):
+            return 1, triangles[mesh]
+        return 0, 0
+
+    _walk(path, roots, lambda node: _children(path, nodes, node), own, "nodes")
+
+
+def _check_3mf(path: Path, limit: int, data: bytes | None) -> None:
+    """The component graph of each model part of a 3MF (a zip whose expanded size
+    ``blueprint.scene.archive.check_zip`` has bounded), walked as glTF nodes are: objects made
+    of components of other objects, placed by build items."""
+    import zipfile
+
+    with contextlib.ExitStack() as stack:
+        fh = (
+            io.BytesIO(data)
+            if data is not None
+            else stack.enter_context(open_file(path, limit, "a model file"))
+        )
+        try:
+            archive = stack.enter_context(zipfile.ZipFile(fh))
+            parts = [i for i in archive.infolist() if i.filename.lower().endswith(".model")]
+            documents = [archive.read(i) for i in parts]
+        except (zipfile.BadZipFile, OSError, ValueError, EOFError, NotImplementedError):
+            return  # the loader says what is wrong
+    for document in documents:
+        _check_3mf_document(path, document)
+
+
+def _check_3mf_document(path: Path, document: bytes) -> None:
+    import xml.etree.ElementTree as ElementTree
+
+    objects: dict[str, tuple[int, list[str]]] = {}  # id: triangles, component object ids
+    items: list[str] = []
+    current = None
+    try:
+        for event, element in ElementTree.iterparse(io.BytesIO(document), events=("start", "end")):
+            tag = element.tag.rsplit("}", 1)[-1]
+            if event == "start":
+                if tag == "object":
+                    current = element.get("id", "")
+                    objects[current] = (0, [])
+                elif tag == "component" and current is not None and not _elsewhere(element):
+                    objects[current][1].append(element.get("objectid", ""))
+                elif tag == "triangle" and current is not None:
+                    count, components = objects[current]
+                    objects[current] = (count + 1, components)
+                elif tag == "item":
+                    items.append(element.get("objectid", ""))
+            else:
+                if tag == "object":
+                    current = None
+                element.clear()
+    except ElementTree.ParseError:
+        return  # the loader says what is wrong
+
+    def children(index: str) -> list[str]:
+        found = objects[index][1]
+        for child in found:
+            if child not in objects:
+                raise InputError(f"{path}: object {index} has a component {child!r}, which does not exist")
+        return found
+
+    roots = [item for item in items if item in objects]
+    _walk(path, roots, children, lambda index: (int(objects[index][0] > 0), objects[index][0]), "objects")
+
+
+def _elsewhere(component) -> bool:
+    """Whether a 3MF component names an object of another model part (``p:path``)."""
+    return any(key.rsplit("}", 1)[-1] == "path" for key in component.keys())
 
 
 def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
@@ -220,17 +298,21 @@ def _gltf_roots(doc: dict, count: int) -> list:
     return roots if roots else list(range(count))
 
 
-def _walk(path: Path, nodes: list, roots: list, mesh_triangles: list[int]) -> None:
+def _walk(path: Path, roots: list, children, own, what: str) -> None:
+    """Walk a graph from ``roots`` once, without recursion: ``children(node)`` lists a node's
+    children (checked), ``own(node)`` the mesh instances (0 or 1) and triangles a node holds
+    itself; ``what`` names the nodes in messages ("nodes", "objects"). Refuses a cycle, more
+    than ``NODE_DEPTH_LIMIT`` levels, and more instances or triangles than the limits, counted
+    over every path (a node placed twice counts twice)."""
     from blueprint import settings
 
-    instances: dict[int, int] = {}  # per node: mesh instances below it, itself included
-    triangles: dict[int, int] = {}
-    on_path: dict[int, int] = {}  # nodes of the current path, to their depth
+    instances: dict = {}  # per node: mesh instances below it, itself included
+    triangles: dict = {}
+    on_path: dict = {}  # nodes of the current path, to their depth
     for root in roots:
-        _node(path, nodes, root, None)
         if root in instances:
             continue
-        stack = [(root, iter(_children(path, nodes, root)))]
+        stack = [(root, iter(children(root)))]
         on_path[root] = 0
         while stack:
             node, pending = stack[-1]
@@ -238,26 +320,25 @@ def _walk(path: Path, nodes: list, roots: list, mesh_triangles: list[int]) -> No
             if child is None:
                 stack.pop()
                 del on_path[node]
-                mesh = nodes[node].get("mesh")
-                own = isinstance(mesh, int) and 0 <= mesh < len(mesh_triangles)
-                kids = _children(path, nodes, node)
-                instances[node] = own + sum(instances[c] for c in kids)
-                triangles[node] = (mesh_triangles[mesh] if own else 0) + sum(triangles[c] for c in kids)
+                kids = children(node)
+                count, held = own(node)
+                instances[node] = count + sum(instances[c] for c in kids)
+                triangles[node] = held + sum(triangles[c] for c in kids)
                 _limit(path, instances[node], settings.INSTANCE_LIMIT, "mesh instances")
                 _limit(path, triangles[node], settings.TRIANGLE_LIMIT, "triangles")
                 continue
             if child in on_path:
                 chain = [n for n, _ in stack[on_path[child] :]] + [child]
                 shown = " → ".join(map(str, chain[:8])) + (" → ..." if len(chain) > 8 else "")
-                raise InputError(f"{path}: its nodes form a cycle ({shown})")
+                raise InputError(f"{path}: its {what} form a cycle ({shown})")
             if child in instances:
                 continue
             if len(stack) >= NODE_DEPTH_LIMIT:
-                raise InputError(f"{path}: its nodes nest more than {NODE_DEPTH_LIMIT} deep (the limit)")
+                raise InputError(f"{path}: its {what} nest more than {NODE_DEPTH_LIMIT} deep (the limit)")
             on_path[child] = len(stack)
-            stack.append((child, iter(_children(path, nodes, child))))
-    _limit(path, sum(instances.get(r, 0) for r in set(roots)), settings.INSTANCE_LIMIT, "mesh instances")
-    _limit(path, sum(triangles.get(r, 0) for r in set(roots)), settings.TRIANGLE_LIMIT, "triangles")
+            stack.append((child, iter(children(child))))
+    _limit(path, sum(instances[r] for r in roots), settings.INSTANCE_LIMIT, "mesh instances")
+    _limit(path, sum(triangles[r] for r in roots), settings.TRIANGLE_LIMIT, "triangles")
 
 
 def _limit(path: Path, count: int, limit: int, what: str) -> None:

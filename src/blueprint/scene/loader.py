@@ -101,9 +101,9 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
         scene, ext = _archive_scene(path, ext)
     else:
         check_declared_counts(path, ext, info.st_size, MODEL_FILE_LIMIT)
-        check_scene_graph(path, ext, info.st_size, MODEL_FILE_LIMIT)
         if ext in ZIP_CONTAINERS:
             check_zip(path)
+        check_scene_graph(path, ext, info.st_size, MODEL_FILE_LIMIT)
         scene = _load_scene(path, ext)
     positions, faces, face_part, names = _flatten(scene, path.stem, name)
     if len(faces) == 0:
@@ -303,6 +303,8 @@ def _archive_scene(path: Path, kind: str):
         where = f"{path}: {member}"
         data = files[member]
         check_declared_counts(Path(where), ext, len(data), MODEL_FILE_LIMIT, data)
+        if ext in ZIP_CONTAINERS:
+            check_zip(Path(where), data)
         check_scene_graph(Path(where), ext, len(data), MODEL_FILE_LIMIT, data)
         scenes.append(_trimesh_scene(where, ext, io.BytesIO(data), resolver))
     scene = scenes[0] if len(scenes) == 1 else trimesh.scene.scene.append_scenes(scenes)
@@ -398,18 +400,23 @@ def _flatten(scene, stem: str | None, label: str = "the scene"):
     """Concatenate every mesh instance of a trimesh Scene in graph order; a scene of one mesh
     names its part ``stem`` (a file's), or after its node where ``stem`` is None. More than
     ``INSTANCE_LIMIT`` instances or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``."""
-    import trimesh
-
-    positions, faces, parts, names = [], [], [], []
-    taken: set[str] = set()
-    counts: dict[str, int] = {}
-    offset = 0
     world = _world_transforms(scene.graph)
     nodes = [n for n in scene.graph.nodes_geometry if n in world]
     if len(nodes) > settings.INSTANCE_LIMIT:
         raise InputError(f"{label}: {len(nodes)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}")
     node_data = scene.graph.transforms.node_data
-    total = 0
+    # NaN and infinite vertices are refused with their count once flattened, not warned about here
+    with np.errstate(all="ignore"):
+        return _concatenated(scene, nodes, world, node_data, stem, label)
+
+
+def _concatenated(scene, nodes, world, node_data, stem, label):
+    import trimesh
+
+    positions, faces, parts, names = [], [], [], []
+    taken: set[str] = set()
+    counts: dict[str, int] = {}
+    offset = total = 0
     for node in nodes:
         geometry_name = node_data[node].get("geometry")
         mesh = scene.geometry.get(geometry_name)
