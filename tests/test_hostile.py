@@ -811,13 +811,9 @@ def _corpus():
 
 FAST = (
     "FIFO mtllib",
-    "sparse 8 GiB OBJ",
     "zip of no model",
-    "OFF face with 10^9 corners",
     "GLB nodes 0 -> 1 -> 0",
-    "GLB 10^5 nested nodes",
     "pipeline digits.toml",
-    "image claiming 100000 x 100000",
     "model name with a newline",
     "OBJ nan vertex",
 )
@@ -831,8 +827,8 @@ def test_a_fast_subset_of_the_hostile_corpus_runs_clean(tmp_path):
     corpus = _corpus()
     kinds = ("special", "sparse", "bomb", "header", "graph", "settings", "pipeline", "names", "numbers")
     chosen = [c for c in corpus.generate(17, 0, kinds) if c.label in FAST]
-    chosen += corpus.generate(17, 6, ("mutated",))
-    assert len(chosen) == len(FAST) + 6
+    chosen += corpus.generate(17, 3, ("mutated",))
+    assert len(chosen) == len(FAST) + 3
     with ThreadPoolExecutor(2) as pool:
         outcomes = list(
             pool.map(lambda ic: corpus.run_case(ic[1], tmp_path / str(ic[0]), TIMEOUT), enumerate(chosen))
@@ -870,3 +866,19 @@ def test_a_cycle_of_3mf_components_is_refused(tmp_path):
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == f"{path}: its objects form a cycle (4 → 3 → 2 → 4)"
+
+
+def test_image_inputs_that_are_not_images_say_so_in_user_words(tmp_path):
+    from PIL import Image
+
+    from blueprint.pipeline.media import read_image
+
+    (tmp_path / "text.png").write_bytes(b"not a picture at all")
+    with pytest.raises(InputError) as caught:
+        read_image(tmp_path / "text.png", "rgba8")
+    assert str(caught.value) == f"{tmp_path / 'text.png'}: not an image in a format Pillow reads"
+    Image.effect_noise((64, 64), 40).convert("RGB").save(tmp_path / "noise.png")
+    (tmp_path / "cut.png").write_bytes((tmp_path / "noise.png").read_bytes()[:200])
+    with pytest.raises(InputError) as caught:
+        read_image(tmp_path / "cut.png", "rgba8")
+    assert str(caught.value) == f"{tmp_path / 'cut.png'}: cannot read the image (it is damaged or cut short)"

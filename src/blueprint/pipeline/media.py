@@ -18,7 +18,7 @@ import numpy as np
 from blueprint.errors import InputError
 from blueprint.export.files import temporary
 from blueprint.gpu.targets import FORMATS
-from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file, one_line
+from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file
 
 VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
 
@@ -87,8 +87,10 @@ def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.
         raise InputError(f"{path}: no such image file") from None
     except Image.DecompressionBombError:
         raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise InputError(f"{path}: cannot read the image ({one_line(exc)})") from None
+    except UnidentifiedImageError:
+        raise InputError(f"{path}: not an image in a format Pillow reads") from None
+    except (OSError, ValueError, SyntaxError):  # Pillow's messages name its internals
+        raise InputError(f"{path}: cannot read the image (it is damaged or cut short)") from None
     return to_format(rgba, fmt)
 
 
@@ -110,8 +112,10 @@ def image_size(path: Path) -> tuple[int, int]:
         raise InputError(f"{path}: no such image file") from None
     except Image.DecompressionBombError:
         raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise InputError(f"{path}: cannot read the image ({one_line(exc)})") from None
+    except UnidentifiedImageError:
+        raise InputError(f"{path}: not an image in a format Pillow reads") from None
+    except (OSError, ValueError, SyntaxError):  # Pillow's messages name its internals
+        raise InputError(f"{path}: cannot read the image (it is damaged or cut short)") from None
 
 
 def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
@@ -123,10 +127,8 @@ def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
         meta = next(reader)
         reader.close()
         frames, _ = ffmpeg.count_frames_and_secs(str(path))
-    except (RuntimeError, OSError, StopIteration) as exc:
-        raise InputError(
-            f"{path}: cannot read the video ({str(exc).strip().splitlines()[0] if str(exc) else exc})"
-        ) from None
+    except (RuntimeError, OSError, StopIteration):  # ffmpeg's messages run to many lines
+        raise InputError(f"{path}: cannot read the video (not a video ffmpeg reads, or damaged)") from None
     return tuple(meta["size"]), float(meta.get("fps") or 25.0), int(frames)
 
 
@@ -137,8 +139,8 @@ def read_video(path: Path) -> Iterator[np.ndarray]:
     try:
         reader = ffmpeg.read_frames(str(path))
         meta = next(reader)
-    except (RuntimeError, OSError, StopIteration) as exc:
-        raise InputError(f"{path}: cannot read the video ({exc})") from None
+    except (RuntimeError, OSError, StopIteration):
+        raise InputError(f"{path}: cannot read the video (not a video ffmpeg reads, or damaged)") from None
     w, h = meta["size"]
     try:
         for raw in reader:
