@@ -653,7 +653,7 @@ def test_frames_glyph_counts_and_glyph_coordinates_are_bounded(tmp_path):
             cwd=tmp_path,
         )
     )
-    assert line == "frames must be from 1 to 100000, got 1000000000"
+    assert line == "frames must be at most 100000 (the limit), got 1000000000"
     (tmp_path / "many.toml").write_text("[[box]]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n" * 10_001)
     line = one_line(run("render", "box.stl", "-o", "out.png", "--glyphs", "many.toml", cwd=tmp_path))
     assert line == "many.toml: 10001 glyphs, over the limit of 10000"

@@ -177,8 +177,10 @@ def turntable(
     """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
     (default: the blueprint) as a video, atomically."""
     output, write = choose_writer(output, Kind.VIDEO)
-    if not 1 <= frames <= FRAME_LIMIT:
-        raise InputError(f"frames must be from 1 to {FRAME_LIMIT}, got {frames}")
+    if frames < 1:
+        raise InputError(f"frames must be at least 1, got {frames}")
+    if frames > FRAME_LIMIT:
+        raise InputError(f"frames must be at most {FRAME_LIMIT} (the limit), got {frames}")
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
@@ -351,8 +353,10 @@ def render_silhouettes_file(
     if animate is None and WRITERS.find(Path(output).suffix, Kind.VIDEO):
         raise InputError(f"{output}: a video needs --animate twist or --animate wave")
     output, write = choose_writer(output, Kind.VIDEO if animate else Kind.IMAGE)
-    if not 1 <= frames <= FRAME_LIMIT:
-        raise InputError(f"frames must be from 1 to {FRAME_LIMIT}, got {frames}")
+    if frames < 1:
+        raise InputError(f"frames must be at least 1, got {frames}")
+    if frames > FRAME_LIMIT:
+        raise InputError(f"frames must be at most {FRAME_LIMIT} (the limit), got {frames}")
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps:g}")
     if not 1 <= layers <= MAX_LAYERS:
