@@ -882,3 +882,15 @@ def test_image_inputs_that_are_not_images_say_so_in_user_words(tmp_path):
     with pytest.raises(InputError) as caught:
         read_image(tmp_path / "cut.png", "rgba8")
     assert str(caught.value) == f"{tmp_path / 'cut.png'}: cannot read the image (it is damaged or cut short)"
+
+
+@pytest.mark.parametrize("label", ["3mf #108", "3mf #117"])
+def test_corpus_finds_stay_fixed(tmp_path, label):
+    """Mutated 3MF files whose deflate streams break mid-member: a traceback from zlib in the
+    walk of the component graph, found by the whole corpus."""
+    (case,) = [c for c in _corpus().generate(17, 160, ("mutated",)) if c.label == label]
+    case.make(tmp_path)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(tmp_path / "m.3mf")
+    assert str(caught.value).startswith(f"{tmp_path / 'm.3mf'}: ")
+    assert "Error" not in str(caught.value)

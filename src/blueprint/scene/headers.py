@@ -179,6 +179,7 @@ def _check_3mf(path: Path, limit: int, data: bytes | None) -> None:
     ``blueprint.scene.archive.check_zip`` has bounded), walked as glTF nodes are: objects made
     of components of other objects, placed by build items."""
     import zipfile
+    import zlib
 
     with contextlib.ExitStack() as stack:
         fh = (
@@ -190,7 +191,7 @@ def _check_3mf(path: Path, limit: int, data: bytes | None) -> None:
             archive = stack.enter_context(zipfile.ZipFile(fh))
             parts = [i for i in archive.infolist() if i.filename.lower().endswith(".model")]
             documents = [archive.read(i) for i in parts]
-        except (zipfile.BadZipFile, OSError, ValueError, EOFError, NotImplementedError):
+        except (zipfile.BadZipFile, zlib.error, OSError, ValueError, EOFError, NotImplementedError):
             return  # the loader says what is wrong
     for document in documents:
         _check_3mf_document(path, document)
