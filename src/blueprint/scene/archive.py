@@ -85,7 +85,8 @@ def expand_stream(path: Path, kind: str) -> bytes:
     stream claims. Concatenated streams (``cat a.gz b.gz``) expand to their concatenation."""
     limit, ratio = _limits()
     with open_file(path, settings.MODEL_FILE_LIMIT, "a model file") as fh:
-        compressed = fh.read()
+        # no more than the limit, should the file grow after its check
+        compressed = fh.read(settings.MODEL_FILE_LIMIT)
     out = bytearray()
     data = compressed
     try:
