@@ -14,6 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -405,3 +406,491 @@ def test_honest_headers_still_load(tmp_path):
     off.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
     assert blueprint.load_model(ply).triangle_count == 1
     assert blueprint.load_model(off).triangle_count == 1
+
+
+# -- compressed models: expanded with bounds ------------------------------------------------------
+def _bomb_bytes(size: int) -> bytes:
+    return b"\0" * size
+
+
+@pytest.mark.parametrize("kind", ["gz", "bz2", "xz"])
+def test_a_compressed_model_loads(tmp_path, kind):
+    import bz2
+    import gzip
+    import lzma
+
+    compress = {"gz": gzip.compress, "bz2": bz2.compress, "xz": lzma.compress}[kind]
+    path = tmp_path / f"box.stl.{kind}"
+    path.write_bytes(compress(_box().export(file_type="stl")))
+    model = loader.load_model(path)
+    assert model.triangle_count == 12 and model.up == "z"
+    assert model.positions.max(axis=0).tolist() == [1, 2, 3]
+
+
+@pytest.mark.parametrize("kind", ["gz", "bz2", "xz"])
+def test_a_compressed_bomb_is_refused_while_expanding(tmp_path, kind, monkeypatch):
+    import bz2
+    import gzip
+    import lzma
+
+    compress = {"gz": gzip.compress, "bz2": bz2.compress, "xz": lzma.compress}[kind]
+    path = tmp_path / f"bomb.stl.{kind}"
+    path.write_bytes(compress(_bomb_bytes(64 << 20)))
+    assert path.stat().st_size < 70_000
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value).startswith(
+        f"{path}: the compressed stream expands to more than 200 times its compressed size ("
+    )
+    monkeypatch.setattr(settings, "EXPANDED_LIMIT", 8 << 20)
+    monkeypatch.setattr(settings, "EXPANSION_RATIO_LIMIT", 10**6)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: the compressed stream expands to more than 8 MiB, the limit for a model's contents "
+        "(set from this machine's memory; BLUEPRINT_MEMORY_LIMIT changes it)"
+    )
+
+
+def _zip(path: Path, files: dict[str, bytes]) -> None:
+    import zipfile
+
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, data in files.items():
+            archive.writestr(name, data)
+
+
+@pytest.mark.parametrize("suffix", ["zip", "3mf", "3dxml"])
+def test_zip_bombs_are_refused_by_their_directory(tmp_path, suffix, monkeypatch):
+    path = tmp_path / f"bomb.{suffix}"
+    _zip(path, {"[Content_Types].xml": b"<Types/>", "3D/3dmodel.model": _bomb_bytes(32 << 20)})
+    read = []
+    monkeypatch.setattr(loader, "_trimesh_scene", lambda *a: read.append(a))
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert "expands to more than 200 times its compressed size" in str(caught.value)
+    assert str(caught.value).startswith(f"{path}: the archive ")
+    assert read == []
+
+
+def test_a_zip_of_models_loads_each(tmp_path):
+    path = tmp_path / "two.zip"
+    moved = _box()
+    moved.apply_translation([10, 0, 0])
+    _zip(path, {"a.stl": _box().export(file_type="stl"), "b.obj": moved.export(file_type="obj").encode()})
+    model = loader.load_model(path)
+    assert model.triangle_count == 24 and len(model.part_names) == 2
+    assert model.positions.min(axis=0).tolist() == [0, 0, 0]
+    assert model.positions.max(axis=0).tolist() == [11, 2, 3]
+
+
+def test_a_zip_without_models_is_one_line(tmp_path):
+    path = tmp_path / "notes.zip"
+    _zip(path, {"readme.txt": b"hello"})
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: the archive holds no model file (it holds: readme.txt)"
+
+
+# -- binary STL counts -----------------------------------------------------------------------------------
+def test_binary_stl_whose_count_lies_is_refused(tmp_path):
+    import struct
+
+    data = _box().export(file_type="stl")
+    path = tmp_path / "lie.stl"
+    path.write_bytes(data[:80] + struct.pack("<I", 10**9) + data[84:])
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: the header declares 1000000000 triangles, more than the file's 684 bytes can hold "
+        "(50000000084 bytes)"
+    )
+
+
+def test_binary_stl_over_the_triangle_limit_is_refused(tmp_path, monkeypatch):
+    path = tmp_path / "box.stl"
+    _box().export(path)
+    monkeypatch.setattr(settings, "TRIANGLE_LIMIT", 11)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: 12 triangles, over the limit of 11 (set from this machine's memory; "
+        "BLUEPRINT_MEMORY_LIMIT changes it)"
+    )
+
+
+# -- glTF node graphs: walked once ----------------------------------------------------------------------
+def _glb(path: Path, nodes: list, roots: list) -> None:
+    """A GLB of one triangle mesh placed by ``nodes`` (glTF node objects) under ``roots``."""
+    import json
+    import struct
+
+    import numpy as np
+
+    binary = (
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32).tobytes()
+        + np.arange(3, dtype="<u4").tobytes()
+    )
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": roots}],
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 12},
+        ],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 3,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            },
+            {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"},
+        ],
+    }
+    text = json.dumps(doc).encode()
+    text += b" " * (-len(text) % 4)
+    body = (
+        struct.pack("<II", len(text), 0x4E4F534A)
+        + text
+        + struct.pack("<II", len(binary), 0x004E4942)
+        + binary
+    )
+    path.write_bytes(struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body)
+
+
+@pytest.mark.parametrize(
+    ("nodes", "roots", "message"),
+    [
+        (
+            [{"mesh": 0, "children": [1]}, {"mesh": 0, "children": [0]}],
+            [0],
+            "its nodes form a cycle (0 → 1 → 0)",
+        ),
+        ([{"mesh": 0, "children": [0]}], [0], "its nodes form a cycle (0 → 0)"),
+        ([{"mesh": 0, "children": [5]}], [0], "node 0 refers to node 5, which does not exist"),
+        ([{"mesh": 0}], [3], "a scene refers to node 3, which does not exist"),
+        (
+            [{"mesh": 0, "children": [i + 1]} for i in range(10**4)] + [{"mesh": 0}],
+            [0],
+            "its nodes nest more than 64 deep (the limit)",
+        ),
+    ],
+)
+def test_broken_node_graphs_are_one_line(tmp_path, nodes, roots, message):
+    path = tmp_path / "graph.glb"
+    _glb(path, nodes, roots)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: {message}"
+
+
+def test_instance_and_triangle_limits_of_a_graph(tmp_path, monkeypatch):
+    path = tmp_path / "many.glb"
+    # a node placing a group twice: four instances of the mesh from three nodes
+    _glb(path, [{"children": [1, 1]}, {"mesh": 0, "children": [2]}, {"mesh": 0}], [0])
+    monkeypatch.setattr(settings, "INSTANCE_LIMIT", 3)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: its scene holds more than 3 mesh instances (the limit)"
+
+
+def test_many_instances_of_one_mesh_still_load(tmp_path):
+    path = tmp_path / "rows.glb"
+    count = 20_000
+    _glb(
+        path,
+        [{"mesh": 0, "translation": [2.0 * (i % 200), 2.0 * (i // 200), 0]} for i in range(count)],
+        list(range(count)),
+    )
+    model = loader.load_model(path)
+    assert model.triangle_count == count and len(model.part_names) == count
+    assert model.positions.max(axis=0).tolist() == [2.0 * 199 + 1, 2.0 * 99 + 1, 0]
+
+
+# -- work bounded before it starts ------------------------------------------------------------------
+def test_off_face_with_a_billion_corners_is_refused(tmp_path):
+    path = tmp_path / "corners.off"
+    path.write_text("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n1000000000 0 1 2\n")
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: face 1 declares 1000000000 corners and lists 3"
+
+
+def test_one_triangle_over_and_over_is_refused(tmp_path):
+    path = tmp_path / "same.obj"
+    path.write_text(
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nv 6 5 5\nv 5 6 5\n" + "f 1 2 3\n" * 257 + "f 4 5 6\n"
+    )
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: 257 faces lie on one another (one triangle over and over), more than the 256 layers "
+        "a drawing can peel"
+    )
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n" + "f 1 2 3\n" * 256)
+    assert loader.load_model(path).triangle_count == 256
+
+
+def test_frames_glyph_counts_and_glyph_coordinates_are_bounded(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    line = one_line(
+        run(
+            "silhouettes",
+            "box.stl",
+            "-o",
+            "s.mp4",
+            "--animate",
+            "twist",
+            "--frames",
+            "1000000000",
+            cwd=tmp_path,
+        )
+    )
+    assert line == "frames must be at most 100000 (the limit), got 1000000000"
+    (tmp_path / "many.toml").write_text("[[box]]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n" * 10_001)
+    line = one_line(run("render", "box.stl", "-o", "out.png", "--glyphs", "many.toml", cwd=tmp_path))
+    assert line == "many.toml: 10001 glyphs, over the limit of 10000"
+    (tmp_path / "far.toml").write_text("[[box]]\nmin = [0, 0, 0]\nmax = [1e300, 1e308, 1]\n")
+    line = one_line(run("render", "box.stl", "-o", "out.png", "--glyphs", "far.toml", cwd=tmp_path))
+    assert line == "far.toml: box 1: max must be finite numbers within ±1e+18, got [1e+300, 1e+308, 1]"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.stl", "far.toml", "many.toml"]
+
+
+def test_the_memory_budget_is_set_from_the_environment(tmp_path):
+    code = "from blueprint import settings as s; print(s.MEMORY_BUDGET, s.MODEL_FILE_LIMIT, s.EXPANDED_LIMIT)"
+    for value, budget in (("64M", 64 << 20), ("1G", 1 << 30), ("123456789", 123456789)):
+        env = {**ENV, settings.MEMORY_ENV: value}
+        out = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, env=env, text=True, check=True
+        )
+        assert out.stdout.split() == [str(budget), str(budget // 4), str(budget // 4)]
+
+
+# -- outputs: temporaries gone with the process, paths refused up front ----------------------------
+KILLED_WRITER = """
+import os, sys, time
+from blueprint.export import files
+if sys.argv[2] == "named":
+    del files.os.O_TMPFILE  # as on a system without unnamed files
+def write(tmp):
+    with open(tmp, "wb") as fh:
+        fh.write(b"half")
+        fh.flush()
+        print("writing", flush=True)
+        time.sleep(60)
+files.atomic_write(sys.argv[1], write)
+"""
+
+
+@pytest.mark.parametrize("mode", ["unnamed", "named"])
+def test_a_writer_killed_mid_write_leaves_nothing_where_the_user_looks(tmp_path, mode):
+    import signal
+
+    from blueprint.export import files
+
+    (tmp_path / "out.png").write_bytes(b"old")
+    child = subprocess.Popen(
+        [sys.executable, "-c", KILLED_WRITER, str(tmp_path / "out.png"), mode],
+        stdout=subprocess.PIPE,
+        env=ENV,
+    )
+    assert child.stdout.readline() == b"writing\n"
+    left = sorted(p.name for p in tmp_path.iterdir())
+    os.kill(child.pid, signal.SIGKILL)
+    child.wait(TIMEOUT)
+    child.stdout.close()
+    after = sorted(p.name for p in tmp_path.iterdir())
+    assert (tmp_path / "out.png").read_bytes() == b"old"
+    if mode == "unnamed":
+        # never named: nothing but the old file, during the write and after the kill
+        assert left == after == ["out.png"]
+        return
+    # named: ours, with the dead process's id, swept by the next write once it is stale
+    (stale,) = set(after) - {"out.png"}
+    assert stale.startswith(f".out.png.bp{child.pid}.") and stale.endswith(".tmp")
+    assert files.sweep_temporaries(tmp_path) == []  # written just now: it might be another host's
+    os.utime(tmp_path / stale, (0, 0))
+    (tmp_path / ".notes.bp1.x.txt").write_text("not ours")
+    files.save_png(tmp_path / "out.png", np.zeros((2, 2, 3), np.uint8))
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".notes.bp1.x.txt", "out.png"]
+
+
+def test_output_written_in_place_has_the_usual_permissions(tmp_path):
+    from blueprint.export import files
+
+    files.save_png(tmp_path / "a.png", np.zeros((2, 2, 3), np.uint8))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o666 & ~umask
+    os.chmod(tmp_path / "a.png", 0o640)
+    files.save_png(tmp_path / "a.png", np.ones((2, 2, 3), np.uint8))
+    assert (tmp_path / "a.png").stat().st_mode & 0o777 == 0o640
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png"]
+
+
+def test_outputs_that_cannot_be_written_are_one_line_before_any_work(tmp_path):
+    _box().export(tmp_path / "box.stl")
+    long = "a" * 300 + ".png"
+    line = one_line(run("render", "box.stl", "-o", long, "--size", "32", "32", cwd=tmp_path))
+    assert line == f"{long}: cannot write (File name too long)"
+    line = one_line(run("turntable", "box.stl", "-o", "/proc/out.mp4", "--size", "32", "32", cwd=tmp_path))
+    assert line.startswith("/proc/out.mp4: folder /proc takes no new files (")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["box.stl"]
+
+
+def test_a_dump_that_cannot_be_written_leaves_no_output(tmp_path):
+    from PIL import Image
+
+    (tmp_path / "invert.toml").write_text(INVERT)
+    Image.new("RGB", (8, 8)).save(tmp_path / "picture.png")
+    (tmp_path / "out.out.png").mkdir()
+    proc = run(
+        "pipeline",
+        "run",
+        "invert.toml",
+        "-o",
+        "out.png",
+        "--image",
+        "picture=picture.png",
+        "--dump",
+        "out",
+        cwd=tmp_path,
+    )
+    assert one_line(proc) == "out.out.png: cannot write (Is a directory)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["invert.toml", "out.out.png", "picture.png"]
+
+
+def test_out_of_memory_names_the_pipeline(tmp_path, monkeypatch):
+    from PIL import Image
+
+    from blueprint.api import files
+    from blueprint.pipeline.executor import Executor
+
+    (tmp_path / "invert.toml").write_text(INVERT)
+    Image.new("RGB", (8, 8)).save(tmp_path / "picture.png")
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(Executor, "run", exhausted)
+    with pytest.raises(InputError) as caught:
+        files.run_pipeline(
+            tmp_path / "invert.toml", None, tmp_path / "out.png", image={"picture": tmp_path / "picture.png"}
+        )
+    assert str(caught.value) == f"{tmp_path / 'invert.toml'}: out of memory (try a smaller --size)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["invert.toml", "picture.png"]
+
+
+def test_numpy_warnings_are_our_one_line_warnings():
+    code = (
+        "import numpy as np\nfrom blueprint.cli.options import setup_logging\nsetup_logging()\n"
+        "np.array([1e308]) * 10\nnp.array([1e308]) * 10\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, env=ENV, text=True)
+    assert proc.stderr == "blueprint: warning: numeric trouble: overflow encountered in multiply\n"
+
+
+# -- the corpus of benchmarks/hostile.py: a fast subset --------------------------------------------
+def _corpus():
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "hostile.py"
+    spec = importlib.util.spec_from_file_location("hostile_corpus", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    return module
+
+
+FAST = (
+    "FIFO mtllib",
+    "zip of no model",
+    "GLB nodes 0 -> 1 -> 0",
+    "pipeline digits.toml",
+    "model name with a newline",
+    "OBJ nan vertex",
+)
+
+
+def test_a_fast_subset_of_the_hostile_corpus_runs_clean(tmp_path):
+    """The same generator as the whole run (``python benchmarks/hostile.py``): a few cases of
+    every cheap kind, and mutated files; each clean, or the reason it is not."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    corpus = _corpus()
+    kinds = ("special", "sparse", "bomb", "header", "graph", "settings", "pipeline", "names", "numbers")
+    chosen = [c for c in corpus.generate(17, 0, kinds) if c.label in FAST]
+    chosen += corpus.generate(17, 3, ("mutated",))
+    assert len(chosen) == len(FAST) + 3
+    with ThreadPoolExecutor(2) as pool:
+        outcomes = list(
+            pool.map(lambda ic: corpus.run_case(ic[1], tmp_path / str(ic[0]), TIMEOUT), enumerate(chosen))
+        )
+    assert [(o.case.label, o.reason) for o in outcomes if not o.clean] == []
+    assert all(o.case.valid or o.reason == "refused" for o in outcomes)
+
+
+def _threemf(path: Path, components: int) -> None:
+    corpus = _corpus()
+    path.write_bytes(corpus.threemf(components))
+
+
+def test_a_deep_chain_of_3mf_components_is_refused(tmp_path):
+    path = tmp_path / "chain.3mf"
+    _threemf(path, 10**4)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: its objects nest more than 64 deep (the limit)"
+    _threemf(path, 20)
+    model = loader.load_model(path)
+    assert model.triangle_count == 12 and model.positions.max(axis=0).tolist() == [1, 2, 3]
+
+
+def test_a_cycle_of_3mf_components_is_refused(tmp_path):
+    path = tmp_path / "cycle.3mf"
+    _threemf(path, 3)
+    import zipfile
+
+    with zipfile.ZipFile(path) as archive:
+        model = archive.read("3D/3dmodel.model").replace(
+            b'<component objectid="1"/>', b'<component objectid="4"/>'
+        )
+    _zip(path, {"[Content_Types].xml": b"<Types/>", "3D/3dmodel.model": model})
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: its objects form a cycle (4 → 3 → 2 → 4)"
+
+
+def test_image_inputs_that_are_not_images_say_so_in_user_words(tmp_path):
+    from PIL import Image
+
+    from blueprint.pipeline.media import read_image
+
+    (tmp_path / "text.png").write_bytes(b"not a picture at all")
+    with pytest.raises(InputError) as caught:
+        read_image(tmp_path / "text.png", "rgba8")
+    assert str(caught.value) == f"{tmp_path / 'text.png'}: not an image in a format Pillow reads"
+    Image.effect_noise((64, 64), 40).convert("RGB").save(tmp_path / "noise.png")
+    (tmp_path / "cut.png").write_bytes((tmp_path / "noise.png").read_bytes()[:200])
+    with pytest.raises(InputError) as caught:
+        read_image(tmp_path / "cut.png", "rgba8")
+    assert str(caught.value) == f"{tmp_path / 'cut.png'}: cannot read the image (it is damaged or cut short)"
+
+
+@pytest.mark.parametrize("label", ["3mf #108", "3mf #117"])
+def test_corpus_finds_stay_fixed(tmp_path, label):
+    """Mutated 3MF files whose deflate streams break mid-member: a traceback from zlib in the
+    walk of the component graph, found by the whole corpus."""
+    (case,) = [c for c in _corpus().generate(17, 160, ("mutated",)) if c.label == label]
+    case.make(tmp_path)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(tmp_path / "m.3mf")
+    assert str(caught.value).startswith(f"{tmp_path / 'm.3mf'}: ")
+    assert "Error" not in str(caught.value)

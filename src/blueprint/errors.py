@@ -1,6 +1,8 @@
 """Errors that carry a one-line message meant for the user."""
 
+import contextlib
 import unicodedata
+from collections.abc import Iterator
 
 
 class BlueprintError(Exception):
@@ -41,3 +43,13 @@ def printable(text: str) -> str:
         else:
             out.append(c)
     return "".join(out)
+
+
+@contextlib.contextmanager
+def out_of_memory(name: str, hint: str = "try a smaller --size") -> Iterator[None]:
+    """Turn a ``MemoryError`` inside the block into an ``InputError`` naming ``name``, the
+    file being read or run (a model, a pipeline), with ``hint`` for what to change."""
+    try:
+        yield
+    except MemoryError:
+        raise InputError(f"{name}: out of memory ({hint})") from None

@@ -19,12 +19,24 @@ from blueprint.color import RGBA, hex_color
 from blueprint.errors import InputError
 
 __all__ = [
+    "COINCIDENT_LIMIT",
+    "COORDINATE_LIMIT",
+    "EXPANDED_LIMIT",
+    "EXPANSION_RATIO_LIMIT",
+    "FRAME_LIMIT",
+    "GLYPH_LIMIT",
     "IMAGE_FILE_LIMIT",
     "IMAGE_PIXEL_LIMIT",
+    "INSTANCE_LIMIT",
+    "MEMORY_BUDGET",
+    "MEMORY_ENV",
     "MODEL_FILE_LIMIT",
     "SETTINGS_FILE_LIMIT",
+    "TRIANGLE_LIMIT",
     "Entry",
     "check_file",
+    "human_size",
+    "memory_budget",
     "is_number",
     "one_line",
     "open_file",
@@ -34,14 +46,82 @@ __all__ = [
     "show",
 ]
 
+# The memory one run may plan to use: what the limits below are derived from, so that a
+# machine with little memory refuses a big file in one line instead of being killed mid-read.
+MEMORY_ENV = "BLUEPRINT_MEMORY_LIMIT"
+_MEMORY_CAP = 16 << 30
+_MEMORY_FLOOR = 64 << 20
+
+
+def _available_memory() -> int:
+    """Bytes this process may still use: the memory the kernel reports available, or less
+    where an address-space limit (``ulimit -v``) is set."""
+    available = None
+    try:
+        with open("/proc/meminfo", "rb") as fh:
+            for line in fh:
+                if line.startswith(b"MemAvailable:"):
+                    available = int(line.split()[1]) * 1024
+                    break
+    except (OSError, ValueError, IndexError):
+        pass
+    if available is None:
+        try:
+            available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (OSError, ValueError, AttributeError):
+            available = 4 * _MEMORY_CAP
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY:
+            available = min(available, soft)
+    except (ImportError, OSError, ValueError):
+        pass
+    return available
+
+
+def memory_budget() -> int:
+    """Bytes of memory the limits on inputs are set from: a quarter of the memory available,
+    at most 16 GiB; the environment variable ``BLUEPRINT_MEMORY_LIMIT`` (bytes, or with a
+    suffix K, M or G; at least 1 MiB) sets it instead."""
+    text = os.environ.get(MEMORY_ENV, "").strip()
+    scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30}.get(text[-1:].upper(), 1)
+    digits = text[:-1] if scale > 1 else text
+    # checked here, at import, where an error could not be one line: a value that is not a
+    # size leaves the default
+    if digits.isdigit() and len(digits) <= 15:
+        return max(int(digits) * scale, 1 << 20)
+    return max(min(_available_memory() // 4, _MEMORY_CAP), _MEMORY_FLOOR)
+
+
+MEMORY_BUDGET = memory_budget()
 # Largest files read, in bytes: they are read whole into memory (trimesh, Pillow, the TOML and
-# JSON parsers), so a sparse or endless file must be refused before it is read, not while.
-MODEL_FILE_LIMIT = 2 << 30  # a model, or a file it references: materials, textures, buffers
-IMAGE_FILE_LIMIT = 1 << 30  # a pipeline's image input
+# JSON parsers) and copied a few times over, so a sparse or endless file must be refused before
+# it is read, not while.
+MODEL_FILE_LIMIT = min(2 << 30, MEMORY_BUDGET // 4)  # a model, or a file it references
+# what the archives of models (zip, 3MF, 3DXML, .gz, .bz2, .xz) may expand to, all members
+# together, and how many times their compressed size: a few kilobytes can expand to gigabytes
+EXPANDED_LIMIT = MODEL_FILE_LIMIT
+EXPANSION_RATIO_LIMIT = 200
+IMAGE_FILE_LIMIT = min(1 << 30, MEMORY_BUDGET // 4)  # a pipeline's image input
 SETTINGS_FILE_LIMIT = 16 << 20  # settings, line style, glyph and pipeline files
-# Pixels an image input may declare (256 MiB as RGBA): its header is read before any pixel, and
-# a few kilobytes of PNG can declare an image larger than memory.
-IMAGE_PIXEL_LIMIT = 1 << 26
+# Pixels an image input may declare (at most 256 MiB as RGBA, and four floats a pixel on the GPU
+# within the budget): its header is read before any pixel, and a few kilobytes of PNG can
+# declare an image larger than memory.
+IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
+# Triangles a model may have, all instances together: loading, welding and drawing keep a few
+# hundred bytes a triangle; and mesh instances a scene may place (each is a part, with a name).
+TRIANGLE_LIMIT = MEMORY_BUDGET // 256
+INSTANCE_LIMIT = 200_000
+# Frames of a video (an hour at 30 frames a second would be 108 000), glyphs of a glyph file (each
+# is projected and stroked on the CPU), and the largest coordinate of a model or a glyph: beyond
+# it, view and projection matrices overflow the GPU's 32-bit floats.
+FRAME_LIMIT = 100_000
+# copies of one triangle a model may hold: each is a layer to the peel, which stops at 256
+COINCIDENT_LIMIT = 256
+GLYPH_LIMIT = 10_000
+COORDINATE_LIMIT = 1e18
 # Settings and pipeline files: how deep tables and arrays nest and how many digits a number has;
 # a 10^4-deep array or a 5000-digit integer is refused with the file and key named.
 SETTINGS_DEPTH_LIMIT = 32
@@ -57,7 +137,8 @@ _NOT_REGULAR = (
 )
 
 
-def _size(n: int) -> str:
+def human_size(n: int) -> str:
+    """A count of bytes as messages give it: "3 GiB", "1.76 KiB", "100 bytes"."""
     for unit, scale in (("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
         if n >= scale:
             return f"{n / scale:.3g} {unit}"
@@ -69,7 +150,9 @@ def _checked(name: str, info: os.stat_result, limit: int | None, what: str) -> o
         kind = next((k for test, k in _NOT_REGULAR if test(info.st_mode)), "a special file")
         raise InputError(f"{name}: not a regular file ({kind})")
     if limit is not None and info.st_size > limit:
-        raise InputError(f"{name}: {_size(info.st_size)} is over the limit of {_size(limit)} for {what}")
+        raise InputError(
+            f"{name}: {human_size(info.st_size)} is over the limit of {human_size(limit)} for {what}"
+        )
     return info
 
 
@@ -120,7 +203,7 @@ def read_file(path: str | os.PathLike, limit: int, what: str = "a file") -> byte
         except OSError as exc:
             raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
     if len(data) > limit:
-        raise InputError(f"{path}: over the limit of {_size(limit)} for {what}")
+        raise InputError(f"{path}: over the limit of {human_size(limit)} for {what}")
     return data
 
 
@@ -231,8 +314,9 @@ class Entry:
         value = self.table[key] if value is None else value
         if not isinstance(value, list | tuple) or len(value) != 3 or not all(map(is_number, value)):
             raise self.fail(f"{key} must be 3 numbers, got {show(value)}")
-        if not all(math.isfinite(v) for v in value):
-            raise self.fail(f"{key} must be finite numbers, got {show(value)}")
+        # bounded as model coordinates are: beyond, a projection overflows
+        if not all(math.isfinite(v) and abs(v) <= COORDINATE_LIMIT for v in value):
+            raise self.fail(f"{key} must be finite numbers within ±{COORDINATE_LIMIT:g}, got {show(value)}")
         return tuple(float(v) for v in value)
 
     def color(self, key: str, default: str) -> RGBA:

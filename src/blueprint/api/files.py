@@ -23,7 +23,7 @@ from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.style import Style
-from blueprint.errors import InputError
+from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
 from blueprint.export.writers import WRITERS, Kind, Writer
 from blueprint.gpu.device import check_size
@@ -43,6 +43,7 @@ from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
+from blueprint.settings import FRAME_LIMIT
 from blueprint.silhouette.gpu import (
     DEFAULT_LAYERS,
     DEFAULT_METHOD,
@@ -152,9 +153,10 @@ def run_pipeline(
         w, h = size or bound.size or (1024, 1024)
         camera = fit_camera(model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
         size = (w, h)
-    if videos:
-        return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
-    result = ex.run(spec, model, camera, size=size, **options)
+    with out_of_memory(str(spec.source)):
+        if videos:
+            return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
+        result = ex.run(spec, model, camera, size=size, **options)
     save_result(result, output, formats)
     return result
 
@@ -182,6 +184,10 @@ def turntable(
     """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
     (default: the blueprint) as a video, atomically."""
     output, write = choose_writer(output, Kind.VIDEO)
+    if frames < 1:
+        raise InputError(f"frames must be at least 1, got {frames}")
+    if frames > FRAME_LIMIT:
+        raise InputError(f"frames must be at most {FRAME_LIMIT} (the limit), got {frames}")
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
@@ -366,6 +372,8 @@ def render_silhouettes_file(
     output, write = choose_writer(output, Kind.VIDEO if animate else Kind.IMAGE)
     if frames < 1:
         raise InputError(f"frames must be at least 1, got {frames}")
+    if frames > FRAME_LIMIT:
+        raise InputError(f"frames must be at most {FRAME_LIMIT} (the limit), got {frames}")
     if not 0 < fps <= 240:
         raise InputError(f"fps must be in (0, 240], got {fps:g}")
     if not 1 <= layers <= MAX_LAYERS:

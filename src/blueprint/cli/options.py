@@ -6,6 +6,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import sys
+import warnings
 
 import click
 
@@ -21,12 +22,26 @@ class _OneLine(logging.Handler):
         click.echo(f"blueprint: warning: {printable(record.getMessage())}", err=True)
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    # Python's form is two lines with the source line (NumPy's "overflow encountered in matmul"
+    # on coordinates near the float limits); ours is one, once per message
+    text = " ".join(str(message).split())
+    if text not in _WARNED:
+        _WARNED.add(text)
+        kind = "numeric trouble: " if issubclass(category, RuntimeWarning) else ""
+        logging.getLogger("blueprint").warning("%s%s", kind, text)
+
+
+_WARNED: set[str] = set()
+
+
 def setup_logging() -> None:
     log = logging.getLogger("blueprint")
     if not any(isinstance(h, _OneLine) for h in log.handlers):
         log.addHandler(_OneLine())
     log.setLevel(logging.WARNING)
     log.propagate = False
+    warnings.showwarning = _one_line_warning
 
 
 @contextlib.contextmanager

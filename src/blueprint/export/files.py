@@ -1,10 +1,22 @@
-"""PNG images and NPZ layer stacks, written atomically; the checks an output path passes first."""
+"""PNG images and NPZ layer stacks, written atomically; the checks an output path passes first.
+
+Every output is written to a temporary file and put in place whole. Where the file system
+allows (Linux's ``O_TMPFILE``: ext4, XFS, Btrfs, tmpfs), the temporary file has no name until
+it is linked into place, so a process killed mid-write leaves nothing behind: the kernel frees
+the unnamed file with the process. Elsewhere it is named ``.NAME.bpPID.XXXX.tmp`` beside the
+output, and every later write into that folder removes such files whose process has died.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import re
+import secrets
+import stat
 import tempfile
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -12,56 +24,193 @@ import numpy as np
 
 from blueprint.errors import InputError
 
+__all__ = ["atomic_write", "check_output", "save_layers", "save_png", "sweep_temporaries", "temporary"]
+
+# what our named temporary files are called: the output's name, our process id, a token
+_NAMED = re.compile(r"^\..*\.bp(\d+)\.[0-9A-Za-z_]+\.tmp$")
+# a named temporary file of a dead process is left alone this long after its last write: the
+# process id may be of another machine or container writing into a shared folder
+STALE_SECONDS = 60.0
+# errors that say the file system has no O_TMPFILE (the folder's, or the kernel's)
+_NO_TMPFILE = (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL, errno.ENOENT)
+
+
+def _folder(path: Path) -> Path:
+    return path.parent if str(path.parent) else Path(".")
+
+
+def _stat(path: Path) -> os.stat_result | None:
+    """``path``'s stat, None where there is no such file; any other failure (a name too long
+    for the file system, a path through a file) is one line."""
+    try:
+        return os.stat(path)
+    except (FileNotFoundError, NotADirectoryError):  # the folder's check says which
+        return None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot write ({exc.strerror or exc})") from None
+
 
 def check_output(path: str | os.PathLike, suffixes: tuple[str, ...], suffix: str | None = None) -> Path:
     """Fail early, before any rendering, on an output path that cannot be written: its suffix
     (or ``suffix``, the format it is to be written in whatever its name) not among
-    ``suffixes``, a directory, or in a folder that is missing or read-only."""
+    ``suffixes``, a directory, a name too long, or in a folder that is missing, read-only or
+    takes no new files (``/proc``): a temporary file is made there, and removed, to know."""
     path = Path(path)
     if (suffix or path.suffix).lower() not in suffixes:
         raise InputError(f"{path}: output must end in {' or '.join(suffixes)}")
-    if path.is_dir():
+    info = _stat(path)
+    if info is not None and stat.S_ISDIR(info.st_mode):
         raise InputError(f"{path}: is a directory")
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
+    folder = _folder(path)
+    if not os.path.isdir(folder):
         raise InputError(f"{path}: folder {folder} does not exist")
     if not os.access(folder, os.W_OK):
         raise InputError(f"{path}: folder {folder} is not writable")
-    if path.exists() and not os.access(path, os.W_OK):
+    if info is not None and not os.access(path, os.W_OK):
         raise InputError(f"{path}: file is not writable")
+    try:
+        with _open_temporary(path):
+            pass
+    except OSError as exc:
+        raise InputError(f"{path}: folder {folder} takes no new files ({exc.strerror or exc})") from None
     return path
 
 
-def publish(tmp: str | os.PathLike, path: Path) -> None:
-    """Rename a finished temporary file onto ``path``, with the permissions the file would have
-    had if written directly: temporary files are private (0600), a drawing is not."""
+def _mode(path: Path) -> int:
+    """The permissions ``path`` would have had if written directly: temporary files are
+    private (0600), a drawing is not."""
     try:
-        mode = os.stat(path).st_mode & 0o7777
+        return os.stat(path).st_mode & 0o7777
     except OSError:
         umask = os.umask(0)
         os.umask(umask)
-        mode = 0o666 & ~umask
-    os.chmod(tmp, mode)
-    os.replace(tmp, path)
+        return 0o666 & ~umask
+
+
+def _named(path: Path) -> str:
+    return f".{path.name[:64]}.bp{os.getpid()}.{secrets.token_hex(4)}.tmp"
+
+
+class _Temporary:
+    """A temporary file for ``path``: unnamed (``fd`` set) or named (``name`` set). ``path``
+    is what writers open: ``/proc/PID/fd/N`` for an unnamed one, which other processes
+    (ffmpeg) can open too."""
+
+    def __init__(self, target: Path) -> None:
+        self.target = target
+        self.fd: int | None = None
+        self.name: Path | None = None
+        folder = _folder(target)
+        try:
+            self.fd = os.open(folder, os.O_TMPFILE | os.O_WRONLY | os.O_CLOEXEC, 0o600)
+        except AttributeError:  # not Linux
+            pass
+        except OSError as exc:
+            if exc.errno not in _NO_TMPFILE:
+                raise
+        if self.fd is not None:
+            self.path = Path(f"/proc/{os.getpid()}/fd/{self.fd}")
+        else:
+            prefix = f".{target.name[:64]}.bp{os.getpid()}."
+            fd, name = tempfile.mkstemp(prefix=prefix, suffix=".tmp", dir=folder)
+            os.close(fd)
+            self.name = self.path = Path(name)
+
+    def publish(self) -> None:
+        """Put the finished file in place of the target, whole."""
+        mode = _mode(self.target)
+        if self.name is not None:
+            os.chmod(self.name, mode)
+            os.replace(self.name, self.target)
+            self.name = None
+            return
+        os.fchmod(self.fd, mode)
+        folder = os.open(_folder(self.target), os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+        try:
+            # a name for the file, then the rename over the target: link(2) cannot replace
+            name = _named(self.target)
+            os.link(f"/proc/self/fd/{self.fd}", name, dst_dir_fd=folder, follow_symlinks=True)
+            try:
+                os.replace(name, self.target.name, src_dir_fd=folder, dst_dir_fd=folder)
+            except OSError:
+                with contextlib.suppress(OSError):
+                    os.unlink(name, dir_fd=folder)
+                raise
+        finally:
+            os.close(folder)
+
+    def close(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+        if self.name is not None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(self.name)
+            self.name = None
 
 
 @contextlib.contextmanager
-def _temporary(path: Path) -> Iterator[Path]:
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:64]}.", suffix=".tmp", dir=path.parent or ".")
-    os.close(fd)
+def _open_temporary(path: Path) -> Iterator[_Temporary]:
+    tmp = _Temporary(path)
     try:
-        yield Path(tmp)
-        publish(tmp, path)
+        yield tmp
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        tmp.close()
+
+
+@contextlib.contextmanager
+def temporary(path: str | os.PathLike) -> Iterator[Path]:
+    """A path to write ``path``'s contents to, put in place of ``path`` when the block ends
+    without an error, and gone otherwise, or if the process is killed (see the module's
+    docstring). Stale temporary files of dead processes in the folder are removed first."""
+    path = Path(path)
+    sweep_temporaries(_folder(path))
+    with _open_temporary(path) as tmp:
+        yield tmp.path
+        tmp.publish()
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, of another user
+        return True
+    return True
+
+
+def sweep_temporaries(folder: str | os.PathLike) -> list[str]:
+    """Remove the named temporary files that processes of ours, now dead, left in ``folder``
+    (killed mid-write where the file system has no unnamed files), untouched for
+    ``STALE_SECONDS``; returns their names. Files of living processes, and any other file,
+    are left alone."""
+    removed = []
+    now = time.time()
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _NAMED.match(entry.name)
+        if not match or int(match.group(1)) == os.getpid() or _alive(int(match.group(1))):
+            continue
+        try:
+            if not entry.is_file(follow_symlinks=False) or now - entry.stat().st_mtime < STALE_SECONDS:
+                continue
+            os.unlink(entry.path)
+        except OSError:
+            continue
+        removed.append(entry.name)
+    return removed
 
 
 def atomic_write(path: str | os.PathLike, write: Callable[[Path], None]) -> Path:
-    """Call ``write(tmp)`` then rename ``tmp`` onto ``path``: readers never see half a file."""
+    """Call ``write(tmp)`` then put ``tmp`` in place of ``path``: readers never see half a file,
+    and a failed or killed write leaves none."""
     path = Path(path)
     try:
-        with _temporary(path) as tmp:
+        with temporary(path) as tmp:
             write(tmp)
     except OSError as exc:
         raise InputError(f"{path}: cannot write ({exc.strerror or exc})") from None

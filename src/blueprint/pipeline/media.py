@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
 import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -17,9 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.errors import InputError
-from blueprint.export.files import publish
+from blueprint.export.files import temporary
 from blueprint.gpu.targets import FORMATS
-from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file, one_line
+from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file
 
 VIDEO_FORMATS = {".mp4": "mp4", ".mov": "mov", ".mkv": "matroska", ".avi": "avi", ".m4v": "mp4"}
 
@@ -88,8 +87,10 @@ def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.
         raise InputError(f"{path}: no such image file") from None
     except Image.DecompressionBombError:
         raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise InputError(f"{path}: cannot read the image ({one_line(exc)})") from None
+    except UnidentifiedImageError:
+        raise InputError(f"{path}: not an image in a format Pillow reads") from None
+    except (OSError, ValueError, SyntaxError):  # Pillow's messages name its internals
+        raise InputError(f"{path}: cannot read the image (it is damaged or cut short)") from None
     return to_format(rgba, fmt)
 
 
@@ -111,8 +112,10 @@ def image_size(path: Path) -> tuple[int, int]:
         raise InputError(f"{path}: no such image file") from None
     except Image.DecompressionBombError:
         raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
-    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as exc:
-        raise InputError(f"{path}: cannot read the image ({one_line(exc)})") from None
+    except UnidentifiedImageError:
+        raise InputError(f"{path}: not an image in a format Pillow reads") from None
+    except (OSError, ValueError, SyntaxError):  # Pillow's messages name its internals
+        raise InputError(f"{path}: cannot read the image (it is damaged or cut short)") from None
 
 
 def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
@@ -124,10 +127,8 @@ def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
         meta = next(reader)
         reader.close()
         frames, _ = ffmpeg.count_frames_and_secs(str(path))
-    except (RuntimeError, OSError, StopIteration) as exc:
-        raise InputError(
-            f"{path}: cannot read the video ({str(exc).strip().splitlines()[0] if str(exc) else exc})"
-        ) from None
+    except (RuntimeError, OSError, StopIteration):  # ffmpeg's messages run to many lines
+        raise InputError(f"{path}: cannot read the video (not a video ffmpeg reads, or damaged)") from None
     return tuple(meta["size"]), float(meta.get("fps") or 25.0), int(frames)
 
 
@@ -138,8 +139,8 @@ def read_video(path: Path) -> Iterator[np.ndarray]:
     try:
         reader = ffmpeg.read_frames(str(path))
         meta = next(reader)
-    except (RuntimeError, OSError, StopIteration) as exc:
-        raise InputError(f"{path}: cannot read the video ({exc})") from None
+    except (RuntimeError, OSError, StopIteration):
+        raise InputError(f"{path}: cannot read the video (not a video ffmpeg reads, or damaged)") from None
     w, h = meta["size"]
     try:
         for raw in reader:
@@ -167,9 +168,11 @@ class VideoWriter:
 
     def __enter__(self) -> VideoWriter:
         ffmpeg = _ffmpeg()
-        folder = self.path.parent if str(self.path.parent) else Path(".")
-        fd, self._tmp = tempfile.mkstemp(prefix=f".{self.path.name[:64]}.", suffix=".tmp", dir=folder)
-        os.close(fd)
+        self._stack = contextlib.ExitStack()
+        try:
+            self._tmp = str(self._stack.enter_context(temporary(self.path)))
+        except OSError as error:
+            raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
         w, h = self.size
         # 4:2:0 (what players expect) needs even sizes; odd ones keep full chroma
         pix_fmt = "yuv420p" if w % 2 == 0 and h % 2 == 0 else "yuv444p"
@@ -205,15 +208,16 @@ class VideoWriter:
             if self._gen is not None:
                 with contextlib.suppress(StopIteration):
                     self._gen.close()
-            if kind is None:
-                if self.frames == 0:
-                    raise InputError(f"{self.path}: no frames to write")
-                publish(self._tmp, self.path)
+            if kind is None and self.frames == 0:
+                raise InputError(f"{self.path}: no frames to write")
+        except BaseException as error:
+            self._stack.__exit__(type(error), error, error.__traceback__)
+            raise
+        try:
+            # published only where the block ended without an error
+            self._stack.__exit__(kind, exc, tb)
         except OSError as error:
             raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
-        finally:
-            if self._tmp and os.path.exists(self._tmp):
-                os.unlink(self._tmp)
 
 
 def write_video(path: str | Path, frames: Iterable[np.ndarray], *, fps: float = 30.0, crf: int = 18) -> Path:

@@ -79,10 +79,13 @@ def _picture(array: np.ndarray) -> np.ndarray:
     return array[..., 0] if array.shape[-1] == 1 else array
 
 
-def write_dumps(result: Result, output: Path, formats: dict[str, str]) -> list[Path]:
+def write_dumps(
+    result: Result, output: Path, formats: dict[str, str], written: list[Path] | None = None
+) -> list[Path]:
     """Each dump beside ``output``: ``STEM.NAME.png`` (8-bit; ``STEM.NAME.K.png`` per layer
-    for per-layer targets) or ``STEM.NAME.npz`` (float and integer data, all layers)."""
-    written = []
+    for per-layer targets) or ``STEM.NAME.npz`` (float and integer data, all layers). Each
+    path is appended to ``written`` as it is written, which a caller keeps if one fails."""
+    written = [] if written is None else written
     for name, array in result.dumps.items():
         if array.dtype == np.uint8:
             if array.ndim == 4:
@@ -98,10 +101,14 @@ def write_dumps(result: Result, output: Path, formats: dict[str, str]) -> list[P
 
 
 def save_result(result: Result, output: Path, formats: dict[str, str]) -> None:
-    """A result's output as ``output`` (NPZ, or PNG of 8-bit data), its dumps beside it."""
-    if output.suffix.lower() == ".npz":
-        save_array(output, result.output, result.format)
-    else:
+    """A result's output as ``output`` (NPZ, or PNG of 8-bit data), its dumps beside it: the
+    dumps first and the output last, and the dumps written removed again where one fails, so
+    that a failed run leaves no output."""
+
+    def write_output() -> None:
+        if output.suffix.lower() == ".npz":
+            save_array(output, result.output, result.format)
+            return
         array = result.output[0] if result.output.ndim == 4 else result.output
         picture = (
             result.image[0]
@@ -109,7 +116,15 @@ def save_result(result: Result, output: Path, formats: dict[str, str]) -> None:
             else _to_8bit(array, result, "output")
         )
         save_png(output, _picture(picture))
-    write_dumps(result, output, formats)
+
+    written: list[Path] = []
+    try:
+        write_dumps(result, output, formats, written)
+        write_output()
+    except BaseException:
+        for path in written:
+            path.unlink(missing_ok=True)
+        raise
 
 
 def run_video(ex, spec, videos, model, camera, size, output, frames, options, progress) -> Result:

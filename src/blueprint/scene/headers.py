@@ -4,6 +4,9 @@ it holds, is refused at once instead of being read (or silently drawn short)."""
 
 from __future__ import annotations
 
+import contextlib
+import io
+import json
 from pathlib import Path
 
 from blueprint.errors import InputError
@@ -19,20 +22,30 @@ _PLY_SIZES = {
 }
 # the fewest bytes an ASCII value takes: a digit and a separator
 _ASCII_VALUE = 2
+# levels of nodes a glTF scene, or of components a 3MF object, may nest: CAD assemblies go a
+# dozen or two deep, and trimesh's 3MF loader takes time cubic in the depth (40 s for 500)
+NODE_DEPTH_LIMIT = 64
 
 
-def check_declared_counts(path: Path, ext: str, size: int, limit: int) -> None:
+def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
     """Raise ``InputError`` where the header of a PLY or OFF file declares more elements than
-    ``size`` bytes can hold (other formats: nothing to check)."""
+    ``size`` bytes can hold (other formats: nothing to check). ``data``: the file's contents
+    where they are in memory already (a member of an archive), else the file is read."""
     if ext not in ("ply", "off"):
         return
-    with open_file(path, limit, "a model file") as fh:
-        head = fh.read(HEADER_BYTES)
+    if data is not None:
+        head = data[:HEADER_BYTES]
+    else:
+        with open_file(path, limit, "a model file") as fh:
+            head = fh.read(HEADER_BYTES)
     text = head.decode("latin-1")
     if ext == "ply":
         _check_ply(path, text, size)
-    else:
-        _check_off(path, text, size)
+    elif _check_off(path, text, size):
+        if data is None:
+            with open_file(path, limit, "a model file") as fh:
+                data = fh.read(limit + 1)
+        _check_off_faces(path, data)
 
 
 def _refuse(path: Path, count: int, what: str, size: int) -> InputError:
@@ -78,7 +91,8 @@ def _check_ply(path: Path, text: str, size: int) -> None:
             raise _refuse(path, count, f"{name} elements", size)
 
 
-def _check_off(path: Path, text: str, size: int) -> None:
+def _check_off(path: Path, text: str, size: int) -> bool:
+    """Whether ``text`` begins an OFF header whose counts ``size`` bytes can hold (refused if not)."""
     words: list[str] = []
     for line in text.splitlines():
         line = line.split("#", 1)[0].strip()
@@ -87,11 +101,11 @@ def _check_off(path: Path, text: str, size: int) -> None:
         if len(words) >= 4:
             break
     if not words or not words[0].endswith("OFF") or len(words) < 3:
-        return
+        return False
     try:
         vertices, faces = int(words[1]), int(words[2])
     except ValueError:
-        return
+        return False
     if vertices < 0 or faces < 0:
         raise InputError(f"{path}: the header declares a negative count ({vertices} vertices, {faces} faces)")
     # a vertex is at least three values, a face its corner count and three corners
@@ -99,3 +113,254 @@ def _check_off(path: Path, text: str, size: int) -> None:
         raise _refuse(path, vertices, "vertices", size)
     if vertices * 3 * _ASCII_VALUE + faces * 4 * _ASCII_VALUE > size:
         raise _refuse(path, faces, "faces", size)
+    return True
+
+
+def _check_off_faces(path: Path, data: bytes) -> None:
+    """Refuse an OFF face whose corner count is more than the values its line holds (a face
+    of 10^9 corners listing three): trimesh reads the first corners and says nothing."""
+    lines = (line.split(b"#", 1)[0].split() for line in data.splitlines())
+    lines = (words for words in lines if words)
+    header = next(lines, [])
+    counts = header[1:] if len(header) > 1 else next(lines, [])
+    try:
+        vertices, faces = int(counts[0]), int(counts[1])
+    except (ValueError, IndexError):
+        return  # the loader says what is wrong
+    for _ in range(vertices):
+        if next(lines, None) is None:
+            return
+    for index in range(faces):
+        words = next(lines, None)
+        if words is None:
+            return
+        try:
+            corners = int(words[0])
+        except ValueError:
+            raise InputError(f"{path}: face {index} does not begin with its corner count") from None
+        if corners < 1 or corners > len(words) - 1:
+            raise InputError(f"{path}: face {index} declares {corners} corners and lists {len(words) - 1}")
+
+
+def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
+    """Raise ``InputError`` where a glTF or GLB file's node graph has a cycle (node 0 a child of
+    node 1 and node 1 of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT``
+    levels, more than ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT``
+    triangles in all. The graph is walked once, without recursion, before any loader follows
+    it: trimesh's walk of a cycle never ends, and of a deep chain takes time quadratic in its
+    depth. ``data`` as for ``check_declared_counts``."""
+    if ext == "3mf":
+        _check_3mf(path, limit, data)
+        return
+    if ext not in ("glb", "gltf"):
+        return
+    doc = _gltf_json(path, ext, size, limit, data)
+    if doc is None:
+        return  # not a document we can read: the loader says what is wrong
+    nodes = doc.get("nodes")
+    if not isinstance(nodes, list) or not nodes:
+        return
+    triangles = _mesh_triangles(doc)
+    roots = _gltf_roots(doc, len(nodes))
+    for root in roots:
+        _node(path, nodes, root, None)
+
+    def own(node: int) -> tuple[int, int]:
+        mesh = nodes[node].get("mesh")
+        if isinstance(mesh, int) and not isinstance(mesh, bool) and 0 <= mesh < len(triangles):
+            return 1, triangles[mesh]
+        return 0, 0
+
+    _walk(path, roots, lambda node: _children(path, nodes, node), own, "nodes")
+
+
+def _check_3mf(path: Path, limit: int, data: bytes | None) -> None:
+    """The component graph of each model part of a 3MF (a zip whose expanded size
+    ``blueprint.scene.archive.check_zip`` has bounded), walked as glTF nodes are: objects made
+    of components of other objects, placed by build items."""
+    import zipfile
+    import zlib
+
+    with contextlib.ExitStack() as stack:
+        fh = (
+            io.BytesIO(data)
+            if data is not None
+            else stack.enter_context(open_file(path, limit, "a model file"))
+        )
+        try:
+            archive = stack.enter_context(zipfile.ZipFile(fh))
+            parts = [i for i in archive.infolist() if i.filename.lower().endswith(".model")]
+            documents = [archive.read(i) for i in parts]
+        except (zipfile.BadZipFile, zlib.error, OSError, ValueError, EOFError, NotImplementedError):
+            return  # the loader says what is wrong
+    for document in documents:
+        _check_3mf_document(path, document)
+
+
+def _check_3mf_document(path: Path, document: bytes) -> None:
+    import xml.etree.ElementTree as ElementTree
+
+    objects: dict[str, tuple[int, list[str]]] = {}  # id: triangles, component object ids
+    items: list[str] = []
+    current = None
+    try:
+        for event, element in ElementTree.iterparse(io.BytesIO(document), events=("start", "end")):
+            tag = element.tag.rsplit("}", 1)[-1]
+            if event == "start":
+                if tag == "object":
+                    current = element.get("id", "")
+                    objects[current] = (0, [])
+                elif tag == "component" and current is not None and not _elsewhere(element):
+                    objects[current][1].append(element.get("objectid", ""))
+                elif tag == "triangle" and current is not None:
+                    count, components = objects[current]
+                    objects[current] = (count + 1, components)
+                elif tag == "item":
+                    items.append(element.get("objectid", ""))
+            else:
+                if tag == "object":
+                    current = None
+                element.clear()
+    except ElementTree.ParseError:
+        return  # the loader says what is wrong
+
+    def children(index: str) -> list[str]:
+        found = objects[index][1]
+        for child in found:
+            if child not in objects:
+                raise InputError(f"{path}: object {index} has a component {child!r}, which does not exist")
+        return found
+
+    roots = [item for item in items if item in objects]
+    _walk(path, roots, children, lambda index: (int(objects[index][0] > 0), objects[index][0]), "objects")
+
+
+def _elsewhere(component) -> bool:
+    """Whether a 3MF component names an object of another model part (``p:path``)."""
+    return any(key.rsplit("}", 1)[-1] == "path" for key in component.keys())
+
+
+def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
+    with contextlib.ExitStack() as stack:
+        fh = (
+            io.BytesIO(data)
+            if data is not None
+            else stack.enter_context(open_file(path, limit, "a model file"))
+        )
+        if ext == "gltf":
+            raw = fh.read(limit + 1)
+        else:
+            head = fh.read(20)
+            if len(head) < 20 or head[:4] != b"glTF" or head[16:20] != b"JSON":
+                return None
+            length = int.from_bytes(head[12:16], "little")
+            if length > size - 20:
+                raise InputError(
+                    f"{path}: the header declares a JSON chunk of {length} bytes, more than the file's "
+                    f"{size} bytes can hold"
+                )
+            raw = fh.read(length)
+    try:
+        return json.loads(raw.decode("utf-8"))
+    except RecursionError:
+        raise InputError(f"{path}: its JSON nests too deeply") from None
+    except (UnicodeDecodeError, ValueError):
+        return None  # not JSON: trimesh's message
+
+
+def _mesh_triangles(doc: dict) -> list[int]:
+    """Triangles of each of the document's meshes, as their accessors declare them."""
+    accessors = doc.get("accessors") if isinstance(doc.get("accessors"), list) else []
+    out = []
+    for mesh in doc.get("meshes") or []:
+        total = 0
+        for primitive in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
+            if not isinstance(primitive, dict):
+                continue
+            index = primitive.get("indices")
+            if index is None:
+                attributes = primitive.get("attributes")
+                index = attributes.get("POSITION") if isinstance(attributes, dict) else None
+            accessor = accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else None
+            count = accessor.get("count") if isinstance(accessor, dict) else None
+            if isinstance(count, int) and count > 0:
+                total += count // 3
+        out.append(total)
+    return out
+
+
+def _gltf_roots(doc: dict, count: int) -> list:
+    scenes = doc.get("scenes")
+    roots = []
+    if isinstance(scenes, list):
+        for scene in scenes:
+            if isinstance(scene, dict) and isinstance(scene.get("nodes"), list):
+                roots += scene["nodes"]
+    return roots if roots else list(range(count))
+
+
+def _walk(path: Path, roots: list, children, own, what: str) -> None:
+    """Walk a graph from ``roots`` once, without recursion: ``children(node)`` lists a node's
+    children (checked), ``own(node)`` the mesh instances (0 or 1) and triangles a node holds
+    itself; ``what`` names the nodes in messages ("nodes", "objects"). Refuses a cycle, more
+    than ``NODE_DEPTH_LIMIT`` levels, and more instances or triangles than the limits, counted
+    over every path (a node placed twice counts twice)."""
+    from blueprint import settings
+
+    instances: dict = {}  # per node: mesh instances below it, itself included
+    triangles: dict = {}
+    on_path: dict = {}  # nodes of the current path, to their depth
+    for root in roots:
+        if root in instances:
+            continue
+        stack = [(root, iter(children(root)))]
+        on_path[root] = 0
+        while stack:
+            node, pending = stack[-1]
+            child = next(pending, None)
+            if child is None:
+                stack.pop()
+                del on_path[node]
+                kids = children(node)
+                count, held = own(node)
+                instances[node] = count + sum(instances[c] for c in kids)
+                triangles[node] = held + sum(triangles[c] for c in kids)
+                _limit(path, instances[node], settings.INSTANCE_LIMIT, "mesh instances")
+                _limit(path, triangles[node], settings.TRIANGLE_LIMIT, "triangles")
+                continue
+            if child in on_path:
+                chain = [n for n, _ in stack[on_path[child] :]] + [child]
+                shown = " → ".join(map(str, chain[:8])) + (" → ..." if len(chain) > 8 else "")
+                raise InputError(f"{path}: its {what} form a cycle ({shown})")
+            if child in instances:
+                continue
+            if len(stack) >= NODE_DEPTH_LIMIT:
+                raise InputError(f"{path}: its {what} nest more than {NODE_DEPTH_LIMIT} deep (the limit)")
+            on_path[child] = len(stack)
+            stack.append((child, iter(children(child))))
+    _limit(path, sum(instances[r] for r in roots), settings.INSTANCE_LIMIT, "mesh instances")
+    _limit(path, sum(triangles[r] for r in roots), settings.TRIANGLE_LIMIT, "triangles")
+
+
+def _limit(path: Path, count: int, limit: int, what: str) -> None:
+    if count > limit:
+        raise InputError(f"{path}: its scene holds more than {limit} {what} (the limit)")
+
+
+def _node(path: Path, nodes: list, index, parent) -> dict:
+    if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < len(nodes):
+        where = f"node {parent}" if parent is not None else "a scene"
+        raise InputError(f"{path}: {where} refers to node {index!r}, which does not exist")
+    node = nodes[index]
+    if not isinstance(node, dict):
+        raise InputError(f"{path}: node {index} is not an object")
+    return node
+
+
+def _children(path: Path, nodes: list, index: int) -> list:
+    children = nodes[index].get("children") or []
+    if not isinstance(children, list):
+        raise InputError(f"{path}: the children of node {index} are not a list")
+    for child in children:
+        _node(path, nodes, child, index)
+    return children

@@ -12,9 +12,11 @@ from pathlib import Path
 
 import numpy as np
 
-from blueprint.errors import InputError
+from blueprint import settings
+from blueprint.errors import InputError, out_of_memory
+from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, members
 from blueprint.scene.environment import PartGlobs, choose_parts
-from blueprint.scene.headers import check_declared_counts
+from blueprint.scene.headers import check_declared_counts, check_scene_graph
 from blueprint.scene.model import Model
 from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
 from blueprint.scene.up import up_of
@@ -24,7 +26,7 @@ log = logging.getLogger("blueprint")
 
 # CAD and printing formats are Z-up by convention; glTF (by its spec), OBJ and scans are Y-up.
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
-MAX_COORDINATE = 1e18
+MAX_COORDINATE = settings.COORDINATE_LIMIT
 _Z_UP = {"stl", "3mf", "3dxml", "step", "stp", "dae"}
 # Formats with no up axis of their own: the shape decides (blueprint.scene.up).
 _GUESS_UP = {"obj", "ply", "off"}
@@ -58,7 +60,11 @@ def load_model(
     InputError
         The file is missing, unreadable, of an unknown format, or holds no usable triangles.
     """
-    path = Path(path)
+    with out_of_memory(str(path), "the model is too large for this machine's memory"):
+        return _load_model(Path(path), up, include, exclude)
+
+
+def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlobs) -> Model:
     name = str(path)
     info = check_file(path, MODEL_FILE_LIMIT, "a model file")
     ext = path.suffix.lower().lstrip(".")
@@ -83,16 +89,23 @@ def load_model(
             exclude=exclude,
         )
     formats = supported_formats()
-    if ext not in formats:
+    if ext not in formats and ext not in STREAM_SUFFIXES:
         common = ("obj", "stl", "ply", "off", "glb", "gltf", "3mf", "step")
         known = ", ".join(f for f in common if f in formats)
-        raise InputError(f"{name}: unknown model format '.{ext}' (supported: {known} and more)")
+        raise InputError(
+            f"{name}: unknown model format '.{ext}' (supported: {known} and more; zip, gz, bz2, xz of them)"
+        )
     if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
-    check_declared_counts(path, ext, info.st_size, MODEL_FILE_LIMIT)
-
-    scene = _load_scene(path, ext)
-    positions, faces, face_part, names = _flatten(scene, path.stem)
+    if ext in STREAM_SUFFIXES or ext == "zip":
+        scene, ext = _archive_scene(path, ext)
+    else:
+        check_declared_counts(path, ext, info.st_size, MODEL_FILE_LIMIT)
+        if ext in ZIP_CONTAINERS:
+            check_zip(path)
+        check_scene_graph(path, ext, info.st_size, MODEL_FILE_LIMIT)
+        scene = _load_scene(path, ext)
+    positions, faces, face_part, names = _flatten(scene, path.stem, name)
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
     default = "z" if ext in _Z_UP else "y"
@@ -203,9 +216,31 @@ def _checked(
     degenerate = model.degenerate_faces()
     if degenerate.all():
         raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
+    _check_coincident(model, name)
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
     return choose_parts(model, include, exclude)
+
+
+def _check_coincident(model: Model, name: str) -> None:
+    """Refuse more than ``COINCIDENT_LIMIT`` copies of one triangle: each copy is a layer of
+    its own to the peel, every layer draws them all, so 10^6 copies would take hours to draw
+    and show one triangle. Copies are found by centroid and area, hashed to one number."""
+    limit = settings.COINCIDENT_LIMIT
+    if len(model.faces) <= limit:
+        return
+    tri = model.positions[model.faces].astype(np.float64)
+    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    key = tri.sum(axis=1) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
+        np.einsum("ij,ij->i", cross, cross)
+    ) * np.sqrt(2)
+    _, counts = np.unique(key, return_counts=True)
+    most = int(counts.max())
+    if most > limit:
+        raise InputError(
+            f"{name}: {most} faces lie on one another (one triangle over and over), more than the "
+            f"{limit} layers a drawing can peel"
+        )
 
 
 _STL_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
@@ -214,16 +249,66 @@ _STL_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("att
 def _binary_stl(path: Path, size: int) -> np.ndarray | None:
     """(F, 3, 3) float32 triangles of a binary STL, read with numpy alone: trimesh, with the
     scipy and networkx it imports, takes most of a small drawing's start. None where the
-    file is not binary STL (its size does not match its triangle count): trimesh reads it."""
+    file is ASCII STL, or longer than its triangle count says: trimesh reads it. A binary
+    file shorter than its count says is refused, as is a count over ``TRIANGLE_LIMIT``."""
     if size < 84:
         return None
     with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
         head = fh.read(84)
         count = int.from_bytes(head[80:84], "little")
         if size != 84 + _STL_RECORD.itemsize * count:
+            if size < 84 + _STL_RECORD.itemsize * count and not _ascii_stl(head):
+                raise InputError(
+                    f"{path}: the header declares {count} triangles, more than the file's {size} bytes "
+                    f"can hold ({84 + _STL_RECORD.itemsize * count} bytes)"
+                )
             return None
+        _triangle_limit(path, count)
         records = np.frombuffer(fh.read(_STL_RECORD.itemsize * count), dtype=_STL_RECORD, count=count)
     return records["triangle"]
+
+
+def _ascii_stl(head: bytes) -> bool:
+    """Whether a file that begins with ``head`` can be ASCII STL: "solid", then text. Binary
+    files may begin with "solid" too, but rarely go on in text for 84 bytes."""
+    if not head.lstrip().lower().startswith(b"solid"):
+        return False
+    return all(32 <= b < 127 or b in (9, 10, 13) for b in head)
+
+
+def _triangle_limit(name, count: int) -> None:
+    if count > settings.TRIANGLE_LIMIT:
+        raise InputError(
+            f"{name}: {count} triangles, over the limit of {settings.TRIANGLE_LIMIT} "
+            f"(set from this machine's memory; {settings.MEMORY_ENV} changes it)"
+        )
+
+
+def _archive_scene(path: Path, kind: str):
+    """The models in a zip archive or a compressed file (``kind``: zip, gz, bz2, xz) as one
+    scene, expanded within the limits of ``blueprint.scene.archive``, and the format of the
+    first (which decides the default up axis). Files the models reference (materials,
+    textures, buffers) are looked up among the archive's members."""
+    import trimesh
+
+    files = members(path, kind)
+    loadable = set(supported_formats()) - {*STREAM_SUFFIXES, *STEP_SUFFIXES, "zip", "tar.gz", "tar.bz2"}
+    found = [(n, ext) for n in files if (ext := Path(n).suffix.lower().lstrip(".")) in loadable]
+    if not found:
+        listed = ", ".join(sorted(files)[:5]) + (", ..." if len(files) > 5 else "")
+        raise InputError(f"{path}: the archive holds no model file (it holds: {listed or 'nothing'})")
+    resolver = trimesh.resolvers.ZipResolver({n: io.BytesIO(d) for n, d in files.items()})
+    scenes = []
+    for member, ext in found:
+        where = f"{path}: {member}"
+        data = files[member]
+        check_declared_counts(Path(where), ext, len(data), MODEL_FILE_LIMIT, data)
+        if ext in ZIP_CONTAINERS:
+            check_zip(Path(where), data)
+        check_scene_graph(Path(where), ext, len(data), MODEL_FILE_LIMIT, data)
+        scenes.append(_trimesh_scene(where, ext, io.BytesIO(data), resolver))
+    scene = scenes[0] if len(scenes) == 1 else trimesh.scene.scene.append_scenes(scenes)
+    return scene, found[0][1]
 
 
 def _load_scene(path: Path, ext: str):
@@ -235,31 +320,44 @@ def _load_scene(path: Path, ext: str):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 return trimesh.load_scene(io.BytesIO(glb), file_type="glb", process=False)
-        except Exception as exc:  # OpenCASCADE wrote a GLB trimesh cannot read
-            detail = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
-            raise InputError(f"{path}: cannot read the mesh OpenCASCADE made of it: {detail}") from None
+        except Exception:  # OpenCASCADE wrote a GLB trimesh cannot read
+            raise InputError(f"{path}: cannot read the mesh OpenCASCADE made of it") from None
     resolver = _resolver_type()(str(path))
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            logging.getLogger("trimesh").setLevel(logging.ERROR)
-            # an open file, not the name: trimesh names meshes after a file name and hashes
-            # the names as UTF-8, which the bytes of a name that are not UTF-8 cannot be
-            with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
-                scene = trimesh.load_scene(fh, file_type=ext, process=False, resolver=resolver)
-    except MemoryError:
-        raise InputError(f"{path}: too large to load into memory") from None
-    except ImportError as exc:
-        raise InputError(f"{path}: reading this file needs the Python package '{exc.name}'") from None
-    except Exception as exc:  # trimesh raises many types for broken files
-        if not resolver.refused:  # else the refusal below, which trimesh may have wrapped
-            detail = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            raise InputError(f"{path}: cannot read as {path.suffix.lstrip('.').upper()}: {detail}") from None
+    # an open file, not the name: trimesh names meshes after a file name and hashes the names
+    # as UTF-8, which the bytes of a name that are not UTF-8 cannot be
+    with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
+        scene = _trimesh_scene(str(path), ext, fh, resolver)
     if resolver.refused:
         # also where trimesh went on without the file: its OBJ loader drops materials it cannot
         # read, whatever the reason, but a reference to a FIFO or a device is a hostile file
         raise InputError(f"{path}: {resolver.refused[0]}")
     return scene
+
+
+def _trimesh_scene(name: str, ext: str, fh, resolver):
+    """trimesh's scene of the open file ``fh`` in format ``ext``, its failures as one line
+    naming ``name``. trimesh's own messages are not for users ("list index out of range",
+    "cannot reshape array of size 956 into shape (3)"), so none is passed on."""
+    import trimesh
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            logging.getLogger("trimesh").setLevel(logging.ERROR)
+            with np.errstate(all="ignore"):
+                return trimesh.load_scene(fh, file_type=ext, process=False, resolver=resolver)
+    except MemoryError:
+        raise InputError(f"{name}: too large to load into this machine's memory") from None
+    except RecursionError:
+        raise InputError(f"{name}: cannot read as {ext.upper()}: it nests too deeply") from None
+    except ImportError as exc:
+        raise InputError(f"{name}: reading this file needs the Python package '{exc.name}'") from None
+    except Exception:  # trimesh raises many types for broken files
+        if getattr(resolver, "refused", None):
+            return None  # the refusal, which trimesh may have wrapped, is the message
+        raise InputError(
+            f"{name}: cannot read as {ext.upper()} (the file is damaged or not in that format)"
+        ) from None
 
 
 @functools.cache
@@ -298,23 +396,37 @@ def _resolver_type():
     return CheckedResolver
 
 
-def _flatten(scene, stem: str | None):
+def _flatten(scene, stem: str | None, label: str = "the scene"):
     """Concatenate every mesh instance of a trimesh Scene in graph order; a scene of one mesh
-    names its part ``stem`` (a file's), or after its node where ``stem`` is None."""
+    names its part ``stem`` (a file's), or after its node where ``stem`` is None. More than
+    ``INSTANCE_LIMIT`` instances or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``."""
+    world = _world_transforms(scene.graph)
+    nodes = [n for n in scene.graph.nodes_geometry if n in world]
+    if len(nodes) > settings.INSTANCE_LIMIT:
+        raise InputError(f"{label}: {len(nodes)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}")
+    node_data = scene.graph.transforms.node_data
+    # NaN and infinite vertices are refused with their count once flattened, not warned about here
+    with np.errstate(all="ignore"):
+        return _concatenated(scene, nodes, world, node_data, stem, label)
+
+
+def _concatenated(scene, nodes, world, node_data, stem, label):
     import trimesh
 
     positions, faces, parts, names = [], [], [], []
     taken: set[str] = set()
     counts: dict[str, int] = {}
-    offset = 0
-    nodes = scene.graph.nodes_geometry
+    offset = total = 0
     for node in nodes:
-        transform, geometry_name = scene.graph[node]
+        geometry_name = node_data[node].get("geometry")
         mesh = scene.geometry.get(geometry_name)
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue
+        total += len(mesh.faces)
+        _triangle_limit(label, total)
+        transform = world[node]
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        if not np.allclose(transform, np.eye(4)):
+        if transform is not None:
             vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
         positions.append(vertices)
         faces.append(np.asarray(mesh.faces, dtype=np.int64) + offset)
@@ -325,6 +437,32 @@ def _flatten(scene, stem: str | None):
     if not faces:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     return np.concatenate(positions), np.concatenate(faces), np.concatenate(parts), names
+
+
+def _world_transforms(graph) -> dict:
+    """Every node reachable from the base frame, to its transform from the frame (None where no
+    edge on the way has one), in one walk down the graph: asking trimesh node by node finds each path anew,
+    which takes time quadratic in a chain's depth. A node on a cycle (trimesh keeps one parent a
+    node) is not reachable, and left out."""
+    forest = graph.transforms
+    children: dict = {}
+    for child, parent in forest.parents.items():
+        if child != parent:
+            children.setdefault(parent, []).append(child)
+    world = {graph.base_frame: None}
+    stack = [graph.base_frame]
+    while stack:
+        parent = stack.pop()
+        above = world[parent]
+        for child in children.get(parent, ()):
+            if child in world:
+                continue
+            matrix = forest.edge_data[(parent, child)].get("matrix")
+            if matrix is not None:
+                matrix = np.asarray(matrix, dtype=np.float64)
+            world[child] = matrix if above is None else (above if matrix is None else above @ matrix)
+            stack.append(child)
+    return world
 
 
 def _part_name(node: str, geometry: str, taken: set[str], counts: dict[str, int]) -> str:

@@ -20,7 +20,7 @@ from blueprint.compose.glyphs.values import (
     Path3D,
 )
 from blueprint.errors import InputError
-from blueprint.settings import Entry, is_number, read_settings, show
+from blueprint.settings import GLYPH_LIMIT, Entry, is_number, read_settings, show
 
 __all__ = ["load_glyphs", "parse_glyphs"]
 
@@ -85,6 +85,12 @@ def parse_glyphs(data: Any, source: str) -> Glyphs:
             raise InputError(
                 f"{source}: {kind} must be a list of tables ([[{kind}]] in TOML), got a {_kind(items)}"
             )
+    # counted before any is checked: each is projected and stroked every frame
+    count = sum(len(data.get(kind, [])) for kind in _KINDS)
+    if count > GLYPH_LIMIT:
+        raise InputError(f"{source}: {count} glyphs, over the limit of {GLYPH_LIMIT}")
+    for kind in _KINDS:
+        items = data.get(kind, [])
         lists[kind] = [
             _Entry(f"{source}: {kind} {i}", table, _KINDS[kind], _REQUIRED[kind])
             for i, table in enumerate(items, 1)
