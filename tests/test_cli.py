@@ -393,3 +393,27 @@ def test_render_plan_sheet_as_vectors(tmp_path, gl):
     stdout = ok(run("render", EXAMPLE, "-o", out, "--size", 160, 120, "--view", "plan"))
     assert stdout.startswith(f"{out}: ") and "polylines level 0" in stdout
     assert out.stat().st_size > 1000
+
+
+def test_help_lists_every_command_without_importing_them():
+    """``blueprint --help`` lists the commands from ``COMMANDS``, whose short helps are the
+    commands' own, and imports none of their modules (nor the renderer)."""
+    import importlib
+
+    from blueprint.cli import COMMANDS, cli
+
+    for name, (module, attribute, short) in COMMANDS.items():
+        command = getattr(importlib.import_module(module), attribute)
+        assert command.name == name
+        assert command.get_short_help_str(limit=10_000) == short
+    assert sorted(COMMANDS) == cli.list_commands(None)
+    probe = (
+        "import sys\nfrom blueprint.cli import main\n"
+        "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
+        "heavy = ('blueprint.cli.', 'blueprint.render', 'numpy')\n"
+        "print(sorted(m for m in sys.modules if m.startswith(heavy)))"
+    )
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[-1] == "['blueprint.cli.shell']"
+    assert all(name in done.stdout for name in COMMANDS)

@@ -790,7 +790,7 @@ def test_out_of_memory_names_the_pipeline(tmp_path, monkeypatch):
 
 def test_numpy_warnings_are_our_one_line_warnings():
     code = (
-        "import numpy as np\nfrom blueprint.cli.options import setup_logging\nsetup_logging()\n"
+        "import numpy as np\nfrom blueprint.cli.shell import setup_logging\nsetup_logging()\n"
         "np.array([1e308]) * 10\nnp.array([1e308]) * 10\n"
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, env=ENV, text=True)

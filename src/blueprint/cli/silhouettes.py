@@ -9,7 +9,8 @@ from pathlib import Path
 
 import click
 
-from blueprint.cli.options import camera_options, progress_bar, run
+from blueprint.cli.options import camera_options, progress_bar
+from blueprint.cli.shell import run
 from blueprint.silhouette.deform import KINDS
 from blueprint.silhouette.gpu import DEFAULT_LAYERS, DEFAULT_METHOD, STILL_METHODS
 

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import click
 
-from blueprint.cli.options import STYLE_NAMES, camera_options, run
+from blueprint.cli.options import STYLE_NAMES, camera_options
+from blueprint.cli.shell import run
 from blueprint.errors import InputError
 from blueprint.scene.camera import VIEWS
 
