@@ -417,3 +417,16 @@ def test_help_lists_every_command_without_importing_them():
     assert done.returncode == 0, done.stderr
     assert done.stdout.splitlines()[-1] == "['blueprint.cli.shell']"
     assert all(name in done.stdout for name in COMMANDS)
+
+
+def test_success_lines_print_names_safely(tmp_path):
+    """A file name holding a newline is one line on stdout too, the newline shown as ``\\n``."""
+    model = tmp_path / "two\nlines.stl"
+    trimesh.creation.box((1.0, 2.0, 3.0)).export(model)
+    lines = ok(run("info", model)).splitlines()
+    assert lines[0].startswith(str(tmp_path / "two\\nlines.stl") + ": 12 triangles, 1 parts")
+    assert len(lines) == 3  # the model, its bounds, its one part
+    out = tmp_path / "out\nfile.png"
+    lines = ok(run("render", model, "-o", out, "--size", "64", "48")).splitlines()
+    assert len(lines) == 1 and lines[0].startswith(str(tmp_path / "out\\nfile.png") + ": 64x48")
+    assert out.exists()

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from blueprint.cli.options import STYLE_NAMES, progress_bar
+from blueprint.errors import printable
 
 
 @click.command()
@@ -55,10 +56,12 @@ def batch(inputs, outdir, views, formats, workers, scheduler, gpus, size, style,
         )
     for record in manifest["inputs"]:
         if record.get("error"):
-            click.echo(f"blueprint: failed: {record['error']}", err=True)
+            click.echo(f"blueprint: failed: {printable(record['error'])}", err=True)
     click.echo(
-        f"{outdir / MANIFEST}: {manifest['drawn']} drawn, {manifest['skipped']} up to date, "
-        f"{manifest['failed']} failed, {manifest['seconds']:.1f} s on {manifest['workers']} workers"
+        printable(
+            f"{outdir / MANIFEST}: {manifest['drawn']} drawn, {manifest['skipped']} up to date, "
+            f"{manifest['failed']} failed, {manifest['seconds']:.1f} s on {manifest['workers']} workers"
+        )
     )
     if manifest["failed"]:
         raise SystemExit(1)

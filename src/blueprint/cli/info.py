@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from blueprint.errors import printable
+
 
 @click.command()
 @click.argument("model", required=False, type=click.Path(path_type=Path))
@@ -76,13 +78,15 @@ def info(model, as_json):
         )
         return
     click.echo(
-        f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, "
-        f"up {loaded.up} ({loaded.up_reason})"
+        printable(
+            f"{model}: {loaded.triangle_count} triangles, {len(loaded.part_names)} parts, "
+            f"up {loaded.up} ({loaded.up_reason})"
+        )
     )
     click.echo(f"bounds: [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] - [{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
     for i, (name, count, around) in enumerate(zip(loaded.part_names, counts, environment, strict=True)):
         note = "  (environment: left out unless --include names it)" if around else ""
-        click.echo(f"  {i:4d}  {count:9d}  {name}{note}")
+        click.echo(printable(f"  {i:4d}  {count:9d}  {name}{note}"))
 
 
 @click.command()

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from blueprint.cli.options import camera_options, progress_bar
+from blueprint.errors import printable
 
 
 @click.group("pipeline")
@@ -90,8 +91,10 @@ def run_command(
     shape = result.output.shape
     layers = f", {result.layers} layers" if result.layer_pixels else ""
     click.echo(
-        f"{output}: {shape[-2]}x{shape[-3]} {result.format}{layers}, {result.ms:.1f} ms "
-        f"on {default_renderer().info['renderer']}"
+        printable(
+            f"{output}: {shape[-2]}x{shape[-3]} {result.format}{layers}, {result.ms:.1f} ms "
+            f"on {default_renderer().info['renderer']}"
+        )
     )
 
 
@@ -109,7 +112,7 @@ def check_command(file, settings):
     spec = load_pipeline(file)
     bound = spec.bind({k: parse_value(v) for k, v in parse_assignments(settings, "--set").items()})
     pl = plan(bound)
-    click.echo(f"{spec.source}: ok: {bound.name}, output {bound.output}")
+    click.echo(printable(f"{spec.source}: ok: {bound.name}, output {bound.output}"))
     for name, a in bound.attributes.items():
         used = "" if name in pl.attributes else " (unused)"
         click.echo(f"  attribute {name:14s} {a.format:8s} x{a.scale:g}{used}")
@@ -227,4 +230,4 @@ def turntable(
             crf=crf,
             progress=progress,
         )
-    click.echo(f"{path}: {frames} frames of {size[0]}x{size[1]} at {fps:g} fps")
+    click.echo(printable(f"{path}: {frames} frames of {size[0]}x{size[1]} at {fps:g} fps"))

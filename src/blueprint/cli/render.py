@@ -8,7 +8,7 @@ import click
 
 from blueprint.api.files import choose_writer
 from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
-from blueprint.errors import InputError
+from blueprint.errors import InputError, printable
 from blueprint.export.writers import WRITERS, Kind
 from blueprint.scene.up import guessed_up
 from blueprint.vector.style import FILE_SUFFIXES, is_style_file
@@ -218,9 +218,11 @@ def render(
     info = default_renderer().info
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
-        f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"
-        f"{guessed_up(loaded.up, loaded.up_reason)}, {frame.layers_shown}{shown}, {frame.ms:.1f} ms "
-        f"on {info['renderer']}"
+        printable(
+            f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"
+            f"{guessed_up(loaded.up, loaded.up_reason)}, {frame.layers_shown}{shown}, {frame.ms:.1f} ms "
+            f"on {info['renderer']}"
+        )
     )
 
 
@@ -232,9 +234,11 @@ def _render_vector(model, output, **options) -> None:
     summary = render_vector_file(model, output, **options)
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
-        f"{output}: {summary['bytes']} bytes{guessed_up(summary['up'], summary['up_reason'])}, "
-        f"polylines {levels or 'none'}, "
-        f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
+        printable(
+            f"{output}: {summary['bytes']} bytes{guessed_up(summary['up'], summary['up_reason'])}, "
+            f"polylines {levels or 'none'}, "
+            f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
+        )
     )
 
 
@@ -262,4 +266,6 @@ def layers(
     loaded = load_model(model, up=kwargs.pop("up"), include=include, exclude=exclude)
     result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)
     write(output, result)
-    click.echo(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")
+    click.echo(
+        printable(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")
+    )

@@ -11,6 +11,7 @@ import click
 
 from blueprint.cli.options import camera_options, progress_bar
 from blueprint.cli.shell import run
+from blueprint.errors import printable
 from blueprint.silhouette.deform import KINDS
 from blueprint.silhouette.gpu import DEFAULT_LAYERS, DEFAULT_METHOD, STILL_METHODS
 
@@ -105,8 +106,10 @@ def silhouettes(
         shown = f"{done['frames']} frames of {done['width']}x{done['height']}"
         timing = f"{done['ms']:.1f} ms per frame (median)"
     click.echo(
-        f"{output}: {shown}, {done['triangles']} triangles, {method}, {timing} "
-        f"on {default_renderer().info['renderer']}"
+        printable(
+            f"{output}: {shown}, {done['triangles']} triangles, {method}, {timing} "
+            f"on {default_renderer().info['renderer']}"
+        )
     )
 
 
