@@ -53,7 +53,6 @@ class ABuffer:
         self.unpack = r.compute(UNPACK_COMP)
         for prog in (self.resolve, self.unpack):
             prog["u_back_bias"].value = back_bias
-        self.fragments = 0
         # pixels covered by each layer, known once layer 0 is drawn
         self.layer_pixels: list[int] = []
 
@@ -81,8 +80,6 @@ class ABuffer:
             calls = self._capture(gb, name)
             if calls is None:
                 return None
-            self._resolve(name, size)
-            calls += 1
         if layer >= len(self.layer_pixels):
             # an empty layer, as the peel's would be
             self.r.ctx.memory_barrier()
@@ -112,53 +109,50 @@ class ABuffer:
         return held
 
     def _capture(self, gb, name: str) -> int | None:
-        """Every fragment into the lists: the geometry pass, again with more room where the
-        first found too little. The calls issued, or None where the fragments would take more
-        than ``max_bytes``."""
+        """Every fragment into the lists and each list sorted into its layers: the geometry
+        pass and the resolve, again with more room where the first found too little. The counts
+        come back in one read a frame. The calls issued, or None where the fragments would take
+        more than ``max_bytes``."""
         ctx, pool, size = self.r.ctx, self.r.pool, gb.size
         head = pool.texture(f"{name}.head", size, "r32ui")
-        # the counts are copied out before they are read: a buffer the CPU reads may be moved
-        # where the GPU's atomics on it are slow
-        seen = pool.buffer(f"{name}.seen", 16)
+        cursor = pool.texture(f"{name}.cursor", size, "r32ui")
+        groups = (-(-size[0] // 8), -(-size[1] // 8))
         calls = 0
         while True:
             room = self._room(size)
             if room * NODE_BYTES > self.max_bytes:
                 return None
-            totals = self._buffers(name, room)[3]
+            totals, depths = self._buffers(name, room)[3:]
             head.bind_to_image(0, read=True, write=True)
             self.clear["u_capacity"].value = room
-            self.clear.run(-(-size[0] // 8), -(-size[1] // 8))
+            self.clear.run(*groups)
             ctx.memory_barrier()
             gb.clears[0].use()
             self.mesh.vao(self.geometry).render()
             ctx.memory_barrier()
-            ctx.copy_buffer(seen, totals, 16)
-            drawn = int(np.frombuffer(seen.read(), np.uint32)[0])
-            calls += 2
-            self.fragments = drawn
+            # lists cut short by too little room hold only the fragments that had room: sorted
+            # all the same, and drawn again below
+            head.bind_to_image(0, read=True, write=False)
+            cursor.bind_to_image(1, read=False, write=True)
+            self.resolve.run(*groups)
+            ctx.memory_barrier()
+            calls += 3
+            # the counts are copied out before they are read: a buffer the CPU reads may be
+            # moved where the GPU's atomics on it are slow
+            seen = pool.buffer(f"{name}.seen", totals.size + depths.size)
+            ctx.copy_buffer(seen, totals, totals.size)
+            ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
+            counts = np.frombuffer(seen.read(), np.uint32).astype(np.int64)
+            drawn = int(counts[0])
+            if drawn > room or tuple(size) not in self.r.abuffer_room:
+                # room to spare for a model turning
+                self.r.abuffer_room[tuple(size)] = int(drawn * 1.25) + 1024
             if drawn <= room:
                 break
-            # more fragments than room: again, with room to spare for a model turning
-            self.r.abuffer_room[tuple(size)] = int(drawn * 1.25) + 1024
-        if self.r.abuffer_room.get(tuple(size), 0) < drawn:
-            self.r.abuffer_room[tuple(size)] = int(drawn * 1.25) + 1024
-        return calls
-
-    def _resolve(self, name: str, size: tuple[int, int]) -> None:
-        """Each pixel's list sorted into its layers (abuffer_resolve.comp)."""
-        pool = self.r.pool
-        pool.texture(f"{name}.head", size, "r32ui").bind_to_image(0, read=True, write=False)
-        pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=False, write=True)
-        self.resolve.run(-(-size[0] // 8), -(-size[1] // 8))
-        self.r.ctx.memory_barrier()
-        depths = pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1))
-        seen = pool.buffer(f"{name}.seen", depths.size)
-        self.r.ctx.copy_buffer(seen, depths, depths.size)
-        with_layers = np.frombuffer(seen.read(), np.uint32).astype(np.int64)
         # pixels with at least k + 1 layers are those layer k covers
-        covered = np.cumsum(with_layers[::-1])[::-1][1:]
+        covered = np.cumsum(counts[4:][::-1])[::-1][1:]
         self.layer_pixels = [int(v) for v in covered if v > 0]
+        return calls
 
     def _unpack(self, gb, name: str, layer: int) -> None:
         """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""
