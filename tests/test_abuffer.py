@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_kbuffer import CASES, _normal_tolerance, _planes
+from test_kbuffer import CASES, _normal_tolerance, _planes, assert_front_to_back
 from test_layers_oracle import nested_round
 
 import blueprint
@@ -62,16 +62,8 @@ def _differ(fast, plain, renderer) -> np.ndarray:
 
 @pytest.mark.parametrize("order", [[0, 1, 2], [2, 1, 0], [1, 0, 2], [2, 0, 1]])
 def test_any_drawing_order_gives_the_layers_front_to_back(renderer, abuffer, order):
-    model = _planes(order)
-    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
     abuffer(True)
-    layers = renderer.peel(model, camera, size=(32, 32), max_layers=4)
-    assert len(layers.depth) == 3
-    for k, z in enumerate((0, 1, 2)):
-        first_face = 2 * order.index(z)
-        assert set(np.unique(layers.triangle[k])) - {-1} == {first_face, first_face + 1}
-    inside = layers.depth[0] < 1.0
-    assert (np.diff(layers.depth[:, inside], axis=0) > 0).all()
+    assert_front_to_back(renderer, order)
 
 
 def test_of_coincident_faces_the_first_drawn_wins(renderer, abuffer):
