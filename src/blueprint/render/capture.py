@@ -145,13 +145,6 @@ class Capture:
             and r.back_bias_in_shader
             and mesh.part_count < 0xFFFF
         )
-        uniforms = {
-            "u_view": camera.view_matrix().T.astype("f4").tobytes(),
-            "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
-            "u_ortho": camera.ortho,
-            "u_depth_range": depth_range(camera),
-            "u_peel_eps": peel_eps(camera),
-        }
         self.abuffer = None
         if (
             r.abuffer_max_bytes
@@ -161,6 +154,13 @@ class Capture:
             and r.back_bias_in_shader
             and mesh.part_count < 0xFFFF
         ):
+            uniforms = {
+                "u_view": camera.view_matrix().T.astype("f4").tobytes(),
+                "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
+                "u_ortho": camera.ortho,
+                "u_depth_range": depth_range(camera),
+                "u_peel_eps": peel_eps(camera),
+            }
             self.abuffer = ABuffer(r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes)
             if not self.abuffer.fits((w, h)):
                 self.abuffer = None
