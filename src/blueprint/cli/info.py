@@ -33,10 +33,8 @@ def info(model, as_json):
                     f"every layer in one geometry pass, from {r.abuffer_min_layers} layers a frame, "
                     f"lists up to {r.abuffer_max_bytes / 2**30:.1f} GiB"
                 )
-            elif r.ctx.version_code < 430:
-                data["abuffer"] = "none (needs OpenGL 4.3)"
             else:
-                data["abuffer"] = "off on this driver (its drawings are not yet checked here)"
+                data["abuffer"] = "none (needs OpenGL 4.3)"
         data["egl_devices"] = egl_devices()
         if as_json:
             click.echo(json.dumps(data))

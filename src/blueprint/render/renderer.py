@@ -128,15 +128,10 @@ class LayerRenderer(Device):
         )
         # Every layer from one geometry pass (render.abuffer): the most bytes its lists may
         # take a frame (0: layers are peeled), and the fragments the last frame of each G-buffer
-        # size drew, the room the next one starts with. On by default only where its drawings
-        # were checked against the peel's (llvmpipe, in the tests). On the H200 its layers
-        # matched the peel's (faces and parts exactly, depths within a step of the depth
-        # buffer) but a drawing did not (a tiled pattern of false edges on planes); a barrier
-        # now keeps each layer's unpack from overwriting the normals and IDs the layer before's
-        # passes may still read, not yet checked there. Set it to use the A-buffer on a GPU
-        # (benchmarks/layers.py --capture abuffer does).
-        verified = self.software and self.ctx.version_code >= 430
-        self.abuffer_max_bytes = default_max_bytes(self) if verified else 0
+        # size drew, the room the next one starts with. Its drawings are checked against the
+        # peel's on llvmpipe (the tests) and on an H200 (the same tests, and five models at
+        # three sizes: at most 9 of 307200 pixels apart, where faces tie in depth).
+        self.abuffer_max_bytes = default_max_bytes(self) if self.ctx.version_code >= 430 else 0
         # ...for frames of at least this many layers (None: all of them): on the H200 it was
         # faster from 2 (the rocker arm, 256x256 and 512x512: 1.15 against 1.64 ms and 1.31
         # against 1.77); llvmpipe pays for sorting every fragment on the CPU, and was faster
