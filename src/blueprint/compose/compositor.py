@@ -92,14 +92,13 @@ class Compositor:
         ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
         for maps, ink, first, shaded in sprites:
             factor = max(1, maps[0].size[0] // target.size[0])
-            defines = {"LAYERS_FACTOR": factor, "SHADED": shaded is not None}
+            defines = {"LAYERS_FACTOR": factor, "SHADED": shaded is not None, "COUNT": len(maps)}
             prog, vao = r.fullscreen(COMPOSITE_FRAG, defines)
             put(prog, "u_threshold", bool(style.threshold))
             for k, tex in enumerate(maps):
                 tex.use(LAYER_UNITS + k)
                 put(prog, f"u_layers{k}", LAYER_UNITS + k)
-            put(prog, "u_layers_count", len(maps))
-            put(prog, "u_ink", ink)
+            put(prog, "u_ink", ink[: 16 * len(maps)])
             if shaded is not None:
                 self._bind_shading(prog, shaded, first)
             vao.render(vertices=3)

@@ -110,10 +110,15 @@ class LayerCapture:
             for name, held in st.attr_dumps.items():
                 tex = st.by_attr[name].texture(name, layer)
                 held.append(read_texture(tex, bound.attributes[name].format))
+            if eager and layer and not groups[0].capture.samples(layer, groups[0].queries[layer]):
+                return  # an empty layer ends the peel (EmptyLayer): nothing reads its passes
             for name in pl.iteration0 if layer == 0 else pl.per_layer:
                 self.ex._run_pass(st, name, layer, layer + 1)
 
-        return peel_layers(draw, groups[0].queries, rules, samples=groups[0].capture.samples)
+        # a software rasteriser looks at every layer's count before its passes run
+        eager = r.software
+        samples = groups[0].capture.samples
+        return peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
 
     def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
         """Layers left behind the last one where the peel stopped at its cap with the last layer

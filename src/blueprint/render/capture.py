@@ -343,6 +343,7 @@ def peel(
     on_counted: Callable[[int], None] | None = None,
     look: bool = True,
     samples: Callable[[int, object], int] | None = None,
+    eager: bool = False,
 ) -> tuple[list[int], int]:
     """The one peel loop. ``draw(layer, query, guard)`` issues layer ``layer``'s geometry pass
     (counting its samples in ``query``, skipped on the GPU when ``guard``, the layer before's
@@ -353,15 +354,17 @@ def peel(
     reads each counted layer back (``on_counted``, called once the layer is known to count);
     else once per ``CHUNK`` layers, or once at the end when a rule caps the layers. Without
     ``look`` (a capped peel whose caller reads nothing back) it never waits: every layer up to
-    the cap is issued, and the counts are left unread (returned empty). ``samples(layer,
-    query)`` reads a layer's count where not every layer is counted by its query
-    (``Capture.samples``).
+    the cap is issued, and the counts are left unread (returned empty). ``eager`` looks after
+    every layer all the same: on a software rasteriser the CPU waiting costs nothing, while a
+    capped frame of a shallow model would otherwise draw its empty layers to the cap.
+    ``samples(layer, query)`` reads a layer's count where not every layer is counted by its
+    query (``Capture.samples``).
     """
     samples = samples or (lambda layer, query: query.samples)
     limits = [r.limit() for r in rules if r.limit() is not None]
     limit = min(limits) if limits else HARD_MAX_LAYERS
     every_layer = on_counted is not None or any(r.every_layer for r in rules)
-    step = 1 if every_layer else (limit if limits else CHUNK)
+    step = 1 if every_layer or eager else (limit if limits else CHUNK)
     if not look:
         if every_layer or not limits:
             raise ValueError("a peel that does not look needs a cap and no rule that looks every layer")

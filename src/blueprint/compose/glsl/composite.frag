@@ -12,10 +12,11 @@ uniform sampler2D u_layers4;
 uniform sampler2D u_layers5;
 uniform sampler2D u_layers6;
 uniform sampler2D u_layers7;
-uniform int u_layers_count;   // layers of this group
-// LAYERS_FACTOR (a define): input pixels per output pixel along each axis
+// Defines: LAYERS_FACTOR, input pixels per output pixel along each axis; COUNT, the layers of
+// this group (a constant, since a software rasteriser fetches every layer a branch on a
+// uniform skips).
 uniform bool u_threshold;     // wire-frame variant: binary edges
-uniform vec4 u_ink[8];        // straight colour and opacity per layer of the group
+uniform vec4 u_ink[COUNT];    // straight colour and opacity per layer of the group
 
 out vec4 o_value;
 
@@ -43,7 +44,7 @@ void main() {
     for (int y = 0; y < LAYERS_FACTOR; ++y) {
         for (int x = 0; x < LAYERS_FACTOR; ++x) {
             vec4 sample_color;
-            SHADED_COMPOSITE(edge_at, u_layers_count, u_ink, base + ivec2(x, y), sample_color)
+            SHADED_COMPOSITE(edge_at, COUNT, u_ink, base + ivec2(x, y), sample_color)
             sum += sample_color;
         }
     }
@@ -57,7 +58,7 @@ void main() {
         for (int x = 0; x < LAYERS_FACTOR; ++x) {
             vec4 union_ = vec4(0.0);
             for (int k = 7; k >= 0; --k) {
-                if (k < u_layers_count) {
+                if (k < COUNT) {
                     float a = clamp(edge_at(k, base + ivec2(x, y)), 0.0, 1.0) * u_ink[k].a;
                     union_ = strongest(union_, u_ink[k].rgb, a);
                 }
