@@ -49,7 +49,11 @@ class Op:
     are inputs that take every depth layer of a per-layer pass; ``resample`` inputs may be an
     integer multiple of the output's size (the others must match it); ``optional`` inputs may
     be left unwired. ``derive`` turns checked parameter values into further uniforms;
-    ``identity`` says when a pass does nothing, so the executor can skip it.
+    ``identity`` says when a pass does nothing, so the executor can skip it. ``support`` and
+    ``reach`` say where the result can be non-zero: within ``reach(uniforms)`` pixels of where
+    input ``support`` holds something (a covered pixel of a depth attribute, a non-zero one of
+    a pass's result), so a software rasteriser may draw the pass over those tiles alone
+    (``blueprint.pipeline.tiles``).
     """
 
     name: str
@@ -68,6 +72,8 @@ class Op:
     optional: tuple[str, ...] = ()
     derive: Callable[[dict], dict] | None = None
     identity: Callable[[dict], bool] | None = None
+    support: str | None = None
+    reach: Callable[[dict], int] | None = None
 
     def defines(self, uniforms: dict[str, float | bool]) -> dict[str, bool]:
         """Compile-time defines of checked uniform values (see ``switches``)."""
@@ -101,6 +107,9 @@ EDGES = Op(
     doc="edge intensity from coverage, part-ID, normal and depth discontinuities",
     compute="blueprint.ops:glsl/edges.comp",
     switches=("id_silhouettes",),
+    # an empty pixel beside a covered one is marked too (both sides of a border)
+    support="depth",
+    reach=lambda u: 1,
 )
 
 DILATE = Op(
@@ -122,6 +131,8 @@ DILATE = Op(
     doc="grey-scale dilation by a disc with a soft rim; hidden layers' lines narrower",
     compute="blueprint.ops:glsl/dilate.comp",
     identity=lambda u: u["u_radius"] <= 0.0 and u["u_hidden_width"] >= 1.0,
+    support="source",
+    reach=lambda u: math.ceil(u["u_radius"]),
 )
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}

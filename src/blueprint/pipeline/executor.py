@@ -51,9 +51,11 @@ from blueprint.pipeline.inputs import (
     texture_bytes,
 )
 from blueprint.pipeline.peel import LayerCapture
-from blueprint.pipeline.programs import Programs
+from blueprint.pipeline.programs import FULLSCREEN, Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
+from blueprint.pipeline.tiles import VERTEX as TILES_VERT
+from blueprint.pipeline.tiles import Tiles
 from blueprint.render.capture import (
     depth_range,
     peel_eps,
@@ -83,11 +85,16 @@ class Executor:
         self._frame = 0
         self._buffers: dict[int, object] = {}
         self.last_run: RunState | None = None
+        self.tiles = Tiles(renderer.ctx)
+        # passes drawn over the tiles their layer covers, found by reading each layer's depth
+        # back: only where that costs less than the pixels it saves (pipeline.tiles)
+        self.tiled = renderer.software
 
     def release(self) -> None:
         """Programs of user shaders and pixel buffers (pool targets belong to the renderer)."""
         self.programs.release()
         self.images.clear()
+        self.tiles.release()
         for buffer in self._buffers.values():
             buffer.release()
         self._buffers.clear()
@@ -240,7 +247,10 @@ class Executor:
             rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
             if reveal is not None:
                 rules.append(reveal)
-            counts, layers = self.capture.peel(st, max_layers, rules)
+            try:
+                counts, layers = self.capture.peel(st, max_layers, rules)
+            finally:
+                self.tiles.forget()
             revealed = None if reveal is None else reveal.shown
             left = self.capture.left(st, rules, counts, layers)
         else:
@@ -398,15 +408,23 @@ class Executor:
         target = self._target(st, name, layer)
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
+        reach = self._reach(st, name) if size == self.tiles.size else None
         if p.user is not None:
             prog = self.programs.user(p.user)
         else:
-            prog = self.programs.library(p.op.shader, defines=_defines(p))
+            vertex = FULLSCREEN if reach is None else TILES_VERT
+            prog = self.programs.library(p.op.shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         for uniform, value in p.uniforms.items():
             self.programs.set(prog, uniform, value)
         for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, source, layer), unit, size)
+        fbo = self.r.pool.framebuffer((target,))
+        if reach is not None:
+            fbo.use()
+            fbo.clear()
+            st.draws += self.tiles.draw(prog, reach)
+            return
         vao = self.programs.vao(prog)
         if p.kind == "separable":
             scratch_slot = pl.scratch[name]
@@ -419,9 +437,30 @@ class Executor:
             self._bind_input(prog, next(iter(inputs)), scratch, BASE_UNIT, size)
             self.programs.set(prog, "u_direction", (0, 1))
             st.draws += 1
-        self.r.pool.framebuffer((target,)).use()
+        fbo.use()
         vao.render(vertices=3)
         st.draws += 1
+
+    def _reach(self, st: RunState, name: str) -> int | None:
+        """How far from the covered pixels of the layer being drawn pass ``name``'s result can
+        be non-zero, through the passes it reads (``Op.support``); None: anywhere, or unknown.
+        Only passes of one layer at a time qualify (a pass that accumulates layers does not)."""
+        if name not in st.reach:
+            pl = st.pl
+            p = pl.bound.passes[name]
+            reach = None
+            if p.per_layer and p.user is None and p.kind == "single" and not p.accumulate and p.op.reach:
+                source = pl.resolve(p.inputs[p.op.support]) if p.op.support in p.inputs else None
+                attribute = pl.bound.attributes.get(source)
+                if attribute is not None:
+                    depth = attribute.parts is None and (attribute.of or source) == "depth"
+                    base = 0 if depth and st.by_attr[source].primary else None
+                else:
+                    base = self._reach(st, source) if source in pl.bound.passes else None
+                if base is not None:
+                    reach = base + p.op.reach(p.uniforms)
+            st.reach[name] = reach
+        return st.reach[name]
 
     def _run_slice(self, st: RunState, name: str, p, layer: int) -> None:
         prog = self.programs.compute(p.op.compute, _defines(p))

@@ -112,11 +112,16 @@ class LayerCapture:
                 held.append(read_texture(tex, bound.attributes[name].format))
             if eager and layer and not groups[0].capture.samples(layer, groups[0].queries[layer]):
                 return  # an empty layer ends the peel (EmptyLayer): nothing reads its passes
+            if tiled:
+                self.ex.tiles.look(groups[0].gb.layer_depth(layer))
             for name in pl.iteration0 if layer == 0 else pl.per_layer:
                 self.ex._run_pass(st, name, layer, layer + 1)
 
-        # a software rasteriser looks at every layer's count before its passes run
+        # a software rasteriser looks at every layer's count before its passes run, and at
+        # where the layer lies, for passes that need only be drawn there (pipeline.tiles)
         eager = r.software
+        tiled = self.ex.tiled and st.arrays is None
+        tiled = tiled and any(self.ex._reach(st, n) is not None for n in pl.per_layer)
         samples = groups[0].capture.samples
         return peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
 

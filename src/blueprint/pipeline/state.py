@@ -125,4 +125,5 @@ class RunState:
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
     camera_uniforms: dict[int, dict] = field(default_factory=dict)  # by target height
+    reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
     draws: int = 0

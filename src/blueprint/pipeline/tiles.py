@@ -1,0 +1,125 @@
+"""Passes drawn only over the tiles where a depth layer has something.
+
+A software rasteriser shades every pixel a full-screen triangle covers, whatever the layer
+holds there: on llvmpipe an edge pass over a layer that covers a thousandth of the screen
+cost two thirds of one over a layer that covers half of it. Where an operation's result can
+be non-zero only near what its input holds (``Op.support`` and ``Op.reach``), the executor
+reads the layer's coverage back (cheap where the GPU is the CPU), finds the tiles it touches,
+widens them by the pass's reach and draws the pass as rectangles over those tiles alone; the
+rest of its target is cleared. GPUs keep drawing full-screen passes (a read-back a layer would
+stall them, and their passes cost little next to it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+TILE = 16  # pixels along each side: llvmpipe's own block of 16x16 pixels
+VERTEX = "tiles.vert"
+
+
+def covered_tiles(depth: np.ndarray) -> np.ndarray:
+    """(ceil(H / TILE), ceil(W / TILE)) bool: the tiles of ``depth`` (H, W), 1.0 where the
+    layer has nothing, that hold any covered pixel."""
+    h, w = depth.shape
+    rows = np.minimum.reduceat(depth, np.arange(0, h, TILE), axis=0)
+    return np.minimum.reduceat(rows, np.arange(0, w, TILE), axis=1) < 1.0
+
+
+def widen(tiles: np.ndarray, by: int) -> np.ndarray:
+    """``tiles`` grown by ``by`` tiles in every direction (a square neighbourhood)."""
+    if by <= 0 or not tiles.any():
+        return tiles
+    h, w = tiles.shape
+    padded = np.zeros((h + 2 * by, w + 2 * by), bool)
+    padded[by : by + h, by : by + w] = tiles
+    rows = np.zeros((h, w + 2 * by), bool)
+    for dy in range(2 * by + 1):
+        rows |= padded[dy : dy + h]
+    out = np.zeros((h, w), bool)
+    for dx in range(2 * by + 1):
+        out |= rows[:, dx : dx + w]
+    return out
+
+
+def rectangles(tiles: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Two triangles (six (x, y) vertices in clip space, float32) for each run of set tiles
+    along a row of ``tiles`` over a target of ``size`` (W, H) pixels; row 0 is the bottom row of
+    the target, as GL stores it."""
+    w, h = size
+    edges = np.diff(np.pad(tiles, ((0, 0), (1, 1))).astype(np.int8), axis=1)
+    starts = np.argwhere(edges == 1)
+    ends = np.argwhere(edges == -1)[:, 1]
+    y0 = starts[:, 0] * TILE
+    y1 = np.minimum(y0 + TILE, h)
+    x0 = starts[:, 1] * TILE
+    x1 = np.minimum(ends * TILE, w)
+    left, right = x0 / w * 2.0 - 1.0, x1 / w * 2.0 - 1.0
+    bottom, top = y0 / h * 2.0 - 1.0, y1 / h * 2.0 - 1.0
+    corners = [(left, bottom), (right, bottom), (right, top), (left, bottom), (right, top), (left, top)]
+    out = np.empty((len(starts), 6, 2), np.float32)
+    for k, (x, y) in enumerate(corners):
+        out[:, k, 0], out[:, k, 1] = x, y
+    return out.reshape(-1, 2)
+
+
+class Tiles:
+    """The coverage of the layer being drawn, in tiles, and the vertex buffer the executor's
+    tiled passes draw from (one per executor; vertex arrays per program)."""
+
+    def __init__(self, ctx) -> None:
+        self.ctx = ctx
+        self.buffer = None
+        self._vaos: dict[int, object] = {}
+        self._scratch: np.ndarray | None = None
+        self.covered: np.ndarray | None = None
+        self.size: tuple[int, int] | None = None
+        self._drawn: tuple | None = None
+        self._vertices = 0
+
+    def release(self) -> None:
+        for vao in self._vaos.values():
+            vao.release()
+        self._vaos.clear()
+        if self.buffer is not None:
+            self.buffer.release()
+            self.buffer = None
+
+    def look(self, depth_texture) -> None:
+        """Read the layer's depth back and keep which tiles it covers."""
+        w, h = depth_texture.size
+        if self._scratch is None or self._scratch.shape != (h, w):
+            self._scratch = np.empty((h, w), np.float32)
+        depth_texture.read_into(self._scratch)
+        self.covered, self.size, self._drawn = covered_tiles(self._scratch), (w, h), None
+
+    def forget(self) -> None:
+        self.covered = self.size = self._drawn = None
+
+    def draw(self, prog, reach: int) -> int:
+        """Draw ``prog`` (built with ``VERTEX``) over the covered tiles widened by ``reach``
+        pixels; returns the draw calls issued (0 where no tile is covered)."""
+        key = (id(self.covered), reach)
+        if self._drawn != key:
+            vertices = rectangles(widen(self.covered, -(-reach // TILE)), self.size)
+            self._upload(vertices)
+            self._drawn, self._vertices = key, len(vertices)
+        if not self._vertices:
+            return 0
+        vao = self._vaos.get(prog.glo)
+        if vao is None:
+            vao = self._vaos[prog.glo] = self.ctx.vertex_array(prog, [(self.buffer, "2f", "in_position")])
+        vao.render(vertices=self._vertices)
+        return 1
+
+    def _upload(self, vertices: np.ndarray) -> None:
+        need = max(vertices.nbytes, 4096)
+        if self.buffer is None or self.buffer.size < need:
+            for vao in self._vaos.values():
+                vao.release()
+            self._vaos.clear()
+            if self.buffer is not None:
+                self.buffer.release()
+            self.buffer = self.ctx.buffer(reserve=2 * need)
+        if vertices.nbytes:
+            self.buffer.write(vertices)
