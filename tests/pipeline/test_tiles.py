@@ -27,8 +27,8 @@ def test_covered_tiles_and_widen_against_brute_force(shape):
     depth = sparse_depth(rng, *shape)
     tiles = covered_tiles(depth)
     th, tw = -(-shape[0] // TILE), -(-shape[1] // TILE)
-    blocks = [[depth[i * TILE : (i + 1) * TILE, j * TILE : (j + 1) * TILE] for j in range(tw)] for i in range(th)]
-    expected = np.array([[(b < 1).any() for b in row] for row in blocks])
+    rows = [depth[i * TILE : (i + 1) * TILE] for i in range(th)]
+    expected = np.array([[(row[:, j * TILE : (j + 1) * TILE] < 1).any() for j in range(tw)] for row in rows])
     np.testing.assert_array_equal(tiles, expected)
     for by in (1, 2):
         grown = widen(tiles, by)
