@@ -88,8 +88,15 @@ class LayerCapture:
         # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
         # the raw ID target) need them
         face_ids = any(g.extra for g in groups) or clear_gb or _id_silhouettes(pl)
+        # a software rasteriser looks at every layer's count before its passes run, and at
+        # where the layer lies, for passes that need only be drawn there (pipeline.tiles)
+        eager = r.software
+        tiled = self.ex.tiled and st.arrays is None
+        tiled = tiled and any(self.ex._reach(st, n) is not None for n in pl.per_layer)
         for g in groups:
-            g.capture = Capture(r, st.mesh, st.camera, g.gb, face_ids=face_ids, batch=max_layers)
+            g.capture = Capture(
+                r, st.mesh, st.camera, g.gb, face_ids=face_ids, batch=max_layers, tiles=tiled and g.primary
+            )
         extras = self._attribute_programs(st) if any(g.extra for g in groups) else None
         for name in pl.accumulated:
             r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
@@ -113,15 +120,14 @@ class LayerCapture:
             if eager and layer and not groups[0].capture.samples(layer, groups[0].queries[layer]):
                 return  # an empty layer ends the peel (EmptyLayer): nothing reads its passes
             if tiled:
-                self.ex.tiles.look(groups[0].gb.layer_depth(layer))
+                primary = groups[0]
+                if primary.capture.tile_layers is not None:
+                    self.ex.tiles.layer_of(primary.capture.tile_layers, layer, primary.size)
+                else:
+                    self.ex.tiles.look(primary.gb.layer_depth(layer))
             for name in pl.iteration0 if layer == 0 else pl.per_layer:
                 self.ex._run_pass(st, name, layer, layer + 1)
 
-        # a software rasteriser looks at every layer's count before its passes run, and at
-        # where the layer lies, for passes that need only be drawn there (pipeline.tiles)
-        eager = r.software
-        tiled = self.ex.tiled and st.arrays is None
-        tiled = tiled and any(self.ex._reach(st, n) is not None for n in pl.per_layer)
         samples = groups[0].capture.samples
         return peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-TILE = 16  # pixels along each side: llvmpipe's own block of 16x16 pixels
+from blueprint.render.abuffer import TILE
+
 VERTEX = "tiles.vert"
 
 
@@ -92,6 +93,11 @@ class Tiles:
             self._scratch = np.empty((h, w), np.float32)
         depth_texture.read_into(self._scratch)
         self.covered, self.size, self._drawn = covered_tiles(self._scratch), (w, h), None
+
+    def layer_of(self, tile_layers: np.ndarray, layer: int, size: tuple[int, int]) -> None:
+        """Keep the tiles layer ``layer`` covers, from the layers of each tile (an A-buffer's
+        count: ``Capture.tile_layers``) over a target of ``size``."""
+        self.covered, self.size, self._drawn = tile_layers > layer, tuple(size), None
 
     def forget(self) -> None:
         self.covered = self.size = self._drawn = None

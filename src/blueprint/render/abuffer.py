@@ -28,18 +28,30 @@ NODE_BYTES = 24
 FIRST_ROOM = 4
 # a quarter of the GPU's memory where the driver tells it, else this
 DEFAULT_MAX_BYTES = 1 << 30
+# pixels along a side of the tiles whose layers the resolve counts, for a software rasteriser
+# to unpack and draw each layer only where it has pixels (blueprint.pipeline.tiles)
+TILE = 16
+# groups of 8 x 8 a row of a tiled unpack's dispatch (abuffer_unpack.comp)
+ROW = 32768
 
 
 class ABuffer:
     """The A-buffer capture of one frame's layers (see the module's docstring): ``draw`` at
     layer 0 captures and sorts every layer, then unpacks layer 0; at each later layer it
     unpacks that layer. ``uniforms`` are the camera's: ``u_view``, ``u_projection`` (bytes),
-    ``u_ortho``, ``u_depth_range``, ``u_peel_eps``; ``back_bias`` the peel's for back faces."""
+    ``u_ortho``, ``u_depth_range``, ``u_peel_eps``; ``back_bias`` the peel's for back faces.
+    With ``tiles`` the resolve also counts the most layers a pixel of each ``TILE`` x ``TILE``
+    tile has (``tile_layers``, read back with the counts) and each layer is unpacked only in
+    the tiles that have it: what a software rasteriser wants, where reading back is cheap and
+    every pixel a pass touches costs."""
 
-    def __init__(self, r, mesh, uniforms: dict, back_bias: float, max_bytes: int) -> None:
+    def __init__(
+        self, r, mesh, uniforms: dict, back_bias: float, max_bytes: int, tiles: bool = False
+    ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
-        self.resolve = r.compute(RESOLVE_COMP)
+        defines = {"TILES": TILE} if tiles else {}
+        self.resolve = r.compute(RESOLVE_COMP, defines)
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),
             (self.resolve, ("u_depth_range", "u_peel_eps")),
@@ -50,11 +62,15 @@ class ABuffer:
                 else:
                     prog[name].value = uniforms[name]
         self.clear = r.compute(CLEAR_COMP)
-        self.unpack = r.compute(UNPACK_COMP)
+        self.unpack = r.compute(UNPACK_COMP, {**defines, "ROW": ROW} if tiles else {})
         for prog in (self.resolve, self.unpack):
             prog["u_back_bias"].value = back_bias
         # pixels covered by each layer, known once layer 0 is drawn
         self.layer_pixels: list[int] = []
+        self.tiles = tiles
+        # (rows, columns) of tiles, row 0 at the bottom: the layers of each, once layer 0 is drawn
+        self.tile_layers: np.ndarray | None = None
+        self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
 
     def deepest(self) -> int:
         """The most layers any pixel has, once layer 0 is drawn."""
@@ -134,6 +150,10 @@ class ABuffer:
             # all the same, and drawn again below
             head.bind_to_image(0, read=True, write=False)
             cursor.bind_to_image(1, read=False, write=True)
+            if self.tiles:
+                tiles = self._tile_target(name, size)
+                tiles.write(np.zeros(tiles.size[::-1], np.uint32))
+                tiles.bind_to_image(2, read=True, write=True)
             self.resolve.run(*groups)
             ctx.memory_barrier()
             calls += 3
@@ -152,7 +172,28 @@ class ABuffer:
         # pixels with at least k + 1 layers are those layer k covers
         covered = np.cumsum(counts[4:][::-1])[::-1][1:]
         self.layer_pixels = [int(v) for v in covered if v > 0]
+        if self.tiles:
+            self._list_tiles(name, size)
         return calls
+
+    def _tile_target(self, name: str, size: tuple[int, int]):
+        return self.r.pool.texture(f"{name}.tiles", (-(-size[0] // TILE), -(-size[1] // TILE)), "r32ui")
+
+    def _list_tiles(self, name: str, size: tuple[int, int]) -> None:
+        """Read the tiles' layers back and upload the tiles that have any, most layers first,
+        so that the tiles with a layer are the first of the list at every layer."""
+        tiles = self._tile_target(name, size)
+        layers = np.frombuffer(tiles.read(), np.uint32).reshape(tiles.size[1], tiles.size[0])
+        self.tile_layers = layers
+        flat = layers.ravel()
+        order = np.argsort(-flat.astype(np.int64), kind="stable")
+        order = order[flat[order] > 0]
+        self._deepest_first = flat[order]
+        rows, columns = np.divmod(order, layers.shape[1])
+        packed = (columns | (rows << 16)).astype(np.uint32)
+        listed = self.r.pool.buffer(f"{name}.tile_list", max(packed.nbytes, 4))
+        if packed.nbytes:
+            listed.write(packed)
 
     def _unpack(self, gb, name: str, layer: int) -> None:
         """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""
@@ -162,10 +203,23 @@ class ABuffer:
         ctx.memory_barrier()
         self._buffers(name, 1)
         pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=True, write=True)
-        self.flat(size)[layer % 2].bind_to_image(2, read=False, write=True)
+        depth = self.flat(size)[layer % 2]
+        depth.bind_to_image(2, read=False, write=True)
         gb.normal.bind_to_image(3, read=False, write=True)
         gb.ids.bind_to_image(4, read=False, write=True)
-        self.unpack.run(-(-size[0] // 8), -(-size[1] // 8))
+        if not self.tiles:
+            self.unpack.run(-(-size[0] // 8), -(-size[1] // 8))
+            ctx.memory_barrier()
+            return
+        pool.framebuffer((depth,)).clear(1.0, 1.0, 1.0, 1.0)
+        ctx.memory_barrier()
+        # the tiles with more than ``layer`` layers lead the list
+        tiles = int(np.count_nonzero(self._deepest_first > layer))
+        groups = tiles * (TILE // 8) ** 2
+        if groups:
+            pool.buffer(f"{name}.tile_list", 4).bind_to_storage_buffer(5)
+            self.unpack["u_groups"].value = groups
+            self.unpack.run(min(groups, ROW), -(-groups // ROW))
         ctx.memory_barrier()
 
 

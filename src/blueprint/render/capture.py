@@ -114,6 +114,7 @@ class Capture:
     ``batch`` > 1 (the layers the frame draws at most; None: all of them) lets one geometry
     pass find that many layers where the driver allows (``_KBuffer``), or every layer
     (``ABuffer``, from ``abuffer_min_layers``). ``selected`` (P,) bool draws only those parts.
+    ``tiles``: an A-buffer also finds which tiles each layer covers (``tile_layers``).
     """
 
     def __init__(
@@ -127,6 +128,7 @@ class Capture:
         batch: int | None = 1,
         tie_break: bool | None = None,
         selected: np.ndarray | None = None,
+        tiles: bool = False,
     ) -> None:
         self.r, self.mesh, self.gb = r, mesh, gb
         normals = gb.normal is not None
@@ -161,7 +163,7 @@ class Capture:
                 "u_depth_range": depth_range(camera),
                 "u_peel_eps": peel_eps(camera),
             }
-            self.abuffer = ABuffer(r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes)
+            self.abuffer = ABuffer(r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes, tiles)
             if not self.abuffer.fits((w, h)):
                 self.abuffer = None
             else:
@@ -206,6 +208,12 @@ class Capture:
             pixels = self.abuffer.layer_pixels
             return pixels[layer] if layer < len(pixels) else 0
         return query.samples
+
+    @property
+    def tile_layers(self) -> np.ndarray | None:
+        """The layers of each tile (``abuffer.TILE`` pixels a side, row 0 at the bottom) where
+        the A-buffer captured them with ``tiles``, once layer 0 is drawn; else None."""
+        return self.abuffer.tile_layers if self.abuffer is not None else None
 
     def deepest(self) -> int | None:
         """The most layers any pixel has where the A-buffer captured them (None otherwise): the

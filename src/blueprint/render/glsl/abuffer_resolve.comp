@@ -16,6 +16,12 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
+#if TILES
+// the most layers a pixel of each tile of TILES x TILES pixels has: where a software
+// rasteriser's passes have work at each layer (blueprint.pipeline.tiles)
+layout(binding = 2, r32ui) uniform uimage2D u_tile_layers;
+shared uint group_deepest;
+#endif
 uniform float u_back_bias;
 uniform float u_peel_eps;
 
@@ -126,14 +132,27 @@ void main() {
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
         group_pixels_with[i] = 0u;
     }
+#if TILES
+    if (gl_LocalInvocationIndex == 0u) {
+        group_deepest = 0u;
+    }
+#endif
     barrier();
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (all(lessThan(p, imageSize(u_head)))) {
         uint layers = chain(p);
         atomicAdd(group_pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
         atomicMax(deepest, layers);
+#if TILES
+        atomicMax(group_deepest, layers);
+#endif
     }
     barrier();
+#if TILES
+    if (gl_LocalInvocationIndex == 0u && group_deepest > 0u) {
+        imageAtomicMax(u_tile_layers, ivec2(gl_WorkGroupID.xy) / (TILES / 8), group_deepest);
+    }
+#endif
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
         if (i > 0u && group_pixels_with[i] > 0u) {
             atomicAdd(pixels_with[i], group_pixels_with[i]);

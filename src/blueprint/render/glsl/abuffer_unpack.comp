@@ -12,9 +12,35 @@ layout(binding = 2, r32f) writeonly uniform image2D u_depth;
 layout(binding = 3, rgba16f) writeonly uniform image2D u_normal;
 layout(binding = 4, rg32i) writeonly uniform iimage2D u_ids;
 uniform float u_back_bias;
+#if TILES
+// Only the tiles of TILES x TILES pixels with a pixel this deep (the rest of the depth target
+// is cleared to 1): the first u_groups / (TILES / 8)^2 entries of the list, tiles packed as
+// x | y << 16, most layers first. Groups of 8 x 8 in rows of ROW (a define).
+layout(std430, binding = 5) readonly buffer TileList {
+    uint tile_list[];
+};
+uniform uint u_groups;
+
+ivec2 pixel() {
+    uint g = gl_WorkGroupID.y * uint(ROW) + gl_WorkGroupID.x;
+    const uint per_tile = uint((TILES / 8) * (TILES / 8));
+    uint entry = tile_list[g / per_tile];
+    uint sub = g % per_tile;
+    ivec2 tile = ivec2(entry & 0xffffu, entry >> 16);
+    ivec2 corner = tile * TILES + ivec2(sub % uint(TILES / 8), sub / uint(TILES / 8)) * 8;
+    return g < u_groups ? corner + ivec2(gl_LocalInvocationID.xy) : ivec2(-1);
+}
+#else
+ivec2 pixel() {
+    return ivec2(gl_GlobalInvocationID.xy);
+}
+#endif
 
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 p = pixel();
+    if (p.x < 0) {
+        return;
+    }
     if (any(greaterThanEqual(p, imageSize(u_cursor)))) {
         return;
     }
