@@ -85,8 +85,9 @@ def tiled(renderer, monkeypatch):
         {"style": "paper", "max_layers": None},
         {"highlight": ["shaft"], "reveal": 0.5},
         {"shade": ["cover"], "supersample": 1},
+        {"supersample": 3, "line_width": 2.0},
     ],
-    ids=["default", "wide", "paper-all", "reveal", "shade"],
+    ids=["default", "wide", "paper-all", "reveal", "shade", "supersample3"],
 )
 def test_same_drawing_as_full_screen_passes(renderer, tiled, options):
     model = examples.gearbox()

@@ -16,6 +16,7 @@ from blueprint.gpu import units
 PAPER_FRAG = "blueprint.compose:glsl/paper.frag"
 COMPOSITE_FRAG = "blueprint.compose:glsl/composite.frag"
 COMPOSE_COMP = "blueprint.compose:glsl/compose.comp"
+TILES_VERT = "tiles.vert"  # blueprint.pipeline.tiles: rectangles over chosen tiles
 GROUP = 8  # layers a pass composes
 SHADE_INDEX_UNIT = units.INPUTS
 SHADE_COLOR_UNIT = units.INPUTS + 1
@@ -64,9 +65,12 @@ class Compositor:
         *,
         highlight=None,
         shading: Shading | None = None,
+        tiles=None,
     ) -> int:
         """Compose the first ``layers`` maps of ``stack`` (one texture a layer); returns the
-        draw calls issued."""
+        draw calls issued. ``tiles(program, first, count)`` draws a group of layers over the
+        tiles they have lines in (``blueprint.pipeline.tiles``; the program built with
+        ``TILES_VERT``) instead of over the whole target."""
         r, ctx = self.r, self.r.ctx
         put = r.uniforms.set
         fbo = r.pool.framebuffer((target,))
@@ -80,20 +84,24 @@ class Compositor:
             set_paper(r.uniforms, prog, style)
             vao.render(vertices=3)
             passes += 1
-        sprites = []
+        sprites = []  # (maps, inks, first layer, shading, drawn over the layers' tiles)
         if layers:
             all_inks = style.layer_inks(layers)
             for first in _groups(layers):
                 count = min(GROUP, layers - first)
-                sprites.append((stack[first : first + count], inks(all_inks, first, count), first, shading))
+                group = stack[first : first + count]
+                sprites.append((group, inks(all_inks, first, count), first, shading, tiles is not None))
         if highlight is not None:
-            sprites.append(([highlight], inks(np.array([style.highlight]), 0, 1), 0, None))
+            sprites.append(([highlight], inks(np.array([style.highlight]), 0, 1), 0, None, False))
         ctx.enable(ctx.BLEND)
         ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
-        for maps, ink, first, shaded in sprites:
+        for maps, ink, first, shaded, tiled in sprites:
             factor = max(1, maps[0].size[0] // target.size[0])
             defines = {"LAYERS_FACTOR": factor, "SHADED": shaded is not None, "COUNT": len(maps)}
-            prog, vao = r.fullscreen(COMPOSITE_FRAG, defines)
+            if tiled:
+                prog = r.program(COMPOSITE_FRAG, TILES_VERT, defines)
+            else:
+                prog, vao = r.fullscreen(COMPOSITE_FRAG, defines)
             put(prog, "u_threshold", bool(style.threshold))
             for k, tex in enumerate(maps):
                 tex.use(LAYER_UNITS + k)
@@ -101,8 +109,11 @@ class Compositor:
             put(prog, "u_ink", ink[: 16 * len(maps)])
             if shaded is not None:
                 self._bind_shading(prog, shaded, first)
-            vao.render(vertices=3)
-            passes += 1
+            if tiled:
+                passes += tiles(prog, first, len(maps))
+            else:
+                vao.render(vertices=3)
+                passes += 1
         ctx.disable(ctx.BLEND)
         return passes
 

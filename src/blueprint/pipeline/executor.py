@@ -29,6 +29,7 @@ run holds (its plan, camera, stacks of layers, targets of chosen parts, passes c
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 import weakref
@@ -37,7 +38,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from blueprint.compose.compositor import Compositor, Shading
+from blueprint.compose.compositor import TILES_VERT, Compositor, Shading
 from blueprint.compose.style import STYLES, Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu import units
@@ -54,7 +55,6 @@ from blueprint.pipeline.peel import LayerCapture
 from blueprint.pipeline.programs import FULLSCREEN, Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
-from blueprint.pipeline.tiles import VERTEX as TILES_VERT
 from blueprint.pipeline.tiles import Tiles
 from blueprint.render.capture import (
     depth_range,
@@ -236,6 +236,7 @@ class Executor:
         stage("upload")
 
         ctx.enable_only(ctx.NOTHING)
+        self.tiles.forget()  # what an earlier run found, even one an error ended
         counts: list[int] = []
         revealed, left = None, 0
         if pl.needs_model:
@@ -247,10 +248,7 @@ class Executor:
             rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
             if reveal is not None:
                 rules.append(reveal)
-            try:
-                counts, layers = self.capture.peel(st, max_layers, rules)
-            finally:
-                self.tiles.forget()
+            counts, layers = self.capture.peel(st, max_layers, rules)
             revealed = None if reveal is None else reveal.shown
             left = self.capture.left(st, rules, counts, layers)
         else:
@@ -263,6 +261,7 @@ class Executor:
         stage("peel_edges")
         for name in pl.after:
             self._run_pass(st, name, 0, layers)
+        self.tiles.forget()
         stage("compose")
         ctx.disable(ctx.BLEND)
         if self.r.use_compute:
@@ -514,9 +513,15 @@ class Executor:
                 self._value(st, wired["shade_index"], 0), self._value(st, wired["shade_color"], 0)
             )
         source = wired[p.stacks[0]]
-        compose = self.compositor.fragment
         if st.arrays is not None and source in st.arrays.arrays:
             compose = self.compositor.compute
+        else:
+            compose = self.compositor.fragment
+            reach = self._reach(st, source) if self.tiles.layers and shading is None else None
+            if reach is not None and tuple(st.stacks[source][0].size) == self.tiles.size:
+                compose = functools.partial(
+                    compose, tiles=functools.partial(self.tiles.draw_layers, reach=reach)
+                )
         st.draws += compose(target, st.stacks[source], layers, style, highlight=highlight, shading=shading)
 
     # -- read back -----------------------------------------------------------------------------

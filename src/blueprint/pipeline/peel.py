@@ -124,7 +124,7 @@ class LayerCapture:
                 if primary.capture.tile_layers is not None:
                     self.ex.tiles.layer_of(primary.capture.tile_layers, layer, primary.size)
                 else:
-                    self.ex.tiles.look(primary.gb.layer_depth(layer))
+                    self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
             for name in pl.iteration0 if layer == 0 else pl.per_layer:
                 self.ex._run_pass(st, name, layer, layer + 1)
 

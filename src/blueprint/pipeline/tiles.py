@@ -16,8 +16,6 @@ import numpy as np
 
 from blueprint.render.abuffer import TILE
 
-VERTEX = "tiles.vert"
-
 
 def covered_tiles(depth: np.ndarray) -> np.ndarray:
     """(ceil(H / TILE), ceil(W / TILE)) bool: the tiles of ``depth`` (H, W), 1.0 where the
@@ -77,6 +75,8 @@ class Tiles:
         self.size: tuple[int, int] | None = None
         self._drawn: tuple | None = None
         self._vertices = 0
+        # the covered tiles of every layer of the run so far (the composite draws over them)
+        self.layers: dict[int, np.ndarray] = {}
 
     def release(self) -> None:
         for vao in self._vaos.values():
@@ -86,28 +86,47 @@ class Tiles:
             self.buffer.release()
             self.buffer = None
 
-    def look(self, depth_texture) -> None:
-        """Read the layer's depth back and keep which tiles it covers."""
+    def look(self, depth_texture, layer: int) -> None:
+        """Read layer ``layer``'s depth back and keep which tiles it covers."""
         w, h = depth_texture.size
         if self._scratch is None or self._scratch.shape != (h, w):
             self._scratch = np.empty((h, w), np.float32)
         depth_texture.read_into(self._scratch)
-        self.covered, self.size, self._drawn = covered_tiles(self._scratch), (w, h), None
+        self._keep(covered_tiles(self._scratch), layer, (w, h))
 
     def layer_of(self, tile_layers: np.ndarray, layer: int, size: tuple[int, int]) -> None:
         """Keep the tiles layer ``layer`` covers, from the layers of each tile (an A-buffer's
         count: ``Capture.tile_layers``) over a target of ``size``."""
-        self.covered, self.size, self._drawn = tile_layers > layer, tuple(size), None
+        self._keep(tile_layers > layer, layer, size)
+
+    def _keep(self, covered: np.ndarray, layer: int, size) -> None:
+        self.covered, self.size, self._drawn = covered, tuple(size), None
+        self.layers[layer] = covered
 
     def forget(self) -> None:
         self.covered = self.size = self._drawn = None
+        self.layers = {}
 
     def draw(self, prog, reach: int) -> int:
-        """Draw ``prog`` (built with ``VERTEX``) over the covered tiles widened by ``reach``
+        """Draw ``prog`` (built with ``compositor.TILES_VERT``) over the covered tiles widened by ``reach``
         pixels; returns the draw calls issued (0 where no tile is covered)."""
-        key = (id(self.covered), reach)
+        return self._draw(prog, (id(self.covered), reach), lambda: widen(self.covered, -(-reach // TILE)))
+
+    def draw_layers(self, prog, first: int, count: int, reach: int) -> int:
+        """Draw ``prog`` over the tiles any of layers ``first`` .. ``first + count - 1`` covers,
+        widened by ``reach`` pixels of the layers' size and one tile more: a target of another
+        size (the composite's, a supersample apart) has pixels straddling two tiles."""
+        held = [self.layers[k] for k in range(first, first + count) if k in self.layers]
+
+        def tiles() -> np.ndarray:
+            union = np.logical_or.reduce(held) if held else np.zeros((1, 1), bool)
+            return widen(union, -(-reach // TILE) + 1)
+
+        return self._draw(prog, ("layers", first, count, reach, len(held)), tiles)
+
+    def _draw(self, prog, key, tiles) -> int:
         if self._drawn != key:
-            vertices = rectangles(widen(self.covered, -(-reach // TILE)), self.size)
+            vertices = rectangles(tiles(), self.size)
             self._upload(vertices)
             self._drawn, self._vertices = key, len(vertices)
         if not self._vertices:
