@@ -3,17 +3,16 @@
 
 from __future__ import annotations
 
-import io
 import logging
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from blueprint.api.frames import PLAN, PartSpec, render_frame, shared
 from blueprint.api.renderer import Renderer
-from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
@@ -24,9 +23,12 @@ from blueprint.scene.loader import load_model, model_from_object
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import paper_size
 
+if TYPE_CHECKING:
+    from blueprint.compose.glyphs import Glyphs
+
 log = logging.getLogger("blueprint")
 
-__all__ = ["Drawing", "draw", "to_model"]
+__all__ = ["Drawing", "draw", "output_writer", "to_model"]
 
 # The options a vector drawing takes; the others are the raster drawing's alone.
 _VECTOR_OPTIONS = (
@@ -53,6 +55,22 @@ _VECTOR_OPTIONS = (
     "dimensions",
 )
 _VECTOR_ONLY = ("scale", "sheet")
+
+
+def output_writer(path: str | os.PathLike, *kinds):
+    """``blueprint.api.files.choose_writer(path, *kinds)``, loading the modules that register
+    the vector drawings' and videos' writers only where ``path``'s suffix is not a picture's or
+    layers' (export's own writers): a PNG's drawing, with its start-up, does without them.
+
+    Returns the path and its ``blueprint.export.writers.Writer``; raises ``InputError`` in one
+    line naming the suffixes allowed where the suffix has none of ``kinds``.
+    """
+    from blueprint.export.writers import WRITERS
+
+    if WRITERS.find(Path(path).suffix, *kinds) is None:
+        import blueprint.api.files  # noqa: F401 - registers every other writer
+
+    return WRITERS.choose(path, *kinds)
 
 
 def to_model(obj, up: str | None = None, include: PartGlobs = None, exclude: PartGlobs = None) -> Model:
@@ -123,13 +141,9 @@ class Drawing:
     def save(self, path: str | os.PathLike) -> Path:
         """Write the drawing to ``path`` atomically, in the format its suffix names: a picture
         (``.png``) or vector lines (``.svg``, ``.pdf``, ``.dxf``). Returns the path written."""
-        from blueprint.export.writers import WRITERS, Kind
+        from blueprint.export.writers import Kind
 
-        if WRITERS.find(Path(path).suffix.lower(), Kind.IMAGE) is None:
-            # the vector writers register with the vector package, loaded only for them
-            import blueprint.api.files  # noqa: F401
-
-        path, write = WRITERS.choose(path, Kind.IMAGE, Kind.DRAWING)
+        path, write = output_writer(path, Kind.IMAGE, Kind.DRAWING)
         if write.kind is Kind.DRAWING:
             return write(path, self.lines)
         given = [k for k in _VECTOR_ONLY if self.options.get(k) is not None]
@@ -140,11 +154,9 @@ class Drawing:
 
     def png(self) -> bytes:
         """The image as PNG bytes (with alpha)."""
-        from PIL import Image
+        from blueprint.export.files import png_bytes
 
-        buffer = io.BytesIO()
-        Image.fromarray(self.image, "RGBA").save(buffer, format="PNG")
-        return buffer.getvalue()
+        return png_bytes(self.image)
 
     def svg(self) -> str:
         """The vector lines as an SVG document."""
@@ -213,6 +225,7 @@ def vector_drawing(
     plan sheet, cut by a section where asked, a glyph file's dimensions added), not written
     anywhere: a ``blueprint.vector.drawing.Drawing``."""
     from blueprint.api.sections import section_of
+    from blueprint.compose.glyphs import Glyphs, load_glyphs
     from blueprint.gpu.device import check_size
     from blueprint.vector.drawing import draw_vector, draw_vector_sheet
 

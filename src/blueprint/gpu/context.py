@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import os
 import re
 
@@ -84,6 +82,11 @@ def _check_device(device) -> None:
 
 def egl_device_count() -> int | None:
     """The number of EGL devices (``eglQueryDevicesEXT``), or None where EGL cannot say."""
+    # imported here: ctypes.util brings subprocess, tempfile and shutil into every drawing's
+    # start, and only a device asked for by index needs it
+    import ctypes
+    import ctypes.util
+
     name = ctypes.util.find_library("EGL")
     if name is None:
         return None
