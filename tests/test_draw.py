@@ -151,22 +151,35 @@ def test_objects_that_cannot_be_drawn_raise_one_line(obj, message):
 
 def _loaded_after(code: str) -> set[str]:
     heavy = ["scipy", "networkx", "trimesh", "moderngl", "blueprint.silhouette", "blueprint.vector", "dask"]
-    probe = f"import sys\n{code}\nprint(' '.join(m for m in {heavy!r} if m in sys.modules))"
+    # what a picture's drawing does without, each a measurable part of its start (benchmarks/startup.py)
+    heavy += ["PIL", "click", "blueprint.compose.glyphs", "blueprint.api.sections", "blueprint.api.files"]
+    heavy += ["importlib.resources", "zipfile", "difflib"]
+    # at exit, which the command line calls itself, on a line of its own among what the code prints
+    report = f"print('loaded:', *(m for m in {heavy!r} if m in sys.modules))"
+    probe = f"import atexit, sys\natexit.register(lambda: {report})\n{code}"
     out = subprocess.run(
         [sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True
     )
-    return set(out.stdout.split())
+    line = next(line for line in out.stdout.splitlines() if line.startswith("loaded:"))
+    return set(line.split()[1:])
 
 
 def test_import_blueprint_loads_nothing_heavy():
     assert _loaded_after("import blueprint; blueprint.InputError; blueprint.__all__") == set()
 
 
-def test_a_binary_stl_drawing_loads_no_trimesh_scipy_or_networkx(tmp_path):
+def test_a_binary_stl_picture_loads_only_what_it_draws_with(tmp_path):
     stl = tmp_path / "part.stl"
     trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.4, sections=24).export(stl)
     code = f"import blueprint\nblueprint.draw({str(stl)!r}, size=(64, 64)).save({str(tmp_path / 'p.png')!r})"
     assert _loaded_after(code) == {"moderngl"}
+    argv = ["render", str(stl), "-o", str(tmp_path / "c.png"), "--size", "64", "64"]
+    command = f"from blueprint.cli import main\nmain({argv!r})"
+    # click's option parser imports difflib itself
+    assert _loaded_after(command) - {"difflib"} == {"moderngl", "click"}
+    np.testing.assert_array_equal(
+        np.asarray(Image.open(tmp_path / "c.png")), np.asarray(Image.open(tmp_path / "p.png"))
+    )
     # read without trimesh, the model is the one trimesh reads
     fast = blueprint.load_model(stl)
     loaded = trimesh.load(stl, process=False)
