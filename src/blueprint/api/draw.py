@@ -25,6 +25,7 @@ from blueprint.scene.sheet import paper_size
 
 if TYPE_CHECKING:
     from blueprint.compose.glyphs import Glyphs
+    from blueprint.export.writers import Kind, Writer
 
 log = logging.getLogger("blueprint")
 
@@ -57,7 +58,7 @@ _VECTOR_OPTIONS = (
 _VECTOR_ONLY = ("scale", "sheet")
 
 
-def output_writer(path: str | os.PathLike, *kinds):
+def output_writer(path: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
     """``blueprint.api.files.choose_writer(path, *kinds)``, loading the modules that register
     the vector drawings' and videos' writers only where ``path``'s suffix is not a picture's or
     layers' (export's own writers): a PNG's drawing, with its start-up, does without them.
