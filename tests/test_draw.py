@@ -7,6 +7,7 @@ import io
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import ezdxf
 import numpy as np
@@ -114,7 +115,7 @@ def test_options_of_the_other_kind_are_refused(renderer, tmp_path):
     mesh = trimesh.creation.box()
     # shading is both kinds' now: a box from the iso view shows every one of its 12 faces
     assert len(blueprint.draw(mesh, size=SIZE, vector=True, shade="*").lines.shading) == 12
-    with pytest.raises(InputError, match="scale are for vector drawings"):
+    with pytest.raises(InputError, match="scale is for vector drawings"):
         blueprint.draw(mesh, size=SIZE, view="top", scale="1:10").save(tmp_path / "x.png")
     assert not list(tmp_path.iterdir())
 
@@ -150,25 +151,132 @@ def test_objects_that_cannot_be_drawn_raise_one_line(obj, message):
 
 def _loaded_after(code: str) -> set[str]:
     heavy = ["scipy", "networkx", "trimesh", "moderngl", "blueprint.silhouette", "blueprint.vector", "dask"]
-    probe = f"import sys\n{code}\nprint(' '.join(m for m in {heavy!r} if m in sys.modules))"
+    # what a picture's drawing does without, each a measurable part of its start (benchmarks/startup.py)
+    heavy += ["PIL", "click", "blueprint.compose.glyphs", "blueprint.api.sections", "blueprint.api.files"]
+    heavy += ["importlib.resources", "zipfile", "difflib"]
+    # at exit, which the command line calls itself, on a line of its own among what the code prints
+    report = f"print('loaded:', *(m for m in {heavy!r} if m in sys.modules))"
+    probe = f"import atexit, sys\natexit.register(lambda: {report})\n{code}"
     out = subprocess.run(
         [sys.executable, "-c", probe], capture_output=True, text=True, timeout=120, check=True
     )
-    return set(out.stdout.split())
+    line = next(line for line in out.stdout.splitlines() if line.startswith("loaded:"))
+    return set(line.split()[1:])
 
 
 def test_import_blueprint_loads_nothing_heavy():
     assert _loaded_after("import blueprint; blueprint.InputError; blueprint.__all__") == set()
 
 
-def test_a_binary_stl_drawing_loads_no_trimesh_scipy_or_networkx(tmp_path):
+def test_a_binary_stl_picture_loads_only_what_it_draws_with(tmp_path):
     stl = tmp_path / "part.stl"
     trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.4, sections=24).export(stl)
     code = f"import blueprint\nblueprint.draw({str(stl)!r}, size=(64, 64)).save({str(tmp_path / 'p.png')!r})"
     assert _loaded_after(code) == {"moderngl"}
+    argv = ["render", str(stl), "-o", str(tmp_path / "c.png"), "--size", "64", "64"]
+    command = f"from blueprint.cli import main\nmain({argv!r})"
+    # click's option parser imports difflib itself
+    assert _loaded_after(command) - {"difflib"} == {"moderngl", "click"}
+    np.testing.assert_array_equal(
+        np.asarray(Image.open(tmp_path / "c.png")), np.asarray(Image.open(tmp_path / "p.png"))
+    )
     # read without trimesh, the model is the one trimesh reads
     fast = blueprint.load_model(stl)
     loaded = trimesh.load(stl, process=False)
     np.testing.assert_array_equal(fast.positions, np.asarray(loaded.vertices, np.float32))
     np.testing.assert_array_equal(fast.faces, loaded.faces)
     assert (fast.part_names, fast.up) == (("part",), "z")
+
+
+# -- the command line's drawing options --------------------------------------------------------------
+BOX_MM = (40.0, 20.0, 10.0)
+
+
+def test_dimensions_measure_the_box_in_pictures_and_vectors(renderer):
+    box = trimesh.creation.box(extents=BOX_MM)
+    kw = dict(size=(160, 120), view="front", ortho=True, dimensions=True)
+    picture = blueprint.draw(box, **kw)
+    # the front view shows width (x) and height (y): 40 and 20 model units, in mm by default
+    assert [t.text for t in picture.frame.marks.texts] == ["40", "20"]
+    np.testing.assert_array_equal(picture.image, blueprint.render(blueprint.api.draw.to_model(box), **kw))
+    # given in cm, the same box measures ten times as many millimetres
+    assert [t.text for t in blueprint.draw(box, units="cm", **kw).frame.marks.texts] == ["400", "200"]
+    svg = ET.fromstring(blueprint.draw(box, vector=True, **kw).svg())
+    texts = [t.text for t in svg.iter("{http://www.w3.org/2000/svg}text")]
+    assert texts == ["40", "20"]
+
+
+def test_a_plan_sheet_has_the_title_block_asked_for(renderer, tmp_path):
+    box = trimesh.creation.box(extents=BOX_MM)
+    picture = blueprint.draw(box, size=(320, 240), view="plan", title="Bracket 7", units="cm")
+    texts = [t.text for t in picture.frame.marks.texts]
+    assert texts[texts.index("TITLE") + 1] == "Bracket 7"
+    assert texts[texts.index("UNITS") + 1] == "mm (model in cm)"
+    drawing = blueprint.draw(box, size=(320, 240), view="plan", title="Bracket 7", sheet="A3", vector=True)
+    root = ET.fromstring(drawing.svg())
+    # an A3 sheet, landscape, in millimetres
+    assert (root.get("width"), root.get("height")) == ("420mm", "297mm")
+    texts = [t.text for t in root.iter("{http://www.w3.org/2000/svg}text")]
+    assert texts[texts.index("TITLE") + 1] == "Bracket 7"
+    # a picture drawing keeps its sheet for its vector files and refuses it for pictures
+    sheet_picture = blueprint.draw(box, size=(320, 240), view="plan", sheet="A3")
+    assert ET.parse(sheet_picture.save(tmp_path / "s.svg")).getroot().get("width") == "420mm"
+    with pytest.raises(InputError, match=r"s\.png: sheet is for vector drawings"):
+        sheet_picture.save(tmp_path / "s.png")
+    assert [p.name for p in tmp_path.iterdir()] == ["s.svg"]
+
+
+def test_include_and_exclude_choose_a_scenes_parts(renderer, scene):
+    assert blueprint.draw(scene, size=SIZE, exclude="pin*").model.part_names == ("block",)
+    assert blueprint.draw(scene, size=SIZE, include="pin1,0").model.part_names == ("block", "pin1")
+    pair = (trimesh.creation.box().vertices, trimesh.creation.box().faces)
+    with pytest.raises(InputError, match=r"^\(vertices, faces\): --include/--exclude leave no part"):
+        blueprint.draw(pair, size=SIZE, exclude="mesh")
+
+
+def test_a_section_cuts_pictures_and_vectors(renderer, scene):
+    kw = dict(size=SIZE, view="front", section="z=0", section_keep="pin0")
+    picture = blueprint.draw(scene, **kw)
+    model = blueprint.api.draw.to_model(scene)
+    np.testing.assert_array_equal(picture.image, blueprint.render(model, **kw))
+    assert not np.array_equal(picture.image, blueprint.draw(scene, size=SIZE, view="front").image)
+    groups = ET.fromstring(blueprint.draw(scene, vector=True, **kw).svg()).iter(
+        "{http://www.w3.org/2000/svg}g"
+    )
+    assert "section" in {g.get("id") for g in groups}
+
+
+@pytest.mark.parametrize(
+    ("flags", "options"),
+    [
+        (["--title", "T"], dict(title="T")),
+        (["--dimensions"], dict(dimensions=True)),
+        (
+            ["--units", "furlong", "--dimensions", "--ortho"],
+            dict(units="furlong", dimensions=True, ortho=True),
+        ),
+        (["--section", "q=1"], dict(section="q=1")),
+        (["--include", "nosuch"], dict(include="nosuch")),
+        (["--view", "bogus"], dict(view="bogus")),
+        (["--supersample", "9"], dict(supersample=9)),
+        (["--view", "plan", "--glyphs", "MARKS"], dict(view="plan", glyphs="MARKS")),
+        (["--sheet", "A3"], dict(sheet="A3", vector=True)),
+        (["--sheet", "A9", "--view", "plan"], dict(sheet="A9", view="plan", vector=True)),
+    ],
+)
+def test_bad_options_raise_the_command_lines_line(renderer, tmp_path, capsys, flags, options):
+    from blueprint import cli
+
+    marks = str(Path(__file__).resolve().parents[1] / "examples" / "marks.toml")
+    path = str(examples.example_path())
+    flags = [marks if f == "MARKS" else f for f in flags]
+    options = {k: marks if v == "MARKS" else v for k, v in options.items()}
+    output = tmp_path / ("out.svg" if options.get("vector") else "out.png")
+    with pytest.raises(SystemExit) as exited:
+        cli.main(["render", path, "-o", str(output), "--size", "64", "64", *flags])
+    assert exited.value.code == 2
+    printed = capsys.readouterr().err.strip().splitlines()[-1]
+    with pytest.raises(InputError) as caught:
+        blueprint.draw(path, size=(64, 64), **options)
+    assert printed == f"blueprint: error: {caught.value}"
+    assert not list(tmp_path.iterdir())

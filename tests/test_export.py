@@ -1,12 +1,16 @@
-"""Files written atomically get the permissions a file written in place would have."""
+"""Files written atomically get the permissions a file written in place would have; PNG bytes
+decode to the pixels written."""
 
 from __future__ import annotations
 
+import io
 import os
 
 import numpy as np
+import pytest
+from PIL import Image
 
-from blueprint.export.files import atomic_write, save_png
+from blueprint.export.files import atomic_write, png_bytes, save_png
 
 
 def _umask() -> int:
@@ -33,3 +37,25 @@ def test_replaced_file_keeps_its_permissions(tmp_path):
     assert path.read_text() == "new"
     assert path.stat().st_mode & 0o777 == 0o604
     assert sorted(p.name for p in tmp_path.iterdir()) == ["old.txt"]
+
+
+@pytest.mark.parametrize("shape", [(5, 7), (5, 7, 1), (5, 7, 2), (5, 7, 3), (5, 7, 4), (1, 1, 4)])
+def test_png_bytes_decode_to_the_same_pixels(tmp_path, shape):
+    image = np.random.default_rng(3).integers(0, 256, size=shape, dtype=np.uint8)
+    data = png_bytes(image)
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    # decoded by an independent reader, every chunk's CRC checked on the way
+    decoded = Image.open(io.BytesIO(data))
+    decoded.load()
+    expected_mode = {1: "L", 2: "LA", 3: "RGB", 4: "RGBA"}[1 if len(shape) == 2 else shape[2]]
+    assert decoded.mode == expected_mode
+    np.testing.assert_array_equal(np.asarray(decoded).reshape(shape), image)
+    assert save_png(tmp_path / "x.png", image).read_bytes() == data
+
+
+@pytest.mark.parametrize(
+    "image", [np.zeros((4, 4, 3), np.float32), np.zeros((4, 4, 5), np.uint8), np.zeros((0, 4, 3), np.uint8)]
+)
+def test_png_bytes_refuses_what_png_cannot_hold(image):
+    with pytest.raises(ValueError, match="a PNG image is"):
+        png_bytes(image)

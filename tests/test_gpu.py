@@ -15,11 +15,12 @@ from blueprint import examples
 from blueprint.errors import GLUnavailableError, InputError, ShaderError
 from blueprint.gpu import TargetPool, build_program, create_context, gl_info, preprocess
 from blueprint.gpu.device import check_size
-from blueprint.gpu.shaders import _explain
+from blueprint.gpu.shaders import _explain, package_files
 
 # -- a throw-away shader package ------------------------------------------------------------------
-# build_program loads "package:path" references through importlib.resources, so a package made in
-# a temporary folder (and put on sys.path) exercises the real loader without a file under src/.
+# build_program loads "package:path" references from the package's folder (package_files), so a
+# package made in a temporary folder (and put on sys.path) exercises the real loader without a file
+# under src/.
 
 SHADERS = {
     "helper.glsl": "float helper(float x) {\n    return x * 2.0;\n}\n",
@@ -83,6 +84,20 @@ def test_context_factory_reports_missing_backend_in_one_line(monkeypatch):
     assert "no usable OpenGL 3.3 context" in message and "no-such-backend" in message
 
 
+def test_context_is_made_without_searching_for_the_gl_libraries(monkeypatch):
+    import ctypes.util
+
+    def searched(name):
+        raise AssertionError(f"find_library({name!r}) runs ldconfig at every start")
+
+    monkeypatch.setattr(ctypes.util, "find_library", searched)
+    ctx = create_context()
+    try:
+        assert ctx.version_code >= 330 and ctx.info["GL_RENDERER"]
+    finally:
+        ctx.release()
+
+
 def test_gl_info_smoke(renderer):
     data = gl_info(renderer.ctx)
     assert set(data) == {"renderer", "vendor", "version", "max_texture_size"}
@@ -110,6 +125,30 @@ def test_preprocess_resolves_includes_defines_and_line_directives(shader_pkg):
     )
     assert source == expected
     assert files == [f"{shader_pkg}/main.frag", f"{shader_pkg}/helper.glsl", "blueprint/gpu/glsl/depth.glsl"]
+
+
+def test_package_files_are_a_folder_or_a_zip_archives_resources(tmp_path):
+    import zipfile
+
+    import blueprint.ops
+
+    assert package_files("blueprint.ops") == Path(blueprint.ops.__file__).parent
+    name = f"bp_zipshaders_{uuid.uuid4().hex[:8]}"
+    archive = tmp_path / "shaders.zip"
+    with zipfile.ZipFile(archive, "w") as zf:
+        zf.writestr(f"{name}/__init__.py", "")
+        zf.writestr(f"{name}/glsl/main.frag", SHADERS["main.frag"])
+        zf.writestr(f"{name}/glsl/helper.glsl", SHADERS["helper.glsl"])
+    sys.path.insert(0, str(archive))
+    try:
+        files = package_files(name)
+        assert not isinstance(files, Path) and files.joinpath("glsl/helper.glsl").is_file()
+        source, names = preprocess(f"{name}:glsl/main.frag", {"SCALE": 1, "FLAG": 1})
+    finally:
+        sys.path.remove(str(archive))
+        sys.modules.pop(name, None)
+    assert names == [f"{name}/glsl/main.frag", f"{name}/glsl/helper.glsl", "blueprint/gpu/glsl/depth.glsl"]
+    assert "return x * 2.0;" in source and "float eye_depth(" in source
 
 
 def test_preprocessed_shader_compiles(renderer, shader_pkg):

@@ -4,7 +4,6 @@ workflows (a model, image or video file in, a picture, drawing, video or data fi
 
 from blueprint.api.frames import PLAN, peel, render, render_frame
 from blueprint.api.renderer import Renderer
-from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
@@ -34,6 +33,18 @@ __all__ = [
     "render_with_glyphs",
     "sheet_cameras",
 ]
+
+_GLYPHS = ("Glyphs", "load_glyphs", "render_with_glyphs")
+
+
+def __getattr__(name: str):
+    # the glyph names load their package when first asked for: a plain drawing needs none of it
+    if name in _GLYPHS:
+        from blueprint.compose import glyphs
+
+        return getattr(glyphs, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 # Here, in the package, so that callers (the tests) can swap it: blueprint.api._renderer = r.
 _renderer: Renderer | None = None

@@ -3,28 +3,33 @@
 
 from __future__ import annotations
 
-import io
 import logging
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from blueprint.api.frames import PLAN, PartSpec, render_frame, shared
 from blueprint.api.renderer import Renderer
-from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
-from blueprint.scene.camera import fit_camera
+from blueprint.scene.camera import VIEWS, fit_camera
 from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin
+from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model, model_from_object
 from blueprint.scene.model import Model
+from blueprint.scene.sheet import paper_size
+
+if TYPE_CHECKING:
+    from blueprint.compose.glyphs import Glyphs
+    from blueprint.export.writers import Kind, Writer
 
 log = logging.getLogger("blueprint")
 
-__all__ = ["Drawing", "draw", "to_model"]
+__all__ = ["Drawing", "draw", "output_writer", "to_model"]
 
 # The options a vector drawing takes; the others are the raster drawing's alone.
 _VECTOR_OPTIONS = (
@@ -43,19 +48,42 @@ _VECTOR_OPTIONS = (
     "glyphs",
     "shade",
     "shade_opacity",
+    "units",
+    "section",
+    "section_plane",
+    "section_keep",
+    "title",
+    "dimensions",
 )
-_VECTOR_ONLY = ("scale", "units")
+_VECTOR_ONLY = ("scale", "sheet")
 
 
-def to_model(obj, up: str | None = None) -> Model:
+def output_writer(path: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
+    """``blueprint.api.files.choose_writer(path, *kinds)``, loading the modules that register
+    the vector drawings' and videos' writers only where ``path``'s suffix is not a picture's or
+    layers' (export's own writers): a PNG's drawing, with its start-up, does without them.
+
+    Returns the path and its ``blueprint.export.writers.Writer``; raises ``InputError`` in one
+    line naming the suffixes allowed where the suffix has none of ``kinds``.
+    """
+    from blueprint.export.writers import WRITERS
+
+    if WRITERS.find(Path(path).suffix, *kinds) is None:
+        import blueprint.api.files  # noqa: F401 - registers every other writer
+
+    return WRITERS.choose(path, *kinds)
+
+
+def to_model(obj, up: str | None = None, include: PartGlobs = None, exclude: PartGlobs = None) -> Model:
     """``obj`` as a ``Model``: a model file's path, a ``Model``, a ``trimesh.Trimesh``, a
-    ``trimesh.Scene`` (a part per mesh instance, transforms applied) or ``(vertices, faces)``.
+    ``trimesh.Scene`` (a part per mesh instance, transforms applied) or ``(vertices, faces)``,
+    with the parts ``include`` and ``exclude`` choose (name globs or indices, as ``--include``).
 
     Raises ``InputError`` with the one-line message the command line would print.
     """
     if isinstance(obj, str | os.PathLike):
-        return load_model(obj, up=up)
-    return model_from_object(obj, up=up)
+        return load_model(obj, up=up, include=include, exclude=exclude)
+    return model_from_object(obj, up=up, include=include, exclude=exclude)
 
 
 class Drawing:
@@ -114,27 +142,22 @@ class Drawing:
     def save(self, path: str | os.PathLike) -> Path:
         """Write the drawing to ``path`` atomically, in the format its suffix names: a picture
         (``.png``) or vector lines (``.svg``, ``.pdf``, ``.dxf``). Returns the path written."""
-        from blueprint.export.writers import WRITERS, Kind
+        from blueprint.export.writers import Kind
 
-        if WRITERS.find(Path(path).suffix.lower(), Kind.IMAGE) is None:
-            # the vector writers register with the vector package, loaded only for them
-            import blueprint.api.files  # noqa: F401
-
-        path, write = WRITERS.choose(path, Kind.IMAGE, Kind.DRAWING)
+        path, write = output_writer(path, Kind.IMAGE, Kind.DRAWING)
         if write.kind is Kind.DRAWING:
             return write(path, self.lines)
         given = [k for k in _VECTOR_ONLY if self.options.get(k) is not None]
         if given:
-            raise InputError(f"{path}: {' and '.join(given)} are for vector drawings (.svg, .pdf, .dxf)")
+            verb = "is" if len(given) == 1 else "are"
+            raise InputError(f"{path}: {' and '.join(given)} {verb} for vector drawings (.svg, .pdf, .dxf)")
         return write(path, self.image)
 
     def png(self) -> bytes:
         """The image as PNG bytes (with alpha)."""
-        from PIL import Image
+        from blueprint.export.files import png_bytes
 
-        buffer = io.BytesIO()
-        Image.fromarray(self.image, "RGBA").save(buffer, format="PNG")
-        return buffer.getvalue()
+        return png_bytes(self.image)
 
     def svg(self) -> str:
         """The vector lines as an SVG document."""
@@ -203,6 +226,7 @@ def vector_drawing(
     plan sheet, cut by a section where asked, a glyph file's dimensions added), not written
     anywhere: a ``blueprint.vector.drawing.Drawing``."""
     from blueprint.api.sections import section_of
+    from blueprint.compose.glyphs import Glyphs, load_glyphs
     from blueprint.gpu.device import check_size
     from blueprint.vector.drawing import draw_vector, draw_vector_sheet
 
@@ -269,7 +293,9 @@ def draw(
     fov: float = 30.0,
     ortho: bool = False,
     up: str | None = None,
-    style: str | Style = "blueprint",
+    include: PartGlobs = None,
+    exclude: PartGlobs = None,
+    style: str | os.PathLike | Style = "blueprint",
     grid: float | None = None,
     max_layers: int | None = 8,
     min_fraction: float = 0.0,
@@ -277,16 +303,25 @@ def draw(
     line_width: float = 1.0,
     supersample: int = 2,
     id_silhouettes: bool = False,
-    highlight: PartSpec | Sequence[str | int] | None = None,
+    highlight: PartSpec | None = None,
     reveal: float | None = None,
     shade: PartSpec | None = None,
     shade_opacity: float = 1.0,
     glyphs: Glyphs | str | os.PathLike | None = None,
-    scale: str | float | None = None,
+    section: str | None = None,
+    section_plane: str | Sequence[float] | None = None,
+    section_keep: PartSpec | None = None,
+    dimensions: bool = False,
     units: str | None = None,
+    title: str | None = None,
+    scale: str | float | None = None,
+    sheet: str | None = None,
     renderer: Renderer | None = None,
 ) -> Drawing:
     """Draw the blueprint of ``obj`` and return it as a ``Drawing``.
+
+    Every option of ``blueprint render`` that draws is an argument of the same name
+    (``--highlight-model FILE`` is ``highlight=blueprint.load_model(FILE)``).
 
     Parameters
     ----------
@@ -301,7 +336,8 @@ def draw(
         Width and height in pixels.
     view : str
         ``iso``, ``front``, ``back``, ``left``, ``right``, ``top``, ``bottom``, or ``plan`` (a
-        sheet of top, front and right orthographic views and an iso view).
+        sheet of top, front and right orthographic views and an iso view, with a border and a
+        title block).
     azimuth, elevation : float, optional
         Degrees, overriding the view's.
     fov : float
@@ -310,9 +346,13 @@ def draw(
         Orthographic projection.
     up : {'y', 'z'}, optional
         The model's up axis (default: the file format's, y for objects).
-    style : str or Style
-        ``blueprint``, ``paper``, ``transparent``, ``wireframe`` or a ``Style``; a vector
-        drawing also takes a line style file (``.toml``, ``.json``).
+    include, exclude : str or sequence of str and int, optional
+        Parts to draw, and parts to leave out: name globs or indices (a string may hold several,
+        comma-separated); without ``include``, environment meshes (skyboxes, huge ground planes)
+        are left out.
+    style : str, PathLike or Style
+        ``blueprint``, ``paper``, ``transparent``, ``wireframe``, a ``Style``, or a line style
+        file (``.toml``, ``.json``: colour, width, dash and opacity per occlusion level).
     grid : float, optional
         Grid spacing in pixels (0: none), overriding the style's.
     max_layers : int or None
@@ -322,7 +362,7 @@ def draw(
     crease_angle : float
         Degrees: sharper edges are drawn as creases.
     line_width : float
-        Line width in pixels.
+        Line width in pixels, in [1, 16].
     supersample : int
         Edges are computed at this multiple of ``size`` (1-4).
     id_silhouettes : bool
@@ -336,9 +376,29 @@ def draw(
     shade_opacity : float
         Opacity of the shading, in (0, 1].
     glyphs : Glyphs, str or PathLike, optional
-        Boxes, arrows, paths and labels in model coordinates (in vectors: dashed or dimmed where hidden).
-    scale, units : optional
-        ``'1:50'`` and the model's length unit: a vector page laid out in millimetres.
+        Boxes, arrows, paths, labels and dimensions in model coordinates (in vectors: dashed or
+        dimmed where hidden). Not on a plan sheet.
+    section : str, optional
+        A section view: ``"x=VALUE"`` (or ``y=``, ``z=``, model units) removes the model in front
+        of that plane as the camera sees it; cut faces are hatched and outlined heavy.
+    section_plane : str or 6 floats, optional
+        A section by any plane: a point of it and a normal towards the side removed
+        (``"PX,PY,PZ,NX,NY,NZ"``).
+    section_keep : str, int, sequence, Model or (P,) bool, optional
+        Parts drawn whole in a section (shafts, bolts, pins).
+    dimensions : bool
+        Overall width and height and circle diameters of an orthographic view (or of a plan
+        sheet's orthographic views), after ISO 129, in millimetres.
+    units : str, optional
+        The model's length unit (``mm``, ``in``, ``m`` ...; default ``m`` for glTF, else
+        ``mm``): for dimensions, ``scale`` and a plan sheet's title block.
+    title : str, optional
+        A plan sheet's title (default: the model's name).
+    scale : str or float, optional
+        ``'1:50'``: a vector page laid out in millimetres, orthographic. Vector drawings only.
+    sheet : str, optional
+        ``A4`` ... ``A0`` (landscape): the paper of a vector plan sheet, the scale fitted to it
+        unless ``scale`` is given. Vector drawings only.
     renderer : Renderer, optional
         Draw with this renderer instead of the shared one.
 
@@ -352,7 +412,17 @@ def draw(
         A file or object that cannot be drawn (a point cloud, an empty scene, NaN vertices),
         or bad options: the one-line message the command line prints.
     """
-    model = to_model(obj, up)
+    views = (*VIEWS, PLAN)
+    if view not in views:
+        raise InputError(f"unknown view {view!r} (choose {', '.join(views)})")
+    if sheet is not None:
+        # a raster drawing draws its sheet only when saved as vectors: refused now all the same
+        paper_size(sheet)
+        if view != PLAN:
+            raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
+    if scale is not None and not vector:
+        check_vector_options("blueprint", scale, None)
+    model = to_model(obj, up, include, exclude)
     options = dict(
         size=tuple(int(v) for v in size),
         view=view,
@@ -362,7 +432,7 @@ def draw(
         ortho=ortho,
         style=style,
         grid=grid,
-        max_layers=max_layers,
+        max_layers=max_layers or None,
         min_fraction=min_fraction,
         crease_angle=crease_angle,
         line_width=line_width,
@@ -373,7 +443,13 @@ def draw(
         shade=shade,
         shade_opacity=shade_opacity,
         glyphs=glyphs,
-        scale=scale,
+        section=section,
+        section_plane=section_plane,
+        section_keep=section_keep,
+        dimensions=dimensions,
         units=units,
+        title=title,
+        scale=scale,
+        sheet=sheet,
     )
     return Drawing(model, options, vector, renderer)

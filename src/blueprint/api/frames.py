@@ -6,13 +6,11 @@ import os
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from blueprint.api.renderer import Renderer
-from blueprint.api.sections import Section, render_section, section_of
-from blueprint.compose.glyphs import Glyphs, load_glyphs, render_with_glyphs
-from blueprint.compose.glyphs.marks import draw_marks
 from blueprint.compose.sheet import over, paper_image
 from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
@@ -25,6 +23,13 @@ from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.sheet import Marks, lay_out_sheet, model_name, picture_per_mm, sheet_fields
+
+if TYPE_CHECKING:
+    from blueprint.api.sections import Section
+    from blueprint.compose.glyphs import Glyphs
+
+# Sections, glyphs and marks are imported where a frame has them: a plain drawing's start-up
+# (benchmarks/startup.py) loads none of them.
 
 #: The view name of a drawing sheet: top, front and right orthographic views plus an iso view.
 PLAN = "plan"
@@ -183,8 +188,8 @@ def render_frame(
     Frame
         The (H, W, 4) uint8 image, the layers drawn, the camera and the timings.
     """
-    if glyphs is not None and not isinstance(glyphs, Glyphs):
-        glyphs = load_glyphs(glyphs)
+    if glyphs is not None:
+        glyphs = _glyphs(glyphs)
     chosen = get_style(style, grid)
     model = _as_model(model, up, include, exclude)
     renderer = shared(renderer)
@@ -206,7 +211,7 @@ def render_frame(
         shade_opacity=shade_opacity,
         profile=profile,
     )
-    section_asked = section_of(model, section, section_plane, section_keep)
+    section_asked = _section_of(model, section, section_plane, section_keep)
     unit = _units(model, units)
     if view == PLAN and camera is None:
         if glyphs is not None:
@@ -223,12 +228,16 @@ def render_frame(
         raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
     drawn = model
     if section_asked is not None:
+        from blueprint.api.sections import render_section
+
         cut = section_asked.cut(model, cam)
         drawn = cut.model
         frame = render_section(renderer, cut, cam, size, options)
     else:
         frame = renderer.render(model, cam, size=size, **options)
     if glyphs is not None:
+        from blueprint.compose.glyphs import render_with_glyphs
+
         t0 = time.perf_counter()
         image = render_with_glyphs(
             renderer, model, frame.camera, size, glyphs, frame.image, mm_per_model=mm_per_model
@@ -236,6 +245,8 @@ def render_frame(
         spent = (time.perf_counter() - t0) * 1e3
         frame = replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "glyphs": spent})
     if dimensions:
+        from blueprint.compose.glyphs.marks import draw_marks
+
         t0 = time.perf_counter()
         marks, _ = _dimensions(drawn, cam, size, mm_per_model, crease_angle)
         image = frame.image.copy()
@@ -245,6 +256,22 @@ def render_frame(
             frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "dimensions": spent}, marks=marks
         )
     return frame
+
+
+def _glyphs(glyphs: Glyphs | str | os.PathLike) -> Glyphs:
+    """``glyphs``, read from its file where it is one."""
+    from blueprint.compose.glyphs import Glyphs, load_glyphs
+
+    return glyphs if isinstance(glyphs, Glyphs) else load_glyphs(glyphs)
+
+
+def _section_of(model: Model, section, section_plane, section_keep) -> Section | None:
+    """``blueprint.api.sections.section_of``, its modules loaded only where a section is asked for."""
+    if section is None and section_plane is None and section_keep is None:
+        return None
+    from blueprint.api.sections import section_of
+
+    return section_of(model, section, section_plane, section_keep)
 
 
 def _dimensions(
@@ -366,11 +393,15 @@ def _plan_frame(
     beside it, all orthographic at one scale, and an iso view in the free corner, laid out by
     ``blueprint.scene.sheet.lay_out_sheet`` (as the vector sheet is) with their labels, a border
     and a title block; a section cuts the model as the front view sees it, in every view."""
+    from blueprint.compose.glyphs.marks import draw_marks
+
     if size[0] < 2 or size[1] < 2:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
     style: Style = options["style"]
     cut = None
     if section is not None:
+        from blueprint.api.sections import render_section
+
         front = sheet_cameras(model, (size[0] // 2, size[1] // 2), fov)["front"]
         cut = section.cut(model, front)
     drawn = model if cut is None else cut.model

@@ -6,28 +6,36 @@ from pathlib import Path
 
 import click
 
-from blueprint.api.files import choose_writer
+from blueprint.api.draw import output_writer
 from blueprint.cli.options import STYLE_NAMES, camera_kwargs, camera_options
+from blueprint.compose.linestyle import FILE_SUFFIXES, is_style_file
 from blueprint.errors import InputError, printable
 from blueprint.export.writers import WRITERS, Kind
 from blueprint.scene.up import guessed_up
-from blueprint.vector.style import FILE_SUFFIXES, is_style_file
 
-# the formats as the registry has them (blueprint.api.files has registered every one)
-PICTURES = ", ".join(WRITERS.suffixes(Kind.IMAGE))
-DRAWINGS = ", ".join(WRITERS.suffixes(Kind.DRAWING))
+
+def _suffixes(kind: Kind) -> str:
+    """The suffixes of ``kind`` as the registry has them, every writer registered first."""
+    import blueprint.api.files  # noqa: F401 - registers the vector drawings' and videos' writers
+
+    return ", ".join(WRITERS.suffixes(kind))
+
+
+class _OutputOption(click.Option):
+    """``-o``, its help naming every format written: made when help is shown, since listing the
+    vector formats loads the vector package, which a picture's drawing does without."""
+
+    def get_help_record(self, ctx: click.Context):
+        self.help = (
+            f"File to write: a picture ({_suffixes(Kind.IMAGE)}) or vector lines "
+            f"({_suffixes(Kind.DRAWING)}); depth layers (.npz) come from blueprint layers."
+        )
+        return super().get_help_record(ctx)
 
 
 @click.command()
 @click.argument("model", type=click.Path(path_type=Path))
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path),
-    required=True,
-    help=f"File to write: a picture ({PICTURES}) or vector lines ({DRAWINGS}); "
-    "depth layers (.npz) come from blueprint layers.",
-)
+@click.option("-o", "--output", cls=_OutputOption, type=click.Path(path_type=Path), required=True)
 @camera_options
 @click.option(
     "--style",
@@ -148,7 +156,7 @@ def render(
     from blueprint.api import default_renderer, render_frame
     from blueprint.scene.loader import load_model
 
-    output, write = choose_writer(output, Kind.IMAGE, Kind.DRAWING)
+    output, write = output_writer(output, Kind.IMAGE, Kind.DRAWING)
     if highlight and highlight_model:
         raise InputError("give --highlight or --highlight-model, not both")
     camera = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (1024, 1024), plan=True)
@@ -182,7 +190,7 @@ def render(
         )
         return
     if scale or sheet:
-        raise InputError(f"--scale and --sheet are for vector drawings ({DRAWINGS})")
+        raise InputError(f"--scale and --sheet are for vector drawings ({_suffixes(Kind.DRAWING)})")
     if is_style_file(style):
         # read before the model, so a bad file is refused at once
         from blueprint.compose.linestyle import load_raster_style
@@ -261,7 +269,7 @@ def layers(
     from blueprint.api import peel
     from blueprint.scene.loader import load_model
 
-    output, write = choose_writer(output, Kind.LAYERS)
+    output, write = output_writer(output, Kind.LAYERS)
     kwargs = camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, (512, 512))
     loaded = load_model(model, up=kwargs.pop("up"), include=include, exclude=exclude)
     result = peel(loaded, max_layers=max_layers or None, min_fraction=min_fraction, **kwargs)

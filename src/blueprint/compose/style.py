@@ -128,12 +128,13 @@ def get_style(style: str | os.PathLike | Style, grid: float | None = None) -> St
     """A style of ``STYLES`` by name, a line style file (a path, or a name ending in ``.toml``
     or ``.json``: ``blueprint.compose.linestyle.load_raster_style``), or a Style; ``grid``
     overrides its grid spacing (pixels)."""
-    from blueprint.compose.linestyle import is_style_file, load_raster_style
-
-    if isinstance(style, os.PathLike) or is_style_file(style):
-        style = load_raster_style(style)
-    elif isinstance(style, str):
-        if style not in STYLES:
-            raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)})")
+    if isinstance(style, str) and style in STYLES:
         style = STYLES[style]
+    elif isinstance(style, str | os.PathLike):
+        # the line style module loads only for a file: a style by name is most drawings'
+        from blueprint.compose.linestyle import is_style_file, load_raster_style
+
+        if not (isinstance(style, os.PathLike) or is_style_file(style)):
+            raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)})")
+        style = load_raster_style(style)
     return style if grid is None else style.with_options(grid=float(grid))

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
 import os
 import re
 
@@ -19,6 +17,7 @@ _INSTALL_HINT = (
     "(Mesa, software llvmpipe), or the NVIDIA driver for a GPU"
 )
 _SOFTWARE = ("llvmpipe", "softpipe", "swrast")
+_LIBGL, _LIBEGL = "libGL.so.1", "libEGL.so.1"
 
 
 def _device_from_environment() -> int | None:
@@ -56,6 +55,11 @@ def create_context(backend: str | None = None, device: int | None = None):
     if device is not None:
         _check_device(device)
     extra = {} if device is None else {"device_index": int(device)}
+    if backend == "egl":
+        # the libraries by soname, which is what glcontext would find: its own lookup runs
+        # ldconfig twice (ctypes.util.find_library), some 7 ms of every start
+        # (GLCONTEXT_LINUX_LIBGL and GLCONTEXT_LINUX_LIBEGL still override these)
+        extra.update(libgl=_LIBGL, libegl=_LIBEGL)
     reason = ""
     # Some drivers give exactly the version asked for: ask for 4.3 (compute shaders) first.
     for version in (430, MIN_GL):
@@ -84,6 +88,11 @@ def _check_device(device) -> None:
 
 def egl_device_count() -> int | None:
     """The number of EGL devices (``eglQueryDevicesEXT``), or None where EGL cannot say."""
+    # imported here: ctypes.util brings subprocess, tempfile and shutil into every drawing's
+    # start, and only a device asked for by index needs it
+    import ctypes
+    import ctypes.util
+
     name = ctypes.util.find_library("EGL")
     if name is None:
         return None

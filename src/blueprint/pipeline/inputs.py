@@ -78,12 +78,12 @@ class ImageInputs:
 
 def output_size(bound: Bound, image_names, size, images: dict, max_texture: int) -> tuple[int, int]:
     """A run's output size: ``size``, else the file's, else the first image input's, else 1024²."""
-    from blueprint.pipeline.media import image_size
-
     if size is not None:
         return check_size(size, 1, max_texture)
     if bound.size is not None:
         return bound.size
+    from blueprint.pipeline.media import image_size
+
     for name in image_names:
         spec = bound.images[name]
         given = images.get(name)

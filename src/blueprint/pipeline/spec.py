@@ -57,10 +57,10 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field, replace
-from importlib import resources
 from pathlib import Path
 
 from blueprint.errors import InputError
+from blueprint.gpu.shaders import package_files
 from blueprint.gpu.targets import FORMATS
 from blueprint.ops import OPS, Op
 from blueprint.settings import SETTINGS_FILE_LIMIT, parse_text, read_file
@@ -266,7 +266,7 @@ class StopSpec:
 
 # -- loading ---------------------------------------------------------------------------------------
 def preset_names() -> list[str]:
-    folder = resources.files(PRESETS.split(":")[0]).joinpath(PRESETS.split(":")[1])
+    folder = package_files(PRESETS.split(":")[0]).joinpath(PRESETS.split(":")[1])
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
 
 
@@ -282,7 +282,7 @@ def load_pipeline(name_or_path) -> PipelineSpec:
         if name_or_path not in preset_names():
             raise InputError(f"unknown pipeline preset {name_or_path!r} (choose {', '.join(preset_names())})")
         package, folder = PRESETS.split(":")
-        text = resources.files(package).joinpath(f"{folder}/{name_or_path}.toml").read_text(encoding="utf-8")
+        text = package_files(package).joinpath(f"{folder}/{name_or_path}.toml").read_text(encoding="utf-8")
         spec = parse(text, f"preset {name_or_path}", None)
     else:
         if text_path.suffix.lower() != ".toml":

@@ -11,11 +11,7 @@ hundred bytes of text compress far better than models do).
 
 from __future__ import annotations
 
-import bz2
 import io
-import lzma
-import tarfile
-import zipfile
 import zlib
 from pathlib import Path
 
@@ -59,6 +55,9 @@ def check_zip(path: Path, data: bytes | None = None) -> None:
     its declared size (and a member that holds more fails its checksum), so a lie cannot
     expand further. ``data``: the archive's bytes where they are in memory (a member of
     another archive), else the file is read."""
+    # the archive modules are imported where used: a plain model file's drawing needs none
+    import zipfile
+
     limit = settings.MODEL_FILE_LIMIT
     with io.BytesIO(data) if data is not None else open_file(path, limit, "a model file") as fh:
         try:
@@ -75,7 +74,11 @@ def _decompressor(kind: str):
     if kind == "gz":
         return zlib.decompressobj(16 + zlib.MAX_WBITS)
     if kind == "bz2":
+        import bz2
+
         return bz2.BZ2Decompressor()
+    import lzma
+
     return lzma.LZMADecompressor()
 
 
@@ -83,6 +86,8 @@ def expand_stream(path: Path, kind: str) -> bytes:
     """The contents of a ``.gz``, ``.bz2`` or ``.xz`` file (``kind`` its suffix), expanded a
     chunk at a time: at no point more than the limit plus one chunk is held, whatever the
     stream claims. Concatenated streams (``cat a.gz b.gz``) expand to their concatenation."""
+    import lzma
+
     limit, ratio = _limits()
     with open_file(path, settings.MODEL_FILE_LIMIT, "a model file") as fh:
         # no more than the limit, should the file grow after its check
@@ -130,6 +135,8 @@ def members(path: Path, ext: str) -> dict[str, bytes]:
     inner = path.stem
     if not inner.lower().endswith(".tar"):
         return {inner: data}
+    import tarfile
+
     try:
         with tarfile.open(fileobj=io.BytesIO(data), mode="r:") as archive:
             return {
@@ -140,6 +147,8 @@ def members(path: Path, ext: str) -> dict[str, bytes]:
 
 
 def _zip_members(path: Path) -> dict[str, bytes]:
+    import zipfile
+
     limit, _ = _limits()
     out: dict[str, bytes] = {}
     total = 0

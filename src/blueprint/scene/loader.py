@@ -112,7 +112,9 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
     return _checked(positions, faces, face_part, names, name, up, default, ext in _GUESS_UP, include, exclude)
 
 
-def model_from_object(obj, up: str | None = None, name: str | None = None) -> Model:
+def model_from_object(
+    obj, up: str | None = None, name: str | None = None, include: PartGlobs = None, exclude: PartGlobs = None
+) -> Model:
     """A model from an object of the Python ecosystem, checked as ``load_model`` checks files.
 
     Parameters
@@ -125,6 +127,9 @@ def model_from_object(obj, up: str | None = None, name: str | None = None) -> Mo
         Up axis for the named views (default y; a Model keeps its own unless given).
     name : str, optional
         What messages call the object (default: its type).
+    include, exclude : str or sequence of str and int, optional
+        Parts to keep, and parts to leave out, as ``load_model`` takes them (a Model is kept
+        whole when neither is given).
 
     Raises
     ------
@@ -135,13 +140,15 @@ def model_from_object(obj, up: str | None = None, name: str | None = None) -> Mo
     if up is not None and up not in ("y", "z"):
         raise InputError(f"unknown up axis {up!r} (choose y or z)")
     if isinstance(obj, Model):
-        return obj if up is None or up == obj.up else replace(obj, up=up, _cache={})
+        model = obj if up is None or up == obj.up else replace(obj, up=up, _cache={})
+        return model if include is None and exclude is None else choose_parts(model, include, exclude)
     if isinstance(obj, tuple | list) and len(obj) == 2:
         label = name or "(vertices, faces)"
         positions, faces = _pair(obj, label)
         if len(faces) == 0:
             raise InputError(f"{label}: no triangles")
-        return _checked(positions, faces, np.zeros(len(faces), np.int32), ["mesh"], label, up, "y")
+        one_part = np.zeros(len(faces), np.int32)
+        return _checked(positions, faces, one_part, ["mesh"], label, up, "y", False, include, exclude)
     import trimesh
 
     if isinstance(obj, trimesh.Scene):
@@ -162,7 +169,7 @@ def model_from_object(obj, up: str | None = None, name: str | None = None) -> Mo
         )
     if len(faces) == 0:
         raise InputError(f"{label}: no triangles")
-    return _checked(positions, faces, face_part, names, label, up, "y")
+    return _checked(positions, faces, face_part, names, label, up, "y", False, include, exclude)
 
 
 def _pair(obj, label: str) -> tuple[np.ndarray, np.ndarray]:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import difflib
 import fnmatch
 from collections.abc import Iterable
 
@@ -37,6 +36,8 @@ def select_parts(model: Model, patterns: str | Iterable[str | int]) -> np.ndarra
             continue
         hits = [i for i, n in enumerate(lowered) if fnmatch.fnmatchcase(n, str(pattern).lower())]
         if not hits:
+            import difflib  # for this message alone: it brings heapq along
+
             close = difflib.get_close_matches(str(pattern), names, n=5, cutoff=0.3)
             hint = f"; closest: {', '.join(close)}" if close else f"; parts are e.g. {', '.join(names[:5])}"
             raise InputError(f"no part matches {pattern!r}{hint}")

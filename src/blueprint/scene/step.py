@@ -10,9 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 from blueprint.errors import InputError
@@ -51,6 +49,10 @@ def step_to_glb(path: Path, data: bytes, time_limit: float | None = None) -> byt
         ``cascadio`` is not installed, OpenCASCADE cannot read the file, or meshing it takes
         longer than the limit.
     """
+    # imported here: every drawing imports this module, few mesh a STEP file
+    import subprocess
+    import tempfile
+
     limit = STEP_TIME_LIMIT if time_limit is None else time_limit
     with tempfile.TemporaryDirectory(prefix="blueprint-step-") as folder:
         source = os.path.join(folder, "model.step")
