@@ -29,10 +29,10 @@ _FACE_BYTES = _SPACE.copy()
 _FACE_BYTES[np.frombuffer(b"0123456789", np.uint8)] = True
 
 
-def _counts(flags: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """How many of ``flags`` are set in each line ``starts[i]:ends[i]``."""
-    total = np.r_[0, np.cumsum(flags, dtype=np.int32)]  # files are below 2 GiB
-    return total[ends] - total[starts]
+def _counts(flags: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """How many of ``flags`` (one a byte) are set in each line (lines begin at ``starts``)."""
+    line = np.searchsorted(starts, np.flatnonzero(flags), side="right") - 1
+    return np.bincount(line, minlength=len(starts))
 
 
 def _numbers(data: bytes, starts: np.ndarray, ends: np.ndarray, keyword: bytes, dtype) -> np.ndarray | None:
@@ -81,12 +81,14 @@ def plain_obj(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     vs, ve, fs, fe = starts[vertex], ends[vertex], starts[face], ends[face]
     # the keyword is each line's only byte outside its kind's set
-    if (_counts(~_VERTEX_BYTES[buf], vs, ve) != 1).any() or (_counts(~_FACE_BYTES[buf], fs, fe) != 1).any():
+    if (_counts(~_VERTEX_BYTES[buf], starts)[vertex] != 1).any():
+        return None
+    if (_counts(~_FACE_BYTES[buf], starts)[face] != 1).any():
         return None
     # words: a byte that is not a space after one that is (or at the file's start)
     space = _SPACE[buf]
-    word = ~space & np.r_[True, space[:-1]]
-    if (_counts(word, vs, ve) != 4).any() or (_counts(word, fs, fe) != 4).any():
+    words = _counts(~space & np.r_[True, space[:-1]], starts)
+    if (words[vertex] != 4).any() or (words[face] != 4).any():
         return None
     vertices = _numbers(data, vs, ve, b"v", np.float64)
     faces = _numbers(data, fs, fe, b"f", np.int64)
