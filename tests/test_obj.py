@@ -4,6 +4,9 @@ same vertices and faces where it reads a file, None (trimesh then reads it) for 
 from __future__ import annotations
 
 import io
+import os
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -11,6 +14,7 @@ import numpy as np
 import pytest
 import trimesh
 
+import blueprint
 from blueprint.scene import loader
 from blueprint.scene.obj import plain_obj
 
@@ -91,3 +95,16 @@ def test_loader_model_is_the_trimesh_model(tmp_path):
         loader.up_of(None, "y", True, positions, faces).axis,
         loader.up_of(None, "y", True, positions, faces).reason,
     )
+
+
+def test_plain_obj_loads_without_trimesh(tmp_path):
+    """trimesh (with scipy and networkx) takes longer to import than a scan takes to read."""
+    path = tmp_path / "triangle.obj"
+    path.write_bytes(READ["triangle"])
+    code = (
+        "import sys; from blueprint.scene.loader import load_model; "
+        f"m = load_model({str(path)!r}); print(len(m.faces), 'trimesh' in sys.modules)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert done.stdout.split() == ["1", "False"], done.stderr
