@@ -35,7 +35,7 @@ def plain_path(points: np.ndarray, offsets: np.ndarray, factor: float, decimals:
 def test_path_text_equals_the_plain_text(decimals, spread):
     rng = np.random.default_rng(int(spread * 10) + decimals)
     for _ in range(20):
-        n = int(rng.integers(2, 200))
+        n = int(rng.integers(2, 600))  # both sides of svg._TEXT_NUMBERS
         points = rng.normal(0, spread, (n, 2)) + rng.normal(0, 3)
         points[::3] = np.round(points[::3], 1)  # repeated and round numbers too
         points[5::7] = points[4::7][: len(points[5::7])]
@@ -51,3 +51,14 @@ def test_known_text():
     points = np.array([[0.5, 0.0], [0.0, 1.25], [-3.0, 1.25], [10.0, 0.0]])
     assert svg.path_data(points, np.array([0, 4]), 1.0, 1) == "M0.5 0l-.5 1.2-3 0 13-1.2"
     assert svg.path_data(points, np.array([0, 4]), 1.0, 2) == "M0.5 0l-.5 1.25-3 0 13-1.25"
+
+
+@pytest.mark.parametrize("decimals", [0, 1, 2, 3, 4])
+def test_byte_text_equals_string_text_on_few_numbers(decimals):
+    """``_number_text`` directly, on fewer numbers than ``path_data`` hands it."""
+    rng = np.random.default_rng(decimals)
+    ticks = rng.integers(-(10**6), 10**6, 40) // rng.integers(1, 10**4, 40)
+    lead = np.frombuffer(b"M l" + b" " * 37, np.uint8).copy()
+    strings = svg.format_numbers(ticks / 10.0**decimals, decimals)
+    plain = svg._shorten("".join(chr(c) + t for c, t in zip(lead.tolist(), strings, strict=True)))
+    assert svg._number_text(ticks, lead, decimals) == plain

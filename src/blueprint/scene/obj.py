@@ -13,11 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint import settings
+
 __all__ = ["PLAIN_OBJ_LIMIT", "plain_obj"]
 
-# Files read here at most: the passes hold a few bytes of index per byte of the file, so
-# larger files go to trimesh, whose memory grows with the file anyway.
-PLAIN_OBJ_LIMIT = 256 << 20
+# Files read here at most: the passes hold up to some 50 bytes of index per byte of the file
+# (a file of nothing but newlines), so larger files go to trimesh, as every OBJ did before.
+PLAIN_OBJ_LIMIT = min(256 << 20, settings.MEMORY_BUDGET // 128)
 
 _SPACE = np.zeros(256, bool)
 _SPACE[[ord(" "), ord("\t"), ord("\r"), ord("\n")]] = True

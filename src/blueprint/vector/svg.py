@@ -21,6 +21,8 @@ QUANTUM_PX = 0.1
 # Decimals the path text is built for as bytes (``_number_text``); more take ``format_numbers``,
 # whose shortest float strings switch to exponents below 1e-4.
 _TEXT_DECIMALS = 4
+# and the numbers it takes at least: below, its twenty-odd array passes cost more than strings
+_TEXT_NUMBERS = 256
 _ID_BAD = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
@@ -76,7 +78,7 @@ def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: 
     starts = np.flatnonzero(first)
     lead[2 * starts] = ord("M")
     lead[2 * starts + 2] = ord("l")
-    if decimals <= _TEXT_DECIMALS and np.abs(ticks).max() < 10**15:
+    if len(ticks) >= _TEXT_NUMBERS and decimals <= _TEXT_DECIMALS and np.abs(ticks).max() < 10**15:
         return _number_text(ticks, lead, decimals)
     numbers = format_numbers(ticks / unit, decimals)
     text = "".join(chr(c) + t for c, t in zip(lead.tolist(), numbers, strict=True))
