@@ -6,7 +6,7 @@ line work are emptied first, so nothing from a previous run helps. Prints one JS
 model: median wall seconds of ``--runs`` runs and their process CPU seconds (every thread,
 llvmpipe's included: the figure to trust on a loaded machine), the stages of the median run,
 ``same_model_seconds`` and ``same_model_cpu_seconds`` (a further view of the same mesh, whose
-adjacency and intersection lines are cached: a viewer, a batch, a turntable), file sizes of
+adjacency, intersection lines and face planes are cached: a viewer, a batch, a turntable), file sizes of
 SVG, PDF and DXF, and the reference figure measured for Blender 5.2 Line Art at 512 x 512 on a
 2-core machine without a GPU (../shared/reference/README.md).
 
@@ -26,6 +26,7 @@ from blueprint.api import default_renderer
 from blueprint.api.files import render_vector_file
 from blueprint.scene.loader import load_model
 from blueprint.vector.lines import ADJACENCY, INTERSECTIONS
+from blueprint.vector.occlusion.levels import PLANES
 
 
 def timed(*args, **kwargs) -> tuple[dict, float]:
@@ -67,8 +68,8 @@ def main() -> None:
             stem = path.stem
             runs, cpu = [], []
             for _ in range(max(args.runs, 1)):
-                ADJACENCY.clear()
-                INTERSECTIONS.clear()
+                for cache in (ADJACENCY, INTERSECTIONS, PLANES):
+                    cache.clear()
                 summary, spent = timed(
                     path, out_dir / f"{stem}.svg", size=size, max_layers=args.max_layers, renderer=renderer
                 )

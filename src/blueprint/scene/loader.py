@@ -18,6 +18,7 @@ from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, 
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.headers import check_declared_counts, check_scene_graph
 from blueprint.scene.model import Model
+from blueprint.scene.obj import PLAIN_OBJ_LIMIT, plain_obj
 from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
@@ -88,6 +89,10 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
             include=include,
             exclude=exclude,
         )
+    plain = _plain_obj(path, info.st_size) if ext == "obj" else None
+    if plain is not None:
+        parts = np.zeros(len(plain[1]), np.int32)
+        return _checked(*plain, parts, [path.stem], name, up, "y", True, include, exclude)
     formats = supported_formats()
     if ext not in formats and ext not in STREAM_SUFFIXES:
         common = ("obj", "stl", "ply", "off", "glb", "gltf", "3mf", "step")
@@ -273,6 +278,17 @@ def _binary_stl(path: Path, size: int) -> np.ndarray | None:
         _triangle_limit(path, count)
         records = np.frombuffer(fh.read(_STL_RECORD.itemsize * count), dtype=_STL_RECORD, count=count)
     return records["triangle"]
+
+
+def _plain_obj(path: Path, size: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """Vertices and faces of an OBJ file of plain ``v`` and ``f`` lines, read with numpy alone
+    (``blueprint.scene.obj``); None for any other OBJ file: trimesh reads it."""
+    if size > PLAIN_OBJ_LIMIT:
+        return None
+    found = plain_obj(read_file(path, MODEL_FILE_LIMIT, "a model file"))
+    if found is not None:
+        _triangle_limit(path, len(found[1]))
+    return found
 
 
 def _ascii_stl(head: bytes) -> bool:

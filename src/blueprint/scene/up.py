@@ -39,20 +39,31 @@ class UpGuess:
 def base_fraction(positions: np.ndarray, faces: np.ndarray, axis: int) -> float:
     """The area of the faces lying flat at the bottom of ``axis``, facing down, as a fraction of
     the bounding box's cross-section across that axis (1 for a box standing on its face)."""
-    tri = positions[faces].astype(np.float64)
-    lo, hi = tri.reshape(-1, 3).min(axis=0), tri.reshape(-1, 3).max(axis=0)
-    extent = hi - lo
+    return _base_fraction(_Triangles(positions, faces), axis)
+
+
+class _Triangles:
+    """What every axis's base fraction needs of a mesh, computed once for both axes."""
+
+    def __init__(self, positions: np.ndarray, faces: np.ndarray) -> None:
+        self.tri = positions[faces].astype(np.float64)
+        corners = self.tri.reshape(-1, 3)
+        self.lo, self.hi = corners.min(axis=0), corners.max(axis=0)
+        self.cross = np.cross(self.tri[:, 1] - self.tri[:, 0], self.tri[:, 2] - self.tri[:, 0])
+        self.area = np.linalg.norm(self.cross, axis=1)
+
+
+def _base_fraction(mesh: _Triangles, axis: int) -> float:
+    extent = mesh.hi - mesh.lo
     across = np.prod(np.delete(extent, axis))
     if extent[axis] <= 0 or across <= 0:
         return 0.0
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area = np.linalg.norm(cross, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        along = np.abs(cross[:, axis]) / area
-    low = tri[:, :, axis].max(axis=1) <= lo[axis] + _SLAB * extent[axis]
+        along = np.abs(mesh.cross[:, axis]) / mesh.area
+    low = mesh.tri[:, :, axis].max(axis=1) <= mesh.lo[axis] + _SLAB * extent[axis]
     # either winding: scans and soups do not orient their faces consistently
     flat = low & (along >= _DOWN)
-    return float(area[flat].sum() / 2.0 / across)
+    return float(mesh.area[flat].sum() / 2.0 / across)
 
 
 def guess_up(positions: np.ndarray, faces: np.ndarray, default: str = "y") -> UpGuess:
@@ -72,7 +83,8 @@ def guess_up(positions: np.ndarray, faces: np.ndarray, default: str = "y") -> Up
     """
     if len(faces) == 0:
         return UpGuess(default, "format default")
-    bases = {name: base_fraction(positions, faces, axis) for name, axis in AXES.items()}
+    mesh = _Triangles(positions, faces)
+    bases = {name: _base_fraction(mesh, axis) for name, axis in AXES.items()}
     best, other = sorted(bases, key=bases.get, reverse=True)
     # the side of a plinth is flat too: a base is the clearly larger of the two
     if bases[best] >= _BASE and bases[best] >= _CLEARLY * bases[other]:

@@ -83,22 +83,34 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     )
     _, component = csgraph.connected_components(graph, directed=False)
 
-    indptr, indices, must_flip = graph.indptr, graph.indices, graph.data == 2
+    # Breadth-first from the lowest face of every component at once: a face's distance from
+    # its start comes from one search in scipy (from a node joined to every start), its parent
+    # is its lowest-numbered neighbour one step nearer (the frontier order of a level-by-level
+    # search), and its flip the parities along its parents, summed by pointer jumping.
+    starts = np.unique(component, return_index=True)[1]
+    root = num_faces
+    source = np.concatenate([lo, hi, np.full(len(starts), root)])
+    target = np.concatenate([hi, lo, starts])
+    reach = sparse.csr_matrix(
+        (np.ones(len(source), np.int8), (source, target)), shape=(num_faces + 1, num_faces + 1)
+    )
+    distance = csgraph.shortest_path(reach, method="D", unweighted=True, indices=root)[:num_faces]
+    near = distance[source[: 2 * len(lo)]] == distance[target[: 2 * len(lo)]] - 1.0
+    child, parent_of = target[: 2 * len(lo)][near], source[: 2 * len(lo)][near]
+    parent = np.arange(num_faces)
+    lowest = np.full(num_faces, num_faces)
+    np.minimum.at(lowest, child, parent_of)
+    has_parent = lowest < num_faces
+    parent[has_parent] = lowest[has_parent]
+    tree = parent_of == parent[child]
     flipped = np.zeros(num_faces, dtype=bool)
-    visited = np.zeros(num_faces, dtype=bool)
-    frontier = np.unique(component, return_index=True)[1]
-    visited[frontier] = True
-    while len(frontier):
-        counts = indptr[frontier + 1] - indptr[frontier]
-        parent = np.repeat(frontier, counts)
-        slot = np.arange(counts.sum()) + np.repeat(indptr[frontier] - np.cumsum(counts) + counts, counts)
-        child = indices[slot]
-        fresh = ~visited[child]
-        child, parent, flip = child[fresh], parent[fresh], must_flip[slot[fresh]]
-        child, first = np.unique(child, return_index=True)
-        flipped[child] = flipped[parent[first]] ^ flip[first]
-        visited[child] = True
-        frontier = child
+    flipped[child[tree]] = np.concatenate([pair_parity, pair_parity])[near][tree]
+    while True:
+        above = parent[parent]
+        if np.array_equal(above, parent):
+            break
+        flipped ^= flipped[parent]
+        parent = above
     return flipped, component.astype(np.int64)
 
 
@@ -159,10 +171,16 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     start, end, half_face = start[proper], end[proper], half_face[proper]
 
     lo, hi = np.minimum(start, end), np.maximum(start, end)
-    keys, half_edge = np.unique(lo * num_vertices + hi, return_inverse=True)
-    half_edge = half_edge.reshape(-1)
+    key = lo * num_vertices + hi
+    # half-edges come in face order, so one stable sort by edge orders them by edge, then face
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    new_edge = np.ones(len(key), bool)
+    new_edge[1:] = sorted_key[1:] != sorted_key[:-1]
+    keys = sorted_key[new_edge]
+    half_edge = np.empty(len(key), np.int64)
+    half_edge[order] = np.cumsum(new_edge) - 1
     edges = np.stack([keys // num_vertices, keys % num_vertices], axis=1)
-    order = np.lexsort((half_face, half_edge))
     edge_faces = np.stack([half_edge[order], half_face[order]], axis=1)
 
     # Manifold edges: exactly two incidences, adjacent after sorting by edge.

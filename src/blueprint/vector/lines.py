@@ -274,23 +274,31 @@ def _candidate_pairs(lo, hi, part, slack: float):
     group_end = np.r_[group_start[1:], len(key)][np.cumsum(new_group) - 1]
     partners = cell_end - group_end
     lo_axis = [np.ascontiguousarray(lo[:, a]) for a in range(3)]
-    hi_axis = [np.ascontiguousarray(hi[:, a]) for a in range(3)]
+    hi_axis = [np.ascontiguousarray(hi[:, a] + slack) for a in range(3)]
     first_axis = [np.ascontiguousarray(first[:, a]) for a in range(3)]
     pairs_i, pairs_j = [], []
     batch = (np.cumsum(partners) - partners) // _PAIR_CHUNK
     bounds = np.r_[0, np.flatnonzero(np.diff(batch)) + 1, len(partners)]
     for lo_b, hi_b in zip(bounds[:-1], bounds[1:], strict=True):
         m = partners[lo_b:hi_b]
-        if m.sum() == 0:
+        busy = np.flatnonzero(m)
+        if len(busy) == 0:
             continue
-        ia = np.repeat(np.arange(lo_b, hi_b), m)
-        ib = np.repeat(group_end[lo_b:hi_b], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))
-        i, j = np.take(owner, ia), np.take(owner, ib)
-        # boxes overlap (axis by axis, keeping survivors), then report a pair only in the first
-        # cell both boxes touch
-        for axis in range(3):
-            keep = (np.take(lo_axis[axis], i) <= np.take(hi_axis[axis], j) + slack) & (
-                np.take(lo_axis[axis], j) <= np.take(hi_axis[axis], i) + slack
+        m, entry = m[busy], lo_b + busy
+        ia = np.repeat(entry, m)
+        ib = np.repeat(group_end[entry], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))
+        j = np.take(owner, ib)
+        # boxes overlap (axis by axis, keeping survivors; an entry's own side of its pairs is a
+        # repeat, not a gather), then report a pair only in the first cell both boxes touch
+        mine = owner[entry]
+        keep = (np.repeat(lo_axis[0][mine], m) <= np.take(hi_axis[0], j)) & (
+            np.take(lo_axis[0], j) <= np.repeat(hi_axis[0][mine], m)
+        )
+        ia, j = ia[keep], j[keep]
+        i = np.take(owner, ia)
+        for axis in (1, 2):
+            keep = (np.take(lo_axis[axis], i) <= np.take(hi_axis[axis], j)) & (
+                np.take(lo_axis[axis], j) <= np.take(hi_axis[axis], i)
             )
             i, j, ia = i[keep], j[keep], ia[keep]
         top = [np.maximum(np.take(first_axis[a], i), np.take(first_axis[a], j)) for a in range(3)]
@@ -327,31 +335,38 @@ def _plane_cut(tri: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return both[:, 0], both[:, 1]
 
 
-def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float):
+def _unit_normals(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals of triangles (M, 3, 3) and whether they have one (non-zero area)."""
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(normal, axis=1)
+    return normal / np.where(length > 0, length, 1.0)[:, None], length > 0
+
+
+def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None):
     """Intersection segments of triangle pairs (M, 3, 3) that properly cut through each other.
 
     Returns the (K, 2, 3) segments and the (K,) indices of the pairs that produced them. Pairs
     that are coplanar, only touch (a vertex or an edge lying in the other's plane) or miss give
     nothing: their contact lines are mesh edges, drawn as such where they are features.
+    ``normals``: ``_unit_normals`` of the triangles of A and of B, where the caller has them.
     """
 
     def proper(d):
         zeros = (d == 0.0).sum(axis=1)
         return (zeros <= 1) & ~(d >= 0.0).all(axis=1) & ~(d <= 0.0).all(axis=1)
 
-    def plane_distances(tri, other):
-        normal = np.cross(other[:, 1] - other[:, 0], other[:, 2] - other[:, 0])
-        length = np.linalg.norm(normal, axis=1)
-        normal = normal / np.where(length > 0, length, 1.0)[:, None]
+    def plane_distances(tri, other, normal):
         dist = np.einsum("mij,mj->mi", tri - other[:, :1], normal)
         dist[np.abs(dist) <= eps] = 0.0
-        return normal, dist, length > 0
+        return dist
 
+    nb, ok_b = normals[1] if normals else _unit_normals(tb)
     # A's vertices against B's plane first: most pairs end there
-    nb, da, ok = plane_distances(ta, tb)
-    idx = np.flatnonzero(ok & proper(da))
-    na, db, ok = plane_distances(tb[idx], ta[idx])
-    keep = ok & proper(db)
+    da = plane_distances(ta, tb, nb)
+    idx = np.flatnonzero(ok_b & proper(da))
+    na, ok_a = (normals[0][0][idx], normals[0][1][idx]) if normals else _unit_normals(ta[idx])
+    db = plane_distances(tb[idx], ta[idx], na)
+    keep = ok_a & proper(db)
     idx, na, db, nb, da = idx[keep], na[keep], db[keep], nb[idx][keep], da[idx][keep]
     if len(idx) == 0:
         return np.zeros((0, 2, 3)), idx
@@ -403,10 +418,16 @@ def _intersections(model: Model) -> Segments:
         candidates = candidates[area[candidates] > 0]
         ci, cj = _candidate_pairs(lo[candidates], hi[candidates], part[candidates], eps)
         i, j = candidates[ci], candidates[cj]
+        # normals once a triangle where there are more pairs than triangles, else a pair
+        shared = _unit_normals(tri[candidates]) if len(i) > len(candidates) else None
         found, fa, fb = [], [], []
         for start in range(0, len(i), _PAIR_CHUNK):
             a, b = i[start : start + _PAIR_CHUNK], j[start : start + _PAIR_CHUNK]
-            segments, which = _triangle_pairs_cut(tri[a], tri[b], eps)
+            normals = None
+            if shared is not None:
+                ca, cb = ci[start : start + _PAIR_CHUNK], cj[start : start + _PAIR_CHUNK]
+                normals = (shared[0][ca], shared[1][ca]), (shared[0][cb], shared[1][cb])
+            segments, which = _triangle_pairs_cut(tri[a], tri[b], eps, normals)
             found.append(segments)
             fa.append(a[which])
             fb.append(b[which])

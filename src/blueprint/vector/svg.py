@@ -18,6 +18,11 @@ __all__ = ["format_numbers", "path_data", "safe_id", "svg_bytes"]
 # Coordinates are written to a grid no coarser than this many pixels (well inside the
 # Douglas–Peucker tolerance).
 QUANTUM_PX = 0.1
+# Decimals the path text is built for as bytes (``_number_text``); more take ``format_numbers``,
+# whose shortest float strings switch to exponents below 1e-4.
+_TEXT_DECIMALS = 4
+# and the numbers it takes at least: below, its twenty-odd array passes cost more than strings
+_TEXT_NUMBERS = 256
 _ID_BAD = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
@@ -67,17 +72,64 @@ def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: 
     if len(grid) == 0:
         return ""
     step = np.diff(grid, axis=0, prepend=grid[:1])
-    values = np.where(first[:, None], grid, step).reshape(-1) / unit
-    numbers = format_numbers(values, decimals)
+    ticks = np.where(first[:, None], grid, step).reshape(-1)
+    # each number's lead: M before a polyline's start, l before its first step, else a space
+    lead = np.full(len(ticks), ord(" "), np.uint8)
     starts = np.flatnonzero(first)
-    ends = np.r_[starts[1:], len(grid)]
-    parts = []
-    for s, e in zip(starts.tolist(), ends.tolist(), strict=True):
-        parts.append(f"M{numbers[2 * s]} {numbers[2 * s + 1]}l" + " ".join(numbers[2 * s + 2 : 2 * e]))
-    text = "".join(parts)
-    # a minus sign separates numbers by itself, and leading zeros are optional
-    text = text.replace(" -", "-").replace("-0.", "-.").replace(" 0.", " .").replace("l0.", "l.")
-    return text
+    lead[2 * starts] = ord("M")
+    lead[2 * starts + 2] = ord("l")
+    if len(ticks) >= _TEXT_NUMBERS and decimals <= _TEXT_DECIMALS and np.abs(ticks).max() < 10**15:
+        return _number_text(ticks, lead, decimals)
+    numbers = format_numbers(ticks / unit, decimals)
+    text = "".join(chr(c) + t for c, t in zip(lead.tolist(), numbers, strict=True))
+    return _shorten(text)
+
+
+def _shorten(text: str) -> str:
+    """A minus sign separates numbers by itself, and leading zeros are optional."""
+    return text.replace(" -", "-").replace("-0.", "-.").replace(" 0.", " .").replace("l0.", "l.")
+
+
+def _number_text(ticks: np.ndarray, lead: np.ndarray, decimals: int) -> str:
+    """Path text of integers ``ticks`` (multiples of 10**-decimals), each after its ``lead``
+    byte, as ``format_numbers`` and ``_shorten`` write it, built as one byte array: a row of
+    characters a number (lead, sign, whole digits, point, fraction), a mask of those written."""
+    negative = ticks < 0
+    magnitude = np.abs(ticks)
+    scale = 10**decimals
+    whole, fraction = magnitude // scale, magnitude % scale
+    wide = max(len(str(int(whole.max()))), 1)
+    powers = 10 ** np.arange(wide - 1, -1, -1, dtype=np.int64)
+    whole_digits = (whole[:, None] // powers) % 10
+    whole_len = 1 + (whole[:, None] >= powers[:-1]).sum(axis=1) if wide > 1 else np.ones(len(whole), np.int64)
+    spaced = lead == ord(" ")
+    columns = [
+        lead[:, None],
+        np.full((len(ticks), 1), ord("-"), np.uint8),
+        (whole_digits + ord("0")).astype(np.uint8),
+    ]
+    shown = [
+        (~(negative & spaced))[:, None],
+        negative[:, None],
+        np.arange(wide)[None] >= wide - whole_len[:, None],
+    ]
+    # "0.5" loses its zero after a space, an l or a minus sign: only "M0.5" keeps it
+    bare = (whole == 0) & (fraction > 0) & (negative | (lead != ord("M")))
+    shown[2][:, -1] &= ~bare
+    if decimals:
+        fraction_powers = 10 ** np.arange(decimals - 1, -1, -1, dtype=np.int64)
+        fraction_digits = (fraction[:, None] // fraction_powers) % 10
+        # the fraction ends at its last digit that is not zero
+        nonzero = fraction_digits != 0
+        fraction_len = np.where(nonzero.any(axis=1), decimals - np.argmax(nonzero[:, ::-1], axis=1), 0)
+        columns += [
+            np.full((len(ticks), 1), ord("."), np.uint8),
+            (fraction_digits + ord("0")).astype(np.uint8),
+        ]
+        shown += [(fraction > 0)[:, None], np.arange(decimals)[None] < fraction_len[:, None]]
+    table = np.concatenate(columns, axis=1)
+    mask = np.concatenate(shown, axis=1)
+    return table[mask].tobytes().decode("ascii")
 
 
 def _stroke(line: LineStyle, base: float) -> str:

@@ -51,17 +51,27 @@ def suppress_coincident(
         c = np.floor(pixel[rows]).astype(np.int64) - origin
         return np.clip(c[:, 1], 0, span[1] - 1) * span[0] + np.clip(c[:, 0], 0, span[0] - 1)
 
-    src_key = cell_of(source)
-    order = np.argsort(src_key, kind="stable")
-    source = source[order]
-    cell_count = np.bincount(src_key, minlength=int(span[0] * span[1]))
+    # stretches by cell, then by rank: a sample's candidates in a cell are the run of stretches
+    # ranked below its own at the cell's start, found by one search, so pairs that the rank
+    # rules out are never made
+    src_cell = cell_of(source)
+    ranks = int(rank.max()) + 1
+    if float(span[0]) * float(span[1]) * ranks >= 2.0**62:  # keys would overflow: ranks in order only
+        rank = np.unique(rank, return_inverse=True)[1].reshape(-1)
+        ranks = int(rank.max()) + 1
+    src_key = src_cell * ranks + rank[source]
+    order = np.argsort(src_key)
+    source, src_key = source[order], src_key[order]
+    cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
     cell_start = np.cumsum(cell_count) - cell_count
     key = cell_of(live)
+    live_rank = rank[live]
     drop = np.zeros(len(live), bool)
     for dy in (-1, 0, 1):
         for dx in (-1, 0, 1):
             probe = key + dy * span[0] + dx  # the margin keeps probes inside the grid
-            lo, count = cell_start[probe], cell_count[probe]
+            lo = cell_start[probe]
+            count = np.searchsorted(src_key, probe * ranks + live_rank) - lo
             for start in range(0, len(live), 1 << 16):
                 c = count[start : start + (1 << 16)]
                 total = int(c.sum())
@@ -71,9 +81,7 @@ def suppress_coincident(
                 within = np.arange(total) - np.repeat(np.cumsum(c) - c, c)
                 other = np.take(source, np.repeat(lo[start : start + len(c)], c) + within)
                 mine = np.take(live, index)
-                ok = (np.take(rank, other) < np.take(rank, mine)) & (
-                    np.take(line, other) != np.take(line, mine)
-                )
+                ok = np.take(line, other) != np.take(line, mine)
                 index, mine, other = index[ok], mine[ok], other[ok]
                 # distance from the sample to the other stretch, and the angle between them
                 rel = np.take(pixel32, mine, axis=0) - np.take(pixel32, other, axis=0)

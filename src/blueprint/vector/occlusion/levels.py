@@ -28,32 +28,42 @@ import numpy as np
 
 from blueprint.scene.model import Model
 
+from ..cache import ModelCache
 from ..lines import BORDER, CREASE, SILHOUETTE
 from .pixels import NEIGHBOURS, PixelLayers, across_line, flat_index
 from .samples import Samples
 
 __all__ = ["classify_samples", "drop_phantoms", "face_planes", "verify_creases"]
 
+# Model-space face normals and corners, per mesh (see ``face_planes``).
+PLANES = ModelCache()
 # Samples classified per NumPy pass (times 9 pixels times the layers at them).
 _CHUNK = 1 << 15
 
 
 def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
     """(F + 1, 4) float64 eye-space planes ``n . x = c`` of every face (unit n), zero for
-    degenerate faces and for the extra last row, which stands for "no face"."""
+    degenerate faces and for the extra last row, which stands for "no face". The model-space
+    normals and corners do not depend on the view: computed once per mesh (``PLANES``)."""
+    normal, corner = PLANES.get(model, lambda: _model_planes(model))
+    rotation, shift = view[:3, :3], view[:3, 3]
+    n_eye = normal @ rotation.T
+    v0_eye = corner @ rotation.T + shift
+    planes = np.zeros((len(normal) + 1, 4))
+    planes[:-1, :3] = n_eye
+    planes[:-1, 3] = np.einsum("ij,ij->i", n_eye, v0_eye)
+    return planes
+
+
+def _model_planes(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """(F, 3) unit normals (zero for degenerate faces) and (F, 3) first corners, float64."""
     tri = model.positions[model.faces].astype(np.float64)
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     length = np.linalg.norm(normal, axis=1)
     good = length > 0
     normal[good] /= length[good, None]
     normal[~good] = 0.0
-    rotation, shift = view[:3, :3], view[:3, 3]
-    n_eye = normal @ rotation.T
-    v0_eye = tri[:, 0] @ rotation.T + shift
-    planes = np.zeros((len(tri) + 1, 4))
-    planes[:-1, :3] = n_eye
-    planes[:-1, 3] = np.einsum("ij,ij->i", n_eye, v0_eye)
-    return planes
+    return normal, np.ascontiguousarray(tri[:, 0])
 
 
 def classify_samples(

@@ -1,0 +1,107 @@
+"""Plain Wavefront OBJ files read with NumPy alone: the scans and meshes written as nothing
+but ``v x y z`` and ``f i j k`` lines (MeshLab, many exporters). trimesh parses OBJ a line at a
+time in Python, which took most of a drawing's time on a 70K-triangle scan; here every line
+is classified, counted and converted in a few whole-file passes.
+
+Anything else (normals, texture coordinates, materials, groups, polygons, negative or
+out-of-range indices, line continuations, numbers NumPy does not read the same way) is left
+to trimesh, which gives such files their meaning and their error messages: ``plain_obj``
+answers None for them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from blueprint import settings
+
+__all__ = ["PLAIN_OBJ_LIMIT", "plain_obj"]
+
+# Files read here at most: the passes hold up to some 50 bytes of index per byte of the file
+# (a file of nothing but newlines), so larger files go to trimesh, as every OBJ did before.
+PLAIN_OBJ_LIMIT = min(256 << 20, settings.MEMORY_BUDGET // 128)
+
+_SPACE = np.zeros(256, bool)
+_SPACE[[ord(" "), ord("\t"), ord("\r"), ord("\n")]] = True
+# bytes a vertex line may hold besides its keyword: decimal numbers as NumPy and Python read
+# them alike (no "nan", "inf", hexadecimal or digit separators)
+_VERTEX_BYTES = _SPACE.copy()
+_VERTEX_BYTES[np.frombuffer(b"0123456789+-.eE", np.uint8)] = True
+_FACE_BYTES = _SPACE.copy()
+_FACE_BYTES[np.frombuffer(b"0123456789", np.uint8)] = True
+
+
+def _counts(flags: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """How many of ``flags`` (one a byte) are set in each line (lines begin at ``starts``)."""
+    line = np.searchsorted(starts, np.flatnonzero(flags), side="right") - 1
+    return np.bincount(line, minlength=len(starts))
+
+
+def _numbers(data: bytes, starts: np.ndarray, ends: np.ndarray, keyword: bytes, dtype) -> np.ndarray | None:
+    """The numbers of the lines ``starts[i]:ends[i]`` (their ``keyword`` read as a space), or
+    None where one is not a number. Lines of a kind mostly come in long runs: a slice a run."""
+    follows = np.r_[False, starts[1:] <= ends[:-1] + 1]
+    run_start = starts[~follows]
+    run_end = ends[np.r_[np.flatnonzero(~follows)[1:] - 1, len(ends) - 1]]
+    text = b"\n".join(data[a:b] for a, b in zip(run_start.tolist(), run_end.tolist(), strict=True))
+    try:
+        return np.fromstring(text.replace(keyword, b" "), dtype=dtype, sep=" ")
+    except ValueError:  # a word that is not a number
+        return None
+
+
+def plain_obj(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
+    """Vertices and triangles of a plain OBJ file, as trimesh loads it (``process=False``):
+    vertices no face uses left out, the rest in file order.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's contents.
+
+    Returns
+    -------
+    (positions, faces) or None
+        (V, 3) float64 and (F, 3) int64 zero-based, or None where the file is anything but
+        ``v`` lines of three numbers, ``f`` lines of three positive vertex numbers that exist,
+        comments and blank lines (then trimesh reads it), or holds no face.
+    """
+    if not data or len(data) > PLAIN_OBJ_LIMIT:
+        return None
+    buf = np.frombuffer(data, np.uint8)
+    newline = np.flatnonzero(buf == ord("\n"))
+    starts = np.r_[0, newline + 1]
+    ends = np.r_[newline, len(buf)]
+    lengths = ends - starts
+    first = buf[np.minimum(starts, len(buf) - 1)]
+    second = buf[np.minimum(starts + 1, len(buf) - 1)]
+    spaced = (lengths > 1) & ((second == ord(" ")) | (second == ord("\t")))
+    vertex = spaced & (first == ord("v"))
+    face = spaced & (first == ord("f"))
+    blank = (lengths == 0) | ((first == ord("#")) & (lengths > 0)) | ((lengths == 1) & (first == ord("\r")))
+    if not (vertex | face | blank).all() or not vertex.any() or not face.any():
+        return None
+    vs, ve, fs, fe = starts[vertex], ends[vertex], starts[face], ends[face]
+    # the keyword is each line's only byte outside its kind's set
+    if (_counts(~_VERTEX_BYTES[buf], starts)[vertex] != 1).any():
+        return None
+    if (_counts(~_FACE_BYTES[buf], starts)[face] != 1).any():
+        return None
+    # words: a byte that is not a space after one that is (or at the file's start)
+    space = _SPACE[buf]
+    words = _counts(~space & np.r_[True, space[:-1]], starts)
+    if (words[vertex] != 4).any() or (words[face] != 4).any():
+        return None
+    vertices = _numbers(data, vs, ve, b"v", np.float64)
+    faces = _numbers(data, fs, fe, b"f", np.int64)
+    if vertices is None or faces is None:
+        return None
+    if len(vertices) != 3 * len(vs) or len(faces) != 3 * len(fs):
+        return None
+    if faces.min() < 1 or faces.max() > len(vs):
+        return None
+    faces = faces.reshape(-1, 3) - 1
+    used = np.zeros(len(vs), bool)
+    used[faces] = True
+    remap = np.cumsum(used) - 1
+    return vertices.reshape(-1, 3)[used], remap[faces]

@@ -1,0 +1,110 @@
+"""The plain OBJ reader (``blueprint.scene.obj``) against trimesh, which it stands in for: the
+same vertices and faces where it reads a file, None (trimesh then reads it) for anything else."""
+
+from __future__ import annotations
+
+import io
+import os
+import subprocess
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import blueprint
+from blueprint.scene import loader
+from blueprint.scene.obj import plain_obj
+
+MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
+
+
+def trimesh_arrays(data: bytes) -> tuple[np.ndarray, np.ndarray]:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = trimesh.load_scene(io.BytesIO(data), file_type="obj", process=False)
+    (mesh,) = scene.geometry.values()
+    return np.asarray(mesh.vertices), np.asarray(mesh.faces)
+
+
+READ = {
+    "triangle": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    "crlf, no last newline": b"v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3",
+    "comments, tabs, unused vertex": b"# c\n\nv 0\t0 0\nv 1 0 0 \nv 0 1e1 0\nv 5 5 5\nf 1 2 3\n",
+    "signs and bare points": b"v .5 -.5 +1.\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    "faces first": b"f 3 1 2\nf 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n",
+    "interleaved": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0 0 1\nf 1 2 4\n# end\n",
+}
+
+LEFT_TO_TRIMESH = {
+    "negative index": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -1\n",
+    "index out of range": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+    "nan": b"v 0 0 0\nv 1 0 0\nv 0 1 nan\nf 1 2 3\n",
+    "not a number": b"v 0 0 0\nv 1-0 0\nv 0 1 0\nf 1 2 3\n",
+    "quad": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n",
+    "normals": b"vn 0 0 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n",
+    "material": b"usemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    "vertex colour": b"v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\n",
+    "no faces": b"v 0 0 0\n",
+    "empty": b"",
+}
+
+
+@pytest.mark.parametrize("name", READ)
+def test_reads_as_trimesh_does(name):
+    found = plain_obj(READ[name])
+    assert found is not None
+    positions, faces = trimesh_arrays(READ[name])
+    np.testing.assert_array_equal(found[0], positions)
+    np.testing.assert_array_equal(found[1], faces)
+    assert found[0].dtype == np.float64 and found[1].dtype == np.int64
+
+
+@pytest.mark.parametrize("name", LEFT_TO_TRIMESH)
+def test_anything_else_is_left_to_trimesh(name):
+    assert plain_obj(LEFT_TO_TRIMESH[name]) is None
+
+
+@pytest.mark.parametrize("name", ["stanford-bunny.obj", "fandisk.obj", "teapot.obj"])
+def test_real_scans_read_as_trimesh_does(name):
+    path = MODELS / "common-3d-test-models" / name
+    if not path.exists():
+        pytest.skip(f"{path} not found (see ../shared/models/README.md)")
+    data = path.read_bytes()
+    found = plain_obj(data)
+    assert found is not None
+    positions, faces = trimesh_arrays(data)
+    np.testing.assert_array_equal(found[0], positions)
+    np.testing.assert_array_equal(found[1], faces)
+
+
+def test_loader_model_is_the_trimesh_model(tmp_path):
+    """load_model through the plain reader gives the model trimesh's path gave: same arrays,
+    part, name and up axis."""
+    data = b"v 0 0 0\nv 2 0 0\nv 0 1 0\nv 0 0 1\nv 9 9 9\nf 1 2 3\nf 1 3 4\nf 1 4 2\n"
+    path = tmp_path / "tetra.obj"
+    path.write_bytes(data)
+    fast = loader.load_model(path)
+    positions, faces = trimesh_arrays(data)
+    np.testing.assert_array_equal(fast.positions, positions.astype(np.float32))
+    np.testing.assert_array_equal(fast.faces, faces.astype(np.int32))
+    assert fast.part_names == ("tetra",)
+    assert (fast.up, fast.up_reason) == (
+        loader.up_of(None, "y", True, positions, faces).axis,
+        loader.up_of(None, "y", True, positions, faces).reason,
+    )
+
+
+def test_plain_obj_loads_without_trimesh(tmp_path):
+    """trimesh (with scipy and networkx) takes longer to import than a scan takes to read."""
+    path = tmp_path / "triangle.obj"
+    path.write_bytes(READ["triangle"])
+    code = (
+        "import sys; from blueprint.scene.loader import load_model; "
+        f"m = load_model({str(path)!r}); print(len(m.faces), 'trimesh' in sys.modules)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert done.stdout.split() == ["1", "False"], done.stderr

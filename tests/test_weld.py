@@ -1,0 +1,51 @@
+"""Close pairs and exact duplicates of the weld against brute force."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from blueprint.scene import weld
+
+
+def brute_pairs(points: np.ndarray, tol: float) -> set[tuple[int, int]]:
+    diff = points[:, None] - points[None]
+    close = np.einsum("ijk,ijk->ij", diff, diff) <= tol * tol
+    i, j = np.nonzero(np.triu(close, 1))
+    return set(zip(i.tolist(), j.tolist(), strict=True))
+
+
+def as_set(pairs) -> set[tuple[int, int]]:
+    i, j = pairs
+    return set(zip(np.minimum(i, j).tolist(), np.maximum(i, j).tolist(), strict=True))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_close_pairs_are_all_pairs_within_tolerance(seed):
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-1, 1, (60, 3))
+    points = np.repeat(centres, 6, axis=0) + rng.normal(0, 0.004, (360, 3))
+    for tol in (0.002, 0.01, 0.05):
+        found = weld._close_pairs(points, tol)
+        assert as_set(found) == brute_pairs(points, tol)
+        assert len(as_set(found)) == len(found[0])  # each pair once
+
+
+def test_points_along_the_sweep_are_found_by_the_grid():
+    """Points that share their projection on the sweep's direction (laid across it) are too
+    many candidates for the sweep; the grid's answer is the same set."""
+    rng = np.random.default_rng(3)
+    across = np.cross(weld._SWEEP_DIRECTION, [0.0, 0.0, 1.0])
+    across /= np.linalg.norm(across)
+    points = rng.uniform(0, 1, 500)[:, None] * across + rng.normal(0, 1e-9, (500, 3))
+    tol = 0.003
+    assert as_set(weld._close_pairs(points, tol)) == brute_pairs(points, tol)
+    assert as_set(weld._grid_pairs(points, tol)) == brute_pairs(points, tol)
+
+
+def test_exact_duplicates_match_numpy_unique():
+    rng = np.random.default_rng(4)
+    points = rng.integers(0, 4, (2000, 3)).astype(np.float64) * 0.25 + 0.0
+    unique, inverse = weld._exact_duplicates(points)
+    np.testing.assert_array_equal(unique[inverse], points)
+    assert len(unique) == len(np.unique(points, axis=0))
