@@ -22,7 +22,8 @@ def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) ->
 
 def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -> np.ndarray:
     """(V,) bool: the welded vertex lies on a crease (an edge whose two faces' normals differ,
-    up to sign, by more than ``crease_angle`` degrees), a border or a non-manifold edge.
+    up to sign, by more than ``crease_angle`` degrees, unless it is a crease edge on its own),
+    a border or a non-manifold edge.
 
     Parameters
     ----------
@@ -41,10 +42,15 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
     count = np.diff(np.r_[starts, len(edges)])
     pair = starts[count == 2]
     cos = np.einsum("ij,ij->i", unit[edge_face[order[pair]]], unit[edge_face[order[pair + 1]]])
-    crease = pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]
-    sharp = np.zeros(int(welded.max(initial=-1)) + 1, bool)
-    sharp[edges[crease].ravel()] = True
+    crease = edges[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
+    vertices = int(welded.max(initial=-1)) + 1
+    sharp = np.zeros(vertices, bool)
     sharp[edges[starts[count != 2]].ravel()] = True
+    # a crease edge alone, its ends on no other crease, border or non-manifold edge, is a scan's
+    # noise: a crease of a made thing runs on into others or to a border
+    alone = np.bincount(crease.ravel(), minlength=vertices) == 1
+    alone &= ~sharp
+    sharp[crease[~(alone[crease[:, 0]] & alone[crease[:, 1]])].ravel()] = True
     return sharp
 
 
@@ -56,9 +62,10 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     A scan's noise tilts faces that share only a vertex by more than the crease angle while
     every edge between them stays below it; splitting the normal there would draw a crease
     fragment, a speck, at each such vertex. A crease is an edge: where no edge is one, the
-    surface is smooth. Vertices on borders and non-manifold edges keep the pairwise rule:
-    where patches meet without sharing edges (T-junctions, open seams), their edges say
-    nothing about the angle between them.
+    surface is smooth; nor is a crease edge on its own, touching no other crease edge, border
+    or non-manifold edge, one: the creases of made things run on. Vertices on borders and
+    non-manifold edges keep the pairwise rule: where patches meet without sharing edges
+    (T-junctions, open seams), their edges say nothing about the angle between them.
 
     Normals are compared up to sign, so faces wound the wrong way still smooth with their
     neighbours; each corner keeps its own face's orientation.
