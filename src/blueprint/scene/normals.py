@@ -46,12 +46,25 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
     vertices = int(welded.max(initial=-1)) + 1
     sharp = np.zeros(vertices, bool)
     sharp[edges[starts[count != 2]].ravel()] = True
-    # a crease edge alone, its ends on no other crease, border or non-manifold edge, is a scan's
-    # noise: a crease of a made thing runs on into others or to a border
-    alone = np.bincount(crease.ravel(), minlength=vertices) == 1
-    alone &= ~sharp
-    sharp[crease[~(alone[crease[:, 0]] & alone[crease[:, 1]])].ravel()] = True
+    sharp[crease[~lone_creases(crease, sharp)].ravel()] = True
     return sharp
+
+
+def lone_creases(crease: np.ndarray, anchored: np.ndarray) -> np.ndarray:
+    """(E,) bool: which of the crease edges are alone: both ends on no other crease edge and
+    not ``anchored`` (on a border or non-manifold edge). A scan's noise lifts single edges past
+    the crease angle; a crease of a made thing runs on into others or to a border.
+
+    Parameters
+    ----------
+    crease : (E, 2) int
+        The crease edges' (welded) vertex indices.
+    anchored : (V,) bool
+        Vertices on a border or non-manifold edge.
+    """
+    free = np.bincount(crease.ravel(), minlength=len(anchored))[: len(anchored)] == 1
+    free &= ~anchored
+    return free[crease[:, 0]] & free[crease[:, 1]]
 
 
 def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:
