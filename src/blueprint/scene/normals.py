@@ -20,9 +20,65 @@ def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) ->
     return welded
 
 
+def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -> np.ndarray:
+    """(V,) bool: the welded vertex lies on a crease (an edge whose two faces' normals differ,
+    up to sign, by more than ``crease_angle`` degrees, unless it is a crease edge on its own),
+    a border or a non-manifold edge.
+
+    Parameters
+    ----------
+    welded : (F, 3) int
+        Welded vertex ids per face (``weld_ids``).
+    unit : (F, 3) float
+        Unit face normals (zero for degenerate faces).
+    crease_angle : float
+        Degrees.
+    """
+    edges = np.sort(welded[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edge_face = np.repeat(np.arange(len(welded)), 3)
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    edges = edges[order]
+    starts = np.flatnonzero(np.r_[True, (edges[1:] != edges[:-1]).any(axis=1)])
+    count = np.diff(np.r_[starts, len(edges)])
+    pair = starts[count == 2]
+    cos = np.einsum("ij,ij->i", unit[edge_face[order[pair]]], unit[edge_face[order[pair + 1]]])
+    crease = edges[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
+    vertices = int(welded.max(initial=-1)) + 1
+    sharp = np.zeros(vertices, bool)
+    sharp[edges[starts[count != 2]].ravel()] = True
+    sharp[crease[~lone_creases(crease, sharp)].ravel()] = True
+    return sharp
+
+
+def lone_creases(crease: np.ndarray, anchored: np.ndarray) -> np.ndarray:
+    """(E,) bool: which of the crease edges are alone: both ends on no other crease edge and
+    not ``anchored`` (on a border or non-manifold edge). A scan's noise lifts single edges past
+    the crease angle; a crease of a made thing runs on into others or to a border.
+
+    Parameters
+    ----------
+    crease : (E, 2) int
+        The crease edges' (welded) vertex indices.
+    anchored : (V,) bool
+        Vertices on a border or non-manifold edge.
+    """
+    free = np.bincount(crease.ravel(), minlength=len(anchored))[: len(anchored)] == 1
+    free &= ~anchored
+    return free[crease[:, 0]] & free[crease[:, 1]]
+
+
 def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:
     """Normal per triangle corner: the area-weighted mean of the normals of the faces around the
-    corner's vertex that lie within ``crease_angle`` degrees of the corner's face.
+    corner's vertex that lie within ``crease_angle`` degrees of the corner's face; at a vertex
+    on no crease edge (``crease_vertices``), of all the faces around it.
+
+    A scan's noise tilts faces that share only a vertex by more than the crease angle while
+    every edge between them stays below it; splitting the normal there would draw a crease
+    fragment, a speck, at each such vertex. A crease is an edge: where no edge is one, the
+    surface is smooth; nor is a crease edge on its own, touching no other crease edge, border
+    or non-manifold edge, one: the creases of made things run on. Vertices on borders and
+    non-manifold edges keep the pairwise rule: where patches meet without sharing edges
+    (T-junctions, open seams), their edges say nothing about the angle between them.
 
     Normals are compared up to sign, so faces wound the wrong way still smooth with their
     neighbours; each corner keeps its own face's orientation.
@@ -47,7 +103,9 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     if crease_angle <= 0 or len(faces) == 0:
         return flat.astype(np.float32)
 
-    vertex = weld_ids(positions, faces).reshape(-1)
+    welded = weld_ids(positions, faces)
+    sharp = crease_vertices(welded, unit, crease_angle)
+    vertex = welded.reshape(-1)
     corner_face = np.repeat(np.arange(len(faces)), 3)
     order = np.argsort(vertex, kind="stable")
     sorted_vertex = vertex[order]
@@ -67,7 +125,7 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     face_b = corner_face[order[b_idx]]
 
     cos = np.einsum("ij,ij->i", unit[face_a], unit[face_b])
-    keep = np.abs(cos) >= np.cos(np.radians(crease_angle)) - 1e-9
+    keep = (np.abs(cos) >= np.cos(np.radians(crease_angle)) - 1e-9) | ~sharp[sorted_vertex[a_idx]]
     contribution = area_normals[face_b[keep]] * np.sign(cos[keep])[:, None]
     target = order[a_idx[keep]]
     summed = np.zeros((len(vertex), 3))

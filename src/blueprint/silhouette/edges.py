@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.scene.normals import lone_creases
+
 from .mesh import Adjacency
 
 __all__ = ["BORDER", "CREASE", "SILHOUETTE", "EdgeSet", "classify_edges"]
@@ -154,6 +156,26 @@ def classify_edges(
     crease[manifold] = (
         normal_ok[f0[manifold]] & normal_ok[f1[manifold]] & (cos_angle < np.cos(np.radians(crease_angle)))
     )
+
+    # a lone crease edge is a scan's noise, as the raster drawing's normals take it
+    # (scene.normals.lone_creases), whether or not this view makes it a silhouette
+    pair = count == 2
+    sharp = np.flatnonzero(pair)
+    sharp = sharp[
+        ~(
+            normal_ok[f0[sharp]]
+            & normal_ok[f1[sharp]]
+            & (
+                np.einsum("ij,ij->i", adj.face_normals[f0[sharp]], adj.face_normals[f1[sharp]])
+                >= np.cos(np.radians(crease_angle))
+            )
+        )
+    ]
+    anchored = np.zeros(len(adj.positions), bool)
+    anchored[adj.edges[count != 2].ravel()] = True
+    alone = np.zeros(num_edges, bool)
+    alone[sharp] = lone_creases(adj.edges[sharp], anchored)
+    crease &= ~alone
 
     kind = np.zeros(num_edges, dtype=np.uint8)
     kind[crease] = CREASE
