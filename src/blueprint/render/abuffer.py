@@ -33,6 +33,8 @@ DEFAULT_MAX_BYTES = 1 << 30
 TILE = 16
 # groups of 8 x 8 a row of a tiled unpack's dispatch (abuffer_unpack.comp)
 ROW = 32768
+# the storage block of the tiles' layers (abuffer_resolve.comp)
+TILE_BINDING = 6
 
 
 class ABuffer:
@@ -50,7 +52,7 @@ class ABuffer:
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
-        defines = {"TILES": TILE} if tiles else {}
+        defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
         self.resolve = r.compute(RESOLVE_COMP, defines)
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),
@@ -62,7 +64,7 @@ class ABuffer:
                 else:
                     prog[name].value = uniforms[name]
         self.clear = r.compute(CLEAR_COMP)
-        self.unpack = r.compute(UNPACK_COMP, {**defines, "ROW": ROW} if tiles else {})
+        self.unpack = r.compute(UNPACK_COMP, {"TILES": TILE, "ROW": ROW} if tiles else {})
         for prog in (self.resolve, self.unpack):
             prog["u_back_bias"].value = back_bias
         # pixels covered by each layer, known once layer 0 is drawn
@@ -133,6 +135,10 @@ class ABuffer:
         head = pool.texture(f"{name}.head", size, "r32ui")
         cursor = pool.texture(f"{name}.cursor", size, "r32ui")
         groups = (-(-size[0] // 8), -(-size[1] // 8))
+        columns, rows = -(-size[0] // TILE), -(-size[1] // TILE)
+        tile_bytes = 4 * columns * rows if self.tiles else 0
+        if self.tiles:
+            tiles = pool.buffer(f"{name}.tile_layers", tile_bytes)
         calls = 0
         while True:
             room = self._room(size)
@@ -151,18 +157,21 @@ class ABuffer:
             head.bind_to_image(0, read=True, write=False)
             cursor.bind_to_image(1, read=False, write=True)
             if self.tiles:
-                tiles = self._tile_target(name, size)
-                tiles.write(np.zeros(tiles.size[::-1], np.uint32))
-                tiles.bind_to_image(2, read=True, write=True)
+                tiles.clear()
+                tiles.bind_to_storage_buffer(TILE_BINDING)
+                self.resolve["u_tile_columns"].value = columns
             self.resolve.run(*groups)
             ctx.memory_barrier()
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
             # moved where the GPU's atomics on it are slow
-            seen = pool.buffer(f"{name}.seen", totals.size + depths.size)
+            seen = pool.buffer(f"{name}.seen", totals.size + depths.size + tile_bytes)
             ctx.copy_buffer(seen, totals, totals.size)
             ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
-            counts = np.frombuffer(seen.read(), np.uint32).astype(np.int64)
+            if self.tiles:
+                ctx.copy_buffer(seen, tiles, tile_bytes, write_offset=totals.size + depths.size)
+            read = seen.read(size=totals.size + depths.size + tile_bytes)
+            counts = np.frombuffer(read, np.uint32).astype(np.int64)
             drawn = int(counts[0])
             if drawn > room or tuple(size) not in self.r.abuffer_room:
                 # room to spare for a model turning
@@ -170,20 +179,16 @@ class ABuffer:
             if drawn <= room:
                 break
         # pixels with at least k + 1 layers are those layer k covers
-        covered = np.cumsum(counts[4:][::-1])[::-1][1:]
+        histogram = counts[4 : 4 + MOST_LAYERS + 1]
+        covered = np.cumsum(histogram[::-1])[::-1][1:]
         self.layer_pixels = [int(v) for v in covered if v > 0]
         if self.tiles:
-            self._list_tiles(name, size)
+            self._list_tiles(name, counts[4 + MOST_LAYERS + 1 :].reshape(rows, columns))
         return calls
 
-    def _tile_target(self, name: str, size: tuple[int, int]):
-        return self.r.pool.texture(f"{name}.tiles", (-(-size[0] // TILE), -(-size[1] // TILE)), "r32ui")
-
-    def _list_tiles(self, name: str, size: tuple[int, int]) -> None:
-        """Read the tiles' layers back and upload the tiles that have any, most layers first,
-        so that the tiles with a layer are the first of the list at every layer."""
-        tiles = self._tile_target(name, size)
-        layers = np.frombuffer(tiles.read(), np.uint32).reshape(tiles.size[1], tiles.size[0])
+    def _list_tiles(self, name: str, layers: np.ndarray) -> None:
+        """Keep the tiles' layers and upload the tiles that have any, most layers first, so that
+        the tiles with a layer are the first of the list at every layer."""
         self.tile_layers = layers
         flat = layers.ravel()
         order = np.argsort(-flat.astype(np.int64), kind="stable")

@@ -17,9 +17,13 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 #if TILES
-// the most layers a pixel of each tile of TILES x TILES pixels has: where a software
-// rasteriser's passes have work at each layer (blueprint.pipeline.tiles)
-layout(binding = 2, r32ui) uniform uimage2D u_tile_layers;
+// the most layers a pixel of each tile of TILES x TILES pixels has, rows of u_tile_columns
+// from the bottom: where a software rasteriser's passes have work at each layer
+// (blueprint.pipeline.tiles); read back with the counts
+layout(std430, binding = TILE_BINDING) coherent buffer TileLayers {
+    uint tile_layers[];
+};
+uniform int u_tile_columns;
 shared uint group_deepest;
 #endif
 uniform float u_back_bias;
@@ -150,7 +154,8 @@ void main() {
     barrier();
 #if TILES
     if (gl_LocalInvocationIndex == 0u && group_deepest > 0u) {
-        imageAtomicMax(u_tile_layers, ivec2(gl_WorkGroupID.xy) / (TILES / 8), group_deepest);
+        ivec2 tile = ivec2(gl_WorkGroupID.xy) / (TILES / 8);
+        atomicMax(tile_layers[tile.y * u_tile_columns + tile.x], group_deepest);
     }
 #endif
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
