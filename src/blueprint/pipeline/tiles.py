@@ -110,7 +110,7 @@ class Tiles:
     def draw(self, prog, reach: int) -> int:
         """Draw ``prog`` (built with ``compositor.TILES_VERT``) over the covered tiles widened by ``reach``
         pixels; returns the draw calls issued (0 where no tile is covered)."""
-        return self._draw(prog, (id(self.covered), reach), lambda: widen(self.covered, -(-reach // TILE)))
+        return self._draw(prog, ("covered", reach), lambda: widen(self.covered, -(-reach // TILE)))
 
     def draw_layers(self, prog, first: int, count: int, reach: int) -> int:
         """Draw ``prog`` over the tiles any of layers ``first`` .. ``first + count - 1`` covers,

@@ -14,7 +14,7 @@ import numpy as np
 from blueprint.color import RGBA
 from blueprint.compose.glyphs.raster import composite, draw_pieces
 from blueprint.compose.glyphs.values import Dimension
-from blueprint.scene.dimension import format_value, linear_dimension
+from blueprint.scene.dimension import format_value, linear_dimension, screen_points
 from blueprint.scene.sheet import Marks, Text
 
 __all__ = ["SHEET_FONTS", "dimension_glyph_marks", "draw_mark_text", "draw_marks"]
@@ -87,13 +87,11 @@ def dimension_glyph_marks(
     ISO 129's measures. Nothing where a point lies behind the camera or the two points are seen
     one behind the other."""
     mvp = np.asarray(projection, np.float64) @ np.asarray(view, np.float64)
-    w, h = size
 
     def screen(point: np.ndarray) -> np.ndarray | None:
-        clip = mvp @ np.r_[point, 1.0]
-        if clip[3] <= 0:
+        if (mvp @ np.r_[point, 1.0])[3] <= 0:
             return None
-        return np.array([(clip[0] / clip[3] + 1) * 0.5 * w, (1 - clip[1] / clip[3]) * 0.5 * h])
+        return screen_points(point[None], view, projection, size)[0]
 
     start, end = np.asarray(dimension.start, np.float64), np.asarray(dimension.end, np.float64)
     a, b = screen(start), screen(end)
