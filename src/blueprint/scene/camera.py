@@ -52,6 +52,22 @@ class Camera:
 
     def view_matrix(self) -> np.ndarray:
         """(4, 4) float64: model to eye coordinates (camera looks down -Z)."""
+        return self._held("_view", self._view_matrix).copy()
+
+    def projection_matrix(self) -> np.ndarray:
+        """(4, 4) float64: eye to clip coordinates, OpenGL conventions (z in [-1, 1])."""
+        return self._held("_projection", self._projection_matrix).copy()
+
+    def _held(self, name: str, make) -> np.ndarray:
+        # a frame asks for each matrix several times (a pass a layer's uniforms, the capture's),
+        # and NumPy's cross products cost a GPU-bound frame more than its draws
+        held = self.__dict__.get(name)
+        if held is None:
+            held = make()
+            object.__setattr__(self, name, held)
+        return held
+
+    def _view_matrix(self) -> np.ndarray:
         eye, target, up = (np.asarray(v, np.float64) for v in (self.eye, self.target, self.up))
         f = target - eye
         f /= np.linalg.norm(f)
@@ -63,8 +79,7 @@ class Camera:
         m[:3, 3] = -m[:3, :3] @ eye
         return m
 
-    def projection_matrix(self) -> np.ndarray:
-        """(4, 4) float64: eye to clip coordinates, OpenGL conventions (z in [-1, 1])."""
+    def _projection_matrix(self) -> np.ndarray:
         n, f = self.near, self.far
         m = np.zeros((4, 4))
         if self.ortho:
