@@ -14,7 +14,9 @@ from test_layers_oracle import nested_round
 
 import blueprint
 from blueprint import examples
-from blueprint.render.abuffer import NODE_BYTES
+from blueprint.pipeline.executor import executor_for
+from blueprint.pipeline.peel import LayerCapture
+from blueprint.render.abuffer import NODE_BYTES, ABuffer
 from blueprint.render.capture import Capture, gbuffer
 from blueprint.scene.camera import fit_camera
 
@@ -224,3 +226,97 @@ def test_tiled_unpack_draws_the_same_layers(renderer, abuffer):
     for a, b in zip(layers[True], layers[False], strict=True):
         for x, y in zip(a, b, strict=True):
             np.testing.assert_array_equal(x, y)
+
+
+@pytest.fixture
+def gpu_form(renderer, monkeypatch):
+    """The renderer drawing as it does on a GPU: nothing looks at a layer before the next is
+    issued (not a software rasteriser's eager peel, no tiles), image passes in compute form."""
+    monkeypatch.setattr(renderer, "software", False)
+    monkeypatch.setattr(renderer, "use_compute", True)
+    monkeypatch.setattr(executor_for(renderer), "tiled", False)
+
+
+@pytest.mark.parametrize("max_layers", [5, None])
+def test_counts_read_late_draw_the_same(renderer, abuffer, monkeypatch, max_layers):
+    """Where the CPU should not wait for the capture (a GPU's frames), the counts are read only
+    once the layers are issued: the same frame, layer counts and layers left as reading them at
+    once; a capture that then proves short of room is drawn again, the room raised."""
+    model = examples.gearbox()
+    options = dict(size=(120, 90), max_layers=max_layers, supersample=1)
+    abuffer(True)
+    at_once = renderer.render(model, **options)
+    monkeypatch.setattr(renderer, "software", False)  # a GPU's frame: nothing looks per layer
+    monkeypatch.setattr(executor_for(renderer), "tiled", False)
+    deferred = []
+    issued = ABuffer.__init__
+
+    def watch(self, *args, **kwargs):
+        issued(self, *args, **kwargs)
+        deferred.append(self.defer)
+
+    monkeypatch.setattr(ABuffer, "__init__", watch)
+    for room in (None, 10):
+        if room is not None:
+            renderer.abuffer_room[(120, 90)] = room
+        late = renderer.render(model, **options)
+        np.testing.assert_array_equal(late.image, at_once.image)
+        assert (late.layers, late.layers_left) == (at_once.layers, at_once.layers_left)
+        assert late.layer_pixels == at_once.layer_pixels
+    assert renderer.abuffer_room[(120, 90)] > 10
+    # the second frame was drawn twice: deferred, short of room, then read at once
+    assert deferred == [True, True, False]
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(max_layers=6, supersample=1),
+        dict(max_layers=None, supersample=2, style="paper", line_width=2.0),
+    ],
+)
+def test_edges_from_the_lists_draw_the_same(renderer, abuffer, gpu_form, monkeypatch, options):
+    """In the compute form the edges of every layer are read straight from the sorted lists,
+    no layer unpacked: the same drawing, pixel for pixel, as edges of unpacked layers."""
+    model = examples.gearbox()
+    abuffer(True)
+    listed = _watch_lists(renderer, monkeypatch)
+    from_lists = renderer.render(model, size=(160, 120), **options)
+    assert listed == ["edges"]
+    monkeypatch.setattr(LayerCapture, "_from_lists", lambda self, st: ())
+    unpacked = renderer.render(model, size=(160, 120), **options)
+    assert listed == ["edges"]
+    assert from_lists.layers == unpacked.layers >= 6
+    np.testing.assert_array_equal(from_lists.image, unpacked.image)
+
+
+@pytest.mark.parametrize("options", [dict(shade=True), dict(id_silhouettes=True), dict(highlight=True)])
+def test_edges_from_the_lists_only_where_they_read_nothing_else(
+    renderer, abuffer, gpu_form, monkeypatch, options
+):
+    """Shaded parts read the layers' depths, triangle-ID silhouettes their faces: those frames
+    unpack every layer. Highlighted parts read a capture of their own: the lists still serve."""
+    model = examples.gearbox()
+    abuffer(True)
+    listed = _watch_lists(renderer, monkeypatch)
+    parts = np.zeros(len(model.part_names), bool)
+    parts[0] = True
+    kind = next(iter(options))
+    if kind in ("shade", "highlight"):
+        options = {kind: parts}
+    renderer.render(model, size=(96, 72), max_layers=4, supersample=1, **options)
+    assert listed == (["edges"] if kind == "highlight" else [])
+
+
+def _watch_lists(renderer, monkeypatch) -> list[str]:
+    """The passes the renderer's executor runs from the lists, as it runs them."""
+    ex = executor_for(renderer)
+    listed: list[str] = []
+    run_lists = type(ex)._run_lists
+
+    def watch(st, name, *args):
+        listed.append(name)
+        run_lists(ex, st, name, *args)
+
+    monkeypatch.setattr(ex, "_run_lists", watch)
+    return listed

@@ -68,6 +68,7 @@ from blueprint.scene.model import Model
 BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
+EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
 _UNSET = object()
 
 
@@ -474,6 +475,27 @@ class Executor:
         array.bind_to_image(1, read=False, write=True)
         prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
         st.draws += 1
+
+    def _run_lists(self, st: RunState, name: str, abuffer, layers: int) -> None:
+        """Slice pass ``name`` (the edges operation) on all ``layers`` layers, read from
+        ``abuffer``'s sorted lists: a dispatch an array of ``SLICES`` layers, each pixel's chain
+        carried from one to the next in a pair of cursor images."""
+        p = st.pl.bound.passes[name]
+        prog = self.programs.compute(EDGES_FROM_LISTS)
+        size = st.groups[0].size
+        self._frame_uniforms(st, prog, size, 0)
+        for uniform, value in p.uniforms.items():
+            self.programs.set(prog, uniform, value)
+        self.programs.set(prog, "u_back_bias", abuffer.back_bias)
+        cursors = abuffer.lists(size)
+        for k in range(-(-layers // SLICES)):
+            st.stacks[name][k].bind_to_image(1, read=False, write=True)
+            cursors[k % 2].bind_to_image(2, read=True, write=False)
+            cursors[(k + 1) % 2].bind_to_image(3, read=False, write=True)
+            self.programs.set(prog, "u_layers", min(SLICES, layers - k * SLICES))
+            prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+            self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
+            st.draws += 1
 
     def _run_batches(self, st: RunState, layers: int) -> None:
         ctx, pl = self.ctx, st.pl

@@ -8,6 +8,7 @@ from blueprint.gpu import units
 from blueprint.pipeline.inputs import read_texture
 from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
+from blueprint.render.abuffer import Overflow
 from blueprint.render.capture import Capture, GBuffer, capture_parts, revealed_pixels
 from blueprint.render.capture import peel as peel_layers
 from blueprint.render.remaining import layers_left
@@ -65,6 +66,21 @@ class LayerCapture:
         return Reveal(stop.fraction, wanted, revealed)
 
     def peel(self, st: RunState, max_layers, rules) -> tuple[list[int], int]:
+        """Peel ``st``'s layers under ``rules``, running the per-layer passes after each; the
+        samples of every layer peeled and how many count (``blueprint.render.capture.peel``).
+        Where nothing looks at a layer before the next is issued (a GPU, no rule or read-back
+        per layer), the A-buffer's counts are read only once the layers are issued, so the CPU
+        does not wait for the capture; one that then proves short of room is drawn again."""
+        eager = self.r.software
+        defer = not eager and not st.attr_dumps and not any(rule.every_layer for rule in rules)
+        if defer:
+            try:
+                return self._peel(st, max_layers, rules, eager, defer=True)
+            except Overflow:
+                st.groups.clear()
+        return self._peel(st, max_layers, rules, eager, defer=False)
+
+    def _peel(self, st: RunState, max_layers, rules, eager: bool, defer: bool) -> tuple[list[int], int]:
         r, ctx, pl = self.r, self.r.ctx, st.pl
         bound = pl.bound
         by_scale: dict[float, list[str]] = {}
@@ -88,18 +104,30 @@ class LayerCapture:
         # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
         # the raw ID target) need them
         face_ids = any(g.extra for g in groups) or clear_gb or _id_silhouettes(pl)
-        # a software rasteriser looks at every layer's count before its passes run, and at
-        # where the layer lies, for passes that need only be drawn there (pipeline.tiles)
-        eager = r.software
+        # a software rasteriser looks at every layer's count before its passes run (``eager``),
+        # and at where the layer lies, for passes that need only be drawn there (pipeline.tiles)
         tiled = self.ex.tiled and st.arrays is None
         tiled = tiled and any(self.ex._reach(st, n) is not None for n in pl.per_layer)
+        # edges read straight from an A-buffer's lists, all layers after the peel, where nothing
+        # else reads the layers: none is unpacked then
+        from_lists = self._from_lists(st) if defer else ()
         for g in groups:
             g.capture = Capture(
-                r, st.mesh, st.camera, g.gb, face_ids=face_ids, batch=max_layers, tiles=tiled and g.primary
+                r,
+                st.mesh,
+                st.camera,
+                g.gb,
+                face_ids=face_ids,
+                batch=max_layers,
+                tiles=tiled and g.primary,
+                defer=defer,
+                unpack=not from_lists,
             )
         extras = self._attribute_programs(st) if any(g.extra for g in groups) else None
         for name in pl.accumulated:
             r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
+
+        listed: list[str] = []
 
         def draw(layer: int, query, guard) -> None:
             self.ex._ensure_stacks(st, layer + 1)
@@ -114,6 +142,9 @@ class LayerCapture:
                     )
                 if g.extra:
                     self._attributes(st, g, layer, extras)
+            if layer == 0 and groups[0].capture.abuffer is not None:
+                # (an A-buffer without room in memory peeled instead, unpacking as it goes)
+                listed.extend(from_lists)
             for name, held in st.attr_dumps.items():
                 tex = st.by_attr[name].texture(name, layer)
                 held.append(read_texture(tex, bound.attributes[name].format))
@@ -126,10 +157,43 @@ class LayerCapture:
                 else:
                     self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
             for name in pl.iteration0 if layer == 0 else pl.per_layer:
-                self.ex._run_pass(st, name, layer, layer + 1)
+                if name not in listed:
+                    self.ex._run_pass(st, name, layer, layer + 1)
 
         samples = groups[0].capture.samples
-        return peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
+        peeled = peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
+        for g in groups:
+            g.capture.settle()
+        if listed:
+            layers = peeled[1]
+            self.ex._ensure_stacks(st, max(layers, 1))
+            for name in listed:
+                self.ex._run_lists(st, name, groups[0].capture.abuffer, layers)
+        return peeled
+
+    def _from_lists(self, st: RunState) -> tuple[str, ...]:
+        """The edges passes that may read every layer from an A-buffer's lists after the peel
+        (``Executor._run_lists``): in the compute form, where they are the only readers of the
+        G-buffer, read the renderer's own depth, normal and IDs, draw no triangle-ID
+        silhouettes, and no layer is read back or given extra attributes."""
+        pl, arrays = st.pl, st.arrays
+        bound = pl.bound
+        if arrays is None or st.attr_dumps or len(st.groups) != 1 or st.groups[0].extra:
+            return ()
+        layered = set(st.groups[0].names)
+        if any(n in layered for n in pl.readback):
+            return ()
+        readers = [
+            n for n in pl.passes if any(pl.resolve(t) in layered for t in bound.passes[n].inputs.values())
+        ]
+        wired = {"depth": "depth", "normal": "normal", "ids": "ids"}
+        for name in readers:
+            p = bound.passes[name]
+            if name not in arrays.slices or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
+                return ()
+            if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
+                return ()
+        return tuple(readers)
 
     def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
         """Layers left behind the last one where the peel stopped at its cap with the last layer

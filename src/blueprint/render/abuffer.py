@@ -7,7 +7,10 @@ buffer's precision, back faces pushed back, the peel's tolerance, the first draw
 tie), and each layer is then unpacked into the G-buffer by a full-screen pass, so whatever
 reads layers sees what the peel draws. The lists' room comes from the fragments the last frame
 of that size drew; a pass that finds too little room is drawn again with enough, and one whose
-fragments would not fit ``max_bytes`` says so and the caller peels instead.
+fragments would not fit ``max_bytes`` says so and the caller peels instead. Where the CPU
+should not wait for the capture before issuing the frame's other passes (a GPU), the counts are
+read only when first asked for, and a capture that then turns out to have had too little room
+raises ``Overflow``: its caller draws the frame again, with the room now known.
 """
 
 from __future__ import annotations
@@ -37,6 +40,10 @@ ROW = 32768
 TILE_BINDING = 6
 
 
+class Overflow(Exception):
+    """A capture whose counts were read late found more fragments than it had room for."""
+
+
 class ABuffer:
     """The A-buffer capture of one frame's layers (see the module's docstring): ``draw`` at
     layer 0 captures and sorts every layer, then unpacks layer 0; at each later layer it
@@ -45,12 +52,25 @@ class ABuffer:
     With ``tiles`` the resolve also counts the most layers a pixel of each ``TILE`` x ``TILE``
     tile has (``tile_layers``, read back with the counts) and each layer is unpacked only in
     the tiles that have it: what a software rasteriser wants, where reading back is cheap and
-    every pixel a pass touches costs."""
+    every pixel a pass touches costs. With ``defer`` the counts are read when first asked for
+    (``layer_pixels``, ``deepest``): every layer is unpacked until then, an unpack past a
+    pixel's last layer clearing it as an empty layer's would, and a capture that had too little
+    room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
+    the sorted lists themselves (``lists``)."""
 
     def __init__(
-        self, r, mesh, uniforms: dict, back_bias: float, max_bytes: int, tiles: bool = False
+        self,
+        r,
+        mesh,
+        uniforms: dict,
+        back_bias: float,
+        max_bytes: int,
+        tiles: bool = False,
+        defer: bool = False,
+        unpack: bool = True,
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
+        self.back_bias, self.unpacks = back_bias, unpack
         self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
         defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
         self.resolve = r.compute(RESOLVE_COMP, defines)
@@ -67,12 +87,25 @@ class ABuffer:
         self.unpack = r.compute(UNPACK_COMP, {"TILES": TILE, "ROW": ROW} if tiles else {})
         for prog in (self.resolve, self.unpack):
             prog["u_back_bias"].value = back_bias
-        # pixels covered by each layer, known once layer 0 is drawn
-        self.layer_pixels: list[int] = []
-        self.tiles = tiles
+        self._layer_pixels: list[int] = []
+        self.tiles, self.defer = tiles, defer and not tiles
+        # (counts buffer, room) of a capture whose counts are not read yet
+        self._unread: tuple | None = None
         # (rows, columns) of tiles, row 0 at the bottom: the layers of each, once layer 0 is drawn
         self.tile_layers: np.ndarray | None = None
         self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
+
+    @property
+    def layer_pixels(self) -> list[int]:
+        """Pixels covered by each layer, once layer 0 is drawn."""
+        self.settle()
+        return self._layer_pixels
+
+    def settle(self) -> None:
+        """Read a deferred capture's counts if they are not read yet (``Overflow`` where it
+        had too little room)."""
+        if self._unread is not None:
+            self._count(*self._unread)
 
     def deepest(self) -> int:
         """The most layers any pixel has, once layer 0 is drawn."""
@@ -98,13 +131,28 @@ class ABuffer:
             calls = self._capture(gb, name)
             if calls is None:
                 return None
-        if layer >= len(self.layer_pixels):
+        if not self.unpacks:
+            return calls
+        if self._unread is None and layer >= len(self._layer_pixels):
             # an empty layer, as the peel's would be
             self.r.ctx.memory_barrier()
             self.r.pool.framebuffer((self.flat(size)[layer % 2],)).clear(1.0, 1.0, 1.0, 1.0)
             return calls
         self._unpack(gb, name, layer)
         return calls + 1
+
+    def lists(self, size: tuple[int, int]) -> tuple:
+        """The captured lists at ``size`` bound to their storage blocks (abuffer.glsl), for a
+        pass that reads the layers from them; returns two cursor images: the first holds each
+        pixel's layer 0 (the resolve's), the second is free for a pass to leave where each
+        pixel's chain goes on."""
+        name = f"abuffer.{size[0]}x{size[1]}"
+        self.r.ctx.memory_barrier()
+        self._buffers(name, 1)
+        pool = self.r.pool
+        return pool.texture(f"{name}.cursor", size, "r32ui"), pool.texture(
+            f"{name}.cursor.next", size, "r32ui"
+        )
 
     def flat(self, size: tuple[int, int]) -> tuple:
         """The two float targets the layers' depths alternate in, at ``size``."""
@@ -165,26 +213,41 @@ class ABuffer:
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
             # moved where the GPU's atomics on it are slow
-            seen = pool.buffer(f"{name}.seen", totals.size + depths.size + tile_bytes)
+            nbytes = totals.size + depths.size + tile_bytes
+            seen = pool.buffer(f"{name}.seen", nbytes)
             ctx.copy_buffer(seen, totals, totals.size)
             ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
             if self.tiles:
                 ctx.copy_buffer(seen, tiles, tile_bytes, write_offset=totals.size + depths.size)
-            read = seen.read(size=totals.size + depths.size + tile_bytes)
-            counts = np.frombuffer(read, np.uint32).astype(np.int64)
-            drawn = int(counts[0])
-            if drawn > room or tuple(size) not in self.r.abuffer_room:
-                # room to spare for a model turning
-                self.r.abuffer_room[tuple(size)] = int(drawn * 1.25) + 1024
-            if drawn <= room:
-                break
+            if self.defer:
+                self._unread = (seen.read, nbytes, room, size, name)
+                return calls
+            if self._count(seen.read, nbytes, room, size, name):
+                return calls
+
+    def _count(self, read, nbytes: int, room: int, size: tuple[int, int], name: str) -> bool:
+        """The counts (``read`` of ``nbytes``) of a capture that had ``room``: the layers'
+        pixels (and tiles) kept, or False where it had too little room (``Overflow`` where it
+        was deferred)."""
+        self._unread = None
+        size = tuple(size)
+        counts = np.frombuffer(read(size=nbytes), np.uint32).astype(np.int64)
+        drawn = int(counts[0])
+        if drawn > room or size not in self.r.abuffer_room:
+            # room to spare for a model turning
+            self.r.abuffer_room[size] = int(drawn * 1.25) + 1024
+        if drawn > room:
+            if self.defer:
+                raise Overflow(f"{drawn} fragments, room for {room}")
+            return False
         # pixels with at least k + 1 layers are those layer k covers
         histogram = counts[4 : 4 + MOST_LAYERS + 1]
         covered = np.cumsum(histogram[::-1])[::-1][1:]
-        self.layer_pixels = [int(v) for v in covered if v > 0]
+        self._layer_pixels = [int(v) for v in covered if v > 0]
         if self.tiles:
+            rows, columns = -(-size[1] // TILE), -(-size[0] // TILE)
             self._list_tiles(name, counts[4 + MOST_LAYERS + 1 :].reshape(rows, columns))
-        return calls
+        return True
 
     def _list_tiles(self, name: str, layers: np.ndarray) -> None:
         """Keep the tiles' layers and upload the tiles that have any, most layers first, so that

@@ -115,6 +115,8 @@ class Capture:
     pass find that many layers where the driver allows (``_KBuffer``), or every layer
     (``ABuffer``, from ``abuffer_min_layers``). ``selected`` (P,) bool draws only those parts.
     ``tiles``: an A-buffer also finds which tiles each layer covers (``tile_layers``).
+    ``defer``: an A-buffer's counts are read only when asked for (``abuffer.Overflow``);
+    ``unpack`` false: an A-buffer unpacks no layer into ``gb`` (its caller reads the lists).
     """
 
     def __init__(
@@ -129,6 +131,8 @@ class Capture:
         tie_break: bool | None = None,
         selected: np.ndarray | None = None,
         tiles: bool = False,
+        defer: bool = False,
+        unpack: bool = True,
     ) -> None:
         self.r, self.mesh, self.gb = r, mesh, gb
         normals = gb.normal is not None
@@ -163,7 +167,9 @@ class Capture:
                 "u_depth_range": depth_range(camera),
                 "u_peel_eps": peel_eps(camera),
             }
-            self.abuffer = ABuffer(r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes, tiles)
+            self.abuffer = ABuffer(
+                r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes, tiles, defer, unpack
+            )
             if not self.abuffer.fits((w, h)):
                 self.abuffer = None
             else:
@@ -219,6 +225,12 @@ class Capture:
         """The most layers any pixel has where the A-buffer captured them (None otherwise): the
         layers a capped peel left, without a counting pass."""
         return self.abuffer.deepest() if self.abuffer is not None else None
+
+    def settle(self) -> None:
+        """Read a deferred A-buffer's counts (``abuffer.Overflow`` where it had too little
+        room): every capture of a frame is known to be whole before the frame is used."""
+        if self.abuffer is not None:
+            self.abuffer.settle()
 
     def release(self) -> None:
         if self._flags is not None:

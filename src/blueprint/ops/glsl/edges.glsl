@@ -9,9 +9,17 @@
 #include "idsil_vertex.glsl"
 #endif
 
+// The layer's samples at pixel q, the pixel itself (i = -1) or its neighbour OFFSETS[i]: from
+// the G-buffer's textures unless the including shader has them already (EDGE_SAMPLES).
+#ifndef EDGE_SAMPLES
 uniform sampler2D u_depth;       // the layer's depth attachment, 1.0 where nothing was drawn
 uniform sampler2D u_normal;
 uniform isampler2D u_ids;
+#define EDGE_LAST (textureSize(u_depth, 0) - 1)
+#define EDGE_DEPTH(q, i) texelFetch(u_depth, q, 0).r
+#define EDGE_NORMAL(q, i) texelFetch(u_normal, q, 0).xyz
+#define EDGE_IDS(q, i) texelFetch(u_ids, q, 0).xy
+#endif
 uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos where they are full)
 uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
 uniform float u_pixel_angle;     // pixel footprint per unit depth (perspective) or per pixel (ortho)
@@ -26,30 +34,30 @@ float crease(vec3 a, vec3 b) {
 }
 
 float edge_value(ivec2 p) {
-    ivec2 last = textureSize(u_depth, 0) - 1;
-    float zc = texelFetch(u_depth, p, 0).r;
+    ivec2 last = EDGE_LAST;
+    float zc = EDGE_DEPTH(p, -1);
     float z[4];
     bool covered[4];
     bool any_covered = false;
     for (int i = 0; i < 4; ++i) {
         // outside the image counts as more of the same, so the frame draws no line
         ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-        z[i] = texelFetch(u_depth, q, 0).r;
+        z[i] = EDGE_DEPTH(q, i);
         covered[i] = z[i] < 1.0;
         any_covered = any_covered || covered[i];
     }
     if (zc >= 1.0) {
         return any_covered ? 1.0 : 0.0;
     }
-    vec3 nc = texelFetch(u_normal, p, 0).xyz;
-    ivec2 own = texelFetch(u_ids, p, 0).xy;
+    vec3 nc = EDGE_NORMAL(p, -1);
+    ivec2 own = EDGE_IDS(p, -1);
     int part = own.y;
 #if ID_SILHOUETTES
     {
         bool loaded = false;
         for (int i = 0; i < 4; ++i) {
             ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-            int other = texelFetch(u_ids, q, 0).x;
+            int other = EDGE_IDS(q, i).x;
             if (covered[i] && other != own.x) {
                 if (!loaded) {
                     load_own(own.x - 1);
@@ -68,10 +76,10 @@ float edge_value(ivec2 p) {
             return 1.0;
         }
         ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-        if (u_part_edges && texelFetch(u_ids, q, 0).y != part) {
+        if (u_part_edges && EDGE_IDS(q, i).y != part) {
             return 1.0;
         }
-        e = max(e, crease(nc, texelFetch(u_normal, q, 0).xyz));
+        e = max(e, crease(nc, EDGE_NORMAL(q, i)));
     }
     // Window depth is affine in screen space on any plane, perspective or not, so its second
     // difference is zero on planes and large across a jump; measured in eye-depth units and

@@ -1,0 +1,60 @@
+// The edges operation (edges.glsl) on up to 8 depth layers at once, read straight from the
+// A-buffer's sorted lists (blueprint.render:glsl/abuffer.glsl) instead of from each layer
+// unpacked into the G-buffer: each pixel walks its own layer chain and its four neighbours'
+// side by side, from where they stood at the array's first layer (u_from, the resolve's cursor
+// for the first array), and leaves its own where the next array starts (u_next). The samples
+// are those the unpack would have written: a pixel past its last layer has depth 1, its normal
+// and IDs are never read then (edge_value looks at a neighbour's only where it is covered).
+#extension GL_ARB_shading_language_packing : require
+layout(local_size_x = 8, local_size_y = 8) in;
+#include "blueprint.render:glsl/kbuffer.glsl"
+#include "blueprint.render:glsl/abuffer.glsl"
+
+layout(r8, binding = 1) uniform writeonly image2DArray u_out;  // set by binding: moderngl cannot set image-array uniforms
+layout(r32ui, binding = 2) uniform readonly uimage2D u_from;
+layout(r32ui, binding = 3) uniform writeonly uimage2D u_next;
+uniform int u_layers;  // layers of this array: slices 0 to u_layers - 1
+uniform float u_back_bias;
+
+// the current layer at the pixel (0) and its neighbours OFFSETS[i] (i + 1)
+float sample_depth[5];
+vec3 sample_normal[5];
+ivec2 sample_ids[5];
+#define EDGE_SAMPLES 1
+#define EDGE_LAST (imageSize(u_from) - 1)
+#define EDGE_DEPTH(q, i) sample_depth[(i) + 1]
+#define EDGE_NORMAL(q, i) sample_normal[(i) + 1]
+#define EDGE_IDS(q, i) sample_ids[(i) + 1]
+#include "blueprint.ops:glsl/edges.glsl"
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 last = EDGE_LAST;
+    if (any(greaterThan(p, last))) {
+        return;
+    }
+    uint at[5];
+    at[0] = imageLoad(u_from, p).x;
+    for (int i = 0; i < 4; ++i) {
+        at[i + 1] = imageLoad(u_from, clamp(p + OFFSETS[i], ivec2(0), last)).x;
+    }
+    for (int i = 0; i < 5; ++i) {
+        sample_normal[i] = vec3(0.0);
+        sample_ids[i] = ivec2(0);
+    }
+    for (int layer = 0; layer < u_layers; ++layer) {
+        for (int i = 0; i < 5; ++i) {
+            if (at[i] == 0u) {
+                sample_depth[i] = 1.0;
+                continue;
+            }
+            uvec4 s = nodes[at[i] - 1u];
+            sample_depth[i] = kb_depth(s, u_back_bias);
+            sample_normal[i] = kb_normal(s);
+            sample_ids[i] = kb_ids(s);
+            at[i] = order[at[i] - 1u];
+        }
+        imageStore(u_out, ivec3(p, layer), vec4(edge_value(p)));
+    }
+    imageStore(u_next, p, uvec4(at[0]));
+}
