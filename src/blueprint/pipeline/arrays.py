@@ -1,7 +1,8 @@
 """The compute form of a plan (GL 4.3): where the renderer runs image passes as compute
 shaders and every per-layer pass has a compute form (a slice operation on attributes, then
 operations over whole arrays) feeding only composites, the per-layer results live in r8
-texture arrays of ``SLICES`` slices, one dispatch a layer (slices) or an array (batches)."""
+texture arrays of ``SLICES`` slices, one dispatch a layer (slices) or an array (batches: an
+invocation a pixel of every slice holding a layer, ``u_slices``)."""
 
 from __future__ import annotations
 

@@ -513,8 +513,9 @@ class Executor:
                 src, dst = st.stacks[source][k], st.stacks[name][k]
                 src.use(BASE_UNIT)
                 self.programs.set(prog, "u_layer", k * SLICES)  # the depth layer of slice 0
+                self.programs.set(prog, "u_slices", min(SLICES, layers - k * SLICES))
                 dst.bind_to_image(1, read=False, write=True)
-                prog.run((dst.size[0] + 7) // 8, (dst.size[1] + 7) // 8, SLICES)
+                prog.run((dst.size[0] + 7) // 8, (dst.size[1] + 7) // 8)
                 st.draws += 1
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
