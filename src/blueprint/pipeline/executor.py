@@ -56,6 +56,7 @@ from blueprint.pipeline.programs import FULLSCREEN, Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
 from blueprint.pipeline.tiles import Tiles
+from blueprint.render.abuffer import Overflow
 from blueprint.render.capture import (
     depth_range,
     peel_eps,
@@ -156,6 +157,48 @@ class Executor:
             Copy a one-texture output into it instead of reading it back (``stream``): the
             result comes with ``pending`` set and ``output`` None.
         """
+        arguments = dict(
+            size=size,
+            view=view,
+            variables=variables,
+            images=images,
+            style=style,
+            max_layers=max_layers,
+            min_fraction=min_fraction,
+            crease_angle=crease_angle,
+            parts=parts,
+            dumps=dumps,
+            profile=profile,
+            read_later=read_later,
+        )
+        frame = self._frame + 1 if frame is None else frame
+        try:
+            return self._run(pipeline, model, camera, frame=frame, blind=True, **arguments)
+        except Overflow:
+            # a frame issued whole found its A-buffer short of room once read: again, looking
+            return self._run(pipeline, model, camera, frame=frame, blind=False, **arguments)
+
+    def _run(
+        self,
+        pipeline,
+        model,
+        camera,
+        *,
+        size,
+        view,
+        variables,
+        images,
+        style,
+        max_layers,
+        min_fraction,
+        crease_angle,
+        parts,
+        dumps,
+        profile,
+        frame,
+        read_later,
+        blind,
+    ) -> Result:
         t0 = clock = time.perf_counter()
         ctx = self.ctx
         self.r.make_current()
@@ -217,7 +260,7 @@ class Executor:
                     "give a model"
                 )
             camera = camera or fit_camera(model, (w, h), view)
-        self._frame = self._frame + 1 if frame is None else frame
+        self._frame = frame
         chosen = None if style is None else get_style(style)
         st = self.last_run = RunState(
             pl=pl,
@@ -249,9 +292,12 @@ class Executor:
             rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
             if reveal is not None:
                 rules.append(reveal)
-            counts, layers = self.capture.peel(st, max_layers, rules)
+            # a frame that reads back its output alone, once a frame, can be issued whole before
+            # its counts are known
+            out = bound.passes.get(pl.output)
+            blind = blind and pl.readback == [pl.output] and out is not None and not out.per_layer
+            counts, layers = self.capture.peel(st, max_layers, rules, blind)
             revealed = None if reveal is None else reveal.shown
-            left = self.capture.left(st, rules, counts, layers)
         else:
             self._ensure_stacks(st, 1)
             for name in pl.iteration0:
@@ -275,6 +321,10 @@ class Executor:
         dumps_out = {
             name: self._read(st, name, layers) for name in pl.readback if pending is None or name != out_name
         }
+        if pl.peel:
+            if counts is None:
+                counts, layers = self.capture.counted(st, rules, layers)
+            left = self.capture.left(st, rules, counts, layers)
         stage("read")
         output = dumps_out.get(out_name)
         fmt = bound.format_of(out_name)

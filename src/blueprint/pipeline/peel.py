@@ -12,7 +12,7 @@ from blueprint.render.abuffer import Overflow
 from blueprint.render.capture import Capture, GBuffer, capture_parts, revealed_pixels
 from blueprint.render.capture import peel as peel_layers
 from blueprint.render.remaining import layers_left
-from blueprint.render.stop import MaxLayers, Reveal, StopRule
+from blueprint.render.stop import EmptyLayer, MaxLayers, MinFraction, Reveal, StopRule
 
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
@@ -65,22 +65,40 @@ class LayerCapture:
 
         return Reveal(stop.fraction, wanted, revealed)
 
-    def peel(self, st: RunState, max_layers, rules) -> tuple[list[int], int]:
+    def peel(self, st: RunState, max_layers, rules, blind: bool = False) -> tuple[list[int] | None, int]:
         """Peel ``st``'s layers under ``rules``, running the per-layer passes after each; the
         samples of every layer peeled and how many count (``blueprint.render.capture.peel``).
         Where nothing looks at a layer before the next is issued (a GPU, no rule or read-back
         per layer), the A-buffer's counts are read only once the layers are issued, so the CPU
-        does not wait for the capture; one that then proves short of room is drawn again."""
+        does not wait for the capture; one that then proves short of room is drawn again.
+        ``blind``, where only a cap and empty layers stop the peel: every layer to the cap is
+        issued and nothing read (the counts None): the caller issues the rest of its frame and
+        then reads them (``counted``; ``abuffer.Overflow`` there means the frame must be drawn
+        again). An empty layer draws nothing, so drawing to the cap changes no picture."""
         eager = self.r.software
         defer = not eager and not st.attr_dumps and not any(rule.every_layer for rule in rules)
+        blind = blind and defer and _capped(rules)
         if defer:
             try:
-                return self._peel(st, max_layers, rules, eager, defer=True)
+                return self._peel(st, max_layers, rules, eager, defer=True, blind=blind)
             except Overflow:
                 st.groups.clear()
-        return self._peel(st, max_layers, rules, eager, defer=False)
+        return self._peel(st, max_layers, rules, eager, defer=False, blind=False)
 
-    def _peel(self, st: RunState, max_layers, rules, eager: bool, defer: bool) -> tuple[list[int], int]:
+    def counted(self, st: RunState, rules, drawn: int) -> tuple[list[int], int]:
+        """A blind peel's samples of the ``drawn`` layers it issued and how many count
+        (``abuffer.Overflow`` where an A-buffer had too little room)."""
+        for g in st.groups:
+            g.capture.settle()
+        g = st.groups[0]
+        counts = [g.capture.samples(k, g.queries[k]) for k in range(drawn)]
+        layers = min((rule.count(counts) for rule in rules), default=len(counts))
+        # as a peel that looks would have stopped: at the first empty layer
+        return counts[: layers + 1], layers
+
+    def _peel(
+        self, st: RunState, max_layers, rules, eager: bool, defer: bool, blind: bool
+    ) -> tuple[list[int] | None, int]:
         r, ctx, pl = self.r, self.r.ctx, st.pl
         bound = pl.bound
         by_scale: dict[float, list[str]] = {}
@@ -161,9 +179,12 @@ class LayerCapture:
                     self.ex._run_pass(st, name, layer, layer + 1)
 
         samples = groups[0].capture.samples
-        peeled = peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
-        for g in groups:
-            g.capture.settle()
+        if blind:
+            peeled = None, peel_layers(draw, groups[0].queries, rules, look=False)[1]
+        else:
+            peeled = peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
+            for g in groups:
+                g.capture.settle()
         if listed:
             layers = peeled[1]
             self.ex._ensure_stacks(st, max(layers, 1))
@@ -235,6 +256,17 @@ class LayerCapture:
         self.programs.set(draw, "u_layer", layer)
         st.mesh.vao(draw).render()
         st.draws += 2
+
+
+def _capped(rules) -> bool:
+    """Whether only a cap and empty layers stop a peel under ``rules``."""
+    capped = any(isinstance(rule, MaxLayers) for rule in rules)
+    others = (
+        isinstance(r, EmptyLayer) or (isinstance(r, MinFraction) and r.fraction == 0)
+        for r in rules
+        if not isinstance(r, MaxLayers)
+    )
+    return capped and all(others)
 
 
 def _id_silhouettes(pl) -> bool:

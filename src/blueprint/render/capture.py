@@ -406,7 +406,9 @@ def peel(
         finished = [r.done(counts) for r in rules]
         if counted < peeled or any(finished):
             break
-    return counts, counted
+    # a chunk looked at at once may hold several layers past the last that counts: the counts
+    # end at the first of them, as looking after each layer would have
+    return counts[: counted + 1], counted
 
 
 def revealed_pixels(r, camera: Camera, mask, layer_depth=None) -> int:
