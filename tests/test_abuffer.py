@@ -14,6 +14,7 @@ from test_layers_oracle import nested_round
 
 import blueprint
 from blueprint import examples
+from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.peel import LayerCapture
 from blueprint.render.abuffer import NODE_BYTES, ABuffer
@@ -323,3 +324,21 @@ def _watch_lists(renderer, monkeypatch) -> list[str]:
 
     monkeypatch.setattr(ex, "_run_lists", watch)
     return listed
+
+
+def test_streamed_frames_count_their_layers_a_frame_late(renderer, abuffer, gpu_form):
+    """Streamed frames issued whole are counted when collected, after the next frame is
+    issued (each frame's counts in a buffer of its own): the pictures, layers, layer counts and
+    layers left of single frames; a first frame short of room is drawn again when collected."""
+    model = examples.gearbox()
+    abuffer(True)
+    cameras = [fit_camera(model, (96, 72), azimuth=a) for a in (0.0, 40.0, 80.0, 120.0)]
+    options = dict(size=(96, 72), max_layers=5, supersample=1)
+    single = [renderer.render(model, c, **options) for c in cameras]
+    assert len({s.layers_left for s in single}) > 1  # frames that count differently
+    renderer.abuffer_room[(96, 72)] = 10
+    streamed = list(stream_blueprint(renderer, model, cameras, **options))
+    assert renderer.abuffer_room[(96, 72)] > 10
+    for a, b in zip(single, streamed, strict=True):
+        np.testing.assert_array_equal(a.image, b.image)
+        assert (a.layers, a.layer_pixels, a.layers_left) == (b.layers, b.layer_pixels, b.layers_left)

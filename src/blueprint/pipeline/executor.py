@@ -130,6 +130,7 @@ class Executor:
         profile: bool = False,
         frame: int | None = None,
         read_later=None,
+        slot: int = 2,
     ) -> Result:
         """Run a pipeline once.
 
@@ -156,6 +157,9 @@ class Executor:
         read_later : pixel buffer, optional
             Copy a one-texture output into it instead of reading it back (``stream``): the
             result comes with ``pending`` set and ``output`` None.
+        slot : int
+            Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2
+            for a frame read at once (never those of a stream still to be read).
         """
         arguments = dict(
             size=size,
@@ -170,6 +174,7 @@ class Executor:
             dumps=dumps,
             profile=profile,
             read_later=read_later,
+            slot=slot,
         )
         frame = self._frame + 1 if frame is None else frame
         try:
@@ -197,6 +202,7 @@ class Executor:
         profile,
         frame,
         read_later,
+        slot,
         blind,
     ) -> Result:
         t0 = clock = time.perf_counter()
@@ -270,6 +276,7 @@ class Executor:
             shade_ink=tuple((chosen or _named_style(bound)).shade),
             size_of=size_of,
             frame=self._frame,
+            slot=slot,
             arrays=array_plan(pl) if self.r.use_compute else None,
         )
         st.attr_dumps = {
@@ -321,10 +328,20 @@ class Executor:
         dumps_out = {
             name: self._read(st, name, layers) for name in pl.readback if pending is None or name != out_name
         }
+        counting = None
         if pl.peel:
-            if counts is None:
-                counts, layers = self.capture.counted(st, rules, layers)
-            left = self.capture.left(st, rules, counts, layers)
+            if counts is None and pending is not None and self.capture.lists_only(st):
+                # a streamed frame's counts are read with its picture, after the next is issued
+                drawn = layers
+
+                def counting():
+                    counts, layers = self.capture.counted(st, rules, drawn)
+                    return counts, layers, self.capture.left(st, rules, counts, layers)
+
+            else:
+                if counts is None:
+                    counts, layers = self.capture.counted(st, rules, layers)
+                left = self.capture.left(st, rules, counts, layers)
         stage("read")
         output = dumps_out.get(out_name)
         fmt = bound.format_of(out_name)
@@ -345,6 +362,7 @@ class Executor:
             revealed,
             left,
             pending,
+            counting,
         )
 
     def stream(
@@ -356,7 +374,16 @@ class Executor:
         read back only once the next frame is issued, so the transfer overlaps the GPU's work.
         ``Result.ms`` is a frame's share of the stream: from its start to the next frame's
         (the last one's: to its read-back), so the times add up to the stream's."""
-        pending: tuple[Result, float] | None = None
+        pending: tuple[Result, float, dict, int] | None = None
+
+        def collected(result: Result, arguments: dict, k: int) -> Result:
+            try:
+                return result.collected()
+            except Overflow:
+                # its A-buffer proved short of room once read: drawn again, now with room, in
+                # its own slot (the next frame's is still to be read)
+                return self.run(pipeline, model, **{**options, **arguments}, slot=k % 2)
+
         for k, arguments in enumerate(frames):
             start = time.perf_counter()
             result = self.run(
@@ -364,13 +391,15 @@ class Executor:
                 model,
                 **{**options, **arguments},
                 read_later=lambda t, k=k: self._pixel_buffer(k % 2, t),
+                slot=k % 2,
             )
             if pending is not None:
-                yield replace(pending[0].collected(), ms=(start - pending[1]) * 1e3)
-            pending = result, start
+                before, began, its_arguments, j = pending
+                yield replace(collected(before, its_arguments, j), ms=(start - began) * 1e3)
+            pending = result, start, arguments, k
         if pending is not None:
-            done = pending[0].collected()
-            yield replace(done, ms=(time.perf_counter() - pending[1]) * 1e3)
+            before, began, its_arguments, j = pending
+            yield replace(collected(before, its_arguments, j), ms=(time.perf_counter() - began) * 1e3)
 
     def _pixel_buffer(self, slot: int, tex):
         """Pixel buffer ``slot`` of two (frames alternate), large enough for ``tex``."""

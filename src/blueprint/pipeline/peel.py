@@ -87,7 +87,8 @@ class LayerCapture:
 
     def counted(self, st: RunState, rules, drawn: int) -> tuple[list[int], int]:
         """A blind peel's samples of the ``drawn`` layers it issued and how many count
-        (``abuffer.Overflow`` where an A-buffer had too little room)."""
+        (``abuffer.Overflow`` where an A-buffer had too little room). Where every layer came
+        from A-buffers (``lists_only``) this may wait until the next frame is issued."""
         for g in st.groups:
             g.capture.settle()
         g = st.groups[0]
@@ -140,6 +141,7 @@ class LayerCapture:
                 tiles=tiled and g.primary,
                 defer=defer,
                 unpack=not from_lists,
+                slot=st.slot,
             )
         extras = self._attribute_programs(st) if any(g.extra for g in groups) else None
         for name in pl.accumulated:
@@ -215,6 +217,11 @@ class LayerCapture:
             if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
                 return ()
         return tuple(readers)
+
+    def lists_only(self, st: RunState) -> bool:
+        """Whether every capture of the run drew into an A-buffer, whose counts stay readable
+        (each frame of two its own) after the next frame is issued."""
+        return all(g.capture.abuffer is not None for g in st.groups)
 
     def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
         """Layers left behind the last one where the peel stopped at its cap with the last layer

@@ -41,6 +41,10 @@ class Result:
     pending : PendingRead or None
         Where a stream issued the next frame before reading this one's output back: the output
         is None until ``collected()``.
+    counting : callable or None
+        Where a stream's frame was issued whole before its layers were counted: gives
+        (layer_pixels, layers, layers_left), which ``collected()`` fills in (``layers`` is the
+        layers drawn until then). May raise ``abuffer.Overflow``: the frame must be drawn again.
     """
 
     output: np.ndarray
@@ -56,12 +60,18 @@ class Result:
     revealed: float | None = None
     layers_left: int = 0
     pending: PendingRead | None = field(default=None, repr=False)
+    counting: Callable | None = field(default=None, repr=False)
 
     def collected(self) -> Result:
-        """This result with its output brought back (itself where nothing is pending)."""
-        if self.pending is None:
-            return self
-        return replace(self, output=self.pending.collect(), pending=None)
+        """This result with its output brought back and its layers counted (itself where
+        nothing is pending)."""
+        done = self
+        if done.counting is not None:
+            counts, layers, left = done.counting()
+            done = replace(done, layer_pixels=counts, layers=layers, layers_left=left, counting=None)
+        if done.pending is None:
+            return done
+        return replace(done, output=done.pending.collect(), pending=None)
 
     @property
     def image(self) -> np.ndarray:
@@ -118,6 +128,7 @@ class RunState:
     size_of: Callable[[float], tuple[int, int]]
     frame: int
     arrays: ArrayPlan | None  # the compute form, where it runs
+    slot: int = 2  # which buffers read late (Executor.run)
     mesh: object = None
     stacks: dict[str, list] = field(default_factory=dict)
     attr_dumps: dict[str, list] = field(default_factory=dict)

@@ -56,7 +56,8 @@ class ABuffer:
     (``layer_pixels``, ``deepest``): every layer is unpacked until then, an unpack past a
     pixel's last layer clearing it as an empty layer's would, and a capture that had too little
     room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
-    the sorted lists themselves (``lists``)."""
+    the sorted lists themselves (``lists``). The counts come back through a buffer of their own
+    for each ``slot``: frames that stream read one frame's counts after the next is issued."""
 
     def __init__(
         self,
@@ -68,9 +69,10 @@ class ABuffer:
         tiles: bool = False,
         defer: bool = False,
         unpack: bool = True,
+        slot: int = 0,
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
-        self.back_bias, self.unpacks = back_bias, unpack
+        self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
         self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
         defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
         self.resolve = r.compute(RESOLVE_COMP, defines)
@@ -214,7 +216,7 @@ class ABuffer:
             # the counts are copied out before they are read: a buffer the CPU reads may be
             # moved where the GPU's atomics on it are slow
             nbytes = totals.size + depths.size + tile_bytes
-            seen = pool.buffer(f"{name}.seen", nbytes)
+            seen = pool.buffer(f"{name}.seen{self.slot}", nbytes)
             ctx.copy_buffer(seen, totals, totals.size)
             ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
             if self.tiles:

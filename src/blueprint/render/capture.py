@@ -116,7 +116,8 @@ class Capture:
     (``ABuffer``, from ``abuffer_min_layers``). ``selected`` (P,) bool draws only those parts.
     ``tiles``: an A-buffer also finds which tiles each layer covers (``tile_layers``).
     ``defer``: an A-buffer's counts are read only when asked for (``abuffer.Overflow``);
-    ``unpack`` false: an A-buffer unpacks no layer into ``gb`` (its caller reads the lists).
+    ``unpack`` false: an A-buffer unpacks no layer into ``gb`` (its caller reads the lists);
+    ``slot``: which of the A-buffer's count buffers (``ABuffer``).
     """
 
     def __init__(
@@ -133,6 +134,7 @@ class Capture:
         tiles: bool = False,
         defer: bool = False,
         unpack: bool = True,
+        slot: int = 0,
     ) -> None:
         self.r, self.mesh, self.gb = r, mesh, gb
         normals = gb.normal is not None
@@ -168,7 +170,7 @@ class Capture:
                 "u_peel_eps": peel_eps(camera),
             }
             self.abuffer = ABuffer(
-                r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes, tiles, defer, unpack
+                r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes, tiles, defer, unpack, slot
             )
             if not self.abuffer.fits((w, h)):
                 self.abuffer = None
