@@ -192,59 +192,90 @@ def feature_segments(
 # -- intersections between parts ------------------------------------------------------------------
 
 
-def _part_boxes(lo: np.ndarray, hi: np.ndarray, part: np.ndarray, parts: int):
-    box_lo = np.full((parts, 3), np.inf)
-    box_hi = np.full((parts, 3), -np.inf)
-    np.minimum.at(box_lo, part, lo)
-    np.maximum.at(box_hi, part, hi)
-    return box_lo, box_hi
+def _columns_max(values: np.ndarray) -> np.ndarray:
+    """The largest of each row of (n, 3) (a reduction over a short axis is slow in NumPy)."""
+    return np.maximum(np.maximum(values[:, 0], values[:, 1]), values[:, 2])
+
+
+def _overlapping(lo_a, hi_a, lo_b, hi_b) -> np.ndarray:
+    """(m, k) bool: whether box i of a (m, 3) overlaps box j of b (k, 3), axis by axis."""
+    hit = (lo_a[:, None, 0] <= hi_b[None, :, 0]) & (hi_a[:, None, 0] >= lo_b[None, :, 0])
+    for axis in (1, 2):
+        hit &= (lo_a[:, None, axis] <= hi_b[None, :, axis]) & (hi_a[:, None, axis] >= lo_b[None, :, axis])
+    return hit
 
 
 def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     """Triangles whose box meets the box of another part overlapping their own part."""
-    box_lo, box_hi = _part_boxes(lo, hi, part, parts)
-    used = np.isfinite(box_lo[:, 0])
-    overlap = np.all(
-        (box_lo[:, None] <= box_hi[None] + slack) & (box_hi[:, None] >= box_lo[None] - slack), axis=2
-    )
+    order = np.argsort(part, kind="stable")
+    bounds = np.searchsorted(part[order], np.arange(parts + 1))
+    used = bounds[1:] > bounds[:-1]
+    box_lo = np.full((parts, 3), np.inf)
+    box_hi = np.full((parts, 3), -np.inf)
+    box_lo[used] = np.minimum.reduceat(lo[order], bounds[:-1][used], axis=0)
+    box_hi[used] = np.maximum.reduceat(hi[order], bounds[:-1][used], axis=0)
+    overlap = _overlapping(box_lo, box_hi, box_lo - slack, box_hi + slack)
     overlap &= used[:, None] & used[None]
     np.fill_diagonal(overlap, False)
     keep = np.zeros(len(lo), dtype=bool)
-    order = np.argsort(part, kind="stable")
-    bounds = np.searchsorted(part[order], np.arange(parts + 1))
     for p in np.flatnonzero(overlap.any(axis=1)):
         mine = order[bounds[p] : bounds[p + 1]]
         others = np.flatnonzero(overlap[p])
         # the region where part p can meet another part: the union of pairwise box overlaps
         meet_lo = np.maximum(box_lo[p], box_lo[others]) - slack
         meet_hi = np.minimum(box_hi[p], box_hi[others]) + slack
+        # only the triangles in the box around that union can meet one of its boxes
+        near = _overlapping(lo[mine], hi[mine], meet_lo.min(axis=0)[None], meet_hi.max(axis=0)[None])
+        mine = mine[near[:, 0]]
+        mine_lo, mine_hi = lo[mine], hi[mine]
         for start in range(0, len(others), 64):
             ml, mh = meet_lo[start : start + 64], meet_hi[start : start + 64]
-            hit = np.all((lo[mine, None] <= mh[None]) & (hi[mine, None] >= ml[None]), axis=2).any(axis=1)
-            keep[mine[hit]] = True
+            keep[mine[_overlapping(mine_lo, mine_hi, ml, mh).any(axis=1)]] = True
     return np.flatnonzero(keep)
 
 
-def _candidate_pairs(lo, hi, part, slack: float):
-    """Pairs (i, j) of triangles of different parts whose boxes overlap, through a uniform grid.
+@dataclass(frozen=True)
+class CellGrid:
+    """Boxes entered in the cells of a uniform grid (``cell_grid``), for pairing across parts.
 
-    Each triangle is entered in every cell its box touches; a pair is reported only in the cell
-    at the componentwise maximum of the two boxes' first cells, which both touch, so no pair
-    comes out twice. Cells start at the median triangle size and double while the entries
-    would exceed a fixed multiple of the triangle count. Within a cell, entries are sorted by
-    part, so only pairs across parts are generated.
+    ``first`` (n, 3) is each box's first cell; entry ``e`` (sorted by cell, then part) puts box
+    ``owner[e]`` in cell ``key[e]``; its partners from other parts are the entries from
+    ``group_end[e]`` (the end of its part's run in the cell) to ``cell_end[e]``.
+    """
+
+    first: np.ndarray
+    key: np.ndarray
+    owner: np.ndarray
+    group_end: np.ndarray
+    cell_end: np.ndarray
+    base: np.ndarray
+    dims: np.ndarray
+
+    def cell_key(self, x, y, z):
+        return _cell_key(self.base, self.dims, x, y, z)
+
+
+def _cell_key(base, dims, x, y, z):
+    return ((z - base[2]) * dims[1] + (y - base[1])) * dims[0] + (x - base[0])
+
+
+def cell_grid(lo, hi, part, slack: float) -> CellGrid:
+    """Each box (``lo`` <= ``hi``) entered in every cell it touches, the entries sorted by cell
+    and then part.
+
+    Cells start at the median box size and double while the entries would exceed a fixed
+    multiple of the box count.
     """
     n = len(lo)
-    if n < 2:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
     origin = lo.min(axis=0)
-    extent = np.ptp(np.concatenate([lo, hi]), axis=0).max() or 1.0
-    cell = max(float(np.median((hi - lo).max(axis=1))), extent / 4096)
+    extent = (hi.max(axis=0) - origin).max() or 1.0
+    cell = max(float(np.median(_columns_max(hi - lo))), extent / 4096)
+    low, high = lo - slack - origin, hi + slack - origin
     while True:
-        first = np.floor((lo - slack - origin) / cell).astype(np.int64)
-        last = np.floor((hi + slack - origin) / cell).astype(np.int64)
+        first = np.floor(low / cell).astype(np.int64)
+        last = np.floor(high / cell).astype(np.int64)
         span = last - first + 1
-        entries = span.prod(axis=1)
+        entries = span[:, 0] * span[:, 1] * span[:, 2]
         if entries.sum() <= _CELLS_PER_TRIANGLE * n + 4096 or cell >= extent:
             break
         cell *= 2.0
@@ -254,16 +285,17 @@ def _candidate_pairs(lo, hi, part, slack: float):
     cx = first[owner, 0] + rank % sx
     cy = first[owner, 1] + (rank // sx) % sy
     cz = first[owner, 2] + rank // (sx * sy)
-    dims = last.max(axis=0) + 2 - first.min(axis=0)
     base = first.min(axis=0)
-
-    def cell_key(x, y, z):
-        return ((z - base[2]) * dims[1] + (y - base[1])) * dims[0] + (x - base[0])
-
-    key = cell_key(cx, cy, cz)
+    dims = last.max(axis=0) + 2 - base
+    key = _cell_key(base, dims, cx, cy, cz)
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
-    order = np.lexsort((part[owner], key))
+    parts = int(part.max()) + 1
+    if float(np.prod(dims.astype(np.float64))) * parts * len(key) < 2.0**62:
+        # one unstable sort of distinct numbers puts them in lexsort's (stable) order, faster
+        order = np.argsort((key * parts + part[owner]) * len(key) + np.arange(len(key)))
+    else:
+        order = np.lexsort((part[owner], key))
     key, owner = key[order], owner[order]
     entry_part = part[owner]
     new_cell = np.r_[True, key[1:] != key[:-1]]
@@ -272,7 +304,22 @@ def _candidate_pairs(lo, hi, part, slack: float):
     group_start = np.flatnonzero(new_group)
     cell_end = np.r_[cell_start[1:], len(key)][np.cumsum(new_cell) - 1]
     group_end = np.r_[group_start[1:], len(key)][np.cumsum(new_group) - 1]
-    partners = cell_end - group_end
+    return CellGrid(first, key, owner, group_end, cell_end, base, dims)
+
+
+def _candidate_pairs(lo, hi, part, slack: float):
+    """Pairs (i, j) of triangles of different parts whose boxes overlap, through a uniform grid
+    (``cell_grid``).
+
+    A pair is reported only in the cell at the componentwise maximum of the two boxes' first
+    cells, which both touch, so no pair comes out twice; pairs come in the order of their
+    first entry in the grid, then of the second.
+    """
+    if len(lo) < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    grid = cell_grid(lo, hi, part, slack)
+    key, owner, group_end, first = grid.key, grid.owner, grid.group_end, grid.first
+    partners = grid.cell_end - group_end
     lo_axis = [np.ascontiguousarray(lo[:, a]) for a in range(3)]
     hi_axis = [np.ascontiguousarray(hi[:, a] + slack) for a in range(3)]
     first_axis = [np.ascontiguousarray(first[:, a]) for a in range(3)]
@@ -302,7 +349,7 @@ def _candidate_pairs(lo, hi, part, slack: float):
             )
             i, j, ia = i[keep], j[keep], ia[keep]
         top = [np.maximum(np.take(first_axis[a], i), np.take(first_axis[a], j)) for a in range(3)]
-        keep = cell_key(*top) == key[ia]
+        keep = grid.cell_key(*top) == key[ia]
         pairs_i.append(i[keep])
         pairs_j.append(j[keep])
     if not pairs_i:
@@ -410,16 +457,18 @@ def _intersections(model: Model) -> Segments:
     if parts > 1 and len(faces):
         positions = model.positions.astype(np.float64)
         tri = positions[faces]
-        lo, hi = tri.min(axis=1), tri.max(axis=1)
+        lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
+        hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
         part = model.face_part.astype(np.int64)
         eps = _TOUCH_REL * _diagonal(positions)
         area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
-        ci, cj = _candidate_pairs(lo[candidates], hi[candidates], part[candidates], eps)
-        i, j = candidates[ci], candidates[cj]
+        lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
+        ci, cj = _candidate_pairs(lo, hi, part_c, eps)
         # normals once a triangle where there are more pairs than triangles, else a pair
-        shared = _unit_normals(tri[candidates]) if len(i) > len(candidates) else None
+        shared = _unit_normals(tri[candidates]) if len(ci) > len(candidates) else None
+        i, j = candidates[ci], candidates[cj]
         found, fa, fb = [], [], []
         for start in range(0, len(i), _PAIR_CHUNK):
             a, b = i[start : start + _PAIR_CHUNK], j[start : start + _PAIR_CHUNK]
