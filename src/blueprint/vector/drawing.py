@@ -393,7 +393,7 @@ def draw_vector(
     page = _page(size, camera, scale, units, model)
 
     clock = time.perf_counter()
-    segments = model_segments(model, view_m, proj, size, crease_angle, intersections)
+    segments = model_segments(model, view_m, proj, size, crease_angle, intersections, renderer)
     lines = join_polylines(segments)
     samples = sample_polylines(lines, view_m, proj, size, spacing)
     seconds["lines"] = time.perf_counter() - clock

@@ -19,6 +19,7 @@ from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_ad
 
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
+from .cuts import gpu_cut_pairs
 
 __all__ = [
     "BORDER",
@@ -254,6 +255,12 @@ class CellGrid:
     def cell_key(self, x, y, z):
         return _cell_key(self.base, self.dims, x, y, z)
 
+    def cells(self, entries: np.ndarray) -> np.ndarray:
+        """(len(entries), 3) cell coordinates of entries."""
+        rest, x = np.divmod(self.key[entries], self.dims[0])
+        z, y = np.divmod(rest, self.dims[1])
+        return np.stack([x, y, z], axis=1) + self.base
+
 
 def _cell_key(base, dims, x, y, z):
     return ((z - base[2]) * dims[1] + (y - base[1])) * dims[0] + (x - base[0])
@@ -439,18 +446,20 @@ def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None
     return segments, idx[keep]
 
 
-def intersection_segments(model: Model) -> Segments:
+def intersection_segments(model: Model, renderer=None) -> Segments:
     """Lines where triangles of different parts cut through each other (view-independent).
 
     Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
     triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
-    triangles, from each one's crossing of the other's plane, vectorised over pairs. Cached per
-    mesh (``cache``).
+    triangles, from each one's crossing of the other's plane, vectorised over pairs. With a
+    ``renderer`` (``LayerRenderer``), one compute pass makes the pairs and leaves only those
+    that may cut (``cuts.gpu_cut_pairs``): the same lines, bit for bit. Cached per mesh
+    (``cache``).
     """
-    return INTERSECTIONS.get(model, lambda: _intersections(model))
+    return INTERSECTIONS.get(model, lambda: _intersections(model, renderer))
 
 
-def _intersections(model: Model) -> Segments:
+def _intersections(model: Model, renderer) -> Segments:
     result = Segments.empty()
     parts = len(model.part_names)
     faces = model.faces.astype(np.int64)
@@ -465,9 +474,17 @@ def _intersections(model: Model) -> Segments:
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
         lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
-        ci, cj = _candidate_pairs(lo, hi, part_c, eps)
-        # normals once a triangle where there are more pairs than triangles, else a pair
-        shared = _unit_normals(tri[candidates]) if len(ci) > len(candidates) else None
+        pairs = shared = None
+        if renderer is not None and len(candidates) > 1:
+            shared = _unit_normals(tri[candidates])
+            grid = cell_grid(lo, hi, part_c, eps)
+            pairs = gpu_cut_pairs(renderer, grid, tri[candidates], *shared, hi + eps, eps)
+        if pairs is None:
+            pairs = _candidate_pairs(lo, hi, part_c, eps)
+            # normals once a triangle where there are more pairs than triangles, else a pair
+            if shared is None and len(pairs[0]) > len(candidates):
+                shared = _unit_normals(tri[candidates])
+        ci, cj = pairs
         i, j = candidates[ci], candidates[cj]
         found, fa, fb = [], [], []
         for start in range(0, len(i), _PAIR_CHUNK):
@@ -498,11 +515,13 @@ def model_segments(
     size: tuple[int, int],
     crease_angle: float = 30.0,
     intersections: bool = True,
+    renderer=None,
 ) -> Segments:
-    """All lines of a model for one view: features, part boundaries and intersection lines."""
+    """All lines of a model for one view: features, part boundaries and intersection lines
+    (found with ``renderer``'s help where given, see ``intersection_segments``)."""
     found = [feature_segments(model, view, projection, size, crease_angle)]
     if intersections:
-        found.append(intersection_segments(model))
+        found.append(intersection_segments(model, renderer))
     return Segments.concatenate(found)
 
 
