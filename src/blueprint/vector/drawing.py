@@ -479,7 +479,7 @@ def draw_vector(
         else:
             in_front = classify_samples(samples, peeled, only_shaded, ortho, footprint, depth_tolerance)
         behind = in_front > 0
-    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind)
+    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
     key = (pieces.part.astype(np.int64) * (count + 1) + pieces.level) * 2 + pieces.behind
     points, offsets, first = chain_pieces(pieces.points, pieces.offsets, key)
     pieces = Pieces(points, offsets, pieces.part[first], pieces.level[first], pieces.behind[first])

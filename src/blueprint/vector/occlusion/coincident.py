@@ -9,18 +9,24 @@ from .samples import Samples
 
 __all__ = ["suppress_coincident"]
 
+COINCIDENT_COMP = "blueprint.vector:glsl/coincident.comp"
+_GROUP = 64
+_MAX_GROUPS = 65535
+
 
 def suppress_coincident(
     samples: Samples,
     level: np.ndarray,
     distance: float = 0.5,
     angle: float = 10.0,
+    renderer=None,
 ) -> np.ndarray:
     """Leave out samples that lie on another line of lower level (or of the same level and an
     earlier polyline): within ``distance`` pixels across it and running within ``angle`` degrees
     of it. Hidden lines right under visible ones (the bottom outline of a plate under its top
     outline in a plan view) and lines drawn twice at one level come out once. Left-out samples
-    get level -1.
+    get level -1. With a ``renderer`` (``LayerRenderer``) the search runs as a compute pass
+    (coincident.comp), with the same arithmetic: the same samples are left out.
     """
     level = level.copy()
     live = np.flatnonzero(level >= 0)
@@ -66,6 +72,32 @@ def suppress_coincident(
     cell_start = np.cumsum(cell_count) - cell_count
     key = cell_of(live)
     live_rank = rank[live]
+    if renderer is not None and renderer.ctx.version_code >= 430 and ranks < 2**31:
+        drop = _gpu_drop(
+            renderer,
+            [
+                np.concatenate([pixel32[live], direction[live]], axis=1),
+                np.stack([key, live_rank, line[live], np.zeros_like(key)], axis=1),
+                np.concatenate([pixel32[source], forward32[source]], axis=1),
+                np.stack(
+                    [
+                        unit32[source, 0],
+                        unit32[source, 1],
+                        inv_length2[source],
+                        np.zeros(len(source), np.float32),
+                    ],
+                    axis=1,
+                ),
+                np.stack([rank[source], line[source]], axis=1),
+                cell_start,
+                cell_count,
+            ],
+            int(span[0]),
+            np.float32(distance * distance),
+            _single_below(sin_limit),
+        )
+        level[live[drop]] = -1
+        return level
     drop = np.zeros(len(live), bool)
     for dy in (-1, 0, 1):
         for dx in (-1, 0, 1):
@@ -94,3 +126,39 @@ def suppress_coincident(
                 drop[index[hit]] = True
     level[live[drop]] = -1
     return level
+
+
+def _single_below(value: float) -> np.float32:
+    """The largest single-precision number at most ``value``: comparing a single with it is
+    comparing the single, widened, with ``value``."""
+    single = np.float32(value)
+    return np.nextafter(single, np.float32(-np.inf)) if single > value else single
+
+
+def _gpu_drop(renderer, inputs, span: int, dist2, sin_limit) -> np.ndarray:
+    """The drop flag of every live sample from coincident.comp, from the search's arrays in
+    ``suppress_coincident`` laid out as the shader's storage buffers (``inputs``)."""
+    count = len(inputs[0])
+    ctx = renderer.ctx
+    prog = renderer.compute(COINCIDENT_COMP)
+    put = renderer.uniforms.set
+    put(prog, "u_count", count)
+    put(prog, "u_span", span)
+    put(prog, "u_distance2", float(dist2))
+    put(prog, "u_sin_limit", float(sin_limit))
+    buffers = [
+        ctx.buffer(np.ascontiguousarray(data, np.int32 if data.dtype.kind in "iu" else np.float32))
+        for data in inputs
+    ]
+    buffers.append(ctx.buffer(reserve=4 * count))
+    try:
+        for binding, buffer in enumerate(buffers):
+            buffer.bind_to_storage_buffer(binding)
+        groups = -(-count // _GROUP)
+        gx = min(groups, _MAX_GROUPS)
+        prog.run(gx, -(-groups // gx))
+        ctx.memory_barrier()
+        return np.frombuffer(buffers[-1].read(), np.int32) != 0
+    finally:
+        for buffer in buffers:
+            buffer.release()

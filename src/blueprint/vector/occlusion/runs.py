@@ -115,6 +115,7 @@ def split_by_level(
     min_run: float = 2.5,
     coincident: float = 0.5,
     behind: np.ndarray | None = None,
+    renderer=None,
 ) -> Pieces:
     """Cut the sampled polylines into 2D pieces of one level each.
 
@@ -125,7 +126,8 @@ def split_by_level(
     ``max_level`` are dropped, and so are samples on a line of lower level (see
     :func:`suppress_coincident`, within ``coincident`` pixels; 0 keeps them). A level change
     must hold for ``min_run`` pixels (see :func:`_smooth`). ``behind`` (S,) bool, samples
-    behind a shaded part's surface, cuts pieces too (a change must hold as long).
+    behind a shaded part's surface, cuts pieces too (a change must hold as long). A
+    ``renderer`` runs the search for coincident samples on the GPU.
     """
     n = len(level)
     if n == 0:
@@ -138,7 +140,7 @@ def split_by_level(
     level = _smooth(level, samples.line, samples.pixel, min_run)
     level = np.where(level <= max_level, level, -1)
     if coincident > 0:
-        level = suppress_coincident(samples, level, coincident)
+        level = suppress_coincident(samples, level, coincident, renderer=renderer)
         # a left-out stretch can end inside a run and leave a sliver of it beside another level
         level = _smooth(level, samples.line, samples.pixel, min_run)
     level = _drop_slivers(level, samples, min_run)
