@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.blas import one_blas_thread
 from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
@@ -280,6 +281,7 @@ def _highlight(highlight, model: Model) -> frozenset[int]:
     return frozenset(int(i) for i in np.flatnonzero(designated_parts(model, highlight)))
 
 
+@one_blas_thread
 def draw_vector(
     model: Model,
     camera: Camera | None = None,
