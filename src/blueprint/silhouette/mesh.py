@@ -196,7 +196,11 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     corners = positions[faces]
     cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     area2 = np.linalg.norm(cross, axis=1)
-    longest2 = (np.diff(corners[:, [0, 1, 2, 0]], axis=1) ** 2).sum(axis=2).max(axis=1)
+    # squared edge lengths summed and compared column by column (NumPy's reductions over a
+    # short axis are slow); the same values
+    square = (corners[:, [1, 2, 0]] - corners) ** 2
+    length2 = square[:, :, 0] + square[:, :, 1] + square[:, :, 2]
+    longest2 = np.maximum(np.maximum(length2[:, 0], length2[:, 1]), length2[:, 2])
     good = area2 > _DEGENERATE_REL_AREA * longest2
     normals = np.zeros_like(cross)
     normals[good] = cross[good] / area2[good, None]

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min, column_ptp
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
 
@@ -115,7 +116,7 @@ class Polylines:
 def _diagonal(points: np.ndarray) -> float:
     if len(points) == 0:
         return 1.0
-    return float(np.linalg.norm(np.ptp(points, axis=0))) or 1.0
+    return float(np.linalg.norm(column_ptp(points))) or 1.0
 
 
 def adjacency(model: Model) -> Adjacency:
@@ -139,7 +140,7 @@ def _welded_adjacency(model: Model) -> Adjacency:
     if len(model.part_names) <= 1 or len(faces) == 0 or np.all(part == part[0]):
         held = build_adjacency(positions, faces)
     else:
-        span = 4.0 * (float(np.ptp(positions, axis=0).max()) + diagonal)
+        span = 4.0 * (float(column_ptp(positions).max()) + diagonal)
         # one vertex per (vertex, part) in use, moved by its part's multiple of the span
         corner_part = np.repeat(part, 3)
         key = faces.reshape(-1) * len(model.part_names) + corner_part
@@ -274,8 +275,8 @@ def cell_grid(lo, hi, part, slack: float) -> CellGrid:
     multiple of the box count.
     """
     n = len(lo)
-    origin = lo.min(axis=0)
-    extent = (hi.max(axis=0) - origin).max() or 1.0
+    origin = column_min(lo)
+    extent = (column_max(hi) - origin).max() or 1.0
     cell = max(float(np.median(_columns_max(hi - lo))), extent / 4096)
     low, high = lo - slack - origin, hi + slack - origin
     while True:
@@ -292,8 +293,8 @@ def cell_grid(lo, hi, part, slack: float) -> CellGrid:
     cx = first[owner, 0] + rank % sx
     cy = first[owner, 1] + (rank // sx) % sy
     cz = first[owner, 2] + rank // (sx * sy)
-    base = first.min(axis=0)
-    dims = last.max(axis=0) + 2 - base
+    base = column_min(first)
+    dims = column_max(last) + 2 - base
     key = _cell_key(base, dims, cx, cy, cz)
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
@@ -532,8 +533,8 @@ def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
     """Ids of points equal after rounding to ``quantum`` (one packed integer key per point)."""
     if len(points) == 0:
         return np.zeros(0, np.int64)
-    q = np.round((points - points.min(axis=0)) / quantum).astype(np.int64)
-    span = q.max(axis=0) + 1
+    q = np.round((points - column_min(points)) / quantum).astype(np.int64)
+    span = column_max(q) + 1
     if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
         key = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
         return np.unique(key, return_inverse=True)[1].reshape(-1)

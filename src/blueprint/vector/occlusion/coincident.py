@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min
+
 from .samples import Samples
 
 __all__ = ["suppress_coincident"]
@@ -49,8 +51,8 @@ def suppress_coincident(
     inv_length2 = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0).astype(np.float32)
     pixel32 = pixel.astype(np.float32)
     # a dense grid of 1-pixel cells, one cell of margin all round; the stretches sorted by cell
-    origin = np.floor(pixel[live].min(axis=0)).astype(np.int64) - 1
-    span = np.floor(pixel[live].max(axis=0)).astype(np.int64) - origin + 2
+    origin = np.floor(column_min(pixel[live])).astype(np.int64) - 1
+    span = np.floor(column_max(pixel[live])).astype(np.int64) - origin + 2
     source = np.flatnonzero(covers)
 
     def cell_of(rows):
