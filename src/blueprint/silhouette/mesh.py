@@ -66,7 +66,8 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     """
     # Duplicate triangles share several edges; one parity per face pair is enough, and
     # duplicates would be summed by the sparse constructor.
-    lo, hi = pair_faces.min(axis=1), pair_faces.max(axis=1)
+    lo = np.minimum(pair_faces[:, 0], pair_faces[:, 1])
+    hi = np.maximum(pair_faces[:, 0], pair_faces[:, 1])
     _, keep = np.unique(lo * num_faces + hi, return_index=True)
     lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
     # scipy loads here, not with the package: only the object-space method needs it
