@@ -37,7 +37,14 @@ class Layer:
 LAYERS = (
     Layer(
         "leaves",
-        ("blueprint.errors", "blueprint.color", "blueprint.settings", "blueprint.blas", "blueprint.columns"),
+        (
+            "blueprint.errors",
+            "blueprint.color",
+            "blueprint.settings",
+            "blueprint.blas",
+            "blueprint.columns",
+            "blueprint.sorting",
+        ),
     ),
     Layer("scene", ("blueprint.scene",)),
     # GPU-free code above the scene: the object-space silhouette method, the file writers and

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.columns import column_min, column_ptp
+from blueprint.sorting import stable_argsort
 
 __all__ = ["weld"]
 
@@ -198,5 +199,5 @@ def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> 
     group_first = np.full(group.max() + 1, len(positions), dtype=np.int64)
     np.minimum.at(group_first, group, np.arange(len(positions)))
     rank = np.empty_like(group_first)
-    rank[np.argsort(group_first, kind="stable")] = np.arange(len(group_first))
+    rank[stable_argsort(group_first)] = np.arange(len(group_first))
     return positions[np.sort(group_first)], rank[group][faces]

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.scene.weld import weld
+from blueprint.sorting import stable_argsort, unique_first
 
 __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 
@@ -68,7 +69,7 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     # duplicates would be summed by the sparse constructor.
     lo = np.minimum(pair_faces[:, 0], pair_faces[:, 1])
     hi = np.maximum(pair_faces[:, 0], pair_faces[:, 1])
-    _, keep = np.unique(lo * num_faces + hi, return_index=True)
+    _, keep, _ = unique_first(lo * num_faces + hi)
     lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
     # scipy loads here, not with the package: only the object-space method needs it
     from scipy import sparse
@@ -88,7 +89,7 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     # its start comes from one search in scipy (from a node joined to every start), its parent
     # is its lowest-numbered neighbour one step nearer (the frontier order of a level-by-level
     # search), and its flip the parities along its parents, summed by pointer jumping.
-    starts = np.unique(component, return_index=True)[1]
+    starts = unique_first(component)[1]
     root = num_faces
     source = np.concatenate([lo, hi, np.full(len(starts), root)])
     target = np.concatenate([hi, lo, starts])
@@ -174,7 +175,7 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     lo, hi = np.minimum(start, end), np.maximum(start, end)
     key = lo * num_vertices + hi
     # half-edges come in face order, so one stable sort by edge orders them by edge, then face
-    order = np.argsort(key, kind="stable")
+    order = stable_argsort(key)
     sorted_key = key[order]
     new_edge = np.ones(len(key), bool)
     new_edge[1:] = sorted_key[1:] != sorted_key[:-1]

@@ -17,6 +17,7 @@ import numpy as np
 from blueprint.columns import column_max, column_min, column_ptp
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
+from blueprint.sorting import stable_argsort, unique_first
 
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
@@ -144,7 +145,7 @@ def _welded_adjacency(model: Model) -> Adjacency:
         # one vertex per (vertex, part) in use, moved by its part's multiple of the span
         corner_part = np.repeat(part, 3)
         key = faces.reshape(-1) * len(model.part_names) + corner_part
-        unique, inverse = np.unique(key, return_inverse=True)
+        unique, _, inverse = unique_first(key)
         moved = positions[unique // len(model.part_names)].copy()
         moved[:, 0] += (unique % len(model.part_names)) * span
         held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
@@ -209,7 +210,7 @@ def _overlapping(lo_a, hi_a, lo_b, hi_b) -> np.ndarray:
 
 def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     """Triangles whose box meets the box of another part overlapping their own part."""
-    order = np.argsort(part, kind="stable")
+    order = stable_argsort(part)
     bounds = np.searchsorted(part[order], np.arange(parts + 1))
     used = bounds[1:] > bounds[:-1]
     box_lo = np.full((parts, 3), np.inf)
@@ -565,7 +566,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     # the same segment twice (an edge that is both a crease and a part boundary, ...): keep one
     lo, hi = pid.min(axis=1), pid.max(axis=1)
     proper = lo != hi
-    _, first = np.unique((lo * (int(pid.max()) + 1) + hi)[proper], return_index=True)
+    _, first, _ = unique_first((lo * (int(pid.max()) + 1) + hi)[proper])
     keep = np.flatnonzero(proper)[np.sort(first)]
     seg_points = segments.points[keep]
     seg_faces = segments.faces[keep]
