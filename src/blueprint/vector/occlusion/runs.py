@@ -37,17 +37,24 @@ class Pieces:
         )
 
 
-def _run_lengths(level, line, pixel):
+def _along(line: np.ndarray, pixel: np.ndarray) -> np.ndarray:
+    """(S + 1,) pixels along the polylines up to each sample, the last entry the end of it all:
+    the steps between samples of one polyline summed (a level does not change it)."""
+    step = np.zeros(len(line))
+    d = np.diff(pixel, axis=0)
+    step[:-1] = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    step[np.r_[line[1:] != line[:-1], True]] = 0.0
+    return np.r_[0.0, np.cumsum(step)]
+
+
+def _run_lengths(level, line, along):
     """Runs of one level along each polyline: start (inclusive), end (exclusive) and length in
     pixels, from halfway to the previous sample to halfway to the next one (the polyline's own
-    ends where there is none)."""
+    ends where there is none); ``along`` from :func:`_along`."""
     n = len(level)
     change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
     start = np.flatnonzero(change)
     end = np.r_[start[1:], n]
-    step = np.r_[np.linalg.norm(np.diff(pixel, axis=0), axis=1), 0.0]
-    step[np.r_[line[1:] != line[:-1], True]] = 0.0
-    along = np.r_[0.0, np.cumsum(step)]
     lo = np.where(start > 0, 0.5 * (along[start - 1] + along[start]), along[start])
     hi = np.where(end < n, 0.5 * (along[end - 1] + along[end]), along[end - 1])
     return start, end, hi - lo
@@ -67,8 +74,9 @@ def _smooth(level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: flo
     n = len(level)
     if n < 2 or min_run <= 0:
         return level
+    along = _along(line, pixel)
     while True:
-        start, end, length = _run_lengths(level, line, pixel)
+        start, end, length = _run_lengths(level, line, along)
         if len(start) < 2:
             break
         run_line, run_level = line[start], level[start]
@@ -98,7 +106,7 @@ def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float) -> np.nda
     own polyline (a coincident line or an edge that is no edge, level -1 inside the view): what
     a pixel test could not decide at the ends of such a stretch. A short line of its own, or
     one running out of the view, stays."""
-    start, end, length = _run_lengths(level, samples.line, samples.pixel)
+    start, end, length = _run_lengths(level, samples.line, _along(samples.line, samples.pixel))
     run_line, run_level = samples.line[start], level[start]
     left_out = (run_level < 0) & samples.inside[start]
     before = np.r_[False, (run_line[1:] == run_line[:-1]) & left_out[:-1]]
