@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from blueprint.columns import column_max, column_min, column_ptp
+from blueprint.columns import column_max, column_min, column_ptp, row_norm
 from blueprint.sorting import stable_argsort, unique_first
 
 
@@ -31,3 +31,12 @@ def test_column_reductions_equal_numpys(dtype):
     ):
         assert got.dtype == expected.dtype
         np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("columns", [2, 3, 4])
+def test_row_norm_equals_numpys(dtype, columns):
+    values = np.random.default_rng(columns).normal(0, 1e2, (20000, columns)).astype(dtype)
+    got, expected = row_norm(values), np.linalg.norm(values, axis=1)
+    assert got.dtype == expected.dtype
+    np.testing.assert_array_equal(got, expected)

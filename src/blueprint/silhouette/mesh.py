@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import row_norm
 from blueprint.scene.weld import weld
 from blueprint.sorting import stable_argsort, unique_first
 
@@ -197,7 +198,7 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
 
     corners = positions[faces]
     cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area2 = np.linalg.norm(cross, axis=1)
+    area2 = row_norm(cross)
     # squared edge lengths summed and compared column by column (NumPy's reductions over a
     # short axis are slow); the same values
     square = (corners[:, [1, 2, 0]] - corners) ** 2

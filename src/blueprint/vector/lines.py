@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min, column_ptp
+from blueprint.columns import column_max, column_min, column_ptp, row_norm
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
 from blueprint.sorting import stable_argsort, unique_first
@@ -394,7 +394,7 @@ def _plane_cut(tri: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarra
 def _unit_normals(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals of triangles (M, 3, 3) and whether they have one (non-zero area)."""
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normal, axis=1)
+    length = row_norm(normal)
     return normal / np.where(length > 0, length, 1.0)[:, None], length > 0
 
 
@@ -472,7 +472,7 @@ def _intersections(model: Model, renderer) -> Segments:
         hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
         part = model.face_part.astype(np.int64)
         eps = _TOUCH_REL * _diagonal(positions)
-        area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        area = row_norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
         lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
@@ -579,9 +579,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     node = np.unique(node_key, return_inverse=True)[1].reshape(-1)
     # half-end h = 2 s + e is segment s's end e (0: start, 1: end)
     leaving = seg_points[:, ::-1] - seg_points
-    leaving = (
-        leaving.reshape(-1, 3) / np.maximum(np.linalg.norm(leaving.reshape(-1, 3), axis=1), 1e-300)[:, None]
-    )
+    leaving = leaving.reshape(-1, 3) / np.maximum(row_norm(leaving.reshape(-1, 3)), 1e-300)[:, None]
     partner = pair_ends(node, leaving, np.cos(np.radians(turn)))
     seg, rev, lengths = chain_order(partner)
     tails = np.where(rev[:, None, None], seg_points[seg][:, ::-1], seg_points[seg])  # (K, 2, 3)

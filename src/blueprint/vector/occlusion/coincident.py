@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min
+from blueprint.columns import column_max, column_min, row_norm
 
 from .samples import Samples
 
@@ -39,7 +39,7 @@ def suppress_coincident(
     has_next = np.r_[line[1:] == line[:-1], False]
     forward = np.zeros_like(pixel)
     forward[has_next] = pixel[1:][has_next[:-1]] - pixel[:-1][has_next[:-1]]
-    length = np.linalg.norm(forward, axis=1)
+    length = row_norm(forward)
     unit = forward / np.where(length > 0, length, 1.0)[:, None]
     # a stretch that is hidden deeper or left out covers nothing
     covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.columns import row_norm
 from blueprint.scene.model import Model
 
 from ..cache import ModelCache
@@ -59,7 +60,7 @@ def _model_planes(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3) unit normals (zero for degenerate faces) and (F, 3) first corners, float64."""
     tri = model.positions[model.faces].astype(np.float64)
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normal, axis=1)
+    length = row_norm(normal)
     good = length > 0
     normal[good] /= length[good, None]
     normal[~good] = 0.0

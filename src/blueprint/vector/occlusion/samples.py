@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import row_norm
+
 from ..lines import Polylines
 
 __all__ = ["Samples", "sample_polylines"]
@@ -74,7 +76,7 @@ def sample_polylines(
     starts = np.flatnonzero(~is_last)  # segment j runs from point j to point j + 1
     # in front of the eye at both ends: the screen length is meaningful
     w = clip[:, 3]
-    length = np.linalg.norm(pix[starts + 1] - pix[starts], axis=1)
+    length = row_norm(pix[starts + 1] - pix[starts])
     length = np.where((w[starts] > 0) & (w[starts + 1] > 0) & np.isfinite(length), length, 0.0)
     count = np.maximum(np.ceil(length / spacing), 1).astype(np.int64)
     count = np.minimum(count, 1 << 16)
