@@ -38,7 +38,7 @@ def suppress_coincident(
     # every sample stands for the stretch to the next sample of its line
     has_next = np.r_[line[1:] == line[:-1], False]
     forward = np.zeros_like(pixel)
-    forward[has_next] = pixel[1:][has_next[:-1]] - pixel[:-1][has_next[:-1]]
+    forward[:-1] = np.where(has_next[:-1, None], np.diff(pixel, axis=0), 0.0)
     length = row_norm(forward)
     unit = forward / np.where(length > 0, length, 1.0)[:, None]
     # a stretch that is hidden deeper or left out covers nothing
