@@ -117,6 +117,10 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     return flipped, component.astype(np.int64)
 
 
+def _squared_length(v: np.ndarray) -> np.ndarray:
+    return v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]
+
+
 def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | None = None) -> Adjacency:
     """Weld a triangle soup, build its edge connectivity and make its winding consistent.
 
@@ -201,9 +205,9 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     area2 = row_norm(cross)
     # squared edge lengths summed and compared column by column (NumPy's reductions over a
     # short axis are slow); the same values
-    square = (corners[:, [1, 2, 0]] - corners) ** 2
-    length2 = square[:, :, 0] + square[:, :, 1] + square[:, :, 2]
-    longest2 = np.maximum(np.maximum(length2[:, 0], length2[:, 1]), length2[:, 2])
+    c0, c1, c2 = corners[:, 0], corners[:, 1], corners[:, 2]
+    length2 = [_squared_length(b - a) for a, b in ((c0, c1), (c1, c2), (c2, c0))]
+    longest2 = np.maximum(np.maximum(length2[0], length2[1]), length2[2])
     good = area2 > _DEGENERATE_REL_AREA * longest2
     normals = np.zeros_like(cross)
     normals[good] = cross[good] / area2[good, None]

@@ -564,7 +564,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     quantum = _JOIN_REL * _diagonal(points)
     pid = _point_ids(points, quantum).reshape(n, 2)
     # the same segment twice (an edge that is both a crease and a part boundary, ...): keep one
-    lo, hi = pid.min(axis=1), pid.max(axis=1)
+    lo, hi = np.minimum(pid[:, 0], pid[:, 1]), np.maximum(pid[:, 0], pid[:, 1])
     proper = lo != hi
     _, first, _ = unique_first((lo * (int(pid.max()) + 1) + hi)[proper])
     keep = np.flatnonzero(proper)[np.sort(first)]
@@ -576,7 +576,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     n = len(keep)
     # nodes: a point within one part
     node_key = np.repeat(seg_part, 2) * (int(pid.max()) + 1) + pid.reshape(-1)
-    node = np.unique(node_key, return_inverse=True)[1].reshape(-1)
+    node = unique_first(node_key)[2]
     # half-end h = 2 s + e is segment s's end e (0: start, 1: end)
     leaving = seg_points[:, ::-1] - seg_points
     leaving = leaving.reshape(-1, 3) / np.maximum(row_norm(leaving.reshape(-1, 3)), 1e-300)[:, None]
