@@ -82,7 +82,7 @@ def sample_polylines(
     count = np.minimum(count, 1 << 16)
     seg = np.repeat(starts, count)
     k = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-    t = k / count[np.searchsorted(starts, seg)]
+    t = k / np.repeat(count, count)
     model = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
     faces = lines.faces[seg]
     kind = lines.kind[seg]
@@ -93,9 +93,14 @@ def sample_polylines(
     faces = np.concatenate([faces, lines.faces[np.maximum(lasts - 1, 0)]])
     kind = np.concatenate([kind, lines.kind[np.maximum(lasts - 1, 0)]])
     vertex = np.concatenate([vertex, np.ones(len(lasts), bool)])
-    line = np.concatenate([line_of_point[seg], np.arange(len(lines))])
-    position = np.concatenate([seg + t, lasts.astype(np.float64)])
-    order = np.lexsort((position, line))
+    # a polyline's samples run in order, its last point after them: where each one goes
+    seg_line = line_of_point[seg]
+    per_line = np.bincount(seg_line, minlength=len(lines))
+    out_first = np.cumsum(per_line + 1) - (per_line + 1)
+    within = np.arange(len(seg)) - (np.cumsum(per_line) - per_line)[seg_line]
+    order = np.empty(len(seg) + len(lasts), np.int64)
+    order[np.concatenate([out_first[seg_line] + within, out_first + per_line])] = np.arange(len(order))
+    line = np.concatenate([seg_line, np.arange(len(lines))])
     model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
     kind = kind[order]
     homogeneous = np.concatenate([model, np.ones((len(model), 1))], axis=1)
