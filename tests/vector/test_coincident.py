@@ -78,3 +78,16 @@ def test_the_compute_pass_leaves_out_the_samples_numpy_does(renderer, seed):
     expected = suppress_coincident(samples, level)
     assert 0 < (expected[level >= 0] == -1).sum() < (level >= 0).sum() // 2
     np.testing.assert_array_equal(suppress_coincident(samples, level, renderer=renderer), expected)
+
+
+def test_the_compute_pass_runs_in_the_renderers_own_context(renderer):
+    from blueprint.render.renderer import LayerRenderer
+
+    top, under = _line((10.2, 20.3), 0.0), _line((10.2, 20.6), 0.0)
+    samples = _samples([top, under])
+    level = np.r_[np.zeros(len(top), np.int32), np.ones(len(under), np.int32)]
+    with LayerRenderer() as other:
+        other.make_current()
+        got = suppress_coincident(samples, level, renderer=renderer)
+    renderer.make_current()
+    np.testing.assert_array_equal(got, suppress_coincident(samples, level))

@@ -84,3 +84,16 @@ def test_gpu_pairs_give_numpys_lines_on_the_engine(renderer, shared_models):
 
     model = load_model(shared_models / "glTF-Sample-Models" / "2CylinderEngine.glb")
     _same(_intersections(model, renderer), _intersections(model, None))
+
+
+def test_gpu_pairs_run_in_the_renderers_own_context(renderer, every_grid):
+    """The passes are a drawing's first GL work: they must not land in whichever context was
+    current before (a window's, another renderer's)."""
+    from blueprint.render.renderer import LayerRenderer
+
+    model = _soup(1, count=1000)
+    with LayerRenderer() as other:
+        other.make_current()
+        got = _intersections(model, renderer)
+    renderer.make_current()
+    _same(got, _intersections(model, None))

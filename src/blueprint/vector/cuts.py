@@ -64,6 +64,7 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     cells = np.zeros((len(busy), 4), np.int32)
     cells[:, :3] = grid.cells(busy)
 
+    renderer.make_current()  # the first GL work of a drawing: another context may be current
     ctx = renderer.ctx
     inputs = {
         0: packed,

@@ -141,6 +141,7 @@ def _gpu_drop(renderer, inputs, span: int, dist2, sin_limit) -> np.ndarray:
     """The drop flag of every live sample from coincident.comp, from the search's arrays in
     ``suppress_coincident`` laid out as the shader's storage buffers (``inputs``)."""
     count = len(inputs[0])
+    renderer.make_current()
     ctx = renderer.ctx
     prog = renderer.compute(COINCIDENT_COMP)
     put = renderer.uniforms.set
