@@ -35,7 +35,17 @@ class Layer:
 # Lowest first. A member is a package or a module; a module belongs to the longest member that
 # is its name or a package above it ("blueprint" itself matches only the top-level __init__).
 LAYERS = (
-    Layer("leaves", ("blueprint.errors", "blueprint.color", "blueprint.settings")),
+    Layer(
+        "leaves",
+        (
+            "blueprint.errors",
+            "blueprint.color",
+            "blueprint.settings",
+            "blueprint.blas",
+            "blueprint.columns",
+            "blueprint.sorting",
+        ),
+    ),
     Layer("scene", ("blueprint.scene",)),
     # GPU-free code above the scene: the object-space silhouette method, the file writers and
     # the generated example models

@@ -21,6 +21,7 @@ import numpy as np
 from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
+from blueprint.blas import one_blas_thread
 from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError, out_of_memory
@@ -221,6 +222,7 @@ def turntable(
     return write(output, pictures(), fps=fps, crf=crf)
 
 
+@one_blas_thread
 def render_vector_file(
     model: Model | str | os.PathLike,
     output: str | os.PathLike,

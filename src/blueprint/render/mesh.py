@@ -6,6 +6,7 @@ import numpy as np
 
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
+from blueprint.sorting import unique_first
 
 
 class GpuMesh:
@@ -24,7 +25,7 @@ class GpuMesh:
         if crease_angle is None:
             normals = None
             key = corner_vertex * max(len(model.part_names), 1) + corner_part
-            _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+            _, first, inverse = unique_first(key)
             vertex, part = corner_vertex[first], corner_part[first]
         else:
             normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)

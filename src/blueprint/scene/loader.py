@@ -243,7 +243,7 @@ def _check_coincident(model: Model, name: str) -> None:
         return
     tri = model.positions[model.faces].astype(np.float64)
     cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    key = tri.sum(axis=1) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
+    key = (tri[:, 0] + tri[:, 1] + tri[:, 2]) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
         np.einsum("ij,ij->i", cross, cross)
     ) * np.sqrt(2)
     _, counts = np.unique(key, return_counts=True)

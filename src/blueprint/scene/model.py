@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min
+
 
 @dataclass(frozen=True, eq=False)
 class Model:
@@ -84,7 +86,7 @@ class Model:
         # every camera fit asks (the viewer: every frame), and a model's arrays do not change
         if "bounds" not in self._cache:
             used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
-            self._cache["bounds"] = np.array([used.min(axis=0), used.max(axis=0)], dtype=np.float64)
+            self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
         return self._cache["bounds"].copy()
 
     def part_triangle_counts(self) -> np.ndarray:

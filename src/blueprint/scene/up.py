@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min, row_norm
+
 # The bottom slab, as a fraction of the model's extent along the axis.
 _SLAB = 0.01
 # Facing down: the face normal within about 18 degrees of the axis.
@@ -48,9 +50,9 @@ class _Triangles:
     def __init__(self, positions: np.ndarray, faces: np.ndarray) -> None:
         self.tri = positions[faces].astype(np.float64)
         corners = self.tri.reshape(-1, 3)
-        self.lo, self.hi = corners.min(axis=0), corners.max(axis=0)
+        self.lo, self.hi = column_min(corners), column_max(corners)
         self.cross = np.cross(self.tri[:, 1] - self.tri[:, 0], self.tri[:, 2] - self.tri[:, 0])
-        self.area = np.linalg.norm(self.cross, axis=1)
+        self.area = row_norm(self.cross)
 
 
 def _base_fraction(mesh: _Triangles, axis: int) -> float:
@@ -60,7 +62,9 @@ def _base_fraction(mesh: _Triangles, axis: int) -> float:
         return 0.0
     with np.errstate(invalid="ignore", divide="ignore"):
         along = np.abs(mesh.cross[:, axis]) / mesh.area
-    low = mesh.tri[:, :, axis].max(axis=1) <= mesh.lo[axis] + _SLAB * extent[axis]
+    heights = mesh.tri[:, :, axis]
+    top = np.maximum(np.maximum(heights[:, 0], heights[:, 1]), heights[:, 2])
+    low = top <= mesh.lo[axis] + _SLAB * extent[axis]
     # either winding: scans and soups do not orient their faces consistently
     flat = low & (along >= _DOWN)
     return float(mesh.area[flat].sum() / 2.0 / across)

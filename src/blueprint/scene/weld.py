@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.columns import column_min, column_ptp
+from blueprint.sorting import stable_argsort
+
 __all__ = ["weld"]
 
 # Default weld tolerance, relative to the bounding-box diagonal.
@@ -80,7 +83,7 @@ def _grid_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]
     and its neighbours finds every pair. Cells are bucketed by a wrapping integer hash: a
     collision only merges two buckets, adding candidates that the distance test rejects.
     """
-    scaled = (points - points.min(axis=0)) / (tol * (1.0 + 1e-9))
+    scaled = (points - column_min(points)) / (tol * (1.0 + 1e-9))
     if scaled.max(initial=0.0) >= 2.0**52:
         raise ValueError("weld tolerance is too small relative to the mesh extent")
     cells = np.floor(scaled).astype(np.int64)
@@ -178,7 +181,7 @@ def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> 
     if len(positions) == 0:
         return positions.copy(), faces
     if tol is None:
-        tol = _REL_TOL * float(np.linalg.norm(np.ptp(positions, axis=0)))
+        tol = _REL_TOL * float(np.linalg.norm(column_ptp(positions)))
     elif not (np.isfinite(tol) and tol >= 0):
         raise ValueError(f"tol must be a finite non-negative number, got {tol}")
 
@@ -196,5 +199,5 @@ def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> 
     group_first = np.full(group.max() + 1, len(positions), dtype=np.int64)
     np.minimum.at(group_first, group, np.arange(len(positions)))
     rank = np.empty_like(group_first)
-    rank[np.argsort(group_first, kind="stable")] = np.arange(len(group_first))
+    rank[stable_argsort(group_first)] = np.arange(len(group_first))
     return positions[np.sort(group_first)], rank[group][faces]

@@ -129,7 +129,8 @@ def classify_edges(
     if not 0.0 <= crease_angle <= 180.0:
         raise ValueError(f"crease_angle must be in [0, 180] degrees, got {crease_angle}")
 
-    normal_ok = adj.face_normals.any(axis=1)
+    normals = adj.face_normals
+    normal_ok = (normals[:, 0] != 0) | (normals[:, 1] != 0) | (normals[:, 2] != 0)
     front = _front_facing(adj, view, projection) & normal_ok
     back = ~front & normal_ok
 
@@ -145,32 +146,26 @@ def classify_edges(
     no_face = len(adj.faces)
     first_front = np.full(num_edges, no_face, dtype=np.int64)
     first_back = np.full(num_edges, no_face, dtype=np.int64)
-    np.minimum.at(first_front, edge[front[face]], face[front[face]])
-    np.minimum.at(first_back, edge[back[face]], face[back[face]])
+    # incidences run by edge, then face: an edge's first front (back) one is its lowest
+    for first, facing in ((first_front, front[face]), (first_back, back[face])):
+        e, f = edge[facing], face[facing]
+        lead = np.r_[True, e[1:] != e[:-1]] if len(e) else np.zeros(0, bool)
+        first[e[lead]] = f[lead]
     silhouette = (first_front < no_face) & (first_back < no_face)
 
     border = count == 1
-    manifold = (count == 2) & ~silhouette
-    cos_angle = np.einsum("ij,ij->i", adj.face_normals[f0[manifold]], adj.face_normals[f1[manifold]])
+    # the angle at every two-face edge, once: for the creases (those that are no silhouette)
+    # and for the lone-crease test (every sharp one, silhouette or not)
+    sharp = np.flatnonzero(count == 2)
+    both_ok = normal_ok[f0[sharp]] & normal_ok[f1[sharp]]
+    limit = np.cos(np.radians(crease_angle))
+    cos_angle = np.einsum("ij,ij->i", normals[f0[sharp]], normals[f1[sharp]])
     crease = np.zeros(num_edges, dtype=bool)
-    crease[manifold] = (
-        normal_ok[f0[manifold]] & normal_ok[f1[manifold]] & (cos_angle < np.cos(np.radians(crease_angle)))
-    )
+    crease[sharp] = both_ok & (cos_angle < limit) & ~silhouette[sharp]
 
     # a lone crease edge is a scan's noise, as the raster drawing's normals take it
     # (scene.normals.lone_creases), whether or not this view makes it a silhouette
-    pair = count == 2
-    sharp = np.flatnonzero(pair)
-    sharp = sharp[
-        ~(
-            normal_ok[f0[sharp]]
-            & normal_ok[f1[sharp]]
-            & (
-                np.einsum("ij,ij->i", adj.face_normals[f0[sharp]], adj.face_normals[f1[sharp]])
-                >= np.cos(np.radians(crease_angle))
-            )
-        )
-    ]
+    sharp = sharp[~(both_ok & (cos_angle >= limit))]
     anchored = np.zeros(len(adj.positions), bool)
     anchored[adj.edges[count != 2].ravel()] = True
     alone = np.zeros(num_edges, bool)

@@ -11,7 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import row_norm
 from blueprint.scene.weld import weld
+from blueprint.sorting import stable_argsort, unique_first
 
 __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 
@@ -66,8 +68,9 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     """
     # Duplicate triangles share several edges; one parity per face pair is enough, and
     # duplicates would be summed by the sparse constructor.
-    lo, hi = pair_faces.min(axis=1), pair_faces.max(axis=1)
-    _, keep = np.unique(lo * num_faces + hi, return_index=True)
+    lo = np.minimum(pair_faces[:, 0], pair_faces[:, 1])
+    hi = np.maximum(pair_faces[:, 0], pair_faces[:, 1])
+    _, keep, _ = unique_first(lo * num_faces + hi)
     lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
     # scipy loads here, not with the package: only the object-space method needs it
     from scipy import sparse
@@ -87,7 +90,7 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     # its start comes from one search in scipy (from a node joined to every start), its parent
     # is its lowest-numbered neighbour one step nearer (the frontier order of a level-by-level
     # search), and its flip the parities along its parents, summed by pointer jumping.
-    starts = np.unique(component, return_index=True)[1]
+    starts = unique_first(component)[1]
     root = num_faces
     source = np.concatenate([lo, hi, np.full(len(starts), root)])
     target = np.concatenate([hi, lo, starts])
@@ -112,6 +115,10 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
         flipped ^= flipped[parent]
         parent = above
     return flipped, component.astype(np.int64)
+
+
+def _squared_length(v: np.ndarray) -> np.ndarray:
+    return v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]
 
 
 def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | None = None) -> Adjacency:
@@ -173,7 +180,7 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     lo, hi = np.minimum(start, end), np.maximum(start, end)
     key = lo * num_vertices + hi
     # half-edges come in face order, so one stable sort by edge orders them by edge, then face
-    order = np.argsort(key, kind="stable")
+    order = stable_argsort(key)
     sorted_key = key[order]
     new_edge = np.ones(len(key), bool)
     new_edge[1:] = sorted_key[1:] != sorted_key[:-1]
@@ -195,8 +202,12 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
 
     corners = positions[faces]
     cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area2 = np.linalg.norm(cross, axis=1)
-    longest2 = (np.diff(corners[:, [0, 1, 2, 0]], axis=1) ** 2).sum(axis=2).max(axis=1)
+    area2 = row_norm(cross)
+    # squared edge lengths summed and compared column by column (NumPy's reductions over a
+    # short axis are slow); the same values
+    c0, c1, c2 = corners[:, 0], corners[:, 1], corners[:, 2]
+    length2 = [_squared_length(b - a) for a, b in ((c0, c1), (c1, c2), (c2, c0))]
+    longest2 = np.maximum(np.maximum(length2[0], length2[1]), length2[2])
     good = area2 > _DEGENERATE_REL_AREA * longest2
     normals = np.zeros_like(cross)
     normals[good] = cross[good] / area2[good, None]

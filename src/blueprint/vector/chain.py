@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.sorting import stable_argsort
+
 __all__ = ["chain_order", "chain_pieces", "pair_ends"]
 
 
@@ -34,7 +36,7 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
     if len(node) == 0:
         return partner
     degree = np.bincount(node)
-    order = np.argsort(node, kind="stable")
+    order = stable_argsort(node)
     starts = np.cumsum(degree) - degree
     two = np.flatnonzero(degree == 2)
     a, b = order[starts[two]], order[starts[two] + 1]

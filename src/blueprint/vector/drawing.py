@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from blueprint.blas import one_blas_thread
 from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
@@ -280,6 +281,7 @@ def _highlight(highlight, model: Model) -> frozenset[int]:
     return frozenset(int(i) for i in np.flatnonzero(designated_parts(model, highlight)))
 
 
+@one_blas_thread
 def draw_vector(
     model: Model,
     camera: Camera | None = None,
@@ -393,7 +395,7 @@ def draw_vector(
     page = _page(size, camera, scale, units, model)
 
     clock = time.perf_counter()
-    segments = model_segments(model, view_m, proj, size, crease_angle, intersections)
+    segments = model_segments(model, view_m, proj, size, crease_angle, intersections, renderer)
     lines = join_polylines(segments)
     samples = sample_polylines(lines, view_m, proj, size, spacing)
     seconds["lines"] = time.perf_counter() - clock
@@ -479,7 +481,7 @@ def draw_vector(
         else:
             in_front = classify_samples(samples, peeled, only_shaded, ortho, footprint, depth_tolerance)
         behind = in_front > 0
-    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind)
+    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
     key = (pieces.part.astype(np.int64) * (count + 1) + pieces.level) * 2 + pieces.behind
     points, offsets, first = chain_pieces(pieces.points, pieces.offsets, key)
     pieces = Pieces(points, offsets, pieces.part[first], pieces.level[first], pieces.behind[first])

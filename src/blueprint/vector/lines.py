@@ -14,11 +14,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min, column_ptp, row_norm
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
+from blueprint.sorting import stable_argsort, unique_first
 
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
+from .cuts import gpu_cut_pairs
 
 __all__ = [
     "BORDER",
@@ -114,7 +117,7 @@ class Polylines:
 def _diagonal(points: np.ndarray) -> float:
     if len(points) == 0:
         return 1.0
-    return float(np.linalg.norm(np.ptp(points, axis=0))) or 1.0
+    return float(np.linalg.norm(column_ptp(points))) or 1.0
 
 
 def adjacency(model: Model) -> Adjacency:
@@ -138,11 +141,11 @@ def _welded_adjacency(model: Model) -> Adjacency:
     if len(model.part_names) <= 1 or len(faces) == 0 or np.all(part == part[0]):
         held = build_adjacency(positions, faces)
     else:
-        span = 4.0 * (float(np.ptp(positions, axis=0).max()) + diagonal)
+        span = 4.0 * (float(column_ptp(positions).max()) + diagonal)
         # one vertex per (vertex, part) in use, moved by its part's multiple of the span
         corner_part = np.repeat(part, 3)
         key = faces.reshape(-1) * len(model.part_names) + corner_part
-        unique, inverse = np.unique(key, return_inverse=True)
+        unique, _, inverse = unique_first(key)
         moved = positions[unique // len(model.part_names)].copy()
         moved[:, 0] += (unique % len(model.part_names)) * span
         held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
@@ -192,59 +195,96 @@ def feature_segments(
 # -- intersections between parts ------------------------------------------------------------------
 
 
-def _part_boxes(lo: np.ndarray, hi: np.ndarray, part: np.ndarray, parts: int):
-    box_lo = np.full((parts, 3), np.inf)
-    box_hi = np.full((parts, 3), -np.inf)
-    np.minimum.at(box_lo, part, lo)
-    np.maximum.at(box_hi, part, hi)
-    return box_lo, box_hi
+def _columns_max(values: np.ndarray) -> np.ndarray:
+    """The largest of each row of (n, 3) (a reduction over a short axis is slow in NumPy)."""
+    return np.maximum(np.maximum(values[:, 0], values[:, 1]), values[:, 2])
+
+
+def _overlapping(lo_a, hi_a, lo_b, hi_b) -> np.ndarray:
+    """(m, k) bool: whether box i of a (m, 3) overlaps box j of b (k, 3), axis by axis."""
+    hit = (lo_a[:, None, 0] <= hi_b[None, :, 0]) & (hi_a[:, None, 0] >= lo_b[None, :, 0])
+    for axis in (1, 2):
+        hit &= (lo_a[:, None, axis] <= hi_b[None, :, axis]) & (hi_a[:, None, axis] >= lo_b[None, :, axis])
+    return hit
 
 
 def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     """Triangles whose box meets the box of another part overlapping their own part."""
-    box_lo, box_hi = _part_boxes(lo, hi, part, parts)
-    used = np.isfinite(box_lo[:, 0])
-    overlap = np.all(
-        (box_lo[:, None] <= box_hi[None] + slack) & (box_hi[:, None] >= box_lo[None] - slack), axis=2
-    )
+    order = stable_argsort(part)
+    bounds = np.searchsorted(part[order], np.arange(parts + 1))
+    used = bounds[1:] > bounds[:-1]
+    box_lo = np.full((parts, 3), np.inf)
+    box_hi = np.full((parts, 3), -np.inf)
+    box_lo[used] = np.minimum.reduceat(lo[order], bounds[:-1][used], axis=0)
+    box_hi[used] = np.maximum.reduceat(hi[order], bounds[:-1][used], axis=0)
+    overlap = _overlapping(box_lo, box_hi, box_lo - slack, box_hi + slack)
     overlap &= used[:, None] & used[None]
     np.fill_diagonal(overlap, False)
     keep = np.zeros(len(lo), dtype=bool)
-    order = np.argsort(part, kind="stable")
-    bounds = np.searchsorted(part[order], np.arange(parts + 1))
     for p in np.flatnonzero(overlap.any(axis=1)):
         mine = order[bounds[p] : bounds[p + 1]]
         others = np.flatnonzero(overlap[p])
         # the region where part p can meet another part: the union of pairwise box overlaps
         meet_lo = np.maximum(box_lo[p], box_lo[others]) - slack
         meet_hi = np.minimum(box_hi[p], box_hi[others]) + slack
+        # only the triangles in the box around that union can meet one of its boxes
+        near = _overlapping(lo[mine], hi[mine], meet_lo.min(axis=0)[None], meet_hi.max(axis=0)[None])
+        mine = mine[near[:, 0]]
+        mine_lo, mine_hi = lo[mine], hi[mine]
         for start in range(0, len(others), 64):
             ml, mh = meet_lo[start : start + 64], meet_hi[start : start + 64]
-            hit = np.all((lo[mine, None] <= mh[None]) & (hi[mine, None] >= ml[None]), axis=2).any(axis=1)
-            keep[mine[hit]] = True
+            keep[mine[_overlapping(mine_lo, mine_hi, ml, mh).any(axis=1)]] = True
     return np.flatnonzero(keep)
 
 
-def _candidate_pairs(lo, hi, part, slack: float):
-    """Pairs (i, j) of triangles of different parts whose boxes overlap, through a uniform grid.
+@dataclass(frozen=True)
+class CellGrid:
+    """Boxes entered in the cells of a uniform grid (``cell_grid``), for pairing across parts.
 
-    Each triangle is entered in every cell its box touches; a pair is reported only in the cell
-    at the componentwise maximum of the two boxes' first cells, which both touch, so no pair
-    comes out twice. Cells start at the median triangle size and double while the entries
-    would exceed a fixed multiple of the triangle count. Within a cell, entries are sorted by
-    part, so only pairs across parts are generated.
+    ``first`` (n, 3) is each box's first cell; entry ``e`` (sorted by cell, then part) puts box
+    ``owner[e]`` in cell ``key[e]``; its partners from other parts are the entries from
+    ``group_end[e]`` (the end of its part's run in the cell) to ``cell_end[e]``.
+    """
+
+    first: np.ndarray
+    key: np.ndarray
+    owner: np.ndarray
+    group_end: np.ndarray
+    cell_end: np.ndarray
+    base: np.ndarray
+    dims: np.ndarray
+
+    def cell_key(self, x, y, z):
+        return _cell_key(self.base, self.dims, x, y, z)
+
+    def cells(self, entries: np.ndarray) -> np.ndarray:
+        """(len(entries), 3) cell coordinates of entries."""
+        rest, x = np.divmod(self.key[entries], self.dims[0])
+        z, y = np.divmod(rest, self.dims[1])
+        return np.stack([x, y, z], axis=1) + self.base
+
+
+def _cell_key(base, dims, x, y, z):
+    return ((z - base[2]) * dims[1] + (y - base[1])) * dims[0] + (x - base[0])
+
+
+def cell_grid(lo, hi, part, slack: float) -> CellGrid:
+    """Each box (``lo`` <= ``hi``) entered in every cell it touches, the entries sorted by cell
+    and then part.
+
+    Cells start at the median box size and double while the entries would exceed a fixed
+    multiple of the box count.
     """
     n = len(lo)
-    if n < 2:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    origin = lo.min(axis=0)
-    extent = np.ptp(np.concatenate([lo, hi]), axis=0).max() or 1.0
-    cell = max(float(np.median((hi - lo).max(axis=1))), extent / 4096)
+    origin = column_min(lo)
+    extent = (column_max(hi) - origin).max() or 1.0
+    cell = max(float(np.median(_columns_max(hi - lo))), extent / 4096)
+    low, high = lo - slack - origin, hi + slack - origin
     while True:
-        first = np.floor((lo - slack - origin) / cell).astype(np.int64)
-        last = np.floor((hi + slack - origin) / cell).astype(np.int64)
+        first = np.floor(low / cell).astype(np.int64)
+        last = np.floor(high / cell).astype(np.int64)
         span = last - first + 1
-        entries = span.prod(axis=1)
+        entries = span[:, 0] * span[:, 1] * span[:, 2]
         if entries.sum() <= _CELLS_PER_TRIANGLE * n + 4096 or cell >= extent:
             break
         cell *= 2.0
@@ -254,16 +294,17 @@ def _candidate_pairs(lo, hi, part, slack: float):
     cx = first[owner, 0] + rank % sx
     cy = first[owner, 1] + (rank // sx) % sy
     cz = first[owner, 2] + rank // (sx * sy)
-    dims = last.max(axis=0) + 2 - first.min(axis=0)
-    base = first.min(axis=0)
-
-    def cell_key(x, y, z):
-        return ((z - base[2]) * dims[1] + (y - base[1])) * dims[0] + (x - base[0])
-
-    key = cell_key(cx, cy, cz)
+    base = column_min(first)
+    dims = column_max(last) + 2 - base
+    key = _cell_key(base, dims, cx, cy, cz)
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
-    order = np.lexsort((part[owner], key))
+    parts = int(part.max()) + 1
+    if float(np.prod(dims.astype(np.float64))) * parts * len(key) < 2.0**62:
+        # one unstable sort of distinct numbers puts them in lexsort's (stable) order, faster
+        order = np.argsort((key * parts + part[owner]) * len(key) + np.arange(len(key)))
+    else:
+        order = np.lexsort((part[owner], key))
     key, owner = key[order], owner[order]
     entry_part = part[owner]
     new_cell = np.r_[True, key[1:] != key[:-1]]
@@ -272,7 +313,22 @@ def _candidate_pairs(lo, hi, part, slack: float):
     group_start = np.flatnonzero(new_group)
     cell_end = np.r_[cell_start[1:], len(key)][np.cumsum(new_cell) - 1]
     group_end = np.r_[group_start[1:], len(key)][np.cumsum(new_group) - 1]
-    partners = cell_end - group_end
+    return CellGrid(first, key, owner, group_end, cell_end, base, dims)
+
+
+def _candidate_pairs(lo, hi, part, slack: float):
+    """Pairs (i, j) of triangles of different parts whose boxes overlap, through a uniform grid
+    (``cell_grid``).
+
+    A pair is reported only in the cell at the componentwise maximum of the two boxes' first
+    cells, which both touch, so no pair comes out twice; pairs come in the order of their
+    first entry in the grid, then of the second.
+    """
+    if len(lo) < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    grid = cell_grid(lo, hi, part, slack)
+    key, owner, group_end, first = grid.key, grid.owner, grid.group_end, grid.first
+    partners = grid.cell_end - group_end
     lo_axis = [np.ascontiguousarray(lo[:, a]) for a in range(3)]
     hi_axis = [np.ascontiguousarray(hi[:, a] + slack) for a in range(3)]
     first_axis = [np.ascontiguousarray(first[:, a]) for a in range(3)]
@@ -302,7 +358,7 @@ def _candidate_pairs(lo, hi, part, slack: float):
             )
             i, j, ia = i[keep], j[keep], ia[keep]
         top = [np.maximum(np.take(first_axis[a], i), np.take(first_axis[a], j)) for a in range(3)]
-        keep = cell_key(*top) == key[ia]
+        keep = grid.cell_key(*top) == key[ia]
         pairs_i.append(i[keep])
         pairs_j.append(j[keep])
     if not pairs_i:
@@ -338,7 +394,7 @@ def _plane_cut(tri: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarra
 def _unit_normals(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals of triangles (M, 3, 3) and whether they have one (non-zero area)."""
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normal, axis=1)
+    length = row_norm(normal)
     return normal / np.where(length > 0, length, 1.0)[:, None], length > 0
 
 
@@ -392,34 +448,46 @@ def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None
     return segments, idx[keep]
 
 
-def intersection_segments(model: Model) -> Segments:
+def intersection_segments(model: Model, renderer=None) -> Segments:
     """Lines where triangles of different parts cut through each other (view-independent).
 
     Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
     triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
-    triangles, from each one's crossing of the other's plane, vectorised over pairs. Cached per
-    mesh (``cache``).
+    triangles, from each one's crossing of the other's plane, vectorised over pairs. With a
+    ``renderer`` (``LayerRenderer``), one compute pass makes the pairs and leaves only those
+    that may cut (``cuts.gpu_cut_pairs``): the same lines, bit for bit. Cached per mesh
+    (``cache``).
     """
-    return INTERSECTIONS.get(model, lambda: _intersections(model))
+    return INTERSECTIONS.get(model, lambda: _intersections(model, renderer))
 
 
-def _intersections(model: Model) -> Segments:
+def _intersections(model: Model, renderer) -> Segments:
     result = Segments.empty()
     parts = len(model.part_names)
     faces = model.faces.astype(np.int64)
     if parts > 1 and len(faces):
         positions = model.positions.astype(np.float64)
         tri = positions[faces]
-        lo, hi = tri.min(axis=1), tri.max(axis=1)
+        lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
+        hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
         part = model.face_part.astype(np.int64)
         eps = _TOUCH_REL * _diagonal(positions)
-        area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        area = row_norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
-        ci, cj = _candidate_pairs(lo[candidates], hi[candidates], part[candidates], eps)
+        lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
+        pairs = shared = None
+        if renderer is not None and len(candidates) > 1:
+            shared = _unit_normals(tri[candidates])
+            grid = cell_grid(lo, hi, part_c, eps)
+            pairs = gpu_cut_pairs(renderer, grid, tri[candidates], *shared, hi + eps, eps)
+        if pairs is None:
+            pairs = _candidate_pairs(lo, hi, part_c, eps)
+            # normals once a triangle where there are more pairs than triangles, else a pair
+            if shared is None and len(pairs[0]) > len(candidates):
+                shared = _unit_normals(tri[candidates])
+        ci, cj = pairs
         i, j = candidates[ci], candidates[cj]
-        # normals once a triangle where there are more pairs than triangles, else a pair
-        shared = _unit_normals(tri[candidates]) if len(i) > len(candidates) else None
         found, fa, fb = [], [], []
         for start in range(0, len(i), _PAIR_CHUNK):
             a, b = i[start : start + _PAIR_CHUNK], j[start : start + _PAIR_CHUNK]
@@ -449,11 +517,13 @@ def model_segments(
     size: tuple[int, int],
     crease_angle: float = 30.0,
     intersections: bool = True,
+    renderer=None,
 ) -> Segments:
-    """All lines of a model for one view: features, part boundaries and intersection lines."""
+    """All lines of a model for one view: features, part boundaries and intersection lines
+    (found with ``renderer``'s help where given, see ``intersection_segments``)."""
     found = [feature_segments(model, view, projection, size, crease_angle)]
     if intersections:
-        found.append(intersection_segments(model))
+        found.append(intersection_segments(model, renderer))
     return Segments.concatenate(found)
 
 
@@ -464,8 +534,8 @@ def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
     """Ids of points equal after rounding to ``quantum`` (one packed integer key per point)."""
     if len(points) == 0:
         return np.zeros(0, np.int64)
-    q = np.round((points - points.min(axis=0)) / quantum).astype(np.int64)
-    span = q.max(axis=0) + 1
+    q = np.round((points - column_min(points)) / quantum).astype(np.int64)
+    span = column_max(q) + 1
     if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
         key = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
         return np.unique(key, return_inverse=True)[1].reshape(-1)
@@ -494,9 +564,9 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     quantum = _JOIN_REL * _diagonal(points)
     pid = _point_ids(points, quantum).reshape(n, 2)
     # the same segment twice (an edge that is both a crease and a part boundary, ...): keep one
-    lo, hi = pid.min(axis=1), pid.max(axis=1)
+    lo, hi = np.minimum(pid[:, 0], pid[:, 1]), np.maximum(pid[:, 0], pid[:, 1])
     proper = lo != hi
-    _, first = np.unique((lo * (int(pid.max()) + 1) + hi)[proper], return_index=True)
+    _, first, _ = unique_first((lo * (int(pid.max()) + 1) + hi)[proper])
     keep = np.flatnonzero(proper)[np.sort(first)]
     seg_points = segments.points[keep]
     seg_faces = segments.faces[keep]
@@ -506,12 +576,10 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     n = len(keep)
     # nodes: a point within one part
     node_key = np.repeat(seg_part, 2) * (int(pid.max()) + 1) + pid.reshape(-1)
-    node = np.unique(node_key, return_inverse=True)[1].reshape(-1)
+    node = unique_first(node_key)[2]
     # half-end h = 2 s + e is segment s's end e (0: start, 1: end)
     leaving = seg_points[:, ::-1] - seg_points
-    leaving = (
-        leaving.reshape(-1, 3) / np.maximum(np.linalg.norm(leaving.reshape(-1, 3), axis=1), 1e-300)[:, None]
-    )
+    leaving = leaving.reshape(-1, 3) / np.maximum(row_norm(leaving.reshape(-1, 3)), 1e-300)[:, None]
     partner = pair_ends(node, leaving, np.cos(np.radians(turn)))
     seg, rev, lengths = chain_order(partner)
     tails = np.where(rev[:, None, None], seg_points[seg][:, ::-1], seg_points[seg])  # (K, 2, 3)

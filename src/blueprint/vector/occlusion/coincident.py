@@ -5,9 +5,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min, row_norm
+
 from .samples import Samples
 
 __all__ = ["suppress_coincident"]
+
+COINCIDENT_COMP = "blueprint.vector:glsl/coincident.comp"
+_GROUP = 64
+_MAX_GROUPS = 65535
 
 
 def suppress_coincident(
@@ -15,12 +21,14 @@ def suppress_coincident(
     level: np.ndarray,
     distance: float = 0.5,
     angle: float = 10.0,
+    renderer=None,
 ) -> np.ndarray:
     """Leave out samples that lie on another line of lower level (or of the same level and an
     earlier polyline): within ``distance`` pixels across it and running within ``angle`` degrees
     of it. Hidden lines right under visible ones (the bottom outline of a plate under its top
     outline in a plan view) and lines drawn twice at one level come out once. Left-out samples
-    get level -1.
+    get level -1. With a ``renderer`` (``LayerRenderer``) the search runs as a compute pass
+    (coincident.comp), with the same arithmetic: the same samples are left out.
     """
     level = level.copy()
     live = np.flatnonzero(level >= 0)
@@ -30,8 +38,8 @@ def suppress_coincident(
     # every sample stands for the stretch to the next sample of its line
     has_next = np.r_[line[1:] == line[:-1], False]
     forward = np.zeros_like(pixel)
-    forward[has_next] = pixel[1:][has_next[:-1]] - pixel[:-1][has_next[:-1]]
-    length = np.linalg.norm(forward, axis=1)
+    forward[:-1] = np.where(has_next[:-1, None], np.diff(pixel, axis=0), 0.0)
+    length = row_norm(forward)
     unit = forward / np.where(length > 0, length, 1.0)[:, None]
     # a stretch that is hidden deeper or left out covers nothing
     covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
@@ -43,8 +51,8 @@ def suppress_coincident(
     inv_length2 = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0).astype(np.float32)
     pixel32 = pixel.astype(np.float32)
     # a dense grid of 1-pixel cells, one cell of margin all round; the stretches sorted by cell
-    origin = np.floor(pixel[live].min(axis=0)).astype(np.int64) - 1
-    span = np.floor(pixel[live].max(axis=0)).astype(np.int64) - origin + 2
+    origin = np.floor(column_min(pixel[live])).astype(np.int64) - 1
+    span = np.floor(column_max(pixel[live])).astype(np.int64) - origin + 2
     source = np.flatnonzero(covers)
 
     def cell_of(rows):
@@ -66,6 +74,32 @@ def suppress_coincident(
     cell_start = np.cumsum(cell_count) - cell_count
     key = cell_of(live)
     live_rank = rank[live]
+    if renderer is not None and renderer.ctx.version_code >= 430 and ranks < 2**31:
+        drop = _gpu_drop(
+            renderer,
+            [
+                np.concatenate([pixel32[live], direction[live]], axis=1),
+                np.stack([key, live_rank, line[live], np.zeros_like(key)], axis=1),
+                np.concatenate([pixel32[source], forward32[source]], axis=1),
+                np.stack(
+                    [
+                        unit32[source, 0],
+                        unit32[source, 1],
+                        inv_length2[source],
+                        np.zeros(len(source), np.float32),
+                    ],
+                    axis=1,
+                ),
+                np.stack([rank[source], line[source]], axis=1),
+                cell_start,
+                cell_count,
+            ],
+            int(span[0]),
+            np.float32(distance * distance),
+            _single_below(sin_limit),
+        )
+        level[live[drop]] = -1
+        return level
     drop = np.zeros(len(live), bool)
     for dy in (-1, 0, 1):
         for dx in (-1, 0, 1):
@@ -94,3 +128,40 @@ def suppress_coincident(
                 drop[index[hit]] = True
     level[live[drop]] = -1
     return level
+
+
+def _single_below(value: float) -> np.float32:
+    """The largest single-precision number at most ``value``: comparing a single with it is
+    comparing the single, widened, with ``value``."""
+    single = np.float32(value)
+    return np.nextafter(single, np.float32(-np.inf)) if single > value else single
+
+
+def _gpu_drop(renderer, inputs, span: int, dist2, sin_limit) -> np.ndarray:
+    """The drop flag of every live sample from coincident.comp, from the search's arrays in
+    ``suppress_coincident`` laid out as the shader's storage buffers (``inputs``)."""
+    count = len(inputs[0])
+    renderer.make_current()
+    ctx = renderer.ctx
+    prog = renderer.compute(COINCIDENT_COMP)
+    put = renderer.uniforms.set
+    put(prog, "u_count", count)
+    put(prog, "u_span", span)
+    put(prog, "u_distance2", float(dist2))
+    put(prog, "u_sin_limit", float(sin_limit))
+    buffers = [
+        ctx.buffer(np.ascontiguousarray(data, np.int32 if data.dtype.kind in "iu" else np.float32))
+        for data in inputs
+    ]
+    buffers.append(ctx.buffer(reserve=4 * count))
+    try:
+        for binding, buffer in enumerate(buffers):
+            buffer.bind_to_storage_buffer(binding)
+        groups = -(-count // _GROUP)
+        gx = min(groups, _MAX_GROUPS)
+        prog.run(gx, -(-groups // gx))
+        ctx.memory_barrier()
+        return np.frombuffer(buffers[-1].read(), np.int32) != 0
+    finally:
+        for buffer in buffers:
+            buffer.release()

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.columns import row_norm
 from blueprint.scene.model import Model
 
 from ..cache import ModelCache
@@ -59,7 +60,7 @@ def _model_planes(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3) unit normals (zero for degenerate faces) and (F, 3) first corners, float64."""
     tri = model.positions[model.faces].astype(np.float64)
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = np.linalg.norm(normal, axis=1)
+    length = row_norm(normal)
     good = length > 0
     normal[good] /= length[good, None]
     normal[~good] = 0.0
@@ -214,22 +215,24 @@ def drop_phantoms(
     at the line's depth to either side of the samples ``rows`` (-1 where none): their levels
     set to -1 where both are one flat surface of one part through the line's point."""
     level = level.copy()
-    eye = samples.eye[rows]
-    plane_a, plane_b = planes[tri_a], planes[tri_b]  # -1 picks the empty last row
+    # only samples with a face of one part to either side can be phantoms
+    same_part = face_part[np.maximum(tri_a, 0)] == face_part[np.maximum(tri_b, 0)]
+    maybe = np.flatnonzero((tri_a >= 0) & (tri_b >= 0) & same_part)
+    rows, tri_a, tri_b = rows[maybe], tri_a[maybe], tri_b[maybe]
+    point = samples.eye[rows]
+    plane_a, plane_b = planes[tri_a], planes[tri_b]
     # normals turned towards the eye
-    to_eye = np.broadcast_to(np.array([0.0, 0.0, 1.0]), eye.shape) if ortho else -samples.eye[rows]
+    to_eye = np.broadcast_to(np.array([0.0, 0.0, 1.0]), point.shape) if ortho else -point
     n_a = plane_a[:, :3] * np.where(np.einsum("ij,ij->i", plane_a[:, :3], to_eye) < 0, -1.0, 1.0)[:, None]
     n_b = plane_b[:, :3] * np.where(np.einsum("ij,ij->i", plane_b[:, :3], to_eye) < 0, -1.0, 1.0)[:, None]
     flat = np.einsum("ij,ij->i", n_a, n_b) > np.cos(np.radians(0.5 * crease_angle))
     # both side surfaces pass through the line's point (not in front of it, not behind it)
-    point = samples.eye[rows]
+    scale = 1.0 if ortho else row_norm(point)
 
     def through(plane):
         gap = np.einsum("ij,ij->i", plane[:, :3], point) - plane[:, 3]
-        scale = 1.0 if ortho else np.linalg.norm(point, axis=1)
         return np.abs(gap) <= 2.0 * tolerance * footprint * scale
 
-    same_part = face_part[np.maximum(tri_a, 0)] == face_part[np.maximum(tri_b, 0)]
-    phantom = (tri_a >= 0) & (tri_b >= 0) & same_part & flat & through(plane_a) & through(plane_b)
+    phantom = flat & through(plane_a) & through(plane_b)
     level[rows[phantom]] = -1
     return level

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import row_norm
+
 from ..lines import BORDER, CREASE, SILHOUETTE
 from .samples import Samples
 
@@ -86,7 +88,7 @@ def across_line(samples: Samples, rows: np.ndarray) -> tuple[np.ndarray, np.ndar
     ahead = np.where((line[nxt] == line[rows])[:, None], pixel[nxt], pixel[rows])
     behind = np.where((line[prv] == line[rows])[:, None], pixel[prv], pixel[rows])
     tangent = ahead - behind
-    length = np.linalg.norm(tangent, axis=1)
+    length = row_norm(tangent)
     good = length > 0
     rows, tangent = rows[good], tangent[good] / length[good, None]
     return rows, np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)

@@ -37,17 +37,24 @@ class Pieces:
         )
 
 
-def _run_lengths(level, line, pixel):
+def _along(line: np.ndarray, pixel: np.ndarray) -> np.ndarray:
+    """(S + 1,) pixels along the polylines up to each sample, the last entry the end of it all:
+    the steps between samples of one polyline summed (a level does not change it)."""
+    step = np.zeros(len(line))
+    d = np.diff(pixel, axis=0)
+    step[:-1] = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+    step[np.r_[line[1:] != line[:-1], True]] = 0.0
+    return np.r_[0.0, np.cumsum(step)]
+
+
+def _run_lengths(level, line, along):
     """Runs of one level along each polyline: start (inclusive), end (exclusive) and length in
     pixels, from halfway to the previous sample to halfway to the next one (the polyline's own
-    ends where there is none)."""
+    ends where there is none); ``along`` from :func:`_along`."""
     n = len(level)
     change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
     start = np.flatnonzero(change)
     end = np.r_[start[1:], n]
-    step = np.r_[np.linalg.norm(np.diff(pixel, axis=0), axis=1), 0.0]
-    step[np.r_[line[1:] != line[:-1], True]] = 0.0
-    along = np.r_[0.0, np.cumsum(step)]
     lo = np.where(start > 0, 0.5 * (along[start - 1] + along[start]), along[start])
     hi = np.where(end < n, 0.5 * (along[end - 1] + along[end]), along[end - 1])
     return start, end, hi - lo
@@ -67,8 +74,9 @@ def _smooth(level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: flo
     n = len(level)
     if n < 2 or min_run <= 0:
         return level
+    along = _along(line, pixel)
     while True:
-        start, end, length = _run_lengths(level, line, pixel)
+        start, end, length = _run_lengths(level, line, along)
         if len(start) < 2:
             break
         run_line, run_level = line[start], level[start]
@@ -98,7 +106,7 @@ def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float) -> np.nda
     own polyline (a coincident line or an edge that is no edge, level -1 inside the view): what
     a pixel test could not decide at the ends of such a stretch. A short line of its own, or
     one running out of the view, stays."""
-    start, end, length = _run_lengths(level, samples.line, samples.pixel)
+    start, end, length = _run_lengths(level, samples.line, _along(samples.line, samples.pixel))
     run_line, run_level = samples.line[start], level[start]
     left_out = (run_level < 0) & samples.inside[start]
     before = np.r_[False, (run_line[1:] == run_line[:-1]) & left_out[:-1]]
@@ -115,6 +123,7 @@ def split_by_level(
     min_run: float = 2.5,
     coincident: float = 0.5,
     behind: np.ndarray | None = None,
+    renderer=None,
 ) -> Pieces:
     """Cut the sampled polylines into 2D pieces of one level each.
 
@@ -125,7 +134,8 @@ def split_by_level(
     ``max_level`` are dropped, and so are samples on a line of lower level (see
     :func:`suppress_coincident`, within ``coincident`` pixels; 0 keeps them). A level change
     must hold for ``min_run`` pixels (see :func:`_smooth`). ``behind`` (S,) bool, samples
-    behind a shaded part's surface, cuts pieces too (a change must hold as long).
+    behind a shaded part's surface, cuts pieces too (a change must hold as long). A
+    ``renderer`` runs the search for coincident samples on the GPU.
     """
     n = len(level)
     if n == 0:
@@ -138,7 +148,7 @@ def split_by_level(
     level = _smooth(level, samples.line, samples.pixel, min_run)
     level = np.where(level <= max_level, level, -1)
     if coincident > 0:
-        level = suppress_coincident(samples, level, coincident)
+        level = suppress_coincident(samples, level, coincident, renderer=renderer)
         # a left-out stretch can end inside a run and leave a sliver of it beside another level
         level = _smooth(level, samples.line, samples.pixel, min_run)
     level = _drop_slivers(level, samples, min_run)

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import row_norm
+
 from ..lines import Polylines
 
 __all__ = ["Samples", "sample_polylines"]
@@ -74,13 +76,13 @@ def sample_polylines(
     starts = np.flatnonzero(~is_last)  # segment j runs from point j to point j + 1
     # in front of the eye at both ends: the screen length is meaningful
     w = clip[:, 3]
-    length = np.linalg.norm(pix[starts + 1] - pix[starts], axis=1)
+    length = row_norm(pix[starts + 1] - pix[starts])
     length = np.where((w[starts] > 0) & (w[starts + 1] > 0) & np.isfinite(length), length, 0.0)
     count = np.maximum(np.ceil(length / spacing), 1).astype(np.int64)
     count = np.minimum(count, 1 << 16)
     seg = np.repeat(starts, count)
     k = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-    t = k / count[np.searchsorted(starts, seg)]
+    t = k / np.repeat(count, count)
     model = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
     faces = lines.faces[seg]
     kind = lines.kind[seg]
@@ -91,9 +93,14 @@ def sample_polylines(
     faces = np.concatenate([faces, lines.faces[np.maximum(lasts - 1, 0)]])
     kind = np.concatenate([kind, lines.kind[np.maximum(lasts - 1, 0)]])
     vertex = np.concatenate([vertex, np.ones(len(lasts), bool)])
-    line = np.concatenate([line_of_point[seg], np.arange(len(lines))])
-    position = np.concatenate([seg + t, lasts.astype(np.float64)])
-    order = np.lexsort((position, line))
+    # a polyline's samples run in order, its last point after them: where each one goes
+    seg_line = line_of_point[seg]
+    per_line = np.bincount(seg_line, minlength=len(lines))
+    out_first = np.cumsum(per_line + 1) - (per_line + 1)
+    within = np.arange(len(seg)) - (np.cumsum(per_line) - per_line)[seg_line]
+    order = np.empty(len(seg) + len(lasts), np.int64)
+    order[np.concatenate([out_first[seg_line] + within, out_first + per_line])] = np.arange(len(order))
+    line = np.concatenate([seg_line, np.arange(len(lines))])
     model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
     kind = kind[order]
     homogeneous = np.concatenate([model, np.ones((len(model), 1))], axis=1)

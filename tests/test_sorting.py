@@ -1,0 +1,42 @@
+"""The fast sorts and column reductions give NumPy's own answers."""
+
+import numpy as np
+import pytest
+
+from blueprint.columns import column_max, column_min, column_ptp, row_norm
+from blueprint.sorting import stable_argsort, unique_first
+
+
+@pytest.mark.parametrize(
+    ("count", "low", "high"),
+    [(0, 0, 5), (1, 0, 5), (50, 0, 3), (20000, -500, 500), (20000, 0, 2**40), (300, 0, 2**62)],
+    ids=["empty", "one", "few-values", "negative", "wide", "too-wide-to-pack"],
+)
+def test_sorts_equal_numpys(count, low, high):
+    key = np.random.default_rng(count).integers(low, high, count)
+    np.testing.assert_array_equal(stable_argsort(key), np.argsort(key, kind="stable"))
+    for got, expected in zip(
+        unique_first(key), np.unique(key, return_index=True, return_inverse=True), strict=True
+    ):
+        np.testing.assert_array_equal(got, expected.reshape(-1))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int64])
+def test_column_reductions_equal_numpys(dtype):
+    values = (np.random.default_rng(3).normal(0, 1e3, (5000, 3))).astype(dtype)
+    for got, expected in (
+        (column_min(values), values.min(axis=0)),
+        (column_max(values), values.max(axis=0)),
+        (column_ptp(values), np.ptp(values, axis=0)),
+    ):
+        assert got.dtype == expected.dtype
+        np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("columns", [2, 3, 4])
+def test_row_norm_equals_numpys(dtype, columns):
+    values = np.random.default_rng(columns).normal(0, 1e2, (20000, columns)).astype(dtype)
+    got, expected = row_norm(values), np.linalg.norm(values, axis=1)
+    assert got.dtype == expected.dtype
+    np.testing.assert_array_equal(got, expected)
