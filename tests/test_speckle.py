@@ -104,10 +104,21 @@ def test_noisy_sphere_draws_no_crease_fragments(renderer):
 
 def test_stanford_bunny_speckle(renderer, shared_models):
     """The default drawing of the stanford bunny at 1024²: 173 specks with creases split at
-    vertices, 126 with lone crease edges kept, 77 now (llvmpipe). Of those, depth edges along
-    hidden contours draw about 40 (fragments of a noisy grazing surface) and small islands of
-    hidden layers in the contour's fold loops about 30; creases 2."""
+    vertices, 126 with lone crease edges kept, 77 with crease ink from 50 % of the crease angle
+    between pixels, full from 80 %; 66 now from 40 and 70 % (llvmpipe). Most of the rest are
+    depth edges along hidden contours (fragments of a noisy grazing surface) and small islands
+    of hidden layers in the contour's fold loops."""
     path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
     assert path.exists(), f"{path} is missing from the shared models"
     image = np.asarray(blueprint.render(blueprint.load_model(path), size=(1024, 1024)))
-    assert specks(image) <= 85, specks(image)
+    assert specks(image) <= 70, specks(image)
+
+
+def test_engine_creases_are_lines_not_dots(renderer, shared_models):
+    """2CylinderEngine's default drawing at 1024²: where a crease edge's triangles are a few
+    pixels wide, the two sides' pixel normals differ by less than the crease angle, so a crease
+    that inked only from 80 % of it came out as a row of dots (16 specks); 4 from 70 %."""
+    path = shared_models / "glTF-Sample-Models" / "2CylinderEngine.glb"
+    assert path.exists(), f"{path} is missing from the shared models"
+    image = np.asarray(blueprint.render(blueprint.load_model(path), size=(1024, 1024)))
+    assert specks(image) <= 6, specks(image)
