@@ -29,6 +29,13 @@ uniform bool u_part_edges;
 
 const ivec2 OFFSETS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
 
+// Eye-space position of pixel q at window depth z (the projection is centred on the image).
+vec3 eye_position(ivec2 q, float z) {
+    float d = eye_depth(z);
+    vec2 xy = (vec2(q) + 0.5 - 0.5 * vec2(EDGE_LAST + 1)) * u_pixel_angle;
+    return u_depth_range.z > 0.5 ? vec3(xy, -d) : vec3(xy * d, -d);
+}
+
 float crease(vec3 a, vec3 b) {
     return 1.0 - smoothstep(u_normal_cos.y, u_normal_cos.x, dot(a, b));
 }
@@ -71,6 +78,7 @@ float edge_value(ivec2 p) {
     }
 #endif
     float e = 0.0;
+    vec3 n[4];
     for (int i = 0; i < 4; ++i) {
         if (!covered[i]) {
             return 1.0;
@@ -79,7 +87,8 @@ float edge_value(ivec2 p) {
         if (u_part_edges && EDGE_IDS(q, i).y != part) {
             return 1.0;
         }
-        e = max(e, crease(nc, EDGE_NORMAL(q, i)));
+        n[i] = EDGE_NORMAL(q, i);
+        e = max(e, crease(nc, n[i]));
     }
     // Window depth is affine in screen space on any plane, perspective or not, so its second
     // difference is zero on planes and large across a jump; measured in eye-depth units and
@@ -88,5 +97,24 @@ float edge_value(ivec2 p) {
     float footprint = u_depth_range.z > 0.5 ? u_pixel_angle : u_pixel_angle * dc;
     float scale = eye_depth_slope(dc) / (footprint * u_depth_threshold);
     float jump = max(abs(z[0] + z[1] - 2.0 * zc), abs(z[2] + z[3] - 2.0 * zc)) * scale;
-    return max(e, smoothstep(1.0, 2.0, jump));
+    float outline = smoothstep(1.0, 2.0, jump);
+    // A jump is an outline only where one side lies off the other's tangent plane or turns
+    // from it by as much as a crease starts at: the near side of a real one grazes the view,
+    // but the far surface neither passes through it nor runs parallel. Where both sides are
+    // one smooth sheet seen edge-on -- a curved surface just short of its contour, or the
+    // noise folds of a scan there -- drawing the jump smears the contour into broken pieces.
+    if (outline > 0.0) {
+        vec3 pc = eye_position(p, zc);
+        float apart = 0.0;
+        bool turned = false;
+        for (int i = 0; i < 4; ++i) {
+            vec3 d = eye_position(clamp(p + OFFSETS[i], ivec2(0), last), z[i]) - pc;
+            apart = max(apart, max(abs(dot(nc, d)), abs(dot(n[i], d))));
+            turned = turned || dot(nc, n[i]) < u_normal_cos.x;
+        }
+        if (!turned) {
+            outline *= smoothstep(0.75, 1.0, apart / (footprint * u_depth_threshold));
+        }
+    }
+    return max(e, outline);
 }
