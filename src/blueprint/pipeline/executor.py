@@ -161,50 +161,6 @@ class Executor:
             Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2
             for a frame read at once (never those of a stream still to be read).
         """
-        arguments = dict(
-            size=size,
-            view=view,
-            variables=variables,
-            images=images,
-            style=style,
-            max_layers=max_layers,
-            min_fraction=min_fraction,
-            crease_angle=crease_angle,
-            parts=parts,
-            dumps=dumps,
-            profile=profile,
-            read_later=read_later,
-            slot=slot,
-        )
-        frame = self._frame + 1 if frame is None else frame
-        try:
-            return self._run(pipeline, model, camera, frame=frame, blind=True, **arguments)
-        except Overflow:
-            # a frame issued whole found its A-buffer short of room once read: again, looking
-            return self._run(pipeline, model, camera, frame=frame, blind=False, **arguments)
-
-    def _run(
-        self,
-        pipeline,
-        model,
-        camera,
-        *,
-        size,
-        view,
-        variables,
-        images,
-        style,
-        max_layers,
-        min_fraction,
-        crease_angle,
-        parts,
-        dumps,
-        profile,
-        frame,
-        read_later,
-        slot,
-        blind,
-    ) -> Result:
         t0 = clock = time.perf_counter()
         ctx = self.ctx
         self.r.make_current()
@@ -266,7 +222,7 @@ class Executor:
                     "give a model"
                 )
             camera = camera or fit_camera(model, (w, h), view)
-        self._frame = frame
+        self._frame = self._frame + 1 if frame is None else frame
         chosen = None if style is None else get_style(style)
         st = self.last_run = RunState(
             pl=pl,
@@ -288,60 +244,73 @@ class Executor:
 
         ctx.enable_only(ctx.NOTHING)
         self.tiles.forget()  # what an earlier run found, even one an error ended
-        counts: list[int] = []
-        revealed, left = None, 0
+        out_name = pl.output
         if pl.needs_model:
             st.mesh = self.r.mesh(model, crease)
             self.capture.capture_parts(st, parts)
-        if pl.peel:
-            reveal = self.capture.reveal_rule(st)
-            # depth masking peels as deep as it needs: the cap would stop it short silently
-            rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
-            if reveal is not None:
-                rules.append(reveal)
-            # a frame that reads back its output alone, once a frame, can be issued whole before
-            # its counts are known
-            out = bound.passes.get(pl.output)
-            blind = blind and pl.readback == [pl.output] and out is not None and not out.per_layer
-            counts, layers = self.capture.peel(st, max_layers, rules, blind)
-            revealed = None if reveal is None else reveal.shown
-        else:
-            self._ensure_stacks(st, 1)
-            for name in pl.iteration0:
-                self._run_pass(st, name, 0, 1)
-            layers = 1
-        if st.arrays is not None:
-            self._run_batches(st, layers)
-        stage("peel_edges")
-        for name in pl.after:
-            self._run_pass(st, name, 0, layers)
-        self.tiles.forget()
-        stage("compose")
-        ctx.disable(ctx.BLEND)
-        if self.r.use_compute:
-            ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
-        out_name = pl.output
-        pending = None
-        if read_later is not None and out_name in pl.bound.passes and out_name not in pl.stacked:
-            tex = self._value(st, out_name, 0)
-            pending = read_texture_later(tex, bound.format_of(out_name), read_later(tex))
-        dumps_out = {
-            name: self._read(st, name, layers) for name in pl.readback if pending is None or name != out_name
-        }
-        counting = None
-        if pl.peel:
-            if counts is None and pending is not None and self.capture.lists_only(st):
-                # a streamed frame's counts are read with its picture, after the next is issued
-                drawn = layers
 
-                def counting():
-                    counts, layers = self.capture.counted(st, rules, drawn)
-                    return counts, layers, self.capture.left(st, rules, counts, layers)
-
+        def draw(blind: bool):
+            """The frame from the peel to its read-back; ``blind`` as ``LayerCapture.peel``."""
+            counts: list[int] | None = []
+            revealed, left, counting = None, 0, None
+            if pl.peel:
+                reveal = self.capture.reveal_rule(st)
+                # depth masking peels as deep as it needs: the cap would stop it short silently
+                rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
+                if reveal is not None:
+                    rules.append(reveal)
+                # a frame that reads back its output alone, once a frame, can be issued whole before
+                # its counts are known
+                out = bound.passes.get(pl.output)
+                blind = blind and pl.readback == [pl.output] and out is not None and not out.per_layer
+                counts, layers = self.capture.peel(st, max_layers, rules, blind)
+                revealed = None if reveal is None else reveal.shown
             else:
-                if counts is None:
-                    counts, layers = self.capture.counted(st, rules, layers)
-                left = self.capture.left(st, rules, counts, layers)
+                self._ensure_stacks(st, 1)
+                for name in pl.iteration0:
+                    self._run_pass(st, name, 0, 1)
+                layers = 1
+            if st.arrays is not None:
+                self._run_batches(st, layers)
+            stage("peel_edges")
+            for name in pl.after:
+                self._run_pass(st, name, 0, layers)
+            self.tiles.forget()
+            stage("compose")
+            ctx.disable(ctx.BLEND)
+            if self.r.use_compute:
+                ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
+            pending = None
+            if read_later is not None and out_name in pl.bound.passes and out_name not in pl.stacked:
+                tex = self._value(st, out_name, 0)
+                pending = read_texture_later(tex, bound.format_of(out_name), read_later(tex))
+            dumps_out = {
+                name: self._read(st, name, layers)
+                for name in pl.readback
+                if pending is None or name != out_name
+            }
+            counting = None
+            if pl.peel:
+                if counts is None and pending is not None and self.capture.lists_only(st):
+                    # a streamed frame's counts are read with its picture, after the next is issued
+                    drawn = layers
+
+                    def counting():
+                        counts, layers = self.capture.counted(st, rules, drawn)
+                        return counts, layers, self.capture.left(st, rules, counts, layers)
+
+                else:
+                    if counts is None:
+                        counts, layers = self.capture.counted(st, rules, layers)
+                    left = self.capture.left(st, rules, counts, layers)
+            return counts, layers, revealed, left, pending, dumps_out, counting
+
+        try:
+            counts, layers, revealed, left, pending, dumps_out, counting = draw(blind=True)
+        except Overflow:
+            # a frame issued whole found its A-buffer short of room once read: again, looking
+            st.groups.clear()
+            counts, layers, revealed, left, pending, dumps_out, counting = draw(blind=False)
         stage("read")
         output = dumps_out.get(out_name)
         fmt = bound.format_of(out_name)
