@@ -98,19 +98,20 @@ def output_size(bound: Bound, image_names, size, images: dict, max_texture: int)
 
 def read_texture(tex, fmt: str) -> np.ndarray:
     """(H, W, C) of a target, row 0 at the top; uint8 for 8-bit formats, float32 or int32."""
-    return _decode(tex.read(), tuple(tex.size[:2]), fmt)
+    return _received(tex.read_into, tuple(tex.size[:2]), fmt)
 
 
-def _decode(data: bytes, size: tuple[int, int], fmt: str) -> np.ndarray:
+def _received(read_into, size: tuple[int, int], fmt: str) -> np.ndarray:
+    """What ``read_into`` fills with a target's pixels (rows bottom up, as the GL gives them),
+    row 0 at the top: a view of the rows read, not a flipped copy (at 2048² a second copy of
+    every frame's picture)."""
     w, h = size
-    if fmt == "depth":
-        array = np.frombuffer(data, np.float32).reshape(h, w, 1)
-    else:
-        components, dtype = FORMATS[fmt]
-        array = np.frombuffer(data, _DTYPES[dtype]).reshape(h, w, components)
-        if array.dtype == np.float16:
-            array = array.astype(np.float32)
-    return np.ascontiguousarray(array[::-1])
+    components, dtype = (1, np.float32) if fmt == "depth" else (FORMATS[fmt][0], _DTYPES[FORMATS[fmt][1]])
+    array = np.empty((h, w, components), dtype)
+    read_into(array)
+    if array.dtype == np.float16:
+        array = array.astype(np.float32)
+    return array[::-1]
 
 
 @dataclass
@@ -124,7 +125,7 @@ class PendingRead:
     nbytes: int
 
     def collect(self) -> np.ndarray:
-        return _decode(self.buffer.read(size=self.nbytes), self.size, self.fmt)
+        return _received(lambda array: self.buffer.read_into(array, size=self.nbytes), self.size, self.fmt)
 
 
 def texture_bytes(tex) -> int:
