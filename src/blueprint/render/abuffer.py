@@ -199,8 +199,7 @@ class ABuffer:
             self.clear["u_capacity"].value = room
             self.clear.run(*groups)
             ctx.memory_barrier()
-            gb.clears[0].use()
-            self.mesh.vao(self.geometry).render()
+            self.fragments(gb)
             ctx.memory_barrier()
             # lists cut short by too little room hold only the fragments that had room: sorted
             # all the same, and drawn again below
@@ -226,6 +225,12 @@ class ABuffer:
                 return calls
             if self._count(seen.read, nbytes, room, size, name):
                 return calls
+
+    def fragments(self, gb) -> None:
+        """Every fragment of the mesh into its pixel's list (abuffer.frag): the graphics
+        pipeline's rasteriser (``benchmarks/compute_capture.py`` measures one in compute)."""
+        gb.clears[0].use()
+        self.mesh.vao(self.geometry).render()
 
     def _count(self, read, nbytes: int, room: int, size: tuple[int, int], name: str) -> bool:
         """The counts (``read`` of ``nbytes``) of a capture that had ``room``: the layers'
