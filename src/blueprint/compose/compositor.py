@@ -5,6 +5,7 @@ image passes run as compute shaders, dispatches over 8-slice texture arrays."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -37,6 +38,13 @@ def inks(all_inks: np.ndarray, first: int, count: int) -> bytes:
     block = np.zeros((GROUP, 4), np.float32)
     block[:count] = all_inks[first : first + count]
     return block.tobytes()
+
+
+@functools.lru_cache(maxsize=256)
+def group_inks(style: Style, first: int, count: int) -> bytes:
+    """``inks`` of the layers ``first`` to ``first + count`` of ``style`` (a layer's ink does
+    not depend on how many follow it), kept: every frame asks for the same few."""
+    return inks(style.layer_inks(first + count), first, count)
 
 
 def set_paper(uniforms, prog, style: Style) -> None:
@@ -86,11 +94,10 @@ class Compositor:
             passes += 1
         sprites = []  # (maps, inks, first layer, shading, drawn over the layers' tiles)
         if layers:
-            all_inks = style.layer_inks(layers)
             for first in _groups(layers):
                 count = min(GROUP, layers - first)
                 group = stack[first : first + count]
-                sprites.append((group, inks(all_inks, first, count), first, shading, tiles is not None))
+                sprites.append((group, group_inks(style, first, count), first, shading, tiles is not None))
         if highlight is not None:
             sprites.append(([highlight], inks(np.array([style.highlight]), 0, 1), 0, None, False))
         ctx.enable(ctx.BLEND)
@@ -133,7 +140,6 @@ class Compositor:
         put = r.uniforms.set
         target.bind_to_image(0, read=True, write=True)
         groups = _groups(layers)
-        all_inks = style.layer_inks(max(layers, 1))
         supersample = max(1, arrays[0].size[0] // target.size[0])
         dispatches = [(arrays[f // GROUP], min(GROUP, layers - f) if layers else 0, f, False) for f in groups]
         if highlight is not None:
@@ -148,7 +154,7 @@ class Compositor:
             put(prog, "u_edges", LAYER_UNITS)
             put(prog, "u_first", first == groups[0] and not overlay)
             put(prog, "u_layers", count)
-            ink = inks(np.array([style.highlight]), 0, 1) if overlay else inks(all_inks, first, count)
+            ink = inks(np.array([style.highlight]), 0, 1) if overlay else group_inks(style, first, count)
             put(prog, "u_ink", ink)
             shaded = shading is not None and not overlay
             put(prog, "u_shaded", shaded)

@@ -42,7 +42,7 @@ from blueprint.compose.compositor import TILES_VERT, Compositor, Shading
 from blueprint.compose.style import STYLES, Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu import units
-from blueprint.pipeline.arrays import SLICES, array_plan
+from blueprint.pipeline.arrays import SLICES, ArrayPlan, array_plan
 from blueprint.pipeline.graph import Plan, plan
 from blueprint.pipeline.inputs import (
     ImageInputs,
@@ -84,6 +84,8 @@ class Executor:
         self.compositor = Compositor(renderer)
         self.capture = LayerCapture(self)
         self._plans: dict[tuple, Plan] = {}
+        # each plan's compute form (``array_plan``), by the plan's id
+        self._array_plans: dict[int, tuple[Plan, ArrayPlan | None]] = {}
         self._frame = 0
         self._buffers: dict[int, object] = {}
         self.last_run: RunState | None = None
@@ -109,6 +111,12 @@ class Executor:
         if held is None or held.bound is not bound:
             held = self._plans[key] = plan(bound, tuple(dumps))
         return held
+
+    def _arrays(self, pl: Plan) -> ArrayPlan | None:
+        held = self._array_plans.get(id(pl))
+        if held is None or held[0] is not pl:
+            held = self._array_plans[id(pl)] = pl, array_plan(pl)
+        return held[1]
 
     # -- running -------------------------------------------------------------------------------
     def run(
@@ -233,7 +241,7 @@ class Executor:
             size_of=size_of,
             frame=self._frame,
             slot=slot,
-            arrays=array_plan(pl) if self.r.use_compute else None,
+            arrays=self._arrays(pl) if self.r.use_compute else None,
         )
         st.attr_dumps = {
             n: [] for n in pl.readback if n in bound.attributes and bound.attributes[n].parts is None
@@ -345,13 +353,13 @@ class Executor:
         (the last one's: to its read-back), so the times add up to the stream's."""
         pending: tuple[Result, float, dict, int] | None = None
 
-        def collected(result: Result, arguments: dict, k: int) -> Result:
+        def collected(result: Result, arguments: dict, k: int, ms: float) -> Result:
             try:
-                return result.collected()
+                return result.collected(ms=ms)
             except Overflow:
                 # its A-buffer proved short of room once read: drawn again, now with room, in
                 # its own slot (the next frame's is still to be read)
-                return self.run(pipeline, model, **{**options, **arguments}, slot=k % 2)
+                return replace(self.run(pipeline, model, **{**options, **arguments}, slot=k % 2), ms=ms)
 
         for k, arguments in enumerate(frames):
             start = time.perf_counter()
@@ -364,11 +372,11 @@ class Executor:
             )
             if pending is not None:
                 before, began, its_arguments, j = pending
-                yield replace(collected(before, its_arguments, j), ms=(start - began) * 1e3)
+                yield collected(before, its_arguments, j, (start - began) * 1e3)
             pending = result, start, arguments, k
         if pending is not None:
             before, began, its_arguments, j = pending
-            yield replace(collected(before, its_arguments, j), ms=(time.perf_counter() - began) * 1e3)
+            yield collected(before, its_arguments, j, (time.perf_counter() - began) * 1e3)
 
     def _pixel_buffer(self, slot: int, tex):
         """Pixel buffer ``slot`` of two (frames alternate), large enough for ``tex``."""

@@ -62,16 +62,15 @@ class Result:
     pending: PendingRead | None = field(default=None, repr=False)
     counting: Callable | None = field(default=None, repr=False)
 
-    def collected(self) -> Result:
-        """This result with its output brought back and its layers counted (itself where
-        nothing is pending)."""
-        done = self
-        if done.counting is not None:
-            counts, layers, left = done.counting()
-            done = replace(done, layer_pixels=counts, layers=layers, layers_left=left, counting=None)
-        if done.pending is None:
-            return done
-        return replace(done, output=done.pending.collect(), pending=None)
+    def collected(self, **changes) -> Result:
+        """This result with its output brought back, its layers counted and ``changes`` made
+        (itself where there is nothing to do)."""
+        if self.counting is not None:
+            counts, layers, left = self.counting()
+            changes.update(layer_pixels=counts, layers=layers, layers_left=left, counting=None)
+        if self.pending is not None:
+            changes.update(output=self.pending.collect(), pending=None)
+        return replace(self, **changes) if changes else self
 
     @property
     def image(self) -> np.ndarray:

@@ -76,19 +76,17 @@ class ABuffer:
         self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
         defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
         self.resolve = r.compute(RESOLVE_COMP, defines)
+        put = r.uniforms.set  # a stream's frames change only the camera's
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),
             (self.resolve, ("u_depth_range", "u_peel_eps")),
         ):
             for name in names:
-                if isinstance(uniforms[name], bytes):
-                    prog[name].write(uniforms[name])
-                else:
-                    prog[name].value = uniforms[name]
+                put(prog, name, uniforms[name])
         self.clear = r.compute(CLEAR_COMP)
         self.unpack = r.compute(UNPACK_COMP, {"TILES": TILE, "ROW": ROW} if tiles else {})
         for prog in (self.resolve, self.unpack):
-            prog["u_back_bias"].value = back_bias
+            put(prog, "u_back_bias", back_bias)
         self._layer_pixels: list[int] = []
         self.tiles, self.defer = tiles, defer and not tiles
         # (counts buffer, room) of a capture whose counts are not read yet

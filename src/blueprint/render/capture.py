@@ -176,6 +176,17 @@ class Capture:
                 self.abuffer = None
             else:
                 use_kbuffer = False
+        self.prog = self.kbuffer = self._flags = None
+        # the peel's own program only where it peels: an A-buffer frame sets up none (unless
+        # its lists prove too big for memory, ``draw``)
+        self._peel_with = (camera, batch, face_ids, selected, use_kbuffer)
+        if self.abuffer is None:
+            self._set_up_peel()
+
+    def _set_up_peel(self) -> None:
+        r, mesh, (w, h) = self.r, self.mesh, self.gb.size
+        camera, batch, face_ids, selected, use_kbuffer = self._peel_with
+        normals = self.gb.normal is not None
         culled_from = r.culled_tie_break_from
         culled = (
             not use_kbuffer
@@ -202,7 +213,6 @@ class Capture:
             prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         self.prog = prog
         self.kbuffer = _KBuffer(r, prog, batch) if use_kbuffer else None
-        self._flags = None
         if selected is not None:
             data = np.asarray(selected, bool).astype(np.int32).tobytes()
             self._flags = r.ctx.texture((len(selected), 1), 1, data, dtype="i4")
@@ -252,6 +262,7 @@ class Capture:
                 return drawn
             # more fragments than the lists may hold: peeled a pass a layer
             self.abuffer = None
+            self._set_up_peel()
         gb.flat = None
         gb.clears[layer % 2].use()
         gb.clears[layer % 2].clear(depth=1.0)
