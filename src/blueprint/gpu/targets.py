@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass
 
 from blueprint.errors import InputError
 
@@ -27,27 +26,21 @@ INTERNAL_FORMATS: dict[str, tuple[int, str]] = {
 }
 
 
-@dataclass(frozen=True)
-class TargetKey:
-    name: str
-    size: tuple[int, ...]
-    fmt: str
-
-
 class TargetPool:
     """Creates textures lazily, keeps them while their size and format stay, drops them on
     change. Passes borrow targets by name; only the pool releases them."""
 
     def __init__(self, ctx) -> None:
         self.ctx = ctx
-        self._textures: dict[str, tuple[TargetKey, object]] = {}
+        # name -> ((size, format), texture); a plain tuple: a frame looks up dozens
+        self._textures: dict[str, tuple[tuple, object]] = {}
         self._framebuffers: dict[tuple, object] = {}
         self._buffers: dict[str, object] = {}
 
     def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
         """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
         ``layers`` > 0 a 2D texture array of that many slices."""
-        key = TargetKey(name, (*size, layers) if layers else tuple(size), fmt)
+        key = ((*size, layers) if layers else tuple(size), fmt)
         held = self._textures.get(name)
         if held is not None and held[0] == key:
             return held[1]
@@ -69,7 +62,7 @@ class TargetPool:
 
     def depth(self, name: str, size: tuple[int, int]):
         """A depth texture, readable by shaders (comparison off) as window depth in [0, 1]."""
-        key = TargetKey(name, tuple(size), "depth")
+        key = (tuple(size), "depth")
         held = self._textures.get(name)
         if held is not None and held[0] == key:
             return held[1]

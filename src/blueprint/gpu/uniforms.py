@@ -16,9 +16,13 @@ class Uniforms:
         return name in members
 
     def set(self, prog, name: str, value) -> None:
-        if not self.has(prog, name):
+        glo = prog.glo
+        members = self._members.get(glo)
+        if members is None:
+            members = self._members[glo] = set(prog)
+        if name not in members:
             return
-        key = (prog.glo, name)
+        key = (glo, name)
         if self._values.get(key) == value:
             return
         self._values[key] = value

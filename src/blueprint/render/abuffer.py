@@ -88,6 +88,7 @@ class ABuffer:
         for prog in (self.resolve, self.unpack):
             put(prog, "u_back_bias", back_bias)
         self._layer_pixels: list[int] = []
+        self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
         self.tiles, self.defer = tiles, defer and not tiles
         # (counts buffer, room) of a capture whose counts are not read yet
         self._unread: tuple | None = None
@@ -156,8 +157,13 @@ class ABuffer:
 
     def flat(self, size: tuple[int, int]) -> tuple:
         """The two float targets the layers' depths alternate in, at ``size``."""
-        name = f"abuffer.{size[0]}x{size[1]}"
-        return tuple(self.r.pool.texture(f"{name}.depth{i}", size, "r32f") for i in (0, 1))
+        held = self._flat.get(size)
+        if held is None:
+            name = f"abuffer.{size[0]}x{size[1]}"
+            held = self._flat[size] = tuple(
+                self.r.pool.texture(f"{name}.depth{i}", size, "r32f") for i in (0, 1)
+            )
+        return held
 
     def _buffers(self, name: str, room: int) -> tuple:
         """(nodes, links, order, totals, depths) with room for ``room`` fragments, bound to their
