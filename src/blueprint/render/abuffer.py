@@ -254,7 +254,7 @@ class ABuffer:
         # pixels with at least k + 1 layers are those layer k covers
         histogram = counts[4 : 4 + MOST_LAYERS + 1]
         covered = np.cumsum(histogram[::-1])[::-1][1:]
-        self._layer_pixels = [int(v) for v in covered if v > 0]
+        self._layer_pixels = covered[covered > 0].tolist()
         if self.tiles:
             rows, columns = -(-size[1] // TILE), -(-size[0] // TILE)
             self._list_tiles(name, counts[4 + MOST_LAYERS + 1 :].reshape(rows, columns))
