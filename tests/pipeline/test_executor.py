@@ -400,3 +400,21 @@ def test_pipeline_file_run_takes_parts_as_renderer_render_does(tmp_path, rendere
     error = capsys.readouterr().err
     assert failed.value.code == 2 and "--parts highlight=GLOBS" in error and error.count("\n") == 1
     assert not (tmp_path / "none.png").exists()
+
+
+@pytest.mark.parametrize("style", ["blueprint", "transparent"])
+def test_frame_left_on_the_gpu_is_the_frame_read_back(renderer, style):
+    """``on_gpu`` (the viewer's frames) leaves the picture in its target, unread: the same
+    premultiplied pixels the read-back frame was made from, and the same layers."""
+    from blueprint.render.renderer import straight_alpha
+
+    model = examples.gearbox()
+    options = dict(size=(96, 72), style=style, supersample=1, max_layers=4)
+    read = renderer.render(model, **options)
+    kept = renderer.render(model, read.camera, on_gpu=True, **options)
+    assert kept.image is None
+    rgba = np.frombuffer(kept.texture.read(), np.uint8).reshape(72, 96, 4)[::-1]
+    assert (rgba[..., 3] < 255).any() == (style == "transparent")
+    np.testing.assert_array_equal(straight_alpha(rgba), read.image)
+    counts = (kept.layers, kept.layer_pixels, kept.layers_left)
+    assert counts == (read.layers, read.layer_pixels, read.layers_left)

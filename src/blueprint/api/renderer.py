@@ -42,6 +42,7 @@ class Renderer(LayerRenderer):
         shade: np.ndarray | None = None,
         shade_opacity: float = 1.0,
         profile: bool = False,
+        on_gpu: bool = False,
     ) -> Frame:
         """Render a blueprint of ``model``: the ``blueprint`` pipeline preset.
 
@@ -80,6 +81,9 @@ class Renderer(LayerRenderer):
             Opacity of the shading, in (0, 1].
         profile : bool
             Synchronise after each stage to fill ``Frame.stages`` (slower).
+        on_gpu : bool
+            Leave the picture on the GPU (``Frame.texture``), unread: for a window of this
+            renderer's context to show it (``Frame.image`` is None then).
         """
         return render_blueprint(
             self,
@@ -101,4 +105,5 @@ class Renderer(LayerRenderer):
             shade=shade,
             shade_opacity=shade_opacity,
             profile=profile,
+            on_gpu=on_gpu,
         )

@@ -29,12 +29,20 @@ def blueprint_preset() -> PipelineSpec:
 
 
 def render_blueprint(
-    renderer: LayerRenderer, model: Model, camera: Camera | None = None, *, profile: bool = False, **options
+    renderer: LayerRenderer,
+    model: Model,
+    camera: Camera | None = None,
+    *,
+    profile: bool = False,
+    on_gpu: bool = False,
+    **options,
 ) -> Frame:
     """``Renderer.render`` through the ``blueprint`` preset; ``options`` are its drawing options
     (``size``, ``style``, ``highlight``...: see there), checked by ``_run_arguments``."""
     style, arguments = _run_arguments(renderer, model, **options)
-    result = executor_for(renderer).run(blueprint_preset(), model, camera, profile=profile, **arguments)
+    result = executor_for(renderer).run(
+        blueprint_preset(), model, camera, profile=profile, keep=on_gpu, **arguments
+    )
     return _frame(result, style)
 
 
@@ -117,7 +125,10 @@ def _run_arguments(
 
 
 def _frame(result, style: Style) -> Frame:
-    image = result.image if style.paper is None else result.output
+    if result.texture is not None:
+        image = None
+    else:
+        image = result.image if style.paper is None else result.output
     return Frame(
         image,
         result.layers,
@@ -128,4 +139,5 @@ def _frame(result, style: Style) -> Frame:
         result.stages,
         result.revealed,
         result.layers_left,
+        texture=result.texture,
     )

@@ -138,6 +138,7 @@ class Executor:
         profile: bool = False,
         frame: int | None = None,
         read_later=None,
+        keep: bool = False,
         slot: int = 2,
     ) -> Result:
         """Run a pipeline once.
@@ -165,6 +166,9 @@ class Executor:
         read_later : pixel buffer, optional
             Copy a one-texture output into it instead of reading it back (``stream``): the
             result comes with ``pending`` set and ``output`` None.
+        keep : bool
+            Leave a one-texture output on the GPU, unread: ``Result.texture`` (a window shows it
+            from there).
         slot : int
             Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2
             for a frame read at once (never those of a stream still to be read).
@@ -288,14 +292,17 @@ class Executor:
             ctx.disable(ctx.BLEND)
             if self.r.use_compute:
                 ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
-            pending = None
-            if read_later is not None and out_name in pl.bound.passes and out_name not in pl.stacked:
-                tex = self._value(st, out_name, 0)
-                pending = read_texture_later(tex, bound.format_of(out_name), read_later(tex))
+            pending = kept = None
+            if out_name in pl.bound.passes and out_name not in pl.stacked:
+                if keep:
+                    kept = self._value(st, out_name, 0)
+                elif read_later is not None:
+                    tex = self._value(st, out_name, 0)
+                    pending = read_texture_later(tex, bound.format_of(out_name), read_later(tex))
             dumps_out = {
                 name: self._read(st, name, layers)
                 for name in pl.readback
-                if pending is None or name != out_name
+                if (pending is None and kept is None) or name != out_name
             }
             counting = None
             if pl.peel:
@@ -311,14 +318,14 @@ class Executor:
                     if counts is None:
                         counts, layers = self.capture.counted(st, rules, layers)
                     left = self.capture.left(st, rules, counts, layers)
-            return counts, layers, revealed, left, pending, dumps_out, counting
+            return counts, layers, revealed, left, pending, kept, dumps_out, counting
 
         try:
-            counts, layers, revealed, left, pending, dumps_out, counting = draw(blind=True)
+            counts, layers, revealed, left, pending, kept, dumps_out, counting = draw(blind=True)
         except Overflow:
             # a frame issued whole found its A-buffer short of room once read: again, looking
             st.groups.clear()
-            counts, layers, revealed, left, pending, dumps_out, counting = draw(blind=False)
+            counts, layers, revealed, left, pending, kept, dumps_out, counting = draw(blind=False)
         stage("read")
         output = dumps_out.get(out_name)
         fmt = bound.format_of(out_name)
@@ -340,6 +347,7 @@ class Executor:
             left,
             pending,
             counting,
+            kept,
         )
 
     def stream(

@@ -45,6 +45,9 @@ class Result:
         Where a stream's frame was issued whole before its layers were counted: gives
         (layer_pixels, layers, layers_left), which ``collected()`` fills in (``layers`` is the
         layers drawn until then). May raise ``abuffer.Overflow``: the frame must be drawn again.
+    texture : moderngl.Texture or None
+        Where the run was asked to ``keep`` its output on the GPU: the output's target (OpenGL
+        rows, bottom up; valid until the next run), and ``output`` is None.
     """
 
     output: np.ndarray
@@ -61,6 +64,7 @@ class Result:
     layers_left: int = 0
     pending: PendingRead | None = field(default=None, repr=False)
     counting: Callable | None = field(default=None, repr=False)
+    texture: object | None = field(default=None, repr=False)
 
     def collected(self, **changes) -> Result:
         """This result with its output brought back, its layers counted and ``changes`` made

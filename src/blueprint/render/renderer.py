@@ -49,9 +49,12 @@ class Frame:
     closer than the peel's tolerance count apart), else 0.
     ``marks``: the sheet marks drawn over the image (a plan sheet's border, title block and
     labels, dimensions; ``blueprint.scene.sheet.Marks``, in the image's pixels), if any.
+    ``texture``, where the frame was drawn ``on_gpu``: the picture left on the GPU (a
+    ``moderngl.Texture``, premultiplied RGBA, OpenGL rows from the bottom, valid until the
+    renderer draws again), ``image`` None.
     """
 
-    image: np.ndarray
+    image: np.ndarray | None
     layers: int
     layer_pixels: list[int]
     camera: Camera
@@ -61,6 +64,7 @@ class Frame:
     revealed: float | None = None
     layers_left: int = 0
     marks: Marks | None = None
+    texture: object | None = field(default=None, repr=False)
 
     @property
     def layers_shown(self) -> str:

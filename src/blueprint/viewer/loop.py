@@ -226,9 +226,14 @@ class Viewer:
             crease_angle=opts.crease_angle,
             line_width=opts.line_width,
             supersample=supersample,
+            # shown from the GPU; a screenshot (not presented at once) reads its drawing back
+            on_gpu=present,
         )
         self._drawing = None if draft else frame.image
-        self.presenter.show(frame.image)
+        if frame.texture is not None:
+            self.presenter.show_texture(frame.texture)
+        else:
+            self.presenter.show(frame.image)
         ms = (time.perf_counter() - t0) * 1e3
         if draft:
             self._drafts.adapt(ms)

@@ -49,9 +49,11 @@ class Presenter:
     def __init__(self, window: Window) -> None:
         self.window = window
         self._textures: dict[str, object] = {}
+        self._fbos: dict[int, object] = {}  # a framebuffer over each texture, by its GL name
         self._overlay_key: tuple | None = None
         self._overlay_base: np.ndarray | None = None
         self._band_rows = 0
+        self._premultiplied = False  # how the picture's colours hold its alpha
 
     @property
     def has_picture(self) -> bool:
@@ -61,6 +63,15 @@ class Presenter:
         """Make ``image``, (H, W, 4) uint8, row 0 at the top, the picture presented from now on;
         presenting again (heads-up lines, exposure) reuses the upload."""
         self._upload("picture", image)
+        self._premultiplied = False
+
+    def show_texture(self, texture) -> None:
+        """Make the renderer's picture ``texture`` (``Frame.texture``: premultiplied RGBA, on
+        the GPU) the picture presented from now on: copied on the GPU, never read back."""
+        ctx = self.window.renderer.ctx
+        picture = self._texture("picture", texture.size)
+        ctx.copy_framebuffer(self._fbos[picture.glo], self.window.renderer.pool.framebuffer((texture,)))
+        self._premultiplied = True
 
     def draw(self, size: tuple[int, int], lines: list[str], show_help: bool) -> None:
         """The picture over the backdrop, scaled to the window's `size`, the heads-up `lines` and
@@ -79,6 +90,7 @@ class Presenter:
         prog["u_overlay"].value = 1
         prog["u_window"].value = (float(w), float(h))
         prog["u_backdrop"].value = tuple(c / 255.0 for c in BACKDROP)
+        prog["u_premultiplied"].value = self._premultiplied
         vao.render(vertices=3)
 
     def read(self, size: tuple[int, int]) -> np.ndarray:
@@ -107,22 +119,31 @@ class Presenter:
         return texture
 
     def _upload(self, name: str, image: np.ndarray):
-        """``image`` (H, W, 4) uint8, row 0 at the top, in the texture ``name`` (kept between
-        frames, remade when the size changes)."""
+        """``image`` (H, W, 4) uint8, row 0 at the top, in the texture ``name``."""
         h, w = image.shape[:2]
-        ctx = self.window.renderer.ctx
-        texture = self._textures.get(name)
-        if texture is None or texture.size != (w, h):
-            if texture is not None:
-                texture.release()
-            texture = self._textures[name] = ctx.texture((w, h), 4, alignment=1)
-            # drafts are scaled up bilinearly; a full-size picture lands on texel centres
-            texture.filter = (ctx.LINEAR, ctx.LINEAR)
-            texture.repeat_x = texture.repeat_y = False
+        texture = self._texture(name, (w, h))
         texture.write(np.ascontiguousarray(image[::-1]).tobytes())
         return texture
 
+    def _texture(self, name: str, size: tuple[int, int]):
+        """The texture ``name``, kept between frames, remade when the size changes."""
+        ctx = self.window.renderer.ctx
+        texture = self._textures.get(name)
+        if texture is None or texture.size != tuple(size):
+            if texture is not None:
+                self._fbos.pop(texture.glo).release()
+                texture.release()
+            texture = self._textures[name] = ctx.texture(tuple(size), 4, alignment=1)
+            # drafts are scaled up bilinearly; a full-size picture lands on texel centres
+            texture.filter = (ctx.LINEAR, ctx.LINEAR)
+            texture.repeat_x = texture.repeat_y = False
+            self._fbos[texture.glo] = ctx.framebuffer(color_attachments=[texture])
+        return texture
+
     def release(self) -> None:
+        for fbo in self._fbos.values():
+            fbo.release()
         for texture in self._textures.values():
             texture.release()
+        self._fbos.clear()
         self._textures.clear()
