@@ -183,6 +183,7 @@ class Bench:
             "depth_max_diff": float(np.abs(a.depth[:k] - b.depth[:k])[both].max(initial=0.0)),
             "normal_max_diff": float(np.abs(a.normal[:k] - b.normal[:k])[both].max(initial=0.0)),
             "tile_pairs": self.raster.binned((size, size)),
+            "fragments": fragments(r, size),
         }
         # the capture alone (lists emptied, every fragment listed, the lists sorted), each way
         ab = peeled_capture(r, model, camera)
@@ -199,6 +200,12 @@ class Bench:
         self.use(False)
         row["pixels_apart"] = int((np.abs(pictures[0] - pictures[1]).max(-1) > 8).sum())
         return row
+
+
+def fragments(r, size: int) -> int:
+    """Fragments the last A-buffer capture at ``size`` drew (its totals' first count)."""
+    totals = r.pool.buffer(f"abuffer.{size}x{size}.totals", 16)
+    return int(np.frombuffer(totals.read(size=4), np.uint32)[0])
 
 
 def peeled_capture(r, model, camera) -> ABuffer:
