@@ -197,6 +197,7 @@ def test_frames_take_every_renderer_argument_by_name_with_its_default():
     frame = _keywords(render_frame)
     assert _keywords(render) == frame
     renderer = _keywords(Renderer.render)
+    assert renderer.pop("on_gpu") is False  # a window's frames alone stay on the GPU
     assert {k: frame[k] for k in renderer} == renderer
     layers = _keywords(Renderer.peel)
     assert {k: v for k, v in _keywords(peel).items() if k in layers} == layers
