@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.gpu.tables import table_fits, table_texture
 from blueprint.render.renderer import LayerRenderer
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera
@@ -116,11 +117,14 @@ def gpu_levels(
 ) -> GpuLevels | None:
     """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
     draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
-    than ``MAX_LAYERS`` layers (then ``triangles_at`` and ``classify_samples``).
+    than ``MAX_LAYERS`` layers or more planes than a texture holds (then ``triangles_at`` and
+    ``classify_samples``).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases``; ``planes`` from
     ``levels.face_planes``; ``size`` (width, height) in pixels.
     """
+    if not table_fits(len(planes), renderer.max_texture):
+        return None
     clock = time.perf_counter()
     surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
     layered = surfaces is None
@@ -167,13 +171,12 @@ def gpu_levels(
     put(prog, "u_ortho", bool(ortho))
     put(prog, "u_limit", float(np.float32(tolerance * footprint)))
     put(prog, "u_offset", float(offset))
-    buffers = [
-        ctx.buffer(packed.tobytes()),
-        ctx.buffer(np.ascontiguousarray(planes, np.float32).tobytes()),
-        ctx.buffer(reserve=16 * len(inside)),
-    ]
+    plane_texture = table_texture(ctx, planes.astype(np.float32))
+    plane_texture.use(location=MAX_LAYERS)
+    put(prog, "u_planes", MAX_LAYERS)
+    buffers = {0: ctx.buffer(packed.tobytes()), 2: ctx.buffer(reserve=16 * len(inside))}
     try:
-        for binding, buffer in enumerate(buffers):
+        for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
         groups = -(-len(inside) // _GROUP)
         gx = min(groups, _MAX_GROUPS)
@@ -181,8 +184,9 @@ def gpu_levels(
         ctx.memory_barrier()
         result = np.frombuffer(buffers[2].read(), np.int32).reshape(-1, 4)
     finally:
-        for buffer in buffers:
+        for buffer in buffers.values():
             buffer.release()
+        plane_texture.release()
     level[inside] = result[:, 0]
     sides[inside] = result[:, 1:3]
     return GpuLevels(level, sides, checked, layers, peel_seconds)
