@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.gpu.tables import table_fits, table_texture
+
 __all__ = ["gpu_cut_pairs"]
 
 TRIANGLE_PAIRS_COMP = "blueprint.vector:glsl/triangle_pairs.comp"
@@ -36,7 +38,11 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     software rasteriser) NumPy is as fast: fewer than ``SOFTWARE_MIN_PARTNERS`` a triangle."""
     n, entries_n = len(tri), len(grid.owner)
     limit = int(renderer.ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 0))
-    if renderer.ctx.version_code < 430 or max(128 * n, 16 * entries_n) > limit or entries_n >= 1 << 31:
+    if (
+        renderer.ctx.version_code < 430
+        or 16 * entries_n > limit
+        or not table_fits(max(8 * n, entries_n), renderer.max_texture)
+    ):
         return None
     partners = grid.cell_end - grid.group_end
     if renderer.software and int(partners.sum()) < SOFTWARE_MIN_PARTNERS * n:
@@ -66,23 +72,29 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
 
     renderer.make_current()  # the first GL work of a drawing: another context may be current
     ctx = renderer.ctx
-    inputs = {
-        0: packed,
-        1: firsts,
-        2: grid.owner.astype(np.int32),
-        3: entries,
-        4: cells,
-        5: rough,
+    tables = {
+        # the doubles' bits, two a texel (triangles.glsl)
+        "u_tris": packed.reshape(n, 16).view(np.uint32).reshape(8 * n, 4),
+        "u_owners": grid.owner.astype(np.int32),
+        "u_boxes": rough.reshape(2 * n, 4),
+        "u_firsts": firsts,
     }
-    buffers = {binding: ctx.buffer(np.ascontiguousarray(data)) for binding, data in inputs.items()}
+    textures = {name: table_texture(ctx, data) for name, data in tables.items()}
+    buffers = {
+        binding: ctx.buffer(np.ascontiguousarray(data)) for binding, data in ((3, entries), (4, cells))
+    }
     try:
+        for unit, texture in enumerate(textures.values()):
+            texture.use(location=unit)
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
         prog = renderer.compute(TRIANGLE_PAIRS_COMP)
+        _bind_tables(renderer, prog, textures)
         pairs_n, buffers[6] = _gathered(renderer, prog, len(busy), 6, max(4096, 8 * n))
         if pairs_n == 0:
             return empty, empty
         prog = renderer.compute(TRIANGLE_CUTS_COMP)
+        _bind_tables(renderer, prog, textures)
         reach = max(-float(lo.min()), float(hi.max()), 0.0)
         tol = _TOL_OF_EPS * eps + _TOL_OF_COORD * reach
         for name, value in (("u_eps", eps), ("u_tol", tol), ("u_tol_span", tol)):
@@ -92,9 +104,17 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     finally:
         for buffer in buffers.values():
             buffer.release()
+        for texture in textures.values():
+            texture.release()
     found = np.frombuffer(data, np.uint32).reshape(-1, 2).astype(np.int64)
     order = np.lexsort((found[:, 1], found[:, 0]))
     return grid.owner[found[order, 0]], grid.owner[found[order, 1]]
+
+
+def _bind_tables(renderer, prog, textures: dict) -> None:
+    """Point the program's table samplers at the units ``gpu_cut_pairs`` bound them to."""
+    for unit, name in enumerate(textures):
+        renderer.uniforms.set(prog, name, unit)
 
 
 def _gathered(renderer, prog, count: int, binding: int, capacity: int):
