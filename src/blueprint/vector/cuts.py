@@ -21,10 +21,12 @@ _MAX_GROUPS = 65535
 # NumPy's differ by less than 1e-14 of the largest coordinate.
 _TOL_OF_EPS = 1e-3
 _TOL_OF_COORD = 1e-12
-# On a software rasteriser, partners in the grid per triangle from which the passes pay for
-# their uploads (llvmpipe, CPU s of the whole intersection stage, NumPy against the passes:
-# 2CylinderEngine, 56 a triangle, 0.26 against 0.20; FM1_satellite, 45, 0.13 against 0.13;
-# rod, 9, 0.06 against 0.07; cycloidal, 3, 0.31 against 0.37).
+# On a software rasteriser, partners in the grid per triangle from which the passes are used
+# (llvmpipe, CPU s of the whole intersection stage, NumPy against the passes reading tables:
+# 2CylinderEngine, 56 a triangle, 0.67 against 0.53; FM1_satellite, 45, 0.33 against 0.34;
+# rod, 9, 0.18 against 0.16; cycloidal, 3, 1.04 against 0.92, on a machine 3x slower than the
+# one of the first figures). Below it the passes gain too little to pay for compiling them,
+# ~0.15 s once a process.
 SOFTWARE_MIN_PARTNERS = 40
 
 
