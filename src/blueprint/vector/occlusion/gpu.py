@@ -24,12 +24,15 @@ __all__ = ["GpuLevels", "gpu_levels"]
 
 OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
 LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
+DEEPEST_COMP = "blueprint.vector:glsl/deepest.comp"
 COPY_FACES_COMP = "blueprint.vector:glsl/copy_faces.comp"
 # The layers one pass reads at most (texture units of a compute shader: 16 at least).
 MAX_LAYERS = 8
 # Units the copy pass binds inside a peel, clear of the ones the peel's own passes use.
 _COPY_UNITS = (14, 15)
 _GROUP = 64
+# Rows of pixels one invocation of deepest.comp looks at.
+_DEEPEST_ROWS = 64
 _MAX_GROUPS = 65535
 
 
@@ -59,20 +62,27 @@ def _bind_surfaces(renderer: LayerRenderer, prog, surfaces) -> None:
 
 
 def _layer_count(renderer: LayerRenderer, surfaces, size, min_fraction: float) -> int:
-    """Layers that count under the peel's stop rules, from per-layer pixel counts made on the GPU."""
+    """Layers that count under the peel's stop rules, from per-layer pixel counts made on the
+    GPU, or (without ``min_fraction``, where only the first empty layer counts) from the
+    deepest pixel's surfaces."""
     ctx, k = renderer.ctx, len(surfaces)
-    prog = renderer.compute(LAYER_COUNTS_COMP, {"K": k})
+    prog = renderer.compute(LAYER_COUNTS_COMP if min_fraction > 0 else DEEPEST_COMP, {"K": k})
     _bind_surfaces(renderer, prog, surfaces)
     renderer.uniforms.set(prog, "u_size", tuple(size))
     counts = ctx.buffer(np.zeros(k, np.uint32).tobytes())
     try:
         counts.bind_to_storage_buffer(3)
-        prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        if min_fraction > 0:
+            prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        else:
+            prog.run(-(-size[0] // _GROUP), -(-size[1] // _DEEPEST_ROWS))
         ctx.memory_barrier()
-        per_layer = np.frombuffer(counts.read(), np.uint32).astype(np.int64).tolist()
+        read = np.frombuffer(counts.read(), np.uint32).astype(np.int64)
     finally:
         counts.release()
-    return min(rule.count(per_layer) for rule in standard_rules(None, min_fraction))
+    if min_fraction <= 0:
+        return int(read[0])
+    return min(rule.count(read.tolist()) for rule in standard_rules(None, min_fraction))
 
 
 def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min_fraction) -> list:
