@@ -134,3 +134,24 @@ def test_a_drawing_reads_back_levels_only(renderer, source, monkeypatch):
     np.testing.assert_array_equal(on_gpu.offsets, on_cpu.offsets)
     np.testing.assert_array_equal(on_gpu.points, on_cpu.points)
     np.testing.assert_array_equal(on_gpu.level, on_cpu.level)
+
+
+@pytest.mark.parametrize(("shape", "max_layers"), [("gears", 3), ("gears", 8), ("box", 8)])
+def test_layer_count_is_the_deepest_pixels_surfaces(renderer, shape, max_layers):
+    """The deepest pixel's surfaces (deepest.comp) and the first empty layer of the per-layer
+    counts (layer_counts.comp, asked with a fraction too small to stop anything) against the
+    k-buffer read back, where a model's layers run out before the cap and where they do not."""
+    from blueprint.scene.loader import model_from_object
+    from blueprint.vector.occlusion.gpu import _layer_count
+
+    model = gearbox() if shape == "gears" else model_from_object(trimesh.creation.box())
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    surfaces = renderer.face_kbuffer(model, camera, size=SIZE, max_layers=max_layers)
+    if surfaces is None:
+        pytest.skip("this renderer draws no faces k-buffer")
+    faces = np.stack([np.frombuffer(t.read(), np.uint32)[1::2] for t in surfaces])
+    # a pixel's surfaces run up to its first empty one; deeper targets hold older frames'
+    deepest = int(np.cumprod(faces != 0, axis=0).sum(axis=0).max())
+    assert deepest == (2 if shape == "box" else max_layers)
+    assert _layer_count(renderer, surfaces, SIZE, 0.0) == deepest
+    assert _layer_count(renderer, surfaces, SIZE, 1e-9) == deepest

@@ -1,4 +1,4 @@
-"""SVG path text built as bytes (``svg._number_text``) against the plain way of writing it:
+"""SVG path text built as bytes (``svg._number_table``) against the plain way of writing it:
 each number's shortest decimal string, joined and shortened."""
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def plain_path(points: np.ndarray, offsets: np.ndarray, factor: float, decimals:
 def test_path_text_equals_the_plain_text(decimals, spread):
     rng = np.random.default_rng(int(spread * 10) + decimals)
     for _ in range(20):
-        n = int(rng.integers(2, 600))  # both sides of svg._TEXT_NUMBERS
+        n = int(rng.integers(2, 600))
         points = rng.normal(0, spread, (n, 2)) + rng.normal(0, 3)
         points[::3] = np.round(points[::3], 1)  # repeated and round numbers too
         points[5::7] = points[4::7][: len(points[5::7])]
@@ -53,12 +53,33 @@ def test_known_text():
     assert svg.path_data(points, np.array([0, 4]), 1.0, 2) == "M0.5 0l-.5 1.25-3 0 13-1.25"
 
 
+@pytest.mark.parametrize("decimals", [0, 2, 5])
+def test_paths_of_groups_are_each_groups_own_path(decimals):
+    """One pass over runs of polylines writes each run as ``plain_path`` writes it alone:
+    runs that lose every polyline, runs of none and runs of many."""
+    rng = np.random.default_rng(decimals)
+    n = 900
+    points = rng.normal(0, 20.0, (n, 2))
+    points[100:130] = points[100]  # polylines that shrink to a point
+    offsets = np.unique(np.r_[0, rng.integers(0, n, 120), 100, 110, 120, 130, n])
+    polylines = len(offsets) - 1
+    groups = np.unique(np.r_[0, rng.integers(0, polylines, 30), polylines])
+    groups = np.sort(np.r_[groups, groups[3]])  # a run of no polylines
+    got = svg.paths_data(points, offsets, groups, 1.0, decimals)
+    assert len(got) == len(groups) - 1
+    for text, a, b in zip(got, groups[:-1], groups[1:], strict=True):
+        sub = offsets[a : b + 1]
+        assert text == plain_path(points[sub[0] : sub[-1]], sub - sub[0], 1.0, decimals)
+    assert "" in got
+
+
 @pytest.mark.parametrize("decimals", [0, 1, 2, 3, 4])
 def test_byte_text_equals_string_text_on_few_numbers(decimals):
-    """``_number_text`` directly, on fewer numbers than ``path_data`` hands it."""
+    """``_number_table`` directly, on few numbers."""
     rng = np.random.default_rng(decimals)
     ticks = rng.integers(-(10**6), 10**6, 40) // rng.integers(1, 10**4, 40)
     lead = np.frombuffer(b"M l" + b" " * 37, np.uint8).copy()
     strings = svg.format_numbers(ticks / 10.0**decimals, decimals)
     plain = svg._shorten("".join(chr(c) + t for c, t in zip(lead.tolist(), strings, strict=True)))
-    assert svg._number_text(ticks, lead, decimals) == plain
+    table, mask = svg._number_table(ticks, lead, decimals)
+    assert table[mask].tobytes().decode("ascii") == plain

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.gpu.tables import table_fits, table_texture
+
 __all__ = ["gpu_cut_pairs"]
 
 TRIANGLE_PAIRS_COMP = "blueprint.vector:glsl/triangle_pairs.comp"
@@ -19,10 +21,12 @@ _MAX_GROUPS = 65535
 # NumPy's differ by less than 1e-14 of the largest coordinate.
 _TOL_OF_EPS = 1e-3
 _TOL_OF_COORD = 1e-12
-# On a software rasteriser, partners in the grid per triangle from which the passes pay for
-# their uploads (llvmpipe, CPU s of the whole intersection stage, NumPy against the passes:
-# 2CylinderEngine, 56 a triangle, 0.26 against 0.20; FM1_satellite, 45, 0.13 against 0.13;
-# rod, 9, 0.06 against 0.07; cycloidal, 3, 0.31 against 0.37).
+# On a software rasteriser, partners in the grid per triangle from which the passes are used
+# (llvmpipe, CPU s of the whole intersection stage, NumPy against the passes reading tables:
+# 2CylinderEngine, 56 a triangle, 0.67 against 0.53; FM1_satellite, 45, 0.33 against 0.34;
+# rod, 9, 0.18 against 0.16; cycloidal, 3, 1.04 against 0.92, on a machine 3x slower than the
+# one of the first figures). Below it the passes gain too little to pay for compiling them,
+# ~0.15 s once a process.
 SOFTWARE_MIN_PARTNERS = 40
 
 
@@ -36,7 +40,11 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     software rasteriser) NumPy is as fast: fewer than ``SOFTWARE_MIN_PARTNERS`` a triangle."""
     n, entries_n = len(tri), len(grid.owner)
     limit = int(renderer.ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 0))
-    if renderer.ctx.version_code < 430 or max(128 * n, 16 * entries_n) > limit or entries_n >= 1 << 31:
+    if (
+        renderer.ctx.version_code < 430
+        or 16 * entries_n > limit
+        or not table_fits(max(8 * n, entries_n), renderer.max_texture)
+    ):
         return None
     partners = grid.cell_end - grid.group_end
     if renderer.software and int(partners.sum()) < SOFTWARE_MIN_PARTNERS * n:
@@ -66,23 +74,29 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
 
     renderer.make_current()  # the first GL work of a drawing: another context may be current
     ctx = renderer.ctx
-    inputs = {
-        0: packed,
-        1: firsts,
-        2: grid.owner.astype(np.int32),
-        3: entries,
-        4: cells,
-        5: rough,
+    tables = {
+        # the doubles' bits, two a texel (triangles.glsl)
+        "u_tris": packed.reshape(n, 16).view(np.uint32).reshape(8 * n, 4),
+        "u_owners": grid.owner.astype(np.int32),
+        "u_boxes": rough.reshape(2 * n, 4),
+        "u_firsts": firsts,
     }
-    buffers = {binding: ctx.buffer(np.ascontiguousarray(data)) for binding, data in inputs.items()}
+    textures = {name: table_texture(ctx, data) for name, data in tables.items()}
+    buffers = {
+        binding: ctx.buffer(np.ascontiguousarray(data)) for binding, data in ((3, entries), (4, cells))
+    }
     try:
+        for unit, texture in enumerate(textures.values()):
+            texture.use(location=unit)
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
         prog = renderer.compute(TRIANGLE_PAIRS_COMP)
+        _bind_tables(renderer, prog, textures)
         pairs_n, buffers[6] = _gathered(renderer, prog, len(busy), 6, max(4096, 8 * n))
         if pairs_n == 0:
             return empty, empty
         prog = renderer.compute(TRIANGLE_CUTS_COMP)
+        _bind_tables(renderer, prog, textures)
         reach = max(-float(lo.min()), float(hi.max()), 0.0)
         tol = _TOL_OF_EPS * eps + _TOL_OF_COORD * reach
         for name, value in (("u_eps", eps), ("u_tol", tol), ("u_tol_span", tol)):
@@ -92,9 +106,17 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     finally:
         for buffer in buffers.values():
             buffer.release()
+        for texture in textures.values():
+            texture.release()
     found = np.frombuffer(data, np.uint32).reshape(-1, 2).astype(np.int64)
     order = np.lexsort((found[:, 1], found[:, 0]))
     return grid.owner[found[order, 0]], grid.owner[found[order, 1]]
+
+
+def _bind_tables(renderer, prog, textures: dict) -> None:
+    """Point the program's table samplers at the units ``gpu_cut_pairs`` bound them to."""
+    for unit, name in enumerate(textures):
+        renderer.uniforms.set(prog, name, unit)
 
 
 def _gathered(renderer, prog, count: int, binding: int, capacity: int):

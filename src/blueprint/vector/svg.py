@@ -18,11 +18,9 @@ __all__ = ["format_numbers", "path_data", "safe_id", "svg_bytes"]
 # Coordinates are written to a grid no coarser than this many pixels (well inside the
 # Douglas–Peucker tolerance).
 QUANTUM_PX = 0.1
-# Decimals the path text is built for as bytes (``_number_text``); more take ``format_numbers``,
+# Decimals the path text is built for as bytes (``_number_table``); more take ``format_numbers``,
 # whose shortest float strings switch to exponents below 1e-4.
 _TEXT_DECIMALS = 4
-# and the numbers it takes at least: below, its twenty-odd array passes cost more than strings
-_TEXT_NUMBERS = 256
 _ID_BAD = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
@@ -65,6 +63,14 @@ def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: 
     points, so rounding never accumulates. Repeated points and polylines that shrink to one
     point are dropped.
     """
+    return paths_data(points, offsets, np.array([0, len(offsets) - 1]), factor, decimals)[0]
+
+
+def paths_data(
+    points: np.ndarray, offsets: np.ndarray, groups: np.ndarray, factor: float, decimals: int
+) -> list[str]:
+    """``path_data`` of each run of polylines ``groups[g]:groups[g + 1]``, in one pass over all
+    of them: a drawing's paths are many, and most are short."""
     unit = 10.0**decimals
     grid = np.rint(points * factor * unit).astype(np.int64)
     first = np.zeros(len(grid), bool)
@@ -75,8 +81,10 @@ def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: 
     counts = np.bincount(owner[keep], minlength=len(offsets) - 1)
     keep &= counts[owner] >= 2
     grid, first, owner = grid[keep], first[keep], owner[keep]
+    # numbers of each group: two a point kept
+    ends = 2 * np.searchsorted(owner, groups, side="left")
     if len(grid) == 0:
-        return ""
+        return [""] * (len(groups) - 1)
     step = np.diff(grid, axis=0, prepend=grid[:1])
     ticks = np.where(first[:, None], grid, step).reshape(-1)
     # each number's lead: M before a polyline's start, l before its first step, else a space
@@ -84,11 +92,15 @@ def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: 
     starts = np.flatnonzero(first)
     lead[2 * starts] = ord("M")
     lead[2 * starts + 2] = ord("l")
-    if len(ticks) >= _TEXT_NUMBERS and decimals <= _TEXT_DECIMALS and np.abs(ticks).max() < 10**15:
-        return _number_text(ticks, lead, decimals)
+    if decimals <= _TEXT_DECIMALS and np.abs(ticks).max() < 10**15:
+        table, mask = _number_table(ticks, lead, decimals)
+        text = table[mask].tobytes().decode("ascii")
+        cut = np.r_[0, np.cumsum(mask.sum(axis=1))][ends].tolist()
+        return [text[a:b] for a, b in zip(cut[:-1], cut[1:], strict=True)]
     numbers = format_numbers(ticks / unit, decimals)
-    text = "".join(chr(c) + t for c, t in zip(lead.tolist(), numbers, strict=True))
-    return _shorten(text)
+    words = [chr(c) + t for c, t in zip(lead.tolist(), numbers, strict=True)]
+    bounds = ends.tolist()
+    return [_shorten("".join(words[a:b])) for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def _shorten(text: str) -> str:
@@ -96,10 +108,10 @@ def _shorten(text: str) -> str:
     return text.replace(" -", "-").replace("-0.", "-.").replace(" 0.", " .").replace("l0.", "l.")
 
 
-def _number_text(ticks: np.ndarray, lead: np.ndarray, decimals: int) -> str:
+def _number_table(ticks: np.ndarray, lead: np.ndarray, decimals: int) -> tuple[np.ndarray, np.ndarray]:
     """Path text of integers ``ticks`` (multiples of 10**-decimals), each after its ``lead``
-    byte, as ``format_numbers`` and ``_shorten`` write it, built as one byte array: a row of
-    characters a number (lead, sign, whole digits, point, fraction), a mask of those written."""
+    byte, as ``format_numbers`` and ``_shorten`` write it, as a row of characters a number
+    (lead, sign, whole digits, point, fraction) and a mask of those written."""
     negative = ticks < 0
     magnitude = np.abs(ticks)
     scale = 10**decimals
@@ -133,9 +145,7 @@ def _number_text(ticks: np.ndarray, lead: np.ndarray, decimals: int) -> str:
             (fraction_digits + ord("0")).astype(np.uint8),
         ]
         shown += [(fraction > 0)[:, None], np.arange(decimals)[None] < fraction_len[:, None]]
-    table = np.concatenate(columns, axis=1)
-    mask = np.concatenate(shown, axis=1)
-    return table[mask].tobytes().decode("ascii")
+    return np.concatenate(columns, axis=1), np.concatenate(shown, axis=1)
 
 
 def _stroke(line: LineStyle, base: float) -> str:
@@ -210,7 +220,15 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
     style = drawing.style
     out = [f'<g id="{gid}" fill="none" stroke-linecap="round" stroke-linejoin="round">\n']
     current = None
-    for part, level, index in groups:
+    groups = list(groups)
+    if groups:
+        index = np.concatenate([g[2] for g in groups])
+        lengths = drawing.offsets[index + 1] - drawing.offsets[index]
+        sub_offsets = np.r_[0, np.cumsum(lengths)]
+        rows = np.repeat(drawing.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
+        bounds = np.r_[0, np.cumsum([len(g[2]) for g in groups])]
+        texts = paths_data(drawing.points[rows], sub_offsets, bounds, factor, decimals)
+    for (part, level, _), d in zip(groups, texts if groups else [], strict=True):
         if part != current:
             if current is not None:
                 out.append("</g>\n")
@@ -222,10 +240,6 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
             )
             current = part
         line = style.level(level, part in drawing.highlight)
-        lengths = drawing.offsets[index + 1] - drawing.offsets[index]
-        sub_offsets = np.r_[0, np.cumsum(lengths)]
-        rows = np.repeat(drawing.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
-        d = path_data(drawing.points[rows], sub_offsets, factor, decimals)
         if d:
             out.append(f'<path class="level-{level}" {_stroke(line, base)} d="{d}"/>\n')
     if current is not None:

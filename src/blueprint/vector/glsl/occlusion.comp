@@ -9,6 +9,8 @@
 // (surface number "how many there are in front" there) is written too, for the crease check.
 // With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
 // r32i, face + 1, 0 where none).
+#include "table.glsl"
+
 layout(local_size_x = 64) in;
 
 #if LAYERED
@@ -26,8 +28,8 @@ struct Sample {
 };
 
 layout(std430, binding = 0) readonly buffer Samples { Sample samples[]; };
-layout(std430, binding = 1) readonly buffer Planes { vec4 planes[]; };  // n, c; last row: none
 layout(std430, binding = 2) writeonly buffer Levels { ivec4 result[]; };  // level, side faces
+uniform sampler2D u_planes;  // a table (gpu/tables.py) of the faces' planes n, c; last row: none
 
 uniform SAMPLER u_s0;
 #if K > 1
@@ -117,7 +119,7 @@ ivec2 texel(ivec2 p) {
         int tri = FACE1(S, q) - 1;                                                  \
         if (tri < 0) return ivec2(front, count);                                    \
         ++count;                                                                    \
-        if (tri != own0 && tri != own1 && in_front(planes[tri], eye)) ++front;      \
+        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye)) ++front;      \
         if (front >= bound) return ivec2(front, count);                             \
     }
 

@@ -5,11 +5,11 @@
 // (lengths along the cut), far above the rounding that separates this arithmetic from
 // NumPy's, and a pair with a corner that close to a plane's touch tolerance is kept untested;
 // the caller cuts the pairs kept with NumPy, so the lines are NumPy's.
+#include "triangles.glsl"
+
 layout(local_size_x = 64) in;
 
-// four per triangle: its corners (w: unused here) and its unit normal (w: 1 where it has one)
-layout(std430, binding = 0) readonly buffer Triangles { dvec4 tris[]; };
-layout(std430, binding = 2) readonly buffer Owners { int owners[]; };  // box of every entry
+uniform isampler2D u_owners;  // a table (gpu/tables.py): the box of every entry
 layout(std430, binding = 6) readonly buffer Pairs { uint pair_count; uint pair_pad; uvec2 pairs[]; };
 layout(std430, binding = 7) buffer Found { uint found_count; uint found_pad; uvec2 found[]; };
 
@@ -82,10 +82,10 @@ void main() {
     int p = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
     if (p >= u_count) return;
     uvec2 pair = pairs[p];
-    int i = owners[pair.x], j = owners[pair.y];
-    dvec3 ta[3] = dvec3[3](tris[4 * i].xyz, tris[4 * i + 1].xyz, tris[4 * i + 2].xyz);
-    dvec3 tb[3] = dvec3[3](tris[4 * j].xyz, tris[4 * j + 1].xyz, tris[4 * j + 2].xyz);
-    if (!may_cut(ta, tris[4 * i + 3], tb, tris[4 * j + 3])) return;
+    int i = TABLE_ROW(u_owners, int(pair.x)).x, j = TABLE_ROW(u_owners, int(pair.y)).x;
+    dvec3 ta[3] = dvec3[3](tri_row(4 * i).xyz, tri_row(4 * i + 1).xyz, tri_row(4 * i + 2).xyz);
+    dvec3 tb[3] = dvec3[3](tri_row(4 * j).xyz, tri_row(4 * j + 1).xyz, tri_row(4 * j + 2).xyz);
+    if (!may_cut(ta, tri_row(4 * i + 3), tb, tri_row(4 * j + 3))) return;
     uint slot = atomicAdd(found_count, 1u);
     if (slot < uint(u_capacity)) found[slot] = pair;
 }

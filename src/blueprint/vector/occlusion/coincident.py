@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.columns import column_max, column_min, row_norm
+from blueprint.gpu.tables import table_fits, table_texture
 
 from .samples import Samples
 
@@ -13,6 +14,8 @@ __all__ = ["suppress_coincident"]
 
 COINCIDENT_COMP = "blueprint.vector:glsl/coincident.comp"
 _GROUP = 64
+# coincident.comp's tables, in the order of ``_gpu_drop``'s inputs after its storage buffers
+_TABLES = ("u_steps", "u_units", "u_keys", "u_cells")
 _MAX_GROUPS = 65535
 
 
@@ -74,7 +77,12 @@ def suppress_coincident(
     cell_start = np.cumsum(cell_count) - cell_count
     key = cell_of(live)
     live_rank = rank[live]
-    if renderer is not None and renderer.ctx.version_code >= 430 and ranks < 2**31:
+    if (
+        renderer is not None
+        and renderer.ctx.version_code >= 430
+        and ranks < 2**31
+        and table_fits(max(len(source), len(cell_count)), renderer.max_texture)
+    ):
         drop = _gpu_drop(
             renderer,
             [
@@ -91,8 +99,7 @@ def suppress_coincident(
                     axis=1,
                 ),
                 np.stack([rank[source], line[source]], axis=1),
-                cell_start,
-                cell_count,
+                np.stack([cell_start, cell_count], axis=1),
             ],
             int(span[0]),
             np.float32(distance * distance),
@@ -139,7 +146,8 @@ def _single_below(value: float) -> np.float32:
 
 def _gpu_drop(renderer, inputs, span: int, dist2, sin_limit) -> np.ndarray:
     """The drop flag of every live sample from coincident.comp, from the search's arrays in
-    ``suppress_coincident`` laid out as the shader's storage buffers (``inputs``)."""
+    ``suppress_coincident`` laid out as the shader's inputs (``inputs``): two storage buffers,
+    then its tables (``_TABLES``)."""
     count = len(inputs[0])
     renderer.make_current()
     ctx = renderer.ctx
@@ -149,14 +157,18 @@ def _gpu_drop(renderer, inputs, span: int, dist2, sin_limit) -> np.ndarray:
     put(prog, "u_span", span)
     put(prog, "u_distance2", float(dist2))
     put(prog, "u_sin_limit", float(sin_limit))
-    buffers = [
-        ctx.buffer(np.ascontiguousarray(data, np.int32 if data.dtype.kind in "iu" else np.float32))
-        for data in inputs
+    singles = [
+        np.ascontiguousarray(data, np.int32 if data.dtype.kind in "iu" else np.float32) for data in inputs
     ]
+    buffers = [ctx.buffer(data) for data in singles[:2]]
     buffers.append(ctx.buffer(reserve=4 * count))
+    tables = [table_texture(ctx, data) for data in singles[2:]]
     try:
-        for binding, buffer in enumerate(buffers):
+        for binding, buffer in zip((0, 1, 2), buffers, strict=True):
             buffer.bind_to_storage_buffer(binding)
+        for unit, (name, texture) in enumerate(zip(_TABLES, tables, strict=True)):
+            texture.use(location=unit)
+            put(prog, name, unit)
         groups = -(-count // _GROUP)
         gx = min(groups, _MAX_GROUPS)
         prog.run(gx, -(-groups // gx))
@@ -165,3 +177,5 @@ def _gpu_drop(renderer, inputs, span: int, dist2, sin_limit) -> np.ndarray:
     finally:
         for buffer in buffers:
             buffer.release()
+        for texture in tables:
+            texture.release()

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.gpu.tables import table_fits, table_texture
 from blueprint.render.renderer import LayerRenderer
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera
@@ -23,12 +24,15 @@ __all__ = ["GpuLevels", "gpu_levels"]
 
 OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
 LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
+DEEPEST_COMP = "blueprint.vector:glsl/deepest.comp"
 COPY_FACES_COMP = "blueprint.vector:glsl/copy_faces.comp"
 # The layers one pass reads at most (texture units of a compute shader: 16 at least).
 MAX_LAYERS = 8
 # Units the copy pass binds inside a peel, clear of the ones the peel's own passes use.
 _COPY_UNITS = (14, 15)
 _GROUP = 64
+# Rows of pixels one invocation of deepest.comp looks at.
+_DEEPEST_ROWS = 64
 _MAX_GROUPS = 65535
 
 
@@ -58,20 +62,27 @@ def _bind_surfaces(renderer: LayerRenderer, prog, surfaces) -> None:
 
 
 def _layer_count(renderer: LayerRenderer, surfaces, size, min_fraction: float) -> int:
-    """Layers that count under the peel's stop rules, from per-layer pixel counts made on the GPU."""
+    """Layers that count under the peel's stop rules, from per-layer pixel counts made on the
+    GPU, or (without ``min_fraction``, where only the first empty layer counts) from the
+    deepest pixel's surfaces."""
     ctx, k = renderer.ctx, len(surfaces)
-    prog = renderer.compute(LAYER_COUNTS_COMP, {"K": k})
+    prog = renderer.compute(LAYER_COUNTS_COMP if min_fraction > 0 else DEEPEST_COMP, {"K": k})
     _bind_surfaces(renderer, prog, surfaces)
     renderer.uniforms.set(prog, "u_size", tuple(size))
     counts = ctx.buffer(np.zeros(k, np.uint32).tobytes())
     try:
         counts.bind_to_storage_buffer(3)
-        prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        if min_fraction > 0:
+            prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
+        else:
+            prog.run(-(-size[0] // _GROUP), -(-size[1] // _DEEPEST_ROWS))
         ctx.memory_barrier()
-        per_layer = np.frombuffer(counts.read(), np.uint32).astype(np.int64).tolist()
+        read = np.frombuffer(counts.read(), np.uint32).astype(np.int64)
     finally:
         counts.release()
-    return min(rule.count(per_layer) for rule in standard_rules(None, min_fraction))
+    if min_fraction <= 0:
+        return int(read[0])
+    return min(rule.count(read.tolist()) for rule in standard_rules(None, min_fraction))
 
 
 def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min_fraction) -> list:
@@ -116,11 +127,14 @@ def gpu_levels(
 ) -> GpuLevels | None:
     """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
     draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
-    than ``MAX_LAYERS`` layers (then ``triangles_at`` and ``classify_samples``).
+    than ``MAX_LAYERS`` layers or more planes than a texture holds (then ``triangles_at`` and
+    ``classify_samples``).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases``; ``planes`` from
     ``levels.face_planes``; ``size`` (width, height) in pixels.
     """
+    if not table_fits(len(planes), renderer.max_texture):
+        return None
     clock = time.perf_counter()
     surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
     layered = surfaces is None
@@ -167,13 +181,12 @@ def gpu_levels(
     put(prog, "u_ortho", bool(ortho))
     put(prog, "u_limit", float(np.float32(tolerance * footprint)))
     put(prog, "u_offset", float(offset))
-    buffers = [
-        ctx.buffer(packed.tobytes()),
-        ctx.buffer(np.ascontiguousarray(planes, np.float32).tobytes()),
-        ctx.buffer(reserve=16 * len(inside)),
-    ]
+    plane_texture = table_texture(ctx, planes.astype(np.float32))
+    plane_texture.use(location=MAX_LAYERS)
+    put(prog, "u_planes", MAX_LAYERS)
+    buffers = {0: ctx.buffer(packed.tobytes()), 2: ctx.buffer(reserve=16 * len(inside))}
     try:
-        for binding, buffer in enumerate(buffers):
+        for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
         groups = -(-len(inside) // _GROUP)
         gx = min(groups, _MAX_GROUPS)
@@ -181,8 +194,9 @@ def gpu_levels(
         ctx.memory_barrier()
         result = np.frombuffer(buffers[2].read(), np.int32).reshape(-1, 4)
     finally:
-        for buffer in buffers:
+        for buffer in buffers.values():
             buffer.release()
+        plane_texture.release()
     level[inside] = result[:, 0]
     sides[inside] = result[:, 1:3]
     return GpuLevels(level, sides, checked, layers, peel_seconds)

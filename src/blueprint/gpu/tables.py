@@ -1,0 +1,36 @@
+"""Tables for compute passes as textures: row ``i`` of an (N, C) array in texel
+``(i % TABLE_WIDTH, i // TABLE_WIDTH)``, read with ``TABLE_ROW`` of ``table.glsl``. A
+scattered read of a texture costs llvmpipe far less than one of a storage buffer (see
+table.glsl); a GPU's own driver reads either as fast."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["TABLE_WIDTH", "table_fits", "table_texture"]
+
+# Rows a texture row (table.glsl's TABLE_WIDTH): a power of two, so that a shader finds the
+# texel with a mask and a shift.
+TABLE_WIDTH = 4096
+_DTYPES = {"f": ("f4", np.float32), "i": ("i4", np.int32), "u": ("u4", np.uint32)}
+
+
+def table_fits(rows: int, max_texture: int) -> bool:
+    """Whether a table of ``rows`` rows fits a texture of at most ``max_texture`` a side."""
+    return -(-rows // TABLE_WIDTH) <= max_texture
+
+
+def table_texture(ctx, data: np.ndarray):
+    """An (N,) or (N, C) array, C at most 4, as a texture of its rows (float32, int32 or
+    uint32 by the array's kind; the last texture row padded with zeros). The caller releases it."""
+    data = np.asarray(data)
+    columns = 1 if data.ndim == 1 else data.shape[1]
+    if not 1 <= columns <= 4 or data.ndim > 2:
+        raise ValueError(f"a table has 1 to 4 columns, got an array of shape {data.shape}")
+    dtype, kind = _DTYPES["i" if data.dtype.kind == "b" else data.dtype.kind]
+    rows = max(-(-len(data) // TABLE_WIDTH), 1)
+    texels = np.zeros((rows * TABLE_WIDTH, columns), kind)
+    texels[: len(data)] = data.reshape(len(data), columns)
+    texture = ctx.texture((TABLE_WIDTH, rows), columns, texels.tobytes(), dtype=dtype)
+    texture.filter = (ctx.NEAREST, ctx.NEAREST)  # an integer texture filtered linearly reads as 0
+    return texture
