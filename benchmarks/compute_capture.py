@@ -26,7 +26,7 @@ import numpy as np
 from blueprint import Renderer, load_model
 from blueprint.gpu.shaders import build_compute
 from blueprint.render.abuffer import ABuffer
-from blueprint.render.capture import BACK_OFFSET, depth_range, gbuffer, peel_eps
+from blueprint.render.capture import BACK_OFFSET, abuffer_uniforms, gbuffer
 from blueprint.scene.camera import fit_camera
 
 SHADER = Path(__file__).parent / "glsl" / "raster.comp"
@@ -210,15 +210,9 @@ def fragments(r, size: int) -> int:
 
 def peeled_capture(r, model, camera) -> ABuffer:
     """An A-buffer with ``camera``'s uniforms over ``model``, as a frame makes it."""
-    mesh = r.mesh(model, 30.0)
-    uniforms = {
-        "u_view": camera.view_matrix().T.astype("f4").tobytes(),
-        "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
-        "u_ortho": camera.ortho,
-        "u_depth_range": depth_range(camera),
-        "u_peel_eps": peel_eps(camera),
-    }
-    return ABuffer(r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes)
+    return ABuffer(
+        r, r.mesh(model, 30.0), abuffer_uniforms(camera), BACK_OFFSET / (1 << 24), r.abuffer_max_bytes
+    )
 
 
 if __name__ == "__main__":

@@ -95,6 +95,17 @@ def peel_uniforms(prog, camera: Camera) -> None:
     prog["u_peel_eps"].value = peel_eps(camera)
 
 
+def abuffer_uniforms(camera: Camera) -> dict:
+    """What an A-buffer's geometry pass and resolve take from the camera (``ABuffer``)."""
+    return {
+        "u_view": camera.view_matrix().T.astype("f4").tobytes(),
+        "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
+        "u_ortho": camera.ortho,
+        "u_depth_range": depth_range(camera),
+        "u_peel_eps": peel_eps(camera),
+    }
+
+
 def depth_range(camera: Camera) -> tuple[float, float, float]:
     """``u_depth_range`` of depth.glsl: near, far, and 1 for an orthographic camera."""
     return (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
@@ -162,15 +173,16 @@ class Capture:
             and r.back_bias_in_shader
             and mesh.part_count < 0xFFFF
         ):
-            uniforms = {
-                "u_view": camera.view_matrix().T.astype("f4").tobytes(),
-                "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
-                "u_ortho": camera.ortho,
-                "u_depth_range": depth_range(camera),
-                "u_peel_eps": peel_eps(camera),
-            }
             self.abuffer = ABuffer(
-                r, mesh, uniforms, BACK_OFFSET / (1 << 24), r.abuffer_max_bytes, tiles, defer, unpack, slot
+                r,
+                mesh,
+                abuffer_uniforms(camera),
+                BACK_OFFSET / (1 << 24),
+                r.abuffer_max_bytes,
+                tiles,
+                defer,
+                unpack,
+                slot,
             )
             if not self.abuffer.fits((w, h)):
                 self.abuffer = None
