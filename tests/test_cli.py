@@ -77,6 +77,8 @@ def test_info_prints_renderer_and_gl_version(gl):
     else:
         abuffer = "none" if r.ctx.version_code < 430 else "off on this driver"
     assert abuffer in lines[5] and lines[5].startswith("A-buffer: ") and abuffer in gl["abuffer"]
+    depth = "exact planes" if r.exact_depth else "as rasterised"
+    assert lines[6].startswith(f"depth: {depth} (") and gl["depth"].startswith(depth)
 
 
 def test_info_model_lists_parts(gearbox_parts):

@@ -14,7 +14,7 @@ import blueprint
 from blueprint import examples
 from blueprint.errors import GLUnavailableError, InputError, ShaderError
 from blueprint.gpu import TargetPool, build_program, create_context, gl_info, preprocess
-from blueprint.gpu.device import check_size
+from blueprint.gpu.device import SNAPPED_DEPTH_PX, check_size
 from blueprint.gpu.shaders import _explain, package_files
 
 # -- a throw-away shader package ------------------------------------------------------------------
@@ -106,6 +106,19 @@ def test_gl_info_smoke(renderer):
 
 
 # -- shader preprocessing --------------------------------------------------------------------------
+
+
+def test_depth_snap_probe(renderer):
+    """Two triangles on one plane, drawn one after the other, are as far apart in depth as the
+    driver's snapping makes them: nothing but rounding on llvmpipe (1.5e-5 px), about 2e-3 px
+    on the H200 (1/256-px corners), never more than the 1/16 px the GL spec allows."""
+    px = renderer.depth_snap_px()
+    assert 0.0 <= px < 1 / 16
+    assert renderer.snapped_depth == (px > SNAPPED_DEPTH_PX)
+    assert renderer.exact_depth == renderer.snapped_depth
+    if renderer.software:
+        assert not renderer.snapped_depth, px
+    assert renderer.ctx.error == "GL_NO_ERROR"
 
 
 def test_preprocess_resolves_includes_defines_and_line_directives(shader_pkg):

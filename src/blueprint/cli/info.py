@@ -35,6 +35,11 @@ def info(model, as_json):
                 )
             else:
                 data["abuffer"] = "none (needs OpenGL 4.3)"
+            snap = r.depth_snap_px()
+            if r.exact_depth:
+                data["depth"] = f"exact planes (the driver's depths come from snapped corners: {snap:.2g} px)"
+            else:
+                data["depth"] = f"as rasterised (coincident faces {snap:.2g} px apart)"
         data["egl_devices"] = egl_devices()
         if as_json:
             click.echo(json.dumps(data))
@@ -42,7 +47,7 @@ def info(model, as_json):
             click.echo(
                 f"renderer: {data['renderer']}\nvendor: {data['vendor']}\nOpenGL: {data['version']}\n"
                 f"image passes: {data['image_passes']}\nk-buffer: {data['kbuffer']}\n"
-                f"A-buffer: {data['abuffer']}"
+                f"A-buffer: {data['abuffer']}\ndepth: {data['depth']}"
             )
             for device in data["egl_devices"]:
                 kind = "GPU" if device["gpu"] else "software"

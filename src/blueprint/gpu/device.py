@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
+
 from blueprint.errors import InputError
 from blueprint.gpu.context import create_context, gl_info
 from blueprint.gpu.queries import Queries
@@ -22,6 +24,27 @@ void main() {
     endInvocationInterlockARB();
 }
 """
+
+# Two triangles on one steep plane, corners in pixels of a 64x64 target, off the sub-pixel
+# grids rasterisers snap to: where the driver takes depth from the plane through the snapped
+# corners, the two differ in depth where they overlap.
+_SNAP_PLANE = (0.3, 0.2)  # NDC depth = 0.3 x + 0.2 y
+_SNAP_TRIANGLES = (
+    (3.3017, 2.7123, 61.1931, 5.4409, 30.5553, 60.8847),
+    (1.9087, 58.2331, 62.6719, 59.0173, 33.1277, 1.3391),
+)
+_SNAP_VERTEX = f"""#version 330
+in vec2 in_px;
+void main() {{
+    vec2 ndc = in_px / 32.0 - 1.0;
+    gl_Position = vec4(ndc, {_SNAP_PLANE[0]} * ndc.x + {_SNAP_PLANE[1]} * ndc.y, 1.0);
+}}
+"""
+_SNAP_FRAGMENT = "#version 330\nout float o_depth;\nvoid main() { o_depth = gl_FragCoord.z; }\n"
+# Apart by more than this many pixels' worth of the plane's slope, the two triangles' depths
+# come from snapped corners: llvmpipe's differ by 1.5e-5 px (rounding), a rasteriser snapping
+# to 1/256 px by up to about 4e-3.
+SNAPPED_DEPTH_PX = 5e-4
 
 
 def current(method):
@@ -46,6 +69,10 @@ class Device:
     ``framebuffer_fetch``: a fragment may read what the ones before it wrote to its pixel.
     ``fragment_interlock``: fragments of one pixel may run a critical section one after
     another in primitive order (GL_ARB_fragment_shader_interlock; probed by compiling one).
+    ``snapped_depth``: a fragment's depth comes from the plane through its triangle's corners
+    as snapped to the sub-pixel grid, not as projected (measured by ``depth_snap_px``), so
+    coincident triangles with different corners differ in depth by up to the slope times the
+    snap.
     """
 
     def __init__(self, ctx=None) -> None:
@@ -71,6 +98,7 @@ class Device:
             and "GL_ARB_fragment_shader_interlock" in ext
             and self._compiles(INTERLOCK_PROBE)
         )
+        self.snapped_depth = self.depth_snap_px() > SNAPPED_DEPTH_PX
 
     def __enter__(self):
         return self
@@ -119,6 +147,32 @@ class Device:
         except Exception:
             return False
         return True
+
+    def depth_snap_px(self) -> float:
+        """How far apart, in pixels' worth of the plane's slope, the driver puts the depths of
+        two triangles lying on one plane where they overlap."""
+        ctx = self.ctx
+        prog = ctx.program(vertex_shader=_SNAP_VERTEX, fragment_shader=_SNAP_FRAGMENT)
+        # the pool's: a framebuffer released while bound leaves moderngl binding a dead one
+        target = self.pool.texture("snap.depth", (64, 64), "r32f")
+        fbo = self.pool.framebuffer((target,))
+        depths = []
+        fbo.use()
+        for corners in _SNAP_TRIANGLES:
+            vbo = ctx.buffer(np.array(corners, "f4"))
+            vao = ctx.vertex_array(prog, [(vbo, "2f", "in_px")])
+            fbo.clear(-1.0)
+            vao.render()
+            depths.append(np.frombuffer(target.read(), "f4"))
+            vao.release()
+            vbo.release()
+        prog.release()
+        a, b = depths
+        both = (a >= 0.0) & (b >= 0.0)
+        if not both.any():
+            return 0.0
+        slope = 0.5 * sum(_SNAP_PLANE) / 32.0  # window depth a pixel along x plus along y
+        return float(np.abs(a[both] - b[both]).max() / slope)
 
     def compute(self, ref: str, defines=None):
         key = ("compute", ref, tuple(sorted((defines or {}).items())))

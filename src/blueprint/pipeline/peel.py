@@ -243,7 +243,9 @@ class LayerCapture:
             if not g.extra:
                 continue
             defines = {f"OUT_{n.upper()}": (g.extra.index(n) if n in g.extra else -1) for n in EXTRA}
-            draw = self.programs.library(ATTR_FRAG, ATTR_VERT, {**defines, "CLEAR": 0})
+            # the peel's depth rule (render.mesh.geometry_program), for attributes where its depths are
+            exact = {"EXACT_DEPTH": self.r.exact_depth}
+            draw = self.programs.library(ATTR_FRAG, ATTR_VERT, {**defines, **exact, "CLEAR": 0})
             clear = self.programs.library(ATTR_FRAG, FULLSCREEN, {**defines, "CLEAR": 1})
             self.programs.set(draw, "u_view", camera.view_matrix().T.astype("f4").tobytes())
             self.programs.set(draw, "u_projection", camera.projection_matrix().T.astype("f4").tobytes())
@@ -251,6 +253,7 @@ class LayerCapture:
             self.programs.set(draw, "u_bounds_size", tuple(float(max(v, 1e-30)) for v in hi - lo))
             self.programs.set(draw, "u_layer_depth", BASE_UNIT)
             self.programs.set(draw, "u_ids", BASE_UNIT + 1)
+            self.programs.set(draw, "u_target", tuple(float(v) for v in g.gb.size))
             progs[g.scale] = (draw, clear)
         return progs
 

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
+from blueprint.render.mesh import geometry_program, target_uniform
+
 ABUFFER_FRAG = "blueprint.render:glsl/abuffer.frag"
 CLEAR_COMP = "blueprint.render:glsl/abuffer_clear.comp"
 RESOLVE_COMP = "blueprint.render:glsl/abuffer_resolve.comp"
@@ -73,7 +74,7 @@ class ABuffer:
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
-        self.geometry = r.program(ABUFFER_FRAG, GEOMETRY_VERT, modern=True)
+        self.geometry = geometry_program(r, ABUFFER_FRAG, modern=True)
         defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
         self.resolve = r.compute(RESOLVE_COMP, defines)
         put = r.uniforms.set  # a stream's frames change only the camera's
@@ -234,6 +235,7 @@ class ABuffer:
         """Every fragment of the mesh into its pixel's list (abuffer.frag): the graphics
         pipeline's rasteriser (``benchmarks/compute_capture.py`` measures one in compute)."""
         gb.clears[0].use()
+        target_uniform(self.r, self.geometry, gb.size)
         self.mesh.vao(self.geometry).render()
 
     def _count(self, read, nbytes: int, room: int, size: tuple[int, int], name: str) -> bool:

@@ -14,6 +14,7 @@ import numpy as np
 from blueprint.errors import InputError
 from blueprint.gpu import units
 from blueprint.render.abuffer import ABuffer
+from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.render.stop import HARD_MAX_LAYERS, StopRule
 from blueprint.scene.camera import Camera
 
@@ -23,7 +24,6 @@ CHUNK = 8
 # Peeling tolerance in eye depth, as a fraction of the camera's depth range: surfaces closer
 # than this count as one (coplanar faces, duplicates, touching parts).
 PEEL_EPSILON = 1e-5
-GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 PEEL_FRAG = "blueprint.render:glsl/peel.frag"
 KBUFFER_FRAG = "blueprint.render:glsl/kbuffer.frag"
 UNPACK_FRAG = "blueprint.render:glsl/unpack.frag"
@@ -200,8 +200,11 @@ class Capture:
         camera, batch, face_ids, selected, use_kbuffer = self._peel_with
         normals = self.gb.normal is not None
         culled_from = r.culled_tie_break_from
+        # depth written by the shader (exact_depth) forgoes the early depth tests two culled
+        # draws are there to keep, and would lose their polygon offset
         culled = (
             not use_kbuffer
+            and not r.exact_depth
             and culled_from is not None
             and mesh.triangles >= culled_from[0]
             and w * h >= culled_from[1]
@@ -209,7 +212,7 @@ class Capture:
         self.shader_bias = r.back_bias_in_shader and self.tie_break and not culled
         if use_kbuffer:
             defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock}
-            prog = r.program(KBUFFER_FRAG, GEOMETRY_VERT, defines, modern=r.kbuffer_interlock)
+            prog = geometry_program(r, KBUFFER_FRAG, defines, modern=r.kbuffer_interlock)
         else:
             defines = {
                 "BACK_BIAS_IN_SHADER": self.shader_bias,
@@ -217,8 +220,9 @@ class Capture:
                 "FACE_IDS": face_ids,
                 "NORMALS": normals,
             }
-            prog = r.program(PEEL_FRAG, GEOMETRY_VERT, defines)
+            prog = geometry_program(r, PEEL_FRAG, defines)
         peel_uniforms(prog, camera)
+        target_uniform(r, prog, (w, h))
         if normals:  # only the normal's orientation needs it
             prog["u_ortho"].value = camera.ortho
         if self.shader_bias:

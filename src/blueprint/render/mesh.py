@@ -1,4 +1,4 @@
-"""A model's triangles on the GPU."""
+"""A model's triangles on the GPU, and the programs of the geometry passes drawing them."""
 
 from __future__ import annotations
 
@@ -7,6 +7,21 @@ import numpy as np
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
 from blueprint.sorting import unique_first
+
+GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
+
+
+def geometry_program(r, fragment: str, defines=None, modern: bool = False):
+    """A geometry pass's program (geometry.vert and ``fragment``) with the renderer's depth
+    rule: fragment_depth.glsl's EXACT_DEPTH where ``r.exact_depth`` (then ``u_target``, the
+    target's size, is the program's to set: ``target_uniform``)."""
+    defines = {**(defines or {}), "EXACT_DEPTH": r.exact_depth}
+    return r.program(fragment, GEOMETRY_VERT, defines, modern=modern)
+
+
+def target_uniform(r, prog, size: tuple[int, int]) -> None:
+    """The size of the target a geometry pass of ``geometry_program`` draws into."""
+    r.uniforms.set(prog, "u_target", (float(size[0]), float(size[1])))
 
 
 class GpuMesh:

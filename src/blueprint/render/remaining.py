@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.gpu import units
-from blueprint.render.capture import GEOMETRY_VERT, peel_uniforms
+from blueprint.render.capture import peel_uniforms
+from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
 REMAINING_FRAG = "blueprint.render:glsl/remaining.frag"
@@ -30,8 +31,9 @@ def layers_left(r, mesh, camera: Camera, last_depth) -> int:
     fbo = r.pool.framebuffer((counts,))
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
-    prog = r.program(REMAINING_FRAG, GEOMETRY_VERT)
+    prog = geometry_program(r, REMAINING_FRAG)
     peel_uniforms(prog, camera)
+    target_uniform(r, prog, size)
     last_depth.use(units.PEEL_DEPTH)
     prog["u_prev_depth"].value = units.PEEL_DEPTH
     ctx.enable_only(ctx.BLEND)

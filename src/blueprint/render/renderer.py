@@ -12,7 +12,6 @@ from blueprint.gpu.device import Device, check_size, current
 from blueprint.render.abuffer import default_max_bytes
 from blueprint.render.capture import (
     BACK_OFFSET,
-    GEOMETRY_VERT,
     KBUFFER_FRAG,
     KBUFFER_INTERLOCK_MIN_DENSITY,
     KBUFFER_MAX,
@@ -23,7 +22,7 @@ from blueprint.render.capture import (
     peel,
     peel_uniforms,
 )
-from blueprint.render.mesh import GpuMesh
+from blueprint.render.mesh import GpuMesh, geometry_program, target_uniform
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
@@ -144,6 +143,10 @@ class LayerRenderer(Device):
         # layers: 0.90 against 0.75)
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 2
         self.abuffer_room: dict[tuple[int, int], int] = {}
+        # Where the driver's depths come from snapped corners, every geometry pass takes its
+        # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): on the H200
+        # coincident faces of one part otherwise peeled as two layers.
+        self.exact_depth = self.snapped_depth
 
     def release(self) -> None:
         self.make_current()
@@ -304,8 +307,9 @@ class LayerRenderer(Device):
         ctx, pool = self.ctx, self.pool
         mesh = self.mesh(model, None)
         defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True}
-        prog = self.program(KBUFFER_FRAG, GEOMETRY_VERT, defines)
+        prog = geometry_program(self, KBUFFER_FRAG, defines)
         peel_uniforms(prog, camera)
+        target_uniform(self, prog, size)
         prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         prog["u_peel"].value = False
         name = f"kbuffer.faces.{size[0]}x{size[1]}"

@@ -3,6 +3,7 @@
 // attributes belong to exactly the surface the peel kept. With CLEAR it is a full-screen pass
 // that writes the "no surface" values. Each OUT_* define is a colour location, or -1 if unused.
 #if !CLEAR
+#include "fragment_depth.glsl"
 uniform sampler2D u_layer_depth;
 uniform isampler2D u_ids;        // (face + 1, part + 1) of the layer
 uniform int u_layer;
@@ -53,20 +54,24 @@ void main() {
     vec2 uv = vec2(0.0);
     vec4 base_color = vec4(0.0);
 #else
+    // where the peel's depths are taken at the pixel centre, so are the attributes
+    vec3 model = at_centre(v_model);
+    vec3 eye = at_centre(v_eye);
     ivec2 p = ivec2(gl_FragCoord.xy);
     ivec2 ids = texelFetch(u_ids, p, 0).xy;
-    // (the isnan test keeps in_normal in the program when uv is not asked for, so the mesh's
-    // vertex layout always fits)
-    if (texelFetch(u_layer_depth, p, 0).r >= 1.0 || ids.x - 1 != gl_PrimitiveID || isnan(v_normal.x)) {
+    // (the isnan tests keep in_normal in the program when uv is not asked for, so the mesh's
+    // vertex layout always fits, and the steps to the centre before the discard)
+    if (isnan(model.x + eye.z) || texelFetch(u_layer_depth, p, 0).r >= 1.0 || ids.x - 1 != gl_PrimitiveID
+        || isnan(v_normal.x)) {
         discard;
     }
     int face = gl_PrimitiveID;
     int part = ids.y - 1;
     int layer = u_layer;
-    float linear_depth = -v_eye.z;
-    vec4 position = vec4(v_model, 1.0);
+    float linear_depth = -eye.z;
+    vec4 position = vec4(model, 1.0);
     // box projection of the model's bounds onto the plane the face most nearly lies in
-    vec3 t = (v_model - u_bounds_lo) / u_bounds_size;
+    vec3 t = (model - u_bounds_lo) / u_bounds_size;
     vec3 a = abs(v_normal);
     vec2 uv = a.x >= a.y && a.x >= a.z ? t.yz : (a.y >= a.z ? t.xz : t.xy);
     vec4 base_color = vec4(part_color(part), 1.0);

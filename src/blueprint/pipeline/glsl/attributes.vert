@@ -9,6 +9,9 @@ in vec3 in_normal;
 out vec3 v_model;
 out vec3 v_eye;
 flat out vec3 v_normal;
+#if EXACT_DEPTH
+out vec3 v_clip;  // fragment_depth.glsl
+#endif
 
 void main() {
     vec4 eye = u_view * vec4(in_position, 1.0);
@@ -16,4 +19,7 @@ void main() {
     v_model = in_position;
     v_normal = in_normal;
     gl_Position = u_projection * eye;
+#if EXACT_DEPTH
+    v_clip = gl_Position.xyw;
+#endif
 }

@@ -3,6 +3,7 @@
 // held are counted and dropped: the capture sees the count and draws again with room for them.
 #extension GL_ARB_shading_language_packing : require
 #include "depth.glsl"
+#include "fragment_depth.glsl"
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
 
@@ -14,6 +15,7 @@ in vec3 v_normal;
 flat in int v_part;
 
 void main() {
+    float z = fragment_depth();
     vec3 n = normalize(v_normal);
     vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -v_eye;
     // two-sided, as peel.frag
@@ -24,7 +26,7 @@ void main() {
     int face = gl_PrimitiveID;
     uint node = atomicAdd(drawn, 1u);
     if (node < capacity) {
-        nodes[node] = kb_pack(gl_FragCoord.z, !gl_FrontFacing, n, face, v_part);
+        nodes[node] = kb_pack(z, !gl_FrontFacing, n, face, v_part);
         links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
     }
 }

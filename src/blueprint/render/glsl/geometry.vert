@@ -11,6 +11,9 @@ in int in_part;
 out vec3 v_eye;
 out vec3 v_normal;
 flat out int v_part;
+#if EXACT_DEPTH
+out vec3 v_clip;  // fragment_depth.glsl
+#endif
 
 void main() {
     vec4 eye = u_view * vec4(in_position, 1.0);
@@ -19,4 +22,7 @@ void main() {
     v_normal = mat3(u_view) * in_normal;
     v_part = in_part;
     gl_Position = u_projection * eye;
+#if EXACT_DEPTH
+    v_clip = gl_Position.xyw;
+#endif
 }

@@ -15,6 +15,7 @@
 #endif
 #extension GL_ARB_shading_language_packing : require
 #include "depth.glsl"
+#include "fragment_depth.glsl"
 #include "kbuffer.glsl"
 
 uniform sampler2D u_prev_depth;
@@ -77,7 +78,7 @@ layout(location = 7) inout KB_T o_s7;
 #endif
 
 void main() {
-    float z = gl_FragCoord.z;
+    float z = fragment_depth();
     bool keep = true;
     if (u_peel) {
         float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;

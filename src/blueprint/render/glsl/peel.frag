@@ -2,6 +2,7 @@
 // i-1 by more than u_peel_eps in eye depth, so coplanar and duplicate faces peel as one surface.
 // Coverage lives in the depth attachment (1.0: nothing), so only depth is cleared per layer.
 #include "depth.glsl"
+#include "fragment_depth.glsl"
 
 uniform sampler2D u_prev_depth;
 uniform bool u_peel;
@@ -24,7 +25,7 @@ layout(location = 0) out int o_face;      // face + 1 alone: the ID buffer of tr
 #endif
 
 void main() {
-    float z = gl_FragCoord.z;
+    float z = fragment_depth();
     if (u_peel) {
         float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;
         if (prev >= 1.0 || eye_depth(z) <= eye_depth(prev) + u_peel_eps) {
@@ -40,6 +41,8 @@ void main() {
 #if BACK_BIAS_IN_SHADER
     // the single-draw form of the renderer's back-face offset (see BACK_OFFSET there)
     gl_FragDepth = gl_FrontFacing ? z : min(z + u_back_bias, 1.0);
+#elif EXACT_DEPTH
+    gl_FragDepth = z;
 #endif
 #if FACE_IDS
     int face = gl_PrimitiveID;

@@ -3,6 +3,7 @@
 // is how many more layers a peel without the cap would draw (coincident surfaces, which the
 // peel takes as one, count apart: an upper bound).
 #include "depth.glsl"
+#include "fragment_depth.glsl"
 
 uniform sampler2D u_prev_depth;
 uniform float u_peel_eps;
@@ -10,8 +11,9 @@ uniform float u_peel_eps;
 layout(location = 0) out vec4 o_count;
 
 void main() {
+    float z = fragment_depth();
     float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;
-    if (prev >= 1.0 || eye_depth(gl_FragCoord.z) <= eye_depth(prev) + u_peel_eps) {
+    if (prev >= 1.0 || eye_depth(z) <= eye_depth(prev) + u_peel_eps) {
         discard;
     }
     o_count = vec4(1.0);
