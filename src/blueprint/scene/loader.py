@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import settings
+from blueprint.columns import face_cross
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, members
 from blueprint.scene.environment import PartGlobs, choose_parts
@@ -242,7 +243,7 @@ def _check_coincident(model: Model, name: str) -> None:
     if len(model.faces) <= limit:
         return
     tri = model.positions[model.faces].astype(np.float64)
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    cross = face_cross(tri)
     key = (tri[:, 0] + tri[:, 1] + tri[:, 2]) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
         np.einsum("ij,ij->i", cross, cross)
     ) * np.sqrt(2)

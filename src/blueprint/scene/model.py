@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min
+from blueprint.columns import column_max, column_min, face_cross
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,7 +97,7 @@ class Model:
         """(F,) bool: faces with zero area or a repeated vertex; they are never drawn."""
         if "degenerate" not in self._cache:
             tri = self.positions[self.faces].astype(np.float64)
-            cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            cross = face_cross(tri)
             area2 = np.einsum("ij,ij->i", cross, cross)
             scale = np.ptp(self.bounds, axis=0).max() if len(self.faces) else 1.0
             f = self.faces

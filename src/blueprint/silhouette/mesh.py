@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.columns import row_norm
+from blueprint.columns import face_cross, row_norm
 from blueprint.scene.weld import weld
 from blueprint.sorting import stable_argsort, unique_first
 
@@ -201,7 +201,7 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     faces = np.where(flipped[:, None], faces[:, [0, 2, 1]], faces)
 
     corners = positions[faces]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    cross = face_cross(corners)
     area2 = row_norm(cross)
     # squared edge lengths summed and compared column by column (NumPy's reductions over a
     # short axis are slow); the same values

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min, column_ptp, row_norm
+from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
 from blueprint.sorting import stable_argsort, unique_first
@@ -393,7 +393,7 @@ def _plane_cut(tri: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 def _unit_normals(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals of triangles (M, 3, 3) and whether they have one (non-zero area)."""
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal = face_cross(tri)
     length = row_norm(normal)
     return normal / np.where(length > 0, length, 1.0)[:, None], length > 0
 
@@ -428,7 +428,7 @@ def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None
         return np.zeros((0, 2, 3)), idx
     a0, a1 = _plane_cut(ta[idx], da)
     b0, b1 = _plane_cut(tb[idx], db)
-    direction = np.cross(na, nb)
+    direction = cross(na, nb)
     sa0, sa1 = np.einsum("mi,mi->m", a0, direction), np.einsum("mi,mi->m", a1, direction)
     sb0, sb1 = np.einsum("mi,mi->m", b0, direction), np.einsum("mi,mi->m", b1, direction)
     swap = sa1 < sa0
@@ -472,7 +472,7 @@ def _intersections(model: Model, renderer) -> Segments:
         hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
         part = model.face_part.astype(np.int64)
         eps = _TOUCH_REL * _diagonal(positions)
-        area = row_norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+        area = row_norm(face_cross(tri))
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
         lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.columns import row_norm
+from blueprint.columns import face_cross, row_norm
 from blueprint.scene.model import Model
 
 from ..cache import ModelCache
@@ -59,7 +59,7 @@ def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
 def _model_planes(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3) unit normals (zero for degenerate faces) and (F, 3) first corners, float64."""
     tri = model.positions[model.faces].astype(np.float64)
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal = face_cross(tri)
     length = row_norm(normal)
     good = length > 0
     normal[good] /= length[good, None]
