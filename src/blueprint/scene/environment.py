@@ -43,7 +43,7 @@ def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(P, 3) lows and highs of every part's faces in one pass over the faces, and (P,) whether
     the part has any: per part, a pass over every face would take minutes for 10^5 instances."""
     count = len(model.part_names)
-    tri = model.positions[model.faces].astype(np.float64)
+    tri = model.corners()
     # corner by corner and part by part (sorted): NumPy's reductions over a short axis and its
     # ufunc.at are slow; the same values
     tri_lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])

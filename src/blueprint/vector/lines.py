@@ -467,12 +467,12 @@ def _intersections(model: Model, renderer) -> Segments:
     faces = model.faces.astype(np.int64)
     if parts > 1 and len(faces):
         positions = model.positions.astype(np.float64)
-        tri = positions[faces]
+        tri = model.corners()
         lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
         hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
         part = model.face_part.astype(np.int64)
         eps = _TOUCH_REL * _diagonal(positions)
-        area = row_norm(face_cross(tri))
+        area = row_norm(model.corner_cross())
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
         lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
