@@ -9,8 +9,16 @@ from blueprint.sorting import stable_argsort, unique_first
 
 @pytest.mark.parametrize(
     ("count", "low", "high"),
-    [(0, 0, 5), (1, 0, 5), (50, 0, 3), (20000, -500, 500), (20000, 0, 2**40), (300, 0, 2**62)],
-    ids=["empty", "one", "few-values", "negative", "wide", "too-wide-to-pack"],
+    [
+        (0, 0, 5),
+        (1, 0, 5),
+        (50, 0, 3),
+        (20000, -500, 500),
+        (2000, 0, 8000),
+        (20000, 0, 2**40),
+        (300, 0, 2**62),
+    ],
+    ids=["empty", "one", "few-values", "negative", "range-of-four-a-key", "wide", "too-wide-to-pack"],
 )
 def test_sorts_equal_numpys(count, low, high):
     key = np.random.default_rng(count).integers(low, high, count)
@@ -19,6 +27,7 @@ def test_sorts_equal_numpys(count, low, high):
         unique_first(key), np.unique(key, return_index=True, return_inverse=True), strict=True
     ):
         np.testing.assert_array_equal(got, expected.reshape(-1))
+        assert got.dtype == expected.dtype
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int64])
