@@ -48,7 +48,7 @@ class _Triangles:
     """What every axis's base fraction needs of a mesh, computed once for both axes."""
 
     def __init__(self, positions: np.ndarray, faces: np.ndarray) -> None:
-        self.tri = positions[faces].astype(np.float64)
+        self.tri = np.asarray(positions, np.float64)[faces]  # a loader's positions are float64: no copy
         corners = self.tri.reshape(-1, 3)
         self.lo, self.hi = column_min(corners), column_max(corners)
         self.cross = face_cross(self.tri)
