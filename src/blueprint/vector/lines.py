@@ -137,7 +137,9 @@ def _welded_adjacency(model: Model) -> Adjacency:
     positions = model.positions.astype(np.float64)
     faces = model.faces.astype(np.int64)
     part = model.face_part.astype(np.int64)
-    diagonal = _diagonal(positions[faces.reshape(-1)] if len(faces) else positions)
+    diagonal = _diagonal(positions)
+    if len(faces):  # the used vertices' diagonal: the model's bounds are their extremes
+        diagonal = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
     if len(model.part_names) <= 1 or len(faces) == 0 or np.all(part == part[0]):
         held = build_adjacency(positions, faces)
     else:
