@@ -292,13 +292,14 @@ def cell_grid(lo, hi, part, slack: float) -> CellGrid:
         cell *= 2.0
     owner = np.repeat(np.arange(n), entries)
     rank = np.arange(len(owner)) - np.repeat(np.cumsum(entries) - entries, entries)
-    sx, sy = span[owner, 0], span[owner, 1]
-    cx = first[owner, 0] + rank % sx
-    cy = first[owner, 1] + (rank // sx) % sy
-    cz = first[owner, 2] + rank // (sx * sy)
     base = column_min(first)
     dims = column_max(last) + 2 - base
-    key = _cell_key(base, dims, cx, cy, cz)
+    # entry (dx, dy, dz) of a box is its first cell's key plus that step: per-box values
+    # repeated, two divisions an entry
+    across, dx = np.divmod(rank, np.repeat(span[:, 0], entries))
+    dz, dy = np.divmod(across, np.repeat(span[:, 1], entries))
+    step = (dz * dims[1] + dy) * dims[0] + dx
+    key = np.repeat(_cell_key(base, dims, first[:, 0], first[:, 1], first[:, 2]), entries) + step
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
     parts = int(part.max()) + 1
