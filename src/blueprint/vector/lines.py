@@ -146,8 +146,16 @@ def _welded_adjacency(model: Model) -> Adjacency:
         span = 4.0 * (float(column_ptp(positions).max()) + diagonal)
         # one vertex per (vertex, part) in use, moved by its part's multiple of the span
         corner_part = np.repeat(part, 3)
-        key = faces.reshape(-1) * len(model.part_names) + corner_part
-        unique, _, inverse = unique_first(key)
+        corner = faces.reshape(-1)
+        part_of = np.zeros(len(positions), np.int64)
+        part_of[corner] = corner_part
+        if np.array_equal(part_of[corner], corner_part):
+            # each vertex in one part: the vertex orders the keys alone, over a range that
+            # unique_first counts over instead of sorting
+            used, _, inverse = unique_first(corner)
+            unique = used * len(model.part_names) + part_of[used]
+        else:
+            unique, _, inverse = unique_first(corner * len(model.part_names) + corner_part)
         moved = positions[unique // len(model.part_names)].copy()
         moved[:, 0] += (unique % len(model.part_names)) * span
         held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
