@@ -93,8 +93,15 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     root = num_faces
     source = np.concatenate([lo, hi, np.full(len(starts), root)])
     target = np.concatenate([hi, lo, starts])
+    # the face pairs' graph with the root's row of starts added, in place of sorting the
+    # pairs into a second matrix
     reach = sparse.csr_matrix(
-        (np.ones(len(source), np.int8), (source, target)), shape=(num_faces + 1, num_faces + 1)
+        (
+            np.r_[graph.data, np.ones(len(starts), np.int8)],
+            np.r_[graph.indices, starts],
+            np.r_[graph.indptr, graph.indptr[-1] + len(starts)],
+        ),
+        shape=(num_faces + 1, num_faces + 1),
     )
     distance = _distances(reach, root)[:num_faces]
     near = distance[source[: 2 * len(lo)]] == distance[target[: 2 * len(lo)]] - 1.0
