@@ -1,16 +1,24 @@
-"""The fast sorts and column reductions give NumPy's own answers."""
+"""The fast sorts, column reductions and cross products give NumPy's own answers."""
 
 import numpy as np
 import pytest
 
-from blueprint.columns import column_max, column_min, column_ptp, row_norm
+from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.sorting import stable_argsort, unique_first
 
 
 @pytest.mark.parametrize(
     ("count", "low", "high"),
-    [(0, 0, 5), (1, 0, 5), (50, 0, 3), (20000, -500, 500), (20000, 0, 2**40), (300, 0, 2**62)],
-    ids=["empty", "one", "few-values", "negative", "wide", "too-wide-to-pack"],
+    [
+        (0, 0, 5),
+        (1, 0, 5),
+        (50, 0, 3),
+        (20000, -500, 500),
+        (2000, 0, 8000),
+        (20000, 0, 2**40),
+        (300, 0, 2**62),
+    ],
+    ids=["empty", "one", "few-values", "negative", "range-of-four-a-key", "wide", "too-wide-to-pack"],
 )
 def test_sorts_equal_numpys(count, low, high):
     key = np.random.default_rng(count).integers(low, high, count)
@@ -19,6 +27,7 @@ def test_sorts_equal_numpys(count, low, high):
         unique_first(key), np.unique(key, return_index=True, return_inverse=True), strict=True
     ):
         np.testing.assert_array_equal(got, expected.reshape(-1))
+        assert got.dtype == expected.dtype
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int64])
@@ -40,3 +49,13 @@ def test_row_norm_equals_numpys(dtype, columns):
     got, expected = row_norm(values), np.linalg.norm(values, axis=1)
     assert got.dtype == expected.dtype
     np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_cross_products_equal_numpys(dtype):
+    tri = np.random.default_rng(5).normal(0, 1e2, (20000, 3, 3)).astype(dtype)
+    u, v = tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]
+    expected = np.cross(u, v)
+    for got in (cross(u, v), face_cross(tri)):
+        assert got.dtype == expected.dtype
+        np.testing.assert_array_equal(got, expected)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from blueprint.gpu.shaders import build_compute
-from blueprint.gpu.tables import TABLE_WIDTH, table_fits, table_texture
+from blueprint.gpu.tables import TABLE_WIDTH, table_fits, table_rows, table_texture
 
 _READ = """
 #include "table.glsl"
@@ -27,11 +27,13 @@ void main() {
         (np.uint32, "usampler2D", "uvec4"),
     ],
 )
-def test_rows_read_back(renderer, tmp_path, dtype, sampler, vec):
+@pytest.mark.parametrize("rows", [TABLE_WIDTH + 37, table_rows(TABLE_WIDTH + 37)], ids=["padded", "whole"])
+def test_rows_read_back(renderer, tmp_path, dtype, sampler, vec, rows):
+    """Rows on either side of a texture row's end, and a table whose rows fill its texture
+    (taken as it is)."""
     if renderer.ctx.version_code < 430:
         pytest.skip("no compute shaders")
     rng = np.random.default_rng(1)
-    rows = TABLE_WIDTH + 37  # rows on either side of a texture row's end
     data = rng.integers(-(1 << 20), 1 << 20, (rows, 3)).astype(dtype)
     if dtype is np.float32:
         data += np.float32(0.125)
@@ -61,6 +63,8 @@ def test_one_column_and_limits(renderer):
         assert texture.size == (TABLE_WIDTH, 1) and texture.components == 1
     finally:
         texture.release()
+    assert table_rows(1, 8) == table_rows(TABLE_WIDTH // 8, 8) == TABLE_WIDTH // 8
+    assert table_rows(TABLE_WIDTH // 8 + 1, 8) == TABLE_WIDTH // 4
     assert table_fits(TABLE_WIDTH * 16384, 16384) and not table_fits(TABLE_WIDTH * 16384 + 1, 16384)
     with pytest.raises(ValueError, match="1 to 4 columns"):
         table_texture(renderer.ctx, np.zeros((3, 5), np.float32))

@@ -1,16 +1,17 @@
-"""Reductions of (N, k) arrays, for small k, column by column: the smallest and largest value of
-each column, and the length of each row.
+"""Reductions and products of (N, k) arrays, for small k, column by column: the smallest and
+largest value of each column, the length of each row, cross products of rows.
 
 NumPy reduces ``a.min(axis=0)`` of an (N, 3) array one row at a time, some 20 times slower than
-one reduction a column (a 624K x 3 array: 13 ms against 0.5 ms), and ``np.linalg.norm(a,
-axis=1)`` four times slower than the sum of squares it stands for; the values are the same.
+one reduction a column (a 624K x 3 array: 13 ms against 0.5 ms), ``np.linalg.norm(a,
+axis=1)`` four times slower than the sum of squares it stands for, and ``np.cross`` of (N, 3)
+rows takes twice the time of the same products a column; the values are the same.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["column_max", "column_min", "column_ptp", "row_norm"]
+__all__ = ["column_max", "column_min", "column_ptp", "cross", "face_cross", "row_norm"]
 
 
 def column_min(values: np.ndarray) -> np.ndarray:
@@ -34,3 +35,24 @@ def row_norm(values: np.ndarray) -> np.ndarray:
     for k in range(1, values.shape[1]):
         total = total + values[:, k] * values[:, k]
     return np.sqrt(total)
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross(a, b)`` of two (N, 3) arrays."""
+    return _cross((a[:, 0], a[:, 1], a[:, 2]), (b[:, 0], b[:, 1], b[:, 2]), np.result_type(a, b))
+
+
+def face_cross(tri: np.ndarray) -> np.ndarray:
+    """``np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])`` of triangles (N, 3, 3): twice
+    their areas along their normals."""
+    u = [tri[:, 1, k] - tri[:, 0, k] for k in range(3)]
+    v = [tri[:, 2, k] - tri[:, 0, k] for k in range(3)]
+    return _cross(u, v, tri.dtype)
+
+
+def _cross(a, b, dtype) -> np.ndarray:
+    out = np.empty((len(a[0]), 3), dtype)
+    for k in range(3):
+        i, j = (k + 1) % 3, (k + 2) % 3
+        np.subtract(a[i] * b[j], a[j] * b[i], out=out[:, k])
+    return out

@@ -2,7 +2,9 @@
 
 ``np.unique(..., return_index=True)`` and ``np.argsort(kind="stable")`` merge-sort; an unstable
 sort of distinct keys (each key times the count, plus its position) is several times faster
-and orders them the same way, where those keys fit in 63 bits.
+and orders them the same way, where those keys fit in 63 bits. Keys of a range not much wider
+than their count (vertex ids, component ids) need no sort at all for ``unique_first``: a table
+over the range marks them, five times faster again.
 """
 
 from __future__ import annotations
@@ -10,6 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["stable_argsort", "unique_first"]
+
+# unique_first counts over the keys' range, not sorting, up to this many times their number.
+_TABLE_PER_KEY = 4
 
 
 def stable_argsort(key: np.ndarray) -> np.ndarray:
@@ -26,6 +31,18 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
 def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``np.unique(key, return_index=True, return_inverse=True)`` of a 1-D integer array: the
     distinct keys, the index of each one's first occurrence, and each entry's distinct key."""
+    n = len(key)
+    if n:
+        low = int(key.min())
+        span = int(key.max()) - low + 1
+        if span <= _TABLE_PER_KEY * n:
+            at = (key - low).astype(np.int64)
+            present = np.zeros(span, bool)
+            present[at] = True
+            first = np.full(span, n, np.int64)
+            np.minimum.at(first, at, np.arange(n))
+            rank = np.cumsum(present) - 1
+            return (np.flatnonzero(present) + low).astype(key.dtype), first[present], rank[at]
     order = stable_argsort(key)
     ordered = key[order]
     new = np.ones(len(key), bool)

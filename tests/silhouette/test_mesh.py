@@ -199,3 +199,24 @@ def test_degenerate_faces_get_zero_normals_and_no_edges():
 def test_empty_mesh():
     adj = build_adjacency(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
     assert adj.edges.shape == (0, 2) and adj.faces.shape == (0, 3)
+
+
+@pytest.mark.parametrize("levels", [4096, 3], ids=["level-by-level", "strip-too-deep"])
+def test_breadth_first_distances_equal_scipys_shortest_paths(monkeypatch, levels):
+    """The winding search's distances (one breadth-first search, a level at a time, or
+    scipy's shortest paths past ``_MAX_LEVELS``) on a random graph with unreachable nodes."""
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    from blueprint.silhouette import mesh
+
+    monkeypatch.setattr(mesh, "_MAX_LEVELS", levels)
+    rng = np.random.default_rng(7)
+    n = 3000
+    source, target = rng.integers(0, n - 100, (2, 4000))  # the last 100 nodes unreachable
+    reach = sparse.csr_matrix(
+        (np.ones(8000, np.int8), (np.r_[source, target], np.r_[target, source])), shape=(n, n)
+    )
+    expected = csgraph.shortest_path(reach, method="D", unweighted=True, indices=0)
+    assert np.isinf(expected).any() and expected[np.isfinite(expected)].max() > 3
+    np.testing.assert_array_equal(mesh._distances(reach, 0), expected)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TABLE_WIDTH", "table_fits", "table_texture"]
+__all__ = ["TABLE_WIDTH", "table_fits", "table_rows", "table_texture"]
 
 # Rows a texture row (table.glsl's TABLE_WIDTH): a power of two, so that a shader finds the
 # texel with a mask and a shift.
@@ -20,17 +20,30 @@ def table_fits(rows: int, max_texture: int) -> bool:
     return -(-rows // TABLE_WIDTH) <= max_texture
 
 
+def table_rows(count: int, per_item: int = 1) -> int:
+    """How many items of ``per_item`` rows each (a divisor of ``TABLE_WIDTH``), ``count`` or
+    more, fill a table to the end of its last texture row: ``table_texture`` takes an array of
+    that many rows as it is."""
+    items = TABLE_WIDTH // per_item
+    return max(-(-count // items), 1) * items
+
+
 def table_texture(ctx, data: np.ndarray):
     """An (N,) or (N, C) array, C at most 4, as a texture of its rows (float32, int32 or
-    uint32 by the array's kind; the last texture row padded with zeros). The caller releases it."""
+    uint32 by the array's kind; the last texture row padded with zeros). The caller releases it.
+    N a multiple of ``TABLE_WIDTH`` (``table_rows``), of that type and contiguous, is not copied."""
     data = np.asarray(data)
     columns = 1 if data.ndim == 1 else data.shape[1]
     if not 1 <= columns <= 4 or data.ndim > 2:
         raise ValueError(f"a table has 1 to 4 columns, got an array of shape {data.shape}")
     dtype, kind = _DTYPES["i" if data.dtype.kind == "b" else data.dtype.kind]
     rows = max(-(-len(data) // TABLE_WIDTH), 1)
-    texels = np.zeros((rows * TABLE_WIDTH, columns), kind)
-    texels[: len(data)] = data.reshape(len(data), columns)
-    texture = ctx.texture((TABLE_WIDTH, rows), columns, texels.tobytes(), dtype=dtype)
+    # one copy at most (none where the caller laid the rows out whole), handed over as it is
+    texels = data.reshape(len(data), columns)
+    if len(data) != rows * TABLE_WIDTH or texels.dtype != kind or not texels.flags.c_contiguous:
+        texels = np.empty((rows * TABLE_WIDTH, columns), kind)
+        texels[: len(data)] = data.reshape(len(data), columns)
+        texels[len(data) :] = 0
+    texture = ctx.texture((TABLE_WIDTH, rows), columns, texels, dtype=dtype)
     texture.filter = (ctx.NEAREST, ctx.NEAREST)  # an integer texture filtered linearly reads as 0
     return texture

@@ -39,7 +39,14 @@ class GpuMesh:
         # a vertex is split where its normal or its part differs, so both can be attributes
         if crease_angle is None:
             normals = None
-            key = corner_vertex * max(len(model.part_names), 1) + corner_part
+            # where each vertex lies in one part, the vertex orders the keys alone, over a range
+            # that unique_first counts over instead of sorting
+            key = corner_vertex
+            if len(model.part_names) > 1:
+                vertex_part = np.zeros(len(model.positions), np.int64)
+                vertex_part[corner_vertex] = corner_part
+                if not np.array_equal(vertex_part[corner_vertex], corner_part):
+                    key = corner_vertex * len(model.part_names) + corner_part
             _, first, inverse = unique_first(key)
             vertex, part = corner_vertex[first], corner_part[first]
         else:

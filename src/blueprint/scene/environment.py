@@ -19,6 +19,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from blueprint.columns import face_cross
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
 from blueprint.scene.parts import select_parts
@@ -42,7 +43,7 @@ def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(P, 3) lows and highs of every part's faces in one pass over the faces, and (P,) whether
     the part has any: per part, a pass over every face would take minutes for 10^5 instances."""
     count = len(model.part_names)
-    tri = model.positions[model.faces].astype(np.float64)
+    tri = model.corners()
     # corner by corner and part by part (sorted): NumPy's reductions over a short axis and its
     # ufunc.at are slow; the same values
     tri_lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
@@ -71,7 +72,7 @@ def _lowest_of_the_rest(values: np.ndarray, alive: np.ndarray) -> np.ndarray:
 
 def _inward_fraction(model: Model, mask: np.ndarray, centre: np.ndarray) -> float:
     tri = model.positions[model.faces[mask]].astype(np.float64)
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    cross = face_cross(tri)
     area = np.linalg.norm(cross, axis=1)
     towards = np.einsum("ij,ij->i", cross, centre - tri.mean(axis=1)) > 0
     total = area.sum()

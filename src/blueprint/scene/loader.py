@@ -225,13 +225,14 @@ def _checked(
         name,
         chosen.reason,
     )
-    degenerate = model.degenerate_faces()
-    if degenerate.all():
-        raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
-    _check_coincident(model, name)
-    if degenerate.any():
-        log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
-    return choose_parts(model, include, exclude)
+    with model.holding_corners():  # every check reads the faces' corners
+        degenerate = model.degenerate_faces()
+        if degenerate.all():
+            raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
+        _check_coincident(model, name)
+        if degenerate.any():
+            log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
+        return choose_parts(model, include, exclude)
 
 
 def _check_coincident(model: Model, name: str) -> None:
@@ -241,8 +242,8 @@ def _check_coincident(model: Model, name: str) -> None:
     limit = settings.COINCIDENT_LIMIT
     if len(model.faces) <= limit:
         return
-    tri = model.positions[model.faces].astype(np.float64)
-    cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    tri = model.corners()
+    cross = model.corner_cross()
     key = (tri[:, 0] + tri[:, 1] + tri[:, 2]) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
         np.einsum("ij,ij->i", cross, cross)
     ) * np.sqrt(2)

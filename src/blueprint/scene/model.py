@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min
+from blueprint.columns import column_max, column_min, face_cross
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,7 +87,10 @@ class Model:
         """(2, 3) float64: minimum and maximum corner of the used vertices."""
         # every camera fit asks (the viewer: every frame), and a model's arrays do not change
         if "bounds" not in self._cache:
-            used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
+            if "corners" in self._cache and len(self.faces):
+                used = self._cache["corners"].reshape(-1, 3)
+            else:
+                used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
             self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
         return self._cache["bounds"].copy()
 
@@ -93,11 +98,38 @@ class Model:
         """(P,) int64: triangles per part."""
         return np.bincount(self.face_part, minlength=len(self.part_names))
 
+    def corners(self) -> np.ndarray:
+        """(F, 3, 3) float64: every face's corners, made anew unless ``holding_corners``."""
+        held = self._cache.get("corners")
+        return self.positions[self.faces].astype(np.float64) if held is None else held
+
+    def corner_cross(self) -> np.ndarray:
+        """(F, 3) float64: ``columns.face_cross`` of ``corners()``, held as they are."""
+        if "corners" not in self._cache:
+            return face_cross(self.corners())
+        if "corner_cross" not in self._cache:
+            self._cache["corner_cross"] = face_cross(self._cache["corners"])
+        return self._cache["corner_cross"]
+
+    @contextmanager
+    def holding_corners(self) -> Iterator[None]:
+        """Hold ``corners()`` and ``corner_cross()`` while the block runs, for work that reads
+        every face's corners more than once (the loader's checks, a vector drawing's lines
+        and planes): made once, not kept with the model (4 times its own size)."""
+        if "corners" in self._cache:
+            yield
+            return
+        self._cache["corners"] = self.positions[self.faces].astype(np.float64)
+        try:
+            yield
+        finally:
+            self._cache.pop("corners", None)
+            self._cache.pop("corner_cross", None)
+
     def degenerate_faces(self) -> np.ndarray:
         """(F,) bool: faces with zero area or a repeated vertex; they are never drawn."""
         if "degenerate" not in self._cache:
-            tri = self.positions[self.faces].astype(np.float64)
-            cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            cross = self.corner_cross()
             area2 = np.einsum("ij,ij->i", cross, cross)
             scale = np.ptp(self.bounds, axis=0).max() if len(self.faces) else 1.0
             f = self.faces

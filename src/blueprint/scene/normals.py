@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.columns import face_cross
 from blueprint.scene.weld import weld
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
@@ -96,7 +97,7 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
         Unit normal for corner ``j`` of face ``i`` at ``[i, j]``.
     """
     tri = positions[faces].astype(np.float64)
-    area_normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area_normals = face_cross(tri)
     length = np.linalg.norm(area_normals, axis=1)
     unit = area_normals / np.where(length > 0, length, 1.0)[:, None]
     flat = np.repeat(unit[:, None, :], 3, axis=1)

@@ -21,20 +21,25 @@ __all__ = ["PLAIN_OBJ_LIMIT", "plain_obj"]
 # (a file of nothing but newlines), so larger files go to trimesh, as every OBJ did before.
 PLAIN_OBJ_LIMIT = min(256 << 20, settings.MEMORY_BUDGET // 128)
 
-_SPACE = np.zeros(256, bool)
-_SPACE[[ord(" "), ord("\t"), ord("\r"), ord("\n")]] = True
-# bytes a vertex line may hold besides its keyword: decimal numbers as NumPy and Python read
-# them alike (no "nan", "inf", hexadecimal or digit separators)
-_VERTEX_BYTES = _SPACE.copy()
-_VERTEX_BYTES[np.frombuffer(b"0123456789+-.eE", np.uint8)] = True
-_FACE_BYTES = _SPACE.copy()
-_FACE_BYTES[np.frombuffer(b"0123456789", np.uint8)] = True
+# Tables of byte values, 1 where a byte is of the kind: uint8, so that ``np.take`` looks a whole
+# file up (twice as fast as indexing a bool table).
+_SPACE = np.zeros(256, np.uint8)
+_SPACE[[ord(" "), ord("\t"), ord("\r"), ord("\n")]] = 1
+# bytes a vertex line may not hold besides its keyword: all but decimal numbers as NumPy and
+# Python read them alike (no "nan", "inf", hexadecimal or digit separators)
+_NOT_VERTEX = 1 - _SPACE
+_NOT_VERTEX[np.frombuffer(b"0123456789+-.eE", np.uint8)] = 0
+_NOT_FACE = 1 - _SPACE
+_NOT_FACE[np.frombuffer(b"0123456789", np.uint8)] = 0
 
 
 def _counts(flags: np.ndarray, starts: np.ndarray) -> np.ndarray:
-    """How many of ``flags`` (one a byte) are set in each line (lines begin at ``starts``)."""
-    line = np.searchsorted(starts, np.flatnonzero(flags), side="right") - 1
-    return np.bincount(line, minlength=len(starts))
+    """How many of ``flags`` (one a byte, 0 or 1) are set in each line (lines begin at
+    ``starts``, the first at 0; a last one at the end of the file holds nothing)."""
+    inside = starts < len(flags)
+    counts = np.zeros(len(starts), np.int64)
+    counts[inside] = np.add.reduceat(flags, starts[inside], dtype=np.int32)
+    return counts
 
 
 def _numbers(data: bytes, starts: np.ndarray, ends: np.ndarray, keyword: bytes, dtype) -> np.ndarray | None:
@@ -83,13 +88,16 @@ def plain_obj(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     vs, ve, fs, fe = starts[vertex], ends[vertex], starts[face], ends[face]
     # the keyword is each line's only byte outside its kind's set
-    if (_counts(~_VERTEX_BYTES[buf], starts)[vertex] != 1).any():
+    if (_counts(np.take(_NOT_VERTEX, buf), starts)[vertex] != 1).any():
         return None
-    if (_counts(~_FACE_BYTES[buf], starts)[face] != 1).any():
+    if (_counts(np.take(_NOT_FACE, buf), starts)[face] != 1).any():
         return None
     # words: a byte that is not a space after one that is (or at the file's start)
-    space = _SPACE[buf]
-    words = _counts(~space & np.r_[True, space[:-1]], starts)
+    space = np.take(_SPACE, buf)
+    starting = np.empty(len(buf), bool)
+    starting[0] = space[0] == 0
+    np.less(space[1:], space[:-1], out=starting[1:])
+    words = _counts(starting, starts)
     if (words[vertex] != 4).any() or (words[face] != 4).any():
         return None
     vertices = _numbers(data, vs, ve, b"v", np.float64)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min, row_norm
+from blueprint.columns import column_max, column_min, face_cross, row_norm
 
 # The bottom slab, as a fraction of the model's extent along the axis.
 _SLAB = 0.01
@@ -48,10 +48,10 @@ class _Triangles:
     """What every axis's base fraction needs of a mesh, computed once for both axes."""
 
     def __init__(self, positions: np.ndarray, faces: np.ndarray) -> None:
-        self.tri = positions[faces].astype(np.float64)
+        self.tri = np.asarray(positions, np.float64)[faces]  # a loader's positions are float64: no copy
         corners = self.tri.reshape(-1, 3)
         self.lo, self.hi = column_min(corners), column_max(corners)
-        self.cross = np.cross(self.tri[:, 1] - self.tri[:, 0], self.tri[:, 2] - self.tri[:, 0])
+        self.cross = face_cross(self.tri)
         self.area = row_norm(self.cross)
 
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.columns import row_norm
+from blueprint.columns import face_cross, row_norm
 from blueprint.scene.weld import weld
 from blueprint.sorting import stable_argsort, unique_first
 
@@ -20,6 +20,8 @@ __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 # Faces whose doubled area is below this fraction of their longest edge squared get a zero
 # normal: their cross product is rounding noise and its direction would be arbitrary.
 _DEGENERATE_REL_AREA = 1e-12
+# Levels of the winding search's breadth-first distances found one at a time, at most.
+_MAX_LEVELS = 4096
 
 
 @dataclass(frozen=True)
@@ -66,25 +68,22 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     frontiers; a face takes its flip from the parent that first reaches it, so on
     non-orientable surfaces the leftover inconsistency sits on non-tree edges.
     """
-    # Duplicate triangles share several edges; one parity per face pair is enough, and
-    # duplicates would be summed by the sparse constructor.
     lo = np.minimum(pair_faces[:, 0], pair_faces[:, 1])
     hi = np.maximum(pair_faces[:, 0], pair_faces[:, 1])
-    _, keep, _ = unique_first(lo * num_faces + hi)
-    lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
     # scipy loads here, not with the package: only the object-space method needs it
     from scipy import sparse
     from scipy.sparse import csgraph
 
-    # Stored as parity + 1 so that consistent pairs are not dropped as explicit zeros.
     graph = sparse.csr_matrix(
-        (
-            np.concatenate([pair_parity, pair_parity]).astype(np.int8) + 1,
-            (np.concatenate([lo, hi]), np.concatenate([hi, lo])),
-        ),
+        (np.ones(2 * len(lo), np.int8), (np.concatenate([lo, hi]), np.concatenate([hi, lo]))),
         shape=(num_faces, num_faces),
     )
     _, component = csgraph.connected_components(graph, directed=False)
+    if graph.nnz < 2 * len(lo):
+        # Duplicate triangles share several edges (the constructor summed them): one parity per
+        # face pair, its first, so that each face has one parity towards its parent.
+        _, keep, _ = unique_first(lo * num_faces + hi)
+        lo, hi, pair_parity = lo[keep], hi[keep], pair_parity[keep]
 
     # Breadth-first from the lowest face of every component at once: a face's distance from
     # its start comes from one search in scipy (from a node joined to every start), its parent
@@ -94,10 +93,17 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     root = num_faces
     source = np.concatenate([lo, hi, np.full(len(starts), root)])
     target = np.concatenate([hi, lo, starts])
+    # the face pairs' graph with the root's row of starts added, in place of sorting the
+    # pairs into a second matrix
     reach = sparse.csr_matrix(
-        (np.ones(len(source), np.int8), (source, target)), shape=(num_faces + 1, num_faces + 1)
+        (
+            np.r_[graph.data, np.ones(len(starts), np.int8)],
+            np.r_[graph.indices, starts],
+            np.r_[graph.indptr, graph.indptr[-1] + len(starts)],
+        ),
+        shape=(num_faces + 1, num_faces + 1),
     )
-    distance = csgraph.shortest_path(reach, method="D", unweighted=True, indices=root)[:num_faces]
+    distance = _distances(reach, root)[:num_faces]
     near = distance[source[: 2 * len(lo)]] == distance[target[: 2 * len(lo)]] - 1.0
     child, parent_of = target[: 2 * len(lo)][near], source[: 2 * len(lo)][near]
     parent = np.arange(num_faces)
@@ -115,6 +121,28 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
         flipped ^= flipped[parent]
         parent = above
     return flipped, component.astype(np.int64)
+
+
+def _distances(reach, root: int) -> np.ndarray:
+    """(N,) float64 breadth-first distances of every node of the sparse graph ``reach`` from
+    ``root`` (inf where it does not reach): ``csgraph.shortest_path(reach, method="D",
+    unweighted=True, indices=root)``, from one breadth-first search, five times faster."""
+    from scipy.sparse import csgraph
+
+    order, predecessor = csgraph.breadth_first_order(reach, root, directed=True, return_predecessors=True)
+    position = np.empty(reach.shape[0], np.int64)
+    position[order] = np.arange(len(order))
+    # the search appends each node's new neighbours in turn, so the positions of the nodes'
+    # parents rise along the order, and each level ends where the last one's children do
+    parent = position[predecessor[order[1:]]]
+    ends = [1]
+    while ends[-1] < len(order) and len(ends) < _MAX_LEVELS:
+        ends.append(1 + int(np.searchsorted(parent, ends[-1])))
+    if ends[-1] < len(order):  # a long strip of faces: a search a level would take longer
+        return csgraph.shortest_path(reach, method="D", unweighted=True, indices=root)
+    distance = np.full(reach.shape[0], np.inf)
+    distance[order] = np.repeat(np.arange(len(ends), dtype=np.float64), np.diff(np.r_[0, ends]))
+    return distance
 
 
 def _squared_length(v: np.ndarray) -> np.ndarray:
@@ -201,7 +229,7 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     faces = np.where(flipped[:, None], faces[:, [0, 2, 1]], faces)
 
     corners = positions[faces]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    cross = face_cross(corners)
     area2 = row_norm(cross)
     # squared edge lengths summed and compared column by column (NumPy's reductions over a
     # short axis are slow); the same values

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.gpu.tables import table_fits, table_texture
+from blueprint.gpu.tables import table_fits, table_rows, table_texture
 
 __all__ = ["gpu_cut_pairs"]
 
@@ -53,11 +53,12 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     empty = np.zeros(0, np.int64)
     if len(busy) == 0:
         return empty, empty
-    packed = np.zeros((n, 4, 4))
-    packed[:, :3, :3] = tri
-    packed[:, :3, 3] = hi
-    packed[:, 3, :3] = normal
-    packed[:, 3, 3] = has_normal
+    # laid out whole for the table (8 texels a triangle), so that the texture takes it uncopied
+    packed = np.zeros((table_rows(n, 8), 4, 4))
+    packed[:n, :3, :3] = tri
+    packed[:n, :3, 3] = hi
+    packed[:n, 3, :3] = normal
+    packed[:n, 3, 3] = has_normal
     # boxes in single precision, rounded outwards so that they overlap where the exact ones do
     lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
     rough = np.zeros((n, 2, 4), np.float32)
@@ -76,7 +77,7 @@ def gpu_cut_pairs(renderer, grid, tri, normal, has_normal, hi, eps: float):
     ctx = renderer.ctx
     tables = {
         # the doubles' bits, two a texel (triangles.glsl)
-        "u_tris": packed.reshape(n, 16).view(np.uint32).reshape(8 * n, 4),
+        "u_tris": packed.reshape(-1, 16).view(np.uint32).reshape(-1, 4),
         "u_owners": grid.owner.astype(np.int32),
         "u_boxes": rough.reshape(2 * n, 4),
         "u_firsts": firsts,

@@ -395,15 +395,16 @@ def draw_vector(
     page = _page(size, camera, scale, units, model)
 
     clock = time.perf_counter()
-    segments = model_segments(model, view_m, proj, size, crease_angle, intersections, renderer)
-    lines = join_polylines(segments)
-    samples = sample_polylines(lines, view_m, proj, size, spacing)
-    seconds["lines"] = time.perf_counter() - clock
+    with model.holding_corners():  # the intersections and the faces' planes read every corner
+        segments = model_segments(model, view_m, proj, size, crease_angle, intersections, renderer)
+        lines = join_polylines(segments)
+        samples = sample_polylines(lines, view_m, proj, size, spacing)
+        seconds["lines"] = time.perf_counter() - clock
 
-    clock = time.perf_counter()
+        clock = time.perf_counter()
+        planes = face_planes(model, view_m)
     ortho = bool(np.isclose(proj[3, 3], 1.0))
     footprint = camera.pixel_angle(size[1])
-    planes = face_planes(model, view_m)
     on_gpu = None
     if layers is None:
         on_gpu = gpu_levels(

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min, column_ptp, row_norm
+from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
 from blueprint.sorting import stable_argsort, unique_first
@@ -137,15 +137,25 @@ def _welded_adjacency(model: Model) -> Adjacency:
     positions = model.positions.astype(np.float64)
     faces = model.faces.astype(np.int64)
     part = model.face_part.astype(np.int64)
-    diagonal = _diagonal(positions[faces.reshape(-1)] if len(faces) else positions)
+    diagonal = _diagonal(positions)
+    if len(faces):  # the used vertices' diagonal: the model's bounds are their extremes
+        diagonal = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
     if len(model.part_names) <= 1 or len(faces) == 0 or np.all(part == part[0]):
         held = build_adjacency(positions, faces)
     else:
         span = 4.0 * (float(column_ptp(positions).max()) + diagonal)
         # one vertex per (vertex, part) in use, moved by its part's multiple of the span
         corner_part = np.repeat(part, 3)
-        key = faces.reshape(-1) * len(model.part_names) + corner_part
-        unique, _, inverse = unique_first(key)
+        corner = faces.reshape(-1)
+        part_of = np.zeros(len(positions), np.int64)
+        part_of[corner] = corner_part
+        if np.array_equal(part_of[corner], corner_part):
+            # each vertex in one part: the vertex orders the keys alone, over a range that
+            # unique_first counts over instead of sorting
+            used, _, inverse = unique_first(corner)
+            unique = used * len(model.part_names) + part_of[used]
+        else:
+            unique, _, inverse = unique_first(corner * len(model.part_names) + corner_part)
         moved = positions[unique // len(model.part_names)].copy()
         moved[:, 0] += (unique % len(model.part_names)) * span
         held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
@@ -290,13 +300,14 @@ def cell_grid(lo, hi, part, slack: float) -> CellGrid:
         cell *= 2.0
     owner = np.repeat(np.arange(n), entries)
     rank = np.arange(len(owner)) - np.repeat(np.cumsum(entries) - entries, entries)
-    sx, sy = span[owner, 0], span[owner, 1]
-    cx = first[owner, 0] + rank % sx
-    cy = first[owner, 1] + (rank // sx) % sy
-    cz = first[owner, 2] + rank // (sx * sy)
     base = column_min(first)
     dims = column_max(last) + 2 - base
-    key = _cell_key(base, dims, cx, cy, cz)
+    # entry (dx, dy, dz) of a box is its first cell's key plus that step: per-box values
+    # repeated, two divisions an entry
+    across, dx = np.divmod(rank, np.repeat(span[:, 0], entries))
+    dz, dy = np.divmod(across, np.repeat(span[:, 1], entries))
+    step = (dz * dims[1] + dy) * dims[0] + dx
+    key = np.repeat(_cell_key(base, dims, first[:, 0], first[:, 1], first[:, 2]), entries) + step
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
     parts = int(part.max()) + 1
@@ -393,7 +404,7 @@ def _plane_cut(tri: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 def _unit_normals(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normals of triangles (M, 3, 3) and whether they have one (non-zero area)."""
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal = face_cross(tri)
     length = row_norm(normal)
     return normal / np.where(length > 0, length, 1.0)[:, None], length > 0
 
@@ -428,7 +439,7 @@ def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None
         return np.zeros((0, 2, 3)), idx
     a0, a1 = _plane_cut(ta[idx], da)
     b0, b1 = _plane_cut(tb[idx], db)
-    direction = np.cross(na, nb)
+    direction = cross(na, nb)
     sa0, sa1 = np.einsum("mi,mi->m", a0, direction), np.einsum("mi,mi->m", a1, direction)
     sb0, sb1 = np.einsum("mi,mi->m", b0, direction), np.einsum("mi,mi->m", b1, direction)
     swap = sa1 < sa0
@@ -467,12 +478,12 @@ def _intersections(model: Model, renderer) -> Segments:
     faces = model.faces.astype(np.int64)
     if parts > 1 and len(faces):
         positions = model.positions.astype(np.float64)
-        tri = positions[faces]
+        tri = model.corners()
         lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
         hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
         part = model.face_part.astype(np.int64)
         eps = _TOUCH_REL * _diagonal(positions)
-        area = row_norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+        area = row_norm(model.corner_cross())
         candidates = _candidate_triangles(lo, hi, part, parts, eps)
         candidates = candidates[area[candidates] > 0]
         lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]

@@ -62,36 +62,6 @@ uniform float u_offset;  // pixels to either side of a line for the crease check
 
 const int BIG = 0x7fffffff;
 
-// face of surface k at pixel q (OpenGL rows), -1 where there is none
-int face_at(int k, ivec2 q) {
-    int f = 0;
-    switch (k) {
-    case 0: f = FACE1(u_s0, q); break;
-#if K > 1
-    case 1: f = FACE1(u_s1, q); break;
-#endif
-#if K > 2
-    case 2: f = FACE1(u_s2, q); break;
-#endif
-#if K > 3
-    case 3: f = FACE1(u_s3, q); break;
-#endif
-#if K > 4
-    case 4: f = FACE1(u_s4, q); break;
-#endif
-#if K > 5
-    case 5: f = FACE1(u_s5, q); break;
-#endif
-#if K > 6
-    case 6: f = FACE1(u_s6, q); break;
-#endif
-#if K > 7
-    case 7: f = FACE1(u_s7, q); break;
-#endif
-    }
-    return f - 1;
-}
-
 bool in_front(vec4 plane, vec3 eye) {
     precise float d = plane.x * eye.x + plane.y * eye.y + plane.z * eye.z;
     float c = plane.w;
@@ -113,10 +83,13 @@ ivec2 texel(ivec2 p) {
 }
 
 // one surface of the stack: stop at the first empty one, count it in front or not; stop
-// too once ``bound`` surfaces are in front (the caller wants no more)
-#define SURFACE(S)                                                                  \
+// too once ``bound`` surfaces are in front (the caller wants no more); its face kept in
+// seen[I] for the sides' check (reading it again there would be K more texel fetches:
+// llvmpipe runs every case of a switch on a lane's value)
+#define SURFACE(S, I)                                                               \
     if (count < u_layers) {                                                         \
         int tri = FACE1(S, q) - 1;                                                  \
+        seen[I] = tri;                                                              \
         if (tri < 0) return ivec2(front, count);                                    \
         ++count;                                                                    \
         if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye)) ++front;      \
@@ -124,31 +97,31 @@ ivec2 texel(ivec2 p) {
     }
 
 // (surfaces counted in front, surfaces there), unrolled over the K targets; counting stops
-// at ``bound`` surfaces in front
-ivec2 stack_at(ivec2 q, vec3 eye, int own0, int own1, int bound) {
+// at ``bound`` surfaces in front; seen: the faces of the surfaces counted
+ivec2 stack_at(ivec2 q, vec3 eye, int own0, int own1, int bound, out int seen[K]) {
     int front = 0;
     int count = 0;
-    SURFACE(u_s0)
+    SURFACE(u_s0, 0)
 #if K > 1
-    SURFACE(u_s1)
+    SURFACE(u_s1, 1)
 #endif
 #if K > 2
-    SURFACE(u_s2)
+    SURFACE(u_s2, 2)
 #endif
 #if K > 3
-    SURFACE(u_s3)
+    SURFACE(u_s3, 3)
 #endif
 #if K > 4
-    SURFACE(u_s4)
+    SURFACE(u_s4, 4)
 #endif
 #if K > 5
-    SURFACE(u_s5)
+    SURFACE(u_s5, 5)
 #endif
 #if K > 6
-    SURFACE(u_s6)
+    SURFACE(u_s6, 6)
 #endif
 #if K > 7
-    SURFACE(u_s7)
+    SURFACE(u_s7, 7)
 #endif
     return ivec2(front, count);
 }
@@ -165,8 +138,9 @@ void main() {
     int best = BIG;
     // a pixel can only lower the minimum: its count stops at the best so far, and none
     // goes below zero
+    int seen[K];
     for (int n = 0; n < 9 && best > 0; ++n) {
-        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, own0, own1, best);
+        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, own0, own1, best, seen);
         int front = (solid && st.y == 0) ? BIG : st.x;
         best = min(best, front);
     }
@@ -176,8 +150,8 @@ void main() {
         for (int side = 0; side < 2; ++side) {
             vec2 spot = s.pixel.xy + (side == 0 ? 1.0 : -1.0) * u_offset * s.pixel.zw;
             ivec2 q = texel(ivec2(floor(spot)));
-            ivec2 st = stack_at(q, eye, own0, own1, BIG);
-            sides[side] = st.x < st.y ? face_at(st.x, q) : -1;
+            ivec2 st = stack_at(q, eye, own0, own1, BIG, seen);
+            sides[side] = st.x < st.y ? seen[st.x] : -1;
         }
     }
     result[i] = ivec4(best, sides, 0);

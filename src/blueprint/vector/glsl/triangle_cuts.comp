@@ -1,6 +1,7 @@
 // The narrow phase of the intersection lines (vector/lines.py, the reference): one invocation
-// per pair of triangle_pairs.comp tests it as lines._triangle_pairs_cut does, in double
-// precision, and keeps it where the triangles may cut through each other. The test is
+// per pair of triangle_pairs.comp keeps it where the triangles' exact boxes overlap (as
+// lines._candidate_pairs tests them) and, tested as lines._triangle_pairs_cut does in double
+// precision, the triangles may cut through each other. The test is
 // conservative: every threshold is loosened by u_tol (distances to a plane) or u_tol_span
 // (lengths along the cut), far above the rounding that separates this arithmetic from
 // NumPy's, and a pair with a corner that close to a plane's touch tolerance is kept untested;
@@ -83,8 +84,13 @@ void main() {
     if (p >= u_count) return;
     uvec2 pair = pairs[p];
     int i = TABLE_ROW(u_owners, int(pair.x)).x, j = TABLE_ROW(u_owners, int(pair.y)).x;
-    dvec3 ta[3] = dvec3[3](tri_row(4 * i).xyz, tri_row(4 * i + 1).xyz, tri_row(4 * i + 2).xyz);
-    dvec3 tb[3] = dvec3[3](tri_row(4 * j).xyz, tri_row(4 * j + 1).xyz, tri_row(4 * j + 2).xyz);
+    dvec4 a0 = tri_row(4 * i), a1 = tri_row(4 * i + 1), a2 = tri_row(4 * i + 2);
+    dvec4 b0 = tri_row(4 * j), b1 = tri_row(4 * j + 1), b2 = tri_row(4 * j + 2);
+    // w: the box's high corner, slack added
+    if (any(greaterThan(min(min(a0.xyz, a1.xyz), a2.xyz), dvec3(b0.w, b1.w, b2.w)))) return;
+    if (any(greaterThan(min(min(b0.xyz, b1.xyz), b2.xyz), dvec3(a0.w, a1.w, a2.w)))) return;
+    dvec3 ta[3] = dvec3[3](a0.xyz, a1.xyz, a2.xyz);
+    dvec3 tb[3] = dvec3[3](b0.xyz, b1.xyz, b2.xyz);
     if (!may_cut(ta, tri_row(4 * i + 3), tb, tri_row(4 * j + 3))) return;
     uint slot = atomicAdd(found_count, 1u);
     if (slot < uint(u_capacity)) found[slot] = pair;

@@ -1,8 +1,11 @@
 // The broad phase of the intersection lines (vector/lines.py, the reference): one invocation
 // per busy entry of the grid (lines.cell_grid) walks its partners in the cell as
-// lines._candidate_pairs does, and hands on the pairs whose boxes overlap and whose first
-// common cell is this one (as entry indices) to triangle_cuts.comp.
-#include "triangles.glsl"
+// lines._candidate_pairs does, and hands on the pairs whose single-precision boxes (rounded
+// outwards) overlap and whose first common cell is this one (as entry indices) to
+// triangle_cuts.comp, which tests the exact boxes first. The exact test stays out of this
+// loop: llvmpipe runs a branch's body for a SIMD vector whether or not any lane takes it, so
+// every partner would pay for six texel fetches and the doubles' comparisons.
+#include "table.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -25,9 +28,6 @@ void main() {
     ivec4 entry = entries[e];
     ivec3 cell = cells[e].xyz;
     int i = TABLE_ROW(u_owners, entry.x).x;
-    dvec4 a0 = tri_row(4 * i), a1 = tri_row(4 * i + 1), a2 = tri_row(4 * i + 2);
-    dvec3 lo_a = min(min(a0.xyz, a1.xyz), a2.xyz);
-    dvec3 hi_a = dvec3(a0.w, a1.w, a2.w);
     ivec3 first_a = TABLE_ROW(u_firsts, i).xyz;
     vec3 rough_lo = TABLE_ROW(u_boxes, 2 * i).xyz, rough_hi = TABLE_ROW(u_boxes, 2 * i + 1).xyz;
     for (int ib = entry.y; ib < entry.z; ++ib) {
@@ -35,10 +35,6 @@ void main() {
         // most partners' boxes miss by far: tell those from single-precision boxes
         if (any(greaterThan(rough_lo, TABLE_ROW(u_boxes, 2 * j + 1).xyz))) continue;
         if (any(greaterThan(TABLE_ROW(u_boxes, 2 * j).xyz, rough_hi))) continue;
-        dvec4 b0 = tri_row(4 * j), b1 = tri_row(4 * j + 1), b2 = tri_row(4 * j + 2);
-        dvec3 lo_b = min(min(b0.xyz, b1.xyz), b2.xyz);
-        dvec3 hi_b = dvec3(b0.w, b1.w, b2.w);
-        if (any(greaterThan(lo_a, hi_b)) || any(greaterThan(lo_b, hi_a))) continue;
         if (max(first_a, TABLE_ROW(u_firsts, j).xyz) != cell) continue;
         uint slot = atomicAdd(pair_count, 1u);
         if (slot < uint(u_capacity)) pairs[slot] = uvec2(entry.x, ib);

@@ -58,13 +58,12 @@ def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
 
 def _model_planes(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """(F, 3) unit normals (zero for degenerate faces) and (F, 3) first corners, float64."""
-    tri = model.positions[model.faces].astype(np.float64)
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    length = row_norm(normal)
+    cross = model.corner_cross()
+    length = row_norm(cross)
     good = length > 0
-    normal[good] /= length[good, None]
-    normal[~good] = 0.0
-    return normal, np.ascontiguousarray(tri[:, 0])
+    normal = np.zeros_like(cross)
+    normal[good] = cross[good] / length[good, None]
+    return normal, np.ascontiguousarray(model.corners()[:, 0])
 
 
 def classify_samples(
