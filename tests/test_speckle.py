@@ -112,17 +112,50 @@ def test_noisy_sphere_contour_is_not_smeared(renderer):
     assert specks(image) <= 30, specks(image)
 
 
+def _octahedron(centre, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    axes = np.vstack([np.eye(3), -np.eye(3)])
+    faces = [[a, b, c] for a in (0, 3) for b in (1, 4) for c in (2, 5)]
+    # each octant's corners wound to face outwards
+    faces = [f if np.linalg.det(axes[f]) > 0 else f[::-1] for f in faces]
+    return np.asarray(centre, float) + radius * axes, np.array(faces)
+
+
+def test_surface_under_one_pixel_draws_no_speck(renderer):
+    """Behind a plate, seen head-on (ortho, 1 unit a pixel, 2 G-buffer pixels), an octahedron
+    0.3 units across covers one G-buffer pixel of the hidden layers and none of its neighbours,
+    as the noise folds beside a scan's contour do; its border was a speck of 3 pixels. An
+    octahedron 8 units across behind the same plate keeps its hidden outline."""
+    corners = np.array([[-20, -20, 1], [20, -20, 1], [20, 20, 1], [-20, 20, 1]], float)
+    pieces = [(corners, np.array([[0, 1, 2], [0, 2, 3]]))]
+    pieces += [_octahedron((0.25, 0.25, 0), 0.15), _octahedron((10.25, 10.25, 0), 4.0)]
+    starts = np.cumsum([0] + [len(v) for v, _ in pieces[:-1]])
+    positions = np.vstack([v for v, _ in pieces])
+    faces = np.vstack([f + start for (_, f), start in zip(pieces, starts, strict=True)])
+    model = blueprint.Model.from_arrays(positions, faces)
+    camera = blueprint.Camera(
+        eye=(0, 0, 10), target=(0, 0, 0), up=(0, 1, 0), near=1, far=20, ortho=True, height=64
+    )
+    hidden = blueprint.peel(model, size=(128, 128), camera=camera).depth[1:] < 1
+    assert hidden[:, 56:72, 56:72].any(axis=0).sum() == 1
+    image = np.asarray(blueprint.render(model, size=(64, 64), camera=camera))
+    ink = _ink(image)
+    assert not ink[24:40, 24:40].any(), np.argwhere(ink[24:40, 24:40])
+    assert ink[12:32, 32:52].sum() >= 20, ink[12:32, 32:52].sum()
+    assert specks(image) == 0, specks(image)
+
+
 def test_stanford_bunny_speckle(renderer, shared_models):
     """The default drawing of the stanford bunny at 1024²: 173 specks with creases split at
     vertices, 126 with lone crease edges kept, 77 with crease ink from 50 % of the crease angle
     between pixels, 66 from 40 %; 17 now that a depth jump within one smooth sheet (each side
     on the other's tangent plane, the normals closer than a crease starts) is no outline
-    (llvmpipe). Of those, small islands of hidden layers in the contour's fold loops draw 10,
-    creases 5, depth edges 2."""
+    (llvmpipe). Of those, small islands of hidden layers in the contour's fold loops drew 10,
+    creases 5, depth edges 2; 14 since a surface covering a pixel of a layer and none of its
+    neighbours draws no border."""
     path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
     assert path.exists(), f"{path} is missing from the shared models"
     image = np.asarray(blueprint.render(blueprint.load_model(path), size=(1024, 1024)))
-    assert specks(image) <= 20, specks(image)
+    assert specks(image) <= 15, specks(image)
 
 
 def test_engine_creases_are_lines_not_dots(renderer, shared_models):

@@ -19,6 +19,7 @@ uniform isampler2D u_ids;
 #define EDGE_DEPTH(q, i) texelFetch(u_depth, q, 0).r
 #define EDGE_NORMAL(q, i) texelFetch(u_normal, q, 0).xyz
 #define EDGE_IDS(q, i) texelFetch(u_ids, q, 0).xy
+#define EDGE_RING_COVERED(q, r) (texelFetch(u_depth, q, 0).r < 1.0)
 #endif
 uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos where they are full)
 uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
@@ -28,6 +29,23 @@ uniform bool u_part_edges;
 // ID_SILHOUETTES define), since a software rasteriser pays for the dead branch on every pixel.
 
 const ivec2 OFFSETS[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
+// The pixels two steps from p (RING), and which three of them neighbour OFFSETS[i] besides p.
+const ivec2 RING[8] = ivec2[8](
+    ivec2(-2, 0), ivec2(2, 0), ivec2(0, -2), ivec2(0, 2),
+    ivec2(-1, -1), ivec2(1, -1), ivec2(-1, 1), ivec2(1, 1));
+const int RING_OF[12] = int[12](0, 4, 6, 1, 5, 7, 2, 4, 5, 3, 6, 7);
+
+// Whether neighbour OFFSETS[i], covered, covers none of its own neighbours but p.
+bool alone_but_p(ivec2 p, int i) {
+    ivec2 last = EDGE_LAST;
+    for (int k = 0; k < 3; ++k) {
+        int r = RING_OF[3 * i + k];
+        if (EDGE_RING_COVERED(clamp(p + RING[r], ivec2(0), last), r)) {
+            return false;
+        }
+    }
+    return true;
+}
 
 // Eye-space position of pixel q at window depth z (the projection is centred on the image).
 vec3 eye_position(ivec2 q, float z) {
@@ -53,8 +71,19 @@ float edge_value(ivec2 p) {
         covered[i] = z[i] < 1.0;
         any_covered = any_covered || covered[i];
     }
+    // A surface that covers a pixel of a layer and none of its neighbours lies under the
+    // pixel: the noise folds of a scan beside a contour, two more surfaces at one pixel, or
+    // something smaller than a pixel. Its border would be a speck.
     if (zc >= 1.0) {
-        return any_covered ? 1.0 : 0.0;
+        for (int i = 0; i < 4; ++i) {
+            if (covered[i] && !alone_but_p(p, i)) {
+                return 1.0;
+            }
+        }
+        return 0.0;
+    }
+    if (!any_covered) {
+        return 0.0;
     }
     vec3 nc = EDGE_NORMAL(p, -1);
     ivec2 own = EDGE_IDS(p, -1);

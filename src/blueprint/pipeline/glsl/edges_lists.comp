@@ -5,6 +5,7 @@
 // for the first array), and leaves its own where the next array starts (u_next). The samples
 // are those the unpack would have written: a pixel past its last layer has depth 1, its normal
 // and IDs are never read then (edge_value looks at a neighbour's only where it is covered).
+// The pixels two steps away (RING) are walked too, for whether each layer covers them.
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "blueprint.render:glsl/kbuffer.glsl"
@@ -25,6 +26,9 @@ ivec2 sample_ids[5];
 #define EDGE_DEPTH(q, i) sample_depth[(i) + 1]
 #define EDGE_NORMAL(q, i) sample_normal[(i) + 1]
 #define EDGE_IDS(q, i) sample_ids[(i) + 1]
+// whether the current layer covers RING[r] (edges.glsl): only whether its chain goes on
+bool ring_covered[8];
+#define EDGE_RING_COVERED(q, r) ring_covered[r]
 #include "blueprint.ops:glsl/edges.glsl"
 
 void main() {
@@ -37,6 +41,10 @@ void main() {
     at[0] = imageLoad(u_from, p).x;
     for (int i = 0; i < 4; ++i) {
         at[i + 1] = imageLoad(u_from, clamp(p + OFFSETS[i], ivec2(0), last)).x;
+    }
+    uint ring[8];
+    for (int r = 0; r < 8; ++r) {
+        ring[r] = imageLoad(u_from, clamp(p + RING[r], ivec2(0), last)).x;
     }
     for (int i = 0; i < 5; ++i) {
         sample_normal[i] = vec3(0.0);
@@ -53,6 +61,12 @@ void main() {
             sample_normal[i] = kb_normal(s);
             sample_ids[i] = kb_ids(s);
             at[i] = order[at[i] - 1u];
+        }
+        for (int r = 0; r < 8; ++r) {
+            ring_covered[r] = ring[r] != 0u;
+            if (ring_covered[r]) {
+                ring[r] = order[ring[r] - 1u];
+            }
         }
         imageStore(u_out, ivec3(p, layer), vec4(edge_value(p)));
     }
