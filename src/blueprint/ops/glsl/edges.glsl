@@ -35,18 +35,6 @@ const ivec2 RING[8] = ivec2[8](
     ivec2(-1, -1), ivec2(1, -1), ivec2(-1, 1), ivec2(1, 1));
 const int RING_OF[12] = int[12](0, 4, 6, 1, 5, 7, 2, 4, 5, 3, 6, 7);
 
-// Whether neighbour OFFSETS[i], covered, covers none of its own neighbours but p.
-bool alone_but_p(ivec2 p, int i) {
-    ivec2 last = EDGE_LAST;
-    for (int k = 0; k < 3; ++k) {
-        int r = RING_OF[3 * i + k];
-        if (EDGE_RING_COVERED(clamp(p + RING[r], ivec2(0), last), r)) {
-            return false;
-        }
-    }
-    return true;
-}
-
 // Eye-space position of pixel q at window depth z (the projection is centred on the image).
 vec3 eye_position(ivec2 q, float z) {
     float d = eye_depth(z);
@@ -74,15 +62,20 @@ float edge_value(ivec2 p) {
     // A surface that covers a pixel of a layer and none of its neighbours lies under the
     // pixel: the noise folds of a scan beside a contour, two more surfaces at one pixel, or
     // something smaller than a pixel. Its border would be a speck.
+    if (!any_covered) {
+        return 0.0;
+    }
     if (zc >= 1.0) {
+        // the ring read at once: a software rasteriser runs every lane through each read
+        bool ring[8];
+        for (int r = 0; r < 8; ++r) {
+            ring[r] = EDGE_RING_COVERED(clamp(p + RING[r], ivec2(0), last), r);
+        }
         for (int i = 0; i < 4; ++i) {
-            if (covered[i] && !alone_but_p(p, i)) {
+            if (covered[i] && (ring[RING_OF[3 * i]] || ring[RING_OF[3 * i + 1]] || ring[RING_OF[3 * i + 2]])) {
                 return 1.0;
             }
         }
-        return 0.0;
-    }
-    if (!any_covered) {
         return 0.0;
     }
     vec3 nc = EDGE_NORMAL(p, -1);
