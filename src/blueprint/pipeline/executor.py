@@ -551,11 +551,13 @@ class Executor:
         for uniform, value in p.uniforms.items():
             self.programs.set(prog, uniform, value)
         self.programs.set(prog, "u_back_bias", abuffer.back_bias)
-        cursors = abuffer.lists(size)
+        *cursors, layer_count = abuffer.lists(size)
+        layer_count.bind_to_image(4, read=True, write=False)
         for k in range(-(-layers // SLICES)):
             st.stacks[name][k].bind_to_image(1, read=False, write=True)
             cursors[k % 2].bind_to_image(2, read=True, write=False)
             cursors[(k + 1) % 2].bind_to_image(3, read=False, write=True)
+            self.programs.set(prog, "u_first_layer", k * SLICES)
             self.programs.set(prog, "u_layers", min(SLICES, layers - k * SLICES))
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)

@@ -145,15 +145,18 @@ class ABuffer:
 
     def lists(self, size: tuple[int, int]) -> tuple:
         """The captured lists at ``size`` bound to their storage blocks (abuffer.glsl), for a
-        pass that reads the layers from them; returns two cursor images: the first holds each
-        pixel's layer 0 (the resolve's), the second is free for a pass to leave where each
-        pixel's chain goes on."""
+        pass that reads the layers from them; returns two cursor images and the layer counts:
+        the first cursor holds each pixel's layer 0 (the resolve's), the second is free for a
+        pass to leave where each pixel's chain goes on; the counts image holds each pixel's
+        layers."""
         name = f"abuffer.{size[0]}x{size[1]}"
         self.r.ctx.memory_barrier()
         self._buffers(name, 1)
         pool = self.r.pool
-        return pool.texture(f"{name}.cursor", size, "r32ui"), pool.texture(
-            f"{name}.cursor.next", size, "r32ui"
+        return (
+            pool.texture(f"{name}.cursor", size, "r32ui"),
+            pool.texture(f"{name}.cursor.next", size, "r32ui"),
+            pool.texture(f"{name}.layer_count", size, "r32ui"),
         )
 
     def flat(self, size: tuple[int, int]) -> tuple:
@@ -189,6 +192,7 @@ class ABuffer:
         ctx, pool, size = self.r.ctx, self.r.pool, gb.size
         head = pool.texture(f"{name}.head", size, "r32ui")
         cursor = pool.texture(f"{name}.cursor", size, "r32ui")
+        layer_count = pool.texture(f"{name}.layer_count", size, "r32ui")
         groups = (-(-size[0] // 8), -(-size[1] // 8))
         columns, rows = -(-size[0] // TILE), -(-size[1] // TILE)
         tile_bytes = 4 * columns * rows if self.tiles else 0
@@ -210,6 +214,7 @@ class ABuffer:
             # all the same, and drawn again below
             head.bind_to_image(0, read=True, write=False)
             cursor.bind_to_image(1, read=False, write=True)
+            layer_count.bind_to_image(2, read=False, write=True)
             if self.tiles:
                 tiles.clear()
                 tiles.bind_to_storage_buffer(TILE_BINDING)

@@ -5,7 +5,7 @@
 // for the first array), and leaves its own where the next array starts (u_next). The samples
 // are those the unpack would have written: a pixel past its last layer has depth 1, its normal
 // and IDs are never read then (edge_value looks at a neighbour's only where it is covered).
-// The pixels two steps away (RING) are walked too, for whether each layer covers them.
+// Whether a layer covers the pixels two steps away (RING) comes from their layer counts.
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "blueprint.render:glsl/kbuffer.glsl"
@@ -14,6 +14,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(r8, binding = 1) uniform writeonly image2DArray u_out;  // set by binding: moderngl cannot set image-array uniforms
 layout(r32ui, binding = 2) uniform readonly uimage2D u_from;
 layout(r32ui, binding = 3) uniform writeonly uimage2D u_next;
+layout(r32ui, binding = 4) uniform readonly uimage2D u_layer_count;  // each pixel's layers
+uniform int u_first_layer;  // the depth layer of slice 0
 uniform int u_layers;  // layers of this array: slices 0 to u_layers - 1
 uniform float u_back_bias;
 
@@ -26,7 +28,7 @@ ivec2 sample_ids[5];
 #define EDGE_DEPTH(q, i) sample_depth[(i) + 1]
 #define EDGE_NORMAL(q, i) sample_normal[(i) + 1]
 #define EDGE_IDS(q, i) sample_ids[(i) + 1]
-// whether the current layer covers RING[r] (edges.glsl): only whether its chain goes on
+// whether the current layer covers RING[r] (edges.glsl)
 bool ring_covered[8];
 #define EDGE_RING_COVERED(q, r) ring_covered[r]
 #include "blueprint.ops:glsl/edges.glsl"
@@ -44,7 +46,7 @@ void main() {
     }
     uint ring[8];
     for (int r = 0; r < 8; ++r) {
-        ring[r] = imageLoad(u_from, clamp(p + RING[r], ivec2(0), last)).x;
+        ring[r] = imageLoad(u_layer_count, clamp(p + RING[r], ivec2(0), last)).x;
     }
     for (int i = 0; i < 5; ++i) {
         sample_normal[i] = vec3(0.0);
@@ -63,10 +65,7 @@ void main() {
             at[i] = order[at[i] - 1u];
         }
         for (int r = 0; r < 8; ++r) {
-            ring_covered[r] = ring[r] != 0u;
-            if (ring_covered[r]) {
-                ring[r] = order[ring[r] - 1u];
-            }
+            ring_covered[r] = ring[r] > uint(u_first_layer + layer);
         }
         imageStore(u_out, ivec3(p, layer), vec4(edge_value(p)));
     }

@@ -16,6 +16,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
+// each pixel's layers: whether a layer covers a pixel, for passes that walk only some chains
+layout(binding = 2, r32ui) writeonly uniform uimage2D u_layer_count;
 #if TILES
 // the most layers a pixel of each tile of TILES x TILES pixels has, rows of u_tile_columns
 // from the bottom: where a software rasteriser's passes have work at each layer
@@ -145,6 +147,7 @@ void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (all(lessThan(p, imageSize(u_head)))) {
         uint layers = chain(p);
+        imageStore(u_layer_count, p, uvec4(layers));
         atomicAdd(group_pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
         atomicMax(deepest, layers);
 #if TILES
