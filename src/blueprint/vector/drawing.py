@@ -471,6 +471,7 @@ def draw_vector(
         only_shaded = planes.copy()
         only_shaded[:-1][~shaded_parts[model.face_part]] = 0.0
         if on_gpu is not None:
+            # of the same faces k-buffer: nothing has drawn since
             in_front = gpu_levels(
                 renderer,
                 model,
@@ -482,6 +483,7 @@ def draw_vector(
                 ortho=ortho,
                 footprint=footprint,
                 tolerance=depth_tolerance,
+                drawn=drawn,
             ).level
         else:
             in_front = classify_samples(samples, peeled, only_shaded, ortho, footprint, depth_tolerance)
