@@ -12,6 +12,7 @@ from blueprint.vector.lines import join_polylines, model_segments
 from blueprint.vector.occlusion import (
     PixelLayers,
     classify_samples,
+    draw_faces,
     drop_phantoms,
     face_planes,
     gpu_levels,
@@ -46,6 +47,37 @@ def _setup(renderer, model, camera):
             "this renderer draws no faces k-buffer (it peels a pass a layer): occlusion runs on the CPU"
         )
     return samples, planes, footprint, got
+
+
+def test_faces_drawn_ahead_read_as_drawn_in_place(renderer, source, monkeypatch):
+    """The faces k-buffer set drawing before the lines are found (draw_faces) gives the levels
+    of one drawn by gpu_levels itself, and is not drawn again."""
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    samples, planes, footprint, in_place = _setup(renderer, model, camera)
+    drawn = draw_faces(renderer, model, camera, SIZE, 8)
+    assert (drawn.surfaces is None) == (source == "a-pass-a-layer")
+
+    def drawn_again(*args, **kwargs):
+        raise AssertionError("the faces k-buffer was drawn again")
+
+    monkeypatch.setattr(renderer, "face_kbuffer", drawn_again)
+    ahead = gpu_levels(
+        renderer,
+        model,
+        camera,
+        samples,
+        planes,
+        SIZE,
+        max_layers=8,
+        ortho=camera.ortho,
+        footprint=footprint,
+        drawn=drawn,
+    )
+    assert ahead.layers == in_place.layers
+    np.testing.assert_array_equal(ahead.level, in_place.level)
+    np.testing.assert_array_equal(ahead.sides, in_place.sides)
+    assert ahead.peel_seconds >= drawn.seconds
 
 
 @pytest.mark.parametrize("ortho", [False, True], ids=["perspective", "orthographic"])

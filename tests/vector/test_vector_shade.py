@@ -50,6 +50,22 @@ def test_lines_behind_the_shaded_plate_go_under_it(renderer, tmp_path):
     assert len(drawn) == int(drawing.behind.sum())
 
 
+def test_lines_behind_the_shading_read_the_one_faces_kbuffer(renderer, monkeypatch):
+    """The count of the shaded parts' surfaces in front reads the faces k-buffer that the
+    occlusion levels read: it is drawn once a drawing."""
+    calls = []
+    draw = renderer.face_kbuffer
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return draw(*args, **kwargs)
+
+    monkeypatch.setattr(renderer, "face_kbuffer", counted)
+    _, drawing, _ = _scene(renderer)
+    assert drawing.behind.any()
+    assert len(calls) == 1
+
+
 def test_shaded_faces_back_to_front_in_the_style_colour(renderer, tmp_path):
     _, drawing, (lo, hi) = _scene(renderer, style="paper")
     shading = drawing.shading

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 
@@ -142,3 +143,23 @@ def gl_info(ctx) -> dict[str, str]:
         "version": info["GL_VERSION"],
         "max_texture_size": str(info["GL_MAX_TEXTURE_SIZE"]),
     }
+
+
+@functools.cache
+def _gl_flush():
+    import ctypes
+
+    try:
+        return ctypes.CDLL(_LIBGL).glFlush
+    except (OSError, AttributeError):
+        return None
+
+
+def gl_flush() -> None:
+    """``glFlush`` on the current context, which moderngl does not offer: the driver starts on
+    the commands given so far while the caller goes on, where a software rasteriser would
+    otherwise start only once something waits for them. A hint (nothing where the GL library
+    does not load): no result depends on it."""
+    flush = _gl_flush()
+    if flush is not None:
+        flush()

@@ -8,7 +8,7 @@ import functools
 import numpy as np
 
 from blueprint.errors import InputError
-from blueprint.gpu.context import create_context, gl_info
+from blueprint.gpu.context import create_context, gl_flush, gl_info
 from blueprint.gpu.queries import Queries
 from blueprint.gpu.shaders import COMPUTE_VERSION, VERSION, build_compute, build_program
 from blueprint.gpu.targets import TargetPool
@@ -109,6 +109,11 @@ class Device:
     def make_current(self) -> None:
         """Direct this thread's GL calls to this device's context."""
         self.ctx.__enter__()
+
+    @current
+    def flush(self) -> None:
+        """Start the driver on what has been drawn so far and go on (``context.gl_flush``)."""
+        gl_flush()
 
     def release(self) -> None:
         self.make_current()

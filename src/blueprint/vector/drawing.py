@@ -55,6 +55,7 @@ from .occlusion import (
     Pieces,
     PixelLayers,
     classify_samples,
+    draw_faces,
     drop_phantoms,
     face_planes,
     gpu_levels,
@@ -394,6 +395,8 @@ def draw_vector(
     size = (int(w), int(h))
     page = _page(size, camera, scale, units, model)
 
+    # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
+    drawn = None if layers is not None else draw_faces(renderer, model, camera, size, max_layers)
     clock = time.perf_counter()
     with model.holding_corners():  # the intersections and the faces' planes read every corner
         segments = model_segments(model, view_m, proj, size, crease_angle, intersections, renderer)
@@ -418,6 +421,7 @@ def draw_vector(
             ortho=ortho,
             footprint=footprint,
             tolerance=depth_tolerance,
+            drawn=drawn,
         )
     if on_gpu is not None:
         count = on_gpu.layers
@@ -467,6 +471,7 @@ def draw_vector(
         only_shaded = planes.copy()
         only_shaded[:-1][~shaded_parts[model.face_part]] = 0.0
         if on_gpu is not None:
+            # of the same faces k-buffer: nothing has drawn since
             in_front = gpu_levels(
                 renderer,
                 model,
@@ -478,6 +483,7 @@ def draw_vector(
                 ortho=ortho,
                 footprint=footprint,
                 tolerance=depth_tolerance,
+                drawn=drawn,
             ).level
         else:
             in_front = classify_samples(samples, peeled, only_shaded, ortho, footprint, depth_tolerance)

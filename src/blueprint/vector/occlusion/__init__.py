@@ -16,18 +16,20 @@ first (``runs``).
 """
 
 from .coincident import suppress_coincident
-from .gpu import GpuLevels, gpu_levels
+from .gpu import FacesDrawn, GpuLevels, draw_faces, gpu_levels
 from .levels import classify_samples, drop_phantoms, face_planes, verify_creases
 from .pixels import PixelLayers, probe_pixels
 from .runs import Pieces, split_by_level
 from .samples import Samples, sample_polylines
 
 __all__ = [
+    "FacesDrawn",
     "GpuLevels",
     "Pieces",
     "PixelLayers",
     "Samples",
     "classify_samples",
+    "draw_faces",
     "drop_phantoms",
     "probe_pixels",
     "face_planes",

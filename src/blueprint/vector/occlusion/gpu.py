@@ -20,7 +20,7 @@ from ..lines import BORDER, CREASE, SILHOUETTE
 from .pixels import across_line
 from .samples import Samples
 
-__all__ = ["GpuLevels", "gpu_levels"]
+__all__ = ["FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels"]
 
 OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
 LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
@@ -45,7 +45,9 @@ class GpuLevels:
         edge's sample (-1 where none, or not asked: ``checked`` False)
     checked : (S,) bool, samples of mesh edges with a direction on screen
     layers : int, layers the peel's stop rules let count
-    peel_seconds : float, of the whole: drawing the k-buffer and counting its layers
+    peel_seconds : float, of the whole: drawing the k-buffer and counting its layers (of a
+        k-buffer from ``draw_faces``, setting it drawing and waiting for it, not the drawing
+        while the caller did other work)
     """
 
     level: np.ndarray
@@ -53,6 +55,34 @@ class GpuLevels:
     checked: np.ndarray
     layers: int
     peel_seconds: float
+
+
+@dataclass(frozen=True)
+class FacesDrawn:
+    """The faces k-buffer set drawing ahead of ``gpu_levels`` (``draw_faces``).
+
+    surfaces : the renderer's ``face_kbuffer`` targets, or None where it draws none
+    seconds : float, spent setting it drawing
+    """
+
+    surfaces: list | None
+    seconds: float
+
+
+def draw_faces(
+    renderer: LayerRenderer, model: Model, camera: Camera, size, max_layers: int | None
+) -> FacesDrawn:
+    """Set the faces k-buffer of ``gpu_levels`` drawing now and go on: flushed to the driver,
+    a software rasteriser's threads draw it while the CPU finds the lines, where otherwise
+    the layer count would wait for all of it (llvmpipe, 2CylinderEngine at 512 x 512: some
+    55 ms). Pass it to ``gpu_levels`` as ``drawn``, with the same model, camera, size and
+    ``max_layers``, before anything else draws into the renderer's targets."""
+    clock = time.perf_counter()
+    renderer.make_current()
+    surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
+    if surfaces is not None:
+        renderer.flush()
+    return FacesDrawn(surfaces, time.perf_counter() - clock)
 
 
 def _bind_surfaces(renderer: LayerRenderer, prog, surfaces) -> None:
@@ -124,6 +154,7 @@ def gpu_levels(
     tolerance: float = 1.0,
     min_fraction: float = 0.0,
     offset: float = 1.0,
+    drawn: FacesDrawn | None = None,
 ) -> GpuLevels | None:
     """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
     draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
@@ -131,12 +162,15 @@ def gpu_levels(
     ``classify_samples``).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases``; ``planes`` from
-    ``levels.face_planes``; ``size`` (width, height) in pixels.
+    ``levels.face_planes``; ``size`` (width, height) in pixels; ``drawn`` the faces k-buffer
+    of this model, camera, size and ``max_layers`` from ``draw_faces``, else drawn here.
     """
     if not table_fits(len(planes), renderer.max_texture):
         return None
     clock = time.perf_counter()
-    surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
+    if drawn is None:
+        drawn = FacesDrawn(renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers), 0.0)
+    surfaces = drawn.surfaces
     layered = surfaces is None
     if not layered:
         layers = _layer_count(renderer, surfaces, size, min_fraction)  # reading the counts waits
@@ -146,7 +180,7 @@ def gpu_levels(
         # the peel's stop rules decided which layers count: those it handed over
         surfaces = _copied_layers(renderer, model, camera, size, max_layers, min_fraction)
         layers = len(surfaces)
-    peel_seconds = time.perf_counter() - clock
+    peel_seconds = time.perf_counter() - clock + drawn.seconds
     count = len(samples.line)
     level = np.full(count, -1, np.int32)
     sides = np.full((count, 2), -1, np.int64)
