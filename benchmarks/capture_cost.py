@@ -1,0 +1,106 @@
+"""What bounds the A-buffer's geometry pass: its GPU time with variants of its fragment shader
+(``benchmarks/glsl/abuffer_variants.frag``) that leave out one cost at a time — exact depth,
+the node's bytes, one atomic on the node counter a fragment (against one a subgroup), every
+write — for each model and G-buffer size. One JSON object per line.
+
+    python benchmarks/capture_cost.py MODEL... [--size 2048 4096] [--frames 9]
+
+Sizes are G-buffer sizes (a 2048² drawing at the default supersample 2 is 4096²). Times are
+of the list clear and the geometry pass alone (no resolve), the GPU kept busy beforehand so
+the time query times the GPU (``compute_capture.Bench.gpu_ms``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from compute_capture import Bench, fragments, peeled_capture
+
+from blueprint import Renderer, load_model
+from blueprint.gpu.shaders import build_program
+from blueprint.render.capture import gbuffer
+from blueprint.render.mesh import GEOMETRY_VERT, target_uniform
+from blueprint.scene.camera import fit_camera
+
+SHADER = Path(__file__).parent / "glsl" / "abuffer_variants.frag"
+VARIANTS = {
+    1: "no exact depth",
+    2: "8-byte node",
+    3: "8-byte node, counter a subgroup",
+    4: "no exact depth, counter a subgroup",
+    5: "counter alone",
+    6: "nothing written",
+    7: "product, counter a subgroup",
+}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("models", nargs="+")
+    parser.add_argument("--size", type=int, nargs="+", default=[2048, 4096])
+    parser.add_argument("--frames", type=int, default=9)
+    args = parser.parse_args()
+    with Renderer() as r:
+        r.abuffer_min_layers, r.kbuffer = 2, False
+        bench = Bench(r, None, args.frames)
+        programs = {}
+        for k in VARIANTS:
+            try:
+                programs[k] = build_program(
+                    r.ctx, GEOMETRY_VERT, SHADER, {"VARIANT": k, "EXACT_DEPTH": r.exact_depth}, "#version 450 core"
+                )
+            except Exception as exc:  # a driver without ARB_shader_ballot: that variant is left out
+                print(json.dumps({"variant": k, "error": str(exc)[:300]}), flush=True)
+        for path in args.models:
+            model = load_model(path)
+            for size in args.size:
+                camera = fit_camera(model, (size, size))
+                ab = peeled_capture(r, model, camera)
+                gb = gbuffer(r.pool, (size, size))
+                name = f"abuffer.{size}x{size}"
+                ab._capture(gb, name)  # the room this size needs
+                ab._capture(gb, name)
+                row = {
+                    "renderer": r.info["renderer"],
+                    "model": Path(path).name,
+                    "size": size,
+                    "fragments": fragments(r, size),
+                }
+                bench.loops = 20_000_000 if size > 1024 else 4_000_000
+                room = r.abuffer_room[(size, size)]
+                nodes, links = ab._buffers(name, room)[:2]
+                small = r.pool.buffer(f"{name}.small", 8 * room)
+                head = r.pool.texture(f"{name}.head", (size, size), "r32ui")
+
+                def capture(prog=None):
+                    ab._buffers(name, room)
+                    small.bind_to_storage_buffer(7)
+                    head.bind_to_image(0, read=True, write=True)
+                    ab.clear["u_capacity"].value = room
+                    ab.clear.run(-(-size // 8), -(-size // 8))
+                    r.ctx.memory_barrier()
+                    if prog is None:
+                        ab.fragments(gb)
+                        return
+                    gb.clears[0].use()
+                    for u in ("u_view", "u_projection"):
+                        prog[u].write(ab.geometry[u].read())
+                    if "u_ortho" in prog:
+                        prog["u_ortho"].value = ab.geometry["u_ortho"].value
+                    if "u_target" in prog:
+                        target_uniform(r, prog, (size, size))
+                    ab.mesh.vao(prog).render()
+
+                row["product_ms"] = bench.gpu_ms(capture)
+                for k, prog in programs.items():
+                    row[f"v{k}_ms"] = bench.gpu_ms(lambda prog=prog: capture(prog))
+                    if k in (3, 4, 7):
+                        row[f"v{k}_fragments"] = fragments(r, size)
+                row["variants"] = VARIANTS
+                print(json.dumps(row), flush=True)
+
+
+if __name__ == "__main__":
+    main()
