@@ -28,6 +28,11 @@ MOST_LAYERS = 256
 # bytes a fragment holds: its surface (16), its link in the pixel's list, its link in the
 # pixel's layers
 NODE_BYTES = 24
+# ...and its depth and face as the geometry pass writes them where the nodes are slim
+SLIM_BYTES = 8
+# storage bindings of the slim fragments and of the mesh the resolve reads (abuffer.glsl,
+# abuffer_resolve.comp)
+SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 # room for this many fragments a pixel before a first frame has counted them
 FIRST_ROOM = 4
 # a quarter of the GPU's memory where the driver tells it, else this
@@ -58,7 +63,9 @@ class ABuffer:
     pixel's last layer clearing it as an empty layer's would, and a capture that had too little
     room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
     the sorted lists themselves (``lists``). The counts come back through a buffer of their own
-    for each ``slot``: frames that stream read one frame's counts after the next is issued."""
+    for each ``slot``: frames that stream read one frame's counts after the next is issued.
+    Where the renderer's ``abuffer_slim``, the geometry pass writes each fragment's depth and
+    face alone and the resolve makes the whole surfaces of the fragments it keeps as layers."""
 
     def __init__(
         self,
@@ -74,13 +81,16 @@ class ABuffer:
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
-        self.geometry = geometry_program(r, ABUFFER_FRAG, modern=True)
+        self.slim = r.abuffer_slim
+        self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
+        self.geometry = geometry_program(r, ABUFFER_FRAG, {"SLIM": self.slim}, modern=True)
         defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
-        self.resolve = r.compute(RESOLVE_COMP, defines)
+        self.resolve = r.compute(RESOLVE_COMP, {**defines, "SLIM": self.slim})
         put = r.uniforms.set  # a stream's frames change only the camera's
+        camera = ("u_view", "u_projection", "u_ortho")
         for prog, names in (
-            (self.geometry, ("u_view", "u_projection", "u_ortho")),
-            (self.resolve, ("u_depth_range", "u_peel_eps")),
+            (self.geometry, camera),
+            (self.resolve, ("u_depth_range", "u_peel_eps", *(camera if self.slim else ()))),
         ):
             for name in names:
                 put(prog, name, uniforms[name])
@@ -115,7 +125,7 @@ class ABuffer:
 
     def fits(self, size: tuple[int, int]) -> bool:
         """Whether a frame of ``size`` with the fragments of the last one there would fit."""
-        return self._room(size) * NODE_BYTES <= self.max_bytes
+        return self._room(size) * self.node_bytes <= self.max_bytes
 
     def _room(self, size: tuple[int, int]) -> int:
         held = self.r.abuffer_room.get(tuple(size))
@@ -182,6 +192,8 @@ class ABuffer:
         )
         for binding, buf in enumerate(held):
             buf.bind_to_storage_buffer(binding)
+        if self.slim:
+            pool.buffer(f"{name}.slim", SLIM_BYTES * room).bind_to_storage_buffer(SLIM_BINDING)
         return held
 
     def _capture(self, gb, name: str) -> int | None:
@@ -201,7 +213,7 @@ class ABuffer:
         calls = 0
         while True:
             room = self._room(size)
-            if room * NODE_BYTES > self.max_bytes:
+            if room * self.node_bytes > self.max_bytes:
                 return None
             totals, depths = self._buffers(name, room)[3:]
             head.bind_to_image(0, read=True, write=True)
@@ -219,6 +231,10 @@ class ABuffer:
                 tiles.clear()
                 tiles.bind_to_storage_buffer(TILE_BINDING)
                 self.resolve["u_tile_columns"].value = columns
+            if self.slim:
+                self.mesh.vbo.bind_to_storage_buffer(VERTICES_BINDING)
+                self.mesh.ibo.bind_to_storage_buffer(INDICES_BINDING)
+                target_uniform(self.r, self.resolve, size)
             self.resolve.run(*groups)
             ctx.memory_barrier()
             calls += 3

@@ -143,6 +143,12 @@ class LayerRenderer(Device):
         # layers: 0.90 against 0.75)
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 2
         self.abuffer_room: dict[tuple[int, int], int] = {}
+        # Fragments of depth and face alone, the rest made by the resolve for those kept as
+        # layers, where the graphics pipeline is narrower than compute (image passes in compute:
+        # a GPU): on the H200 the geometry pass is bound by the bytes its fragments write
+        # (benchmarks/capture_cost.py: cycloidal, 4096², 8 bytes a fragment instead of 16
+        # without exact depth, 19.0 -> 14.5 ms); llvmpipe's compute is its fragment stage.
+        self.abuffer_slim = self.use_compute
         # Where the driver's depths come from snapped corners, every geometry pass takes its
         # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): on the H200
         # coincident faces of one part otherwise peeled as two layers.

@@ -4,7 +4,9 @@
 // after it lying more than u_peel_eps (eye depth) behind it. Its own depth is kept whole, not
 // rounded to the depth buffer's steps: a rounding that differs from the driver's by a step here
 // and there is noise to the edges' second differences of depth. The layers are
-// chained in order[] from u_cursor (node + 1; 0 ends the chain).
+// chained in order[] from u_cursor (node + 1; 0 ends the chain). With SLIM (abuffer.frag) the
+// fragments hold depth and face alone, and each one kept as a layer gets its whole node here:
+// the normal and part of its face at the pixel centre, as the geometry pass would have made.
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "depth.glsl"
@@ -30,6 +32,60 @@ shared uint group_deepest;
 #endif
 uniform float u_back_bias;
 uniform float u_peel_eps;
+
+#if SLIM
+// the mesh (render.mesh.GpuMesh): 7 words a vertex (position, normal, part), 3 indices a face
+layout(std430, binding = 8) readonly buffer Vertices {
+    float vertices[];
+};
+layout(std430, binding = 9) readonly buffer Indices {
+    uint indices[];
+};
+uniform mat4 u_view;
+uniform mat4 u_projection;
+uniform bool u_ortho;
+uniform vec2 u_target;  // the pixels of the G-buffer
+
+vec3 vertex_vec3(uint v, uint at) {
+    return vec3(vertices[7u * v + at], vertices[7u * v + at + 1u], vertices[7u * v + at + 2u]);
+}
+
+// fragment i at pixel p kept as a layer: its whole node. The weights of the face's corners at
+// the pixel centre are the perspective-correct ones the rasteriser interpolates with: those
+// whose clip position projects to the centre (two planes through the eye, crossed).
+void keep(ivec2 p, uint i) {
+    uvec2 s = slim[i];
+    uint face = s.y - 1u;
+    vec2 q = (vec2(p) + 0.5) / u_target * 2.0 - 1.0;
+    vec3 eye[3];
+    vec3 normal[3];
+    vec3 across_x;
+    vec3 across_y;
+    int part = 0;
+    for (int k = 0; k < 3; ++k) {
+        uint v = indices[3u * face + uint(k)];
+        vec4 e = u_view * vec4(vertex_vec3(v, 0u), 1.0);
+        vec4 c = u_projection * e;
+        eye[k] = e.xyz;
+        normal[k] = mat3(u_view) * vertex_vec3(v, 3u);
+        across_x[k] = c.x - q.x * c.w;
+        across_y[k] = c.y - q.y * c.w;
+        part = floatBitsToInt(vertices[7u * v + 6u]);
+    }
+    vec3 w = cross(across_x, across_y);
+    w /= w.x + w.y + w.z;
+    vec3 n = normalize(w.x * normal[0] + w.y * normal[1] + w.z * normal[2]);
+    vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -(w.x * eye[0] + w.y * eye[1] + w.z * eye[2]);
+    // two-sided, as peel.frag
+    if (dot(n, to_eye) < 0.0) {
+        n = -n;
+    }
+    nodes[i] = kb_pack(uintBitsToFloat(s.x & ~KB_BACK), (s.x & KB_BACK) != 0u, n, int(face), part);
+}
+#else
+void keep(ivec2 p, uint i) {
+}
+#endif
 
 shared uint group_pixels_with[MOST_LAYERS + 1];
 
@@ -57,7 +113,7 @@ uint chain(ivec2 p) {
     uint at = imageLoad(u_head, p).x;
     uint head = at;
     while (at != 0u && n < SORTED) {
-        uvec4 s = nodes[at - 1u];
+        uvec4 s = fragment(at - 1u);
         uint k = held_depth(s);
         // insertion in order
         uint i = n;
@@ -79,10 +135,11 @@ uint chain(ivec2 p) {
     if (at == 0u) {
         float behind = -1.0 / 0.0;
         for (uint i = 0u; i < n; ++i) {
-            uvec4 s = nodes[node[i] - 1u];
+            uvec4 s = fragment(node[i] - 1u);
             if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                 continue;
             }
+            keep(p, node[i] - 1u);
             if (last == 0u) {
                 first = node[i];
             } else {
@@ -101,7 +158,7 @@ uint chain(ivec2 p) {
             uint best_key = 0xffffffffu;
             uint best_face = 0xffffffffu;
             for (uint a = head; a != 0u; a = links[a - 1u]) {
-                uvec4 s = nodes[a - 1u];
+                uvec4 s = fragment(a - 1u);
                 if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                     continue;
                 }
@@ -121,7 +178,8 @@ uint chain(ivec2 p) {
                 order[last - 1u] = best;
             }
             last = best;
-            behind = next_after(nodes[best - 1u]);
+            keep(p, best - 1u);
+            behind = next_after(fragment(best - 1u));
             ++layers;
         }
     }
