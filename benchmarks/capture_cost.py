@@ -33,7 +33,12 @@ VARIANTS = {
     5: "counter alone",
     6: "nothing written",
     7: "product, counter a subgroup",
+    8: "8-byte node, exact depth, heads in a storage buffer",
+    9: "8-byte slots (16 a pixel), exact depth, no links",
+    10: "4-byte node (face)",
+    11: "4-byte slots (16 a pixel), no links",
 }
+FIXED = 16  # abuffer_variants.frag
 
 
 def main() -> None:
@@ -71,12 +76,17 @@ def main() -> None:
                 bench.loops = 20_000_000 if size > 1024 else 4_000_000
                 room = r.abuffer_room[(size, size)]
                 nodes, links = ab._buffers(name, room)[:2]
-                small = r.pool.buffer(f"{name}.small", 8 * room)
+                small = r.pool.buffer(f"{name}.small", 8 * max(room, FIXED * size * size))
+                faces = r.pool.buffer(f"{name}.faces", 4 * max(room, FIXED * size * size))
+                heads = r.pool.buffer(f"{name}.heads", 4 * size * size)
                 head = r.pool.texture(f"{name}.head", (size, size), "r32ui")
 
                 def capture(prog=None):
                     ab._buffers(name, room)
                     small.bind_to_storage_buffer(7)
+                    heads.clear()
+                    heads.bind_to_storage_buffer(10)
+                    faces.bind_to_storage_buffer(11)
                     head.bind_to_image(0, read=True, write=True)
                     ab.clear["u_capacity"].value = room
                     ab.clear.run(-(-size // 8), -(-size // 8))
@@ -89,6 +99,9 @@ def main() -> None:
                         prog[u].write(ab.geometry[u].read())
                     if "u_ortho" in prog:
                         prog["u_ortho"].value = ab.geometry["u_ortho"].value
+                    for u, value in (("u_width", size), ("u_pixels", size * size)):
+                        if u in prog:
+                            prog[u].value = value
                     if "u_target" in prog:
                         target_uniform(r, prog, (size, size))
                     ab.mesh.vao(prog).render()

@@ -7,6 +7,13 @@
 //   5  the counter alone: no node, no link
 //   6  nothing written: the rasteriser and the shader's launch
 //   7  the product's pass (exact depth where the renderer takes it), the counter once a subgroup
+//   8  as 2, with exact depth where the renderer takes it, the list heads in a storage buffer
+//      instead of an image
+//   9  as 2, with exact depth where the renderer takes it: no links, the first FIXED fragments
+//      of a pixel in slots of their own (slot k of every pixel together), counted per pixel
+//      in a storage buffer (fragments past FIXED are dropped: a lower bound)
+//  10  a node of the face alone (4 bytes: depth found later from the face), with the link
+//  11  as 9, a slot of the face alone (4 bytes)
 #extension GL_ARB_shading_language_packing : require
 #if VARIANT == 3 || VARIANT == 4 || VARIANT == 7
 #extension GL_ARB_shader_ballot : require
@@ -31,7 +38,16 @@ layout(std430, binding = 3) coherent buffer Totals {
 layout(std430, binding = 7) coherent buffer Small {
     uvec2 small[];
 };
+layout(std430, binding = 10) coherent buffer Heads {
+    uint heads[];
+};
+layout(std430, binding = 11) coherent buffer Faces {
+    uint faces[];
+};
+#define FIXED 16
 layout(binding = 0, r32ui) coherent uniform uimage2D u_head;
+uniform int u_width;
+uniform int u_pixels;
 uniform bool u_ortho;
 
 in vec3 v_eye;
@@ -66,6 +82,31 @@ void main() {
     }
 #elif VARIANT == 5
     atomicAdd(drawn, 1u);
+#elif VARIANT == 8
+    float z = fragment_depth();
+    uint node = atomicAdd(drawn, 1u);
+    if (node < capacity) {
+        small[node] = uvec2(floatBitsToUint(z) | (gl_FrontFacing ? 0u : KB_BACK), uint(gl_PrimitiveID + 1));
+        ivec2 q = ivec2(gl_FragCoord.xy);
+        links[node] = atomicExchange(heads[q.y * u_width + q.x], node + 1u);
+    }
+#elif VARIANT == 9 || VARIANT == 11
+    ivec2 q = ivec2(gl_FragCoord.xy);
+    int pixel = q.y * u_width + q.x;
+    uint k = atomicAdd(heads[pixel], 1u);
+    if (k < uint(FIXED)) {
+#if VARIANT == 9
+        small[int(k) * u_pixels + pixel] = uvec2(floatBitsToUint(fragment_depth()) | (gl_FrontFacing ? 0u : KB_BACK), uint(gl_PrimitiveID + 1));
+#else
+        faces[int(k) * u_pixels + pixel] = uint(gl_PrimitiveID + 1) | (gl_FrontFacing ? 0u : KB_BACK);
+#endif
+    }
+#elif VARIANT == 10
+    uint node = atomicAdd(drawn, 1u);
+    if (node < capacity) {
+        faces[node] = uint(gl_PrimitiveID + 1) | (gl_FrontFacing ? 0u : KB_BACK);
+        links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
+    }
 #elif VARIANT == 2 || VARIANT == 3
     uint node = next_node();
     if (node < capacity) {
