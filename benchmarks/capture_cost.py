@@ -98,7 +98,7 @@ def main() -> None:
                     for u in ("u_view", "u_projection"):
                         prog[u].write(ab.geometry[u].read())
                     if "u_ortho" in prog:
-                        prog["u_ortho"].value = ab.geometry["u_ortho"].value
+                        prog["u_ortho"].value = camera.ortho
                     for u, value in (("u_width", size), ("u_pixels", size * size)):
                         if u in prog:
                             prog[u].value = value

@@ -378,41 +378,6 @@ def test_slim_normals_are_taken_at_the_pixel_centre(renderer, abuffer, monkeypat
     moved = np.abs(snapped.normal.astype(np.float64) - plain.normal).max(axis=-1)[same]
     if renderer.abuffer_slim:
         assert moved.max() <= 2.0**-11
-    else:
+    elif not renderer.snapped_depth:
+        # (a driver that snaps corners itself moves them either way: nothing to compare)
         assert (moved > 2e-3).sum() > 0
-
-
-
-def test_face_alone_fragments_give_the_slim_layers(renderer, monkeypatch):
-    """Fragments of their face alone (``abuffer_slim`` 2) take their depths from the true plane
-    at the pixel centre, where the rasteriser's are off it by its own rounding (llvmpipe's, on
-    faces seen edge-on, by up to a few hundred 24-bit steps), so against slim fragments (the
-    rasteriser's depths) the layers differ only where faces tie; the drawing is the same. The
-    ray-casting oracle checks their depths (test_layers_oracle.py, method a-buffer-face)."""
-    if renderer.ctx.version_code < 430:
-        pytest.skip("the A-buffer needs OpenGL 4.3 (storage buffers in fragment shaders)")
-    monkeypatch.setattr(renderer, "abuffer_max_bytes", 1 << 28)
-    monkeypatch.setattr(renderer, "abuffer_min_layers", 2)
-    monkeypatch.setattr(renderer, "kbuffer", False)
-    monkeypatch.setattr(renderer, "abuffer_room", {})
-    for name in ("nested-round", "gearbox", "gearbox-ortho"):
-        make, camera = CASES[name]
-        layers = {}
-        for slim in (1, 2):
-            renderer.abuffer_slim = slim
-            layers[slim] = blueprint.peel(make(), renderer=renderer, size=(160, 120), max_layers=None, **camera)
-        a, b = layers[2], layers[1]
-        count_a, count_b = (a.depth < 1).sum(axis=0), (b.depth < 1).sum(axis=0)
-        assert (count_a == count_b).mean() >= 0.999, name
-        k = min(len(a.depth), len(b.depth))
-        both = (a.depth[:k] < 1) & (b.depth[:k] < 1)
-        assert (a.triangle[:k] == b.triangle[:k])[both].mean() >= 0.999, name
-        apart = np.abs(a.depth[:k] - b.depth[:k])[both & (a.triangle[:k] == b.triangle[:k])]
-        assert apart.max() < 1e-4, name
-        assert (apart < 1e-6).mean() >= 0.99, name
-
-    def use(slim: bool) -> None:
-        renderer.abuffer_slim = 2 if slim else 1
-
-    diff = drawing_difference(use, "blueprint", 2)
-    assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"

@@ -131,10 +131,9 @@ CASES = [
 # interlock; forced whatever the model's size), the A-buffer (every layer from one geometry
 # pass, OpenGL 4.3; forced whatever the layers), and the lean pass of vector drawings (no
 # normals: depth and triangle IDs alone).
-# a-buffer-slim and a-buffer-face: fragments listed as depth and face, or as face alone (their
-# depth then the true plane's at the pixel centre): what GPUs use (LayerRenderer.abuffer_slim)
-METHODS = ["pass-a-layer", "two-culled-draws", "k-buffer", "a-buffer", "a-buffer-slim", "a-buffer-face", "ids-only"]
-SLIM = {"a-buffer-slim": 1, "a-buffer-face": 2}
+# a-buffer-slim: fragments listed as depth and face alone, the rest found by the sort: what GPUs
+# use (LayerRenderer.abuffer_slim)
+METHODS = ["pass-a-layer", "two-culled-draws", "k-buffer", "a-buffer", "a-buffer-slim", "ids-only"]
 
 
 @pytest.fixture(params=METHODS)
@@ -157,7 +156,7 @@ def method(request, renderer):
     renderer.culled_tie_break_from = (0, 0) if request.param == "two-culled-draws" else None
     renderer.abuffer_max_bytes = (1 << 30) if abuffer else 0
     renderer.abuffer_min_layers = 2
-    renderer.abuffer_slim = SLIM.get(request.param, 0)
+    renderer.abuffer_slim = request.param == "a-buffer-slim"
     yield request.param
     (
         renderer.kbuffer,
@@ -292,15 +291,14 @@ def test_exact_depth_undoes_snapped_corners(exact, method, renderer, monkeypatch
     different corners depths up to the slope times the snap apart, and the peel keeps them as
     two layers: on the H200 the gearbox had 248 of 5 878 pixels a layer too many. Corners
     snapped the same way in the vertex shader reproduce it on any driver; exact depth (the
-    depth moved along the true plane to the pixel centre) brings back the oracle's layers. Face
-    alone fragments take their depths from the true corners whatever the rasteriser does."""
+    depth moved along the true plane to the pixel centre) brings back the oracle's layers."""
     case = next(c for c in CASES if c.name == "gearbox")
     model, _, oracle = _peel_and_cast(case, renderer, request, method)
     monkeypatch.setattr(mesh, "GEOMETRY_VERT", Path(__file__).parent / "glsl" / "snapped_geometry.vert")
     monkeypatch.setattr(renderer, "exact_depth", exact)
     layers = blueprint.peel(model, size=case.size, renderer=renderer, normals=method != "ids-only")
     result = compare_layers(layers.depth, oracle)
-    if exact or method == "a-buffer-face":
+    if exact:
         assert result.fraction >= DEPTH_AGREEMENT, result.describe()
     else:
         assert (result.compared & ~result.count_ok).sum() > 0.01 * result.compared.sum(), result.describe()

@@ -28,9 +28,8 @@ MOST_LAYERS = 256
 # bytes a fragment holds: its surface (16), its link in the pixel's list, its link in the
 # pixel's layers
 NODE_BYTES = 24
-# ...and what the geometry pass writes of it where fragments are slim, by ``abuffer_slim``:
-# depth and face (1), face (2)
-SLIM_BYTES = {0: 0, 1: 8, 2: 4}
+# ...and its depth and face as the geometry pass writes them where the nodes are slim
+SLIM_BYTES = 8
 # storage bindings of the slim fragments and of the mesh the resolve reads (abuffer.glsl,
 # abuffer_resolve.comp)
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
@@ -65,9 +64,8 @@ class ABuffer:
     room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
     the sorted lists themselves (``lists``). The counts come back through a buffer of their own
     for each ``slot``: frames that stream read one frame's counts after the next is issued.
-    Where the renderer's ``abuffer_slim`` is 1, the geometry pass writes each fragment's depth
-    and face alone, where 2 its face alone, and the resolve makes the rest: the depth of every
-    fragment (2), the whole surfaces of those it keeps as layers."""
+    Where the renderer's ``abuffer_slim``, the geometry pass writes each fragment's depth and
+    face alone and the resolve makes the whole surfaces of the fragments it keeps as layers."""
 
     def __init__(
         self,
@@ -83,8 +81,8 @@ class ABuffer:
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
-        self.slim = int(r.abuffer_slim)
-        self.node_bytes = NODE_BYTES + SLIM_BYTES[self.slim]
+        self.slim = r.abuffer_slim
+        self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
         self.geometry = geometry_program(r, ABUFFER_FRAG, {"SLIM": self.slim}, modern=True)
         defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
         self.resolve = r.compute(RESOLVE_COMP, {**defines, "SLIM": self.slim})
@@ -195,7 +193,7 @@ class ABuffer:
         for binding, buf in enumerate(held):
             buf.bind_to_storage_buffer(binding)
         if self.slim:
-            pool.buffer(f"{name}.slim", SLIM_BYTES[self.slim] * room).bind_to_storage_buffer(SLIM_BINDING)
+            pool.buffer(f"{name}.slim", SLIM_BYTES * room).bind_to_storage_buffer(SLIM_BINDING)
         return held
 
     def _capture(self, gb, name: str) -> int | None:

@@ -143,13 +143,14 @@ class LayerRenderer(Device):
         # layers: 0.90 against 0.75)
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 2
         self.abuffer_room: dict[tuple[int, int], int] = {}
-        # A-buffer fragments of depth and face alone (1), or of their face alone (2), the rest
-        # made by the resolve, where the graphics pipeline is narrower than compute (image passes
-        # in compute: a GPU); 0: whole fragments. On the H200 the geometry pass is bound by the
-        # bytes its fragments write (benchmarks/capture_cost.py). There, cycloidal at 4096², all
-        # 36 layers, depth and face: geometry pass 21.1 -> 15.5 ms, sort 2.8 -> 4.2 ms, a
-        # streamed 2048² frame 30.4 -> 27.2 ms. llvmpipe's compute is its fragment stage.
-        self.abuffer_slim = 1 if self.use_compute else 0
+        # Fragments of depth and face alone, the rest made by the resolve for those kept as
+        # layers, where the graphics pipeline is narrower than compute (image passes in compute:
+        # a GPU): on the H200 the geometry pass is bound by the bytes its fragments write
+        # (benchmarks/capture_cost.py). There, cycloidal at 4096², all 36 layers: geometry
+        # pass 21.1 -> 15.5 ms, sort 2.8 -> 4.2 ms, a streamed 2048² frame 30.4 -> 27.2 ms
+        # (fragments of their face alone, each one's depth found by the sort from its face:
+        # 36.3 ms). llvmpipe's compute is its fragment stage.
+        self.abuffer_slim = self.use_compute
         # Where the driver's depths come from snapped corners, every geometry pass takes its
         # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): on the H200
         # coincident faces of one part otherwise peeled as two layers.

@@ -1,11 +1,10 @@
 // Geometry pass of the A-buffer: every fragment of the mesh, unordered, is appended to its
 // pixel's list (abuffer.glsl); nothing is tested, nothing drawn. Fragments beyond the nodes
 // held are counted and dropped: the capture sees the count and draws again with room for them.
-// With SLIM a fragment is its depth and face alone, 8 bytes instead of 16 (SLIM 1), or its face
-// alone, 4 bytes (SLIM 2): where the graphics pipeline runs on a few of the GPU's cores (the
-// H200) the pass is bound by the bytes its fragments write (benchmarks/capture_cost.py), and
-// the resolve, in compute on all of them, finds what the fragments it keeps as layers lack from
-// their faces (with SLIM 2 every fragment's depth too: the true plane's at the pixel centre).
+// With SLIM a fragment is its depth and face alone, 8 bytes instead of 16: where the graphics
+// pipeline runs on a few of the GPU's cores (the H200) the pass is bound by the bytes its
+// fragments write (benchmarks/capture_cost.py), and the resolve, in compute on all of them,
+// finds the normal and part of the fragments that become layers from their faces.
 #extension GL_ARB_shading_language_packing : require
 #include "depth.glsl"
 #include "fragment_depth.glsl"
@@ -20,19 +19,13 @@ in vec3 v_normal;
 flat in int v_part;
 
 void main() {
-#if SLIM != 2
-    // before any branch: it takes derivatives
     float z = fragment_depth();
-#endif
+#if SLIM
     uint node = atomicAdd(drawn, 1u);
-    if (node >= capacity) {
-        return;
+    if (node < capacity) {
+        slim[node] = uvec2(floatBitsToUint(z) | (gl_FrontFacing ? 0u : KB_BACK), uint(gl_PrimitiveID + 1));
+        links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
     }
-    uint back = gl_FrontFacing ? 0u : KB_BACK;
-#if SLIM == 2
-    slim[node] = uint(gl_PrimitiveID + 1) | back;
-#elif SLIM == 1
-    slim[node] = uvec2(floatBitsToUint(z) | back, uint(gl_PrimitiveID + 1));
 #else
     vec3 n = normalize(v_normal);
     vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -v_eye;
@@ -41,7 +34,11 @@ void main() {
         n = -n;
     }
     // faces cost a GPU nothing, and order the fragments of one depth as drawing them would
-    nodes[node] = kb_pack(z, !gl_FrontFacing, n, gl_PrimitiveID, v_part);
+    int face = gl_PrimitiveID;
+    uint node = atomicAdd(drawn, 1u);
+    if (node < capacity) {
+        nodes[node] = kb_pack(z, !gl_FrontFacing, n, face, v_part);
+        links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
+    }
 #endif
-    links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
 }

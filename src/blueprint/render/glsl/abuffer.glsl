@@ -2,9 +2,9 @@
 // node + 1 of each pixel's list (0: none); node i is surface i of the pass, packed as a
 // k-buffer surface (kbuffer.glsl), and links[i] the next node + 1 of its pixel's list. The
 // resolve (abuffer_resolve.comp) puts each pixel's layers in peel order in order[], from the
-// pixel's u_cursor. With SLIM the geometry pass writes each fragment slim into slim[] (see
-// abuffer.frag): its depth and face (SLIM 1), or its face alone (SLIM 2); the resolve fills node
-// i only for the fragments it keeps as layers.
+// pixel's u_cursor. With SLIM the geometry pass writes each fragment's depth and face alone
+// into slim[] (see abuffer.frag), and the resolve fills node i (normal, part) only for the
+// fragments it keeps as layers: fragment(i) reads either form's depth and face.
 #ifndef SLIM
 #define SLIM 0
 #endif
@@ -30,14 +30,18 @@ layout(std430, binding = 3) coherent buffer Totals {
 layout(std430, binding = 4) coherent buffer Depths {
     uint pixels_with[MOST_LAYERS + 1];
 };
-#if SLIM == 1
+#if SLIM
 // (window depth bits, bit 31 set for a back face; face + 1) of each fragment
 layout(std430, binding = 7) coherent buffer Slim {
     uvec2 slim[];
 };
-#elif SLIM == 2
-// face + 1 of each fragment, bit 31 set for a back face
-layout(std430, binding = 7) coherent buffer Slim {
-    uint slim[];
-};
+
+uvec4 fragment(uint i) {
+    uvec2 s = slim[i];
+    return uvec4(s.x, 0u, 0u, s.y);
+}
+#else
+uvec4 fragment(uint i) {
+    return nodes[i];
+}
 #endif

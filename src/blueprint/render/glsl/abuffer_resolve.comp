@@ -5,9 +5,8 @@
 // rounded to the depth buffer's steps: a rounding that differs from the driver's by a step here
 // and there is noise to the edges' second differences of depth. The layers are
 // chained in order[] from u_cursor (node + 1; 0 ends the chain). With SLIM (abuffer.frag) the
-// fragments hold their depth and face (1) or their face alone (2: the depth is found here), and
-// each one kept as a layer gets its whole node here: the normal and part of its face at the
-// pixel centre, as the geometry pass would have made.
+// fragments hold depth and face alone, and each one kept as a layer gets its whole node here:
+// the normal and part of its face at the pixel centre, as the geometry pass would have made.
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "depth.glsl"
@@ -51,49 +50,13 @@ vec3 vertex_vec3(uint v, uint at) {
     return vec3(vertices[7u * v + at], vertices[7u * v + at + 1u], vertices[7u * v + at + 2u]);
 }
 
-// pixel p's centre in normalised device coordinates
-vec2 centre(ivec2 p) {
-    return (vec2(p) + 0.5) / u_target * 2.0 - 1.0;
-}
-#endif
-
-#if SLIM == 2
-// A fragment's depth is the true plane's at the pixel centre: of the face's clip corners (as
-// geometry.vert makes them), weighted by those weights that project to the centre (two planes
-// through the eye, crossed), in double precision so that coincident faces get one depth.
-uvec4 fragment(ivec2 p, uint i) {
-    uint s = slim[i];
-    uint face = (s & ~KB_BACK) - 1u;
-    dvec4 c[3];
-    for (int k = 0; k < 3; ++k) {
-        uint v = indices[3u * face + uint(k)];
-        c[k] = dvec4(u_projection * (u_view * vec4(vertex_vec3(v, 0u), 1.0)));
-    }
-    // the centre in double as well: on a face seen edge-on its rounding is many steps of depth
-    dvec2 q = (dvec2(p) + 0.5) / dvec2(u_target) * 2.0 - 1.0;
-    dvec3 cw = dvec3(c[0].w, c[1].w, c[2].w);
-    dvec3 w = cross(dvec3(c[0].x, c[1].x, c[2].x) - q.x * cw, dvec3(c[0].y, c[1].y, c[2].y) - q.y * cw);
-    double z = dot(w, dvec3(c[0].z, c[1].z, c[2].z)) / dot(w, cw);
-    return uvec4(floatBitsToUint(float(0.5 * z + 0.5)) | (s & KB_BACK), 0u, 0u, face + 1u);
-}
-#elif SLIM == 1
-uvec4 fragment(ivec2 p, uint i) {
+// fragment i at pixel p kept as a layer: its whole node. The weights of the face's corners at
+// the pixel centre are the perspective-correct ones the rasteriser interpolates with: those
+// whose clip position projects to the centre (two planes through the eye, crossed).
+void keep(ivec2 p, uint i) {
     uvec2 s = slim[i];
-    return uvec4(s.x, 0u, 0u, s.y);
-}
-#else
-uvec4 fragment(ivec2 p, uint i) {
-    return nodes[i];
-}
-#endif
-
-#if SLIM
-// fragment i (``s``: its depth and face) at pixel p kept as a layer: its whole node. The
-// weights of the face's corners at the pixel centre are the perspective-correct ones the
-// rasteriser interpolates with, as for the depth above.
-void keep(ivec2 p, uint i, uvec4 s) {
-    uint face = s.w - 1u;
-    vec2 q = centre(p);
+    uint face = s.y - 1u;
+    vec2 q = (vec2(p) + 0.5) / u_target * 2.0 - 1.0;
     vec3 eye[3];
     vec3 normal[3];
     vec3 across_x;
@@ -120,7 +83,7 @@ void keep(ivec2 p, uint i, uvec4 s) {
     nodes[i] = kb_pack(uintBitsToFloat(s.x & ~KB_BACK), (s.x & KB_BACK) != 0u, n, int(face), part);
 }
 #else
-void keep(ivec2 p, uint i, uvec4 s) {
+void keep(ivec2 p, uint i) {
 }
 #endif
 
@@ -150,7 +113,7 @@ uint chain(ivec2 p) {
     uint at = imageLoad(u_head, p).x;
     uint head = at;
     while (at != 0u && n < SORTED) {
-        uvec4 s = fragment(p, at - 1u);
+        uvec4 s = fragment(at - 1u);
         uint k = held_depth(s);
         // insertion in order
         uint i = n;
@@ -172,11 +135,11 @@ uint chain(ivec2 p) {
     if (at == 0u) {
         float behind = -1.0 / 0.0;
         for (uint i = 0u; i < n; ++i) {
-            uvec4 s = fragment(p, node[i] - 1u);
+            uvec4 s = fragment(node[i] - 1u);
             if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                 continue;
             }
-            keep(p, node[i] - 1u, s);
+            keep(p, node[i] - 1u);
             if (last == 0u) {
                 first = node[i];
             } else {
@@ -195,7 +158,7 @@ uint chain(ivec2 p) {
             uint best_key = 0xffffffffu;
             uint best_face = 0xffffffffu;
             for (uint a = head; a != 0u; a = links[a - 1u]) {
-                uvec4 s = fragment(p, a - 1u);
+                uvec4 s = fragment(a - 1u);
                 if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                     continue;
                 }
@@ -215,9 +178,8 @@ uint chain(ivec2 p) {
                 order[last - 1u] = best;
             }
             last = best;
-            uvec4 kept = fragment(p, best - 1u);
-            keep(p, best - 1u, kept);
-            behind = next_after(kept);
+            keep(p, best - 1u);
+            behind = next_after(fragment(best - 1u));
             ++layers;
         }
     }
