@@ -325,9 +325,8 @@ def cell_grid(lo, hi, part, slack: float) -> CellGrid:
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
     parts = int(part.max()) + 1
-    if float(np.prod(dims.astype(np.float64))) * parts * len(key) < 2.0**62:
-        # one unstable sort of distinct numbers puts them in lexsort's (stable) order, faster
-        order = np.argsort((key * parts + part[owner]) * len(key) + np.arange(len(key)))
+    if float(np.prod(dims.astype(np.float64))) * parts < 2.0**62:
+        order = stable_argsort(key * parts + part[owner])
     else:
         order = np.lexsort((part[owner], key))
     key, owner = key[order], owner[order]
