@@ -10,14 +10,26 @@ adjacency, intersection lines and face planes are cached: a viewer, a batch, a t
 SVG, PDF and DXF, and the reference figure measured for Blender 5.2 Line Art at 512 x 512 on a
 2-core machine without a GPU (../shared/reference/README.md).
 
+``--lineart`` measures Line Art on this machine instead, side by side (``lineart.py``: one
+Blender process a run, file to PNG at ``--size``), a run of it, one of ours and one whole
+``blueprint render`` process to SVG taking turns in each round. Then ``lineart`` holds its
+figures (Blender's version named), ``process_seconds`` and ``process_cpu_seconds`` ours of
+the whole process, and the speedups: ``speedup_vs_lineart`` and ``cpu_speedup_vs_lineart``
+(our drawing in a running process against Line Art's file to PNG, as the recorded figures
+are compared), ``process_...`` (process against process) and ``warm_...`` (against Line Art's
+warm frame, the model already in Blender).
+
     python benchmarks/vector.py [--models-dir ../shared/models] [--size 1024 1024] [--runs 3]
+                                [--lineart [--blender PATH] [--xvfb]]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -27,6 +39,9 @@ from blueprint.api.files import render_vector_file
 from blueprint.scene.loader import load_model
 from blueprint.vector.lines import ADJACENCY, INTERSECTIONS
 from blueprint.vector.occlusion.levels import PLANES
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from lineart import LineArt, find_model, run_process  # noqa: E402  (a script beside this one)
 
 
 def timed(*args, **kwargs) -> tuple[dict, float]:
@@ -45,6 +60,18 @@ MODELS = {
 }
 
 
+def our_process(path: Path, output: Path, size, max_layers: int) -> tuple[float, float]:
+    """Wall and CPU seconds (every thread) of the whole ``blueprint render`` process, file to SVG:
+    Python's start, the imports and the GL context included, as Blender's start is in its
+    figure."""
+    command = [sys.executable, "-m", "blueprint", "render", str(path), "-o", str(output)]
+    command += ["--size", *map(str, size), "--max-layers", str(max_layers)]
+    done, wall, cpu = run_process(command)
+    if done.returncode != 0:
+        raise RuntimeError(f"blueprint render failed ({done.returncode}):\n{done.stderr[-2000:]}")
+    return wall, cpu
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--models-dir", type=Path, default=ROOT.parent / "shared" / "models")
@@ -52,29 +79,50 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--max-layers", type=int, default=8)
     parser.add_argument("--keep", type=Path, default=None, help="Folder to keep the drawings in.")
+    parser.add_argument(
+        "--lineart",
+        action="store_true",
+        help="Measure Blender Line Art here too (benchmarks/lineart.py), a run of each in turn.",
+    )
+    parser.add_argument("--blender", default=os.environ.get("BLENDER", "blender"))
+    parser.add_argument("--xvfb", action="store_true", help="Run Blender under xvfb-run.")
     args = parser.parse_args()
     renderer = default_renderer()
     size = tuple(args.size)
+    lineart = LineArt(args.blender, args.xvfb, size) if args.lineart else None
     with tempfile.TemporaryDirectory() as scratch:
         out_dir = args.keep or Path(scratch)
         out_dir.mkdir(parents=True, exist_ok=True)
         for name, blender_s in MODELS.items():
-            path = args.models_dir / name
-            if not path.exists():  # a flat folder of models
-                path = args.models_dir / Path(name).name
-            if not path.exists():
+            path = find_model(args.models_dir, name)
+            if path is None:
                 print(json.dumps({"model": name, "skipped": f"not found under {args.models_dir}"}))
                 continue
             stem = path.stem
-            runs, cpu = [], []
-            for _ in range(max(args.runs, 1)):
-                for cache in (ADJACENCY, INTERSECTIONS, PLANES):
-                    cache.clear()
-                summary, spent = timed(
-                    path, out_dir / f"{stem}.svg", size=size, max_layers=args.max_layers, renderer=renderer
-                )
-                runs.append(summary)
-                cpu.append(spent)
+            runs, cpu, processes, theirs = [], [], [], []
+            for run in range(max(args.runs, 1)):
+                # side by side: Blender and we take turns, each first every other round, so
+                # that the other loads of the machine fall on both alike
+                turns = ["ours", "process", "lineart"] if lineart else ["ours"]
+                for turn in turns if run % 2 == 0 else turns[::-1]:
+                    if turn == "lineart":
+                        theirs.append(lineart.run(path, out_dir / f"{stem}_lineart.png"))
+                    elif turn == "process":
+                        processes.append(
+                            our_process(path, out_dir / f"{stem}_process.svg", size, args.max_layers)
+                        )
+                    else:
+                        for cache in (ADJACENCY, INTERSECTIONS, PLANES):
+                            cache.clear()
+                        summary, spent = timed(
+                            path,
+                            out_dir / f"{stem}.svg",
+                            size=size,
+                            max_layers=args.max_layers,
+                            renderer=renderer,
+                        )
+                        runs.append(summary)
+                        cpu.append(spent)
             # the same mesh again: its view-independent work (welding, the intersections between
             # parts) is cached, as in a viewer or a batch of views
             loaded = load_model(path)
@@ -93,31 +141,44 @@ def main() -> None:
                 )
                 sizes[fmt] = other["bytes"]
             seconds = statistics.median(totals)
-            print(
-                json.dumps(
-                    {
-                        "renderer": renderer.info["renderer"],
-                        "model": path.name,
-                        "width": size[0],
-                        "height": size[1],
-                        "max_layers": args.max_layers,
-                        "layers": median["layers"],
-                        "seconds": round(seconds, 3),
-                        "runs": [round(t, 3) for t in totals],
-                        "cpu_seconds": round(statistics.median(cpu), 3),
-                        "same_model_seconds": warm["seconds"]["total"],
-                        "same_model_cpu_seconds": round(warm_cpu, 3),
-                        "stages": median["seconds"],
-                        "lines_per_level": median["lines"],
-                        "points": median["points"],
-                        "bytes": sizes,
-                        "blender_lineart_512_s": blender_s,
-                        "speedup_vs_blender": round(blender_s / seconds, 2),
-                        "cpu_speedup_vs_blender": round(blender_s / statistics.median(cpu), 2),
-                    }
-                ),
-                flush=True,
-            )
+            cpu_seconds = statistics.median(cpu)
+            figures = {
+                "renderer": renderer.info["renderer"],
+                "model": path.name,
+                "width": size[0],
+                "height": size[1],
+                "max_layers": args.max_layers,
+                "layers": median["layers"],
+                "seconds": round(seconds, 3),
+                "runs": [round(t, 3) for t in totals],
+                "cpu_seconds": round(cpu_seconds, 3),
+                "same_model_seconds": warm["seconds"]["total"],
+                "same_model_cpu_seconds": round(warm_cpu, 3),
+                "stages": median["seconds"],
+                "lines_per_level": median["lines"],
+                "points": median["points"],
+                "bytes": sizes,
+            }
+            if lineart is None:
+                figures["blender_lineart_512_s"] = blender_s
+                figures["speedup_vs_blender"] = round(blender_s / seconds, 2)
+                figures["cpu_speedup_vs_blender"] = round(blender_s / cpu_seconds, 2)
+            else:
+                peer = LineArt.summary(theirs)
+                process_s = statistics.median(w for w, _ in processes)
+                process_cpu = statistics.median(c for _, c in processes)
+                figures["process_seconds"] = round(process_s, 3)
+                figures["process_cpu_seconds"] = round(process_cpu, 3)
+                figures["lineart"] = {"renderer": f"{lineart.version} Line Art", **peer}
+                # a drawing in a running process against Line Art's file to PNG, as the
+                # recorded figures were compared; and process against process
+                figures["speedup_vs_lineart"] = round(peer["seconds"] / seconds, 2)
+                figures["cpu_speedup_vs_lineart"] = round(peer["cpu_seconds"] / cpu_seconds, 2)
+                figures["process_speedup_vs_lineart"] = round(peer["seconds"] / process_s, 2)
+                figures["process_cpu_speedup_vs_lineart"] = round(peer["cpu_seconds"] / process_cpu, 2)
+                figures["warm_speedup_vs_lineart"] = round(peer["warm_seconds"] / seconds, 2)
+                figures["warm_cpu_speedup_vs_lineart"] = round(peer["warm_cpu_seconds"] / cpu_seconds, 2)
+            print(json.dumps(figures), flush=True)
 
 
 if __name__ == "__main__":

@@ -16,9 +16,21 @@ from blueprint.sorting import stable_argsort, unique_first
         (20000, -500, 500),
         (2000, 0, 8000),
         (20000, 0, 2**40),
+        (1000, 0, 2**51),
+        (1000, 0, 2**53),
         (300, 0, 2**62),
     ],
-    ids=["empty", "one", "few-values", "negative", "range-of-four-a-key", "wide", "too-wide-to-pack"],
+    ids=[
+        "empty",
+        "one",
+        "few-values",
+        "negative",
+        "range-of-four-a-key",
+        "wide",
+        "widest-packed",
+        "just-too-wide-to-pack",
+        "too-wide-to-pack",
+    ],
 )
 def test_sorts_equal_numpys(count, low, high):
     key = np.random.default_rng(count).integers(low, high, count)

@@ -1,8 +1,10 @@
 """Sorting integer keys the fast way with NumPy's answers.
 
-``np.unique(..., return_index=True)`` and ``np.argsort(kind="stable")`` merge-sort; an unstable
-sort of distinct keys (each key times the count, plus its position) is several times faster
-and orders them the same way, where those keys fit in 63 bits. Keys of a range not much wider
+``np.unique(..., return_index=True)`` and ``np.argsort(kind="stable")`` merge-sort; a sort of
+distinct keys (each key shifted left, its position in the low bits) is several times faster
+and orders them the same way, where those keys fit in 63 bits; sorting them as values, the
+positions read back from their low bits, is twice as fast again as an argsort (NumPy sorts
+integers with SIMD, and their argsort without, short of AVX-512). Keys of a range not much wider
 than their count (vertex ids, component ids) need no sort at all for ``unique_first``: a table
 over the range marks them, five times faster again.
 """
@@ -23,8 +25,11 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
     if n == 0:
         return np.zeros(0, np.int64)
     low, high = int(key.min()), int(key.max())
-    if (float(high) - float(low) + 1.0) * n < 2.0**62:
-        return np.argsort((key.astype(np.int64) - low) * n + np.arange(n))
+    bits = n.bit_length()
+    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
+        packed = ((key.astype(np.int64) - low) << bits) | np.arange(n)
+        packed.sort()
+        return packed & ((1 << bits) - 1)
     return np.argsort(key, kind="stable")
 
 

@@ -16,6 +16,7 @@ from blueprint.vector.lines import (
     SILHOUETTE,
     Segments,
     _candidate_pairs,
+    _candidate_triangles,
     feature_segments,
     intersection_segments,
     join_polylines,
@@ -112,6 +113,26 @@ def test_grid_broad_phase_finds_exactly_the_overlapping_boxes():
     overlap &= part[:, None] != part[None]
     a, b = np.nonzero(np.triu(overlap, 1))
     assert got == set(zip(a.tolist(), b.tolist(), strict=True))
+
+
+def test_candidate_triangles_are_those_meeting_another_parts_box():
+    rng = np.random.default_rng(3)
+    for parts, slack in ((5, 0.0), (70, 0.05), (150, 0.0)):  # one, two and three words of parts
+        n = 600
+        # each part's triangles about a place of its own
+        part = rng.integers(0, parts, n)
+        centre = rng.uniform(0, 1.2 * parts ** (1 / 3), (parts, 3))[part] + rng.normal(0, 0.3, (n, 3))
+        size = rng.uniform(0.01, 0.2, (n, 3))
+        lo, hi = centre - size, centre + size
+        # two more parts that hold no triangle
+        got = _candidate_triangles(lo, hi, part, parts + 2, slack)
+        box_lo, box_hi = np.full((parts, 3), np.inf), np.full((parts, 3), -np.inf)
+        np.minimum.at(box_lo, part, lo)
+        np.maximum.at(box_hi, part, hi)
+        meets = np.all((lo[:, None] <= box_hi[None] + slack) & (hi[:, None] >= box_lo[None] - slack), axis=2)
+        meets[np.arange(n), part] = False
+        assert got.tolist() == np.flatnonzero(meets.any(axis=1)).tolist()
+        assert 0 < len(got) < n
 
 
 def test_join_chains_and_closes_loops():

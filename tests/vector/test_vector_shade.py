@@ -66,6 +66,17 @@ def test_lines_behind_the_shading_read_the_one_faces_kbuffer(renderer, monkeypat
     assert len(calls) == 1
 
 
+def test_one_part_index_alone_shades_as_a_list_of_it(renderer, tmp_path):
+    from blueprint.api.files import render_vector_file
+
+    model = assemble({"plate": box(*PLATE), "block": box(*BLOCK)})
+    alone, listed = tmp_path / "alone.svg", tmp_path / "listed.svg"
+    for path, shade in ((alone, 0), (listed, [0]), (tmp_path / "numpy.svg", np.int64(0))):
+        render_vector_file(model, path, size=SIZE, view="front", shade=shade, renderer=renderer)
+    assert alone.read_bytes() == listed.read_bytes() == (tmp_path / "numpy.svg").read_bytes()
+    assert b'id="shading"' in alone.read_bytes()
+
+
 def test_shaded_faces_back_to_front_in_the_style_colour(renderer, tmp_path):
     _, drawing, (lo, hi) = _scene(renderer, style="paper")
     shading = drawing.shading

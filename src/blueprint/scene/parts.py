@@ -11,11 +11,11 @@ from blueprint.errors import InputError
 from blueprint.scene.model import Model
 
 
-def select_parts(model: Model, patterns: str | Iterable[str | int]) -> np.ndarray:
+def select_parts(model: Model, patterns: str | int | Iterable[str | int]) -> np.ndarray:
     """(P,) bool: the parts matching any of ``patterns``.
 
     A pattern is a glob on the part name (``Piston*``, case-insensitive) or a part index; a
-    string may hold several, separated by commas.
+    string may hold several, separated by commas; one index may come alone.
 
     Raises
     ------
@@ -24,6 +24,8 @@ def select_parts(model: Model, patterns: str | Iterable[str | int]) -> np.ndarra
     """
     if isinstance(patterns, str):
         patterns = [p.strip() for p in patterns.split(",") if p.strip()]
+    elif isinstance(patterns, int | np.integer):
+        patterns = [patterns]
     names = model.part_names
     lowered = [n.lower() for n in names]
     selected = np.zeros(len(names), bool)

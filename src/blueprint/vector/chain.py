@@ -145,7 +145,15 @@ def chain_pieces(
     first_point, last_point = offsets[:-1], offsets[1:] - 1
     ends = np.stack([points[first_point], points[last_point]], axis=1).reshape(-1, 2)
     cell = np.round(ends / quantum).astype(np.int64)
-    node = np.unique(np.column_stack([np.repeat(key, 2), cell]), axis=0, return_inverse=True)[1].reshape(-1)
+    rows = np.column_stack([np.repeat(key, 2), cell])
+    low = rows.min(axis=0)
+    span = rows.max(axis=0) - low + 1
+    if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
+        # the rows packed in their order into one integer: a 1-D unique, numbered alike
+        packed = ((rows[:, 0] - low[0]) * span[1] + (rows[:, 1] - low[1])) * span[2] + (rows[:, 2] - low[2])
+        node = np.unique(packed, return_inverse=True)[1].reshape(-1)
+    else:
+        node = np.unique(rows, axis=0, return_inverse=True)[1].reshape(-1)
     inward = np.stack([points[first_point + 1], points[last_point - 1]], axis=1).reshape(-1, 2)
     leaving = inward - ends
     leaving /= np.maximum(np.linalg.norm(leaving, axis=1), 1e-300)[:, None]

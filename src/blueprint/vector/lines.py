@@ -219,7 +219,9 @@ def _overlapping(lo_a, hi_a, lo_b, hi_b) -> np.ndarray:
 
 
 def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
-    """Triangles whose box meets the box of another part overlapping their own part."""
+    """Triangles whose box meets the box of another part, widened by ``slack``: those that can
+    meet another part's triangles (the box of a triangle lies in its own part's box, so it
+    meets where the two parts' boxes overlap)."""
     order = stable_argsort(part)
     bounds = np.searchsorted(part[order], np.arange(parts + 1))
     used = bounds[1:] > bounds[:-1]
@@ -230,20 +232,32 @@ def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     overlap = _overlapping(box_lo, box_hi, box_lo - slack, box_hi + slack)
     overlap &= used[:, None] & used[None]
     np.fill_diagonal(overlap, False)
-    keep = np.zeros(len(lo), dtype=bool)
-    for p in np.flatnonzero(overlap.any(axis=1)):
-        mine = order[bounds[p] : bounds[p + 1]]
-        others = np.flatnonzero(overlap[p])
-        # the region where part p can meet another part: the union of pairwise box overlaps
-        meet_lo = np.maximum(box_lo[p], box_lo[others]) - slack
-        meet_hi = np.minimum(box_hi[p], box_hi[others]) + slack
-        # only the triangles in the box around that union can meet one of its boxes
-        near = _overlapping(lo[mine], hi[mine], meet_lo.min(axis=0)[None], meet_hi.max(axis=0)[None])
-        mine = mine[near[:, 0]]
-        mine_lo, mine_hi = lo[mine], hi[mine]
-        for start in range(0, len(others), 64):
-            ml, mh = meet_lo[start : start + 64], meet_hi[start : start + 64]
-            keep[mine[_overlapping(mine_lo, mine_hi, ml, mh).any(axis=1)]] = True
+    # along an axis, the parts whose widened box starts at or below a triangle's high end are
+    # a prefix of the parts sorted by start, those ending at or above its low end a suffix of
+    # the parts sorted by end: two searches a triangle, not a test a part
+    reach = []
+    for axis in range(3):
+        below, above = box_lo[:, axis] - slack, box_hi[:, axis] + slack
+        by_below, by_above = np.argsort(below), np.argsort(above)
+        prefix = np.searchsorted(below[by_below], np.ascontiguousarray(hi[:, axis]), side="right")
+        suffix = np.searchsorted(above[by_above], np.ascontiguousarray(lo[:, axis]), side="left")
+        reach.append((by_below, prefix, by_above, suffix))
+    keep = np.zeros(len(lo), bool)
+    ids = np.arange(parts)
+    for word in range(0, parts, 64):
+        # sets of 64 parts as the bits of a word: the parts met along every axis, but its own
+        bit = np.zeros(parts, np.uint64)
+        bit[word : word + 64] = np.left_shift(np.uint64(1), (ids[word : word + 64] - word).astype(np.uint64))
+        rows = np.flatnonzero(overlap[:, word : word + 64].any(axis=1)[part])
+        meets = ~bit[part[rows]]
+        for by_below, prefix, by_above, suffix in reach:
+            first = np.zeros(parts + 1, np.uint64)
+            np.bitwise_or.accumulate(bit[by_below], out=first[1:])
+            last = np.zeros(parts + 1, np.uint64)
+            last[:-1] = np.bitwise_or.accumulate(bit[by_above][::-1])[::-1]
+            meets &= first[prefix[rows]]
+            meets &= last[suffix[rows]]
+        keep[rows[meets != 0]] = True
     return np.flatnonzero(keep)
 
 
@@ -311,9 +325,8 @@ def cell_grid(lo, hi, part, slack: float) -> CellGrid:
     # entries by cell, then by part: an entry's partners from other parts are the rest of its
     # cell after its own part's run, so only pairs across parts are ever generated
     parts = int(part.max()) + 1
-    if float(np.prod(dims.astype(np.float64))) * parts * len(key) < 2.0**62:
-        # one unstable sort of distinct numbers puts them in lexsort's (stable) order, faster
-        order = np.argsort((key * parts + part[owner]) * len(key) + np.arange(len(key)))
+    if float(np.prod(dims.astype(np.float64))) * parts < 2.0**62:
+        order = stable_argsort(key * parts + part[owner])
     else:
         order = np.lexsort((part[owner], key))
     key, owner = key[order], owner[order]

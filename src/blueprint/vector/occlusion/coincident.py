@@ -7,6 +7,7 @@ import numpy as np
 
 from blueprint.columns import column_max, column_min, row_norm
 from blueprint.gpu.tables import table_fits, table_texture
+from blueprint.sorting import stable_argsort
 
 from .samples import Samples
 
@@ -71,7 +72,7 @@ def suppress_coincident(
         rank = np.unique(rank, return_inverse=True)[1].reshape(-1)
         ranks = int(rank.max()) + 1
     src_key = src_cell * ranks + rank[source]
-    order = np.argsort(src_key)
+    order = stable_argsort(src_key)  # the order within a run of one key does not matter
     source, src_key = source[order], src_key[order]
     cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
     cell_start = np.cumsum(cell_count) - cell_count
