@@ -70,6 +70,11 @@ BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
+# the uniforms every pass may take (see the module's docstring), in the groups that are computed
+# together: of the target and the run, of the camera, the camera's matrices
+_FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
+_CAMERA_SCALARS = ("u_depth_range", "u_peel_eps", "u_pixel_angle", "u_normal_cos")
+_CAMERA_MATRICES = ("u_view", "u_projection")
 _UNSET = object()
 
 
@@ -88,6 +93,8 @@ class Executor:
         self._array_plans: dict[int, tuple[Plan, ArrayPlan | None]] = {}
         self._frame = 0
         self._buffers: dict[int, object] = {}
+        # which groups of the frame uniforms (``_frame_uniforms``) each program declares
+        self._declared: dict[object, tuple[bool, bool, bool, bool]] = {}
         self.last_run: RunState | None = None
         self.tiles = Tiles(renderer.ctx)
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
@@ -433,18 +440,36 @@ class Executor:
 
     # -- passes --------------------------------------------------------------------------------
     def _frame_uniforms(self, st: RunState, prog, size, layer: int) -> None:
-        w, h = size
-        put = self.programs.set
-        put(prog, "u_texel", (1.0 / w, 1.0 / h))
-        put(prog, "u_size", (float(w), float(h)))
-        put(prog, "u_layer", layer)
-        put(prog, "u_frame", st.frame)
-        put(prog, "u_shade_ink", st.shade_ink)
+        declared = self._declared.get(prog)
+        if declared is None:
+            has = self.programs.has
+            declared = self._declared[prog] = (
+                any(has(prog, name) for name in _FRAME_UNIFORMS),
+                any(has(prog, name) for name in _CAMERA_SCALARS),
+                any(has(prog, name) for name in _CAMERA_MATRICES),
+                has(prog, "u_corners"),
+            )
+        frame, scalars, matrices, corners = declared
+        put = self.programs.update
+        if frame:
+            w, h = size
+            put(
+                prog,
+                {
+                    "u_texel": (1.0 / w, 1.0 / h),
+                    "u_size": (float(w), float(h)),
+                    "u_layer": layer,
+                    "u_frame": st.frame,
+                    "u_shade_ink": st.shade_ink,
+                },
+            )
         if st.camera is None:
             return
-        for name, value in _camera_uniforms(st, h).items():
-            put(prog, name, value)
-        if st.mesh is not None and self.programs.has(prog, "u_corners"):
+        if scalars:
+            put(prog, _camera_scalars(st, size[1]))
+        if matrices:
+            put(prog, _camera_matrices(st))
+        if corners and st.mesh is not None:
             st.mesh.bind_corners(prog, units.CORNERS)
 
     def _bind_input(self, prog, key: str, tex, unit: int, size) -> None:
@@ -479,8 +504,7 @@ class Executor:
             vertex = FULLSCREEN if reach is None else TILES_VERT
             prog = self.programs.library(p.op.shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
-        for uniform, value in p.uniforms.items():
-            self.programs.set(prog, uniform, value)
+        self.programs.update(prog, p.uniforms)
         for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, source, layer), unit, size)
         fbo = self.r.pool.framebuffer((target,))
@@ -531,8 +555,7 @@ class Executor:
         array = st.stacks[name][layer // SLICES]
         size = tuple(array.size[:2])
         self._frame_uniforms(st, prog, size, layer)
-        for uniform, value in p.uniforms.items():
-            self.programs.set(prog, uniform, value)
+        self.programs.update(prog, p.uniforms)
         for unit, (key, source) in enumerate(p.inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, st.pl.resolve(source), layer), unit, size)
         self.programs.set(prog, "u_layer", layer % SLICES)
@@ -548,8 +571,7 @@ class Executor:
         prog = self.programs.compute(EDGES_FROM_LISTS)
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
-        for uniform, value in p.uniforms.items():
-            self.programs.set(prog, uniform, value)
+        self.programs.update(prog, p.uniforms)
         self.programs.set(prog, "u_back_bias", abuffer.back_bias)
         *cursors, layer_count = abuffer.lists(size)
         layer_count.bind_to_image(4, read=True, write=False)
@@ -570,8 +592,7 @@ class Executor:
         for name in st.arrays.batches:
             p = pl.bound.passes[name]
             prog = self.programs.compute(p.op.compute)
-            for uniform, value in p.uniforms.items():
-                self.programs.set(prog, uniform, value)
+            self.programs.update(prog, p.uniforms)
             (source,) = (pl.resolve(t) for t in p.inputs.values())
             (key,) = p.inputs
             self.programs.set(prog, f"u_{key}", BASE_UNIT)
@@ -687,9 +708,9 @@ class Executor:
         return read_texture(self._target(st, "out", 0), bound.passes["out"].format)[::-1]
 
 
-def _camera_uniforms(st: RunState, height: int) -> dict:
-    """The uniforms a pass takes from the run's camera, for targets ``height`` pixels high
-    (computed once a run and height: a frame runs dozens of passes)."""
+def _camera_scalars(st: RunState, height: int) -> dict:
+    """The uniforms a pass takes from the run's camera but its matrices, for targets ``height``
+    pixels high (computed once a run and height: a frame runs dozens of passes)."""
     held = st.camera_uniforms.get(height)
     if held is None:
         camera = st.camera
@@ -703,6 +724,17 @@ def _camera_uniforms(st: RunState, height: int) -> dict:
             # corners, so on small triangles the sides differ by well under the angle: ink from
             # 40 % of it, full from 70 % (from 50 and 80 %, crease chains broke into dots).
             "u_normal_cos": (math.cos(0.4 * half), math.cos(0.7 * half)),
+        }
+    return held
+
+
+def _camera_matrices(st: RunState) -> dict:
+    """``u_view`` and ``u_projection`` of the run's camera, once a run (passes that draw no
+    geometry seldom read them)."""
+    held = st.camera_matrices
+    if held is None:
+        camera = st.camera
+        held = st.camera_matrices = {
             "u_view": camera.view_matrix().T.astype("f4").tobytes(),
             "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
         }
