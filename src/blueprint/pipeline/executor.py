@@ -367,6 +367,8 @@ class Executor:
         ``Result.ms`` is a frame's share of the stream: from its start to the next frame's
         (the last one's: to its read-back), so the times add up to the stream's."""
         pending: tuple[Result, float, dict, int] | None = None
+        # bound once: ``options`` hold for every frame (a frame giving variables binds its own)
+        bound = pipeline.bind(options.get("variables")) if isinstance(pipeline, PipelineSpec) else pipeline
 
         def collected(result: Result, arguments: dict, k: int, ms: float) -> Result:
             try:
@@ -379,7 +381,7 @@ class Executor:
         for k, arguments in enumerate(frames):
             start = time.perf_counter()
             result = self.run(
-                pipeline,
+                pipeline if "variables" in arguments else bound,
                 model,
                 **{**options, **arguments},
                 read_later=lambda t, k=k: self._pixel_buffer(k % 2, t),
