@@ -36,6 +36,8 @@ class TargetPool:
         self._textures: dict[str, tuple[tuple, object]] = {}
         self._framebuffers: dict[tuple, object] = {}
         self._buffers: dict[str, object] = {}
+        # objects made of the pool's targets (``held``), dropped with any target
+        self._held: dict[tuple, object] = {}
 
     def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
         """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
@@ -88,7 +90,17 @@ class TargetPool:
             return fbo
         return fbo[0]
 
+    def held(self, key: tuple, make):
+        """What ``make()`` returns, kept under ``key`` until the pool drops or replaces any of
+        its targets (a frame's G-buffer: a dozen look-ups a frame otherwise). ``key`` must name
+        everything ``make`` depends on but the pool's targets."""
+        if key in self._held:
+            return self._held[key]
+        value = self._held[key] = make()
+        return value
+
     def _drop(self, name: str) -> None:
+        self._held.clear()
         old = self._textures.pop(name)[1]
         for key, (fbo, colors, depth) in list(self._framebuffers.items()):
             if any(c is old for c in colors) or depth is old:
@@ -104,6 +116,7 @@ class TargetPool:
         if held is not None and held.size >= nbytes:
             return held
         if held is not None:
+            self._held.clear()
             held.release()
             del self._buffers[name]
         try:
@@ -121,6 +134,7 @@ class TargetPool:
             self.ctx.detect_framebuffer(0).use()
 
     def release(self) -> None:
+        self._held.clear()
         for fbo, _, _ in self._framebuffers.values():
             self._unbind(fbo)
             fbo.release()

@@ -14,7 +14,7 @@ from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import PendingRead
 from blueprint.pipeline.spec import Bound
-from blueprint.render.capture import Capture, GBuffer, gbuffer
+from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.renderer import LayerRenderer, straight_alpha
 from blueprint.scene.camera import Camera
 
@@ -95,19 +95,27 @@ class Group:
         self, r: LayerRenderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
     ):
         self.scale, self.size, self.names = scale, size, names
-        self.gb: GBuffer = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
         self.queries = r.queries("peel" if primary else f"peel.pipeline.gb{scale:g}")
         self.primary = primary
         self.capture: Capture | None = None
-        self.attr_clear = r.pool.framebuffer((self.gb.normal, self.gb.ids)) if clear_gb else None
         self.extra = [n for n in EXTRA if n in names]
-        self.textures = {}
-        for name in self.extra:
-            fmt = bound.attributes[name].format
-            self.textures[name] = r.pool.texture(f"pipeline.attr{scale:g}.{name}", size, fmt)
-        self.extra_fbo = (
-            r.pool.framebuffer(tuple(self.textures[n] for n in self.extra)) if self.extra else None
-        )
+        formats = tuple(bound.attributes[n].format for n in self.extra) if self.extra else ()
+
+        def targets() -> tuple:
+            gb = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
+            textures = {
+                name: r.pool.texture(f"pipeline.attr{scale:g}.{name}", size, fmt)
+                for name, fmt in zip(self.extra, formats, strict=True)
+            }
+            return (
+                gb,
+                r.pool.framebuffer((gb.normal, gb.ids)) if clear_gb else None,
+                textures,
+                r.pool.framebuffer(tuple(textures[n] for n in self.extra)) if self.extra else None,
+            )
+
+        key = ("pipeline.group", scale, tuple(size), primary, clear_gb, tuple(self.extra), formats)
+        self.gb, self.attr_clear, self.textures, self.extra_fbo = r.pool.held(key, targets)
 
     def texture(self, name: str, layer: int):
         if name == "depth":
