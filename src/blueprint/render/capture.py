@@ -243,6 +243,13 @@ class Capture:
             return pixels[layer] if layer < len(pixels) else 0
         return query.samples
 
+    def counts(self, layers: int, queries) -> list[int]:
+        """``samples`` of layers 0 to ``layers`` - 1, each counted by its query of ``queries``."""
+        if self.abuffer is not None:
+            pixels = self.abuffer.layer_pixels[:layers]
+            return pixels + [0] * (layers - len(pixels))
+        return [queries[k].samples for k in range(layers)]
+
     @property
     def tile_layers(self) -> np.ndarray | None:
         """The layers of each tile (``abuffer.TILE`` pixels a side, row 0 at the bottom) where
@@ -272,6 +279,8 @@ class Capture:
         issued."""
         gb, ctx = self.gb, self.r.ctx
         if self.abuffer is not None:
+            if layer and not self.abuffer.unpacks:
+                return 0  # every layer was captured at layer 0, and none is unpacked
             drawn = self.abuffer.draw(gb, layer)
             if drawn is not None:
                 gb.flat = self.abuffer.flat(gb.size)
