@@ -407,6 +407,9 @@ class Executor:
 
     # -- targets -------------------------------------------------------------------------------
     def _ensure_stacks(self, st: RunState, layers: int) -> None:
+        if layers <= st.stacked_layers:
+            return  # asked again after every layer
+        st.stacked_layers = layers
         pl, pool = st.pl, self.r.pool
         arrays = st.arrays.arrays if st.arrays else frozenset()
         for name in arrays:

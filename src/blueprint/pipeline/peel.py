@@ -100,7 +100,7 @@ class LayerCapture:
         for g in st.groups:
             g.capture.settle()
         g = st.groups[0]
-        counts = [g.capture.samples(k, g.queries[k]) for k in range(drawn)]
+        counts = g.capture.counts(drawn, g.queries)
         layers = min((rule.count(counts) for rule in rules), default=len(counts))
         # as a peel that looks would have stopped: at the first empty layer
         return counts[: layers + 1], layers

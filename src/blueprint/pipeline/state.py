@@ -142,6 +142,7 @@ class RunState:
     slot: int = 2  # which buffers read late (Executor.run)
     mesh: object = None
     stacks: dict[str, list] = field(default_factory=dict)
+    stacked_layers: int = 0  # layers ``stacks`` hold room for
     attr_dumps: dict[str, list] = field(default_factory=dict)
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
