@@ -95,6 +95,7 @@ class Executor:
         self._buffers: dict[int, object] = {}
         # which groups of the frame uniforms (``_frame_uniforms``) each program declares
         self._declared: dict[object, tuple[bool, bool, bool, bool]] = {}
+        self._rules: tuple = (None, ())  # (settings, rules): _standard_rules
         self.last_run: RunState | None = None
         self.tiles = Tiles(renderer.ctx)
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
@@ -275,9 +276,10 @@ class Executor:
             if pl.peel:
                 reveal = self.capture.reveal_rule(st)
                 # depth masking peels as deep as it needs: the cap would stop it short silently
-                rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
-                if reveal is not None:
-                    rules.append(reveal)
+                if reveal is None:
+                    rules = self._standard_rules(max_layers, min_fraction)
+                else:
+                    rules = (*standard_rules(None, min_fraction), reveal)
                 # a frame that reads back its output alone, once a frame, can be issued whole before
                 # its counts are known
                 out = bound.passes.get(pl.output)
@@ -394,6 +396,13 @@ class Executor:
         if pending is not None:
             before, began, its_arguments, j = pending
             yield collected(before, its_arguments, j, (time.perf_counter() - began) * 1e3)
+
+    def _standard_rules(self, max_layers: int | None, min_fraction: float) -> tuple:
+        """``standard_rules``, the same tuple while the settings stay (none of them holds
+        state): the capture then knows them again without looking (``LayerCapture.peel``)."""
+        if self._rules[0] != (max_layers, min_fraction):
+            self._rules = (max_layers, min_fraction), tuple(standard_rules(max_layers, min_fraction))
+        return self._rules[1]
 
     def _pixel_buffer(self, slot: int, tex):
         """Pixel buffer ``slot`` of two (frames alternate), large enough for ``tex``."""

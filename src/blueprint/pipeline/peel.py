@@ -32,6 +32,9 @@ class LayerCapture:
         # plan's id: every frame of a stream asks again
         self._layouts: dict[int, tuple[Plan, Layout]] = {}
         self._lists: dict[int, tuple[Plan, ArrayPlan, tuple[str, ...]]] = {}
+        # the last rules peeled under: whether any looks after every layer, whether only a cap
+        # stops the peel (the executor keeps a frame's standard rules from one frame to the next)
+        self._rules: tuple = (None, False, False)
 
     def capture_parts(self, st: RunState, parts: dict) -> None:
         """The front surface of every set of chosen parts an attribute reads, once a frame,
@@ -83,9 +86,12 @@ class LayerCapture:
         issued and nothing read (the counts None): the caller issues the rest of its frame and
         then reads them (``counted``; ``abuffer.Overflow`` there means the frame must be drawn
         again). An empty layer draws nothing, so drawing to the cap changes no picture."""
+        if rules is not self._rules[0]:
+            self._rules = (rules, any(rule.every_layer for rule in rules), _capped(rules))
+        _, every_layer, capped = self._rules
         eager = self.r.software
-        defer = not eager and not st.attr_dumps and not any(rule.every_layer for rule in rules)
-        blind = blind and defer and _capped(rules)
+        defer = not eager and not st.attr_dumps and not every_layer
+        blind = blind and defer and capped
         if defer:
             try:
                 return self._peel(st, max_layers, rules, eager, defer=True, blind=blind)
