@@ -419,19 +419,26 @@ class Executor:
         if layers <= st.stacked_layers:
             return  # asked again after every layer
         st.stacked_layers = layers
-        pl, pool = st.pl, self.r.pool
+        pl = st.pl
         arrays = st.arrays.arrays if st.arrays else frozenset()
-        for name in arrays:
-            held = st.stacks.setdefault(name, [])
-            size = st.size_of(pl.bound.passes[name].scale)
-            while len(held) * SLICES < layers:
-                held.append(pool.texture(f"pipeline.array.{name}.{len(held)}", size, "r8", SLICES))
+        count = -(-layers // SLICES)
+        if arrays and count > st.stacked_arrays:
+            st.stacked_arrays = count
+            for name in arrays:
+                size = st.size_of(pl.bound.passes[name].scale)
+                st.stacks[name] = self._stack(f"pipeline.array.{name}", size, "r8", count, SLICES)
         for name in pl.stacked - arrays:
             p = pl.bound.passes[name]
-            held = st.stacks.setdefault(name, [])
-            size = st.size_of(p.scale)
-            while len(held) < layers:
-                held.append(pool.texture(f"pipeline.stack.{name}.{len(held)}", size, p.format))
+            st.stacks[name] = self._stack(f"pipeline.stack.{name}", st.size_of(p.scale), p.format, layers, 0)
+
+    def _stack(self, name: str, size, fmt: str, count: int, slices: int) -> list:
+        """``count`` textures (arrays of ``slices`` where > 0) named ``name.K``, kept by the pool
+        as one list (never changed: a run wanting more takes a longer one)."""
+        pool = self.r.pool
+        return pool.held(
+            ("pipeline.stack", name, size, fmt, count, slices),
+            lambda: [pool.texture(f"{name}.{k}", size, fmt, slices) for k in range(count)],
+        )
 
     def _value(self, st: RunState, name: str, layer: int):
         """The texture holding ``name`` for a pass at ``layer``."""

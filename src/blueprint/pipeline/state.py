@@ -143,6 +143,7 @@ class RunState:
     mesh: object = None
     stacks: dict[str, list] = field(default_factory=dict)
     stacked_layers: int = 0  # layers ``stacks`` hold room for
+    stacked_arrays: int = 0  # arrays of ``SLICES`` layers each of ``stacks``' arrays holds
     attr_dumps: dict[str, list] = field(default_factory=dict)
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
