@@ -35,15 +35,16 @@ class TargetPool:
         # name -> ((size, format), texture); a plain tuple: a frame looks up dozens
         self._textures: dict[str, tuple[tuple, object]] = {}
         self._framebuffers: dict[tuple, object] = {}
-        self._buffers: dict[str, object] = {}
+        # name -> (bytes, buffer): a buffer's own size is a call into the driver's wrapper
+        self._buffers: dict[str, tuple[int, object]] = {}
         # objects made of the pool's targets (``held``), dropped with any target
         self._held: dict[tuple, object] = {}
 
     def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
         """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
         ``layers`` > 0 a 2D texture array of that many slices."""
-        key = ((*size, layers) if layers else tuple(size), fmt)
-        held = self._textures.get(name)
+        key = ((*size, layers) if layers else (*size,), fmt)
+        held = self._textures[name] if name in self._textures else None
         if held is not None and held[0] == key:
             return held[1]
         spec = FORMATS.get(fmt) or INTERNAL_FORMATS.get(fmt)
@@ -80,8 +81,8 @@ class TargetPool:
 
     def framebuffer(self, colors: tuple, depth=None):
         """A framebuffer over pool textures, cached while its attachments live."""
-        key = (tuple(id(c) for c in colors), id(depth) if depth is not None else None)
-        fbo = self._framebuffers.get(key)
+        key = (tuple(map(id, colors)), id(depth) if depth is not None else None)
+        fbo = self._framebuffers[key] if key in self._framebuffers else None
         if fbo is None:
             size = (colors[0] if colors else depth).size
             with _allocating(size):
@@ -112,10 +113,10 @@ class TargetPool:
     def buffer(self, name: str, nbytes: int):
         """The storage buffer called ``name`` holding at least ``nbytes``: kept while it is big
         enough, replaced by one of the size asked for when it is not."""
-        held = self._buffers.get(name)
-        if held is not None and held.size >= nbytes:
-            return held
-        if held is not None:
+        if name in self._buffers:
+            size, held = self._buffers[name]
+            if size >= nbytes:
+                return held
             self._held.clear()
             held.release()
             del self._buffers[name]
@@ -125,7 +126,7 @@ class TargetPool:
             raise InputError(
                 f"{name}: {nbytes / 2**20:.0f} MiB of GPU memory could not be allocated (try a smaller size)"
             ) from None
-        self._buffers[name] = buf
+        self._buffers[name] = (buf.size, buf)
         return buf
 
     def _unbind(self, fbo) -> None:
@@ -140,7 +141,7 @@ class TargetPool:
             fbo.release()
         for _, tex in self._textures.values():
             tex.release()
-        for buf in self._buffers.values():
+        for _, buf in self._buffers.values():
             buf.release()
         self._framebuffers.clear()
         self._textures.clear()
