@@ -487,9 +487,9 @@ class Executor:
         if st.camera is None:
             return
         if scalars:
-            put(prog, _camera_scalars(st, size[1]))
+            put(prog, _camera_scalars(st.camera, st.crease, size[1]))
         if matrices:
-            put(prog, _camera_matrices(st))
+            put(prog, _camera_matrices(st.camera))
         if corners and st.mesh is not None:
             st.mesh.bind_corners(prog, units.CORNERS)
 
@@ -729,37 +729,32 @@ class Executor:
         return read_texture(self._target(st, "out", 0), bound.passes["out"].format)[::-1]
 
 
-def _camera_scalars(st: RunState, height: int) -> dict:
-    """The uniforms a pass takes from the run's camera but its matrices, for targets ``height``
-    pixels high (computed once a run and height: a frame runs dozens of passes)."""
-    held = st.camera_uniforms.get(height)
-    if held is None:
-        camera = st.camera
-        half = math.radians(st.crease)
-        held = st.camera_uniforms[height] = {
-            "u_depth_range": depth_range(camera),
-            "u_peel_eps": peel_eps(camera),
-            "u_pixel_angle": camera.pixel_angle(height),
-            # The mesh splits normals across edges past the crease angle, but a pixel beside one
-            # blends its corners' split normals with the smooth ones of the triangles' other
-            # corners, so on small triangles the sides differ by well under the angle: ink from
-            # 40 % of it, full from 70 % (from 50 and 80 %, crease chains broke into dots).
-            "u_normal_cos": (math.cos(0.4 * half), math.cos(0.7 * half)),
-        }
-    return held
+@functools.lru_cache(maxsize=16)
+def _camera_scalars(camera: Camera, crease: float, height: int) -> dict:
+    """The uniforms a pass takes from ``camera`` but its matrices, for targets ``height``
+    pixels high (kept by the camera's value: a frame runs dozens of passes, a stream may
+    draw from one camera again and again)."""
+    half = math.radians(crease)
+    return {
+        "u_depth_range": depth_range(camera),
+        "u_peel_eps": peel_eps(camera),
+        "u_pixel_angle": camera.pixel_angle(height),
+        # The mesh splits normals across edges past the crease angle, but a pixel beside one
+        # blends its corners' split normals with the smooth ones of the triangles' other
+        # corners, so on small triangles the sides differ by well under the angle: ink from
+        # 40 % of it, full from 70 % (from 50 and 80 %, crease chains broke into dots).
+        "u_normal_cos": (math.cos(0.4 * half), math.cos(0.7 * half)),
+    }
 
 
-def _camera_matrices(st: RunState) -> dict:
-    """``u_view`` and ``u_projection`` of the run's camera, once a run (passes that draw no
-    geometry seldom read them)."""
-    held = st.camera_matrices
-    if held is None:
-        camera = st.camera
-        held = st.camera_matrices = {
-            "u_view": camera.view_matrix().T.astype("f4").tobytes(),
-            "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
-        }
-    return held
+@functools.lru_cache(maxsize=16)
+def _camera_matrices(camera: Camera) -> dict:
+    """``u_view`` and ``u_projection`` of ``camera`` (passes that draw no geometry seldom read
+    them)."""
+    return {
+        "u_view": camera.view_matrix().T.astype("f4").tobytes(),
+        "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
+    }
 
 
 def _defines(p) -> dict:

@@ -149,7 +149,5 @@ class RunState:
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
-    camera_uniforms: dict[int, dict] = field(default_factory=dict)  # by target height
-    camera_matrices: dict | None = None
     reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
     draws: int = 0

@@ -6,6 +6,7 @@ parts, and the one peel loop every caller runs, with its stop rules (``blueprint
 from __future__ import annotations
 
 import contextlib
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -95,8 +96,10 @@ def peel_uniforms(prog, camera: Camera) -> None:
     prog["u_peel_eps"].value = peel_eps(camera)
 
 
+@functools.lru_cache(maxsize=16)
 def abuffer_uniforms(camera: Camera) -> dict:
-    """What an A-buffer's geometry pass and resolve take from the camera (``ABuffer``)."""
+    """What an A-buffer's geometry pass and resolve take from the camera (``ABuffer``); kept
+    by the camera's value, as streams may draw from one camera again and again (read only)."""
     return {
         "u_view": camera.view_matrix().T.astype("f4").tobytes(),
         "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
