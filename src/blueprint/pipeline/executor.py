@@ -96,6 +96,9 @@ class Executor:
         # which groups of the frame uniforms (``_frame_uniforms``) each program declares
         self._declared: dict[object, tuple[bool, bool, bool, bool]] = {}
         self._rules: tuple = (None, ())  # (settings, rules): _standard_rules
+        # the sizes of each plan's scales at the last output size it ran at, all checked
+        self._sizes: dict[int, tuple[Plan, tuple[int, int], dict]] = {}
+        self._checked: tuple | None = None  # the last peel settings check_frame_args passed
         self.last_run: RunState | None = None
         self.tiles = Tiles(renderer.ctx)
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
@@ -203,7 +206,9 @@ class Executor:
                     f"{bound.source}: no image called {name!r} (choose {', '.join(bound.images) or 'none'})"
                 )
         w, h = output_size(bound, pl.images, size, images, self.r.max_texture)
-        sizes: dict[float, tuple[int, int]] = {}
+        held = self._sizes.get(id(pl))
+        checked = held is not None and held[0] is pl and held[1] == (w, h)
+        sizes: dict[float, tuple[int, int]] = held[2] if checked else {}
 
         def size_of(scale: float) -> tuple[int, int]:
             if scale not in sizes:
@@ -215,10 +220,13 @@ class Executor:
                     )
             return sizes[scale]
 
-        for scale in {bound.scale_of(n) for n in (*pl.attributes, *pl.images)} | {
-            bound.passes[n].scale for n in pl.passes
-        }:
-            size_of(scale)
+        if not checked:
+            for scale in {bound.scale_of(n) for n in (*pl.attributes, *pl.images)} | {
+                bound.passes[n].scale for n in pl.passes
+            }:
+                size_of(scale)
+            # every scale checked: later runs of the plan at this size need not check again
+            self._sizes[id(pl)] = (pl, (w, h), sizes)
         if max_layers is _UNSET:
             max_layers = bound.layers if bound.layers is not None else 8
             max_layers = max_layers or None
@@ -226,7 +234,9 @@ class Executor:
             max_layers = 1
         min_fraction = bound.min_fraction if min_fraction is None else min_fraction
         crease = bound.crease_angle if crease_angle is None else crease_angle
-        check_frame_args(max_layers, min_fraction, crease, 1.0)
+        if (max_layers, min_fraction, crease) != self._checked:
+            check_frame_args(max_layers, min_fraction, crease, 1.0)
+            self._checked = (max_layers, min_fraction, crease)
         parts = dict(parts or {})
         for name in pl.parts:
             wanted = bound.attributes[name].parts
