@@ -68,7 +68,7 @@ class GBuffer:
     # float targets that hold the layers' depths instead, where the A-buffer captured them
     flat: tuple | None = None
 
-    @property
+    @functools.cached_property
     def size(self) -> tuple[int, int]:
         return tuple(self.depth[0].size)
 
