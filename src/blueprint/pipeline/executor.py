@@ -624,16 +624,21 @@ class Executor:
             p = pl.bound.passes[name]
             prog = self.programs.compute(p.op.compute)
             self.programs.update(prog, p.uniforms)
-            (source,) = (pl.resolve(t) for t in p.inputs.values())
-            (key,) = p.inputs
-            self.programs.set(prog, f"u_{key}", BASE_UNIT)
+            ((key, source),) = p.inputs.items()
+            source = pl.resolve(source)
+            w, h = st.size_of(p.scale)
             for k in range(used):
-                src, dst = st.stacks[source][k], st.stacks[name][k]
-                src.use(BASE_UNIT)
-                self.programs.set(prog, "u_layer", k * SLICES)  # the depth layer of slice 0
-                self.programs.set(prog, "u_slices", min(SLICES, layers - k * SLICES))
-                dst.bind_to_image(1, read=False, write=True)
-                prog.run((dst.size[0] + 7) // 8, (dst.size[1] + 7) // 8)
+                st.stacks[source][k].use(BASE_UNIT)
+                self.programs.update(
+                    prog,
+                    {
+                        f"u_{key}": BASE_UNIT,
+                        "u_layer": k * SLICES,  # the depth layer of slice 0
+                        "u_slices": min(SLICES, layers - k * SLICES),
+                    },
+                )
+                st.stacks[name][k].bind_to_image(1, read=False, write=True)
+                prog.run((w + 7) // 8, (h + 7) // 8)
                 st.draws += 1
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
