@@ -603,15 +603,20 @@ class Executor:
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         self.programs.update(prog, p.uniforms)
-        self.programs.set(prog, "u_back_bias", abuffer.back_bias)
         *cursors, layer_count = abuffer.lists(size)
         layer_count.bind_to_image(4, read=True, write=False)
         for k in range(-(-layers // SLICES)):
             st.stacks[name][k].bind_to_image(1, read=False, write=True)
             cursors[k % 2].bind_to_image(2, read=True, write=False)
             cursors[(k + 1) % 2].bind_to_image(3, read=False, write=True)
-            self.programs.set(prog, "u_first_layer", k * SLICES)
-            self.programs.set(prog, "u_layers", min(SLICES, layers - k * SLICES))
+            self.programs.update(
+                prog,
+                {
+                    "u_back_bias": abuffer.back_bias,
+                    "u_first_layer": k * SLICES,
+                    "u_layers": min(SLICES, layers - k * SLICES),
+                },
+            )
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
