@@ -283,6 +283,7 @@ class Layout:
 
 
 def layout(pl: Plan) -> Layout:
+    """The captures of ``pl``'s frames: one G-buffer a scale of the attributes of every layer."""
     bound = pl.bound
     by_scale: dict[float, list[str]] = {}
     for name in pl.attributes:
