@@ -53,6 +53,34 @@ def set_paper(uniforms, prog, style: Style) -> None:
     uniforms.set(prog, "u_grid", float(style.grid))
 
 
+@functools.lru_cache(maxsize=64)
+def _dispatches(style: Style, layers: int, supersample: int, highlight: bool, shaded: bool) -> tuple:
+    """(overlay, first layer, uniforms) of each dispatch ``Compositor.compute`` runs: the groups
+    of layers back-most first, then the highlight's overlay; kept, as every frame of a stream
+    asks for the same."""
+    common = {
+        "u_paper": tuple(style.paper or (0.0, 0.0, 0.0, 0.0)),
+        "u_grid_color": tuple(style.grid_color),
+        "u_grid": float(style.grid),
+        "u_supersample": supersample,
+        "u_threshold": bool(style.threshold),
+        "u_has_paper": style.paper is not None,
+        "u_edges": LAYER_UNITS,
+    }
+    groups = _groups(layers)
+    out = []
+    for first in groups:
+        count = min(GROUP, layers - first) if layers else 0
+        ink = group_inks(style, first, count)
+        values = {"u_first": first == groups[0], "u_layers": count, "u_ink": ink, "u_shaded": shaded}
+        out.append((False, first, {**common, **values}))
+    if highlight:
+        ink = inks(np.array([style.highlight]), 0, 1)
+        values = {"u_first": False, "u_layers": 1, "u_ink": ink, "u_shaded": False}
+        out.append((True, 0, {**common, **values}))
+    return tuple(out)
+
+
 def _groups(layers: int) -> list[int]:
     """First layers of the groups, back-most first."""
     return list(range(((max(layers, 1) - 1) // GROUP) * GROUP, -1, -GROUP))
@@ -63,6 +91,7 @@ class Compositor:
 
     def __init__(self, r) -> None:
         self.r = r
+        self._compose: dict[bool, object] = {}  # compose.comp without and with OVERLAY
 
     def fragment(
         self,
@@ -137,30 +166,19 @@ class Compositor:
         """Compose the first ``layers`` slices of ``arrays`` (8-slice r8 texture arrays) by
         compute dispatches; returns the dispatches run."""
         r, ctx = self.r, self.r.ctx
-        put = r.uniforms.set
         target.bind_to_image(0, read=True, write=True)
-        groups = _groups(layers)
-        supersample = max(1, arrays[0].size[0] // target.size[0])
-        dispatches = [(arrays[f // GROUP], min(GROUP, layers - f) if layers else 0, f, False) for f in groups]
-        if highlight is not None:
-            dispatches.append((highlight, 1, 0, True))
-        for maps, count, first, overlay in dispatches:
-            prog = r.compute(COMPOSE_COMP, {"OVERLAY": overlay})
-            set_paper(r.uniforms, prog, style)
-            put(prog, "u_supersample", supersample)
-            put(prog, "u_threshold", bool(style.threshold))
-            put(prog, "u_has_paper", style.paper is not None)
-            maps.use(LAYER_UNITS)
-            put(prog, "u_edges", LAYER_UNITS)
-            put(prog, "u_first", first == groups[0] and not overlay)
-            put(prog, "u_layers", count)
-            ink = inks(np.array([style.highlight]), 0, 1) if overlay else group_inks(style, first, count)
-            put(prog, "u_ink", ink)
-            shaded = shading is not None and not overlay
-            put(prog, "u_shaded", shaded)
-            if shaded:
+        w, h = target.size
+        supersample = max(1, arrays[0].size[0] // w)
+        dispatches = _dispatches(style, layers, supersample, highlight is not None, shading is not None)
+        for overlay, first, values in dispatches:
+            prog = self._compose.get(overlay)
+            if prog is None:
+                prog = self._compose[overlay] = r.compute(COMPOSE_COMP, {"OVERLAY": overlay})
+            r.uniforms.update(prog, values)
+            (highlight if overlay else arrays[first // GROUP]).use(LAYER_UNITS)
+            if shading is not None and not overlay:
                 self._bind_shading(prog, shading, first)
-            prog.run((target.size[0] + 7) // 8, (target.size[1] + 7) // 8)
+            prog.run((w + 7) // 8, (h + 7) // 8)
             ctx.memory_barrier(ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
         ctx.memory_barrier(
             ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT

@@ -81,6 +81,9 @@ class Device:
         self.queries = Queries(self.ctx)
         self.uniforms = Uniforms()
         self._programs: dict[tuple, object] = {}
+        # the same programs by their arguments as given, defines in the caller's order: found
+        # without sorting them (a streamed frame looks up a dozen programs)
+        self._given: dict[tuple, object] = {}
         self._fullscreen: dict[int, object] = {}
         self.info = gl_info(self.ctx)
         self.max_texture = int(self.info["max_texture_size"])
@@ -124,6 +127,7 @@ class Device:
         for prog in self._programs.values():
             prog.release()
         self._programs.clear()
+        self._given.clear()
         self.ctx.release()
 
     def program(
@@ -136,11 +140,15 @@ class Device:
     ):
         """A program from shader files, built once; ``modern``: GLSL 4.30 (image load/store);
         ``geometry``: a geometry shader between the two."""
+        given = (vertex, fragment, modern, geometry, *(defines or {}).items())
+        if given in self._given:
+            return self._given[given]
         key = (vertex, fragment, tuple(sorted((defines or {}).items())), modern, geometry)
         prog = self._programs.get(key)
         if prog is None:
             version = COMPUTE_VERSION if modern else VERSION
             prog = self._programs[key] = build_program(self.ctx, vertex, fragment, defines, version, geometry)
+        self._given[given] = prog
         return prog
 
     def _compiles(self, fragment_source: str) -> bool:
@@ -180,10 +188,14 @@ class Device:
         return float(np.abs(a[both] - b[both]).max() / slope)
 
     def compute(self, ref: str, defines=None):
+        given = ("compute", ref, *(defines or {}).items())
+        if given in self._given:
+            return self._given[given]
         key = ("compute", ref, tuple(sorted((defines or {}).items())))
         prog = self._programs.get(key)
         if prog is None:
             prog = self._programs[key] = build_compute(self.ctx, ref, defines)
+        self._given[given] = prog
         return prog
 
     def fullscreen(self, fragment: str, defines=None):

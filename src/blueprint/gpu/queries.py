@@ -12,9 +12,12 @@ class QuerySet:
         self._queries: list = []
 
     def __getitem__(self, index: int):
-        while len(self._queries) <= index:
-            self._queries.append(self.ctx.query(samples=True))
-        return self._queries[index]
+        try:
+            return self._queries[index]  # a peel asks twice a layer
+        except IndexError:
+            while len(self._queries) <= index:
+                self._queries.append(self.ctx.query(samples=True))
+            return self._queries[index]
 
     def release(self) -> None:
         # moderngl queries have no release of their own: they go with their context

@@ -35,13 +35,16 @@ class TargetPool:
         # name -> ((size, format), texture); a plain tuple: a frame looks up dozens
         self._textures: dict[str, tuple[tuple, object]] = {}
         self._framebuffers: dict[tuple, object] = {}
-        self._buffers: dict[str, object] = {}
+        # name -> (bytes, buffer): a buffer's own size is a call into the driver's wrapper
+        self._buffers: dict[str, tuple[int, object]] = {}
+        # objects made of the pool's targets (``held``), dropped with any target
+        self._held: dict[tuple, object] = {}
 
     def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
         """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
         ``layers`` > 0 a 2D texture array of that many slices."""
-        key = ((*size, layers) if layers else tuple(size), fmt)
-        held = self._textures.get(name)
+        key = ((*size, layers) if layers else (*size,), fmt)
+        held = self._textures[name] if name in self._textures else None
         if held is not None and held[0] == key:
             return held[1]
         spec = FORMATS.get(fmt) or INTERNAL_FORMATS.get(fmt)
@@ -78,8 +81,8 @@ class TargetPool:
 
     def framebuffer(self, colors: tuple, depth=None):
         """A framebuffer over pool textures, cached while its attachments live."""
-        key = (tuple(id(c) for c in colors), id(depth) if depth is not None else None)
-        fbo = self._framebuffers.get(key)
+        key = (tuple(map(id, colors)), id(depth) if depth is not None else None)
+        fbo = self._framebuffers[key] if key in self._framebuffers else None
         if fbo is None:
             size = (colors[0] if colors else depth).size
             with _allocating(size):
@@ -88,7 +91,17 @@ class TargetPool:
             return fbo
         return fbo[0]
 
+    def held(self, key: tuple, make):
+        """What ``make()`` returns, kept under ``key`` until the pool drops or replaces any of
+        its targets (a frame's G-buffer: a dozen look-ups a frame otherwise). ``key`` must name
+        everything ``make`` depends on but the pool's targets."""
+        if key in self._held:
+            return self._held[key]
+        value = self._held[key] = make()
+        return value
+
     def _drop(self, name: str) -> None:
+        self._held.clear()
         old = self._textures.pop(name)[1]
         for key, (fbo, colors, depth) in list(self._framebuffers.items()):
             if any(c is old for c in colors) or depth is old:
@@ -100,10 +113,11 @@ class TargetPool:
     def buffer(self, name: str, nbytes: int):
         """The storage buffer called ``name`` holding at least ``nbytes``: kept while it is big
         enough, replaced by one of the size asked for when it is not."""
-        held = self._buffers.get(name)
-        if held is not None and held.size >= nbytes:
-            return held
-        if held is not None:
+        if name in self._buffers:
+            size, held = self._buffers[name]
+            if size >= nbytes:
+                return held
+            self._held.clear()
             held.release()
             del self._buffers[name]
         try:
@@ -112,7 +126,7 @@ class TargetPool:
             raise InputError(
                 f"{name}: {nbytes / 2**20:.0f} MiB of GPU memory could not be allocated (try a smaller size)"
             ) from None
-        self._buffers[name] = buf
+        self._buffers[name] = (buf.size, buf)
         return buf
 
     def _unbind(self, fbo) -> None:
@@ -121,12 +135,13 @@ class TargetPool:
             self.ctx.detect_framebuffer(0).use()
 
     def release(self) -> None:
+        self._held.clear()
         for fbo, _, _ in self._framebuffers.values():
             self._unbind(fbo)
             fbo.release()
         for _, tex in self._textures.values():
             tex.release()
-        for buf in self._buffers.values():
+        for _, buf in self._buffers.values():
             buf.release()
         self._framebuffers.clear()
         self._textures.clear()

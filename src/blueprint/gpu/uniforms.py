@@ -3,31 +3,48 @@ declares it. Every write to a program kept here must go through it, or the cache
 
 from __future__ import annotations
 
+_UNSET = object()
+
 
 class Uniforms:
     def __init__(self) -> None:
-        self._values: dict[tuple[int, str], object] = {}
-        self._members: dict[int, set[str]] = {}
+        # program -> {name of each uniform it declares: the value it last got}; keyed by the
+        # program itself, not its GL name, which a program built after one released may reuse.
+        # Looked up with operators, not dict methods: a streamed frame sets dozens.
+        self._values: dict[object, dict[str, object]] = {}
+
+    def _learn(self, prog) -> dict[str, object]:
+        values = self._values[prog] = dict.fromkeys(prog, _UNSET)
+        return values
 
     def has(self, prog, name: str) -> bool:
-        members = self._members.get(prog.glo)
-        if members is None:
-            members = self._members[prog.glo] = set(prog)
-        return name in members
+        values = self._values[prog] if prog in self._values else self._learn(prog)
+        return name in values
 
     def set(self, prog, name: str, value) -> None:
-        glo = prog.glo
-        members = self._members.get(glo)
-        if members is None:
-            members = self._members[glo] = set(prog)
-        if name not in members:
+        values = self._values[prog] if prog in self._values else self._learn(prog)
+        if name not in values or values[name] == value:
             return
-        key = (glo, name)
-        if self._values.get(key) == value:
-            return
-        self._values[key] = value
+        values[name] = value
         member = prog[name]
         if isinstance(value, bytes):
             member.write(value)
         else:
             member.value = value
+
+    def update(self, prog, values: dict) -> None:
+        """``set`` for each of ``values`` (name -> value) in one call."""
+        held = self._values[prog] if prog in self._values else self._learn(prog)
+        for name, value in values.items():
+            if name not in held or held[name] == value:
+                continue
+            held[name] = value
+            member = prog[name]
+            if isinstance(value, bytes):
+                member.write(value)
+            else:
+                member.value = value
+
+    def forget(self, prog) -> None:
+        """Drop a program about to be released."""
+        self._values.pop(prog, None)

@@ -70,6 +70,11 @@ BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
+# the uniforms every pass may take (see the module's docstring), in the groups that are computed
+# together: of the target and the run, of the camera, the camera's matrices
+_FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
+_CAMERA_SCALARS = ("u_depth_range", "u_peel_eps", "u_pixel_angle", "u_normal_cos")
+_CAMERA_MATRICES = ("u_view", "u_projection")
 _UNSET = object()
 
 
@@ -88,6 +93,12 @@ class Executor:
         self._array_plans: dict[int, tuple[Plan, ArrayPlan | None]] = {}
         self._frame = 0
         self._buffers: dict[int, object] = {}
+        # which groups of the frame uniforms (``_frame_uniforms``) each program declares
+        self._declared: dict[object, tuple[bool, bool, bool, bool]] = {}
+        self._rules: tuple = (None, ())  # (settings, rules): _standard_rules
+        # the sizes of each plan's scales at the last output size it ran at, all checked
+        self._sizes: dict[int, tuple[Plan, tuple[int, int], dict]] = {}
+        self._checked: tuple | None = None  # the last peel settings check_frame_args passed
         self.last_run: RunState | None = None
         self.tiles = Tiles(renderer.ctx)
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
@@ -195,7 +206,9 @@ class Executor:
                     f"{bound.source}: no image called {name!r} (choose {', '.join(bound.images) or 'none'})"
                 )
         w, h = output_size(bound, pl.images, size, images, self.r.max_texture)
-        sizes: dict[float, tuple[int, int]] = {}
+        held = self._sizes.get(id(pl))
+        checked = held is not None and held[0] is pl and held[1] == (w, h)
+        sizes: dict[float, tuple[int, int]] = held[2] if checked else {}
 
         def size_of(scale: float) -> tuple[int, int]:
             if scale not in sizes:
@@ -207,10 +220,13 @@ class Executor:
                     )
             return sizes[scale]
 
-        for scale in {bound.scale_of(n) for n in (*pl.attributes, *pl.images)} | {
-            bound.passes[n].scale for n in pl.passes
-        }:
-            size_of(scale)
+        if not checked:
+            for scale in {bound.scale_of(n) for n in (*pl.attributes, *pl.images)} | {
+                bound.passes[n].scale for n in pl.passes
+            }:
+                size_of(scale)
+            # every scale checked: later runs of the plan at this size need not check again
+            self._sizes[id(pl)] = (pl, (w, h), sizes)
         if max_layers is _UNSET:
             max_layers = bound.layers if bound.layers is not None else 8
             max_layers = max_layers or None
@@ -218,7 +234,9 @@ class Executor:
             max_layers = 1
         min_fraction = bound.min_fraction if min_fraction is None else min_fraction
         crease = bound.crease_angle if crease_angle is None else crease_angle
-        check_frame_args(max_layers, min_fraction, crease, 1.0)
+        if (max_layers, min_fraction, crease) != self._checked:
+            check_frame_args(max_layers, min_fraction, crease, 1.0)
+            self._checked = (max_layers, min_fraction, crease)
         parts = dict(parts or {})
         for name in pl.parts:
             wanted = bound.attributes[name].parts
@@ -268,9 +286,10 @@ class Executor:
             if pl.peel:
                 reveal = self.capture.reveal_rule(st)
                 # depth masking peels as deep as it needs: the cap would stop it short silently
-                rules = standard_rules(None if reveal is not None else max_layers, min_fraction)
-                if reveal is not None:
-                    rules.append(reveal)
+                if reveal is None:
+                    rules = self._standard_rules(max_layers, min_fraction)
+                else:
+                    rules = (*standard_rules(None, min_fraction), reveal)
                 # a frame that reads back its output alone, once a frame, can be issued whole before
                 # its counts are known
                 out = bound.passes.get(pl.output)
@@ -360,6 +379,8 @@ class Executor:
         ``Result.ms`` is a frame's share of the stream: from its start to the next frame's
         (the last one's: to its read-back), so the times add up to the stream's."""
         pending: tuple[Result, float, dict, int] | None = None
+        # bound once: ``options`` hold for every frame (a frame giving variables binds its own)
+        bound = pipeline.bind(options.get("variables")) if isinstance(pipeline, PipelineSpec) else pipeline
 
         def collected(result: Result, arguments: dict, k: int, ms: float) -> Result:
             try:
@@ -372,7 +393,7 @@ class Executor:
         for k, arguments in enumerate(frames):
             start = time.perf_counter()
             result = self.run(
-                pipeline,
+                pipeline if "variables" in arguments else bound,
                 model,
                 **{**options, **arguments},
                 read_later=lambda t, k=k: self._pixel_buffer(k % 2, t),
@@ -386,6 +407,13 @@ class Executor:
             before, began, its_arguments, j = pending
             yield collected(before, its_arguments, j, (time.perf_counter() - began) * 1e3)
 
+    def _standard_rules(self, max_layers: int | None, min_fraction: float) -> tuple:
+        """``standard_rules``, the same tuple while the settings stay (none of them holds
+        state): the capture then knows them again without looking (``LayerCapture.peel``)."""
+        if self._rules[0] != (max_layers, min_fraction):
+            self._rules = (max_layers, min_fraction), tuple(standard_rules(max_layers, min_fraction))
+        return self._rules[1]
+
     def _pixel_buffer(self, slot: int, tex):
         """Pixel buffer ``slot`` of two (frames alternate), large enough for ``tex``."""
         need = texture_bytes(tex)
@@ -398,19 +426,29 @@ class Executor:
 
     # -- targets -------------------------------------------------------------------------------
     def _ensure_stacks(self, st: RunState, layers: int) -> None:
-        pl, pool = st.pl, self.r.pool
+        if layers <= st.stacked_layers:
+            return  # asked again after every layer
+        st.stacked_layers = layers
+        pl = st.pl
         arrays = st.arrays.arrays if st.arrays else frozenset()
-        for name in arrays:
-            held = st.stacks.setdefault(name, [])
-            size = st.size_of(pl.bound.passes[name].scale)
-            while len(held) * SLICES < layers:
-                held.append(pool.texture(f"pipeline.array.{name}.{len(held)}", size, "r8", SLICES))
+        count = -(-layers // SLICES)
+        if arrays and count > st.stacked_arrays:
+            st.stacked_arrays = count
+            for name in arrays:
+                size = st.size_of(pl.bound.passes[name].scale)
+                st.stacks[name] = self._stack(f"pipeline.array.{name}", size, "r8", count, SLICES)
         for name in pl.stacked - arrays:
             p = pl.bound.passes[name]
-            held = st.stacks.setdefault(name, [])
-            size = st.size_of(p.scale)
-            while len(held) < layers:
-                held.append(pool.texture(f"pipeline.stack.{name}.{len(held)}", size, p.format))
+            st.stacks[name] = self._stack(f"pipeline.stack.{name}", st.size_of(p.scale), p.format, layers, 0)
+
+    def _stack(self, name: str, size, fmt: str, count: int, slices: int) -> list:
+        """``count`` textures (arrays of ``slices`` where > 0) named ``name.K``, kept by the pool
+        as one list (never changed: a run wanting more takes a longer one)."""
+        pool = self.r.pool
+        return pool.held(
+            ("pipeline.stack", name, size, fmt, count, slices),
+            lambda: [pool.texture(f"{name}.{k}", size, fmt, slices) for k in range(count)],
+        )
 
     def _value(self, st: RunState, name: str, layer: int):
         """The texture holding ``name`` for a pass at ``layer``."""
@@ -433,18 +471,36 @@ class Executor:
 
     # -- passes --------------------------------------------------------------------------------
     def _frame_uniforms(self, st: RunState, prog, size, layer: int) -> None:
-        w, h = size
-        put = self.programs.set
-        put(prog, "u_texel", (1.0 / w, 1.0 / h))
-        put(prog, "u_size", (float(w), float(h)))
-        put(prog, "u_layer", layer)
-        put(prog, "u_frame", st.frame)
-        put(prog, "u_shade_ink", st.shade_ink)
+        declared = self._declared.get(prog)
+        if declared is None:
+            has = self.programs.has
+            declared = self._declared[prog] = (
+                any(has(prog, name) for name in _FRAME_UNIFORMS),
+                any(has(prog, name) for name in _CAMERA_SCALARS),
+                any(has(prog, name) for name in _CAMERA_MATRICES),
+                has(prog, "u_corners"),
+            )
+        frame, scalars, matrices, corners = declared
+        put = self.programs.update
+        if frame:
+            w, h = size
+            put(
+                prog,
+                {
+                    "u_texel": (1.0 / w, 1.0 / h),
+                    "u_size": (float(w), float(h)),
+                    "u_layer": layer,
+                    "u_frame": st.frame,
+                    "u_shade_ink": st.shade_ink,
+                },
+            )
         if st.camera is None:
             return
-        for name, value in _camera_uniforms(st, h).items():
-            put(prog, name, value)
-        if st.mesh is not None and self.programs.has(prog, "u_corners"):
+        if scalars:
+            put(prog, _camera_scalars(st.camera, st.crease, size[1]))
+        if matrices:
+            put(prog, _camera_matrices(st.camera))
+        if corners and st.mesh is not None:
             st.mesh.bind_corners(prog, units.CORNERS)
 
     def _bind_input(self, prog, key: str, tex, unit: int, size) -> None:
@@ -479,8 +535,7 @@ class Executor:
             vertex = FULLSCREEN if reach is None else TILES_VERT
             prog = self.programs.library(p.op.shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
-        for uniform, value in p.uniforms.items():
-            self.programs.set(prog, uniform, value)
+        self.programs.update(prog, p.uniforms)
         for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, source, layer), unit, size)
         fbo = self.r.pool.framebuffer((target,))
@@ -531,8 +586,7 @@ class Executor:
         array = st.stacks[name][layer // SLICES]
         size = tuple(array.size[:2])
         self._frame_uniforms(st, prog, size, layer)
-        for uniform, value in p.uniforms.items():
-            self.programs.set(prog, uniform, value)
+        self.programs.update(prog, p.uniforms)
         for unit, (key, source) in enumerate(p.inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, st.pl.resolve(source), layer), unit, size)
         self.programs.set(prog, "u_layer", layer % SLICES)
@@ -548,17 +602,21 @@ class Executor:
         prog = self.programs.compute(EDGES_FROM_LISTS)
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
-        for uniform, value in p.uniforms.items():
-            self.programs.set(prog, uniform, value)
-        self.programs.set(prog, "u_back_bias", abuffer.back_bias)
+        self.programs.update(prog, p.uniforms)
         *cursors, layer_count = abuffer.lists(size)
         layer_count.bind_to_image(4, read=True, write=False)
         for k in range(-(-layers // SLICES)):
             st.stacks[name][k].bind_to_image(1, read=False, write=True)
             cursors[k % 2].bind_to_image(2, read=True, write=False)
             cursors[(k + 1) % 2].bind_to_image(3, read=False, write=True)
-            self.programs.set(prog, "u_first_layer", k * SLICES)
-            self.programs.set(prog, "u_layers", min(SLICES, layers - k * SLICES))
+            self.programs.update(
+                prog,
+                {
+                    "u_back_bias": abuffer.back_bias,
+                    "u_first_layer": k * SLICES,
+                    "u_layers": min(SLICES, layers - k * SLICES),
+                },
+            )
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
@@ -570,18 +628,22 @@ class Executor:
         for name in st.arrays.batches:
             p = pl.bound.passes[name]
             prog = self.programs.compute(p.op.compute)
-            for uniform, value in p.uniforms.items():
-                self.programs.set(prog, uniform, value)
-            (source,) = (pl.resolve(t) for t in p.inputs.values())
-            (key,) = p.inputs
-            self.programs.set(prog, f"u_{key}", BASE_UNIT)
+            self.programs.update(prog, p.uniforms)
+            ((key, source),) = p.inputs.items()
+            source = pl.resolve(source)
+            w, h = st.size_of(p.scale)
             for k in range(used):
-                src, dst = st.stacks[source][k], st.stacks[name][k]
-                src.use(BASE_UNIT)
-                self.programs.set(prog, "u_layer", k * SLICES)  # the depth layer of slice 0
-                self.programs.set(prog, "u_slices", min(SLICES, layers - k * SLICES))
-                dst.bind_to_image(1, read=False, write=True)
-                prog.run((dst.size[0] + 7) // 8, (dst.size[1] + 7) // 8)
+                st.stacks[source][k].use(BASE_UNIT)
+                self.programs.update(
+                    prog,
+                    {
+                        f"u_{key}": BASE_UNIT,
+                        "u_layer": k * SLICES,  # the depth layer of slice 0
+                        "u_slices": min(SLICES, layers - k * SLICES),
+                    },
+                )
+                st.stacks[name][k].bind_to_image(1, read=False, write=True)
+                prog.run((w + 7) // 8, (h + 7) // 8)
                 st.draws += 1
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
@@ -687,26 +749,32 @@ class Executor:
         return read_texture(self._target(st, "out", 0), bound.passes["out"].format)[::-1]
 
 
-def _camera_uniforms(st: RunState, height: int) -> dict:
-    """The uniforms a pass takes from the run's camera, for targets ``height`` pixels high
-    (computed once a run and height: a frame runs dozens of passes)."""
-    held = st.camera_uniforms.get(height)
-    if held is None:
-        camera = st.camera
-        half = math.radians(st.crease)
-        held = st.camera_uniforms[height] = {
-            "u_depth_range": depth_range(camera),
-            "u_peel_eps": peel_eps(camera),
-            "u_pixel_angle": camera.pixel_angle(height),
-            # The mesh splits normals across edges past the crease angle, but a pixel beside one
-            # blends its corners' split normals with the smooth ones of the triangles' other
-            # corners, so on small triangles the sides differ by well under the angle: ink from
-            # 40 % of it, full from 70 % (from 50 and 80 %, crease chains broke into dots).
-            "u_normal_cos": (math.cos(0.4 * half), math.cos(0.7 * half)),
-            "u_view": camera.view_matrix().T.astype("f4").tobytes(),
-            "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
-        }
-    return held
+@functools.lru_cache(maxsize=16)
+def _camera_scalars(camera: Camera, crease: float, height: int) -> dict:
+    """The uniforms a pass takes from ``camera`` but its matrices, for targets ``height``
+    pixels high (kept by the camera's value: a frame runs dozens of passes, a stream may
+    draw from one camera again and again)."""
+    half = math.radians(crease)
+    return {
+        "u_depth_range": depth_range(camera),
+        "u_peel_eps": peel_eps(camera),
+        "u_pixel_angle": camera.pixel_angle(height),
+        # The mesh splits normals across edges past the crease angle, but a pixel beside one
+        # blends its corners' split normals with the smooth ones of the triangles' other
+        # corners, so on small triangles the sides differ by well under the angle: ink from
+        # 40 % of it, full from 70 % (from 50 and 80 %, crease chains broke into dots).
+        "u_normal_cos": (math.cos(0.4 * half), math.cos(0.7 * half)),
+    }
+
+
+@functools.lru_cache(maxsize=16)
+def _camera_matrices(camera: Camera) -> dict:
+    """``u_view`` and ``u_projection`` of ``camera`` (passes that draw no geometry seldom read
+    them)."""
+    return {
+        "u_view": camera.view_matrix().T.astype("f4").tobytes(),
+        "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
+    }
 
 
 def _defines(p) -> dict:

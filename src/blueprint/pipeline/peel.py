@@ -4,7 +4,11 @@ executor's per-layer passes after each layer."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from blueprint.gpu import units
+from blueprint.pipeline.arrays import ArrayPlan
+from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import read_texture
 from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
@@ -24,6 +28,13 @@ class LayerCapture:
 
     def __init__(self, ex) -> None:
         self.ex, self.r, self.programs = ex, ex.r, ex.programs
+        # what a plan's captures are (``layout``) and which passes read the lists, by the
+        # plan's id: every frame of a stream asks again
+        self._layouts: dict[int, tuple[Plan, Layout]] = {}
+        self._lists: dict[int, tuple[Plan, ArrayPlan, tuple[str, ...]]] = {}
+        # the last rules peeled under: whether any looks after every layer, whether only a cap
+        # stops the peel (the executor keeps a frame's standard rules from one frame to the next)
+        self._rules: tuple = (None, False, False)
 
     def capture_parts(self, st: RunState, parts: dict) -> None:
         """The front surface of every set of chosen parts an attribute reads, once a frame,
@@ -75,9 +86,12 @@ class LayerCapture:
         issued and nothing read (the counts None): the caller issues the rest of its frame and
         then reads them (``counted``; ``abuffer.Overflow`` there means the frame must be drawn
         again). An empty layer draws nothing, so drawing to the cap changes no picture."""
+        if rules is not self._rules[0]:
+            self._rules = (rules, any(rule.every_layer for rule in rules), _capped(rules))
+        _, every_layer, capped = self._rules
         eager = self.r.software
-        defer = not eager and not st.attr_dumps and not any(rule.every_layer for rule in rules)
-        blind = blind and defer and _capped(rules)
+        defer = not eager and not st.attr_dumps and not every_layer
+        blind = blind and defer and capped
         if defer:
             try:
                 return self._peel(st, max_layers, rules, eager, defer=True, blind=blind)
@@ -92,7 +106,7 @@ class LayerCapture:
         for g in st.groups:
             g.capture.settle()
         g = st.groups[0]
-        counts = [g.capture.samples(k, g.queries[k]) for k in range(drawn)]
+        counts = g.capture.counts(drawn, g.queries)
         layers = min((rule.count(counts) for rule in rules), default=len(counts))
         # as a peel that looks would have stopped: at the first empty layer
         return counts[: layers + 1], layers
@@ -102,27 +116,12 @@ class LayerCapture:
     ) -> tuple[list[int] | None, int]:
         r, ctx, pl = self.r, self.r.ctx, st.pl
         bound = pl.bound
-        by_scale: dict[float, list[str]] = {}
-        for name in pl.attributes:
-            if bound.attributes[name].parts is None:
-                by_scale.setdefault(bound.attributes[name].scale, []).append(name)
-        primary_scale = bound.attributes["depth"].scale if "depth" in pl.attributes else next(iter(by_scale))
-        # normal and ids are left as they were where a layer has no surface; clear them unless
-        # every reader looks at depth first (the edges operation)
-        readers = {
-            (t, bound.passes[n].op.name) for n in pl.passes for t in bound.passes[n].inputs.values()
-        } | {(n, "readback") for n in pl.readback}
-        clear_gb = any(t in ("normal", "ids") and op != "edges" for t, op in readers)
-        for scale, names in sorted(by_scale.items(), key=lambda kv: kv[0] != primary_scale):
-            st.groups.append(
-                Group(r, scale, st.size_of(scale), names, scale == primary_scale, bound, clear_gb)
-            )
+        layout = self._layout(pl)
         groups = st.groups
+        for scale, names, primary in layout.scales:
+            groups.append(Group(r, scale, st.size_of(scale), names, primary, bound, layout.clear_gb))
         st.by_attr = {n: g for g in groups for n in g.names}
         ctx.depth_func = "<"
-        # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of
-        # the raw ID target) need them
-        face_ids = any(g.extra for g in groups) or clear_gb or _id_silhouettes(pl)
         # a software rasteriser looks at every layer's count before its passes run (``eager``),
         # and at where the layer lies, for passes that need only be drawn there (pipeline.tiles)
         tiled = self.ex.tiled and st.arrays is None
@@ -136,18 +135,23 @@ class LayerCapture:
                 st.mesh,
                 st.camera,
                 g.gb,
-                face_ids=face_ids,
+                face_ids=layout.face_ids,
                 batch=max_layers,
                 tiles=tiled and g.primary,
                 defer=defer,
                 unpack=not from_lists,
                 slot=st.slot,
             )
-        extras = self._attribute_programs(st) if any(g.extra for g in groups) else None
+        extras = self._attribute_programs(st) if layout.extra else None
         for name in pl.accumulated:
             r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
 
         listed: list[str] = []
+        # the passes run after each layer: not those over whole arrays after the peel, nor those
+        # read from the lists (known once layer 0 is drawn)
+        batches = st.arrays.batches if st.arrays is not None else ()
+        first = [n for n in pl.iteration0 if n not in batches]
+        later = [n for n in pl.per_layer if n not in batches]
 
         def draw(layer: int, query, guard) -> None:
             self.ex._ensure_stacks(st, layer + 1)
@@ -162,9 +166,11 @@ class LayerCapture:
                     )
                 if g.extra:
                     self._attributes(st, g, layer, extras)
-            if layer == 0 and groups[0].capture.abuffer is not None:
+            if layer == 0 and groups[0].capture.abuffer is not None and from_lists:
                 # (an A-buffer without room in memory peeled instead, unpacking as it goes)
                 listed.extend(from_lists)
+                first[:] = [n for n in first if n not in listed]
+                later[:] = [n for n in later if n not in listed]
             for name, held in st.attr_dumps.items():
                 tex = st.by_attr[name].texture(name, layer)
                 held.append(read_texture(tex, bound.attributes[name].format))
@@ -176,9 +182,8 @@ class LayerCapture:
                     self.ex.tiles.layer_of(primary.capture.tile_layers, layer, primary.size)
                 else:
                     self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
-            for name in pl.iteration0 if layer == 0 else pl.per_layer:
-                if name not in listed:
-                    self.ex._run_pass(st, name, layer, layer + 1)
+            for name in first if layer == 0 else later:
+                self.ex._run_pass(st, name, layer, layer + 1)
 
         samples = groups[0].capture.samples
         if blind:
@@ -200,23 +205,18 @@ class LayerCapture:
         G-buffer, read the renderer's own depth, normal and IDs, draw no triangle-ID
         silhouettes, and no layer is read back or given extra attributes."""
         pl, arrays = st.pl, st.arrays
-        bound = pl.bound
-        if arrays is None or st.attr_dumps or len(st.groups) != 1 or st.groups[0].extra:
+        if arrays is None or st.attr_dumps:
             return ()
-        layered = set(st.groups[0].names)
-        if any(n in layered for n in pl.readback):
-            return ()
-        readers = [
-            n for n in pl.passes if any(pl.resolve(t) in layered for t in bound.passes[n].inputs.values())
-        ]
-        wired = {"depth": "depth", "normal": "normal", "ids": "ids"}
-        for name in readers:
-            p = bound.passes[name]
-            if name not in arrays.slices or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
-                return ()
-            if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
-                return ()
-        return tuple(readers)
+        held = self._lists.get(id(pl))
+        if held is None or held[0] is not pl or held[1] is not arrays:
+            held = self._lists[id(pl)] = (pl, arrays, _lists_readers(pl, arrays, self._layout(pl)))
+        return held[2]
+
+    def _layout(self, pl: Plan) -> Layout:
+        held = self._layouts.get(id(pl))
+        if held is None or held[0] is not pl:
+            held = self._layouts[id(pl)] = (pl, layout(pl))
+        return held[1]
 
     def lists_only(self, st: RunState) -> bool:
         """Whether every capture of the run drew into an A-buffer, whose counts stay readable
@@ -266,6 +266,63 @@ class LayerCapture:
         self.programs.set(draw, "u_layer", layer)
         st.mesh.vao(draw).render()
         st.draws += 2
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The captures a plan's frames make, whatever their camera and size."""
+
+    scales: tuple[tuple[float, tuple[str, ...], bool], ...]  # (scale, attributes, primary), primary first
+    # normal and ids are left as they were where a layer has no surface; cleared unless every
+    # reader looks at depth first (the edges operation)
+    clear_gb: bool
+    extra: bool  # some attribute is the attribute pass's
+    # face IDs cost a software rasteriser dearly; only the extra attributes (and readers of the
+    # raw ID target) need them
+    face_ids: bool
+
+
+def layout(pl: Plan) -> Layout:
+    """The captures of ``pl``'s frames: one G-buffer a scale of the attributes of every layer."""
+    bound = pl.bound
+    by_scale: dict[float, list[str]] = {}
+    for name in pl.attributes:
+        if bound.attributes[name].parts is None:
+            by_scale.setdefault(bound.attributes[name].scale, []).append(name)
+    primary_scale = bound.attributes["depth"].scale if "depth" in pl.attributes else next(iter(by_scale))
+    readers = {(t, bound.passes[n].op.name) for n in pl.passes for t in bound.passes[n].inputs.values()} | {
+        (n, "readback") for n in pl.readback
+    }
+    clear_gb = any(t in ("normal", "ids") and op != "edges" for t, op in readers)
+    extra = any(n in EXTRA for names in by_scale.values() for n in names)
+    return Layout(
+        tuple(
+            (scale, tuple(names), scale == primary_scale)
+            for scale, names in sorted(by_scale.items(), key=lambda kv: kv[0] != primary_scale)
+        ),
+        clear_gb,
+        extra,
+        extra or clear_gb or _id_silhouettes(pl),
+    )
+
+
+def _lists_readers(pl: Plan, arrays: ArrayPlan, lay: Layout) -> tuple[str, ...]:
+    """``LayerCapture._from_lists`` of a plan whose layers no one reads back."""
+    bound = pl.bound
+    if len(lay.scales) != 1 or lay.extra:
+        return ()
+    layered = set(lay.scales[0][1])
+    if any(n in layered for n in pl.readback):
+        return ()
+    readers = [n for n in pl.passes if any(pl.resolve(t) in layered for t in bound.passes[n].inputs.values())]
+    wired = {"depth": "depth", "normal": "normal", "ids": "ids"}
+    for name in readers:
+        p = bound.passes[name]
+        if name not in arrays.slices or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
+            return ()
+        if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
+            return ()
+    return tuple(readers)
 
 
 def _capped(rules) -> bool:

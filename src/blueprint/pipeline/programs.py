@@ -24,12 +24,13 @@ class Programs:
     def __init__(self, r) -> None:
         self.r, self.ctx = r, r.ctx
         # the device's cache itself, not a method of ours around it: a frame sets hundreds
-        self.has, self.set = r.uniforms.has, r.uniforms.set
+        self.has, self.set, self.update = r.uniforms.has, r.uniforms.set, r.uniforms.update
         self._vaos: dict[int, object] = {}
         self._user: dict[tuple, object] = {}
 
     def release(self) -> None:
         for prog in self._user.values():
+            self.r.uniforms.forget(prog)
             prog.release()
         for vao in self._vaos.values():
             vao.release()

@@ -4,7 +4,7 @@ state (made anew each run), and its result."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -14,7 +14,7 @@ from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import PendingRead
 from blueprint.pipeline.spec import Bound
-from blueprint.render.capture import Capture, GBuffer, gbuffer
+from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.renderer import LayerRenderer, straight_alpha
 from blueprint.scene.camera import Camera
 
@@ -74,7 +74,8 @@ class Result:
             changes.update(layer_pixels=counts, layers=layers, layers_left=left, counting=None)
         if self.pending is not None:
             changes.update(output=self.pending.collect(), pending=None)
-        return replace(self, **changes) if changes else self
+        # (``dataclasses.replace`` looks each field up by name: a dozen calls every streamed frame)
+        return Result(**{**self.__dict__, **changes}) if changes else self
 
     @property
     def image(self) -> np.ndarray:
@@ -95,19 +96,27 @@ class Group:
         self, r: LayerRenderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
     ):
         self.scale, self.size, self.names = scale, size, names
-        self.gb: GBuffer = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
         self.queries = r.queries("peel" if primary else f"peel.pipeline.gb{scale:g}")
         self.primary = primary
         self.capture: Capture | None = None
-        self.attr_clear = r.pool.framebuffer((self.gb.normal, self.gb.ids)) if clear_gb else None
         self.extra = [n for n in EXTRA if n in names]
-        self.textures = {}
-        for name in self.extra:
-            fmt = bound.attributes[name].format
-            self.textures[name] = r.pool.texture(f"pipeline.attr{scale:g}.{name}", size, fmt)
-        self.extra_fbo = (
-            r.pool.framebuffer(tuple(self.textures[n] for n in self.extra)) if self.extra else None
-        )
+        formats = tuple(bound.attributes[n].format for n in self.extra) if self.extra else ()
+
+        def targets() -> tuple:
+            gb = gbuffer(r.pool, size, "gb" if primary else f"pipeline.gb{scale:g}")
+            textures = {
+                name: r.pool.texture(f"pipeline.attr{scale:g}.{name}", size, fmt)
+                for name, fmt in zip(self.extra, formats, strict=True)
+            }
+            return (
+                gb,
+                r.pool.framebuffer((gb.normal, gb.ids)) if clear_gb else None,
+                textures,
+                r.pool.framebuffer(tuple(textures[n] for n in self.extra)) if self.extra else None,
+            )
+
+        key = ("pipeline.group", scale, tuple(size), primary, clear_gb, tuple(self.extra), formats)
+        self.gb, self.attr_clear, self.textures, self.extra_fbo = r.pool.held(key, targets)
 
     def texture(self, name: str, layer: int):
         if name == "depth":
@@ -134,10 +143,11 @@ class RunState:
     slot: int = 2  # which buffers read late (Executor.run)
     mesh: object = None
     stacks: dict[str, list] = field(default_factory=dict)
+    stacked_layers: int = 0  # layers ``stacks`` hold room for
+    stacked_arrays: int = 0  # arrays of ``SLICES`` layers each of ``stacks``' arrays holds
     attr_dumps: dict[str, list] = field(default_factory=dict)
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
-    camera_uniforms: dict[int, dict] = field(default_factory=dict)  # by target height
     reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
     draws: int = 0

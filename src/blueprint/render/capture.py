@@ -6,6 +6,7 @@ parts, and the one peel loop every caller runs, with its stop rules (``blueprint
 from __future__ import annotations
 
 import contextlib
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -67,7 +68,7 @@ class GBuffer:
     # float targets that hold the layers' depths instead, where the A-buffer captured them
     flat: tuple | None = None
 
-    @property
+    @functools.cached_property
     def size(self) -> tuple[int, int]:
         return tuple(self.depth[0].size)
 
@@ -95,8 +96,10 @@ def peel_uniforms(prog, camera: Camera) -> None:
     prog["u_peel_eps"].value = peel_eps(camera)
 
 
+@functools.lru_cache(maxsize=16)
 def abuffer_uniforms(camera: Camera) -> dict:
-    """What an A-buffer's geometry pass and resolve take from the camera (``ABuffer``)."""
+    """What an A-buffer's geometry pass and resolve take from the camera (``ABuffer``); kept
+    by the camera's value, as streams may draw from one camera again and again (read only)."""
     return {
         "u_view": camera.view_matrix().T.astype("f4").tobytes(),
         "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
@@ -243,6 +246,13 @@ class Capture:
             return pixels[layer] if layer < len(pixels) else 0
         return query.samples
 
+    def counts(self, layers: int, queries) -> list[int]:
+        """``samples`` of layers 0 to ``layers`` - 1, each counted by its query of ``queries``."""
+        if self.abuffer is not None:
+            pixels = self.abuffer.layer_pixels[:layers]
+            return pixels + [0] * (layers - len(pixels))
+        return [queries[k].samples for k in range(layers)]
+
     @property
     def tile_layers(self) -> np.ndarray | None:
         """The layers of each tile (``abuffer.TILE`` pixels a side, row 0 at the bottom) where
@@ -272,6 +282,8 @@ class Capture:
         issued."""
         gb, ctx = self.gb, self.r.ctx
         if self.abuffer is not None:
+            if layer and not self.abuffer.unpacks:
+                return 0  # every layer was captured at layer 0, and none is unpacked
             drawn = self.abuffer.draw(gb, layer)
             if drawn is not None:
                 gb.flat = self.abuffer.flat(gb.size)
