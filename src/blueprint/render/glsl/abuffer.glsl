@@ -12,12 +12,12 @@ layout(std430, binding = 1) coherent buffer Links {
 layout(std430, binding = 2) coherent buffer Order {
     uint order[];
 };
-// (fragments drawn, nodes held, the most layers of any pixel, pixels whose list was too long
-// to sort in registers)
+// (fragments drawn, nodes held, pixels whose list was too long to sort in registers); the most
+// layers of any pixel comes from Depths, not from an atomic a pixel on one shared word (on
+// llvmpipe that took a fifth of the resolve)
 layout(std430, binding = 3) coherent buffer Totals {
     uint drawn;
     uint capacity;
-    uint deepest;
     uint long_lists;
 };
 // pixels by the number of layers they hold, the last entry for that many or more

@@ -149,7 +149,6 @@ void main() {
         uint layers = chain(p);
         imageStore(u_layer_count, p, uvec4(layers));
         atomicAdd(group_pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
-        atomicMax(deepest, layers);
 #if TILES
         atomicMax(group_deepest, layers);
 #endif
