@@ -78,16 +78,31 @@ float edge_value(ivec2 p) {
         }
         return 0.0;
     }
-    vec3 nc = EDGE_NORMAL(p, -1);
+    // Each kind of sample read for every neighbour before anything is decided: llvmpipe pays
+    // several times over for reads between early returns in a loop.
     ivec2 own = EDGE_IDS(p, -1);
-    int part = own.y;
+    ivec2 ids[4];
+    for (int i = 0; i < 4; ++i) {
+        ids[i] = EDGE_IDS(clamp(p + OFFSETS[i], ivec2(0), last), i);
+    }
+    bool border = false;
+    for (int i = 0; i < 4; ++i) {
+        border = border || !covered[i] || (u_part_edges && ids[i].y != own.y);
+    }
+    if (border) {
+        return 1.0;
+    }
+    vec3 nc = EDGE_NORMAL(p, -1);
+    vec3 n[4];
+    for (int i = 0; i < 4; ++i) {
+        n[i] = EDGE_NORMAL(clamp(p + OFFSETS[i], ivec2(0), last), i);
+    }
 #if ID_SILHOUETTES
     {
         bool loaded = false;
         for (int i = 0; i < 4; ++i) {
-            ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-            int other = EDGE_IDS(q, i).x;
-            if (covered[i] && other != own.x) {
+            int other = ids[i].x;
+            if (other != own.x) {
                 if (!loaded) {
                     load_own(own.x - 1);
                     loaded = true;
@@ -100,16 +115,7 @@ float edge_value(ivec2 p) {
     }
 #endif
     float e = 0.0;
-    vec3 n[4];
     for (int i = 0; i < 4; ++i) {
-        if (!covered[i]) {
-            return 1.0;
-        }
-        ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-        if (u_part_edges && EDGE_IDS(q, i).y != part) {
-            return 1.0;
-        }
-        n[i] = EDGE_NORMAL(q, i);
         e = max(e, crease(nc, n[i]));
     }
     // Window depth is affine in screen space on any plane, perspective or not, so its second
