@@ -32,13 +32,11 @@ NODE_BYTES = 24
 FIRST_ROOM = 4
 # a quarter of the GPU's memory where the driver tells it, else this
 DEFAULT_MAX_BYTES = 1 << 30
-# pixels along a side of the tiles whose layers the resolve counts, for a software rasteriser
-# to unpack and draw each layer only where it has pixels (blueprint.pipeline.tiles)
+# pixels along a side of the tiles whose layers are counted, for a software rasteriser to unpack
+# and draw each layer only where it has pixels (blueprint.pipeline.tiles)
 TILE = 16
 # groups of 8 x 8 a row of a tiled unpack's dispatch (abuffer_unpack.comp)
 ROW = 32768
-# the storage block of the tiles' layers (abuffer_resolve.comp)
-TILE_BINDING = 6
 
 
 class Overflow(Exception):
@@ -50,9 +48,9 @@ class ABuffer:
     layer 0 captures and sorts every layer, then unpacks layer 0; at each later layer it
     unpacks that layer. ``uniforms`` are the camera's: ``u_view``, ``u_projection`` (bytes),
     ``u_ortho``, ``u_depth_range``, ``u_peel_eps``; ``back_bias`` the peel's for back faces.
-    With ``tiles`` the resolve also counts the most layers a pixel of each ``TILE`` x ``TILE``
-    tile has (``tile_layers``, read back with the counts) and each layer is unpacked only in
-    the tiles that have it: what a software rasteriser wants, where reading back is cheap and
+    With ``tiles`` the counts come from each pixel's layers read back, with the most layers a
+    pixel of each ``TILE`` x ``TILE`` tile has (``tile_layers``), and each layer is unpacked only
+    in the tiles that have it: what a software rasteriser wants, where reading back is cheap and
     every pixel a pass touches costs. With ``defer`` the counts are read when first asked for
     (``layer_pixels``, ``deepest``): every layer is unpacked until then, an unpack past a
     pixel's last layer clearing it as an empty layer's would, and a capture that had too little
@@ -75,8 +73,8 @@ class ABuffer:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
         self.geometry = geometry_program(r, ABUFFER_FRAG, modern=True)
-        defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
-        self.resolve = r.compute(RESOLVE_COMP, defines)
+        # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
+        self.resolve = r.compute(RESOLVE_COMP, {"COUNTED_AFTER": 1} if tiles else {})
         put = r.uniforms.set  # a stream's frames change only the camera's
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),
@@ -194,10 +192,6 @@ class ABuffer:
         cursor = pool.texture(f"{name}.cursor", size, "r32ui")
         layer_count = pool.texture(f"{name}.layer_count", size, "r32ui")
         groups = (-(-size[0] // 8), -(-size[1] // 8))
-        columns, rows = -(-size[0] // TILE), -(-size[1] // TILE)
-        tile_bytes = 4 * columns * rows if self.tiles else 0
-        if self.tiles:
-            tiles = pool.buffer(f"{name}.tile_layers", tile_bytes)
         calls = 0
         while True:
             room = self._room(size)
@@ -215,21 +209,16 @@ class ABuffer:
             head.bind_to_image(0, read=True, write=False)
             cursor.bind_to_image(1, read=False, write=True)
             layer_count.bind_to_image(2, read=False, write=True)
-            if self.tiles:
-                tiles.clear()
-                tiles.bind_to_storage_buffer(TILE_BINDING)
-                self.resolve["u_tile_columns"].value = columns
             self.resolve.run(*groups)
             ctx.memory_barrier()
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
             # moved where the GPU's atomics on it are slow
-            nbytes = totals.size + depths.size + tile_bytes
+            nbytes = totals.size + (0 if self.tiles else depths.size)
             seen = pool.buffer(f"{name}.seen{self.slot}", nbytes)
             ctx.copy_buffer(seen, totals, totals.size)
-            ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
-            if self.tiles:
-                ctx.copy_buffer(seen, tiles, tile_bytes, write_offset=totals.size + depths.size)
+            if not self.tiles:
+                ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
             if self.defer:
                 self._unread = (seen.read, nbytes, room, size, name)
                 return calls
@@ -258,14 +247,23 @@ class ABuffer:
             if self.defer:
                 raise Overflow(f"{drawn} fragments, room for {room}")
             return False
+        histogram = self._count_pixels(name, size) if self.tiles else counts[4 : 4 + MOST_LAYERS + 1]
         # pixels with at least k + 1 layers are those layer k covers
-        histogram = counts[4 : 4 + MOST_LAYERS + 1]
         covered = np.cumsum(histogram[::-1])[::-1][1:]
         self._layer_pixels = covered[covered > 0].tolist()
-        if self.tiles:
-            rows, columns = -(-size[1] // TILE), -(-size[0] // TILE)
-            self._list_tiles(name, counts[4 + MOST_LAYERS + 1 :].reshape(rows, columns))
         return True
+
+    def _count_pixels(self, name: str, size: tuple[int, int]) -> np.ndarray:
+        """The histogram of the pixels' layers (the last entry: ``MOST_LAYERS`` or more) from
+        each pixel's layers read back, and the tiles' layers listed: what the resolve counts on
+        a GPU, at a copy's cost where the GPU is the CPU."""
+        layers = np.empty(size[::-1], np.uint32)
+        self.r.pool.texture(f"{name}.layer_count", size, "r32ui").read_into(layers)
+        histogram = np.bincount(np.minimum(layers, MOST_LAYERS).ravel(), minlength=MOST_LAYERS + 1)
+        starts = np.arange(0, size[1], TILE), np.arange(0, size[0], TILE)
+        rows = np.maximum.reduceat(layers, starts[0], axis=0)
+        self._list_tiles(name, np.maximum.reduceat(rows, starts[1], axis=1))
+        return histogram
 
     def _list_tiles(self, name: str, layers: np.ndarray) -> None:
         """Keep the tiles' layers and upload the tiles that have any, most layers first, so that

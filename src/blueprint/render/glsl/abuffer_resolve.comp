@@ -18,20 +18,8 @@ layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 // each pixel's layers: whether a layer covers a pixel, for passes that walk only some chains
 layout(binding = 2, r32ui) writeonly uniform uimage2D u_layer_count;
-#if TILES
-// the most layers a pixel of each tile of TILES x TILES pixels has, rows of u_tile_columns
-// from the bottom: where a software rasteriser's passes have work at each layer
-// (blueprint.pipeline.tiles); read back with the counts
-layout(std430, binding = TILE_BINDING) coherent buffer TileLayers {
-    uint tile_layers[];
-};
-uniform int u_tile_columns;
-shared uint group_deepest;
-#endif
 uniform float u_back_bias;
 uniform float u_peel_eps;
-
-shared uint group_pixels_with[MOST_LAYERS + 1];
 
 // the depth the depth buffer holds for a fragment: 24-bit fixed point
 uint held_depth(uvec4 s) {
@@ -132,37 +120,37 @@ uint chain(ivec2 p) {
     return layers;
 }
 
+#if COUNTED_AFTER
+// The counts are left to the caller, which reads u_layer_count back (a software rasteriser,
+// where that costs a copy): the group's histogram took a third of the resolve on llvmpipe (its
+// barriers and shared atomics).
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (all(lessThan(p, imageSize(u_head)))) {
+        imageStore(u_layer_count, p, uvec4(chain(p)));
+    }
+}
+#else
+shared uint group_pixels_with[MOST_LAYERS + 1];
+
 void main() {
     // the histogram of layers a pixel, counted in the group first: one global atomic a group
     // and count instead of one a pixel
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
         group_pixels_with[i] = 0u;
     }
-#if TILES
-    if (gl_LocalInvocationIndex == 0u) {
-        group_deepest = 0u;
-    }
-#endif
     barrier();
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (all(lessThan(p, imageSize(u_head)))) {
         uint layers = chain(p);
         imageStore(u_layer_count, p, uvec4(layers));
         atomicAdd(group_pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
-#if TILES
-        atomicMax(group_deepest, layers);
-#endif
     }
     barrier();
-#if TILES
-    if (gl_LocalInvocationIndex == 0u && group_deepest > 0u) {
-        ivec2 tile = ivec2(gl_WorkGroupID.xy) / (TILES / 8);
-        atomicMax(tile_layers[tile.y * u_tile_columns + tile.x], group_deepest);
-    }
-#endif
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
         if (i > 0u && group_pixels_with[i] > 0u) {
             atomicAdd(pixels_with[i], group_pixels_with[i]);
         }
     }
 }
+#endif
