@@ -545,7 +545,7 @@ class Executor:
         ``abuffer``'s sorted lists: a dispatch an array of ``SLICES`` layers, each pixel's chain
         carried from one to the next in a pair of cursor images."""
         p = st.pl.bound.passes[name]
-        prog = self.programs.compute(EDGES_FROM_LISTS)
+        prog = self.programs.compute(EDGES_FROM_LISTS, abuffer.defines)
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         for uniform, value in p.uniforms.items():

@@ -37,6 +37,16 @@ DEFAULT_MAX_BYTES = 1 << 30
 TILE = 16
 # groups of 8 x 8 a row of a tiled unpack's dispatch (abuffer_unpack.comp)
 ROW = 32768
+# entries a row of the images that hold the lists on a software rasteriser (abuffer.glsl)
+AB_ROW = 4096
+# the image units of the lists there (nodes, links, order; abuffer.glsl)
+LIST_UNITS = (5, 6, 7)
+
+
+def list_defines(r) -> dict:
+    """The defines of a program that reads or writes the lists on renderer ``r`` (abuffer.glsl):
+    images on a software rasteriser, storage buffers elsewhere."""
+    return {"AB_IMAGES": 1} if r.software else {}
 
 
 class Overflow(Exception):
@@ -56,7 +66,9 @@ class ABuffer:
     pixel's last layer clearing it as an empty layer's would, and a capture that had too little
     room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
     the sorted lists themselves (``lists``). The counts come back through a buffer of their own
-    for each ``slot``: frames that stream read one frame's counts after the next is issued."""
+    for each ``slot``: frames that stream read one frame's counts after the next is issued.
+    On a software rasteriser the lists live in images, not storage buffers (abuffer.glsl):
+    programs that read them take ``defines``."""
 
     def __init__(
         self,
@@ -72,9 +84,11 @@ class ABuffer:
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
-        self.geometry = geometry_program(r, ABUFFER_FRAG, modern=True)
+        self.images = r.software
+        self.defines = list_defines(r)
+        self.geometry = geometry_program(r, ABUFFER_FRAG, self.defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
-        self.resolve = r.compute(RESOLVE_COMP, {"COUNTED_AFTER": 1} if tiles else {})
+        self.resolve = r.compute(RESOLVE_COMP, {**self.defines, "COUNTED_AFTER": 1} if tiles else self.defines)
         put = r.uniforms.set  # a stream's frames change only the camera's
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),
@@ -83,17 +97,19 @@ class ABuffer:
             for name in names:
                 put(prog, name, uniforms[name])
         self.clear = r.compute(CLEAR_COMP)
-        self.unpack = r.compute(UNPACK_COMP, {"TILES": TILE, "ROW": ROW} if tiles else {})
+        self.unpack = r.compute(UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines)
         for prog in (self.resolve, self.unpack):
             put(prog, "u_back_bias", back_bias)
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
+        self._rooms: dict[str, int] = {}  # the room of the last capture, by its lists' name
         self.tiles, self.defer = tiles, defer and not tiles
         # (counts buffer, room) of a capture whose counts are not read yet
         self._unread: tuple | None = None
         # (rows, columns) of tiles, row 0 at the bottom: the layers of each, once layer 0 is drawn
         self.tile_layers: np.ndarray | None = None
         self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
+        self._tile_list = None  # the image of the tiles with any layer, most layers first
 
     @property
     def layer_pixels(self) -> list[int]:
@@ -113,7 +129,12 @@ class ABuffer:
 
     def fits(self, size: tuple[int, int]) -> bool:
         """Whether a frame of ``size`` with the fragments of the last one there would fit."""
-        return self._room(size) * NODE_BYTES <= self.max_bytes
+        return self._holds(self._room(size))
+
+    def _holds(self, room: int) -> bool:
+        """Whether lists of ``room`` fragments fit ``max_bytes`` (and the images' rows)."""
+        rows = -(-room // AB_ROW)
+        return room * NODE_BYTES <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
     def _room(self, size: tuple[int, int]) -> int:
         held = self.r.abuffer_room.get(tuple(size))
@@ -149,7 +170,7 @@ class ABuffer:
         layers."""
         name = f"abuffer.{size[0]}x{size[1]}"
         self.r.ctx.memory_barrier()
-        self._buffers(name, 1)
+        self._buffers(name)
         pool = self.r.pool
         return (
             pool.texture(f"{name}.cursor", size, "r32ui"),
@@ -167,18 +188,22 @@ class ABuffer:
             )
         return held
 
-    def _buffers(self, name: str, room: int) -> tuple:
-        """(nodes, links, order, totals, depths) with room for ``room`` fragments, bound to their
-        storage blocks (abuffer.glsl)."""
+    def _buffers(self, name: str, room: int | None = None) -> tuple:
+        """(totals, depths) bound to their storage blocks, and the lists with room for ``room``
+        fragments (None: as the last capture had) bound to theirs or their image units
+        (abuffer.glsl)."""
         pool = self.r.pool
-        held = (
-            pool.buffer(f"{name}.nodes", 16 * room),
-            pool.buffer(f"{name}.links", 4 * room),
-            pool.buffer(f"{name}.order", 4 * room),
-            pool.buffer(f"{name}.totals", 16),
-            pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1)),
-        )
-        for binding, buf in enumerate(held):
+        room = self._rooms[name] if room is None else room
+        self._rooms[name] = room
+        if self.images:
+            size = (AB_ROW, -(-room // AB_ROW))
+            for unit, (part, fmt) in zip(LIST_UNITS, (("nodes", "rgba32ui"), ("links", "r32ui"), ("order", "r32ui"))):
+                pool.texture(f"{name}.{part}", size, fmt).bind_to_image(unit, read=True, write=True)
+        else:
+            for binding, (part, nbytes) in enumerate((("nodes", 16), ("links", 4), ("order", 4))):
+                pool.buffer(f"{name}.{part}", nbytes * room).bind_to_storage_buffer(binding)
+        held = pool.buffer(f"{name}.totals", 16), pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1))
+        for binding, buf in enumerate(held, 3):
             buf.bind_to_storage_buffer(binding)
         return held
 
@@ -195,9 +220,9 @@ class ABuffer:
         calls = 0
         while True:
             room = self._room(size)
-            if room * NODE_BYTES > self.max_bytes:
+            if not self._holds(room):
                 return None
-            totals, depths = self._buffers(name, room)[3:]
+            totals, depths = self._buffers(name, room)
             head.bind_to_image(0, read=True, write=True)
             self.clear["u_capacity"].value = room
             self.clear.run(*groups)
@@ -274,10 +299,11 @@ class ABuffer:
         order = order[flat[order] > 0]
         self._deepest_first = flat[order]
         rows, columns = np.divmod(order, layers.shape[1])
-        packed = (columns | (rows << 16)).astype(np.uint32)
-        listed = self.r.pool.buffer(f"{name}.tile_list", max(packed.nbytes, 4))
-        if packed.nbytes:
-            listed.write(packed)
+        # an image, AB_ROW entries a row (abuffer_unpack.comp): the list is read once a pixel
+        packed = np.zeros(max(1, -(-len(order) // AB_ROW)) * AB_ROW, np.uint32)
+        packed[: len(order)] = columns | (rows << 16)
+        self._tile_list = self.r.pool.texture(f"{name}.tile_list", (AB_ROW, len(packed) // AB_ROW), "r32ui")
+        self._tile_list.write(packed)
 
     def _unpack(self, gb, name: str, layer: int) -> None:
         """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""
@@ -285,7 +311,7 @@ class ABuffer:
         # the layer before's passes may still be reading the normal and ID targets this
         # overwrites (a GPU runs dispatches side by side; llvmpipe one after another)
         ctx.memory_barrier()
-        self._buffers(name, 1)
+        self._buffers(name)
         pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=True, write=True)
         depth = self.flat(size)[layer % 2]
         depth.bind_to_image(2, read=False, write=True)
@@ -301,7 +327,7 @@ class ABuffer:
         tiles = int(np.count_nonzero(self._deepest_first > layer))
         groups = tiles * (TILE // 8) ** 2
         if groups:
-            pool.buffer(f"{name}.tile_list", 4).bind_to_storage_buffer(5)
+            self._tile_list.bind_to_image(0, read=True, write=False)
             self.unpack["u_groups"].value = groups
             self.unpack.run(min(groups, ROW), -(-groups // ROW))
         ctx.memory_barrier()

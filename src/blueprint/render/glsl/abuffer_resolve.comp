@@ -4,7 +4,7 @@
 // after it lying more than u_peel_eps (eye depth) behind it. Its own depth is kept whole, not
 // rounded to the depth buffer's steps: a rounding that differs from the driver's by a step here
 // and there is noise to the edges' second differences of depth. The layers are
-// chained in order[] from u_cursor (node + 1; 0 ends the chain).
+// chained through AB_ORDER from u_cursor (node + 1; 0 ends the chain).
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "depth.glsl"
@@ -45,7 +45,7 @@ uint chain(ivec2 p) {
     uint at = imageLoad(u_head, p).x;
     uint head = at;
     while (at != 0u && n < SORTED) {
-        uvec4 s = nodes[at - 1u];
+        uvec4 s = AB_NODE(at - 1u);
         uint k = held_depth(s);
         // insertion in order
         uint i = n;
@@ -59,7 +59,7 @@ uint chain(ivec2 p) {
         key[i] = k;
         face[i] = s.w;
         ++n;
-        at = links[at - 1u];
+        at = AB_LINK(at - 1u);
     }
     uint layers = 0u;
     uint first = 0u;
@@ -67,14 +67,14 @@ uint chain(ivec2 p) {
     if (at == 0u) {
         float behind = -1.0 / 0.0;
         for (uint i = 0u; i < n; ++i) {
-            uvec4 s = nodes[node[i] - 1u];
+            uvec4 s = AB_NODE(node[i] - 1u);
             if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                 continue;
             }
             if (last == 0u) {
                 first = node[i];
             } else {
-                order[last - 1u] = node[i];
+                AB_SET_ORDER(last - 1u, node[i]);
             }
             last = node[i];
             behind = next_after(s);
@@ -88,8 +88,8 @@ uint chain(ivec2 p) {
             uint best = 0u;
             uint best_key = 0xffffffffu;
             uint best_face = 0xffffffffu;
-            for (uint a = head; a != 0u; a = links[a - 1u]) {
-                uvec4 s = nodes[a - 1u];
+            for (uint a = head; a != 0u; a = AB_LINK(a - 1u)) {
+                uvec4 s = AB_NODE(a - 1u);
                 if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                     continue;
                 }
@@ -106,15 +106,15 @@ uint chain(ivec2 p) {
             if (last == 0u) {
                 first = best;
             } else {
-                order[last - 1u] = best;
+                AB_SET_ORDER(last - 1u, best);
             }
             last = best;
-            behind = next_after(nodes[best - 1u]);
+            behind = next_after(AB_NODE(best - 1u));
             ++layers;
         }
     }
     if (last != 0u) {
-        order[last - 1u] = 0u;
+        AB_SET_ORDER(last - 1u, 0u);
     }
     imageStore(u_cursor, p, uvec4(first));
     return layers;
