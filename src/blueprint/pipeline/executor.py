@@ -536,6 +536,7 @@ class Executor:
         for unit, (key, source) in enumerate(p.inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, st.pl.resolve(source), layer), unit, size)
         self.programs.set(prog, "u_layer", layer % SLICES)
+        self.programs.set(prog, "u_first_layer", layer - layer % SLICES)
         array.bind_to_image(1, read=False, write=True)
         prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
         st.draws += 1

@@ -25,6 +25,9 @@ uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos w
 uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
 uniform float u_pixel_angle;     // pixel footprint per unit depth (perspective) or per pixel (ortho)
 uniform bool u_part_edges;
+// Ink of depth layers >= 1 over layer 0's: hidden lines narrower than the edges' own width keep
+// that share of their ink (_widths.glsl), taken here where no pass widens the lines after.
+uniform float u_hidden_ink;
 // Triangle-ID silhouettes as one more edge source: compiled in only where asked for (the
 // ID_SILHOUETTES define), since a software rasteriser pays for the dead branch on every pixel.
 
@@ -145,4 +148,9 @@ float edge_value(ivec2 p) {
         }
     }
     return max(e, outline);
+}
+
+// edge_value in the ink of depth layer ``layer``
+float layer_edge_value(ivec2 p, int layer) {
+    return edge_value(p) * (layer > 0 ? u_hidden_ink : 1.0);
 }

@@ -67,7 +67,7 @@ void main() {
         for (int r = 0; r < 8; ++r) {
             ring_covered[r] = ring[r] > uint(u_first_layer + layer);
         }
-        imageStore(u_out, ivec3(p, layer), vec4(edge_value(p)));
+        imageStore(u_out, ivec3(p, layer), vec4(layer_edge_value(p, u_first_layer + layer)));
     }
     imageStore(u_next, p, uvec4(at[0]));
 }
