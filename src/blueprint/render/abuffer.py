@@ -88,7 +88,9 @@ class ABuffer:
         self.defines = list_defines(r)
         self.geometry = geometry_program(r, ABUFFER_FRAG, self.defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
-        self.resolve = r.compute(RESOLVE_COMP, {**self.defines, "COUNTED_AFTER": 1} if tiles else self.defines)
+        self.resolve = r.compute(
+            RESOLVE_COMP, {**self.defines, "COUNTED_AFTER": 1} if tiles else self.defines
+        )
         put = r.uniforms.set  # a stream's frames change only the camera's
         for prog, names in (
             (self.geometry, ("u_view", "u_projection", "u_ortho")),
@@ -97,7 +99,9 @@ class ABuffer:
             for name in names:
                 put(prog, name, uniforms[name])
         self.clear = r.compute(CLEAR_COMP)
-        self.unpack = r.compute(UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines)
+        self.unpack = r.compute(
+            UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
+        )
         for prog in (self.resolve, self.unpack):
             put(prog, "u_back_bias", back_bias)
         self._layer_pixels: list[int] = []
@@ -197,7 +201,8 @@ class ABuffer:
         self._rooms[name] = room
         if self.images:
             size = (AB_ROW, -(-room // AB_ROW))
-            for unit, (part, fmt) in zip(LIST_UNITS, (("nodes", "rgba32ui"), ("links", "r32ui"), ("order", "r32ui"))):
+            parts = (("nodes", "rgba32ui"), ("links", "r32ui"), ("order", "r32ui"))
+            for unit, (part, fmt) in zip(LIST_UNITS, parts, strict=True):
                 pool.texture(f"{name}.{part}", size, fmt).bind_to_image(unit, read=True, write=True)
         else:
             for binding, (part, nbytes) in enumerate((("nodes", 16), ("links", 4), ("order", 4))):
