@@ -25,7 +25,7 @@ import numpy as np
 
 from blueprint import Renderer, load_model
 from blueprint.gpu.shaders import build_compute
-from blueprint.render.abuffer import ABuffer
+from blueprint.render.abuffer import ABuffer, list_defines
 from blueprint.render.capture import BACK_OFFSET, abuffer_uniforms, gbuffer
 from blueprint.scene.camera import fit_camera
 
@@ -38,7 +38,7 @@ class ComputeRaster:
 
     def __init__(self, r) -> None:
         self.r = r
-        self.stages = [build_compute(r.ctx, SHADER, {"STAGE": k}) for k in range(4)]
+        self.stages = [build_compute(r.ctx, SHADER, {"STAGE": k, **list_defines(r)}) for k in range(4)]
         # triangle-tile pairs the bins hold: the most a frame listed so far (a frame that lists
         # more loses triangles: ``binned`` tells)
         self.bin_room = 0

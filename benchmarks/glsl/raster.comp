@@ -254,8 +254,8 @@ void main() {
                     n = -n;
                 }
                 int part = floatBitsToInt(vertices[7u * v0 + 6u]);
-                nodes[node] = kb_pack(z, !front, n, face, part);
-                links[node] = head;
+                AB_SET_NODE(node, kb_pack(z, !front, n, face, part));
+                AB_SET_LINK(node, head);
                 head = node + 1u;
             }
             node += 1u;

@@ -374,17 +374,21 @@ def test_presets_are_valid():
 
 
 def test_blueprint_plan_is_per_layer_edges_then_composite():
-    pl = plan(load_pipeline("blueprint").bind())
-    # at line width 1 visible lines keep the edges' width and hidden ones are narrowed to half
-    assert pl.per_layer == ["edges", "lines"] and pl.after == ["drawing"] and pl.stacked == {"lines"}
-    assert pl.bound.passes["lines"].uniforms == {"u_radius": 0.0, "u_hidden_width": 0.5}
-    # hidden lines as wide as visible ones at line width 1: nothing to dilate
-    pl = plan(load_pipeline("blueprint").bind({"hidden_width": 1.0}))
-    assert pl.per_layer == ["edges"] and pl.stacked == {"edges"}
-    assert pl.aliases == {"lines": "edges"}
+    # at line width 1 visible lines keep the edges' width and hidden ones, half as wide, keep
+    # half the ink: the edges pass takes that share, and there is nothing to dilate
+    for variables in ({}, {"hidden_width": 1.0}):
+        pl = plan(load_pipeline("blueprint").bind(variables))
+        assert pl.per_layer == ["edges"] and pl.after == ["drawing"] and pl.stacked == {"edges"}
+        assert pl.aliases == {"lines": "edges"}
+        assert pl.bound.passes["edges"].uniforms["u_hidden_ink"] == variables.get("hidden_width", 0.5)
     pl = plan(load_pipeline("blueprint").bind({"line_width": 2.0}))
     assert pl.per_layer == ["edges", "lines"] and pl.stacked == {"lines"}
     assert pl.bound.passes["lines"].uniforms == {"u_radius": 1.0, "u_hidden_width": 0.5}
+    assert pl.bound.passes["edges"].uniforms["u_hidden_ink"] == 1.0
+    # hidden lines a third of visible ones 2 wide (4 supersampled): narrower than the edges
+    pl = plan(load_pipeline("blueprint").bind({"line_width": 2.0, "hidden_width": 1 / 3}))
+    assert pl.bound.passes["lines"].uniforms["u_hidden_width"] == 0.5
+    assert abs(pl.bound.passes["edges"].uniforms["u_hidden_ink"] - 2 / 3) < 1e-12
 
 
 def test_blueprint_highlight_shade_and_reveal_are_passes_of_the_preset():
@@ -395,7 +399,7 @@ def test_blueprint_highlight_shade_and_reveal_are_passes_of_the_preset():
     pl = plan(bound)
     assert pl.parts == ["highlight_depth", "highlight_ids", "highlight_normal", "shade_depth", "shade_normal"]
     assert [(s.rule, s.depth, s.fraction) for s in bound.stops] == [("reveal", "highlight_depth", 0.9)]
-    assert pl.per_layer == ["edges", "lines", "shade_layers"] and pl.accumulated == ["shade_layers"]
+    assert pl.per_layer == ["edges", "shade_layers"] and pl.accumulated == ["shade_layers"]
     assert pl.slots["shade_layers"].space == "A" and "shade_layers" not in pl.stacked
     assert set(pl.iteration0) >= {"highlight_edges", "shading"} and pl.after == ["drawing"]
     drawing = bound.passes["drawing"].inputs

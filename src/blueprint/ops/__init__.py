@@ -103,6 +103,9 @@ EDGES = Op(
             False,
             doc="also mark neighbours whose triangles share no vertex (paper 002); needs face IDs",
         ),
+        Param(
+            "hidden_ink", 1.0, 0.0, 1.0, "ink of the lines of layers >= 1 of a per-layer pass over layer 0's"
+        ),
     ),
     doc="edge intensity from coverage, part-ID, normal and depth discontinuities",
     compute="blueprint.ops:glsl/edges.comp",

@@ -590,6 +590,7 @@ class Executor:
         for unit, (key, source) in enumerate(p.inputs.items(), BASE_UNIT):
             self._bind_input(prog, key, self._value(st, st.pl.resolve(source), layer), unit, size)
         self.programs.set(prog, "u_layer", layer % SLICES)
+        self.programs.set(prog, "u_first_layer", layer - layer % SLICES)
         array.bind_to_image(1, read=False, write=True)
         prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
         st.draws += 1
@@ -599,7 +600,7 @@ class Executor:
         ``abuffer``'s sorted lists: a dispatch an array of ``SLICES`` layers, each pixel's chain
         carried from one to the next in a pair of cursor images."""
         p = st.pl.bound.passes[name]
-        prog = self.programs.compute(EDGES_FROM_LISTS)
+        prog = self.programs.compute(EDGES_FROM_LISTS, abuffer.defines)
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         self.programs.update(prog, p.uniforms)

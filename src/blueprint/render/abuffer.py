@@ -37,13 +37,21 @@ SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 FIRST_ROOM = 4
 # a quarter of the GPU's memory where the driver tells it, else this
 DEFAULT_MAX_BYTES = 1 << 30
-# pixels along a side of the tiles whose layers the resolve counts, for a software rasteriser
-# to unpack and draw each layer only where it has pixels (blueprint.pipeline.tiles)
+# pixels along a side of the tiles whose layers are counted, for a software rasteriser to unpack
+# and draw each layer only where it has pixels (blueprint.pipeline.tiles)
 TILE = 16
 # groups of 8 x 8 a row of a tiled unpack's dispatch (abuffer_unpack.comp)
 ROW = 32768
-# the storage block of the tiles' layers (abuffer_resolve.comp)
-TILE_BINDING = 6
+# entries a row of the images that hold the lists on a software rasteriser (abuffer.glsl)
+AB_ROW = 4096
+# the image units of the lists there (nodes, links, order; abuffer.glsl)
+LIST_UNITS = (5, 6, 7)
+
+
+def list_defines(r) -> dict:
+    """The defines of a program that reads or writes the lists on renderer ``r`` (abuffer.glsl):
+    images on a software rasteriser, storage buffers elsewhere."""
+    return {"AB_IMAGES": 1} if r.software else {}
 
 
 class Overflow(Exception):
@@ -55,17 +63,19 @@ class ABuffer:
     layer 0 captures and sorts every layer, then unpacks layer 0; at each later layer it
     unpacks that layer. ``uniforms`` are the camera's: ``u_view``, ``u_projection`` (bytes),
     ``u_ortho``, ``u_depth_range``, ``u_peel_eps``; ``back_bias`` the peel's for back faces.
-    With ``tiles`` the resolve also counts the most layers a pixel of each ``TILE`` x ``TILE``
-    tile has (``tile_layers``, read back with the counts) and each layer is unpacked only in
-    the tiles that have it: what a software rasteriser wants, where reading back is cheap and
+    With ``tiles`` the counts come from each pixel's layers read back, with the most layers a
+    pixel of each ``TILE`` x ``TILE`` tile has (``tile_layers``), and each layer is unpacked only
+    in the tiles that have it: what a software rasteriser wants, where reading back is cheap and
     every pixel a pass touches costs. With ``defer`` the counts are read when first asked for
     (``layer_pixels``, ``deepest``): every layer is unpacked until then, an unpack past a
     pixel's last layer clearing it as an empty layer's would, and a capture that had too little
     room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
     the sorted lists themselves (``lists``). The counts come back through a buffer of their own
     for each ``slot``: frames that stream read one frame's counts after the next is issued.
-    Where the renderer's ``abuffer_slim``, the geometry pass writes each fragment's depth and
-    face alone and the resolve makes the whole surfaces of the fragments it keeps as layers."""
+    On a software rasteriser the lists live in images, not storage buffers (abuffer.glsl):
+    programs that read them take ``defines``. Where the renderer's ``abuffer_slim``, the
+    geometry pass writes each fragment's depth and face alone and the resolve makes the whole
+    surfaces of the fragments it keeps as layers."""
 
     def __init__(
         self,
@@ -81,11 +91,14 @@ class ABuffer:
     ) -> None:
         self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
+        self.images = r.software
+        self.defines = list_defines(r)
         self.slim = r.abuffer_slim
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
-        self.geometry = geometry_program(r, ABUFFER_FRAG, {"SLIM": self.slim}, modern=True)
-        defines = {"TILES": TILE, "TILE_BINDING": TILE_BINDING} if tiles else {}
-        self.resolve = r.compute(RESOLVE_COMP, {**defines, "SLIM": self.slim})
+        capture = {**self.defines, "SLIM": self.slim}
+        self.geometry = geometry_program(r, ABUFFER_FRAG, capture, modern=True)
+        # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
+        self.resolve = r.compute(RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1} if tiles else capture)
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera = ("u_view", "u_projection", "u_ortho")
         for prog, names in (
@@ -95,17 +108,21 @@ class ABuffer:
             for name in names:
                 put(prog, name, uniforms[name])
         self.clear = r.compute(CLEAR_COMP)
-        self.unpack = r.compute(UNPACK_COMP, {"TILES": TILE, "ROW": ROW} if tiles else {})
+        self.unpack = r.compute(
+            UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
+        )
         for prog in (self.resolve, self.unpack):
             put(prog, "u_back_bias", back_bias)
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
+        self._rooms: dict[str, int] = {}  # the room of the last capture, by its lists' name
         self.tiles, self.defer = tiles, defer and not tiles
         # (counts buffer, room) of a capture whose counts are not read yet
         self._unread: tuple | None = None
         # (rows, columns) of tiles, row 0 at the bottom: the layers of each, once layer 0 is drawn
         self.tile_layers: np.ndarray | None = None
         self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
+        self._tile_list = None  # the image of the tiles with any layer, most layers first
 
     @property
     def layer_pixels(self) -> list[int]:
@@ -125,7 +142,12 @@ class ABuffer:
 
     def fits(self, size: tuple[int, int]) -> bool:
         """Whether a frame of ``size`` with the fragments of the last one there would fit."""
-        return self._room(size) * self.node_bytes <= self.max_bytes
+        return self._holds(self._room(size))
+
+    def _holds(self, room: int) -> bool:
+        """Whether lists of ``room`` fragments fit ``max_bytes`` (and the images' rows)."""
+        rows = -(-room // AB_ROW)
+        return room * self.node_bytes <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
     def _room(self, size: tuple[int, int]) -> int:
         held = self.r.abuffer_room.get(tuple(size))
@@ -161,7 +183,7 @@ class ABuffer:
         layers."""
         name = f"abuffer.{size[0]}x{size[1]}"
         self.r.ctx.memory_barrier()
-        self._buffers(name, 1)
+        self._buffers(name)
         pool = self.r.pool
         return (
             pool.texture(f"{name}.cursor", size, "r32ui"),
@@ -179,18 +201,23 @@ class ABuffer:
             )
         return held
 
-    def _buffers(self, name: str, room: int) -> tuple:
-        """(nodes, links, order, totals, depths) with room for ``room`` fragments, bound to their
-        storage blocks (abuffer.glsl)."""
+    def _buffers(self, name: str, room: int | None = None) -> tuple:
+        """(totals, depths) bound to their storage blocks, and the lists with room for ``room``
+        fragments (None: as the last capture had) bound to theirs or their image units
+        (abuffer.glsl)."""
         pool = self.r.pool
-        held = (
-            pool.buffer(f"{name}.nodes", 16 * room),
-            pool.buffer(f"{name}.links", 4 * room),
-            pool.buffer(f"{name}.order", 4 * room),
-            pool.buffer(f"{name}.totals", 16),
-            pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1)),
-        )
-        for binding, buf in enumerate(held):
+        room = self._rooms[name] if room is None else room
+        self._rooms[name] = room
+        if self.images:
+            size = (AB_ROW, -(-room // AB_ROW))
+            parts = (("nodes", "rgba32ui"), ("links", "r32ui"), ("order", "r32ui"))
+            for unit, (part, fmt) in zip(LIST_UNITS, parts, strict=True):
+                pool.texture(f"{name}.{part}", size, fmt).bind_to_image(unit, read=True, write=True)
+        else:
+            for binding, (part, nbytes) in enumerate((("nodes", 16), ("links", 4), ("order", 4))):
+                pool.buffer(f"{name}.{part}", nbytes * room).bind_to_storage_buffer(binding)
+        held = pool.buffer(f"{name}.totals", 16), pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1))
+        for binding, buf in enumerate(held, 3):
             buf.bind_to_storage_buffer(binding)
         if self.slim:
             pool.buffer(f"{name}.slim", SLIM_BYTES * room).bind_to_storage_buffer(SLIM_BINDING)
@@ -206,16 +233,12 @@ class ABuffer:
         cursor = pool.texture(f"{name}.cursor", size, "r32ui")
         layer_count = pool.texture(f"{name}.layer_count", size, "r32ui")
         groups = (-(-size[0] // 8), -(-size[1] // 8))
-        columns, rows = -(-size[0] // TILE), -(-size[1] // TILE)
-        tile_bytes = 4 * columns * rows if self.tiles else 0
-        if self.tiles:
-            tiles = pool.buffer(f"{name}.tile_layers", tile_bytes)
         calls = 0
         while True:
             room = self._room(size)
-            if room * self.node_bytes > self.max_bytes:
+            if not self._holds(room):
                 return None
-            totals, depths = self._buffers(name, room)[3:]
+            totals, depths = self._buffers(name, room)
             head.bind_to_image(0, read=True, write=True)
             self.clear["u_capacity"].value = room
             self.clear.run(*groups)
@@ -227,10 +250,6 @@ class ABuffer:
             head.bind_to_image(0, read=True, write=False)
             cursor.bind_to_image(1, read=False, write=True)
             layer_count.bind_to_image(2, read=False, write=True)
-            if self.tiles:
-                tiles.clear()
-                tiles.bind_to_storage_buffer(TILE_BINDING)
-                self.resolve["u_tile_columns"].value = columns
             if self.slim:
                 self.mesh.vbo.bind_to_storage_buffer(VERTICES_BINDING)
                 self.mesh.ibo.bind_to_storage_buffer(INDICES_BINDING)
@@ -240,12 +259,11 @@ class ABuffer:
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
             # moved where the GPU's atomics on it are slow
-            nbytes = totals.size + depths.size + tile_bytes
+            nbytes = totals.size + (0 if self.tiles else depths.size)
             seen = pool.buffer(f"{name}.seen{self.slot}", nbytes)
             ctx.copy_buffer(seen, totals, totals.size)
-            ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
-            if self.tiles:
-                ctx.copy_buffer(seen, tiles, tile_bytes, write_offset=totals.size + depths.size)
+            if not self.tiles:
+                ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
             if self.defer:
                 self._unread = (seen.read, nbytes, room, size, name)
                 return calls
@@ -274,14 +292,23 @@ class ABuffer:
             if self.defer:
                 raise Overflow(f"{drawn} fragments, room for {room}")
             return False
+        histogram = self._count_pixels(name, size) if self.tiles else counts[4 : 4 + MOST_LAYERS + 1]
         # pixels with at least k + 1 layers are those layer k covers
-        histogram = counts[4 : 4 + MOST_LAYERS + 1]
         covered = np.cumsum(histogram[::-1])[::-1][1:]
         self._layer_pixels = covered[covered > 0].tolist()
-        if self.tiles:
-            rows, columns = -(-size[1] // TILE), -(-size[0] // TILE)
-            self._list_tiles(name, counts[4 + MOST_LAYERS + 1 :].reshape(rows, columns))
         return True
+
+    def _count_pixels(self, name: str, size: tuple[int, int]) -> np.ndarray:
+        """The histogram of the pixels' layers (the last entry: ``MOST_LAYERS`` or more) from
+        each pixel's layers read back, and the tiles' layers listed: what the resolve counts on
+        a GPU, at a copy's cost where the GPU is the CPU."""
+        layers = np.empty(size[::-1], np.uint32)
+        self.r.pool.texture(f"{name}.layer_count", size, "r32ui").read_into(layers)
+        histogram = np.bincount(np.minimum(layers, MOST_LAYERS).ravel(), minlength=MOST_LAYERS + 1)
+        starts = np.arange(0, size[1], TILE), np.arange(0, size[0], TILE)
+        rows = np.maximum.reduceat(layers, starts[0], axis=0)
+        self._list_tiles(name, np.maximum.reduceat(rows, starts[1], axis=1))
+        return histogram
 
     def _list_tiles(self, name: str, layers: np.ndarray) -> None:
         """Keep the tiles' layers and upload the tiles that have any, most layers first, so that
@@ -292,10 +319,11 @@ class ABuffer:
         order = order[flat[order] > 0]
         self._deepest_first = flat[order]
         rows, columns = np.divmod(order, layers.shape[1])
-        packed = (columns | (rows << 16)).astype(np.uint32)
-        listed = self.r.pool.buffer(f"{name}.tile_list", max(packed.nbytes, 4))
-        if packed.nbytes:
-            listed.write(packed)
+        # an image, AB_ROW entries a row (abuffer_unpack.comp): the list is read once a pixel
+        packed = np.zeros(max(1, -(-len(order) // AB_ROW)) * AB_ROW, np.uint32)
+        packed[: len(order)] = columns | (rows << 16)
+        self._tile_list = self.r.pool.texture(f"{name}.tile_list", (AB_ROW, len(packed) // AB_ROW), "r32ui")
+        self._tile_list.write(packed)
 
     def _unpack(self, gb, name: str, layer: int) -> None:
         """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""
@@ -303,7 +331,7 @@ class ABuffer:
         # the layer before's passes may still be reading the normal and ID targets this
         # overwrites (a GPU runs dispatches side by side; llvmpipe one after another)
         ctx.memory_barrier()
-        self._buffers(name, 1)
+        self._buffers(name)
         pool.texture(f"{name}.cursor", size, "r32ui").bind_to_image(1, read=True, write=True)
         depth = self.flat(size)[layer % 2]
         depth.bind_to_image(2, read=False, write=True)
@@ -319,7 +347,7 @@ class ABuffer:
         tiles = int(np.count_nonzero(self._deepest_first > layer))
         groups = tiles * (TILE // 8) ** 2
         if groups:
-            pool.buffer(f"{name}.tile_list", 4).bind_to_storage_buffer(5)
+            self._tile_list.bind_to_image(0, read=True, write=False)
             self.unpack["u_groups"].value = groups
             self.unpack.run(min(groups, ROW), -(-groups // ROW))
         ctx.memory_barrier()

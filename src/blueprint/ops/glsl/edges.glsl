@@ -25,6 +25,9 @@ uniform vec2 u_normal_cos;       // (cos of the angle where creases start, cos w
 uniform float u_depth_threshold; // jumps beyond this many pixel footprints are silhouettes
 uniform float u_pixel_angle;     // pixel footprint per unit depth (perspective) or per pixel (ortho)
 uniform bool u_part_edges;
+// Ink of depth layers >= 1 over layer 0's: hidden lines narrower than the edges' own width keep
+// that share of their ink (_widths.glsl), taken here where no pass widens the lines after.
+uniform float u_hidden_ink;
 // Triangle-ID silhouettes as one more edge source: compiled in only where asked for (the
 // ID_SILHOUETTES define), since a software rasteriser pays for the dead branch on every pixel.
 
@@ -78,16 +81,31 @@ float edge_value(ivec2 p) {
         }
         return 0.0;
     }
-    vec3 nc = EDGE_NORMAL(p, -1);
+    // Each kind of sample read for every neighbour before anything is decided: llvmpipe pays
+    // several times over for reads between early returns in a loop.
     ivec2 own = EDGE_IDS(p, -1);
-    int part = own.y;
+    ivec2 ids[4];
+    for (int i = 0; i < 4; ++i) {
+        ids[i] = EDGE_IDS(clamp(p + OFFSETS[i], ivec2(0), last), i);
+    }
+    bool border = false;
+    for (int i = 0; i < 4; ++i) {
+        border = border || !covered[i] || (u_part_edges && ids[i].y != own.y);
+    }
+    if (border) {
+        return 1.0;
+    }
+    vec3 nc = EDGE_NORMAL(p, -1);
+    vec3 n[4];
+    for (int i = 0; i < 4; ++i) {
+        n[i] = EDGE_NORMAL(clamp(p + OFFSETS[i], ivec2(0), last), i);
+    }
 #if ID_SILHOUETTES
     {
         bool loaded = false;
         for (int i = 0; i < 4; ++i) {
-            ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-            int other = EDGE_IDS(q, i).x;
-            if (covered[i] && other != own.x) {
+            int other = ids[i].x;
+            if (other != own.x) {
                 if (!loaded) {
                     load_own(own.x - 1);
                     loaded = true;
@@ -100,16 +118,7 @@ float edge_value(ivec2 p) {
     }
 #endif
     float e = 0.0;
-    vec3 n[4];
     for (int i = 0; i < 4; ++i) {
-        if (!covered[i]) {
-            return 1.0;
-        }
-        ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
-        if (u_part_edges && EDGE_IDS(q, i).y != part) {
-            return 1.0;
-        }
-        n[i] = EDGE_NORMAL(q, i);
         e = max(e, crease(nc, n[i]));
     }
     // Window depth is affine in screen space on any plane, perspective or not, so its second
@@ -139,4 +148,9 @@ float edge_value(ivec2 p) {
         }
     }
     return max(e, outline);
+}
+
+// edge_value in the ink of depth layer ``layer``
+float layer_edge_value(ivec2 p, int layer) {
+    return edge_value(p) * (layer > 0 ? u_hidden_ink : 1.0);
 }

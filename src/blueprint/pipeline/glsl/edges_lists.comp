@@ -58,16 +58,16 @@ void main() {
                 sample_depth[i] = 1.0;
                 continue;
             }
-            uvec4 s = nodes[at[i] - 1u];
+            uvec4 s = AB_NODE(at[i] - 1u);
             sample_depth[i] = kb_depth(s, u_back_bias);
             sample_normal[i] = kb_normal(s);
             sample_ids[i] = kb_ids(s);
-            at[i] = order[at[i] - 1u];
+            at[i] = AB_ORDER(at[i] - 1u);
         }
         for (int r = 0; r < 8; ++r) {
             ring_covered[r] = ring[r] > uint(u_first_layer + layer);
         }
-        imageStore(u_out, ivec3(p, layer), vec4(edge_value(p)));
+        imageStore(u_out, ivec3(p, layer), vec4(layer_edge_value(p, u_first_layer + layer)));
     }
     imageStore(u_next, p, uvec4(at[0]));
 }

@@ -24,7 +24,7 @@ void main() {
     uint node = atomicAdd(drawn, 1u);
     if (node < capacity) {
         slim[node] = uvec2(floatBitsToUint(z) | (gl_FrontFacing ? 0u : KB_BACK), uint(gl_PrimitiveID + 1));
-        links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
+        AB_SET_LINK(node, imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u));
     }
 #else
     vec3 n = normalize(v_normal);
@@ -37,8 +37,8 @@ void main() {
     int face = gl_PrimitiveID;
     uint node = atomicAdd(drawn, 1u);
     if (node < capacity) {
-        nodes[node] = kb_pack(z, !gl_FrontFacing, n, face, v_part);
-        links[node] = imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u);
+        AB_SET_NODE(node, kb_pack(z, !gl_FrontFacing, n, face, v_part));
+        AB_SET_LINK(node, imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u));
     }
 #endif
 }

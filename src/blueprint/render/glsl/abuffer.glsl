@@ -1,13 +1,34 @@
 // The A-buffer: every fragment of one geometry pass in a list per pixel. u_head holds the first
 // node + 1 of each pixel's list (0: none); node i is surface i of the pass, packed as a
-// k-buffer surface (kbuffer.glsl), and links[i] the next node + 1 of its pixel's list. The
-// resolve (abuffer_resolve.comp) puts each pixel's layers in peel order in order[], from the
-// pixel's u_cursor. With SLIM the geometry pass writes each fragment's depth and face alone
-// into slim[] (see abuffer.frag), and the resolve fills node i (normal, part) only for the
-// fragments it keeps as layers: fragment(i) reads either form's depth and face.
+// k-buffer surface (kbuffer.glsl), and link i the next node + 1 of its pixel's list. The
+// resolve (abuffer_resolve.comp) puts each pixel's layers in peel order, chained through
+// order i from the pixel's u_cursor. Read and written through AB_NODE, AB_LINK, AB_ORDER and
+// their AB_SET_ forms: in storage buffers, or with AB_IMAGES in images, entry i at
+// (i % AB_ROW, i / AB_ROW): llvmpipe loads a storage buffer a lane at a time, ten times the
+// time of an image load (A-buffer frames on llvmpipe spent half their time in those loads).
+// With SLIM the geometry pass writes each fragment's depth and face alone into slim[] (see
+// abuffer.frag), and the resolve fills node i (normal, part) only for the fragments it keeps
+// as layers: fragment(i) reads either form's depth and face.
 #ifndef SLIM
 #define SLIM 0
 #endif
+#define AB_ROW 4096
+#if AB_IMAGES
+layout(binding = 5, rgba32ui) coherent uniform uimage2D u_nodes;
+layout(binding = 6, r32ui) coherent uniform uimage2D u_links;
+layout(binding = 7, r32ui) coherent uniform uimage2D u_order;
+
+ivec2 ab_at(uint i) {
+    return ivec2(int(i % uint(AB_ROW)), int(i / uint(AB_ROW)));
+}
+
+#define AB_NODE(i) imageLoad(u_nodes, ab_at(i))
+#define AB_LINK(i) imageLoad(u_links, ab_at(i)).x
+#define AB_ORDER(i) imageLoad(u_order, ab_at(i)).x
+#define AB_SET_NODE(i, v) imageStore(u_nodes, ab_at(i), (v))
+#define AB_SET_LINK(i, v) imageStore(u_links, ab_at(i), uvec4(v))
+#define AB_SET_ORDER(i, v) imageStore(u_order, ab_at(i), uvec4(v))
+#else
 layout(std430, binding = 0) coherent buffer Nodes {
     uvec4 nodes[];
 };
@@ -17,12 +38,19 @@ layout(std430, binding = 1) coherent buffer Links {
 layout(std430, binding = 2) coherent buffer Order {
     uint order[];
 };
-// (fragments drawn, nodes held, the most layers of any pixel, pixels whose list was too long
-// to sort in registers)
+#define AB_NODE(i) nodes[i]
+#define AB_LINK(i) links[i]
+#define AB_ORDER(i) order[i]
+#define AB_SET_NODE(i, v) nodes[i] = (v)
+#define AB_SET_LINK(i, v) links[i] = (v)
+#define AB_SET_ORDER(i, v) order[i] = (v)
+#endif
+// (fragments drawn, nodes held, pixels whose list was too long to sort in registers); the most
+// layers of any pixel comes from Depths, not from an atomic a pixel on one shared word (on
+// llvmpipe that took a fifth of the resolve)
 layout(std430, binding = 3) coherent buffer Totals {
     uint drawn;
     uint capacity;
-    uint deepest;
     uint long_lists;
 };
 // pixels by the number of layers they hold, the last entry for that many or more
@@ -42,6 +70,6 @@ uvec4 fragment(uint i) {
 }
 #else
 uvec4 fragment(uint i) {
-    return nodes[i];
+    return AB_NODE(i);
 }
 #endif

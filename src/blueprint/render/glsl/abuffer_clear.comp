@@ -10,7 +10,6 @@ void main() {
     if (p == ivec2(0)) {
         drawn = 0u;
         capacity = u_capacity;
-        deepest = 0u;
         long_lists = 0u;
         for (int i = 0; i <= MOST_LAYERS; ++i) {
             pixels_with[i] = 0u;

@@ -4,9 +4,9 @@
 // after it lying more than u_peel_eps (eye depth) behind it. Its own depth is kept whole, not
 // rounded to the depth buffer's steps: a rounding that differs from the driver's by a step here
 // and there is noise to the edges' second differences of depth. The layers are
-// chained in order[] from u_cursor (node + 1; 0 ends the chain). With SLIM (abuffer.frag) the
-// fragments hold depth and face alone, and each one kept as a layer gets its whole node here:
-// the normal and part of its face at the pixel centre, as the geometry pass would have made.
+// chained through AB_ORDER from u_cursor (node + 1; 0 ends the chain). With SLIM (abuffer.frag)
+// the fragments hold depth and face alone, and each one kept as a layer gets its whole node
+// here: the normal and part of its face at the pixel centre, as the geometry pass would have made.
 #extension GL_ARB_shading_language_packing : require
 layout(local_size_x = 8, local_size_y = 8) in;
 #include "depth.glsl"
@@ -20,16 +20,6 @@ layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 // each pixel's layers: whether a layer covers a pixel, for passes that walk only some chains
 layout(binding = 2, r32ui) writeonly uniform uimage2D u_layer_count;
-#if TILES
-// the most layers a pixel of each tile of TILES x TILES pixels has, rows of u_tile_columns
-// from the bottom: where a software rasteriser's passes have work at each layer
-// (blueprint.pipeline.tiles); read back with the counts
-layout(std430, binding = TILE_BINDING) coherent buffer TileLayers {
-    uint tile_layers[];
-};
-uniform int u_tile_columns;
-shared uint group_deepest;
-#endif
 uniform float u_back_bias;
 uniform float u_peel_eps;
 
@@ -80,14 +70,12 @@ void keep(ivec2 p, uint i) {
     if (dot(n, to_eye) < 0.0) {
         n = -n;
     }
-    nodes[i] = kb_pack(uintBitsToFloat(s.x & ~KB_BACK), (s.x & KB_BACK) != 0u, n, int(face), part);
+    AB_SET_NODE(i, kb_pack(uintBitsToFloat(s.x & ~KB_BACK), (s.x & KB_BACK) != 0u, n, int(face), part));
 }
 #else
 void keep(ivec2 p, uint i) {
 }
 #endif
-
-shared uint group_pixels_with[MOST_LAYERS + 1];
 
 // the depth the depth buffer holds for a fragment: 24-bit fixed point
 uint held_depth(uvec4 s) {
@@ -127,7 +115,7 @@ uint chain(ivec2 p) {
         key[i] = k;
         face[i] = s.w;
         ++n;
-        at = links[at - 1u];
+        at = AB_LINK(at - 1u);
     }
     uint layers = 0u;
     uint first = 0u;
@@ -143,7 +131,7 @@ uint chain(ivec2 p) {
             if (last == 0u) {
                 first = node[i];
             } else {
-                order[last - 1u] = node[i];
+                AB_SET_ORDER(last - 1u, node[i]);
             }
             last = node[i];
             behind = next_after(s);
@@ -157,7 +145,7 @@ uint chain(ivec2 p) {
             uint best = 0u;
             uint best_key = 0xffffffffu;
             uint best_face = 0xffffffffu;
-            for (uint a = head; a != 0u; a = links[a - 1u]) {
+            for (uint a = head; a != 0u; a = AB_LINK(a - 1u)) {
                 uvec4 s = fragment(a - 1u);
                 if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                     continue;
@@ -175,7 +163,7 @@ uint chain(ivec2 p) {
             if (last == 0u) {
                 first = best;
             } else {
-                order[last - 1u] = best;
+                AB_SET_ORDER(last - 1u, best);
             }
             last = best;
             keep(p, best - 1u);
@@ -184,11 +172,24 @@ uint chain(ivec2 p) {
         }
     }
     if (last != 0u) {
-        order[last - 1u] = 0u;
+        AB_SET_ORDER(last - 1u, 0u);
     }
     imageStore(u_cursor, p, uvec4(first));
     return layers;
 }
+
+#if COUNTED_AFTER
+// The counts are left to the caller, which reads u_layer_count back (a software rasteriser,
+// where that costs a copy): the group's histogram took a third of the resolve on llvmpipe (its
+// barriers and shared atomics).
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (all(lessThan(p, imageSize(u_head)))) {
+        imageStore(u_layer_count, p, uvec4(chain(p)));
+    }
+}
+#else
+shared uint group_pixels_with[MOST_LAYERS + 1];
 
 void main() {
     // the histogram of layers a pixel, counted in the group first: one global atomic a group
@@ -196,32 +197,18 @@ void main() {
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
         group_pixels_with[i] = 0u;
     }
-#if TILES
-    if (gl_LocalInvocationIndex == 0u) {
-        group_deepest = 0u;
-    }
-#endif
     barrier();
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (all(lessThan(p, imageSize(u_head)))) {
         uint layers = chain(p);
         imageStore(u_layer_count, p, uvec4(layers));
         atomicAdd(group_pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
-        atomicMax(deepest, layers);
-#if TILES
-        atomicMax(group_deepest, layers);
-#endif
     }
     barrier();
-#if TILES
-    if (gl_LocalInvocationIndex == 0u && group_deepest > 0u) {
-        ivec2 tile = ivec2(gl_WorkGroupID.xy) / (TILES / 8);
-        atomicMax(tile_layers[tile.y * u_tile_columns + tile.x], group_deepest);
-    }
-#endif
     for (uint i = gl_LocalInvocationIndex; i <= MOST_LAYERS; i += 64u) {
         if (i > 0u && group_pixels_with[i] > 0u) {
             atomicAdd(pixels_with[i], group_pixels_with[i]);
         }
     }
 }
+#endif

@@ -15,16 +15,16 @@ uniform float u_back_bias;
 #if TILES
 // Only the tiles of TILES x TILES pixels with a pixel this deep (the rest of the depth target
 // is cleared to 1): the first u_groups / (TILES / 8)^2 entries of the list, tiles packed as
-// x | y << 16, most layers first. Groups of 8 x 8 in rows of ROW (a define).
-layout(std430, binding = 5) readonly buffer TileList {
-    uint tile_list[];
-};
+// x | y << 16, most layers first, AB_ROW a row of the image. Groups of 8 x 8 in rows of ROW
+// (a define).
+layout(binding = 0, r32ui) readonly uniform uimage2D u_tile_list;
 uniform uint u_groups;
 
 ivec2 pixel() {
     uint g = gl_WorkGroupID.y * uint(ROW) + gl_WorkGroupID.x;
     const uint per_tile = uint((TILES / 8) * (TILES / 8));
-    uint entry = tile_list[g / per_tile];
+    uint listed = g / per_tile;
+    uint entry = imageLoad(u_tile_list, ivec2(int(listed % uint(AB_ROW)), int(listed / uint(AB_ROW)))).x;
     uint sub = g % per_tile;
     ivec2 tile = ivec2(entry & 0xffffu, entry >> 16);
     ivec2 corner = tile * TILES + ivec2(sub % uint(TILES / 8), sub / uint(TILES / 8)) * 8;
@@ -49,8 +49,8 @@ void main() {
         imageStore(u_depth, p, vec4(1.0));
         return;
     }
-    uvec4 s = nodes[at - 1u];
-    imageStore(u_cursor, p, uvec4(order[at - 1u]));
+    uvec4 s = AB_NODE(at - 1u);
+    imageStore(u_cursor, p, uvec4(AB_ORDER(at - 1u)));
     imageStore(u_depth, p, vec4(kb_depth(s, u_back_bias)));
     imageStore(u_normal, p, vec4(kb_normal(s), 1.0));
     imageStore(u_ids, p, ivec4(kb_ids(s), 0, 0));
