@@ -13,6 +13,7 @@ the time query times the GPU (``compute_capture.Bench.gpu_ms``).
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 from pathlib import Path
 
@@ -54,7 +55,11 @@ def main() -> None:
         for k in VARIANTS:
             try:
                 programs[k] = build_program(
-                    r.ctx, GEOMETRY_VERT, SHADER, {"VARIANT": k, "EXACT_DEPTH": r.exact_depth}, "#version 450 core"
+                    r.ctx,
+                    GEOMETRY_VERT,
+                    SHADER,
+                    {"VARIANT": k, "EXACT_DEPTH": r.exact_depth},
+                    "#version 450 core",
                 )
             except Exception as exc:  # a driver without ARB_shader_ballot: that variant is left out
                 print(json.dumps({"variant": k, "error": str(exc)[:300]}), flush=True)
@@ -74,45 +79,53 @@ def main() -> None:
                     "fragments": fragments(r, size),
                 }
                 bench.loops = 20_000_000 if size > 1024 else 4_000_000
-                room = r.abuffer_room[(size, size)]
-                nodes, links = ab._buffers(name, room)[:2]
-                small = r.pool.buffer(f"{name}.small", 8 * max(room, FIXED * size * size))
-                faces = r.pool.buffer(f"{name}.faces", 4 * max(room, FIXED * size * size))
-                heads = r.pool.buffer(f"{name}.heads", 4 * size * size)
-                head = r.pool.texture(f"{name}.head", (size, size), "r32ui")
-
-                def capture(prog=None):
-                    ab._buffers(name, room)
-                    small.bind_to_storage_buffer(7)
-                    heads.clear()
-                    heads.bind_to_storage_buffer(10)
-                    faces.bind_to_storage_buffer(11)
-                    head.bind_to_image(0, read=True, write=True)
-                    ab.clear["u_capacity"].value = room
-                    ab.clear.run(-(-size // 8), -(-size // 8))
-                    r.ctx.memory_barrier()
-                    if prog is None:
-                        ab.fragments(gb)
-                        return
-                    gb.clears[0].use()
-                    for u in ("u_view", "u_projection"):
-                        prog[u].write(ab.geometry[u].read())
-                    if "u_ortho" in prog:
-                        prog["u_ortho"].value = camera.ortho
-                    for u, value in (("u_width", size), ("u_pixels", size * size)):
-                        if u in prog:
-                            prog[u].value = value
-                    if "u_target" in prog:
-                        target_uniform(r, prog, (size, size))
-                    ab.mesh.vao(prog).render()
-
-                row["product_ms"] = bench.gpu_ms(capture)
+                run = Capture(r, ab, gb, camera, size)
+                row["product_ms"] = bench.gpu_ms(run)
                 for k, prog in programs.items():
-                    row[f"v{k}_ms"] = bench.gpu_ms(lambda prog=prog: capture(prog))
+                    row[f"v{k}_ms"] = bench.gpu_ms(functools.partial(run, prog))
                     if k in (3, 4, 7):
                         row[f"v{k}_fragments"] = fragments(r, size)
                 row["variants"] = VARIANTS
                 print(json.dumps(row), flush=True)
+
+
+class Capture:
+    """The lists cleared and every fragment listed by the product's geometry pass, or by a
+    variant's program: a call is one capture (no sort)."""
+
+    def __init__(self, r, ab, gb, camera, size: int) -> None:
+        self.r, self.ab, self.gb, self.camera, self.size = r, ab, gb, camera, size
+        self.name = f"abuffer.{size}x{size}"
+        self.room = r.abuffer_room[(size, size)]
+        most = max(self.room, FIXED * size * size)
+        self.small = r.pool.buffer(f"{self.name}.small", 8 * most)
+        self.faces = r.pool.buffer(f"{self.name}.faces", 4 * most)
+        self.heads = r.pool.buffer(f"{self.name}.heads", 4 * size * size)
+        self.head = r.pool.texture(f"{self.name}.head", (size, size), "r32ui")
+
+    def __call__(self, prog=None) -> None:
+        r, ab, size = self.r, self.ab, self.size
+        ab._buffers(self.name, self.room)
+        self.small.bind_to_storage_buffer(7)
+        self.heads.clear()
+        self.heads.bind_to_storage_buffer(10)
+        self.faces.bind_to_storage_buffer(11)
+        self.head.bind_to_image(0, read=True, write=True)
+        ab.clear["u_capacity"].value = self.room
+        ab.clear.run(-(-size // 8), -(-size // 8))
+        r.ctx.memory_barrier()
+        if prog is None:
+            ab.fragments(self.gb)
+            return
+        self.gb.clears[0].use()
+        for u in ("u_view", "u_projection"):
+            prog[u].write(ab.geometry[u].read())
+        for u, value in (("u_ortho", self.camera.ortho), ("u_width", size), ("u_pixels", size * size)):
+            if u in prog:
+                prog[u].value = value
+        if "u_target" in prog:
+            target_uniform(r, prog, (size, size))
+        ab.mesh.vao(prog).render()
 
 
 if __name__ == "__main__":
