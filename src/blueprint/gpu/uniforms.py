@@ -26,11 +26,7 @@ class Uniforms:
         if name not in values or values[name] == value:
             return
         values[name] = value
-        member = prog[name]
-        if isinstance(value, bytes):
-            member.write(value)
-        else:
-            member.value = value
+        _write(prog[name], value)
 
     def update(self, prog, values: dict) -> None:
         """``set`` for each of ``values`` (name -> value) in one call."""
@@ -39,12 +35,16 @@ class Uniforms:
             if name not in held or held[name] == value:
                 continue
             held[name] = value
-            member = prog[name]
-            if isinstance(value, bytes):
-                member.write(value)
-            else:
-                member.value = value
+            _write(prog[name], value)
 
     def forget(self, prog) -> None:
         """Drop a program about to be released."""
         self._values.pop(prog, None)
+
+
+def _write(member, value) -> None:
+    """A uniform's new value (matrices come as bytes)."""
+    if isinstance(value, bytes):
+        member.write(value)
+    else:
+        member.value = value

@@ -98,12 +98,7 @@ def _orient_merged(
         first = order[np.r_[True, high[order][1:] != high[order][:-1]]]
         parent[high[first]] = low[first]
         flip[high[first]] = between[first]
-        while True:
-            above = parent[parent]
-            if np.array_equal(above, parent):
-                break
-            flip ^= flip[parent]
-            parent = above
+        parent = _to_roots(parent, flip)
     if np.any(flip[a] ^ flip[b] ^ parity):
         return None
     # roots only ever hang under lower ones: each component's root is its lowest face
@@ -165,13 +160,19 @@ def _orient_searched(
     tree = parent_of == parent[child]
     flipped = np.zeros(num_faces, dtype=bool)
     flipped[child[tree]] = np.concatenate([pair_parity, pair_parity])[near][tree]
+    _to_roots(parent, flipped)
+    return flipped, component.astype(np.int64)
+
+
+def _to_roots(parent: np.ndarray, flip: np.ndarray) -> np.ndarray:
+    """Pointer jumping over a forest: each node's parent made its root, returned, and ``flip``
+    (modified in place) made each node's flip relative to its root (the xor along the way)."""
     while True:
         above = parent[parent]
         if np.array_equal(above, parent):
-            break
-        flipped ^= flipped[parent]
+            return parent
+        flip ^= flip[parent]
         parent = above
-    return flipped, component.astype(np.int64)
 
 
 def _distances(reach, root: int) -> np.ndarray:
