@@ -38,7 +38,8 @@ class ComputeRaster:
 
     def __init__(self, r) -> None:
         self.r = r
-        self.stages = [build_compute(r.ctx, SHADER, {"STAGE": k, **list_defines(r)}) for k in range(4)]
+        defines = {**list_defines(r), "SLIM": r.abuffer_slim}
+        self.stages = [build_compute(r.ctx, SHADER, {"STAGE": k, **defines}) for k in range(4)]
         # triangle-tile pairs the bins hold: the most a frame listed so far (a frame that lists
         # more loses triangles: ``binned`` tells)
         self.bin_room = 0
@@ -58,10 +59,12 @@ class ComputeRaster:
         count.clear()
         ab.mesh.vbo.bind_to_storage_buffer(5)
         ab.mesh.ibo.bind_to_storage_buffer(6)
-        for binding, buf in ((7, setup), (8, count), (9, start), (10, bins)):
+        for binding, buf in ((11, setup), (12, count), (13, start), (14, bins)):
             buf.bind_to_storage_buffer(binding)
         pool.texture(f"abuffer.{w}x{h}.head", (w, h), "r32ui").bind_to_image(0, read=True, write=True)
         view, projection = ab.geometry["u_view"].read(), ab.geometry["u_projection"].read()
+        # (slim fragments' geometry pass has no normals to turn: the resolve holds the camera's)
+        ortho = (ab.resolve if ab.slim else ab.geometry)["u_ortho"].value
         for prog in self.stages:
             for name, value in (
                 ("u_size", (w, h)),
@@ -69,7 +72,7 @@ class ComputeRaster:
                 ("u_tile_columns", columns),
                 ("u_tiles", tiles),
                 ("u_bin_room", room),
-                ("u_ortho", ab.geometry["u_ortho"].value),
+                ("u_ortho", ortho),
             ):
                 if name in prog:
                     prog[name].value = value

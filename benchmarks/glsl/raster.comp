@@ -27,10 +27,10 @@ layout(std430, binding = 6) readonly buffer Indices { uint indices[]; };
 // draws nothing) and the third corner unsnapped, the first two unsnapped: depth and the
 // attributes follow the plane through the corners as projected (the rasteriser's coverage
 // follows the snapped ones)
-layout(std430, binding = 7) buffer Setup { ivec4 setup[]; };
-layout(std430, binding = 8) buffer TileCount { uint tile_count[]; };
-layout(std430, binding = 9) buffer TileStart { uint tile_start[]; };
-layout(std430, binding = 10) buffer Bins { uint bins[]; };
+layout(std430, binding = 11) buffer Setup { ivec4 setup[]; };
+layout(std430, binding = 12) buffer TileCount { uint tile_count[]; };
+layout(std430, binding = 13) buffer TileStart { uint tile_start[]; };
+layout(std430, binding = 14) buffer Bins { uint bins[]; };
 layout(binding = 0, r32ui) coherent uniform uimage2D u_head;
 
 uniform mat4 u_view;
@@ -241,6 +241,13 @@ void main() {
             if (!covers(k, pixel, z, b, front)) {
                 continue;
             }
+#if SLIM
+            if (node < capacity) {
+                slim[node] = uvec2(floatBitsToUint(z) | (front ? 0u : KB_BACK), uint(held_face[k] + 1));
+                AB_SET_LINK(node, head);
+                head = node + 1u;
+            }
+#else
             if (node < capacity) {
                 ivec4 s2 = held[5u * k + 2u];
                 int face = held_face[k];
@@ -258,6 +265,7 @@ void main() {
                 AB_SET_LINK(node, head);
                 head = node + 1u;
             }
+#endif
             node += 1u;
         }
     }
