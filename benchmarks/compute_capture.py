@@ -31,6 +31,7 @@ from blueprint.scene.camera import fit_camera
 
 SHADER = Path(__file__).parent / "glsl" / "raster.comp"
 TILE = 16
+ROWS = 8  # threads a triangle in the set-up and binning (raster.comp)
 
 
 class ComputeRaster:
@@ -56,6 +57,7 @@ class ComputeRaster:
         start = pool.buffer("raster.start", 4 * (tiles + 1))
         room = max(self.bin_room, 16 * triangles, 1 << 22)
         bins = pool.buffer("raster.bins", 4 * room)
+        pool.buffer("raster.edges", 72 * triangles).bind_to_storage_buffer(15)
         count.clear()
         ab.mesh.vbo.bind_to_storage_buffer(5)
         ab.mesh.ibo.bind_to_storage_buffer(6)
@@ -79,7 +81,7 @@ class ComputeRaster:
             for name, value in (("u_view", view), ("u_projection", projection)):
                 if name in prog:
                     prog[name].write(value)
-        groups = -(-triangles // 64)
+        groups = -(-triangles * ROWS // 64)
         self.stages[0].run(groups)
         ctx.memory_barrier()
         self.stages[1].run(1)

@@ -4,6 +4,11 @@
 // pixel centre's fragment appended to the pixel's list as the fragment shader appends it.
 // STAGE 0 sets each triangle up and counts the tiles it touches, 1 turns the counts into
 // where each tile's triangles start, 2 lists the triangles of each tile, 3 rasterises.
+// A triangle's edges are kept as equations exact in double precision (corners are integers
+// below 2^21, so every term is an integer below 2^53), the top-left rule folded in: a tile is
+// binned only where some pixel centre of it lies inside all three edges' half-planes (thin
+// triangles across a model bin to a fraction of the tiles of their bounds), and a pixel's test
+// is three multiply-adds against the equations moved to its tile.
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 #include "blueprint.render:glsl/abuffer.glsl"
@@ -31,6 +36,9 @@ layout(std430, binding = 11) buffer Setup { ivec4 setup[]; };
 layout(std430, binding = 12) buffer TileCount { uint tile_count[]; };
 layout(std430, binding = 13) buffer TileStart { uint tile_start[]; };
 layout(std430, binding = 14) buffer Bins { uint bins[]; };
+// a triangle's three edge equations E(x, y) = a x + b y + c over positions in 1/256 pixel,
+// front-facing order, >= 0 inside (a pixel centre on an edge it does not own is outside)
+layout(std430, binding = 15) buffer Edges { double edge_eq[]; };
 layout(binding = 0, r32ui) coherent uniform uimage2D u_head;
 
 uniform mat4 u_view;
@@ -58,9 +66,68 @@ bool tiles_of(int t, out ivec2 first, out ivec2 last) {
 }
 #endif
 
+#if STAGE == 0 || STAGE == 2
+// the tiles of row y, within bounds (first, last), that snapped corners c may reach: the x
+// extent of the triangle cut to the row's band of pixel centres (a sliver across the model
+// walks its own tiles, not its bounds')
+ivec2 row_tiles(ivec2 c[3], int y, ivec2 bounds) {
+    double ya = double(y * TILE * 256 + 128), yb = ya + double((TILE - 1) * 256);
+    double lo = 1e30, hi = -1e30;
+    for (int i = 0; i < 3; ++i) {
+        dvec2 p = dvec2(c[i]), q = dvec2(c[(i + 1) % 3]);
+        if (p.y >= ya && p.y <= yb) {
+            lo = min(lo, p.x);
+            hi = max(hi, p.x);
+        }
+        for (int side = 0; side < 2; ++side) {
+            double at = side == 0 ? ya : yb;
+            if ((p.y - at) * (q.y - at) < 0.0) {
+                double x = p.x + (q.x - p.x) * (at - p.y) / (q.y - p.y);
+                lo = min(lo, x);
+                hi = max(hi, x);
+            }
+        }
+    }
+    // (a unit wider each way: the division rounds)
+    int span = TILE * 256;
+    return ivec2(max(bounds.x, int(floor((lo - 1.0) / double(span)))), min(bounds.y, int(floor((hi + 1.0) / double(span)))));
+}
+
+// whether any pixel centre of tile (x, y) lies inside all three edges (a, b, c: one edge's
+// equation a component)
+bool touches(dvec3 a, dvec3 b, dvec3 c, int x, int y) {
+    // the tile's first and last pixel centres, in 1/256 pixel
+    dvec2 lo = dvec2(ivec2(x, y) * (TILE * 256) + 128);
+    double span = double((TILE - 1) * 256);
+    dvec3 most = a * lo.x + b * lo.y + c + max(a * span, 0.0) + max(b * span, 0.0);
+    return all(greaterThanEqual(most, dvec3(0.0)));
+}
+
+// Stages 0 and 2 walk a triangle's tiles in ROWS threads, each taking every ROWS-th row of
+// tiles: a big triangle's walk otherwise held up its whole subgroup (cycloidal 4096²: the
+// set-up took 1.6 ms for 377K triangles).
+#define ROWS 8
+#endif
+
 #if STAGE == 0
+// the pixel centre on the edge from a to b belongs to the triangle on the edge's left or top
+// side only, so that two triangles sharing the edge do not both draw it
+bool owns(ivec2 a, ivec2 b) {
+    ivec2 d = b - a;
+    return d.y < 0 || (d.y == 0 && d.x < 0);
+}
+
+// (a, b, c) of the edge from corner p to q: twice the signed area of (p, q, position)
+void put_edge(int i, ivec2 p, ivec2 q, inout dvec3 a, inout dvec3 b, inout dvec3 c) {
+    a[i] = -double(q.y - p.y);
+    b[i] = double(q.x - p.x);
+    double at = double(q.y - p.y) * double(p.x) - double(q.x - p.x) * double(p.y);
+    // values are integers: "> 0, or 0 where the edge is owned" is ">= 0" after this
+    c[i] = owns(p, q) ? at : at - 1.0;
+}
+
 void main() {
-    int t = int(gl_GlobalInvocationID.x);
+    int t = int(gl_GlobalInvocationID.x) / ROWS, row = int(gl_GlobalInvocationID.x) % ROWS;
     if (t >= u_triangles) {
         return;
     }
@@ -85,22 +152,46 @@ void main() {
     ivec2 last = min((hi - 128) >> 8, u_size - 1);
     double area = double(corner[1].x - corner[0].x) * double(corner[2].y - corner[0].y)
         - double(corner[2].x - corner[0].x) * double(corner[1].y - corner[0].y);
-    setup[5 * t] = ivec4(corner[0], corner[1]);
-    setup[5 * t + 1] = ivec4(corner[2], floatBitsToInt(z[0]), floatBitsToInt(z[1]));
-    setup[5 * t + 2] = ivec4(floatBitsToInt(z[2]), floatBitsToInt(inv_w[0]), floatBitsToInt(inv_w[1]),
-        floatBitsToInt(inv_w[2]));
+    bool first_row = row == 0;
+    if (first_row) {
+        setup[5 * t] = ivec4(corner[0], corner[1]);
+        setup[5 * t + 1] = ivec4(corner[2], floatBitsToInt(z[0]), floatBitsToInt(z[1]));
+        setup[5 * t + 2] = ivec4(floatBitsToInt(z[2]), floatBitsToInt(inv_w[0]), floatBitsToInt(inv_w[1]),
+            floatBitsToInt(inv_w[2]));
+    }
     // (a vertex behind the eye needs clipping, which this experiment leaves out: the benchmark
     // refuses such views)
     if (behind || area == 0.0 || any(greaterThan(first, last))) {
-        setup[5 * t + 3] = ivec4(0);
+        if (first_row) {
+            setup[5 * t + 3] = ivec4(0);
+        }
         return;
     }
     ivec2 tile0 = first / TILE, tile1 = last / TILE;
-    setup[5 * t + 3] = ivec4(tile0.x | (tile0.y << 16), tile1.x | (tile1.y << 16), floatBitsToInt(exact[2]));
-    setup[5 * t + 4] = ivec4(floatBitsToInt(exact[0]), floatBitsToInt(exact[1]));
-    for (int y = tile0.y; y <= tile1.y; ++y) {
-        for (int x = tile0.x; x <= tile1.x; ++x) {
-            atomicAdd(tile_count[y * u_tile_columns + x], 1u);
+    ivec2 c0 = corner[0], c1 = corner[1], c2 = corner[2];
+    if (area < 0.0) {
+        c1 = corner[2];
+        c2 = corner[1];
+    }
+    dvec3 a, b, c;
+    put_edge(0, c1, c2, a, b, c);
+    put_edge(1, c2, c0, a, b, c);
+    put_edge(2, c0, c1, a, b, c);
+    if (first_row) {
+        setup[5 * t + 3] = ivec4(tile0.x | (tile0.y << 16), tile1.x | (tile1.y << 16), floatBitsToInt(exact[2]));
+        setup[5 * t + 4] = ivec4(floatBitsToInt(exact[0]), floatBitsToInt(exact[1]));
+        for (int i = 0; i < 3; ++i) {
+            edge_eq[9 * t + 3 * i] = a[i];
+            edge_eq[9 * t + 3 * i + 1] = b[i];
+            edge_eq[9 * t + 3 * i + 2] = c[i];
+        }
+    }
+    for (int y = tile0.y + row; y <= tile1.y; y += ROWS) {
+        ivec2 xs = row_tiles(corner, y, ivec2(tile0.x, tile1.x));
+        for (int x = xs.x; x <= xs.y; ++x) {
+            if (touches(a, b, c, x, y)) {
+                atomicAdd(tile_count[y * u_tile_columns + x], 1u);
+            }
         }
     }
 }
@@ -134,13 +225,22 @@ void main() {
 }
 #elif STAGE == 2
 void main() {
-    int t = int(gl_GlobalInvocationID.x);
+    int t = int(gl_GlobalInvocationID.x) / ROWS, row = int(gl_GlobalInvocationID.x) % ROWS;
     ivec2 first, last;
     if (t >= u_triangles || !tiles_of(t, first, last)) {
         return;
     }
-    for (int y = first.y; y <= last.y; ++y) {
-        for (int x = first.x; x <= last.x; ++x) {
+    ivec4 s0 = setup[5 * t], s1 = setup[5 * t + 1];
+    ivec2 corner[3] = ivec2[3](s0.xy, s0.zw, s1.xy);
+    dvec3 a = dvec3(edge_eq[9 * t], edge_eq[9 * t + 3], edge_eq[9 * t + 6]);
+    dvec3 b = dvec3(edge_eq[9 * t + 1], edge_eq[9 * t + 4], edge_eq[9 * t + 7]);
+    dvec3 c = dvec3(edge_eq[9 * t + 2], edge_eq[9 * t + 5], edge_eq[9 * t + 8]);
+    for (int y = first.y + row; y <= last.y; y += ROWS) {
+        ivec2 xs = row_tiles(corner, y, ivec2(first.x, last.x));
+        for (int x = xs.x; x <= xs.y; ++x) {
+            if (!touches(a, b, c, x, y)) {
+                continue;
+            }
             uint tile = uint(y * u_tile_columns + x);
             uint at = tile_start[tile] + atomicAdd(tile_count[tile], 1u);
             if (at < uint(u_bin_room)) {
@@ -150,85 +250,89 @@ void main() {
     }
 }
 #else
-shared ivec4 held[TILE * TILE * 5];
-shared int held_face[TILE * TILE];
+// triangles a batch: shared memory holds their set-up (32K at most on some drivers)
+#define BATCH 128
+// each held triangle's corners' depths, its corners as projected (unsnapped), its face,
+// facing, and edge equations moved to the tile: E at its first pixel centre and E's steps a
+// pixel along x and y
+shared vec3 held_z[BATCH];
+shared vec4 held_p01[BATCH];
+shared vec2 held_p2[BATCH];
+shared int held_face[BATCH];
+shared bool held_front[BATCH];
+shared dvec3 held_at[BATCH];
+shared dvec3 held_dx[BATCH];
+shared dvec3 held_dy[BATCH];
 
-// twice the signed area of (a, b, p), exact: corners are integers below 2^26
-double edge(ivec2 a, ivec2 b, ivec2 p) {
-    return double(b.x - a.x) * double(p.y - a.y) - double(b.y - a.y) * double(p.x - a.x);
-}
-
-// a pixel centre on an edge belongs to the triangle on the edge's left or top side only, so
-// that two triangles sharing the edge do not both draw it
-bool owns(ivec2 a, ivec2 b) {
-    ivec2 d = b - a;
-    return d.y < 0 || (d.y == 0 && d.x < 0);
-}
-
-shared uint group_total;
-shared uint group_base;
-
-// whether the pixel centre lies in held triangle k, with its depth, barycentrics and facing
-bool covers(uint k, ivec2 pixel, out float z, out vec3 b, out bool front) {
-    ivec2 sample_at = pixel * 256 + 128;
-    ivec4 s0 = held[5u * k], s1 = held[5u * k + 1u], s2 = held[5u * k + 2u];
-    ivec2 c0 = s0.xy, c1 = s0.zw, c2 = s1.xy;
-    front = edge(c0, c1, c2) > 0.0;
-    if (!front) {
-        ivec2 swap = c1;
-        c1 = c2;
-        c2 = swap;
-    }
-    double e0 = edge(c1, c2, sample_at), e1 = edge(c2, c0, sample_at), e2 = edge(c0, c1, sample_at);
-    if (!((e0 > 0.0 || (e0 == 0.0 && owns(c1, c2))) && (e1 > 0.0 || (e1 == 0.0 && owns(c2, c0)))
-            && (e2 > 0.0 || (e2 == 0.0 && owns(c0, c1))))) {
-        return false;
-    }
-    // the plane of depth through the projected corners, at the pixel centre
-    vec2 p0 = intBitsToFloat(held[5u * k + 4u].xy), p1 = intBitsToFloat(held[5u * k + 4u].zw);
-    vec2 p2 = intBitsToFloat(held[5u * k + 3u].zw);
+// the depth of held triangle k at the pixel centre (the plane through the corners as
+// projected), with its barycentrics; false where it lies outside the depth range
+bool depth_at(uint k, ivec2 pixel, out float z, out vec3 b) {
+    vec2 p0 = held_p01[k].xy, p1 = held_p01[k].zw, p2 = held_p2[k];
     vec2 d10 = p1 - p0, d20 = p2 - p0, at = vec2(pixel) + 0.5 - p0;
     float twice = d10.x * d20.y - d20.x * d10.y;
     b.y = (at.x * d20.y - d20.x * at.y) / twice;
     b.z = (d10.x * at.y - at.x * d10.y) / twice;
     b.x = 1.0 - b.y - b.z;
-    vec3 zs = vec3(intBitsToFloat(s1.z), intBitsToFloat(s1.w), intBitsToFloat(s2.x));
+    vec3 zs = held_z[k];
     z = zs.x + b.y * (zs.y - zs.x) + b.z * (zs.z - zs.x);
     return z >= 0.0 && z <= 1.0;
 }
 
+shared uint group_total;
+shared uint group_base;
+
 // The workgroup owns its tile's pixels: each pixel's list head stays in a register and is
 // stored once, and the fragments of a batch of triangles take their nodes with one atomic on
 // the fragment counter for the whole group (counted first, then written), where the fragment
-// shader spends an atomic on the counter and one on the head a fragment.
+// shader spends an atomic on the counter and one on the head a fragment. The count keeps the
+// batch's triangles that cover the pixel as bits, so the write tests no triangle again.
 void main() {
     uint tile = gl_WorkGroupID.y * uint(u_tile_columns) + gl_WorkGroupID.x;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     bool inside = all(lessThan(pixel, u_size));
     uint lane = gl_LocalInvocationIndex;
+    dvec2 local = dvec2(gl_LocalInvocationID.xy);
+    dvec2 origin = dvec2(ivec2(gl_WorkGroupID.xy) * (TILE * 256) + 128);
     uint begin = tile_start[tile], end = tile_start[tile + 1u];
     mat3 turn = mat3(u_view);
     uint head = 0u;
-    for (uint batch = begin; batch < end; batch += uint(TILE * TILE)) {
-        uint count = min(uint(TILE * TILE), end - batch);
+    for (uint batch = begin; batch < end; batch += uint(BATCH)) {
+        uint count = min(uint(BATCH), end - batch);
         barrier();
         if (lane < count) {
             int t = int(bins[batch + lane]);
-            for (int j = 0; j < 5; ++j) {
-                held[5u * lane + uint(j)] = setup[5 * t + j];
-            }
+            ivec4 s0 = setup[5 * t], s1 = setup[5 * t + 1], s2 = setup[5 * t + 2];
+            held_z[lane] = vec3(intBitsToFloat(s1.z), intBitsToFloat(s1.w), intBitsToFloat(s2.x));
+            held_p01[lane] = intBitsToFloat(setup[5 * t + 4]);
+            held_p2[lane] = intBitsToFloat(setup[5 * t + 3].zw);
             held_face[lane] = t;
+            dvec3 a = dvec3(edge_eq[9 * t], edge_eq[9 * t + 3], edge_eq[9 * t + 6]);
+            dvec3 b = dvec3(edge_eq[9 * t + 1], edge_eq[9 * t + 4], edge_eq[9 * t + 7]);
+            dvec3 c = dvec3(edge_eq[9 * t + 2], edge_eq[9 * t + 5], edge_eq[9 * t + 8]);
+            held_at[lane] = a * origin.x + b * origin.y + c;
+            held_dx[lane] = a * 256.0;
+            held_dy[lane] = b * 256.0;
+            ivec2 c0 = s0.xy, c1 = s0.zw, c2 = s1.xy;
+            held_front[lane] = double(c1.x - c0.x) * double(c2.y - c0.y) - double(c1.y - c0.y) * double(c2.x - c0.x) > 0.0;
         }
         if (lane == 0u) {
             group_total = 0u;
         }
         barrier();
         float z;
-        vec3 b;
-        bool front;
+        vec3 w;
+        uint hits[BATCH / 32];
         uint mine = 0u;
-        for (uint k = 0u; inside && k < count; ++k) {
-            mine += covers(k, pixel, z, b, front) ? 1u : 0u;
+        for (uint word = 0u; word < uint(BATCH / 32); ++word) {
+            uint bits = 0u;
+            for (uint k = 32u * word; inside && k < min(count, 32u * word + 32u); ++k) {
+                dvec3 e = held_at[k] + held_dx[k] * local.x + held_dy[k] * local.y;
+                if (e.x >= 0.0 && e.y >= 0.0 && e.z >= 0.0 && depth_at(k, pixel, z, w)) {
+                    bits |= 1u << (k - 32u * word);
+                }
+            }
+            hits[word] = bits;
+            mine += uint(bitCount(bits));
         }
         uint offset = atomicAdd(group_total, mine);
         barrier();
@@ -237,36 +341,40 @@ void main() {
         }
         barrier();
         uint node = group_base + offset;
-        for (uint k = 0u; mine > 0u && k < count; ++k) {
-            if (!covers(k, pixel, z, b, front)) {
-                continue;
-            }
+        for (uint word = 0u; mine > 0u && word < uint(BATCH / 32); ++word) {
+            uint bits = hits[word];
+            while (bits != 0u) {
+                uint k = 32u * word + uint(findLSB(bits));
+                bits &= bits - 1u;
+                depth_at(k, pixel, z, w);
+                bool front = held_front[k];
 #if SLIM
-            if (node < capacity) {
-                slim[node] = uvec2(floatBitsToUint(z) | (front ? 0u : KB_BACK), uint(held_face[k] + 1));
-                AB_SET_LINK(node, head);
-                head = node + 1u;
-            }
-#else
-            if (node < capacity) {
-                ivec4 s2 = held[5u * k + 2u];
-                int face = held_face[k];
-                vec3 w = b * vec3(intBitsToFloat(s2.y), intBitsToFloat(s2.z), intBitsToFloat(s2.w));
-                w /= w.x + w.y + w.z;
-                uint v0 = indices[3 * face], v1 = indices[3 * face + 1], v2 = indices[3 * face + 2];
-                vec3 n = normalize(turn * (w.x * normal(v0) + w.y * normal(v1) + w.z * normal(v2)));
-                vec3 eye = (u_view * vec4(w.x * position(v0) + w.y * position(v1) + w.z * position(v2), 1.0)).xyz;
-                vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -eye;
-                if (dot(n, to_eye) < 0.0) {
-                    n = -n;
+                if (node < capacity) {
+                    slim[node] = uvec2(floatBitsToUint(z) | (front ? 0u : KB_BACK), uint(held_face[k] + 1));
+                    AB_SET_LINK(node, head);
+                    head = node + 1u;
                 }
-                int part = floatBitsToInt(vertices[7u * v0 + 6u]);
-                AB_SET_NODE(node, kb_pack(z, !front, n, face, part));
-                AB_SET_LINK(node, head);
-                head = node + 1u;
-            }
+#else
+                if (node < capacity) {
+                    ivec4 s2 = setup[5 * held_face[k] + 2];
+                    int face = held_face[k];
+                    vec3 v = w * vec3(intBitsToFloat(s2.y), intBitsToFloat(s2.z), intBitsToFloat(s2.w));
+                    v /= v.x + v.y + v.z;
+                    uint v0 = indices[3 * face], v1 = indices[3 * face + 1], v2 = indices[3 * face + 2];
+                    vec3 n = normalize(turn * (v.x * normal(v0) + v.y * normal(v1) + v.z * normal(v2)));
+                    vec3 eye = (u_view * vec4(v.x * position(v0) + v.y * position(v1) + v.z * position(v2), 1.0)).xyz;
+                    vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -eye;
+                    if (dot(n, to_eye) < 0.0) {
+                        n = -n;
+                    }
+                    int part = floatBitsToInt(vertices[7u * v0 + 6u]);
+                    AB_SET_NODE(node, kb_pack(z, !front, n, face, part));
+                    AB_SET_LINK(node, head);
+                    head = node + 1u;
+                }
 #endif
-            node += 1u;
+                node += 1u;
+            }
         }
     }
     if (inside) {
