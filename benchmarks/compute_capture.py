@@ -10,12 +10,14 @@ Python issuing it) and of a whole ``Renderer.render`` frame each way. One JSON o
     python benchmarks/compute_capture.py MODEL... [--size 1024 2048 4096] [--frames 9]
 
 Sizes are G-buffer sizes (a 2048² drawing at the default supersample 2 is 4096²). The compute
-pass leaves out clipping: views with a vertex behind the eye are refused.
+rasteriser is the renderer's (``render.raster``, ``LayerRenderer.compute_capture``); it does not
+clip: views with a vertex behind the eye are refused.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import statistics
 import time
@@ -24,79 +26,18 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import Renderer, load_model
-from blueprint.gpu.shaders import build_compute
-from blueprint.render.abuffer import ABuffer, list_defines
+from blueprint.render.abuffer import ABuffer
 from blueprint.render.capture import BACK_OFFSET, abuffer_uniforms, gbuffer
+from blueprint.render.raster import TILE
 from blueprint.scene.camera import fit_camera
 
-SHADER = Path(__file__).parent / "glsl" / "raster.comp"
-TILE = 16
-ROWS = 8  # threads a triangle in the set-up and binning (raster.comp)
 
-
-class ComputeRaster:
-    """The four dispatches of ``raster.comp`` and their buffers, for one renderer."""
-
-    def __init__(self, r) -> None:
-        self.r = r
-        defines = {**list_defines(r), "SLIM": r.abuffer_slim}
-        self.stages = [build_compute(r.ctx, SHADER, {"STAGE": k, **defines}) for k in range(4)]
-        # triangle-tile pairs the bins hold: the most a frame listed so far (a frame that lists
-        # more loses triangles: ``binned`` tells)
-        self.bin_room = 0
-
-    def fragments(self, ab: ABuffer, gb) -> None:
-        r, ctx = self.r, self.r.ctx
-        w, h = gb.size
-        triangles = ab.mesh.triangles
-        columns, rows = -(-w // TILE), -(-h // TILE)
-        tiles = columns * rows
-        pool = r.pool
-        setup = pool.buffer("raster.setup", 80 * triangles)
-        count = pool.buffer("raster.count", 4 * tiles)
-        start = pool.buffer("raster.start", 4 * (tiles + 1))
-        room = max(self.bin_room, 16 * triangles, 1 << 22)
-        bins = pool.buffer("raster.bins", 4 * room)
-        pool.buffer("raster.edges", 72 * triangles).bind_to_storage_buffer(15)
-        count.clear()
-        ab.mesh.vbo.bind_to_storage_buffer(5)
-        ab.mesh.ibo.bind_to_storage_buffer(6)
-        for binding, buf in ((11, setup), (12, count), (13, start), (14, bins)):
-            buf.bind_to_storage_buffer(binding)
-        pool.texture(f"abuffer.{w}x{h}.head", (w, h), "r32ui").bind_to_image(0, read=True, write=True)
-        view, projection = ab.geometry["u_view"].read(), ab.geometry["u_projection"].read()
-        # (slim fragments' geometry pass has no normals to turn: the resolve holds the camera's)
-        ortho = (ab.resolve if ab.slim else ab.geometry)["u_ortho"].value
-        for prog in self.stages:
-            for name, value in (
-                ("u_size", (w, h)),
-                ("u_triangles", triangles),
-                ("u_tile_columns", columns),
-                ("u_tiles", tiles),
-                ("u_bin_room", room),
-                ("u_ortho", ortho),
-            ):
-                if name in prog:
-                    prog[name].value = value
-            for name, value in (("u_view", view), ("u_projection", projection)):
-                if name in prog:
-                    prog[name].write(value)
-        groups = -(-triangles * ROWS // 64)
-        self.stages[0].run(groups)
-        ctx.memory_barrier()
-        self.stages[1].run(1)
-        ctx.memory_barrier()
-        self.stages[2].run(groups)
-        ctx.memory_barrier()
-        self.stages[3].run(columns, rows)
-
-    def binned(self, size: tuple[int, int]) -> int:
-        """Triangle-tile pairs of the last frame at ``size`` (a read: not for timed frames)."""
-        tiles = -(-size[0] // TILE) * -(-size[1] // TILE)
-        start = self.r.pool.buffer("raster.start", 4 * (tiles + 1))
-        pairs = int(np.frombuffer(start.read(size=4, offset=4 * tiles), np.uint32)[0])
-        self.bin_room = max(self.bin_room, pairs)
-        return pairs
+def binned(r, size: tuple[int, int]) -> int:
+    """Triangle-tile pairs the compute rasteriser listed in the last frame at ``size`` (a read:
+    not for timed frames)."""
+    tiles = -(-size[0] // TILE) * -(-size[1] // TILE)
+    start = r.pool.buffer("raster.start", 4 * (tiles + 1))
+    return int(np.frombuffer(start.read(size=4, offset=4 * tiles), np.uint32)[0])
 
 
 STALL = """#version 430
@@ -130,19 +71,16 @@ def main() -> None:
 
 
 class Bench:
-    """Both ways of filling the A-buffer's lists, switched in ``ABuffer.fragments``."""
+    """Both ways of filling the A-buffer's lists (``LayerRenderer.compute_capture``)."""
 
     def __init__(self, r, layers: int | None, frames: int) -> None:
         self.r, self.layers, self.frames = r, layers, frames
-        self.raster = ComputeRaster(r)
-        self.graphics = ABuffer.fragments
         self.stall_prog = r.ctx.compute_shader(STALL)
         self.stall_buf = r.ctx.buffer(reserve=256)
         self.loops = 0
 
     def use(self, compute: bool) -> None:
-        raster = self.raster
-        ABuffer.fragments = (lambda ab, gb: raster.fragments(ab, gb)) if compute else self.graphics
+        self.r.compute_capture = compute
 
     def stall(self) -> None:
         self.stall_buf.bind_to_storage_buffer(11)
@@ -187,19 +125,21 @@ class Bench:
             "surfaces_same_triangle": round(float((a.triangle[:k] == b.triangle[:k])[both].mean()), 6),
             "depth_max_diff": float(np.abs(a.depth[:k] - b.depth[:k])[both].max(initial=0.0)),
             "normal_max_diff": float(np.abs(a.normal[:k] - b.normal[:k])[both].max(initial=0.0)),
-            "tile_pairs": self.raster.binned((size, size)),
+            "tile_pairs": binned(r, (size, size)),
             "fragments": fragments(r, size),
         }
         # the capture alone (lists emptied, every fragment listed, the lists sorted), each way
-        ab = peeled_capture(r, model, camera)
         gb = gbuffer(r.pool, (size, size))
         self.loops = 20_000_000 if size > 1024 else 4_000_000
         options = dict(size=(size // 2, size // 2), max_layers=self.layers)
         pictures = []
         for compute in (False, True):
             self.use(compute)
+            ab = peeled_capture(r, model, camera)
             form = "compute" if compute else "graphics"
-            row[f"capture_{form}_ms"] = self.gpu_ms(lambda: ab._capture(gb, f"abuffer.{size}x{size}"))
+            row[f"capture_{form}_ms"] = self.gpu_ms(
+                functools.partial(ab._capture, gb, f"abuffer.{size}x{size}")
+            )
             pictures.append(r.render(model, camera, **options).image.astype(np.int16))
             row[f"frame_{form}_ms"] = self.gpu_ms(lambda: r.render(model, camera, **options))
         self.use(False)

@@ -95,7 +95,7 @@ class ABuffer:
         self.defines = list_defines(r)
         self.slim = r.abuffer_slim
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
-        capture = {**self.defines, "SLIM": self.slim}
+        capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         self.geometry = geometry_program(r, ABUFFER_FRAG, capture, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
         self.resolve = r.compute(RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1} if tiles else capture)
@@ -113,6 +113,11 @@ class ABuffer:
         )
         for prog in (self.resolve, self.unpack):
             put(prog, "u_back_bias", back_bias)
+        self.uniforms = uniforms
+        # the compute rasteriser where the renderer captures in compute (render.raster), and
+        # (its bins' room, the size) of the capture in hand where it drew it
+        self.raster = r.compute_raster if r.compute_capture else None
+        self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
         self._rooms: dict[str, int] = {}  # the room of the last capture, by its lists' name
@@ -142,12 +147,16 @@ class ABuffer:
 
     def fits(self, size: tuple[int, int]) -> bool:
         """Whether a frame of ``size`` with the fragments of the last one there would fit."""
-        return self._holds(self._room(size))
+        return self._holds(self._room(size), size)
 
-    def _holds(self, room: int) -> bool:
-        """Whether lists of ``room`` fragments fit ``max_bytes`` (and the images' rows)."""
+    def _holds(self, room: int, size: tuple[int, int]) -> bool:
+        """Whether lists of ``room`` fragments at ``size``, and the compute rasteriser's
+        buffers where it draws them, fit ``max_bytes`` (and the images' rows)."""
         rows = -(-room // AB_ROW)
-        return room * self.node_bytes <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
+        held = room * self.node_bytes
+        if self.raster is not None:
+            held += self.raster.bytes(size, self.mesh.triangles)
+        return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
     def _room(self, size: tuple[int, int]) -> int:
         held = self.r.abuffer_room.get(tuple(size))
@@ -236,13 +245,14 @@ class ABuffer:
         calls = 0
         while True:
             room = self._room(size)
-            if not self._holds(room):
+            if not self._holds(room, size):
                 return None
             totals, depths = self._buffers(name, room)
             head.bind_to_image(0, read=True, write=True)
             self.clear["u_capacity"].value = room
             self.clear.run(*groups)
             ctx.memory_barrier()
+            self._binned = None
             self.fragments(gb)
             ctx.memory_barrier()
             # lists cut short by too little room hold only the fragments that had room: sorted
@@ -271,8 +281,12 @@ class ABuffer:
                 return calls
 
     def fragments(self, gb) -> None:
-        """Every fragment of the mesh into its pixel's list (abuffer.frag): the graphics
-        pipeline's rasteriser (``benchmarks/compute_capture.py`` measures one in compute)."""
+        """Every fragment of the mesh into its pixel's list: by the compute rasteriser where
+        there is one and it sees the view, else the graphics pipeline's (abuffer.frag)."""
+        raster = self.raster
+        if raster is not None and raster.sees(self.mesh.bounds, self.uniforms, gb.size):
+            self._binned = raster.fragments(self, gb.size, self.uniforms), tuple(gb.size)
+            return
         gb.clears[0].use()
         target_uniform(self.r, self.geometry, gb.size)
         self.mesh.vao(self.geometry).render()
@@ -288,9 +302,11 @@ class ABuffer:
         if drawn > room or size not in self.r.abuffer_room:
             # room to spare for a model turning
             self.r.abuffer_room[size] = int(drawn * 1.25) + 1024
-        if drawn > room:
+        # the compute rasteriser's bins (render.raster) take the same turn where they were short
+        binned = self._binned is None or self.raster.pairs(self._binned[1], int(counts[3]), self._binned[0])
+        if drawn > room or not binned:
             if self.defer:
-                raise Overflow(f"{drawn} fragments, room for {room}")
+                raise Overflow(f"{drawn} fragments, room for {room}; {counts[3]} tile bins")
             return False
         histogram = self._count_pixels(name, size) if self.tiles else counts[4 : 4 + MOST_LAYERS + 1]
         # pixels with at least k + 1 layers are those layer k covers

@@ -23,6 +23,7 @@ from blueprint.render.capture import (
     peel_uniforms,
 )
 from blueprint.render.mesh import GpuMesh, geometry_program, target_uniform
+from blueprint.render.raster import ComputeRaster
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
@@ -151,6 +152,14 @@ class LayerRenderer(Device):
         # (fragments of their face alone, each one's depth found by the sort from its face:
         # 36.3 ms). llvmpipe's compute is its fragment stage.
         self.abuffer_slim = self.use_compute
+        # The A-buffer's fragments listed by a rasteriser in compute (render.raster) instead of
+        # the graphics pipeline's, in views that need no clipping. On the H200 it listed
+        # cycloidal's at 4096² in 11.3 against 19.7 ms (benchmarks/compute_capture.py), and
+        # streamed 2048² frames took 17.7 against 25.2 ms; off until it has run the oracle
+        # tests there (test_layers_oracle's a-buffer-compute), and on llvmpipe, whose
+        # rasteriser is its compute, it is slower: the tests turn it on.
+        self.compute_capture = False
+        self.compute_raster = ComputeRaster(self)
         # Where the driver's depths come from snapped corners, every geometry pass takes its
         # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): on the H200
         # coincident faces of one part otherwise peeled as two layers.

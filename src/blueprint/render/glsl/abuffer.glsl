@@ -45,13 +45,15 @@ layout(std430, binding = 2) coherent buffer Order {
 #define AB_SET_LINK(i, v) links[i] = (v)
 #define AB_SET_ORDER(i, v) order[i] = (v)
 #endif
-// (fragments drawn, nodes held, pixels whose list was too long to sort in registers); the most
+// (fragments drawn, nodes held, pixels whose list was too long to sort in registers, triangle-
+// tile pairs the compute rasteriser listed: abuffer_raster.comp); the most
 // layers of any pixel comes from Depths, not from an atomic a pixel on one shared word (on
 // llvmpipe that took a fifth of the resolve)
 layout(std430, binding = 3) coherent buffer Totals {
     uint drawn;
     uint capacity;
     uint long_lists;
+    uint pairs;
 };
 // pixels by the number of layers they hold, the last entry for that many or more
 #define MOST_LAYERS 256

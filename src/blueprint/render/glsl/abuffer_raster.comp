@@ -1,5 +1,4 @@
-// The A-buffer's geometry pass (abuffer.frag) done in compute, for benchmarks/compute_capture.py:
-// triangles snapped to 1/256 pixel as a rasteriser snaps them, binned to tiles of TILE x TILE
+// The A-buffer's geometry pass (abuffer.frag) done in compute (render/raster.py): triangles snapped to 1/256 pixel as a rasteriser snaps them, binned to tiles of TILE x TILE
 // pixels, and each tile's pixels tested against its triangles by one workgroup, every covered
 // pixel centre's fragment appended to the pixel's list as the fragment shader appends it.
 // STAGE 0 sets each triangle up and counts the tiles it touches, 1 turns the counts into
@@ -159,8 +158,8 @@ void main() {
         setup[5 * t + 2] = ivec4(floatBitsToInt(z[2]), floatBitsToInt(inv_w[0]), floatBitsToInt(inv_w[1]),
             floatBitsToInt(inv_w[2]));
     }
-    // (a vertex behind the eye needs clipping, which this experiment leaves out: the benchmark
-    // refuses such views)
+    // (no vertex lies behind the eye: such views are left to the graphics pipeline, which
+    // clips; render.raster.ComputeRaster.sees)
     if (behind || area == 0.0 || any(greaterThan(first, last))) {
         if (first_row) {
             setup[5 * t + 3] = ivec4(0);
@@ -221,6 +220,8 @@ void main() {
     }
     if (i == GROUP - 1u) {
         tile_start[u_tiles] = sums[i];
+        // more than the bins hold: the capture sees it and draws again with room for them
+        pairs = sums[i];
     }
 }
 #elif STAGE == 2
@@ -293,7 +294,8 @@ void main() {
     uint lane = gl_LocalInvocationIndex;
     dvec2 local = dvec2(gl_LocalInvocationID.xy);
     dvec2 origin = dvec2(ivec2(gl_WorkGroupID.xy) * (TILE * 256) + 128);
-    uint begin = tile_start[tile], end = tile_start[tile + 1u];
+    // (bins past the room were never listed)
+    uint begin = min(tile_start[tile], uint(u_bin_room)), end = min(tile_start[tile + 1u], uint(u_bin_room));
     mat3 turn = mat3(u_view);
     uint head = 0u;
     for (uint batch = begin; batch < end; batch += uint(BATCH)) {

@@ -1,0 +1,132 @@
+"""The A-buffer's fragments listed by the compute rasteriser (render/raster.py,
+``LayerRenderer.compute_capture``) against the graphics pipeline's: the same fragments, and the
+same layers at every pixel but where two faces tie in depth (coincident faces: there the
+rasteriser's rounding and ours each pick one), with the bins' room short (drawn again)
+and in views it must leave to the graphics pipeline (a corner of the model behind the eye). The
+ray-casting oracle checks it against the geometry (test_layers_oracle.py, a-buffer-compute)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_layers_oracle import nested_boxes, nested_round
+
+import blueprint
+from blueprint import examples
+from blueprint.render.capture import abuffer_uniforms
+from blueprint.render.raster import REACH, ComputeRaster
+from blueprint.scene.camera import Camera, fit_camera
+
+# window depths of the two rasterisers at one surface: the plane through the projected corners
+# against the driver's interpolation from corners snapped to 1/256 px, apart by the snap times
+# the depth's slope a pixel (the gearbox: 1.2e-5 at most, beyond 1e-6 at 1 % of its surfaces).
+# The depths' own accuracy is the oracle's to judge (test_layers_oracle.py).
+DEPTH_APART = 1e-4
+
+
+@pytest.fixture
+def capture(renderer):
+    """Switches the renderer's A-buffer (always on, whole fragments) between the graphics
+    pipeline's fragments and the compute rasteriser's."""
+    if renderer.ctx.version_code < 430:
+        pytest.skip("the A-buffer needs OpenGL 4.3 (storage buffers and compute shaders)")
+    saved = (
+        renderer.abuffer_max_bytes,
+        renderer.abuffer_min_layers,
+        renderer.kbuffer,
+        renderer.compute_capture,
+    )
+    rooms = dict(renderer.compute_raster.rooms)
+
+    def use(compute: bool) -> None:
+        renderer.abuffer_max_bytes, renderer.abuffer_min_layers, renderer.kbuffer = 1 << 28, 2, False
+        renderer.compute_capture = compute
+
+    yield use
+    (
+        renderer.abuffer_max_bytes,
+        renderer.abuffer_min_layers,
+        renderer.kbuffer,
+        renderer.compute_capture,
+    ) = saved
+    renderer.compute_raster.rooms.clear()
+    renderer.compute_raster.rooms.update(rooms)
+
+
+def _both(renderer, capture, model, **options):
+    capture(True)
+    compute = blueprint.peel(model, renderer=renderer, **options)
+    capture(False)
+    graphics = blueprint.peel(model, renderer=renderer, **options)
+    return compute, graphics
+
+
+@pytest.mark.parametrize(
+    "make, view",
+    [
+        (nested_boxes, dict(azimuth=30.0, elevation=25.0)),
+        (nested_round, dict(azimuth=20.0, elevation=35.0)),
+        (examples.gearbox, {}),
+        (examples.gearbox, dict(view="front", ortho=True)),
+    ],
+    ids=["nested-boxes", "nested-round", "gearbox", "gearbox-front-ortho"],
+)
+def test_compute_lists_the_graphics_pipelines_layers(renderer, capture, make, view):
+    model = make()
+    compute, graphics = _both(renderer, capture, model, size=(96, 80), **view)
+    assert len(compute.depth) == len(graphics.depth) >= 2
+    count = (compute.depth < 1).sum(0), (graphics.depth < 1).sum(0)
+    other = count[0] != count[1]
+    # two surfaces about the peel's tolerance apart are one layer or two by rounding: on a face
+    # seen edge-on the driver's depth from corners snapped to 1/256 px and the true plane's
+    # differ by the snap times the slope (the gearbox: one pixel of 7 680)
+    assert other.sum() <= 1e-3 * (count[1] > 0).sum(), f"{other.sum()} pixels with other layer counts"
+    covered = (graphics.depth < 1) & ~other
+    apart = np.abs(compute.depth - graphics.depth)[covered]
+    assert apart.max() <= DEPTH_APART
+    # faces that tie in depth (coincident faces: the same depth within rounding) are the ones
+    # whose order either rasteriser's rounding decides
+    same_face = compute.triangle == graphics.triangle
+    assert same_face[covered].mean() >= 0.998
+    assert np.array_equal(compute.part[covered & same_face], graphics.part[covered & same_face])
+
+
+def test_short_bins_are_drawn_again(renderer, capture):
+    model = nested_round()
+    options = dict(size=(96, 96), azimuth=20.0, elevation=35.0)
+    capture(True)
+    full = blueprint.peel(model, renderer=renderer, **options)
+    renderer.compute_raster.rooms[(96, 96)] = 8  # far fewer triangle-tile pairs than it lists
+    again = blueprint.peel(model, renderer=renderer, **options)
+    assert renderer.compute_raster.rooms[(96, 96)] > 8
+    assert np.array_equal(again.depth, full.depth)
+    assert np.array_equal(again.triangle, full.triangle)
+
+
+def test_views_it_cannot_draw_go_to_the_graphics_pipeline(renderer, capture, monkeypatch):
+    """A camera inside the model (corners of its bounds behind the eye: the graphics pipeline
+    clips them) is drawn by the graphics pipeline, its layers the same."""
+    model = nested_boxes()
+    camera = Camera(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0), near=0.05, far=20.0)
+    listed = []
+    fragments = ComputeRaster.fragments
+    monkeypatch.setattr(ComputeRaster, "fragments", lambda *a: listed.append(1) or fragments(*a))
+    compute, graphics = _both(renderer, capture, model, size=(64, 64), camera=camera)
+    assert not listed
+    assert np.array_equal(compute.depth, graphics.depth)
+    compute, graphics = _both(renderer, capture, model, size=(64, 64))
+    assert listed, "a view from outside the model is listed in compute"
+
+
+def test_what_it_sees(renderer):
+    raster = renderer.compute_raster
+    model = nested_boxes()
+    size = (256, 256)
+    outside = abuffer_uniforms(fit_camera(model, size))
+    assert raster.sees(model.bounds, outside, size)
+    inside = Camera(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0), near=0.05, far=20.0)
+    assert not raster.sees(model.bounds, abuffer_uniforms(inside), size)
+    # in front of the eye, but projected past the range its edge tests stay exact in
+    near = Camera(eye=(0.0, 0.0, 2.0 + 1e-4), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), near=1e-5, far=20.0)
+    assert not raster.sees(model.bounds, abuffer_uniforms(near), (4096, 4096))
+    assert REACH <= 1 << 17
