@@ -15,6 +15,7 @@ import os
 import time
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,23 +23,12 @@ from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.blas import one_blas_thread
-from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
 from blueprint.export.writers import WRITERS, Kind, Writer
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.executor import Result, executor_for
 from blueprint.pipeline.media import VIDEO_FORMATS, write_video
-from blueprint.pipeline.run import (
-    PICTURE_SUFFIXES,
-    orbit,
-    parse_variables,
-    run_video,
-    save_result,
-    with_images,
-)
-from blueprint.pipeline.spec import with_file
 from blueprint.scene.camera import VIEWS, fit_camera
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
@@ -54,6 +44,10 @@ from blueprint.silhouette.gpu import (
 )
 from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
 from blueprint.vector.style import VectorStyle
+
+if TYPE_CHECKING:
+    from blueprint.compose.glyphs import Glyphs
+    from blueprint.pipeline.state import Result
 
 log = logging.getLogger("blueprint")
 
@@ -107,6 +101,11 @@ def run_pipeline(
     name (``{"highlight": "gear*"}``: name globs or indices, as ``--highlight`` takes them),
     ``dump`` names targets to write beside the output. Returns the last frame's result.
     """
+    # the executor and its passes load for pipelines only, not for every drawing
+    from blueprint.pipeline.executor import executor_for
+    from blueprint.pipeline.run import PICTURE_SUFFIXES, parse_variables, run_video, save_result, with_images
+    from blueprint.pipeline.spec import with_file
+
     images = {k: str(v) for k, v in (image or {}).items()}
     spec = with_images(pipeline, images)
     variables = parse_variables(set)
@@ -193,6 +192,9 @@ def turntable(
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
         raise InputError(f"crf must be in [0, 51], got {crf}")
+    from blueprint.pipeline.executor import executor_for  # as in run_pipeline
+    from blueprint.pipeline.run import orbit, parse_variables, with_images
+
     renderer = shared(renderer)
     spec = with_images(pipeline, {})
     variables = parse_variables(set)

@@ -26,7 +26,6 @@ from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
 from blueprint.export.writers import WRITERS, Kind
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.blueprint import render_blueprint
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.dimension import UNITS_MM
@@ -256,6 +255,8 @@ def _revealing_layers(renderer, model, camera, size, chosen, reveal, max_layers)
     """How many layers the renderer's depth masking peels to uncover ``reveal`` of the parts."""
     if not chosen:
         raise InputError("reveal needs parts to reveal: give highlight as well")
+    from blueprint.pipeline.blueprint import render_blueprint  # depth masking only: loaded here
+
     flags = np.zeros(len(model.part_names), bool)
     flags[sorted(chosen)] = True
     frame = render_blueprint(
