@@ -1,7 +1,7 @@
 """File workflows: a model, an image or a video file in; a picture, drawing, video or data file
 out (silhouettes: ``blueprint.api.silhouettes``). Each draws with ``renderer``, or with the
-shared one (``blueprint.api.default_renderer``) when it is None. The command line is a thin shell over these: every option is an argument of
-the same name.
+shared one (``blueprint.api.default_renderer``) when it is None. The command line is a thin
+shell over these: every option is an argument of the same name.
 
 Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``.
 This module imports every module that registers writers (vector drawings) and registers video
