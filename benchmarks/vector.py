@@ -19,8 +19,17 @@ the whole process, and the speedups: ``speedup_vs_lineart`` and ``cpu_speedup_vs
 are compared), ``process_...`` (process against process) and ``warm_...`` (against Line Art's
 warm frame, the model already in Blender).
 
+Whole processes run as an installed package does: with bytecode (compiled once, into a
+temporary ``PYTHONPYCACHEPREFIX``, by a warm-up run; ``PYTHONDONTWRITEBYTECODE`` is removed
+from their environment, since without bytecode every start compiles the package's modules
+anew) and with Mesa's shader cache as the user has it, filled by that warm-up run.
+``process_cold_cache_cpu_seconds`` is one more process with the shader cache empty, as on
+the first run after installing (llvmpipe then compiles every shader with LLVM). ``--before
+SRC`` adds a whole process of another source tree of the package (``SRC``, the folder holding
+``blueprint``: an older commit's ``src``) to each round's turns, ``before_process_...``.
+
     python benchmarks/vector.py [--models-dir ../shared/models] [--size 1024 1024] [--runs 3]
-                                [--lineart [--blender PATH] [--xvfb]]
+                                [--lineart [--blender PATH] [--xvfb]] [--before SRC]
 """
 
 from __future__ import annotations
@@ -60,13 +69,23 @@ MODELS = {
 }
 
 
-def our_process(path: Path, output: Path, size, max_layers: int) -> tuple[float, float]:
+def process_environment(pycache: Path, source: Path | None = None, **extra: str) -> dict[str, str]:
+    """This environment as an installed package runs in: bytecode kept in ``pycache``;
+    ``source``: a source tree of the package put first on the path."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")}
+    env["PYTHONPYCACHEPREFIX"] = str(pycache)
+    if source is not None:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(source), env.get("PYTHONPATH")) if p)
+    return {**env, **extra}
+
+
+def our_process(path: Path, output: Path, size, max_layers: int, env: dict[str, str]) -> tuple[float, float]:
     """Wall and CPU seconds (every thread) of the whole ``blueprint render`` process, file to SVG:
     Python's start, the imports and the GL context included, as Blender's start is in its
     figure."""
     command = [sys.executable, "-m", "blueprint", "render", str(path), "-o", str(output)]
     command += ["--size", *map(str, size), "--max-layers", str(max_layers)]
-    done, wall, cpu = run_process(command)
+    done, wall, cpu = run_process(command, env)
     if done.returncode != 0:
         raise RuntimeError(f"blueprint render failed ({done.returncode}):\n{done.stderr[-2000:]}")
     return wall, cpu
@@ -86,6 +105,9 @@ def main() -> None:
     )
     parser.add_argument("--blender", default=os.environ.get("BLENDER", "blender"))
     parser.add_argument("--xvfb", action="store_true", help="Run Blender under xvfb-run.")
+    parser.add_argument(
+        "--before", type=Path, default=None, help="Another source tree of the package, taking turns too."
+    )
     args = parser.parse_args()
     renderer = default_renderer()
     size = tuple(args.size)
@@ -93,24 +115,29 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as scratch:
         out_dir = args.keep or Path(scratch)
         out_dir.mkdir(parents=True, exist_ok=True)
+        envs = {"process": process_environment(Path(scratch) / "pycache")}
+        if args.before is not None:
+            envs["before"] = process_environment(Path(scratch) / "pycache", args.before.resolve())
         for name, blender_s in MODELS.items():
             path = find_model(args.models_dir, name)
             if path is None:
                 print(json.dumps({"model": name, "skipped": f"not found under {args.models_dir}"}))
                 continue
             stem = path.stem
-            runs, cpu, processes, theirs = [], [], [], []
+            runs, cpu, theirs = [], [], []
+            processes: dict[str, list] = {turn: [] for turn in envs}
+            for turn, env in envs.items():  # warm-up: bytecode written, shader cache filled
+                our_process(path, out_dir / f"{stem}_{turn}.svg", size, args.max_layers, env)
             for run in range(max(args.runs, 1)):
                 # side by side: Blender and we take turns, each first every other round, so
                 # that the other loads of the machine fall on both alike
-                turns = ["ours", "process", "lineart"] if lineart else ["ours"]
+                turns = ["ours", *envs, "lineart"] if lineart else ["ours", *envs]
                 for turn in turns if run % 2 == 0 else turns[::-1]:
                     if turn == "lineart":
                         theirs.append(lineart.run(path, out_dir / f"{stem}_lineart.png"))
-                    elif turn == "process":
-                        processes.append(
-                            our_process(path, out_dir / f"{stem}_process.svg", size, args.max_layers)
-                        )
+                    elif turn in envs:
+                        output = out_dir / f"{stem}_{turn}.svg"
+                        processes[turn].append(our_process(path, output, size, args.max_layers, envs[turn]))
                     else:
                         for cache in (ADJACENCY, INTERSECTIONS, PLANES):
                             cache.clear()
@@ -142,6 +169,10 @@ def main() -> None:
                 sizes[fmt] = other["bytes"]
             seconds = statistics.median(totals)
             cpu_seconds = statistics.median(cpu)
+            cold = {**envs["process"], "MESA_SHADER_CACHE_DIR": str(Path(scratch) / f"mesa-cold-{stem}")}
+            cold_cpu = our_process(path, out_dir / f"{stem}_cold.svg", size, args.max_layers, cold)[1]
+            process_s = statistics.median(w for w, _ in processes["process"])
+            process_cpu = statistics.median(c for _, c in processes["process"])
             figures = {
                 "renderer": renderer.info["renderer"],
                 "model": path.name,
@@ -158,17 +189,20 @@ def main() -> None:
                 "lines_per_level": median["lines"],
                 "points": median["points"],
                 "bytes": sizes,
+                "process_seconds": round(process_s, 3),
+                "process_cpu_seconds": round(process_cpu, 3),
+                "process_cold_cache_cpu_seconds": round(cold_cpu, 3),
             }
+            if "before" in processes:
+                before = processes["before"]
+                figures["before_process_seconds"] = round(statistics.median(w for w, _ in before), 3)
+                figures["before_process_cpu_seconds"] = round(statistics.median(c for _, c in before), 3)
             if lineart is None:
                 figures["blender_lineart_512_s"] = blender_s
                 figures["speedup_vs_blender"] = round(blender_s / seconds, 2)
                 figures["cpu_speedup_vs_blender"] = round(blender_s / cpu_seconds, 2)
             else:
                 peer = LineArt.summary(theirs)
-                process_s = statistics.median(w for w, _ in processes)
-                process_cpu = statistics.median(c for _, c in processes)
-                figures["process_seconds"] = round(process_s, 3)
-                figures["process_cpu_seconds"] = round(process_cpu, 3)
                 figures["lineart"] = {"renderer": f"{lineart.version} Line Art", **peer}
                 # a drawing in a running process against Line Art's file to PNG, as the
                 # recorded figures were compared; and process against process

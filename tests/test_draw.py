@@ -149,11 +149,16 @@ def test_objects_that_cannot_be_drawn_raise_one_line(obj, message):
     assert "\n" not in text
 
 
-def _loaded_after(code: str) -> set[str]:
-    heavy = ["scipy", "networkx", "trimesh", "moderngl", "blueprint.silhouette", "blueprint.vector", "dask"]
-    # what a picture's drawing does without, each a measurable part of its start (benchmarks/startup.py)
-    heavy += ["PIL", "click", "blueprint.compose.glyphs", "blueprint.api.sections", "blueprint.api.files"]
-    heavy += ["importlib.resources", "zipfile", "difflib"]
+# what a picture's drawing does without, each a measurable part of its start (benchmarks/startup.py)
+PICTURE_HEAVY = ["scipy", "networkx", "trimesh", "moderngl", "blueprint.silhouette", "blueprint.vector"]
+PICTURE_HEAVY += ["dask", "PIL", "click", "blueprint.compose.glyphs", "blueprint.api.sections"]
+PICTURE_HEAVY += ["blueprint.api.files", "importlib.resources", "zipfile", "difflib"]
+# what a vector drawing does without (benchmarks/vector.py, whole processes)
+VECTOR_HEAVY = ["scipy", "networkx", "trimesh", "PIL", "dask", "tomllib", "blueprint.pipeline.executor"]
+VECTOR_HEAVY += ["blueprint.ops", "blueprint.silhouette.gpu", "blueprint.compose.glyphs.values"]
+
+
+def _loaded_after(code: str, heavy: list[str] = PICTURE_HEAVY) -> set[str]:
     # at exit, which the command line calls itself, on a line of its own among what the code prints
     report = f"print('loaded:', *(m for m in {heavy!r} if m in sys.modules))"
     probe = f"import atexit, sys\natexit.register(lambda: {report})\n{code}"
@@ -186,6 +191,13 @@ def test_a_binary_stl_picture_loads_only_what_it_draws_with(tmp_path):
     np.testing.assert_array_equal(fast.positions, np.asarray(loaded.vertices, np.float32))
     np.testing.assert_array_equal(fast.faces, loaded.faces)
     assert (fast.part_names, fast.up) == (("part",), "z")
+
+
+def test_a_glb_vector_drawing_loads_only_what_it_draws_with(tmp_path):
+    """The glTF reader, the pipeline, glyphs and the GPU silhouette methods stay out of an SVG
+    drawing's process: together well over a CPU second of its start."""
+    argv = ["render", str(examples.example_path()), "-o", str(tmp_path / "g.svg"), "--size", "64", "64"]
+    assert _loaded_after(f"from blueprint.cli import main\nmain({argv!r})", VECTOR_HEAVY) == set()
 
 
 # -- the command line's drawing options --------------------------------------------------------------

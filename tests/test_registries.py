@@ -153,7 +153,7 @@ def test_layers_take_only_their_writers(tmp_path):
 
 
 def test_a_video_suffix_without_animation_asks_for_it(tmp_path):
-    from blueprint.api.files import render_silhouettes_file
+    from blueprint.api.silhouettes import render_silhouettes_file
 
     with pytest.raises(InputError, match="a video needs --animate"):
         render_silhouettes_file("unread.glb", tmp_path / "x.mkv")

@@ -11,7 +11,6 @@ import json
 import math
 import os
 import stat
-import tomllib
 from pathlib import Path
 from typing import Any, BinaryIO
 
@@ -234,6 +233,8 @@ def _number_text(name: str, kind: type):
 def parse_text(text: str, name: str, fmt: str) -> Any:
     """The data of TOML or JSON ``text`` (``fmt`` "toml" or "json") from the file ``name``, with
     nesting depth and number sizes bounded: a one-line InputError naming the file and the key."""
+    import tomllib  # its regular expressions are compiled at import: most runs read no TOML
+
     floats = _number_text(name, float)
     try:
         if fmt == "toml":

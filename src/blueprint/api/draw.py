@@ -226,7 +226,6 @@ def vector_drawing(
     plan sheet, cut by a section where asked, a glyph file's dimensions added), not written
     anywhere: a ``blueprint.vector.drawing.Drawing``."""
     from blueprint.api.sections import section_of
-    from blueprint.compose.glyphs import Glyphs, load_glyphs
     from blueprint.gpu.device import check_size
     from blueprint.vector.drawing import draw_vector, draw_vector_sheet
 
@@ -256,8 +255,11 @@ def vector_drawing(
     cut = section_of(model, section, section_plane, section_keep)
     if sheet is not None and view != PLAN:
         raise InputError(f"--sheet {sheet} sets the paper of a plan sheet: give --view plan")
-    if glyphs is not None and not isinstance(glyphs, Glyphs):
-        glyphs = load_glyphs(glyphs)
+    if glyphs is not None:
+        from blueprint.compose.glyphs import Glyphs, load_glyphs  # loaded for drawings with glyphs
+
+        if not isinstance(glyphs, Glyphs):
+            glyphs = load_glyphs(glyphs)
     if view == PLAN:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")

@@ -1,7 +1,7 @@
 """File workflows: a model, an image or a video file in; a picture, drawing, video or data file
-out. Each draws with ``renderer``, or with the shared one (``blueprint.api.default_renderer``)
-when it is None. The command line is a thin shell over these: every option is an argument of
-the same name.
+out (silhouettes: ``blueprint.api.silhouettes``). Each draws with ``renderer``, or with the
+shared one (``blueprint.api.default_renderer``) when it is None. The command line is a thin
+shell over these: every option is an argument of the same name.
 
 Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``.
 This module imports every module that registers writers (vector drawings) and registers video
@@ -15,6 +15,7 @@ import os
 import time
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,42 +23,28 @@ from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.blas import one_blas_thread
-from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.style import Style
 from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
 from blueprint.export.writers import WRITERS, Kind, Writer
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.executor import Result, executor_for
 from blueprint.pipeline.media import VIDEO_FORMATS, write_video
-from blueprint.pipeline.run import (
-    PICTURE_SUFFIXES,
-    orbit,
-    parse_variables,
-    run_video,
-    save_result,
-    with_images,
-)
-from blueprint.pipeline.spec import with_file
-from blueprint.scene.camera import VIEWS, fit_camera
+from blueprint.scene.camera import fit_camera
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.settings import FRAME_LIMIT
-from blueprint.silhouette.gpu import (
-    DEFAULT_LAYERS,
-    DEFAULT_METHOD,
-    MAX_LAYERS,
-    animate_silhouettes,
-    render_silhouettes,
-)
 from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
 from blueprint.vector.style import VectorStyle
 
+if TYPE_CHECKING:
+    from blueprint.compose.glyphs import Glyphs
+    from blueprint.pipeline.state import Result
+
 log = logging.getLogger("blueprint")
 
-__all__ = ["choose_writer", "render_silhouettes_file", "render_vector_file", "run_pipeline", "turntable"]
+__all__ = ["choose_writer", "render_vector_file", "run_pipeline", "turntable"]
 
 
 def choose_writer(output: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
@@ -107,6 +94,11 @@ def run_pipeline(
     name (``{"highlight": "gear*"}``: name globs or indices, as ``--highlight`` takes them),
     ``dump`` names targets to write beside the output. Returns the last frame's result.
     """
+    # the executor and its passes load for pipelines only, not for every drawing
+    from blueprint.pipeline.executor import executor_for
+    from blueprint.pipeline.run import PICTURE_SUFFIXES, parse_variables, run_video, save_result, with_images
+    from blueprint.pipeline.spec import with_file
+
     images = {k: str(v) for k, v in (image or {}).items()}
     spec = with_images(pipeline, images)
     variables = parse_variables(set)
@@ -193,6 +185,9 @@ def turntable(
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
         raise InputError(f"crf must be in [0, 51], got {crf}")
+    from blueprint.pipeline.executor import executor_for  # as in run_pipeline
+    from blueprint.pipeline.run import orbit, parse_variables, with_images
+
     renderer = shared(renderer)
     spec = with_images(pipeline, {})
     variables = parse_variables(set)
@@ -331,94 +326,3 @@ def render_vector_file(
         "height": drawing.height,
         "seconds": {k: round(v, 4) for k, v in seconds.items()},
     }
-
-
-def render_silhouettes_file(
-    model: Model | str | os.PathLike,
-    output: str | os.PathLike,
-    *,
-    method: str = DEFAULT_METHOD,
-    layers: int = DEFAULT_LAYERS,
-    size: tuple[int, int] = (800, 600),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
-    animate: str | None = None,
-    frames: int = 60,
-    fps: float = 30.0,
-    split_at: float = 0.5,
-    renderer: Renderer | None = None,
-    progress: Callable[[int, int], None] | None = None,
-) -> dict:
-    """From a model (file or ``Model``) to a PNG of its silhouettes or, with
-    ``animate`` (``twist`` or ``wave``), to an MP4 of ``frames`` frames of them as the model
-    deforms, splitting in two after ``split_at`` of the animation (see
-    ``blueprint.silhouette.gpu.render_silhouettes`` and ``animate_silhouettes``). Arguments
-    are checked before the model is loaded or the GPU touched.
-
-    Returns
-    -------
-    dict
-        ``path``, ``frames``, ``width``, ``height``, ``triangles``, ``method`` and ``ms``: the
-        still's time, or the median time of a frame's silhouettes.
-    """
-    if view not in VIEWS:
-        raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
-    if animate is None and WRITERS.find(Path(output).suffix, Kind.VIDEO):
-        raise InputError(f"{output}: a video needs --animate twist or --animate wave")
-    output, write = choose_writer(output, Kind.VIDEO if animate else Kind.IMAGE)
-    if frames < 1:
-        raise InputError(f"frames must be at least 1, got {frames}")
-    if frames > FRAME_LIMIT:
-        raise InputError(f"frames must be at most {FRAME_LIMIT} (the limit), got {frames}")
-    if not 0 < fps <= 240:
-        raise InputError(f"fps must be in (0, 240], got {fps:g}")
-    if not 1 <= layers <= MAX_LAYERS:
-        raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
-    size = tuple(size)
-    camera = dict(view=view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
-    renderer = shared(renderer)
-    summary = {
-        "path": str(output),
-        "width": size[0],
-        "height": size[1],
-        "triangles": loaded.triangle_count,
-        "method": method,
-    }
-    if animate is None:
-        t0 = time.perf_counter()
-        image = render_silhouettes(
-            loaded, method=method, layers=layers, size=size, renderer=renderer, **camera
-        )
-        ms = (time.perf_counter() - t0) * 1e3
-        write(output, image)
-        return {**summary, "frames": 1, "ms": ms}
-
-    times: list[float] = []
-    pictures = animate_silhouettes(
-        loaded,
-        animate=animate,
-        frames=frames,
-        split_at=split_at,
-        method=method,
-        layers=layers,
-        size=size,
-        renderer=renderer,
-        **camera,
-    )
-
-    def tracked():
-        for done, (image, ms) in enumerate(pictures, start=1):
-            times.append(ms)
-            yield image
-            if progress is not None:
-                progress(done, frames)
-
-    write(output, tracked(), fps=fps)
-    return {**summary, "frames": len(times), "ms": float(np.median(times))}

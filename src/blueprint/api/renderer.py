@@ -6,7 +6,6 @@ import numpy as np
 
 from blueprint.compose.style import Style
 from blueprint.gpu.device import current
-from blueprint.pipeline.blueprint import render_blueprint
 from blueprint.render.renderer import Frame, LayerRenderer
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
@@ -85,6 +84,9 @@ class Renderer(LayerRenderer):
             Leave the picture on the GPU (``Frame.texture``), unread: for a window of this
             renderer's context to show it (``Frame.image`` is None then).
         """
+        # the pipeline is for pictures: vector drawings and depth layers start without it
+        from blueprint.pipeline.blueprint import render_blueprint
+
         return render_blueprint(
             self,
             model,

@@ -78,7 +78,7 @@ def silhouettes(
     """Draw MODEL's silhouettes into a PNG, or, with --animate, the
     silhouettes of MODEL deforming (and splitting in two part-way) into an MP4."""
     from blueprint.api import default_renderer
-    from blueprint.api.files import render_silhouettes_file
+    from blueprint.api.silhouettes import render_silhouettes_file
 
     options = dict(
         method=method,

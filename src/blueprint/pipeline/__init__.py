@@ -1,11 +1,29 @@
 """Declared image-space pipelines (paper 004, the G²-buffer): attributes and passes in a TOML
-file, validated as a graph before any GPU work, run on the renderer's context and targets."""
+file, validated as a graph before any GPU work, run on the renderer's context and targets.
 
-from blueprint.pipeline.blueprint import render_blueprint
-from blueprint.pipeline.executor import Executor, executor_for
-from blueprint.pipeline.graph import Plan, plan
-from blueprint.pipeline.spec import ATTRIBUTES, PipelineSpec, load_pipeline, parse, preset_names
-from blueprint.pipeline.state import Result
+Names are imported when first used (PEP 562): a module of the package (``media`` for videos)
+loads without the executor, which a vector drawing or a depth peel never runs.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+# public name -> the module that defines it
+_EXPORTS = {
+    "render_blueprint": "blueprint.pipeline.blueprint",
+    "Executor": "blueprint.pipeline.executor",
+    "executor_for": "blueprint.pipeline.executor",
+    "Plan": "blueprint.pipeline.graph",
+    "plan": "blueprint.pipeline.graph",
+    "ATTRIBUTES": "blueprint.pipeline.spec",
+    "PipelineSpec": "blueprint.pipeline.spec",
+    "load_pipeline": "blueprint.pipeline.spec",
+    "parse": "blueprint.pipeline.spec",
+    "preset_names": "blueprint.pipeline.spec",
+    "Result": "blueprint.pipeline.state",
+}
 
 __all__ = [
     "ATTRIBUTES",
@@ -20,3 +38,23 @@ __all__ = [
     "preset_names",
     "render_blueprint",
 ]
+
+if TYPE_CHECKING:
+    from blueprint.pipeline.blueprint import render_blueprint
+    from blueprint.pipeline.executor import Executor, executor_for
+    from blueprint.pipeline.graph import Plan, plan
+    from blueprint.pipeline.spec import ATTRIBUTES, PipelineSpec, load_pipeline, parse, preset_names
+    from blueprint.pipeline.state import Result
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'blueprint.pipeline' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

@@ -16,6 +16,7 @@ from blueprint import settings
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, members
 from blueprint.scene.environment import PartGlobs, choose_parts
+from blueprint.scene.gltf import Instance, read_glb
 from blueprint.scene.headers import check_declared_counts, check_scene_graph
 from blueprint.scene.model import Model
 from blueprint.scene.obj import PLAIN_OBJ_LIMIT, plain_obj
@@ -93,6 +94,9 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
     if plain is not None:
         parts = np.zeros(len(plain[1]), np.int32)
         return _checked(*plain, parts, [path.stem], name, up, "y", True, include, exclude)
+    instances = _glb(path, info.st_size) if ext == "glb" else None
+    if instances is not None:
+        return _loaded(_joined(instances, path.stem, name), name, up, ext, include, exclude)
     formats = supported_formats()
     if ext not in formats and ext not in STREAM_SUFFIXES:
         common = ("obj", "stl", "ply", "off", "glb", "gltf", "3mf", "step")
@@ -110,7 +114,12 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
             check_zip(path)
         check_scene_graph(path, ext, info.st_size, MODEL_FILE_LIMIT)
         scene = _load_scene(path, ext)
-    positions, faces, face_part, names = _flatten(scene, path.stem, name)
+    return _loaded(_flatten(scene, path.stem, name), name, up, ext, include, exclude)
+
+
+def _loaded(joined, name: str, up: str | None, ext: str, include: PartGlobs, exclude: PartGlobs) -> Model:
+    """The model of a scene's instances ``joined`` (``_joined``) read from a file of format ``ext``."""
+    positions, faces, face_part, names = joined
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
     default = "z" if ext in _Z_UP else "y"
@@ -281,6 +290,14 @@ def _binary_stl(path: Path, size: int) -> np.ndarray | None:
     return records["triangle"]
 
 
+def _glb(path: Path, size: int) -> list[Instance] | None:
+    """The mesh instances of a GLB file read with NumPy alone (``blueprint.scene.gltf``), its
+    node graph checked first; None where trimesh reads it."""
+    data = read_file(path, MODEL_FILE_LIMIT, "a model file")
+    check_scene_graph(path, "glb", size, MODEL_FILE_LIMIT, data)
+    return read_glb(data)
+
+
 def _plain_obj(path: Path, size: int) -> tuple[np.ndarray, np.ndarray] | None:
     """Vertices and faces of an OBJ file of plain ``v`` and ``f`` lines, read with numpy alone
     (``blueprint.scene.obj``); None for any other OBJ file: trimesh reads it."""
@@ -421,43 +438,51 @@ def _resolver_type():
 
 
 def _flatten(scene, stem: str | None, label: str = "the scene"):
-    """Concatenate every mesh instance of a trimesh Scene in graph order; a scene of one mesh
-    names its part ``stem`` (a file's), or after its node where ``stem`` is None. More than
-    ``INSTANCE_LIMIT`` instances or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``."""
-    world = _world_transforms(scene.graph)
-    nodes = [n for n in scene.graph.nodes_geometry if n in world]
-    if len(nodes) > settings.INSTANCE_LIMIT:
-        raise InputError(f"{label}: {len(nodes)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}")
-    node_data = scene.graph.transforms.node_data
-    # NaN and infinite vertices are refused with their count once flattened, not warned about here
-    with np.errstate(all="ignore"):
-        return _concatenated(scene, nodes, world, node_data, stem, label)
-
-
-def _concatenated(scene, nodes, world, node_data, stem, label):
+    """Concatenate every mesh instance of a trimesh Scene in graph order (``_joined``)."""
     import trimesh
 
+    world = _world_transforms(scene.graph)
+    node_data = scene.graph.transforms.node_data
+    instances = []
+    for node in scene.graph.nodes_geometry:
+        if node not in world:
+            continue
+        geometry = node_data[node].get("geometry")
+        mesh = scene.geometry.get(geometry)
+        arrays = (mesh.vertices, mesh.faces) if isinstance(mesh, trimesh.Trimesh) else (None, None)
+        instances.append(Instance(str(node), str(geometry), *arrays, world[node]))
+    return _joined(instances, stem, label)
+
+
+def _joined(instances: list[Instance], stem: str | None, label: str):
+    """Concatenate mesh instances; a scene of one instance names its part ``stem`` (a
+    file's), or after its node where ``stem`` is None. More than ``INSTANCE_LIMIT`` instances
+    or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``."""
+    if len(instances) > settings.INSTANCE_LIMIT:
+        raise InputError(
+            f"{label}: {len(instances)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}"
+        )
     positions, faces, parts, names = [], [], [], []
     taken: set[str] = set()
     counts: dict[str, int] = {}
     offset = total = 0
-    for node in nodes:
-        geometry_name = node_data[node].get("geometry")
-        mesh = scene.geometry.get(geometry_name)
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
-            continue
-        total += len(mesh.faces)
-        _triangle_limit(label, total)
-        transform = world[node]
-        vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        if transform is not None:
-            vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
-        positions.append(vertices)
-        faces.append(np.asarray(mesh.faces, dtype=np.int64) + offset)
-        parts.append(np.full(len(mesh.faces), len(names), np.int32))
-        single = len(nodes) == 1 and stem is not None
-        names.append(stem if single else _part_name(str(node), str(geometry_name), taken, counts))
-        offset += len(vertices)
+    single = len(instances) == 1 and stem is not None
+    # NaN and infinite vertices are refused with their count once joined, not warned about here
+    with np.errstate(all="ignore"):
+        for instance in instances:
+            if instance.faces is None or len(instance.faces) == 0:
+                continue
+            total += len(instance.faces)
+            _triangle_limit(label, total)
+            transform = instance.transform
+            vertices = np.asarray(instance.vertices, dtype=np.float64)
+            if transform is not None:
+                vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
+            positions.append(vertices)
+            faces.append(np.asarray(instance.faces, dtype=np.int64) + offset)
+            parts.append(np.full(len(instance.faces), len(names), np.int32))
+            names.append(stem if single else _part_name(instance.node, instance.geometry, taken, counts))
+            offset += len(vertices)
     if not faces:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     return np.concatenate(positions), np.concatenate(faces), np.concatenate(parts), names
@@ -489,13 +514,14 @@ def _world_transforms(graph) -> dict:
     return world
 
 
-def _part_name(node: str, geometry: str, taken: set[str], counts: dict[str, int]) -> str:
+def _part_name(node: str | None, geometry: str, taken: set[str], counts: dict[str, int]) -> str:
     """The node's name where it says more than its mesh's name (CAD instance paths), else the
-    mesh's name, numbered from the second instance on, so patterns like ``Piston*`` match.
+    mesh's name (always where the node has none), numbered from the second instance on, so
+    patterns like ``Piston*`` match.
 
     ``counts`` keeps the last number given per mesh, so that 10^5 instances of one mesh are
     named in one pass, not by trying every number from 2 against every name given."""
-    if node.startswith(geometry):
+    if node is not None and node.startswith(geometry):
         name = node
     else:
         name, k = geometry, counts.get(geometry, 1)

@@ -47,7 +47,8 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
     size = degree[junction]
     # every pair (i < j) of half-ends at every junction
     first_i, first_j = [], []
-    for k in np.unique(size).tolist():
+    # the sizes present, from a count (np.unique without indices imports numpy.ma: 20 ms a process)
+    for k in np.flatnonzero(np.bincount(size)).tolist():
         i, j = np.triu_indices(k, 1)
         base = starts[junction[size == k]]
         first_i.append((base[:, None] + i[None]).reshape(-1))

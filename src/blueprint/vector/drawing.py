@@ -15,18 +15,17 @@ import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from blueprint.blas import one_blas_thread
-from blueprint.compose.glyphs import Glyphs, load_glyphs
 from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
 from blueprint.export.writers import WRITERS, Kind
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.blueprint import render_blueprint
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.dimension import UNITS_MM
@@ -47,9 +46,7 @@ from blueprint.scene.sheet import (
 )
 
 from .chain import chain_pieces
-from .dimension import dimension_marks
 from .dxf import write_dxf
-from .glyphs import GlyphLines, glyph_lines
 from .lines import join_polylines, model_segments
 from .occlusion import (
     Pieces,
@@ -70,6 +67,11 @@ from .shade import ShadedFaces, shaded_faces
 from .simplify import douglas_peucker
 from .style import VectorStyle, vector_style
 from .svg import svg_bytes
+
+if TYPE_CHECKING:
+    from blueprint.compose.glyphs import Glyphs
+
+    from .glyphs import GlyphLines
 
 log = logging.getLogger("blueprint")
 
@@ -256,6 +258,8 @@ def _revealing_layers(renderer, model, camera, size, chosen, reveal, max_layers)
     """How many layers the renderer's depth masking peels to uncover ``reveal`` of the parts."""
     if not chosen:
         raise InputError("reveal needs parts to reveal: give highlight as well")
+    from blueprint.pipeline.blueprint import render_blueprint  # depth masking only: loaded here
+
     flags = np.zeros(len(model.part_names), bool)
     flags[sorted(chosen)] = True
     frame = render_blueprint(
@@ -368,8 +372,12 @@ def draw_vector(
     if not 0.0 < shade_opacity <= 1.0:
         raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
     shaded_parts = None if shade is None else designated_parts(model, shade)
-    if glyphs is not None and not isinstance(glyphs, Glyphs):
-        glyphs = load_glyphs(glyphs)
+    if glyphs is not None:
+        # glyphs and dimensions load with the drawings that have them, not with every drawing
+        from blueprint.compose.glyphs import Glyphs, load_glyphs
+
+        if not isinstance(glyphs, Glyphs):
+            glyphs = load_glyphs(glyphs)
     if not (0.1 <= spacing <= 16):
         raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
     if not (0 <= tolerance <= 16):
@@ -526,6 +534,8 @@ def draw_vector(
             raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
         unit = page.model_unit or units or _default_units(model)
         mm_per_px = page.factor if page.unit == "mm" else None
+        from .dimension import dimension_marks
+
         marks = dimension_marks(model, view_m, proj, size, UNITS_MM[unit], mm_per_px, crease_angle)
 
     shading = None
@@ -535,6 +545,8 @@ def draw_vector(
 
     glyph_drawing = None
     if glyphs is not None:
+        from .glyphs import glyph_lines
+
         clock = time.perf_counter()
         # the front surface is all the depth test of glyphs needs
         front = (
@@ -640,6 +652,8 @@ def draw_vector_sheet(
         unit = quarter.model_unit or units or _default_units(model)
         drawn = cut.model if cut is not None else model
         crease = options.get("crease_angle", 30.0)
+        from .dimension import dimension_marks
+
         for name in ("top", "front", "right"):
             view_m, proj = cameras[name].view_matrix(), cameras[name].projection_matrix()
             marks = dimension_marks(drawn, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px, crease)

@@ -49,19 +49,21 @@ test), ``strokes`` (line glyphs into screen pieces), ``raster`` (pieces and text
 ``draw`` (the two entries above).
 """
 
-from blueprint.compose.glyphs.draw import draw_glyphs, render_with_glyphs
-from blueprint.compose.glyphs.parse import load_glyphs
-from blueprint.compose.glyphs.values import (
-    ANCHORS,
-    HIDDEN_MODES,
-    Arrow,
-    Box,
-    Dimension,
-    Glyphs,
-    Hidden,
-    Label,
-    Path3D,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
+# Names load on first use (PEP 562): a module of the package (``raster`` for label anchors)
+# loads without the others, which a drawing without glyphs never runs.
+_EXPORTS = {
+    **dict.fromkeys(("draw_glyphs", "render_with_glyphs"), "blueprint.compose.glyphs.draw"),
+    "load_glyphs": "blueprint.compose.glyphs.parse",
+    **dict.fromkeys(
+        ("ANCHORS", "HIDDEN_MODES", "Arrow", "Box", "Dimension", "Glyphs", "Hidden", "Label", "Path3D"),
+        "blueprint.compose.glyphs.values",
+    ),
+}
 
 __all__ = [
     "ANCHORS",
@@ -77,3 +79,31 @@ __all__ = [
     "load_glyphs",
     "render_with_glyphs",
 ]
+
+if TYPE_CHECKING:
+    from blueprint.compose.glyphs.draw import draw_glyphs, render_with_glyphs
+    from blueprint.compose.glyphs.parse import load_glyphs
+    from blueprint.compose.glyphs.values import (
+        ANCHORS,
+        HIDDEN_MODES,
+        Arrow,
+        Box,
+        Dimension,
+        Glyphs,
+        Hidden,
+        Label,
+        Path3D,
+    )
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'blueprint.compose.glyphs' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_EXPORTS])

@@ -1,0 +1,386 @@
+"""Binary glTF 2.0 (GLB) read with NumPy alone, as trimesh loads it: importing trimesh (with the
+scipy and networkx it loads) took a CPU second of every glTF drawing's process, more than most
+drawings themselves.
+
+The common file is read here: indexed or plain triangles, float positions, node matrices or
+translation, rotation and scale, one scene's graph, the names trimesh gives meshes and nodes,
+all in trimesh's order (``blueprint.scene.loader`` joins the instances as it joins trimesh's).
+Anything else answers None and is left to trimesh, which gives it its meaning or its error:
+buffers by URI, compressed or quantised meshes (Draco, meshopt, extensions on primitives or
+buffer views), sparse or bufferless accessors, points, lines and strips, a node placed twice,
+declared sizes the data cannot hold. Materials, textures and normals are not read: a drawing
+has no use for them.
+
+One difference: trimesh names the frames of a mesh of several primitives with random suffixes,
+so their parts are named after their meshes here whatever the node's name.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Instance", "read_glb"]
+
+_GLB, _JSON, _BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
+_TRIANGLES = 4
+_DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
+_WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
+_INDEX_TYPES = (5121, 5123, 5125)
+# trimesh's name of the root frame, which a node of the same name is renamed around
+_BASE_FRAME = "world"
+# trimesh.transformations' threshold of a zero quaternion
+_EPS = np.finfo(float).eps * 4.0
+
+
+@dataclass(frozen=True)
+class Instance:
+    """One mesh placed in a scene: ``vertices`` (V, 3) and ``faces`` (F, 3) of its mesh
+    (None where it is not a triangle mesh), ``transform`` (4, 4) float64 from the mesh to the
+    scene (None: the identity), the names of its node and mesh (``node`` None: a frame with
+    no name of its own, named after its mesh)."""
+
+    node: str | None
+    geometry: str
+    vertices: np.ndarray | None
+    faces: np.ndarray | None
+    transform: np.ndarray | None
+
+
+class _Leave(Exception):
+    """The file is not the common case: trimesh reads it."""
+
+
+def read_glb(data: bytes) -> list[Instance] | None:
+    """The mesh instances of a GLB file's scene in trimesh's order, or None to leave the file
+    to trimesh (see the module's docstring)."""
+    try:
+        return _read(data)
+    except _Leave:
+        return None
+
+
+def _read(data: bytes) -> list[Instance]:
+    doc, binary = _chunks(data)
+    access = _Accessors(doc, binary)
+    geometries = _meshes(doc, access)
+    nodes = _list(doc.get("nodes", []))
+    names = _node_names(nodes)
+    roots = _scene_roots(doc, len(nodes))
+    _once_each(nodes, roots)
+    cameras = doc.get("cameras")
+    camera_taken = False
+    world: dict[int, np.ndarray] = {}
+    instances = []
+    # trimesh's walk: a stack of (parent, child) edges, the last pushed taken first
+    stack = [(None, root) for root in roots]
+    while stack:
+        parent, index = stack.pop()
+        node = nodes[index]
+        stack.extend((index, child) for child in _indices(node.get("children", []), len(nodes)))
+        matrix = _node_matrix(node)
+        if "camera" in node and not camera_taken:
+            # trimesh takes camera nodes (and so their subtrees) out of its graph until one
+            # makes a camera
+            camera_taken = _is_camera(cameras, node["camera"])
+            continue
+        if parent is not None and parent not in world:
+            continue  # below the camera taken out
+        world[index] = matrix if parent is None else world[parent] @ matrix
+        if "mesh" not in node:
+            continue
+        mesh = node["mesh"]
+        if not _is_index(mesh, len(geometries)):
+            raise _Leave
+        primitives = geometries[mesh]
+        if len(primitives) == 1:
+            instances.append(Instance(names[index], *primitives[0], world[index]))
+            continue
+        # trimesh hangs the primitives under the node, each by an identity edge
+        below = world[index] @ np.eye(4)
+        instances += [Instance(None, *primitive, below) for primitive in primitives]
+    return instances
+
+
+def _chunks(data: bytes) -> tuple[dict, bytes | None]:
+    """The JSON document and the BIN chunk of a GLB file laid out as the format asks."""
+    if len(data) < 20:
+        raise _Leave
+    magic, version, length, json_length, kind = struct.unpack_from("<5I", data)
+    if magic != _GLB or version != 2 or length != len(data) or kind != _JSON or json_length > length - 20:
+        raise _Leave
+    try:
+        doc = json.loads(data[20 : 20 + json_length].decode("utf-8"))
+    except (UnicodeDecodeError, ValueError, RecursionError):
+        raise _Leave from None
+    if not isinstance(doc, dict):
+        raise _Leave
+    rest = data[20 + json_length :]
+    binary = None
+    if rest:
+        if len(rest) < 8:
+            raise _Leave
+        size, kind = struct.unpack_from("<2I", rest)
+        if kind != _BIN or 8 + size != len(rest):
+            raise _Leave
+        binary = rest[8:]
+    buffers = _list(doc.get("buffers", []))
+    if any(not isinstance(b, dict) or "uri" in b for b in buffers):
+        raise _Leave
+    return doc, binary
+
+
+class _Accessors:
+    """Every accessor of the document checked against the bytes it reads (as trimesh reads
+    them all, a broken one anywhere fails its load), the ones used read on demand."""
+
+    def __init__(self, doc: dict, binary: bytes | None) -> None:
+        buffers = [] if binary is None else [binary]
+        self.views = []
+        for view in _list(doc.get("bufferViews")):
+            if not isinstance(view, dict) or "extensions" in view:
+                raise _Leave
+            buffer, start, size = view.get("buffer"), view.get("byteOffset", 0), view.get("byteLength")
+            if not _is_index(buffer, len(buffers)) or not _count(start) or not _count(size):
+                raise _Leave
+            if start + size > len(buffers[buffer]):
+                raise _Leave
+            stride = view.get("byteStride")
+            if stride is not None and (not _count(stride) or stride == 0):
+                raise _Leave
+            self.views.append((memoryview(buffers[buffer])[start : start + size], stride))
+        self.accessors = _list(doc.get("accessors"))
+        for accessor in self.accessors:
+            self._check(accessor)
+
+    def _check(self, accessor) -> None:
+        if not isinstance(accessor, dict) or "sparse" in accessor:
+            raise _Leave
+        count, start = accessor.get("count"), accessor.get("byteOffset", 0)
+        kind, shape = accessor.get("componentType"), accessor.get("type")
+        if not _count(count) or count == 0 or not _count(start) or kind not in _DTYPES or shape not in _WIDTH:
+            raise _Leave
+        if not _is_index(accessor.get("bufferView"), len(self.views)):
+            raise _Leave
+        view, stride = self.views[accessor["bufferView"]]
+        row = np.dtype(_DTYPES[kind]).itemsize * _WIDTH[shape]
+        if stride is not None and stride < row:
+            raise _Leave  # rows that overlap: spread out, they would take more than the file
+        end = start + (count * row if stride is None else (count - 1) * stride + row)
+        if end > len(view):
+            raise _Leave
+
+    def read(self, index, kind: tuple[int, ...], shape: str) -> np.ndarray:
+        """Accessor ``index`` as a (count, width) array, its component type one of ``kind``
+        and its type ``shape`` (else trimesh reads the file)."""
+        if not _is_index(index, len(self.accessors)):
+            raise _Leave
+        accessor = self.accessors[index]
+        if accessor["componentType"] not in kind or accessor["type"] != shape:
+            raise _Leave
+        view, stride = self.views[accessor["bufferView"]]
+        dtype, width, count = np.dtype(_DTYPES[accessor["componentType"]]), _WIDTH[shape], accessor["count"]
+        start = accessor.get("byteOffset", 0)
+        if stride is None:
+            return np.frombuffer(view, dtype, count * width, start).reshape(count, width)
+        rows = np.lib.stride_tricks.as_strided(
+            np.frombuffer(view, np.uint8, (count - 1) * stride + dtype.itemsize * width, start),
+            (count, dtype.itemsize * width),
+            (stride, 1),
+        )
+        return np.ascontiguousarray(rows).view(dtype)
+
+
+def _meshes(doc: dict, access: _Accessors) -> list[list[tuple[str, np.ndarray, np.ndarray]]]:
+    """Each mesh's primitives as (name, vertices, faces), named as trimesh names them: the
+    mesh's name, made unique across every primitive of the file."""
+    taken: dict[str, None] = {}
+    counts: dict = {}
+    meshes = []
+    for mesh in _list(doc.get("meshes", [])):
+        if not isinstance(mesh, dict):
+            raise _Leave
+        primitives = _list(mesh.get("primitives"))
+        name = mesh.get("name", "GLTF")
+        if not primitives or not isinstance(name, str):
+            raise _Leave
+        found = []
+        for primitive in primitives:
+            if not isinstance(primitive, dict) or "extensions" in primitive:
+                raise _Leave
+            if primitive.get("mode", _TRIANGLES) != _TRIANGLES:
+                raise _Leave
+            attributes = primitive.get("attributes")
+            if not isinstance(attributes, dict):
+                raise _Leave
+            vertices = access.read(attributes.get("POSITION"), (5126,), "VEC3")
+            if "indices" in primitive:
+                flat = access.read(primitive["indices"], _INDEX_TYPES, "SCALAR").reshape(-1)
+            else:
+                flat = np.arange(len(vertices), dtype=np.int64)
+            if len(flat) % 3:
+                raise _Leave
+            unique = _unique_name(name, taken, counts)
+            taken[unique] = None
+            found.append((unique, vertices, flat.reshape(-1, 3)))
+        meshes.append(found)
+    return meshes
+
+
+def _node_names(nodes: list) -> list[str]:
+    """Each node's frame name as trimesh gives it: its name or its index, made unique."""
+    taken: dict[str, int] = {}
+    counts: dict = {}
+    for index, node in enumerate(nodes):
+        if not isinstance(node, dict):
+            raise _Leave
+        name = node.get("name", str(index))
+        if not isinstance(name, str):
+            raise _Leave
+        taken[_unique_name(name, taken, counts)] = index
+    names = [""] * len(nodes)
+    for name, index in taken.items():
+        names[index] = name
+    if _BASE_FRAME in taken:
+        names[taken[_BASE_FRAME]] = _unique_name(_BASE_FRAME, set(names))
+    return names
+
+
+def _scene_roots(doc: dict, count: int) -> list[int]:
+    scenes = doc.get("scenes")
+    chosen = doc.get("scene", 0)
+    if (
+        not isinstance(scenes, list)
+        or not _is_index(chosen, len(scenes))
+        or not isinstance(scenes[chosen], dict)
+    ):
+        raise _Leave  # no scene to draw: trimesh's load says so
+    return _indices(scenes[chosen].get("nodes", []), count)
+
+
+def _once_each(nodes: list, roots: list[int]) -> None:
+    """Leave a node placed twice (in a scene or under two parents) to trimesh, whose graph
+    keeps one parent a node."""
+    seen = set(roots)
+    placed = len(roots)
+    for node in nodes:
+        children = _indices(node.get("children", []), len(nodes))
+        seen.update(children)
+        placed += len(children)
+    if len(seen) != placed:
+        raise _Leave
+
+
+def _node_matrix(node: dict) -> np.ndarray:
+    """The node's transform from its parent as trimesh composes it: matrix, then T, R, S."""
+    matrix = np.eye(4) if "matrix" not in node else _numbers(node["matrix"], 16).reshape((4, 4)).T
+    if "translation" in node:
+        translation = np.identity(4)
+        translation[:3, 3] = _numbers(node["translation"], 3)
+        matrix = np.dot(matrix, translation)
+    if "rotation" in node:
+        matrix = np.dot(matrix, _quaternion_matrix(_numbers(node["rotation"], 4)[[3, 0, 1, 2]]))
+    if "scale" in node:
+        matrix = np.dot(matrix, np.diag(np.concatenate((_numbers(node["scale"], 3), [1.0]))))
+    return matrix
+
+
+def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
+    """trimesh.transformations.quaternion_matrix of one (w, x, y, z) quaternion."""
+    n = np.dot(q, q)
+    if not n < _EPS:
+        q = q * np.sqrt(2.0 / n)
+    q = q[None, :] * q[:, None]
+    return np.array(
+        [
+            [1.0 - q[2, 2] - q[3, 3], q[1, 2] - q[3, 0], q[1, 3] + q[2, 0], 0.0],
+            [q[1, 2] + q[3, 0], 1.0 - q[1, 1] - q[3, 3], q[2, 3] - q[1, 0], 0.0],
+            [q[1, 3] - q[2, 0], q[2, 3] + q[1, 0], 1.0 - q[1, 1] - q[2, 2], 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+def _is_camera(cameras, index) -> bool:
+    """Whether trimesh makes a camera of a node's ``camera``: a perspective one with its
+    fields (a missing field is no camera); a reference it cannot follow fails its load."""
+    if cameras is None:
+        return False
+    if (
+        not isinstance(cameras, list)
+        or not _is_index(index, len(cameras))
+        or not isinstance(cameras[index], dict)
+    ):
+        raise _Leave
+    if "perspective" not in cameras[index]:
+        return False
+    perspective = cameras[index]["perspective"]
+    if not isinstance(perspective, dict):
+        raise _Leave
+    fields = [perspective.get(k) for k in ("znear", "aspectRatio", "yfov")]
+    if any(f is None for f in fields):
+        return False
+    if not all(_number(f) and math.isfinite(f) and f > 0 for f in fields):
+        raise _Leave
+    return True
+
+
+def _unique_name(start: str, contains, counts: dict | None = None) -> str:
+    """trimesh.util.unique_name: ``start``, else ``start_N`` with the first free N (counting on
+    from a trailing number of ``start``, and from the last N given where ``counts`` keeps
+    them)."""
+    if start and start not in contains:
+        return start
+    increment = 0 if counts is None else counts.get(start, 0)
+    if start:
+        formatter = start + "_{}"
+        split = start.rsplit("_", 1)
+        if len(split) == 2 and increment == 0:
+            try:
+                increment = int(split[1])
+                formatter = split[0] + "_{}"
+            except ValueError:
+                pass
+    else:
+        formatter = "geometry_{}"
+    for i in range(increment + 1, 2 + increment + len(contains)):
+        check = formatter.format(i)
+        if check not in contains:
+            if counts is not None:
+                counts[start] = i
+            return check
+    raise _Leave
+
+
+def _list(value) -> list:
+    if not isinstance(value, list):
+        raise _Leave
+    return value
+
+
+def _number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _count(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
+
+
+def _is_index(value, length: int) -> bool:
+    return _count(value) and value < length
+
+
+def _indices(value, length: int) -> list[int]:
+    if not isinstance(value, list) or not all(_is_index(v, length) for v in value):
+        raise _Leave
+    return value
+
+
+def _numbers(value, count: int) -> np.ndarray:
+    if not isinstance(value, list) or len(value) != count or not all(_number(v) for v in value):
+        raise _Leave
+    return np.array(value, dtype=np.float64)
