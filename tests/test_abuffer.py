@@ -324,17 +324,70 @@ def test_edges_from_the_lists_only_where_they_read_nothing_else(
     assert listed == (["edges"] if kind == "highlight" else [])
 
 
-def _watch_lists(renderer, monkeypatch) -> list[str]:
-    """The passes the renderer's executor runs from the lists, as it runs them."""
+@pytest.fixture
+def software_form(renderer, monkeypatch):
+    """The renderer drawing as it does on a software rasteriser: each layer looked at before
+    its passes run, those drawn over the tiles the layer covers, image passes as fragment
+    passes."""
+    monkeypatch.setattr(renderer, "software", True)
+    monkeypatch.setattr(renderer, "use_compute", False)
+    monkeypatch.setattr(executor_for(renderer), "tiled", True)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(max_layers=6, supersample=1),
+        dict(max_layers=None, supersample=2, style="paper", line_width=2.0),
+    ],
+)
+def test_edges_from_the_lists_a_layer_at_a_time_draw_the_same(
+    renderer, abuffer, software_form, monkeypatch, options
+):
+    """Where passes run a layer at a time, the edges of each layer are read from the sorted
+    lists as it comes, no layer unpacked: the same drawing, pixel for pixel."""
+    model = examples.gearbox()
+    abuffer(True)
+    listed = _watch_lists(renderer, monkeypatch, "_run_layer_lists")
+    from_lists = renderer.render(model, size=(160, 120), **options)
+    assert set(listed) == {"edges"} and len(listed) == from_lists.layers
+    monkeypatch.setattr(LayerCapture, "_from_lists", lambda self, st: ())
+    unpacked = renderer.render(model, size=(160, 120), **options)
+    assert len(listed) == from_lists.layers
+    assert from_lists.layers == unpacked.layers >= 6
+    np.testing.assert_array_equal(from_lists.image, unpacked.image)
+
+
+@pytest.mark.parametrize("options", [dict(shade=True), dict(id_silhouettes=True), dict(reveal=0.5)])
+def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
+    renderer, abuffer, software_form, monkeypatch, options
+):
+    """Shaded parts read the layers' depths, triangle-ID silhouettes their faces, depth masking
+    each layer's depth as it comes: there every layer is unpacked."""
+    model = examples.gearbox()
+    abuffer(True)
+    listed = _watch_lists(renderer, monkeypatch, "_run_layer_lists")
+    parts = np.zeros(len(model.part_names), bool)
+    parts[0] = True
+    if "shade" in options:
+        options = {"shade": parts}
+    elif "reveal" in options:
+        options = {"highlight": parts, **options}
+    renderer.render(model, size=(96, 72), max_layers=4, supersample=1, **options)
+    assert listed == []
+
+
+def _watch_lists(renderer, monkeypatch, method: str = "_run_lists") -> list[str]:
+    """The passes the renderer's executor runs from the lists (by ``method``), as it runs them."""
     ex = executor_for(renderer)
     listed: list[str] = []
-    run_lists = type(ex)._run_lists
+    run_lists = getattr(type(ex), method)
 
     def watch(st, name, *args):
         listed.append(name)
         run_lists(ex, st, name, *args)
 
-    monkeypatch.setattr(ex, "_run_lists", watch)
+    monkeypatch.setattr(ex, method, watch)
     return listed
 
 

@@ -70,6 +70,7 @@ BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
+EDGES_FROM_LISTS_FRAG = "blueprint.pipeline:glsl/edges_lists.frag"
 # the uniforms every pass may take (see the module's docstring), in the groups that are computed
 # together: of the target and the run, of the camera, the camera's matrices
 _FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
@@ -525,6 +526,9 @@ class Executor:
         if p.kind == "composite":
             self._composite(st, p, self._target(st, name, layer), layers)
             return
+        if name in st.layer_lists:
+            self._run_layer_lists(st, name, p, layer)
+            return
         target = self._target(st, name, layer)
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
@@ -621,6 +625,32 @@ class Executor:
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
+
+    def _run_layer_lists(self, st: RunState, name: str, p, layer: int) -> None:
+        """Pass ``name`` (the edges operation) on layer ``layer`` read from the A-buffer's sorted
+        lists, no layer unpacked: each pixel's chain carried from one layer to the next in a
+        pair of cursor images."""
+        abuffer = st.groups[0].capture.abuffer
+        target = self._target(st, name, layer)
+        size = tuple(target.size)
+        reach = self._reach(st, name) if size == self.tiles.size else None
+        vertex = FULLSCREEN if reach is None else TILES_VERT
+        prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, abuffer.defines, modern=True)
+        self._frame_uniforms(st, prog, size, layer)
+        self.programs.update(prog, p.uniforms)
+        self.programs.set(prog, "u_back_bias", abuffer.back_bias)
+        *cursors, layer_count = abuffer.lists(size)
+        cursors[layer % 2].bind_to_image(2, read=True, write=False)
+        cursors[(layer + 1) % 2].bind_to_image(3, read=False, write=True)
+        layer_count.bind_to_image(4, read=True, write=False)
+        fbo = self.r.pool.framebuffer((target,))
+        fbo.use()
+        if reach is not None:
+            fbo.clear()
+            st.draws += self.tiles.draw(prog, reach)
+            return
+        self.programs.vao(prog).render(vertices=3)
+        st.draws += 1
 
     def _run_batches(self, st: RunState, layers: int) -> None:
         ctx, pl = self.ctx, st.pl

@@ -128,7 +128,11 @@ class LayerCapture:
         tiled = tiled and any(self.ex._reach(st, n) is not None for n in pl.per_layer)
         # edges read straight from an A-buffer's lists, all layers after the peel, where nothing
         # else reads the layers: none is unpacked then
-        from_lists = self._from_lists(st) if defer else ()
+        from_lists = self._from_lists(st) if defer and st.arrays is not None else ()
+        # ...or, where passes run a layer at a time (a software rasteriser), read each layer
+        # from the lists as it comes, unless a stop rule reads the layers (depth masking)
+        looks = any(rule.every_layer for rule in rules)
+        layer_lists = self._from_lists(st) if st.arrays is None and not looks else ()
         for g in groups:
             g.capture = Capture(
                 r,
@@ -139,7 +143,7 @@ class LayerCapture:
                 batch=max_layers,
                 tiles=tiled and g.primary,
                 defer=defer,
-                unpack=not from_lists,
+                unpack=not (from_lists or layer_lists),
                 slot=st.slot,
             )
         extras = self._attribute_programs(st) if layout.extra else None
@@ -171,6 +175,8 @@ class LayerCapture:
                 listed.extend(from_lists)
                 first[:] = [n for n in first if n not in listed]
                 later[:] = [n for n in later if n not in listed]
+            if layer == 0:
+                st.layer_lists = layer_lists if groups[0].capture.abuffer is not None else ()
             for name, held in st.attr_dumps.items():
                 tex = st.by_attr[name].texture(name, layer)
                 held.append(read_texture(tex, bound.attributes[name].format))
@@ -200,12 +206,13 @@ class LayerCapture:
         return peeled
 
     def _from_lists(self, st: RunState) -> tuple[str, ...]:
-        """The edges passes that may read every layer from an A-buffer's lists after the peel
-        (``Executor._run_lists``): in the compute form, where they are the only readers of the
-        G-buffer, read the renderer's own depth, normal and IDs, draw no triangle-ID
-        silhouettes, and no layer is read back or given extra attributes."""
+        """The edges passes that may read their layers from an A-buffer's lists: every layer
+        after the peel in the compute form (``Executor._run_lists``), else each layer as it
+        comes (``Executor._run_layer_lists``); where they are the only readers of the G-buffer,
+        read the renderer's own depth, normal and IDs, draw no triangle-ID silhouettes, and no
+        layer is read back or given extra attributes."""
         pl, arrays = st.pl, st.arrays
-        if arrays is None or st.attr_dumps:
+        if st.attr_dumps:
             return ()
         held = self._lists.get(id(pl))
         if held is None or held[0] is not pl or held[1] is not arrays:
@@ -306,8 +313,9 @@ def layout(pl: Plan) -> Layout:
     )
 
 
-def _lists_readers(pl: Plan, arrays: ArrayPlan, lay: Layout) -> tuple[str, ...]:
-    """``LayerCapture._from_lists`` of a plan whose layers no one reads back."""
+def _lists_readers(pl: Plan, arrays: ArrayPlan | None, lay: Layout) -> tuple[str, ...]:
+    """``LayerCapture._from_lists`` of a plan whose layers no one reads back, in the compute
+    form ``arrays`` or (None) a pass a layer."""
     bound = pl.bound
     if len(lay.scales) != 1 or lay.extra:
         return ()
@@ -318,7 +326,8 @@ def _lists_readers(pl: Plan, arrays: ArrayPlan, lay: Layout) -> tuple[str, ...]:
     wired = {"depth": "depth", "normal": "normal", "ids": "ids"}
     for name in readers:
         p = bound.passes[name]
-        if name not in arrays.slices or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
+        one = name in arrays.slices if arrays is not None else p.per_layer and p.kind == "single"
+        if not one or p.accumulate or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
             return ()
         if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
             return ()

@@ -37,8 +37,8 @@ class Programs:
         self._user.clear()
         self._vaos.clear()
 
-    def library(self, fragment: str, vertex: str = FULLSCREEN, defines=None):
-        return self.r.program(fragment, vertex, {**OWN, **(defines or {})})
+    def library(self, fragment: str, vertex: str = FULLSCREEN, defines=None, modern: bool = False):
+        return self.r.program(fragment, vertex, {**OWN, **(defines or {})}, modern)
 
     def compute(self, ref: str, defines=None):
         return self.r.compute(ref, {**OWN, **(defines or {})})

@@ -150,4 +150,7 @@ class RunState:
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
     reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
+    # per-layer passes that read each layer from the A-buffer's lists as it is drawn
+    # (Executor._run_layer_lists), once layer 0 has captured them
+    layer_lists: tuple[str, ...] = ()
     draws: int = 0

@@ -94,26 +94,33 @@ float next_after(uvec4 s) {
 
 // the pixel's layers, chained from its cursor; how many
 uint chain(ivec2 p) {
+    // The short list sorted by insertion of one word an entry, its held depth above its place
+    // in the list (SORTED <= 256): what an insertion moves is that word alone, where llvmpipe
+    // moves each array a lane at a time. Node, face and depth bits stay at the list's place j.
+    uint sorted[SORTED];
     uint node[SORTED];
-    uint key[SORTED];
     uint face[SORTED];
+    uint bits[SORTED];
     uint n = 0u;
     uint at = imageLoad(u_head, p).x;
     uint head = at;
     while (at != 0u && n < SORTED) {
         uvec4 s = fragment(at - 1u);
+        node[n] = at;
+        face[n] = s.w;
+        bits[n] = s.x;
         uint k = held_depth(s);
-        // insertion in order
         uint i = n;
-        while (i > 0u && before(k, s.w, key[i - 1u], face[i - 1u])) {
-            node[i] = node[i - 1u];
-            key[i] = key[i - 1u];
-            face[i] = face[i - 1u];
+        while (i > 0u) {
+            uint other = sorted[i - 1u];
+            // (depth, face) order, as before(): a face looked up on equal depths alone
+            if ((other >> 8) < k || ((other >> 8) == k && face[other & 0xffu] <= s.w)) {
+                break;
+            }
+            sorted[i] = other;
             --i;
         }
-        node[i] = at;
-        key[i] = k;
-        face[i] = s.w;
+        sorted[i] = (k << 8) | n;
         ++n;
         at = AB_LINK(at - 1u);
     }
@@ -123,17 +130,18 @@ uint chain(ivec2 p) {
     if (at == 0u) {
         float behind = -1.0 / 0.0;
         for (uint i = 0u; i < n; ++i) {
-            uvec4 s = fragment(node[i] - 1u);
+            uint j = sorted[i] & 0xffu;
+            uvec4 s = uvec4(bits[j], 0u, 0u, 0u);
             if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                 continue;
             }
-            keep(p, node[i] - 1u);
+            keep(p, node[j] - 1u);
             if (last == 0u) {
-                first = node[i];
+                first = node[j];
             } else {
-                AB_SET_ORDER(last - 1u, node[i]);
+                AB_SET_ORDER(last - 1u, node[j]);
             }
-            last = node[i];
+            last = node[j];
             behind = next_after(s);
             ++layers;
         }
