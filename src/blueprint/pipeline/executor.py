@@ -179,7 +179,8 @@ class Executor:
             result comes with ``pending`` set and ``output`` None.
         keep : bool
             Leave a one-texture output on the GPU, unread: ``Result.texture`` (a window shows it
-            from there).
+            from there). Such a frame reads nothing back, so it does not count the layers a cap
+            left (``Result.layers_left`` is 0): that count is a geometry pass and a read-back.
         slot : int
             Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2
             for a frame read at once (never those of a stream still to be read).
@@ -336,7 +337,8 @@ class Executor:
                 else:
                     if counts is None:
                         counts, layers = self.capture.counted(st, rules, layers)
-                    left = self.capture.left(st, rules, counts, layers)
+                    # a window's frame shows no count: its pass and read-back would be a stall
+                    left = 0 if keep else self.capture.left(st, rules, counts, layers)
             return counts, layers, revealed, left, pending, kept, dumps_out, counting
 
         try:
