@@ -70,6 +70,7 @@ BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
+EDGES_FROM_SURFACES = "blueprint.pipeline:glsl/edges_surfaces.frag"
 # the uniforms every pass may take (see the module's docstring), in the groups that are computed
 # together: of the target and the run, of the camera, the camera's matrices
 _FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
@@ -531,15 +532,32 @@ class Executor:
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
         reach = self._reach(st, name) if size == self.tiles.size else None
+        vertex = FULLSCREEN if reach is None else TILES_VERT
+        surfaces = name in st.from_surfaces
         if p.user is not None:
             prog = self.programs.user(p.user)
         else:
-            vertex = FULLSCREEN if reach is None else TILES_VERT
-            prog = self.programs.library(p.op.shader, vertex, _defines(p))
+            shader = EDGES_FROM_SURFACES if surfaces else p.op.shader
+            prog = self.programs.library(shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
-        for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
-            self._bind_input(prog, key, self._value(st, source, layer), unit, size)
+        if surfaces:
+            # the layer's depth, normal and IDs from the k-buffer, one fetch a pixel
+            kbuffer = st.surfaces
+            kbuffer.surfaces[layer].use(BASE_UNIT)
+            kbuffer.count.use(BASE_UNIT + 1)
+            self.programs.update(
+                prog,
+                {
+                    "u_surfaces": BASE_UNIT,
+                    "u_count": BASE_UNIT + 1,
+                    "u_held": (layer + 0.5) / 255.0,
+                    "u_back_bias": kbuffer.back_bias,
+                },
+            )
+        else:
+            for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
+                self._bind_input(prog, key, self._value(st, source, layer), unit, size)
         fbo = self.r.pool.framebuffer((target,))
         if reach is not None:
             fbo.use()

@@ -150,4 +150,7 @@ class RunState:
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
     reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
+    # the k-buffer whose surfaces hold every layer, unpacked, and the passes that read them there
+    surfaces: object = None
+    from_surfaces: tuple[str, ...] = ()
     draws: int = 0
