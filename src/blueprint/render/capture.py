@@ -404,8 +404,10 @@ class _KBuffer:
         """The pass that finds layers ``layer`` to ``layer + k - 1``."""
         ctx = self.r.ctx
         surfaces, target, first_target = self._surfaces(gb.size)
-        # the first target alone is cleared: kbuffer.frag keeps the rest valid
-        first_target.clear()
+        # the first target alone is cleared: kbuffer.frag keeps the rest valid; where the
+        # surfaces are read as they are, all of them, so that an empty one means no layer
+        # (clearing four more targets cost llvmpipe a tenth of one full-screen pass)
+        (first_target if self.unpacks else target).clear()
         self.prog["u_peel"].value = layer > 0
         self.prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
         if self.r.kbuffer_interlock:

@@ -1,9 +1,10 @@
 // The edges operation (edges.glsl) on one layer read straight from the surface a k-buffer pass
 // found for it (blueprint.render:glsl/kbuffer.glsl) instead of from the layer unpacked into the
-// G-buffer: one fetch a pixel gives its depth, normal and IDs, and the pass's count of the
-// layers each pixel holds (kbuffer_count.frag) says where the layer has a surface. The samples
-// are those the unpack would have written: the depth as the G-buffer's 24-bit depth holds it,
-// 1 where the layer has no surface.
+// G-buffer: one fetch a pixel gives its depth, normal and IDs, or nothing where the layer has
+// no surface (every surface was cleared before the pass); the pass's count of the layers each
+// pixel holds (kbuffer_count.frag) answers for the pixels two steps away. The samples are those
+// the unpack would have written: the depth as the G-buffer's 24-bit depth holds it, 1 where the
+// layer has no surface.
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 
@@ -39,7 +40,7 @@ void main() {
     for (int i = 0; i < 5; ++i) {
         ivec2 q = i == 0 ? p : clamp(p + OFFSETS[i - 1], ivec2(0), last);
         uvec4 s = texelFetch(u_surfaces, q, 0);
-        sample_depth[i] = texelFetch(u_count, q, 0).r > u_held ? depth24(kb_depth(s, u_back_bias)) : 1.0;
+        sample_depth[i] = kb_empty(s) ? 1.0 : depth24(kb_depth(s, u_back_bias));
         sample_normal[i] = kb_normal(s);
         sample_ids[i] = kb_ids(s);
     }
