@@ -116,6 +116,11 @@ class Compositor:
         passes = 0
         if style.paper is None:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
+        elif not style.grid:
+            # plain paper is one colour: a clear, where a full-screen pass cost llvmpipe as much
+            # as a tenth of a viewer's frame (paper.glsl's premultiplication, in float32)
+            paper = np.asarray(style.paper, np.float32)
+            fbo.clear(*(float(v) for v in paper[:3] * paper[3]), float(paper[3]))
         else:
             prog, vao = r.fullscreen(PAPER_FRAG)
             set_paper(r.uniforms, prog, style)
