@@ -28,7 +28,6 @@ PEEL_EPSILON = 1e-5
 PEEL_FRAG = "blueprint.render:glsl/peel.frag"
 KBUFFER_FRAG = "blueprint.render:glsl/kbuffer.frag"
 UNPACK_FRAG = "blueprint.render:glsl/unpack.frag"
-COUNT_FRAG = "blueprint.render:glsl/kbuffer_count.frag"
 REVEAL_FRAG = "blueprint.render:glsl/reveal.frag"
 # Touching solids have coincident faces of opposite winding (the top of one, the bottom of the
 # other). Drawing back faces in a second draw pushed back by this polygon offset (in steps of
@@ -199,8 +198,10 @@ class Capture:
         self.prog = self.kbuffer = self._flags = None
         # the peel's own program only where it peels: an A-buffer frame sets up none (unless
         # its lists prove too big for memory, ``draw``)
-        # every layer from one k-buffer pass (at most KBUFFER_MAX of them: batch is all of them)
-        surfaces = surfaces and layers is not None and layers <= KBUFFER_MAX
+        # every layer from one k-buffer pass through framebuffer fetch (batch is all of them),
+        # with a target left for the count
+        surfaces = surfaces and not r.kbuffer_interlock
+        surfaces = surfaces and layers is not None and layers < min(KBUFFER_MAX, r.max_draw_buffers)
         self._peel_with = (camera, batch, face_ids, selected, use_kbuffer, surfaces)
         if self.abuffer is None:
             self._set_up_peel()
@@ -221,7 +222,7 @@ class Capture:
         )
         self.shader_bias = r.back_bias_in_shader and self.tie_break and not culled
         if use_kbuffer:
-            defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock}
+            defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock, "COUNT": surfaces}
             prog = geometry_program(r, KBUFFER_FRAG, defines, modern=r.kbuffer_interlock)
         else:
             defines = {
@@ -357,11 +358,12 @@ class _KBuffer:
     reads layers sees what the one-pass-a-layer peel draws. The layer's occlusion query counts
     its covered pixels.
 
-    Without ``unpack`` (one pass finds every layer of the frame: ``find_all``) the layers stay in
-    the surfaces, and one full-screen pass counts the layers each pixel holds instead (``count``,
-    read back: the covered pixels of every layer and the tiles each covers): on llvmpipe the
-    unpacking cost as much as a third of a frame's geometry, and readers of the surfaces fetch
-    a pixel's depth, normal and IDs at once."""
+    Without ``unpack`` (one pass finds every layer of the frame, through framebuffer fetch:
+    ``find_all``) the layers stay in the surfaces, and the pass writes how many each pixel holds
+    into one more target instead (``count``, read back: the covered pixels of every layer and the
+    tiles each covers): on llvmpipe the unpacking cost as much as a third of a frame's geometry,
+    a full-screen pass counting the surfaces a fifth of it, and readers of the surfaces fetch a
+    pixel's depth, normal and IDs at once."""
 
     def __init__(self, r, prog, k: int, unpack: bool = True) -> None:
         self.r, self.prog, self.k, self.unpacks = r, prog, k, unpack
@@ -376,22 +378,22 @@ class _KBuffer:
         self.layer_pixels: list[int] = []
         self.tile_layers: np.ndarray | None = None
         if not unpack:
-            self.counter, self.counter_vao = r.fullscreen(COUNT_FRAG, {"K": k})
-            for i in range(k):
-                self.counter[f"u_s{i}"].value = units.INPUTS + i
             self.unpack["u_count"].value = units.INPUTS
 
     def _surfaces(self, size: tuple[int, int]) -> tuple:
-        """(targets, their framebuffer, the first one's) at ``size``: pipelines peel G-buffers
-        of several sizes in turn, so the targets are named by size too."""
+        """(targets, their framebuffer (with the count's target, without unpack), the first
+        one's, the count's target or None) at ``size``: pipelines peel G-buffers of several sizes
+        in turn, so the targets are named by size too."""
         held = self._targets.get(size)
         if held is None:
             pool, name = self.r.pool, f"kbuffer.{size[0]}x{size[1]}"
             surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k))
+            count = None if self.unpacks else pool.texture(f"{name}.count", size, "r8")
             held = self._targets[size] = (
                 surfaces,
-                pool.framebuffer(surfaces),
+                pool.framebuffer(surfaces if count is None else (*surfaces, count)),
                 pool.framebuffer(surfaces[:1]),
+                count,
             )
         return held
 
@@ -403,7 +405,7 @@ class _KBuffer:
     def _find(self, mesh, gb: GBuffer, layer: int) -> None:
         """The pass that finds layers ``layer`` to ``layer + k - 1``."""
         ctx = self.r.ctx
-        surfaces, target, first_target = self._surfaces(gb.size)
+        surfaces, target, first_target, _ = self._surfaces(gb.size)
         # the first target alone is cleared: kbuffer.frag keeps the rest valid; where the
         # surfaces are read as they are, all of them, so that an empty one means no layer
         # (clearing four more targets cost llvmpipe a tenth of one full-screen pass)
@@ -423,20 +425,15 @@ class _KBuffer:
             mesh.vao(self.prog).render()
 
     def find_all(self, mesh, gb: GBuffer) -> int:
-        """Every layer into the surfaces in one pass, then the layers each pixel holds counted
-        and read back (``count``, ``layer_pixels``, ``tile_layers``). Returns the draw calls."""
+        """Every layer into the surfaces in one pass, with the layers each pixel holds, read back
+        (``count``, ``layer_pixels``, ``tile_layers``). Returns the draw calls."""
         self._find(mesh, gb, 0)
         w, h = gb.size
-        pool = self.r.pool
-        self.count = pool.texture(f"kbuffer.count.{w}x{h}", (w, h), "r8")
-        pool.framebuffer((self.count,)).use()
-        for unit, tex in enumerate(self._surfaces(gb.size)[0], units.INPUTS):
-            tex.use(unit)
-        self.counter_vao.render(vertices=3)
+        self.count = self._surfaces(gb.size)[3]
         held = np.frombuffer(self.count.read(), np.uint8).reshape(h, w)
         self.layer_pixels = [int(np.count_nonzero(held > k)) for k in range(self.k)]
         self.tile_layers = _tile_max(held)
-        return 2
+        return 1
 
     def unpack_held(self, gb: GBuffer, layer: int) -> None:
         """Layer ``layer`` of the last ``find_all`` into the G-buffer, where the count says a

@@ -2,7 +2,7 @@
 // found for it (blueprint.render:glsl/kbuffer.glsl) instead of from the layer unpacked into the
 // G-buffer: one fetch a pixel gives its depth, normal and IDs, or nothing where the layer has
 // no surface (every surface was cleared before the pass); the pass's count of the layers each
-// pixel holds (kbuffer_count.frag) answers for the pixels two steps away. The samples are those
+// pixel holds (kbuffer.frag with COUNT) answers for the pixels two steps away. The samples are those
 // the unpack would have written: the depth as the G-buffer's 24-bit depth holds it, 1 where the
 // layer has no surface.
 #extension GL_ARB_shading_language_packing : require

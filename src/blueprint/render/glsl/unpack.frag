@@ -2,7 +2,7 @@
 // (biased for back faces), normal and IDs; nothing where the layer has no surface. A pixel's
 // targets hold surfaces only up to the first empty one (kbuffer.frag), so a layer is read only
 // where the one before it has a surface; with HELD, where the pixel's count of the layers the
-// pass found (kbuffer_count.frag) says it holds this one.
+// pass found (kbuffer.frag with COUNT) says it holds this one.
 #extension GL_ARB_shading_language_packing : require
 #include "kbuffer.glsl"
 
