@@ -317,7 +317,9 @@ class Capture:
             self._set_up_peel()
         gb.flat = None
         if self.kbuffer is not None and not self.kbuffer.unpacks:
-            # every layer is found at layer 0 and read from the surfaces: no depth to clear
+            # every layer is found at layer 0 and read from the surfaces: no depth to clear;
+            # kbuffer.frag's previous layer is read though unused (llvmpipe runs the branch a
+            # uniform skips): a depth texture, never one the pass draws into
             gb.depth[1].use(units.PEEL_DEPTH + 1)
             return self.kbuffer.find_all(self.mesh, gb) if layer == 0 else 0
         gb.clears[layer % 2].use()
@@ -408,7 +410,8 @@ class _KBuffer:
         surfaces, target, first_target, _ = self._surfaces(gb.size)
         # the first target alone is cleared: kbuffer.frag keeps the rest valid; where the
         # surfaces are read as they are, all of them, so that an empty one means no layer
-        # (clearing four more targets cost llvmpipe a tenth of one full-screen pass)
+        # (at 800x600 on llvmpipe: 9 ms more CPU to clear, 18 ms less for the edges to tell
+        # the layer's pixels from its count)
         (first_target if self.unpacks else target).clear()
         self.prog["u_peel"].value = layer > 0
         self.prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
