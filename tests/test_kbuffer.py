@@ -163,3 +163,25 @@ def test_used_only_where_it_pays(renderer, monkeypatch):
     assert not kbuffered(large, 5)
     monkeypatch.setattr(capture, "KBUFFER_MAX_BYTES", 16 * 5 * 64 * 64 - 1)
     assert not kbuffered(small, 5)
+
+
+@pytest.mark.parametrize("supersample", [1, 2])
+def test_edges_from_the_surfaces_are_those_of_unpacked_layers(renderer, kbuffer, monkeypatch, supersample):
+    """Where one k-buffer pass finds every layer of a frame its edges read the surfaces, unpacked
+    (edges_surfaces.frag): the same drawing, covered pixels and layers left as from the layers
+    unpacked into the G-buffer, depths rounded as the 24-bit depth target rounds them."""
+    from blueprint.pipeline.executor import executor_for
+    from blueprint.pipeline.peel import LayerCapture
+
+    kbuffer(True)
+    model = examples.gearbox()
+    options = dict(size=(160, 120), max_layers=4, supersample=supersample)
+    direct = renderer.render(model, **options)
+    assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
+    unpacked = renderer.render(model, direct.camera, **options)
+    assert executor_for(renderer).last_run.from_surfaces == ()
+    assert direct.layers_left > 0
+    counts = (direct.layers, direct.layer_pixels, direct.layers_left)
+    assert counts == (unpacked.layers, unpacked.layer_pixels, unpacked.layers_left)
+    np.testing.assert_array_equal(direct.image, unpacked.image)

@@ -82,7 +82,8 @@ class Renderer(LayerRenderer):
             Synchronise after each stage to fill ``Frame.stages`` (slower).
         on_gpu : bool
             Leave the picture on the GPU (``Frame.texture``), unread: for a window of this
-            renderer's context to show it (``Frame.image`` is None then).
+            renderer's context to show it (``Frame.image`` is None then). Nothing is read
+            back then: ``Frame.layers_left`` is not counted (0).
         """
         # the pipeline is for pictures: vector drawings and depth layers start without it
         from blueprint.pipeline.blueprint import render_blueprint

@@ -116,6 +116,11 @@ class Compositor:
         passes = 0
         if style.paper is None:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
+        elif not style.grid:
+            # plain paper is one colour: a clear (0.4 ms of CPU at 800x600 on llvmpipe, the pass
+            # 6.4); paper.glsl's premultiplication, in float32
+            paper = np.asarray(style.paper, np.float32)
+            fbo.clear(*(float(v) for v in paper[:3] * paper[3]), float(paper[3]))
         else:
             prog, vao = r.fullscreen(PAPER_FRAG)
             set_paper(r.uniforms, prog, style)

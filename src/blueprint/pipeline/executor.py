@@ -71,6 +71,7 @@ ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
 EDGES_FROM_LISTS_FRAG = "blueprint.pipeline:glsl/edges_lists.frag"
+EDGES_FROM_SURFACES = "blueprint.pipeline:glsl/edges_surfaces.frag"
 # the uniforms every pass may take (see the module's docstring), in the groups that are computed
 # together: of the target and the run, of the camera, the camera's matrices
 _FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
@@ -180,7 +181,8 @@ class Executor:
             result comes with ``pending`` set and ``output`` None.
         keep : bool
             Leave a one-texture output on the GPU, unread: ``Result.texture`` (a window shows it
-            from there).
+            from there). Such a frame reads nothing back, so it does not count the layers a cap
+            left (``Result.layers_left`` is 0): that count is a geometry pass and a read-back.
         slot : int
             Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2
             for a frame read at once (never those of a stream still to be read).
@@ -337,7 +339,8 @@ class Executor:
                 else:
                     if counts is None:
                         counts, layers = self.capture.counted(st, rules, layers)
-                    left = self.capture.left(st, rules, counts, layers)
+                    # a window's frame shows no count: its pass and read-back would be a stall
+                    left = 0 if keep else self.capture.left(st, rules, counts, layers)
             return counts, layers, revealed, left, pending, kept, dumps_out, counting
 
         try:
@@ -533,15 +536,32 @@ class Executor:
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
         reach = self._reach(st, name) if size == self.tiles.size else None
+        vertex = FULLSCREEN if reach is None else TILES_VERT
+        surfaces = name in st.from_surfaces
         if p.user is not None:
             prog = self.programs.user(p.user)
         else:
-            vertex = FULLSCREEN if reach is None else TILES_VERT
-            prog = self.programs.library(p.op.shader, vertex, _defines(p))
+            shader = EDGES_FROM_SURFACES if surfaces else p.op.shader
+            prog = self.programs.library(shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
-        for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
-            self._bind_input(prog, key, self._value(st, source, layer), unit, size)
+        if surfaces:
+            # the layer's depth, normal and IDs from the k-buffer, one fetch a pixel
+            kbuffer = st.surfaces
+            kbuffer.surfaces[layer].use(BASE_UNIT)
+            kbuffer.count.use(BASE_UNIT + 1)
+            self.programs.update(
+                prog,
+                {
+                    "u_surfaces": BASE_UNIT,
+                    "u_count": BASE_UNIT + 1,
+                    "u_held": (layer + 0.5) / 255.0,
+                    "u_back_bias": kbuffer.back_bias,
+                },
+            )
+        else:
+            for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
+                self._bind_input(prog, key, self._value(st, source, layer), unit, size)
         fbo = self.r.pool.framebuffer((target,))
         if reach is not None:
             fbo.use()

@@ -32,6 +32,7 @@ class LayerCapture:
         # plan's id: every frame of a stream asks again
         self._layouts: dict[int, tuple[Plan, Layout]] = {}
         self._lists: dict[int, tuple[Plan, ArrayPlan, tuple[str, ...]]] = {}
+        self._surface_readers: dict[int, tuple[Plan, tuple[str, ...]]] = {}
         # the last rules peeled under: whether any looks after every layer, whether only a cap
         # stops the peel (the executor keeps a frame's standard rules from one frame to the next)
         self._rules: tuple = (None, False, False)
@@ -133,6 +134,9 @@ class LayerCapture:
         # from the lists as it comes, unless a stop rule reads the layers (depth masking)
         looks = any(rule.every_layer for rule in rules)
         layer_lists = self._from_lists(st) if st.arrays is None and not looks else ()
+        # ...or from the surfaces of a k-buffer that finds every layer in one pass, where no
+        # rule looks at each layer
+        from_surfaces = self._from_surfaces(st) if not from_lists and not self._rules[1] else ()
         for g in groups:
             g.capture = Capture(
                 r,
@@ -145,7 +149,11 @@ class LayerCapture:
                 defer=defer,
                 unpack=not (from_lists or layer_lists),
                 slot=st.slot,
+                surfaces=bool(from_surfaces),
             )
+        kbuffer = groups[0].capture.kbuffer
+        if kbuffer is not None and not kbuffer.unpacks:
+            st.surfaces, st.from_surfaces = kbuffer, from_surfaces
         extras = self._attribute_programs(st) if layout.extra else None
         for name in pl.accumulated:
             r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
@@ -219,6 +227,17 @@ class LayerCapture:
             held = self._lists[id(pl)] = (pl, arrays, _lists_readers(pl, arrays, self._layout(pl)))
         return held[2]
 
+    def _from_surfaces(self, st: RunState) -> tuple[str, ...]:
+        """The edges passes that may read each layer from a k-buffer's surfaces (fragment form:
+        ``Executor._run_pass``), on the same terms as ``_from_lists``."""
+        pl = st.pl
+        if st.arrays is not None or st.attr_dumps:
+            return ()
+        held = self._surface_readers.get(id(pl))
+        if held is None or held[0] is not pl:
+            held = self._surface_readers[id(pl)] = (pl, _edges_readers(pl, self._layout(pl)))
+        return held[1]
+
     def _layout(self, pl: Plan) -> Layout:
         held = self._layouts.get(id(pl))
         if held is None or held[0] is not pl:
@@ -241,7 +260,7 @@ class LayerCapture:
         if deepest is not None:
             return max(0, deepest - layers)
         st.draws += 1
-        return layers_left(self.r, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
+        return layers_left(self.r, st.mesh, st.camera, st.groups[0].capture.layer_depth(layers - 1))
 
     def _attribute_programs(self, st: RunState) -> dict:
         progs = {}
@@ -316,6 +335,22 @@ def layout(pl: Plan) -> Layout:
 def _lists_readers(pl: Plan, arrays: ArrayPlan | None, lay: Layout) -> tuple[str, ...]:
     """``LayerCapture._from_lists`` of a plan whose layers no one reads back, in the compute
     form ``arrays`` or (None) a pass a layer."""
+    readers = _edges_readers(pl, lay)
+    passes = pl.bound.passes
+    if arrays is not None:
+        one = all(name in arrays.slices for name in readers)
+    else:
+        one = all(
+            passes[n].per_layer and passes[n].kind == "single" and not passes[n].accumulate for n in readers
+        )
+    return readers if one else ()
+
+
+def _edges_readers(pl: Plan, lay: Layout) -> tuple[str, ...]:
+    """The passes that read the layers of a plan whose layers no one reads back, where they
+    are all edges operations on the renderer's own depth, normal and IDs that draw no
+    triangle-ID silhouettes (the forms that read a capture's lists or surfaces have none);
+    else none."""
     bound = pl.bound
     if len(lay.scales) != 1 or lay.extra:
         return ()
@@ -326,8 +361,7 @@ def _lists_readers(pl: Plan, arrays: ArrayPlan | None, lay: Layout) -> tuple[str
     wired = {"depth": "depth", "normal": "normal", "ids": "ids"}
     for name in readers:
         p = bound.passes[name]
-        one = name in arrays.slices if arrays is not None else p.per_layer and p.kind == "single"
-        if not one or p.accumulate or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
+        if p.user is not None or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
             return ()
         if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
             return ()

@@ -153,4 +153,7 @@ class RunState:
     # per-layer passes that read each layer from the A-buffer's lists as it is drawn
     # (Executor._run_layer_lists), once layer 0 has captured them
     layer_lists: tuple[str, ...] = ()
+    # the k-buffer whose surfaces hold every layer, unpacked, and the passes that read them there
+    surfaces: object = None
+    from_surfaces: tuple[str, ...] = ()
     draws: int = 0

@@ -46,7 +46,8 @@ class Frame:
     ``revealed`` the fraction of the highlighted parts uncovered where depth masking peeled;
     ``layers_left``, where the peel stopped at its ``max_layers`` with surfaces left behind the
     last layer, how many more layers a peel without the cap would have drawn (at most: surfaces
-    closer than the peel's tolerance count apart), else 0.
+    closer than the peel's tolerance count apart), else 0; always 0 on frames drawn ``on_gpu``,
+    which read nothing back.
     ``marks``: the sheet marks drawn over the image (a plan sheet's border, title block and
     labels, dimensions; ``blueprint.scene.sheet.Marks``, in the image's pixels), if any.
     ``texture``, where the frame was drawn ``on_gpu``: the picture left on the GPU (a

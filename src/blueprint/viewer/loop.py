@@ -32,6 +32,9 @@ REFINE_DELAY = 0.2
 REVEAL = 0.95
 # How long a message (screenshot saved) stays in the heads-up lines.
 STATUS_SECONDS = 5.0
+# The frame rate in the heads-up lines changes at most this often: readable while the view
+# moves, and the lines are drawn again only when they change.
+RATE_SECONDS = 0.5
 
 
 @dataclass
@@ -90,6 +93,7 @@ class Viewer:
         self._status_time = 0.0
         self._drafts = Drafts(self.options.interactive_scale)
         self._rate = FrameRate()
+        self._shown_ms = (0.0, -RATE_SECONDS)  # (the draw time shown, when it was taken)
         # what needs doing
         self._needs_render = True
         self._needs_present = False
@@ -234,7 +238,10 @@ class Viewer:
             self.presenter.show_texture(frame.texture)
         else:
             self.presenter.show(frame.image)
-        ms = (time.perf_counter() - t0) * 1e3
+        done = time.perf_counter()
+        ms = (done - t0) * 1e3
+        if done - self._shown_ms[1] >= RATE_SECONDS or not draft:
+            self._shown_ms = (ms, done)
         if draft:
             self._drafts.adapt(ms)
         self._last = {
@@ -264,7 +271,8 @@ class Viewer:
             return
         fresh = self._status and time.perf_counter() - self._status_time < STATUS_SECONDS
         status = self._status if fresh else ""
-        lines = hud_lines(self.state, self.model, self._last, self.window.renderer_name, status)
+        last = {**self._last, "ms": self._shown_ms[0]}
+        lines = hud_lines(self.state, self.model, last, self.window.renderer_name, status)
         self.presenter.draw(size, lines, self.state.help)
         if self.dump is not None:
             self.dump.write(

@@ -53,6 +53,7 @@ class Presenter:
         self._overlay_key: tuple | None = None
         self._overlay_base: np.ndarray | None = None
         self._band_rows = 0
+        self._band_lines: list[str] | None = None  # the lines the band holds now
         self._premultiplied = False  # how the picture's colours hold its alpha
 
     @property
@@ -80,15 +81,18 @@ class Presenter:
         renderer = self.window.renderer
         ctx = renderer.ctx
         overlay = self._overlay(size, lines, show_help)
-        prog, vao = renderer.fullscreen(PRESENT_FRAG)
+        picture = self._textures["picture"]
+        same_size = tuple(picture.size) == (w, h)
+        prog, vao = renderer.fullscreen(PRESENT_FRAG, {"SAME_SIZE": same_size})
         ctx.screen.use()
         ctx.viewport = (0, 0, w, h)
         ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
-        self._textures["picture"].use(0)
+        picture.use(0)
         overlay.use(1)
         prog["u_picture"].value = 0
         prog["u_overlay"].value = 1
-        prog["u_window"].value = (float(w), float(h))
+        if not same_size:
+            prog["u_window"].value = (float(w), float(h))
         prog["u_backdrop"].value = tuple(c / 255.0 for c in BACKDROP)
         prog["u_premultiplied"].value = self._premultiplied
         vao.render(vertices=3)
@@ -103,15 +107,19 @@ class Presenter:
 
     def _overlay(self, size: tuple[int, int], lines: list[str], show_help: bool):
         """The overlay texture: the help box redrawn when it or the window changes, the band of
-        heads-up lines every frame (rows written down to the lower of this band and the last)."""
+        heads-up lines where they changed (rows written down to the lower of this band and the
+        last): drawing them took llvmpipe's viewer a fiftieth of its frame."""
         w, h = size
         key = (w, h, show_help)
         if self._overlay_key != key:
             self._overlay_base = help_overlay(size, show_help)
             self._upload("overlay", self._overlay_base)
-            self._overlay_key, self._band_rows = key, 0
-        rows = min(h, max(self._band_rows, LINE_HEIGHT * len(lines)))
+            self._overlay_key, self._band_rows, self._band_lines = key, 0, None
         texture = self._textures["overlay"]
+        if lines == self._band_lines:
+            return texture
+        self._band_lines = list(lines)
+        rows = min(h, max(self._band_rows, LINE_HEIGHT * len(lines)))
         if rows:
             top = band_overlay(self._overlay_base[:rows], lines)
             texture.write(np.ascontiguousarray(top[::-1]).tobytes(), viewport=(0, h - rows, w, rows))

@@ -7,7 +7,9 @@
 // u_back_bias behind, a fragment no more than u_peel_eps (eye depth) behind a surface is that
 // surface (coplanar faces, touching parts), and of two fragments at one depth the first drawn
 // stays. With IDS_ONLY (through framebuffer fetch) a surface is its depth and face alone
-// (kbuffer.glsl), for passes that need no normals.
+// (kbuffer.glsl), for passes that need no normals. With COUNT (through framebuffer fetch) one
+// more target, after the K surfaces, holds how many surfaces the pixel holds, as count / 255
+// (r8), for passes that read the surfaces where they lie instead of unpacked.
 #if INTERLOCK
 #extension GL_ARB_fragment_shader_interlock : require
 #else
@@ -74,6 +76,9 @@ layout(location = 6) inout KB_T o_s6;
 #endif
 #if K > 7
 layout(location = 7) inout KB_T o_s7;
+#endif
+#if COUNT
+layout(location = K) out vec4 o_count;
 #endif
 #endif
 
@@ -207,6 +212,9 @@ void main() {
 #endif
 #if K > 7
     o_s7 = KB_SHIFTED(s, c, at, held, same, 7, 6);
+#endif
+#if COUNT
+    o_count = vec4(float(min(held, K)) / 255.0);
 #endif
 #endif
 }

@@ -80,24 +80,29 @@ int kb_place(KB_T s[K], float ze, float cb, float back_bias, float eps, out bool
             count = k;
         }
     }
+    // The surfaces are sorted by biased depth, so the first one the fragment lies in front of
+    // is its place, and the one before that (the farthest it lies at or behind) is the only one
+    // it may be part of: eye depth never decreases with window depth, so if it is within the
+    // tolerance of any surface in front of it, it is within that of this one. One division
+    // each instead of two a surface held (llvmpipe runs every branch of the loop).
     int at = count;
-    same = false;
-    bool part_of_one = false;
+    float before = 0.0;  // the biased depth of the surface before ``at``
+    float raw = 0.0;     // the raw depth of the surface at ``at``
     for (int k = 0; k < K; ++k) {
-        if (k >= count || at < count || part_of_one) {
-            continue;
-        }
         float sb = kb_depth(s[k], back_bias);
-        if (cb >= sb) {
-            // at or behind this surface: part of it, or on to the next one
-            part_of_one = ze <= eye_depth(sb) + eps;
-            continue;
+        if (k < count && at == count) {
+            if (cb >= sb) {
+                before = sb;
+            } else {
+                at = k;
+                raw = kb_raw(s[k]);
+            }
         }
-        // in front of it: the peel would take this fragment first and then skip the surface
-        // if it lies within the tolerance behind
-        at = k;
-        same = eye_depth(kb_raw(s[k])) <= eye_depth(cb) + eps;
     }
+    bool part_of_one = at > 0 && ze <= eye_depth(before) + eps;
+    // in front of it: the peel would take this fragment first and then skip the surface if it
+    // lies within the tolerance behind
+    same = !part_of_one && at < count && eye_depth(raw) <= eye_depth(cb) + eps;
     held = same ? count : count + 1;
     return part_of_one ? K : at;
 }
