@@ -10,7 +10,7 @@ Python issuing it) and of a whole ``Renderer.render`` frame each way. One JSON o
     python benchmarks/compute_capture.py MODEL... [--size 1024 2048 4096] [--frames 9]
 
 Sizes are G-buffer sizes (a 2048² drawing at the default supersample 2 is 4096²). The compute
-rasteriser is the renderer's (``render.raster``, ``LayerRenderer.compute_capture``); it does not
+rasteriser is the renderer's (``render.raster``, ``LayerRenderer.compute_capture_from``); it does not
 clip: views with a vertex behind the eye are refused.
 """
 
@@ -71,7 +71,8 @@ def main() -> None:
 
 
 class Bench:
-    """Both ways of filling the A-buffer's lists (``LayerRenderer.compute_capture``)."""
+    """Both ways of filling the A-buffer's lists, whatever the size
+    (``LayerRenderer.compute_capture_from``)."""
 
     def __init__(self, r, layers: int | None, frames: int) -> None:
         self.r, self.layers, self.frames = r, layers, frames
@@ -80,7 +81,7 @@ class Bench:
         self.loops = 0
 
     def use(self, compute: bool) -> None:
-        self.r.compute_capture = compute
+        self.r.compute_capture_from = 0 if compute else None
 
     def stall(self) -> None:
         self.stall_buf.bind_to_storage_buffer(11)

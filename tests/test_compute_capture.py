@@ -1,5 +1,5 @@
 """The A-buffer's fragments listed by the compute rasteriser (render/raster.py,
-``LayerRenderer.compute_capture``) against the graphics pipeline's: the same fragments, and the
+``LayerRenderer.compute_capture_from``) against the graphics pipeline's: the same fragments, and the
 same layers at every pixel but where two faces tie in depth (coincident faces: there the
 rasteriser's rounding and ours each pick one), with the bins' room short (drawn again)
 and in views it must leave to the graphics pipeline (a corner of the model behind the eye). The
@@ -34,20 +34,20 @@ def capture(renderer):
         renderer.abuffer_max_bytes,
         renderer.abuffer_min_layers,
         renderer.kbuffer,
-        renderer.compute_capture,
+        renderer.compute_capture_from,
     )
     rooms = dict(renderer.compute_raster.rooms)
 
     def use(compute: bool) -> None:
         renderer.abuffer_max_bytes, renderer.abuffer_min_layers, renderer.kbuffer = 1 << 28, 2, False
-        renderer.compute_capture = compute
+        renderer.compute_capture_from = 0 if compute else None
 
     yield use
     (
         renderer.abuffer_max_bytes,
         renderer.abuffer_min_layers,
         renderer.kbuffer,
-        renderer.compute_capture,
+        renderer.compute_capture_from,
     ) = saved
     renderer.compute_raster.rooms.clear()
     renderer.compute_raster.rooms.update(rooms)
@@ -130,3 +130,19 @@ def test_what_it_sees(renderer):
     near = Camera(eye=(0.0, 0.0, 2.0 + 1e-4), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), near=1e-5, far=20.0)
     assert not raster.sees(model.bounds, abuffer_uniforms(near), (4096, 4096))
     assert REACH <= 1 << 17
+
+
+def test_frames_below_its_size_stay_with_the_graphics_pipeline(renderer, capture, monkeypatch):
+    """``compute_capture_from`` is the G-buffer size from which the compute rasteriser lists a
+    frame: smaller frames cost it more than the graphics pipeline (the H200: the crank case)."""
+    listed = []
+    fragments = ComputeRaster.fragments
+    monkeypatch.setattr(ComputeRaster, "fragments", lambda *a: listed.append(a[2]) or fragments(*a))
+    capture(True)
+    model = nested_boxes()
+    renderer.compute_capture_from = 64 * 64 + 1
+    blueprint.peel(model, renderer=renderer, size=(64, 64))
+    assert not listed
+    renderer.compute_capture_from = 64 * 64
+    blueprint.peel(model, renderer=renderer, size=(64, 64))
+    assert listed == [(64, 64)]

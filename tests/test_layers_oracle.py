@@ -133,7 +133,7 @@ CASES = [
 # normals: depth and triangle IDs alone).
 # a-buffer-slim: fragments listed as depth and face alone, the rest found by the sort: what GPUs
 # use (LayerRenderer.abuffer_slim); a-buffer-compute: those listed by the rasteriser in compute
-# (render.raster, LayerRenderer.compute_capture)
+# (render.raster, LayerRenderer.compute_capture_from: forced whatever the size)
 METHODS = [
     "pass-a-layer",
     "two-culled-draws",
@@ -160,14 +160,14 @@ def method(request, renderer):
         renderer.abuffer_max_bytes,
         renderer.abuffer_min_layers,
         renderer.abuffer_slim,
-        renderer.compute_capture,
+        renderer.compute_capture_from,
     )
     renderer.kbuffer, renderer.kbuffer_density = kbuffer, 0.0
     renderer.culled_tie_break_from = (0, 0) if request.param == "two-culled-draws" else None
     renderer.abuffer_max_bytes = (1 << 30) if abuffer else 0
     renderer.abuffer_min_layers = 2
     renderer.abuffer_slim = request.param in ("a-buffer-slim", "a-buffer-compute")
-    renderer.compute_capture = request.param == "a-buffer-compute"
+    renderer.compute_capture_from = 0 if request.param == "a-buffer-compute" else None
     yield request.param
     (
         renderer.kbuffer,
@@ -176,7 +176,7 @@ def method(request, renderer):
         renderer.abuffer_max_bytes,
         renderer.abuffer_min_layers,
         renderer.abuffer_slim,
-        renderer.compute_capture,
+        renderer.compute_capture_from,
     ) = saved
 
 

@@ -116,7 +116,7 @@ class ABuffer:
         self.uniforms = uniforms
         # the compute rasteriser where the renderer captures in compute (render.raster), and
         # (its bins' room, the size) of the capture in hand where it drew it
-        self.raster = r.compute_raster if r.compute_capture else None
+        self.raster = r.compute_raster if r.compute_capture_from is not None else None
         self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
@@ -154,7 +154,7 @@ class ABuffer:
         buffers where it draws them, fit ``max_bytes`` (and the images' rows)."""
         rows = -(-room // AB_ROW)
         held = room * self.node_bytes
-        if self.raster is not None:
+        if self._computes(size):
             held += self.raster.bytes(size, self.mesh.triangles)
         return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
@@ -280,12 +280,16 @@ class ABuffer:
             if self._count(seen.read, nbytes, room, size, name):
                 return calls
 
+    def _computes(self, size: tuple[int, int]) -> bool:
+        """Whether the compute rasteriser lists a frame of ``size`` (render.raster: where it
+        sees the view too)."""
+        return self.raster is not None and size[0] * size[1] >= self.r.compute_capture_from
+
     def fragments(self, gb) -> None:
         """Every fragment of the mesh into its pixel's list: by the compute rasteriser where
         there is one and it sees the view, else the graphics pipeline's (abuffer.frag)."""
-        raster = self.raster
-        if raster is not None and raster.sees(self.mesh.bounds, self.uniforms, gb.size):
-            self._binned = raster.fragments(self, gb.size, self.uniforms), tuple(gb.size)
+        if self._computes(gb.size) and self.raster.sees(self.mesh.bounds, self.uniforms, gb.size):
+            self._binned = self.raster.fragments(self, gb.size, self.uniforms), tuple(gb.size)
             return
         gb.clears[0].use()
         target_uniform(self.r, self.geometry, gb.size)
