@@ -7,8 +7,9 @@ loads without the executor, which a vector drawing or a depth peel never runs.
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from blueprint.lazy import lazy_names
 
 # public name -> the module that defines it
 _EXPORTS = {
@@ -47,14 +48,4 @@ if TYPE_CHECKING:
     from blueprint.pipeline.state import Result
 
 
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'blueprint.pipeline' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_EXPORTS])
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS, globals())

@@ -51,8 +51,9 @@ test), ``strokes`` (line glyphs into screen pieces), ``raster`` (pieces and text
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
+
+from blueprint.lazy import lazy_names
 
 # Names load on first use (PEP 562): a module of the package (``raster`` for label anchors)
 # loads without the others, which a drawing without glyphs never runs.
@@ -96,14 +97,4 @@ if TYPE_CHECKING:
     )
 
 
-def __getattr__(name: str):
-    module = _EXPORTS.get(name)
-    if module is None:
-        raise AttributeError(f"module 'blueprint.compose.glyphs' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_EXPORTS])
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS, globals())
