@@ -44,6 +44,7 @@ LAYERS = (
             "blueprint.blas",
             "blueprint.columns",
             "blueprint.sorting",
+            "blueprint.lazy",
         ),
     ),
     Layer("scene", ("blueprint.scene",)),
