@@ -5,16 +5,14 @@ then reads it, or refuses it in one line) for anything else."""
 from __future__ import annotations
 
 import json
-import os
 import struct
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from test_obj import loaded_in_a_process
 
 import blueprint
 from blueprint import examples
@@ -243,13 +241,7 @@ def test_loader_model_is_the_trimesh_model():
 
 def test_a_glb_loads_without_trimesh():
     """trimesh (with scipy and networkx) takes longer to import than most drawings take."""
-    code = (
-        "import sys; from blueprint.scene.loader import load_model; "
-        f"m = load_model({str(GEARBOX)!r}); print(len(m.part_names), 'trimesh' in sys.modules)"
-    )
-    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
-    assert done.stdout.split() == ["13", "False"], done.stderr
+    assert loaded_in_a_process(GEARBOX, "len(m.part_names)") == ["13", "False"]
 
 
 # -- left to trimesh ---------------------------------------------------------------------------------

@@ -97,14 +97,21 @@ def test_loader_model_is_the_trimesh_model(tmp_path):
     )
 
 
+def loaded_in_a_process(path: Path, what: str) -> list[str]:
+    """``what`` (an expression of the model ``m``) of ``path`` loaded in a fresh process, and
+    whether that process imported trimesh."""
+    code = (
+        "import sys; from blueprint.scene.loader import load_model; "
+        f"m = load_model({str(path)!r}); print({what}, 'trimesh' in sys.modules)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
+
+
 def test_plain_obj_loads_without_trimesh(tmp_path):
     """trimesh (with scipy and networkx) takes longer to import than a scan takes to read."""
     path = tmp_path / "triangle.obj"
     path.write_bytes(READ["triangle"])
-    code = (
-        "import sys; from blueprint.scene.loader import load_model; "
-        f"m = load_model({str(path)!r}); print(len(m.faces), 'trimesh' in sys.modules)"
-    )
-    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
-    assert done.stdout.split() == ["1", "False"], done.stderr
+    assert loaded_in_a_process(path, "len(m.faces)") == ["1", "False"]
