@@ -44,30 +44,42 @@ void main() {
     for (int i = 0; i < 4; ++i) {
         at[i + 1] = imageLoad(u_from, clamp(p + OFFSETS[i], ivec2(0), last)).x;
     }
-    uint ring[8];
-    for (int r = 0; r < 8; ++r) {
-        ring[r] = imageLoad(u_layer_count, clamp(p + RING[r], ivec2(0), last)).x;
-    }
     for (int i = 0; i < 5; ++i) {
         sample_normal[i] = vec3(0.0);
         sample_ids[i] = ivec2(0);
     }
-    for (int layer = 0; layer < u_layers; ++layer) {
-        for (int i = 0; i < 5; ++i) {
-            if (at[i] == 0u) {
-                sample_depth[i] = 1.0;
-                continue;
-            }
-            uvec4 s = AB_NODE(at[i] - 1u);
-            sample_depth[i] = kb_depth(s, u_back_bias);
-            sample_normal[i] = kb_normal(s);
-            sample_ids[i] = kb_ids(s);
-            at[i] = AB_ORDER(at[i] - 1u);
-        }
+    // A pixel whose four neighbours have no layer left has no edge (edge_value's speck rule)
+    // in any layer on, and chains only run out: most pixels of the deep arrays end here.
+    int layer = 0;
+    if ((at[1] | at[2] | at[3] | at[4]) != 0u) {
+        uint ring[8];
         for (int r = 0; r < 8; ++r) {
-            ring_covered[r] = ring[r] > uint(u_first_layer + layer);
+            ring[r] = imageLoad(u_layer_count, clamp(p + RING[r], ivec2(0), last)).x;
         }
-        imageStore(u_out, ivec3(p, layer), vec4(layer_edge_value(p, u_first_layer + layer)));
+        for (; layer < u_layers && (at[1] | at[2] | at[3] | at[4]) != 0u; ++layer) {
+            for (int i = 0; i < 5; ++i) {
+                if (at[i] == 0u) {
+                    sample_depth[i] = 1.0;
+                    continue;
+                }
+                uvec4 s = AB_NODE(at[i] - 1u);
+                sample_depth[i] = kb_depth(s, u_back_bias);
+                sample_normal[i] = kb_normal(s);
+                sample_ids[i] = kb_ids(s);
+                at[i] = AB_ORDER(at[i] - 1u);
+            }
+            for (int r = 0; r < 8; ++r) {
+                ring_covered[r] = ring[r] > uint(u_first_layer + layer);
+            }
+            imageStore(u_out, ivec3(p, layer), vec4(layer_edge_value(p, u_first_layer + layer)));
+        }
+    }
+    for (; layer < u_layers; ++layer) {
+        imageStore(u_out, ivec3(p, layer), vec4(0.0));
+    }
+    // the pixel's own chain goes on where its neighbours' ran out
+    for (int k = layer; k < u_layers && at[0] != 0u; ++k) {
+        at[0] = AB_ORDER(at[0] - 1u);
     }
     imageStore(u_next, p, uvec4(at[0]));
 }

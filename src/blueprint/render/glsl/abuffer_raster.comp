@@ -279,7 +279,12 @@ bool depth_at(uint k, ivec2 pixel, out float z, out vec3 b) {
     return z >= 0.0 && z <= 1.0;
 }
 
-shared uint group_total;
+// each held triangle's fragments in the tile, then where the next of them goes in the batch's
+// nodes (triangle k's fragments side by side: passes that read a pixel's layer and its
+// neighbours' read the same triangle's nodes where they lie together, as the fragment shader's
+// appends leave them)
+shared uint tri_count[BATCH];
+shared uint tri_next[BATCH];
 shared uint group_base;
 
 // The workgroup owns its tile's pixels: each pixel's list head stays in a register and is
@@ -317,8 +322,8 @@ void main() {
             ivec2 c0 = s0.xy, c1 = s0.zw, c2 = s1.xy;
             held_front[lane] = double(c1.x - c0.x) * double(c2.y - c0.y) - double(c1.y - c0.y) * double(c2.x - c0.x) > 0.0;
         }
-        if (lane == 0u) {
-            group_total = 0u;
+        if (lane < uint(BATCH)) {
+            tri_count[lane] = 0u;
         }
         barrier();
         float z;
@@ -336,18 +341,41 @@ void main() {
             hits[word] = bits;
             mine += uint(bitCount(bits));
         }
-        uint offset = atomicAdd(group_total, mine);
-        barrier();
-        if (lane == 0u) {
-            group_base = atomicAdd(drawn, group_total);
+        for (uint word = 0u; mine > 0u && word < uint(BATCH / 32); ++word) {
+            for (uint bits = hits[word]; bits != 0u; bits &= bits - 1u) {
+                atomicAdd(tri_count[32u * word + uint(findLSB(bits))], 1u);
+            }
         }
         barrier();
-        uint node = group_base + offset;
+        // where each triangle's fragments start: an inclusive scan of the counts, then less each
+        if (lane < uint(BATCH)) {
+            tri_next[lane] = tri_count[lane];
+        }
+        barrier();
+        for (uint d = 1u; d < uint(BATCH); d <<= 1) {
+            uint before = lane < uint(BATCH) && lane >= d ? tri_next[lane - d] : 0u;
+            barrier();
+            if (lane < uint(BATCH)) {
+                tri_next[lane] += before;
+            }
+            barrier();
+        }
+        uint total = tri_next[BATCH - 1];
+        uint start = lane < uint(BATCH) ? tri_next[lane] - tri_count[lane] : 0u;
+        barrier();
+        if (lane < uint(BATCH)) {
+            tri_next[lane] = start;
+        }
+        if (lane == 0u) {
+            group_base = atomicAdd(drawn, total);
+        }
+        barrier();
         for (uint word = 0u; mine > 0u && word < uint(BATCH / 32); ++word) {
             uint bits = hits[word];
             while (bits != 0u) {
                 uint k = 32u * word + uint(findLSB(bits));
                 bits &= bits - 1u;
+                uint node = group_base + atomicAdd(tri_next[k], 1u);
                 depth_at(k, pixel, z, w);
                 bool front = held_front[k];
 #if SLIM
@@ -375,7 +403,6 @@ void main() {
                     head = node + 1u;
                 }
 #endif
-                node += 1u;
             }
         }
     }
