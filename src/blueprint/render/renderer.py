@@ -156,13 +156,13 @@ class LayerRenderer(Device):
         # The A-buffer's fragments listed by a rasteriser in compute (render.raster) instead of
         # the graphics pipeline's, in views that need no clipping, for G-buffers of at least
         # this many pixels (None: never). On the H200 (where the oracle tests pass with it:
-        # test_layers_oracle's a-buffer-compute) it listed cycloidal's at 4096² in 11.3
-        # against 19.7 ms (benchmarks/compute_capture.py); streamed 2048² drawings at
-        # supersample 2 took 17.8 against 25.6 ms (cycloidal, 36 layers) and 13.3 against
-        # 17.5 (2CylinderEngine, 40); at 2048² G-buffers it tied (the rocker arm, 1.6 ms
-        # both ways), below it lost (the crank case, 512²: 0.85 against 0.53 ms; the engine at
-        # 1024²: 2.2 against 1.8-2.4). llvmpipe's compute is its fragment stage, and slower.
-        self.compute_capture_from = 4096 * 4096 if self.use_compute else None
+        # test_layers_oracle's a-buffer-compute), streamed drawings, all layers, took 14.3-15.0
+        # against 25.6 ms at 2048² and supersample 2 (cycloidal, 36 layers), 10.1 against 17.5
+        # (2CylinderEngine, 40); at 2048² G-buffers 4.6 against 6.6 ms (cycloidal at 1024²,
+        # supersample 2), 3.6 against 4.5 (the engine) and a tie for the rocker arm (1.6 ms);
+        # below it lost (the engine at 512², supersample 2: 1.95 against 1.7 ms; the crank case,
+        # 512², 5 layers: 0.57 against 0.33). llvmpipe's compute is its fragment stage, and slower.
+        self.compute_capture_from = 2048 * 2048 if self.use_compute else None
         self.compute_raster = ComputeRaster(self)
         # Where the driver's depths come from snapped corners, every geometry pass takes its
         # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): on the H200
