@@ -96,7 +96,10 @@ class ABuffer:
         self.slim = r.abuffer_slim
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
-        self.geometry = geometry_program(r, ABUFFER_FRAG, capture, modern=True)
+        # where the lists live in images (a software rasteriser) an atomic on the fragment
+        # counter runs a lane at a time: the subgroup's fragments take their nodes with one
+        ballot = self.images and not self.slim and r.subgroup_ballot
+        self.geometry = geometry_program(r, ABUFFER_FRAG, {**capture, "BALLOT": ballot}, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
         self.resolve = r.compute(RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1} if tiles else capture)
         put = r.uniforms.set  # a stream's frames change only the camera's
