@@ -14,7 +14,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu import units
-from blueprint.render.abuffer import TILE, ABuffer
+from blueprint.render.abuffer import ABuffer, tile_max
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.render.stop import HARD_MAX_LAYERS, StopRule
 from blueprint.scene.camera import Camera
@@ -435,7 +435,7 @@ class _KBuffer:
         self.count = self._surfaces(gb.size)[3]
         held = np.frombuffer(self.count.read(), np.uint8).reshape(h, w)
         self.layer_pixels = [int(np.count_nonzero(held > k)) for k in range(self.k)]
-        self.tile_layers = _tile_max(held)
+        self.tile_layers = tile_max(held)
         return 1
 
     def unpack_held(self, gb: GBuffer, layer: int) -> None:
@@ -467,18 +467,6 @@ class _KBuffer:
             self.unpack_vao.render(vertices=3)
         ctx.disable(ctx.DEPTH_TEST)
         return 2 if first else 1
-
-
-def _tile_max(values: np.ndarray) -> np.ndarray:
-    """The largest of ``values`` (H, W) in each ``TILE`` x ``TILE`` tile (those at the far
-    edges cut short); by reshaping, seven times faster than ``np.maximum.reduceat``."""
-    h, w = values.shape
-    th, tw = -(-h // TILE), -(-w // TILE)
-    if (th * TILE, tw * TILE) != (h, w):
-        padded = np.zeros((th * TILE, tw * TILE), values.dtype)
-        padded[:h, :w] = values
-        values = padded
-    return values.reshape(th, TILE, tw * TILE).max(axis=1).reshape(th, tw, TILE).max(axis=2)
 
 
 def capture_parts(r, mesh, camera: Camera, size: tuple[int, int], parts: np.ndarray, name: str, what: str):
