@@ -69,8 +69,9 @@ class Device:
     ``framebuffer_fetch``: a fragment may read what the ones before it wrote to its pixel.
     ``fragment_interlock``: fragments of one pixel may run a critical section one after
     another in primitive order (GL_ARB_fragment_shader_interlock; probed by compiling one).
-    ``subgroup_ballot``: a shader may count and rank the invocations of its subgroup
-    (GL_ARB_shader_ballot with 64-bit integers for its masks).
+    ``subgroup_ballot``: a shader may count and rank the invocations of its subgroup, helper
+    invocations told apart (GL_ARB_shader_ballot, 64-bit integers for its masks,
+    GL_ARB_ES3_1_compatibility for gl_HelperInvocation).
     ``snapped_depth``: a fragment's depth comes from the plane through its triangle's corners
     as snapped to the sub-pixel grid, not as projected (measured by ``depth_snap_px``), so
     coincident triangles with different corners differ in depth by up to the slope times the
@@ -103,7 +104,10 @@ class Device:
             and "GL_ARB_fragment_shader_interlock" in ext
             and self._compiles(INTERLOCK_PROBE)
         )
-        self.subgroup_ballot = "GL_ARB_shader_ballot" in ext and "GL_ARB_gpu_shader_int64" in ext
+        self.subgroup_ballot = all(
+            e in ext
+            for e in ("GL_ARB_shader_ballot", "GL_ARB_gpu_shader_int64", "GL_ARB_ES3_1_compatibility")
+        )
         self.snapped_depth = self.depth_snap_px() > SNAPPED_DEPTH_PX
 
     def __enter__(self):

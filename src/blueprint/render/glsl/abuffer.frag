@@ -9,6 +9,7 @@
 #if BALLOT
 #extension GL_ARB_shader_ballot : require
 #extension GL_ARB_gpu_shader_int64 : require
+#extension GL_ARB_ES3_1_compatibility : require
 #endif
 #include "depth.glsl"
 #include "fragment_depth.glsl"
@@ -20,9 +21,11 @@ uniform bool u_ortho;
 
 #if BALLOT
 // the fragment's node: the subgroup's fragments take theirs with one atomic, where an atomic on
-// a storage buffer runs a lane at a time (llvmpipe: 0.4 of the engine's 1.3 s pass at 2048²)
+// a storage buffer runs a lane at a time (llvmpipe: 0.4 of the engine's 1.3 s pass at 2048²).
+// Helper invocations take no part: an atomic of theirs does nothing, so one of them leading
+// would hand out nodes already taken, and lists that share nodes can run in circles.
 uint next_node() {
-    uint64_t lanes = ballotARB(true);
+    uint64_t lanes = ballotARB(!gl_HelperInvocation);
     uvec2 halves = unpackUint2x32(lanes);
     uint count = uint(bitCount(halves.x) + bitCount(halves.y));
     int leader = halves.x != 0u ? findLSB(halves.x) : 32 + findLSB(halves.y);
