@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # One device run: set up OpenGL and wheels, check a render, then time blueprint, its code-path
-# variants, capture in compute against the graphics pipeline, the textbook baseline, the extra
-# features and vector drawings (needs the fpdf2, ezdxf and defusedxml wheels in .whl as well). Models come in .models/ (copied from
-# ../shared/models). Run on the device as: bash benchmarks/device.sh   (carry .gl .whl .models)
+# variants, streamed drawings a second and capture in compute against the graphics pipeline, the
+# textbook baseline, the extra features and vector drawings (needs the fpdf2, ezdxf and
+# defusedxml wheels in .whl as well). Models come in .models/ (copied from ../shared/models).
+# Run on the device as: bash benchmarks/device.sh   (carry .gl .whl .models)
 set -u
 for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
@@ -20,6 +21,8 @@ python3 benchmarks/textbook.py $models --size 512 512 --size 1024 1024 --max-lay
 python3 benchmarks/features.py .models/2CylinderEngine.glb --highlight "Piston*" --size 1024 1024 > $OUT/features.jsonl
 python3 benchmarks/layers.py .models/rocker-arm.obj .models/cycloidal.glb .models/2CylinderEngine.glb > $OUT/layers.jsonl
 python3 benchmarks/variants.py .models/rocker-arm.obj .models/cycloidal.glb --frames 30 > $OUT/variants.jsonl
+python3 benchmarks/stream.py .models/rocker-arm.obj --size 512 --supersample 1 --max-layers 5 --frames 600 > $OUT/stream_crank.jsonl
+python3 benchmarks/stream.py .models/cycloidal.glb .models/2CylinderEngine.glb --size 1024 2048 --max-layers 0 --frames 30 > $OUT/stream.jsonl
 python3 benchmarks/compute_capture.py .models/rocker-arm.obj .models/cycloidal.glb .models/2CylinderEngine.glb > $OUT/compute_capture.jsonl
 python3 benchmarks/table1.py --models-dir .models --frames 20 --cpu-frames 1 > $OUT/table1.jsonl
 python3 benchmarks/vector.py --models-dir .models --runs 3 > $OUT/vector.jsonl
