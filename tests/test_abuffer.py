@@ -11,7 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_kbuffer import CASES, _normal_tolerance, _planes, assert_front_to_back, drawing_difference
+from test_kbuffer import (
+    CASES,
+    _normal_tolerance,
+    _planes,
+    assert_front_to_back,
+    drawing_difference,
+    peel_both_ways,
+)
 from test_layers_oracle import nested_round
 
 import blueprint
@@ -47,14 +54,6 @@ def abuffer(renderer, request):
     renderer.abuffer_max_bytes, renderer.abuffer_min_layers, renderer.kbuffer, renderer.abuffer_slim = saved
     renderer.abuffer_room.clear()
     renderer.abuffer_room.update(room)
-
-
-def _both(renderer, abuffer, model, **options):
-    abuffer(True)
-    fast = blueprint.peel(model, renderer=renderer, **options)
-    abuffer(False)
-    plain = blueprint.peel(model, renderer=renderer, **options)
-    return fast, plain
 
 
 def _differ(fast, plain, renderer) -> np.ndarray:
@@ -99,7 +98,7 @@ def test_of_coincident_faces_the_first_drawn_wins(renderer, abuffer):
 @pytest.mark.parametrize("name", list(CASES))
 def test_same_layers_as_a_pass_a_layer(renderer, abuffer, name, max_layers):
     make, camera = CASES[name]
-    fast, plain = _both(renderer, abuffer, make(), size=(160, 120), max_layers=max_layers, **camera)
+    fast, plain = peel_both_ways(renderer, abuffer, make(), size=(160, 120), max_layers=max_layers, **camera)
     assert fast.depth.shape == plain.depth.shape
     covered = plain.depth < 1.0
     assert covered.sum() > 0
@@ -117,7 +116,7 @@ def test_lists_too_long_to_sort_in_registers(renderer, abuffer):
     order = [int(v) for v in np.random.default_rng(3).permutation(60)]
     model = _planes(order)
     camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
-    fast, plain = _both(renderer, abuffer, model, camera=camera, size=(24, 24), max_layers=None)
+    fast, plain = peel_both_ways(renderer, abuffer, model, camera=camera, size=(24, 24), max_layers=None)
     assert len(plain.depth) == 60
     assert not _differ(fast, plain, renderer).any()
 
@@ -150,7 +149,11 @@ def test_more_than_the_memory_allows_is_peeled(renderer, abuffer):
         Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).abuffer is None
     )
     renderer.abuffer_room.pop((64, 64))
-    fast, plain = _both(renderer, lambda on: abuffer(on, max_bytes=NODE_BYTES * 10), model, size=(64, 64))
+
+    def short(on: bool) -> None:
+        abuffer(on, max_bytes=NODE_BYTES * 10)
+
+    fast, plain = peel_both_ways(renderer, short, model, size=(64, 64))
     assert np.array_equal(fast.triangle, plain.triangle)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_kbuffer import peel_both_ways
 from test_layers_oracle import nested_boxes, nested_round
 
 import blueprint
@@ -53,14 +54,6 @@ def capture(renderer):
     renderer.compute_raster.rooms.update(rooms)
 
 
-def _both(renderer, capture, model, **options):
-    capture(True)
-    compute = blueprint.peel(model, renderer=renderer, **options)
-    capture(False)
-    graphics = blueprint.peel(model, renderer=renderer, **options)
-    return compute, graphics
-
-
 @pytest.mark.parametrize(
     "make, view",
     [
@@ -73,7 +66,7 @@ def _both(renderer, capture, model, **options):
 )
 def test_compute_lists_the_graphics_pipelines_layers(renderer, capture, make, view):
     model = make()
-    compute, graphics = _both(renderer, capture, model, size=(96, 80), **view)
+    compute, graphics = peel_both_ways(renderer, capture, model, size=(96, 80), **view)
     assert len(compute.depth) == len(graphics.depth) >= 2
     count = (compute.depth < 1).sum(0), (graphics.depth < 1).sum(0)
     other = count[0] != count[1]
@@ -111,10 +104,10 @@ def test_views_it_cannot_draw_go_to_the_graphics_pipeline(renderer, capture, mon
     listed = []
     fragments = ComputeRaster.fragments
     monkeypatch.setattr(ComputeRaster, "fragments", lambda *a: listed.append(1) or fragments(*a))
-    compute, graphics = _both(renderer, capture, model, size=(64, 64), camera=camera)
+    compute, graphics = peel_both_ways(renderer, capture, model, size=(64, 64), camera=camera)
     assert not listed
     assert np.array_equal(compute.depth, graphics.depth)
-    compute, graphics = _both(renderer, capture, model, size=(64, 64))
+    compute, graphics = peel_both_ways(renderer, capture, model, size=(64, 64))
     assert listed, "a view from outside the model is listed in compute"
 
 

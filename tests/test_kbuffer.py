@@ -32,12 +32,14 @@ def kbuffer(renderer):
     renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = saved
 
 
-def _both(renderer, kbuffer, model, **options):
-    kbuffer(True)
-    fast = blueprint.peel(model, renderer=renderer, **options)
-    kbuffer(False)
-    plain = blueprint.peel(model, renderer=renderer, **options)
-    return fast, plain
+def peel_both_ways(renderer, switch, model, **options):
+    """``blueprint.peel`` of ``model`` with ``switch(True)`` (a way of capturing switched on),
+    then with ``switch(False)``: (on, off)."""
+    switch(True)
+    on = blueprint.peel(model, renderer=renderer, **options)
+    switch(False)
+    off = blueprint.peel(model, renderer=renderer, **options)
+    return on, off
 
 
 def _planes(order: list[int]) -> blueprint.Model:
@@ -83,7 +85,7 @@ CASES = {
 @pytest.mark.parametrize("name", list(CASES))
 def test_same_layers_as_a_pass_a_layer(renderer, kbuffer, name, max_layers):
     make, camera = CASES[name]
-    fast, plain = _both(renderer, kbuffer, make(), size=(160, 120), max_layers=max_layers, **camera)
+    fast, plain = peel_both_ways(renderer, kbuffer, make(), size=(160, 120), max_layers=max_layers, **camera)
     assert fast.depth.shape == plain.depth.shape
     covered = plain.depth < 1.0
     assert covered.sum() > 0
@@ -99,7 +101,8 @@ def test_same_layers_as_a_pass_a_layer(renderer, kbuffer, name, max_layers):
 
 def test_more_layers_than_one_pass_holds(renderer, kbuffer):
     """Up to ten surfaces a ray: the second pass starts behind the first pass's last layer."""
-    fast, plain = _both(renderer, kbuffer, nested_round(), size=(96, 96), azimuth=20.0, elevation=35.0)
+    view = dict(size=(96, 96), azimuth=20.0, elevation=35.0)
+    fast, plain = peel_both_ways(renderer, kbuffer, nested_round(), **view)
     assert len(plain.depth) > KBUFFER_MAX
     assert np.array_equal(fast.depth, plain.depth)
     assert np.array_equal(fast.triangle, plain.triangle)
