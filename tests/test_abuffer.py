@@ -351,7 +351,7 @@ def test_edges_from_the_lists_a_layer_at_a_time_draw_the_same(
     lists as it comes, no layer unpacked: the same drawing, pixel for pixel."""
     model = examples.gearbox()
     abuffer(True)
-    listed = _watch_lists(renderer, monkeypatch, "_run_layer_lists")
+    listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
     from_lists = renderer.render(model, size=(160, 120), **options)
     assert set(listed) == {"edges"} and len(listed) == from_lists.layers
     monkeypatch.setattr(LayerCapture, "_from_lists", lambda self, st: ())
@@ -369,7 +369,7 @@ def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
     each layer's depth as it comes: there every layer is unpacked."""
     model = examples.gearbox()
     abuffer(True)
-    listed = _watch_lists(renderer, monkeypatch, "_run_layer_lists")
+    listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
     parts = np.zeros(len(model.part_names), bool)
     parts[0] = True
     if "shade" in options:

@@ -529,23 +529,28 @@ class Executor:
         if p.kind == "composite":
             self._composite(st, p, self._target(st, name, layer), layers)
             return
-        if name in st.layer_lists:
-            self._run_layer_lists(st, name, p, layer)
-            return
         target = self._target(st, name, layer)
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
         reach = self._reach(st, name) if size == self.tiles.size else None
         vertex = FULLSCREEN if reach is None else TILES_VERT
+        # the edges operation may read its layer from the A-buffer's lists or the k-buffer's
+        # surfaces instead of the G-buffer's textures
+        lists = name in st.layer_lists
         surfaces = name in st.from_surfaces
         if p.user is not None:
             prog = self.programs.user(p.user)
+        elif lists:
+            abuffer = st.groups[0].capture.abuffer
+            prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, abuffer.defines, modern=True)
         else:
             shader = EDGES_FROM_SURFACES if surfaces else p.op.shader
             prog = self.programs.library(shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
-        if surfaces:
+        if lists:
+            self._bind_layer_lists(st, name, prog, size, layer)
+        elif surfaces:
             # the layer's depth, normal and IDs from the k-buffer, one fetch a pixel
             kbuffer = st.surfaces
             kbuffer.surfaces[layer].use(BASE_UNIT)
@@ -646,31 +651,16 @@ class Executor:
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
 
-    def _run_layer_lists(self, st: RunState, name: str, p, layer: int) -> None:
-        """Pass ``name`` (the edges operation) on layer ``layer`` read from the A-buffer's sorted
-        lists, no layer unpacked: each pixel's chain carried from one layer to the next in a
-        pair of cursor images."""
+    def _bind_layer_lists(self, st: RunState, name: str, prog, size, layer: int) -> None:
+        """The A-buffer's sorted lists bound for pass ``name`` (the edges operation) to read layer
+        ``layer`` from, no layer unpacked: each pixel's chain carried from one layer to the next
+        in a pair of cursor images."""
         abuffer = st.groups[0].capture.abuffer
-        target = self._target(st, name, layer)
-        size = tuple(target.size)
-        reach = self._reach(st, name) if size == self.tiles.size else None
-        vertex = FULLSCREEN if reach is None else TILES_VERT
-        prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, abuffer.defines, modern=True)
-        self._frame_uniforms(st, prog, size, layer)
-        self.programs.update(prog, p.uniforms)
         self.programs.set(prog, "u_back_bias", abuffer.back_bias)
         *cursors, layer_count = abuffer.lists(size)
         cursors[layer % 2].bind_to_image(2, read=True, write=False)
         cursors[(layer + 1) % 2].bind_to_image(3, read=False, write=True)
         layer_count.bind_to_image(4, read=True, write=False)
-        fbo = self.r.pool.framebuffer((target,))
-        fbo.use()
-        if reach is not None:
-            fbo.clear()
-            st.draws += self.tiles.draw(prog, reach)
-            return
-        self.programs.vao(prog).render(vertices=3)
-        st.draws += 1
 
     def _run_batches(self, st: RunState, layers: int) -> None:
         ctx, pl = self.ctx, st.pl

@@ -216,7 +216,7 @@ class LayerCapture:
     def _from_lists(self, st: RunState) -> tuple[str, ...]:
         """The edges passes that may read their layers from an A-buffer's lists: every layer
         after the peel in the compute form (``Executor._run_lists``), else each layer as it
-        comes (``Executor._run_layer_lists``); where they are the only readers of the G-buffer,
+        comes (``Executor._bind_layer_lists``); where they are the only readers of the G-buffer,
         read the renderer's own depth, normal and IDs, draw no triangle-ID silhouettes, and no
         layer is read back or given extra attributes."""
         pl, arrays = st.pl, st.arrays

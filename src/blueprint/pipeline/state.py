@@ -151,7 +151,7 @@ class RunState:
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
     reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
     # per-layer passes that read each layer from the A-buffer's lists as it is drawn
-    # (Executor._run_layer_lists), once layer 0 has captured them
+    # (Executor._bind_layer_lists), once layer 0 has captured them
     layer_lists: tuple[str, ...] = ()
     # the k-buffer whose surfaces hold every layer, unpacked, and the passes that read them there
     surfaces: object = None
