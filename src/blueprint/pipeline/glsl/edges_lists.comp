@@ -19,15 +19,8 @@ uniform int u_first_layer;  // the depth layer of slice 0
 uniform int u_layers;  // layers of this array: slices 0 to u_layers - 1
 uniform float u_back_bias;
 
-// the current layer at the pixel (0) and its neighbours OFFSETS[i] (i + 1)
-float sample_depth[5];
-vec3 sample_normal[5];
-ivec2 sample_ids[5];
-#define EDGE_SAMPLES 1
+#include "edges_held.glsl"
 #define EDGE_LAST (imageSize(u_from) - 1)
-#define EDGE_DEPTH(q, i) sample_depth[(i) + 1]
-#define EDGE_NORMAL(q, i) sample_normal[(i) + 1]
-#define EDGE_IDS(q, i) sample_ids[(i) + 1]
 // whether the current layer covers RING[r] (edges.glsl)
 bool ring_covered[8];
 #define EDGE_RING_COVERED(q, r) ring_covered[r]

@@ -16,15 +16,8 @@ layout(r32ui, binding = 4) uniform readonly uimage2D u_layer_count;  // each pix
 uniform int u_layer;
 uniform float u_back_bias;
 
-// the layer at the pixel (0) and at its neighbours OFFSETS[i] (i + 1)
-float sample_depth[5];
-vec3 sample_normal[5];
-ivec2 sample_ids[5];
-#define EDGE_SAMPLES 1
+#include "edges_held.glsl"
 #define EDGE_LAST (imageSize(u_from) - 1)
-#define EDGE_DEPTH(q, i) sample_depth[(i) + 1]
-#define EDGE_NORMAL(q, i) sample_normal[(i) + 1]
-#define EDGE_IDS(q, i) sample_ids[(i) + 1]
 #define EDGE_RING_COVERED(q, r) (imageLoad(u_layer_count, q).x > uint(u_layer))
 #include "blueprint.ops:glsl/edges.glsl"
 

@@ -15,15 +15,8 @@ uniform float u_held;  // (layer + 0.5) / 255: counts above it hold the layer
 uniform float u_back_bias;
 uniform int u_layer;
 
-// the pixel (0) and its neighbours OFFSETS[i] (i + 1)
-float sample_depth[5];
-vec3 sample_normal[5];
-ivec2 sample_ids[5];
-#define EDGE_SAMPLES 1
+#include "edges_held.glsl"
 #define EDGE_LAST (textureSize(u_count, 0) - 1)
-#define EDGE_DEPTH(q, i) sample_depth[(i) + 1]
-#define EDGE_NORMAL(q, i) sample_normal[(i) + 1]
-#define EDGE_IDS(q, i) sample_ids[(i) + 1]
 bool ring_covered[8];
 #define EDGE_RING_COVERED(q, r) ring_covered[r]
 #include "blueprint.ops:glsl/edges.glsl"
