@@ -39,7 +39,7 @@ def main() -> None:
                 camera = fit_camera(model, (size, size))
                 for capture in args.capture:
                     r.abuffer_max_bytes = wanted if capture == "abuffer" else 0
-                    r.abuffer_min_layers = 2 if capture == "abuffer" else min_layers
+                    r.abuffer_min_layers = 1 if capture == "abuffer" else min_layers
                     for layers in args.layers:
                         options = dict(
                             size=(size, size), supersample=args.supersample, max_layers=layers or None

@@ -46,7 +46,7 @@ def abuffer(renderer, request):
 
     def use(on: bool, max_bytes: int = 1 << 28) -> None:
         renderer.abuffer_max_bytes = max_bytes if on else 0
-        renderer.abuffer_min_layers = 2
+        renderer.abuffer_min_layers = 1
         renderer.kbuffer = False
         renderer.abuffer_slim = request.param
 
@@ -94,7 +94,7 @@ def test_of_coincident_faces_the_first_drawn_wins(renderer, abuffer):
     assert np.array_equal(fast[0].triangle, plain[0].triangle)
 
 
-@pytest.mark.parametrize("max_layers", [None, 3, 10], ids=["all", "3", "10"])
+@pytest.mark.parametrize("max_layers", [None, 1, 3, 10], ids=["all", "1", "3", "10"])
 @pytest.mark.parametrize("name", list(CASES))
 def test_same_layers_as_a_pass_a_layer(renderer, abuffer, name, max_layers):
     make, camera = CASES[name]
@@ -180,14 +180,16 @@ def test_same_drawing(renderer, abuffer, style, supersample):
 
 
 def test_used_only_where_it_pays(renderer, abuffer):
-    """Not for one layer, nor below the renderer's ``abuffer_min_layers`` (llvmpipe's: only
-    frames of many layers pay for sorting every fragment), nor for captures of chosen parts or
-    without normals (ID passes)."""
+    """Not below the renderer's ``abuffer_min_layers`` (llvmpipe's: only frames of many layers
+    pay for sorting every fragment), nor for captures of chosen parts or without normals (ID
+    passes)."""
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
     camera = fit_camera(model, (64, 64))
     abuffer(True)
     gb = gbuffer(renderer.pool, (64, 64), "test.ab")
+    assert Capture(renderer, mesh, camera, gb, batch=1).abuffer is not None
+    renderer.abuffer_min_layers = 2
     assert Capture(renderer, mesh, camera, gb, batch=5).abuffer is not None
     assert Capture(renderer, mesh, camera, gb, batch=1).abuffer is None
     renderer.abuffer_min_layers = 16

@@ -29,8 +29,10 @@ def info(model, as_json):
                 way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
                 data["kbuffer"] = f"{way}, from {r.kbuffer_density:g} triangles per pixel"
             if r.abuffer_max_bytes:
+                least = r.abuffer_min_layers
+                frames = "every frame" if least <= 1 else f"from {least} layers a frame"
                 data["abuffer"] = (
-                    f"every layer in one geometry pass, from {r.abuffer_min_layers} layers a frame, "
+                    f"every layer in one geometry pass, {frames}, "
                     f"lists up to {r.abuffer_max_bytes / 2**30:.1f} GiB"
                 )
             else:

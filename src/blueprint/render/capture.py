@@ -174,7 +174,7 @@ class Capture:
         self.abuffer = None
         if (
             r.abuffer_max_bytes
-            and (layers is None or layers >= max(2, r.abuffer_min_layers))
+            and (layers is None or layers >= r.abuffer_min_layers)
             and normals
             and selected is None
             and r.back_bias_in_shader

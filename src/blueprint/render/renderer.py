@@ -138,12 +138,14 @@ class LayerRenderer(Device):
         # three sizes: at most 9 of 307200 pixels apart, where faces tie in depth).
         self.abuffer_max_bytes = default_max_bytes(self) if self.ctx.version_code >= 430 else 0
         # ...for frames of at least this many layers (None: all of them): on the H200 it was
-        # faster from 2 (the rocker arm, 256x256 and 512x512: 1.15 against 1.64 ms and 1.31
-        # against 1.77); llvmpipe pays for sorting every fragment on the CPU, and was faster
-        # only where many layers are drawn (2CylinderEngine, 1024x1024, all 40 layers: 14.8
-        # against 27.5 CPU seconds; 512x512, 8 layers: 1.62 against 1.39; the bunny, 5
-        # layers: 0.90 against 0.75)
-        self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 2
+        # faster even for one layer, whose geometry and edge passes the narrow graphics
+        # pipeline draws at the whole G-buffer's size (benchmarks/layers.py, supersample 2: the
+        # rocker arm at 512x512 0.79 against 1.32 ms, cycloidal at 2048x2048 13.6 against 44.0,
+        # 2CylinderEngine 11.4 against 28.9); llvmpipe pays for sorting every fragment on the
+        # CPU, and was faster only where many layers are drawn (2CylinderEngine, 1024x1024,
+        # all 40 layers: 14.8 against 27.5 CPU seconds; 512x512, 8 layers: 1.62 against 1.39;
+        # the bunny, 5 layers: 0.90 against 0.75)
+        self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 1
         self.abuffer_room: dict[tuple[int, int], int] = {}
         # Fragments of depth and face alone, the rest made by the resolve for those kept as
         # layers, where the graphics pipeline is narrower than compute (image passes in compute:
