@@ -386,7 +386,9 @@ def test_lambert(ex):
         {"background": 0.5},
         formats={"depth": "depth"},
     )
-    assert (out[:2, :, :3] == 128).all() and (out[:2, :, 3] == 255).all()
+    # 0.5 lies halfway between two 8-bit steps: drivers round the tie either way (llvmpipe up,
+    # the H200's compute form down)
+    assert np.isin(out[:2, :, :3], (127, 128)).all() and (out[:2, :, 3] == 255).all()
 
 
 @pytest.mark.parametrize("style", ["blueprint", "paper"])
