@@ -101,7 +101,8 @@ class ABuffer:
         ballot = self.images and not self.slim and r.subgroup_ballot
         self.geometry = geometry_program(r, ABUFFER_FRAG, {**capture, "BALLOT": ballot}, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
-        self.resolve = r.compute(RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1} if tiles else capture)
+        resolve = {**capture, "SORTED": r.abuffer_sorted}
+        self.resolve = r.compute(RESOLVE_COMP, {**resolve, "COUNTED_AFTER": 1} if tiles else resolve)
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera = ("u_view", "u_projection", "u_ortho")
         for prog, names in (

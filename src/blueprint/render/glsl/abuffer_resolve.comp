@@ -13,8 +13,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
 
-// lists up to this long are sorted in registers; longer ones are walked once a layer
-#define SORTED 48
+// Lists up to SORTED long (LayerRenderer.abuffer_sorted, at most 256) are sorted in registers;
+// longer ones are walked once a layer.
 
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
