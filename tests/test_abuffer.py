@@ -111,7 +111,7 @@ def test_same_layers_as_a_pass_a_layer(renderer, abuffer, name, max_layers):
 
 
 @pytest.mark.parametrize("squares", [30, 60])
-@pytest.mark.parametrize("sort", [24, 48])
+@pytest.mark.parametrize("sort", [32, 48])
 def test_lists_too_long_to_sort_in_registers(renderer, abuffer, squares, sort):
     """Squares one behind the other: lists longer than the resolve sorts in registers
     (``abuffer_sorted``: a GPU's and llvmpipe's) are walked once a layer, shorter ones sorted."""

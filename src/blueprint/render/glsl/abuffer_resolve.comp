@@ -96,25 +96,38 @@ float next_after(uvec4 s) {
 uint chain(ivec2 p) {
     // The short list sorted by insertion of one word an entry, its held depth above its place
     // in the list (SORTED <= 256): what an insertion moves is that word alone, where llvmpipe
-    // moves each array a lane at a time. Node, face and depth bits stay at the list's place j.
+    // moves each array a lane at a time. Node, face and depth bits stay at the list's place j:
+    // held in arrays where the lists are images (llvmpipe's image loads cost more than the
+    // arrays); read again from the fragment on a GPU, where arrays live in the threads' local
+    // memory and the fragment, just read, in its cache (the H200's resolve at 4096²: 2.6
+    // against 3.4 ms, cycloidal).
     uint sorted[SORTED];
     uint node[SORTED];
+#if AB_IMAGES
     uint face[SORTED];
     uint bits[SORTED];
+#define FACE_AT(j) face[j]
+#define BITS_AT(j) bits[j]
+#else
+#define FACE_AT(j) fragment(node[j] - 1u).w
+#define BITS_AT(j) fragment(node[j] - 1u).x
+#endif
     uint n = 0u;
     uint at = imageLoad(u_head, p).x;
     uint head = at;
     while (at != 0u && n < SORTED) {
         uvec4 s = fragment(at - 1u);
         node[n] = at;
+#if AB_IMAGES
         face[n] = s.w;
         bits[n] = s.x;
+#endif
         uint k = held_depth(s);
         uint i = n;
         while (i > 0u) {
             uint other = sorted[i - 1u];
             // (depth, face) order, as before(): a face looked up on equal depths alone
-            if ((other >> 8) < k || ((other >> 8) == k && face[other & 0xffu] <= s.w)) {
+            if ((other >> 8) < k || ((other >> 8) == k && FACE_AT(other & 0xffu) <= s.w)) {
                 break;
             }
             sorted[i] = other;
@@ -131,7 +144,7 @@ uint chain(ivec2 p) {
         float behind = -1.0 / 0.0;
         for (uint i = 0u; i < n; ++i) {
             uint j = sorted[i] & 0xffu;
-            uvec4 s = uvec4(bits[j], 0u, 0u, 0u);
+            uvec4 s = uvec4(BITS_AT(j), 0u, 0u, 0u);
             if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
                 continue;
             }
