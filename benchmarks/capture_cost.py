@@ -115,7 +115,7 @@ class Capture:
         ab.clear.run(-(-size // 8), -(-size // 8))
         r.ctx.memory_barrier()
         if prog is None:
-            ab.fragments(self.gb)
+            ab.fragments(self.gb, self.head)
             return
         self.gb.clears[0].use()
         for u in ("u_view", "u_projection"):

@@ -99,7 +99,11 @@ class ABuffer:
         # where the lists live in images (a software rasteriser) an atomic on the fragment
         # counter runs a lane at a time: the subgroup's fragments take their nodes with one
         ballot = self.images and not self.slim and r.subgroup_ballot
-        self.geometry = geometry_program(r, ABUFFER_FRAG, {**capture, "BALLOT": ballot}, modern=True)
+        # ...and where the driver orders a pixel's fragments (framebuffer fetch), each takes the
+        # pixel's list from the last one without an atomic: the head is the pass's target
+        self.fetch_head = self.images and r.framebuffer_fetch
+        defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
+        self.geometry = geometry_program(r, ABUFFER_FRAG, defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
         resolve = {**capture, "SORTED": r.abuffer_sorted}
         self.resolve = r.compute(RESOLVE_COMP, {**resolve, "COUNTED_AFTER": 1} if tiles else resolve)
@@ -257,7 +261,7 @@ class ABuffer:
             self.clear.run(*groups)
             ctx.memory_barrier()
             self._binned = None
-            self.fragments(gb)
+            self.fragments(gb, head)
             ctx.memory_barrier()
             # lists cut short by too little room hold only the fragments that had room: sorted
             # all the same, and drawn again below
@@ -289,13 +293,17 @@ class ABuffer:
         sees the view too)."""
         return self.raster is not None and size[0] * size[1] >= self.r.compute_capture_from
 
-    def fragments(self, gb) -> None:
-        """Every fragment of the mesh into its pixel's list: by the compute rasteriser where
-        there is one and it sees the view, else the graphics pipeline's (abuffer.frag)."""
+    def fragments(self, gb, head) -> None:
+        """Every fragment of the mesh into its pixel's list (``head``: the lists' first nodes):
+        by the compute rasteriser where there is one and it sees the view, else the graphics
+        pipeline's (abuffer.frag)."""
         if self._computes(gb.size) and self.raster.sees(self.mesh.bounds, self.uniforms, gb.size):
             self._binned = self.raster.fragments(self, gb.size, self.uniforms), tuple(gb.size)
             return
-        gb.clears[0].use()
+        if self.fetch_head:
+            self.r.pool.framebuffer((head,)).use()
+        else:
+            gb.clears[0].use()
         target_uniform(self.r, self.geometry, gb.size)
         self.mesh.vao(self.geometry).render()
 

@@ -6,6 +6,9 @@
 // fragments write (benchmarks/capture_cost.py), and the resolve, in compute on all of them,
 // finds the normal and part of the fragments that become layers from their faces.
 #extension GL_ARB_shading_language_packing : require
+#if FETCH_HEAD
+#extension GL_EXT_shader_framebuffer_fetch : require
+#endif
 #if BALLOT
 #extension GL_ARB_shader_ballot : require
 #extension GL_ARB_gpu_shader_int64 : require
@@ -16,7 +19,16 @@
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
 
+#if FETCH_HEAD
+// the pixel's head as its target: a pixel's fragments read and write it one after another, so
+// each links the last one's node without an atomic, which a software rasteriser runs a lane at
+// a time
+layout(location = 0) inout uint o_head;
+#define PUSH(node) AB_SET_LINK(node, o_head); o_head = node + 1u
+#else
 layout(binding = 0, r32ui) coherent uniform uimage2D u_head;
+#define PUSH(node) AB_SET_LINK(node, imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u))
+#endif
 uniform bool u_ortho;
 
 #if BALLOT
@@ -53,7 +65,7 @@ void main() {
     uint node = next_node();
     if (node < capacity) {
         slim[node] = uvec2(floatBitsToUint(z) | (gl_FrontFacing ? 0u : KB_BACK), uint(gl_PrimitiveID + 1));
-        AB_SET_LINK(node, imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u));
+        PUSH(node);
     }
 #else
     vec3 n = normalize(v_normal);
@@ -67,7 +79,7 @@ void main() {
     uint node = next_node();
     if (node < capacity) {
         AB_SET_NODE(node, kb_pack(z, !gl_FrontFacing, n, face, v_part));
-        AB_SET_LINK(node, imageAtomicExchange(u_head, ivec2(gl_FragCoord.xy), node + 1u));
+        PUSH(node);
     }
 #endif
 }
