@@ -105,8 +105,7 @@ class ABuffer:
         defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
         self.geometry = geometry_program(r, ABUFFER_FRAG, defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
-        resolve = {**capture, "SORTED": r.abuffer_sorted}
-        self.resolve = r.compute(RESOLVE_COMP, {**resolve, "COUNTED_AFTER": 1} if tiles else resolve)
+        self.resolve = r.compute(RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1} if tiles else capture)
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera = ("u_view", "u_projection", "u_ortho")
         for prog, names in (

@@ -155,12 +155,6 @@ class LayerRenderer(Device):
         # (fragments of their face alone, each one's depth found by the sort from its face:
         # 36.3 ms). llvmpipe's compute is its fragment stage.
         self.abuffer_slim = self.use_compute
-        # The resolve sorts lists up to this long in registers and walks longer ones once a
-        # layer (abuffer_resolve.comp's SORTED). A GPU keeps such arrays in its threads' local
-        # memory: on the H200 at 4096² the resolve took 2.6 ms at 32, 2.6 at 24, 2.8 at 48
-        # and 3.7 at 16 (cycloidal, 36 layers; 2CylinderEngine 2.1, 2.2, 1.9 and 2.9). On
-        # llvmpipe neither 16 nor 64 was faster than 48.
-        self.abuffer_sorted = 48 if self.software else 32
         # The A-buffer's fragments listed by a rasteriser in compute (render.raster) instead of
         # the graphics pipeline's, in views that need no clipping, for G-buffers of at least
         # this many pixels (None: never). On the H200 (where the oracle tests pass with it:

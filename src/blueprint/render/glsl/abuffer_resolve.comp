@@ -13,8 +13,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
 
-// Lists up to SORTED long (LayerRenderer.abuffer_sorted, at most 256) are sorted in registers;
-// longer ones are walked once a layer.
+// lists up to this long are sorted in registers; longer ones are walked once a layer (on the
+// H200, with the fragments read again below: 48 was as fast as 32 or faster at 4096², and at
+// 1024², where lists run longer, 1.2 against 3.1 ms for cycloidal)
+#define SORTED 48
 
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
@@ -99,8 +101,8 @@ uint chain(ivec2 p) {
     // moves each array a lane at a time. Node, face and depth bits stay at the list's place j:
     // held in arrays where the lists are images (llvmpipe's image loads cost more than the
     // arrays); read again from the fragment on a GPU, where arrays live in the threads' local
-    // memory and the fragment, just read, in its cache (the H200's resolve at 4096²: 2.6
-    // against 3.4 ms, cycloidal).
+    // memory and the fragment, just read, in its cache (the H200's resolve at 4096²: 2.8
+    // against 5.3 ms, cycloidal; at 1024² 1.2 against 2.0).
     uint sorted[SORTED];
     uint node[SORTED];
 #if AB_IMAGES
