@@ -256,6 +256,7 @@ def test_bench_prints_one_record_per_configuration(bench_run, gl):
     assert record["layers"] == 2 and record["ms"] > 0
     assert isinstance(record["stages"], dict) and record["stages"]
     assert all(isinstance(v, int | float) and v >= 0 for v in record["stages"].values())
+    assert record["capture"] in ("peel", "k-buffer", "A-buffer", "A-buffer, compute rasteriser")
 
 
 def test_bench_stdout_is_pure_json_lines(bench_run):

@@ -14,6 +14,7 @@ from test_layers_oracle import nested_boxes, nested_round
 
 import blueprint
 from blueprint import examples
+from blueprint.bench import time_frames
 from blueprint.render.capture import abuffer_uniforms
 from blueprint.render.raster import REACH, ComputeRaster
 from blueprint.scene.camera import Camera, fit_camera
@@ -139,3 +140,20 @@ def test_frames_below_its_size_stay_with_the_graphics_pipeline(renderer, capture
     renderer.compute_capture_from = 64 * 64
     blueprint.peel(model, renderer=renderer, size=(64, 64))
     assert listed == [(64, 64)]
+
+
+def test_bench_names_the_way_the_layers_were_found(renderer, capture):
+    """``blueprint bench``'s ``capture`` (``Capture.way``) names the compute rasteriser where it
+    listed the fragments, and the A-buffer alone where the graphics pipeline did: by choice, or
+    for a view the rasteriser cannot draw (the camera inside the model)."""
+    model = nested_boxes()
+    options = dict(size=(64, 64), max_layers=None, supersample=1, style="blueprint", frames=1, warmup=0)
+    outside = fit_camera(model, (64, 64))
+    inside = Camera(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0), near=0.05, far=20.0)
+    for compute, camera, way in (
+        (True, outside, "A-buffer, compute rasteriser"),
+        (True, inside, "A-buffer"),
+        (False, outside, "A-buffer"),
+    ):
+        capture(compute)
+        assert time_frames(renderer, model, camera, **options)["capture"] == way

@@ -12,6 +12,7 @@ from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
 
 import blueprint
 from blueprint import examples
+from blueprint.bench import time_frames
 from blueprint.render import capture
 from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
 from blueprint.scene.camera import fit_camera
@@ -188,3 +189,14 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(renderer, kbuffer,
     counts = (direct.layers, direct.layer_pixels, direct.layers_left)
     assert counts == (unpacked.layers, unpacked.layer_pixels, unpacked.layers_left)
     np.testing.assert_array_equal(direct.image, unpacked.image)
+
+
+def test_bench_names_the_way_the_layers_were_found(renderer, kbuffer):
+    """``blueprint bench``'s ``capture`` (``Capture.way``): the k-buffer where it found the
+    layers, ``peel`` where a geometry pass drew each."""
+    model = examples.gearbox()
+    camera = fit_camera(model, (64, 64))
+    options = dict(size=(64, 64), max_layers=3, supersample=1, style="blueprint", frames=1, warmup=0)
+    for on, way in ((True, "k-buffer"), (False, "peel")):
+        kbuffer(on)
+        assert time_frames(renderer, model, camera, **options)["capture"] == way

@@ -15,6 +15,7 @@ from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.blueprint import stream_blueprint
+from blueprint.pipeline.executor import executor_for
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
@@ -52,8 +53,9 @@ def time_frames(
     -------
     dict
         ``layers``, ``ms`` (median), ``ms_min``, ``ms_max``, ``fps``, ``ms_streamed`` (median
-        interval), ``fps_streamed``, ``draws`` and ``stages`` (ms per stage of the profiled
-        frame).
+        interval), ``fps_streamed``, ``draws``, ``stages`` (ms per stage of the profiled frame)
+        and ``capture``: how the layers were found (``Capture.way``: peel, k-buffer, A-buffer),
+        which explains most of a figure.
     """
     options = dict(size=size, max_layers=max_layers, supersample=supersample, style=style)
     for _ in range(warmup):
@@ -66,6 +68,7 @@ def time_frames(
     streamed = [f.ms for f in stream_blueprint(renderer, model, [camera] * (warmup + frames), **options)]
     streamed = streamed[warmup:]
     profiled = renderer.render(model, camera, profile=True, **options)
+    capture = executor_for(renderer).last_run.groups[0].capture
     return {
         "layers": frame.layers,
         "ms": round(statistics.median(times), 3),
@@ -76,6 +79,7 @@ def time_frames(
         "fps_streamed": round(1000.0 / statistics.median(streamed), 1),
         "draws": frame.draws,
         "stages": {k: round(v, 3) for k, v in profiled.stages.items()},
+        "capture": capture.way,
     }
 
 

@@ -137,6 +137,11 @@ class ABuffer:
         self._tile_list = None  # the image of the tiles with any layer, most layers first
 
     @property
+    def rasterised_in_compute(self) -> bool:
+        """Whether the compute rasteriser listed the last capture's fragments."""
+        return self._binned is not None
+
+    @property
     def layer_pixels(self) -> list[int]:
         """Pixels covered by each layer, once layer 0 is drawn."""
         self.settle()

@@ -246,6 +246,16 @@ class Capture:
             self._flags.filter = (r.ctx.NEAREST, r.ctx.NEAREST)
             prog["u_selected"].value = units.SELECTED
 
+    @property
+    def way(self) -> str:
+        """How this capture found its layers, for reports (``blueprint bench``): ``peel`` (a
+        geometry pass a layer), ``k-buffer`` (up to 8 layers a pass), ``A-buffer`` (every
+        layer from one pass) or ``A-buffer, compute rasteriser`` (its fragments listed in
+        compute: render.raster)."""
+        if self.abuffer is not None:
+            return "A-buffer, compute rasteriser" if self.abuffer.rasterised_in_compute else "A-buffer"
+        return "k-buffer" if self.kbuffer is not None else "peel"
+
     def samples(self, layer: int, query) -> int:
         """Layer ``layer``'s covered pixels: what its occlusion ``query`` counted, or what the
         A-buffer counted where it drew the layer."""
