@@ -346,19 +346,24 @@ def software_form(renderer, monkeypatch):
         dict(max_layers=None, supersample=2, style="paper", line_width=2.0),
     ],
 )
+@pytest.mark.parametrize("batch", [1, 3, 8])
 def test_edges_from_the_lists_a_layer_at_a_time_draw_the_same(
-    renderer, abuffer, software_form, monkeypatch, options
+    renderer, abuffer, software_form, monkeypatch, options, batch
 ):
-    """Where passes run a layer at a time, the edges of each layer are read from the sorted
-    lists as it comes, no layer unpacked: the same drawing, pixel for pixel."""
+    """Where passes run a layer at a time, the edges of each batch of layers are read from the
+    sorted lists as it comes, no layer unpacked: the same drawing, pixel for pixel, whatever
+    the batch (the last one cut short by the cap or the last layer). Where lines are widened,
+    each layer's edges go through one target to the pass that widens them: a layer a pass."""
     model = examples.gearbox()
     abuffer(True)
+    monkeypatch.setattr(executor_for(renderer), "edge_batch", batch)
+    step = 1 if "line_width" in options else batch
     listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
     from_lists = renderer.render(model, size=(160, 120), **options)
-    assert set(listed) == {"edges"} and len(listed) == from_lists.layers
+    assert set(listed) == {"edges"} and len(listed) == -(-from_lists.layers // step)
     monkeypatch.setattr(LayerCapture, "_from_lists", lambda self, st: ())
     unpacked = renderer.render(model, size=(160, 120), **options)
-    assert len(listed) == from_lists.layers
+    assert len(listed) == -(-from_lists.layers // step)
     assert from_lists.layers == unpacked.layers >= 6
     np.testing.assert_array_equal(from_lists.image, unpacked.image)
 

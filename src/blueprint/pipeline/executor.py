@@ -74,6 +74,7 @@ EDGES_FROM_LISTS_FRAG = "blueprint.pipeline:glsl/edges_lists.frag"
 EDGES_FROM_SURFACES = "blueprint.pipeline:glsl/edges_surfaces.frag"
 # the uniforms every pass may take (see the module's docstring), in the groups that are computed
 # together: of the target and the run, of the camera, the camera's matrices
+EDGE_BATCH = 8
 _FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
 _CAMERA_SCALARS = ("u_depth_range", "u_peel_eps", "u_pixel_angle", "u_normal_cos")
 _CAMERA_MATRICES = ("u_view", "u_projection")
@@ -106,6 +107,9 @@ class Executor:
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
         # back: only where that costs less than the pixels it saves (pipeline.tiles)
         self.tiled = renderer.software
+        # layers an edges pass read from an A-buffer's lists draws at once, a target each: the
+        # layer counts and cursors are read once a batch, not once a layer
+        self.edge_batch = min(EDGE_BATCH, renderer.max_draw_buffers)
 
     def release(self) -> None:
         """Programs of user shaders and pixel buffers (pool targets belong to the renderer)."""
@@ -517,7 +521,9 @@ class Executor:
         put(prog, f"u_{key}_components", tex.components)
         put(prog, f"u_{key}_factor", max(1, w // size[0]))
 
-    def _run_pass(self, st: RunState, name: str, layer: int, layers: int) -> None:
+    def _run_pass(self, st: RunState, name: str, layer: int, layers: int, span: int = 1) -> None:
+        """Pass ``name`` at ``layer`` (``layers`` peeled so far); an edges pass read from an
+        A-buffer's lists draws ``span`` layers from ``layer`` on at once (``edge_batch``)."""
         pl = st.pl
         p = pl.bound.passes[name]
         if st.arrays is not None:
@@ -542,7 +548,8 @@ class Executor:
             prog = self.programs.user(p.user)
         elif lists:
             abuffer = st.groups[0].capture.abuffer
-            prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, abuffer.defines, modern=True)
+            defines = {**abuffer.defines, "BATCH": self.edge_batch}
+            prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, defines, modern=True)
         else:
             shader = EDGES_FROM_SURFACES if surfaces else p.op.shader
             prog = self.programs.library(shader, vertex, _defines(p))
@@ -550,6 +557,7 @@ class Executor:
         self.programs.update(prog, p.uniforms)
         if lists:
             self._bind_layer_lists(st, name, prog, size, layer)
+            self.programs.set(prog, "u_batch", span)
         elif surfaces:
             # the layer's depth, normal and IDs from the k-buffer, one fetch a pixel
             kbuffer = st.surfaces
@@ -567,7 +575,11 @@ class Executor:
         else:
             for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
                 self._bind_input(prog, key, self._value(st, source, layer), unit, size)
-        fbo = self.r.pool.framebuffer((target,))
+        if span > 1:
+            targets = tuple(self._target(st, name, k) for k in range(layer, layer + span))
+        else:
+            targets = (target,)
+        fbo = self.r.pool.framebuffer(targets)
         if reach is not None:
             fbo.use()
             fbo.clear()
@@ -652,14 +664,15 @@ class Executor:
             st.draws += 1
 
     def _bind_layer_lists(self, st: RunState, name: str, prog, size, layer: int) -> None:
-        """The A-buffer's sorted lists bound for pass ``name`` (the edges operation) to read layer
-        ``layer`` from, no layer unpacked: each pixel's chain carried from one layer to the next
-        in a pair of cursor images."""
+        """The A-buffer's sorted lists bound for pass ``name`` (the edges operation) to read the
+        batch of layers from ``layer`` on, no layer unpacked: each pixel's chain carried from one
+        batch to the next in a pair of cursor images."""
         abuffer = st.groups[0].capture.abuffer
         self.programs.set(prog, "u_back_bias", abuffer.back_bias)
         *cursors, layer_count = abuffer.lists(size)
-        cursors[layer % 2].bind_to_image(2, read=True, write=False)
-        cursors[(layer + 1) % 2].bind_to_image(3, read=False, write=True)
+        batch = layer // st.list_step
+        cursors[batch % 2].bind_to_image(2, read=True, write=False)
+        cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
         layer_count.bind_to_image(4, read=True, write=False)
 
     def _run_batches(self, st: RunState, layers: int) -> None:

@@ -165,6 +165,20 @@ class LayerCapture:
         first = [n for n in pl.iteration0 if n not in batches]
         later = [n for n in pl.per_layer if n not in batches]
 
+        def batch_span(layer: int) -> int:
+            """The layers from ``layer`` on that hold pixels and the cap allows, up to a batch;
+            one where the counts are not looked at as the layers come (a GPU's frame)."""
+            if st.list_step == 1:
+                return 1
+            capture = groups[0].capture
+            last = layer + st.list_step
+            if max_layers is not None:
+                last = min(last, max_layers)
+            span = 1
+            while layer + span < last and capture.samples(layer + span, None):
+                span += 1
+            return span
+
         def draw(layer: int, query, guard) -> None:
             self.ex._ensure_stacks(st, layer + 1)
             for g in groups:
@@ -185,6 +199,10 @@ class LayerCapture:
                 later[:] = [n for n in later if n not in listed]
             if layer == 0:
                 st.layer_lists = layer_lists if groups[0].capture.abuffer is not None else ()
+                # (a pass whose layers share one target, read by the next pass of each layer,
+                # draws one at a time)
+                batched = eager and all(n in pl.stacked for n in st.layer_lists)
+                st.list_step = self.ex.edge_batch if batched else 1
             for name, held in st.attr_dumps.items():
                 tex = st.by_attr[name].texture(name, layer)
                 held.append(read_texture(tex, bound.attributes[name].format))
@@ -197,7 +215,15 @@ class LayerCapture:
                 else:
                     self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
             for name in first if layer == 0 else later:
-                self.ex._run_pass(st, name, layer, layer + 1)
+                if name in st.layer_lists:
+                    # a batch of layers at once, at the batch's first
+                    if layer % st.list_step:
+                        continue
+                    span = batch_span(layer)
+                    self.ex._ensure_stacks(st, layer + span)
+                    self.ex._run_pass(st, name, layer, layer + 1, span)
+                else:
+                    self.ex._run_pass(st, name, layer, layer + 1)
 
         samples = groups[0].capture.samples
         if blind:
