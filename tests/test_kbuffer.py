@@ -169,19 +169,34 @@ def test_used_only_where_it_pays(renderer, monkeypatch):
     assert not kbuffered(small, 5)
 
 
-@pytest.mark.parametrize("supersample", [1, 2])
-def test_edges_from_the_surfaces_are_those_of_unpacked_layers(renderer, kbuffer, monkeypatch, supersample):
+@pytest.mark.parametrize(("supersample", "batch"), [(1, 8), (2, 8), (1, 3), (2, 1)])
+def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
+    renderer, kbuffer, monkeypatch, supersample, batch
+):
     """Where one k-buffer pass finds every layer of a frame its edges read the surfaces, unpacked
-    (edges_surfaces.frag): the same drawing, covered pixels and layers left as from the layers
-    unpacked into the G-buffer, depths rounded as the 24-bit depth target rounds them."""
+    (edges_surfaces.frag), ``batch`` layers a pass: the same drawing, covered pixels and layers
+    left as from the layers unpacked into the G-buffer, depths rounded as the 24-bit depth
+    target rounds them."""
     from blueprint.pipeline.executor import executor_for
     from blueprint.pipeline.peel import LayerCapture
 
     kbuffer(True)
     model = examples.gearbox()
     options = dict(size=(160, 120), max_layers=4, supersample=supersample)
+    ex = executor_for(renderer)
+    monkeypatch.setattr(ex, "edge_batch", batch)
+    passes = []
+    run_pass = type(ex)._run_pass
+
+    def watch(self, st, name, layer, layers, span=1):
+        if name in st.from_surfaces:
+            passes.append(span)
+        run_pass(self, st, name, layer, layers, span)
+
+    monkeypatch.setattr(type(ex), "_run_pass", watch)
     direct = renderer.render(model, **options)
     assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    assert passes == [min(batch, 4 - k) for k in range(0, 4, batch)]
     monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
     unpacked = renderer.render(model, direct.camera, **options)
     assert executor_for(renderer).last_run.from_surfaces == ()

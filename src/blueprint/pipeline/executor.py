@@ -523,7 +523,8 @@ class Executor:
 
     def _run_pass(self, st: RunState, name: str, layer: int, layers: int, span: int = 1) -> None:
         """Pass ``name`` at ``layer`` (``layers`` peeled so far); an edges pass read from an
-        A-buffer's lists draws ``span`` layers from ``layer`` on at once (``edge_batch``)."""
+        A-buffer's lists or a k-buffer's surfaces draws ``span`` layers from ``layer`` on at
+        once (``edge_batch``)."""
         pl = st.pl
         p = pl.bound.passes[name]
         if st.arrays is not None:
@@ -550,25 +551,31 @@ class Executor:
             abuffer = st.groups[0].capture.abuffer
             defines = {**abuffer.defines, "BATCH": self.edge_batch}
             prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, defines, modern=True)
+        elif surfaces:
+            defines = {**_defines(p), "BATCH": self.edge_batch}
+            prog = self.programs.library(EDGES_FROM_SURFACES, vertex, defines, modern=True)
         else:
-            shader = EDGES_FROM_SURFACES if surfaces else p.op.shader
-            prog = self.programs.library(shader, vertex, _defines(p))
+            prog = self.programs.library(p.op.shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
         if lists:
             self._bind_layer_lists(st, name, prog, size, layer)
             self.programs.set(prog, "u_batch", span)
         elif surfaces:
-            # the layer's depth, normal and IDs from the k-buffer, one fetch a pixel
+            # the batch's depth, normal and IDs from the k-buffer, one fetch a pixel and layer
             kbuffer = st.surfaces
-            kbuffer.surfaces[layer].use(BASE_UNIT)
-            kbuffer.count.use(BASE_UNIT + 1)
+            held = kbuffer.surfaces
+            for k in range(self.edge_batch):
+                held[min(layer + k, len(held) - 1)].use(BASE_UNIT + 1 + k)
+            kbuffer.count.use(BASE_UNIT)
+            held_at = tuple(range(BASE_UNIT + 1, BASE_UNIT + 1 + self.edge_batch))
             self.programs.update(
                 prog,
                 {
-                    "u_surfaces": BASE_UNIT,
-                    "u_count": BASE_UNIT + 1,
-                    "u_held": (layer + 0.5) / 255.0,
+                    "u_count": BASE_UNIT,
+                    # (moderngl takes an array of one as a single value)
+                    "u_surfaces": held_at if len(held_at) > 1 else held_at[0],
+                    "u_batch": span,
                     "u_back_bias": kbuffer.back_bias,
                 },
             )
@@ -670,7 +677,7 @@ class Executor:
         abuffer = st.groups[0].capture.abuffer
         self.programs.set(prog, "u_back_bias", abuffer.back_bias)
         *cursors, layer_count = abuffer.lists(size)
-        batch = layer // st.list_step
+        batch = layer // st.edge_step
         cursors[batch % 2].bind_to_image(2, read=True, write=False)
         cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
         layer_count.bind_to_image(4, read=True, write=False)

@@ -168,10 +168,10 @@ class LayerCapture:
         def batch_span(layer: int) -> int:
             """The layers from ``layer`` on that hold pixels and the cap allows, up to a batch;
             one where the counts are not looked at as the layers come (a GPU's frame)."""
-            if st.list_step == 1:
+            if st.edge_step == 1:
                 return 1
             capture = groups[0].capture
-            last = layer + st.list_step
+            last = layer + st.edge_step
             if max_layers is not None:
                 last = min(last, max_layers)
             span = 1
@@ -201,8 +201,8 @@ class LayerCapture:
                 st.layer_lists = layer_lists if groups[0].capture.abuffer is not None else ()
                 # (a pass whose layers share one target, read by the next pass of each layer,
                 # draws one at a time)
-                batched = eager and all(n in pl.stacked for n in st.layer_lists)
-                st.list_step = self.ex.edge_batch if batched else 1
+                batched = eager and all(n in pl.stacked for n in (*st.layer_lists, *st.from_surfaces))
+                st.edge_step = self.ex.edge_batch if batched else 1
             for name, held in st.attr_dumps.items():
                 tex = st.by_attr[name].texture(name, layer)
                 held.append(read_texture(tex, bound.attributes[name].format))
@@ -215,9 +215,9 @@ class LayerCapture:
                 else:
                     self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
             for name in first if layer == 0 else later:
-                if name in st.layer_lists:
+                if name in st.layer_lists or name in st.from_surfaces:
                     # a batch of layers at once, at the batch's first
-                    if layer % st.list_step:
+                    if layer % st.edge_step:
                         continue
                     span = batch_span(layer)
                     self.ex._ensure_stacks(st, layer + span)

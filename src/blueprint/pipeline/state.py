@@ -153,8 +153,9 @@ class RunState:
     # per-layer passes that read each layer from the A-buffer's lists as it is drawn
     # (Executor._bind_layer_lists), once layer 0 has captured them
     layer_lists: tuple[str, ...] = ()
-    list_step: int = 1  # the layers between the starts of two such passes (their batch)
     # the k-buffer whose surfaces hold every layer, unpacked, and the passes that read them there
     surfaces: object = None
     from_surfaces: tuple[str, ...] = ()
+    # the layers between the starts of two passes of those (their batch): each draws that many
+    edge_step: int = 1
     draws: int = 0

@@ -1,27 +1,50 @@
-// The edges operation (edges.glsl) on one layer read straight from the surface a k-buffer pass
-// found for it (blueprint.render:glsl/kbuffer.glsl) instead of from the layer unpacked into the
-// G-buffer: one fetch a pixel gives its depth, normal and IDs, or nothing where the layer has
-// no surface (every surface was cleared before the pass); the pass's count of the layers each
-// pixel holds (kbuffer.frag with COUNT) answers for the pixels two steps away. The samples are those
-// the unpack would have written: the depth as the G-buffer's 24-bit depth holds it, 1 where the
-// layer has no surface.
+// The edges operation (edges.glsl) on up to BATCH depth layers at once (u_layer and the
+// u_batch - 1 behind it, one target each), read straight from the surfaces a k-buffer pass
+// found for them (blueprint.render:glsl/kbuffer.glsl) instead of from each layer unpacked into
+// the G-buffer: one fetch a pixel and layer gives its depth, normal and IDs, or nothing where
+// the layer has no surface (every surface was cleared before the pass); the pass's count of
+// the layers each pixel holds (kbuffer.frag with COUNT), read once for the batch, answers for
+// the pixels two steps away and tells where a pixel's lanes may stop. The samples are those
+// the unpack would have written: the depth as the G-buffer's 24-bit depth holds it, 1 where
+// the layer has no surface.
 #extension GL_ARB_shading_language_packing : require
-#extension GL_ARB_texture_gather : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 
-uniform usampler2D u_surfaces;
+uniform usampler2D u_surfaces[BATCH];  // the batch's layers, the first one's surfaces first
 uniform sampler2D u_count;
-uniform float u_held;  // (layer + 0.5) / 255: counts above it hold the layer
+uniform int u_layer;  // the batch's first layer
+uniform int u_batch;  // its layers, 1 to BATCH: outputs 0 to u_batch - 1
 uniform float u_back_bias;
-uniform int u_layer;
 
 #include "edges_held.glsl"
 #define EDGE_LAST (textureSize(u_count, 0) - 1)
-bool ring_covered[8];
-#define EDGE_RING_COVERED(q, r) ring_covered[r]
+float ring_count[8];  // as the count's target holds it: layers / 255
+float ring_held;  // counts above it hold the layer edge_value is looking at
+#define EDGE_RING_COVERED(q, r) (ring_count[r] > ring_held)
 #include "blueprint.ops:glsl/edges.glsl"
 
-out vec4 o_edge;
+layout(location = 0) out vec4 o_edge0;
+#if BATCH > 1
+layout(location = 1) out vec4 o_edge1;
+#endif
+#if BATCH > 2
+layout(location = 2) out vec4 o_edge2;
+#endif
+#if BATCH > 3
+layout(location = 3) out vec4 o_edge3;
+#endif
+#if BATCH > 4
+layout(location = 4) out vec4 o_edge4;
+#endif
+#if BATCH > 5
+layout(location = 5) out vec4 o_edge5;
+#endif
+#if BATCH > 6
+layout(location = 6) out vec4 o_edge6;
+#endif
+#if BATCH > 7
+layout(location = 7) out vec4 o_edge7;
+#endif
 
 // A window depth as a 24-bit depth target stores it and a shader reads it back (llvmpipe's
 // rounding, checked bit for bit over the whole range)
@@ -32,29 +55,74 @@ float depth24(float z) {
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     ivec2 last = EDGE_LAST;
-    for (int i = 0; i < 5; ++i) {
-        ivec2 q = i == 0 ? p : clamp(p + OFFSETS[i - 1], ivec2(0), last);
-        uvec4 s = texelFetch(u_surfaces, q, 0);
-        sample_depth[i] = kb_empty(s) ? 1.0 : depth24(kb_depth(s, u_back_bias));
-        sample_normal[i] = kb_normal(s);
-        sample_ids[i] = kb_ids(s);
-    }
-    // the ring's counts in four gathers of two ring pixels each, not eight fetches (7 % of the
-    // edges' time on llvmpipe). The 2x2 block whose lower left texel is p + (x0, y0), gathered
-    // at its centre p + (x0 + 1, y0 + 1), comes as (x0, y0 + 1), (x0 + 1, y0 + 1), (x0 + 1, y0),
-    // (x0, y0), clamped to the image as the fetches above (the pool's targets clamp to edges).
+    // the ring's counts and the neighbours' in four gathers of 2x2 blocks, not twelve fetches
+    // (7 % of the edges' time on llvmpipe). The block whose lower left texel is p + (x0, y0),
+    // gathered at its centre p + (x0 + 1, y0 + 1), comes as (x0, y0 + 1), (x0 + 1, y0 + 1),
+    // (x0 + 1, y0), (x0, y0), clamped to the image as the fetches are (the pool's targets clamp
+    // to edges).
     vec2 size = vec2(last + 1);
-    bvec4 a = greaterThan(textureGather(u_count, (vec2(p) + vec2(2.0, 1.0)) / size), vec4(u_held));
-    bvec4 b = greaterThan(textureGather(u_count, (vec2(p) + vec2(-1.0, 0.0)) / size), vec4(u_held));
-    bvec4 c = greaterThan(textureGather(u_count, (vec2(p) + vec2(0.0, 2.0)) / size), vec4(u_held));
-    bvec4 d = greaterThan(textureGather(u_count, (vec2(p) + vec2(1.0, -1.0)) / size), vec4(u_held));
-    ring_covered[0] = b.x;  // (-2, 0)
-    ring_covered[1] = a.z;  // (2, 0)
-    ring_covered[2] = d.w;  // (0, -2)
-    ring_covered[3] = c.y;  // (0, 2)
-    ring_covered[4] = b.z;  // (-1, -1)
-    ring_covered[5] = d.y;  // (1, -1)
-    ring_covered[6] = c.w;  // (-1, 1)
-    ring_covered[7] = a.x;  // (1, 1)
-    o_edge = vec4(layer_edge_value(p, u_layer));
+    vec4 a = textureGather(u_count, (vec2(p) + vec2(2.0, 1.0)) / size);
+    vec4 b = textureGather(u_count, (vec2(p) + vec2(-1.0, 0.0)) / size);
+    vec4 c = textureGather(u_count, (vec2(p) + vec2(0.0, 2.0)) / size);
+    vec4 d = textureGather(u_count, (vec2(p) + vec2(1.0, -1.0)) / size);
+    ring_count[0] = b.x;  // (-2, 0)
+    ring_count[1] = a.z;  // (2, 0)
+    ring_count[2] = d.w;  // (0, -2)
+    ring_count[3] = c.y;  // (0, 2)
+    ring_count[4] = b.z;  // (-1, -1)
+    ring_count[5] = d.y;  // (1, -1)
+    ring_count[6] = c.w;  // (-1, 1)
+    ring_count[7] = a.x;  // (1, 1)
+    // the most layers the pixel or a neighbour ((-1, 0), (1, 0), (0, -1), (0, 1)) holds: no
+    // layer behind has an edge here (edge_value's speck rule)
+    float deepest = max(max(texelFetch(u_count, p, 0).r, b.y), max(max(a.w, d.x), c.z));
+    ivec2 q[5];
+    q[0] = p;
+    for (int i = 0; i < 4; ++i) {
+        q[i + 1] = clamp(p + OFFSETS[i], ivec2(0), last);
+    }
+    float e[BATCH];
+    for (int k = 0; k < BATCH; ++k) {
+        e[k] = 0.0;
+    }
+    // tested at the loop's end, where a software rasteriser leaves a loop once every lane
+    // has (a test at the top runs the body once more with every lane masked off)
+    int k = 0;
+    do {
+        int layer = u_layer + k;
+        ring_held = (float(layer) + 0.5) / 255.0;
+        if (deepest <= ring_held) {
+            break;
+        }
+        for (int i = 0; i < 5; ++i) {
+            uvec4 s = texelFetch(u_surfaces[k], q[i], 0);
+            sample_depth[i] = kb_empty(s) ? 1.0 : depth24(kb_depth(s, u_back_bias));
+            sample_normal[i] = kb_normal(s);
+            sample_ids[i] = kb_ids(s);
+        }
+        e[k] = layer_edge_value(p, layer);
+        ++k;
+    } while (k < u_batch);
+    o_edge0 = vec4(e[0]);
+#if BATCH > 1
+    o_edge1 = vec4(e[1]);
+#endif
+#if BATCH > 2
+    o_edge2 = vec4(e[2]);
+#endif
+#if BATCH > 3
+    o_edge3 = vec4(e[3]);
+#endif
+#if BATCH > 4
+    o_edge4 = vec4(e[4]);
+#endif
+#if BATCH > 5
+    o_edge5 = vec4(e[5]);
+#endif
+#if BATCH > 6
+    o_edge6 = vec4(e[6]);
+#endif
+#if BATCH > 7
+    o_edge7 = vec4(e[7]);
+#endif
 }
