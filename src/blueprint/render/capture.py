@@ -221,9 +221,13 @@ class Capture:
             and w * h >= culled_from[1]
         )
         self.shader_bias = r.back_bias_in_shader and self.tie_break and not culled
+        behind = None
         if use_kbuffer:
             defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock, "COUNT": surfaces}
-            prog = geometry_program(r, KBUFFER_FRAG, defines, modern=r.kbuffer_interlock)
+            modern = r.kbuffer_interlock
+            prog = geometry_program(r, KBUFFER_FRAG, {**defines, "PEEL": False}, modern=modern)
+            if not surfaces:  # (one pass finds every layer there)
+                behind = geometry_program(r, KBUFFER_FRAG, {**defines, "PEEL": True}, modern=modern)
         else:
             defines = {
                 "BACK_BIAS_IN_SHADER": self.shader_bias,
@@ -232,14 +236,15 @@ class Capture:
                 "NORMALS": normals,
             }
             prog = geometry_program(r, PEEL_FRAG, defines)
-        peel_uniforms(prog, camera)
-        target_uniform(r, prog, (w, h))
-        if normals:  # only the normal's orientation needs it
-            prog["u_ortho"].value = camera.ortho
-        if self.shader_bias:
-            prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
+        for each in (prog, behind) if behind is not None else (prog,):
+            peel_uniforms(each, camera)
+            target_uniform(r, each, (w, h))
+            if normals:  # only the normal's orientation needs it
+                each["u_ortho"].value = camera.ortho
+            if self.shader_bias:
+                each["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         self.prog = prog
-        self.kbuffer = _KBuffer(r, prog, batch, unpack=not surfaces) if use_kbuffer else None
+        self.kbuffer = _KBuffer(r, prog, behind, batch, unpack=not surfaces) if use_kbuffer else None
         if selected is not None:
             data = np.asarray(selected, bool).astype(np.int32).tobytes()
             self._flags = r.ctx.texture((len(selected), 1), 1, data, dtype="i4")
@@ -377,8 +382,9 @@ class _KBuffer:
     a full-screen pass counting the surfaces a fifth of it, and readers of the surfaces fetch a
     pixel's depth, normal and IDs at once."""
 
-    def __init__(self, r, prog, k: int, unpack: bool = True) -> None:
-        self.r, self.prog, self.k, self.unpacks = r, prog, k, unpack
+    def __init__(self, r, prog, behind, k: int, unpack: bool = True) -> None:
+        # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
+        self.r, self.prog, self.behind, self.k, self.unpacks = r, prog, behind, k, unpack
         self.back_bias = BACK_OFFSET / (1 << 24)  # kbuffer.glsl's kb_depth
         self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG, {"HELD": not unpack})
         self.unpack["u_surfaces"].value = units.KBUFFER
@@ -423,19 +429,21 @@ class _KBuffer:
         # (at 800x600 on llvmpipe: 9 ms more CPU to clear, 18 ms less for the edges to tell
         # the layer's pixels from its count)
         (first_target if self.unpacks else target).clear()
-        self.prog["u_peel"].value = layer > 0
-        self.prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
+        prog = self.prog
+        if layer > 0:
+            prog = self.behind
+            prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
         if self.r.kbuffer_interlock:
             # the surfaces as images; the pass rasterises into this layer's depth (not the
             # previous layer's, which it samples), writing nothing there: no depth test
             for unit, tex in enumerate(surfaces):
                 tex.bind_to_image(unit, read=True, write=True)
             gb.clears[layer % 2].use()
-            mesh.vao(self.prog).render()
+            mesh.vao(prog).render()
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
         else:
             target.use()
-            mesh.vao(self.prog).render()
+            mesh.vao(prog).render()
 
     def find_all(self, mesh, gb: GBuffer) -> int:
         """Every layer into the surfaces in one pass, with the layers each pixel holds, read back

@@ -329,12 +329,11 @@ class LayerRenderer(Device):
         """One k-buffer pass of depths and faces alone into ``k`` targets (kbuffer.frag)."""
         ctx, pool = self.ctx, self.pool
         mesh = self.mesh(model, None)
-        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True}
+        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
         prog = geometry_program(self, KBUFFER_FRAG, defines)
         peel_uniforms(prog, camera)
         target_uniform(self, prog, size)
         prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
-        prog["u_peel"].value = False
         name = f"kbuffer.faces.{size[0]}x{size[1]}"
         surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
         pool.framebuffer((surfaces[0],)).clear()

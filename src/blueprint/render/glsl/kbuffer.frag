@@ -9,7 +9,10 @@
 // stays. With IDS_ONLY (through framebuffer fetch) a surface is its depth and face alone
 // (kbuffer.glsl), for passes that need no normals. With COUNT (through framebuffer fetch) one
 // more target, after the K surfaces, holds how many surfaces the pixel holds, as count / 255
-// (r8), for passes that read the surfaces where they lie instead of unpacked.
+// (r8), for passes that read the surfaces where they lie instead of unpacked. With PEEL the
+// pass finds the layers behind those of an earlier one (u_prev_depth); the first pass is built
+// without (a software rasteriser reads the previous depth under a uniform branch too: 22 % of
+// llvmpipe's first pass).
 #if INTERLOCK
 #extension GL_ARB_fragment_shader_interlock : require
 #else
@@ -20,8 +23,9 @@
 #include "fragment_depth.glsl"
 #include "kbuffer.glsl"
 
+#if PEEL
 uniform sampler2D u_prev_depth;
-uniform bool u_peel;
+#endif
 uniform float u_peel_eps;
 uniform bool u_ortho;
 uniform float u_back_bias;
@@ -85,10 +89,10 @@ layout(location = K) out vec4 o_count;
 void main() {
     float z = fragment_depth();
     bool keep = true;
-    if (u_peel) {
-        float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;
-        keep = prev < 1.0 && eye_depth(z) > eye_depth(prev) + u_peel_eps;
-    }
+#if PEEL
+    float prev = texelFetch(u_prev_depth, ivec2(gl_FragCoord.xy), 0).r;
+    keep = prev < 1.0 && eye_depth(z) > eye_depth(prev) + u_peel_eps;
+#endif
 #if IDS_ONLY
     vec3 n = vec3(0.0);
 #else
