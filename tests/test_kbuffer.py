@@ -206,6 +206,26 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     np.testing.assert_array_equal(direct.image, unpacked.image)
 
 
+def test_surfaces_an_earlier_frame_left_change_nothing(renderer, kbuffer, monkeypatch):
+    """Only a k-buffer's first surface and its count are cleared before a pass: the surfaces
+    a deeper frame left behind a pixel's last one are never read as layers. A frame drawn over
+    them is the one drawn from its layers unpacked (where the count alone says what is held)."""
+    from blueprint.pipeline.executor import executor_for
+    from blueprint.pipeline.peel import LayerCapture
+
+    kbuffer(True)
+    model = examples.gearbox()
+    options = dict(size=(160, 120), max_layers=5, supersample=1)
+    boxes = nested_boxes()  # five layers over most of the frame
+    deep = renderer.render(boxes, fit_camera(boxes, (160, 120), "front"), **options)
+    over = renderer.render(model, fit_camera(model, (160, 120), "iso"), **options)
+    assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    assert deep.layers == 5
+    monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
+    unpacked = renderer.render(model, over.camera, **options)
+    np.testing.assert_array_equal(over.image, unpacked.image)
+
+
 def test_bench_names_the_way_the_layers_were_found(renderer, kbuffer):
     """``blueprint bench``'s ``capture`` (``Capture.way``): the k-buffer where it found the
     layers, ``peel`` where a geometry pass drew each."""

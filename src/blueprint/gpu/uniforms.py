@@ -43,8 +43,11 @@ class Uniforms:
 
 
 def _write(member, value) -> None:
-    """A uniform's new value (matrices come as bytes)."""
+    """A uniform's new value (matrices come as bytes; an array as a tuple, of which moderngl
+    takes the first alone where the array has one element or the compiler kept only one)."""
     if isinstance(value, bytes):
         member.write(value)
+    elif isinstance(value, tuple) and member.array_length == 1 and member.dimension == 1:
+        member.value = value[0]
     else:
         member.value = value

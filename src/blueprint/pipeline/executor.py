@@ -568,13 +568,11 @@ class Executor:
             for k in range(self.edge_batch):
                 held[min(layer + k, len(held) - 1)].use(BASE_UNIT + 1 + k)
             kbuffer.count.use(BASE_UNIT)
-            held_at = tuple(range(BASE_UNIT + 1, BASE_UNIT + 1 + self.edge_batch))
             self.programs.update(
                 prog,
                 {
                     "u_count": BASE_UNIT,
-                    # (moderngl takes an array of one as a single value)
-                    "u_surfaces": held_at if len(held_at) > 1 else held_at[0],
+                    "u_surfaces": tuple(range(BASE_UNIT + 1, BASE_UNIT + 1 + self.edge_batch)),
                     "u_batch": span,
                     "u_back_bias": kbuffer.back_bias,
                 },

@@ -399,9 +399,10 @@ class _KBuffer:
             self.unpack["u_count"].value = units.INPUTS
 
     def _surfaces(self, size: tuple[int, int]) -> tuple:
-        """(targets, their framebuffer (with the count's target, without unpack), the first
-        one's, the count's target or None) at ``size``: pipelines peel G-buffers of several sizes
-        in turn, so the targets are named by size too."""
+        """(targets, their framebuffer (with the count's target, without unpack), the one of
+        the targets cleared before a pass (the first, and the count's), the count's target or
+        None) at ``size``: pipelines peel G-buffers of several sizes in turn, so the targets
+        are named by size too."""
         held = self._targets.get(size)
         if held is None:
             pool, name = self.r.pool, f"kbuffer.{size[0]}x{size[1]}"
@@ -410,7 +411,7 @@ class _KBuffer:
             held = self._targets[size] = (
                 surfaces,
                 pool.framebuffer(surfaces if count is None else (*surfaces, count)),
-                pool.framebuffer(surfaces[:1]),
+                pool.framebuffer(surfaces[:1] if count is None else (surfaces[0], count)),
                 count,
             )
         return held
@@ -423,12 +424,10 @@ class _KBuffer:
     def _find(self, mesh, gb: GBuffer, layer: int) -> None:
         """The pass that finds layers ``layer`` to ``layer + k - 1``."""
         ctx = self.r.ctx
-        surfaces, target, first_target, _ = self._surfaces(gb.size)
-        # the first target alone is cleared: kbuffer.frag keeps the rest valid; where the
-        # surfaces are read as they are, all of them, so that an empty one means no layer
-        # (at 800x600 on llvmpipe: 9 ms more CPU to clear, 18 ms less for the edges to tell
-        # the layer's pixels from its count)
-        (first_target if self.unpacks else target).clear()
+        surfaces, target, cleared, _ = self._surfaces(gb.size)
+        # the first target alone is cleared (and the count): kbuffer.frag keeps the rest valid
+        # up to a pixel's first empty one, and readers look no further (the count says where)
+        cleared.clear()
         prog = self.prog
         if layer > 0:
             prog = self.behind

@@ -1,12 +1,13 @@
 // The edges operation (edges.glsl) on up to BATCH depth layers at once (u_layer and the
 // u_batch - 1 behind it, one target each), read straight from the surfaces a k-buffer pass
 // found for them (blueprint.render:glsl/kbuffer.glsl) instead of from each layer unpacked into
-// the G-buffer: one fetch a pixel and layer gives its depth, normal and IDs, or nothing where
-// the layer has no surface (every surface was cleared before the pass); the pass's count of
-// the layers each pixel holds (kbuffer.frag with COUNT), read once for the batch, answers for
-// the pixels two steps away and tells where a pixel's lanes may stop. The samples are those
-// the unpack would have written: the depth as the G-buffer's 24-bit depth holds it, 1 where
-// the layer has no surface.
+// the G-buffer: one fetch a pixel and layer gives its depth, normal and IDs. The pass's count
+// of the layers each pixel holds (kbuffer.frag with COUNT), read once for the batch, says
+// where a layer has a surface (the targets past a pixel's last surface hold whatever an earlier
+// frame left: only the first is cleared), answers for the pixels two steps away and tells
+// where a pixel's lanes may stop. The samples are those the unpack would have written: the
+// depth as the G-buffer's 24-bit depth holds it, 1 where the layer has no surface (its normal
+// and IDs are never read then: edge_value reads a neighbour's only where it is covered).
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 
@@ -73,9 +74,10 @@ void main() {
     ring_count[5] = d.y;  // (1, -1)
     ring_count[6] = c.w;  // (-1, 1)
     ring_count[7] = a.x;  // (1, 1)
-    // the most layers the pixel or a neighbour ((-1, 0), (1, 0), (0, -1), (0, 1)) holds: no
-    // layer behind has an edge here (edge_value's speck rule)
-    float deepest = max(max(texelFetch(u_count, p, 0).r, b.y), max(max(a.w, d.x), c.z));
+    // the layers the pixel and its neighbours (OFFSETS: (-1, 0), (1, 0), (0, -1), (0, 1)) hold;
+    // the most of them: no layer behind has an edge here (edge_value's speck rule)
+    float count[5] = float[5](texelFetch(u_count, p, 0).r, b.y, a.w, d.x, c.z);
+    float deepest = max(max(count[0], count[1]), max(max(count[2], count[3]), count[4]));
     ivec2 q[5];
     q[0] = p;
     for (int i = 0; i < 4; ++i) {
@@ -96,7 +98,7 @@ void main() {
         }
         for (int i = 0; i < 5; ++i) {
             uvec4 s = texelFetch(u_surfaces[k], q[i], 0);
-            sample_depth[i] = kb_empty(s) ? 1.0 : depth24(kb_depth(s, u_back_bias));
+            sample_depth[i] = count[i] > ring_held ? depth24(kb_depth(s, u_back_bias)) : 1.0;
             sample_normal[i] = kb_normal(s);
             sample_ids[i] = kb_ids(s);
         }
