@@ -72,9 +72,11 @@ ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
 EDGES_FROM_LISTS_FRAG = "blueprint.pipeline:glsl/edges_lists.frag"
 EDGES_FROM_SURFACES = "blueprint.pipeline:glsl/edges_surfaces.frag"
+# the most layers an edges pass read from a capture's lists or surfaces draws at once
+# (Executor.edge_batch), the most render targets GL asks every driver for
+EDGE_BATCH = 8
 # the uniforms every pass may take (see the module's docstring), in the groups that are computed
 # together: of the target and the run, of the camera, the camera's matrices
-EDGE_BATCH = 8
 _FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
 _CAMERA_SCALARS = ("u_depth_range", "u_peel_eps", "u_pixel_angle", "u_normal_cos")
 _CAMERA_MATRICES = ("u_view", "u_projection")
@@ -107,8 +109,9 @@ class Executor:
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
         # back: only where that costs less than the pixels it saves (pipeline.tiles)
         self.tiled = renderer.software
-        # layers an edges pass read from an A-buffer's lists draws at once, a target each: the
-        # layer counts and cursors are read once a batch, not once a layer
+        # layers an edges pass read from an A-buffer's lists or a k-buffer's surfaces draws at
+        # once, a target each: the layer counts (and cursors) are read once a batch, not once a
+        # layer
         self.edge_batch = min(EDGE_BATCH, renderer.max_draw_buffers)
 
     def release(self) -> None:
