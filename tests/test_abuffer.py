@@ -203,6 +203,33 @@ def test_used_only_where_it_pays(renderer, abuffer):
     assert Capture(renderer, renderer.mesh(model, None), camera, ids, batch=5).abuffer is None
 
 
+def _tiled_layers(renderer, mesh, camera, size, tiles: bool) -> tuple[list, Capture]:
+    """Every layer's (depth, normal, ids) of a capture, zero where the layer has no fragment."""
+    gb = gbuffer(renderer.pool, size, f"test.ab.tiles{tiles}")
+    capture = Capture(renderer, mesh, camera, gb, batch=None, tiles=tiles)
+    assert capture.abuffer is not None
+    got = []
+    layer = 0
+    while layer == 0 or layer < capture.abuffer.deepest():
+        capture.draw(layer, renderer.queries("test.ab")[0])
+        depth = np.frombuffer(gb.layer_depth(layer).read(), np.float32).reshape(size[::-1])
+        covered = depth < 1
+        normal = np.frombuffer(gb.normal.read(), np.float16).reshape(size[1], size[0], 4)
+        ids = np.frombuffer(gb.ids.read(), np.int32).reshape(size[1], size[0], 2)
+        got.append(
+            (depth.copy(), np.where(covered[..., None], normal, 0), np.where(covered[..., None], ids, 0))
+        )
+        layer += 1
+    return got, capture
+
+
+def _assert_same_layers(a: list, b: list) -> None:
+    assert len(a) == len(b)
+    for x, y in zip(a, b, strict=True):
+        for u, v in zip(x, y, strict=True):
+            np.testing.assert_array_equal(u, v)
+
+
 def test_tiled_unpack_draws_the_same_layers(renderer, abuffer):
     """With ``tiles`` each layer is unpacked only in the tiles that have it and the rest of its
     depth is cleared: the same layers, pixel for pixel, as unpacking every pixel; and each
@@ -212,38 +239,35 @@ def test_tiled_unpack_draws_the_same_layers(renderer, abuffer):
     size = (100, 70)  # not a whole number of tiles
     camera = fit_camera(model, size)
     abuffer(True)
-    layers = {}
-    for tiles in (False, True):
-        gb = gbuffer(renderer.pool, size, f"test.ab.tiles{tiles}")
-        capture = Capture(renderer, mesh, camera, gb, batch=None, tiles=tiles)
-        assert capture.abuffer is not None
-        got = []
-        layer = 0
-        while layer == 0 or layer < capture.abuffer.deepest():
-            capture.draw(layer, renderer.queries("test.ab")[0])
-            depth = np.frombuffer(gb.layer_depth(layer).read(), np.float32).reshape(size[::-1])
-            covered = depth < 1
-            normal = np.frombuffer(gb.normal.read(), np.float16).reshape(size[1], size[0], 4)
-            ids = np.frombuffer(gb.ids.read(), np.int32).reshape(size[1], size[0], 2)
-            got.append(
-                (depth.copy(), np.where(covered[..., None], normal, 0), np.where(covered[..., None], ids, 0))
-            )
-            layer += 1
-        layers[tiles] = got
-        if tiles:
-            counts = np.zeros(size[::-1], int)
-            for depth, _, _ in got:
-                counts += depth < 1
-            th, tw = capture.tile_layers.shape
-            most = np.zeros((th, tw), int)
-            for i in range(th):
-                for j in range(tw):
-                    most[i, j] = counts[i * 16 : (i + 1) * 16, j * 16 : (j + 1) * 16].max()
-            np.testing.assert_array_equal(capture.tile_layers, most)
-    assert len(layers[True]) == len(layers[False]) > 8
-    for a, b in zip(layers[True], layers[False], strict=True):
-        for x, y in zip(a, b, strict=True):
-            np.testing.assert_array_equal(x, y)
+    plain, _ = _tiled_layers(renderer, mesh, camera, size, False)
+    tiled, capture = _tiled_layers(renderer, mesh, camera, size, True)
+    counts = np.zeros(size[::-1], int)
+    for depth, _, _ in tiled:
+        counts += depth < 1
+    th, tw = capture.tile_layers.shape
+    most = np.zeros((th, tw), int)
+    for i in range(th):
+        for j in range(tw):
+            most[i, j] = counts[i * 16 : (i + 1) * 16, j * 16 : (j + 1) * 16].max()
+    np.testing.assert_array_equal(capture.tile_layers, most)
+    assert len(tiled) > 8
+    _assert_same_layers(tiled, plain)
+
+
+def test_tiles_a_frame_leaves_empty_hold_nothing_of_it(renderer, abuffer):
+    """The tiled resolve runs only where a frame has fragments: a frame that covers less than
+    the one before at the same size (a zoom out) finds none of the earlier frame's layers in
+    the tiles it leaves empty."""
+    model = examples.gearbox()
+    mesh = renderer.mesh(model, 30.0)
+    size = (96, 96)
+    abuffer(True)
+    _tiled_layers(renderer, mesh, fit_camera(model, size), size, True)
+    small = fit_camera(model, size, margin=0.35)
+    tiled, capture = _tiled_layers(renderer, mesh, small, size, True)
+    plain, _ = _tiled_layers(renderer, mesh, small, size, False)
+    assert (capture.tile_layers == 0).sum() > capture.tile_layers.size // 2
+    _assert_same_layers(tiled, plain)
 
 
 @pytest.fixture

@@ -104,8 +104,11 @@ class ABuffer:
         self.fetch_head = self.images and r.framebuffer_fetch
         defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
         self.geometry = geometry_program(r, ABUFFER_FRAG, defines, modern=True)
-        # with tiles the counts come from each pixel's layers read back (``_count_pixels``)
-        self.resolve = r.compute(RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1} if tiles else capture)
+        # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
+        # the resolve runs over the tiles with fragments alone (``_resolve``)
+        self.resolve = r.compute(
+            RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else capture
+        )
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera = ("u_view", "u_projection", "u_ortho")
         for prog, names in (
@@ -276,7 +279,7 @@ class ABuffer:
                 self.mesh.vbo.bind_to_storage_buffer(VERTICES_BINDING)
                 self.mesh.ibo.bind_to_storage_buffer(INDICES_BINDING)
                 target_uniform(self.r, self.resolve, size)
-            self.resolve.run(*groups)
+            self._resolve(name, head, (cursor, layer_count), groups)
             ctx.memory_barrier()
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
@@ -291,6 +294,38 @@ class ABuffer:
                 return calls
             if self._count(seen.read, nbytes, room, size, name):
                 return calls
+
+    def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int]) -> None:
+        """The resolve's dispatch: over every group, or with tiles over the tiles that hold a
+        fragment, found from the lists' heads read back, the ``cleared`` images (cursors and
+        counts) zeroed everywhere first."""
+        if not self.tiles:
+            self.resolve.run(*groups)
+            return
+        w, h = head.size
+        heads = np.empty((h, w), np.uint32)
+        head.read_into(heads)
+        held = tile_max(heads).ravel()
+        tiles = np.flatnonzero(held)
+        for image in cleared:
+            self.r.pool.framebuffer((image,)).clear()
+        if not len(tiles):
+            return
+        columns = -(-w // TILE)
+        self._tile_image(f"{name}.resolve_tiles", tiles, columns).bind_to_image(3, read=True, write=False)
+        count = len(tiles) * (TILE // 8) ** 2
+        self.resolve["u_groups"].value = count
+        self.resolve.run(min(count, ROW), -(-count // ROW))
+
+    def _tile_image(self, name: str, tiles: np.ndarray, columns: int):
+        """``tiles`` (flat indices, ``columns`` tiles a row) in the image that passes over
+        listed tiles read (abuffer_tiles.glsl): x | y << 16 each, ``AB_ROW`` a row."""
+        rows, across = np.divmod(tiles, columns)
+        packed = np.zeros(max(1, -(-len(tiles) // AB_ROW)) * AB_ROW, np.uint32)
+        packed[: len(tiles)] = across | (rows << 16)
+        image = self.r.pool.texture(name, (AB_ROW, len(packed) // AB_ROW), "r32ui")
+        image.write(packed)
+        return image
 
     def _computes(self, size: tuple[int, int]) -> bool:
         """Whether the compute rasteriser lists a frame of ``size`` (render.raster: where it
@@ -354,12 +389,7 @@ class ABuffer:
         order = np.argsort(-flat.astype(np.int64), kind="stable")
         order = order[flat[order] > 0]
         self._deepest_first = flat[order]
-        rows, columns = np.divmod(order, layers.shape[1])
-        # an image, AB_ROW entries a row (abuffer_unpack.comp): the list is read once a pixel
-        packed = np.zeros(max(1, -(-len(order) // AB_ROW)) * AB_ROW, np.uint32)
-        packed[: len(order)] = columns | (rows << 16)
-        self._tile_list = self.r.pool.texture(f"{name}.tile_list", (AB_ROW, len(packed) // AB_ROW), "r32ui")
-        self._tile_list.write(packed)
+        self._tile_list = self._tile_image(f"{name}.tile_list", order, layers.shape[1])
 
     def _unpack(self, gb, name: str, layer: int) -> None:
         """Layer ``layer`` at each pixel's cursor into the G-buffer, the cursor moved on."""

@@ -204,10 +204,16 @@ uint chain(ivec2 p) {
 #if COUNTED_AFTER
 // The counts are left to the caller, which reads u_layer_count back (a software rasteriser,
 // where that costs a copy): the group's histogram took a third of the resolve on llvmpipe (its
-// barriers and shared atomics).
+// barriers and shared atomics). There the groups run only over the tiles listed as holding a
+// fragment (TILES): a software rasteriser runs all of a group's code, empty or not (a third of
+// llvmpipe's resolve of a model that covers half the frame), and the caller has cleared the
+// counts and cursors of the rest.
+#define TILE_LIST_BINDING 3
+#include "abuffer_tiles.glsl"
+
 void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    if (all(lessThan(p, imageSize(u_head)))) {
+    ivec2 p = listed_pixel();
+    if (p.x >= 0 && all(lessThan(p, imageSize(u_head)))) {
         imageStore(u_layer_count, p, uvec4(chain(p)));
     }
 }

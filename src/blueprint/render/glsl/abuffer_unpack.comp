@@ -13,22 +13,13 @@ layout(binding = 3, rgba16f) writeonly uniform image2D u_normal;
 layout(binding = 4, rg32i) writeonly uniform iimage2D u_ids;
 uniform float u_back_bias;
 #if TILES
-// Only the tiles of TILES x TILES pixels with a pixel this deep (the rest of the depth target
-// is cleared to 1): the first u_groups / (TILES / 8)^2 entries of the list, tiles packed as
-// x | y << 16, most layers first, AB_ROW a row of the image. Groups of 8 x 8 in rows of ROW
-// (a define).
-layout(binding = 0, r32ui) readonly uniform uimage2D u_tile_list;
-uniform uint u_groups;
+// Only the tiles with a pixel this deep, most layers first (the rest of the depth target is
+// cleared to 1)
+#define TILE_LIST_BINDING 0
+#include "abuffer_tiles.glsl"
 
 ivec2 pixel() {
-    uint g = gl_WorkGroupID.y * uint(ROW) + gl_WorkGroupID.x;
-    const uint per_tile = uint((TILES / 8) * (TILES / 8));
-    uint listed = g / per_tile;
-    uint entry = imageLoad(u_tile_list, ivec2(int(listed % uint(AB_ROW)), int(listed / uint(AB_ROW)))).x;
-    uint sub = g % per_tile;
-    ivec2 tile = ivec2(entry & 0xffffu, entry >> 16);
-    ivec2 corner = tile * TILES + ivec2(sub % uint(TILES / 8), sub / uint(TILES / 8)) * 8;
-    return g < u_groups ? corner + ivec2(gl_LocalInvocationID.xy) : ivec2(-1);
+    return listed_pixel();
 }
 #else
 ivec2 pixel() {
