@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # One device run: set up OpenGL and wheels, check a render, then time blueprint, its code-path
 # variants, streamed drawings a second and capture in compute against the graphics pipeline, the
-# textbook baseline, the extra features and vector drawings (needs the fpdf2, ezdxf and
-# defusedxml wheels in .whl as well). Models come in .models/ (copied from ../shared/models).
+# textbook baseline, the extra features and vector drawings. The wheels a bare H200 lacks come from
+#   bash ../shared/tools/device-gl-prep fpdf2==2.8.9 ezdxf==1.4.5 pikepdf==10.18.0 lxml==6.2.0 \
+#     defusedxml==0.7.1 fonttools==4.68.0 pyparsing==3.3.3
+# (vector drawings write PDF layers with pikepdf). Models come in .models/ (copied from
+# ../shared/models).
 # Run on the device as: bash benchmarks/device.sh   (carry .gl .whl .models)
 set -u
 for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
