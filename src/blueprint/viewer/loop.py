@@ -217,11 +217,13 @@ class Viewer:
             # style's highlight ink; M adds depth masking (peel until the part shows)
             highlight = np.arange(len(self.model.part_names)) == state.part
             reveal = REVEAL if state.mask else None
+        style = get_style(state.style, opts.grid)
+        opaque = style.paper is not None and style.paper[3] >= 1.0
         t0 = time.perf_counter()
         frame = self.window.renderer.render(
             self.model,
             camera,
-            style=get_style(state.style, opts.grid),
+            style=style,
             highlight=highlight,
             reveal=reveal,
             size=(rw, rh),
@@ -235,9 +237,9 @@ class Viewer:
         )
         self._drawing = None if draft else frame.image
         if frame.texture is not None:
-            self.presenter.show_texture(frame.texture)
+            self.presenter.show_texture(frame.texture, opaque)
         else:
-            self.presenter.show(frame.image)
+            self.presenter.show(frame.image, opaque)
         done = time.perf_counter()
         ms = (done - t0) * 1e3
         if done - self._shown_ms[1] >= RATE_SECONDS or not draft:

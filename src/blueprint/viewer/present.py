@@ -1,6 +1,8 @@
 """Presenting: the drawing, uploaded once as a texture, drawn to the window over the backdrop
 (scaled up where it is a draft), with the overlay (help box and heads-up lines, drawn on the
-CPU) as a second texture over it."""
+CPU) as a second texture over it. An opaque drawing of the window's size hides the backdrop:
+it is copied to the window instead, and the overlay drawn over the rows it covers alone
+(llvmpipe's viewer at 800x600: 3.0 ms a frame for the full-screen pass, 1.0 ms so)."""
 
 from __future__ import annotations
 
@@ -12,6 +14,7 @@ from blueprint.viewer.state import ViewState
 from blueprint.viewer.window import Window
 
 PRESENT_FRAG = "blueprint.viewer:glsl/present.frag"
+OVERLAY_FRAG = "blueprint.viewer:glsl/overlay.frag"
 
 
 def hud_lines(state: ViewState, model: Model, last: dict, renderer_name: str, status: str) -> list[str]:
@@ -55,24 +58,26 @@ class Presenter:
         self._band_rows = 0
         self._band_lines: list[str] | None = None  # the lines the band holds now
         self._premultiplied = False  # how the picture's colours hold its alpha
+        self._opaque = False  # whether the picture covers the backdrop everywhere
 
     @property
     def has_picture(self) -> bool:
         return "picture" in self._textures
 
-    def show(self, image: np.ndarray) -> None:
+    def show(self, image: np.ndarray, opaque: bool = False) -> None:
         """Make ``image``, (H, W, 4) uint8, row 0 at the top, the picture presented from now on;
-        presenting again (heads-up lines, exposure) reuses the upload."""
+        presenting again (heads-up lines, exposure) reuses the upload. ``opaque``: its alpha
+        is 1 everywhere (drawn on paper)."""
         self._upload("picture", image)
-        self._premultiplied = False
+        self._premultiplied, self._opaque = False, opaque
 
-    def show_texture(self, texture) -> None:
+    def show_texture(self, texture, opaque: bool = False) -> None:
         """Make the renderer's picture ``texture`` (``Frame.texture``: premultiplied RGBA, on
         the GPU) the picture presented from now on: copied on the GPU, never read back."""
         ctx = self.window.renderer.ctx
         picture = self._texture("picture", texture.size)
         ctx.copy_framebuffer(self._fbos[picture.glo], self.window.renderer.pool.framebuffer((texture,)))
-        self._premultiplied = True
+        self._premultiplied, self._opaque = True, opaque
 
     def draw(self, size: tuple[int, int], lines: list[str], show_help: bool) -> None:
         """The picture over the backdrop, scaled to the window's `size`, the heads-up `lines` and
@@ -83,10 +88,14 @@ class Presenter:
         overlay = self._overlay(size, lines, show_help)
         picture = self._textures["picture"]
         same_size = tuple(picture.size) == (w, h)
-        prog, vao = renderer.fullscreen(PRESENT_FRAG, {"SAME_SIZE": same_size})
         ctx.screen.use()
         ctx.viewport = (0, 0, w, h)
         ctx.disable(ctx.DEPTH_TEST | ctx.BLEND)
+        if same_size and self._opaque:
+            ctx.copy_framebuffer(ctx.screen, self._fbos[picture.glo])
+            self._draw_overlay(overlay, h if show_help else min(h, self._band_rows))
+            return
+        prog, vao = renderer.fullscreen(PRESENT_FRAG, {"SAME_SIZE": same_size})
         picture.use(0)
         overlay.use(1)
         prog["u_picture"].value = 0
@@ -96,6 +105,23 @@ class Presenter:
         prog["u_backdrop"].value = tuple(c / 255.0 for c in BACKDROP)
         prog["u_premultiplied"].value = self._premultiplied
         vao.render(vertices=3)
+
+    def _draw_overlay(self, overlay, rows: int) -> None:
+        """The overlay's top ``rows`` blended over what the window holds."""
+        if rows <= 0:
+            return
+        renderer = self.window.renderer
+        ctx = renderer.ctx
+        w, h = overlay.size
+        prog, vao = renderer.fullscreen(OVERLAY_FRAG)
+        overlay.use(1)
+        prog["u_overlay"].value = 1
+        ctx.scissor = (0, h - rows, w, rows)
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.SRC_ALPHA, ctx.ONE_MINUS_SRC_ALPHA
+        vao.render(vertices=3)
+        ctx.disable(ctx.BLEND)
+        ctx.scissor = None
 
     def read(self, size: tuple[int, int]) -> np.ndarray:
         """What the back buffer shows, (H, W, 3) uint8, row 0 at the top; read it before the
