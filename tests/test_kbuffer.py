@@ -215,6 +215,46 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     np.testing.assert_array_equal(direct.image, unpacked.image)
 
 
+@pytest.mark.parametrize("cap", [2, 3, 5, 7])
+def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfaces_kbuffer, monkeypatch, cap):
+    """The k-buffer pass that finds every layer of a capped frame counts the surfaces each pixel
+    let go behind its K: no counting pass runs (remaining.py), and the layers drawn and left
+    add up to those the frame draws without a cap (peeled in batches, unpacked)."""
+    from blueprint.pipeline import peel
+    from blueprint.pipeline.executor import executor_for
+
+    def no_counting_pass(*args):
+        raise AssertionError("a counting pass ran")
+
+    options = dict(size=(160, 120), supersample=1)
+    capped_some = False
+    for model, view in ((examples.gearbox(), "iso"), (nested_round(), "front"), (sphere_in_cube(), "top")):
+        surfaces_kbuffer(True)
+        camera = fit_camera(model, options["size"], view)
+        full = renderer.render(model, camera, max_layers=None, **options)
+        if full.layers <= cap:
+            continue
+        capped_some = True
+        with monkeypatch.context() as m:
+            m.setattr(peel, "layers_left", no_counting_pass)
+            capped = renderer.render(model, camera, max_layers=cap, **options)
+        assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+        assert (capped.layers, capped.layers + capped.layers_left) == (cap, full.layers), view
+    assert capped_some
+
+
+def test_a_fragment_part_of_a_held_surface_is_no_layer_left(renderer, surfaces_kbuffer):
+    """Squares at depths 0, 1 and 1 again, drawn in that order, capped at 2: the third is part
+    of the second surface held, so the frame leaves no layer behind (the peel draws two)."""
+    surfaces_kbuffer(True)
+    model = _planes([0, 1, 1])
+    options = dict(size=(64, 64), supersample=1)
+    camera = fit_camera(model, options["size"], "front")
+    assert renderer.render(model, camera, max_layers=None, **options).layers == 2
+    capped = renderer.render(model, camera, max_layers=2, **options)
+    assert (capped.layers, capped.layers_left) == (2, 0)
+
+
 def test_surfaces_an_earlier_frame_left_change_nothing(renderer, surfaces_kbuffer, monkeypatch):
     """Only a k-buffer's first surface and its count are cleared before a pass: the surfaces
     a deeper frame left behind a pixel's last one are never read as layers. A frame drawn over

@@ -23,6 +23,7 @@ INTERNAL_FORMATS: dict[str, tuple[int, str]] = {
     "rgba32ui": (4, "u4"),
     "rg32ui": (2, "u4"),
     "r32ui": (1, "u4"),
+    "rg8": (2, "f1"),
 }
 
 

@@ -286,7 +286,7 @@ class LayerCapture:
         if deepest is not None:
             return max(0, deepest - layers)
         st.draws += 1
-        return layers_left(self.r, st.mesh, st.camera, st.groups[0].capture.layer_depth(layers - 1))
+        return layers_left(self.r, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
 
     def _attribute_programs(self, st: RunState) -> dict:
         progs = {}

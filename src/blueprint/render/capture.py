@@ -171,6 +171,10 @@ class Capture:
             and r.back_bias_in_shader
             and mesh.part_count < 0xFFFF
         )
+        # every layer from one k-buffer pass through framebuffer fetch (batch is all of them),
+        # with a target left for the count
+        surfaces = surfaces and not r.kbuffer_interlock
+        surfaces = surfaces and layers is not None and layers < min(KBUFFER_MAX, r.max_draw_buffers)
         self.abuffer = None
         if (
             r.abuffer_max_bytes
@@ -198,10 +202,6 @@ class Capture:
         self.prog = self.kbuffer = self._flags = None
         # the peel's own program only where it peels: an A-buffer frame sets up none (unless
         # its lists prove too big for memory, ``draw``)
-        # every layer from one k-buffer pass through framebuffer fetch (batch is all of them),
-        # with a target left for the count
-        surfaces = surfaces and not r.kbuffer_interlock
-        surfaces = surfaces and layers is not None and layers < min(KBUFFER_MAX, r.max_draw_buffers)
         self._peel_with = (camera, batch, face_ids, selected, use_kbuffer, surfaces)
         if self.abuffer is None:
             self._set_up_peel()
@@ -292,16 +292,15 @@ class Capture:
         return None
 
     def deepest(self) -> int | None:
-        """The most layers any pixel has where the A-buffer captured them (None otherwise): the
-        layers a capped peel left, without a counting pass."""
-        return self.abuffer.deepest() if self.abuffer is not None else None
-
-    def layer_depth(self, layer: int):
-        """Layer ``layer``'s depth texture, unpacked first where the k-buffer left it in its
-        surfaces (counting the layers left reads it)."""
+        """The most layers any pixel has where the A-buffer captured them, or where a k-buffer
+        found every layer of the frame in one pass (its surfaces held and let go, coincident
+        ones apart), once layer 0 is drawn; None otherwise: the layers a capped peel left,
+        without a counting pass."""
+        if self.abuffer is not None:
+            return self.abuffer.deepest()
         if self.kbuffer is not None and not self.kbuffer.unpacks:
-            self.kbuffer.unpack_held(self.gb, layer)
-        return self.gb.layer_depth(layer)
+            return self.kbuffer.deepest
+        return None
 
     def settle(self) -> None:
         """Read a deferred A-buffer's counts (``abuffer.Overflow`` where it had too little
@@ -377,8 +376,9 @@ class _KBuffer:
 
     Without ``unpack`` (one pass finds every layer of the frame, through framebuffer fetch:
     ``find_all``) the layers stay in the surfaces, and the pass writes how many each pixel holds
-    into one more target instead (``count``, read back: the covered pixels of every layer and the
-    tiles each covers): on llvmpipe the unpacking cost as much as a third of a frame's geometry,
+    into one more target instead, with the surfaces it let go behind them (``count``, read back:
+    the covered pixels of every layer, the tiles each covers and the layers a capped frame
+    leaves): on llvmpipe the unpacking cost as much as a third of a frame's geometry,
     a full-screen pass counting the surfaces a fifth of it, and readers of the surfaces fetch a
     pixel's depth, normal and IDs at once."""
 
@@ -386,17 +386,17 @@ class _KBuffer:
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
         self.r, self.prog, self.behind, self.k, self.unpacks = r, prog, behind, k, unpack
         self.back_bias = BACK_OFFSET / (1 << 24)  # kbuffer.glsl's kb_depth
-        self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG, {"HELD": not unpack})
+        self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG)
         self.unpack["u_surfaces"].value = units.KBUFFER
         self.unpack["u_back_bias"].value = self.back_bias
         self._targets: dict[tuple[int, int], tuple] = {}
-        # without unpack: the layers each pixel holds (r8, count / 255), the pixels each layer
-        # covers, and the most layers in each tile (``TILE`` pixels a side, row 0 at the bottom)
+        # without unpack: the layers each pixel holds and let go behind them (rg8, count / 255),
+        # the pixels each layer covers, the most layers in each tile (``TILE`` pixels a side,
+        # row 0 at the bottom) and the most any pixel held and let go
         self.count = None
         self.layer_pixels: list[int] = []
         self.tile_layers: np.ndarray | None = None
-        if not unpack:
-            self.unpack["u_count"].value = units.INPUTS
+        self.deepest = 0
 
     def _surfaces(self, size: tuple[int, int]) -> tuple:
         """(targets, their framebuffer (with the count's target, without unpack), the one of
@@ -407,7 +407,7 @@ class _KBuffer:
         if held is None:
             pool, name = self.r.pool, f"kbuffer.{size[0]}x{size[1]}"
             surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(self.k))
-            count = None if self.unpacks else pool.texture(f"{name}.count", size, "r8")
+            count = None if self.unpacks else pool.texture(f"{name}.count", size, "rg8")
             held = self._targets[size] = (
                 surfaces,
                 pool.framebuffer(surfaces if count is None else (*surfaces, count)),
@@ -445,29 +445,19 @@ class _KBuffer:
             mesh.vao(prog).render()
 
     def find_all(self, mesh, gb: GBuffer) -> int:
-        """Every layer into the surfaces in one pass, with the layers each pixel holds, read back
-        (``count``, ``layer_pixels``, ``tile_layers``). Returns the draw calls."""
+        """Every layer into the surfaces in one pass, with the layers each pixel holds and let
+        go, read back (``count``, ``layer_pixels``, ``tile_layers``, ``deepest``). Returns the
+        draw calls."""
         self._find(mesh, gb, 0)
         w, h = gb.size
         self.count = self._surfaces(gb.size)[3]
-        held = np.frombuffer(self.count.read(), np.uint8).reshape(h, w)
+        counts = np.frombuffer(self.count.read(), np.uint8).reshape(h, w, 2)
+        held = np.ascontiguousarray(counts[..., 0])
         self.layer_pixels = [int(np.count_nonzero(held > k)) for k in range(self.k)]
         self.tile_layers = tile_max(held)
+        # only pixels holding K let surfaces go; layers are nested (a pixel holding k + 1 holds k)
+        self.deepest = sum(1 for pixels in self.layer_pixels if pixels) + int(counts[..., 1].max())
         return 1
-
-    def unpack_held(self, gb: GBuffer, layer: int) -> None:
-        """Layer ``layer`` of the last ``find_all`` into the G-buffer, where the count says a
-        pixel holds it."""
-        ctx = self.r.ctx
-        gb.clears[layer % 2].use()
-        gb.clears[layer % 2].clear(depth=1.0)
-        gb.fbos[layer % 2].use()
-        self.surfaces[layer].use(units.KBUFFER)
-        self.count.use(units.INPUTS)
-        self.unpack["u_held"].value = (layer + 0.5) / 255.0
-        ctx.enable(ctx.DEPTH_TEST)
-        self.unpack_vao.render(vertices=3)
-        ctx.disable(ctx.DEPTH_TEST)
 
     def draw(self, mesh, gb: GBuffer, layer: int, query) -> int:
         ctx = self.r.ctx

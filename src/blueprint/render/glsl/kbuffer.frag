@@ -9,7 +9,12 @@
 // stays. With IDS_ONLY (through framebuffer fetch) a surface is its depth and face alone
 // (kbuffer.glsl), for passes that need no normals. With COUNT (through framebuffer fetch) one
 // more target, after the K surfaces, holds how many surfaces the pixel holds, as count / 255
-// (r8), for passes that read the surfaces where they lie instead of unpacked. With PEEL the
+// (r), for passes that read the surfaces where they lie instead of unpacked, and how many the
+// pixel let go behind its K (g, saturating at 255): every fragment behind all K that is part
+// of none, and every surface pushed out behind the K-th, one each; the most of these is the
+// layers a frame capped at K leaves behind, without a pass to count them (remaining.py: a third
+// of llvmpipe's crank-case frame). As that pass counts, coincident surfaces count apart. With
+// PEEL the
 // pass finds the layers behind those of an earlier one (u_prev_depth); the first pass is built
 // without (a software rasteriser reads the previous depth under a uniform branch too: 22 % of
 // llvmpipe's first pass).
@@ -82,7 +87,7 @@ layout(location = 6) inout KB_T o_s6;
 layout(location = 7) inout KB_T o_s7;
 #endif
 #if COUNT
-layout(location = K) out vec4 o_count;
+layout(location = K) inout vec4 o_count;
 #endif
 #endif
 
@@ -110,7 +115,7 @@ void main() {
     KB_T c = kb_pack(z, !gl_FrontFacing, n, face, v_part);
     float cb = kb_depth(c, u_back_bias);
     KB_T s[K];
-    bool same;
+    bool same, merged;
     int held;
 #if INTERLOCK
     // the critical section is entered by every fragment, in main's own flow (the extension's
@@ -139,7 +144,7 @@ void main() {
 #if K > 7
     s[7] = imageLoad(u_s7, p);
 #endif
-    int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held);
+    int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held, merged);
     if (keep && at < K) {
         imageStore(u_s0, p, KB_SHIFTED(s, c, at, held, same, 0, 0));
 #if K > 1
@@ -191,10 +196,19 @@ void main() {
 #if K > 7
     s[7] = o_s7;
 #endif
-    int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held);
+    int at = kb_place(s, eye_depth(z), cb, u_back_bias, u_peel_eps, same, held, merged);
+#if COUNT
+    // a fragment that goes nowhere writes its pixel's surfaces back as they are (KB_SHIFTED
+    // keeps them all for at == K): on llvmpipe a discard saves nothing, it only masks the lanes
+    vec4 count = o_count;
+    float kept = at == K ? count.r : float(min(held, K)) / 255.0;
+    float let_go = count.g * 255.0 + (held > K && !merged ? 1.0 : 0.0);
+    o_count = vec4(kept, min(let_go, 255.0) / 255.0, 0.0, 0.0);
+#else
     if (at == K) {
         discard;
     }
+#endif
     o_s0 = KB_SHIFTED(s, c, at, held, same, 0, 0);
 #if K > 1
     o_s1 = KB_SHIFTED(s, c, at, held, same, 1, 0);
@@ -216,9 +230,6 @@ void main() {
 #endif
 #if K > 7
     o_s7 = KB_SHIFTED(s, c, at, held, same, 7, 6);
-#endif
-#if COUNT
-    o_count = vec4(float(min(held, K)) / 255.0);
 #endif
 #endif
 }

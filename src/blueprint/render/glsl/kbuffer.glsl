@@ -76,9 +76,11 @@ ivec2 kb_ids(uvec4 s) {
 // Where a fragment ``c`` (biased depth ``cb``, eye depth of its raw depth ``ze``) goes among a
 // pixel's held surfaces ``s``, by the rules of peel.frag: before the first surface it lies in
 // front of (taking that surface's place when it lies within the tolerance behind: ``same``),
-// or after them all; K where it is part of a held surface or behind all K. ``held`` is how
-// many surfaces the pixel holds after it goes in.
-int kb_place(KB_T s[K], float ze, float cb, float back_bias, float eps, out bool same, out int held) {
+// or after them all; K where it is part of a held surface (``merged``) or behind all K.
+// ``held`` is how many surfaces the pixel holds after it goes in (K + 1: one is let go).
+int kb_place(
+    KB_T s[K], float ze, float cb, float back_bias, float eps, out bool same, out int held, out bool merged
+) {
     // The surfaces held come first, and the place after them is empty: only the first target
     // is cleared before a pass, the rest of a pixel's targets are read only up to there.
     int count = K;
@@ -111,6 +113,7 @@ int kb_place(KB_T s[K], float ze, float cb, float back_bias, float eps, out bool
     // lies within the tolerance behind
     same = !part_of_one && at < count && eye_depth(raw) <= eye_depth(cb) + eps;
     held = same ? count : count + 1;
+    merged = part_of_one;
     return part_of_one ? K : at;
 }
 
