@@ -27,7 +27,7 @@ from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.peel import LayerCapture
 from blueprint.render.abuffer import NODE_BYTES, ABuffer
-from blueprint.render.capture import Capture, gbuffer
+from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
 from blueprint.scene.camera import fit_camera
 
 # one step of the 24-bit depth buffer: the peel reads its depths back from one, the A-buffer
@@ -201,6 +201,28 @@ def test_used_only_where_it_pays(renderer, abuffer):
     assert Capture(renderer, mesh, camera, gb, batch=5, selected=parts).abuffer is None
     ids = gbuffer(renderer.pool, (64, 64), "test.ab.ids", normals=False)
     assert Capture(renderer, renderer.mesh(model, None), camera, ids, batch=5).abuffer is None
+
+
+def test_after_a_kbuffer_pass_that_holds_every_layer(renderer, abuffer, monkeypatch):
+    """With ``abuffer_after_kbuffer`` (llvmpipe) a capped frame whose layers one k-buffer pass
+    finds, for readers that read them where they lie (``surfaces``), is drawn so; every other
+    goes to the A-buffer."""
+    if not renderer.framebuffer_fetch or renderer.max_draw_buffers < KBUFFER_MAX:
+        pytest.skip("one k-buffer pass leaves a frame's layers to readers through framebuffer fetch alone")
+    model = examples.gearbox()
+    mesh = renderer.mesh(model, 30.0)
+    camera = fit_camera(model, (64, 64))
+    gb = gbuffer(renderer.pool, (64, 64), "test.ab")
+    abuffer(True)
+    monkeypatch.setattr(renderer, "kbuffer", True)
+    monkeypatch.setattr(renderer, "kbuffer_density", 0.0)
+    for after in (True, False):
+        monkeypatch.setattr(renderer, "abuffer_after_kbuffer", after)
+        held = Capture(renderer, mesh, camera, gb, batch=5, surfaces=True)
+        assert (held.abuffer is None) == after and (held.kbuffer is not None) == after
+        assert held.kbuffer is None or not held.kbuffer.unpacks
+        for batch, surfaces in ((5, False), (KBUFFER_MAX, True), (None, True)):
+            assert Capture(renderer, mesh, camera, gb, batch=batch, surfaces=surfaces).abuffer is not None
 
 
 def _tiled_layers(renderer, mesh, camera, size, tiles: bool) -> tuple[list, Capture]:

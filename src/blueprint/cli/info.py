@@ -31,6 +31,8 @@ def info(model, as_json):
             if r.abuffer_max_bytes:
                 least = r.abuffer_min_layers
                 frames = "every frame" if least <= 1 else f"from {least} layers a frame"
+                if r.abuffer_after_kbuffer and r.kbuffer:
+                    frames += " that one k-buffer pass does not hold"
                 data["abuffer"] = (
                     f"every layer in one geometry pass, {frames}, "
                     f"lists up to {r.abuffer_max_bytes / 2**30:.1f} GiB"

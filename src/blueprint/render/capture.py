@@ -127,7 +127,8 @@ class Capture:
     coincident front faces (see ``BACK_OFFSET``); ID-only passes break no ties unless asked.
     ``batch`` > 1 (the layers the frame draws at most; None: all of them) lets one geometry
     pass find that many layers where the driver allows (``_KBuffer``), or every layer
-    (``ABuffer``, from ``abuffer_min_layers``). ``selected`` (P,) bool draws only those parts.
+    (``ABuffer``, from ``abuffer_min_layers``, after a k-buffer that finds them all at once
+    where ``abuffer_after_kbuffer``). ``selected`` (P,) bool draws only those parts.
     ``tiles``: an A-buffer also finds which tiles each layer covers (``tile_layers``).
     ``defer``: an A-buffer's counts are read only when asked for (``abuffer.Overflow``);
     ``unpack`` false: an A-buffer unpacks no layer into ``gb`` (its caller reads the lists);
@@ -179,6 +180,7 @@ class Capture:
         if (
             r.abuffer_max_bytes
             and (layers is None or layers >= r.abuffer_min_layers)
+            and not (r.abuffer_after_kbuffer and use_kbuffer and surfaces)
             and normals
             and selected is None
             and r.back_bias_in_shader

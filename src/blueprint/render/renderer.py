@@ -30,7 +30,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks
 
 # llvmpipe's A-buffer frames: from this many layers (see LayerRenderer.abuffer_min_layers)
-ABUFFER_SOFTWARE_MIN_LAYERS = 16
+ABUFFER_SOFTWARE_MIN_LAYERS = 4
 
 
 @dataclass
@@ -141,11 +141,17 @@ class LayerRenderer(Device):
         # faster even for one layer, whose geometry and edge passes the narrow graphics
         # pipeline draws at the whole G-buffer's size (benchmarks/layers.py, supersample 2: the
         # rocker arm at 512x512 0.79 against 1.32 ms, cycloidal at 2048x2048 13.6 against 44.0,
-        # 2CylinderEngine 11.4 against 28.9); llvmpipe pays for sorting every fragment on the
-        # CPU, and was faster only where many layers are drawn (2CylinderEngine, 1024x1024,
-        # all 40 layers: 14.8 against 27.5 CPU seconds; 512x512, 8 layers: 1.62 against 1.39;
-        # the bunny, 5 layers: 0.90 against 0.75)
+        # 2CylinderEngine 11.4 against 28.9). llvmpipe lists and sorts every fragment however
+        # few layers are drawn, so there a peel of one layer wins (2CylinderEngine 1024x1024,
+        # supersample 2: 0.26 against 0.75 s) and from four the A-buffer (five layers: 0.93
+        # against 0.59 s; eight 1.38 against 0.65; the rocker arm 0.42 against 0.19 and 0.59
+        # against 0.20; the bunny 0.85 against 0.27), two and three layers a tie by model
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 1
+        # ...unless one k-buffer pass finds every layer of the frame, read where they lie
+        # (Capture's ``surfaces``): there llvmpipe draws faster so (cycloidal 512x512 and
+        # 1024x1024, supersample 2, four layers: 0.15 against 0.30 s, 0.40 against 0.90;
+        # 2CylinderEngine 512x512: 0.09 against 0.18)
+        self.abuffer_after_kbuffer = self.software
         self.abuffer_room: dict[tuple[int, int], int] = {}
         # Fragments of depth and face alone, the rest made by the resolve for those kept as
         # layers, where the graphics pipeline is narrower than compute (image passes in compute:
