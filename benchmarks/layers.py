@@ -32,7 +32,7 @@ def main() -> None:
     rows = []
     with Renderer() as r:
         wanted = r.abuffer_max_bytes or default_max_bytes(r)
-        min_layers = r.abuffer_min_layers
+        min_layers, after_kbuffer = r.abuffer_min_layers, r.abuffer_after_kbuffer
         for path in args.models:
             model = load_model(path)
             for size in args.size:
@@ -40,6 +40,8 @@ def main() -> None:
                 for capture in args.capture:
                     r.abuffer_max_bytes = wanted if capture == "abuffer" else 0
                     r.abuffer_min_layers = 1 if capture == "abuffer" else min_layers
+                    # the A-buffer's rows are its own, not a k-buffer's that holds every layer
+                    r.abuffer_after_kbuffer = after_kbuffer and capture != "abuffer"
                     for layers in args.layers:
                         options = dict(
                             size=(size, size), supersample=args.supersample, max_layers=layers or None
