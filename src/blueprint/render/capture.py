@@ -388,9 +388,11 @@ class _KBuffer:
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
         self.r, self.prog, self.behind, self.k, self.unpacks = r, prog, behind, k, unpack
         self.back_bias = BACK_OFFSET / (1 << 24)  # kbuffer.glsl's kb_depth
-        self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG)
-        self.unpack["u_surfaces"].value = units.KBUFFER
-        self.unpack["u_back_bias"].value = self.back_bias
+        # the pass that unpacks a layer into the G-buffer, where layers are unpacked at all
+        if unpack:
+            self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG)
+            self.unpack["u_surfaces"].value = units.KBUFFER
+            self.unpack["u_back_bias"].value = self.back_bias
         self._targets: dict[tuple[int, int], tuple] = {}
         # without unpack: the layers each pixel holds and let go behind them (rg8, count / 255),
         # the pixels each layer covers, the most layers in each tile (``TILE`` pixels a side,
