@@ -2,9 +2,8 @@
 
 Every matrix product of a drawing is an (N, 3) or (N, 4) array by a 3 x 3 or 4 x 4 matrix: too
 little work to share out, but OpenBLAS wakes its threads for it all the same, and they spin a
-while after each product, on the cores the software rasteriser's threads need (llvmpipe, 2
-cores, file to SVG at 512 x 512, CPU s: stanford-bunny 0.35 -> 0.29, 2CylinderEngine 1.17 ->
-0.94; the same drawings, byte for byte, as a row of a product is one thread's either way).
+while after each product, on the cores the software rasteriser's threads need (the drawings
+stay the same byte for byte, as a row of a product is one thread's either way).
 threadpoolctl sets the limit where it can; an environment set up before it was a dependency
 draws as before, only slower.
 """

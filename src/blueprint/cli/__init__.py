@@ -3,7 +3,7 @@
 Commands live in the modules of this package by subject and share ``blueprint.cli.options``;
 ``main`` is the ``blueprint`` console script (``python -m blueprint.cli`` runs it too). A
 command's module is imported only when that command runs: ``blueprint --help`` lists them from
-``COMMANDS`` without loading the renderer (0.69 s a help before, most of it imports).
+``COMMANDS`` without loading the renderer, whose imports a help does not need.
 """
 
 from __future__ import annotations
@@ -110,8 +110,8 @@ def cli() -> None:
 def main(argv: list[str] | None = None) -> None:
     """Entry point: user errors become one line on stderr and exit code 2."""
     # Set before NumPy is imported, unless the user chose: the command's matrix products are
-    # (N, 3) by 3 x 3, held to one BLAS thread anyway (blueprint.blas), and OpenBLAS starting a
-    # thread a core at NumPy's import took 0.05 CPU s of every process.
+    # (N, 3) by 3 x 3, held to one BLAS thread anyway (blueprint.blas), so OpenBLAS starting a
+    # thread a core at NumPy's import would only cost every process time.
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     _light_exit()
     run(cli, argv, "blueprint")
@@ -120,8 +120,8 @@ def main(argv: list[str] | None = None) -> None:
 @functools.cache
 def _light_exit() -> None:
     """At the interpreter's exit (not when a caller in this process goes on), freeze what is
-    left: Python's collections at shutdown walk every object the imports made, 0.035 CPU s of
-    a drawing's process, only to free memory the OS takes back anyway."""
+    left: Python's collections at shutdown walk every object the imports made, only to free
+    memory the OS takes back anyway."""
     atexit.register(gc.freeze)
 
 

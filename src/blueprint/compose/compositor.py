@@ -117,8 +117,8 @@ class Compositor:
         if style.paper is None:
             fbo.clear(0.0, 0.0, 0.0, 0.0)
         elif not style.grid:
-            # plain paper is one colour: a clear (0.4 ms of CPU at 800x600 on llvmpipe, the pass
-            # 6.4); paper.glsl's premultiplication, in float32
+            # plain paper is one colour: a clear, far cheaper than a full-screen pass on a
+            # software rasteriser; paper.glsl's premultiplication, in float32
             paper = np.asarray(style.paper, np.float32)
             fbo.clear(*(float(v) for v in paper[:3] * paper[3]), float(paper[3]))
         else:

@@ -240,10 +240,8 @@ def png_bytes(image: np.ndarray) -> bytes:
     top, as the bytes of a PNG file.
 
     Encoded here with zlib rather than by Pillow: importing Pillow cost a small drawing's
-    process more than the whole encoding (about 40 against 12 ms for 512x512 RGBA), and rows
-    left unfiltered compress drawings (flat paper, thin lines) smaller than Pillow's adaptive
-    filters at its default level (9.9 against 13.5 KB for the 512x512 ring of
-    benchmarks/startup.py).
+    process more than the whole encoding, and rows left unfiltered compress drawings (flat
+    paper, thin lines) smaller than Pillow's adaptive filters at its default level.
     """
     image = np.asarray(image)
     channels = 1 if image.ndim == 2 else (image.shape[2] if image.ndim == 3 else 0)

@@ -58,7 +58,7 @@ def create_context(backend: str | None = None, device: int | None = None):
     extra = {} if device is None else {"device_index": int(device)}
     if backend == "egl":
         # the libraries by soname, which is what glcontext would find: its own lookup runs
-        # ldconfig twice (ctypes.util.find_library), some 7 ms of every start
+        # ldconfig twice (ctypes.util.find_library) at every start
         # (GLCONTEXT_LINUX_LIBGL and GLCONTEXT_LINUX_LIBEGL still override these)
         extra.update(libgl=_LIBGL, libegl=_LIBEGL)
     reason = ""

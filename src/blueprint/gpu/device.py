@@ -90,8 +90,8 @@ class Device:
         self._fullscreen: dict[int, object] = {}
         self.info = gl_info(self.ctx)
         self.max_texture = int(self.info["max_texture_size"])
-        # on GPUs built for compute (H100, H200) only a few cores rasterise, while compute
-        # shaders run on all of them
+        # on GPUs built for compute only a few cores rasterise, while compute shaders run on
+        # all of them
         self.software = any(name in self.info["renderer"].lower() for name in ("llvmpipe", "softpipe"))
         self.use_compute = self.ctx.version_code >= 430 and not self.software
         ext = self.ctx.extensions

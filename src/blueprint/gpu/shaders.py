@@ -28,7 +28,7 @@ def package_files(package: str):
     package imported from a zip archive).
 
     Found from the package's import spec: importlib.resources would bring tempfile, shutil and
-    zipfile into every drawing's start (about 30 ms of CPU here with its first lookup).
+    zipfile into every drawing's start.
     """
     spec = importlib.util.find_spec(package)
     for location in (spec.submodule_search_locations or []) if spec is not None else []:

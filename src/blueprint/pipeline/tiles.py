@@ -1,9 +1,9 @@
 """Passes drawn only over the tiles where a depth layer has something.
 
 A software rasteriser shades every pixel a full-screen triangle covers, whatever the layer
-holds there: on llvmpipe an edge pass over a layer that covers a thousandth of the screen
-cost two thirds of one over a layer that covers half of it. Where an operation's result can
-be non-zero only near what its input holds (``Op.support`` and ``Op.reach``), the executor
+holds there, so a pass over a layer that covers little of the screen costs nearly as much as
+one over a layer that covers much of it. Where an operation's result can be non-zero only
+near what its input holds (``Op.support`` and ``Op.reach``), the executor
 reads the layer's coverage back (cheap where the GPU is the CPU), finds the tiles it touches,
 widens them by the pass's reach and draws the pass as rectangles over those tiles alone; the
 rest of its target is cleared. GPUs keep drawing full-screen passes (a read-back a layer would
@@ -46,8 +46,8 @@ def rectangles(tiles: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     along a row of ``tiles`` over a target of ``size`` (W, H) pixels; row 0 is the bottom row of
     the target, as GL stores it."""
     w, h = size
-    # (np.pad, np.diff and np.argwhere took a fiftieth of llvmpipe's small frames in Python
-    # overhead alone: a tile pass a layer calls this)
+    # (not np.pad, np.diff and np.argwhere, whose Python overhead counts in small frames: a tile
+    # pass a layer calls this)
     rows, columns = tiles.shape
     padded = np.zeros((rows, columns + 2), np.int8)
     padded[:, 1:-1] = tiles

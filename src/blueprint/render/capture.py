@@ -36,16 +36,10 @@ REVEAL_FRAG = "blueprint.render:glsl/reveal.frag"
 BACK_OFFSET = 16.0
 # Layers one k-buffer pass finds at most: the targets a fragment shader may write.
 KBUFFER_MAX = 8
-# The k-buffer saves geometry passes but adds a full-screen pass a layer: on llvmpipe it paid
-# from about this many triangles per G-buffer pixel (8 layers at 1024x1024 supersampled:
-# featuretype, 0.003, 16 % slower; rocker arm, 0.02, 8 % slower; bunny, 0.066, 21 % faster;
-# 2CylinderEngine, 0.12, 27 % faster; 5 layers of the rocker arm at 800x600, 0.04, 16 % faster).
+# The k-buffer saves geometry passes but adds a full-screen pass a layer: under framebuffer
+# fetch it paid from about this many triangles per G-buffer pixel (benchmarks/variants.py).
 KBUFFER_MIN_DENSITY = 0.03
-# Under fragment shader interlock (the H200) it paid only from about this many: 5 layers of the
-# 377K-triangle cycloidal at 0.36 triangles per G-buffer pixel, 9.4 against 11.6 ms a frame
-# and 8.0 against 10.0, at 1.44, 4.3 against 5.8 ms; the 20K-triangle rocker arm at 0.076,
-# 2.3 against 2.7 ms but 4.4 against 2.9 at 0.019; the bunny, 5 layers at 0.067, 5.5 against
-# 4.1 ms; the cycloidal, all 36 layers at 0.09, 144 against 116 ms (benchmarks/variants.py).
+# Under fragment shader interlock it paid only from about this many (likewise measured).
 KBUFFER_INTERLOCK_MIN_DENSITY = 0.3
 # The k-buffer's targets hold 16 bytes a pixel a layer (8 for triangle IDs alone); above this
 # many bytes the layers are peeled a pass each instead (8 layers at 2048x2048 supersampled
@@ -380,9 +374,9 @@ class _KBuffer:
     ``find_all``) the layers stay in the surfaces, and the pass writes how many each pixel holds
     into one more target instead, with the surfaces it let go behind them (``count``, read back:
     the covered pixels of every layer, the tiles each covers and the layers a capped frame
-    leaves): on llvmpipe the unpacking cost as much as a third of a frame's geometry,
-    a full-screen pass counting the surfaces a fifth of it, and readers of the surfaces fetch a
-    pixel's depth, normal and IDs at once."""
+    leaves): on a software rasteriser the unpacking and a full-screen pass counting the
+    surfaces cost much of a frame's geometry, and readers of the surfaces fetch a pixel's depth,
+    normal and IDs at once."""
 
     def __init__(self, r, prog, behind, k: int, unpack: bool = True) -> None:
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)

@@ -1,10 +1,10 @@
 """The A-buffer's geometry pass in compute: triangles binned to tiles, each tile rasterised by a
 workgroup (glsl/abuffer_raster.comp), every fragment listed as the fragment shader lists it.
 
-Where the graphics pipeline runs on a few of the GPU's cores and compute on all of them (an
-H200 draws triangles on a couple of its TPCs), the geometry pass is bound by what its fragments
-write from those few (``benchmarks/capture_cost.py``); the same fragments listed from compute
-cost less (``benchmarks/compute_capture.py``). Coverage follows the rasteriser's rules (corners
+Where the graphics pipeline runs on a few of the GPU's cores and compute on all of them, the
+geometry pass is bound by what its fragments write from those few
+(``benchmarks/capture_cost.py``); the same fragments listed from compute cost less
+(``benchmarks/compute_capture.py``). Coverage follows the rasteriser's rules (corners
 snapped to 1/256 pixel, pixel centres, the top-left rule, exact edge tests) and a fragment's
 depth is the plane through the projected corners at the pixel centre: the true plane's, as
 ``fragment_depth.glsl`` takes it where the driver snaps depths. There is no clipping: a view is

@@ -109,15 +109,10 @@ class LayerRenderer(Device):
         super().__init__(ctx)
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
         # The back-face tie-break as one draw writing depth, or two culled draws with a polygon
-        # offset: one draw measured faster on llvmpipe and on the H100 in 3 of 4 cases
-        # (benchmarks/variants.py), and never more than 10 % slower.
+        # offset: one draw, which measured faster in most cases (benchmarks/variants.py)...
         self.back_bias_in_shader = True
         # ...except for big frames of dense models on a GPU: a draw writing depth loses early
-        # depth tests, and there hidden fragments dominate. On the H200 (benchmarks/variants.py,
-        # 2048x2048 supersampled twice, compute image passes) two culled draws took 341 against
-        # 378 ms (cycloidal, 377K triangles, 36 layers) and 231 against 262 (2CylinderEngine,
-        # 121K, 40 layers), 107 against 119 for 5 layers; for the 70K-triangle bunny 90 against
-        # 86, and at 512x512 one draw won or tied but for 2CylinderEngine (31 against 32 ms).
+        # depth tests, and there hidden fragments dominate.
         # (triangles, G-buffer pixels) from which two culled draws are used; None: never.
         self.culled_tie_break_from = None if self.software else (100_000, 1 << 22)
         # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
@@ -134,47 +129,33 @@ class LayerRenderer(Device):
         # Every layer from one geometry pass (render.abuffer): the most bytes its lists may
         # take a frame (0: layers are peeled), and the fragments the last frame of each G-buffer
         # size drew, the room the next one starts with. Its drawings are checked against the
-        # peel's on llvmpipe (the tests) and on an H200 (the same tests, and five models at
-        # three sizes: at most 9 of 307200 pixels apart, where faces tie in depth).
+        # peel's by the tests, on software and GPU drivers alike.
         self.abuffer_max_bytes = default_max_bytes(self) if self.ctx.version_code >= 430 else 0
-        # ...for frames of at least this many layers (None: all of them): on the H200 it was
+        # ...for frames of at least this many layers (None: all of them): on a GPU it is
         # faster even for one layer, whose geometry and edge passes the narrow graphics
-        # pipeline draws at the whole G-buffer's size (benchmarks/layers.py, supersample 2: the
-        # rocker arm at 512x512 0.79 against 1.32 ms, cycloidal at 2048x2048 13.6 against 44.0,
-        # 2CylinderEngine 11.4 against 28.9). llvmpipe lists and sorts every fragment however
-        # few layers are drawn, so there a peel of one layer wins (2CylinderEngine 1024x1024,
-        # supersample 2: 0.26 against 0.75 s) and from four the A-buffer (five layers: 0.93
-        # against 0.59 s; eight 1.38 against 0.65; the rocker arm 0.42 against 0.19 and 0.59
-        # against 0.20; the bunny 0.85 against 0.27), two and three layers a tie by model
+        # pipeline draws at the whole G-buffer's size; llvmpipe lists and sorts every fragment
+        # however few layers are drawn, so there it pays only from a few layers a frame
+        # (benchmarks/layers.py)
         self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 1
         # ...unless one k-buffer pass finds every layer of the frame, read where they lie
-        # (Capture's ``surfaces``): there llvmpipe draws faster so (cycloidal 512x512 and
-        # 1024x1024, supersample 2, four layers: 0.15 against 0.30 s, 0.40 against 0.90;
-        # 2CylinderEngine 512x512: 0.09 against 0.18)
+        # (Capture's ``surfaces``): there llvmpipe draws faster so
         self.abuffer_after_kbuffer = self.software
         self.abuffer_room: dict[tuple[int, int], int] = {}
         # Fragments of depth and face alone, the rest made by the resolve for those kept as
         # layers, where the graphics pipeline is narrower than compute (image passes in compute:
-        # a GPU): on the H200 the geometry pass is bound by the bytes its fragments write
-        # (benchmarks/capture_cost.py). There, cycloidal at 4096², all 36 layers: geometry
-        # pass 21.1 -> 15.5 ms, sort 2.8 -> 4.2 ms, a streamed 2048² frame 30.4 -> 27.2 ms
-        # (fragments of their face alone, each one's depth found by the sort from its face:
-        # 36.3 ms). llvmpipe's compute is its fragment stage.
+        # a GPU): there the geometry pass is bound by the bytes its fragments write
+        # (benchmarks/capture_cost.py). llvmpipe's compute is its fragment stage.
         self.abuffer_slim = self.use_compute
         # The A-buffer's fragments listed by a rasteriser in compute (render.raster) instead of
         # the graphics pipeline's, in views that need no clipping, for G-buffers of at least
-        # this many pixels (None: never). On the H200 (where the oracle tests pass with it:
-        # test_layers_oracle's a-buffer-compute), streamed drawings, all layers, took 14.3-15.0
-        # against 25.6 ms at 2048² and supersample 2 (cycloidal, 36 layers), 10.1 against 17.5
-        # (2CylinderEngine, 40); at 2048² G-buffers 4.6 against 6.6 ms (cycloidal at 1024²,
-        # supersample 2), 3.6 against 4.5 (the engine) and a tie for the rocker arm (1.6 ms);
-        # below it lost (the engine at 512², supersample 2: 1.95 against 1.7 ms; the crank case,
-        # 512², 5 layers: 0.57 against 0.33). llvmpipe's compute is its fragment stage, and slower.
+        # this many pixels (None: never): from there it measured faster on a GPU, below it
+        # slower (benchmarks/compute_capture.py; test_layers_oracle's a-buffer-compute checks
+        # it). llvmpipe's compute is its fragment stage, and slower.
         self.compute_capture_from = 2048 * 2048 if self.use_compute else None
         self.compute_raster = ComputeRaster(self)
         # Where the driver's depths come from snapped corners, every geometry pass takes its
-        # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): on the H200
-        # coincident faces of one part otherwise peeled as two layers.
+        # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): coincident faces
+        # of one part would otherwise peel as two layers.
         self.exact_depth = self.snapped_depth
 
     def release(self) -> None:

@@ -33,7 +33,7 @@ _BASES = {
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.cross`` of two 3-vectors, the same products and differences, without its general
-    machinery (75 us a call on a slow CPU: every new camera of a turntable's frames makes two)."""
+    machinery, which every new camera of a turntable's frames pays twice."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 

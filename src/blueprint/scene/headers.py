@@ -23,7 +23,7 @@ _PLY_SIZES = {
 # the fewest bytes an ASCII value takes: a digit and a separator
 _ASCII_VALUE = 2
 # levels of nodes a glTF scene, or of components a 3MF object, may nest: CAD assemblies go a
-# dozen or two deep, and trimesh's 3MF loader takes time cubic in the depth (40 s for 500)
+# dozen or two deep, and trimesh's 3MF loader takes time cubic in the depth
 NODE_DEPTH_LIMIT = 64
 
 

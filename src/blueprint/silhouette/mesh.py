@@ -76,7 +76,7 @@ def _orient_merged(
     num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """``_orient`` by merging trees of faces, with NumPy alone (scipy, which the search needs,
-    takes 0.4 s of CPU time to import): every round, each tree's root hangs under the lowest
+    is slow to import): every round, each tree's root hangs under the lowest
     root that a pair joins it to, and the trees are flattened by pointer jumping, each face
     keeping its flip relative to its root; a few rounds on real meshes. None where a pair's
     parity disagrees with the flips found: a surface that cannot be wound consistently, whose
@@ -178,7 +178,7 @@ def _to_roots(parent: np.ndarray, flip: np.ndarray) -> np.ndarray:
 def _distances(reach, root: int) -> np.ndarray:
     """(N,) float64 breadth-first distances of every node of the sparse graph ``reach`` from
     ``root`` (inf where it does not reach): ``csgraph.shortest_path(reach, method="D",
-    unweighted=True, indices=root)``, from one breadth-first search, five times faster."""
+    unweighted=True, indices=root)``, from one breadth-first search, faster."""
     from scipy.sparse import csgraph
 
     order, predecessor = csgraph.breadth_first_order(reach, root, directed=True, return_predecessors=True)

@@ -47,7 +47,7 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
     size = degree[junction]
     # every pair (i < j) of half-ends at every junction
     first_i, first_j = [], []
-    # the sizes present, from a count (np.unique without indices imports numpy.ma: 20 ms a process)
+    # the sizes present, from a count (np.unique without indices imports numpy.ma, slow to import)
     for k in np.flatnonzero(np.bincount(size)).tolist():
         i, j = np.triu_indices(k, 1)
         base = starts[junction[size == k]]

@@ -21,12 +21,8 @@ _MAX_GROUPS = 65535
 # NumPy's differ by less than 1e-14 of the largest coordinate.
 _TOL_OF_EPS = 1e-3
 _TOL_OF_COORD = 1e-12
-# On a software rasteriser, partners in the grid per triangle from which the passes are used
-# (llvmpipe, CPU s of the whole intersection stage, NumPy against the passes reading tables:
-# 2CylinderEngine, 56 a triangle, 0.67 against 0.53; FM1_satellite, 45, 0.33 against 0.34;
-# rod, 9, 0.18 against 0.16; cycloidal, 3, 1.04 against 0.92, on a machine 3x slower than the
-# one of the first figures). Below it the passes gain too little to pay for compiling them,
-# ~0.15 s once a process.
+# On a software rasteriser, partners in the grid per triangle from which the passes are used:
+# below it they gain too little to pay for compiling them once a process.
 SOFTWARE_MIN_PARTNERS = 40
 
 

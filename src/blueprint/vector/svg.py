@@ -25,8 +25,8 @@ _ID_BAD = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
 def _text(value: str) -> str:
-    """``value`` as XML character data (xml.sax.saxutils would import urllib, http and email:
-    a tenth of a second of a small drawing's process)."""
+    """``value`` as XML character data (xml.sax.saxutils would import urllib, http and email
+    into a small drawing's process)."""
     return _escape(value, quote=False)
 
 

@@ -1,6 +1,6 @@
 // The window depth of a geometry pass's fragment. Where the driver takes it from the plane
 // through the triangle's corners as snapped to its sub-pixel grid (EXACT_DEPTH: the device's
-// snapped_depth, the H200), coincident faces of one part with different corners get depths up
+// snapped_depth), coincident faces of one part with different corners get depths up
 // to the slope times the snap apart, past the peel's tolerance on steep faces, and peel as two
 // layers. The rasteriser's depth at the pixel centre is the true plane's at the point its
 // snapped weights make of the true corners: the interpolated clip position (kept as x, y, w;

@@ -56,8 +56,8 @@ float depth24(float z) {
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     ivec2 last = EDGE_LAST;
-    // the ring's counts and the neighbours' in four gathers of 2x2 blocks, not twelve fetches
-    // (7 % of the edges' time on llvmpipe). The block whose lower left texel is p + (x0, y0),
+    // the ring's counts and the neighbours' in four gathers of 2x2 blocks, not twelve fetches,
+    // which cost llvmpipe more. The block whose lower left texel is p + (x0, y0),
     // gathered at its centre p + (x0 + 1, y0 + 1), comes as (x0, y0 + 1), (x0 + 1, y0 + 1),
     // (x0 + 1, y0), (x0, y0), clamped to the image as the fetches are (the pool's targets clamp
     // to edges).

@@ -2,7 +2,7 @@
 // pixel's list (abuffer.glsl); nothing is tested, nothing drawn. Fragments beyond the nodes
 // held are counted and dropped: the capture sees the count and draws again with room for them.
 // With SLIM a fragment is its depth and face alone, 8 bytes instead of 16: where the graphics
-// pipeline runs on a few of the GPU's cores (the H200) the pass is bound by the bytes its
+// pipeline runs on a few of the GPU's cores the pass is bound by the bytes its
 // fragments write (benchmarks/capture_cost.py), and the resolve, in compute on all of them,
 // finds the normal and part of the fragments that become layers from their faces.
 #extension GL_ARB_shading_language_packing : require
@@ -33,7 +33,7 @@ uniform bool u_ortho;
 
 #if BALLOT
 // the fragment's node: the subgroup's fragments take theirs with one atomic, where an atomic on
-// a storage buffer runs a lane at a time (llvmpipe: 0.4 of the engine's 1.3 s pass at 2048²).
+// a storage buffer runs a lane at a time on a software rasteriser.
 // Helper invocations take no part: an atomic of theirs does nothing, so one of them leading
 // would hand out nodes already taken, and lists that share nodes can run in circles.
 uint next_node() {

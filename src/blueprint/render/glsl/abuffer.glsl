@@ -4,8 +4,8 @@
 // resolve (abuffer_resolve.comp) puts each pixel's layers in peel order, chained through
 // order i from the pixel's u_cursor. Read and written through AB_NODE, AB_LINK, AB_ORDER and
 // their AB_SET_ forms: in storage buffers, or with AB_IMAGES in images, entry i at
-// (i % AB_ROW, i / AB_ROW): llvmpipe loads a storage buffer a lane at a time, ten times the
-// time of an image load (A-buffer frames on llvmpipe spent half their time in those loads).
+// (i % AB_ROW, i / AB_ROW): llvmpipe loads a storage buffer a lane at a time, far slower
+// than an image load.
 // With SLIM the geometry pass writes each fragment's depth and face alone into slim[] (see
 // abuffer.frag), and the resolve fills node i (normal, part) only for the fragments it keeps
 // as layers: fragment(i) reads either form's depth and face.
@@ -47,8 +47,8 @@ layout(std430, binding = 2) coherent buffer Order {
 #endif
 // (fragments drawn, nodes held, pixels whose list was too long to sort in registers, triangle-
 // tile pairs the compute rasteriser listed: abuffer_raster.comp); the most
-// layers of any pixel comes from Depths, not from an atomic a pixel on one shared word (on
-// llvmpipe that took a fifth of the resolve)
+// layers of any pixel comes from Depths, not from an atomic a pixel on one shared word, which
+// a software rasteriser runs a lane at a time
 layout(std430, binding = 3) coherent buffer Totals {
     uint drawn;
     uint capacity;

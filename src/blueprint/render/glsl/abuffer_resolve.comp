@@ -13,9 +13,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
 
-// lists up to this long are sorted in registers; longer ones are walked once a layer (on the
-// H200, with the fragments read again below: 48 was as fast as 32 or faster at 4096², and at
-// 1024², where lists run longer, 1.2 against 3.1 ms for cycloidal)
+// lists up to this long are sorted in registers; longer ones are walked once a layer, which
+// costs most where lists run long
 #define SORTED 48
 
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
@@ -101,8 +100,7 @@ uint chain(ivec2 p) {
     // moves each array a lane at a time. Node, face and depth bits stay at the list's place j:
     // held in arrays where the lists are images (llvmpipe's image loads cost more than the
     // arrays); read again from the fragment on a GPU, where arrays live in the threads' local
-    // memory and the fragment, just read, in its cache (the H200's resolve at 4096²: 2.8
-    // against 5.3 ms, cycloidal; at 1024² 1.2 against 2.0).
+    // memory and the fragment, just read, in its cache.
     uint sorted[SORTED];
     uint node[SORTED];
 #if AB_IMAGES
@@ -203,11 +201,10 @@ uint chain(ivec2 p) {
 
 #if COUNTED_AFTER
 // The counts are left to the caller, which reads u_layer_count back (a software rasteriser,
-// where that costs a copy): the group's histogram took a third of the resolve on llvmpipe (its
-// barriers and shared atomics). There the groups run only over the tiles listed as holding a
-// fragment (TILES): a software rasteriser runs all of a group's code, empty or not (a third of
-// llvmpipe's resolve of a model that covers half the frame), and the caller has cleared the
-// counts and cursors of the rest.
+// where that costs a copy): the group's histogram, its barriers and shared atomics, cost much
+// of the resolve there. There the groups run only over the tiles listed as holding a
+// fragment (TILES): a software rasteriser runs all of a group's code, empty or not, and the
+// caller has cleared the counts and cursors of the rest.
 #define TILE_LIST_BINDING 3
 #include "abuffer_tiles.glsl"
 

@@ -12,12 +12,11 @@
 // (r), for passes that read the surfaces where they lie instead of unpacked, and how many the
 // pixel let go behind its K (g, saturating at 255): every fragment behind all K that is part
 // of none, and every surface pushed out behind the K-th, one each; the most of these is the
-// layers a frame capped at K leaves behind, without a pass to count them (remaining.py: a third
-// of llvmpipe's crank-case frame). As that pass counts, coincident surfaces count apart. With
-// PEEL the
-// pass finds the layers behind those of an earlier one (u_prev_depth); the first pass is built
-// without (a software rasteriser reads the previous depth under a uniform branch too: 22 % of
-// llvmpipe's first pass).
+// layers a frame capped at K leaves behind, without remaining.py's pass to count them, which
+// costs a software rasteriser much of a capped frame. As that pass counts, coincident surfaces
+// count apart. With PEEL the pass finds the layers behind those of an earlier one
+// (u_prev_depth); the first pass is built without (a software rasteriser reads the previous
+// depth under a uniform branch too).
 #if INTERLOCK
 #extension GL_ARB_fragment_shader_interlock : require
 #else

@@ -29,8 +29,7 @@ MAX_LAYERS = 64
 # What render() draws with: object-space edges as lines, or one of the triangle-ID passes.
 LINES = "edges"
 DRAW_METHODS = (LINES, *METHODS)
-# The ID pass draws no normals, so its upload skips their smoothing (most of an upload's time:
-# 1.2 of the 1.9 s of a first drawing of the 70K-triangle bunny on llvmpipe).
+# The ID pass draws no normals, so its upload skips their smoothing, most of an upload's time.
 _CREASE = None
 
 

@@ -74,9 +74,9 @@ def draw_faces(
 ) -> FacesDrawn:
     """Set the faces k-buffer of ``gpu_levels`` drawing now and go on: flushed to the driver,
     a software rasteriser's threads draw it while the CPU finds the lines, where otherwise
-    the layer count would wait for all of it (llvmpipe, 2CylinderEngine at 512 x 512: some
-    55 ms). Pass it to ``gpu_levels`` as ``drawn``, with the same model, camera, size and
-    ``max_layers``, before anything else draws into the renderer's targets."""
+    the layer count would wait for all of it. Pass it to ``gpu_levels`` as ``drawn``, with the
+    same model, camera, size and ``max_layers``, before anything else draws into the
+    renderer's targets."""
     clock = time.perf_counter()
     renderer.make_current()
     surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
