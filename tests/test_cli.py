@@ -87,8 +87,11 @@ def test_info_model_lists_parts(gearbox_parts):
     lines = ok(run("info", EXAMPLE)).splitlines()
     assert lines[0] == f"{EXAMPLE}: 2144 triangles, 13 parts, up y (by the format)"
     assert lines[1] == "bounds: [-70, 0, -35] - [70, 73.5, 35]"
-    rows = [re.fullmatch(r"\s*(\d+)\s+(\d+)\s+(\S+)", line) for line in lines[2:]]
-    assert all(rows), lines[2:]
+    # glTF is in metres by its specification
+    assert lines[2] == "unit: m, from the file (glTF is in metres by its specification)"
+    assert lines[3] == "size: 140 x 73.5 x 70 m = 140000 x 73500 x 70000 mm"
+    rows = [re.fullmatch(r"\s*(\d+)\s+(\d+)\s+(\S+)", line) for line in lines[4:]]
+    assert all(rows), lines[4:]
     assert [int(r.group(1)) for r in rows] == list(range(13))
     assert {r.group(3): int(r.group(2)) for r in rows} == gearbox_parts
 
@@ -98,6 +101,8 @@ def test_info_model_json(gearbox_parts):
     assert data["file"] == str(EXAMPLE)
     assert data["triangles"] == 2144 and data["up"] == "y"
     assert data["bounds"] == [[-70.0, 0.0, -35.0], [70.0, 73.5, 35.0]]
+    assert (data["unit"], data["unit_assumed"]) == ("m", False)
+    assert data["size"] == [140.0, 73.5, 70.0] and data["size_mm"] == [140000.0, 73500.0, 70000.0]
     assert [p["index"] for p in data["parts"]] == list(range(13))
     assert {p["name"]: p["triangles"] for p in data["parts"]} == gearbox_parts
 
@@ -429,7 +434,7 @@ def test_success_lines_print_names_safely(tmp_path):
     trimesh.creation.box((1.0, 2.0, 3.0)).export(model)
     lines = ok(run("info", model)).splitlines()
     assert lines[0].startswith(str(tmp_path / "two\\nlines.stl") + ": 12 triangles, 1 parts")
-    assert len(lines) == 3  # the model, its bounds, its one part
+    assert len(lines) == 5  # the model, its bounds, unit and size, its one part
     out = tmp_path / "out\nfile.png"
     lines = ok(run("render", model, "-o", out, "--size", "64", "48")).splitlines()
     assert len(lines) == 1 and lines[0].startswith(str(tmp_path / "out\\nfile.png") + ": 64x48")

@@ -17,11 +17,12 @@ from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
 from blueprint.scene.camera import VIEWS, fit_camera
-from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin
+from blueprint.scene.dimension import UNITS_MM, dimension_margin
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model, model_from_object
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import paper_size
+from blueprint.scene.units import check_units, drawing_unit, warn_if_assumed
 
 if TYPE_CHECKING:
     from blueprint.compose.glyphs import Glyphs
@@ -184,13 +185,13 @@ class Drawing:
 def check_vector_options(style, scale: str | float | None, units: str | None):
     """The ``VectorStyle`` that ``style`` names, with ``scale`` and ``units`` checked: what a
     vector drawing can refuse before any model is read. Raises ``InputError``."""
-    from blueprint.vector.drawing import UNITS_MM, parse_scale
+    from blueprint.vector.drawing import parse_scale
     from blueprint.vector.style import vector_style
 
     if scale is not None:
         parse_scale(scale)
-    if units is not None and units not in UNITS_MM:
-        raise InputError(f"unknown units {units!r} (choose {', '.join(UNITS_MM)})")
+    if units is not None:
+        check_units(units)
     return vector_style(style)
 
 
@@ -260,13 +261,20 @@ def vector_drawing(
 
         if not isinstance(glyphs, Glyphs):
             glyphs = load_glyphs(glyphs)
+    measures = scale is not None or dimensions or sheet is not None
+    measures = measures or (glyphs is not None and bool(glyphs.dimensions))
+    # the views are given the unit resolved: an assumed one is warned about here alone
+    given, units = units, drawing_unit(model, units)
     if view == PLAN:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")
         plane = None if cut is None else (cut.plane, cut.keep)
-        return draw_vector_sheet(
+        drawing = draw_vector_sheet(
             model, size, fov=fov, scale=scale, units=units, sheet=sheet, section=plane, **options
         )
+        if measures:
+            warn_if_assumed(model, given)
+        return drawing
     # room for the dimensions below and right of the model
     margin = dimension_margin(size, 96.0 / 25.4) if dimensions else 0.05
     camera = fit_camera(
@@ -280,7 +288,9 @@ def vector_drawing(
     if glyphs is not None:
         from blueprint.vector.dimension import with_dimension_glyphs
 
-        drawing = with_dimension_glyphs(drawing, glyphs, UNITS_MM[units or default_units(model)])
+        drawing = with_dimension_glyphs(drawing, glyphs, UNITS_MM[units])
+    if measures:
+        warn_if_assumed(model, given)
     return drawing
 
 
@@ -392,8 +402,9 @@ def draw(
         Overall width and height and circle diameters of an orthographic view (or of a plan
         sheet's orthographic views), after ISO 129, in millimetres.
     units : str, optional
-        The model's length unit (``mm``, ``in``, ``m`` ...; default ``m`` for glTF, else
-        ``mm``): for dimensions, ``scale`` and a plan sheet's title block.
+        The model's length unit (``mm``, ``in``, ``m`` ...), over the one its file states:
+        for dimensions, ``scale`` and a plan sheet's title block. Default ``Model.unit``
+        (glTF and STEP: ``m``; 3MF: its own), else ``mm``, with a warning.
     title : str, optional
         A plan sheet's title (default: the model's name).
     scale : str or float, optional

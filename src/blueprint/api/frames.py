@@ -17,12 +17,13 @@ from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
-from blueprint.scene.dimension import UNITS_MM, default_units, dimension_margin, screen_points
+from blueprint.scene.dimension import UNITS_MM, dimension_margin, screen_points
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.sheet import Marks, lay_out_sheet, model_name, picture_per_mm, sheet_fields
+from blueprint.scene.units import check_units, drawing_unit, warn_if_assumed
 
 if TYPE_CHECKING:
     from blueprint.api.sections import Section
@@ -174,8 +175,9 @@ def render_frame(
         orthographic views) and the diameters of the circles its lines find, after ISO 129,
         in millimetres: the vector drawing's marks and numbers.
     units : str, optional
-        The model's length unit (``mm``, ``in``, ``m`` ...; default ``m`` for glTF, else
-        ``mm``): the dimensions' values (glyph file dimensions' too) and a plan sheet's units.
+        The model's length unit (``mm``, ``in``, ``m`` ...), over the one its file states:
+        the dimensions' values (glyph file dimensions' too) and a plan sheet's units. Default
+        ``Model.unit`` (glTF and STEP: ``m``; 3MF: its own), else ``mm``, with a warning.
     title : str, optional
         A plan sheet's title (default: the model's name).
     profile : bool
@@ -212,15 +214,19 @@ def render_frame(
         profile=profile,
     )
     section_asked = _section_of(model, section, section_plane, section_keep)
-    unit = _units(model, units)
+    if units is not None:
+        check_units(units)
     if view == PLAN and camera is None:
         if glyphs is not None:
             raise InputError("glyphs need one view; the plan sheet draws four")
-        sheet = _SheetAsked(dimensions, unit, title)
-        return _plan_frame(model, size, fov, renderer, options, section_asked, sheet)
+        sheet = _SheetAsked(dimensions, drawing_unit(model, units), title)
+        frame = _plan_frame(model, size, fov, renderer, options, section_asked, sheet)
+        warn_if_assumed(model, units)  # its title block names the unit
+        return frame
     if title is not None:
         raise InputError("--title names a plan sheet's title block: give --view plan")
-    mm_per_model = UNITS_MM[unit]
+    measures = dimensions or (glyphs is not None and bool(glyphs.dimensions))
+    mm_per_model = UNITS_MM[drawing_unit(model, units)]
     # room for the dimensions below and right of the model
     margin = dimension_margin(size, picture_per_mm(size)) if dimensions else 0.05
     cam = _camera(model, size, view, azimuth, elevation, fov, ortho, camera, margin)
@@ -255,6 +261,8 @@ def render_frame(
         frame = replace(
             frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "dimensions": spent}, marks=marks
         )
+    if measures:
+        warn_if_assumed(model, units)
     return frame
 
 
@@ -309,14 +317,6 @@ class _SheetAsked:
     @property
     def mm_per_model(self) -> float:
         return UNITS_MM[self.unit]
-
-
-def _units(model: Model, units: str | None) -> str:
-    """The model's length unit: ``units``, checked, or the file format's default."""
-    unit = units or default_units(model)
-    if unit not in UNITS_MM:
-        raise InputError(f"unknown units {unit!r} (choose {', '.join(UNITS_MM)})")
-    return unit
 
 
 # Pixels of paper left around a view's lines where a plan sheet crops its picture: the lines'

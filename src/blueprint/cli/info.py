@@ -15,7 +15,8 @@ from blueprint.errors import printable
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def info(model, as_json):
     """Without MODEL: the OpenGL renderer, the ways it draws and the EGL devices (for --gpus
-    and BLUEPRINT_GL_DEVICE). With MODEL: its parts, triangles and bounds."""
+    and BLUEPRINT_GL_DEVICE). With MODEL: its parts, triangles, bounds, length unit (the
+    file's, or assumed) and size."""
     if model is None:
         from blueprint.gpu.context import egl_devices
         from blueprint.render.renderer import LayerRenderer
@@ -59,12 +60,15 @@ def info(model, as_json):
         return
     from blueprint.scene.environment import environment_parts
     from blueprint.scene.loader import load_model
+    from blueprint.scene.units import ASSUMED_UNIT, UNITS_MM
 
     # every part, environment meshes marked: the names to give --include and --exclude
     loaded = load_model(model, include="*")
     environment = environment_parts(loaded)
     counts = loaded.part_triangle_counts()
     lo, hi = loaded.bounds
+    unit = loaded.unit or ASSUMED_UNIT
+    size = hi - lo
     if as_json:
         click.echo(
             json.dumps(
@@ -74,6 +78,11 @@ def info(model, as_json):
                     "up": loaded.up,
                     "up_reason": loaded.up_reason,
                     "bounds": [lo.tolist(), hi.tolist()],
+                    "unit": unit,
+                    "unit_assumed": loaded.unit is None,
+                    "unit_reason": loaded.unit_reason,
+                    "size": size.tolist(),
+                    "size_mm": (size * UNITS_MM[unit]).tolist(),
                     "parts": [
                         {"index": i, "name": n, "triangles": int(c), "environment": bool(e)}
                         for i, (n, c, e) in enumerate(
@@ -91,6 +100,13 @@ def info(model, as_json):
         )
     )
     click.echo(f"bounds: [{lo[0]:.6g}, {lo[1]:.6g}, {lo[2]:.6g}] - [{hi[0]:.6g}, {hi[1]:.6g}, {hi[2]:.6g}]")
+    if loaded.unit is None:
+        click.echo(f"unit: {unit}, assumed ({loaded.unit_reason}; render --units sets it)")
+    else:
+        click.echo(f"unit: {unit}, from the file ({loaded.unit_reason})")
+    sizes = " x ".join(f"{v:.6g}" for v in size)
+    in_mm = "" if unit == "mm" else " = " + " x ".join(f"{v:.6g}" for v in size * UNITS_MM[unit]) + " mm"
+    click.echo(f"size: {sizes} {unit}{in_mm}")
     for i, (name, count, around) in enumerate(zip(loaded.part_names, counts, environment, strict=True)):
         note = "  (environment: left out unless --include names it)" if around else ""
         click.echo(printable(f"  {i:4d}  {count:9d}  {name}{note}"))

@@ -73,7 +73,10 @@ class _OutputOption(click.Option):
     "--scale", default=None, help="Vector plan views to scale, e.g. 1:50 (orthographic, page in mm)."
 )
 @click.option(
-    "--units", default=None, help="The model's length unit for --scale and dimensions (mm, cm, m, in, ft)."
+    "--units",
+    default=None,
+    help="The model's length unit for --scale, dimensions and plan sheets (um, mm, cm, m, km, in, ft); "
+    "default: the file's (glTF, STEP: m; 3MF: its own), else mm, with a warning.",
 )
 @click.option("--id-silhouettes", is_flag=True, help="Add triangle-ID silhouettes to every layer's edges.")
 @click.option("--shade", default=None, help="Parts to draw shaded inside the drawing: globs or indices.")

@@ -13,13 +13,12 @@ import math
 
 import numpy as np
 
-from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks, Text
+from blueprint.scene.units import UNITS_MM
 
 __all__ = [
     "DIMENSION_WIDTH",
     "UNITS_MM",
-    "default_units",
     "diameter_marks",
     "dimension_margin",
     "format_value",
@@ -27,26 +26,6 @@ __all__ = [
     "overall_dimensions",
     "screen_points",
 ]
-
-#: Millimetres per model unit, by the unit's name.
-UNITS_MM: dict[str, float] = {
-    "um": 1e-3,
-    "mm": 1.0,
-    "cm": 10.0,
-    "m": 1000.0,
-    "km": 1e6,
-    "in": 25.4,
-    "ft": 304.8,
-}
-
-
-def default_units(model: Model) -> str:
-    """The length unit a model file's numbers are taken in when none is given."""
-    source = (model.source or "").lower()
-    # glTF lengths are metres by specification; other formats carry none, and CAD exports
-    # (STL, 3MF, OBJ from CAD) are most often millimetres
-    return "m" if source.endswith((".glb", ".gltf")) else "mm"
-
 
 # ISO 129 measures in millimetres on paper: the gap between the part and an extension line,
 # how far an extension line runs past the dimension line, the dimension line's distance from

@@ -182,4 +182,6 @@ def subset(model: Model, keep: np.ndarray) -> Model:
         model.up,
         model.source,
         model.up_reason,
+        model.unit,
+        model.unit_reason,
     )

@@ -21,6 +21,7 @@ from blueprint.scene.headers import check_declared_counts, check_scene_graph
 from blueprint.scene.model import Model
 from blueprint.scene.obj import PLAIN_OBJ_LIMIT, plain_obj
 from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
+from blueprint.scene.units import file_unit, object_unit
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
@@ -89,11 +90,13 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
             "z",
             include=include,
             exclude=exclude,
+            unit=file_unit(name, "stl"),
         )
     plain = _plain_obj(path, info.st_size) if ext == "obj" else None
     if plain is not None:
         parts = np.zeros(len(plain[1]), np.int32)
-        return _checked(*plain, parts, [path.stem], name, up, "y", True, include, exclude)
+        unit = file_unit(name, "obj")
+        return _checked(*plain, parts, [path.stem], name, up, "y", True, include, exclude, unit)
     instances = _glb(path, info.st_size) if ext == "glb" else None
     if instances is not None:
         return _loaded(_joined(instances, path.stem, name), name, up, ext, include, exclude)
@@ -114,16 +117,24 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
             check_zip(path)
         check_scene_graph(path, ext, info.st_size, MODEL_FILE_LIMIT)
         scene = _load_scene(path, ext)
-    return _loaded(_flatten(scene, path.stem, name), name, up, ext, include, exclude)
+    # trimesh reports the unit a 3MF file states (its default where it states none)
+    stated = scene.units if ext == "3mf" else None
+    return _loaded(_flatten(scene, path.stem, name), name, up, ext, include, exclude, stated)
 
 
-def _loaded(joined, name: str, up: str | None, ext: str, include: PartGlobs, exclude: PartGlobs) -> Model:
-    """The model of a scene's instances ``joined`` (``_joined``) read from a file of format ``ext``."""
+def _loaded(
+    joined, name: str, up: str | None, ext: str, include: PartGlobs, exclude: PartGlobs, stated=None
+) -> Model:
+    """The model of a scene's instances ``joined`` (``_joined``) read from a file of format
+    ``ext`` that states the unit ``stated`` (``blueprint.scene.units.file_unit``)."""
     positions, faces, face_part, names = joined
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
     default = "z" if ext in _Z_UP else "y"
-    return _checked(positions, faces, face_part, names, name, up, default, ext in _GUESS_UP, include, exclude)
+    unit = file_unit(name, ext, stated)
+    return _checked(
+        positions, faces, face_part, names, name, up, default, ext in _GUESS_UP, include, exclude, unit
+    )
 
 
 def model_from_object(
@@ -162,7 +173,8 @@ def model_from_object(
         if len(faces) == 0:
             raise InputError(f"{label}: no triangles")
         one_part = np.zeros(len(faces), np.int32)
-        return _checked(positions, faces, one_part, ["mesh"], label, up, "y", False, include, exclude)
+        unit = (None, "arrays carry no unit")
+        return _checked(positions, faces, one_part, ["mesh"], label, up, "y", False, include, exclude, unit)
     import trimesh
 
     if isinstance(obj, trimesh.Scene):
@@ -183,7 +195,8 @@ def model_from_object(
         )
     if len(faces) == 0:
         raise InputError(f"{label}: no triangles")
-    return _checked(positions, faces, face_part, names, label, up, "y", False, include, exclude)
+    unit = object_unit(obj.units)
+    return _checked(positions, faces, face_part, names, label, up, "y", False, include, exclude, unit)
 
 
 def _pair(obj, label: str) -> tuple[np.ndarray, np.ndarray]:
@@ -212,10 +225,11 @@ def _checked(
     guess_up: bool = False,
     include: PartGlobs = None,
     exclude: PartGlobs = None,
+    unit: tuple[str | None, str] = (None, "no unit given"),
 ) -> Model:
     """The checks every model passes, whether from a file or an object, named ``name``; its up
     axis ``up`` where given, else guessed from the shape (``guess_up``) or ``default_up``; the
-    parts ``include`` and ``exclude`` choose."""
+    parts ``include`` and ``exclude`` choose; its length ``unit`` and where that came from."""
     bad = ~np.isfinite(positions).all(axis=1)
     if bad.any():
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates")
@@ -233,6 +247,7 @@ def _checked(
         chosen.axis,
         name,
         chosen.reason,
+        *unit,
     )
     with model.holding_corners():  # every check reads the faces' corners
         degenerate = model.degenerate_faces()

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from blueprint.columns import column_max, column_min, face_cross
+from blueprint.scene.units import UNITS_MM
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,6 +33,12 @@ class Model:
     up_reason : str
         Where ``up`` came from ("given", "by the format", or how the shape decided it), for
         ``blueprint info`` and printed lines.
+    unit : str or None
+        The length unit of ``positions`` (a name of ``blueprint.scene.units.UNITS_MM``) where
+        the file states one (glTF, STEP: ``"m"``; 3MF: its own); None where it does not, and
+        drawings to scale assume millimetres (``blueprint.scene.units.drawing_unit``).
+    unit_reason : str
+        Where ``unit`` came from, or why there is none, for ``blueprint info`` and warnings.
     """
 
     positions: np.ndarray
@@ -41,6 +48,8 @@ class Model:
     up: str = "y"
     source: str | None = None
     up_reason: str = "given"
+    unit: str | None = None
+    unit_reason: str = "no unit given"
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -56,6 +65,8 @@ class Model:
             raise ValueError("face_part refers to parts that do not exist")
         if self.up not in ("y", "z"):
             raise ValueError(f"up must be 'y' or 'z', got {self.up!r}")
+        if self.unit is not None and self.unit not in UNITS_MM:
+            raise ValueError(f"unit must be one of {', '.join(UNITS_MM)} or None, got {self.unit!r}")
 
     @classmethod
     def from_arrays(
@@ -66,8 +77,10 @@ class Model:
         part_names: tuple[str, ...] | list[str] | None = None,
         up: str = "y",
         source: str | None = None,
+        unit: str | None = None,
     ) -> Model:
-        """Build a model from plain arrays (one part unless ``face_part`` says otherwise)."""
+        """Build a model from plain arrays (one part unless ``face_part`` says otherwise), its
+        length unit ``unit`` where given."""
         positions = np.ascontiguousarray(positions, dtype=np.float32)
         faces = np.ascontiguousarray(faces, dtype=np.int32)
         if face_part is None:
@@ -76,7 +89,8 @@ class Model:
         if part_names is None:
             count = int(face_part.max()) + 1 if len(face_part) else 1
             part_names = tuple(f"part{i}" for i in range(count))
-        return cls(positions, faces, face_part, tuple(part_names), up, source)
+        reason = "given" if unit is not None else "no unit given"
+        return cls(positions, faces, face_part, tuple(part_names), up, source, unit=unit, unit_reason=reason)
 
     @property
     def triangle_count(self) -> int:

@@ -206,6 +206,8 @@ def cut_model(model: Model, plane: SectionPlane, keep: np.ndarray | None = None)
         model.part_names,
         model.up,
         model.source,
+        unit=model.unit,
+        unit_reason=model.unit_reason,
     )
     return Cut(cut, cap, plane, keep)
 

@@ -29,7 +29,6 @@ from blueprint.gpu.device import check_size
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.dimension import UNITS_MM
-from blueprint.scene.dimension import default_units as _default_units
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
@@ -44,6 +43,7 @@ from blueprint.scene.sheet import (
     paper_size,
     sheet_fields,
 )
+from blueprint.scene.units import drawing_unit, warn_if_assumed
 
 from .chain import chain_pieces
 from .dxf import write_dxf
@@ -237,9 +237,7 @@ def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
         return Page(float(w), float(h))
     if not camera.ortho:
         raise InputError("a drawing to scale needs an orthographic view (ortho=True)")
-    unit = units or _default_units(model)
-    if unit not in UNITS_MM:
-        raise InputError(f"unknown units {unit!r} (choose {', '.join(UNITS_MM)})")
+    unit = drawing_unit(model, units)
     model_per_px = camera.height / h
     factor = model_per_px * UNITS_MM[unit] / denominator
     page = Page(w * factor, h * factor, "mm", factor, denominator, unit)
@@ -332,7 +330,7 @@ def draw_vector(
     line_width : float
         Base line width, pixels (or multiples of 0.25 mm on a drawing to scale).
     scale, units : optional
-        '1:50' and the model's length unit ('mm', 'm', ...; default 'm' for glTF, else 'mm'):
+        '1:50' and the model's length unit ('mm', 'm', ...; default ``model.unit``, else 'mm'):
         the page is laid out in millimetres at that scale. Needs an orthographic camera.
     highlight : part name globs, indices, a second Model or (P,) bool, optional
         Parts drawn in the style's highlight colour.
@@ -532,7 +530,7 @@ def draw_vector(
     if dimensions:
         if not camera.ortho:
             raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
-        unit = page.model_unit or units or _default_units(model)
+        unit = page.model_unit or drawing_unit(model, units)
         mm_per_px = page.factor if page.unit == "mm" else None
         from .dimension import dimension_marks
 
@@ -558,6 +556,8 @@ def draw_vector(
         glyph_drawing = glyph_lines(glyphs, camera, size, depth)
         seconds["glyphs"] = time.perf_counter() - clock
 
+    if page.scale is not None or dimensions:
+        warn_if_assumed(model, units)
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
         title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
@@ -626,6 +626,8 @@ def draw_vector_sheet(
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
     paper = None if sheet is None else paper_size(sheet)
     cameras = sheet_cameras(model, (w, h), fov)
+    measures = scale is not None or paper is not None or options.get("dimensions", False)
+    given, units = units, drawing_unit(model, units)
     cut = None
     if section is not None:
         plane, keep = section
@@ -649,14 +651,13 @@ def draw_vector_sheet(
     mm_per_px = quarter.factor if quarter.unit == "mm" else None
     if dimensions:
         # on the orthographic views, sized for the sheet's scale, known only now
-        unit = quarter.model_unit or units or _default_units(model)
         drawn = cut.model if cut is not None else model
         crease = options.get("crease_angle", 30.0)
         from .dimension import dimension_marks
 
         for name in ("top", "front", "right"):
             view_m, proj = cameras[name].view_matrix(), cameras[name].projection_matrix()
-            marks = dimension_marks(drawn, view_m, proj, (w, h), UNITS_MM[unit], mm_per_px, crease)
+            marks = dimension_marks(drawn, view_m, proj, (w, h), UNITS_MM[units], mm_per_px, crease)
             cells[name] = replace(cells[name], marks=marks)
     extents = {name: _view_extent(cell, (w, h)) for name, cell in cells.items()}
     per_mm = 1.0 / mm_per_px if mm_per_px else 96.0 / 25.4
@@ -677,6 +678,8 @@ def draw_vector_sheet(
     counts = [len(cells[n].points) for n in order]
     starts = np.cumsum([0, *counts[:-1]])
     ends = [cells[n].offsets[1:] + start for n, start in zip(order, starts, strict=True)]
+    if measures:
+        warn_if_assumed(model, given)
     return replace(
         first,
         width=int(math.ceil(width)),
@@ -713,9 +716,7 @@ def _view_extent(cell: Drawing, size: tuple[int, int]) -> np.ndarray:
 
 def _sheet_scale(cells, camera: Camera, size, paper, units, model) -> float:
     """The largest standard scale at which a sheet's views fit on ``paper`` (mm)."""
-    unit = units or _default_units(model)
-    if unit not in UNITS_MM:
-        raise InputError(f"unknown units {unit!r} (choose {', '.join(UNITS_MM)})")
+    unit = drawing_unit(model, units)
     spans = {name: np.ptp(_view_extent(cell, size), axis=0) for name, cell in cells.items()}
     content_w = max(spans["top"][0], spans["front"][0]) + max(spans["right"][0], spans["iso"][0])
     content_h = max(spans["top"][1], spans["iso"][1]) + max(spans["front"][1], spans["right"][1])
