@@ -679,7 +679,9 @@ def main() -> int:
             said = " ".join(said.split())[:400]
         print(f"{name:<26} {status:<4} {time.perf_counter() - start:6.1f}s  {said}", flush=True)
     print(f"smoke: {len(CASES) - failed} passed, {failed} failed", flush=True)
-    if not args.keep:
+    if failed and not args.keep:
+        print(f"smoke: outputs kept in {work}", flush=True)
+    elif not args.keep:
         shutil.rmtree(work, ignore_errors=True)
     return 1 if failed else 0
 
