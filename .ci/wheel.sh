@@ -1,36 +1,46 @@
 #!/usr/bin/env bash
-# The wheel outside the source tree: build it, install it with its dependencies from the package
-# index into a fresh virtualenv, and draw from another folder with the shipped shaders, presets
-# and example model. Takes minutes (it downloads the dependencies), so it is not in the tests.
-#   .ci/wheel.sh [PYTHON]
+# The package as users install it: build the wheel once (as pip builds it, in isolation), then for
+# each PYTHON install it with its dependencies and no test extras into a fresh virtualenv and run
+# .ci/smoke.py from a folder outside the source tree: every command and major option, each case
+# checked by what it wrote, one line per case. Exits 1 if any Python's smoke test failed.
+#   .ci/wheel.sh [PYTHON...]     (default: python3)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-python=${1:-python3}
+root=$PWD
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$python" -m pip wheel . --no-deps -q -w "$work/wheel"
+pythons=("${@:-python3}")
+
+# a copy of the project: setuptools writes its build folders into the tree it builds
+mkdir "$work/project"
+tar -c --exclude=__pycache__ --exclude='*.egg-info' pyproject.toml README.md LICENSE src | tar -x -C "$work/project"
+start=$SECONDS
+"${pythons[0]}" -m pip wheel "$work/project" --no-deps -qq -w "$work/wheel"
 wheel=$(ls "$work"/wheel/blueprint_drawings-*.whl)
-"$python" -m venv "$work/venv"
-"$work/venv/bin/python" -m pip install -q "$wheel"
-cd "$work"
-"$work/venv/bin/blueprint" --version
-"$work/venv/bin/python" - <<'PY'
-import importlib.resources as res
-from pathlib import Path
+echo "wheel: built $(basename "$wheel") in $((SECONDS - start)) s"
 
-import blueprint
-from blueprint import examples
-
-here = Path(blueprint.__file__).resolve()
-assert "site-packages" in here.parts, f"blueprint imported from {here}, not from the wheel"
-gearbox = examples.example_path()
-assert gearbox.is_file(), gearbox
-drawing = blueprint.draw(gearbox, size=(256, 192))
-assert drawing.image.shape == (192, 256, 4) and drawing.layers >= 2, drawing.layers
-for suffix in ("png", "svg", "pdf", "dxf"):
-    assert drawing.save(f"gearbox.{suffix}").stat().st_size > 0
-print("drew", gearbox.name, "in", drawing.layers, "layers from", here.parent)
-PY
-"$work/venv/bin/blueprint" render "$("$work/venv/bin/python" -c 'from blueprint import examples; print(examples.example_path())')" -o "$work/cli.png" --size 256 192
-"$work/venv/bin/blueprint" batch "$work"/venv/lib/python*/site-packages/blueprint/data -o "$work/batch" --formats png,svg --size 128 96
-echo "wheel ok: $(basename "$wheel")"
+failed=()
+for python in "${pythons[@]}"; do
+    version=$("$python" -c 'import sys; print("%d.%d.%d" % sys.version_info[:3])')
+    venv="$work/venv-$version"
+    start=$SECONDS
+    "$python" -m venv "$venv"
+    # -qq: the package index's configuration warns of every name its local mirrors lack
+    if ! "$venv/bin/python" -m pip install -qq "$wheel"; then
+        echo "wheel: Python $version: installing the wheel failed"
+        failed+=("$version")
+        continue
+    fi
+    echo "wheel: Python $version: installed with its dependencies in $((SECONDS - start)) s"
+    mkdir "$work/smoke-$version"
+    start=$SECONDS
+    if ! (cd "$work/smoke-$version" && "$venv/bin/python" "$root/.ci/smoke.py"); then
+        failed+=("$version")
+    fi
+    echo "wheel: Python $version: smoke test took $((SECONDS - start)) s"
+done
+if [ ${#failed[@]} -gt 0 ]; then
+    echo "wheel: failed on Python ${failed[*]}"
+    exit 1
+fi
+echo "wheel: ok on ${#pythons[@]} Python versions"
