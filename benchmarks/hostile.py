@@ -11,13 +11,16 @@ files the case made; or, for inputs that may turn out valid (mutated files, many
 when it exits 0 without a traceback. Anything else is listed with its first stderr line.
 
 Kinds: special (FIFOs, devices, directories, sockets, for the model and everything it
-references), sparse (files far larger than memory), bomb (zip, 3MF, 3DXML, .gz, .bz2, .xz),
-header (counts a header declares against the file's size), graph (glTF cycles, depth,
-dangling children, instances), work (coincident triangles, frames, glyph counts), settings
-(glyph, style and pipeline files: digits, nesting, types, encodings), pipeline (expressions,
-image inputs, dumps), names (not UTF-8, newlines, too long, unwritable places), numbers
-(NaN, infinite and huge coordinates), arguments (sizes, layers, views), and mutated (valid
-files of every format with bytes flipped, cut, repeated or inserted).
+references), sparse (files far larger than memory), bomb (zip, 3MF, 3DXML, .gz, .bz2, .xz;
+encrypted members), header (counts a header declares against the file's size), graph (glTF
+cycles, depth, dangling children, instances, instances drawing more triangles than the
+memory budget holds), work (coincident triangles, frames, glyph counts), settings (glyph,
+style and pipeline files: digits, nesting, types, encodings), pipeline (expressions, image
+inputs, dumps), names (not UTF-8, newlines, too long, unwritable places), numbers (NaN,
+infinite and huge coordinates, OBJ vertices of two numbers), arguments (sizes, layers,
+views), mutated (valid files of every format with bytes flipped, cut, repeated or inserted),
+and shape (glTF and GLB documents whose JSON has the wrong types: a list for the document,
+an object for the nodes, a string for an index).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from __future__ import annotations
 import argparse
 import bz2
 import collections
+import copy
 import gzip
 import json
 import lzma
@@ -143,11 +147,13 @@ def ply_binary(v, f, faces=None) -> bytes:
     return head + body
 
 
-def gltf_doc(nodes, roots, positions=None, uri=None):
-    """A glTF document of one triangle mesh placed by ``nodes``, and its binary buffer."""
+def gltf_doc(nodes, roots, positions=None, uri=None, faces=None):
+    """A glTF document of one triangle mesh placed by ``nodes``, and its binary buffer: a
+    triangle, or ``positions`` and ``faces`` (default: the positions in threes)."""
     pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32) if positions is None else positions
     pos = np.asarray(pos, np.float32)
-    binary = pos.tobytes() + np.arange(3, dtype="<u4").tobytes()
+    index = np.arange(3, dtype="<u4") if faces is None else np.asarray(faces, "<u4").reshape(-1)
+    binary = pos.tobytes() + index.tobytes()
     with np.errstate(all="ignore"):
         lo, hi = np.nan_to_num(pos.min(0)).tolist(), np.nan_to_num(pos.max(0)).tolist()
     buffer = {"byteLength": len(binary), **({"uri": uri} if uri else {})}
@@ -160,18 +166,22 @@ def gltf_doc(nodes, roots, positions=None, uri=None):
         "buffers": [buffer],
         "bufferViews": [
             {"buffer": 0, "byteOffset": 0, "byteLength": pos.nbytes},
-            {"buffer": 0, "byteOffset": pos.nbytes, "byteLength": 12},
+            {"buffer": 0, "byteOffset": pos.nbytes, "byteLength": index.nbytes},
         ],
         "accessors": [
             {"bufferView": 0, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi},
-            {"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"},
+            {"bufferView": 1, "componentType": 5125, "count": len(index), "type": "SCALAR"},
         ],
     }
     return doc, binary
 
 
-def glb(nodes, roots, positions=None, json_length=None) -> bytes:
-    doc, binary = gltf_doc(nodes, roots, positions)
+def glb(nodes, roots, positions=None, json_length=None, faces=None) -> bytes:
+    return glb_of(*gltf_doc(nodes, roots, positions, faces=faces), json_length)
+
+
+def glb_of(doc, binary: bytes, json_length=None) -> bytes:
+    """A GLB file of the document ``doc`` (any JSON value) and its binary buffer."""
     text = json.dumps(doc).encode()
     text += b" " * (-len(text) % 4)
     binary += b"\0" * (-len(binary) % 4)
@@ -212,6 +222,22 @@ def _zip_bytes(files: dict) -> bytes:
         for name, data in files.items():
             archive.writestr(name, data)
     return out.getvalue()
+
+
+def encrypted(data: bytes) -> bytes:
+    """A zip archive with every member flagged as encrypted (its bytes left as they are), as
+    Python's zipfile cannot write one."""
+    import io
+
+    out = bytearray(data)
+    with zipfile.ZipFile(io.BytesIO(data)) as archive:
+        at = archive.start_dir
+        for info in archive.infolist():
+            out[info.header_offset + 6] |= 1  # the flags of the member's local header
+            out[at + 8] |= 1  # and of its entry in the central directory
+            name, extra, comment = struct.unpack_from("<HHH", out, at + 28)
+            at += 46 + name + extra + comment
+    return bytes(out)
 
 
 def png_header(width: int, height: int) -> bytes:
@@ -547,6 +573,20 @@ def bomb_cases(rng: random.Random) -> list[Case]:
             ("m.stl.gz",),
         )
     )
+    for suffix, data in (
+        ("3mf", threemf()),
+        ("3dxml", threemf()),
+        ("zip", _zip_bytes({"a.stl": stl_binary(v, f)})),
+    ):
+        cases.append(
+            Case(
+                "bomb",
+                f"encrypted .{suffix}",
+                ["info", f"m.{suffix}"],
+                _files(**{f"m.{suffix}": encrypted(data)}),
+                (f"m.{suffix}",),
+            )
+        )
     return cases
 
 
@@ -620,6 +660,7 @@ def header_cases() -> list[Case]:
 
 
 def graph_cases() -> list[Case]:
+    box, box_faces = box_arrays()
     chain = lambda n: [{"mesh": 0, "children": [i + 1]} for i in range(n - 1)] + [{"mesh": 0}]  # noqa: E731
     rows = lambda n: [{"mesh": 0, "translation": [2.0 * (i % 300), 2.0 * (i // 300), 0.0]} for i in range(n)]  # noqa: E731
     return [
@@ -686,6 +727,22 @@ def graph_cases() -> list[Case]:
             "GLB 10^5 instances",
             ["render", "m.glb", "-o", "out.png", *RENDER],
             _files(**{"m.glb": _later(lambda: glb(rows(10**5), list(range(10**5))))}),
+            valid=True,
+        ),
+        Case(
+            "graph",
+            "GLB 10^5 instances of a box",
+            ["render", "m.glb", "-o", "out.png", *RENDER],
+            _files(**{"m.glb": _later(lambda: glb(rows(10**5), list(range(10**5)), box, faces=box_faces))}),
+            ("m.glb",),
+            valid=True,
+        ),
+        Case(
+            "graph",
+            "GLB 87 000 instances of a box to SVG",
+            ["render", "m.glb", "-o", "out.svg"],
+            _files(**{"m.glb": _later(lambda: glb(rows(87_000), list(range(87_000)), box, faces=box_faces))}),
+            ("m.glb",),
             valid=True,
         ),
         Case(
@@ -1014,6 +1071,14 @@ def name_cases() -> list[Case]:
     ]
 
 
+def _short_vertex_obj() -> bytes:
+    """A box whose fourth vertex has a number replaced by ``nan`` and its last one dropped:
+    trimesh cuts every vertex to the shortest vertex line."""
+    lines = obj_text(*box_arrays()).split(b"\n")
+    lines[3] = b"v 0.0 nan"
+    return b"\n".join(lines)
+
+
 def number_cases() -> list[Case]:
     tri = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
     return [
@@ -1050,6 +1115,20 @@ def number_cases() -> list[Case]:
             "OBJ 1e308 vertices",
             ["render", "m.obj", "-o", "out.png", *RENDER],
             _files(**{"m.obj": b"v 1e308 0 0\nv -1e308 0 0\nv 0 1e308 0\nf 1 2 3\n"}),
+            ("m.obj",),
+        ),
+        Case(
+            "numbers",
+            "OBJ vertex of two numbers",
+            ["info", "m.obj"],
+            _files(**{"m.obj": _short_vertex_obj()}),
+            ("m.obj",),
+        ),
+        Case(
+            "numbers",
+            "OBJ vertices cut to two numbers",
+            ["render", "m.obj", "-o", "out.png", *RENDER],
+            _files(**{"m.obj": b"vn 0 0 1\n" + _short_vertex_obj().replace(b" 0.0\n", b"\n")}),
             ("m.obj",),
         ),
         Case(
@@ -1151,6 +1230,66 @@ def argument_cases() -> list[Case]:
     ]
 
 
+def _set(path, value):
+    """A change of a glTF document: the value at ``path`` (keys and indices) set to ``value``."""
+
+    def change(doc):
+        target = doc
+        for key in path[:-1]:
+            target = target[key]
+        target[path[-1]] = value
+        return doc
+
+    return change
+
+
+def shape_cases() -> list[Case]:
+    nodes = [{"mesh": 0, "children": [1]}, {"mesh": 0, "translation": [2, 0, 0]}]
+    doc, binary = gltf_doc(nodes, [0])
+    linked, _ = gltf_doc(nodes, [0], uri="buffer.bin")  # a .gltf's buffer is a file of its own
+    changes = {
+        "document a list": lambda d: [d],
+        "document a string": lambda d: "glTF",
+        "document a number": lambda d: 2.0,
+        "nodes an object": lambda d: {**d, "nodes": dict(enumerate(d["nodes"]))},
+        "scenes a number": _set(("scenes",), 0),
+        "meshes a number": _set(("meshes",), 3),
+        "an accessor a number": _set(("accessors", 0), 7),
+        "componentType a list": _set(("accessors", 0, "componentType"), [5126]),
+        "count a string": _set(("accessors", 1, "count"), "3"),
+        "mesh index a string": _set(("nodes", 1, "mesh"), "0"),
+        "mesh index -1": _set(("nodes", 1, "mesh"), -1),
+        "scene -1": _set(("scene",), -1),
+        "children an object": _set(("nodes", 0, "children"), {"1": 1}),
+        "translation of booleans": _set(("nodes", 1, "translation"), [True, False, False]),
+        "attributes a list": _set(("meshes", 0, "primitives", 0, "attributes"), [0]),
+        "primitives of numbers": _set(("meshes", 0, "primitives"), [0]),
+        "indices past the accessors": _set(("meshes", 0, "primitives", 0, "indices"), 9),
+    }
+    cases = []
+    for label, change in changes.items():
+        text = json.dumps(change(copy.deepcopy(linked))).encode()
+        cases.append(
+            Case(
+                "shape",
+                f"glTF {label}",
+                ["info", "m.gltf"],
+                _files(**{"m.gltf": text, "buffer.bin": binary}),
+                ("m.gltf",),
+            )
+        )
+        cases.append(
+            Case(
+                "shape",
+                f"GLB {label}",
+                ["render", "m.glb", "-o", "out.png", *RENDER],
+                _files(**{"m.glb": glb_of(change(copy.deepcopy(doc)), binary)}),
+                ("m.glb",),
+            )
+        )
+    return cases
+
+
 _MUTATIONS = ("flip", "cut", "repeat", "insert", "zero", "digits")
 
 
@@ -1220,6 +1359,7 @@ KINDS = {
     "numbers": lambda rng, n: number_cases(),
     "arguments": lambda rng, n: argument_cases(),
     "mutated": mutated_cases,
+    "shape": lambda rng, n: shape_cases(),
 }
 
 

@@ -357,13 +357,14 @@ def test_lying_sizes_are_refused_in_one_line(tmp_path, change):
     assert str(caught.value) == f"{path}: cannot read as GLB (the file is damaged or not in that format)"
 
 
-def test_a_mesh_that_does_not_exist_is_no_triangles(tmp_path):
-    """trimesh leaves such a node (and its subtree) out of its graph."""
+def test_a_mesh_that_does_not_exist_is_refused(tmp_path):
+    """trimesh would leave such a node (and its subtree) out of its graph, and draw the rest
+    as if the file were whole."""
     path = tmp_path / "nomesh.glb"
     path.write_bytes(_lie(_simple().bytes(), "a mesh that does not exist"))
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
-    assert str(caught.value) == f"{path}: no triangles in the file"
+    assert str(caught.value) == f"{path}: nodes[1].mesh refers to mesh 9, which does not exist"
 
 
 def test_a_million_deep_node_chain_is_refused(tmp_path):

@@ -510,12 +510,13 @@ def test_binary_stl_whose_count_lies_is_refused(tmp_path):
 def test_binary_stl_over_the_triangle_limit_is_refused(tmp_path, monkeypatch):
     path = tmp_path / "box.stl"
     _box().export(path)
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", 12 * settings.TRIANGLE_BYTES - 1)
     monkeypatch.setattr(settings, "TRIANGLE_LIMIT", 11)
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == (
-        f"{path}: 12 triangles, over the limit of 11 (set from this machine's memory; "
-        "BLUEPRINT_MEMORY_LIMIT changes it)"
+        f"{path}: 12 triangles to draw, more than the 11 that the memory budget of 12 KiB holds at "
+        "1024 bytes a triangle (BLUEPRINT_MEMORY_LIMIT sets the budget)"
     )
 
 
@@ -816,6 +817,11 @@ FAST = (
     "pipeline digits.toml",
     "model name with a newline",
     "OBJ nan vertex",
+    "OBJ vertices cut to two numbers",
+    "encrypted .3mf",
+    "GLB 10^5 instances of a box",
+    "glTF document a list",
+    "GLB nodes an object",
 )
 
 
@@ -825,7 +831,18 @@ def test_a_fast_subset_of_the_hostile_corpus_runs_clean(tmp_path):
     from concurrent.futures import ThreadPoolExecutor
 
     corpus = _corpus()
-    kinds = ("special", "sparse", "bomb", "header", "graph", "settings", "pipeline", "names", "numbers")
+    kinds = (
+        "special",
+        "sparse",
+        "bomb",
+        "header",
+        "graph",
+        "settings",
+        "pipeline",
+        "names",
+        "numbers",
+        "shape",
+    )
     chosen = [c for c in corpus.generate(17, 0, kinds) if c.label in FAST]
     chosen += corpus.generate(17, 3, ("mutated",))
     assert len(chosen) == len(FAST) + 3
@@ -894,3 +911,191 @@ def test_corpus_finds_stay_fixed(tmp_path, label):
         loader.load_model(tmp_path / "m.3mf")
     assert str(caught.value).startswith(f"{tmp_path / 'm.3mf'}: ")
     assert "Error" not in str(caught.value)
+
+
+# -- issue 36: OBJ rows cut short, glTF JSON of the wrong types, encrypted archives, instances ---------
+def _case(label: str):
+    (case,) = [c for c in _corpus().generate(17, 0) if c.label == label]
+    return case
+
+
+def test_short_vertex_lines_are_found_as_a_line_by_line_reading_finds_them(monkeypatch):
+    """``short_vertex`` against a plain reading of every line, across blocks of a few bytes."""
+    from blueprint.scene import obj
+
+    rng = np.random.default_rng(36)
+    for trial in range(200):
+        lines = []
+        for _ in range(rng.integers(1, 30)):
+            kind = rng.choice(["v", "vn", "vt", "f", "#", "", " v"])
+            numbers = " ".join(f"{x:.3g}" for x in rng.normal(size=rng.choice([3, 3, 3, 4, 6, 2, 1, 0])))
+            space = rng.choice([" ", "  ", "\t "])
+            lines.append(f"{kind}{space}{numbers}" if kind else "")
+        ending = rng.choice(["\n", "\r\n"])
+        data = ending.join(lines).encode() + (ending.encode() if trial % 2 else b"")
+        expected = None
+        for number, line in enumerate(data.split(b"\n"), 1):
+            if line.startswith(b"v ") and len(line.split()) < 4:
+                expected = (number, len(line.split()) - 1)
+                break
+        monkeypatch.setattr(obj, "_BLOCK", int(rng.integers(1, 64)))
+        assert obj.short_vertex(data) == expected, data
+
+
+def test_an_obj_vertex_of_two_numbers_is_refused_naming_its_line(tmp_path):
+    """trimesh reads every vertex cut to the shortest vertex line: a box of 2-D vertices, or a
+    traceback where the vertices meet their transform."""
+    path = tmp_path / "box.obj"
+    path.write_bytes(_corpus()._short_vertex_obj())
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: line 4: a vertex of 2 numbers (x, y and z are needed)"
+    path.write_bytes(b"vn 0 0 1\nv 0 0 0\nv 1\nv 0 1 0\nf 1//1 2//1 3//1\n")
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: line 3: a vertex of 1 number (x, y and z are needed)"
+
+
+@pytest.mark.parametrize(
+    ("line", "message"),
+    [
+        (b"v nan 2.0 3.0", "1 vertices have NaN or infinite coordinates"),
+        (b"v 1e20 2.0 3.0", "coordinates beyond 1e+18 cannot be drawn"),
+    ],
+)
+def test_obj_vertices_of_nan_or_huge_numbers_are_refused(tmp_path, line, message):
+    path = tmp_path / "box.obj"
+    lines = _corpus()._short_vertex_obj().split(b"\n")
+    lines[3] = line
+    path.write_bytes(b"\n".join(lines))
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: {message}"
+
+
+SHAPES = {
+    "document a list": "not a glTF document (its JSON is a list, not an object)",
+    "document a string": "not a glTF document (its JSON is a string, not an object)",
+    "document a number": "not a glTF document (its JSON is 2.0, not an object)",
+    "nodes an object": "nodes is an object, not a list",
+    "scenes a number": "scenes is 0, not a list",
+    "meshes a number": "meshes is 3, not a list",
+    "an accessor a number": "accessors[0] is 7, not an object",
+    "componentType a list": "accessors[0].componentType is a list, not a whole number",
+    "count a string": "accessors[1].count is a string, not a whole number",
+    "mesh index a string": "nodes[1].mesh is a string, not a whole number",
+    "mesh index -1": "nodes[1].mesh is -1, not a whole number",
+    "scene -1": "scene is -1, not a whole number",
+    "children an object": "nodes[0].children is an object, not a list",
+    "translation of booleans": "nodes[1].translation holds true, not only numbers",
+    "attributes a list": "meshes[0].primitives[0].attributes is a list, not an object",
+    "primitives of numbers": "meshes[0].primitives holds 0, not only objects",
+    "indices past the accessors": (
+        "meshes[0].primitives[0].indices refers to accessor 9, which does not exist"
+    ),
+}
+
+
+@pytest.mark.parametrize("suffix", ["gltf", "glb"])
+def test_gltf_json_of_the_wrong_shape_is_one_line_naming_the_field(tmp_path, suffix):
+    """Every case of the corpus's kind ``shape``, once as .gltf and once as GLB."""
+    cases = [c for c in _corpus().generate(17, 0, ("shape",)) if c.args[1] == f"m.{suffix}"]
+    assert sorted(c.label.split(" ", 1)[1] for c in cases) == sorted(SHAPES)
+    for k, case in enumerate(cases):
+        folder = tmp_path / str(k)
+        folder.mkdir()
+        case.make(folder)
+        with pytest.raises(InputError) as caught:
+            loader.load_model(folder / f"m.{suffix}")
+        assert str(caught.value) == f"{folder / f'm.{suffix}'}: {SHAPES[case.label.split(' ', 1)[1]]}"
+
+
+@pytest.mark.parametrize(
+    ("suffix", "member"), [("3mf", "[Content_Types].xml"), ("3dxml", "[Content_Types].xml"), ("zip", "a.stl")]
+)
+def test_encrypted_archive_members_are_one_line(tmp_path, suffix, member):
+    """Python's zipfile would raise RuntimeError ("password required") at the first read."""
+    _case(f"encrypted .{suffix}").make(tmp_path)
+    path = tmp_path / f"m.{suffix}"
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert (
+        str(caught.value) == f"{path}: {member} in the archive is encrypted (a password is needed to read it)"
+    )
+
+
+def _box_rows(path: Path, count: int) -> None:
+    corpus = _corpus()
+    box, faces = corpus.box_arrays()
+    nodes = [{"mesh": 0, "translation": [2.0 * (i % 50), 3.0 * (i // 50), 0.0]} for i in range(count)]
+    path.write_bytes(corpus.glb(nodes, list(range(count)), box, faces=faces))
+
+
+def test_instances_beyond_the_memory_budget_are_refused_before_any_is_made(tmp_path, monkeypatch):
+    path = tmp_path / "rows.glb"
+    _box_rows(path, 2000)
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", 20_000 * settings.TRIANGLE_BYTES)
+    monkeypatch.setattr(settings, "TRIANGLE_LIMIT", 20_000)
+
+    def made(data):
+        raise AssertionError("the instances were read")
+
+    monkeypatch.setattr(loader, "read_glb", made)
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == (
+        f"{path}: 24000 triangles to draw (2000 mesh instances), more than the 20000 that the memory "
+        "budget of 19.5 MiB holds at 1024 bytes a triangle (BLUEPRINT_MEMORY_LIMIT sets the budget)"
+    )
+    monkeypatch.undo()
+    model = loader.load_model(path)
+    assert model.triangle_count == 24_000 and len(model.part_names) == 2000
+    assert model.bounds.tolist() == [[0, 0, 0], [2.0 * 49 + 1, 3.0 * 39 + 2, 3]]
+
+
+def test_joined_instances_are_each_mesh_placed_by_its_transform(monkeypatch):
+    """``_joined`` places the instances of a mesh a block at a time; the same arrays, to the
+    bit, as placing them one by one in order."""
+    from blueprint.scene.gltf import Instance
+
+    rng = np.random.default_rng(7)
+    meshes = [(rng.normal(size=(n, 3)), rng.integers(0, n, size=(m, 3))) for n, m in ((4, 2), (9, 7), (3, 1))]
+    instances = []
+    for k in range(40):
+        vertices, faces = meshes[int(rng.integers(0, 3))]
+        transform = (
+            None if k % 5 == 0 else np.r_[np.c_[rng.normal(size=(3, 3)), rng.normal(size=3)], [[0, 0, 0, 1]]]
+        )
+        instances.append(Instance(f"n{k}", f"mesh{id(vertices) % 7}", vertices, faces, transform))
+    instances.insert(3, Instance("empty", "none", None, None, None))
+    instances.insert(9, Instance("flat", "flat", np.zeros((3, 3)), np.zeros((0, 3), int), None))
+    one_by_one, offset = [], 0
+    drawn = [i for i in instances if i.faces is not None and len(i.faces)]
+    for i in drawn:
+        placed = (
+            i.vertices if i.transform is None else i.vertices @ i.transform[:3, :3].T + i.transform[:3, 3]
+        )
+        one_by_one.append((placed, i.faces + offset))
+        offset += len(i.vertices)
+    monkeypatch.setattr(loader, "_PLACED_ROWS", 20)  # blocks of two instances of the largest mesh
+    positions, faces, parts, names = loader._joined(instances, None, "scene")
+    assert np.array_equal(positions, np.concatenate([p for p, _ in one_by_one]))
+    assert np.array_equal(faces, np.concatenate([f for _, f in one_by_one]))
+    assert parts.tolist() == [k for k, i in enumerate(drawn) for _ in range(len(i.faces))]
+    assert len(names) == len(drawn)
+
+
+def test_smoothing_a_block_of_corners_at_a_time_changes_no_normal(monkeypatch):
+    from blueprint.scene import normals
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    fan = np.r_[
+        [[0, 0, 2.0]], np.c_[np.cos(np.linspace(0, 6, 90)), np.sin(np.linspace(0, 6, 90)), np.full(90, 2.0)]
+    ]
+    positions = np.r_[sphere.vertices, fan]
+    faces = np.r_[
+        sphere.faces, np.c_[np.zeros(89, int), np.arange(1, 90), np.arange(2, 91)] + len(sphere.vertices)
+    ]
+    whole = normals.corner_normals(positions, faces)
+    monkeypatch.setattr(normals, "_PAIR_BLOCK", 5)
+    assert np.array_equal(normals.corner_normals(positions, faces), whole)

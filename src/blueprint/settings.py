@@ -31,6 +31,7 @@ __all__ = [
     "MEMORY_ENV",
     "MODEL_FILE_LIMIT",
     "SETTINGS_FILE_LIMIT",
+    "TRIANGLE_BYTES",
     "TRIANGLE_LIMIT",
     "Entry",
     "check_file",
@@ -109,9 +110,13 @@ SETTINGS_FILE_LIMIT = 16 << 20  # settings, line style, glyph and pipeline files
 # within the budget): its header is read before any pixel, and a few kilobytes of PNG can
 # declare an image larger than memory.
 IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
-# Triangles a model may have, all instances together: loading, welding and drawing keep a few
-# hundred bytes a triangle; and mesh instances a scene may place (each is a part, with a name).
-TRIANGLE_LIMIT = MEMORY_BUDGET // 256
+# Memory a drawn triangle takes at the peak of a drawing's preparation (loading, welding,
+# smoothing normals, the GPU's copy), over what the process holds before it: measured, with a
+# margin, in benchmarks/notes/hostile-memory.md. From it, the triangles a model may have, all
+# instances together (refused before they are made); and mesh instances a scene may place
+# (each is a part, with a name).
+TRIANGLE_BYTES = 1024
+TRIANGLE_LIMIT = MEMORY_BUDGET // TRIANGLE_BYTES
 INSTANCE_LIMIT = 200_000
 # Frames of a video (an hour at 30 frames a second would be 108 000), glyphs of a glyph file (each
 # is projected and stroked on the CPU), and the largest coordinate of a model or a glyph: beyond

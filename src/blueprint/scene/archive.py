@@ -28,6 +28,8 @@ ZIP_CONTAINERS = ("zip", "3mf", "3dxml")
 # below this expanded size the ratio is not held against an archive
 _RATIO_FLOOR = 1 << 20
 _CHUNK = 1 << 20
+# the bit of a zip member's flags that says it is encrypted (a password is needed)
+_ENCRYPTED = 0x1
 
 
 def _limits() -> tuple[int, int]:
@@ -51,10 +53,10 @@ def _check_total(path: Path, expanded: int, compressed: int, what: str) -> None:
 
 def check_zip(path: Path, data: bytes | None = None) -> None:
     """Refuse a zip archive whose members, by the sizes its central directory declares, expand
-    beyond the limits. Those sizes bound what can be read: Python's zipfile stops a member at
-    its declared size (and a member that holds more fails its checksum), so a lie cannot
-    expand further. ``data``: the archive's bytes where they are in memory (a member of
-    another archive), else the file is read."""
+    beyond the limits, or that holds an encrypted member. Those sizes bound what can be read:
+    Python's zipfile stops a member at its declared size (and a member that holds more fails
+    its checksum), so a lie cannot expand further. ``data``: the archive's bytes where they
+    are in memory (a member of another archive), else the file is read."""
     # the archive modules are imported where used: a plain model file's drawing needs none
     import zipfile
 
@@ -68,6 +70,9 @@ def check_zip(path: Path, data: bytes | None = None) -> None:
     expanded = sum(info.file_size for info in infos)
     compressed = sum(info.compress_size for info in infos)
     _check_total(path, expanded, compressed, "the archive")
+    locked = [info.filename for info in infos if info.flag_bits & _ENCRYPTED]
+    if locked:
+        raise InputError(f"{path}: {locked[0]} in the archive is encrypted (a password is needed to read it)")
 
 
 def _decompressor(kind: str):

@@ -10,7 +10,7 @@ import json
 from pathlib import Path
 
 from blueprint.errors import InputError
-from blueprint.settings import open_file
+from blueprint.settings import human_size, open_file
 
 # the most of a file read to find its header
 HEADER_BYTES = 1 << 16
@@ -29,8 +29,12 @@ NODE_DEPTH_LIMIT = 64
 
 def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
     """Raise ``InputError`` where the header of a PLY or OFF file declares more elements than
-    ``size`` bytes can hold (other formats: nothing to check). ``data``: the file's contents
-    where they are in memory already (a member of an archive), else the file is read."""
+    ``size`` bytes can hold, or a vertex line of an OBJ file has fewer than three numbers
+    (other formats: nothing to check). ``data``: the file's contents where they are in memory
+    already (a member of an archive), else the file is read."""
+    if ext == "obj":
+        _check_obj(path, limit, data)
+        return
     if ext not in ("ply", "off"):
         return
     if data is not None:
@@ -46,6 +50,21 @@ def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: byt
             with open_file(path, limit, "a model file") as fh:
                 data = fh.read(limit + 1)
         _check_off_faces(path, data)
+
+
+def _check_obj(path: Path, limit: int, data: bytes | None) -> None:
+    """Refuse a vertex line of fewer than three numbers, which trimesh reads as 2-D vertices
+    (or, where the counts happen to add up, as vertices shifted by a number)."""
+    from blueprint.scene.obj import short_vertex
+
+    if data is None:
+        with open_file(path, limit, "a model file") as fh:
+            data = fh.read(limit + 1)
+    found = short_vertex(data)
+    if found is not None:
+        line, numbers = found
+        counted = f"{numbers} number" + ("" if numbers == 1 else "s")
+        raise InputError(f"{path}: line {line}: a vertex of {counted} (x, y and z are needed)")
 
 
 def _refuse(path: Path, count: int, what: str, size: int) -> InputError:
@@ -157,6 +176,7 @@ def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes |
     doc = _gltf_json(path, ext, size, limit, data)
     if doc is None:
         return  # not a document we can read: the loader says what is wrong
+    check_gltf_shape(path, doc)
     nodes = doc.get("nodes")
     if not isinstance(nodes, list) or not nodes:
         return
@@ -172,6 +192,130 @@ def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes |
         return 0, 0
 
     _walk(path, roots, lambda node: _children(path, nodes, node), own, "nodes")
+
+
+# The fields of a glTF 2.0 document that place and shape its triangles, by the type the
+# specification gives them: a type, "numbers" (of the length given), "objects" (a list of
+# objects), "nodes[]" (a list of node indices, checked by the walk of the graph), or the name
+# of the top-level array an index refers into ("accessors{}": an object of such indices).
+# Fields that do not decide the geometry (names, materials, cameras, bounds, extensions) are
+# not looked at: trimesh reads past their mistakes, and so may a drawing.
+_PRIMITIVE = {"attributes": "accessors{}", "indices": "accessors", "mode": int}
+_GLTF_ARRAYS = {
+    "scenes": {"nodes": "nodes[]"},
+    "nodes": {
+        "children": "nodes[]",
+        "mesh": "meshes",
+        "matrix": ("numbers", 16),
+        "translation": ("numbers", 3),
+        "rotation": ("numbers", 4),
+        "scale": ("numbers", 3),
+    },
+    "meshes": {"primitives": "objects"},
+    "accessors": {
+        "bufferView": "bufferViews",
+        "byteOffset": int,
+        "componentType": int,
+        "count": int,
+        "type": str,
+    },
+    "bufferViews": {"byteOffset": int, "byteLength": int, "byteStride": int},
+}
+_SINGULAR = {"bufferViews": "buffer view", "meshes": "mesh"}
+_KINDS = {dict: "an object", list: "a list", str: "a string"}
+
+
+def _kind(value) -> str:
+    """What a JSON value is, in a message: its kind, or a number, true, false or null itself."""
+    if type(value) in _KINDS:
+        return _KINDS[type(value)]
+    shown = json.dumps(value)
+    return shown if len(shown) <= 24 else f"a number of {len(shown)} digits"
+
+
+def check_gltf_shape(path: Path, doc) -> None:
+    """Raise ``InputError`` where a glTF document's JSON is not shaped as the specification
+    says, in one line naming the field (``nodes[3].mesh is a string, not a whole number``),
+    or where an index refers past the end of its array; checked once before any reader
+    trusts a type. The children of nodes and the nodes of scenes are left to the walk of
+    the graph, which names them as nodes."""
+    if not isinstance(doc, dict):
+        raise InputError(f"{path}: not a glTF document (its JSON is {_kind(doc)}, not an object)")
+    for name in _GLTF_ARRAYS:
+        if name in doc and not isinstance(doc[name], list):
+            raise InputError(f"{path}: {name} is {_kind(doc[name])}, not a list")
+    _check_field(path, doc, "scene", doc, "scenes", "")
+    for name, fields in _GLTF_ARRAYS.items():
+        for index, item in enumerate(doc.get(name, [])):
+            where = f"{name}[{index}]"
+            if not isinstance(item, dict):
+                raise InputError(f"{path}: {where} is {_kind(item)}, not an object")
+            _check_fields(path, doc, item, fields, where + ".")
+            if name == "meshes":
+                for k, primitive in enumerate(item.get("primitives", [])):
+                    _check_fields(path, doc, primitive, _PRIMITIVE, f"{where}.primitives[{k}].")
+
+
+def _check_fields(path: Path, doc: dict, item: dict, fields: dict, prefix: str) -> None:
+    for key in item:
+        want = fields.get(key)
+        if want is not None:
+            _check_field(path, doc, key, item, want, prefix)
+
+
+def _check_field(path: Path, doc: dict, key: str, item: dict, want, prefix: str) -> None:
+    """Check ``item[key]``, where present, against ``want`` (see ``_GLTF_ARRAYS``)."""
+    if key not in item:
+        return
+    value, where = item[key], f"{prefix}{key}"
+
+    def refuse(expected: str) -> InputError:
+        return InputError(f"{path}: {where} is {_kind(value)}, not {expected}")
+
+    if want is int:
+        if not _whole(value):
+            raise refuse("a whole number")
+    elif want is str:
+        if not isinstance(value, str):
+            raise refuse("a string")
+    elif want == "nodes[]":
+        if not isinstance(value, list):
+            raise refuse("a list")
+    elif want == "objects" or isinstance(want, tuple):
+        what, count = ("numbers", want[1]) if isinstance(want, tuple) else (want, None)
+        if not isinstance(value, list):
+            raise refuse(f"a list of {count} {what}" if count else f"a list of {what}")
+        odd = [v for v in value if not _ELEMENT[what](v)][:1]
+        if odd:
+            raise InputError(f"{path}: {where} holds {_kind(odd[0])}, not only {what}")
+        if count is not None and len(value) != count:
+            raise InputError(f"{path}: {where} holds {len(value)} numbers, not {count}")
+    elif want.endswith("{}"):
+        if not isinstance(value, dict):
+            raise refuse("an object")
+        for name, index in value.items():
+            _check_index(path, doc, f"{where}.{name}", index, want[:-2])
+    else:
+        _check_index(path, doc, where, value, want)
+
+
+def _check_index(path: Path, doc: dict, where: str, value, array: str) -> None:
+    if not _whole(value):
+        raise InputError(f"{path}: {where} is {_kind(value)}, not a whole number")
+    count = len(doc.get(array, []))
+    if value >= count:
+        what = _SINGULAR.get(array, array[:-1])
+        raise InputError(f"{path}: {where} refers to {what} {value}, which does not exist")
+
+
+_ELEMENT = {
+    "objects": lambda v: isinstance(v, dict),
+    "numbers": lambda v: isinstance(v, int | float) and not isinstance(v, bool),
+}
+
+
+def _whole(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
 def _check_3mf(path: Path, limit: int, data: bytes | None) -> None:
@@ -326,7 +470,6 @@ def _walk(path: Path, roots: list, children, own, what: str) -> None:
                 instances[node] = count + sum(instances[c] for c in kids)
                 triangles[node] = held + sum(triangles[c] for c in kids)
                 _limit(path, instances[node], settings.INSTANCE_LIMIT, "mesh instances")
-                _limit(path, triangles[node], settings.TRIANGLE_LIMIT, "triangles")
                 continue
             if child in on_path:
                 chain = [n for n, _ in stack[on_path[child] :]] + [child]
@@ -338,8 +481,25 @@ def _walk(path: Path, roots: list, children, own, what: str) -> None:
                 raise InputError(f"{path}: its {what} nest more than {NODE_DEPTH_LIMIT} deep (the limit)")
             on_path[child] = len(stack)
             stack.append((child, iter(children(child))))
-    _limit(path, sum(instances[r] for r in roots), settings.INSTANCE_LIMIT, "mesh instances")
-    _limit(path, sum(triangles[r] for r in roots), settings.TRIANGLE_LIMIT, "triangles")
+    placed = sum(instances[r] for r in roots)
+    _limit(path, placed, settings.INSTANCE_LIMIT, "mesh instances")
+    check_triangle_count(path, sum(triangles[r] for r in roots), placed)
+
+
+def check_triangle_count(name, count: int, instances: int | None = None) -> None:
+    """Raise ``InputError`` where ``count`` triangles to draw (of ``instances`` mesh instances,
+    where a scene places them) are more than ``TRIANGLE_LIMIT``, the memory budget's worth,
+    naming ``name``, the count and the budget: before any of them is made."""
+    from blueprint import settings
+
+    if count <= settings.TRIANGLE_LIMIT:
+        return
+    placed = "" if instances is None else f" ({instances} mesh instances)"
+    raise InputError(
+        f"{name}: {count} triangles to draw{placed}, more than the {settings.TRIANGLE_LIMIT} that the "
+        f"memory budget of {human_size(settings.MEMORY_BUDGET)} holds at {settings.TRIANGLE_BYTES} bytes "
+        f"a triangle ({settings.MEMORY_ENV} sets the budget)"
+    )
 
 
 def _limit(path: Path, count: int, limit: int, what: str) -> None:

@@ -17,7 +17,7 @@ from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, members
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.gltf import Instance, read_glb
-from blueprint.scene.headers import check_declared_counts, check_scene_graph
+from blueprint.scene.headers import check_declared_counts, check_scene_graph, check_triangle_count
 from blueprint.scene.model import Model
 from blueprint.scene.obj import PLAIN_OBJ_LIMIT, plain_obj
 from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
@@ -300,7 +300,7 @@ def _binary_stl(path: Path, size: int) -> np.ndarray | None:
                     f"can hold ({84 + _STL_RECORD.itemsize * count} bytes)"
                 )
             return None
-        _triangle_limit(path, count)
+        check_triangle_count(path, count)
         records = np.frombuffer(fh.read(_STL_RECORD.itemsize * count), dtype=_STL_RECORD, count=count)
     return records["triangle"]
 
@@ -320,7 +320,7 @@ def _plain_obj(path: Path, size: int) -> tuple[np.ndarray, np.ndarray] | None:
         return None
     found = plain_obj(read_file(path, MODEL_FILE_LIMIT, "a model file"))
     if found is not None:
-        _triangle_limit(path, len(found[1]))
+        check_triangle_count(path, len(found[1]))
     return found
 
 
@@ -330,14 +330,6 @@ def _ascii_stl(head: bytes) -> bool:
     if not head.lstrip().lower().startswith(b"solid"):
         return False
     return all(32 <= b < 127 or b in (9, 10, 13) for b in head)
-
-
-def _triangle_limit(name, count: int) -> None:
-    if count > settings.TRIANGLE_LIMIT:
-        raise InputError(
-            f"{name}: {count} triangles, over the limit of {settings.TRIANGLE_LIMIT} "
-            f"(set from this machine's memory; {settings.MEMORY_ENV} changes it)"
-        )
 
 
 def _archive_scene(path: Path, kind: str):
@@ -472,35 +464,75 @@ def _flatten(scene, stem: str | None, label: str = "the scene"):
 def _joined(instances: list[Instance], stem: str | None, label: str):
     """Concatenate mesh instances; a scene of one instance names its part ``stem`` (a
     file's), or after its node where ``stem`` is None. More than ``INSTANCE_LIMIT`` instances
-    or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``."""
+    or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``, before any is placed.
+
+    The instances of one mesh are placed together, a block of them at a time (one matrix
+    product a block), into arrays made once at their joined size: 10^5 instances of a box
+    cost their triangles, not 10^5 arrays of each kind."""
     if len(instances) > settings.INSTANCE_LIMIT:
         raise InputError(
             f"{label}: {len(instances)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}"
         )
-    positions, faces, parts, names = [], [], [], []
-    taken: set[str] = set()
-    counts: dict[str, int] = {}
-    offset = total = 0
-    single = len(instances) == 1 and stem is not None
+    drawn = [i for i in instances if i.faces is not None and len(i.faces) > 0]
+    face_counts = np.array([len(i.faces) for i in drawn], np.int64)
+    check_triangle_count(label, int(face_counts.sum()))
+    if not drawn:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
+    vertex_counts = np.array([len(i.vertices) for i in drawn], np.int64)
+    vertex_start = np.cumsum(vertex_counts) - vertex_counts
+    face_start = np.cumsum(face_counts) - face_counts
+    positions = np.empty((int(vertex_counts.sum()), 3))
+    faces = np.empty((int(face_counts.sum()), 3), np.int64)
+    by_mesh: dict[tuple[int, int], list[int]] = {}
+    for k, instance in enumerate(drawn):
+        by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
     # NaN and infinite vertices are refused with their count once joined, not warned about here
     with np.errstate(all="ignore"):
-        for instance in instances:
-            if instance.faces is None or len(instance.faces) == 0:
-                continue
-            total += len(instance.faces)
-            _triangle_limit(label, total)
-            transform = instance.transform
-            vertices = np.asarray(instance.vertices, dtype=np.float64)
-            if transform is not None:
-                vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
-            positions.append(vertices)
-            faces.append(np.asarray(instance.faces, dtype=np.int64) + offset)
-            parts.append(np.full(len(instance.faces), len(names), np.int32))
-            names.append(stem if single else _part_name(instance.node, instance.geometry, taken, counts))
-            offset += len(vertices)
-    if not faces:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
-    return np.concatenate(positions), np.concatenate(faces), np.concatenate(parts), names
+        for members in by_mesh.values():
+            mesh = drawn[members[0]]
+            vertices = np.asarray(mesh.vertices, dtype=np.float64)
+            if vertices.ndim != 2 or vertices.shape[1] != 3:
+                # a loader's reading of a broken file (trimesh's OBJ reader cuts rows short)
+                raise InputError(f"{label}: the vertices of mesh {mesh.geometry!r} are not x, y, z")
+            mesh_faces = np.asarray(mesh.faces, dtype=np.int64)
+            step = max(1, _PLACED_ROWS // max(len(vertices), len(mesh_faces)))
+            for first in range(0, len(members), step):
+                block = np.array(members[first : first + step])
+                _place(
+                    vertices,
+                    mesh_faces,
+                    [drawn[k].transform for k in block],
+                    block,
+                    vertex_start,
+                    face_start,
+                    positions,
+                    faces,
+                )
+    parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_counts)
+    single = len(instances) == 1 and stem is not None
+    taken: set[str] = set()
+    counts: dict[str, int] = {}
+    names = [stem if single else _part_name(i.node, i.geometry, taken, counts) for i in drawn]
+    return positions, faces, parts, names
+
+
+# rows (vertices or faces) of instances placed by one matrix product
+_PLACED_ROWS = 1 << 18
+
+
+def _place(vertices, mesh_faces, transforms, block, vertex_start, face_start, positions, faces) -> None:
+    """Place one mesh at the instances ``block`` (their numbers among the joined instances) by
+    their ``transforms`` (None: as it is) into the joined ``positions`` and ``faces``."""
+    rows = vertex_start[block][:, None] + np.arange(len(vertices))
+    moved = np.array([t is not None for t in transforms])
+    if moved.any():
+        stack = np.array([t for t in transforms if t is not None])
+        positions[rows[moved]] = (
+            np.matmul(vertices[None], stack[:, :3, :3].transpose(0, 2, 1)) + stack[:, None, :3, 3]
+        )
+    positions[rows[~moved]] = vertices
+    face_rows = face_start[block][:, None] + np.arange(len(mesh_faces))
+    faces[face_rows] = mesh_faces[None] + vertex_start[block][:, None, None]
 
 
 def _world_transforms(graph) -> dict:

@@ -10,6 +10,8 @@ from blueprint.scene.weld import weld
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
 _MAX_DEGREE = 64
+# Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
+_PAIR_BLOCK = 1 << 20
 
 
 def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
@@ -116,22 +118,35 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     group_size = np.repeat(degree, degree)
     smooth = group_size <= _MAX_DEGREE
 
-    # every ordered pair (corner a, corner b) around the same vertex
+    # every ordered pair (corner a, corner b) around the same vertex, a block of corners at a
+    # time: a vertex of degree d makes d pairs a corner, so all at once would hold up to
+    # _MAX_DEGREE times the corners
     a_sorted = np.flatnonzero(smooth)
-    counts = group_size[a_sorted]
-    a_idx = np.repeat(a_sorted, counts)
-    within = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
-    b_idx = group_start[a_idx] + within
-    face_a = corner_face[order[a_idx]]
-    face_b = corner_face[order[b_idx]]
-
-    cos = np.einsum("ij,ij->i", unit[face_a], unit[face_b])
-    keep = (np.abs(cos) >= np.cos(np.radians(crease_angle)) - 1e-9) | ~sharp[sorted_vertex[a_idx]]
-    contribution = area_normals[face_b[keep]] * np.sign(cos[keep])[:, None]
-    target = order[a_idx[keep]]
-    summed = np.zeros((len(vertex), 3))
-    for axis in range(3):
-        summed[:, axis] = np.bincount(target, contribution[:, axis], minlength=len(vertex))
+    ends = np.cumsum(group_size[a_sorted])
+    pairs = int(ends[-1]) if len(ends) else 0
+    cuts = np.r_[0, np.searchsorted(ends, np.arange(_PAIR_BLOCK, pairs, _PAIR_BLOCK)), len(a_sorted)]
+    cos_crease = np.cos(np.radians(crease_angle)) - 1e-9
+    summed_sorted = np.zeros((len(vertex), 3))
+    for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
+        if lo == hi:
+            continue
+        block = a_sorted[lo:hi]
+        counts = group_size[block]
+        a_idx = np.repeat(block, counts)
+        within = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
+        face_b = corner_face[order[group_start[a_idx] + within]]
+        cos = np.einsum("ij,ij->i", unit[corner_face[order[a_idx]]], unit[face_b])
+        keep = (np.abs(cos) >= cos_crease) | ~sharp[sorted_vertex[a_idx]]
+        contribution = area_normals[face_b[keep]] * np.sign(cos[keep])[:, None]
+        # a block's corners are a run of the sorted corners
+        target = a_idx[keep] - block[0]
+        span = block[-1] + 1 - block[0]
+        for axis in range(3):
+            summed_sorted[block[0] : block[-1] + 1, axis] += np.bincount(
+                target, contribution[:, axis], minlength=span
+            )
+    summed = np.empty_like(summed_sorted)
+    summed[order] = summed_sorted
     norm = np.linalg.norm(summed, axis=1)
     result = flat.reshape(-1, 3).copy()
     ok = norm > 0

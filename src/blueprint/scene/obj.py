@@ -15,7 +15,7 @@ import numpy as np
 
 from blueprint import settings
 
-__all__ = ["PLAIN_OBJ_LIMIT", "plain_obj"]
+__all__ = ["PLAIN_OBJ_LIMIT", "plain_obj", "short_vertex"]
 
 # Files read here at most: the passes hold up to some 50 bytes of index per byte of the file
 # (a file of nothing but newlines), so larger files go to trimesh, as every OBJ did before.
@@ -31,6 +31,12 @@ _NOT_VERTEX = 1 - _SPACE
 _NOT_VERTEX[np.frombuffer(b"0123456789+-.eE", np.uint8)] = 0
 _NOT_FACE = 1 - _SPACE
 _NOT_FACE[np.frombuffer(b"0123456789", np.uint8)] = 0
+# the bytes ``bytes.split`` splits words at
+_WHITE = _SPACE.copy()
+_WHITE[[0x0B, 0x0C]] = 1
+# Bytes ``short_vertex`` scans at a time: its passes hold up to some 25 bytes of index per byte
+# of a block (a block of empty lines), so a file of any size costs a few blocks' worth.
+_BLOCK = 1 << 22
 
 
 def _counts(flags: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -113,3 +119,37 @@ def plain_obj(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
     used[faces] = True
     remap = np.cumsum(used) - 1
     return vertices.reshape(-1, 3)[used], remap[faces]
+
+
+def short_vertex(data: bytes) -> tuple[int, int] | None:
+    """The first vertex line of an OBJ file with fewer than three numbers, as (line number
+    from 1, how many words it has after ``v``), or None. Vertex lines are found as trimesh
+    finds them: ``v`` and a space at a line's start. trimesh cuts every vertex to the shortest
+    such line, so that one line of two numbers makes a mesh of 2-D vertices, or where the
+    numbers happen to add up, shifts the numbers of the vertices after it.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's contents, scanned a block of whole lines at a time.
+    """
+    line, start = 1, 0
+    while start < len(data):
+        cut = data.find(b"\n", start + _BLOCK)
+        end = len(data) if cut < 0 else cut + 1
+        buf = np.frombuffer(data, np.uint8, end - start, start)
+        newline = np.flatnonzero(buf == ord("\n"))
+        starts = np.r_[0, newline + 1]
+        starts = starts[starts < len(buf)]
+        white = np.take(_WHITE, buf)
+        starting = np.empty(len(buf), np.uint8)
+        starting[0] = 1 - white[0]
+        np.less(white[1:], white[:-1], out=starting[1:])
+        words = np.add.reduceat(starting, starts, dtype=np.int32)
+        spaced = (buf[np.minimum(starts + 1, len(buf) - 1)] == ord(" ")) & (starts + 1 < len(buf))
+        short = np.flatnonzero((buf[starts] == ord("v")) & spaced & (words < 4))
+        if len(short):
+            return line + int(short[0]), int(words[short[0]]) - 1
+        line += len(newline)
+        start = end
+    return None
