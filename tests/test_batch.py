@@ -17,7 +17,7 @@ from PIL import Image
 
 import blueprint
 from blueprint import InputError
-from blueprint.api.batch import MANIFEST, batch, choose_devices, collect_inputs, outputs_for
+from blueprint.api.batch import MANIFEST, MODEL_SUFFIXES, batch, choose_devices, collect_inputs, outputs_for
 from blueprint.gpu.context import create_context, egl_device_count, egl_devices
 
 BLUEPRINT = Path(sys.executable).parent / "blueprint"
@@ -63,6 +63,20 @@ def test_inputs_from_folders_globs_and_files(tmp_path):
             bad.mkdir()
         with pytest.raises(InputError, match=message):
             collect_inputs([bad])
+
+
+def test_a_folder_yields_every_format_the_loader_reads(tmp_path):
+    # every suffix a folder is searched for is one the loader reads (STEP through its
+    # tessellator), and none it cannot
+    from blueprint.scene.loader import supported_formats
+
+    readable = {f".{ext}" for ext in supported_formats()}
+    assert set(MODEL_SUFFIXES) <= readable
+    for suffix in (".step", ".stp", ".3mf", ".gltf"):
+        (tmp_path / f"part{suffix.upper()}").write_bytes(b"x")
+    (tmp_path / "notes.txt").write_text("not a model")
+    found = {p.name for p in collect_inputs([tmp_path])}
+    assert found == {"part.STEP", "part.STP", "part.3MF", "part.GLTF"}
 
 
 def test_outputs_keep_the_folders_below_the_common_one(tmp_path):

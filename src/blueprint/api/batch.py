@@ -23,7 +23,7 @@ __all__ = ["MANIFEST", "MODEL_SUFFIXES", "batch", "choose_devices", "collect_inp
 MANIFEST = "manifest.json"
 
 #: Suffixes a folder given as input is searched for (any case).
-MODEL_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae", ".3dxml")
+MODEL_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".3dxml", ".step", ".stp")
 
 #: The Dask resource each drawing worker holds one of: a task needs one, so a worker draws one
 #: input at a time, on its own device.

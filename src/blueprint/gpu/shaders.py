@@ -43,7 +43,11 @@ def package_files(package: str):
 @cache
 def _read(package: str, name: str) -> str:
     if not _is_file(package, name):
-        raise ShaderError(f"shader file {package}/{name} not found")
+        # the package's own shaders: one missing is a broken installation, not the user's input
+        raise ShaderError(
+            f"shader file {package}/{name} not found in {package_files(package)}: the installation "
+            "is incomplete (reinstall blueprint-drawings)"
+        )
     return package_files(package).joinpath(name).read_text(encoding="utf-8")
 
 

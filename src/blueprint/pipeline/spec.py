@@ -264,6 +264,10 @@ class StopSpec:
     fraction: float
 
 
+#: The preset every picture is drawn with (``blueprint.pipeline.blueprint``).
+CORE_PRESET = "blueprint"
+
+
 # -- loading ---------------------------------------------------------------------------------------
 def preset_names() -> list[str]:
     folder = package_files(PRESETS.split(":")[0]).joinpath(PRESETS.split(":")[1])
@@ -279,9 +283,16 @@ def load_pipeline(name_or_path) -> PipelineSpec:
         and not name_or_path.endswith(".toml")
         and _NAME_OR_DASH.match(name_or_path)
     ):
-        if name_or_path not in preset_names():
-            raise InputError(f"unknown pipeline preset {name_or_path!r} (choose {', '.join(preset_names())})")
         package, folder = PRESETS.split(":")
+        if name_or_path not in preset_names():
+            if name_or_path == CORE_PRESET:
+                # every picture is drawn by it: without it the installation is broken, not the input
+                place = package_files(package).joinpath(folder)
+                raise InputError(
+                    f"{place}/{CORE_PRESET}.toml is missing: the installation is incomplete "
+                    "(reinstall blueprint-drawings)"
+                )
+            raise InputError(f"unknown pipeline preset {name_or_path!r} (choose {', '.join(preset_names())})")
         text = package_files(package).joinpath(f"{folder}/{name_or_path}.toml").read_text(encoding="utf-8")
         spec = parse(text, f"preset {name_or_path}", None)
     else:
