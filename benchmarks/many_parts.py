@@ -26,16 +26,19 @@ from pathlib import Path
 import numpy as np
 from hostile import box_arrays, glb
 
-# Instance spacing in box sizes: neighbours along x overlap, along y and z they stand apart.
+# Instance spacing in box sizes: neighbours along x overlap, along y and z they stand apart;
+# every other one along x is shifted by SHIFT, so that their faces cut through each other.
 SPACING = (0.9, 1.25, 1.25)
+SHIFT = (0.0, 0.1, 0.1)
 
 
-def grid_nodes(count: int, spacing=SPACING) -> list[dict]:
+def grid_nodes(count: int) -> list[dict]:
     """glTF nodes placing ``count`` instances of mesh 0 in a grid about as deep as it is wide."""
     side = max(1, round(count ** (1 / 3)))
     i = np.arange(count)
-    cells = np.stack([i % side, (i // side) % side, i // (side * side)], axis=1) * np.asarray(spacing)
-    return [{"mesh": 0, "translation": cell} for cell in cells.tolist()]
+    cells = np.stack([i % side, (i // side) % side, i // (side * side)], axis=1)
+    places = cells * np.asarray(SPACING) + (cells[:, :1] % 2) * np.asarray(SHIFT)
+    return [{"mesh": 0, "translation": place} for place in places.tolist()]
 
 
 def many_boxes(count: int) -> bytes:

@@ -2,6 +2,7 @@
 to many parts, against a brute-force reference, either way of testing (part by part or by words
 of 64 parts), and in memory that follows the parts, not their square."""
 
+import itertools
 import tracemalloc
 
 import numpy as np
@@ -49,13 +50,16 @@ def test_candidate_triangles_match_every_pair_either_way(kind, monkeypatch):
         extra = int(rng.integers(0, 3))  # parts that hold no triangle
         want = _reference(lo, hi, part, parts + extra, slack)
         found = []
-        # every part tested part by part, every part by words (in blocks of one, three and 64
-        # words), and as the cost chooses
-        for cost, block in ((10**9, 64), (-64, 1), (-64, 3), (-64, 64), (lines._WORD_SEARCHES, 64)):
+        # the parts' pairs from the grid and all at once; every part tested part by part, every
+        # part by words (in blocks of one, three and 64 words), and as the cost chooses
+        for pairs, cost, block in itertools.product(
+            (0, lines._DENSE_PAIRS), (10**9, -64, lines._WORD_SEARCHES), (1, 3, lines._BLOCK_WORDS)
+        ):
+            monkeypatch.setattr(lines, "_DENSE_PAIRS", pairs)
             monkeypatch.setattr(lines, "_WORD_SEARCHES", cost)
             monkeypatch.setattr(lines, "_BLOCK_WORDS", block)
             found.append(_candidate_triangles(lo, hi, part, parts + extra, slack).tolist())
-        assert found == [want.tolist()] * 5, (kind, parts)
+        assert found == [want.tolist()] * 18, (kind, parts)
 
 
 def test_candidate_triangles_of_touching_boxes_and_gaps_of_the_slack():

@@ -53,6 +53,8 @@ _PAIR_CHUNK = 1 << 19
 # Cost of placing a triangle among the parts' ends (six binary searches) in tests of it against
 # one part's box.
 _WORD_SEARCHES = 6
+# Pairs of part boxes up to which all are tested at once.
+_DENSE_PAIRS = 1 << 22
 # Words of 64 parts ranked together when triangles are tested against words: their tables hold
 # a word's bits at every rank of the block's parts.
 _BLOCK_WORDS = 64
@@ -222,10 +224,11 @@ def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     meet another part's triangles (the box of a triangle lies in its own part's box, so it
     meets where the two parts' boxes overlap).
 
-    The parts whose widened boxes overlap come from a uniform grid (``_candidate_pairs``), so
-    time and memory follow the triangles and the pairs of overlapping parts, not the parts
-    squared; each part's triangles are then tested against its partners one by one or, where
-    they are many, a word of 64 parts at a time (``_by_words``).
+    The parts whose widened boxes overlap come from a uniform grid where they are many
+    (``_overlapping_boxes``), so time and memory follow the triangles and the pairs of
+    overlapping parts, not the parts squared; each part's triangles are then tested against
+    its partners one by one or, where they are many, a word of 64 parts at a time
+    (``_by_words``).
     """
     order = stable_argsort(part)
     bounds = np.searchsorted(part[order], np.arange(parts + 1))
@@ -242,10 +245,10 @@ def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     near_lo, near_hi = box_lo - slack, box_hi + slack
     # where a triangle of p meets q's widened box, the widened boxes of p and q overlap (rounding
     # is monotonic): the pairs of those are all the partners there are
-    a, b = _candidate_pairs(near_lo[live], near_hi[live], np.arange(len(live)), 0.0)
+    a, b = _overlapping_boxes(near_lo[live], near_hi[live])
     p, q = live[np.r_[a, b]], live[np.r_[b, a]]
     words = (parts + 63) // 64
-    part_word = np.unique(p * words + q // 64)
+    part_word = unique_first(p * words + q // 64)[0]
     dense = _by_words(np.bincount(p, minlength=parts), np.bincount(part_word // words, minlength=parts))
     sparse = ~dense[p]
     _meet_parts(keep, lo, hi, bounds, p[sparse], q[sparse], near_lo, near_hi)
@@ -254,6 +257,20 @@ def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     found = np.zeros(len(order), bool)
     found[order] = keep
     return np.flatnonzero(found)
+
+
+def _overlapping_boxes(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i, j), i < j, of the boxes (n, 3) that overlap or touch: every pair tested at once
+    where there are few boxes (a grid of few boxes that overlap much holds each many times),
+    else through a uniform grid (``_candidate_pairs``)."""
+    if len(lo) ** 2 > _DENSE_PAIRS:
+        return _candidate_pairs(lo, hi, np.arange(len(lo)), 0.0)
+    hit = (lo[:, None, 0] <= hi[None, :, 0]) & (hi[:, None, 0] >= lo[None, :, 0])
+    for axis in (1, 2):
+        hit &= (lo[:, None, axis] <= hi[None, :, axis]) & (hi[:, None, axis] >= lo[None, :, axis])
+    i, j = np.nonzero(hit)
+    upper = i < j
+    return i[upper], j[upper]
 
 
 def _by_words(partners: np.ndarray, words: np.ndarray) -> np.ndarray:
@@ -303,11 +320,23 @@ def _meet_words(keep, lo, hi, bounds, p, w, near_lo, near_hi, live) -> None:
     the union of its parts' bits up to (or from) each rank the word's parts met. Words go in
     blocks of ``_BLOCK_WORDS``, ranked among the block's parts, so that the tables stay small.
     """
-    used = np.unique(w)
-    for block in range(0, len(used), _BLOCK_WORDS):
-        block_words = used[block : block + _BLOCK_WORDS]
-        members = live[np.isin(live // 64, block_words)]
-        slot = np.searchsorted(block_words, members // 64)
+    if len(w) == 0:
+        return
+    used = np.flatnonzero(np.bincount(w))
+    slot_of = np.zeros(used[-1] + 1, np.int64)
+    slot_of[used] = np.arange(len(used))
+    # the (part, word) pairs by block, parts still ascending within one
+    block_of = slot_of[w] // _BLOCK_WORDS
+    by_block = stable_argsort(block_of)
+    cuts = np.searchsorted(block_of[by_block], np.arange(-(-len(used) // _BLOCK_WORDS) + 1))
+    live_word = live // 64
+    for block in range(len(cuts) - 1):
+        block_words = used[block * _BLOCK_WORDS : (block + 1) * _BLOCK_WORDS]
+        members = live[
+            np.searchsorted(live_word, block_words[0]) : np.searchsorted(live_word, block_words[-1] + 1)
+        ]
+        members = members[np.isin(members // 64, block_words)]
+        slot = slot_of[members // 64] - block * _BLOCK_WORDS
         bit = np.left_shift(np.uint64(1), (members % 64).astype(np.uint64))
         width = len(members) + 1
         axes = []
@@ -327,27 +356,23 @@ def _meet_words(keep, lo, hi, bounds, p, w, near_lo, near_hi, live) -> None:
                     table = np.cumsum(table[:, ::-1], axis=1)[:, ::-1]
                 ranked.append((ends[by_end], table.ravel()))
             axes.append(ranked)
-        chosen = np.isin(w, block_words)
-        pairs_p, pairs_w = p[chosen], np.searchsorted(block_words, w[chosen])
-        owners, first, words = np.unique(pairs_p, return_index=True, return_counts=True)
+        chosen = by_block[cuts[block] : cuts[block + 1]]
+        pairs_p, pairs_w = p[chosen], slot_of[w[chosen]] - block * _BLOCK_WORDS
+        first = np.flatnonzero(np.diff(pairs_p, prepend=-1))
+        owners, words = pairs_p[first], np.diff(np.r_[first, len(pairs_p)])
+        # per (part, word): where the word's table starts, and the bits left once its own is out
+        start = pairs_w * width
+        own = np.where(block_words[pairs_w] == pairs_p // 64, pairs_p % 64, 64).astype(np.uint64)
+        others = ~np.left_shift(np.uint64(1), own, where=own < 64, out=np.zeros(len(own), np.uint64))
         for k, t in _spans(bounds[owners], bounds[owners + 1] - bounds[owners], words):
-            found = []
-            for axis, ((starts, below), (stops, above)) in enumerate(axes):
-                found.append((np.searchsorted(starts, hi[axis, t], side="right"), below))
-                found.append((np.searchsorted(stops, lo[axis, t], side="left"), above))
             # each triangle once a word of its part's
             m = words[k]
-            row = np.repeat(np.arange(len(t)), m)
-            word = pairs_w[np.repeat(first[k], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))]
-            own = owners[k][row]
-            met = np.where(
-                block_words[word] == own // 64,
-                ~np.left_shift(np.uint64(1), (own % 64).astype(np.uint64)),
-                ~np.uint64(0),
-            )
-            for rank, table in found:
-                met &= table[word * width + rank[row]]
-            keep[t[row[met != 0]]] = True
+            pair = np.repeat(first[k], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))
+            at, met = start[pair], others[pair]
+            for axis, ((starts, below), (stops, above)) in enumerate(axes):
+                met &= below[at + np.repeat(np.searchsorted(starts, hi[axis, t], side="right"), m)]
+                met &= above[at + np.repeat(np.searchsorted(stops, lo[axis, t], side="left"), m)]
+            keep[np.repeat(t, m)[met != 0]] = True
 
 
 @dataclass(frozen=True)
