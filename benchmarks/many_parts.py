@@ -1,7 +1,7 @@
 """Many parts: GLBs of N instances of one box in a 3D grid, each overlapping its neighbours along
 x a little (so that intersection lines are found between them), rendered with ``blueprint
-render`` under ``/usr/bin/time``; prints the peak resident memory and the seconds of each, and
-one JSON object.
+render`` under ``/usr/bin/time``; prints the peak resident memory and the seconds (wall and
+CPU) of each, and one JSON object.
 
     python benchmarks/many_parts.py [--counts 1000,10000,30000,100000] [--size 512]
                                     [--output svg] [--memory 6G] [--keep DIR]
@@ -72,6 +72,9 @@ def measure(model: Path, out: Path, size: int, memory: int | None = None) -> dic
     return {
         "code": done.returncode,
         "seconds": round(sum(x * 60**k for k, x in enumerate(reversed(wall))), 2),
+        "cpu_seconds": round(
+            float(field(r"User time \(seconds\)")) + float(field(r"System time \(seconds\)")), 2
+        ),
         "peak_mib": round(int(field(r"Maximum resident set size \(kbytes\)")) / 1024),
         "error": errors[-1] if errors else "",
     }
@@ -95,8 +98,8 @@ def main() -> None:
             result = measure(model, folder / f"boxes{count}.{args.output}", args.size, args.memory)
             results[count] = result
             print(
-                f"{count:>7} boxes: exit {result['code']}, {result['seconds']} s, {result['peak_mib']} MiB "
-                f"{result['error']}",
+                f"{count:>7} boxes: exit {result['code']}, {result['seconds']} s "
+                f"({result['cpu_seconds']} s CPU), {result['peak_mib']} MiB {result['error']}",
                 flush=True,
             )
     finally:
