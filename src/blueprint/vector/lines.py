@@ -47,8 +47,17 @@ _JOIN_REL = 1e-6
 _TOUCH_REL = 1e-7
 # Cell entries of the intersection broad phase, per candidate triangle, before cells grow.
 _CELLS_PER_TRIANGLE = 8
-# Candidate triangle pairs examined per NumPy pass of the narrow phase.
+# Candidate triangle pairs examined per NumPy pass of the narrow phase (and triangle-part pairs
+# of the broad phase).
 _PAIR_CHUNK = 1 << 19
+# Cost of placing a triangle among the parts' ends (six binary searches) in tests of it against
+# one part's box.
+_WORD_SEARCHES = 6
+# Pairs of part boxes up to which all are tested at once.
+_DENSE_PAIRS = 1 << 22
+# Words of 64 parts ranked together when triangles are tested against words: their tables hold
+# a word's bits at every rank of the block's parts.
+_BLOCK_WORDS = 64
 
 ADJACENCY = ModelCache()
 INTERSECTIONS = ModelCache()
@@ -210,55 +219,160 @@ def _columns_max(values: np.ndarray) -> np.ndarray:
     return np.maximum(np.maximum(values[:, 0], values[:, 1]), values[:, 2])
 
 
-def _overlapping(lo_a, hi_a, lo_b, hi_b) -> np.ndarray:
-    """(m, k) bool: whether box i of a (m, 3) overlaps box j of b (k, 3), axis by axis."""
-    hit = (lo_a[:, None, 0] <= hi_b[None, :, 0]) & (hi_a[:, None, 0] >= lo_b[None, :, 0])
-    for axis in (1, 2):
-        hit &= (lo_a[:, None, axis] <= hi_b[None, :, axis]) & (hi_a[:, None, axis] >= lo_b[None, :, axis])
-    return hit
-
-
 def _candidate_triangles(lo, hi, part, parts: int, slack: float) -> np.ndarray:
     """Triangles whose box meets the box of another part, widened by ``slack``: those that can
     meet another part's triangles (the box of a triangle lies in its own part's box, so it
-    meets where the two parts' boxes overlap)."""
+    meets where the two parts' boxes overlap).
+
+    The parts whose widened boxes overlap come from a uniform grid where they are many
+    (``_overlapping_boxes``), so time and memory follow the triangles and the pairs of
+    overlapping parts, not the parts squared; each part's triangles are then tested against
+    its partners one by one or, where they are many, a word of 64 parts at a time
+    (``_by_words``).
+    """
     order = stable_argsort(part)
     bounds = np.searchsorted(part[order], np.arange(parts + 1))
-    used = bounds[1:] > bounds[:-1]
+    live = np.flatnonzero(bounds[1:] > bounds[:-1])
+    keep = np.zeros(len(lo), bool)
+    if len(live) < 2:
+        return np.flatnonzero(keep)
     box_lo = np.full((parts, 3), np.inf)
     box_hi = np.full((parts, 3), -np.inf)
-    box_lo[used] = np.minimum.reduceat(lo[order], bounds[:-1][used], axis=0)
-    box_hi[used] = np.maximum.reduceat(hi[order], bounds[:-1][used], axis=0)
-    overlap = _overlapping(box_lo, box_hi, box_lo - slack, box_hi + slack)
-    overlap &= used[:, None] & used[None]
-    np.fill_diagonal(overlap, False)
-    # along an axis, the parts whose widened box starts at or below a triangle's high end are
-    # a prefix of the parts sorted by start, those ending at or above its low end a suffix of
-    # the parts sorted by end: two searches a triangle, not a test a part
-    reach = []
-    for axis in range(3):
-        below, above = box_lo[:, axis] - slack, box_hi[:, axis] + slack
-        by_below, by_above = np.argsort(below), np.argsort(above)
-        prefix = np.searchsorted(below[by_below], np.ascontiguousarray(hi[:, axis]), side="right")
-        suffix = np.searchsorted(above[by_above], np.ascontiguousarray(lo[:, axis]), side="left")
-        reach.append((by_below, prefix, by_above, suffix))
-    keep = np.zeros(len(lo), bool)
-    ids = np.arange(parts)
-    for word in range(0, parts, 64):
-        # sets of 64 parts as the bits of a word: the parts met along every axis, but its own
-        bit = np.zeros(parts, np.uint64)
-        bit[word : word + 64] = np.left_shift(np.uint64(1), (ids[word : word + 64] - word).astype(np.uint64))
-        rows = np.flatnonzero(overlap[:, word : word + 64].any(axis=1)[part])
-        meets = ~bit[part[rows]]
-        for by_below, prefix, by_above, suffix in reach:
-            first = np.zeros(parts + 1, np.uint64)
-            np.bitwise_or.accumulate(bit[by_below], out=first[1:])
-            last = np.zeros(parts + 1, np.uint64)
-            last[:-1] = np.bitwise_or.accumulate(bit[by_above][::-1])[::-1]
-            meets &= first[prefix[rows]]
-            meets &= last[suffix[rows]]
-        keep[rows[meets != 0]] = True
-    return np.flatnonzero(keep)
+    # the triangles' boxes by part, an axis a row: a part's triangles are a run of each row
+    lo, hi = np.take(lo.T, order, axis=1), np.take(hi.T, order, axis=1)
+    box_lo[live] = np.minimum.reduceat(lo, bounds[live], axis=1).T
+    box_hi[live] = np.maximum.reduceat(hi, bounds[live], axis=1).T
+    near_lo, near_hi = box_lo - slack, box_hi + slack
+    # where a triangle of p meets q's widened box, the widened boxes of p and q overlap (rounding
+    # is monotonic): the pairs of those are all the partners there are
+    a, b = _overlapping_boxes(near_lo[live], near_hi[live])
+    p, q = live[np.r_[a, b]], live[np.r_[b, a]]
+    words = (parts + 63) // 64
+    part_word = unique_first(p * words + q // 64)[0]
+    dense = _by_words(np.bincount(p, minlength=parts), np.bincount(part_word // words, minlength=parts))
+    sparse = ~dense[p]
+    _meet_parts(keep, lo, hi, bounds, p[sparse], q[sparse], near_lo, near_hi)
+    part_word = part_word[dense[part_word // words]]
+    _meet_words(keep, lo, hi, bounds, part_word // words, part_word % words, near_lo, near_hi, live)
+    found = np.zeros(len(order), bool)
+    found[order] = keep
+    return np.flatnonzero(found)
+
+
+def _overlapping_boxes(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (i, j), i < j, of the boxes (n, 3) that overlap or touch: every pair tested at once
+    where there are few boxes (a grid of few boxes that overlap much holds each many times),
+    else through a uniform grid (``_candidate_pairs``)."""
+    if len(lo) ** 2 > _DENSE_PAIRS:
+        return _candidate_pairs(lo, hi, np.arange(len(lo)), 0.0)
+    hit = (lo[:, None, 0] <= hi[None, :, 0]) & (hi[:, None, 0] >= lo[None, :, 0])
+    for axis in (1, 2):
+        hit &= (lo[:, None, axis] <= hi[None, :, axis]) & (hi[:, None, axis] >= lo[None, :, axis])
+    i, j = np.nonzero(hit)
+    upper = i < j
+    return i[upper], j[upper]
+
+
+def _by_words(partners: np.ndarray, words: np.ndarray) -> np.ndarray:
+    """(parts,) bool: the parts whose triangles are cheaper to test against the ``words`` of 64
+    parts that hold their ``partners`` than against each partner: a test against a word costs
+    about what a test against a box does, plus ``_WORD_SEARCHES`` tests a triangle for finding
+    its place among the parts' ends."""
+    return partners > _WORD_SEARCHES + words
+
+
+def _spans(first: np.ndarray, count: np.ndarray, weight=1):
+    """The runs ``first[k] + range(count[k])`` of indices, concatenated in blocks of about
+    ``_PAIR_CHUNK`` indices (each of run ``k`` counting ``weight[k]``): yields ``(k, index)``
+    per block, ``k`` the run each index comes from."""
+    size = count * weight
+    block = (np.cumsum(size) - size) // _PAIR_CHUNK
+    cuts = np.r_[0, np.flatnonzero(np.diff(block)) + 1, len(count)]
+    for start, stop in zip(cuts[:-1], cuts[1:], strict=True):
+        m = count[start:stop]
+        k = np.repeat(np.arange(start, stop), m)
+        yield k, np.repeat(first[start:stop], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))
+
+
+def _meet_parts(keep, lo, hi, bounds, p, q, near_lo, near_hi) -> None:
+    """Mark in ``keep`` the triangles of part ``p[k]`` whose box meets the box ``near_lo``,
+    ``near_hi`` of part ``q[k]``, for every k; triangles by part, part ``p``'s from
+    ``bounds[p]`` to ``bounds[p + 1]``, their boxes' ends ``lo``, ``hi`` (3, n) an axis a row."""
+    near_lo, near_hi = np.ascontiguousarray(near_lo.T), np.ascontiguousarray(near_hi.T)
+    for k, t in _spans(bounds[p], bounds[p + 1] - bounds[p]):
+        other = q[k]
+        meets = lo[0].take(t) <= near_hi[0].take(other)
+        for axis in range(3):
+            if axis:
+                meets &= lo[axis].take(t) <= near_hi[axis].take(other)
+            meets &= hi[axis].take(t) >= near_lo[axis].take(other)
+        keep[t[meets]] = True
+
+
+def _meet_words(keep, lo, hi, bounds, p, w, near_lo, near_hi, live) -> None:
+    """Mark in ``keep`` the triangles of part ``p[k]`` whose box meets the box ``near_lo``,
+    ``near_hi`` of a part of word ``w[k]`` (parts ``64 w`` to ``64 w + 63``) but its own; ``p``
+    ascending, ``live`` the parts that hold triangles, the rest as in ``_meet_parts``.
+
+    Along an axis, the parts whose widened box starts at or below a triangle's high end are
+    the first of the parts ranked by start, those ending at or above its low end the last of
+    the parts ranked by end: a search a triangle and end gives the rank, and a table a word of
+    the union of its parts' bits up to (or from) each rank the word's parts met. Words go in
+    blocks of ``_BLOCK_WORDS``, ranked among the block's parts, so that the tables stay small.
+    """
+    if len(w) == 0:
+        return
+    used = np.flatnonzero(np.bincount(w))
+    slot_of = np.zeros(used[-1] + 1, np.int64)
+    slot_of[used] = np.arange(len(used))
+    # the (part, word) pairs by block, parts still ascending within one
+    block_of = slot_of[w] // _BLOCK_WORDS
+    by_block = stable_argsort(block_of)
+    cuts = np.searchsorted(block_of[by_block], np.arange(-(-len(used) // _BLOCK_WORDS) + 1))
+    live_word = live // 64
+    for block in range(len(cuts) - 1):
+        block_words = used[block * _BLOCK_WORDS : (block + 1) * _BLOCK_WORDS]
+        members = live[
+            np.searchsorted(live_word, block_words[0]) : np.searchsorted(live_word, block_words[-1] + 1)
+        ]
+        members = members[np.isin(members // 64, block_words)]
+        slot = slot_of[members // 64] - block * _BLOCK_WORDS
+        bit = np.left_shift(np.uint64(1), (members % 64).astype(np.uint64))
+        width = len(members) + 1
+        axes = []
+        for axis in range(3):
+            ranked = []
+            for ends, side in ((near_lo[members, axis], 1), (near_hi[members, axis], 0)):
+                by_end = np.argsort(ends)
+                rank = np.empty(len(members), np.int64)
+                rank[by_end] = np.arange(len(members))
+                table = np.zeros((len(block_words), width), np.uint64)
+                # bits summed, not or-ed: a word's bits are distinct
+                if side:
+                    table[slot, rank + 1] = bit
+                    table = np.cumsum(table, axis=1)
+                else:
+                    table[slot, rank] = bit
+                    table = np.cumsum(table[:, ::-1], axis=1)[:, ::-1]
+                ranked.append((ends[by_end], table.ravel()))
+            axes.append(ranked)
+        chosen = by_block[cuts[block] : cuts[block + 1]]
+        pairs_p, pairs_w = p[chosen], slot_of[w[chosen]] - block * _BLOCK_WORDS
+        first = np.flatnonzero(np.diff(pairs_p, prepend=-1))
+        owners, words = pairs_p[first], np.diff(np.r_[first, len(pairs_p)])
+        # per (part, word): where the word's table starts, and the bits left once its own is out
+        start = pairs_w * width
+        own = np.where(block_words[pairs_w] == pairs_p // 64, pairs_p % 64, 64).astype(np.uint64)
+        others = ~np.left_shift(np.uint64(1), own, where=own < 64, out=np.zeros(len(own), np.uint64))
+        for k, t in _spans(bounds[owners], bounds[owners + 1] - bounds[owners], words):
+            # each triangle once a word of its part's
+            m = words[k]
+            pair = np.repeat(first[k], m) + (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m))
+            at, met = start[pair], others[pair]
+            for axis, ((starts, below), (stops, above)) in enumerate(axes):
+                met &= below[at + np.repeat(np.searchsorted(starts, hi[axis, t], side="right"), m)]
+                met &= above[at + np.repeat(np.searchsorted(stops, lo[axis, t], side="left"), m)]
+            keep[np.repeat(t, m)[met != 0]] = True
 
 
 @dataclass(frozen=True)
