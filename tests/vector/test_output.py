@@ -60,6 +60,22 @@ def test_svg_parses_with_the_image_as_view_box_and_groups_per_part(gear_drawing,
     assert all(p.get("stroke") != "#0a1f44" for (gid, _), p in paths.items() if gid == "gear")
 
 
+def test_dxf_parts_whose_names_sanitise_alike_get_layers_of_their_own(renderer, tmp_path):
+    import ezdxf
+
+    model = assemble({"a/b": box((0, 0, 0), (1, 1, 1)), "a:b": box((2, 0, 0), (3, 1, 1))})
+    drawing = draw_vector(model, size=SIZE, renderer=renderer)
+    doc = ezdxf.readfile(save_drawing(tmp_path / "alike.dxf", drawing))
+    by_layer = {}
+    for entity in doc.modelspace().query("LWPOLYLINE"):
+        by_layer.setdefault(entity.dxf.layer, []).append(min(x for x, *_ in entity.get_points()))
+    visible = {name: xs for name, xs in by_layer.items() if name.endswith("-L0")}
+    assert set(visible) == {layer_name("a/b", 0), "a_b_1-L0"}
+    # each layer holds one box's lines: the boxes lie apart along x
+    left, right = max(visible[layer_name("a/b", 0)]), min(visible["a_b_1-L0"])
+    assert left < right
+
+
 def test_svg_parses_back_to_the_drawing_within_the_output_grid(gear_drawing, tmp_path):
     path = save_drawing(tmp_path / "gear.svg", gear_drawing)
     lines = svg_lines(path)

@@ -128,6 +128,8 @@ def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: floa
     holes and shafts seen square on) as CIRCLE and ARC entities."""
     style, names, offsets = drawing.style, drawing.part_names, drawing.offsets
     page_per_px = drawing.page.factor
+    # the names taken, looked up once a new layer is named (not a scan of every layer made)
+    taken = set(layers.values())
     for part, level, index in groups:
         line = style.level(level, part in drawing.highlight)
         linetype = "CONTINUOUS"
@@ -143,9 +145,10 @@ def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: floa
         name = layers.get((part, level))
         if name is None:
             name = layer_name(names[part] if part < len(names) else f"part{part}", level)
-            while name in layers.values():  # two parts whose names sanitise alike
+            while name in taken:  # two parts whose names sanitise alike
                 name = name[: name.rfind("-L")] + f"_{part}-L{level}"
             layers[(part, level)] = name
+            taken.add(name)
             layer = doc.layers.add(name)
             layer.rgb = tuple(round(c * 255) for c in line.color)
             layer.dxf.linetype = linetype
