@@ -60,17 +60,15 @@ _VECTOR_ONLY = ("scale", "sheet")
 
 
 def output_writer(path: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
-    """``blueprint.api.files.choose_writer(path, *kinds)``, loading the modules that register
-    the vector drawings' and videos' writers only where ``path``'s suffix is not a picture's or
-    layers' (export's own writers): a PNG's drawing, with its start-up, does without them.
+    """The writer of ``path``'s suffix among those that take ``kinds`` (in that order), the path
+    checked writable first: how the API and the command line pick every output format
+    (``blueprint.export.writers.WRITERS``; also ``blueprint.api.files.choose_writer``). The
+    vector drawings' and videos' writers load only for their suffixes.
 
     Returns the path and its ``blueprint.export.writers.Writer``; raises ``InputError`` in one
     line naming the suffixes allowed where the suffix has none of ``kinds``.
     """
     from blueprint.export.writers import WRITERS
-
-    if WRITERS.find(Path(path).suffix, *kinds) is None:
-        import blueprint.api.files  # noqa: F401 - registers every other writer
 
     return WRITERS.choose(path, *kinds)
 

@@ -3,9 +3,8 @@ out (silhouettes: ``blueprint.api.silhouettes``). Each draws with ``renderer``, 
 shared one (``blueprint.api.default_renderer``) when it is None. The command line is a thin
 shell over these: every option is an argument of the same name.
 
-Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``.
-This module imports every module that registers writers (vector drawings) and registers video
-itself, so ``choose_writer`` here knows every format.
+Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``
+(``choose_writer``).
 """
 
 from __future__ import annotations
@@ -20,22 +19,21 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint.api.draw import check_vector_options, vector_drawing
+from blueprint.api.draw import output_writer as choose_writer
 from blueprint.api.frames import shared
 from blueprint.api.renderer import Renderer
 from blueprint.blas import one_blas_thread
 from blueprint.compose.style import Style
 from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
-from blueprint.export.writers import WRITERS, Kind, Writer
+from blueprint.export.writers import Kind
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.media import VIDEO_FORMATS, write_video
 from blueprint.scene.camera import fit_camera
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.settings import FRAME_LIMIT
-from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
 from blueprint.vector.style import VectorStyle
 
 if TYPE_CHECKING:
@@ -45,21 +43,6 @@ if TYPE_CHECKING:
 log = logging.getLogger("blueprint")
 
 __all__ = ["choose_writer", "render_vector_file", "run_pipeline", "turntable"]
-
-
-def choose_writer(output: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
-    """The writer of ``output``'s suffix among those that take ``kinds`` (in that order), the
-    path checked writable first: how the API and the command line pick every output format.
-
-    Raises ``InputError`` in one line naming the suffixes allowed where there is none.
-    """
-    return WRITERS.choose(output, *kinds)
-
-
-# Registered here, not in export/: the encoder is the pipeline's (media.write_video), a layer above.
-for _suffix in VIDEO_FORMATS:
-    WRITERS.add(_suffix, Kind.VIDEO, write_video)
-del _suffix
 
 
 def run_pipeline(

@@ -15,9 +15,7 @@ from blueprint.scene.up import guessed_up
 
 
 def _suffixes(kind: Kind) -> str:
-    """The suffixes of ``kind`` as the registry has them, every writer registered first."""
-    import blueprint.api.files  # noqa: F401 - registers the vector drawings' and videos' writers
-
+    """The suffixes of ``kind`` as the registry has them."""
     return ", ".join(WRITERS.suffixes(kind))
 
 

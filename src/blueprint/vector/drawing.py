@@ -24,7 +24,7 @@ from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
-from blueprint.export.writers import WRITERS, Kind
+from blueprint.export.writers import WRITERS, Kind, Writers
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
@@ -751,7 +751,12 @@ def _write_dxf(path: Path, drawing: Drawing) -> Path:
     return atomic_write(path, lambda tmp: write_dxf(drawing, tmp))
 
 
-WRITERS.add(".svg", Kind.DRAWING, _write_svg)
-WRITERS.add(".pdf", Kind.DRAWING, _write_pdf)
-WRITERS.add(".dxf", Kind.DRAWING, _write_dxf)
-FORMATS = WRITERS.suffixes(Kind.DRAWING)
+_WRITERS = {".svg": _write_svg, ".pdf": _write_pdf, ".dxf": _write_dxf}
+FORMATS = tuple(_WRITERS)
+
+
+def register_writers(writers: Writers) -> None:
+    """Add the vector drawings' writers to ``writers`` (``blueprint.export.writers.PROVIDERS``
+    names this function)."""
+    for suffix, write in _WRITERS.items():
+        writers.add(suffix, Kind.DRAWING, write)
