@@ -21,12 +21,13 @@ from blueprint.bench import time_frames
 from blueprint.cli import STYLE_NAMES
 from blueprint.cli.render import layers as layers_command
 from blueprint.cli.render import render as render_command
+from blueprint.compose.compositor import COMPOSITE
 from blueprint.compose.style import STYLES
 from blueprint.errors import InputError
 from blueprint.export.files import save_layers, save_png
 from blueprint.export.writers import PROVIDERS, WRITERS, Kind, Writers
-from blueprint.ops import COMPOSITE
 from blueprint.pipeline.media import write_video
+from blueprint.pipeline.spec import OPERATIONS
 from blueprint.vector.style import is_style_file, vector_style
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,9 +177,10 @@ def test_a_video_suffix_without_animation_asks_for_it(tmp_path):
 # -- styles ------------------------------------------------------------------------------------------
 def test_one_list_of_raster_styles():
     assert STYLE_NAMES == tuple(STYLES) == ("blueprint", "paper", "transparent", "wireframe")
-    # the composite op lies below compose and lists them for pipelines: it must keep up
+    # the composite op takes its style names from STYLES, and pipelines find it by name
     [style] = [p for p in COMPOSITE.params if p.name == "style"]
     assert style.choices == tuple(STYLES)
+    assert OPERATIONS["composite"] is COMPOSITE
 
 
 def test_vector_styles_by_name_file_or_object(tmp_path):
