@@ -10,7 +10,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import re
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
@@ -41,6 +40,7 @@ from blueprint.scene.sheet import (
     lay_out_sheet,
     model_name,
     paper_size,
+    parse_scale,
     sheet_fields,
 )
 from blueprint.scene.units import drawing_unit, warn_if_assumed
@@ -210,24 +210,6 @@ class Drawing:
     def page_width(self) -> float:
         """Base line width in page units."""
         return self.line_width * (SCALED_PEN_MM if self.page.unit == "mm" else 1.0)
-
-
-def parse_scale(scale: str | float | None) -> float | None:
-    """'1:50' (or '50', 50) to 50.0; '2:1' to 0.5; None stays None."""
-    if scale is None:
-        return None
-    if isinstance(scale, int | float):
-        value = float(scale)
-    else:
-        text = str(scale).strip()
-        match = re.fullmatch(r"\s*([0-9.]+)\s*[:/]\s*([0-9.]+)\s*", text)
-        try:
-            value = float(match.group(2)) / float(match.group(1)) if match else float(text)
-        except (ValueError, ZeroDivisionError):
-            raise InputError(f"scale must look like 1:50, got {scale!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"scale must look like 1:50, got {scale!r}")
-    return value
 
 
 def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
