@@ -12,18 +12,18 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from blueprint.api.draw import check_vector_options, vector_drawing
 from blueprint.api.draw import output_writer as choose_writer
-from blueprint.api.frames import shared
+from blueprint.api.draw import vector_drawing
+from blueprint.api.frames import as_model, shared
+from blueprint.api.options import DrawOptions, options_but, takes_options, zero_layers_are_all
 from blueprint.api.renderer import Renderer
 from blueprint.blas import one_blas_thread
-from blueprint.compose.style import Style
 from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
 from blueprint.export.writers import Kind
@@ -34,10 +34,8 @@ from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.settings import FRAME_LIMIT
-from blueprint.vector.style import VectorStyle
 
 if TYPE_CHECKING:
-    from blueprint.compose.glyphs import Glyphs
     from blueprint.pipeline.state import Result
 
 log = logging.getLogger("blueprint")
@@ -200,55 +198,45 @@ def turntable(
     return write(output, pictures(), fps=fps, crf=crf)
 
 
+# What a vector drawing file takes of the options: every one but the picture's own.
+VECTOR_OPTIONS = options_but(
+    "camera",
+    "supersample",
+    "min_fraction",
+    "grid",
+    "depth_threshold",
+    "part_edges",
+    "id_silhouettes",
+    "profile",
+)
+
+
+@takes_options(*VECTOR_OPTIONS, prepare=zero_layers_are_all)
 @one_blas_thread
 def render_vector_file(
     model: Model | str | os.PathLike,
     output: str | os.PathLike,
+    options: DrawOptions,
     *,
-    size: tuple[int, int] = (1024, 1024),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
-    style: str | os.PathLike | Style | VectorStyle = "blueprint",
-    max_layers: int | None = 8,
-    crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    scale: str | float | None = None,
-    units: str | None = None,
-    highlight: Iterable[str | int] | str | int | Model | None = None,
-    reveal: float | None = None,
-    section: str | None = None,
-    section_plane: str | Sequence[float] | None = None,
-    section_keep: Iterable[str | int] | str | int | Model | None = None,
-    sheet: str | None = None,
-    title: str | None = None,
-    dimensions: bool = False,
-    glyphs: Glyphs | str | os.PathLike | None = None,
-    shade: Iterable[str | int] | str | int | Model | None = None,
-    shade_opacity: float = 1.0,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
 
     Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
-    line with its occlusion level and writes the file atomically. ``style`` is a raster style's
-    name, a line style file or a ``VectorStyle`` (see ``blueprint.vector.style.vector_style``).
-    A ``scale`` ('1:50') makes the view orthographic and lays the page out in millimetres
-    (``units``: the model's length unit). ``max_layers`` None or 0 peels every layer.
-    ``section``, ``section_plane`` and ``section_keep`` draw a section view (as
-    ``blueprint.render_frame`` does), its hatching and cut outline a group of their own.
-    A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
-    default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper. ``dimensions`` draws
-    the overall width and height of orthographic views and the diameters of the circles
-    their lines find (ISO 129, in mm). ``glyphs`` (a ``Glyphs`` or a glyph file) are drawn over
-    one view, dashed or dimmed where hidden, its ``[[dimension]]`` entries as dimensions;
-    ``shade`` parts are filled polygons in depth order (``shade_opacity``), over the lines
-    behind them.
+    line with its occlusion level and writes the file atomically. ``options`` (a
+    ``DrawOptions``) and its fields as keywords, over it where both are given, say what is
+    drawn: ``style`` is a raster style's name, a line style file or a ``VectorStyle`` (see
+    ``blueprint.vector.style.vector_style``). A ``scale`` ('1:50') makes the view orthographic
+    and lays the page out in millimetres (``units``: the model's length unit). ``max_layers``
+    None or 0 peels every layer. ``section``, ``section_plane`` and ``section_keep`` draw a
+    section view (as ``blueprint.render_frame`` does), its hatching and cut outline a group of
+    their own. A plan sheet (``view="plan"``) is labelled, bordered and has a title block
+    (``title``, default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper.
+    ``dimensions`` draws the overall width and height of orthographic views and the diameters
+    of the circles their lines find (ISO 129, in mm). ``glyphs`` (a ``Glyphs`` or a glyph
+    file) are drawn over one view, dashed or dimmed where hidden, its ``[[dimension]]``
+    entries as dimensions; ``shade`` parts are filled polygons in depth order
+    (``shade_opacity``), over the lines behind them.
 
     Returns
     -------
@@ -260,37 +248,11 @@ def render_vector_file(
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
-    style = check_vector_options(style, scale, units)
+    options.vector_style  # noqa: B018 - a style the drawing cannot take fails before the model loads
     clock = time.perf_counter()
-    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
+    loaded = as_model(model, options)
     load_s = time.perf_counter() - clock
-    drawing = vector_drawing(
-        loaded,
-        size=size,
-        view=view,
-        azimuth=azimuth,
-        elevation=elevation,
-        fov=fov,
-        ortho=ortho,
-        style=style,
-        max_layers=max_layers,
-        crease_angle=crease_angle,
-        line_width=line_width,
-        highlight=highlight,
-        reveal=reveal,
-        scale=scale,
-        units=units,
-        section=section,
-        section_plane=section_plane,
-        section_keep=section_keep,
-        sheet=sheet,
-        title=title,
-        dimensions=dimensions,
-        glyphs=glyphs,
-        shade=shade,
-        shade_opacity=shade_opacity,
-        renderer=renderer,
-    )
+    drawing = vector_drawing(loaded, options, shared(renderer))
     clock = time.perf_counter()
     write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}

@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     from blueprint.compose.linestyle import VectorStyle
     from blueprint.scene.section import SectionPlane
 
-__all__ = ["GROUPS", "PLAN", "DrawOptions", "PartSpec", "option_fields", "takes_options"]
+__all__ = ["GROUPS", "PLAN", "DrawOptions", "PartSpec", "option_fields", "options_but", "takes_options"]
 
 #: The view name of a drawing sheet: top, front and right orthographic views plus an iso view.
 PLAN = "plan"
@@ -427,6 +427,12 @@ def _read_glyphs(glyphs) -> Glyphs:
 def option_fields() -> dict[str, dataclasses.Field]:
     """The fields of ``DrawOptions`` by name, in their order."""
     return {f.name: f for f in fields(DrawOptions)}
+
+
+def options_but(*left_out: str) -> tuple[str, ...]:
+    """The names of ``DrawOptions``' fields, in their order, but ``left_out``."""
+    assert set(left_out) <= set(option_fields()), left_out
+    return tuple(name for name in option_fields() if name not in left_out)
 
 
 def takes_options(

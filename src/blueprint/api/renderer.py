@@ -86,12 +86,10 @@ class Renderer(LayerRenderer):
             back then: ``Frame.layers_left`` is not counted (0).
         """
         # the pipeline is for pictures: vector drawings and depth layers start without it
+        from blueprint.api.options import DrawOptions
         from blueprint.pipeline.blueprint import render_blueprint
 
-        return render_blueprint(
-            self,
-            model,
-            camera,
+        options = DrawOptions(
             size=size,
             view=view,
             style=style,
@@ -107,6 +105,7 @@ class Renderer(LayerRenderer):
             reveal=reveal,
             shade=shade,
             shade_opacity=shade_opacity,
-            profile=profile,
-            on_gpu=on_gpu,
+        )
+        return render_blueprint(
+            self, model, camera, profile=profile, on_gpu=on_gpu, **options.frame_keywords(model)
         )
