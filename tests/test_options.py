@@ -193,3 +193,58 @@ def test_zero_layers_are_all_where_an_entry_point_says_so():
         return options.max_layers
 
     assert (entry(max_layers=0), entry(max_layers=3), entry()) == (None, 3, 8)
+
+
+# -- the command line --------------------------------------------------------------------------------
+def test_the_command_line_names_its_flags_where_the_api_names_an_argument():
+    from blueprint.cli.options import with_flags
+
+    assert (
+        with_flags("line_width must be in [1, 16] pixels, got 20")
+        == "--line-width must be in [1, 16] pixels, got 20"
+    )
+    assert with_flags("shade_opacity must be in (0, 1], got 0") == "--shade-opacity must be in (0, 1], got 0"
+    # spelled the same either way, or not an option: as it is
+    for same in (
+        "supersample must be 1, 2, 3 or 4, got 9",
+        "p.toml: variables.line_width: unknown variable",
+        "/tmp/line_width.stl: no triangles in the file",
+        "style x: hidden_width must be in (0, 16], got 20",
+    ):
+        assert with_flags(same) == same
+
+
+def test_the_render_command_takes_its_options_from_the_fields():
+    from blueprint.cli.render import RENDER_OPTIONS
+    from blueprint.cli.render import render as command
+
+    params = {p.name: p for p in command.params}
+    on_cli = {n for n, f in option_fields().items() if f.metadata["cli"]}
+    assert set(RENDER_OPTIONS) == on_cli
+    assert set(params) == on_cli | {"model", "output", "highlight_model"}
+    for name in on_cli:
+        f, option = option_fields()[name], params[name]
+        assert option.opts == ["--" + name.replace("_", "-")]
+        assert option.help == f.metadata["help"]
+        expected = (1024, 1024) if name == "size" else f.default
+        assert option.default == expected, name
+
+
+@pytest.mark.parametrize(
+    ("flags", "line"),
+    [
+        (["--line-width", "20"], "--line-width must be in [1, 16] pixels, got 20.0"),
+        (["--max-layers", "300"], "--max-layers must be between 1 and 256, got 300"),
+        (["--shade", "0", "--shade-opacity", "0"], "--shade-opacity must be in (0, 1], got 0.0"),
+        (["--supersample", "9"], "supersample must be 1, 2, 3 or 4, got 9"),
+        (["--reveal", "0.5"], "reveal needs parts to reveal: give highlight as well"),
+    ],
+)
+def test_the_command_line_prints_the_check_with_its_flag(tmp_path, capsys, flags, line):
+    from blueprint import cli
+
+    with pytest.raises(SystemExit) as exited:
+        cli.main(["render", str(examples.example_path()), "-o", str(tmp_path / "x.png"), *flags])
+    assert exited.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"blueprint: error: {line}"
+    assert not list(tmp_path.iterdir())

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from blueprint.compose.linestyle import FILE_SUFFIXES
 from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
@@ -210,7 +211,12 @@ class DrawOptions:
         None, "layers", "Depth masking: peel until this fraction of the highlighted parts shows.", kind=float
     )
     # -- style
-    style: str | os.PathLike | Style | VectorStyle = _option("blueprint", "style", "The style.")
+    style: str | os.PathLike | Style | VectorStyle = _option(
+        "blueprint",
+        "style",
+        f"One of {', '.join(STYLES)}, or a line style file ({' or '.join(FILE_SUFFIXES)}: colour, width, "
+        "dash and opacity per occlusion level; pictures draw no dashes).",
+    )
     grid: float | None = _option(None, "style", "Grid spacing in pixels (0: none).", kind=float)
     line_width: float = _option(1.0, "style", "Pixels.")
     crease_angle: float = _option(30.0, "style", "Degrees.")
