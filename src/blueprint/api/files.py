@@ -28,9 +28,6 @@ from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
 from blueprint.export.writers import Kind
 from blueprint.gpu.device import check_size
-from blueprint.scene.camera import fit_camera
-from blueprint.scene.environment import PartGlobs
-from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.settings import FRAME_LIMIT
@@ -43,20 +40,17 @@ log = logging.getLogger("blueprint")
 __all__ = ["choose_writer", "render_vector_file", "run_pipeline", "turntable"]
 
 
+# What a pipeline takes of the options: where the camera looks from and the model file's parts.
+PIPELINE_OPTIONS = ("size", "view", "azimuth", "elevation", "fov", "ortho", "up", "include", "exclude")
+
+
+@takes_options(*PIPELINE_OPTIONS, size=None)
 def run_pipeline(
     pipeline,
     input: str | os.PathLike | None = None,
     output: str | os.PathLike | None = None,
+    options: DrawOptions | None = None,
     *,
-    size: tuple[int, int] | None = None,
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
     set: dict | None = None,
     image: dict[str, str] | None = None,
     parts: dict[str, str] | None = None,
@@ -73,7 +67,10 @@ def run_pipeline(
     a video ``output`` (at most ``frames`` frames). ``set`` overrides variables, ``image``
     gives image files by name, ``parts`` the sets of parts that attributes of chosen parts
     name (``{"highlight": "gear*"}``: name globs or indices, as ``--highlight`` takes them),
-    ``dump`` names targets to write beside the output. Returns the last frame's result.
+    ``dump`` names targets to write beside the output. ``options`` (``DrawOptions``, its
+    fields ``size``, default the pipeline's own, ``view``, ``azimuth``, ``elevation``, ``fov``,
+    ``ortho``, ``up``, ``include`` and ``exclude`` keywords too) place the camera and load the
+    model. Returns the last frame's result.
     """
     # the executor and its passes load for pipelines only, not for every drawing
     from blueprint.pipeline.executor import executor_for
@@ -88,7 +85,7 @@ def run_pipeline(
     model = None
     if input is not None:
         if plan.needs_model:
-            model = load_model(input, up=up, include=include, exclude=exclude)
+            model = as_model(input, options)
         else:
             free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
             if not free:
@@ -114,49 +111,48 @@ def run_pipeline(
         output = check_output(output, PICTURE_SUFFIXES)
     formats = {d: bound.format_of(plan.resolve(d)) for d in dump}
     if max_layers is not None and not 0 <= max_layers <= 256:
-        raise InputError(f"max-layers must be between 0 (all) and 256, got {max_layers}")
-    options = dict(variables=variables, dumps=tuple(dump))
+        raise InputError(f"max_layers must be between 0 (all) and 256, got {max_layers}")
+    run = dict(variables=variables, dumps=tuple(dump))
     if parts:
         if model is None:
             raise InputError(f"{spec.source}: parts are parts of a model: give a model")
-        options["parts"] = {name: designated_parts(model, chosen) for name, chosen in parts.items()}
+        run["parts"] = {name: designated_parts(model, chosen) for name, chosen in parts.items()}
     if max_layers is not None:
-        options["max_layers"] = max_layers or None
-    camera = None
+        run["max_layers"] = max_layers or None
+    camera, size = None, options.size
     if model is not None:
-        w, h = size or bound.size or (1024, 1024)
-        camera = fit_camera(model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-        size = (w, h)
+        size = size or bound.size or (1024, 1024)
+        camera = options.fit_camera(model, size)
     with out_of_memory(str(spec.source)):
         if videos:
-            return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
-        result = ex.run(spec, model, camera, size=size, **options)
+            return run_video(ex, spec, videos, model, camera, size, output, frames, run, progress)
+        result = ex.run(spec, model, camera, size=size, **run)
     save_result(result, output, formats)
     return result
 
 
+# What a turntable takes of the options: the orbit's camera and the model file's parts.
+TURNTABLE_OPTIONS = ("size", "elevation", "azimuth", "fov", "ortho", "up", "include", "exclude")
+
+
+@takes_options(*TURNTABLE_OPTIONS, size=(640, 480), azimuth=0.0)
 def turntable(
     model,
     output: str | os.PathLike,
+    options: DrawOptions,
     *,
     frames: int = 60,
     fps: float = 30.0,
-    size: tuple[int, int] = (640, 480),
     pipeline="blueprint",
-    elevation: float | None = None,
-    azimuth: float = 0.0,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
     set: dict | None = None,
     crf: int = 18,
     renderer: Renderer | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
-    (default: the blueprint) as a video, atomically."""
+    (default: the blueprint) as a video, atomically. ``options`` (``DrawOptions``, its fields
+    ``size``, ``elevation``, ``azimuth`` (of the first frame), ``fov``, ``ortho``, ``up``,
+    ``include`` and ``exclude`` keywords too) place the camera and load the model."""
     output, write = choose_writer(output, Kind.VIDEO)
     if frames < 1:
         raise InputError(f"frames must be at least 1, got {frames}")
@@ -176,10 +172,10 @@ def turntable(
     plan = ex.plan(spec, variables)
     if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
-    model = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
-    size = tuple(int(v) for v in size)
-    check_size(size, 1, renderer.max_texture)
-    cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
+    model = as_model(model, options)
+    size = check_size(options.size, 1, renderer.max_texture)
+    turn = dict(elevation=options.elevation, azimuth=options.azimuth, fov=options.fov, ortho=options.ortho)
+    cameras = orbit(model, frames, size, **turn)
 
     def pictures():
         # streamed: a frame is read back while the next one is drawn
