@@ -23,10 +23,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from blueprint.compose.linestyle import FILE_SUFFIXES
-from blueprint.compose.style import STYLES, Style
+from blueprint.compose.style import FILE_SUFFIXES, STYLES, Style
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
+from blueprint.render.stop import HARD_MAX_LAYERS
 from blueprint.scene.camera import VIEWS, Camera
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import paper_size, parse_scale
@@ -48,10 +48,6 @@ PartSpec = str | int | Sequence[str | int] | Model | np.ndarray
 
 #: The groups of options, in the order the fields list them.
 GROUPS = ("camera", "model", "size", "layers", "style", "masking", "section", "sheet", "glyphs", "output")
-
-# The most layers a drawing peels (blueprint.render.stop.HARD_MAX_LAYERS, not imported: the
-# render package loads with the renderer, not with the options).
-_MAX_LAYERS = 256
 
 
 def _option(
@@ -292,8 +288,8 @@ class DrawOptions:
             object.__setattr__(self, "size", check_size(self.size, self.supersample, sys.maxsize))
         elif not 1 <= self.supersample <= 4:
             raise InputError(f"supersample must be 1, 2, 3 or 4, got {self.supersample}")
-        if self.max_layers is not None and not 1 <= self.max_layers <= _MAX_LAYERS:
-            raise InputError(f"max_layers must be between 1 and {_MAX_LAYERS}, got {self.max_layers}")
+        if self.max_layers is not None and not 1 <= self.max_layers <= HARD_MAX_LAYERS:
+            raise InputError(f"max_layers must be between 1 and {HARD_MAX_LAYERS}, got {self.max_layers}")
         _within("min_fraction", self.min_fraction, 0.0, 1.0)
         if self.reveal is not None:
             if self.highlight is None:
@@ -321,17 +317,17 @@ class DrawOptions:
     def _check_style(self) -> None:
         """A style name of ``STYLES``, a line style file (read now) or a style object; and the
         grid spacing that overrides the style's."""
-        from blueprint.compose.linestyle import VectorStyle, is_style_file
-
         style, lines = self.style, None
-        if isinstance(style, os.PathLike) or is_style_file(style):
-            from blueprint.compose.linestyle import load_vector_style
+        # a style by name or object, most drawings' case, does without the line style module
+        if not (isinstance(style, Style) or (isinstance(style, str) and style in STYLES)):
+            from blueprint.compose.linestyle import VectorStyle, is_style_file, load_vector_style
 
-            lines = load_vector_style(style)
-        elif isinstance(style, VectorStyle):
-            lines = style
-        elif not isinstance(style, Style) and style not in STYLES:
-            raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)} or a line style file)")
+            if isinstance(style, os.PathLike) or is_style_file(style):
+                lines = load_vector_style(style)
+            elif isinstance(style, VectorStyle):
+                lines = style
+            else:
+                raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)} or a line style file)")
         object.__setattr__(self, "_lines", lines)
         if self.grid is not None and not (math.isfinite(self.grid) and self.grid >= 0):
             raise InputError(f"grid must be a spacing of pixels >= 0, got {self.grid}")

@@ -1,6 +1,8 @@
-"""What every command shares: the camera options and the progress bar; and, from
-``blueprint.cli.shell``, the one-line warnings and ``run``, which makes a click command a program
-whose user errors are one line and exit code 2."""
+"""What every command shares: the drawing options, made from the fields of the API's
+``DrawOptions`` (``drawing_options``, ``drawing_values``; the camera's are ``camera_options``),
+the flags that name the API's arguments in its errors (``with_flags``) and the progress bar;
+and, from ``blueprint.cli.shell``, the one-line warnings and ``run``, which makes a click
+command a program whose user errors are one line and exit code 2."""
 
 from __future__ import annotations
 

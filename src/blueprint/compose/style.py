@@ -123,6 +123,11 @@ STYLES: dict[str, Style] = {
 }
 
 
+#: A style that ends in one of these is a line style file (``blueprint.compose.linestyle``), not
+#: a name.
+FILE_SUFFIXES = (".toml", ".json")
+
+
 def get_style(style: str | os.PathLike | Style, grid: float | None = None) -> Style:
     """A style of ``STYLES`` by name, a line style file (a path, or a name ending in ``.toml``
     or ``.json``: ``blueprint.compose.linestyle.load_raster_style``), or a Style; ``grid``
