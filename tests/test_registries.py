@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import importlib
 import inspect
 from pathlib import Path
 
@@ -20,12 +21,13 @@ from blueprint.bench import time_frames
 from blueprint.cli import STYLE_NAMES
 from blueprint.cli.render import layers as layers_command
 from blueprint.cli.render import render as render_command
+from blueprint.compose.compositor import COMPOSITE
 from blueprint.compose.style import STYLES
 from blueprint.errors import InputError
 from blueprint.export.files import save_layers, save_png
-from blueprint.export.writers import WRITERS, Kind, Writers
-from blueprint.ops import COMPOSITE
+from blueprint.export.writers import PROVIDERS, WRITERS, Kind, Writers
 from blueprint.pipeline.media import write_video
+from blueprint.pipeline.spec import OPERATIONS
 from blueprint.vector.style import is_style_file, vector_style
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -105,7 +107,18 @@ def test_one_suffix_may_have_a_writer_per_kind(writers, tmp_path):
 
 # -- the package's registry ---------------------------------------------------------------------------
 def test_every_format_and_its_writer():
-    """Once blueprint.api.files is imported (this module does), every layer has registered."""
+    """The kinds made above export are registered by the functions ``PROVIDERS`` names, each
+    of its own kind, when a suffix of that kind is first looked for."""
+    assert PROVIDERS == {
+        Kind.DRAWING: "blueprint.vector.drawing:register_writers",
+        Kind.VIDEO: "blueprint.pipeline.media:register_writers",
+    }
+    for kind, provider in PROVIDERS.items():
+        own = Writers()
+        module, function = provider.split(":")
+        getattr(importlib.import_module(module), function)(own)
+        assert {k for k, _ in own._writers} == {kind}
+    assert WRITERS.suffixes(*Kind)
     table = {(w.kind, w.suffix): w.write for w in WRITERS._writers.values()}
     assert table == {
         (Kind.IMAGE, ".png"): save_png,
@@ -164,9 +177,10 @@ def test_a_video_suffix_without_animation_asks_for_it(tmp_path):
 # -- styles ------------------------------------------------------------------------------------------
 def test_one_list_of_raster_styles():
     assert STYLE_NAMES == tuple(STYLES) == ("blueprint", "paper", "transparent", "wireframe")
-    # the composite op lies below compose and lists them for pipelines: it must keep up
+    # the composite op takes its style names from STYLES, and pipelines find it by name
     [style] = [p for p in COMPOSITE.params if p.name == "style"]
     assert style.choices == tuple(STYLES)
+    assert OPERATIONS["composite"] is COMPOSITE
 
 
 def test_vector_styles_by_name_file_or_object(tmp_path):
@@ -213,3 +227,21 @@ def test_every_render_option_is_an_api_argument():
         assert param.name in frame | vector, f"--{param.name} is no argument of the API"
     assert {p.name for p in layers_command.params} - {"model", "output"} <= set(_keywords(peel))
     assert "output" in inspect.signature(render_vector_file).parameters
+
+
+def test_writers_register_when_their_kind_is_first_looked_for(tmp_path):
+    """A picture's suffix is found without loading the vector drawings' writers; a vector
+    drawing's loads them, and a suffix of no kind asked for lists every kind's."""
+    code = (
+        "import sys\n"
+        "from blueprint.export.writers import WRITERS, Kind\n"
+        f"WRITERS.choose({str(tmp_path / 'a.png')!r}, Kind.IMAGE, Kind.DRAWING)\n"
+        "print('blueprint.vector.drawing' in sys.modules, 'blueprint.pipeline.media' in sys.modules)\n"
+        f"WRITERS.choose({str(tmp_path / 'a.svg')!r}, Kind.IMAGE, Kind.DRAWING)\n"
+        "print('blueprint.vector.drawing' in sys.modules, 'blueprint.pipeline.media' in sys.modules)\n"
+    )
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split("\n")[:2] == ["False False", "True False"]

@@ -23,6 +23,7 @@ _EXPORTS = {
     "Drawing": "blueprint.api.draw",
     "draw": "blueprint.api.draw",
     "batch": "blueprint.api.batch",
+    "DrawOptions": "blueprint.api.options",
     "Renderer": "blueprint.api.renderer",
     "Glyphs": "blueprint.compose.glyphs",
     "draw_glyphs": "blueprint.compose.glyphs",
@@ -56,6 +57,7 @@ __all__ = [
     "BlueprintError",
     "Camera",
     "Cut",
+    "DrawOptions",
     "Drawing",
     "Frame",
     "GLUnavailableError",
@@ -93,6 +95,7 @@ if TYPE_CHECKING:
     from blueprint.api import default_renderer, peel, render, render_frame
     from blueprint.api.batch import batch
     from blueprint.api.draw import Drawing, draw
+    from blueprint.api.options import DrawOptions
     from blueprint.api.renderer import Renderer
     from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
     from blueprint.compose.style import STYLES, Style

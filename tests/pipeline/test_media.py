@@ -117,11 +117,11 @@ def cli():
 
 
 def test_cli_ops_lists_every_operation(cli, capsys):
-    from blueprint.ops import OPS
+    from blueprint.pipeline.spec import OPERATIONS
 
     assert cli("ops", "--json") == 0
     records = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
-    assert [r["name"] for r in records] == list(OPS)
+    assert [r["name"] for r in records] == list(OPERATIONS)
     sobel = next(r for r in records if r["name"] == "sobel")
     assert sobel["inputs"] == {"source": "float"} and {p["name"] for p in sobel["params"]} == {
         "threshold",

@@ -15,8 +15,9 @@ import pytest
 
 from blueprint import examples
 from blueprint.compose.style import STYLES
-from blueprint.ops import BLUR, OPS
+from blueprint.ops import BLUR
 from blueprint.pipeline.executor import executor_for
+from blueprint.pipeline.spec import OPERATIONS
 from blueprint.scene.camera import fit_camera
 
 H, W = 11, 13
@@ -52,7 +53,7 @@ def exact_away_from_ties(actual, expected, margin, tol=1e-4):
 def test_every_op_has_a_shader_file_and_is_tested():
     from importlib import resources
 
-    for op in OPS.values():
+    for op in OPERATIONS.values():
         package, name = op.shader.split(":")
         assert resources.files(package).joinpath(name).is_file(), op.shader
     tested = {
@@ -79,7 +80,7 @@ def test_every_op_has_a_shader_file_and_is_tested():
         "shade",
     }
     tested.add("shade_layer")  # accumulates over a peel: tests/pipeline/test_executor.py
-    assert set(OPS) == tested
+    assert set(OPERATIONS) == tested
 
 
 # -- edge detectors ------------------------------------------------------------------------------

@@ -103,7 +103,7 @@ def test_see_through_shading_and_bad_opacity(renderer, tmp_path):
     root = ET.parse(save_drawing(tmp_path / "half.svg", drawing)).getroot()
     shading = next(g for g in root if g.get("id") == "shading")
     assert shading.get("opacity") == "0.4"
-    with pytest.raises(InputError, match="shade-opacity"):
+    with pytest.raises(InputError, match="shade_opacity"):
         _scene(renderer, shade_opacity=0.0)
 
 

@@ -1,8 +1,10 @@
 """The Python API: frames (``render``, ``peel``: ``blueprint.api.frames``) and the file
 workflows (a model, image or video file in, a picture, drawing, video or data file out:
-``blueprint.api.files``), drawn with a renderer shared by every call that is given none."""
+``blueprint.api.files``), drawn with a renderer shared by every call that is given none; their
+options as one checked value, ``DrawOptions`` (``blueprint.api.options``)."""
 
 from blueprint.api.frames import PLAN, peel, render, render_frame
+from blueprint.api.options import DrawOptions
 from blueprint.api.renderer import Renderer
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
@@ -16,6 +18,7 @@ __all__ = [
     "PLAN",
     "SHEET_CELLS",
     "Camera",
+    "DrawOptions",
     "Frame",
     "Glyphs",
     "InputError",

@@ -3,9 +3,8 @@ out (silhouettes: ``blueprint.api.silhouettes``). Each draws with ``renderer``, 
 shared one (``blueprint.api.default_renderer``) when it is None. The command line is a thin
 shell over these: every option is an argument of the same name.
 
-Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``.
-This module imports every module that registers writers (vector drawings) and registers video
-itself, so ``choose_writer`` here knows every format.
+Outputs are written by the writer their suffix names in ``blueprint.export.writers.WRITERS``
+(``choose_writer``).
 """
 
 from __future__ import annotations
@@ -13,33 +12,27 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from blueprint.api.draw import check_vector_options, vector_drawing
-from blueprint.api.frames import shared
+from blueprint.api.draw import output_writer as choose_writer
+from blueprint.api.draw import vector_drawing
+from blueprint.api.frames import as_model, shared
+from blueprint.api.options import DrawOptions, options_but, takes_options, zero_layers_are_all
 from blueprint.api.renderer import Renderer
 from blueprint.blas import one_blas_thread
-from blueprint.compose.style import Style
 from blueprint.errors import InputError, out_of_memory
 from blueprint.export.files import check_output
-from blueprint.export.writers import WRITERS, Kind, Writer
+from blueprint.export.writers import Kind
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.media import VIDEO_FORMATS, write_video
-from blueprint.scene.camera import fit_camera
-from blueprint.scene.environment import PartGlobs
-from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.settings import FRAME_LIMIT
-from blueprint.vector import drawing as _drawing  # noqa: F401 - registers the SVG, PDF and DXF writers
-from blueprint.vector.style import VectorStyle
 
 if TYPE_CHECKING:
-    from blueprint.compose.glyphs import Glyphs
     from blueprint.pipeline.state import Result
 
 log = logging.getLogger("blueprint")
@@ -47,35 +40,17 @@ log = logging.getLogger("blueprint")
 __all__ = ["choose_writer", "render_vector_file", "run_pipeline", "turntable"]
 
 
-def choose_writer(output: str | os.PathLike, *kinds: Kind) -> tuple[Path, Writer]:
-    """The writer of ``output``'s suffix among those that take ``kinds`` (in that order), the
-    path checked writable first: how the API and the command line pick every output format.
-
-    Raises ``InputError`` in one line naming the suffixes allowed where there is none.
-    """
-    return WRITERS.choose(output, *kinds)
+# What a pipeline takes of the options: where the camera looks from and the model file's parts.
+PIPELINE_OPTIONS = ("size", "view", "azimuth", "elevation", "fov", "ortho", "up", "include", "exclude")
 
 
-# Registered here, not in export/: the encoder is the pipeline's (media.write_video), a layer above.
-for _suffix in VIDEO_FORMATS:
-    WRITERS.add(_suffix, Kind.VIDEO, write_video)
-del _suffix
-
-
+@takes_options(*PIPELINE_OPTIONS, size=None)
 def run_pipeline(
     pipeline,
     input: str | os.PathLike | None = None,
     output: str | os.PathLike | None = None,
+    options: DrawOptions | None = None,
     *,
-    size: tuple[int, int] | None = None,
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
     set: dict | None = None,
     image: dict[str, str] | None = None,
     parts: dict[str, str] | None = None,
@@ -92,7 +67,10 @@ def run_pipeline(
     a video ``output`` (at most ``frames`` frames). ``set`` overrides variables, ``image``
     gives image files by name, ``parts`` the sets of parts that attributes of chosen parts
     name (``{"highlight": "gear*"}``: name globs or indices, as ``--highlight`` takes them),
-    ``dump`` names targets to write beside the output. Returns the last frame's result.
+    ``dump`` names targets to write beside the output. ``options`` (``DrawOptions``, its
+    fields ``size``, default the pipeline's own, ``view``, ``azimuth``, ``elevation``, ``fov``,
+    ``ortho``, ``up``, ``include`` and ``exclude`` keywords too) place the camera and load the
+    model. Returns the last frame's result.
     """
     # the executor and its passes load for pipelines only, not for every drawing
     from blueprint.pipeline.executor import executor_for
@@ -107,7 +85,7 @@ def run_pipeline(
     model = None
     if input is not None:
         if plan.needs_model:
-            model = load_model(input, up=up, include=include, exclude=exclude)
+            model = as_model(input, options)
         else:
             free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
             if not free:
@@ -133,49 +111,48 @@ def run_pipeline(
         output = check_output(output, PICTURE_SUFFIXES)
     formats = {d: bound.format_of(plan.resolve(d)) for d in dump}
     if max_layers is not None and not 0 <= max_layers <= 256:
-        raise InputError(f"max-layers must be between 0 (all) and 256, got {max_layers}")
-    options = dict(variables=variables, dumps=tuple(dump))
+        raise InputError(f"max_layers must be between 0 (all) and 256, got {max_layers}")
+    run = dict(variables=variables, dumps=tuple(dump))
     if parts:
         if model is None:
             raise InputError(f"{spec.source}: parts are parts of a model: give a model")
-        options["parts"] = {name: designated_parts(model, chosen) for name, chosen in parts.items()}
+        run["parts"] = {name: designated_parts(model, chosen) for name, chosen in parts.items()}
     if max_layers is not None:
-        options["max_layers"] = max_layers or None
-    camera = None
+        run["max_layers"] = max_layers or None
+    camera, size = None, options.size
     if model is not None:
-        w, h = size or bound.size or (1024, 1024)
-        camera = fit_camera(model, (w, h), view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-        size = (w, h)
+        size = size or bound.size or (1024, 1024)
+        camera = options.fit_camera(model, size)
     with out_of_memory(str(spec.source)):
         if videos:
-            return run_video(ex, spec, videos, model, camera, size, output, frames, options, progress)
-        result = ex.run(spec, model, camera, size=size, **options)
+            return run_video(ex, spec, videos, model, camera, size, output, frames, run, progress)
+        result = ex.run(spec, model, camera, size=size, **run)
     save_result(result, output, formats)
     return result
 
 
+# What a turntable takes of the options: the orbit's camera and the model file's parts.
+TURNTABLE_OPTIONS = ("size", "elevation", "azimuth", "fov", "ortho", "up", "include", "exclude")
+
+
+@takes_options(*TURNTABLE_OPTIONS, size=(640, 480), azimuth=0.0)
 def turntable(
     model,
     output: str | os.PathLike,
+    options: DrawOptions,
     *,
     frames: int = 60,
     fps: float = 30.0,
-    size: tuple[int, int] = (640, 480),
     pipeline="blueprint",
-    elevation: float | None = None,
-    azimuth: float = 0.0,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
     set: dict | None = None,
     crf: int = 18,
     renderer: Renderer | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
     """Orbit the camera once around ``model`` and write ``frames`` frames of ``pipeline``
-    (default: the blueprint) as a video, atomically."""
+    (default: the blueprint) as a video, atomically. ``options`` (``DrawOptions``, its fields
+    ``size``, ``elevation``, ``azimuth`` (of the first frame), ``fov``, ``ortho``, ``up``,
+    ``include`` and ``exclude`` keywords too) place the camera and load the model."""
     output, write = choose_writer(output, Kind.VIDEO)
     if frames < 1:
         raise InputError(f"frames must be at least 1, got {frames}")
@@ -195,10 +172,10 @@ def turntable(
     plan = ex.plan(spec, variables)
     if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
-    model = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
-    size = tuple(int(v) for v in size)
-    check_size(size, 1, renderer.max_texture)
-    cameras = orbit(model, frames, size, elevation=elevation, azimuth=azimuth, fov=fov, ortho=ortho)
+    model = as_model(model, options)
+    size = check_size(options.size, 1, renderer.max_texture)
+    turn = dict(elevation=options.elevation, azimuth=options.azimuth, fov=options.fov, ortho=options.ortho)
+    cameras = orbit(model, frames, size, **turn)
 
     def pictures():
         # streamed: a frame is read back while the next one is drawn
@@ -217,55 +194,45 @@ def turntable(
     return write(output, pictures(), fps=fps, crf=crf)
 
 
+# What a vector drawing file takes of the options: every one but the picture's own.
+VECTOR_OPTIONS = options_but(
+    "camera",
+    "supersample",
+    "min_fraction",
+    "grid",
+    "depth_threshold",
+    "part_edges",
+    "id_silhouettes",
+    "profile",
+)
+
+
+@takes_options(*VECTOR_OPTIONS, prepare=zero_layers_are_all)
 @one_blas_thread
 def render_vector_file(
     model: Model | str | os.PathLike,
     output: str | os.PathLike,
+    options: DrawOptions,
     *,
-    size: tuple[int, int] = (1024, 1024),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
-    style: str | os.PathLike | Style | VectorStyle = "blueprint",
-    max_layers: int | None = 8,
-    crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    scale: str | float | None = None,
-    units: str | None = None,
-    highlight: Iterable[str | int] | str | int | Model | None = None,
-    reveal: float | None = None,
-    section: str | None = None,
-    section_plane: str | Sequence[float] | None = None,
-    section_keep: Iterable[str | int] | str | int | Model | None = None,
-    sheet: str | None = None,
-    title: str | None = None,
-    dimensions: bool = False,
-    glyphs: Glyphs | str | os.PathLike | None = None,
-    shade: Iterable[str | int] | str | int | Model | None = None,
-    shade_opacity: float = 1.0,
     renderer: Renderer | None = None,
 ) -> dict:
     """From a model (file or ``Model``) to a vector drawing file (.svg, .pdf or .dxf).
 
     Loads the model, peels its layers with ``renderer`` (default: the shared one), draws every
-    line with its occlusion level and writes the file atomically. ``style`` is a raster style's
-    name, a line style file or a ``VectorStyle`` (see ``blueprint.vector.style.vector_style``).
-    A ``scale`` ('1:50') makes the view orthographic and lays the page out in millimetres
-    (``units``: the model's length unit). ``max_layers`` None or 0 peels every layer.
-    ``section``, ``section_plane`` and ``section_keep`` draw a section view (as
-    ``blueprint.render_frame`` does), its hatching and cut outline a group of their own.
-    A plan sheet (``view="plan"``) is labelled, bordered and has a title block (``title``,
-    default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper. ``dimensions`` draws
-    the overall width and height of orthographic views and the diameters of the circles
-    their lines find (ISO 129, in mm). ``glyphs`` (a ``Glyphs`` or a glyph file) are drawn over
-    one view, dashed or dimmed where hidden, its ``[[dimension]]`` entries as dimensions;
-    ``shade`` parts are filled polygons in depth order (``shade_opacity``), over the lines
-    behind them.
+    line with its occlusion level and writes the file atomically. ``options`` (a
+    ``DrawOptions``) and its fields as keywords, over it where both are given, say what is
+    drawn: ``style`` is a raster style's name, a line style file or a ``VectorStyle`` (see
+    ``blueprint.vector.style.vector_style``). A ``scale`` ('1:50') makes the view orthographic
+    and lays the page out in millimetres (``units``: the model's length unit). ``max_layers``
+    None or 0 peels every layer. ``section``, ``section_plane`` and ``section_keep`` draw a
+    section view (as ``blueprint.render_frame`` does), its hatching and cut outline a group of
+    their own. A plan sheet (``view="plan"``) is labelled, bordered and has a title block
+    (``title``, default the model's name); ``sheet`` ('A4' ... 'A0') sets its paper.
+    ``dimensions`` draws the overall width and height of orthographic views and the diameters
+    of the circles their lines find (ISO 129, in mm). ``glyphs`` (a ``Glyphs`` or a glyph
+    file) are drawn over one view, dashed or dimmed where hidden, its ``[[dimension]]``
+    entries as dimensions; ``shade`` parts are filled polygons in depth order
+    (``shade_opacity``), over the lines behind them.
 
     Returns
     -------
@@ -277,37 +244,11 @@ def render_vector_file(
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
-    style = check_vector_options(style, scale, units)
+    options.vector_style  # noqa: B018 - a style the drawing cannot take fails before the model loads
     clock = time.perf_counter()
-    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
+    loaded = as_model(model, options)
     load_s = time.perf_counter() - clock
-    drawing = vector_drawing(
-        loaded,
-        size=size,
-        view=view,
-        azimuth=azimuth,
-        elevation=elevation,
-        fov=fov,
-        ortho=ortho,
-        style=style,
-        max_layers=max_layers,
-        crease_angle=crease_angle,
-        line_width=line_width,
-        highlight=highlight,
-        reveal=reveal,
-        scale=scale,
-        units=units,
-        section=section,
-        section_plane=section_plane,
-        section_keep=section_keep,
-        sheet=sheet,
-        title=title,
-        dimensions=dimensions,
-        glyphs=glyphs,
-        shade=shade,
-        shade_opacity=shade_opacity,
-        renderer=renderer,
-    )
+    drawing = vector_drawing(loaded, options, shared(renderer))
     clock = time.perf_counter()
     write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}

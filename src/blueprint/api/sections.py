@@ -5,20 +5,20 @@ drawn by the usual frame, then hatched where the first layer shows a cut face
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from blueprint.api.options import DrawOptions
+from blueprint.api.picture import blueprint_frame
 from blueprint.api.renderer import Renderer
 from blueprint.compose.hatch import hatch_overlay
 from blueprint.compose.style import Style
-from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
-from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
+from blueprint.scene.section import Cut, SectionPlane, cut_model
 
 __all__ = ["Section", "render_section", "section_of"]
 
@@ -35,34 +35,25 @@ class Section:
         return cut_model(model, self.plane.facing(camera.eye, camera.target), self.keep)
 
 
-def section_of(
-    model: Model,
-    section: str | None,
-    section_plane: str | Sequence[float] | None,
-    section_keep,
-) -> Section | None:
-    """The ``Section`` of ``render_frame``'s arguments, None when no plane is given."""
-    plane = parse_section(section, section_plane)
-    if plane is None:
-        if section_keep is not None:
-            raise InputError("--section-keep names parts left uncut: give --section or --section-plane")
+def section_of(model: Model, options: DrawOptions) -> Section | None:
+    """The ``Section`` of ``options`` (its plane and the parts of ``model`` it keeps whole),
+    None when no plane is given."""
+    if options.plane is None:
         return None
     keep = np.zeros(len(model.part_names), bool)
-    if section_keep is not None:
-        keep = designated_parts(model, section_keep)
-    return Section(plane, keep)
+    if options.section_keep is not None:
+        keep = designated_parts(model, options.section_keep)
+    return Section(options.plane, keep)
 
 
-def render_section(
-    renderer: Renderer, cut: Cut, camera: Camera, size: tuple[int, int], options: dict
-) -> Frame:
-    """Draw the model ``cut`` left with ``options`` (``Renderer.render``'s) and hatch its cut
-    faces where the first layer of the parts cut shows them: parts kept whole, in front of the
-    plane, do not hide the hatching (as in the vector drawing)."""
-    frame = renderer.render(cut.model, camera, size=size, **options)
+def render_section(renderer: Renderer, cut: Cut, camera: Camera, options: DrawOptions) -> Frame:
+    """Draw the model ``cut`` left with ``options`` (resolved: its ``style`` a ``Style``) and
+    hatch its cut faces where the first layer of the parts cut shows them: parts kept whole,
+    in front of the plane, do not hide the hatching (as in the vector drawing)."""
+    frame = blueprint_frame(renderer, cut.model, camera, options)
     t0 = time.perf_counter()
-    style: Style = options["style"]
-    s = int(options.get("supersample", 1))
+    style: Style = options.style
+    size, s = options.size, options.supersample
     model, cap = cut.model, cut.cap
     if cut.keep is not None and cut.keep.any():
         cut_faces = ~cut.keep[model.face_part]
@@ -78,7 +69,7 @@ def render_section(
         cap,
         style.ink,
         supersample=s,
-        line_width=float(options.get("line_width", 1.0)),
+        line_width=float(options.line_width),
     )
     spent = (time.perf_counter() - t0) * 1e3
     return replace(frame, image=image, ms=frame.ms + spent, stages={**frame.stages, "section": spent})

@@ -12,13 +12,12 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.api.files import choose_writer
-from blueprint.api.frames import shared
+from blueprint.api.frames import as_model, shared
+from blueprint.api.options import DrawOptions, takes_options
 from blueprint.api.renderer import Renderer
 from blueprint.errors import InputError
 from blueprint.export.writers import WRITERS, Kind
 from blueprint.scene.camera import VIEWS
-from blueprint.scene.environment import PartGlobs
-from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.settings import FRAME_LIMIT
 from blueprint.silhouette.gpu import (
@@ -32,21 +31,18 @@ from blueprint.silhouette.gpu import (
 __all__ = ["render_silhouettes_file"]
 
 
+# What a silhouette picture takes of the options: where the camera looks from and the parts.
+SILHOUETTE_OPTIONS = ("size", "view", "azimuth", "elevation", "fov", "ortho", "up", "include", "exclude")
+
+
+@takes_options(*SILHOUETTE_OPTIONS, size=(800, 600))
 def render_silhouettes_file(
     model: Model | str | os.PathLike,
     output: str | os.PathLike,
+    options: DrawOptions,
     *,
     method: str = DEFAULT_METHOD,
     layers: int = DEFAULT_LAYERS,
-    size: tuple[int, int] = (800, 600),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: PartGlobs = None,
-    exclude: PartGlobs = None,
     animate: str | None = None,
     frames: int = 60,
     fps: float = 30.0,
@@ -57,8 +53,10 @@ def render_silhouettes_file(
     """From a model (file or ``Model``) to a PNG of its silhouettes or, with
     ``animate`` (``twist`` or ``wave``), to an MP4 of ``frames`` frames of them as the model
     deforms, splitting in two after ``split_at`` of the animation (see
-    ``blueprint.silhouette.gpu.render_silhouettes`` and ``animate_silhouettes``). Arguments
-    are checked before the model is loaded or the GPU touched.
+    ``blueprint.silhouette.gpu.render_silhouettes`` and ``animate_silhouettes``). ``options``
+    (``DrawOptions``, its fields ``size``, ``view``, ``azimuth``, ``elevation``, ``fov``,
+    ``ortho``, ``up``, ``include`` and ``exclude`` keywords too) place the camera and load the
+    model. Arguments are checked before the model is loaded or the GPU touched.
 
     Returns
     -------
@@ -66,8 +64,8 @@ def render_silhouettes_file(
         ``path``, ``frames``, ``width``, ``height``, ``triangles``, ``method`` and ``ms``: the
         still's time, or the median time of a frame's silhouettes.
     """
-    if view not in VIEWS:
-        raise InputError(f"unknown view {view!r} (choose {', '.join(VIEWS)})")
+    if options.view not in VIEWS:
+        raise InputError(f"unknown view {options.view!r} (choose {', '.join(VIEWS)})")
     if animate is None and WRITERS.find(Path(output).suffix, Kind.VIDEO):
         raise InputError(f"{output}: a video needs --animate twist or --animate wave")
     output, write = choose_writer(output, Kind.VIDEO if animate else Kind.IMAGE)
@@ -79,9 +77,15 @@ def render_silhouettes_file(
         raise InputError(f"fps must be in (0, 240], got {fps:g}")
     if not 1 <= layers <= MAX_LAYERS:
         raise InputError(f"layers must be an integer from 1 to {MAX_LAYERS}, got {layers}")
-    size = tuple(size)
-    camera = dict(view=view, azimuth=azimuth, elevation=elevation, fov=fov, ortho=ortho)
-    loaded = model if isinstance(model, Model) else load_model(model, up=up, include=include, exclude=exclude)
+    size = options.size
+    camera = dict(
+        view=options.view,
+        azimuth=options.azimuth,
+        elevation=options.elevation,
+        fov=options.fov,
+        ortho=options.ortho,
+    )
+    loaded = as_model(model, options)
     renderer = shared(renderer)
     summary = {
         "path": str(output),

@@ -1,16 +1,18 @@
-"""What every command shares: the camera options and the progress bar; and, from
-``blueprint.cli.shell``, the one-line warnings and ``run``, which makes a click command a program
-whose user errors are one line and exit code 2."""
+"""What every command shares: the drawing options, made from the fields of the API's
+``DrawOptions`` (``drawing_options``, ``drawing_values``; the camera's are ``camera_options``),
+the flags that name the API's arguments in its errors (``with_flags``) and the progress bar;
+and, from ``blueprint.cli.shell``, the one-line warnings and ``run``, which makes a click
+command a program whose user errors are one line and exit code 2."""
 
 from __future__ import annotations
 
 import contextlib
+import re
+from pathlib import Path
 
 import click
 
 from blueprint.compose.style import STYLES
-from blueprint.errors import InputError
-from blueprint.scene.camera import VIEWS
 
 STYLE_NAMES = tuple(STYLES)
 
@@ -40,69 +42,83 @@ def progress_bar(label: str):
         yield update
 
 
+# The options of every command that places a camera, as DrawOptions names them.
+CAMERA_OPTIONS = ("size", "view", "azimuth", "elevation", "fov", "ortho", "include", "exclude", "up")
+
+
+def drawing_options(*names: str, helps: dict[str, str] | None = None, **defaults):
+    """The click options of ``DrawOptions``' fields ``names``, made from the fields: the flag
+    (``--`` and the name, dashed), help (``helps`` over the field's own, where a command takes
+    less), type, metavar and default (``defaults`` over the field's own), in the order named.
+    ``drawing_values`` makes the values the API's."""
+    from blueprint.api.options import option_fields
+
+    made = []
+    for name in names:
+        f = option_fields()[name]
+        meta, default = dict(f.metadata), defaults.get(name, f.default)
+        meta["help"] = (helps or {}).get(name, meta["help"])
+        assert meta["cli"], f"{name} is no option of the command line"
+        if isinstance(f.default, bool):
+            made.append(click.option(flag(name), is_flag=True, default=default, help=meta["help"]))
+            continue
+        kind = meta["kind"] or (str if f.default is None else type(f.default))
+        if kind == "path":
+            kind = click.Path(path_type=Path)
+        elif meta["choices"]:
+            kind = click.Choice(meta["choices"])
+        shown = default is not None and not meta["nargs"]
+        made.append(
+            click.option(
+                flag(name),
+                type=kind,
+                nargs=meta["nargs"] or 1,
+                default=default,
+                show_default=shown,
+                metavar=meta["metavar"],
+                help=meta["help"],
+            )
+        )
+
+    def decorate(func):
+        for option in reversed(made):
+            func = option(func)
+        return func
+
+    return decorate
+
+
 def camera_options(func):
-    """Options shared by every command that places a camera."""
-    options = [
-        click.option(
-            "--size",
-            nargs=2,
-            type=int,
-            default=None,
-            metavar="W H",
-            help="Image width and height in pixels.",
-        ),
-        click.option(
-            "--view",
-            default="iso",
-            show_default=True,
-            help=f"Named view: {', '.join(VIEWS)}; render also takes plan (a sheet of top, front, right).",
-        ),
-        click.option(
-            "--azimuth", type=float, default=None, help="Degrees from the front, towards the right."
-        ),
-        click.option("--elevation", type=float, default=None, help="Degrees above the horizon."),
-        click.option(
-            "--fov",
-            type=float,
-            default=30.0,
-            show_default=True,
-            help="Vertical field of view, degrees.",
-        ),
-        click.option("--ortho", is_flag=True, help="Orthographic projection (plan views)."),
-        click.option(
-            "--include",
-            default=None,
-            metavar="GLOBS",
-            help="Draw only these parts (name globs or indices, comma-separated); keeps environment meshes.",
-        ),
-        click.option(
-            "--exclude",
-            default=None,
-            metavar="GLOBS",
-            help="Leave these parts out (environment meshes like skyboxes are left out by default).",
-        ),
-        click.option(
-            "--up",
-            type=click.Choice(["y", "z"]),
-            default=None,
-            help="Model up axis (default: z for STL/3MF, y for glTF; OBJ/PLY/OFF: guessed from a flat base).",
-        ),
-    ]
-    for option in reversed(options):
-        func = option(func)
-    return func
+    """Options shared by every command that places a camera (``--size`` defaults to None: the
+    command's own)."""
+    return drawing_options(*CAMERA_OPTIONS, size=None)(func)
 
 
-def camera_kwargs(size, view, azimuth, elevation, fov, ortho, up, default_size, plan=False):
-    names = [*VIEWS, "plan"] if plan else list(VIEWS)
-    if view not in names:
-        raise InputError(f"unknown view {view!r} (choose {', '.join(names)})")
-    return dict(
-        size=tuple(size) if size else default_size,
-        view=view,
-        azimuth=azimuth,
-        elevation=elevation,
-        fov=fov,
-        ortho=ortho,
-        up=up,
-    )
+def drawing_values(values: dict) -> dict:
+    """Take the values of ``DrawOptions``' fields out of a command's ``values`` (click's, by
+    parameter name) as the API takes them: ``--max-layers 0`` is every layer (None), ``--size``
+    a tuple, an option not given left out (the field's default then)."""
+    from blueprint.api.options import option_fields, zero_layers_are_all
+
+    taken = {name: values.pop(name) for name in option_fields() if name in values}
+    if taken.get("size") is not None:
+        taken["size"] = tuple(taken["size"])
+    return zero_layers_are_all({k: v for k, v in taken.items() if v is not None or k == "max_layers"})
+
+
+def flag(name: str) -> str:
+    """The command line's flag of an API argument: ``line_width`` is ``--line-width``."""
+    return "--" + name.replace("_", "-")
+
+
+_ARGUMENT = re.compile(r"(?<![\w./-])([a-z]+(?:_[a-z]+)+)(?![\w./-])")
+
+
+def with_flags(message: str) -> str:
+    """``message`` (an API error) with the arguments of ``DrawOptions`` it names as the command
+    line's flags: ``line_width must be ...`` is ``--line-width must be ...``. Names spelled the
+    same either way (``supersample``) are left as they are."""
+    from blueprint.api.options import option_fields
+
+    known = {name for name, f in option_fields().items() if f.metadata["cli"] and "_" in name}
+    return _ARGUMENT.sub(lambda m: flag(m.group(1)) if m.group(1) in known else m.group(1), message)

@@ -140,10 +140,11 @@ def check_command(file, settings):
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 def ops(as_json):
     """List the image-space operations with their inputs, output and parameters."""
-    from blueprint.ops import OPS, ChoiceParam
+    from blueprint.ops import ChoiceParam
+    from blueprint.pipeline.spec import OPERATIONS
 
     records = []
-    for op in OPS.values():
+    for op in OPERATIONS.values():
         params = []
         for p in op.params:
             entry = {"name": p.name, "default": p.default, "doc": p.doc}

@@ -52,8 +52,11 @@ def run(command: click.Command, argv: list[str] | None, prog_name: str) -> None:
         click.echo(f"blueprint: error: {printable(exc.format_message())}", err=True)
         sys.exit(2)
     except BlueprintError as exc:
+        # the API names its arguments, the command line its flags; loaded only for an error
+        from blueprint.cli.options import with_flags
+
         # file names in messages may hold newlines and bytes that are not UTF-8
-        click.echo(f"blueprint: error: {printable(str(exc))}", err=True)
+        click.echo(f"blueprint: error: {printable(with_flags(str(exc)))}", err=True)
         sys.exit(2)
     except MemoryError:
         click.echo("blueprint: error: out of memory (try a smaller --size)", err=True)

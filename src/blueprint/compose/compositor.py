@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.compose.style import Style
+from blueprint.compose.style import STYLES, Style
 from blueprint.gpu import units
+from blueprint.ops import ChoiceParam, Op
 
 PAPER_FRAG = "blueprint.compose:glsl/paper.frag"
 COMPOSITE_FRAG = "blueprint.compose:glsl/composite.frag"
@@ -22,6 +23,24 @@ GROUP = 8  # layers a pass composes
 SHADE_INDEX_UNIT = units.INPUTS
 SHADE_COLOR_UNIT = units.INPUTS + 1
 LAYER_UNITS = units.INPUTS + 2  # the group's layer maps, 8 units from here
+
+
+#: The compositor as a pipeline operation (``blueprint.pipeline.spec.OPERATIONS`` lists it with the
+#: library of ``blueprint.ops``): declared here, beside its shader and the styles it names.
+COMPOSITE = Op(
+    name="composite",
+    shader=COMPOSITE_FRAG,
+    inputs={"layers": "r8", "highlight": "r8", "shade_color": "rgba8", "shade_index": "r8"},
+    output="rgba8",
+    params=(ChoiceParam("style", "blueprint", doc="paper and inks", choices=tuple(STYLES)),),
+    doc="depth-sprite composite: the style's paper, then every layer's map back to front in its ink, "
+    "box-filtered down by the ratio of input to output size (premultiplied alpha); optionally "
+    "shading between the layers (shade_color, shade_index) and a highlight map over everything",
+    kind="composite",
+    stacks=("layers",),
+    resample=("layers", "highlight", "shade_color", "shade_index"),
+    optional=("highlight", "shade_color", "shade_index"),
+)
 
 
 @dataclass

@@ -8,7 +8,7 @@ import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from blueprint.compose.style import STYLES, Style, get_style, hex_color
+from blueprint.compose.style import FILE_SUFFIXES, STYLES, Style, get_style, hex_color
 from blueprint.errors import InputError
 
 __all__ = [
@@ -21,9 +21,6 @@ __all__ = [
     "raster_style",
     "vector_style",
 ]
-
-#: A style that ends in one of these is a line style file (``load_vector_style``), not a name.
-FILE_SUFFIXES = (".toml", ".json")
 
 RGB = tuple[float, float, float]
 

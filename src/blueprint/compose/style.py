@@ -78,9 +78,8 @@ class Style:
 
 #: The raster styles by name: the one list that the API, the command line (``--style``), the
 #: viewer's style cycle and vector drawings (``blueprint.vector.vector_style``) choose from. A new
-#: style is one entry here; line style files (``blueprint.compose.linestyle``) stay files. The composite op
-#: (blueprint.ops, a layer below, which cannot import this) lists the same names for pipelines'
-#: ``style`` parameter: tests/test_registries.py keeps the two equal.
+#: style is one entry here; line style files (``blueprint.compose.linestyle``) stay files. The
+#: composite op's ``style`` parameter (``blueprint.compose.compositor.COMPOSITE``) takes its names.
 STYLES: dict[str, Style] = {
     "blueprint": Style(
         "blueprint",
@@ -122,6 +121,11 @@ STYLES: dict[str, Style] = {
         threshold=True,
     ),
 }
+
+
+#: A style that ends in one of these is a line style file (``blueprint.compose.linestyle``), not
+#: a name.
+FILE_SUFFIXES = (".toml", ".json")
 
 
 def get_style(style: str | os.PathLike | Style, grid: float | None = None) -> Style:

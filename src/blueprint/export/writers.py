@@ -5,29 +5,29 @@ video frames, and writes it atomically. ``WRITERS.choose(path, *kinds)`` checks 
 before any work is done and returns the writer its suffix names among those kinds, or fails in
 one line naming the suffixes allowed; the command line and the API choose every output this way.
 
-Where a new format goes: its writer lives in the package that knows what it writes, and that
-package registers it with one line, ``WRITERS.add(suffix, kind, write)``, beside the writer.
-export/ may import only blueprint.errors and blueprint.scene (tests/test_layers.py), so only the
-writers that need nothing above them register here (PNG, NPZ: the bottom of this file); vector
-drawings register in blueprint.vector.drawing, beside the SVG, PDF and DXF writers, and video in
-blueprint.api.files (the pipeline's VideoWriter encodes it). The registry does not look those
-modules up by name when a suffix is missing: that would be an upward import at run time which
-the layering test cannot see, and a cycle, since they import export for atomic writes. So a
-suffix is known once the module registering it is imported: ``blueprint.api.files`` imports
-every one, and its ``choose_writer`` is where the CLI and the API choose.
+Where a new format goes: its writer lives in the package that knows what it writes and is
+registered by one line, ``writers.add(suffix, kind, write)``. export/ may import only
+blueprint.errors and blueprint.scene (tests/test_layers.py), so only the writers that need
+nothing above them are added here (PNG, NPZ: the bottom of this file). The kinds made above
+export register in a function of their package, ``register_writers(writers)``, which the
+registry calls when a suffix of that kind is first looked for (``PROVIDERS``): vector drawings
+in blueprint.vector.drawing, beside the SVG, PDF and DXF writers, and video in
+blueprint.pipeline.media, beside its encoder. Nothing registers on import, and a picture's
+drawing loads neither package.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 
 from blueprint.export.files import check_output, save_layers, save_png
 
-__all__ = ["WRITERS", "Kind", "Writer", "Writers"]
+__all__ = ["PROVIDERS", "WRITERS", "Kind", "Writer", "Writers"]
 
 
 class Kind(StrEnum):
@@ -59,10 +59,24 @@ class Writer:
 
 class Writers:
     """Writers by kind and suffix. A suffix has at most one writer of each kind; suffixes are
-    listed in the order they were added, which is the order error messages name them in."""
+    listed in the order they were added, which is the order error messages name them in.
 
-    def __init__(self) -> None:
+    ``providers`` names, for a kind, the function that registers its writers
+    (``"package.module:function"``, called with this registry): it is imported and called the
+    first time a suffix of that kind is looked for while none of that kind is registered.
+    """
+
+    def __init__(self, providers: Mapping[Kind, str] | None = None) -> None:
         self._writers: dict[tuple[Kind, str], Writer] = {}
+        self._providers = dict(providers or {})
+
+    def _provide(self, kinds: tuple[Kind, ...]) -> None:
+        """Register the writers of ``kinds`` that have a provider and none registered yet."""
+        registered = {kind for kind, _ in self._writers}
+        for kind in kinds:
+            if kind not in registered and kind in self._providers:
+                module, function = self._providers[kind].split(":")
+                getattr(importlib.import_module(module), function)(self)
 
     def add(self, suffix: str, kind: Kind, write: Callable[..., Path]) -> Writer:
         """Register ``write(path, value, **options) -> Path`` for ``kind`` and ``suffix``."""
@@ -75,6 +89,7 @@ class Writers:
 
     def suffixes(self, *kinds: Kind) -> tuple[str, ...]:
         """The suffixes written for ``kinds``: the first kind's first, without repeats."""
+        self._provide(kinds)
         found: dict[str, None] = {}
         for kind in kinds:
             found.update((s, None) for k, s in self._writers if k == kind)
@@ -83,7 +98,12 @@ class Writers:
     def find(self, suffix: str, *kinds: Kind) -> Writer | None:
         """The writer of the first of ``kinds`` that writes ``suffix`` (any case), else None."""
         suffix = suffix.lower()
-        return next((self._writers[k, suffix] for k in kinds if (k, suffix) in self._writers), None)
+        for kind in kinds:
+            # kind by kind, so that a picture's suffix is found before the vector writers load
+            self._provide((kind,))
+            if (kind, suffix) in self._writers:
+                return self._writers[kind, suffix]
+        return None
 
     def choose(self, path: str | os.PathLike, *kinds: Kind, suffix: str | None = None) -> tuple[Path, Writer]:
         """Check that ``path`` can be written with a writer of one of ``kinds`` (chosen by its
@@ -91,18 +111,23 @@ class Writers:
 
         Raises ``InputError`` in one line where the suffix has no writer of those kinds (naming
         the suffixes that do), the path is a directory, or its folder is missing or read-only;
-        ``LookupError`` where no writer of those kinds is registered at all (the module that
-        registers them was not imported: a bug, not bad input).
+        ``LookupError`` where no writer of those kinds is registered at all (none was added and
+        no provider names them: a bug, not bad input).
         """
-        allowed = self.suffixes(*kinds)
+        writer = self.find(suffix or Path(path).suffix, *kinds)
+        # the suffixes of every kind are listed (and their writers loaded) only to refuse one
+        allowed = (writer.suffix,) if writer is not None else self.suffixes(*kinds)
         if not allowed:
-            raise LookupError(
-                f"no writer of {' or '.join(kinds)} is registered: import blueprint.api.files first"
-            )
-        path = check_output(path, allowed, suffix)
-        return path, self.find(suffix or path.suffix, *kinds)
+            raise LookupError(f"no writer of {' or '.join(kinds)} is registered")
+        return check_output(path, allowed, suffix), writer
 
 
-WRITERS = Writers()
+#: The functions that register the writers of the kinds made above export, by kind.
+PROVIDERS = {
+    Kind.DRAWING: "blueprint.vector.drawing:register_writers",
+    Kind.VIDEO: "blueprint.pipeline.media:register_writers",
+}
+
+WRITERS = Writers(PROVIDERS)
 WRITERS.add(".png", Kind.IMAGE, save_png)
 WRITERS.add(".npz", Kind.LAYERS, save_layers)

@@ -374,28 +374,6 @@ SHADE_LAYER = Op(
     doc="per layer, accumulating: 1 + the layer's index where the surface lies in it "
     "(where a composite puts shading between layers)",
 )
-COMPOSITE = Op(
-    name="composite",
-    shader="blueprint.compose:glsl/composite.frag",
-    inputs={"layers": "r8", "highlight": "r8", "shade_color": "rgba8", "shade_index": "r8"},
-    output="rgba8",
-    params=(
-        ChoiceParam(
-            "style",
-            "blueprint",
-            doc="paper and inks",
-            choices=("blueprint", "paper", "transparent", "wireframe"),
-        ),
-    ),
-    doc="depth-sprite composite: the style's paper, then every layer's map back to front in its ink, "
-    "box-filtered down by the ratio of input to output size (premultiplied alpha); optionally "
-    "shading between the layers (shade_color, shade_index) and a highlight map over everything",
-    kind="composite",
-    stacks=("layers",),
-    resample=("layers", "highlight", "shade_color", "shade_index"),
-    optional=("highlight", "shade_color", "shade_index"),
-)
-
 for _op in (
     ROBERTS,
     SOBEL,
@@ -414,14 +392,12 @@ for _op in (
     ID_EDGES,
     SHADE,
     SHADE_LAYER,
-    COMPOSITE,
 ):
     OPS[_op.name] = _op
 del _op
 
 __all__ = [
     "BLUR",
-    "COMPOSITE",
     "DILATE",
     "EDGES",
     "OPS",

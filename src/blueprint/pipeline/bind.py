@@ -9,7 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from blueprint.errors import InputError
-from blueprint.ops import OPS, Op
+from blueprint.ops import Op
 from blueprint.pipeline.expressions import evaluate
 from blueprint.pipeline.spec import (
     ALL_FORMATS,
@@ -19,6 +19,7 @@ from blueprint.pipeline.spec import (
     IMAGE_SUFFIXES,
     MAX_LAYERS,
     MAX_SCALE,
+    OPERATIONS,
     VIDEO_SUFFIXES,
     AttributeSpec,
     Bound,
@@ -180,9 +181,9 @@ def bind(spec: PipelineSpec, values: dict) -> Bound:
         p = spec.passes[name]
         key = f"passes.{name}"
         if p.op is not None:
-            if p.op not in OPS:
-                raise fail(src, f"{key}.op", f"unknown operation {p.op!r} (choose {', '.join(OPS)})")
-            op = OPS[p.op]
+            if p.op not in OPERATIONS:
+                raise fail(src, f"{key}.op", f"unknown operation {p.op!r} (choose {', '.join(OPERATIONS)})")
+            op = OPERATIONS[p.op]
         else:
             op = user_op(spec, p, values)
         for input_name in p.inputs:

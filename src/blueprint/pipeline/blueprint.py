@@ -13,7 +13,7 @@ from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.spec import PipelineSpec, load_pipeline
-from blueprint.render.renderer import Frame, LayerRenderer, check_frame_args
+from blueprint.render.renderer import Frame, LayerRenderer
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
@@ -38,7 +38,8 @@ def render_blueprint(
     **options,
 ) -> Frame:
     """``Renderer.render`` through the ``blueprint`` preset; ``options`` are its drawing options
-    (``size``, ``style``, ``highlight``...: see there), checked by ``_run_arguments``."""
+    (``size``, ``style``, ``highlight``...: see there), as ``_run_arguments`` takes them. Their
+    ranges are the API's to check (``blueprint.api.options.DrawOptions``), once."""
     style, arguments = _run_arguments(renderer, model, **options)
     result = executor_for(renderer).run(
         blueprint_preset(), model, camera, profile=profile, keep=on_gpu, **arguments
@@ -68,27 +69,29 @@ def _run_arguments(
     max_layers: int | None = 8,
     min_fraction: float = 0.0,
     crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    supersample: int = 2,
-    depth_threshold: float = 4.0,
-    part_edges: bool = True,
-    id_silhouettes: bool = False,
     highlight: np.ndarray | None = None,
     reveal: float | None = None,
     shade: np.ndarray | None = None,
-    shade_opacity: float = 1.0,
+    **variables,
 ) -> tuple[Style, dict]:
-    """The checked style and ``Executor.run``'s arguments of a blueprint frame: the options as
-    the preset's variables and part sets."""
+    """The style and ``Executor.run``'s arguments of a blueprint frame: the peel's settings,
+    the parts as the preset's part sets, and the other options (``supersample``,
+    ``line_width``, ``depth_threshold``, ``part_edges``, ``id_silhouettes``,
+    ``shade_opacity``) as the preset's variables of the same names, their defaults the
+    preset's. The API's ``DrawOptions`` checks their ranges where the user gives them; the
+    size is checked here against this GPU."""
+    preset = blueprint_preset()
     style = get_style(style)
-    check_frame_args(max_layers, min_fraction, crease_angle, line_width)
-    w, h = check_size(size, supersample, renderer.max_texture)
+    unknown = sorted(set(variables) - set(preset.variables))
+    if unknown:
+        raise TypeError(f"a blueprint frame takes no option {unknown[0]!r}")
+    # as the preset declares them: an int, a float or a bool
+    variables = {name: type(preset.variables[name])(value) for name, value in variables.items()}
+    w, h = check_size(
+        size, variables.get("supersample", preset.variables["supersample"]), renderer.max_texture
+    )
     if reveal is not None and highlight is None:
         raise InputError("reveal needs parts to reveal: give highlight as well")
-    if reveal is not None and not 0.0 < reveal <= 1.0:
-        raise InputError(f"reveal must be in (0, 1], got {reveal}")
-    if shade is not None and not 0.0 < shade_opacity <= 1.0:
-        raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
     parts = {}
     for name, flags in (("highlight", highlight), ("shade", shade)):
         if flags is not None:
@@ -98,20 +101,14 @@ def _run_arguments(
                     f"{name} needs one flag per part ({len(model.part_names)}), got {flags.shape}"
                 )
             parts[name] = flags
-    variables = {
-        "supersample": int(supersample),
-        "line_width": float(line_width),
-        "visible_width": float(style.width),
-        "hidden_width": float(style.hidden_width),
-        "depth_threshold": float(depth_threshold),
-        "part_edges": bool(part_edges),
-        "id_silhouettes": bool(id_silhouettes),
-        "highlight": highlight is not None,
-        "highlight_width": float(style.highlight_width),
-        "reveal": float(reveal or 0.0),
-        "shade": shade is not None,
-        "shade_opacity": float(shade_opacity),
-    }
+    variables.update(
+        visible_width=float(style.width),
+        hidden_width=float(style.hidden_width),
+        highlight=highlight is not None,
+        highlight_width=float(style.highlight_width),
+        reveal=float(reveal or 0.0),
+        shade=shade is not None,
+    )
     return style, {
         "size": (w, h),
         "view": view,

@@ -17,6 +17,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.export.files import temporary
+from blueprint.export.writers import Kind, Writers
 from blueprint.gpu.targets import FORMATS
 from blueprint.settings import IMAGE_FILE_LIMIT, IMAGE_PIXEL_LIMIT, check_file
 
@@ -218,6 +219,13 @@ class VideoWriter:
             self._stack.__exit__(kind, exc, tb)
         except OSError as error:
             raise InputError(f"{self.path}: cannot write ({error.strerror or error})") from None
+
+
+def register_writers(writers: Writers) -> None:
+    """Add the video writer, one per container suffix, to ``writers``
+    (``blueprint.export.writers.PROVIDERS`` names this function)."""
+    for suffix in VIDEO_FORMATS:
+        writers.add(suffix, Kind.VIDEO, write_video)
 
 
 def write_video(path: str | Path, frames: Iterable[np.ndarray], *, fps: float = 30.0, crf: int = 18) -> Path:

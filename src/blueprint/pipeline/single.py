@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.ops import OPS
 from blueprint.pipeline.bind import check_params
 from blueprint.pipeline.inputs import default_format
-from blueprint.pipeline.spec import Bound, BoundPass, ImageSpec
+from blueprint.pipeline.spec import OPERATIONS, Bound, BoundPass, ImageSpec
 
 
 def single_op(
@@ -20,7 +19,7 @@ def single_op(
     scale: float,
 ) -> tuple[Bound, dict[str, list[np.ndarray]]]:
     """The bound one-pass pipeline and each input's arrays (one, or one a layer for a stack)."""
-    op = OPS[op_name]
+    op = OPERATIONS[op_name]
     formats = dict(formats or {})
     images, wiring, arrays = {}, {}, {}
     for key, value in inputs.items():

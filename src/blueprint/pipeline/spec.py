@@ -59,11 +59,16 @@ import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from blueprint.compose.compositor import COMPOSITE
 from blueprint.errors import InputError
 from blueprint.gpu.shaders import package_files
 from blueprint.gpu.targets import FORMATS
 from blueprint.ops import OPS, Op
 from blueprint.settings import SETTINGS_FILE_LIMIT, parse_text, read_file
+
+#: The operations a pass may name: the image-space library (``blueprint.ops.OPS``) and the
+#: compositor, which compose declares beside its shader and styles.
+OPERATIONS: dict[str, Op] = {**OPS, COMPOSITE.name: COMPOSITE}
 
 # name: (default format, allowed formats, from the renderer's G-buffer, what it holds)
 ATTRIBUTES: dict[str, tuple[str, tuple[str, ...], bool, str]] = {
@@ -398,7 +403,7 @@ def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
                 shader = (folder or Path.cwd()) / shader
         op = entry.get("op")
         if op is not None and not isinstance(op, str):
-            raise fail(source, f"{key}.op", f"must be a name (choose {', '.join(OPS)})")
+            raise fail(source, f"{key}.op", f"must be a name (choose {', '.join(OPERATIONS)})")
         inputs = _table(source, f"{key}.inputs", entry.get("inputs", {}))
         for k, v in inputs.items():
             if not isinstance(v, str):

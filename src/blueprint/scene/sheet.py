@@ -12,6 +12,7 @@ from __future__ import annotations
 import datetime
 import math
 import os
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -99,6 +100,24 @@ def paper_size(sheet: str) -> tuple[float, float]:
     if key not in PAPER_MM:
         raise InputError(f"unknown sheet {sheet!r} (choose {', '.join(PAPER_MM)})")
     return PAPER_MM[key]
+
+
+def parse_scale(scale: str | float | None) -> float | None:
+    """'1:50' (or '50', 50) to 50.0; '2:1' to 0.5; None stays None."""
+    if scale is None:
+        return None
+    if isinstance(scale, int | float):
+        value = float(scale)
+    else:
+        text = str(scale).strip()
+        match = re.fullmatch(r"\s*([0-9.]+)\s*[:/]\s*([0-9.]+)\s*", text)
+        try:
+            value = float(match.group(2)) / float(match.group(1)) if match else float(text)
+        except (ValueError, ZeroDivisionError):
+            raise InputError(f"scale must look like 1:50, got {scale!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise InputError(f"scale must look like 1:50, got {scale!r}")
+    return value
 
 
 def fit_scale(needed: float) -> float:

@@ -10,7 +10,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import re
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
@@ -24,7 +23,7 @@ from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
-from blueprint.export.writers import WRITERS, Kind
+from blueprint.export.writers import WRITERS, Kind, Writers
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
@@ -41,6 +40,7 @@ from blueprint.scene.sheet import (
     lay_out_sheet,
     model_name,
     paper_size,
+    parse_scale,
     sheet_fields,
 )
 from blueprint.scene.units import drawing_unit, warn_if_assumed
@@ -80,6 +80,9 @@ __all__ = [
     "UNITS_MM",
     "Drawing",
     "Page",
+    "VectorOptions",
+    "draw_lines",
+    "draw_sheet",
     "draw_vector",
     "draw_vector_sheet",
     "parse_scale",
@@ -212,24 +215,6 @@ class Drawing:
         return self.line_width * (SCALED_PEN_MM if self.page.unit == "mm" else 1.0)
 
 
-def parse_scale(scale: str | float | None) -> float | None:
-    """'1:50' (or '50', 50) to 50.0; '2:1' to 0.5; None stays None."""
-    if scale is None:
-        return None
-    if isinstance(scale, int | float):
-        value = float(scale)
-    else:
-        text = str(scale).strip()
-        match = re.fullmatch(r"\s*([0-9.]+)\s*[:/]\s*([0-9.]+)\s*", text)
-        try:
-            value = float(match.group(2)) / float(match.group(1)) if match else float(text)
-        except (ValueError, ZeroDivisionError):
-            raise InputError(f"scale must look like 1:50, got {scale!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise InputError(f"scale must look like 1:50, got {scale!r}")
-    return value
-
-
 def _page(size, camera: Camera, scale, units: str | None, model: Model) -> Page:
     w, h = size
     denominator = parse_scale(scale)
@@ -284,35 +269,60 @@ def _highlight(highlight, model: Model) -> frozenset[int]:
     return frozenset(int(i) for i in np.flatnonzero(designated_parts(model, highlight)))
 
 
+@dataclass(frozen=True)
+class VectorOptions:
+    """What a vector drawing of one view draws: ``draw_vector``'s options (see there), as one
+    value. ``checked()`` checks the ones a caller gives ``draw_vector``; the API's
+    ``DrawOptions`` has checked its own where it makes one (``blueprint.api.draw``)."""
+
+    view: str = "iso"
+    style: str | Style | VectorStyle = "blueprint"
+    max_layers: int | None = 8
+    crease_angle: float = 30.0
+    line_width: float = 1.0
+    scale: str | float | None = None
+    units: str | None = None
+    highlight: Iterable[str | int] | str | int | Model | None = None
+    reveal: float | None = None
+    intersections: bool = True
+    spacing: float = 1.0
+    tolerance: float = 0.25
+    depth_tolerance: float = 1.0
+    title: str | None = None
+    section: Cut | None = None
+    dimensions: bool = False
+    glyphs: Glyphs | str | os.PathLike | None = None
+    shade: Iterable[str | int] | str | int | Model | None = None
+    shade_opacity: float = 1.0
+
+    def checked(self) -> VectorOptions:
+        """These options, their ranges checked; raises ``InputError`` naming the argument."""
+        if not 0.0 < self.shade_opacity <= 1.0:
+            raise InputError(f"shade_opacity must be in (0, 1], got {self.shade_opacity}")
+        if not (0.1 <= self.spacing <= 16):
+            raise InputError(f"spacing must be in [0.1, 16] pixels, got {self.spacing}")
+        if not (0 <= self.tolerance <= 16):
+            raise InputError(f"tolerance must be in [0, 16] pixels, got {self.tolerance}")
+        if not 1.0 <= self.line_width <= 16.0:
+            raise InputError(f"line_width must be in [1, 16] pixels, got {self.line_width}")
+        if self.reveal is not None and not 0.0 < self.reveal <= 1.0:
+            raise InputError(f"reveal must be in (0, 1], got {self.reveal}")
+        return self
+
+
 @one_blas_thread
 def draw_vector(
     model: Model,
     camera: Camera | None = None,
     size: tuple[int, int] = (1024, 1024),
     *,
-    view: str = "iso",
-    style: str | Style | VectorStyle = "blueprint",
-    max_layers: int | None = 8,
-    crease_angle: float = 30.0,
-    line_width: float = 1.0,
-    scale: str | float | None = None,
-    units: str | None = None,
-    highlight: Iterable[str | int] | str | int | Model | None = None,
-    reveal: float | None = None,
     renderer: LayerRenderer,
     layers: Layers | None = None,
-    intersections: bool = True,
-    spacing: float = 1.0,
-    tolerance: float = 0.25,
-    depth_tolerance: float = 1.0,
-    title: str | None = None,
-    section: Cut | None = None,
-    dimensions: bool = False,
-    glyphs: Glyphs | str | os.PathLike | None = None,
-    shade: Iterable[str | int] | str | int | Model | None = None,
-    shade_opacity: float = 1.0,
+    **options,
 ) -> Drawing:
     """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
+
+    ``options`` are the fields of ``VectorOptions`` as keywords, checked.
 
     Parameters
     ----------
@@ -366,9 +376,25 @@ def draw_vector(
     shade_opacity : float
         Opacity of the shading, in (0, 1]: 1 hides the lines behind the shaded parts.
     """
+    return draw_lines(model, camera, size, renderer, VectorOptions(**options).checked(), layers)
+
+
+def draw_lines(
+    model: Model,
+    camera: Camera | None,
+    size: tuple[int, int],
+    renderer: LayerRenderer,
+    options: VectorOptions,
+    layers: Layers | None = None,
+) -> Drawing:
+    """``draw_vector`` with its options as one value, checked already."""
+    view, style, max_layers = options.view, options.style, options.max_layers
+    crease_angle, line_width, highlight = options.crease_angle, options.line_width, options.highlight
+    scale, units, title, reveal = options.scale, options.units, options.title, options.reveal
+    intersections, spacing, depth_tolerance = options.intersections, options.spacing, options.depth_tolerance
+    tolerance, section, dimensions = options.tolerance, options.section, options.dimensions
+    glyphs, shade, shade_opacity = options.glyphs, options.shade, options.shade_opacity
     seconds: dict[str, float] = {}
-    if not 0.0 < shade_opacity <= 1.0:
-        raise InputError(f"shade-opacity must be in (0, 1], got {shade_opacity}")
     shaded_parts = None if shade is None else designated_parts(model, shade)
     if glyphs is not None:
         # glyphs and dimensions load with the drawings that have them, not with every drawing
@@ -376,12 +402,6 @@ def draw_vector(
 
         if not isinstance(glyphs, Glyphs):
             glyphs = load_glyphs(glyphs)
-    if not (0.1 <= spacing <= 16):
-        raise InputError(f"spacing must be in [0.1, 16] pixels, got {spacing}")
-    if not (0 <= tolerance <= 16):
-        raise InputError(f"tolerance must be in [0, 16] pixels, got {tolerance}")
-    if not 1.0 <= line_width <= 16.0:
-        raise InputError(f"line-width must be in [1, 16], got {line_width}")
     vstyle = vector_style(style)
     chosen = _highlight(highlight, model)
     if layers is None:
@@ -599,10 +619,8 @@ def draw_vector_sheet(
     model: Model,
     size: tuple[int, int] = (1024, 1024),
     *,
+    renderer: LayerRenderer,
     fov: float = 30.0,
-    scale: str | float | None = None,
-    units: str | None = None,
-    title: str | None = None,
     sheet: str | None = None,
     section: tuple[SectionPlane, np.ndarray] | None = None,
     **options,
@@ -616,29 +634,42 @@ def draw_vector_sheet(
     scale; ``sheet`` ('A4' ... 'A0', landscape) sets the paper, the scale then being the largest
     standard one at which the views fit unless ``scale`` gives it. ``section`` (a plane and the
     parts kept whole, (P,) bool) cuts the model as the front view sees it, in every view.
-    ``options`` go to :func:`draw_vector` for every view.
+    ``options`` are ``VectorOptions``' fields, as :func:`draw_vector` takes them, for every view.
     """
+    lines = VectorOptions(**options).checked()
+    return draw_sheet(model, size, renderer, lines, fov=fov, sheet=sheet, section=section)
+
+
+def draw_sheet(
+    model: Model,
+    size: tuple[int, int],
+    renderer: LayerRenderer,
+    options: VectorOptions,
+    *,
+    fov: float = 30.0,
+    sheet: str | None = None,
+    section: tuple[SectionPlane, np.ndarray] | None = None,
+) -> Drawing:
+    """``draw_vector_sheet`` with its views' options as one value, checked already: its
+    ``scale``, ``units``, ``title`` and ``dimensions`` are the sheet's."""
     for option in ("glyphs", "shade"):
-        if options.get(option) is not None:
+        if getattr(options, option) is not None:
             raise InputError(f"--{option} draws on one view, not on a plan sheet: give another --view")
     w, h = size[0] // 2, size[1] // 2
     if w < 1 or h < 1:
         raise InputError(f"size {size[0]}x{size[1]} is too small for a plan sheet (at least 2x2)")
+    scale, title, dimensions = options.scale, options.title, options.dimensions
     paper = None if sheet is None else paper_size(sheet)
     cameras = sheet_cameras(model, (w, h), fov)
-    measures = scale is not None or paper is not None or options.get("dimensions", False)
-    given, units = units, drawing_unit(model, units)
+    measures = scale is not None or paper is not None or dimensions
+    given, units = options.units, drawing_unit(model, options.units)
     cut = None
     if section is not None:
         plane, keep = section
         cut = cut_model(model, plane.facing(cameras["front"].eye, cameras["front"].target), keep)
-    cells: dict[str, Drawing] = {}
-    dimensions = options.pop("dimensions", False)
-    for name in SHEET_CELLS:
-        if cut is not None:
-            cells[name] = draw_vector(cut.model, cameras[name], (w, h), section=cut, **options)
-        else:
-            cells[name] = draw_vector(model, cameras[name], (w, h), **options)
+    view = replace(options, scale=None, units=None, title=None, dimensions=False, section=cut)
+    drawn = model if cut is None else cut.model
+    cells = {name: draw_lines(drawn, cameras[name], (w, h), renderer, view) for name in SHEET_CELLS}
     first = cells["top"]
     seconds: dict[str, float] = {}
     for cell in cells.values():
@@ -651,8 +682,7 @@ def draw_vector_sheet(
     mm_per_px = quarter.factor if quarter.unit == "mm" else None
     if dimensions:
         # on the orthographic views, sized for the sheet's scale, known only now
-        drawn = cut.model if cut is not None else model
-        crease = options.get("crease_angle", 30.0)
+        crease = options.crease_angle
         from .dimension import dimension_marks
 
         for name in ("top", "front", "right"):
@@ -751,7 +781,12 @@ def _write_dxf(path: Path, drawing: Drawing) -> Path:
     return atomic_write(path, lambda tmp: write_dxf(drawing, tmp))
 
 
-WRITERS.add(".svg", Kind.DRAWING, _write_svg)
-WRITERS.add(".pdf", Kind.DRAWING, _write_pdf)
-WRITERS.add(".dxf", Kind.DRAWING, _write_dxf)
-FORMATS = WRITERS.suffixes(Kind.DRAWING)
+_WRITERS = {".svg": _write_svg, ".pdf": _write_pdf, ".dxf": _write_dxf}
+FORMATS = tuple(_WRITERS)
+
+
+def register_writers(writers: Writers) -> None:
+    """Add the vector drawings' writers to ``writers`` (``blueprint.export.writers.PROVIDERS``
+    names this function)."""
+    for suffix, write in _WRITERS.items():
+        writers.add(suffix, Kind.DRAWING, write)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from blueprint.compose.style import STYLES, get_style
+from blueprint.api.options import DrawOptions
+from blueprint.compose.style import STYLES
 from blueprint.viewer.loop import Options, Viewer
 from blueprint.viewer.snapshots import DUMP_ENV
 from blueprint.viewer.state import ViewState
@@ -15,29 +16,40 @@ from blueprint.viewer.window import import_glfw
 
 def run_viewer(
     model_path: str | os.PathLike,
+    options: DrawOptions | None = None,
     *,
-    size: tuple[int, int] = (800, 600),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
-    up: str | None = None,
-    include: str | None = None,
-    exclude: str | None = None,
-    style: str = "blueprint",
     styles: tuple[str, ...] = tuple(STYLES),
-    max_layers: int | None = 5,
-    options: Options | None = None,
+    interactive_scale: float = 0.0,
     frames: int = 0,
 ) -> dict | None:
-    """Open the viewer on a model file; returns when the window closes (see ``Viewer.run``)."""
+    """Open the viewer on a model file; returns when the window closes (see ``Viewer.run``).
+
+    ``options`` (default: a window of 800 x 600 peeling 5 layers) give the window's size, the
+    first view and style, the model file's ``up``, ``include`` and ``exclude``, and the
+    frames' settings (``grid``, ``max_layers``, ``min_fraction``, ``crease_angle``,
+    ``line_width``, ``supersample``); ``styles`` are those the S key cycles through.
+    """
     from blueprint.scene.loader import load_model
 
     import_glfw()  # no display: say so before loading anything
-    state = ViewState.start(styles, style, view, azimuth, elevation, fov, ortho, max_layers)
-    options = options or Options()
-    get_style(style, options.grid)
-    model = load_model(model_path, up=up, include=include, exclude=exclude)
-    viewer = Viewer(model, Path(model_path), state, size=size, options=options, dump=os.environ.get(DUMP_ENV))
+    options = options or DrawOptions(size=(800, 600), max_layers=5)
+    camera = (options.view, options.azimuth, options.elevation, options.fov, options.ortho)
+    state = ViewState.start(styles, options.style, *camera, options.max_layers)
+    frames_options = Options(
+        grid=options.grid,
+        min_fraction=options.min_fraction,
+        crease_angle=options.crease_angle,
+        line_width=options.line_width,
+        supersample=options.supersample,
+        interactive_scale=interactive_scale,
+    )
+    model = load_model(model_path, up=options.up, include=options.include, exclude=options.exclude)
+    viewer = Viewer(
+        model,
+        Path(model_path),
+        state,
+        size=options.size,
+        options=frames_options,
+        dump=os.environ.get(DUMP_ENV),
+    )
     return viewer.run(frames=frames)

@@ -103,13 +103,9 @@ def animate_silhouettes(
     method: str = DEFAULT_METHOD,
     layers: int = DEFAULT_LAYERS,
     size: tuple[int, int] = (800, 600),
-    view: str = "iso",
-    azimuth: float | None = None,
-    elevation: float | None = None,
-    fov: float = 30.0,
-    ortho: bool = False,
     camera: Camera | None = None,
     renderer: LayerRenderer,
+    **placement,
 ) -> Iterator[tuple[np.ndarray, float]]:
     """Pictures of a deforming model's silhouettes, frame by frame: ``(image, ms)`` pairs, the
     image (H, W, 3) uint8 and `ms` the time to get its silhouettes from the frame's positions.
@@ -118,23 +114,16 @@ def animate_silhouettes(
     and ``gpu-idlist`` upload them too and rebuild their edge records or lists when the topology
     changes (once, at the split); ``cpu`` redoes the whole
     object-space preprocessing every frame, as the paper's comparison does. `renderer` draws
-    them, as for :func:`render_silhouettes`.
+    them, as for :func:`render_silhouettes`. The camera is `camera`, or one fitted to every
+    pose of the animation from `placement`: ``fit_camera``'s `view` and its `azimuth`,
+    `elevation`, `fov` and `ortho` keywords.
     """
     if method not in STILL_METHODS:
         raise InputError(f"unknown method {method!r} (choose {', '.join(STILL_METHODS)})")
     anim = Animation(model, animate, frames, split_at)
     w, h = check_size(size, 1, renderer.max_texture)
     if camera is None:
-        camera = fit_camera(
-            box_corners(anim.bounds()),
-            (w, h),
-            view,
-            azimuth=azimuth,
-            elevation=elevation,
-            fov=fov,
-            ortho=ortho,
-            up=model.up,
-        )
+        camera = fit_camera(box_corners(anim.bounds()), (w, h), up=model.up, **placement)
     if method == "cpu":
         for i in range(anim.frames):
             pose = anim.pose(i)
