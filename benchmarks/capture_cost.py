@@ -49,8 +49,8 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=9)
     args = parser.parse_args()
     with Renderer() as r:
-        r.abuffer_min_layers, r.kbuffer = 2, False
         bench = Bench(r, None, args.frames)
+        bench.use(False)
         programs = {}
         for k in VARIANTS:
             try:
@@ -58,7 +58,7 @@ def main() -> None:
                     r.ctx,
                     GEOMETRY_VERT,
                     SHADER,
-                    {"VARIANT": k, "EXACT_DEPTH": r.exact_depth},
+                    {"VARIANT": k, "EXACT_DEPTH": r.capture_table.exact_depth},
                     "#version 450 core",
                 )
             except Exception as exc:  # a driver without ARB_shader_ballot: that variant is left out

@@ -6,6 +6,8 @@ each other, normals included, and the drawings they make."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
@@ -13,31 +15,43 @@ from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
 import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
-from blueprint.render import capture
-from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
+from blueprint.render.table import (
+    KBUFFER_MAX,
+    KBUFFER_MAX_BYTES,
+    CaptureTable,
+    PeelRow,
+    Request,
+    capture_table,
+    choose,
+)
 from blueprint.scene.camera import fit_camera
 
 
 @pytest.fixture
 def kbuffer(renderer):
-    """Switches the renderer between both ways; the k-buffer is forced whatever the density."""
-    if not renderer.kbuffer:
+    """Switches the renderer between both ways (its capture table: the k-buffer whatever the
+    density, or a pass a layer; the A-buffer, test_abuffer.py, off either way)."""
+    default = capture_table(renderer)
+    row = default.row("k-buffer")
+    if row is None:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    saved = renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes
+    saved = renderer.capture_table
+    peel = default.row("peel")
 
     def use(on: bool) -> None:
-        # the A-buffer (test_abuffer.py) off: the other way is a pass a layer
-        renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = on, 0.0, 0
+        rows = (replace(row, min_density=0.0, whole_frames=False), peel) if on else (peel,)
+        renderer.capture_table = CaptureTable(rows, default.exact_depth)
 
+    use.interlock = row.interlock
     yield use
-    renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = saved
+    renderer.capture_table = saved
 
 
 @pytest.fixture
 def surfaces_kbuffer(renderer, kbuffer):
     """``kbuffer``, where one k-buffer pass can leave every layer in its surfaces for the edges
     to read there: through framebuffer fetch alone (Capture, ``surfaces``)."""
-    if renderer.kbuffer_interlock:
+    if kbuffer.interlock:
         pytest.skip("the k-buffer runs under fragment shader interlock here: its layers are unpacked")
     return kbuffer
 
@@ -155,27 +169,26 @@ def test_same_drawing(renderer, kbuffer, style, supersample):
     assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
 
 
-def test_used_only_where_it_pays(renderer, monkeypatch):
-    """From KBUFFER_MIN_DENSITY triangles per G-buffer pixel, never for one layer, and not where
-    its targets would take more than KBUFFER_MAX_BYTES."""
-    if not renderer.kbuffer:
+def test_used_only_where_it_pays(renderer):
+    """From the row's ``min_density`` triangles per G-buffer pixel, never for one layer, and not
+    where its targets would take more than its ``max_bytes`` (KBUFFER_MAX_BYTES)."""
+    row = capture_table(renderer).row("k-buffer")
+    if row is None:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    monkeypatch.setattr(renderer, "abuffer_max_bytes", 0)  # else preferred (test_abuffer.py)
+    row = replace(row, whole_frames=False)
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
-    camera = fit_camera(model, (64, 64))
-    side = int(np.sqrt(mesh.triangles / renderer.kbuffer_density)) + 2
-    small = gbuffer(renderer.pool, (64, 64), "test.small")
-    large = gbuffer(renderer.pool, (side, side), "test.large")
+    side = int(np.sqrt(mesh.triangles / row.min_density)) + 2
+    assert row.max_bytes == KBUFFER_MAX_BYTES
 
-    def kbuffered(gb, batch: int) -> bool:
-        return Capture(renderer, mesh, camera, gb, batch=batch).kbuffer is not None
+    def kbuffered(size, batch: int, row=row) -> bool:
+        request = Request(size, mesh.triangles, mesh.part_count, batch)
+        return choose(CaptureTable((row, PeelRow())), request)[0].way == "k-buffer"
 
-    assert kbuffered(small, 5)
-    assert not kbuffered(small, 1)
-    assert not kbuffered(large, 5)
-    monkeypatch.setattr(capture, "KBUFFER_MAX_BYTES", 16 * 5 * 64 * 64 - 1)
-    assert not kbuffered(small, 5)
+    assert kbuffered((64, 64), 5)
+    assert not kbuffered((64, 64), 1)
+    assert not kbuffered((side, side), 5)
+    assert not kbuffered((64, 64), 5, replace(row, max_bytes=16 * 5 * 64 * 64 - 1))
 
 
 @pytest.mark.parametrize(("supersample", "batch"), [(1, 8), (2, 8), (1, 3), (2, 1)])

@@ -35,8 +35,6 @@ SLIM_BYTES = 8
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 # room for this many fragments a pixel before a first frame has counted them
 FIRST_ROOM = 4
-# a quarter of the GPU's memory where the driver tells it, else this
-DEFAULT_MAX_BYTES = 1 << 30
 # pixels along a side of the tiles whose layers are counted, for a software rasteriser to unpack
 # and draw each layer only where it has pixels (blueprint.pipeline.tiles)
 TILE = 16
@@ -73,27 +71,28 @@ class ABuffer:
     the sorted lists themselves (``lists``). The counts come back through a buffer of their own
     for each ``slot``: frames that stream read one frame's counts after the next is issued.
     On a software rasteriser the lists live in images, not storage buffers (abuffer.glsl):
-    programs that read them take ``defines``. Where the renderer's ``abuffer_slim``, the
-    geometry pass writes each fragment's depth and face alone and the resolve makes the whole
-    surfaces of the fragments it keeps as layers."""
+    programs that read them take ``defines``. ``row`` is the capture table's (``table.ABufferRow``):
+    the bytes the lists may take, and where it is ``slim`` the geometry pass writes each
+    fragment's depth and face alone and the resolve makes the whole surfaces of the fragments
+    it keeps as layers."""
 
     def __init__(
         self,
         r,
+        row,
         mesh,
         uniforms: dict,
         back_bias: float,
-        max_bytes: int,
         tiles: bool = False,
         defer: bool = False,
         unpack: bool = True,
         slot: int = 0,
     ) -> None:
-        self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
+        self.r, self.mesh, self.max_bytes = r, mesh, row.max_bytes
         self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
         self.images = r.software
         self.defines = list_defines(r)
-        self.slim = r.abuffer_slim
+        self.slim = row.slim
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
@@ -126,7 +125,8 @@ class ABuffer:
         self.uniforms = uniforms
         # the compute rasteriser where the renderer captures in compute (render.raster), and
         # (its bins' room, the size) of the capture in hand where it drew it
-        self.raster = r.compute_raster if r.compute_capture_from is not None else None
+        self.raster = r.compute_raster if row.compute_from is not None else None
+        self.compute_from = row.compute_from
         self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
@@ -330,7 +330,7 @@ class ABuffer:
     def _computes(self, size: tuple[int, int]) -> bool:
         """Whether the compute rasteriser lists a frame of ``size`` (render.raster: where it
         sees the view too)."""
-        return self.raster is not None and size[0] * size[1] >= self.r.compute_capture_from
+        return self.raster is not None and size[0] * size[1] >= self.compute_from
 
     def fragments(self, gb, head) -> None:
         """Every fragment of the mesh into its pixel's list (``head``: the lists' first nodes):
@@ -444,9 +444,3 @@ def gpu_memory_bytes(r) -> int | None:
     except (OSError, AttributeError):
         return None
     return value.value * 1024 if value.value > 0 else None
-
-
-def default_max_bytes(r) -> int:
-    """The most the lists of one frame may take: a quarter of the GPU's memory, or 1 GiB."""
-    total = gpu_memory_bytes(r)
-    return total // 4 if total else DEFAULT_MAX_BYTES

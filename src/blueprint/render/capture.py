@@ -17,6 +17,7 @@ from blueprint.gpu import units
 from blueprint.render.abuffer import ABuffer, tile_max
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.render.stop import HARD_MAX_LAYERS, StopRule
+from blueprint.render.table import ABufferRow, KBufferRow, Request, choose, kbuffer_layers
 from blueprint.scene.camera import Camera
 
 # Layers peeled between two looks at the occlusion queries when no maximum is set: one CPU
@@ -34,17 +35,6 @@ REVEAL_FRAG = "blueprint.render:glsl/reveal.frag"
 # the depth buffer) makes the front face win every pixel of the tie, instead of whichever
 # rounds nearer (speckle); it is far below the peeling tolerance, so both still peel as one.
 BACK_OFFSET = 16.0
-# Layers one k-buffer pass finds at most: the targets a fragment shader may write.
-KBUFFER_MAX = 8
-# The k-buffer saves geometry passes but adds a full-screen pass a layer: under framebuffer
-# fetch it paid from about this many triangles per G-buffer pixel (benchmarks/variants.py).
-KBUFFER_MIN_DENSITY = 0.03
-# Under fragment shader interlock it paid only from about this many (likewise measured).
-KBUFFER_INTERLOCK_MIN_DENSITY = 0.3
-# The k-buffer's targets hold 16 bytes a pixel a layer (8 for triangle IDs alone); above this
-# many bytes the layers are peeled a pass each instead (8 layers at 2048x2048 supersampled
-# would take 2 GiB).
-KBUFFER_MAX_BYTES = 1 << 29
 
 
 @dataclass
@@ -152,75 +142,51 @@ class Capture:
         self.r, self.mesh, self.gb = r, mesh, gb
         normals = gb.normal is not None
         self.tie_break = normals if tie_break is None else tie_break
-        layers = batch  # None: every layer
-        batch = batch or KBUFFER_MAX
-        batch = -(-batch // -(-batch // KBUFFER_MAX))  # as many to a pass as evenly fit
-        w, h = gb.size
-        use_kbuffer = (
-            r.kbuffer
-            and batch > 1
-            and mesh.triangles >= r.kbuffer_density * w * h
-            and 16 * batch * w * h <= KBUFFER_MAX_BYTES
-            and normals
-            and selected is None
-            and r.back_bias_in_shader
-            and mesh.part_count < 0xFFFF
+        request = Request(
+            tuple(gb.size), mesh.triangles, mesh.part_count, batch, normals, selected is not None, surfaces
         )
-        # every layer from one k-buffer pass through framebuffer fetch (batch is all of them),
-        # with a target left for the count
-        surfaces = surfaces and not r.kbuffer_interlock
-        surfaces = surfaces and layers is not None and layers < min(KBUFFER_MAX, r.max_draw_buffers)
-        self.abuffer = None
-        if (
-            r.abuffer_max_bytes
-            and (layers is None or layers >= r.abuffer_min_layers)
-            and not (r.abuffer_after_kbuffer and use_kbuffer and surfaces)
-            and normals
-            and selected is None
-            and r.back_bias_in_shader
-            and mesh.part_count < 0xFFFF
-        ):
-            self.abuffer = ABuffer(
-                r,
-                mesh,
-                abuffer_uniforms(camera),
-                BACK_OFFSET / (1 << 24),
-                r.abuffer_max_bytes,
-                tiles,
-                defer,
-                unpack,
-                slot,
-            )
-            if not self.abuffer.fits((w, h)):
-                self.abuffer = None
+        self.abuffer = kbuffer = None
+        for row in choose(r.capture_table, request):
+            if isinstance(row, ABufferRow):
+                abuffer = ABuffer(
+                    r,
+                    row,
+                    mesh,
+                    abuffer_uniforms(camera),
+                    BACK_OFFSET / (1 << 24),
+                    tiles,
+                    defer,
+                    unpack,
+                    slot,
+                )
+                if abuffer.fits(gb.size):
+                    self.abuffer = abuffer
+                    break
+            elif isinstance(row, KBufferRow):
+                kbuffer = row
+                break
             else:
-                use_kbuffer = False
+                break
         self.prog = self.kbuffer = self._flags = None
         # the peel's own program only where it peels: an A-buffer frame sets up none (unless
         # its lists prove too big for memory, ``draw``)
-        self._peel_with = (camera, batch, face_ids, selected, use_kbuffer, surfaces)
+        self._peel_with = (camera, face_ids, selected, kbuffer, request)
         if self.abuffer is None:
             self._set_up_peel()
 
     def _set_up_peel(self) -> None:
-        r, mesh, (w, h) = self.r, self.mesh, self.gb.size
-        camera, batch, face_ids, selected, use_kbuffer, surfaces = self._peel_with
+        r, (w, h) = self.r, self.gb.size
+        camera, face_ids, selected, kbuffer, request = self._peel_with
+        table = r.capture_table
         normals = self.gb.normal is not None
-        culled_from = r.culled_tie_break_from
-        # depth written by the shader (exact_depth) forgoes the early depth tests two culled
-        # draws are there to keep, and would lose their polygon offset
-        culled = (
-            not use_kbuffer
-            and not r.exact_depth
-            and culled_from is not None
-            and mesh.triangles >= culled_from[0]
-            and w * h >= culled_from[1]
-        )
-        self.shader_bias = r.back_bias_in_shader and self.tie_break and not culled
+        culled = kbuffer is None and table.rows[-1].culled(request, table.exact_depth)
+        self.shader_bias = self.tie_break and not culled
         behind = None
-        if use_kbuffer:
-            defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": r.kbuffer_interlock, "COUNT": surfaces}
-            modern = r.kbuffer_interlock
+        if kbuffer is not None:
+            surfaces = kbuffer.holds_frame(request)
+            batch = kbuffer_layers(request.layers)
+            modern = interlock = kbuffer.interlock
+            defines = {"K": batch, "FACE_IDS": face_ids, "INTERLOCK": interlock, "COUNT": surfaces}
             prog = geometry_program(r, KBUFFER_FRAG, {**defines, "PEEL": False}, modern=modern)
             if not surfaces:  # (one pass finds every layer there)
                 behind = geometry_program(r, KBUFFER_FRAG, {**defines, "PEEL": True}, modern=modern)
@@ -240,7 +206,8 @@ class Capture:
             if self.shader_bias:
                 each["u_back_bias"].value = BACK_OFFSET / (1 << 24)
         self.prog = prog
-        self.kbuffer = _KBuffer(r, prog, behind, batch, unpack=not surfaces) if use_kbuffer else None
+        if kbuffer is not None:
+            self.kbuffer = _KBuffer(r, prog, behind, batch, kbuffer.interlock, unpack=not surfaces)
         if selected is not None:
             data = np.asarray(selected, bool).astype(np.int32).tobytes()
             self._flags = r.ctx.texture((len(selected), 1), 1, data, dtype="i4")
@@ -378,9 +345,10 @@ class _KBuffer:
     surfaces cost much of a frame's geometry, and readers of the surfaces fetch a pixel's depth,
     normal and IDs at once."""
 
-    def __init__(self, r, prog, behind, k: int, unpack: bool = True) -> None:
+    def __init__(self, r, prog, behind, k: int, interlock: bool, unpack: bool = True) -> None:
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
         self.r, self.prog, self.behind, self.k, self.unpacks = r, prog, behind, k, unpack
+        self.interlock = interlock
         self.back_bias = BACK_OFFSET / (1 << 24)  # kbuffer.glsl's kb_depth
         # the pass that unpacks a layer into the G-buffer, where layers are unpacked at all
         if unpack:
@@ -430,7 +398,7 @@ class _KBuffer:
         if layer > 0:
             prog = self.behind
             prog["u_prev_depth"].value = units.PEEL_DEPTH + (layer - 1) % 2
-        if self.r.kbuffer_interlock:
+        if self.interlock:
             # the surfaces as images; the pass rasterises into this layer's depth (not the
             # previous layer's, which it samples), writing nothing there: no depth test
             for unit, tex in enumerate(surfaces):

@@ -13,9 +13,9 @@ GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 
 def geometry_program(r, fragment: str, defines=None, modern: bool = False):
     """A geometry pass's program (geometry.vert and ``fragment``) with the renderer's depth
-    rule: fragment_depth.glsl's EXACT_DEPTH where ``r.exact_depth`` (then ``u_target``, the
-    target's size, is the program's to set: ``target_uniform``)."""
-    defines = {**(defines or {}), "EXACT_DEPTH": r.exact_depth}
+    rule: fragment_depth.glsl's EXACT_DEPTH where its capture table's ``exact_depth`` (then
+    ``u_target``, the target's size, is the program's to set: ``target_uniform``)."""
+    defines = {**(defines or {}), "EXACT_DEPTH": r.capture_table.exact_depth}
     return r.program(fragment, GEOMETRY_VERT, defines, modern=modern)
 
 

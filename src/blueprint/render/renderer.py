@@ -9,14 +9,9 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
-from blueprint.render.abuffer import default_max_bytes
 from blueprint.render.capture import (
     BACK_OFFSET,
     KBUFFER_FRAG,
-    KBUFFER_INTERLOCK_MIN_DENSITY,
-    KBUFFER_MAX,
-    KBUFFER_MAX_BYTES,
-    KBUFFER_MIN_DENSITY,
     Capture,
     gbuffer,
     peel,
@@ -25,12 +20,10 @@ from blueprint.render.capture import (
 from blueprint.render.mesh import GpuMesh, geometry_program, target_uniform
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.stop import standard_rules
+from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks
-
-# llvmpipe's A-buffer frames: from this many layers (see LayerRenderer.abuffer_min_layers)
-ABUFFER_SOFTWARE_MIN_LAYERS = 4
 
 
 @dataclass
@@ -108,55 +101,24 @@ class LayerRenderer(Device):
     def __init__(self, ctx=None) -> None:
         super().__init__(ctx)
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
-        # The back-face tie-break as one draw writing depth, or two culled draws with a polygon
-        # offset: one draw, which measured faster in most cases (benchmarks/variants.py)...
-        self.back_bias_in_shader = True
-        # ...except for big frames of dense models on a GPU: a draw writing depth loses early
-        # depth tests, and there hidden fragments dominate.
-        # (triangles, G-buffer pixels) from which two culled draws are used; None: never.
-        self.culled_tie_break_from = None if self.software else (100_000, 1 << 22)
-        # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
-        # pixel to read and write its surfaces one after another: framebuffer fetch (Mesa's
-        # drivers, llvmpipe among them) with a target a layer, else fragment shader interlock
-        # on images (NVIDIA's); used from the density of triangles per pixel where each way was
-        # measured to pay (benchmarks/variants.py compares both ways).
-        fetch = self.framebuffer_fetch and self.max_draw_buffers >= KBUFFER_MAX
-        self.kbuffer = fetch or self.fragment_interlock
-        self.kbuffer_interlock = not fetch and self.fragment_interlock
-        self.kbuffer_density = (
-            KBUFFER_INTERLOCK_MIN_DENSITY if self.kbuffer_interlock else KBUFFER_MIN_DENSITY
-        )
-        # Every layer from one geometry pass (render.abuffer): the most bytes its lists may
-        # take a frame (0: layers are peeled), and the fragments the last frame of each G-buffer
-        # size drew, the room the next one starts with. Its drawings are checked against the
-        # peel's by the tests, on software and GPU drivers alike.
-        self.abuffer_max_bytes = default_max_bytes(self) if self.ctx.version_code >= 430 else 0
-        # ...for frames of at least this many layers (None: all of them): on a GPU it is
-        # faster even for one layer, whose geometry and edge passes the narrow graphics
-        # pipeline draws at the whole G-buffer's size; llvmpipe lists and sorts every fragment
-        # however few layers are drawn, so there it pays only from a few layers a frame
-        # (benchmarks/layers.py)
-        self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 1
-        # ...unless one k-buffer pass finds every layer of the frame, read where they lie
-        # (Capture's ``surfaces``): there llvmpipe draws faster so
-        self.abuffer_after_kbuffer = self.software
+        self._table = capture_table(self)
+        # what the A-buffer and the compute rasteriser remember from frame to frame: the
+        # fragments (and triangle-tile pairs) the last frame of each G-buffer size drew, the
+        # room the next one starts with
         self.abuffer_room: dict[tuple[int, int], int] = {}
-        # Fragments of depth and face alone, the rest made by the resolve for those kept as
-        # layers, where the graphics pipeline is narrower than compute (image passes in compute:
-        # a GPU): there the geometry pass is bound by the bytes its fragments write
-        # (benchmarks/capture_cost.py). llvmpipe's compute is its fragment stage.
-        self.abuffer_slim = self.use_compute
-        # The A-buffer's fragments listed by a rasteriser in compute (render.raster) instead of
-        # the graphics pipeline's, in views that need no clipping, for G-buffers of at least
-        # this many pixels (None: never): from there it measured faster on a GPU, below it
-        # slower (benchmarks/compute_capture.py; test_layers_oracle's a-buffer-compute checks
-        # it). llvmpipe's compute is its fragment stage, and slower.
-        self.compute_capture_from = 2048 * 2048 if self.use_compute else None
         self.compute_raster = ComputeRaster(self)
-        # Where the driver's depths come from snapped corners, every geometry pass takes its
-        # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): coincident faces
-        # of one part would otherwise peel as two layers.
-        self.exact_depth = self.snapped_depth
+
+    @property
+    def capture_table(self) -> CaptureTable:
+        """How this renderer captures layers (``render.table``): the device's measured table,
+        or one set here (``capture_table(device, way)`` forces a way)."""
+        return self._table
+
+    @capture_table.setter
+    def capture_table(self, table: CaptureTable) -> None:
+        if not isinstance(table, CaptureTable):
+            raise TypeError(f"capture_table must be a CaptureTable, got {type(table).__name__}")
+        self._table = table
 
     def release(self) -> None:
         self.make_current()
@@ -267,13 +229,8 @@ class LayerRenderer(Device):
     def _faces_kbuffer_fits(self, size, max_layers) -> bool:
         """Whether ``max_layers`` layers of faces at ``size`` come from one faces-only k-buffer
         pass (measured only under framebuffer fetch, llvmpipe)."""
-        return bool(
-            self.kbuffer
-            and not self.kbuffer_interlock
-            and max_layers is not None
-            and 1 < max_layers <= KBUFFER_MAX
-            and 8 * max_layers * size[0] * size[1] <= KBUFFER_MAX_BYTES
-        )
+        row = self.capture_table.row("k-buffer")
+        return row is not None and row.faces_fit(size, max_layers)
 
     def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):
         """The ``max_layers`` nearest surfaces of every pixel left on the GPU, for passes that
