@@ -21,7 +21,7 @@ from compute_capture import Bench, fragments, peeled_capture
 
 from blueprint import Renderer, load_model
 from blueprint.gpu.shaders import build_program
-from blueprint.render.capture import gbuffer
+from blueprint.render.gbuffer import gbuffer
 from blueprint.render.mesh import GEOMETRY_VERT, target_uniform
 from blueprint.scene.camera import fit_camera
 
@@ -67,8 +67,8 @@ def main() -> None:
             model = load_model(path)
             for size in args.size:
                 camera = fit_camera(model, (size, size))
-                ab = peeled_capture(r, model, camera)
                 gb = gbuffer(r.pool, (size, size))
+                ab = peeled_capture(r, model, camera, gb)
                 name = f"abuffer.{size}x{size}"
                 ab._capture(gb, name)  # the room this size needs
                 ab._capture(gb, name)

@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import Renderer, load_model
-from blueprint.render.abuffer import ABuffer
-from blueprint.render.capture import BACK_OFFSET, abuffer_uniforms, gbuffer
+from blueprint.render.abuffer import ABufferSource
+from blueprint.render.gbuffer import gbuffer
 from blueprint.render.raster import TILE
-from blueprint.render.table import CaptureTable, capture_table
+from blueprint.render.table import CaptureTable, Request, capture_table
 from blueprint.scene.camera import fit_camera
 
 
@@ -141,7 +141,7 @@ class Bench:
         pictures = []
         for compute in (False, True):
             self.use(compute)
-            ab = peeled_capture(r, model, camera)
+            ab = peeled_capture(r, model, camera, gb)
             form = "compute" if compute else "graphics"
             row[f"capture_{form}_ms"] = self.gpu_ms(
                 functools.partial(ab._capture, gb, f"abuffer.{size}x{size}")
@@ -159,11 +159,12 @@ def fragments(r, size: int) -> int:
     return int(np.frombuffer(totals.read(size=4), np.uint32)[0])
 
 
-def peeled_capture(r, model, camera) -> ABuffer:
-    """An A-buffer with ``camera``'s uniforms over ``model``, as a frame makes it with the
-    renderer's capture table."""
-    row = r.capture_table.row("A-buffer")
-    return ABuffer(r, row, r.mesh(model, 30.0), abuffer_uniforms(camera), BACK_OFFSET / (1 << 24))
+def peeled_capture(r, model, camera, gb) -> ABufferSource:
+    """An A-buffer of ``model`` from ``camera`` into ``gb``, as a frame of every layer makes it
+    with the renderer's capture table."""
+    mesh = r.mesh(model, 30.0)
+    request = Request(gb.size, mesh.triangles, mesh.part_count, None)
+    return ABufferSource(r, r.capture_table.row("A-buffer"), mesh, camera, gb, request)
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ from blueprint import examples
 from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.peel import LayerCapture
-from blueprint.render.abuffer import NODE_BYTES, ABuffer
+from blueprint.render.abuffer import NODE_BYTES, ABufferSource
 from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.table import (
     KBUFFER_MAX,
@@ -244,10 +244,10 @@ def _tiled_layers(renderer, mesh, camera, size, tiles: bool) -> tuple[list, Capt
     """Every layer's (depth, normal, ids) of a capture, zero where the layer has no fragment."""
     gb = gbuffer(renderer.pool, size, f"test.ab.tiles{tiles}")
     capture = Capture(renderer, mesh, camera, gb, batch=None, tiles=tiles)
-    assert capture.abuffer is not None
+    assert capture.way == "A-buffer"
     got = []
     layer = 0
-    while layer == 0 or layer < capture.abuffer.deepest():
+    while layer == 0 or layer < capture.deepest():
         capture.draw(layer, renderer.queries("test.ab")[0])
         depth = np.frombuffer(gb.layer_depth(layer).read(), np.float32).reshape(size[::-1])
         covered = depth < 1
@@ -329,13 +329,13 @@ def test_counts_read_late_draw_the_same(renderer, abuffer, monkeypatch, max_laye
     monkeypatch.setattr(renderer, "software", False)  # a GPU's frame: nothing looks per layer
     monkeypatch.setattr(executor_for(renderer), "tiled", False)
     deferred = []
-    issued = ABuffer.__init__
+    issued = ABufferSource.__init__
 
     def watch(self, *args, **kwargs):
         issued(self, *args, **kwargs)
         deferred.append(self.defer)
 
-    monkeypatch.setattr(ABuffer, "__init__", watch)
+    monkeypatch.setattr(ABufferSource, "__init__", watch)
     for room in (None, 10):
         if room is not None:
             renderer.abuffer_room[(120, 90)] = room

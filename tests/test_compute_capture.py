@@ -17,7 +17,7 @@ from test_layers_oracle import nested_boxes, nested_round
 import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
-from blueprint.render.capture import abuffer_uniforms
+from blueprint.render.gbuffer import abuffer_uniforms
 from blueprint.render.raster import REACH, ComputeRaster
 from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera, fit_camera

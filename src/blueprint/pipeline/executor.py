@@ -57,10 +57,7 @@ from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
 from blueprint.pipeline.tiles import Tiles
 from blueprint.render.abuffer import Overflow
-from blueprint.render.capture import (
-    depth_range,
-    peel_eps,
-)
+from blueprint.render.gbuffer import depth_range, peel_eps
 from blueprint.render.renderer import LayerRenderer, check_frame_args
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
@@ -551,8 +548,7 @@ class Executor:
         if p.user is not None:
             prog = self.programs.user(p.user)
         elif lists:
-            abuffer = st.groups[0].capture.abuffer
-            defines = {**abuffer.defines, "BATCH": self.edge_batch}
+            defines = {**st.groups[0].capture.defines, "BATCH": self.edge_batch}
             prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, defines, modern=True)
         elif surfaces:
             defines = {**_defines(p), "BATCH": self.edge_batch}
@@ -566,20 +562,8 @@ class Executor:
             self.programs.set(prog, "u_batch", span)
         elif surfaces:
             # the batch's depth, normal and IDs from the k-buffer, one fetch a pixel and layer
-            kbuffer = st.surfaces
-            held = kbuffer.surfaces
-            for k in range(self.edge_batch):
-                held[min(layer + k, len(held) - 1)].use(BASE_UNIT + 1 + k)
-            kbuffer.count.use(BASE_UNIT)
-            self.programs.update(
-                prog,
-                {
-                    "u_count": BASE_UNIT,
-                    "u_surfaces": tuple(range(BASE_UNIT + 1, BASE_UNIT + 1 + self.edge_batch)),
-                    "u_batch": span,
-                    "u_back_bias": kbuffer.back_bias,
-                },
-            )
+            st.groups[0].capture.bind(prog, layer, st.edge_step)
+            self.programs.set(prog, "u_batch", span)
         else:
             for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
                 self._bind_input(prog, key, self._value(st, source, layer), unit, size)
@@ -644,28 +628,20 @@ class Executor:
         prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
         st.draws += 1
 
-    def _run_lists(self, st: RunState, name: str, abuffer, layers: int) -> None:
+    def _run_lists(self, st: RunState, name: str, capture, layers: int) -> None:
         """Slice pass ``name`` (the edges operation) on all ``layers`` layers, read from
-        ``abuffer``'s sorted lists: a dispatch an array of ``SLICES`` layers, each pixel's chain
-        carried from one to the next in a pair of cursor images."""
+        ``capture``'s sorted lists (an A-buffer's): a dispatch an array of ``SLICES`` layers,
+        each pixel's chain carried from one to the next."""
         p = st.pl.bound.passes[name]
-        prog = self.programs.compute(EDGES_FROM_LISTS, abuffer.defines)
+        prog = self.programs.compute(EDGES_FROM_LISTS, capture.defines)
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         self.programs.update(prog, p.uniforms)
-        *cursors, layer_count = abuffer.lists(size)
-        layer_count.bind_to_image(4, read=True, write=False)
         for k in range(-(-layers // SLICES)):
+            capture.bind(prog, k * SLICES, SLICES)
             st.stacks[name][k].bind_to_image(1, read=False, write=True)
-            cursors[k % 2].bind_to_image(2, read=True, write=False)
-            cursors[(k + 1) % 2].bind_to_image(3, read=False, write=True)
             self.programs.update(
-                prog,
-                {
-                    "u_back_bias": abuffer.back_bias,
-                    "u_first_layer": k * SLICES,
-                    "u_layers": min(SLICES, layers - k * SLICES),
-                },
+                prog, {"u_first_layer": k * SLICES, "u_layers": min(SLICES, layers - k * SLICES)}
             )
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
@@ -673,15 +649,8 @@ class Executor:
 
     def _bind_layer_lists(self, st: RunState, name: str, prog, size, layer: int) -> None:
         """The A-buffer's sorted lists bound for pass ``name`` (the edges operation) to read the
-        batch of layers from ``layer`` on, no layer unpacked: each pixel's chain carried from one
-        batch to the next in a pair of cursor images."""
-        abuffer = st.groups[0].capture.abuffer
-        self.programs.set(prog, "u_back_bias", abuffer.back_bias)
-        *cursors, layer_count = abuffer.lists(size)
-        batch = layer // st.edge_step
-        cursors[batch % 2].bind_to_image(2, read=True, write=False)
-        cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
-        layer_count.bind_to_image(4, read=True, write=False)
+        batch of layers from ``layer`` on, no layer unpacked."""
+        st.groups[0].capture.bind(prog, layer, st.edge_step)
 
     def _run_batches(self, st: RunState, layers: int) -> None:
         ctx, pl = self.ctx, st.pl

@@ -151,9 +151,8 @@ class LayerCapture:
                 slot=st.slot,
                 surfaces=bool(from_surfaces),
             )
-        kbuffer = groups[0].capture.kbuffer
-        if kbuffer is not None and not kbuffer.unpacks:
-            st.surfaces, st.from_surfaces = kbuffer, from_surfaces
+        if groups[0].capture.reads == "surfaces":
+            st.from_surfaces = from_surfaces
         extras = self._attribute_programs(st) if layout.extra else None
         for name in pl.accumulated:
             r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
@@ -192,13 +191,13 @@ class LayerCapture:
                     )
                 if g.extra:
                     self._attributes(st, g, layer, extras)
-            if layer == 0 and groups[0].capture.abuffer is not None and from_lists:
+            if layer == 0 and groups[0].capture.reads == "lists" and from_lists:
                 # (an A-buffer without room in memory peeled instead, unpacking as it goes)
                 listed.extend(from_lists)
                 first[:] = [n for n in first if n not in listed]
                 later[:] = [n for n in later if n not in listed]
             if layer == 0:
-                st.layer_lists = layer_lists if groups[0].capture.abuffer is not None else ()
+                st.layer_lists = layer_lists if groups[0].capture.reads == "lists" else ()
                 # (a pass whose layers share one target, read by the next pass of each layer,
                 # draws one at a time)
                 batched = eager and all(n in pl.stacked for n in (*st.layer_lists, *st.from_surfaces))
@@ -236,7 +235,7 @@ class LayerCapture:
             layers = peeled[1]
             self.ex._ensure_stacks(st, max(layers, 1))
             for name in listed:
-                self.ex._run_lists(st, name, groups[0].capture.abuffer, layers)
+                self.ex._run_lists(st, name, groups[0].capture, layers)
         return peeled
 
     def _from_lists(self, st: RunState) -> tuple[str, ...]:
@@ -273,7 +272,7 @@ class LayerCapture:
     def lists_only(self, st: RunState) -> bool:
         """Whether every capture of the run drew into an A-buffer, whose counts stay readable
         (each frame of two its own) after the next frame is issued."""
-        return all(g.capture.abuffer is not None for g in st.groups)
+        return all(g.capture.counts_kept for g in st.groups)
 
     def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
         """Layers left behind the last one where the peel stopped at its cap with the last layer

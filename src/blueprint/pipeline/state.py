@@ -153,8 +153,7 @@ class RunState:
     # per-layer passes that read each layer from the A-buffer's lists as it is drawn
     # (Executor._bind_layer_lists), once layer 0 has captured them
     layer_lists: tuple[str, ...] = ()
-    # the k-buffer whose surfaces hold every layer, unpacked, and the passes that read them there
-    surfaces: object = None
+    # the passes that read every layer from the surfaces of a k-buffer that holds them all
     from_surfaces: tuple[str, ...] = ()
     # the layers between the starts of two passes of those (their batch): each draws that many
     edge_step: int = 1

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.gpu import units
-from blueprint.render.capture import peel_uniforms
+from blueprint.render.gbuffer import peel_uniforms
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 

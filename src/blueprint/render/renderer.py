@@ -9,14 +9,9 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
-from blueprint.render.capture import (
-    BACK_OFFSET,
-    KBUFFER_FRAG,
-    Capture,
-    gbuffer,
-    peel,
-    peel_uniforms,
-)
+from blueprint.render.capture import Capture, peel
+from blueprint.render.gbuffer import BACK_BIAS, gbuffer, peel_uniforms
+from blueprint.render.kbuffer import KBUFFER_FRAG
 from blueprint.render.mesh import GpuMesh, geometry_program, target_uniform
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.stop import standard_rules
@@ -277,7 +272,7 @@ class LayerRenderer(Device):
         prog = geometry_program(self, KBUFFER_FRAG, defines)
         peel_uniforms(prog, camera)
         target_uniform(self, prog, size)
-        prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
+        prog["u_back_bias"].value = BACK_BIAS
         name = f"kbuffer.faces.{size[0]}x{size[1]}"
         surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
         pool.framebuffer((surfaces[0],)).clear()

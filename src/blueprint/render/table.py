@@ -13,13 +13,10 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from blueprint.errors import InputError
-from blueprint.render.abuffer import gpu_memory_bytes
+from blueprint.render.abuffer import ABufferSource, gpu_memory_bytes
+from blueprint.render.kbuffer import KBUFFER_MAX, KBUFFER_MAX_BYTES, KBufferSource, kbuffer_layers
+from blueprint.render.source import PeelSource
 
-# Layers one k-buffer pass finds at most: the targets a fragment shader may write.
-KBUFFER_MAX = 8
-# The k-buffer's targets hold 16 bytes a pixel a layer (8 for triangle IDs alone); above this
-# many bytes the layers are peeled a pass each instead.
-KBUFFER_MAX_BYTES = 1 << 29
 # Part IDs the k-buffer's and the A-buffer's surfaces hold (16 bits, one value kept for none).
 MOST_PARTS = 0xFFFF
 # A-buffer lists of a frame at most where the driver does not tell the GPU's memory.
@@ -44,6 +41,15 @@ class Request:
     normals: bool = True
     selected: bool = False
     surfaces: bool = False
+    # how the chosen source draws: face IDs kept (a software rasteriser pays for tracking
+    # them), back faces pushed behind coincident front faces (``gbuffer.BACK_OFFSET``), and
+    # an A-buffer's tiles, counts read late, layers unpacked and buffer slot (``ABufferSource``)
+    face_ids: bool = True
+    tie_break: bool = True
+    tiles: bool = False
+    defer: bool = False
+    unpack: bool = True
+    slot: int = 0
 
     @property
     def pixels(self) -> int:
@@ -53,13 +59,6 @@ class Request:
     def whole(self) -> bool:
         """A whole G-buffer (normals and parts) of every part: what the sorting ways capture."""
         return self.normals and not self.selected and self.parts < MOST_PARTS
-
-
-def kbuffer_layers(layers: int | None) -> int:
-    """The layers a k-buffer pass finds for a frame of ``layers`` (None: every layer): as many
-    to a pass as evenly fit ``KBUFFER_MAX``."""
-    wanted = layers or KBUFFER_MAX
-    return -(-wanted // -(-wanted // KBUFFER_MAX))
 
 
 @dataclass(frozen=True)
@@ -74,6 +73,7 @@ class PeelRow:
 
     culled_from: tuple[int, int] | None = None
     way = "peel"
+    source = PeelSource
 
     def accepts(self, request: Request) -> bool:
         return True
@@ -107,6 +107,7 @@ class KBufferRow:
     max_bytes: int = KBUFFER_MAX_BYTES
     whole_frames: bool = False
     way = "k-buffer"
+    source = KBufferSource
 
     def accepts(self, request: Request) -> bool:
         k = kbuffer_layers(request.layers)
@@ -152,6 +153,7 @@ class ABufferRow:
     slim: bool = False
     compute_from: int | None = None
     way = "A-buffer"
+    source = ABufferSource
 
     def accepts(self, request: Request) -> bool:
         layers = request.layers
