@@ -419,7 +419,7 @@ def test_edges_from_the_lists_a_layer_at_a_time_draw_the_same(
     abuffer(True)
     monkeypatch.setattr(executor_for(renderer), "edge_batch", batch)
     step = 1 if "line_width" in options else batch
-    listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
+    listed = _watch_lists(renderer, monkeypatch, "_bind_in_place")
     from_lists = renderer.render(model, size=(160, 120), **options)
     assert set(listed) == {"edges"} and len(listed) == -(-from_lists.layers // step)
     monkeypatch.setattr(LayerCapture, "_from_lists", lambda self, st: ())
@@ -437,7 +437,7 @@ def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
     each layer's depth as it comes: there every layer is unpacked."""
     model = examples.gearbox()
     abuffer(True)
-    listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
+    listed = _watch_lists(renderer, monkeypatch, "_bind_in_place")
     parts = np.zeros(len(model.part_names), bool)
     parts[0] = True
     if "shade" in options:
@@ -448,7 +448,7 @@ def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
     assert listed == []
 
 
-def _watch_lists(renderer, monkeypatch, method: str = "_run_lists") -> list[str]:
+def _watch_lists(renderer, monkeypatch, method: str = "run_in_place") -> list[str]:
     """The passes the renderer's executor runs from the lists (by ``method``), as it runs them."""
     ex = executor_for(renderer)
     listed: list[str] = []

@@ -208,14 +208,14 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     ex = executor_for(renderer)
     monkeypatch.setattr(ex, "edge_batch", batch)
     passes = []
-    run_pass = type(ex)._run_pass
+    run_pass = type(ex).run_pass
 
     def watch(self, st, name, layer, layers, span=1):
         if name in st.from_surfaces:
             passes.append(span)
         run_pass(self, st, name, layer, layers, span)
 
-    monkeypatch.setattr(type(ex), "_run_pass", watch)
+    monkeypatch.setattr(type(ex), "run_pass", watch)
     direct = renderer.render(model, **options)
     assert executor_for(renderer).last_run.from_surfaces == ("edges",)
     assert passes == [min(batch, 4 - k) for k in range(0, 4, batch)]

@@ -82,6 +82,31 @@ def test_every_op_has_a_shader_file_and_is_tested():
     assert set(OPS) == tested
 
 
+def test_capabilities_the_pipeline_plans_by():
+    """The pipeline plans by descriptor fields, never an op's name: a compute form only with a
+    compute shader; an in-place form (``IN_PLACE``, its shaders present) for exactly the ops
+    that may read their layers where a capture holds them; the edges op's triangle-ID
+    silhouettes need face IDs, and no in-place form reads them."""
+    from importlib import resources
+
+    from blueprint.pipeline.peel import IN_PLACE
+
+    for op in OPS.values():
+        assert op.compute_form in (None, "slice", "array"), op.name
+        assert op.compute_form is None or op.compute is not None, op.name
+        assert (op.in_place is not None) == (op.name in IN_PLACE), op.name
+    for forms in IN_PLACE.values():
+        assert set(forms.compute) <= set(forms.fragment)
+        for shader in (*forms.fragment.values(), *forms.compute.values()):
+            package, name = shader.split(":")
+            assert resources.files(package).joinpath(name).is_file(), shader
+    edges = OPS["edges"]
+    assert edges.depth_first and edges.compute_form == "slice" and OPS["dilate"].compute_form == "array"
+    for ids in (False, True):
+        values = edges.uniforms(id_silhouettes=ids)
+        assert edges.face_ids(values) == ids and edges.in_place(values) == (not ids)
+
+
 # -- edge detectors ------------------------------------------------------------------------------
 @pytest.mark.parametrize("channels", [1, 3, 4])
 def test_roberts_magnitude(ex, channels):

@@ -51,7 +51,7 @@ from blueprint.pipeline.inputs import (
     read_texture_later,
     texture_bytes,
 )
-from blueprint.pipeline.peel import LayerCapture
+from blueprint.pipeline.peel import IN_PLACE, LayerCapture
 from blueprint.pipeline.programs import FULLSCREEN, Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
@@ -66,9 +66,6 @@ from blueprint.scene.model import Model
 BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
-EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
-EDGES_FROM_LISTS_FRAG = "blueprint.pipeline:glsl/edges_lists.frag"
-EDGES_FROM_SURFACES = "blueprint.pipeline:glsl/edges_surfaces.frag"
 # the most layers an edges pass read from a capture's lists or surfaces draws at once
 # (Executor.edge_batch), the most render targets GL asks every driver for
 EDGE_BATCH = 8
@@ -304,15 +301,15 @@ class Executor:
                 counts, layers = self.capture.peel(st, max_layers, rules, blind)
                 revealed = None if reveal is None else reveal.shown
             else:
-                self._ensure_stacks(st, 1)
+                self.ensure_stacks(st, 1)
                 for name in pl.iteration0:
-                    self._run_pass(st, name, 0, 1)
+                    self.run_pass(st, name, 0, 1)
                 layers = 1
             if st.arrays is not None:
                 self._run_batches(st, layers)
             stage("peel_edges")
             for name in pl.after:
-                self._run_pass(st, name, 0, layers)
+                self.run_pass(st, name, 0, layers)
             self.tiles.forget()
             stage("compose")
             ctx.disable(ctx.BLEND)
@@ -433,7 +430,7 @@ class Executor:
         return held
 
     # -- targets -------------------------------------------------------------------------------
-    def _ensure_stacks(self, st: RunState, layers: int) -> None:
+    def ensure_stacks(self, st: RunState, layers: int) -> None:
         if layers <= st.stacked_layers:
             return  # asked again after every layer
         st.stacked_layers = layers
@@ -467,9 +464,9 @@ class Executor:
             return st.by_attr[name].texture(name, layer)
         if name in bound.images:
             return self.images.texture(name)
-        return self._target(st, name, layer)
+        return self.target(st, name, layer)
 
-    def _target(self, st: RunState, name: str, layer: int):
+    def target(self, st: RunState, name: str, layer: int):
         pl = st.pl
         if name in pl.stacked:
             p = pl.bound.passes[name]
@@ -521,7 +518,7 @@ class Executor:
         put(prog, f"u_{key}_components", tex.components)
         put(prog, f"u_{key}_factor", max(1, w // size[0]))
 
-    def _run_pass(self, st: RunState, name: str, layer: int, layers: int, span: int = 1) -> None:
+    def run_pass(self, st: RunState, name: str, layer: int, layers: int, span: int = 1) -> None:
         """Pass ``name`` at ``layer`` (``layers`` peeled so far); an edges pass read from an
         A-buffer's lists or a k-buffer's surfaces draws ``span`` layers from ``layer`` on at
         once (``edge_batch``)."""
@@ -534,41 +531,35 @@ class Executor:
                 self._run_slice(st, name, p, layer)
                 return
         if p.kind == "composite":
-            self._composite(st, p, self._target(st, name, layer), layers)
+            self._composite(st, p, self.target(st, name, layer), layers)
             return
-        target = self._target(st, name, layer)
+        target = self.target(st, name, layer)
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
-        reach = self._reach(st, name) if size == self.tiles.size else None
+        reach = self.reach(st, name) if size == self.tiles.size else None
         vertex = FULLSCREEN if reach is None else TILES_VERT
-        # the edges operation may read its layer from the A-buffer's lists or the k-buffer's
-        # surfaces instead of the G-buffer's textures
-        lists = name in st.layer_lists
-        surfaces = name in st.from_surfaces
+        # an op's in-place form reads its batch of layers where the capture holds them (an
+        # A-buffer's lists, a k-buffer's surfaces) instead of from the G-buffer's textures
+        in_place = name in st.layer_lists or name in st.from_surfaces
         if p.user is not None:
             prog = self.programs.user(p.user)
-        elif lists:
-            defines = {**st.groups[0].capture.defines, "BATCH": self.edge_batch}
-            prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, defines, modern=True)
-        elif surfaces:
-            defines = {**_defines(p), "BATCH": self.edge_batch}
-            prog = self.programs.library(EDGES_FROM_SURFACES, vertex, defines, modern=True)
+        elif in_place:
+            capture = st.groups[0].capture
+            shader = IN_PLACE[p.op.name].fragment[capture.reads]
+            defines = {**_defines(p), **capture.defines, "BATCH": self.edge_batch}
+            prog = self.programs.library(shader, vertex, defines, modern=True)
         else:
             prog = self.programs.library(p.op.shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
-        if lists:
-            self._bind_layer_lists(st, name, prog, size, layer)
-            self.programs.set(prog, "u_batch", span)
-        elif surfaces:
-            # the batch's depth, normal and IDs from the k-buffer, one fetch a pixel and layer
-            st.groups[0].capture.bind(prog, layer, st.edge_step)
+        if in_place:
+            self._bind_in_place(st, name, prog, layer)
             self.programs.set(prog, "u_batch", span)
         else:
             for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
                 self._bind_input(prog, key, self._value(st, source, layer), unit, size)
         if span > 1:
-            targets = tuple(self._target(st, name, k) for k in range(layer, layer + span))
+            targets = tuple(self.target(st, name, k) for k in range(layer, layer + span))
         else:
             targets = (target,)
         fbo = self.r.pool.framebuffer(targets)
@@ -593,7 +584,7 @@ class Executor:
         vao.render(vertices=3)
         st.draws += 1
 
-    def _reach(self, st: RunState, name: str) -> int | None:
+    def reach(self, st: RunState, name: str) -> int | None:
         """How far from the covered pixels of the layer being drawn pass ``name``'s result can
         be non-zero, through the passes it reads (``Op.support``); None: anywhere, or unknown.
         Only passes of one layer at a time qualify (a pass that accumulates layers does not)."""
@@ -608,7 +599,7 @@ class Executor:
                     depth = attribute.parts is None and (attribute.of or source) == "depth"
                     base = 0 if depth and st.by_attr[source].primary else None
                 else:
-                    base = self._reach(st, source) if source in pl.bound.passes else None
+                    base = self.reach(st, source) if source in pl.bound.passes else None
                 if base is not None:
                     reach = base + p.op.reach(p.uniforms)
             st.reach[name] = reach
@@ -628,12 +619,13 @@ class Executor:
         prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
         st.draws += 1
 
-    def _run_lists(self, st: RunState, name: str, capture, layers: int) -> None:
-        """Slice pass ``name`` (the edges operation) on all ``layers`` layers, read from
-        ``capture``'s sorted lists (an A-buffer's): a dispatch an array of ``SLICES`` layers,
-        each pixel's chain carried from one to the next."""
+    def run_in_place(self, st: RunState, name: str, capture, layers: int) -> None:
+        """Slice pass ``name`` on all ``layers`` layers in its compute in-place form, read
+        where ``capture`` holds them (an A-buffer's sorted lists): a dispatch an array of
+        ``SLICES`` layers, each pixel's chain carried from one to the next."""
         p = st.pl.bound.passes[name]
-        prog = self.programs.compute(EDGES_FROM_LISTS, capture.defines)
+        shader = IN_PLACE[p.op.name].compute[capture.reads]
+        prog = self.programs.compute(shader, {**_defines(p), **capture.defines})
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         self.programs.update(prog, p.uniforms)
@@ -647,9 +639,9 @@ class Executor:
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
 
-    def _bind_layer_lists(self, st: RunState, name: str, prog, size, layer: int) -> None:
-        """The A-buffer's sorted lists bound for pass ``name`` (the edges operation) to read the
-        batch of layers from ``layer`` on, no layer unpacked."""
+    def _bind_in_place(self, st: RunState, name: str, prog, layer: int) -> None:
+        """The capture's layers bound for pass ``name``'s in-place form ``prog`` to read the
+        batch of layers from ``layer`` on (``LayerSource.bind``), none unpacked."""
         st.groups[0].capture.bind(prog, layer, st.edge_step)
 
     def _run_batches(self, st: RunState, layers: int) -> None:
@@ -699,7 +691,7 @@ class Executor:
             compose = self.compositor.compute
         else:
             compose = self.compositor.fragment
-            reach = self._reach(st, source) if self.tiles.layers and shading is None else None
+            reach = self.reach(st, source) if self.tiles.layers and shading is None else None
             if reach is not None and tuple(st.stacks[source][0].size) == self.tiles.size:
                 compose = functools.partial(
                     compose, tiles=functools.partial(self.tiles.draw_layers, reach=reach)
@@ -776,8 +768,8 @@ class Executor:
             else:
                 self.images.put(f"in_{key}", textures[0])
         count = len(arrays[op.stacks[0]]) if op.stacks else 1
-        self._run_pass(st, "out", 0, count)
-        return read_texture(self._target(st, "out", 0), bound.passes["out"].format)[::-1]
+        self.run_pass(st, "out", 0, count)
+        return read_texture(self.target(st, "out", 0), bound.passes["out"].format)[::-1]
 
 
 @functools.lru_cache(maxsize=16)

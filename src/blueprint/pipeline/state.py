@@ -149,9 +149,9 @@ class RunState:
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
-    reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
+    reach: dict[str, int | None] = field(default_factory=dict)  # Executor.reach, per pass
     # per-layer passes that read each layer from the A-buffer's lists as it is drawn
-    # (Executor._bind_layer_lists), once layer 0 has captured them
+    # (Executor.run_pass), once layer 0 has captured them
     layer_lists: tuple[str, ...] = ()
     # the passes that read every layer from the surfaces of a k-buffer that holds them all
     from_surfaces: tuple[str, ...] = ()
