@@ -4,7 +4,7 @@ them), normals, triangles and parts, in whatever order the triangles come, for l
 enough to sort in registers and for longer ones, with too little room (drawn again) and with
 too little memory (peeled instead); and it counts the layers a capped frame left exactly. Each
 test runs with whole fragments and with slim ones (depth and face, the rest found by the resolve:
-``abuffer_slim``), whose normals may differ from the geometry pass's in a half's last place. The
+``ABufferRow.slim``), whose normals may differ from the geometry pass's in a half's last place. The
 ray-casting oracle checks the peel against the geometry (test_layers_oracle.py)."""
 
 from __future__ import annotations
@@ -146,7 +146,7 @@ def test_too_little_room_is_drawn_again(renderer, abuffer):
 
 
 def test_more_than_the_memory_allows_is_peeled(renderer, abuffer):
-    """Lists that would take more than ``abuffer_max_bytes`` are not drawn: the frame is peeled
+    """Lists that would take more than the row's ``max_bytes`` are not drawn: the frame is peeled
     a pass a layer instead, the same layers."""
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)

@@ -44,6 +44,11 @@ class KBufferSource:
     every layer, the tiles each covers and the layers a capped frame leaves): on a software
     rasteriser the unpacking and a full-screen pass counting the surfaces cost much of a
     frame's geometry, and readers of the surfaces fetch a pixel's depth, normal and IDs at once.
+
+    A frame of depths and faces alone (``request.normals`` false: a vector drawing's) is one
+    pass of ``rg32ui`` surfaces (window depth bits, face + 1), left for its readers
+    (``surfaces``, or read back a layer at a time: ``faces``); a pixel's surfaces run up to the
+    first with face 0.
     """
 
     way = "k-buffer"
@@ -53,8 +58,27 @@ class KBufferSource:
     def __init__(self, r, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
         self.r, self.mesh, self.gb, self.interlock = r, mesh, gb, row.interlock
         self.k = kbuffer_layers(request.layers)
-        self.unpacks = not row.holds_frame(request)
+        self.ids_only = not request.normals
+        self.unpacks = not (self.ids_only or row.holds_frame(request))
         self.reads = None if self.unpacks else "surfaces"
+        # (faces alone) each surface's face + 1 read back, 0 at and behind a pixel's first empty one
+        self._faces: list[np.ndarray] = []
+        # without unpacking: the layers each pixel holds and let go behind them (rg8,
+        # count / 255), the pixels each layer covers, the most layers in each tile (``TILE``
+        # pixels a side, row 0 at the bottom) and the most any pixel held and let go
+        self.count = None
+        self._layer_pixels: list[int] = []
+        self._tile_layers: np.ndarray | None = None
+        self._deepest = 0
+        if self.ids_only:
+            defines = {"K": self.k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
+            self.prog = geometry_program(r, KBUFFER_FRAG, defines)
+            peel_uniforms(self.prog, camera)
+            target_uniform(r, self.prog, gb.size)
+            self.prog["u_back_bias"].value = BACK_BIAS
+            name, size = f"kbuffer.faces.{gb.size[0]}x{gb.size[1]}", gb.size
+            self.surfaces = tuple(r.pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(self.k))
+            return
         defines = {
             "K": self.k,
             "FACE_IDS": request.face_ids,
@@ -79,13 +103,7 @@ class KBufferSource:
             self.unpack["u_surfaces"].value = units.KBUFFER
             self.unpack["u_back_bias"].value = BACK_BIAS
         self._held = self._surfaces(gb.size)
-        # without unpacking: the layers each pixel holds and let go behind them (rg8,
-        # count / 255), the pixels each layer covers, the most layers in each tile (``TILE``
-        # pixels a side, row 0 at the bottom) and the most any pixel held and let go
-        self.count = None
-        self._layer_pixels: list[int] = []
-        self._tile_layers: np.ndarray | None = None
-        self._deepest = 0
+        self.surfaces = self._held[0]
 
     @classmethod
     def open(cls, r, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> KBufferSource:
@@ -113,6 +131,8 @@ class KBufferSource:
     def draw(self, layer: int, query, guard=None) -> int:
         gb = self.gb
         gb.flat = None
+        if self.ids_only:
+            return self._find_faces() if layer == 0 else 0
         if not self.unpacks:
             # every layer is found at layer 0 and read from the surfaces: no depth to clear;
             # kbuffer.frag's previous layer is read though unused (llvmpipe runs the branch a
@@ -164,6 +184,25 @@ class KBufferSource:
         self._deepest = sum(1 for pixels in self._layer_pixels if pixels) + int(counts[..., 1].max())
         return 1
 
+    def _find_faces(self) -> int:
+        """Every layer's depths and faces into the surfaces in one pass; its draw calls."""
+        ctx, pool = self.r.ctx, self.r.pool
+        self._faces.clear()
+        pool.framebuffer(self.surfaces[:1]).clear()
+        pool.framebuffer(self.surfaces).use()
+        ctx.enable_only(ctx.NOTHING)
+        self.mesh.vao(self.prog).render()
+        return 1
+
+    def faces(self, layer: int) -> np.ndarray:
+        """(H * W,) face + 1 of each pixel's ``layer``-th surface (OpenGL rows), 0 where it has
+        none; read back up to that layer when first asked for (faces alone)."""
+        while len(self._faces) <= layer:
+            face = np.frombuffer(self.surfaces[len(self._faces)].read(), np.uint32)[1::2]
+            held = face if not self._faces else np.where(self._faces[-1] != 0, face, 0)
+            self._faces.append(held)
+        return self._faces[layer]
+
     def _draw(self, layer: int, query) -> int:
         ctx, gb = self.r.ctx, self.gb
         surfaces = self._held[0]
@@ -181,12 +220,14 @@ class KBufferSource:
         return 2 if first else 1
 
     def samples(self, layer: int, query) -> int:
+        if self.ids_only:
+            return int(np.count_nonzero(self.faces(layer)))
         return query.samples if self.unpacks else self._layer_pixels[layer]
 
     def deepest(self) -> int | None:
-        """Where one pass found every layer: the most any pixel held and let go (coincident
-        surfaces apart), once layer 0 is drawn; else None."""
-        return None if self.unpacks else self._deepest
+        """Where one pass found every layer for its readers with a count: the most any pixel
+        held and let go (coincident surfaces apart), once layer 0 is drawn; else None."""
+        return None if self.unpacks or self.ids_only else self._deepest
 
     @property
     def tile_layers(self) -> np.ndarray | None:

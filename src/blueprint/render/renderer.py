@@ -10,9 +10,8 @@ import numpy as np
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
 from blueprint.render.capture import Capture, peel
-from blueprint.render.gbuffer import BACK_BIAS, gbuffer, peel_uniforms
-from blueprint.render.kbuffer import KBUFFER_FRAG
-from blueprint.render.mesh import GpuMesh, geometry_program, target_uniform
+from blueprint.render.gbuffer import gbuffer
+from blueprint.render.mesh import GpuMesh
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.stop import standard_rules
 from blueprint.render.table import CaptureTable, capture_table
@@ -209,34 +208,38 @@ class LayerRenderer(Device):
             raise InputError(f"pixels must be flat indices into {w}x{h}")
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
-        if self._faces_kbuffer_fits((w, h), max_layers):
-            return self._kbuffer_faces(model, camera, (w, h), max_layers, min_fraction, gl)
+        check_frame_args(max_layers, min_fraction, 30.0, 1.0)
+        capture, gb = self._faces(model, camera, (w, h), max_layers)
         out = []
 
-        def read(gb, layer: int) -> None:
+        def read(layer: int) -> None:
+            if capture.reads == "surfaces":  # one k-buffer pass, its surfaces read as they are
+                face = capture.source.faces(layer)[gl].astype(np.int64)
+                out.append(np.where(face != 0, face - 1, -1).astype(np.int32))
+                return
             z = np.frombuffer(gb.layer_depth(layer).read(), np.float32)[gl]
             face = np.frombuffer(gb.ids.read(), np.int32)[gl]
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
 
-        self._peeled(model, camera, (w, h), max_layers, min_fraction, 30.0, False, read)
+        rules = standard_rules(max_layers, min_fraction)
+        peel(capture.draw, self.queries("peel"), rules, read, samples=capture.samples)
+        capture.release()
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
-
-    def _faces_kbuffer_fits(self, size, max_layers) -> bool:
-        """Whether ``max_layers`` layers of faces at ``size`` come from one faces-only k-buffer
-        pass (measured only under framebuffer fetch, llvmpipe)."""
-        row = self.capture_table.row("k-buffer")
-        return row is not None and row.faces_fit(size, max_layers)
 
     def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):
         """The ``max_layers`` nearest surfaces of every pixel left on the GPU, for passes that
         read them there (vector occlusion): a list of ``rg32ui`` textures, surface ``k`` in the
         ``k``-th, (window depth bits, face + 1), a pixel's surfaces running up to the first
-        with face 0, OpenGL rows (bottom up). None where this renderer gathers faces by peeling
-        a pass a layer (``triangles_at`` serves every renderer)."""
+        with face 0, OpenGL rows (bottom up), from one k-buffer pass where the capture table's
+        k-buffer takes such a frame; else None (``each_face_layer`` peels them a pass a layer,
+        ``triangles_at`` serves either way)."""
         w, h = check_size(size, 1, self.max_texture)
-        if not self._faces_kbuffer_fits((w, h), max_layers):
+        capture, _ = self._faces(model, camera, (w, h), max_layers)
+        if capture.reads != "surfaces":
+            capture.release()
             return None
-        return self._kbuffer_face_targets(model, camera, (w, h), max_layers)
+        capture.draw(0, None)
+        return list(capture.source.surfaces)
 
     def each_face_layer(
         self,
@@ -264,40 +267,15 @@ class LayerRenderer(Device):
             lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
         )
 
-    def _kbuffer_face_targets(self, model, camera, size, k) -> list:
-        """One k-buffer pass of depths and faces alone into ``k`` targets (kbuffer.frag)."""
-        ctx, pool = self.ctx, self.pool
+    def _faces(self, model, camera, size, max_layers) -> tuple:
+        """(capture, G-buffer) of depths and faces alone, for readers of a k-buffer's surfaces
+        where the capture table's k-buffer finds every layer in one pass (``reads``
+        "surfaces"), else peeled a pass a layer into the G-buffer."""
+        self.ctx.enable_only(self.ctx.NOTHING)
+        self.ctx.depth_func = "<"
+        gb = gbuffer(self.pool, size, "idb", normals=False)
         mesh = self.mesh(model, None)
-        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
-        prog = geometry_program(self, KBUFFER_FRAG, defines)
-        peel_uniforms(prog, camera)
-        target_uniform(self, prog, size)
-        prog["u_back_bias"].value = BACK_BIAS
-        name = f"kbuffer.faces.{size[0]}x{size[1]}"
-        surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
-        pool.framebuffer((surfaces[0],)).clear()
-        pool.framebuffer(tuple(surfaces)).use()
-        ctx.enable_only(ctx.NOTHING)
-        mesh.vao(prog).render()
-        return surfaces
-
-    def _kbuffer_faces(self, model, camera, size, k, min_fraction, gl) -> np.ndarray:
-        """``triangles_at`` in one k-buffer pass of depths and faces alone: no layer is
-        unpacked, the k targets are read as they are (a pixel's surfaces run up to the first
-        empty one, kbuffer.frag) and gathered at the OpenGL pixel indices ``gl``."""
-        check_frame_args(k, min_fraction, 0.0, 1.0)
-        rules = standard_rules(None, min_fraction)
-        surfaces = self._kbuffer_face_targets(model, camera, size, k)
-        valid = np.ones(size[0] * size[1], bool)
-        out, counts = [], []
-        for tex in surfaces:
-            face = np.frombuffer(tex.read(), np.uint32)[1::2]
-            valid &= face != 0
-            counts.append(int(np.count_nonzero(valid)))
-            if min(r.count(counts) for r in rules) < len(counts):
-                break
-            out.append(np.where(valid[gl], face[gl].astype(np.int64) - 1, -1).astype(np.int32))
-        return np.stack(out) if out else np.zeros((0, len(gl)), np.int32)
+        return Capture(self, mesh, camera, gb, batch=max_layers, tie_break=True, surfaces=True), gb
 
     def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read) -> None:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth

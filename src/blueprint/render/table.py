@@ -99,7 +99,9 @@ class KBufferRow:
     ``min_density``: triangles per G-buffer pixel from which it pays (it saves geometry passes
     but adds a full-screen pass a layer); ``max_bytes`` its targets may take; ``whole_frames``:
     only frames whose every layer one pass finds, for readers of its surfaces in place (a row
-    placed before the A-buffer where that draws faster).
+    placed before the A-buffer where that draws faster). Frames of depths and faces alone (a
+    vector drawing's) it takes whatever the density where one pass finds all their layers for
+    readers of its surfaces (measured only under framebuffer fetch).
     """
 
     min_density: float
@@ -112,6 +114,8 @@ class KBufferRow:
     def accepts(self, request: Request) -> bool:
         k = kbuffer_layers(request.layers)
         w, h = request.size
+        if not request.normals:
+            return request.surfaces and not request.selected and self.faces_fit(request)
         return (
             k > 1
             and request.triangles >= self.min_density * w * h
@@ -126,14 +130,15 @@ class KBufferRow:
         layers = request.layers
         return request.surfaces and not self.interlock and layers is not None and layers < KBUFFER_MAX
 
-    def faces_fit(self, size: tuple[int, int], layers: int | None) -> bool:
-        """Whether ``layers`` layers of depths and faces alone at ``size`` come from one pass,
-        read in place (measured only under framebuffer fetch)."""
+    def faces_fit(self, request: Request) -> bool:
+        """Whether every layer of ``request``, depths and faces alone (8 bytes a pixel a
+        layer), comes from one pass."""
+        layers, (w, h) = request.layers, request.size
         return (
             not self.interlock
             and layers is not None
             and 1 < layers <= KBUFFER_MAX
-            and 8 * layers * size[0] * size[1] <= self.max_bytes
+            and 8 * layers * w * h <= self.max_bytes
         )
 
 
