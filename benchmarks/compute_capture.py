@@ -164,7 +164,7 @@ def peeled_capture(r, model, camera, gb) -> ABufferSource:
     with the renderer's capture table."""
     mesh = r.mesh(model, 30.0)
     request = Request(gb.size, mesh.triangles, mesh.part_count, None)
-    return ABufferSource(r, r.capture_table.row("A-buffer"), mesh, camera, gb, request)
+    return ABufferSource(r.capturer, r.capture_table.row("A-buffer"), mesh, camera, gb, request)
 
 
 if __name__ == "__main__":

@@ -26,7 +26,6 @@ from test_layers_oracle import nested_round
 import blueprint
 from blueprint import examples
 from blueprint.pipeline.blueprint import stream_blueprint
-from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.peel import LayerCapture
 from blueprint.render.abuffer import NODE_BYTES, ABufferSource
 from blueprint.render.capture import Capture, gbuffer
@@ -154,12 +153,15 @@ def test_more_than_the_memory_allows_is_peeled(renderer, abuffer):
     abuffer(True, max_bytes=NODE_BYTES * 64 * 64 * 8)
     renderer.abuffer_room[(64, 64)] = 64 * 64 * 4
     assert (
-        Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
+        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
         == "A-buffer"
     )
     # the gearbox has more fragments than 8 a pixel once counted
     renderer.abuffer_room[(64, 64)] = 64 * 64 * 9
-    assert Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way == "peel"
+    assert (
+        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
+        == "peel"
+    )
     renderer.abuffer_room.pop((64, 64))
 
     def short(on: bool) -> None:
@@ -243,7 +245,7 @@ def test_after_a_kbuffer_pass_that_holds_every_layer(renderer, abuffer):
 def _tiled_layers(renderer, mesh, camera, size, tiles: bool) -> tuple[list, Capture]:
     """Every layer's (depth, normal, ids) of a capture, zero where the layer has no fragment."""
     gb = gbuffer(renderer.pool, size, f"test.ab.tiles{tiles}")
-    capture = Capture(renderer, mesh, camera, gb, batch=None, tiles=tiles)
+    capture = Capture(renderer.capturer, mesh, camera, gb, batch=None, tiles=tiles)
     assert capture.way == "A-buffer"
     got = []
     layer = 0
@@ -313,7 +315,7 @@ def gpu_form(renderer, monkeypatch):
     issued (not a software rasteriser's eager peel, no tiles), image passes in compute form."""
     monkeypatch.setattr(renderer, "software", False)
     monkeypatch.setattr(renderer, "use_compute", True)
-    monkeypatch.setattr(executor_for(renderer), "tiled", False)
+    monkeypatch.setattr(renderer.executor, "tiled", False)
 
 
 @pytest.mark.parametrize("max_layers", [5, 30, None])  # the gearbox has 15 layers here
@@ -327,7 +329,7 @@ def test_counts_read_late_draw_the_same(renderer, abuffer, monkeypatch, max_laye
     abuffer(True)
     at_once = renderer.render(model, **options)
     monkeypatch.setattr(renderer, "software", False)  # a GPU's frame: nothing looks per layer
-    monkeypatch.setattr(executor_for(renderer), "tiled", False)
+    monkeypatch.setattr(renderer.executor, "tiled", False)
     deferred = []
     issued = ABufferSource.__init__
 
@@ -397,7 +399,7 @@ def software_form(renderer, monkeypatch):
     passes."""
     monkeypatch.setattr(renderer, "software", True)
     monkeypatch.setattr(renderer, "use_compute", False)
-    monkeypatch.setattr(executor_for(renderer), "tiled", True)
+    monkeypatch.setattr(renderer.executor, "tiled", True)
 
 
 @pytest.mark.parametrize(
@@ -417,7 +419,7 @@ def test_edges_from_the_lists_a_layer_at_a_time_draw_the_same(
     each layer's edges go through one target to the pass that widens them: a layer a pass."""
     model = examples.gearbox()
     abuffer(True)
-    monkeypatch.setattr(executor_for(renderer), "edge_batch", batch)
+    monkeypatch.setattr(renderer.executor, "edge_batch", batch)
     step = 1 if "line_width" in options else batch
     listed = _watch_lists(renderer, monkeypatch, "_bind_in_place")
     from_lists = renderer.render(model, size=(160, 120), **options)
@@ -450,7 +452,7 @@ def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
 
 def _watch_lists(renderer, monkeypatch, method: str = "run_in_place") -> list[str]:
     """The passes the renderer's executor runs from the lists (by ``method``), as it runs them."""
-    ex = executor_for(renderer)
+    ex = renderer.executor
     listed: list[str] = []
     run_lists = getattr(type(ex), method)
 

@@ -64,9 +64,9 @@ def test_info_prints_renderer_and_gl_version(gl):
     assert (major, minor) >= (3, 3)
     assert int(gl["max_texture_size"]) >= 1024
     # the ways it draws, as the renderer's capture table holds them for this driver
-    from blueprint.render.renderer import LayerRenderer
+    from blueprint.api.renderer import Renderer
 
-    with LayerRenderer() as r:
+    with Renderer() as r:
         passes = "compute shaders" if r.use_compute else "fragment passes"
         table, old_gl = r.capture_table, r.ctx.version_code < 430
     kbuffer, listed = table.row("k-buffer"), table.row("A-buffer")

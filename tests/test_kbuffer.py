@@ -199,13 +199,12 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     (edges_surfaces.frag), ``batch`` layers a pass: the same drawing, covered pixels and layers
     left as from the layers unpacked into the G-buffer, depths rounded as the 24-bit depth
     target rounds them."""
-    from blueprint.pipeline.executor import executor_for
     from blueprint.pipeline.peel import LayerCapture
 
     surfaces_kbuffer(True)
     model = examples.gearbox()
     options = dict(size=(160, 120), max_layers=4, supersample=supersample)
-    ex = executor_for(renderer)
+    ex = renderer.executor
     monkeypatch.setattr(ex, "edge_batch", batch)
     passes = []
     run_pass = type(ex).run_pass
@@ -217,11 +216,11 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
 
     monkeypatch.setattr(type(ex), "run_pass", watch)
     direct = renderer.render(model, **options)
-    assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    assert renderer.executor.last_run.from_surfaces == ("edges",)
     assert passes == [min(batch, 4 - k) for k in range(0, 4, batch)]
     monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
     unpacked = renderer.render(model, direct.camera, **options)
-    assert executor_for(renderer).last_run.from_surfaces == ()
+    assert renderer.executor.last_run.from_surfaces == ()
     assert direct.layers_left > 0
     counts = (direct.layers, direct.layer_pixels, direct.layers_left)
     assert counts == (unpacked.layers, unpacked.layer_pixels, unpacked.layers_left)
@@ -234,7 +233,6 @@ def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfac
     let go behind its K: no counting pass runs (remaining.py), and the layers drawn and left
     add up to those the frame draws without a cap (peeled in batches, unpacked)."""
     from blueprint.pipeline import peel
-    from blueprint.pipeline.executor import executor_for
 
     def no_counting_pass(*args):
         raise AssertionError("a counting pass ran")
@@ -251,7 +249,7 @@ def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfac
         with monkeypatch.context() as m:
             m.setattr(peel, "layers_left", no_counting_pass)
             capped = renderer.render(model, camera, max_layers=cap, **options)
-        assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+        assert renderer.executor.last_run.from_surfaces == ("edges",)
         assert (capped.layers, capped.layers + capped.layers_left) == (cap, full.layers), view
     assert capped_some
 
@@ -272,7 +270,6 @@ def test_surfaces_an_earlier_frame_left_change_nothing(renderer, surfaces_kbuffe
     """Only a k-buffer's first surface and its count are cleared before a pass: the surfaces
     a deeper frame left behind a pixel's last one are never read as layers. A frame drawn over
     them is the one drawn from its layers unpacked (where the count alone says what is held)."""
-    from blueprint.pipeline.executor import executor_for
     from blueprint.pipeline.peel import LayerCapture
 
     surfaces_kbuffer(True)
@@ -281,7 +278,7 @@ def test_surfaces_an_earlier_frame_left_change_nothing(renderer, surfaces_kbuffe
     boxes = nested_boxes()  # five layers over most of the frame
     deep = renderer.render(boxes, fit_camera(boxes, (160, 120), "front"), **options)
     over = renderer.render(model, fit_camera(model, (160, 120), "iso"), **options)
-    assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    assert renderer.executor.last_run.from_surfaces == ("edges",)
     assert deep.layers == 5
     monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
     unpacked = renderer.render(model, over.camera, **options)

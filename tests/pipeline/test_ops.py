@@ -16,7 +16,6 @@ import pytest
 from blueprint import examples
 from blueprint.compose.style import STYLES
 from blueprint.ops import BLUR, OPS
-from blueprint.pipeline.executor import executor_for
 from blueprint.scene.camera import fit_camera
 
 H, W = 11, 13
@@ -25,7 +24,7 @@ rng = np.random.default_rng(4)
 
 @pytest.fixture(scope="module")
 def ex(renderer):
-    return executor_for(renderer)
+    return renderer.executor
 
 
 def shift(a: np.ndarray, dx: int, dy: int) -> np.ndarray:

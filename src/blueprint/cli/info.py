@@ -17,10 +17,10 @@ def info(model, as_json):
     """Without MODEL: the OpenGL renderer, the ways it draws and the EGL devices (for --gpus
     and BLUEPRINT_GL_DEVICE). With MODEL: its parts, triangles and bounds."""
     if model is None:
+        from blueprint.api.renderer import Renderer
         from blueprint.gpu.context import egl_devices
-        from blueprint.render.renderer import LayerRenderer
 
-        with LayerRenderer() as r:
+        with Renderer() as r:
             data = dict(r.info)
             data["image_passes"] = "compute shaders" if r.use_compute else "fragment passes"
             data.update(r.capture_table.describe())

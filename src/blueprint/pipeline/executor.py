@@ -32,7 +32,6 @@ from __future__ import annotations
 import functools
 import math
 import time
-import weakref
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 
@@ -42,6 +41,7 @@ from blueprint.compose.compositor import TILES_VERT, Compositor, Shading
 from blueprint.compose.style import STYLES, Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu import units
+from blueprint.gpu.device import Device
 from blueprint.pipeline.arrays import SLICES, ArrayPlan, array_plan
 from blueprint.pipeline.graph import Plan, plan
 from blueprint.pipeline.inputs import (
@@ -58,7 +58,7 @@ from blueprint.pipeline.state import Result, RunState
 from blueprint.pipeline.tiles import Tiles
 from blueprint.render.abuffer import Overflow
 from blueprint.render.gbuffer import depth_range, peel_eps
-from blueprint.render.renderer import LayerRenderer, check_frame_args
+from blueprint.render.renderer import Capturer, check_frame_args
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
@@ -78,14 +78,16 @@ _UNSET = object()
 
 
 class Executor:
-    """Runs pipelines on ``renderer`` (its context, pool, programs and peel)."""
+    """Runs pipelines on ``device`` (its context, pool and programs), capturing the layers of
+    models with ``capturer`` (``render.renderer.Capturer``: uploads, capture table). A
+    ``blueprint.Renderer`` composes one (``Renderer.executor``) with its device and capturer."""
 
-    def __init__(self, renderer: LayerRenderer) -> None:
-        self.r = renderer
-        self.ctx = renderer.ctx
-        self.programs = Programs(renderer)
-        self.images = ImageInputs(renderer.pool)
-        self.compositor = Compositor(renderer)
+    def __init__(self, device: Device, capturer: Capturer) -> None:
+        self.r, self.capturer = device, capturer
+        self.ctx = device.ctx
+        self.programs = Programs(device)
+        self.images = ImageInputs(device.pool)
+        self.compositor = Compositor(device)
         self.capture = LayerCapture(self)
         self._plans: dict[tuple, Plan] = {}
         # each plan's compute form (``array_plan``), by the plan's id
@@ -99,14 +101,14 @@ class Executor:
         self._sizes: dict[int, tuple[Plan, tuple[int, int], dict]] = {}
         self._checked: tuple | None = None  # the last peel settings check_frame_args passed
         self.last_run: RunState | None = None
-        self.tiles = Tiles(renderer.ctx)
+        self.tiles = Tiles(device.ctx)
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
         # back: only where that costs less than the pixels it saves (pipeline.tiles)
-        self.tiled = renderer.software
+        self.tiled = device.software
         # layers an edges pass read from an A-buffer's lists or a k-buffer's surfaces draws at
         # once, a target each: the layer counts (and cursors) are read once a batch, not once a
         # layer
-        self.edge_batch = min(EDGE_BATCH, renderer.max_draw_buffers)
+        self.edge_batch = min(EDGE_BATCH, device.max_draw_buffers)
 
     def release(self) -> None:
         """Programs of user shaders and pixel buffers (pool targets belong to the renderer)."""
@@ -280,7 +282,7 @@ class Executor:
         self.tiles.forget()  # what an earlier run found, even one an error ended
         out_name = pl.output
         if pl.needs_model:
-            st.mesh = self.r.mesh(model, crease)
+            st.mesh = self.capturer.mesh(model, crease)
             self.capture.capture_parts(st, parts)
 
         def draw(blind: bool):
@@ -809,17 +811,6 @@ def part_color(part: np.ndarray) -> np.ndarray:
     h = np.modf(np.asarray(part, np.float64) * 0.61803398875)[0][..., None]
     p = np.abs(np.modf(h + np.array([1.0, 2.0 / 3.0, 1.0 / 3.0]))[0] * 6.0 - 3.0)
     return 0.9 * (1.0 + (np.clip(p - 1.0, 0.0, 1.0) - 1.0) * 0.45)
-
-
-_executors: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def executor_for(renderer: LayerRenderer) -> Executor:
-    """One executor per renderer (it holds caches of programs and plans)."""
-    ex = _executors.get(renderer)
-    if ex is None:
-        ex = _executors[renderer] = Executor(renderer)
-    return ex
 
 
 def _named_style(bound: Bound) -> Style:

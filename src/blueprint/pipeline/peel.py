@@ -46,10 +46,10 @@ BASE_UNIT = units.INPUTS
 
 
 class LayerCapture:
-    """The capture side of ``ex``'s runs (its renderer, programs, passes and targets)."""
+    """The capture side of ``ex``'s runs (its device, capturer, programs, passes and targets)."""
 
     def __init__(self, ex) -> None:
-        self.ex, self.r, self.programs = ex, ex.r, ex.programs
+        self.ex, self.r, self.capturer, self.programs = ex, ex.r, ex.capturer, ex.programs
         # what a plan's captures are (``layout``) and which passes read the lists, by the
         # plan's id: every frame of a stream asks again
         self._layouts: dict[int, tuple[Plan, Layout]] = {}
@@ -69,7 +69,7 @@ class LayerCapture:
             key = (spec.parts, spec.scale)
             if key not in held:
                 held[key] = capture_parts(
-                    self.r,
+                    self.capturer,
                     st.mesh,
                     st.camera,
                     st.size_of(spec.scale),
@@ -161,7 +161,7 @@ class LayerCapture:
         from_surfaces = self._from_surfaces(st) if not from_lists and not self._rules[1] else ()
         for g in groups:
             g.capture = Capture(
-                r,
+                self.capturer,
                 st.mesh,
                 st.camera,
                 g.gb,
@@ -307,7 +307,7 @@ class LayerCapture:
         if deepest is not None:
             return max(0, deepest - layers)
         st.draws += 1
-        return layers_left(self.r, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
+        return layers_left(self.capturer, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
 
     def _attribute_programs(self, st: RunState) -> dict:
         progs = {}
@@ -317,7 +317,7 @@ class LayerCapture:
                 continue
             defines = {f"OUT_{n.upper()}": (g.extra.index(n) if n in g.extra else -1) for n in EXTRA}
             # the peel's depth rule (render.mesh.geometry_program), for attributes where its depths are
-            exact = {"EXACT_DEPTH": self.r.capture_table.exact_depth}
+            exact = {"EXACT_DEPTH": self.capturer.table.exact_depth}
             draw = self.programs.library(ATTR_FRAG, ATTR_VERT, {**defines, **exact, "CLEAR": 0})
             clear = self.programs.library(ATTR_FRAG, FULLSCREEN, {**defines, "CLEAR": 1})
             self.programs.set(draw, "u_view", camera.view_matrix().T.astype("f4").tobytes())

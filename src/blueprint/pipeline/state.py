@@ -10,12 +10,13 @@ import numpy as np
 
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
+from blueprint.gpu.device import Device
 from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import PendingRead
 from blueprint.pipeline.spec import Bound
 from blueprint.render.capture import Capture, gbuffer
-from blueprint.render.renderer import LayerRenderer, straight_alpha
+from blueprint.render.renderer import straight_alpha
 from blueprint.scene.camera import Camera
 
 # attributes the attribute pass draws (the rest are the renderer's G-buffer)
@@ -93,7 +94,7 @@ class Group:
     pass's targets."""
 
     def __init__(
-        self, r: LayerRenderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
+        self, r: Device, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
     ):
         self.scale, self.size, self.names = scale, size, names
         self.queries = r.queries("peel" if primary else f"peel.pipeline.gb{scale:g}")

@@ -79,8 +79,11 @@ class ABufferSource:
 
     counts_kept = True
 
-    def __init__(self, r, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
-        self.r, self.mesh, self.gb, self.max_bytes = r, mesh, gb, row.max_bytes
+    def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
+        r = self.r = capturer.device
+        self.mesh, self.gb, self.max_bytes = mesh, gb, row.max_bytes
+        # the room of the frames before, by G-buffer size (``Capturer.abuffer_room``)
+        self.rooms = capturer.abuffer_room
         self.back_bias, self.unpacks, self.slot = BACK_BIAS, request.unpack, request.slot
         self.reads = None if self.unpacks else "lists"
         uniforms = abuffer_uniforms(camera)
@@ -97,7 +100,7 @@ class ABufferSource:
         # pixel's list from the last one without an atomic: the head is the pass's target
         self.fetch_head = self.images and r.framebuffer_fetch
         defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
-        self.geometry = geometry_program(r, ABUFFER_FRAG, defines, modern=True)
+        self.geometry = geometry_program(capturer, ABUFFER_FRAG, defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
         # the resolve runs over the tiles with fragments alone (``_resolve``)
         self.resolve = r.compute(
@@ -120,7 +123,7 @@ class ABufferSource:
         self.uniforms = uniforms
         # the compute rasteriser where the row lists fragments in compute (render.raster), and
         # (its bins' room, the size) of the capture in hand where it drew it
-        self.raster = r.compute_raster if row.compute_from is not None else None
+        self.raster = capturer.compute_raster if row.compute_from is not None else None
         self.compute_from = row.compute_from
         self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []
@@ -135,10 +138,12 @@ class ABufferSource:
         self._tile_list = None  # the image of the tiles with any layer, most layers first
 
     @classmethod
-    def open(cls, r, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> ABufferSource | None:
+    def open(
+        cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None
+    ) -> ABufferSource | None:
         """The A-buffer of the frame, or None where its lists, with the fragments the last
         frame of its size drew, would pass the row's memory."""
-        source = cls(r, row, mesh, camera, gb, request)
+        source = cls(capturer, row, mesh, camera, gb, request)
         return source if source.fits(gb.size) else None
 
     @property
@@ -182,7 +187,7 @@ class ABufferSource:
         return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
     def _room(self, size: tuple[int, int]) -> int:
-        held = self.r.abuffer_room.get(tuple(size))
+        held = self.rooms.get(tuple(size))
         return held if held is not None else FIRST_ROOM * size[0] * size[1]
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
@@ -391,9 +396,9 @@ class ABufferSource:
         size = tuple(size)
         counts = np.frombuffer(read(size=nbytes), np.uint32).astype(np.int64)
         drawn = int(counts[0])
-        if drawn > room or size not in self.r.abuffer_room:
+        if drawn > room or size not in self.rooms:
             # room to spare for a model turning
-            self.r.abuffer_room[size] = int(drawn * 1.25) + 1024
+            self.rooms[size] = int(drawn * 1.25) + 1024
         # the compute rasteriser's bins (render.raster) take the same turn where they were short
         binned = self._binned is None or self.raster.pairs(self._binned[1], int(counts[3]), self._binned[0])
         if drawn > room or not binned:

@@ -23,8 +23,8 @@ REVEAL_FRAG = "blueprint.render:glsl/reveal.frag"
 
 
 class Capture:
-    """The geometry passes of one frame into one G-buffer: the first source of the rows the
-    capture table chose for the frame (``table.choose``) that holds it, behind the
+    """The geometry passes of one frame into one G-buffer: the first source of the rows
+    ``capturer``'s capture table chose for the frame (``table.choose``) that holds it, behind the
     ``LayerSource`` protocol (``render.source``); one that finds at layer 0 that it cannot hold
     the frame after all (an A-buffer's lists past its memory) hands it to the peel, the last
     row, which takes any frame and unpacks every layer as its readers then expect.
@@ -42,7 +42,7 @@ class Capture:
 
     def __init__(
         self,
-        r,
+        capturer,
         mesh,
         camera: Camera,
         gb: GBuffer,
@@ -73,10 +73,10 @@ class Capture:
             unpack,
             slot,
         )
-        rows = choose(r.capture_table, request)
+        rows = choose(capturer.table, request)
 
         def open_row(row):
-            return row.source.open(r, row, mesh, camera, gb, request, selected)
+            return row.source.open(capturer, row, mesh, camera, gb, request, selected)
 
         self._peel = lambda: open_row(rows[-1])
         self.source = next(source for source in map(open_row, rows) if source is not None)
@@ -150,14 +150,17 @@ class Capture:
         return drawn
 
 
-def capture_parts(r, mesh, camera: Camera, size: tuple[int, int], parts: np.ndarray, name: str, what: str):
+def capture_parts(
+    capturer, mesh, camera: Camera, size: tuple[int, int], parts: np.ndarray, name: str, what: str
+):
     """The front surface of the flagged parts alone, in the G-buffer ``name`` (layer 0, in
     ``depth[0]``), with face IDs: depth masking, highlighted and shaded parts."""
     parts = np.asarray(parts, bool)
     if parts.shape != (mesh.part_count,):
         raise InputError(f"{what} needs one flag per part ({mesh.part_count}), got {parts.shape}")
+    r = capturer.device
     gb = gbuffer(r.pool, size, name)
-    capture = Capture(r, mesh, camera, gb, selected=parts)
+    capture = Capture(capturer, mesh, camera, gb, selected=parts)
     r.ctx.enable_only(r.ctx.NOTHING)
     r.ctx.depth_func = "<"
     capture.draw(0, r.queries("capture")[0])

@@ -55,8 +55,9 @@ class KBufferSource:
     counts_kept = False
     defines: dict = {}
 
-    def __init__(self, r, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
-        self.r, self.mesh, self.gb, self.interlock = r, mesh, gb, row.interlock
+    def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
+        r = self.r = capturer.device
+        self.mesh, self.gb, self.interlock = mesh, gb, row.interlock
         self.k = kbuffer_layers(request.layers)
         self.ids_only = not request.normals
         self.unpacks = not (self.ids_only or row.holds_frame(request))
@@ -72,7 +73,7 @@ class KBufferSource:
         self._deepest = 0
         if self.ids_only:
             defines = {"K": self.k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
-            self.prog = geometry_program(r, KBUFFER_FRAG, defines)
+            self.prog = geometry_program(capturer, KBUFFER_FRAG, defines)
             peel_uniforms(self.prog, camera)
             target_uniform(r, self.prog, gb.size)
             self.prog["u_back_bias"].value = BACK_BIAS
@@ -87,10 +88,10 @@ class KBufferSource:
         }
         modern = self.interlock
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
-        self.prog = geometry_program(r, KBUFFER_FRAG, {**defines, "PEEL": False}, modern=modern)
+        self.prog = geometry_program(capturer, KBUFFER_FRAG, {**defines, "PEEL": False}, modern=modern)
         self.behind = None
         if self.unpacks:  # (one pass finds every layer otherwise)
-            self.behind = geometry_program(r, KBUFFER_FRAG, {**defines, "PEEL": True}, modern=modern)
+            self.behind = geometry_program(capturer, KBUFFER_FRAG, {**defines, "PEEL": True}, modern=modern)
         for prog in (self.prog, self.behind) if self.behind is not None else (self.prog,):
             peel_uniforms(prog, camera)
             target_uniform(r, prog, gb.size)
@@ -106,8 +107,8 @@ class KBufferSource:
         self.surfaces = self._held[0]
 
     @classmethod
-    def open(cls, r, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> KBufferSource:
-        return cls(r, row, mesh, camera, gb, request)
+    def open(cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> KBufferSource:
+        return cls(capturer, row, mesh, camera, gb, request)
 
     def _surfaces(self, size: tuple[int, int]) -> tuple:
         """(targets, their framebuffer (with the count's target, without unpack), the one of

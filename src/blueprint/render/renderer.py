@@ -1,9 +1,11 @@
-"""The layer renderer: a device with models uploaded to it, peeling depth layers and reading
-them back; and the values frames and layers come back in."""
+"""A device's layer capture (``Capturer``): the models uploaded to it, the capture table, and
+depth layers peeled and read back for other tools; what code below the API takes as a renderer
+(``LayerRenderer``); and the values frames and layers come back in."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
@@ -83,43 +85,44 @@ class Layers:
     camera: Camera
 
 
-class LayerRenderer(Device):
-    """A device (context, targets, queries, programs) with the models uploaded to it, that
-    peels depth layers in the one peel loop and reads them back for other tools (the API's
-    ``Renderer`` draws blueprint frames on it).
+class Capturer:
+    """The layer capture of one ``device``: the models uploaded to it, the capture table that
+    chooses each frame's layer source (``render.table``: ``table``, the device's measured one
+    unless given), what the sources keep from frame to frame (the fragments, and triangle-tile
+    pairs, the last frame of each G-buffer size drew: the room the next one starts with), and
+    the layers peeled in the one peel loop for other tools, read back (``peel``,
+    ``triangles_at``) or left on the GPU (``face_kbuffer``, ``each_face_layer``).
 
-    Use as a context manager or call ``release()``. Models, cameras and styles stay GPU-free;
-    the renderer uploads a model once per (model, crease angle).
+    Release it (its models) before its device. Models and cameras stay GPU-free; a model is
+    uploaded once per (model, crease angle).
     """
 
-    def __init__(self, ctx=None) -> None:
-        super().__init__(ctx)
+    def __init__(self, device: Device, table: CaptureTable | None = None) -> None:
+        self.device = device
+        self.table = capture_table(device) if table is None else table
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
-        self._table = capture_table(self)
-        # what the A-buffer and the compute rasteriser remember from frame to frame: the
-        # fragments (and triangle-tile pairs) the last frame of each G-buffer size drew, the
-        # room the next one starts with
         self.abuffer_room: dict[tuple[int, int], int] = {}
-        self.compute_raster = ComputeRaster(self)
+        self.compute_raster = ComputeRaster(device)
 
     @property
-    def capture_table(self) -> CaptureTable:
-        """How this renderer captures layers (``render.table``): the device's measured table,
-        or one set here (``capture_table(device, way)`` forces a way)."""
+    def table(self) -> CaptureTable:
+        """How layers are captured (``render.table``)."""
         return self._table
 
-    @capture_table.setter
-    def capture_table(self, table: CaptureTable) -> None:
+    @table.setter
+    def table(self, table: CaptureTable) -> None:
         if not isinstance(table, CaptureTable):
-            raise TypeError(f"capture_table must be a CaptureTable, got {type(table).__name__}")
+            raise TypeError(f"a capture table must be a CaptureTable, got {type(table).__name__}")
         self._table = table
+
+    def make_current(self) -> None:
+        self.device.make_current()
 
     def release(self) -> None:
         self.make_current()
         for _, mesh in self._meshes.values():
             mesh.release()
         self._meshes.clear()
-        super().release()
 
     # -- models --------------------------------------------------------------------------------
     def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh:
@@ -127,7 +130,7 @@ class LayerRenderer(Device):
         key = (id(model), None if crease_angle is None else float(crease_angle))
         held = self._meshes.get(key)
         if held is None or held[0] is not model:
-            held = self._meshes[key] = (model, GpuMesh(self.ctx, model, crease_angle))
+            held = self._meshes[key] = (model, GpuMesh(self.device.ctx, model, crease_angle))
         return held[1]
 
     @current
@@ -157,7 +160,7 @@ class LayerRenderer(Device):
         ``Layers.normal`` is None: no normals are smoothed, drawn or read (vector drawings need
         only depths and triangles).
         """
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         camera = camera or fit_camera(model, (w, h), view)
         depth, normal_maps, tri = [], [], []
 
@@ -202,7 +205,7 @@ class LayerRenderer(Device):
         ``y * width + x``, row 0 at the top), -1 where none. The layers are ``peel``'s without
         normals; only the pixels asked for leave the GPU's copy, so a vector drawing does not
         pay for whole images."""
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         pixels = np.asarray(pixels, np.int64)
         if len(pixels) and (pixels.min() < 0 or pixels.max() >= w * h):
             raise InputError(f"pixels must be flat indices into {w}x{h}")
@@ -222,10 +225,11 @@ class LayerRenderer(Device):
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
 
         rules = standard_rules(max_layers, min_fraction)
-        peel(capture.draw, self.queries("peel"), rules, read, samples=capture.samples)
+        peel(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
         capture.release()
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
 
+    @current
     def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):
         """The ``max_layers`` nearest surfaces of every pixel left on the GPU, for passes that
         read them there (vector occlusion): a list of ``rg32ui`` textures, surface ``k`` in the
@@ -233,7 +237,7 @@ class LayerRenderer(Device):
         with face 0, OpenGL rows (bottom up), from one k-buffer pass where the capture table's
         k-buffer takes such a frame; else None (``each_face_layer`` peels them a pass a layer,
         ``triangles_at`` serves either way)."""
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         capture, _ = self._faces(model, camera, (w, h), max_layers)
         if capture.reads != "surfaces":
             capture.release()
@@ -241,6 +245,7 @@ class LayerRenderer(Device):
         capture.draw(0, None)
         return list(capture.source.surfaces)
 
+    @current
     def each_face_layer(
         self,
         model: Model,
@@ -255,7 +260,7 @@ class LayerRenderer(Device):
         to ``visit(ids, depth, layer)`` while it is on the GPU: ``ids`` the ``r32i`` target of
         face + 1, ``depth`` the layer's window depth (1.0 where it has no surface), OpenGL rows.
         Nothing is read back."""
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         self._peeled(
             model,
             camera,
@@ -271,9 +276,10 @@ class LayerRenderer(Device):
         """(capture, G-buffer) of depths and faces alone, for readers of a k-buffer's surfaces
         where the capture table's k-buffer finds every layer in one pass (``reads``
         "surfaces"), else peeled a pass a layer into the G-buffer."""
-        self.ctx.enable_only(self.ctx.NOTHING)
-        self.ctx.depth_func = "<"
-        gb = gbuffer(self.pool, size, "idb", normals=False)
+        ctx = self.device.ctx
+        ctx.enable_only(ctx.NOTHING)
+        ctx.depth_func = "<"
+        gb = gbuffer(self.device.pool, size, "idb", normals=False)
         mesh = self.mesh(model, None)
         return Capture(self, mesh, camera, gb, batch=max_layers, tie_break=True, surfaces=True), gb
 
@@ -281,21 +287,35 @@ class LayerRenderer(Device):
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth
         of layer ``i`` in ``depth[i % 2]``; ID target face + 1, with normals part + 1 too)."""
         check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
-        ctx = self.ctx
-        ctx.enable_only(ctx.NOTHING)
-        ctx.depth_func = "<"
+        device = self.device
+        device.ctx.enable_only(device.ctx.NOTHING)
+        device.ctx.depth_func = "<"
         if normals:
             mesh = self.mesh(model, crease_angle)
-            gb = gbuffer(self.pool, size)
+            gb = gbuffer(device.pool, size)
             capture = Capture(self, mesh, camera, gb, batch=max_layers)
         else:
             mesh = self.mesh(model, None)
-            gb = gbuffer(self.pool, size, "idb", normals=False)
+            gb = gbuffer(device.pool, size, "idb", normals=False)
             capture = Capture(self, mesh, camera, gb, tie_break=True)
         rules = standard_rules(max_layers, min_fraction)
-        peel(
-            capture.draw, self.queries("peel"), rules, lambda layer: read(gb, layer), samples=capture.samples
-        )
+        queries = device.queries("peel")
+        peel(capture.draw, queries, rules, lambda layer: read(gb, layer), samples=capture.samples)
+
+
+class LayerRenderer(Protocol):
+    """What code below the API takes as a renderer (``blueprint.Renderer`` is one): a
+    ``device`` whose attributes it shows as its own (``ctx``, ``pool``, ``uniforms``,
+    ``queries``, ``program``, ``compute``, ``fullscreen``, the capabilities: ``gpu.Device``)
+    and the ``capturer`` of the models uploaded to it, whose methods it shows as its own too
+    (``mesh``, ``peel``, ``triangles_at``, ``face_kbuffer``, ``each_face_layer``)."""
+
+    device: Device
+    capturer: Capturer
+
+    def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh: ...
+
+    def peel(self, model: Model, camera: Camera | None = None, **options) -> Layers: ...
 
 
 def check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:

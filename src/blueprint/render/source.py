@@ -48,7 +48,9 @@ class LayerSource(Protocol):
     counts_kept: bool
 
     @classmethod
-    def open(cls, r, row, mesh, camera: Camera, gb: GBuffer, request, selected) -> LayerSource | None: ...
+    def open(
+        cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected
+    ) -> LayerSource | None: ...
 
     def draw(self, layer: int, query, guard=None) -> int | None: ...
 
@@ -77,18 +79,19 @@ class PeelSource:
     counts_kept = False
     tile_layers = None
 
-    def __init__(self, r, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> None:
-        self.r, self.mesh, self.gb = r, mesh, gb
+    def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> None:
+        r = self.r = capturer.device
+        self.mesh, self.gb = mesh, gb
         normals = gb.normal is not None
         self.tie_break = request.tie_break
-        self.shader_bias = self.tie_break and not row.culled(request, r.capture_table.exact_depth)
+        self.shader_bias = self.tie_break and not row.culled(request, capturer.table.exact_depth)
         defines = {
             "BACK_BIAS_IN_SHADER": self.shader_bias,
             "SELECTED_ONLY": selected is not None,
             "FACE_IDS": request.face_ids,
             "NORMALS": normals,
         }
-        prog = self.prog = geometry_program(r, PEEL_FRAG, defines)
+        prog = self.prog = geometry_program(capturer, PEEL_FRAG, defines)
         peel_uniforms(prog, camera)
         target_uniform(r, prog, gb.size)
         if normals:  # only the normal's orientation needs it
@@ -103,8 +106,8 @@ class PeelSource:
             prog["u_selected"].value = units.SELECTED
 
     @classmethod
-    def open(cls, r, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> PeelSource:
-        return cls(r, row, mesh, camera, gb, request, selected)
+    def open(cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> PeelSource:
+        return cls(capturer, row, mesh, camera, gb, request, selected)
 
     def draw(self, layer: int, query, guard=None) -> int:
         gb, ctx = self.gb, self.r.ctx
