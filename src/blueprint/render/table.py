@@ -112,10 +112,10 @@ class KBufferRow:
     source = KBufferSource
 
     def accepts(self, request: Request) -> bool:
-        k = kbuffer_layers(request.layers)
-        w, h = request.size
         if not request.normals:
             return request.surfaces and not request.selected and self.faces_fit(request)
+        k = kbuffer_layers(request.layers)
+        w, h = request.size
         return (
             k > 1
             and request.triangles >= self.min_density * w * h
