@@ -21,7 +21,7 @@ from compute_capture import Bench, fragments, peeled_capture
 
 from blueprint import Renderer, load_model
 from blueprint.gpu.shaders import build_program
-from blueprint.render.capture import gbuffer
+from blueprint.render.gbuffer import gbuffer
 from blueprint.render.mesh import GEOMETRY_VERT, target_uniform
 from blueprint.scene.camera import fit_camera
 
@@ -49,8 +49,8 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=9)
     args = parser.parse_args()
     with Renderer() as r:
-        r.abuffer_min_layers, r.kbuffer = 2, False
         bench = Bench(r, None, args.frames)
+        bench.use(False)
         programs = {}
         for k in VARIANTS:
             try:
@@ -58,7 +58,7 @@ def main() -> None:
                     r.ctx,
                     GEOMETRY_VERT,
                     SHADER,
-                    {"VARIANT": k, "EXACT_DEPTH": r.exact_depth},
+                    {"VARIANT": k, "EXACT_DEPTH": r.capture_table.exact_depth},
                     "#version 450 core",
                 )
             except Exception as exc:  # a driver without ARB_shader_ballot: that variant is left out
@@ -67,8 +67,8 @@ def main() -> None:
             model = load_model(path)
             for size in args.size:
                 camera = fit_camera(model, (size, size))
-                ab = peeled_capture(r, model, camera)
                 gb = gbuffer(r.pool, (size, size))
+                ab = peeled_capture(r, model, camera, gb)
                 name = f"abuffer.{size}x{size}"
                 ab._capture(gb, name)  # the room this size needs
                 ab._capture(gb, name)

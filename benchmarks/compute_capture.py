@@ -10,7 +10,7 @@ Python issuing it) and of a whole ``Renderer.render`` frame each way. One JSON o
     python benchmarks/compute_capture.py MODEL... [--size 1024 2048 4096] [--frames 9]
 
 Sizes are G-buffer sizes (a 2048² drawing at the default supersample 2 is 4096²). The compute
-rasteriser is the renderer's (``render.raster``, ``LayerRenderer.compute_capture_from``); it does not
+rasteriser is the renderer's (``render.raster``, ``ABufferRow.compute_from``); it does not
 clip: views with a vertex behind the eye are refused.
 """
 
@@ -21,14 +21,16 @@ import functools
 import json
 import statistics
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from blueprint import Renderer, load_model
-from blueprint.render.abuffer import ABuffer
-from blueprint.render.capture import BACK_OFFSET, abuffer_uniforms, gbuffer
+from blueprint.render.abuffer import ABufferSource
+from blueprint.render.gbuffer import gbuffer
 from blueprint.render.raster import TILE
+from blueprint.render.table import CaptureTable, Request, capture_table
 from blueprint.scene.camera import fit_camera
 
 
@@ -60,7 +62,6 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=9)
     args = parser.parse_args()
     with Renderer() as r:
-        r.abuffer_min_layers, r.kbuffer = 2, False
         bench = Bench(r, args.layers or None, args.frames)
         for path in args.models:
             model = load_model(path)
@@ -71,17 +72,21 @@ def main() -> None:
 
 
 class Bench:
-    """Both ways of filling the A-buffer's lists, whatever the size
-    (``LayerRenderer.compute_capture_from``)."""
+    """Both ways of filling the A-buffer's lists, whatever the size (``ABufferRow.compute_from``),
+    the renderer's capture table the A-buffer's from two layers, then the peel."""
 
     def __init__(self, r, layers: int | None, frames: int) -> None:
         self.r, self.layers, self.frames = r, layers, frames
+        default = capture_table(r)
+        self.listed = replace(default.row("A-buffer"), min_layers=2)
+        self.table = CaptureTable((self.listed, default.row("peel")), default.exact_depth)
         self.stall_prog = r.ctx.compute_shader(STALL)
         self.stall_buf = r.ctx.buffer(reserve=256)
         self.loops = 0
 
     def use(self, compute: bool) -> None:
-        self.r.compute_capture_from = 0 if compute else None
+        rows = (replace(self.listed, compute_from=0 if compute else None), *self.table.rows[1:])
+        self.r.capture_table = replace(self.table, rows=rows)
 
     def stall(self) -> None:
         self.stall_buf.bind_to_storage_buffer(11)
@@ -136,7 +141,7 @@ class Bench:
         pictures = []
         for compute in (False, True):
             self.use(compute)
-            ab = peeled_capture(r, model, camera)
+            ab = peeled_capture(r, model, camera, gb)
             form = "compute" if compute else "graphics"
             row[f"capture_{form}_ms"] = self.gpu_ms(
                 functools.partial(ab._capture, gb, f"abuffer.{size}x{size}")
@@ -154,11 +159,12 @@ def fragments(r, size: int) -> int:
     return int(np.frombuffer(totals.read(size=4), np.uint32)[0])
 
 
-def peeled_capture(r, model, camera) -> ABuffer:
-    """An A-buffer with ``camera``'s uniforms over ``model``, as a frame makes it."""
-    return ABuffer(
-        r, r.mesh(model, 30.0), abuffer_uniforms(camera), BACK_OFFSET / (1 << 24), r.abuffer_max_bytes
-    )
+def peeled_capture(r, model, camera, gb) -> ABufferSource:
+    """An A-buffer of ``model`` from ``camera`` into ``gb``, as a frame of every layer makes it
+    with the renderer's capture table."""
+    mesh = r.mesh(model, 30.0)
+    request = Request(gb.size, mesh.triangles, mesh.part_count, None)
+    return ABufferSource(r.capturer, r.capture_table.row("A-buffer"), mesh, camera, gb, request)
 
 
 if __name__ == "__main__":

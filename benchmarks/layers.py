@@ -12,10 +12,11 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+from dataclasses import replace
 from pathlib import Path
 
 from blueprint import Renderer, load_model
-from blueprint.render.abuffer import default_max_bytes
+from blueprint.render.table import ABufferRow, CaptureTable, capture_table, device_max_bytes
 from blueprint.scene.camera import fit_camera
 
 
@@ -31,17 +32,20 @@ def main() -> None:
     args = parser.parse_args()
     rows = []
     with Renderer() as r:
-        wanted = r.abuffer_max_bytes or default_max_bytes(r)
-        min_layers, after_kbuffer = r.abuffer_min_layers, r.abuffer_after_kbuffer
+        default = capture_table(r)
+        listed = ABufferRow(max_bytes=device_max_bytes(r), min_layers=1, slim=r.use_compute)
+        listed = replace(default.row("A-buffer") or listed, min_layers=1)
+        tables = {
+            # the A-buffer's rows are its own, not a k-buffer's that holds every layer
+            "abuffer": (listed, *(row for row in default.rows if row.way == "peel" or _unpacking(row))),
+            "peel": tuple(row for row in default.rows if row.way != "A-buffer"),
+        }
         for path in args.models:
             model = load_model(path)
             for size in args.size:
                 camera = fit_camera(model, (size, size))
                 for capture in args.capture:
-                    r.abuffer_max_bytes = wanted if capture == "abuffer" else 0
-                    r.abuffer_min_layers = 1 if capture == "abuffer" else min_layers
-                    # the A-buffer's rows are its own, not a k-buffer's that holds every layer
-                    r.abuffer_after_kbuffer = after_kbuffer and capture != "abuffer"
+                    r.capture_table = CaptureTable(tables[capture], default.exact_depth)
                     for layers in args.layers:
                         options = dict(
                             size=(size, size), supersample=args.supersample, max_layers=layers or None
@@ -78,6 +82,11 @@ def main() -> None:
                     if row["model"] == name and row["size"] == size and row["capture"] == capture
                 }
                 print(f"| {size}² | {capture} | " + " | ".join(str(cells.get(c, "")) for c in columns) + " |")
+
+
+def _unpacking(row) -> bool:
+    """A k-buffer row that takes any frame its thresholds allow."""
+    return row.way == "k-buffer" and not row.whole_frames
 
 
 if __name__ == "__main__":

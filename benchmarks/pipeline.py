@@ -21,7 +21,7 @@ from pathlib import Path
 
 from blueprint import examples
 from blueprint.api import default_renderer
-from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
+from blueprint.pipeline import load_pipeline, render_blueprint
 from blueprint.scene.camera import fit_camera
 from blueprint.scene.loader import load_model
 
@@ -57,7 +57,7 @@ def main(argv=None) -> None:
     renderer = default_renderer()
     model = load_model(args.model) if args.model else examples.gearbox()
     name = Path(args.model).name if args.model else "gearbox (example)"
-    ex = executor_for(renderer)
+    ex = renderer.executor
     base = {"renderer": renderer.info["renderer"], "model": name, "triangles": model.triangle_count}
     if not args.skip_paper:
         for case, preset, size, paper_fps in PAPER_CASES:

@@ -1,7 +1,7 @@
 """Streamed drawings a second: ``stream_blueprint`` frames (each picture read back while the next
 is drawn) of one model from one camera and on a turntable (a new camera every frame), with the
 A-buffer's fragments listed by the graphics pipeline, by the compute rasteriser
-(``LayerRenderer.compute_capture_from``) and as the renderer chooses, the ways taken in turns
+(``ABufferRow.compute_from``) and as the renderer chooses, the ways taken in turns
 for ``--rounds`` rounds so that a machine's drift falls on all of them alike. One JSON object
 per model, size and way: ``ms`` (wall time a frame over the stream, each round), ``fps`` (of the
 best round), ``layers`` drawn.
@@ -17,11 +17,13 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from blueprint import Renderer, load_model
 from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.pipeline.run import orbit
+from blueprint.render.table import CaptureTable
 from blueprint.scene.camera import fit_camera
 
 
@@ -35,9 +37,11 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=2)
     args = parser.parse_args()
     with Renderer() as r:
-        product = r.compute_capture_from
+        product = r.capture_table
         # capture in compute exists where image passes run in compute (a GPU)
-        ways = {"graphics": None, "compute": 0, "product": product} if r.use_compute else {"product": product}
+        ways = {"product": product}
+        if r.use_compute:
+            ways = {"graphics": _listing(product, None), "compute": _listing(product, 0), **ways}
         for path in args.models:
             model = load_model(path)
             for size in args.size:
@@ -47,7 +51,13 @@ def main() -> None:
                         for cameras in ("one camera", "turntable"):
                             for row in _measure(r, model, options, cameras, ways, args):
                                 print(json.dumps({"model": Path(path).name, **row}), flush=True)
-        r.compute_capture_from = product
+        r.capture_table = product
+
+
+def _listing(table: CaptureTable, start: int | None) -> CaptureTable:
+    """``table`` with its A-buffer's fragments listed in compute from ``start`` pixels."""
+    rows = tuple(replace(row, compute_from=start) if row.way == "A-buffer" else row for row in table.rows)
+    return replace(table, rows=rows)
 
 
 def _measure(r, model, options: dict, cameras: str, ways: dict, args) -> list[dict]:
@@ -59,8 +69,8 @@ def _measure(r, model, options: dict, cameras: str, ways: dict, args) -> list[di
     times: dict[str, list[float]] = {way: [] for way in ways}
     layers: dict[str, int] = {}
     for _ in range(args.rounds):
-        for way, start in ways.items():
-            r.compute_capture_from = start
+        for way, table in ways.items():
+            r.capture_table = table
             for _ in stream_blueprint(r, model, views[:10], **options):
                 pass  # warm: programs built, the lists' room known
             t0 = time.perf_counter()

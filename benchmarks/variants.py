@@ -13,9 +13,11 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
+from dataclasses import replace
 from pathlib import Path
 
 from blueprint import Renderer, load_model
+from blueprint.render.table import CaptureTable, PeelRow, capture_table
 from blueprint.scene.camera import fit_camera
 
 
@@ -29,7 +31,9 @@ def main() -> None:
     parser.add_argument("--warmup", type=int, default=5)
     args = parser.parse_args()
     with Renderer() as r:
-        supported = r.kbuffer
+        default = capture_table(r)
+        kbuffer = default.row("k-buffer")
+        supported = kbuffer is not None
         computes = (True, False) if r.ctx.version_code >= 430 else (False,)
         variants = [(c, b, False) for c in computes for b in (True, False)]
         variants += [(c, True, True) for c in computes if supported]
@@ -38,10 +42,13 @@ def main() -> None:
             for size in [tuple(s) for s in (args.size or [[512, 512]])]:
                 camera = fit_camera(model, size)
                 for ss in args.supersample or [1, 2]:
-                    for use_compute, in_shader, kbuffer in variants:
-                        r.use_compute, r.back_bias_in_shader = use_compute, in_shader
-                        r.culled_tie_break_from = None  # the variant's tie-break at every size
-                        r.kbuffer, r.kbuffer_density = kbuffer, 0.0
+                    for use_compute, in_shader, kbuffered in variants:
+                        r.use_compute = use_compute
+                        # the variant's tie-break at every size, the k-buffer whatever the
+                        # density, no A-buffer (benchmarks/layers.py times that)
+                        peel = PeelRow(culled_from=None if in_shader else (0, 0))
+                        rows = (replace(kbuffer, min_density=0.0, whole_frames=False), peel)
+                        r.capture_table = CaptureTable(rows if kbuffered else (peel,), default.exact_depth)
                         options = dict(size=size, supersample=ss, max_layers=args.max_layers)
                         for _ in range(args.warmup):
                             r.render(model, camera, **options)
@@ -63,8 +70,8 @@ def main() -> None:
                                     if in_shader
                                     else "two culled draws",
                                     "peel": (
-                                        ("k-buffer, interlock" if r.kbuffer_interlock else "k-buffer, fetch")
-                                        if kbuffer
+                                        ("k-buffer, interlock" if kbuffer.interlock else "k-buffer, fetch")
+                                        if kbuffered
                                         else "a pass a layer"
                                     ),
                                     "ms": round(ms, 3),

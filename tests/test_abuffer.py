@@ -4,10 +4,12 @@ them), normals, triangles and parts, in whatever order the triangles come, for l
 enough to sort in registers and for longer ones, with too little room (drawn again) and with
 too little memory (peeled instead); and it counts the layers a capped frame left exactly. Each
 test runs with whole fragments and with slim ones (depth and face, the rest found by the resolve:
-``abuffer_slim``), whose normals may differ from the geometry pass's in a half's last place. The
+``ABufferRow.slim``), whose normals may differ from the geometry pass's in a half's last place. The
 ray-casting oracle checks the peel against the geometry (test_layers_oracle.py)."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -24,10 +26,17 @@ from test_layers_oracle import nested_round
 import blueprint
 from blueprint import examples
 from blueprint.pipeline.blueprint import stream_blueprint
-from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.peel import LayerCapture
-from blueprint.render.abuffer import NODE_BYTES, ABuffer
-from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
+from blueprint.render.abuffer import NODE_BYTES, ABufferSource
+from blueprint.render.capture import Capture, gbuffer
+from blueprint.render.table import (
+    KBUFFER_MAX,
+    CaptureTable,
+    KBufferRow,
+    Request,
+    capture_table,
+    choose,
+)
 from blueprint.scene.camera import fit_camera
 
 # one step of the 24-bit depth buffer: the peel reads its depths back from one, the A-buffer
@@ -38,27 +47,28 @@ DEPTH_STEP = 1.0 / (1 << 24) * 1.01
 @pytest.fixture(params=[False, True], ids=["whole", "slim"])
 def abuffer(renderer, request):
     """Switches the renderer between the A-buffer (with whole or slim fragments, by the
-    parameter) and peeling (k-buffer off: a pass a layer)."""
+    parameter: ``abuffer.slim``) and peeling (a pass a layer), through its capture table."""
     if renderer.ctx.version_code < 430:
         pytest.skip("the A-buffer needs OpenGL 4.3 (storage buffers in fragment shaders)")
-    saved = renderer.abuffer_max_bytes, renderer.abuffer_min_layers, renderer.kbuffer, renderer.abuffer_slim
+    saved = renderer.capture_table
+    default = capture_table(renderer)
+    peel = default.row("peel")
     room = dict(renderer.abuffer_room)
 
     def use(on: bool, max_bytes: int = 1 << 28) -> None:
-        renderer.abuffer_max_bytes = max_bytes if on else 0
-        renderer.abuffer_min_layers = 1
-        renderer.kbuffer = False
-        renderer.abuffer_slim = request.param
+        listed = replace(default.row("A-buffer"), max_bytes=max_bytes, min_layers=1, slim=request.param)
+        renderer.capture_table = CaptureTable((listed, peel) if on else (peel,), default.exact_depth)
 
+    use.slim = request.param
     yield use
-    renderer.abuffer_max_bytes, renderer.abuffer_min_layers, renderer.kbuffer, renderer.abuffer_slim = saved
+    renderer.capture_table = saved
     renderer.abuffer_room.clear()
     renderer.abuffer_room.update(room)
 
 
-def _differ(fast, plain, renderer) -> np.ndarray:
+def _differ(fast, plain, renderer, slim: bool) -> np.ndarray:
     tolerance = _normal_tolerance(renderer)
-    if renderer.abuffer_slim:
+    if slim:
         # a slim fragment's normal is the resolve's sum of the corners' at the pixel centre, not
         # the rasteriser's: a half's last place apart (2^-11 for a unit vector's component); where
         # the driver snaps corners (the H200) the rasteriser's is taken at the snapped sample, up
@@ -105,7 +115,7 @@ def test_same_layers_as_a_pass_a_layer(renderer, abuffer, name, max_layers):
     # two surfaces about one peeling tolerance apart may be merged either way (the depth buffer
     # a peel compares with rounds as its driver does), moving that pixel's deeper layers: a
     # handful of pixels
-    differ = _differ(fast, plain, renderer).any(axis=0)
+    differ = _differ(fast, plain, renderer, abuffer.slim).any(axis=0)
     pixels = covered.any(axis=0).sum()
     assert differ.sum() <= max(3, 1e-4 * pixels), f"{differ.sum()} of {pixels} pixels differ"
 
@@ -118,7 +128,7 @@ def test_lists_too_long_to_sort_in_registers(renderer, abuffer):
     camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
     fast, plain = peel_both_ways(renderer, abuffer, model, camera=camera, size=(24, 24), max_layers=None)
     assert len(plain.depth) == 60
-    assert not _differ(fast, plain, renderer).any()
+    assert not _differ(fast, plain, renderer, abuffer.slim).any()
 
 
 def test_too_little_room_is_drawn_again(renderer, abuffer):
@@ -131,22 +141,26 @@ def test_too_little_room_is_drawn_again(renderer, abuffer):
     abuffer(False)
     plain = blueprint.peel(model, renderer=renderer, **options)
     assert room > (plain.depth < 1.0).sum()
-    assert not _differ(fast, plain, renderer).any()
+    assert not _differ(fast, plain, renderer, abuffer.slim).any()
 
 
 def test_more_than_the_memory_allows_is_peeled(renderer, abuffer):
-    """Lists that would take more than ``abuffer_max_bytes`` are not drawn: the frame is peeled
+    """Lists that would take more than the row's ``max_bytes`` are not drawn: the frame is peeled
     a pass a layer instead, the same layers."""
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
     camera = fit_camera(model, (64, 64))
     abuffer(True, max_bytes=NODE_BYTES * 64 * 64 * 8)
     renderer.abuffer_room[(64, 64)] = 64 * 64 * 4
-    assert Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).abuffer
+    assert (
+        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
+        == "A-buffer"
+    )
     # the gearbox has more fragments than 8 a pixel once counted
     renderer.abuffer_room[(64, 64)] = 64 * 64 * 9
     assert (
-        Capture(renderer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).abuffer is None
+        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
+        == "peel"
     )
     renderer.abuffer_room.pop((64, 64))
 
@@ -180,59 +194,62 @@ def test_same_drawing(renderer, abuffer, style, supersample):
 
 
 def test_used_only_where_it_pays(renderer, abuffer):
-    """Not below the renderer's ``abuffer_min_layers`` (llvmpipe's: only frames of many layers
-    pay for sorting every fragment), nor for captures of chosen parts or without normals (ID
-    passes)."""
+    """Not below the row's ``min_layers`` (llvmpipe's: only frames of many layers pay for
+    sorting every fragment), nor for captures of chosen parts or without normals (ID passes)."""
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
-    camera = fit_camera(model, (64, 64))
     abuffer(True)
-    gb = gbuffer(renderer.pool, (64, 64), "test.ab")
-    assert Capture(renderer, mesh, camera, gb, batch=1).abuffer is not None
-    renderer.abuffer_min_layers = 2
-    assert Capture(renderer, mesh, camera, gb, batch=5).abuffer is not None
-    assert Capture(renderer, mesh, camera, gb, batch=1).abuffer is None
-    renderer.abuffer_min_layers = 16
-    assert Capture(renderer, mesh, camera, gb, batch=8).abuffer is None
-    assert Capture(renderer, mesh, camera, gb, batch=16).abuffer is not None
-    assert Capture(renderer, mesh, camera, gb, batch=None).abuffer is not None
-    renderer.abuffer_min_layers = 2
-    parts = np.ones(mesh.part_count, bool)
-    assert Capture(renderer, mesh, camera, gb, batch=5, selected=parts).abuffer is None
-    ids = gbuffer(renderer.pool, (64, 64), "test.ab.ids", normals=False)
-    assert Capture(renderer, renderer.mesh(model, None), camera, ids, batch=5).abuffer is None
+    table = renderer.capture_table
+
+    def listed(layers, min_layers: int = 1, **options) -> bool:
+        rows = (replace(table.row("A-buffer"), min_layers=min_layers), table.row("peel"))
+        request = Request((64, 64), mesh.triangles, mesh.part_count, layers, **options)
+        return choose(replace(table, rows=rows), request)[0].way == "A-buffer"
+
+    assert listed(1)
+    assert listed(5, 2)
+    assert not listed(1, 2)
+    assert not listed(8, 16)
+    assert listed(16, 16)
+    assert listed(None, 16)
+    assert not listed(5, 2, selected=True)
+    assert not listed(5, 2, normals=False)
 
 
-def test_after_a_kbuffer_pass_that_holds_every_layer(renderer, abuffer, monkeypatch):
-    """With ``abuffer_after_kbuffer`` (llvmpipe) a capped frame whose layers one k-buffer pass
-    finds, for readers that read them where they lie (``surfaces``), is drawn so; every other
-    goes to the A-buffer."""
+def test_after_a_kbuffer_pass_that_holds_every_layer(renderer, abuffer):
+    """With a k-buffer row of ``whole_frames`` before the A-buffer (llvmpipe's table) a capped
+    frame whose layers one k-buffer pass finds, for readers that read them where they lie
+    (``surfaces``), is drawn so; every other goes to the A-buffer."""
     if not renderer.framebuffer_fetch or renderer.max_draw_buffers < KBUFFER_MAX:
         pytest.skip("one k-buffer pass leaves a frame's layers to readers through framebuffer fetch alone")
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
-    camera = fit_camera(model, (64, 64))
-    gb = gbuffer(renderer.pool, (64, 64), "test.ab")
     abuffer(True)
-    monkeypatch.setattr(renderer, "kbuffer", True)
-    monkeypatch.setattr(renderer, "kbuffer_density", 0.0)
+    listed, peel = renderer.capture_table.row("A-buffer"), renderer.capture_table.row("peel")
+    kbuffer = KBufferRow(min_density=0.0)
+
+    def first(table, layers, surfaces):
+        request = Request((64, 64), mesh.triangles, mesh.part_count, layers, surfaces=surfaces)
+        return choose(table, request)[0], request
+
     for after in (True, False):
-        monkeypatch.setattr(renderer, "abuffer_after_kbuffer", after)
-        held = Capture(renderer, mesh, camera, gb, batch=5, surfaces=True)
-        assert (held.abuffer is None) == after and (held.kbuffer is not None) == after
-        assert held.kbuffer is None or not held.kbuffer.unpacks
+        rows = ((replace(kbuffer, whole_frames=True),) if after else ()) + (listed, kbuffer, peel)
+        table = CaptureTable(rows)
+        held, request = first(table, 5, True)
+        assert (held.way == "k-buffer") == after
+        assert held.way == "A-buffer" or held.holds_frame(request)
         for batch, surfaces in ((5, False), (KBUFFER_MAX, True), (None, True)):
-            assert Capture(renderer, mesh, camera, gb, batch=batch, surfaces=surfaces).abuffer is not None
+            assert first(table, batch, surfaces)[0].way == "A-buffer"
 
 
 def _tiled_layers(renderer, mesh, camera, size, tiles: bool) -> tuple[list, Capture]:
     """Every layer's (depth, normal, ids) of a capture, zero where the layer has no fragment."""
     gb = gbuffer(renderer.pool, size, f"test.ab.tiles{tiles}")
-    capture = Capture(renderer, mesh, camera, gb, batch=None, tiles=tiles)
-    assert capture.abuffer is not None
+    capture = Capture(renderer.capturer, mesh, camera, gb, batch=None, tiles=tiles)
+    assert capture.way == "A-buffer"
     got = []
     layer = 0
-    while layer == 0 or layer < capture.abuffer.deepest():
+    while layer == 0 or layer < capture.deepest():
         capture.draw(layer, renderer.queries("test.ab")[0])
         depth = np.frombuffer(gb.layer_depth(layer).read(), np.float32).reshape(size[::-1])
         covered = depth < 1
@@ -298,7 +315,7 @@ def gpu_form(renderer, monkeypatch):
     issued (not a software rasteriser's eager peel, no tiles), image passes in compute form."""
     monkeypatch.setattr(renderer, "software", False)
     monkeypatch.setattr(renderer, "use_compute", True)
-    monkeypatch.setattr(executor_for(renderer), "tiled", False)
+    monkeypatch.setattr(renderer.executor, "tiled", False)
 
 
 @pytest.mark.parametrize("max_layers", [5, 30, None])  # the gearbox has 15 layers here
@@ -312,15 +329,15 @@ def test_counts_read_late_draw_the_same(renderer, abuffer, monkeypatch, max_laye
     abuffer(True)
     at_once = renderer.render(model, **options)
     monkeypatch.setattr(renderer, "software", False)  # a GPU's frame: nothing looks per layer
-    monkeypatch.setattr(executor_for(renderer), "tiled", False)
+    monkeypatch.setattr(renderer.executor, "tiled", False)
     deferred = []
-    issued = ABuffer.__init__
+    issued = ABufferSource.__init__
 
     def watch(self, *args, **kwargs):
         issued(self, *args, **kwargs)
         deferred.append(self.defer)
 
-    monkeypatch.setattr(ABuffer, "__init__", watch)
+    monkeypatch.setattr(ABufferSource, "__init__", watch)
     for room in (None, 10):
         if room is not None:
             renderer.abuffer_room[(120, 90)] = room
@@ -382,7 +399,7 @@ def software_form(renderer, monkeypatch):
     passes."""
     monkeypatch.setattr(renderer, "software", True)
     monkeypatch.setattr(renderer, "use_compute", False)
-    monkeypatch.setattr(executor_for(renderer), "tiled", True)
+    monkeypatch.setattr(renderer.executor, "tiled", True)
 
 
 @pytest.mark.parametrize(
@@ -402,9 +419,9 @@ def test_edges_from_the_lists_a_layer_at_a_time_draw_the_same(
     each layer's edges go through one target to the pass that widens them: a layer a pass."""
     model = examples.gearbox()
     abuffer(True)
-    monkeypatch.setattr(executor_for(renderer), "edge_batch", batch)
+    monkeypatch.setattr(renderer.executor, "edge_batch", batch)
     step = 1 if "line_width" in options else batch
-    listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
+    listed = _watch_lists(renderer, monkeypatch, "_bind_in_place")
     from_lists = renderer.render(model, size=(160, 120), **options)
     assert set(listed) == {"edges"} and len(listed) == -(-from_lists.layers // step)
     monkeypatch.setattr(LayerCapture, "_from_lists", lambda self, st: ())
@@ -422,7 +439,7 @@ def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
     each layer's depth as it comes: there every layer is unpacked."""
     model = examples.gearbox()
     abuffer(True)
-    listed = _watch_lists(renderer, monkeypatch, "_bind_layer_lists")
+    listed = _watch_lists(renderer, monkeypatch, "_bind_in_place")
     parts = np.zeros(len(model.part_names), bool)
     parts[0] = True
     if "shade" in options:
@@ -433,9 +450,9 @@ def test_edges_a_layer_at_a_time_unpack_where_others_read_the_layers(
     assert listed == []
 
 
-def _watch_lists(renderer, monkeypatch, method: str = "_run_lists") -> list[str]:
+def _watch_lists(renderer, monkeypatch, method: str = "run_in_place") -> list[str]:
     """The passes the renderer's executor runs from the lists (by ``method``), as it runs them."""
-    ex = executor_for(renderer)
+    ex = renderer.executor
     listed: list[str] = []
     run_lists = getattr(type(ex), method)
 
@@ -477,7 +494,7 @@ def test_slim_normals_are_taken_at_the_pixel_centre(renderer, abuffer, monkeypat
     abuffer(True)
     make, camera = CASES["gearbox"]
     options = dict(size=(160, 120), max_layers=None, **camera)
-    monkeypatch.setattr(renderer, "exact_depth", True)
+    monkeypatch.setattr(renderer, "capture_table", replace(renderer.capture_table, exact_depth=True))
     plain = blueprint.peel(make(), renderer=renderer, **options)
     monkeypatch.setattr(mesh, "GEOMETRY_VERT", Path(__file__).parent / "glsl" / "snapped_geometry.vert")
     snapped = blueprint.peel(make(), renderer=renderer, **options)
@@ -485,7 +502,7 @@ def test_slim_normals_are_taken_at_the_pixel_centre(renderer, abuffer, monkeypat
     same = (snapped.triangle == plain.triangle) & (plain.triangle >= 0)
     assert same.sum() > 0.99 * (plain.triangle >= 0).sum()
     moved = np.abs(snapped.normal.astype(np.float64) - plain.normal).max(axis=-1)[same]
-    if renderer.abuffer_slim:
+    if abuffer.slim:
         assert moved.max() <= 2.0**-11
     elif not renderer.snapped_depth:
         # (a driver that snaps corners itself moves them either way: nothing to compare)

@@ -63,22 +63,24 @@ def test_info_prints_renderer_and_gl_version(gl):
     major, minor = (int(v) for v in re.match(r"(\d+)\.(\d+)", gl["version"]).groups())
     assert (major, minor) >= (3, 3)
     assert int(gl["max_texture_size"]) >= 1024
-    # the ways it draws, as the renderer chose them for this driver
-    from blueprint.render.renderer import LayerRenderer
+    # the ways it draws, as the renderer's capture table holds them for this driver
+    from blueprint.api.renderer import Renderer
 
-    with LayerRenderer() as r:
+    with Renderer() as r:
         passes = "compute shaders" if r.use_compute else "fragment passes"
-        way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
-        held = f"{way}, from {r.kbuffer_density:g} triangles per pixel" if r.kbuffer else "none"
+        table, old_gl = r.capture_table, r.ctx.version_code < 430
+    kbuffer, listed = table.row("k-buffer"), table.row("A-buffer")
+    way = "fragment shader interlock" if kbuffer and kbuffer.interlock else "framebuffer fetch"
+    held = f"{way}, from {kbuffer.min_density:g} triangles per pixel" if kbuffer else "none"
     assert lines[3] == f"image passes: {passes}" and gl["image_passes"] == passes
     assert lines[4].startswith(f"k-buffer: {held}") and gl["kbuffer"].startswith(held)
-    if r.abuffer_max_bytes:
-        least = r.abuffer_min_layers
+    if listed:
+        least = listed.min_layers
         abuffer = "every frame" if least <= 1 else f"from {least} layers a frame"
     else:
-        abuffer = "none" if r.ctx.version_code < 430 else "off on this driver"
+        abuffer = "none" if old_gl else "off on this driver"
     assert abuffer in lines[5] and lines[5].startswith("A-buffer: ") and abuffer in gl["abuffer"]
-    depth = "exact planes" if r.exact_depth else "as rasterised"
+    depth = "exact planes" if table.exact_depth else "as rasterised"
     assert lines[6].startswith(f"depth: {depth} (") and gl["depth"].startswith(depth)
 
 

@@ -1,11 +1,13 @@
 """The A-buffer's fragments listed by the compute rasteriser (render/raster.py,
-``LayerRenderer.compute_capture_from``) against the graphics pipeline's: the same fragments, and the
+``ABufferRow.compute_from``) against the graphics pipeline's: the same fragments, and the
 same layers at every pixel but where two faces tie in depth (coincident faces: there the
 rasteriser's rounding and ours each pick one), with the bins' room short (drawn again)
 and in views it must leave to the graphics pipeline (a corner of the model behind the eye). The
 ray-casting oracle checks it against the geometry (test_layers_oracle.py, a-buffer-compute)."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,8 +17,9 @@ from test_layers_oracle import nested_boxes, nested_round
 import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
-from blueprint.render.capture import abuffer_uniforms
+from blueprint.render.gbuffer import abuffer_uniforms
 from blueprint.render.raster import REACH, ComputeRaster
+from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera, fit_camera
 
 # window depths of the two rasterisers at one surface: the plane through the projected corners
@@ -29,28 +32,24 @@ DEPTH_APART = 1e-4
 @pytest.fixture
 def capture(renderer):
     """Switches the renderer's A-buffer (always on, whole fragments) between the graphics
-    pipeline's fragments and the compute rasteriser's."""
+    pipeline's fragments and the compute rasteriser's, through its capture table; ``capture.
+    start(pixels)`` lists G-buffers from that size in compute."""
     if renderer.ctx.version_code < 430:
         pytest.skip("the A-buffer needs OpenGL 4.3 (storage buffers and compute shaders)")
-    saved = (
-        renderer.abuffer_max_bytes,
-        renderer.abuffer_min_layers,
-        renderer.kbuffer,
-        renderer.compute_capture_from,
-    )
+    saved = renderer.capture_table
+    default = capture_table(renderer)
     rooms = dict(renderer.compute_raster.rooms)
 
-    def use(compute: bool) -> None:
-        renderer.abuffer_max_bytes, renderer.abuffer_min_layers, renderer.kbuffer = 1 << 28, 2, False
-        renderer.compute_capture_from = 0 if compute else None
+    def start(pixels: int | None) -> None:
+        listed = replace(default.row("A-buffer"), max_bytes=1 << 28, min_layers=2, compute_from=pixels)
+        renderer.capture_table = CaptureTable((listed, default.row("peel")), default.exact_depth)
 
+    def use(compute: bool) -> None:
+        start(0 if compute else None)
+
+    use.start = start
     yield use
-    (
-        renderer.abuffer_max_bytes,
-        renderer.abuffer_min_layers,
-        renderer.kbuffer,
-        renderer.compute_capture_from,
-    ) = saved
+    renderer.capture_table = saved
     renderer.compute_raster.rooms.clear()
     renderer.compute_raster.rooms.update(rooms)
 
@@ -127,17 +126,17 @@ def test_what_it_sees(renderer):
 
 
 def test_frames_below_its_size_stay_with_the_graphics_pipeline(renderer, capture, monkeypatch):
-    """``compute_capture_from`` is the G-buffer size from which the compute rasteriser lists a
+    """``ABufferRow.compute_from`` is the G-buffer size from which the compute rasteriser lists a
     frame: smaller frames cost it more than the graphics pipeline (the H200: the crank case)."""
     listed = []
     fragments = ComputeRaster.fragments
     monkeypatch.setattr(ComputeRaster, "fragments", lambda *a: listed.append(a[2]) or fragments(*a))
     capture(True)
     model = nested_boxes()
-    renderer.compute_capture_from = 64 * 64 + 1
+    capture.start(64 * 64 + 1)
     blueprint.peel(model, renderer=renderer, size=(64, 64))
     assert not listed
-    renderer.compute_capture_from = 64 * 64
+    capture.start(64 * 64)
     blueprint.peel(model, renderer=renderer, size=(64, 64))
     assert listed == [(64, 64)]
 

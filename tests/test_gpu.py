@@ -16,6 +16,7 @@ from blueprint.errors import GLUnavailableError, InputError, ShaderError
 from blueprint.gpu import TargetPool, build_program, create_context, gl_info, preprocess
 from blueprint.gpu.device import SNAPPED_DEPTH_PX, check_size
 from blueprint.gpu.shaders import _explain, package_files
+from blueprint.render.table import capture_table
 
 # -- a throw-away shader package ------------------------------------------------------------------
 # build_program loads "package:path" references from the package's folder (package_files), so a
@@ -115,7 +116,7 @@ def test_depth_snap_probe(renderer):
     px = renderer.depth_snap_px()
     assert 0.0 <= px < 1 / 16
     assert renderer.snapped_depth == (px > SNAPPED_DEPTH_PX)
-    assert renderer.exact_depth == renderer.snapped_depth
+    assert capture_table(renderer).exact_depth == renderer.snapped_depth
     if renderer.software:
         assert not renderer.snapped_depth, px
     assert renderer.ctx.error == "GL_NO_ERROR"
@@ -316,12 +317,12 @@ def test_bad_sizes_rejected_before_any_gpu_work(renderer, how):
     call = {"render": blueprint.render_frame, "peel": blueprint.peel}[how]
     too_large = renderer.max_texture + 1
     before = _pool_state(renderer)
-    meshes = dict(renderer._meshes)
+    meshes = dict(renderer.capturer._meshes)
     for size in [(0, 0), (64, 0), (too_large, 8), (8, too_large)]:
         with pytest.raises(InputError, match="size"):
             call(model, size=size, renderer=renderer)
     assert _pool_state(renderer) == before, "targets were (re)allocated for a rejected size"
-    assert dict(renderer._meshes) == meshes, "the model was uploaded for a rejected size"
+    assert dict(renderer.capturer._meshes) == meshes, "the model was uploaded for a rejected size"
 
 
 @pytest.mark.parametrize(
@@ -373,9 +374,11 @@ def test_capability_probes_compile_what_they_claim(renderer):
 
     trivial = "#version 430 core\nout vec4 o;\nvoid main() { o = vec4(1.0); }\n"
     broken = "#version 430 core\nvoid main() { undeclared = 1; }\n"
-    assert renderer._compiles(trivial) == (renderer.ctx.version_code >= 430)
-    assert not renderer._compiles(broken)
+    assert renderer.device._compiles(trivial) == (renderer.ctx.version_code >= 430)
+    assert not renderer.device._compiles(broken)
     listed = "GL_ARB_fragment_shader_interlock" in renderer.ctx.extensions
-    assert renderer.fragment_interlock == (listed and renderer._compiles(INTERLOCK_PROBE))
+    assert renderer.fragment_interlock == (listed and renderer.device._compiles(INTERLOCK_PROBE))
     # where both exist, framebuffer fetch holds the k-buffer; interlock only where fetch is missing
-    assert renderer.kbuffer_interlock == (renderer.fragment_interlock and not renderer.framebuffer_fetch)
+    row = capture_table(renderer).row("k-buffer")
+    interlock = renderer.fragment_interlock and not renderer.framebuffer_fetch
+    assert (row is not None and row.interlock) == interlock

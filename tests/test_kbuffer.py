@@ -6,6 +6,8 @@ each other, normals included, and the drawings they make."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
@@ -13,31 +15,43 @@ from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
 import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
-from blueprint.render import capture
-from blueprint.render.capture import KBUFFER_MAX, Capture, gbuffer
+from blueprint.render.table import (
+    KBUFFER_MAX,
+    KBUFFER_MAX_BYTES,
+    CaptureTable,
+    PeelRow,
+    Request,
+    capture_table,
+    choose,
+)
 from blueprint.scene.camera import fit_camera
 
 
 @pytest.fixture
 def kbuffer(renderer):
-    """Switches the renderer between both ways; the k-buffer is forced whatever the density."""
-    if not renderer.kbuffer:
+    """Switches the renderer between both ways (its capture table: the k-buffer whatever the
+    density, or a pass a layer; the A-buffer, test_abuffer.py, off either way)."""
+    default = capture_table(renderer)
+    row = default.row("k-buffer")
+    if row is None:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    saved = renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes
+    saved = renderer.capture_table
+    peel = default.row("peel")
 
     def use(on: bool) -> None:
-        # the A-buffer (test_abuffer.py) off: the other way is a pass a layer
-        renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = on, 0.0, 0
+        rows = (replace(row, min_density=0.0, whole_frames=False), peel) if on else (peel,)
+        renderer.capture_table = CaptureTable(rows, default.exact_depth)
 
+    use.interlock = row.interlock
     yield use
-    renderer.kbuffer, renderer.kbuffer_density, renderer.abuffer_max_bytes = saved
+    renderer.capture_table = saved
 
 
 @pytest.fixture
 def surfaces_kbuffer(renderer, kbuffer):
     """``kbuffer``, where one k-buffer pass can leave every layer in its surfaces for the edges
     to read there: through framebuffer fetch alone (Capture, ``surfaces``)."""
-    if renderer.kbuffer_interlock:
+    if kbuffer.interlock:
         pytest.skip("the k-buffer runs under fragment shader interlock here: its layers are unpacked")
     return kbuffer
 
@@ -155,27 +169,26 @@ def test_same_drawing(renderer, kbuffer, style, supersample):
     assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
 
 
-def test_used_only_where_it_pays(renderer, monkeypatch):
-    """From KBUFFER_MIN_DENSITY triangles per G-buffer pixel, never for one layer, and not where
-    its targets would take more than KBUFFER_MAX_BYTES."""
-    if not renderer.kbuffer:
+def test_used_only_where_it_pays(renderer):
+    """From the row's ``min_density`` triangles per G-buffer pixel, never for one layer, and not
+    where its targets would take more than its ``max_bytes`` (KBUFFER_MAX_BYTES)."""
+    row = capture_table(renderer).row("k-buffer")
+    if row is None:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    monkeypatch.setattr(renderer, "abuffer_max_bytes", 0)  # else preferred (test_abuffer.py)
+    row = replace(row, whole_frames=False)
     model = examples.gearbox()
     mesh = renderer.mesh(model, 30.0)
-    camera = fit_camera(model, (64, 64))
-    side = int(np.sqrt(mesh.triangles / renderer.kbuffer_density)) + 2
-    small = gbuffer(renderer.pool, (64, 64), "test.small")
-    large = gbuffer(renderer.pool, (side, side), "test.large")
+    side = int(np.sqrt(mesh.triangles / row.min_density)) + 2
+    assert row.max_bytes == KBUFFER_MAX_BYTES
 
-    def kbuffered(gb, batch: int) -> bool:
-        return Capture(renderer, mesh, camera, gb, batch=batch).kbuffer is not None
+    def kbuffered(size, batch: int, row=row) -> bool:
+        request = Request(size, mesh.triangles, mesh.part_count, batch)
+        return choose(CaptureTable((row, PeelRow())), request)[0].way == "k-buffer"
 
-    assert kbuffered(small, 5)
-    assert not kbuffered(small, 1)
-    assert not kbuffered(large, 5)
-    monkeypatch.setattr(capture, "KBUFFER_MAX_BYTES", 16 * 5 * 64 * 64 - 1)
-    assert not kbuffered(small, 5)
+    assert kbuffered((64, 64), 5)
+    assert not kbuffered((64, 64), 1)
+    assert not kbuffered((side, side), 5)
+    assert not kbuffered((64, 64), 5, replace(row, max_bytes=16 * 5 * 64 * 64 - 1))
 
 
 @pytest.mark.parametrize(("supersample", "batch"), [(1, 8), (2, 8), (1, 3), (2, 1)])
@@ -186,29 +199,28 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     (edges_surfaces.frag), ``batch`` layers a pass: the same drawing, covered pixels and layers
     left as from the layers unpacked into the G-buffer, depths rounded as the 24-bit depth
     target rounds them."""
-    from blueprint.pipeline.executor import executor_for
     from blueprint.pipeline.peel import LayerCapture
 
     surfaces_kbuffer(True)
     model = examples.gearbox()
     options = dict(size=(160, 120), max_layers=4, supersample=supersample)
-    ex = executor_for(renderer)
+    ex = renderer.executor
     monkeypatch.setattr(ex, "edge_batch", batch)
     passes = []
-    run_pass = type(ex)._run_pass
+    run_pass = type(ex).run_pass
 
     def watch(self, st, name, layer, layers, span=1):
         if name in st.from_surfaces:
             passes.append(span)
         run_pass(self, st, name, layer, layers, span)
 
-    monkeypatch.setattr(type(ex), "_run_pass", watch)
+    monkeypatch.setattr(type(ex), "run_pass", watch)
     direct = renderer.render(model, **options)
-    assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    assert renderer.executor.last_run.from_surfaces == ("edges",)
     assert passes == [min(batch, 4 - k) for k in range(0, 4, batch)]
     monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
     unpacked = renderer.render(model, direct.camera, **options)
-    assert executor_for(renderer).last_run.from_surfaces == ()
+    assert renderer.executor.last_run.from_surfaces == ()
     assert direct.layers_left > 0
     counts = (direct.layers, direct.layer_pixels, direct.layers_left)
     assert counts == (unpacked.layers, unpacked.layer_pixels, unpacked.layers_left)
@@ -221,7 +233,6 @@ def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfac
     let go behind its K: no counting pass runs (remaining.py), and the layers drawn and left
     add up to those the frame draws without a cap (peeled in batches, unpacked)."""
     from blueprint.pipeline import peel
-    from blueprint.pipeline.executor import executor_for
 
     def no_counting_pass(*args):
         raise AssertionError("a counting pass ran")
@@ -238,7 +249,7 @@ def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfac
         with monkeypatch.context() as m:
             m.setattr(peel, "layers_left", no_counting_pass)
             capped = renderer.render(model, camera, max_layers=cap, **options)
-        assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+        assert renderer.executor.last_run.from_surfaces == ("edges",)
         assert (capped.layers, capped.layers + capped.layers_left) == (cap, full.layers), view
     assert capped_some
 
@@ -259,7 +270,6 @@ def test_surfaces_an_earlier_frame_left_change_nothing(renderer, surfaces_kbuffe
     """Only a k-buffer's first surface and its count are cleared before a pass: the surfaces
     a deeper frame left behind a pixel's last one are never read as layers. A frame drawn over
     them is the one drawn from its layers unpacked (where the count alone says what is held)."""
-    from blueprint.pipeline.executor import executor_for
     from blueprint.pipeline.peel import LayerCapture
 
     surfaces_kbuffer(True)
@@ -268,7 +278,7 @@ def test_surfaces_an_earlier_frame_left_change_nothing(renderer, surfaces_kbuffe
     boxes = nested_boxes()  # five layers over most of the frame
     deep = renderer.render(boxes, fit_camera(boxes, (160, 120), "front"), **options)
     over = renderer.render(model, fit_camera(model, (160, 120), "iso"), **options)
-    assert executor_for(renderer).last_run.from_surfaces == ("edges",)
+    assert renderer.executor.last_run.from_surfaces == ("edges",)
     assert deep.layers == 5
     monkeypatch.setattr(LayerCapture, "_from_surfaces", lambda self, st: ())
     unpacked = renderer.render(model, over.camera, **options)

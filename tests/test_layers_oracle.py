@@ -21,7 +21,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -40,6 +40,7 @@ from oracle import (
 import blueprint
 from blueprint import examples
 from blueprint.render import mesh
+from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
 
 # share of compared pixels that must agree (depth layers) and of interior pixels (IDs)
 DEPTH_AGREEMENT = 0.998
@@ -132,8 +133,8 @@ CASES = [
 # pass, OpenGL 4.3; forced whatever the layers), and the lean pass of vector drawings (no
 # normals: depth and triangle IDs alone).
 # a-buffer-slim: fragments listed as depth and face alone, the rest found by the sort: what GPUs
-# use (LayerRenderer.abuffer_slim); a-buffer-compute: those listed by the rasteriser in compute
-# (render.raster, LayerRenderer.compute_capture_from: forced whatever the size)
+# use (ABufferRow.slim); a-buffer-compute: those listed by the rasteriser in compute
+# (render.raster, ABufferRow.compute_from: forced whatever the size)
 METHODS = [
     "pass-a-layer",
     "two-culled-draws",
@@ -147,37 +148,27 @@ METHODS = [
 
 @pytest.fixture(params=METHODS)
 def method(request, renderer):
+    """The renderer capturing every frame the method's way (``render.table``: a capture table
+    of that way alone, whatever its thresholds, the peel taking what it cannot)."""
+    default = capture_table(renderer)
     kbuffer = request.param == "k-buffer"
-    if kbuffer and not renderer.kbuffer:
+    if kbuffer and default.row("k-buffer") is None:
         pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
     abuffer = request.param.startswith("a-buffer")
     if abuffer and renderer.ctx.version_code < 430:
         pytest.skip("the A-buffer needs OpenGL 4.3")
-    saved = (
-        renderer.kbuffer,
-        renderer.kbuffer_density,
-        renderer.culled_tie_break_from,
-        renderer.abuffer_max_bytes,
-        renderer.abuffer_min_layers,
-        renderer.abuffer_slim,
-        renderer.compute_capture_from,
-    )
-    renderer.kbuffer, renderer.kbuffer_density = kbuffer, 0.0
-    renderer.culled_tie_break_from = (0, 0) if request.param == "two-culled-draws" else None
-    renderer.abuffer_max_bytes = (1 << 30) if abuffer else 0
-    renderer.abuffer_min_layers = 2
-    renderer.abuffer_slim = request.param in ("a-buffer-slim", "a-buffer-compute")
-    renderer.compute_capture_from = 0 if request.param == "a-buffer-compute" else None
+    if kbuffer:
+        rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
+    elif abuffer:
+        slim = request.param in ("a-buffer-slim", "a-buffer-compute")
+        compute_from = 0 if request.param == "a-buffer-compute" else None
+        rows = (ABufferRow(1 << 30, min_layers=2, slim=slim, compute_from=compute_from), PeelRow())
+    else:
+        rows = (PeelRow(culled_from=(0, 0) if request.param == "two-culled-draws" else None),)
+    saved = renderer.capture_table
+    renderer.capture_table = CaptureTable(rows, default.exact_depth)
     yield request.param
-    (
-        renderer.kbuffer,
-        renderer.kbuffer_density,
-        renderer.culled_tie_break_from,
-        renderer.abuffer_max_bytes,
-        renderer.abuffer_min_layers,
-        renderer.abuffer_slim,
-        renderer.compute_capture_from,
-    ) = saved
+    renderer.capture_table = saved
 
 
 # peeled Layers per (case, method) and the Oracle per case, shared by the depth and ID tests
@@ -307,7 +298,7 @@ def test_exact_depth_undoes_snapped_corners(exact, method, renderer, monkeypatch
     case = next(c for c in CASES if c.name == "gearbox")
     model, _, oracle = _peel_and_cast(case, renderer, request, method)
     monkeypatch.setattr(mesh, "GEOMETRY_VERT", Path(__file__).parent / "glsl" / "snapped_geometry.vert")
-    monkeypatch.setattr(renderer, "exact_depth", exact)
+    monkeypatch.setattr(renderer, "capture_table", replace(renderer.capture_table, exact_depth=exact))
     layers = blueprint.peel(model, size=case.size, renderer=renderer, normals=method != "ids-only")
     result = compare_layers(layers.depth, oracle)
     # the compute rasteriser takes every depth from the plane through the projected corners,

@@ -15,7 +15,6 @@ from blueprint.api.renderer import Renderer
 from blueprint.compose.style import Style
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.blueprint import stream_blueprint
-from blueprint.pipeline.executor import executor_for
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
@@ -68,7 +67,7 @@ def time_frames(
     streamed = [f.ms for f in stream_blueprint(renderer, model, [camera] * (warmup + frames), **options)]
     streamed = streamed[warmup:]
     profiled = renderer.render(model, camera, profile=True, **options)
-    capture = executor_for(renderer).last_run.groups[0].capture
+    capture = renderer.executor.last_run.groups[0].capture
     return {
         "layers": frame.layers,
         "ms": round(statistics.median(times), 3),

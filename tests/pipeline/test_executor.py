@@ -16,7 +16,7 @@ from PIL import Image
 from blueprint import examples, render
 from blueprint.api.files import run_pipeline
 from blueprint.errors import InputError, ShaderError
-from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
+from blueprint.pipeline import load_pipeline, render_blueprint
 from blueprint.pipeline.executor import part_color
 from blueprint.scene.camera import fit_camera
 
@@ -25,7 +25,7 @@ SIZE = (64, 48)
 
 @pytest.fixture(scope="module")
 def ex(renderer):
-    return executor_for(renderer)
+    return renderer.executor
 
 
 @pytest.fixture(scope="module")
@@ -279,7 +279,7 @@ def test_blueprint_compute_form_matches_its_golden_frame(
     skip_unless_pinned(renderer)
     monkeypatch.setattr(renderer, "use_compute", True)
     frame = render_golden_case(functools.partial(render_blueprint, renderer), golden_models, name)
-    assert executor_for(renderer).last_run.arrays is not None
+    assert renderer.executor.last_run.arrays is not None
     assert_frame_pinned(name, frame)
     assert_like_golden(name, frame.image, artifacts, label=f"{name}.compute")
 

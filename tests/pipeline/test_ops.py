@@ -15,8 +15,7 @@ import pytest
 
 from blueprint import examples
 from blueprint.compose.style import STYLES
-from blueprint.ops import BLUR
-from blueprint.pipeline.executor import executor_for
+from blueprint.ops import BLUR, OPS
 from blueprint.pipeline.spec import OPERATIONS
 from blueprint.scene.camera import fit_camera
 
@@ -26,7 +25,7 @@ rng = np.random.default_rng(4)
 
 @pytest.fixture(scope="module")
 def ex(renderer):
-    return executor_for(renderer)
+    return renderer.executor
 
 
 def shift(a: np.ndarray, dx: int, dy: int) -> np.ndarray:
@@ -81,6 +80,31 @@ def test_every_op_has_a_shader_file_and_is_tested():
     }
     tested.add("shade_layer")  # accumulates over a peel: tests/pipeline/test_executor.py
     assert set(OPERATIONS) == tested
+
+
+def test_capabilities_the_pipeline_plans_by():
+    """The pipeline plans by descriptor fields, never an op's name: a compute form only with a
+    compute shader; an in-place form (``IN_PLACE``, its shaders present) for exactly the ops
+    that may read their layers where a capture holds them; the edges op's triangle-ID
+    silhouettes need face IDs, and no in-place form reads them."""
+    from importlib import resources
+
+    from blueprint.pipeline.peel import IN_PLACE
+
+    for op in OPS.values():
+        assert op.compute_form in (None, "slice", "array"), op.name
+        assert op.compute_form is None or op.compute is not None, op.name
+        assert (op.in_place is not None) == (op.name in IN_PLACE), op.name
+    for forms in IN_PLACE.values():
+        assert set(forms.compute) <= set(forms.fragment)
+        for shader in (*forms.fragment.values(), *forms.compute.values()):
+            package, name = shader.split(":")
+            assert resources.files(package).joinpath(name).is_file(), shader
+    edges = OPS["edges"]
+    assert edges.depth_first and edges.compute_form == "slice" and OPS["dilate"].compute_form == "array"
+    for ids in (False, True):
+        values = edges.uniforms(id_silhouettes=ids)
+        assert edges.face_ids(values) == ids and edges.in_place(values) == (not ids)
 
 
 # -- edge detectors ------------------------------------------------------------------------------

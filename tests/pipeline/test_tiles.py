@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from blueprint import examples
-from blueprint.pipeline import executor_for, load_pipeline, render_blueprint
+from blueprint.pipeline import load_pipeline, render_blueprint
 from blueprint.pipeline.tiles import TILE, Tiles, covered_tiles, rectangles, widen
 
 
@@ -59,7 +59,7 @@ def tiled(renderer, monkeypatch):
     """Switches the executor's tiled passes on or off, counting the tiled draws."""
     if renderer.use_compute:
         pytest.skip("this renderer runs the image passes in compute form, which is not tiled")
-    ex = executor_for(renderer)
+    ex = renderer.executor
     saved = ex.tiled
     drawn = []
     original = Tiles.draw
@@ -137,7 +137,7 @@ def test_passes_that_spread_are_drawn_whole(renderer, tiled, tmp_path):
     path = tmp_path / "spread.toml"
     path.write_text(text, encoding="utf-8")
     spec = load_pipeline(str(path))
-    ex = executor_for(renderer)
+    ex = renderer.executor
     model = examples.gearbox()
     outputs = {}
     for on in (True, False):

@@ -81,12 +81,12 @@ def test_the_compute_pass_leaves_out_the_samples_numpy_does(renderer, seed):
 
 
 def test_the_compute_pass_runs_in_the_renderers_own_context(renderer):
-    from blueprint.render.renderer import LayerRenderer
+    from blueprint.gpu.device import Device
 
     top, under = _line((10.2, 20.3), 0.0), _line((10.2, 20.6), 0.0)
     samples = _samples([top, under])
     level = np.r_[np.zeros(len(top), np.int32), np.ones(len(under), np.int32)]
-    with LayerRenderer() as other:
+    with Device() as other:
         other.make_current()
         got = suppress_coincident(samples, level, renderer=renderer)
     renderer.make_current()

@@ -89,10 +89,10 @@ def test_gpu_pairs_give_numpys_lines_on_the_engine(renderer, shared_models):
 def test_gpu_pairs_run_in_the_renderers_own_context(renderer, every_grid):
     """The passes are a drawing's first GL work: they must not land in whichever context was
     current before (a window's, another renderer's)."""
-    from blueprint.render.renderer import LayerRenderer
+    from blueprint.gpu.device import Device
 
     model = _soup(1, count=1000)
-    with LayerRenderer() as other:
+    with Device() as other:
         other.make_current()
         got = _intersections(model, renderer)
     renderer.make_current()

@@ -15,6 +15,7 @@ from vector_helpers import (
 )
 
 from blueprint.examples import assemble, box, prism
+from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera
 from blueprint.vector import draw_vector, vector_style
 
@@ -197,22 +198,26 @@ def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, kbuffer, max_
     import blueprint
     from blueprint import examples
 
-    if kbuffer and (not renderer.kbuffer or renderer.kbuffer_interlock):
+    default = capture_table(renderer)
+    row = default.row("k-buffer")
+    if kbuffer and (row is None or row.interlock):
         pytest.skip("the faces-only k-buffer needs framebuffer fetch, which this driver lacks")
     model = examples.gearbox()
     camera = Camera.fit(model.positions, "front", aspect=4 / 3)
     size = (96, 72)
-    saved = renderer.kbuffer
-    renderer.kbuffer = False
+    saved = renderer.capture_table
+    peeled = CaptureTable((default.row("peel"),), default.exact_depth)
+    renderer.capture_table = peeled
     layers = blueprint.peel(
         model, camera=camera, size=size, renderer=renderer, normals=False, max_layers=max_layers
     )
     pixels = np.random.default_rng(1).choice(size[0] * size[1], 500, replace=False)
-    renderer.kbuffer = kbuffer
+    if kbuffer:
+        renderer.capture_table = CaptureTable((row, default.row("peel")), default.exact_depth)
     try:
         faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
     finally:
-        renderer.kbuffer = saved
+        renderer.capture_table = saved
     expected = layers.triangle.reshape(len(layers.depth), -1)[:, pixels]
     assert faces.shape == expected.shape and (faces[:3] >= 0).any(axis=1).all()
     assert np.array_equal(faces, expected)

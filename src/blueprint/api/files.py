@@ -73,14 +73,13 @@ def run_pipeline(
     model. Returns the last frame's result.
     """
     # the executor and its passes load for pipelines only, not for every drawing
-    from blueprint.pipeline.executor import executor_for
     from blueprint.pipeline.run import PICTURE_SUFFIXES, parse_variables, run_video, save_result, with_images
     from blueprint.pipeline.spec import with_file
 
     images = {k: str(v) for k, v in (image or {}).items()}
     spec = with_images(pipeline, images)
     variables = parse_variables(set)
-    ex = executor_for(shared(renderer))
+    ex = shared(renderer).executor
     plan = ex.plan(spec, variables, tuple(dump))
     model = None
     if input is not None:
@@ -162,13 +161,12 @@ def turntable(
         raise InputError(f"fps must be in (0, 240], got {fps}")
     if not 0 <= crf <= 51:
         raise InputError(f"crf must be in [0, 51], got {crf}")
-    from blueprint.pipeline.executor import executor_for  # as in run_pipeline
     from blueprint.pipeline.run import orbit, parse_variables, with_images
 
     renderer = shared(renderer)
     spec = with_images(pipeline, {})
     variables = parse_variables(set)
-    ex = executor_for(renderer)
+    ex = renderer.executor
     plan = ex.plan(spec, variables)
     if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")

@@ -18,30 +18,15 @@ def info(model, as_json):
     and BLUEPRINT_GL_DEVICE). With MODEL: its parts, triangles, bounds, length unit (the
     file's, or assumed) and size."""
     if model is None:
+        from blueprint.api.renderer import Renderer
         from blueprint.gpu.context import egl_devices
-        from blueprint.render.renderer import LayerRenderer
 
-        with LayerRenderer() as r:
+        with Renderer() as r:
             data = dict(r.info)
             data["image_passes"] = "compute shaders" if r.use_compute else "fragment passes"
-            if not r.kbuffer:
-                data["kbuffer"] = "none (a geometry pass a layer)"
-            else:
-                way = "fragment shader interlock" if r.kbuffer_interlock else "framebuffer fetch"
-                data["kbuffer"] = f"{way}, from {r.kbuffer_density:g} triangles per pixel"
-            if r.abuffer_max_bytes:
-                least = r.abuffer_min_layers
-                frames = "every frame" if least <= 1 else f"from {least} layers a frame"
-                if r.abuffer_after_kbuffer and r.kbuffer:
-                    frames += " that one k-buffer pass does not hold"
-                data["abuffer"] = (
-                    f"every layer in one geometry pass, {frames}, "
-                    f"lists up to {r.abuffer_max_bytes / 2**30:.1f} GiB"
-                )
-            else:
-                data["abuffer"] = "none (needs OpenGL 4.3)"
+            data.update(r.capture_table.describe())
             snap = r.depth_snap_px()
-            if r.exact_depth:
+            if r.capture_table.exact_depth:
                 data["depth"] = f"exact planes (the driver's depths come from snapped corners: {snap:.2g} px)"
             else:
                 data["depth"] = f"as rasterised (coincident faces {snap:.2g} px apart)"

@@ -54,6 +54,15 @@ class Op:
     input ``support`` holds something (a covered pixel of a depth attribute, a non-zero one of
     a pass's result), so a software rasteriser may draw the pass over those tiles alone
     (``blueprint.pipeline.tiles``).
+
+    What the pipeline plans by (never an op's name): ``compute_form`` says how the ``compute``
+    shader runs: ``"slice"`` (one layer's slice of an r8 array from attributes, a dispatch a
+    layer) or ``"array"`` (a whole array into another, a dispatch an array); ``depth_first``:
+    the normal and ID inputs are read only where the depth input holds a surface, so a layer's
+    stale ones need no clearing; ``face_ids(uniforms)``: the pass reads face IDs, which the
+    capture must then track; ``in_place(uniforms)``: a per-layer pass reads its layer's depth,
+    normal and IDs alone, so it may read them where a capture holds them (the pipeline's in-place
+    forms of the op: a k-buffer's surfaces, an A-buffer's lists) instead of from the G-buffer.
     """
 
     name: str
@@ -74,6 +83,10 @@ class Op:
     identity: Callable[[dict], bool] | None = None
     support: str | None = None
     reach: Callable[[dict], int] | None = None
+    compute_form: str | None = None
+    depth_first: bool = False
+    face_ids: Callable[[dict], bool] | None = None
+    in_place: Callable[[dict], bool] | None = None
 
     def defines(self, uniforms: dict[str, float | bool]) -> dict[str, bool]:
         """Compile-time defines of checked uniform values (see ``switches``)."""
@@ -113,6 +126,11 @@ EDGES = Op(
     # an empty pixel beside a covered one is marked too (both sides of a border)
     support="depth",
     reach=lambda u: 1,
+    compute_form="slice",
+    depth_first=True,
+    # triangle-ID silhouettes compare the faces' corners, which no in-place form reads
+    face_ids=lambda u: bool(u["u_id_silhouettes"]),
+    in_place=lambda u: not u["u_id_silhouettes"],
 )
 
 DILATE = Op(
@@ -136,6 +154,7 @@ DILATE = Op(
     identity=lambda u: u["u_radius"] <= 0.0 and u["u_hidden_width"] >= 1.0,
     support="source",
     reach=lambda u: math.ceil(u["u_radius"]),
+    compute_form="array",
 )
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}

@@ -15,7 +15,6 @@ from blueprint.lazy import lazy_names
 _EXPORTS = {
     "render_blueprint": "blueprint.pipeline.blueprint",
     "Executor": "blueprint.pipeline.executor",
-    "executor_for": "blueprint.pipeline.executor",
     "Plan": "blueprint.pipeline.graph",
     "plan": "blueprint.pipeline.graph",
     "ATTRIBUTES": "blueprint.pipeline.spec",
@@ -32,7 +31,6 @@ __all__ = [
     "PipelineSpec",
     "Plan",
     "Result",
-    "executor_for",
     "load_pipeline",
     "parse",
     "plan",
@@ -42,7 +40,7 @@ __all__ = [
 
 if TYPE_CHECKING:
     from blueprint.pipeline.blueprint import render_blueprint
-    from blueprint.pipeline.executor import Executor, executor_for
+    from blueprint.pipeline.executor import Executor
     from blueprint.pipeline.graph import Plan, plan
     from blueprint.pipeline.spec import ATTRIBUTES, PipelineSpec, load_pipeline, parse, preset_names
     from blueprint.pipeline.state import Result

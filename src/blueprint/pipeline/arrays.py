@@ -10,10 +10,6 @@ from dataclasses import dataclass
 
 from blueprint.pipeline.graph import Plan
 
-# operations whose compute shader writes one slice (u_layer) of an r8 array, and those that
-# map a whole array to another (a dispatch an array)
-SLICE_OPS = {"edges"}
-ARRAY_OPS = {"dilate"}
 SLICES = 8
 
 
@@ -38,9 +34,10 @@ def array_plan(pl: Plan) -> ArrayPlan | None:
         sources = [pl.resolve(t) for t in p.inputs.values()]
         if p.user is not None or p.format != "r8" or p.op.compute is None:
             return None
-        if p.op.name in SLICE_OPS and all(t in b.attributes for t in sources):
+        # (``Op.compute_form``: a slice a layer from attributes, or a whole array into another)
+        if p.op.compute_form == "slice" and all(t in b.attributes for t in sources):
             slices.append(name)
-        elif p.op.name in ARRAY_OPS and len(sources) == 1 and sources[0] in arrays:
+        elif p.op.compute_form == "array" and len(sources) == 1 and sources[0] in arrays:
             batches.append(name)
         else:
             return None

@@ -11,9 +11,8 @@ import numpy as np
 from blueprint.compose.style import Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
-from blueprint.pipeline.executor import executor_for
 from blueprint.pipeline.spec import PipelineSpec, load_pipeline
-from blueprint.render.renderer import Frame, LayerRenderer
+from blueprint.render.renderer import Frame
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
@@ -29,7 +28,7 @@ def blueprint_preset() -> PipelineSpec:
 
 
 def render_blueprint(
-    renderer: LayerRenderer,
+    renderer,
     model: Model,
     camera: Camera | None = None,
     *,
@@ -37,30 +36,29 @@ def render_blueprint(
     on_gpu: bool = False,
     **options,
 ) -> Frame:
-    """``Renderer.render`` through the ``blueprint`` preset; ``options`` are its drawing options
-    (``size``, ``style``, ``highlight``...: see there), as ``_run_arguments`` takes them. Their
-    ranges are the API's to check (``blueprint.api.options.DrawOptions``), once."""
+    """``Renderer.render`` through the ``blueprint`` preset, run by ``renderer``'s executor (a
+    ``blueprint.Renderer``); ``options`` are its drawing options (``size``, ``style``,
+    ``highlight``...: see there), as ``_run_arguments`` takes them. Their ranges are the API's
+    to check (``blueprint.api.options.DrawOptions``), once."""
     style, arguments = _run_arguments(renderer, model, **options)
-    result = executor_for(renderer).run(
+    result = renderer.executor.run(
         blueprint_preset(), model, camera, profile=profile, keep=on_gpu, **arguments
     )
     return _frame(result, style)
 
 
-def stream_blueprint(
-    renderer: LayerRenderer, model: Model, cameras: Iterable[Camera], **options
-) -> Iterator[Frame]:
+def stream_blueprint(renderer, model: Model, cameras: Iterable[Camera], **options) -> Iterator[Frame]:
     """Frames of ``model`` from each of ``cameras`` with ``render_blueprint``'s other options,
     streamed: a frame's picture is read back while the next one is drawn (``Executor.stream``),
     and ``Frame.ms`` is the interval between frames."""
     style, arguments = _run_arguments(renderer, model, **options)
     frames = ({"camera": camera} for camera in cameras)
-    for result in executor_for(renderer).stream(blueprint_preset(), model, frames, **arguments):
+    for result in renderer.executor.stream(blueprint_preset(), model, frames, **arguments):
         yield _frame(result, style)
 
 
 def _run_arguments(
-    renderer: LayerRenderer,
+    renderer,
     model: Model,
     *,
     size: tuple[int, int] = (1024, 1024),

@@ -32,7 +32,6 @@ from __future__ import annotations
 import functools
 import math
 import time
-import weakref
 from collections.abc import Iterable, Iterator
 from dataclasses import replace
 
@@ -42,6 +41,7 @@ from blueprint.compose.compositor import TILES_VERT, Compositor, Shading
 from blueprint.compose.style import STYLES, Style, get_style
 from blueprint.errors import InputError
 from blueprint.gpu import units
+from blueprint.gpu.device import Device
 from blueprint.pipeline.arrays import SLICES, ArrayPlan, array_plan
 from blueprint.pipeline.graph import Plan, plan
 from blueprint.pipeline.inputs import (
@@ -51,17 +51,14 @@ from blueprint.pipeline.inputs import (
     read_texture_later,
     texture_bytes,
 )
-from blueprint.pipeline.peel import LayerCapture
+from blueprint.pipeline.peel import IN_PLACE, LayerCapture
 from blueprint.pipeline.programs import FULLSCREEN, Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
 from blueprint.pipeline.tiles import Tiles
 from blueprint.render.abuffer import Overflow
-from blueprint.render.capture import (
-    depth_range,
-    peel_eps,
-)
-from blueprint.render.renderer import LayerRenderer, check_frame_args
+from blueprint.render.gbuffer import depth_range, peel_eps
+from blueprint.render.renderer import Capturer, check_frame_args
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
@@ -69,9 +66,6 @@ from blueprint.scene.model import Model
 BASE_UNIT = units.INPUTS
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
-EDGES_FROM_LISTS = "blueprint.pipeline:glsl/edges_lists.comp"
-EDGES_FROM_LISTS_FRAG = "blueprint.pipeline:glsl/edges_lists.frag"
-EDGES_FROM_SURFACES = "blueprint.pipeline:glsl/edges_surfaces.frag"
 # the most layers an edges pass read from a capture's lists or surfaces draws at once
 # (Executor.edge_batch), the most render targets GL asks every driver for
 EDGE_BATCH = 8
@@ -84,14 +78,16 @@ _UNSET = object()
 
 
 class Executor:
-    """Runs pipelines on ``renderer`` (its context, pool, programs and peel)."""
+    """Runs pipelines on ``device`` (its context, pool and programs), capturing the layers of
+    models with ``capturer`` (``render.renderer.Capturer``: uploads, capture table). A
+    ``blueprint.Renderer`` composes one (``Renderer.executor``) with its device and capturer."""
 
-    def __init__(self, renderer: LayerRenderer) -> None:
-        self.r = renderer
-        self.ctx = renderer.ctx
-        self.programs = Programs(renderer)
-        self.images = ImageInputs(renderer.pool)
-        self.compositor = Compositor(renderer)
+    def __init__(self, device: Device, capturer: Capturer) -> None:
+        self.r, self.capturer = device, capturer
+        self.ctx = device.ctx
+        self.programs = Programs(device)
+        self.images = ImageInputs(device.pool)
+        self.compositor = Compositor(device)
         self.capture = LayerCapture(self)
         self._plans: dict[tuple, Plan] = {}
         # each plan's compute form (``array_plan``), by the plan's id
@@ -105,14 +101,14 @@ class Executor:
         self._sizes: dict[int, tuple[Plan, tuple[int, int], dict]] = {}
         self._checked: tuple | None = None  # the last peel settings check_frame_args passed
         self.last_run: RunState | None = None
-        self.tiles = Tiles(renderer.ctx)
+        self.tiles = Tiles(device.ctx)
         # passes drawn over the tiles their layer covers, found by reading each layer's depth
         # back: only where that costs less than the pixels it saves (pipeline.tiles)
-        self.tiled = renderer.software
+        self.tiled = device.software
         # layers an edges pass read from an A-buffer's lists or a k-buffer's surfaces draws at
         # once, a target each: the layer counts (and cursors) are read once a batch, not once a
         # layer
-        self.edge_batch = min(EDGE_BATCH, renderer.max_draw_buffers)
+        self.edge_batch = min(EDGE_BATCH, device.max_draw_buffers)
 
     def release(self) -> None:
         """Programs of user shaders and pixel buffers (pool targets belong to the renderer)."""
@@ -286,7 +282,7 @@ class Executor:
         self.tiles.forget()  # what an earlier run found, even one an error ended
         out_name = pl.output
         if pl.needs_model:
-            st.mesh = self.r.mesh(model, crease)
+            st.mesh = self.capturer.mesh(model, crease)
             self.capture.capture_parts(st, parts)
 
         def draw(blind: bool):
@@ -307,15 +303,15 @@ class Executor:
                 counts, layers = self.capture.peel(st, max_layers, rules, blind)
                 revealed = None if reveal is None else reveal.shown
             else:
-                self._ensure_stacks(st, 1)
+                self.ensure_stacks(st, 1)
                 for name in pl.iteration0:
-                    self._run_pass(st, name, 0, 1)
+                    self.run_pass(st, name, 0, 1)
                 layers = 1
             if st.arrays is not None:
                 self._run_batches(st, layers)
             stage("peel_edges")
             for name in pl.after:
-                self._run_pass(st, name, 0, layers)
+                self.run_pass(st, name, 0, layers)
             self.tiles.forget()
             stage("compose")
             ctx.disable(ctx.BLEND)
@@ -436,7 +432,7 @@ class Executor:
         return held
 
     # -- targets -------------------------------------------------------------------------------
-    def _ensure_stacks(self, st: RunState, layers: int) -> None:
+    def ensure_stacks(self, st: RunState, layers: int) -> None:
         if layers <= st.stacked_layers:
             return  # asked again after every layer
         st.stacked_layers = layers
@@ -470,9 +466,9 @@ class Executor:
             return st.by_attr[name].texture(name, layer)
         if name in bound.images:
             return self.images.texture(name)
-        return self._target(st, name, layer)
+        return self.target(st, name, layer)
 
-    def _target(self, st: RunState, name: str, layer: int):
+    def target(self, st: RunState, name: str, layer: int):
         pl = st.pl
         if name in pl.stacked:
             p = pl.bound.passes[name]
@@ -524,7 +520,7 @@ class Executor:
         put(prog, f"u_{key}_components", tex.components)
         put(prog, f"u_{key}_factor", max(1, w // size[0]))
 
-    def _run_pass(self, st: RunState, name: str, layer: int, layers: int, span: int = 1) -> None:
+    def run_pass(self, st: RunState, name: str, layer: int, layers: int, span: int = 1) -> None:
         """Pass ``name`` at ``layer`` (``layers`` peeled so far); an edges pass read from an
         A-buffer's lists or a k-buffer's surfaces draws ``span`` layers from ``layer`` on at
         once (``edge_batch``)."""
@@ -537,54 +533,35 @@ class Executor:
                 self._run_slice(st, name, p, layer)
                 return
         if p.kind == "composite":
-            self._composite(st, p, self._target(st, name, layer), layers)
+            self._composite(st, p, self.target(st, name, layer), layers)
             return
-        target = self._target(st, name, layer)
+        target = self.target(st, name, layer)
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
-        reach = self._reach(st, name) if size == self.tiles.size else None
+        reach = self.reach(st, name) if size == self.tiles.size else None
         vertex = FULLSCREEN if reach is None else TILES_VERT
-        # the edges operation may read its layer from the A-buffer's lists or the k-buffer's
-        # surfaces instead of the G-buffer's textures
-        lists = name in st.layer_lists
-        surfaces = name in st.from_surfaces
+        # an op's in-place form reads its batch of layers where the capture holds them (an
+        # A-buffer's lists, a k-buffer's surfaces) instead of from the G-buffer's textures
+        in_place = name in st.layer_lists or name in st.from_surfaces
         if p.user is not None:
             prog = self.programs.user(p.user)
-        elif lists:
-            abuffer = st.groups[0].capture.abuffer
-            defines = {**abuffer.defines, "BATCH": self.edge_batch}
-            prog = self.programs.library(EDGES_FROM_LISTS_FRAG, vertex, defines, modern=True)
-        elif surfaces:
-            defines = {**_defines(p), "BATCH": self.edge_batch}
-            prog = self.programs.library(EDGES_FROM_SURFACES, vertex, defines, modern=True)
+        elif in_place:
+            capture = st.groups[0].capture
+            shader = IN_PLACE[p.op.name].fragment[capture.reads]
+            defines = {**_defines(p), **capture.defines, "BATCH": self.edge_batch}
+            prog = self.programs.library(shader, vertex, defines, modern=True)
         else:
             prog = self.programs.library(p.op.shader, vertex, _defines(p))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
-        if lists:
-            self._bind_layer_lists(st, name, prog, size, layer)
+        if in_place:
+            self._bind_in_place(st, name, prog, layer)
             self.programs.set(prog, "u_batch", span)
-        elif surfaces:
-            # the batch's depth, normal and IDs from the k-buffer, one fetch a pixel and layer
-            kbuffer = st.surfaces
-            held = kbuffer.surfaces
-            for k in range(self.edge_batch):
-                held[min(layer + k, len(held) - 1)].use(BASE_UNIT + 1 + k)
-            kbuffer.count.use(BASE_UNIT)
-            self.programs.update(
-                prog,
-                {
-                    "u_count": BASE_UNIT,
-                    "u_surfaces": tuple(range(BASE_UNIT + 1, BASE_UNIT + 1 + self.edge_batch)),
-                    "u_batch": span,
-                    "u_back_bias": kbuffer.back_bias,
-                },
-            )
         else:
             for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
                 self._bind_input(prog, key, self._value(st, source, layer), unit, size)
         if span > 1:
-            targets = tuple(self._target(st, name, k) for k in range(layer, layer + span))
+            targets = tuple(self.target(st, name, k) for k in range(layer, layer + span))
         else:
             targets = (target,)
         fbo = self.r.pool.framebuffer(targets)
@@ -609,7 +586,7 @@ class Executor:
         vao.render(vertices=3)
         st.draws += 1
 
-    def _reach(self, st: RunState, name: str) -> int | None:
+    def reach(self, st: RunState, name: str) -> int | None:
         """How far from the covered pixels of the layer being drawn pass ``name``'s result can
         be non-zero, through the passes it reads (``Op.support``); None: anywhere, or unknown.
         Only passes of one layer at a time qualify (a pass that accumulates layers does not)."""
@@ -624,7 +601,7 @@ class Executor:
                     depth = attribute.parts is None and (attribute.of or source) == "depth"
                     base = 0 if depth and st.by_attr[source].primary else None
                 else:
-                    base = self._reach(st, source) if source in pl.bound.passes else None
+                    base = self.reach(st, source) if source in pl.bound.passes else None
                 if base is not None:
                     reach = base + p.op.reach(p.uniforms)
             st.reach[name] = reach
@@ -644,44 +621,30 @@ class Executor:
         prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
         st.draws += 1
 
-    def _run_lists(self, st: RunState, name: str, abuffer, layers: int) -> None:
-        """Slice pass ``name`` (the edges operation) on all ``layers`` layers, read from
-        ``abuffer``'s sorted lists: a dispatch an array of ``SLICES`` layers, each pixel's chain
-        carried from one to the next in a pair of cursor images."""
+    def run_in_place(self, st: RunState, name: str, capture, layers: int) -> None:
+        """Slice pass ``name`` on all ``layers`` layers in its compute in-place form, read
+        where ``capture`` holds them (an A-buffer's sorted lists): a dispatch an array of
+        ``SLICES`` layers, each pixel's chain carried from one to the next."""
         p = st.pl.bound.passes[name]
-        prog = self.programs.compute(EDGES_FROM_LISTS, abuffer.defines)
+        shader = IN_PLACE[p.op.name].compute[capture.reads]
+        prog = self.programs.compute(shader, {**_defines(p), **capture.defines})
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         self.programs.update(prog, p.uniforms)
-        *cursors, layer_count = abuffer.lists(size)
-        layer_count.bind_to_image(4, read=True, write=False)
         for k in range(-(-layers // SLICES)):
+            capture.bind(prog, k * SLICES, SLICES)
             st.stacks[name][k].bind_to_image(1, read=False, write=True)
-            cursors[k % 2].bind_to_image(2, read=True, write=False)
-            cursors[(k + 1) % 2].bind_to_image(3, read=False, write=True)
             self.programs.update(
-                prog,
-                {
-                    "u_back_bias": abuffer.back_bias,
-                    "u_first_layer": k * SLICES,
-                    "u_layers": min(SLICES, layers - k * SLICES),
-                },
+                prog, {"u_first_layer": k * SLICES, "u_layers": min(SLICES, layers - k * SLICES)}
             )
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
             self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
 
-    def _bind_layer_lists(self, st: RunState, name: str, prog, size, layer: int) -> None:
-        """The A-buffer's sorted lists bound for pass ``name`` (the edges operation) to read the
-        batch of layers from ``layer`` on, no layer unpacked: each pixel's chain carried from one
-        batch to the next in a pair of cursor images."""
-        abuffer = st.groups[0].capture.abuffer
-        self.programs.set(prog, "u_back_bias", abuffer.back_bias)
-        *cursors, layer_count = abuffer.lists(size)
-        batch = layer // st.edge_step
-        cursors[batch % 2].bind_to_image(2, read=True, write=False)
-        cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
-        layer_count.bind_to_image(4, read=True, write=False)
+    def _bind_in_place(self, st: RunState, name: str, prog, layer: int) -> None:
+        """The capture's layers bound for pass ``name``'s in-place form ``prog`` to read the
+        batch of layers from ``layer`` on (``LayerSource.bind``), none unpacked."""
+        st.groups[0].capture.bind(prog, layer, st.edge_step)
 
     def _run_batches(self, st: RunState, layers: int) -> None:
         ctx, pl = self.ctx, st.pl
@@ -730,7 +693,7 @@ class Executor:
             compose = self.compositor.compute
         else:
             compose = self.compositor.fragment
-            reach = self._reach(st, source) if self.tiles.layers and shading is None else None
+            reach = self.reach(st, source) if self.tiles.layers and shading is None else None
             if reach is not None and tuple(st.stacks[source][0].size) == self.tiles.size:
                 compose = functools.partial(
                     compose, tiles=functools.partial(self.tiles.draw_layers, reach=reach)
@@ -807,8 +770,8 @@ class Executor:
             else:
                 self.images.put(f"in_{key}", textures[0])
         count = len(arrays[op.stacks[0]]) if op.stacks else 1
-        self._run_pass(st, "out", 0, count)
-        return read_texture(self._target(st, "out", 0), bound.passes["out"].format)[::-1]
+        self.run_pass(st, "out", 0, count)
+        return read_texture(self.target(st, "out", 0), bound.passes["out"].format)[::-1]
 
 
 @functools.lru_cache(maxsize=16)
@@ -848,17 +811,6 @@ def part_color(part: np.ndarray) -> np.ndarray:
     h = np.modf(np.asarray(part, np.float64) * 0.61803398875)[0][..., None]
     p = np.abs(np.modf(h + np.array([1.0, 2.0 / 3.0, 1.0 / 3.0]))[0] * 6.0 - 3.0)
     return 0.9 * (1.0 + (np.clip(p - 1.0, 0.0, 1.0) - 1.0) * 0.45)
-
-
-_executors: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def executor_for(renderer: LayerRenderer) -> Executor:
-    """One executor per renderer (it holds caches of programs and plans)."""
-    ex = _executors.get(renderer)
-    if ex is None:
-        ex = _executors[renderer] = Executor(renderer)
-    return ex
 
 
 def _named_style(bound: Bound) -> Style:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from blueprint.gpu import units
+from blueprint.ops import EDGES
 from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import read_texture
@@ -18,16 +19,37 @@ from blueprint.render.capture import peel as peel_layers
 from blueprint.render.remaining import layers_left
 from blueprint.render.stop import EmptyLayer, MaxLayers, MinFraction, Reveal, StopRule
 
+
+@dataclass(frozen=True)
+class InPlace:
+    """An op's forms that read layers where a capture holds them, by ``LayerSource.reads``."""
+
+    fragment: dict[str, str]
+    compute: dict[str, str]
+
+
+# The in-place forms of the library's ops (those whose descriptor allows ``Op.in_place``), by
+# where a capture holds the layers (``LayerSource.reads``): fragment passes of a batch of layers,
+# compute passes of an array of ``SLICES`` layers.
+IN_PLACE = {
+    EDGES.name: InPlace(
+        fragment={
+            "surfaces": "blueprint.pipeline:glsl/edges_surfaces.frag",
+            "lists": "blueprint.pipeline:glsl/edges_lists.frag",
+        },
+        compute={"lists": "blueprint.pipeline:glsl/edges_lists.comp"},
+    )
+}
 ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
 ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 BASE_UNIT = units.INPUTS
 
 
 class LayerCapture:
-    """The capture side of ``ex``'s runs (its renderer, programs, passes and targets)."""
+    """The capture side of ``ex``'s runs (its device, capturer, programs, passes and targets)."""
 
     def __init__(self, ex) -> None:
-        self.ex, self.r, self.programs = ex, ex.r, ex.programs
+        self.ex, self.r, self.capturer, self.programs = ex, ex.r, ex.capturer, ex.programs
         # what a plan's captures are (``layout``) and which passes read the lists, by the
         # plan's id: every frame of a stream asks again
         self._layouts: dict[int, tuple[Plan, Layout]] = {}
@@ -47,7 +69,7 @@ class LayerCapture:
             key = (spec.parts, spec.scale)
             if key not in held:
                 held[key] = capture_parts(
-                    self.r,
+                    self.capturer,
                     st.mesh,
                     st.camera,
                     st.size_of(spec.scale),
@@ -126,7 +148,7 @@ class LayerCapture:
         # a software rasteriser looks at every layer's count before its passes run (``eager``),
         # and at where the layer lies, for passes that need only be drawn there (pipeline.tiles)
         tiled = self.ex.tiled and st.arrays is None
-        tiled = tiled and any(self.ex._reach(st, n) is not None for n in pl.per_layer)
+        tiled = tiled and any(self.ex.reach(st, n) is not None for n in pl.per_layer)
         # edges read straight from an A-buffer's lists, all layers after the peel, where nothing
         # else reads the layers: none is unpacked then
         from_lists = self._from_lists(st) if defer and st.arrays is not None else ()
@@ -139,7 +161,7 @@ class LayerCapture:
         from_surfaces = self._from_surfaces(st) if not from_lists and not self._rules[1] else ()
         for g in groups:
             g.capture = Capture(
-                r,
+                self.capturer,
                 st.mesh,
                 st.camera,
                 g.gb,
@@ -151,12 +173,11 @@ class LayerCapture:
                 slot=st.slot,
                 surfaces=bool(from_surfaces),
             )
-        kbuffer = groups[0].capture.kbuffer
-        if kbuffer is not None and not kbuffer.unpacks:
-            st.surfaces, st.from_surfaces = kbuffer, from_surfaces
+        if groups[0].capture.reads == "surfaces":
+            st.from_surfaces = from_surfaces
         extras = self._attribute_programs(st) if layout.extra else None
         for name in pl.accumulated:
-            r.pool.framebuffer((self.ex._target(st, name, 0),)).clear()
+            r.pool.framebuffer((self.ex.target(st, name, 0),)).clear()
 
         listed: list[str] = []
         # the passes run after each layer: not those over whole arrays after the peel, nor those
@@ -180,7 +201,7 @@ class LayerCapture:
             return span
 
         def draw(layer: int, query, guard) -> None:
-            self.ex._ensure_stacks(st, layer + 1)
+            self.ex.ensure_stacks(st, layer + 1)
             for g in groups:
                 if g.attr_clear is not None:
                     g.attr_clear.clear()
@@ -192,13 +213,13 @@ class LayerCapture:
                     )
                 if g.extra:
                     self._attributes(st, g, layer, extras)
-            if layer == 0 and groups[0].capture.abuffer is not None and from_lists:
+            if layer == 0 and groups[0].capture.reads == "lists" and from_lists:
                 # (an A-buffer without room in memory peeled instead, unpacking as it goes)
                 listed.extend(from_lists)
                 first[:] = [n for n in first if n not in listed]
                 later[:] = [n for n in later if n not in listed]
             if layer == 0:
-                st.layer_lists = layer_lists if groups[0].capture.abuffer is not None else ()
+                st.layer_lists = layer_lists if groups[0].capture.reads == "lists" else ()
                 # (a pass whose layers share one target, read by the next pass of each layer,
                 # draws one at a time)
                 batched = eager and all(n in pl.stacked for n in (*st.layer_lists, *st.from_surfaces))
@@ -220,10 +241,10 @@ class LayerCapture:
                     if layer % st.edge_step:
                         continue
                     span = batch_span(layer)
-                    self.ex._ensure_stacks(st, layer + span)
-                    self.ex._run_pass(st, name, layer, layer + 1, span)
+                    self.ex.ensure_stacks(st, layer + span)
+                    self.ex.run_pass(st, name, layer, layer + 1, span)
                 else:
-                    self.ex._run_pass(st, name, layer, layer + 1)
+                    self.ex.run_pass(st, name, layer, layer + 1)
 
         samples = groups[0].capture.samples
         if blind:
@@ -234,17 +255,17 @@ class LayerCapture:
                 g.capture.settle()
         if listed:
             layers = peeled[1]
-            self.ex._ensure_stacks(st, max(layers, 1))
+            self.ex.ensure_stacks(st, max(layers, 1))
             for name in listed:
-                self.ex._run_lists(st, name, groups[0].capture.abuffer, layers)
+                self.ex.run_in_place(st, name, groups[0].capture, layers)
         return peeled
 
     def _from_lists(self, st: RunState) -> tuple[str, ...]:
-        """The edges passes that may read their layers from an A-buffer's lists: every layer
-        after the peel in the compute form (``Executor._run_lists``), else each layer as it
-        comes (``Executor._bind_layer_lists``); where they are the only readers of the G-buffer,
-        read the renderer's own depth, normal and IDs, draw no triangle-ID silhouettes, and no
-        layer is read back or given extra attributes."""
+        """The passes that may read their layers from an A-buffer's lists: every layer
+        after the peel in the compute form (``Executor.run_in_place``), else each layer as it
+        comes (``Executor.run_pass``); where they are the only readers of the G-buffer,
+        read the renderer's own depth, normal and IDs in a form that reads them in place
+        (``Op.in_place``, ``IN_PLACE``), and no layer is read back or given extra attributes."""
         pl, arrays = st.pl, st.arrays
         if st.attr_dumps:
             return ()
@@ -254,14 +275,14 @@ class LayerCapture:
         return held[2]
 
     def _from_surfaces(self, st: RunState) -> tuple[str, ...]:
-        """The edges passes that may read each layer from a k-buffer's surfaces (fragment form:
-        ``Executor._run_pass``), on the same terms as ``_from_lists``."""
+        """The passes that may read each layer from a k-buffer's surfaces (fragment form:
+        ``Executor.run_pass``), on the same terms as ``_from_lists``."""
         pl = st.pl
         if st.arrays is not None or st.attr_dumps:
             return ()
         held = self._surface_readers.get(id(pl))
         if held is None or held[0] is not pl:
-            held = self._surface_readers[id(pl)] = (pl, _edges_readers(pl, self._layout(pl)))
+            held = self._surface_readers[id(pl)] = (pl, _in_place_readers(pl, self._layout(pl), "surfaces"))
         return held[1]
 
     def _layout(self, pl: Plan) -> Layout:
@@ -273,7 +294,7 @@ class LayerCapture:
     def lists_only(self, st: RunState) -> bool:
         """Whether every capture of the run drew into an A-buffer, whose counts stay readable
         (each frame of two its own) after the next frame is issued."""
-        return all(g.capture.abuffer is not None for g in st.groups)
+        return all(g.capture.counts_kept for g in st.groups)
 
     def left(self, st: RunState, rules, counts: list[int], layers: int) -> int:
         """Layers left behind the last one where the peel stopped at its cap with the last layer
@@ -286,7 +307,7 @@ class LayerCapture:
         if deepest is not None:
             return max(0, deepest - layers)
         st.draws += 1
-        return layers_left(self.r, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
+        return layers_left(self.capturer, st.mesh, st.camera, st.groups[0].gb.layer_depth(layers - 1))
 
     def _attribute_programs(self, st: RunState) -> dict:
         progs = {}
@@ -296,7 +317,7 @@ class LayerCapture:
                 continue
             defines = {f"OUT_{n.upper()}": (g.extra.index(n) if n in g.extra else -1) for n in EXTRA}
             # the peel's depth rule (render.mesh.geometry_program), for attributes where its depths are
-            exact = {"EXACT_DEPTH": self.r.exact_depth}
+            exact = {"EXACT_DEPTH": self.capturer.table.exact_depth}
             draw = self.programs.library(ATTR_FRAG, ATTR_VERT, {**defines, **exact, "CLEAR": 0})
             clear = self.programs.library(ATTR_FRAG, FULLSCREEN, {**defines, "CLEAR": 1})
             self.programs.set(draw, "u_view", camera.view_matrix().T.astype("f4").tobytes())
@@ -342,10 +363,12 @@ def layout(pl: Plan) -> Layout:
         if bound.attributes[name].parts is None:
             by_scale.setdefault(bound.attributes[name].scale, []).append(name)
     primary_scale = bound.attributes["depth"].scale if "depth" in pl.attributes else next(iter(by_scale))
-    readers = {(t, bound.passes[n].op.name) for n in pl.passes for t in bound.passes[n].inputs.values()} | {
-        (n, "readback") for n in pl.readback
-    }
-    clear_gb = any(t in ("normal", "ids") and op != "edges" for t, op in readers)
+    # (read back, or read by a pass that does not look at depth first: ``Op.depth_first``)
+    clear_gb = any(n in ("normal", "ids") for n in pl.readback) or any(
+        t in ("normal", "ids") and not bound.passes[n].op.depth_first
+        for n in pl.passes
+        for t in bound.passes[n].inputs.values()
+    )
     extra = any(n in EXTRA for names in by_scale.values() for n in names)
     return Layout(
         tuple(
@@ -354,14 +377,14 @@ def layout(pl: Plan) -> Layout:
         ),
         clear_gb,
         extra,
-        extra or clear_gb or _id_silhouettes(pl),
+        extra or clear_gb or _face_ids(pl),
     )
 
 
 def _lists_readers(pl: Plan, arrays: ArrayPlan | None, lay: Layout) -> tuple[str, ...]:
     """``LayerCapture._from_lists`` of a plan whose layers no one reads back, in the compute
     form ``arrays`` or (None) a pass a layer."""
-    readers = _edges_readers(pl, lay)
+    readers = _in_place_readers(pl, lay, "lists", arrays is not None)
     passes = pl.bound.passes
     if arrays is not None:
         one = all(name in arrays.slices for name in readers)
@@ -372,11 +395,11 @@ def _lists_readers(pl: Plan, arrays: ArrayPlan | None, lay: Layout) -> tuple[str
     return readers if one else ()
 
 
-def _edges_readers(pl: Plan, lay: Layout) -> tuple[str, ...]:
+def _in_place_readers(pl: Plan, lay: Layout, reads: str, compute: bool = False) -> tuple[str, ...]:
     """The passes that read the layers of a plan whose layers no one reads back, where they
-    are all edges operations on the renderer's own depth, normal and IDs that draw no
-    triangle-ID silhouettes (the forms that read a capture's lists or surfaces have none);
-    else none."""
+    all read the renderer's own depth, normal and IDs and may read them where a capture holds
+    them (``Op.in_place``), in a form (``IN_PLACE``, compute or fragment) for a capture that
+    ``reads`` them so; else none."""
     bound = pl.bound
     if len(lay.scales) != 1 or lay.extra:
         return ()
@@ -387,7 +410,10 @@ def _edges_readers(pl: Plan, lay: Layout) -> tuple[str, ...]:
     wired = {"depth": "depth", "normal": "normal", "ids": "ids"}
     for name in readers:
         p = bound.passes[name]
-        if p.user is not None or p.op.name != "edges" or p.uniforms.get("u_id_silhouettes"):
+        if p.user is not None or p.op.in_place is None or not p.op.in_place(p.uniforms):
+            return ()
+        forms = IN_PLACE.get(p.op.name)
+        if forms is None or reads not in (forms.compute if compute else forms.fragment):
             return ()
         if {key: pl.resolve(t) for key, t in p.inputs.items()} != wired:
             return ()
@@ -405,9 +431,9 @@ def _capped(rules) -> bool:
     return capped and all(others)
 
 
-def _id_silhouettes(pl) -> bool:
-    """Whether an edges pass draws triangle-ID silhouettes (they need face IDs)."""
+def _face_ids(pl) -> bool:
+    """Whether a pass reads face IDs (``Op.face_ids``: triangle-ID silhouettes)."""
     return any(
-        p.op is not None and p.op.name == "edges" and p.uniforms.get("u_id_silhouettes")
+        p.op is not None and p.op.face_ids is not None and p.op.face_ids(p.uniforms)
         for p in pl.bound.passes.values()
     )

@@ -10,12 +10,13 @@ import numpy as np
 
 from blueprint.compose.style import Style
 from blueprint.errors import InputError
+from blueprint.gpu.device import Device
 from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import PendingRead
 from blueprint.pipeline.spec import Bound
 from blueprint.render.capture import Capture, gbuffer
-from blueprint.render.renderer import LayerRenderer, straight_alpha
+from blueprint.render.renderer import straight_alpha
 from blueprint.scene.camera import Camera
 
 # attributes the attribute pass draws (the rest are the renderer's G-buffer)
@@ -93,7 +94,7 @@ class Group:
     pass's targets."""
 
     def __init__(
-        self, r: LayerRenderer, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
+        self, r: Device, scale: float, size, names: list[str], primary: bool, bound: Bound, clear_gb
     ):
         self.scale, self.size, self.names = scale, size, names
         self.queries = r.queries("peel" if primary else f"peel.pipeline.gb{scale:g}")
@@ -149,12 +150,11 @@ class RunState:
     groups: list[Group] = field(default_factory=list)
     by_attr: dict[str, Group] = field(default_factory=dict)
     parts: dict[str, object] = field(default_factory=dict)  # attribute of chosen parts -> texture
-    reach: dict[str, int | None] = field(default_factory=dict)  # Executor._reach, per pass
+    reach: dict[str, int | None] = field(default_factory=dict)  # Executor.reach, per pass
     # per-layer passes that read each layer from the A-buffer's lists as it is drawn
-    # (Executor._bind_layer_lists), once layer 0 has captured them
+    # (Executor.run_pass), once layer 0 has captured them
     layer_lists: tuple[str, ...] = ()
-    # the k-buffer whose surfaces hold every layer, unpacked, and the passes that read them there
-    surfaces: object = None
+    # the passes that read every layer from the surfaces of a k-buffer that holds them all
     from_surfaces: tuple[str, ...] = ()
     # the layers between the starts of two passes of those (their batch): each draws that many
     edge_step: int = 1

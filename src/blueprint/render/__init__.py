@@ -1,5 +1,5 @@
 """Depth peeling on the GPU and the blueprint frame built on it."""
 
-from blueprint.render.renderer import Frame, LayerRenderer, Layers
+from blueprint.render.renderer import Capturer, Frame, LayerRenderer, Layers
 
-__all__ = ["Frame", "LayerRenderer", "Layers"]
+__all__ = ["Capturer", "Frame", "LayerRenderer", "Layers"]

@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms
 from blueprint.render.mesh import geometry_program, target_uniform
+from blueprint.scene.camera import Camera
 
 ABUFFER_FRAG = "blueprint.render:glsl/abuffer.frag"
 CLEAR_COMP = "blueprint.render:glsl/abuffer_clear.comp"
@@ -35,8 +37,6 @@ SLIM_BYTES = 8
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 # room for this many fragments a pixel before a first frame has counted them
 FIRST_ROOM = 4
-# a quarter of the GPU's memory where the driver tells it, else this
-DEFAULT_MAX_BYTES = 1 << 30
 # pixels along a side of the tiles whose layers are counted, for a software rasteriser to unpack
 # and draw each layer only where it has pixels (blueprint.pipeline.tiles)
 TILE = 16
@@ -58,42 +58,39 @@ class Overflow(Exception):
     """A capture whose counts were read late found more fragments than it had room for."""
 
 
-class ABuffer:
-    """The A-buffer capture of one frame's layers (see the module's docstring): ``draw`` at
-    layer 0 captures and sorts every layer, then unpacks layer 0; at each later layer it
-    unpacks that layer. ``uniforms`` are the camera's: ``u_view``, ``u_projection`` (bytes),
-    ``u_ortho``, ``u_depth_range``, ``u_peel_eps``; ``back_bias`` the peel's for back faces.
-    With ``tiles`` the counts come from each pixel's layers read back, with the most layers a
-    pixel of each ``TILE`` x ``TILE`` tile has (``tile_layers``), and each layer is unpacked only
-    in the tiles that have it: what a software rasteriser wants, where reading back is cheap and
-    every pixel a pass touches costs. With ``defer`` the counts are read when first asked for
-    (``layer_pixels``, ``deepest``): every layer is unpacked until then, an unpack past a
-    pixel's last layer clearing it as an empty layer's would, and a capture that had too little
-    room raises ``Overflow`` there. Without ``unpack`` no layer is unpacked: the caller reads
-    the sorted lists themselves (``lists``). The counts come back through a buffer of their own
-    for each ``slot``: frames that stream read one frame's counts after the next is issued.
-    On a software rasteriser the lists live in images, not storage buffers (abuffer.glsl):
-    programs that read them take ``defines``. Where the renderer's ``abuffer_slim``, the
-    geometry pass writes each fragment's depth and face alone and the resolve makes the whole
-    surfaces of the fragments it keeps as layers."""
+class ABufferSource:
+    """The A-buffer capture of one frame's layers into ``gb`` (see the module's docstring):
+    ``draw`` at layer 0 captures and sorts every layer, then unpacks layer 0; at each later
+    layer it unpacks that layer. ``row`` is the capture table's (``table.ABufferRow``): the
+    bytes the lists may take, and where it is ``slim`` the geometry pass writes each fragment's
+    depth and face alone and the resolve makes the whole surfaces of the fragments it keeps as
+    layers. The ``request`` (``table.Request``) says the rest. With its ``tiles`` the counts
+    come from each pixel's layers read back, with the most layers a pixel of each ``TILE`` x
+    ``TILE`` tile has (``tile_layers``), and each layer is unpacked only in the tiles that have
+    it: what a software rasteriser wants, where reading back is cheap and every pixel a pass
+    touches costs. With ``defer`` the counts are read when first asked for (``layer_pixels``,
+    ``deepest``): every layer is unpacked until then, an unpack past a pixel's last layer
+    clearing it as an empty layer's would, and a capture that had too little room raises
+    ``Overflow`` there. Without ``unpack`` no layer is unpacked: readers read the sorted lists
+    themselves (``reads`` "lists": ``bind``). The counts come back through a buffer of their
+    own for each ``slot``: frames that stream read one frame's counts after the next is issued
+    (``counts_kept``). On a software rasteriser the lists live in images, not storage buffers
+    (abuffer.glsl): programs that read them take ``defines``."""
 
-    def __init__(
-        self,
-        r,
-        mesh,
-        uniforms: dict,
-        back_bias: float,
-        max_bytes: int,
-        tiles: bool = False,
-        defer: bool = False,
-        unpack: bool = True,
-        slot: int = 0,
-    ) -> None:
-        self.r, self.mesh, self.max_bytes = r, mesh, max_bytes
-        self.back_bias, self.unpacks, self.slot = back_bias, unpack, slot
+    counts_kept = True
+
+    def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
+        r = self.r = capturer.device
+        self.mesh, self.gb, self.max_bytes = mesh, gb, row.max_bytes
+        # the room of the frames before, by G-buffer size (``Capturer.abuffer_room``)
+        self.rooms = capturer.abuffer_room
+        self.back_bias, self.unpacks, self.slot = BACK_BIAS, request.unpack, request.slot
+        self.reads = None if self.unpacks else "lists"
+        uniforms = abuffer_uniforms(camera)
+        tiles, defer = request.tiles, request.defer
         self.images = r.software
         self.defines = list_defines(r)
-        self.slim = r.abuffer_slim
+        self.slim = row.slim
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
@@ -103,17 +100,17 @@ class ABuffer:
         # pixel's list from the last one without an atomic: the head is the pass's target
         self.fetch_head = self.images and r.framebuffer_fetch
         defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
-        self.geometry = geometry_program(r, ABUFFER_FRAG, defines, modern=True)
+        self.geometry = geometry_program(capturer, ABUFFER_FRAG, defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
         # the resolve runs over the tiles with fragments alone (``_resolve``)
         self.resolve = r.compute(
             RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else capture
         )
         put = r.uniforms.set  # a stream's frames change only the camera's
-        camera = ("u_view", "u_projection", "u_ortho")
+        camera_names = ("u_view", "u_projection", "u_ortho")
         for prog, names in (
-            (self.geometry, camera),
-            (self.resolve, ("u_depth_range", "u_peel_eps", *(camera if self.slim else ()))),
+            (self.geometry, camera_names),
+            (self.resolve, ("u_depth_range", "u_peel_eps", *(camera_names if self.slim else ()))),
         ):
             for name in names:
                 put(prog, name, uniforms[name])
@@ -122,11 +119,12 @@ class ABuffer:
             UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
         )
         for prog in (self.resolve, self.unpack):
-            put(prog, "u_back_bias", back_bias)
+            put(prog, "u_back_bias", self.back_bias)
         self.uniforms = uniforms
-        # the compute rasteriser where the renderer captures in compute (render.raster), and
+        # the compute rasteriser where the row lists fragments in compute (render.raster), and
         # (its bins' room, the size) of the capture in hand where it drew it
-        self.raster = r.compute_raster if r.compute_capture_from is not None else None
+        self.raster = capturer.compute_raster if row.compute_from is not None else None
+        self.compute_from = row.compute_from
         self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)
@@ -138,6 +136,21 @@ class ABuffer:
         self.tile_layers: np.ndarray | None = None
         self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
         self._tile_list = None  # the image of the tiles with any layer, most layers first
+
+    @classmethod
+    def open(
+        cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None
+    ) -> ABufferSource | None:
+        """The A-buffer of the frame, or None where its lists, with the fragments the last
+        frame of its size drew, would pass the row's memory."""
+        source = cls(capturer, row, mesh, camera, gb, request)
+        return source if source.fits(gb.size) else None
+
+    @property
+    def way(self) -> str:
+        """``A-buffer``, or ``A-buffer, compute rasteriser`` where its fragments were listed
+        in compute (render.raster)."""
+        return "A-buffer, compute rasteriser" if self.rasterised_in_compute else "A-buffer"
 
     @property
     def rasterised_in_compute(self) -> bool:
@@ -174,14 +187,43 @@ class ABuffer:
         return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
     def _room(self, size: tuple[int, int]) -> int:
-        held = self.r.abuffer_room.get(tuple(size))
+        held = self.rooms.get(tuple(size))
         return held if held is not None else FIRST_ROOM * size[0] * size[1]
 
-    def draw(self, gb, layer: int) -> int | None:
-        """Layer ``layer`` into ``gb``: its depth into ``flat[layer % 2]``, two float targets
-        standing in for the G-buffer's depth textures (``layer_pixels[layer]`` then tells its
-        covered pixels); the draw calls and dispatches issued, or None where layer 0 found more
-        fragments than ``max_bytes`` holds (nothing is drawn then)."""
+    def draw(self, layer: int, query=None, guard=None) -> int | None:
+        """Layer ``layer`` into the G-buffer: its depth into ``flat[layer % 2]``, two float
+        targets standing in for the G-buffer's depth textures (``samples`` then tells its
+        covered pixels; the query and guard are the peel's, unused); the draw calls and
+        dispatches issued, or None where layer 0 found more fragments than ``max_bytes`` holds
+        (nothing is drawn then)."""
+        gb = self.gb
+        if layer and not self.unpacks:
+            return 0  # every layer was captured at layer 0, and none is unpacked
+        drawn = self._draw(gb, layer)
+        if drawn is not None:
+            gb.flat = self.flat(gb.size)
+        return drawn
+
+    def samples(self, layer: int, query=None) -> int:
+        """Layer ``layer``'s covered pixels, as the capture counted them (0 past the deepest)."""
+        pixels = self.layer_pixels
+        return pixels[layer] if layer < len(pixels) else 0
+
+    def bind(self, prog, layer: int, step: int) -> None:
+        """The sorted lists bound for a reader (edges_lists.frag and .comp) of the layers from
+        ``layer`` on, no layer unpacked: each pixel's chain carried from one pass to the next
+        (``step`` layers on) in a pair of cursor images, and each pixel's layer count."""
+        self.r.uniforms.set(prog, "u_back_bias", self.back_bias)
+        *cursors, layer_count = self.lists(self.gb.size)
+        batch = layer // step
+        cursors[batch % 2].bind_to_image(2, read=True, write=False)
+        cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
+        layer_count.bind_to_image(4, read=True, write=False)
+
+    def release(self) -> None:
+        """The lists are the pool's."""
+
+    def _draw(self, gb, layer: int) -> int | None:
         size = gb.size
         name = f"abuffer.{size[0]}x{size[1]}"
         calls = 0
@@ -330,7 +372,7 @@ class ABuffer:
     def _computes(self, size: tuple[int, int]) -> bool:
         """Whether the compute rasteriser lists a frame of ``size`` (render.raster: where it
         sees the view too)."""
-        return self.raster is not None and size[0] * size[1] >= self.r.compute_capture_from
+        return self.raster is not None and size[0] * size[1] >= self.compute_from
 
     def fragments(self, gb, head) -> None:
         """Every fragment of the mesh into its pixel's list (``head``: the lists' first nodes):
@@ -354,9 +396,9 @@ class ABuffer:
         size = tuple(size)
         counts = np.frombuffer(read(size=nbytes), np.uint32).astype(np.int64)
         drawn = int(counts[0])
-        if drawn > room or size not in self.r.abuffer_room:
+        if drawn > room or size not in self.rooms:
             # room to spare for a model turning
-            self.r.abuffer_room[size] = int(drawn * 1.25) + 1024
+            self.rooms[size] = int(drawn * 1.25) + 1024
         # the compute rasteriser's bins (render.raster) take the same turn where they were short
         binned = self._binned is None or self.raster.pairs(self._binned[1], int(counts[3]), self._binned[0])
         if drawn > room or not binned:
@@ -444,9 +486,3 @@ def gpu_memory_bytes(r) -> int | None:
     except (OSError, AttributeError):
         return None
     return value.value * 1024 if value.value > 0 else None
-
-
-def default_max_bytes(r) -> int:
-    """The most the lists of one frame may take: a quarter of the GPU's memory, or 1 GiB."""
-    total = gpu_memory_bytes(r)
-    return total // 4 if total else DEFAULT_MAX_BYTES

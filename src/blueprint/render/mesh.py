@@ -11,12 +11,13 @@ from blueprint.sorting import unique_first
 GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 
 
-def geometry_program(r, fragment: str, defines=None, modern: bool = False):
-    """A geometry pass's program (geometry.vert and ``fragment``) with the renderer's depth
-    rule: fragment_depth.glsl's EXACT_DEPTH where ``r.exact_depth`` (then ``u_target``, the
-    target's size, is the program's to set: ``target_uniform``)."""
-    defines = {**(defines or {}), "EXACT_DEPTH": r.exact_depth}
-    return r.program(fragment, GEOMETRY_VERT, defines, modern=modern)
+def geometry_program(capturer, fragment: str, defines=None, modern: bool = False):
+    """A geometry pass's program (geometry.vert and ``fragment``) on ``capturer``'s device,
+    with its depth rule: fragment_depth.glsl's EXACT_DEPTH where its capture table's
+    ``exact_depth`` (then ``u_target``, the target's size, is the program's to set:
+    ``target_uniform``)."""
+    defines = {**(defines or {}), "EXACT_DEPTH": capturer.table.exact_depth}
+    return capturer.device.program(fragment, GEOMETRY_VERT, defines, modern=modern)
 
 
 def target_uniform(r, prog, size: tuple[int, int]) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.gpu import units
-from blueprint.render.capture import peel_uniforms
+from blueprint.render.gbuffer import peel_uniforms
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
@@ -20,18 +20,19 @@ REMAINING_FRAG = "blueprint.render:glsl/remaining.frag"
 MAX4_FRAG = "blueprint.render:glsl/max4.frag"
 
 
-def layers_left(r, mesh, camera: Camera, last_depth) -> int:
+def layers_left(capturer, mesh, camera: Camera, last_depth) -> int:
     """The most surfaces any pixel has behind ``last_depth`` (the depth texture of the last
     layer peeled): the layers a peel without its cap would still draw. Coincident surfaces,
     which the peel takes as one, count apart here, so this is an upper bound. Waits for the
     GPU (one read-back); leaves depth test, blending and culling off."""
+    r = capturer.device
     ctx = r.ctx
     size = tuple(last_depth.size)
     counts = r.pool.texture("remaining.count", size, "r32f")
     fbo = r.pool.framebuffer((counts,))
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
-    prog = geometry_program(r, REMAINING_FRAG)
+    prog = geometry_program(capturer, REMAINING_FRAG)
     peel_uniforms(prog, camera)
     target_uniform(r, prog, size)
     last_depth.use(units.PEEL_DEPTH)

@@ -1,36 +1,25 @@
-"""The layer renderer: a device with models uploaded to it, peeling depth layers and reading
-them back; and the values frames and layers come back in."""
+"""A device's layer capture (``Capturer``): the models uploaded to it, the capture table, and
+depth layers peeled and read back for other tools; what code below the API takes as a renderer
+(``LayerRenderer``); and the values frames and layers come back in."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
-from blueprint.render.abuffer import default_max_bytes
-from blueprint.render.capture import (
-    BACK_OFFSET,
-    KBUFFER_FRAG,
-    KBUFFER_INTERLOCK_MIN_DENSITY,
-    KBUFFER_MAX,
-    KBUFFER_MAX_BYTES,
-    KBUFFER_MIN_DENSITY,
-    Capture,
-    gbuffer,
-    peel,
-    peel_uniforms,
-)
-from blueprint.render.mesh import GpuMesh, geometry_program, target_uniform
+from blueprint.render.capture import Capture, peel
+from blueprint.render.gbuffer import gbuffer
+from blueprint.render.mesh import GpuMesh
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.stop import standard_rules
+from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks
-
-# llvmpipe's A-buffer frames: from this many layers (see LayerRenderer.abuffer_min_layers)
-ABUFFER_SOFTWARE_MIN_LAYERS = 4
 
 
 @dataclass
@@ -96,74 +85,44 @@ class Layers:
     camera: Camera
 
 
-class LayerRenderer(Device):
-    """A device (context, targets, queries, programs) with the models uploaded to it, that
-    peels depth layers in the one peel loop and reads them back for other tools (the API's
-    ``Renderer`` draws blueprint frames on it).
+class Capturer:
+    """The layer capture of one ``device``: the models uploaded to it, the capture table that
+    chooses each frame's layer source (``render.table``: ``table``, the device's measured one
+    unless given), what the sources keep from frame to frame (the fragments, and triangle-tile
+    pairs, the last frame of each G-buffer size drew: the room the next one starts with), and
+    the layers peeled in the one peel loop for other tools, read back (``peel``,
+    ``triangles_at``) or left on the GPU (``face_kbuffer``, ``each_face_layer``).
 
-    Use as a context manager or call ``release()``. Models, cameras and styles stay GPU-free;
-    the renderer uploads a model once per (model, crease angle).
+    Release it (its models) before its device. Models and cameras stay GPU-free; a model is
+    uploaded once per (model, crease angle).
     """
 
-    def __init__(self, ctx=None) -> None:
-        super().__init__(ctx)
+    def __init__(self, device: Device, table: CaptureTable | None = None) -> None:
+        self.device = device
+        self.table = capture_table(device) if table is None else table
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
-        # The back-face tie-break as one draw writing depth, or two culled draws with a polygon
-        # offset: one draw, which measured faster in most cases (benchmarks/variants.py)...
-        self.back_bias_in_shader = True
-        # ...except for big frames of dense models on a GPU: a draw writing depth loses early
-        # depth tests, and there hidden fragments dominate.
-        # (triangles, G-buffer pixels) from which two culled draws are used; None: never.
-        self.culled_tie_break_from = None if self.software else (100_000, 1 << 22)
-        # Peeling several layers a geometry pass (capture._KBuffer) needs the fragments of a
-        # pixel to read and write its surfaces one after another: framebuffer fetch (Mesa's
-        # drivers, llvmpipe among them) with a target a layer, else fragment shader interlock
-        # on images (NVIDIA's); used from the density of triangles per pixel where each way was
-        # measured to pay (benchmarks/variants.py compares both ways).
-        fetch = self.framebuffer_fetch and self.max_draw_buffers >= KBUFFER_MAX
-        self.kbuffer = fetch or self.fragment_interlock
-        self.kbuffer_interlock = not fetch and self.fragment_interlock
-        self.kbuffer_density = (
-            KBUFFER_INTERLOCK_MIN_DENSITY if self.kbuffer_interlock else KBUFFER_MIN_DENSITY
-        )
-        # Every layer from one geometry pass (render.abuffer): the most bytes its lists may
-        # take a frame (0: layers are peeled), and the fragments the last frame of each G-buffer
-        # size drew, the room the next one starts with. Its drawings are checked against the
-        # peel's by the tests, on software and GPU drivers alike.
-        self.abuffer_max_bytes = default_max_bytes(self) if self.ctx.version_code >= 430 else 0
-        # ...for frames of at least this many layers (None: all of them): on a GPU it is
-        # faster even for one layer, whose geometry and edge passes the narrow graphics
-        # pipeline draws at the whole G-buffer's size; llvmpipe lists and sorts every fragment
-        # however few layers are drawn, so there it pays only from a few layers a frame
-        # (benchmarks/layers.py)
-        self.abuffer_min_layers = ABUFFER_SOFTWARE_MIN_LAYERS if self.software else 1
-        # ...unless one k-buffer pass finds every layer of the frame, read where they lie
-        # (Capture's ``surfaces``): there llvmpipe draws faster so
-        self.abuffer_after_kbuffer = self.software
         self.abuffer_room: dict[tuple[int, int], int] = {}
-        # Fragments of depth and face alone, the rest made by the resolve for those kept as
-        # layers, where the graphics pipeline is narrower than compute (image passes in compute:
-        # a GPU): there the geometry pass is bound by the bytes its fragments write
-        # (benchmarks/capture_cost.py). llvmpipe's compute is its fragment stage.
-        self.abuffer_slim = self.use_compute
-        # The A-buffer's fragments listed by a rasteriser in compute (render.raster) instead of
-        # the graphics pipeline's, in views that need no clipping, for G-buffers of at least
-        # this many pixels (None: never): from there it measured faster on a GPU, below it
-        # slower (benchmarks/compute_capture.py; test_layers_oracle's a-buffer-compute checks
-        # it). llvmpipe's compute is its fragment stage, and slower.
-        self.compute_capture_from = 2048 * 2048 if self.use_compute else None
-        self.compute_raster = ComputeRaster(self)
-        # Where the driver's depths come from snapped corners, every geometry pass takes its
-        # depths from the true planes instead (gpu/glsl/fragment_depth.glsl): coincident faces
-        # of one part would otherwise peel as two layers.
-        self.exact_depth = self.snapped_depth
+        self.compute_raster = ComputeRaster(device)
+
+    @property
+    def table(self) -> CaptureTable:
+        """How layers are captured (``render.table``)."""
+        return self._table
+
+    @table.setter
+    def table(self, table: CaptureTable) -> None:
+        if not isinstance(table, CaptureTable):
+            raise TypeError(f"a capture table must be a CaptureTable, got {type(table).__name__}")
+        self._table = table
+
+    def make_current(self) -> None:
+        self.device.make_current()
 
     def release(self) -> None:
         self.make_current()
         for _, mesh in self._meshes.values():
             mesh.release()
         self._meshes.clear()
-        super().release()
 
     # -- models --------------------------------------------------------------------------------
     def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh:
@@ -171,7 +130,7 @@ class LayerRenderer(Device):
         key = (id(model), None if crease_angle is None else float(crease_angle))
         held = self._meshes.get(key)
         if held is None or held[0] is not model:
-            held = self._meshes[key] = (model, GpuMesh(self.ctx, model, crease_angle))
+            held = self._meshes[key] = (model, GpuMesh(self.device.ctx, model, crease_angle))
         return held[1]
 
     @current
@@ -201,7 +160,7 @@ class LayerRenderer(Device):
         ``Layers.normal`` is None: no normals are smoothed, drawn or read (vector drawings need
         only depths and triangles).
         """
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         camera = camera or fit_camera(model, (w, h), view)
         depth, normal_maps, tri = [], [], []
 
@@ -246,46 +205,47 @@ class LayerRenderer(Device):
         ``y * width + x``, row 0 at the top), -1 where none. The layers are ``peel``'s without
         normals; only the pixels asked for leave the GPU's copy, so a vector drawing does not
         pay for whole images."""
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         pixels = np.asarray(pixels, np.int64)
         if len(pixels) and (pixels.min() < 0 or pixels.max() >= w * h):
             raise InputError(f"pixels must be flat indices into {w}x{h}")
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
-        if self._faces_kbuffer_fits((w, h), max_layers):
-            return self._kbuffer_faces(model, camera, (w, h), max_layers, min_fraction, gl)
+        check_frame_args(max_layers, min_fraction, 30.0, 1.0)
+        capture, gb = self._faces(model, camera, (w, h), max_layers)
         out = []
 
-        def read(gb, layer: int) -> None:
+        def read(layer: int) -> None:
+            if capture.reads == "surfaces":  # one k-buffer pass, its surfaces read as they are
+                face = capture.source.faces(layer)[gl].astype(np.int64)
+                out.append(np.where(face != 0, face - 1, -1).astype(np.int32))
+                return
             z = np.frombuffer(gb.layer_depth(layer).read(), np.float32)[gl]
             face = np.frombuffer(gb.ids.read(), np.int32)[gl]
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
 
-        self._peeled(model, camera, (w, h), max_layers, min_fraction, 30.0, False, read)
+        rules = standard_rules(max_layers, min_fraction)
+        peel(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
+        capture.release()
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
 
-    def _faces_kbuffer_fits(self, size, max_layers) -> bool:
-        """Whether ``max_layers`` layers of faces at ``size`` come from one faces-only k-buffer
-        pass (measured only under framebuffer fetch, llvmpipe)."""
-        return bool(
-            self.kbuffer
-            and not self.kbuffer_interlock
-            and max_layers is not None
-            and 1 < max_layers <= KBUFFER_MAX
-            and 8 * max_layers * size[0] * size[1] <= KBUFFER_MAX_BYTES
-        )
-
+    @current
     def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):
         """The ``max_layers`` nearest surfaces of every pixel left on the GPU, for passes that
         read them there (vector occlusion): a list of ``rg32ui`` textures, surface ``k`` in the
         ``k``-th, (window depth bits, face + 1), a pixel's surfaces running up to the first
-        with face 0, OpenGL rows (bottom up). None where this renderer gathers faces by peeling
-        a pass a layer (``triangles_at`` serves every renderer)."""
-        w, h = check_size(size, 1, self.max_texture)
-        if not self._faces_kbuffer_fits((w, h), max_layers):
+        with face 0, OpenGL rows (bottom up), from one k-buffer pass where the capture table's
+        k-buffer takes such a frame; else None (``each_face_layer`` peels them a pass a layer,
+        ``triangles_at`` serves either way)."""
+        w, h = check_size(size, 1, self.device.max_texture)
+        capture, _ = self._faces(model, camera, (w, h), max_layers)
+        if capture.reads != "surfaces":
+            capture.release()
             return None
-        return self._kbuffer_face_targets(model, camera, (w, h), max_layers)
+        capture.draw(0, None)
+        return list(capture.source.surfaces)
 
+    @current
     def each_face_layer(
         self,
         model: Model,
@@ -300,7 +260,7 @@ class LayerRenderer(Device):
         to ``visit(ids, depth, layer)`` while it is on the GPU: ``ids`` the ``r32i`` target of
         face + 1, ``depth`` the layer's window depth (1.0 where it has no surface), OpenGL rows.
         Nothing is read back."""
-        w, h = check_size(size, 1, self.max_texture)
+        w, h = check_size(size, 1, self.device.max_texture)
         self._peeled(
             model,
             camera,
@@ -312,60 +272,50 @@ class LayerRenderer(Device):
             lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
         )
 
-    def _kbuffer_face_targets(self, model, camera, size, k) -> list:
-        """One k-buffer pass of depths and faces alone into ``k`` targets (kbuffer.frag)."""
-        ctx, pool = self.ctx, self.pool
-        mesh = self.mesh(model, None)
-        defines = {"K": k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
-        prog = geometry_program(self, KBUFFER_FRAG, defines)
-        peel_uniforms(prog, camera)
-        target_uniform(self, prog, size)
-        prog["u_back_bias"].value = BACK_OFFSET / (1 << 24)
-        name = f"kbuffer.faces.{size[0]}x{size[1]}"
-        surfaces = [pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(k)]
-        pool.framebuffer((surfaces[0],)).clear()
-        pool.framebuffer(tuple(surfaces)).use()
+    def _faces(self, model, camera, size, max_layers) -> tuple:
+        """(capture, G-buffer) of depths and faces alone, for readers of a k-buffer's surfaces
+        where the capture table's k-buffer finds every layer in one pass (``reads``
+        "surfaces"), else peeled a pass a layer into the G-buffer."""
+        ctx = self.device.ctx
         ctx.enable_only(ctx.NOTHING)
-        mesh.vao(prog).render()
-        return surfaces
-
-    def _kbuffer_faces(self, model, camera, size, k, min_fraction, gl) -> np.ndarray:
-        """``triangles_at`` in one k-buffer pass of depths and faces alone: no layer is
-        unpacked, the k targets are read as they are (a pixel's surfaces run up to the first
-        empty one, kbuffer.frag) and gathered at the OpenGL pixel indices ``gl``."""
-        check_frame_args(k, min_fraction, 0.0, 1.0)
-        rules = standard_rules(None, min_fraction)
-        surfaces = self._kbuffer_face_targets(model, camera, size, k)
-        valid = np.ones(size[0] * size[1], bool)
-        out, counts = [], []
-        for tex in surfaces:
-            face = np.frombuffer(tex.read(), np.uint32)[1::2]
-            valid &= face != 0
-            counts.append(int(np.count_nonzero(valid)))
-            if min(r.count(counts) for r in rules) < len(counts):
-                break
-            out.append(np.where(valid[gl], face[gl].astype(np.int64) - 1, -1).astype(np.int32))
-        return np.stack(out) if out else np.zeros((0, len(gl)), np.int32)
+        ctx.depth_func = "<"
+        gb = gbuffer(self.device.pool, size, "idb", normals=False)
+        mesh = self.mesh(model, None)
+        return Capture(self, mesh, camera, gb, batch=max_layers, tie_break=True, surfaces=True), gb
 
     def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read) -> None:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth
         of layer ``i`` in ``depth[i % 2]``; ID target face + 1, with normals part + 1 too)."""
         check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
-        ctx = self.ctx
-        ctx.enable_only(ctx.NOTHING)
-        ctx.depth_func = "<"
+        device = self.device
+        device.ctx.enable_only(device.ctx.NOTHING)
+        device.ctx.depth_func = "<"
         if normals:
             mesh = self.mesh(model, crease_angle)
-            gb = gbuffer(self.pool, size)
+            gb = gbuffer(device.pool, size)
             capture = Capture(self, mesh, camera, gb, batch=max_layers)
         else:
             mesh = self.mesh(model, None)
-            gb = gbuffer(self.pool, size, "idb", normals=False)
+            gb = gbuffer(device.pool, size, "idb", normals=False)
             capture = Capture(self, mesh, camera, gb, tie_break=True)
         rules = standard_rules(max_layers, min_fraction)
-        peel(
-            capture.draw, self.queries("peel"), rules, lambda layer: read(gb, layer), samples=capture.samples
-        )
+        queries = device.queries("peel")
+        peel(capture.draw, queries, rules, lambda layer: read(gb, layer), samples=capture.samples)
+
+
+class LayerRenderer(Protocol):
+    """What code below the API takes as a renderer (``blueprint.Renderer`` is one): a
+    ``device`` whose attributes it shows as its own (``ctx``, ``pool``, ``uniforms``,
+    ``queries``, ``program``, ``compute``, ``fullscreen``, the capabilities: ``gpu.Device``)
+    and the ``capturer`` of the models uploaded to it, whose methods it shows as its own too
+    (``mesh``, ``peel``, ``triangles_at``, ``face_kbuffer``, ``each_face_layer``)."""
+
+    device: Device
+    capturer: Capturer
+
+    def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh: ...
+
+    def peel(self, model: Model, camera: Camera | None = None, **options) -> Layers: ...
 
 
 def check_frame_args(max_layers, min_fraction, crease_angle, line_width) -> None:

@@ -165,7 +165,7 @@ class GpuSilhouettes:
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
         gb = gbuffer(r.pool, (w, h), "idb", normals=False)
-        capture = Capture(r, mesh, camera, gb, tie_break=False)
+        capture = Capture(r.capturer, mesh, camera, gb, tie_break=False)
         if method == LINES:
             sil = LinePass(r, edges, corners, camera, (w, h), layers, diagonal)
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.gpu import units
-from blueprint.render.capture import depth_range
+from blueprint.render.gbuffer import depth_range
 from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.camera import Camera
 

@@ -66,6 +66,8 @@ class SoupMesh:
         self._vaos: dict[int, object] = {}
         parts = np.zeros(self.faces, np.int32) if face_part is None else np.asarray(face_part, np.int32)
         self._corner_parts = ctx.buffer(np.repeat(parts, 3).astype(np.int32))
+        # ...and what the capture table's thresholds weigh (render.table.Request)
+        self.triangles, self.part_count = self.faces, int(parts.max(initial=0)) + 1
         self._first = corners
         self._topology = None if topology is None else tuple(topology)
         self._lists: ListTextures | None = None
