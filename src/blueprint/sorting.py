@@ -27,9 +27,13 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
     if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
-        packed = ((key.astype(np.int64) - low) << bits) | np.arange(n)
+        packed = key.astype(np.int64)
+        packed -= low
+        packed <<= bits
+        packed |= np.arange(n)
         packed.sort()
-        return packed & ((1 << bits) - 1)
+        packed &= (1 << bits) - 1
+        return packed
     return np.argsort(key, kind="stable")
 
 

@@ -1,0 +1,154 @@
+"""A model's triangles made ready for the GPU: shared vertices split where their normal or part
+differs, and the faces' corners as indices into them; kept by the model's content, so another
+view of it, or the same file loaded again, does not make them again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+
+import numpy as np
+
+from blueprint.scene.model import Model
+from blueprint.scene.normals import corner_normals
+from blueprint.sorting import stable_argsort, unique_first
+
+__all__ = ["VERTEX", "content_key", "gpu_arrays"]
+
+# One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
+VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
+# Prepared models kept, the most recently used first, and the bytes they may hold together.
+_KEPT = 4
+_KEPT_BYTES = 1 << 30
+# Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
+_SHIFT = 1 << 16
+
+_prepared: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+
+
+def content_key(model: Model) -> bytes:
+    """A digest of the model's triangles (positions, faces, parts): models with one digest
+    prepare alike. Made once per model."""
+    key = model._cache.get("content")
+    if key is None:
+        digest = hashlib.blake2b(digest_size=20)
+        for array in (model.positions, model.faces, model.face_part):
+            digest.update(str((array.dtype.str, array.shape)).encode())
+            digest.update(memoryview(np.ascontiguousarray(array)).cast("B"))
+        digest.update(str(len(model.part_names)).encode())
+        key = model._cache["content"] = digest.digest()
+    return key
+
+
+def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The vertex and index arrays of ``model`` for ``render.mesh.GpuMesh``.
+
+    Every corner of every face becomes a vertex, corners of one vertex of the model merged
+    where their part and their normal (``corner_normals`` with ``crease_angle``, quantized to
+    16 bits) are the same; without a crease angle (None) the normals are left zero.
+
+    Returns
+    -------
+    vertices : (N,) ``VERTEX``
+        Ordered by model vertex, then part, then normal.
+    indices : (3F,) uint32
+        Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
+    """
+    key = (content_key(model), None if crease_angle is None else float(crease_angle))
+    held = _prepared.get(key)
+    if held is None:
+        held = _prepare(model, crease_angle)
+        _prepared[key] = held
+        while len(_prepared) > _KEPT or sum(v.nbytes + i.nbytes for v, i in _prepared.values()) > _KEPT_BYTES:
+            _prepared.popitem(last=False)
+    _prepared.move_to_end(key)
+    return held
+
+
+def _prepare(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.ndarray]:
+    corner_vertex = model.faces.reshape(-1).astype(np.int64)
+    parts = len(model.part_names)
+    if crease_angle is None:
+        normals = None
+        # where each vertex lies in one part, the vertex orders the keys alone, over a range
+        # that unique_first counts over instead of sorting
+        key = corner_vertex
+        if parts > 1:
+            corner_part = np.repeat(model.face_part, 3)
+            vertex_part = np.zeros(len(model.positions), np.int32)
+            vertex_part[corner_vertex] = corner_part
+            if not np.array_equal(vertex_part[corner_vertex], corner_part):
+                key = corner_vertex * parts + corner_part
+            del corner_part, vertex_part
+        _, chosen, inverse = unique_first(key)
+        del key
+    else:
+        normals = corner_normals(model.positions, model.faces, crease_angle).reshape(-1, 3)
+        key = corner_vertex
+        if parts > 1:
+            key = corner_vertex * parts
+            key += np.repeat(model.face_part, 3)
+        if np.all(key[1:] > key[:-1]):
+            # every corner a vertex of its own (a triangle soup): nothing to merge
+            chosen = inverse = None
+        else:
+            chosen, inverse = _split_vertices(key, normals)
+        del key
+    if chosen is None:
+        vertices = np.zeros(len(corner_vertex), VERTEX)
+        vertices["p"] = model.positions[corner_vertex]
+        vertices["n"] = normals
+        vertices["part"] = np.repeat(model.face_part, 3)
+        return vertices, np.arange(len(corner_vertex), dtype=np.uint32)
+    vertices = np.zeros(len(chosen), VERTEX)
+    vertices["p"] = model.positions[corner_vertex[chosen]]
+    if normals is not None:
+        vertices["n"] = normals[chosen]
+    vertices["part"] = model.face_part[chosen // 3]
+    return vertices, inverse.astype(np.uint32)
+
+
+def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct (vertex and part, quantized normal) pairs of the corners, in that order:
+    the last corner of each, and each corner's pair (its number among them).
+
+    ``vertex_part`` (3F,) int64 orders the vertex and the part; the normals' three 16-bit
+    components pack into one more key. Corners are sorted by the first key, then, only in
+    the runs of one vertex whose normals differ, by both."""
+    n = len(vertex_part)
+    order = stable_argsort(vertex_part)
+    first = vertex_part[order]
+    same_first = first[1:] == first[:-1]
+    second = _normal_key(normals[order])
+    mixed = same_first & (second[1:] != second[:-1])
+    if mixed.any():
+        run = np.cumsum(np.r_[True, ~same_first])
+        at = np.flatnonzero(np.isin(run, run[1:][mixed]))
+        del run
+        # a stable sort: the corners of one pair keep their order
+        sub = np.lexsort((second[at], first[at]))
+        order[at] = order[at][sub]
+        second[at] = second[at][sub]
+    del first, mixed
+    new = np.empty(n, bool)
+    new[0] = True
+    np.not_equal(second[1:], second[:-1], out=new[1:])
+    new[1:] |= ~same_first
+    del second, same_first
+    inverse = np.empty(n, np.int64)
+    inverse[order] = np.cumsum(new) - 1
+    last = order[np.r_[np.flatnonzero(new)[1:] - 1, n - 1]]
+    return last, inverse
+
+
+def _normal_key(normals: np.ndarray) -> np.ndarray:
+    """(N,) int64: the unit normals (N, 3) float32 quantized to 16 bits a component (as
+    ``np.round(normals * 32767)``), packed in their order: the keys sort as the rows do."""
+    key = np.zeros(len(normals), np.int64)
+    for axis in range(3):
+        quantized = np.round(normals[:, axis] * 32767).astype(np.int64)
+        quantized += _SHIFT
+        quantized <<= 17 * (2 - axis)
+        key |= quantized
+    return key
