@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min, face_cross
+from blueprint.columns import column_max, column_min, face_cross, indexed_cross
 from blueprint.scene.units import UNITS_MM
 
 
@@ -101,10 +101,13 @@ class Model:
         """(2, 3) float64: minimum and maximum corner of the used vertices."""
         # every camera fit asks (the viewer: every frame), and a model's arrays do not change
         if "bounds" not in self._cache:
-            if "corners" in self._cache and len(self.faces):
-                used = self._cache["corners"].reshape(-1, 3)
-            else:
-                used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
+            used = self.positions
+            if len(self.faces):
+                # each used vertex once, not once a corner (some six times in a closed mesh)
+                mask = np.zeros(len(self.positions), bool)
+                mask[self.faces.reshape(-1)] = True
+                if not mask.all():
+                    used = self.positions[mask]
             self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
         return self._cache["bounds"].copy()
 
@@ -120,7 +123,7 @@ class Model:
     def corner_cross(self) -> np.ndarray:
         """(F, 3) float64: ``columns.face_cross`` of ``corners()``, held as they are."""
         if "corners" not in self._cache:
-            return face_cross(self.corners())
+            return indexed_cross(self.positions, self.faces)
         if "corner_cross" not in self._cache:
             self._cache["corner_cross"] = face_cross(self._cache["corners"])
         return self._cache["corner_cross"]

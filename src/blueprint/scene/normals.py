@@ -61,7 +61,9 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
     starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
     count = np.diff(np.r_[starts, len(key)])
     pair = starts[count == 2]
-    cos = np.einsum("ij,ij->i", unit[order[pair] // 3], unit[order[pair + 1] // 3])
+    one, other = (np.take(unit, order[pair + k] // 3, axis=0) for k in (0, 1))
+    cos = np.einsum("ij,ij->i", one, other)
+    del one, other
     del order
     crease = key[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
     sharp = np.zeros(vertices, bool)
@@ -163,7 +165,7 @@ def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length:
     limit = np.cos(np.radians(_CONE)) * length
     for j in range(3):
         at = welded[:, j]
-        dot = np.einsum("ij,ij->i", unit, axis[at])
+        dot = np.einsum("ij,ij->i", unit, np.take(axis, at, axis=0))
         outside[at[dot <= limit[at]]] = True
     return ~outside
 

@@ -10,6 +10,7 @@ from collections import OrderedDict
 
 import numpy as np
 
+from blueprint import settings
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
 from blueprint.sorting import stable_argsort, unique_first
@@ -18,9 +19,10 @@ __all__ = ["VERTEX", "content_key", "gpu_arrays"]
 
 # One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
 VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
-# Prepared models kept, the most recently used first, and the bytes they may hold together.
+# Prepared models kept, and the bytes they may hold together: a model's arrays outlive its
+# upload only while they are small beside the memory a drawing may use.
 _KEPT = 4
-_KEPT_BYTES = 1 << 30
+_KEPT_BYTES = settings.MEMORY_BUDGET // 32
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
@@ -32,7 +34,7 @@ def content_key(model: Model) -> bytes:
     prepare alike. Made once per model."""
     key = model._cache.get("content")
     if key is None:
-        digest = hashlib.blake2b(digest_size=20)
+        digest = hashlib.sha256()
         for array in (model.positions, model.faces, model.face_part):
             digest.update(str((array.dtype.str, array.shape)).encode())
             digest.update(memoryview(np.ascontiguousarray(array)).cast("B"))
@@ -57,12 +59,14 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     """
     key = (content_key(model), None if crease_angle is None else float(crease_angle))
     held = _prepared.get(key)
-    if held is None:
-        held = _prepare(model, crease_angle)
+    if held is not None:
+        _prepared.move_to_end(key)
+        return held
+    held = _prepare(model, crease_angle)
+    if held[0].nbytes + held[1].nbytes <= _KEPT_BYTES:
         _prepared[key] = held
         while len(_prepared) > _KEPT or sum(v.nbytes + i.nbytes for v, i in _prepared.values()) > _KEPT_BYTES:
             _prepared.popitem(last=False)
-    _prepared.move_to_end(key)
     return held
 
 

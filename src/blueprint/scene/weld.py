@@ -193,7 +193,7 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _row_changes(positions: np.ndarray, order: np.ndarray) -> np.ndarray:
     """(V - 1,) bool: row ``order[i + 1]`` of ``positions`` differs from row ``order[i]`` (as
     values: -0.0 equals 0.0)."""
-    rows = positions[order]
+    rows = np.take(positions, order, axis=0)  # NumPy takes rows faster than it indexes them
     changes = rows[1:, 0] != rows[:-1, 0]
     for k in (1, 2):
         changes |= rows[1:, k] != rows[:-1, k]
