@@ -279,3 +279,33 @@ def test_environment_of_faces_out_of_part_order():
     out_of_order = environment.environment_parts(Model.from_arrays(positions, faces[mixed], face_part[mixed]))
     assert in_order.tolist() == [False, True, True, False, False]
     assert out_of_order.tolist() == in_order.tolist()
+
+
+def test_crease_vertices_of_more_welded_vertices_than_an_int32_key_holds():
+    """Edge keys (lo * vertices + hi) of 60 000 vertices pass 2**31: int32 ids say the same as
+    int64 ones. A strip three vertices wide, its middle row inside, its heights noisy."""
+    n = 20000
+    rng = np.random.default_rng(1)
+    positions = np.concatenate(
+        [np.c_[np.arange(n), np.full(n, row), rng.normal(0, 0.3, n)] for row in range(3)]
+    )
+    i = np.arange(n - 1)
+    faces = np.concatenate(
+        [
+            np.r_[
+                np.c_[i + r * n, i + 1 + r * n, i + (r + 1) * n],
+                np.c_[i + 1 + r * n, i + 1 + (r + 1) * n, i + (r + 1) * n],
+            ]
+            for r in range(2)
+        ]
+    )
+    welded = normals.weld_ids(positions, faces)
+    unit = np.cross(
+        positions[faces[:, 1]] - positions[faces[:, 0]], positions[faces[:, 2]] - positions[faces[:, 0]]
+    )
+    unit /= np.linalg.norm(unit, axis=1)[:, None]
+    wide = normals.crease_vertices(welded, unit, 30.0)
+    narrow = normals.crease_vertices(welded.astype(np.int32), unit, 30.0)
+    assert welded.max() ** 2 > 2**31
+    np.testing.assert_array_equal(narrow, wide)
+    assert 0 < wide[n : 2 * n].sum() < n  # some of the middle row on creases, not all

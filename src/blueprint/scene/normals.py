@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.columns import column_max, column_min, indexed_cross
-from blueprint.scene.weld import weld
-from blueprint.sorting import stable_argsort
+from blueprint.scene.weld import check_mesh, weld_groups
+from blueprint.sorting import sorted_with_order, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
@@ -14,6 +14,8 @@ _MAX_DEGREE = 64
 # Around a vertex whose faces' normals all lie within this many degrees of their mean, no two
 # are 90 degrees apart (``corner_normals``).
 _CONE = 44.0
+# Pairs of faces whose normals are compared at a time.
+_CROSS_BLOCK = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 20
 
@@ -22,16 +24,21 @@ def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) ->
     """(F, 3) int64: vertex ids where vertices at the same position (within ``rel_tol`` of the
     bounding-box diagonal of the vertices the faces use) share an id, numbered in the order of
     their first vertices, so triangle soups smooth like indexed meshes."""
-    positions, faces = np.asarray(positions), np.asarray(faces)
+    return _welded(positions, faces, rel_tol).astype(np.int64)
+
+
+def _welded(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
+    """``weld_ids`` as int32, which halves what the corners' ids take."""
+    positions, faces = check_mesh(positions, faces)
     if len(faces) == 0:
-        return np.zeros((0, 3), np.int64)
+        return np.zeros((0, 3), np.int32)
     used = np.zeros(len(positions), bool)
     used[faces.reshape(-1)] = True
     points = positions if used.all() else positions[used]
     extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
     diag = float(np.linalg.norm(extent))
-    _, welded = weld(positions, faces, tol=(diag or 1.0) * rel_tol)
-    return welded
+    group, _ = weld_groups(positions, (diag or 1.0) * rel_tol)
+    return np.take(group.astype(np.int32), faces)
 
 
 def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -> np.ndarray:
@@ -53,21 +60,31 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
     key = np.empty((len(welded), 3), np.int64)
     for k in range(3):
         a, b = welded[:, k], welded[:, (k + 1) % 3]
-        np.multiply(np.minimum(a, b), vertices, out=key[:, k])
+        np.multiply(np.minimum(a, b), vertices, out=key[:, k], dtype=np.int64)
         key[:, k] += np.maximum(a, b)
-    key = key.reshape(-1)
-    order = stable_argsort(key)
-    key = key[order]
-    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    count = np.diff(np.r_[starts, len(key)])
-    pair = starts[count == 2]
-    one, other = (np.take(unit, order[pair + k] // 3, axis=0) for k in (0, 1))
-    cos = np.einsum("ij,ij->i", one, other)
-    del one, other
+    key, order = sorted_with_order(key.reshape(-1), overwrite=True)
+    # edges of two faces: runs of two equal keys (bool masks: run starts and lengths would take
+    # eight bytes an edge each)
+    same = np.zeros(len(key) + 1, bool)
+    np.equal(key[1:], key[:-1], out=same[1:-1])
+    paired = same[1:-1] & ~same[:-2] & ~same[2:]
+    pair = np.flatnonzero(paired)
+    cos = np.empty(len(pair))
+    for lo in range(0, len(pair), _CROSS_BLOCK):
+        at = pair[lo : lo + _CROSS_BLOCK]
+        one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
+        cos[lo : lo + len(at)] = np.einsum("ij,ij->i", one, other)
     del order
     crease = key[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
+    del pair, cos
+    # every other edge is a border or a non-manifold edge
+    apart = np.ones(len(key), bool)
+    apart[:-1][paired] = False
+    apart[1:][paired] = False
+    del same, paired
+    open_edges = key[apart]
+    del apart, key
     sharp = np.zeros(vertices, bool)
-    open_edges = key[starts[count != 2]]
     sharp[open_edges // vertices] = True
     sharp[open_edges % vertices] = True
     crease = np.stack([crease // vertices, crease % vertices], axis=1)
@@ -125,10 +142,9 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     length = np.linalg.norm(area_normals, axis=1)
     unit = area_normals / np.where(length > 0, length, 1.0)[:, None]
     del length
-    flat = unit.astype(np.float32)
     if crease_angle <= 0 or len(faces) == 0:
-        return np.repeat(flat[:, None, :], 3, axis=1)
-    welded = weld_ids(positions, faces)
+        return np.repeat(unit.astype(np.float32)[:, None, :], 3, axis=1)
+    welded = _welded(positions, faces)
     sharp = crease_vertices(welded, unit, crease_angle)
     vertices = len(sharp)
     vertex = welded.reshape(-1)
@@ -149,7 +165,7 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     np.take(summed.astype(np.float32), vertex, axis=0, out=corners)
     del summed
     apart = np.flatnonzero(~shared[vertex])
-    corners[apart] = flat[apart // 3]
+    corners[apart] = np.take(unit, apart // 3, axis=0)
     paired = apart[degree[vertex[apart]] <= _MAX_DEGREE]
     if len(paired):
         _pairwise(paired, vertex[paired], area_normals, unit, sharp, crease_angle, corners)

@@ -23,6 +23,8 @@ VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
 # upload only while they are small beside the memory a drawing may use.
 _KEPT = 4
 _KEPT_BYTES = settings.MEMORY_BUDGET // 32
+# Vertices whose fields are gathered at a time.
+_BLOCK = 1 << 20
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
@@ -71,10 +73,10 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
 
 
 def _prepare(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.ndarray]:
-    corner_vertex = model.faces.reshape(-1).astype(np.int64)
+    corner_vertex = model.faces.reshape(-1)
     parts = len(model.part_names)
+    normals = None
     if crease_angle is None:
-        normals = None
         # where each vertex lies in one part, the vertex orders the keys alone, over a range
         # that unique_first counts over instead of sorting
         key = corner_vertex
@@ -83,41 +85,41 @@ def _prepare(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.n
             vertex_part = np.zeros(len(model.positions), np.int32)
             vertex_part[corner_vertex] = corner_part
             if not np.array_equal(vertex_part[corner_vertex], corner_part):
-                key = corner_vertex * parts + corner_part
+                key = corner_vertex.astype(np.int64) * parts + corner_part
             del corner_part, vertex_part
         _, chosen, inverse = unique_first(key)
         del key
+        inverse = inverse.astype(np.uint32)
     else:
         normals = corner_normals(model.positions, model.faces, crease_angle).reshape(-1, 3)
         key = corner_vertex
         if parts > 1:
-            key = corner_vertex * parts
+            key = corner_vertex.astype(np.int64) * parts
             key += np.repeat(model.face_part, 3)
         if np.all(key[1:] > key[:-1]):
             # every corner a vertex of its own (a triangle soup): nothing to merge
-            chosen = inverse = None
+            chosen, inverse = None, np.arange(len(key), dtype=np.uint32)
         else:
             chosen, inverse = _split_vertices(key, normals)
         del key
-    if chosen is None:
-        vertices = np.zeros(len(corner_vertex), VERTEX)
-        vertices["p"] = model.positions[corner_vertex]
-        vertices["n"] = normals
-        vertices["part"] = np.repeat(model.face_part, 3)
-        return vertices, np.arange(len(corner_vertex), dtype=np.uint32)
-    vertices = np.zeros(len(chosen), VERTEX)
-    vertices["p"] = model.positions[corner_vertex[chosen]]
-    if normals is not None:
-        vertices["n"] = normals[chosen]
-    vertices["part"] = model.face_part[chosen // 3]
-    return vertices, inverse.astype(np.uint32)
+    count = len(corner_vertex) if chosen is None else len(chosen)
+    vertices = np.zeros(count, VERTEX)
+    # a block of vertices at a time: their gathered fields are as large as the vertices
+    for lo in range(0, count, _BLOCK):
+        corner = np.arange(lo, min(lo + _BLOCK, count)) if chosen is None else chosen[lo : lo + _BLOCK]
+        rows = slice(lo, lo + len(corner))
+        vertices["p"][rows] = np.take(model.positions, corner_vertex[corner], axis=0)
+        if normals is not None:
+            vertices["n"][rows] = np.take(normals, corner, axis=0)
+        vertices["part"][rows] = model.face_part[corner // 3]
+    return vertices, inverse
 
 
 def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct (vertex and part, quantized normal) pairs of the corners, in that order:
-    the last corner of each, and each corner's pair (its number among them).
+    the last corner of each, and each corner's pair (its number among them, uint32).
 
-    ``vertex_part`` (3F,) int64 orders the vertex and the part; the normals' three 16-bit
+    ``vertex_part`` (3F,) int orders the vertex and the part; the normals' three 16-bit
     components pack into one more key. Corners are sorted by the first key, then, only in
     the runs of one vertex whose normals differ, by both."""
     n = len(vertex_part)
@@ -140,8 +142,8 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     np.not_equal(second[1:], second[:-1], out=new[1:])
     new[1:] |= ~same_first
     del second, same_first
-    inverse = np.empty(n, np.int64)
-    inverse[order] = np.cumsum(new) - 1
+    inverse = np.empty(n, np.uint32)
+    inverse[order] = np.cumsum(new, dtype=np.uint32) - np.uint32(1)
     last = order[np.r_[np.flatnonzero(new)[1:] - 1, n - 1]]
     return last, inverse
 

@@ -11,7 +11,7 @@ import numpy as np
 from blueprint.columns import column_max, column_min
 from blueprint.sorting import unique_first
 
-__all__ = ["default_tolerance", "weld", "weld_groups"]
+__all__ = ["check_mesh", "default_tolerance", "weld", "weld_groups"]
 
 # Default weld tolerance, relative to the bounding-box diagonal.
 _REL_TOL = 1e-6
@@ -30,7 +30,9 @@ _BITS_HASH = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F
 _HASH = np.array([73856093, 19349663, 83492791], dtype=np.int64)
 
 
-def _check_mesh(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def check_mesh(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``positions`` as float32 or float64 and ``faces`` as integers, checked: shapes, indices
+    in range, finite positions (ValueError)."""
     positions = np.asarray(positions)
     if positions.dtype != np.float32:
         positions = positions.astype(np.float64, copy=False)
@@ -39,9 +41,10 @@ def _check_mesh(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, n
         raise ValueError(f"positions must have shape (V, 3), got {positions.shape}")
     if faces.ndim != 2 or faces.shape[1] != 3:
         raise ValueError(f"faces must have shape (F, 3), got {faces.shape}")
-    if faces.size and not np.issubdtype(faces.dtype, np.integer):
-        raise ValueError(f"faces must hold integers, got dtype {faces.dtype}")
-    faces = faces.astype(np.int64)
+    if not np.issubdtype(faces.dtype, np.integer):
+        if faces.size:
+            raise ValueError(f"faces must hold integers, got dtype {faces.dtype}")
+        faces = faces.astype(np.int64)
     if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
         raise ValueError(f"face indices must lie in [0, {len(positions)})")
     if not np.isfinite(positions).all():
@@ -159,8 +162,8 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     key &= ~low
     key |= np.arange(n, dtype=np.uint64)
     key.sort()
-    same_hash = np.empty(n - 1, bool)
-    np.equal(key[1:] >> np.uint64(bits), key[:-1] >> np.uint64(bits), out=same_hash)
+    # equal above the index bits: their exclusive or is below them
+    same_hash = np.bitwise_xor(key[1:], key[:-1]) <= low
     key &= low
     order = key.view(np.int64)
     del key
@@ -174,19 +177,23 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         picked = order[sub]
         order[sub] = picked[np.lexsort([positions[picked, k] for k in (2, 1, 0)])]
         differs = _row_changes(positions, order)
-    del same_hash
+    del same_hash, collided
     new = np.empty(n, bool)
     new[0] = True
     new[1:] = differs
     del differs
     # within a row's run its indices rise: the run's first is the row's first occurrence
-    starts = np.flatnonzero(new)
-    firsts = order[starts]
+    firsts = order[new]
     seen = np.zeros(n, bool)
     seen[firsts] = True
-    number = np.cumsum(seen) - 1
+    rank = np.cumsum(seen, dtype=np.int32)[firsts]
+    rank -= 1
+    group = np.cumsum(new, dtype=np.int32)
+    del new
+    group -= 1
+    np.take(rank, group, out=group)
     inverse = np.empty(n, np.int64)
-    inverse[order] = np.repeat(number[firsts], np.diff(np.r_[starts, n]))
+    inverse[order] = group
     return inverse, np.flatnonzero(seen)
 
 
@@ -233,9 +240,9 @@ def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> 
     faces : np.ndarray
         (F, 3) int64 faces remapped to the welded positions.
     """
-    positions, faces = _check_mesh(positions, faces)
+    positions, faces = check_mesh(positions, faces)
     if len(positions) == 0:
-        return positions.astype(np.float64), faces
+        return positions.astype(np.float64), faces.astype(np.int64)
     if tol is None:
         tol = default_tolerance(positions)
     elif not (np.isfinite(tol) and tol >= 0):
