@@ -87,9 +87,12 @@ def _prepare(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.n
             if not np.array_equal(vertex_part[corner_vertex], corner_part):
                 key = corner_vertex.astype(np.int64) * parts + corner_part
             del corner_part, vertex_part
-        _, chosen, inverse = unique_first(key)
+        if np.all(key[1:] > key[:-1]):
+            chosen, inverse = None, np.arange(len(key), dtype=np.uint32)  # a triangle soup
+        else:
+            _, chosen, inverse = unique_first(key)
+            inverse = inverse.astype(np.uint32)
         del key
-        inverse = inverse.astype(np.uint32)
     else:
         normals = corner_normals(model.positions, model.faces, crease_angle).reshape(-1, 3)
         key = corner_vertex
