@@ -11,13 +11,13 @@ from blueprint.sorting import sorted_with_order, stable_argsort
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
 _MAX_DEGREE = 64
-# Around a vertex whose faces' normals all lie within this many degrees of their mean, no two
-# are 90 degrees apart (``corner_normals``).
+# Around a vertex whose faces' normals all lie within this many degrees of the sum of their area
+# normals, no two are 90 degrees apart (``corner_normals``).
 _CONE = 44.0
 # Pairs of faces whose normals are compared at a time.
 _CROSS_BLOCK = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
-_PAIR_BLOCK = 1 << 20
+_PAIR_BLOCK = 1 << 18
 
 
 def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
@@ -214,20 +214,24 @@ def _pairwise(
     pairs = int(ends[-1])
     cuts = np.r_[0, np.searchsorted(ends, np.arange(_PAIR_BLOCK, pairs, _PAIR_BLOCK)), len(order)]
     cos_crease = np.cos(np.radians(crease_angle)) - 1e-9
+    corner_unit = np.take(unit, corner_face, axis=0)  # NumPy takes rows faster than it indexes them
+    corner_sharp = sharp[sorted_vertex]
+    area = [np.ascontiguousarray(area_normals[:, axis]) for axis in range(3)]
     summed = np.zeros((len(order), 3))
     for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
         if lo == hi:
             continue
         counts = group_size[lo:hi]
         a_idx = np.repeat(np.arange(lo, hi), counts)
-        within = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
-        face_b = corner_face[group_start[a_idx] + within]
-        cos = np.einsum("ij,ij->i", unit[corner_face[a_idx]], unit[face_b])
-        keep = (np.abs(cos) >= cos_crease) | ~sharp[sorted_vertex[a_idx]]
-        contribution = area_normals[face_b[keep]] * np.sign(cos[keep])[:, None]
+        b_idx = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
+        b_idx += group_start[a_idx]
+        cos = np.einsum("ij,ij->i", np.take(corner_unit, a_idx, axis=0), np.take(corner_unit, b_idx, axis=0))
+        keep = (np.abs(cos) >= cos_crease) | ~corner_sharp[a_idx]
+        face_b = corner_face[b_idx[keep]]
+        sign = np.sign(cos[keep])
         target = a_idx[keep] - lo
         for axis in range(3):
-            summed[lo:hi, axis] += np.bincount(target, contribution[:, axis], minlength=hi - lo)
+            summed[lo:hi, axis] += np.bincount(target, area[axis][face_b] * sign, minlength=hi - lo)
     norm = np.linalg.norm(summed, axis=1)
     ok = norm > 0
     out[corners[order[ok]]] = (summed[ok] / norm[ok, None]).astype(np.float32)
