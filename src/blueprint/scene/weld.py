@@ -24,6 +24,8 @@ _FORWARD_OFFSETS = np.array(
 # may give on average before the grid takes over.
 _SWEEP_DIRECTION = np.array([1.0, np.sqrt(2.0), np.sqrt(3.0)]) / np.sqrt(6.0)
 _SWEEP_CANDIDATES = 16
+# Candidates of the sweep checked at a time.
+_SWEEP_BLOCK = 1 << 22
 # Odd multipliers that mix a position's three 64-bit patterns into one key (wrapping).
 _BITS_HASH = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
 # Large odd multipliers for a spatial hash of integer cell coordinates (Teschner et al. 2003).
@@ -72,12 +74,27 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     total = int(count.sum())
     if total > _SWEEP_CANDIDATES * n:
         return _grid_pairs(points, tol)
-    first = np.repeat(np.arange(n), count)
-    second = first + 1 + (np.arange(total) - np.repeat(np.cumsum(count) - count, count))
-    i, j = order[first], order[second]
-    diff = points[i] - points[j]
-    keep = np.einsum("ij,ij->i", diff, diff) <= tol * tol
-    return i[keep], j[keep]
+    # the candidates of a block of points at a time, read from the points in sweep order: a
+    # candidate lies a few places on, where its row is at hand
+    ordered = np.take(points, order, axis=0)
+    x = np.ascontiguousarray(ordered[:, 0])
+    ends = np.cumsum(count)
+    cuts = np.r_[0, np.searchsorted(ends, np.arange(_SWEEP_BLOCK, total, _SWEEP_BLOCK)), n]
+    found_i, found_j = [], []
+    for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
+        block = count[lo:hi]
+        first = np.repeat(np.arange(lo, hi), block)
+        second = first + 1 + (np.arange(len(first)) - np.repeat(np.cumsum(block) - block, block))
+        # the squared difference in x is at most the squared distance, as computed: it rules
+        # most candidates out before their rows are read
+        dx = x[first] - x[second]
+        near = dx * dx <= tol * tol
+        first, second = first[near], second[near]
+        diff = np.take(ordered, first, axis=0) - np.take(ordered, second, axis=0)
+        keep = np.einsum("ij,ij->i", diff, diff) <= tol * tol
+        found_i.append(order[first[keep]])
+        found_j.append(order[second[keep]])
+    return np.concatenate(found_i), np.concatenate(found_j)
 
 
 def _grid_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
@@ -176,7 +193,10 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         sub = np.flatnonzero(np.isin(run, run[1:][collided]))
         picked = order[sub]
         order[sub] = picked[np.lexsort([positions[picked, k] for k in (2, 1, 0)])]
-        differs = _row_changes(positions, order)
+        # only the neighbours of the rows moved can change
+        moved = np.union1d(sub[sub > 0] - 1, sub[sub < n - 1])
+        one, other = (np.take(positions, order[moved + k], axis=0) for k in (0, 1))
+        differs[moved] = (one != other).any(axis=1)
     del same_hash, collided
     new = np.empty(n, bool)
     new[0] = True
