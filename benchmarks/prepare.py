@@ -176,7 +176,8 @@ def child(path: str, name: str) -> dict:
     stage("creases", partial(normals.crease_vertices, welded, unit, 30.0))
     del welded, unit
     stage("normals", lambda: normals.corner_normals(model.positions, model.faces, 30.0))
-    held = getattr(sys.modules.get("blueprint.scene.prepare"), "_prepared", None)
+    prepared = sys.modules.get("blueprint.scene.prepare")
+    held = getattr(prepared, "_topologies", None)
     if held is not None:
         held.clear()
     stage("gpu_arrays", lambda: mesh.GpuMesh(_Buffers(), fresh(), 30.0))

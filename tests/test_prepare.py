@@ -181,7 +181,7 @@ def test_gpu_arrays_equal_unique_rows(shape, crease):
             None,
         )
     model = Model.from_arrays(positions, faces, face_part)
-    vertices, indices = prepare._prepare(model, crease)
+    vertices, indices = prepare._prepare(model, crease, None)
     expected_vertices, expected_indices = reference_arrays(model, crease)
     assert vertices.tobytes() == expected_vertices.tobytes()
     np.testing.assert_array_equal(indices, expected_indices)
@@ -190,7 +190,7 @@ def test_gpu_arrays_equal_unique_rows(shape, crease):
 def test_gpu_arrays_without_normals_share_vertices_of_one_part():
     positions, faces, face_part = mixed_mesh()
     model = Model.from_arrays(positions, faces, face_part)
-    vertices, indices = prepare._prepare(model, None)
+    vertices, indices = prepare._prepare(model, None, None)
     assert not vertices["n"].any()
     corner_vertex = model.faces.reshape(-1)
     np.testing.assert_array_equal(vertices["p"][indices], model.positions[corner_vertex])
@@ -221,32 +221,43 @@ class _Buffers:
         self.data.append(bytes(memoryview(data)))
 
 
-def test_a_model_of_the_same_content_reuses_the_prepared_arrays(monkeypatch):
-    monkeypatch.setattr(prepare, "_prepared", type(prepare._prepared)())
+def test_a_model_of_the_same_content_skips_the_sorts(monkeypatch):
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
     positions, faces, face_part = mixed_mesh()
     first = Model.from_arrays(positions, faces, face_part)
     made = prepare.gpu_arrays(first, 30.0)
+    held = prepare.topology(first)
+    assert held["welded"].dtype == np.int32 and held[("sharp", 30.0)].dtype == bool
+
+    def refused(*args):
+        raise AssertionError("sorted again")
+
+    monkeypatch.setattr(normals, "_welded", refused)
+    monkeypatch.setattr(normals, "crease_vertices", refused)
     again = prepare.gpu_arrays(Model.from_arrays(positions.copy(), faces.copy(), face_part.copy()), 30.0)
-    assert again[0] is made[0] and again[1] is made[1]
-    assert prepare.gpu_arrays(first, 20.0)[0] is not made[0]  # another crease angle
+    assert again[0].tobytes() == made[0].tobytes() and again[1].tobytes() == made[1].tobytes()
     moved = positions.copy()
     moved[0, 0] += 1e-3
-    assert prepare.gpu_arrays(Model.from_arrays(moved, faces, face_part), 30.0)[0] is not made[0]
-    # GpuMesh uploads them
+    with pytest.raises(AssertionError, match="sorted again"):
+        prepare.gpu_arrays(Model.from_arrays(moved, faces, face_part), 30.0)
+    with pytest.raises(AssertionError, match="sorted again"):
+        prepare.gpu_arrays(first, 20.0)  # another crease angle: its crease vertices
+    # GpuMesh uploads the arrays
     buffers = _Buffers()
     GpuMesh(buffers, first, 30.0)
     assert buffers.data == [made[0].tobytes(), made[1].tobytes()]
 
 
-def test_prepared_arrays_kept_are_bounded(monkeypatch):
-    monkeypatch.setattr(prepare, "_prepared", type(prepare._prepared)())
+def test_topologies_kept_are_bounded(monkeypatch):
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
     box = trimesh.creation.box()
-    for k in range(prepare._KEPT + 3):
-        prepare.gpu_arrays(Model.from_arrays(box.vertices + k, box.faces), 30.0)
-    assert len(prepare._prepared) == prepare._KEPT
+    models = [Model.from_arrays(box.vertices + k, box.faces) for k in range(prepare._KEPT + 3)]
+    for model in models:
+        prepare.gpu_arrays(model, 30.0)
+    assert list(prepare._topologies) == [prepare.content_key(m) for m in models[-prepare._KEPT :]]
     monkeypatch.setattr(prepare, "_KEPT_BYTES", 10)
-    big = prepare.gpu_arrays(Model.from_arrays(box.vertices - 1, box.faces), 30.0)
-    assert all(v is not big[0] for v, _ in prepare._prepared.values())
+    prepare.gpu_arrays(models[0], 30.0)
+    assert not prepare._topologies
 
 
 def test_up_guess_a_block_at_a_time_equals_all_at_once(monkeypatch):

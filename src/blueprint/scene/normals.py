@@ -109,7 +109,9 @@ def lone_creases(crease: np.ndarray, anchored: np.ndarray) -> np.ndarray:
     return free[crease[:, 0]] & free[crease[:, 1]]
 
 
-def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:
+def corner_normals(
+    positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0, topology: dict | None = None
+) -> np.ndarray:
     """Normal per triangle corner: the area-weighted mean of the normals of the faces around the
     corner's vertex that lie within ``crease_angle`` degrees of the corner's face; at a vertex
     on no crease edge (``crease_vertices``), of all the faces around it.
@@ -131,12 +133,17 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     faces : (F, 3) int
     crease_angle : float
         Degrees; 0 gives flat (per-face) normals.
+    topology : dict, optional
+        Kept with the mesh (by ``scene.prepare``): the welded vertex ids (``"welded"``, (F, 3)
+        int32) and the crease vertices (``("sharp", crease_angle)``, (V,) bool) are read from
+        it where it holds them, and left in it where it does not: they take the sorts.
 
     Returns
     -------
     (F, 3, 3) float32
         Unit normal for corner ``j`` of face ``i`` at ``[i, j]``.
     """
+    topology = {} if topology is None else topology
     faces = np.asarray(faces)
     area_normals = indexed_cross(np.asarray(positions), faces)
     length = np.linalg.norm(area_normals, axis=1)
@@ -144,8 +151,12 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     del length
     if crease_angle <= 0 or len(faces) == 0:
         return np.repeat(unit.astype(np.float32)[:, None, :], 3, axis=1)
-    welded = _welded(positions, faces)
-    sharp = crease_vertices(welded, unit, crease_angle)
+    welded = topology.get("welded")
+    if welded is None:
+        welded = topology["welded"] = _welded(positions, faces)
+    sharp = topology.get(("sharp", float(crease_angle)))
+    if sharp is None:
+        sharp = topology[("sharp", float(crease_angle))] = crease_vertices(welded, unit, crease_angle)
     vertices = len(sharp)
     vertex = welded.reshape(-1)
     # Where no pair of the faces around a vertex is told apart (no crease there, and every two
@@ -157,7 +168,6 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     norm = np.linalg.norm(summed, axis=1)
     degree = np.bincount(vertex, minlength=vertices)
     shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
-    del welded
     summed[shared] /= norm[shared, None]
     del norm
     result = np.empty((len(faces), 3, 3), np.float32)

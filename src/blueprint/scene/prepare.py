@@ -1,6 +1,10 @@
 """A model's triangles made ready for the GPU: shared vertices split where their normal or part
-differs, and the faces' corners as indices into them; kept by the model's content, so another
-view of it, or the same file loaded again, does not make them again.
+differs, and the faces' corners as indices into them.
+
+What the sorts find (the welded vertices, the crease vertices) is kept by the model's content,
+so that another model of the same triangles (another view of a file loaded again, a batch)
+skips them: some 12 bytes a triangle, where the arrays themselves, 100 bytes a triangle of a
+triangle soup, would stay in memory through the drawing that uploaded them.
 """
 
 from __future__ import annotations
@@ -15,12 +19,11 @@ from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
 from blueprint.sorting import stable_argsort, unique_first
 
-__all__ = ["VERTEX", "content_key", "gpu_arrays"]
+__all__ = ["VERTEX", "content_key", "gpu_arrays", "topology"]
 
 # One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
 VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
-# Prepared models kept, and the bytes they may hold together: a model's arrays outlive its
-# upload only while they are small beside the memory a drawing may use.
+# Topologies kept, and the bytes they may hold together.
 _KEPT = 4
 _KEPT_BYTES = settings.MEMORY_BUDGET // 32
 # Vertices whose fields are gathered at a time.
@@ -28,7 +31,7 @@ _BLOCK = 1 << 20
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
-_prepared: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+_topologies: OrderedDict[bytes, dict] = OrderedDict()
 
 
 def content_key(model: Model) -> bytes:
@@ -45,6 +48,25 @@ def content_key(model: Model) -> bytes:
     return key
 
 
+def topology(model: Model) -> dict:
+    """The topology kept for the model's content (``corner_normals``' ``topology``), the most
+    recently used kept last; a new, empty one where none is."""
+    key = content_key(model)
+    held = _topologies.get(key)
+    if held is None:
+        held = _topologies[key] = {}
+    _topologies.move_to_end(key)
+    return held
+
+
+def _bound() -> None:
+    """Forget the least recently used topologies beyond ``_KEPT`` or ``_KEPT_BYTES``."""
+    sizes = [sum(a.nbytes for a in held.values()) for held in _topologies.values()]
+    while len(sizes) > _KEPT or sum(sizes) > _KEPT_BYTES:
+        _topologies.popitem(last=False)
+        sizes.pop(0)
+
+
 def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.ndarray]:
     """The vertex and index arrays of ``model`` for ``render.mesh.GpuMesh``.
 
@@ -59,20 +81,14 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
-    key = (content_key(model), None if crease_angle is None else float(crease_angle))
-    held = _prepared.get(key)
-    if held is not None:
-        _prepared.move_to_end(key)
-        return held
-    held = _prepare(model, crease_angle)
-    if held[0].nbytes + held[1].nbytes <= _KEPT_BYTES:
-        _prepared[key] = held
-        while len(_prepared) > _KEPT or sum(v.nbytes + i.nbytes for v, i in _prepared.values()) > _KEPT_BYTES:
-            _prepared.popitem(last=False)
-    return held
+    if crease_angle is None:
+        return _prepare(model, None, None)
+    arrays = _prepare(model, crease_angle, topology(model))
+    _bound()
+    return arrays
 
 
-def _prepare(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.ndarray]:
+def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tuple[np.ndarray, np.ndarray]:
     corner_vertex = model.faces.reshape(-1)
     parts = len(model.part_names)
     normals = None
@@ -94,7 +110,7 @@ def _prepare(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.n
             inverse = inverse.astype(np.uint32)
         del key
     else:
-        normals = corner_normals(model.positions, model.faces, crease_angle).reshape(-1, 3)
+        normals = corner_normals(model.positions, model.faces, crease_angle, known).reshape(-1, 3)
         key = corner_vertex
         if parts > 1:
             key = corner_vertex.astype(np.int64) * parts
