@@ -254,7 +254,7 @@ def test_topologies_kept_are_bounded(monkeypatch):
     models = [Model.from_arrays(box.vertices + k, box.faces) for k in range(prepare._KEPT + 3)]
     for model in models:
         prepare.gpu_arrays(model, 30.0)
-    assert list(prepare._topologies) == [prepare.content_key(m) for m in models[-prepare._KEPT :]]
+    assert list(prepare._topologies) == [m.content_digest() for m in models[-prepare._KEPT :]]
     monkeypatch.setattr(prepare, "_KEPT_BYTES", 10)
     prepare.gpu_arrays(models[0], 30.0)
     assert not prepare._topologies

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -110,6 +111,18 @@ class Model:
                     used = self.positions[mask]
             self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
         return self._cache["bounds"].copy()
+
+    def content_digest(self) -> bytes:
+        """SHA-256 of the triangles (positions, faces, parts and the part count): models with
+        one digest draw alike, so work kept by it serves a file loaded again. Made once."""
+        if "digest" not in self._cache:
+            digest = hashlib.sha256()
+            for array in (self.positions, self.faces, self.face_part):
+                digest.update(str((array.dtype.str, array.shape)).encode())
+                digest.update(memoryview(np.ascontiguousarray(array)).cast("B"))
+            digest.update(str(len(self.part_names)).encode())
+            self._cache["digest"] = digest.digest()
+        return self._cache["digest"]
 
     def part_triangle_counts(self) -> np.ndarray:
         """(P,) int64: triangles per part."""

@@ -9,7 +9,6 @@ triangle soup, would stay in memory through the drawing that uploaded them.
 
 from __future__ import annotations
 
-import hashlib
 from collections import OrderedDict
 
 import numpy as np
@@ -19,7 +18,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
 from blueprint.sorting import stable_argsort, unique_first
 
-__all__ = ["VERTEX", "content_key", "gpu_arrays", "topology"]
+__all__ = ["VERTEX", "gpu_arrays", "topology"]
 
 # One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
 VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
@@ -34,24 +33,10 @@ _SHIFT = 1 << 16
 _topologies: OrderedDict[bytes, dict] = OrderedDict()
 
 
-def content_key(model: Model) -> bytes:
-    """A digest of the model's triangles (positions, faces, parts): models with one digest
-    prepare alike. Made once per model."""
-    key = model._cache.get("content")
-    if key is None:
-        digest = hashlib.sha256()
-        for array in (model.positions, model.faces, model.face_part):
-            digest.update(str((array.dtype.str, array.shape)).encode())
-            digest.update(memoryview(np.ascontiguousarray(array)).cast("B"))
-        digest.update(str(len(model.part_names)).encode())
-        key = model._cache["content"] = digest.digest()
-    return key
-
-
 def topology(model: Model) -> dict:
     """The topology kept for the model's content (``corner_normals``' ``topology``), the most
     recently used kept last; a new, empty one where none is."""
-    key = content_key(model)
+    key = model.content_digest()
     held = _topologies.get(key)
     if held is None:
         held = _topologies[key] = {}
