@@ -320,3 +320,16 @@ def test_crease_vertices_of_more_welded_vertices_than_an_int32_key_holds():
     assert welded.max() ** 2 > 2**31
     np.testing.assert_array_equal(narrow, wide)
     assert 0 < wide[n : 2 * n].sum() < n  # some of the middle row on creases, not all
+
+
+def test_content_digest_is_the_triangles():
+    box = trimesh.creation.box()
+    one = Model.from_arrays(box.vertices, box.faces)
+    assert Model.from_arrays(box.vertices.copy(), box.faces.copy()).content_digest() == one.content_digest()
+    others = [
+        Model.from_arrays(box.vertices, box.faces[::-1]),
+        Model.from_arrays(box.vertices, box.faces, np.arange(12) % 2),
+        Model.from_arrays(box.vertices, box.faces, part_names=["a", "b"]),
+        Model.from_arrays(np.zeros((0, 3)), np.zeros((0, 3), int)),
+    ]
+    assert len({m.content_digest() for m in [one, *others]}) == 5

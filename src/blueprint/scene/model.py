@@ -119,7 +119,7 @@ class Model:
             digest = hashlib.sha256()
             for array in (self.positions, self.faces, self.face_part):
                 digest.update(str((array.dtype.str, array.shape)).encode())
-                digest.update(memoryview(np.ascontiguousarray(array)).cast("B"))
+                digest.update(np.ascontiguousarray(array).reshape(-1).view(np.uint8))
             digest.update(str(len(self.part_names)).encode())
             self._cache["digest"] = digest.digest()
         return self._cache["digest"]
