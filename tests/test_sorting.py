@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
-from blueprint.sorting import stable_argsort, unique_first
+from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
 
 
 @pytest.mark.parametrize(
@@ -35,6 +35,10 @@ from blueprint.sorting import stable_argsort, unique_first
 def test_sorts_equal_numpys(count, low, high):
     key = np.random.default_rng(count).integers(low, high, count)
     np.testing.assert_array_equal(stable_argsort(key), np.argsort(key, kind="stable"))
+    ordered, order = sorted_with_order(key)
+    np.testing.assert_array_equal(order, np.argsort(key, kind="stable"))
+    np.testing.assert_array_equal(ordered, np.sort(key))
+    assert ordered.dtype == order.dtype == np.int64
     for got, expected in zip(
         unique_first(key), np.unique(key, return_index=True, return_inverse=True), strict=True
     ):

@@ -20,8 +20,10 @@ def as_set(pairs) -> set[tuple[int, int]]:
     return set(zip(np.minimum(i, j).tolist(), np.maximum(i, j).tolist(), strict=True))
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_close_pairs_are_all_pairs_within_tolerance(seed):
+@pytest.mark.parametrize(("seed", "block"), [(0, None), (1, None), (2, None), (0, 7)])
+def test_close_pairs_are_all_pairs_within_tolerance(seed, block, monkeypatch):
+    if block is not None:  # the sweep's candidates a few at a time
+        monkeypatch.setattr(weld, "_SWEEP_BLOCK", block)
     rng = np.random.default_rng(seed)
     centres = rng.uniform(-1, 1, (60, 3))
     points = np.repeat(centres, 6, axis=0) + rng.normal(0, 0.004, (360, 3))

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["column_max", "column_min", "column_ptp", "cross", "face_cross", "row_norm"]
+__all__ = ["column_max", "column_min", "column_ptp", "cross", "face_cross", "indexed_cross", "row_norm"]
 
 
 def column_min(values: np.ndarray) -> np.ndarray:
@@ -48,6 +48,18 @@ def face_cross(tri: np.ndarray) -> np.ndarray:
     u = [tri[:, 1, k] - tri[:, 0, k] for k in range(3)]
     v = [tri[:, 2, k] - tri[:, 0, k] for k in range(3)]
     return _cross(u, v, tri.dtype)
+
+
+def indexed_cross(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """``face_cross(positions[faces].astype(np.float64))`` of (V, 3) positions and (F, 3)
+    faces, one coordinate at a time: without the (F, 3, 3) float64 corners."""
+    u, v = [], []
+    for k in range(3):
+        column = positions[:, k]
+        first = column[faces[:, 0]].astype(np.float64)
+        u.append(column[faces[:, 1]].astype(np.float64) - first)
+        v.append(column[faces[:, 2]].astype(np.float64) - first)
+    return _cross(u, v, np.dtype(np.float64))
 
 
 def _cross(a, b, dtype) -> np.ndarray:

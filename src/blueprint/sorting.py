@@ -13,8 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["stable_argsort", "unique_first"]
+__all__ = ["sorted_with_order", "stable_argsort", "unique_first"]
 
+# Indices packed into keys at a time (``sorted_with_order``).
+_BLOCK = 1 << 20
 # unique_first counts over the keys' range, not sorting, up to this many times their number.
 _TABLE_PER_KEY = 4
 
@@ -27,10 +29,38 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
     if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
-        packed = ((key.astype(np.int64) - low) << bits) | np.arange(n)
+        packed = key.astype(np.int64)
+        packed -= low
+        packed <<= bits
+        packed |= np.arange(n)
         packed.sort()
-        return packed & ((1 << bits) - 1)
+        packed &= (1 << bits) - 1
+        return packed
     return np.argsort(key, kind="stable")
+
+
+def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """``(key[order], order)`` with ``order = stable_argsort(key)`` of a 1-D integer array, as
+    int64 arrays: both read off one sort of packed keys where they fit, without a gather.
+    ``overwrite`` lets an int64 ``key`` hold the packed keys."""
+    n = len(key)
+    if n == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    low, high = int(key.min()), int(key.max())
+    bits = n.bit_length()
+    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
+        packed = key if overwrite and key.dtype == np.int64 else key.astype(np.int64)
+        packed -= low
+        packed <<= bits
+        for start in range(0, n, _BLOCK):
+            packed[start : start + _BLOCK] |= np.arange(start, min(start + _BLOCK, n))
+        packed.sort()
+        ordered = packed >> bits
+        ordered += low
+        packed &= (1 << bits) - 1
+        return ordered, packed
+    order = np.argsort(key, kind="stable")
+    return key[order].astype(np.int64), order
 
 
 def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

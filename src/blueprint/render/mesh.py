@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.scene.model import Model
-from blueprint.scene.normals import corner_normals
-from blueprint.sorting import unique_first
+from blueprint.scene.prepare import gpu_arrays
 
 GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 
@@ -34,42 +33,14 @@ class GpuMesh:
 
     def __init__(self, ctx, model: Model, crease_angle: float | None) -> None:
         self.ctx = ctx
-        faces = model.faces
-        corner_vertex = faces.reshape(-1).astype(np.int64)
-        corner_part = np.repeat(model.face_part, 3).astype(np.int64)
-        # a vertex is split where its normal or its part differs, so both can be attributes
-        if crease_angle is None:
-            normals = None
-            # where each vertex lies in one part, the vertex orders the keys alone, over a range
-            # that unique_first counts over instead of sorting
-            key = corner_vertex
-            if len(model.part_names) > 1:
-                vertex_part = np.zeros(len(model.positions), np.int64)
-                vertex_part[corner_vertex] = corner_part
-                if not np.array_equal(vertex_part[corner_vertex], corner_part):
-                    key = corner_vertex * len(model.part_names) + corner_part
-            _, first, inverse = unique_first(key)
-            vertex, part = corner_vertex[first], corner_part[first]
-        else:
-            normals = corner_normals(model.positions, faces, crease_angle).reshape(-1, 3)
-            quantized = np.round(normals * 32767).astype(np.int64)
-            keys = np.column_stack([corner_vertex, corner_part, quantized])
-            unique, inverse = np.unique(keys, axis=0, return_inverse=True)
-            first = np.zeros(len(unique), np.int64)
-            first[inverse.reshape(-1)] = np.arange(len(keys))
-            vertex, part = unique[:, 0], unique[:, 1]
-        data = np.zeros(len(first), [("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
-        data["p"] = model.positions[vertex]
-        if normals is not None:
-            data["n"] = normals[first]
-        data["part"] = part
-        self.vbo = ctx.buffer(data.tobytes())
-        self.ibo = ctx.buffer(inverse.reshape(-1).astype(np.uint32).tobytes())
+        vertices, indices = gpu_arrays(model, crease_angle)
+        self.vbo = ctx.buffer(vertices)
+        self.ibo = ctx.buffer(indices)
         self._vaos: dict[int, object] = {}
         self._corners = None
         self._model = model
         self.part_count = len(model.part_names)
-        self.triangles = len(faces)
+        self.triangles = len(model.faces)
         self.bounds = model.bounds  # (2, 3): its used vertices' corners
 
     def vao(self, program):

@@ -24,6 +24,7 @@ from blueprint.errors import InputError
 from blueprint.scene.model import Model
 from blueprint.scene.parts import select_parts
 from blueprint.scene.up import AXES
+from blueprint.sorting import stable_argsort
 
 log = logging.getLogger("blueprint")
 
@@ -39,23 +40,41 @@ _WIDER = 4.0
 PartGlobs = str | Iterable[str | int] | None
 
 
-def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(P, 3) lows and highs of every part's faces in one pass over the faces, and (P,) whether
-    the part has any: per part, a pass over every face would take minutes for 10^5 instances."""
+def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(P, 3) lows and highs of every part's faces in one pass over the faces, (P,) whether the
+    part has any, and (P + 1,) where each part's faces start among the faces ordered by part
+    (``_part_faces``): per part, a pass over every face would take minutes for 10^5 instances."""
     count = len(model.part_names)
-    tri = model.corners()
-    # corner by corner and part by part (sorted): NumPy's reductions over a short axis and its
-    # ufunc.at are slow; the same values
-    tri_lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
-    tri_hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
-    order = np.argsort(model.face_part, kind="stable")
-    starts = np.searchsorted(model.face_part[order], np.arange(count + 1))
+    # every face's low and high corner, coordinate by coordinate, in the positions' own type
+    # (the extremes of float32 values are the float32 values of the float64 extremes)
+    tri_lo = np.empty((len(model.faces), 3), model.positions.dtype)
+    tri_hi = np.empty_like(tri_lo)
+    for k in range(3):
+        corner = [model.positions[:, k][model.faces[:, j]] for j in range(3)]
+        np.minimum(np.minimum(corner[0], corner[1]), corner[2], out=tri_lo[:, k])
+        np.maximum(np.maximum(corner[0], corner[1]), corner[2], out=tri_hi[:, k])
+    del corner
+    order = _faces_by_part(model)
+    part = model.face_part
+    if order is not None:
+        part = part[order]
+        tri_lo, tri_hi = np.take(tri_lo, order, axis=0), np.take(tri_hi, order, axis=0)
+    starts = np.searchsorted(part, np.arange(count + 1))
     has = starts[1:] > starts[:-1]
     lo, hi = np.full((count, 3), np.inf), np.full((count, 3), -np.inf)
     if has.any():
-        lo[has] = np.minimum.reduceat(tri_lo[order], starts[:-1][has], axis=0)
-        hi[has] = np.maximum.reduceat(tri_hi[order], starts[:-1][has], axis=0)
-    return lo, hi, has
+        lo[has] = np.minimum.reduceat(tri_lo, starts[:-1][has], axis=0)
+        hi[has] = np.maximum.reduceat(tri_hi, starts[:-1][has], axis=0)
+    return lo, hi, has, starts
+
+
+def _faces_by_part(model: Model) -> np.ndarray | None:
+    """(F,) the faces ordered by part, in order within each (None: they are, as loaders write
+    a scene's parts), made once per model."""
+    if "faces_by_part" not in model._cache:
+        part = model.face_part
+        model._cache["faces_by_part"] = None if np.all(part[1:] >= part[:-1]) else stable_argsort(part)
+    return model._cache["faces_by_part"]
 
 
 def _lowest_of_the_rest(values: np.ndarray, alive: np.ndarray) -> np.ndarray:
@@ -70,8 +89,8 @@ def _lowest_of_the_rest(values: np.ndarray, alive: np.ndarray) -> np.ndarray:
     return np.where(np.arange(len(values))[:, None] == first[None, :], second[None, :], lowest[None, :])
 
 
-def _inward_fraction(model: Model, mask: np.ndarray, centre: np.ndarray) -> float:
-    tri = model.positions[model.faces[mask]].astype(np.float64)
+def _inward_fraction(model: Model, faces: np.ndarray | slice, centre: np.ndarray) -> float:
+    tri = model.positions[model.faces[faces]].astype(np.float64)
     cross = face_cross(tri)
     area = np.linalg.norm(cross, axis=1)
     towards = np.einsum("ij,ij->i", cross, centre - tri.mean(axis=1)) > 0
@@ -88,7 +107,8 @@ def environment_parts(model: Model) -> np.ndarray:
         return found
     up = AXES[model.up]
     across = [a for a in range(3) if a != up]
-    lo, hi, has = _bounds_by_part(model)
+    lo, hi, has, starts = _bounds_by_part(model)
+    by_part = _faces_by_part(model)
     size = hi - lo
     grow = _INSIDE * size.max(axis=1)
     order = np.arange(count)
@@ -119,7 +139,9 @@ def environment_parts(model: Model) -> np.ndarray:
                 part = int(part)
                 if not ground[part] and part not in inward:
                     centre = (lo[part] + hi[part]) / 2
-                    inward[part] = _inward_fraction(model, model.face_part == part, centre)
+                    faces = slice(starts[part], starts[part + 1])
+                    faces = faces if by_part is None else by_part[faces]
+                    inward[part] = _inward_fraction(model, faces, centre)
                 if ground[part] or inward[part] >= _INWARD:
                     found[part] = True
                     start = part + 1

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from blueprint.columns import column_max, column_min, face_cross
+from blueprint.columns import column_max, column_min, face_cross, indexed_cross
 from blueprint.scene.units import UNITS_MM
 
 
@@ -101,12 +102,27 @@ class Model:
         """(2, 3) float64: minimum and maximum corner of the used vertices."""
         # every camera fit asks (the viewer: every frame), and a model's arrays do not change
         if "bounds" not in self._cache:
-            if "corners" in self._cache and len(self.faces):
-                used = self._cache["corners"].reshape(-1, 3)
-            else:
-                used = self.positions[self.faces.reshape(-1)] if len(self.faces) else self.positions
+            used = self.positions
+            if len(self.faces):
+                # each used vertex once, not once a corner (some six times in a closed mesh)
+                mask = np.zeros(len(self.positions), bool)
+                mask[self.faces.reshape(-1)] = True
+                if not mask.all():
+                    used = self.positions[mask]
             self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
         return self._cache["bounds"].copy()
+
+    def content_digest(self) -> bytes:
+        """SHA-256 of the triangles (positions, faces, parts and the part count): models with
+        one digest draw alike, so work kept by it serves a file loaded again. Made once."""
+        if "digest" not in self._cache:
+            digest = hashlib.sha256()
+            for array in (self.positions, self.faces, self.face_part):
+                digest.update(str((array.dtype.str, array.shape)).encode())
+                digest.update(np.ascontiguousarray(array).reshape(-1).view(np.uint8))
+            digest.update(str(len(self.part_names)).encode())
+            self._cache["digest"] = digest.digest()
+        return self._cache["digest"]
 
     def part_triangle_counts(self) -> np.ndarray:
         """(P,) int64: triangles per part."""
@@ -120,7 +136,7 @@ class Model:
     def corner_cross(self) -> np.ndarray:
         """(F, 3) float64: ``columns.face_cross`` of ``corners()``, held as they are."""
         if "corners" not in self._cache:
-            return face_cross(self.corners())
+            return indexed_cross(self.positions, self.faces)
         if "corner_cross" not in self._cache:
             self._cache["corner_cross"] = face_cross(self._cache["corners"])
         return self._cache["corner_cross"]

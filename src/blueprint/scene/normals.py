@@ -4,23 +4,41 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.columns import face_cross
-from blueprint.scene.weld import weld
+from blueprint.columns import column_max, column_min, indexed_cross
+from blueprint.scene.weld import check_mesh, weld_groups
+from blueprint.sorting import sorted_with_order, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
 _MAX_DEGREE = 64
+# Around a vertex whose faces' normals all lie within this many degrees of the sum of their area
+# normals, no two are 90 degrees apart (``corner_normals``).
+_CONE = 44.0
+# Pairs of faces whose normals are compared at a time.
+_CROSS_BLOCK = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
-_PAIR_BLOCK = 1 << 20
+_PAIR_BLOCK = 1 << 18
 
 
 def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
     """(F, 3) int64: vertex ids where vertices at the same position (within ``rel_tol`` of the
-    bounding-box diagonal) share an id, so triangle soups smooth like indexed meshes."""
-    used = positions[faces.reshape(-1)].astype(np.float64)
-    diag = float(np.linalg.norm(np.ptp(used, axis=0))) or 1.0
-    _, welded = weld(positions, faces, tol=diag * rel_tol)
-    return welded
+    bounding-box diagonal of the vertices the faces use) share an id, numbered in the order of
+    their first vertices, so triangle soups smooth like indexed meshes."""
+    return _welded(positions, faces, rel_tol).astype(np.int64)
+
+
+def _welded(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
+    """``weld_ids`` as int32, which halves what the corners' ids take."""
+    positions, faces = check_mesh(positions, faces)
+    if len(faces) == 0:
+        return np.zeros((0, 3), np.int32)
+    used = np.zeros(len(positions), bool)
+    used[faces.reshape(-1)] = True
+    points = positions if used.all() else positions[used]
+    extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
+    diag = float(np.linalg.norm(extent))
+    group, _ = weld_groups(positions, (diag or 1.0) * rel_tol)
+    return np.take(group.astype(np.int32), faces)
 
 
 def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -> np.ndarray:
@@ -37,18 +55,39 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
     crease_angle : float
         Degrees.
     """
-    edges = np.sort(welded[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edge_face = np.repeat(np.arange(len(welded)), 3)
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    edges = edges[order]
-    starts = np.flatnonzero(np.r_[True, (edges[1:] != edges[:-1]).any(axis=1)])
-    count = np.diff(np.r_[starts, len(edges)])
-    pair = starts[count == 2]
-    cos = np.einsum("ij,ij->i", unit[edge_face[order[pair]]], unit[edge_face[order[pair + 1]]])
-    crease = edges[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
     vertices = int(welded.max(initial=-1)) + 1
+    # edge k of a face joins its corners k and k + 1; its key is lo * vertices + hi
+    key = np.empty((len(welded), 3), np.int64)
+    for k in range(3):
+        a, b = welded[:, k], welded[:, (k + 1) % 3]
+        np.multiply(np.minimum(a, b), vertices, out=key[:, k], dtype=np.int64)
+        key[:, k] += np.maximum(a, b)
+    key, order = sorted_with_order(key.reshape(-1), overwrite=True)
+    # edges of two faces: runs of two equal keys (bool masks: run starts and lengths would take
+    # eight bytes an edge each)
+    same = np.zeros(len(key) + 1, bool)
+    np.equal(key[1:], key[:-1], out=same[1:-1])
+    paired = same[1:-1] & ~same[:-2] & ~same[2:]
+    pair = np.flatnonzero(paired)
+    cos = np.empty(len(pair))
+    for lo in range(0, len(pair), _CROSS_BLOCK):
+        at = pair[lo : lo + _CROSS_BLOCK]
+        one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
+        cos[lo : lo + len(at)] = np.einsum("ij,ij->i", one, other)
+    del order
+    crease = key[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
+    del pair, cos
+    # every other edge is a border or a non-manifold edge
+    apart = np.ones(len(key), bool)
+    apart[:-1][paired] = False
+    apart[1:][paired] = False
+    del same, paired
+    open_edges = key[apart]
+    del apart, key
     sharp = np.zeros(vertices, bool)
-    sharp[edges[starts[count != 2]].ravel()] = True
+    sharp[open_edges // vertices] = True
+    sharp[open_edges % vertices] = True
+    crease = np.stack([crease // vertices, crease % vertices], axis=1)
     sharp[crease[~lone_creases(crease, sharp)].ravel()] = True
     return sharp
 
@@ -70,7 +109,9 @@ def lone_creases(crease: np.ndarray, anchored: np.ndarray) -> np.ndarray:
     return free[crease[:, 0]] & free[crease[:, 1]]
 
 
-def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0) -> np.ndarray:
+def corner_normals(
+    positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0, topology: dict | None = None
+) -> np.ndarray:
     """Normal per triangle corner: the area-weighted mean of the normals of the faces around the
     corner's vertex that lie within ``crease_angle`` degrees of the corner's face; at a vertex
     on no crease edge (``crease_vertices``), of all the faces around it.
@@ -92,63 +133,115 @@ def corner_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float
     faces : (F, 3) int
     crease_angle : float
         Degrees; 0 gives flat (per-face) normals.
+    topology : dict, optional
+        Kept with the mesh (by ``scene.prepare``): the welded vertex ids (``"welded"``, (F, 3)
+        int32) and the crease vertices (``("sharp", crease_angle)``, (V,) bool) are read from
+        it where it holds them, and left in it where it does not: they take the sorts.
 
     Returns
     -------
     (F, 3, 3) float32
         Unit normal for corner ``j`` of face ``i`` at ``[i, j]``.
     """
-    tri = positions[faces].astype(np.float64)
-    area_normals = face_cross(tri)
+    topology = {} if topology is None else topology
+    faces = np.asarray(faces)
+    area_normals = indexed_cross(np.asarray(positions), faces)
     length = np.linalg.norm(area_normals, axis=1)
     unit = area_normals / np.where(length > 0, length, 1.0)[:, None]
-    flat = np.repeat(unit[:, None, :], 3, axis=1)
+    del length
     if crease_angle <= 0 or len(faces) == 0:
-        return flat.astype(np.float32)
-
-    welded = weld_ids(positions, faces)
-    sharp = crease_vertices(welded, unit, crease_angle)
+        return np.repeat(unit.astype(np.float32)[:, None, :], 3, axis=1)
+    welded = topology.get("welded")
+    if welded is None:
+        welded = topology["welded"] = _welded(positions, faces)
+    sharp = topology.get(("sharp", float(crease_angle)))
+    if sharp is None:
+        sharp = topology[("sharp", float(crease_angle))] = crease_vertices(welded, unit, crease_angle)
+    vertices = len(sharp)
     vertex = welded.reshape(-1)
-    corner_face = np.repeat(np.arange(len(faces)), 3)
-    order = np.argsort(vertex, kind="stable")
+    # Where no pair of the faces around a vertex is told apart (no crease there, and every two
+    # faces' normals less than 90 degrees apart, so none counts with a flipped sign), each of
+    # its corners sums the area normals of all of them, in corner order as the pairs would.
+    summed = np.empty((vertices, 3))
+    for axis in range(3):
+        summed[:, axis] = np.bincount(vertex, np.repeat(area_normals[:, axis], 3), minlength=vertices)
+    norm = np.linalg.norm(summed, axis=1)
+    degree = np.bincount(vertex, minlength=vertices)
+    shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
+    summed[shared] /= norm[shared, None]
+    del norm
+    result = np.empty((len(faces), 3, 3), np.float32)
+    corners = result.reshape(-1, 3)
+    np.take(summed.astype(np.float32), vertex, axis=0, out=corners)
+    del summed
+    apart = np.flatnonzero(~shared[vertex])
+    corners[apart] = np.take(unit, apart // 3, axis=0)
+    paired = apart[degree[vertex[apart]] <= _MAX_DEGREE]
+    if len(paired):
+        _pairwise(paired, vertex[paired], area_normals, unit, sharp, crease_angle, corners)
+    return result
+
+
+def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length: np.ndarray) -> np.ndarray:
+    """(V,) bool: every face around the vertex has a unit normal within ``_CONE`` degrees of the
+    vertex's ``axis`` (V, 3) of ``length`` (V,) (degenerate faces never are), so any two of
+    them lie within twice that, less than 90 degrees apart: their cosine, computed, is
+    positive."""
+    outside = np.zeros(len(axis), bool)
+    limit = np.cos(np.radians(_CONE)) * length
+    for j in range(3):
+        at = welded[:, j]
+        dot = np.einsum("ij,ij->i", unit, np.take(axis, at, axis=0))
+        outside[at[dot <= limit[at]]] = True
+    return ~outside
+
+
+def _pairwise(
+    corners: np.ndarray,
+    vertex: np.ndarray,
+    area_normals: np.ndarray,
+    unit: np.ndarray,
+    sharp: np.ndarray,
+    crease_angle: float,
+    out: np.ndarray,
+) -> None:
+    """The normals of ``corners`` (all the corners of their vertices, ``vertex``) from every
+    ordered pair of corners around a vertex: the other corner's face counts where it lies
+    within the crease angle of this corner's face, or the vertex is on no crease, with the
+    sign of their cosine. Written into ``out`` (3F, 3) float32 where they are not zero."""
+    order = stable_argsort(vertex)
+    corner_face = corners[order] // 3
     sorted_vertex = vertex[order]
     starts = np.flatnonzero(np.r_[True, sorted_vertex[1:] != sorted_vertex[:-1]])
     degree = np.diff(np.r_[starts, len(order)])
     group_start = np.repeat(starts, degree)
     group_size = np.repeat(degree, degree)
-    smooth = group_size <= _MAX_DEGREE
 
     # every ordered pair (corner a, corner b) around the same vertex, a block of corners at a
     # time: a vertex of degree d makes d pairs a corner, so all at once would hold up to
     # _MAX_DEGREE times the corners
-    a_sorted = np.flatnonzero(smooth)
-    ends = np.cumsum(group_size[a_sorted])
-    pairs = int(ends[-1]) if len(ends) else 0
-    cuts = np.r_[0, np.searchsorted(ends, np.arange(_PAIR_BLOCK, pairs, _PAIR_BLOCK)), len(a_sorted)]
+    ends = np.cumsum(group_size)
+    pairs = int(ends[-1])
+    cuts = np.r_[0, np.searchsorted(ends, np.arange(_PAIR_BLOCK, pairs, _PAIR_BLOCK)), len(order)]
     cos_crease = np.cos(np.radians(crease_angle)) - 1e-9
-    summed_sorted = np.zeros((len(vertex), 3))
+    corner_unit = np.take(unit, corner_face, axis=0)  # NumPy takes rows faster than it indexes them
+    corner_sharp = sharp[sorted_vertex]
+    area = [np.ascontiguousarray(area_normals[:, axis]) for axis in range(3)]
+    summed = np.zeros((len(order), 3))
     for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
         if lo == hi:
             continue
-        block = a_sorted[lo:hi]
-        counts = group_size[block]
-        a_idx = np.repeat(block, counts)
-        within = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
-        face_b = corner_face[order[group_start[a_idx] + within]]
-        cos = np.einsum("ij,ij->i", unit[corner_face[order[a_idx]]], unit[face_b])
-        keep = (np.abs(cos) >= cos_crease) | ~sharp[sorted_vertex[a_idx]]
-        contribution = area_normals[face_b[keep]] * np.sign(cos[keep])[:, None]
-        # a block's corners are a run of the sorted corners
-        target = a_idx[keep] - block[0]
-        span = block[-1] + 1 - block[0]
+        counts = group_size[lo:hi]
+        a_idx = np.repeat(np.arange(lo, hi), counts)
+        b_idx = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
+        b_idx += group_start[a_idx]
+        cos = np.einsum("ij,ij->i", np.take(corner_unit, a_idx, axis=0), np.take(corner_unit, b_idx, axis=0))
+        keep = (np.abs(cos) >= cos_crease) | ~corner_sharp[a_idx]
+        face_b = corner_face[b_idx[keep]]
+        sign = np.sign(cos[keep])
+        target = a_idx[keep] - lo
         for axis in range(3):
-            summed_sorted[block[0] : block[-1] + 1, axis] += np.bincount(
-                target, contribution[:, axis], minlength=span
-            )
-    summed = np.empty_like(summed_sorted)
-    summed[order] = summed_sorted
+            summed[lo:hi, axis] += np.bincount(target, area[axis][face_b] * sign, minlength=hi - lo)
     norm = np.linalg.norm(summed, axis=1)
-    result = flat.reshape(-1, 3).copy()
     ok = norm > 0
-    result[ok] = summed[ok] / norm[ok, None]
-    return result.reshape(-1, 3, 3).astype(np.float32)
+    out[corners[order[ok]]] = (summed[ok] / norm[ok, None]).astype(np.float32)

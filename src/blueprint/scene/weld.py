@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.columns import column_min, column_ptp
-from blueprint.sorting import stable_argsort
+from blueprint.columns import column_max, column_min
+from blueprint.sorting import unique_first
 
-__all__ = ["weld"]
+__all__ = ["check_mesh", "default_tolerance", "weld", "weld_groups"]
 
 # Default weld tolerance, relative to the bounding-box diagonal.
 _REL_TOL = 1e-6
@@ -24,22 +24,29 @@ _FORWARD_OFFSETS = np.array(
 # may give on average before the grid takes over.
 _SWEEP_DIRECTION = np.array([1.0, np.sqrt(2.0), np.sqrt(3.0)]) / np.sqrt(6.0)
 _SWEEP_CANDIDATES = 16
+# Candidates of the sweep checked at a time.
+_SWEEP_BLOCK = 1 << 22
 # Odd multipliers that mix a position's three 64-bit patterns into one key (wrapping).
 _BITS_HASH = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
 # Large odd multipliers for a spatial hash of integer cell coordinates (Teschner et al. 2003).
 _HASH = np.array([73856093, 19349663, 83492791], dtype=np.int64)
 
 
-def _check_mesh(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    positions = np.asarray(positions, dtype=np.float64)
+def check_mesh(positions: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``positions`` as float32 or float64 and ``faces`` as integers, checked: shapes, indices
+    in range, finite positions (ValueError)."""
+    positions = np.asarray(positions)
+    if positions.dtype != np.float32:
+        positions = positions.astype(np.float64, copy=False)
     faces = np.asarray(faces)
     if positions.ndim != 2 or positions.shape[1] != 3:
         raise ValueError(f"positions must have shape (V, 3), got {positions.shape}")
     if faces.ndim != 2 or faces.shape[1] != 3:
         raise ValueError(f"faces must have shape (F, 3), got {faces.shape}")
-    if faces.size and not np.issubdtype(faces.dtype, np.integer):
-        raise ValueError(f"faces must hold integers, got dtype {faces.dtype}")
-    faces = faces.astype(np.int64)
+    if not np.issubdtype(faces.dtype, np.integer):
+        if faces.size:
+            raise ValueError(f"faces must hold integers, got dtype {faces.dtype}")
+        faces = faces.astype(np.int64)
     if faces.size and (faces.min() < 0 or faces.max() >= len(positions)):
         raise ValueError(f"face indices must lie in [0, {len(positions)})")
     if not np.isfinite(positions).all():
@@ -67,12 +74,27 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     total = int(count.sum())
     if total > _SWEEP_CANDIDATES * n:
         return _grid_pairs(points, tol)
-    first = np.repeat(np.arange(n), count)
-    second = first + 1 + (np.arange(total) - np.repeat(np.cumsum(count) - count, count))
-    i, j = order[first], order[second]
-    diff = points[i] - points[j]
-    keep = np.einsum("ij,ij->i", diff, diff) <= tol * tol
-    return i[keep], j[keep]
+    # the candidates of a block of points at a time, read from the points in sweep order: a
+    # candidate lies a few places on, where its row is at hand
+    ordered = np.take(points, order, axis=0)
+    x = np.ascontiguousarray(ordered[:, 0])
+    ends = np.cumsum(count)
+    cuts = np.r_[0, np.searchsorted(ends, np.arange(_SWEEP_BLOCK, total, _SWEEP_BLOCK)), n]
+    found_i, found_j = [], []
+    for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
+        block = count[lo:hi]
+        first = np.repeat(np.arange(lo, hi), block)
+        second = first + 1 + (np.arange(len(first)) - np.repeat(np.cumsum(block) - block, block))
+        # the squared difference in x is at most the squared distance, as computed: it rules
+        # most candidates out before their rows are read
+        dx = x[first] - x[second]
+        near = dx * dx <= tol * tol
+        first, second = first[near], second[near]
+        diff = np.take(ordered, first, axis=0) - np.take(ordered, second, axis=0)
+        keep = np.einsum("ij,ij->i", diff, diff) <= tol * tol
+        found_i.append(order[first[keep]])
+        found_j.append(order[second[keep]])
+    return np.concatenate(found_i), np.concatenate(found_j)
 
 
 def _grid_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
@@ -133,23 +155,84 @@ def _components(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
             return np.unique(label, return_inverse=True)[1].reshape(-1)
 
 
+def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each row of ``positions`` (V, 3) numbered among the distinct rows in the order of their
+    first occurrence, and the index of each distinct row's first occurrence: ``(inverse,
+    first)``, ``positions[first][inverse]`` equal to ``positions`` (-0.0 equal to 0.0).
+
+    Rows are sorted by a hash of their bits with their index in its low bits, one sort of
+    values: rows that share the rest of their hash are one row, or (never seen; possible) a
+    collision, whose rows alone are sorted by their values."""
+    n = len(positions)
+    if n == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    unsigned = np.uint32 if positions.dtype == np.float32 else np.uint64
+    key = np.zeros(n, np.uint64)
+    for k, multiplier in enumerate(_BITS_HASH):
+        # adding 0.0 turns -0.0 into 0.0, which would hash apart by its bits
+        column = (positions[:, k] + positions.dtype.type(0.0)).view(unsigned).astype(np.uint64)
+        column *= multiplier
+        key += column
+        del column
+    bits = max(1, (n - 1).bit_length())
+    low = np.uint64((1 << bits) - 1)
+    key &= ~low
+    key |= np.arange(n, dtype=np.uint64)
+    key.sort()
+    # equal above the index bits: their exclusive or is below them
+    same_hash = np.bitwise_xor(key[1:], key[:-1]) <= low
+    key &= low
+    order = key.view(np.int64)
+    del key
+    differs = _row_changes(positions, order)
+    collided = same_hash & differs
+    if collided.any():
+        # the rows of the runs with a collision, sorted by value (stably: each one's first
+        # occurrence stays first)
+        run = np.cumsum(np.r_[True, ~same_hash])
+        sub = np.flatnonzero(np.isin(run, run[1:][collided]))
+        picked = order[sub]
+        order[sub] = picked[np.lexsort([positions[picked, k] for k in (2, 1, 0)])]
+        # only the neighbours of the rows moved can change
+        moved = np.union1d(sub[sub > 0] - 1, sub[sub < n - 1])
+        one, other = (np.take(positions, order[moved + k], axis=0) for k in (0, 1))
+        differs[moved] = (one != other).any(axis=1)
+    del same_hash, collided
+    new = np.empty(n, bool)
+    new[0] = True
+    new[1:] = differs
+    del differs
+    # within a row's run its indices rise: the run's first is the row's first occurrence
+    firsts = order[new]
+    seen = np.zeros(n, bool)
+    seen[firsts] = True
+    rank = np.cumsum(seen, dtype=np.int32)[firsts]
+    rank -= 1
+    group = np.cumsum(new, dtype=np.int32)
+    del new
+    group -= 1
+    np.take(rank, group, out=group)
+    inverse = np.empty(n, np.int64)
+    inverse[order] = group
+    return inverse, np.flatnonzero(seen)
+
+
+def _row_changes(positions: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """(V - 1,) bool: row ``order[i + 1]`` of ``positions`` differs from row ``order[i]`` (as
+    values: -0.0 equals 0.0)."""
+    rows = np.take(positions, order, axis=0)  # NumPy takes rows faster than it indexes them
+    changes = rows[1:, 0] != rows[:-1, 0]
+    for k in (1, 2):
+        changes |= rows[1:, k] != rows[:-1, k]
+    return changes
+
+
 def _exact_duplicates(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Distinct rows of ``positions`` and each row's number among them, as
-    ``np.unique(axis=0, return_inverse=True)`` gives them but in another order: rows are sorted
-    by a hash of their bits, one 1-D sort where a row-wise unique compares rows. Two distinct
-    rows with one hash (never seen; possible) take ``np.unique`` instead."""
-    bits = np.ascontiguousarray(positions).view(np.uint64)
-    key = bits[:, 0] * _BITS_HASH[0] + bits[:, 1] * _BITS_HASH[1] + bits[:, 2] * _BITS_HASH[2]
-    order = np.argsort(key)
-    rows = positions[order]
-    same_key = key[order][1:] == key[order][:-1]
-    if (same_key & (rows[1:] != rows[:-1]).any(axis=1)).any():
-        unique, inverse = np.unique(positions, axis=0, return_inverse=True)
-        return unique, inverse.reshape(-1)
-    new = np.r_[True, ~same_key]
-    inverse = np.empty(len(positions), np.int64)
-    inverse[order] = np.cumsum(new) - 1
-    return rows[new], inverse
+    ``np.unique(axis=0, return_inverse=True)`` gives them but in the order of their first
+    occurrence."""
+    inverse, first = _exact_groups(positions)
+    return positions[first], inverse
 
 
 def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -177,27 +260,49 @@ def weld(positions: np.ndarray, faces: np.ndarray, tol: float | None = None) -> 
     faces : np.ndarray
         (F, 3) int64 faces remapped to the welded positions.
     """
-    positions, faces = _check_mesh(positions, faces)
+    positions, faces = check_mesh(positions, faces)
     if len(positions) == 0:
-        return positions.copy(), faces
+        return positions.astype(np.float64), faces.astype(np.int64)
     if tol is None:
-        tol = _REL_TOL * float(np.linalg.norm(column_ptp(positions)))
+        tol = default_tolerance(positions)
     elif not (np.isfinite(tol) and tol >= 0):
         raise ValueError(f"tol must be a finite non-negative number, got {tol}")
+    group, first = weld_groups(positions, tol)
+    return positions[first].astype(np.float64), group[faces]
 
+
+def default_tolerance(positions: np.ndarray) -> float:
+    """``weld``'s default tolerance for the points ``positions`` (V, 3): ``_REL_TOL`` times
+    their bounding box's diagonal (in float64, whatever their type)."""
+    extent = column_max(positions).astype(np.float64) - column_min(positions).astype(np.float64)
+    return _REL_TOL * float(np.linalg.norm(extent))
+
+
+def weld_groups(positions: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """The welded vertex of every vertex of ``weld``, and the first vertex of every welded one.
+
+    Parameters
+    ----------
+    positions : (V, 3) float32 or float64
+        Finite positions.
+    tol : float
+        Euclidean merge distance (non-negative).
+
+    Returns
+    -------
+    group : (V,) int64
+        Welded vertex of each vertex, numbered in the order of their first vertices.
+    first : (V',) int64
+        The lowest vertex of each welded vertex, ascending.
+    """
     # Exact duplicates first: triangle soups repeat every vertex several times, and collapsing
-    # them keeps the grid cells nearly empty for the near-duplicate search.
-    # Adding 0.0 turns -0.0 into 0.0, which row-unique would otherwise tell apart by bytes.
-    unique, inverse = _exact_duplicates(positions + 0.0)
-    label = np.arange(len(unique))
-    if tol > 0 and len(unique) > 1:
-        i, j = _close_pairs(unique, tol)
-        label = _components(label, np.asarray(i, np.int64), np.asarray(j, np.int64))
-
-    group = label[inverse]
-    # Number the groups by their first original vertex so the output order is stable.
-    group_first = np.full(group.max() + 1, len(positions), dtype=np.int64)
-    np.minimum.at(group_first, group, np.arange(len(positions)))
-    rank = np.empty_like(group_first)
-    rank[stable_argsort(group_first)] = np.arange(len(group_first))
-    return positions[np.sort(group_first)], rank[group][faces]
+    # them keeps the sweep's and the grid's neighbourhoods nearly empty.
+    inverse, first = _exact_groups(positions)
+    if tol > 0 and len(first) > 1:
+        i, j = _close_pairs(positions[first].astype(np.float64), tol)
+        if len(i):
+            label = _components(np.arange(len(first)), np.asarray(i, np.int64), np.asarray(j, np.int64))
+            # components are numbered by their lowest member, and members by first vertex
+            first = first[unique_first(label)[1]]
+            inverse = label[inverse]
+    return inverse, first

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.columns import face_cross, row_norm
+from blueprint.columns import indexed_cross, row_norm
 from blueprint.scene.weld import weld
 from blueprint.sorting import stable_argsort, unique_first
 
@@ -94,8 +94,13 @@ def _orient_merged(
             break
         between = flip[ea] ^ flip[eb] ^ ep  # the flip of one root relative to the other
         low, high = np.minimum(ra, rb), np.maximum(ra, rb)
-        order = stable_argsort(high * num_faces + low)
-        first = order[np.r_[True, high[order][1:] != high[order][:-1]]]
+        # each higher root's pair to the lowest root, the first such pair: the smallest key
+        # low * pairs + pair, found in one pass where sorting the pairs by (high, low) would
+        # order them all
+        pairs = len(ea)
+        best = np.full(num_faces, num_faces * pairs, np.int64)
+        np.minimum.at(best, high, low * pairs + np.arange(pairs))
+        first = best[best < num_faces * pairs] % pairs
         parent[high[first]] = low[first]
         flip[high[first]] = between[first]
         parent = _to_roots(parent, flip)
@@ -197,10 +202,6 @@ def _distances(reach, root: int) -> np.ndarray:
     return distance
 
 
-def _squared_length(v: np.ndarray) -> np.ndarray:
-    return v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1] + v[:, 2] * v[:, 2]
-
-
 def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | None = None) -> Adjacency:
     """Weld a triangle soup, build its edge connectivity and make its winding consistent.
 
@@ -248,46 +249,69 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     # Half-edge k of face f runs from corner k to corner k + 1.
     start = faces.reshape(-1)
     end = faces[:, [1, 2, 0]].reshape(-1)
-    half_face = np.repeat(np.arange(num_faces, dtype=np.int64), 3)
     # A face with a repeated index is a line or a point: it bounds nothing, so its edges
     # would only add false borders and break the two-face count of real edges.
-    proper = np.repeat(
-        (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0]),
-        3,
-    )
-    start, end, half_face = start[proper], end[proper], half_face[proper]
+    proper = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
+    if proper.all():
+        half_face = None  # half-edge h of face h // 3
+    else:
+        half_face = np.repeat(np.arange(num_faces, dtype=np.int64), 3)
+        proper = np.repeat(proper, 3)
+        start, end, half_face = start[proper], end[proper], half_face[proper]
+    del proper
 
-    lo, hi = np.minimum(start, end), np.maximum(start, end)
-    key = lo * num_vertices + hi
+    key = np.minimum(start, end)
+    key *= num_vertices
+    key += np.maximum(start, end)
     # half-edges come in face order, so one stable sort by edge orders them by edge, then face
     order = stable_argsort(key)
     sorted_key = key[order]
-    new_edge = np.ones(len(key), bool)
+    del key
+    new_edge = np.ones(len(sorted_key), bool)
     new_edge[1:] = sorted_key[1:] != sorted_key[:-1]
     keys = sorted_key[new_edge]
-    half_edge = np.empty(len(key), np.int64)
-    half_edge[order] = np.cumsum(new_edge) - 1
-    edges = np.stack([keys // num_vertices, keys % num_vertices], axis=1)
-    edge_faces = np.stack([half_edge[order], half_face[order]], axis=1)
+    del sorted_key
+    edges = np.empty((len(keys), 2), np.int64)
+    np.floor_divide(keys, num_vertices, out=edges[:, 0])
+    np.remainder(keys, num_vertices, out=edges[:, 1])
+    del keys
+    edge_faces = np.empty((len(order), 2), np.int64)
+    np.subtract(np.cumsum(new_edge), 1, out=edge_faces[:, 0])
+    if half_face is None:
+        np.floor_divide(order, 3, out=edge_faces[:, 1])
+    else:
+        np.take(half_face, order, out=edge_faces[:, 1])
 
     # Manifold edges: exactly two incidences, adjacent after sorting by edge.
-    count = np.bincount(half_edge, minlength=len(edges))
-    manifold = order[count[half_edge[order]] == 2]
+    starts = np.flatnonzero(new_edge)
+    del new_edge
+    count = np.diff(np.r_[starts, len(order)])
+    manifold = order[np.repeat(count == 2, count)]
+    del starts, count, order
     first, second = manifold[::2], manifold[1::2]
     same_direction = start[first] == start[second]
-    flipped, component = _orient(
-        num_faces, np.stack([half_face[first], half_face[second]], axis=1), same_direction
-    )
+    pair_faces = np.stack([first, second], axis=1)
+    if half_face is None:
+        pair_faces //= 3
+    else:
+        pair_faces = half_face[pair_faces]
+    flipped, component = _orient(num_faces, pair_faces, same_direction)
     faces = np.where(flipped[:, None], faces[:, [0, 2, 1]], faces)
 
-    corners = positions[faces]
-    cross = face_cross(corners)
+    cross = indexed_cross(positions, faces)
     area2 = row_norm(cross)
-    # squared edge lengths summed and compared column by column (NumPy's reductions over a
-    # short axis are slow); the same values
-    c0, c1, c2 = corners[:, 0], corners[:, 1], corners[:, 2]
-    length2 = [_squared_length(b - a) for a, b in ((c0, c1), (c1, c2), (c2, c0))]
+    # squared edge lengths summed coordinate by coordinate, x then y then z (NumPy's reductions
+    # over a short axis are slow), without the faces' (F, 3, 3) corners
+    length2 = [None, None, None]
+    for k in range(3):
+        column = positions[:, k]
+        corner = [column[faces[:, j]] for j in range(3)]
+        for e, (a, b) in enumerate(((0, 1), (1, 2), (2, 0))):
+            d = corner[b] - corner[a]
+            d *= d
+            length2[e] = d if length2[e] is None else length2[e] + d
     longest2 = np.maximum(np.maximum(length2[0], length2[1]), length2[2])
+    del length2
     good = area2 > _DEGENERATE_REL_AREA * longest2
     normals = np.zeros_like(cross)
     normals[good] = cross[good] / area2[good, None]
@@ -295,8 +319,8 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
         positions=positions,
         faces=faces,
         flipped=flipped,
-        edges=edges.astype(np.int64),
-        edge_faces=edge_faces.astype(np.int64),
+        edges=edges,
+        edge_faces=edge_faces,
         component=component,
         face_normals=normals,
     )

@@ -4,7 +4,6 @@ batch, a benchmark or a second load of one file hands over a new object with the
 
 from __future__ import annotations
 
-import hashlib
 import weakref
 from collections import OrderedDict
 from collections.abc import Callable
@@ -16,21 +15,11 @@ __all__ = ["ModelCache", "content_key"]
 
 T = TypeVar("T")
 
-_KEYS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
 
 def content_key(model: Model) -> str:
     """A digest of what the lines depend on (positions, faces, their parts, the part count),
-    computed once per model object."""
-    key = _KEYS.get(model)
-    if key is None:
-        digest = hashlib.blake2b(digest_size=16)
-        for array in (model.positions, model.faces, model.face_part):
-            digest.update(str(array.dtype).encode() + str(array.shape).encode())
-            digest.update(array.tobytes())
-        digest.update(str(len(model.part_names)).encode())
-        key = _KEYS[model] = digest.hexdigest()
-    return key
+    computed once per model object (``Model.content_digest``)."""
+    return model.content_digest().hex()
 
 
 class ModelCache:

@@ -1,0 +1,164 @@
+"""A model's triangles made ready for the GPU: shared vertices split where their normal or part
+differs, and the faces' corners as indices into them.
+
+What the sorts find (the welded vertices, the crease vertices) is kept by the model's content,
+so that another model of the same triangles (another view of a file loaded again, a batch)
+skips them: some 12 bytes a triangle, where the arrays themselves, 100 bytes a triangle of a
+triangle soup, would stay in memory through the drawing that uploaded them.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+
+from blueprint import settings
+from blueprint.scene.model import Model
+from blueprint.scene.normals import corner_normals
+from blueprint.sorting import stable_argsort, unique_first
+
+__all__ = ["VERTEX", "gpu_arrays", "topology"]
+
+# One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
+VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
+# Topologies kept, and the bytes they may hold together.
+_KEPT = 4
+_KEPT_BYTES = settings.MEMORY_BUDGET // 32
+# Vertices whose fields are gathered at a time.
+_BLOCK = 1 << 20
+# Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
+_SHIFT = 1 << 16
+
+_topologies: OrderedDict[bytes, dict] = OrderedDict()
+
+
+def topology(model: Model) -> dict:
+    """The topology kept for the model's content (``corner_normals``' ``topology``), the most
+    recently used kept last; a new, empty one where none is."""
+    key = model.content_digest()
+    held = _topologies.get(key)
+    if held is None:
+        held = _topologies[key] = {}
+    _topologies.move_to_end(key)
+    return held
+
+
+def _bound() -> None:
+    """Forget the least recently used topologies beyond ``_KEPT`` or ``_KEPT_BYTES``."""
+    sizes = [sum(a.nbytes for a in held.values()) for held in _topologies.values()]
+    while len(sizes) > _KEPT or sum(sizes) > _KEPT_BYTES:
+        _topologies.popitem(last=False)
+        sizes.pop(0)
+
+
+def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The vertex and index arrays of ``model`` for ``render.mesh.GpuMesh``.
+
+    Every corner of every face becomes a vertex, corners of one vertex of the model merged
+    where their part and their normal (``corner_normals`` with ``crease_angle``, quantized to
+    16 bits) are the same; without a crease angle (None) the normals are left zero.
+
+    Returns
+    -------
+    vertices : (N,) ``VERTEX``
+        Ordered by model vertex, then part, then normal.
+    indices : (3F,) uint32
+        Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
+    """
+    if crease_angle is None:
+        return _prepare(model, None, None)
+    arrays = _prepare(model, crease_angle, topology(model))
+    _bound()
+    return arrays
+
+
+def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tuple[np.ndarray, np.ndarray]:
+    corner_vertex = model.faces.reshape(-1)
+    parts = len(model.part_names)
+    normals = None
+    if crease_angle is None:
+        # where each vertex lies in one part, the vertex orders the keys alone, over a range
+        # that unique_first counts over instead of sorting
+        key = corner_vertex
+        if parts > 1:
+            corner_part = np.repeat(model.face_part, 3)
+            vertex_part = np.zeros(len(model.positions), np.int32)
+            vertex_part[corner_vertex] = corner_part
+            if not np.array_equal(vertex_part[corner_vertex], corner_part):
+                key = corner_vertex.astype(np.int64) * parts + corner_part
+            del corner_part, vertex_part
+        if np.all(key[1:] > key[:-1]):
+            chosen, inverse = None, np.arange(len(key), dtype=np.uint32)  # a triangle soup
+        else:
+            _, chosen, inverse = unique_first(key)
+            inverse = inverse.astype(np.uint32)
+        del key
+    else:
+        normals = corner_normals(model.positions, model.faces, crease_angle, known).reshape(-1, 3)
+        key = corner_vertex
+        if parts > 1:
+            key = corner_vertex.astype(np.int64) * parts
+            key += np.repeat(model.face_part, 3)
+        if np.all(key[1:] > key[:-1]):
+            # every corner a vertex of its own (a triangle soup): nothing to merge
+            chosen, inverse = None, np.arange(len(key), dtype=np.uint32)
+        else:
+            chosen, inverse = _split_vertices(key, normals)
+        del key
+    count = len(corner_vertex) if chosen is None else len(chosen)
+    vertices = np.zeros(count, VERTEX)
+    # a block of vertices at a time: their gathered fields are as large as the vertices
+    for lo in range(0, count, _BLOCK):
+        corner = np.arange(lo, min(lo + _BLOCK, count)) if chosen is None else chosen[lo : lo + _BLOCK]
+        rows = slice(lo, lo + len(corner))
+        vertices["p"][rows] = np.take(model.positions, corner_vertex[corner], axis=0)
+        if normals is not None:
+            vertices["n"][rows] = np.take(normals, corner, axis=0)
+        vertices["part"][rows] = model.face_part[corner // 3]
+    return vertices, inverse
+
+
+def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct (vertex and part, quantized normal) pairs of the corners, in that order:
+    the last corner of each, and each corner's pair (its number among them, uint32).
+
+    ``vertex_part`` (3F,) int orders the vertex and the part; the normals' three 16-bit
+    components pack into one more key. Corners are sorted by the first key, then, only in
+    the runs of one vertex whose normals differ, by both."""
+    n = len(vertex_part)
+    order = stable_argsort(vertex_part)
+    first = vertex_part[order]
+    same_first = first[1:] == first[:-1]
+    second = _normal_key(normals[order])
+    mixed = same_first & (second[1:] != second[:-1])
+    if mixed.any():
+        run = np.cumsum(np.r_[True, ~same_first])
+        at = np.flatnonzero(np.isin(run, run[1:][mixed]))
+        del run
+        # a stable sort: the corners of one pair keep their order
+        sub = np.lexsort((second[at], first[at]))
+        order[at] = order[at][sub]
+        second[at] = second[at][sub]
+    del first, mixed
+    new = np.empty(n, bool)
+    new[0] = True
+    np.not_equal(second[1:], second[:-1], out=new[1:])
+    new[1:] |= ~same_first
+    del second, same_first
+    inverse = np.empty(n, np.uint32)
+    inverse[order] = np.cumsum(new, dtype=np.uint32) - np.uint32(1)
+    last = order[np.r_[np.flatnonzero(new)[1:] - 1, n - 1]]
+    return last, inverse
+
+
+def _normal_key(normals: np.ndarray) -> np.ndarray:
+    """(N,) int64: the unit normals (N, 3) float32 quantized to 16 bits a component (as
+    ``np.round(normals * 32767)``), packed in their order: the keys sort as the rows do."""
+    key = np.zeros(len(normals), np.int64)
+    for axis in range(3):
+        quantized = np.round(normals[:, axis] * 32767).astype(np.int64)
+        quantized += _SHIFT
+        quantized <<= 17 * (2 - axis)
+        key |= quantized
+    return key

@@ -1,0 +1,335 @@
+"""Preparing a model for the GPU (``scene.prepare``, ``scene.normals``, ``scene.weld``) against
+slow, independent computations on small meshes: corner normals from a loop over every corner
+and the faces around it, the vertex split from ``np.unique`` of whole rows, the weld's
+grouping with every row's hash the same; and the prepared arrays kept by content."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from blueprint.render.mesh import GpuMesh
+from blueprint.scene import environment, normals, prepare, up, weld
+from blueprint.scene.model import Model
+
+
+def mixed_mesh() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Some 300 faces with every case of the smoothing: a noisy sphere as a triangle soup with
+    faces wound the wrong way (smooth vertices, lone creases of noise, chained ones), a box
+    (creases), an open fold (a border), a fan of 70 faces (a vertex beyond ``_MAX_DEGREE``), a
+    pointed cone, a degenerate face and vertices a hair apart (welded). Three parts."""
+    rng = np.random.default_rng(5)
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    v = sphere.vertices * (1 + rng.normal(0, 0.04, (len(sphere.vertices), 1)))
+    f = sphere.faces.copy()
+    f[::5] = f[::5, ::-1]
+    soup = v[f].reshape(-1, 3) + rng.normal(0, 1e-9, (3 * len(f), 3))
+    parts = [(soup, np.arange(len(soup)).reshape(-1, 3))]
+    box = trimesh.creation.box(extents=(0.5, 0.5, 0.5))
+    parts.append((box.vertices + (2.0, 0, 0), box.faces))
+    fold = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -0.8, 0.6], [1, 1, 0.1]], float) + (0, 2.0, 0)
+    parts.append((fold, np.array([[0, 1, 2], [1, 0, 3], [1, 4, 2], [2, 2, 4]])))
+    ring = np.linspace(0, 2 * np.pi, 70, endpoint=False)
+    fan = np.r_[[[0, 0, 0.3]], np.c_[np.cos(ring), np.sin(ring), np.zeros(70)]] + (0, -3.0, 0)
+    parts.append((fan, np.c_[np.zeros(70, int), 1 + np.arange(70), 1 + (np.arange(70) + 1) % 70]))
+    # a pointed apex on no crease edge whose opposite faces are 120 degrees apart: counted with
+    # the sign of their cosine
+    ring = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    cone = np.r_[[[0, 0, 1.7]], np.c_[np.cos(ring), np.sin(ring), np.zeros(24)]] + (3.0, 3.0, 0)
+    parts.append((cone, np.c_[np.zeros(24, int), 1 + np.arange(24), 1 + (np.arange(24) + 1) % 24]))
+    positions, faces, face_part, offset = [], [], [], 0
+    for k, (p, fc) in enumerate(parts):
+        positions.append(p)
+        faces.append(fc + offset)
+        face_part.append(np.full(len(fc), min(k, 2)))
+        offset += len(p)
+    return np.concatenate(positions), np.concatenate(faces), np.concatenate(face_part)
+
+
+def reference_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: float) -> np.ndarray:
+    """``corner_normals`` one corner at a time, as its docstring says."""
+    p = positions.astype(np.float64)
+    used = np.unique(faces)
+    diag = float(np.linalg.norm(p[used].max(axis=0) - p[used].min(axis=0))) or 1.0
+    tol2 = (1e-6 * diag) ** 2
+    root = list(range(len(p)))
+
+    def find(i):
+        while root[i] != i:
+            i = root[i]
+        return i
+
+    diff = p[:, None] - p[None]
+    for i, j in zip(*np.nonzero(np.triu(np.einsum("ijk,ijk->ij", diff, diff) <= tol2, 1)), strict=True):
+        root[find(int(i))] = find(int(j))
+    welded = [[find(int(i)) for i in face] for face in faces]
+
+    area, unit = [], []
+    for face in faces:
+        a, b, c = p[face]
+        u, w = b - a, c - a
+        n = np.array([u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]])
+        length = math.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+        area.append(n)
+        unit.append(n / length if length > 0 else n)
+
+    def cos(f, g):
+        return unit[f][0] * unit[g][0] + unit[f][1] * unit[g][1] + unit[f][2] * unit[g][2]
+
+    edge_faces: dict[tuple[int, int], list[int]] = {}
+    for f, w in enumerate(welded):
+        for k in range(3):
+            edge_faces.setdefault(tuple(sorted((w[k], w[(k + 1) % 3]))), []).append(f)
+    limit = math.cos(math.radians(crease_angle)) - 1e-9
+    anchored = {v for e, fs in edge_faces.items() if len(fs) != 2 for v in e}
+    creases = [e for e, fs in edge_faces.items() if len(fs) == 2 and abs(cos(*fs)) < limit]
+    on_creases = {}
+    for e in creases:
+        for v in e:
+            on_creases[v] = on_creases.get(v, 0) + 1
+    sharp = set(anchored)
+    for e in creases:
+        alone = all(on_creases[v] == 1 and v not in anchored for v in e)
+        if not alone:
+            sharp.update(e)
+
+    around: dict[int, list[int]] = {}
+    for f, w in enumerate(welded):
+        for k in range(3):
+            around.setdefault(w[k], []).append(f)  # corners in corner order
+    out = np.zeros((len(faces), 3, 3), np.float32)
+    for f, w in enumerate(welded):
+        for k in range(3):
+            total = np.zeros(3)
+            if len(around[w[k]]) <= normals._MAX_DEGREE:
+                for g in around[w[k]]:
+                    c = cos(f, g)
+                    if w[k] not in sharp or abs(c) >= limit:
+                        total = total + area[g] * np.sign(c)
+            length = math.sqrt(total[0] ** 2 + total[1] ** 2 + total[2] ** 2)
+            out[f, k] = total / length if length > 0 else unit[f]
+    return out
+
+
+@pytest.mark.parametrize("crease", [15.0, 30.0, 60.0])
+def test_corner_normals_equal_a_loop_over_every_corner(crease):
+    positions, faces, _ = mixed_mesh()
+    np.testing.assert_allclose(
+        normals.corner_normals(positions, faces, crease),
+        reference_normals(positions, faces, crease),
+        atol=2e-7,
+    )
+
+
+def test_smoothing_without_pairs_needs_every_pair_positive():
+    """The vertices smoothed without comparing their faces pairwise (``_within_cone``) are ones
+    where every pair of faces around them has a positive cosine."""
+    positions, faces, _ = mixed_mesh()
+    welded = normals.weld_ids(positions, faces)
+    cross = np.cross(
+        positions[faces[:, 1]] - positions[faces[:, 0]], positions[faces[:, 2]] - positions[faces[:, 0]]
+    )
+    length = np.linalg.norm(cross, axis=1)
+    unit = cross / np.where(length > 0, length, 1)[:, None]
+    vertices = welded.max() + 1
+    summed = np.stack(
+        [np.bincount(welded.ravel(), np.repeat(cross[:, k], 3), minlength=vertices) for k in range(3)], 1
+    )
+    inside = normals._within_cone(welded, unit, summed, np.linalg.norm(summed, axis=1))
+    assert 0 < inside.sum() < vertices
+    for v in np.flatnonzero(inside):
+        around = unit[np.flatnonzero((welded == v).any(axis=1))]
+        assert (around @ around.T > 0).all(), v
+
+
+def reference_arrays(model: Model, crease: float) -> tuple[np.ndarray, np.ndarray]:
+    """``gpu_arrays`` by ``np.unique`` of (vertex, part, quantized normal) rows, the last corner of
+    each row giving its normal."""
+    corner_normals = normals.corner_normals(model.positions, model.faces, crease).reshape(-1, 3)
+    rows = np.column_stack(
+        [
+            model.faces.reshape(-1),
+            np.repeat(model.face_part, 3),
+            np.round(corner_normals * 32767).astype(np.int64),
+        ]
+    )
+    unique, inverse = np.unique(rows, axis=0, return_inverse=True)
+    last = np.zeros(len(unique), np.int64)
+    np.maximum.at(last, inverse.reshape(-1), np.arange(len(rows)))
+    vertices = np.zeros(len(unique), prepare.VERTEX)
+    vertices["p"] = model.positions[unique[:, 0]]
+    vertices["n"] = corner_normals[last]
+    vertices["part"] = unique[:, 1]
+    return vertices, inverse.reshape(-1).astype(np.uint32)
+
+
+@pytest.mark.parametrize("crease", [15.0, 30.0])
+@pytest.mark.parametrize("shape", ["mixed", "indexed-box", "soup"])
+def test_gpu_arrays_equal_unique_rows(shape, crease):
+    positions, faces, face_part = mixed_mesh()
+    if shape == "indexed-box":
+        # an indexed box whose parts share vertices: corners split by part and by crease
+        box = trimesh.creation.box()
+        positions, faces, face_part = box.vertices, box.faces, np.arange(12) % 3
+    elif shape == "soup":
+        positions, faces, face_part = (
+            positions[faces].reshape(-1, 3),
+            np.arange(3 * len(faces)).reshape(-1, 3),
+            None,
+        )
+    model = Model.from_arrays(positions, faces, face_part)
+    vertices, indices = prepare._prepare(model, crease, None)
+    expected_vertices, expected_indices = reference_arrays(model, crease)
+    assert vertices.tobytes() == expected_vertices.tobytes()
+    np.testing.assert_array_equal(indices, expected_indices)
+
+
+def test_gpu_arrays_without_normals_share_vertices_of_one_part():
+    positions, faces, face_part = mixed_mesh()
+    model = Model.from_arrays(positions, faces, face_part)
+    vertices, indices = prepare._prepare(model, None, None)
+    assert not vertices["n"].any()
+    corner_vertex = model.faces.reshape(-1)
+    np.testing.assert_array_equal(vertices["p"][indices], model.positions[corner_vertex])
+    np.testing.assert_array_equal(vertices["part"][indices], np.repeat(model.face_part, 3))
+    assert len(vertices) == len(np.unique(corner_vertex))  # no vertex here lies in two parts
+
+
+def test_weld_groups_rows_by_value_when_every_hash_collides(monkeypatch):
+    rng = np.random.default_rng(2)
+    points = rng.integers(0, 3, (500, 3)).astype(np.float32) * np.float32(0.5)
+    points[::7] *= -1  # -0.0 and 0.0 are one position
+    expected_inverse, expected_first = weld._exact_groups(points)
+    monkeypatch.setattr(weld, "_BITS_HASH", np.zeros(3, np.uint64))
+    inverse, first = weld._exact_groups(points)
+    np.testing.assert_array_equal(inverse, expected_inverse)
+    np.testing.assert_array_equal(first, expected_first)
+    # numbered by first occurrence, each the lowest of its equal rows
+    _, lowest, numbers = np.unique(points + np.float32(0), axis=0, return_index=True, return_inverse=True)
+    assert first.tolist() == sorted(lowest.tolist())
+    np.testing.assert_array_equal(first[inverse], lowest[numbers.reshape(-1)])
+
+
+class _Buffers:
+    def __init__(self) -> None:
+        self.data: list[bytes] = []
+
+    def buffer(self, data) -> None:
+        self.data.append(bytes(memoryview(data)))
+
+
+def test_a_model_of_the_same_content_skips_the_sorts(monkeypatch):
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
+    positions, faces, face_part = mixed_mesh()
+    first = Model.from_arrays(positions, faces, face_part)
+    made = prepare.gpu_arrays(first, 30.0)
+    held = prepare.topology(first)
+    assert held["welded"].dtype == np.int32 and held[("sharp", 30.0)].dtype == bool
+
+    def refused(*args):
+        raise AssertionError("sorted again")
+
+    monkeypatch.setattr(normals, "_welded", refused)
+    monkeypatch.setattr(normals, "crease_vertices", refused)
+    again = prepare.gpu_arrays(Model.from_arrays(positions.copy(), faces.copy(), face_part.copy()), 30.0)
+    assert again[0].tobytes() == made[0].tobytes() and again[1].tobytes() == made[1].tobytes()
+    moved = positions.copy()
+    moved[0, 0] += 1e-3
+    with pytest.raises(AssertionError, match="sorted again"):
+        prepare.gpu_arrays(Model.from_arrays(moved, faces, face_part), 30.0)
+    with pytest.raises(AssertionError, match="sorted again"):
+        prepare.gpu_arrays(first, 20.0)  # another crease angle: its crease vertices
+    # GpuMesh uploads the arrays
+    buffers = _Buffers()
+    GpuMesh(buffers, first, 30.0)
+    assert buffers.data == [made[0].tobytes(), made[1].tobytes()]
+
+
+def test_topologies_kept_are_bounded(monkeypatch):
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
+    box = trimesh.creation.box()
+    models = [Model.from_arrays(box.vertices + k, box.faces) for k in range(prepare._KEPT + 3)]
+    for model in models:
+        prepare.gpu_arrays(model, 30.0)
+    assert list(prepare._topologies) == [m.content_digest() for m in models[-prepare._KEPT :]]
+    monkeypatch.setattr(prepare, "_KEPT_BYTES", 10)
+    prepare.gpu_arrays(models[0], 30.0)
+    assert not prepare._topologies
+
+
+def test_up_guess_a_block_at_a_time_equals_all_at_once(monkeypatch):
+    """Flat faces at the bottom of every axis in several blocks: a finely split box under the
+    mixed mesh."""
+    positions, faces, _ = mixed_mesh()
+    box = trimesh.creation.box(extents=(2, 2, 2)).subdivide().subdivide()
+    faces = np.r_[faces, box.faces + len(positions)]
+    positions = np.r_[positions, box.vertices - 4.0]
+    whole = [up.base_fraction(positions, faces, axis) for axis in range(3)]
+    monkeypatch.setattr(up, "_BLOCK", 7)
+    assert [up.base_fraction(positions, faces, axis) for axis in range(3)] == whole
+    assert all(value > 0 for value in whole)
+
+
+def test_environment_of_faces_out_of_part_order():
+    """A skybox and a ground plane found alike whether the faces come part by part or mixed."""
+    sky = trimesh.creation.box(extents=(40, 40, 40))
+    sky.invert()
+    ground = trimesh.creation.box(extents=(30, 0.01, 30))
+    ground.apply_translation((0, -0.6, 0))
+    meshes = [trimesh.creation.box().apply_translation((k * 1.5, 0, 0)) for k in range(3)]
+    meshes[1:1] = [sky, ground]
+    offsets = np.cumsum([0] + [len(m.vertices) for m in meshes])
+    positions = np.concatenate([m.vertices for m in meshes])
+    faces = np.concatenate([m.faces + o for m, o in zip(meshes, offsets, strict=False)])
+    face_part = np.concatenate([np.full(len(m.faces), k) for k, m in enumerate(meshes)])
+    in_order = environment.environment_parts(Model.from_arrays(positions, faces, face_part))
+    mixed = np.random.default_rng(0).permutation(len(faces))
+    out_of_order = environment.environment_parts(Model.from_arrays(positions, faces[mixed], face_part[mixed]))
+    assert in_order.tolist() == [False, True, True, False, False]
+    assert out_of_order.tolist() == in_order.tolist()
+
+
+def test_crease_vertices_of_more_welded_vertices_than_an_int32_key_holds():
+    """Edge keys (lo * vertices + hi) of 60 000 vertices pass 2**31: int32 ids say the same as
+    int64 ones. A strip three vertices wide, its middle row inside, its heights noisy."""
+    n = 20000
+    rng = np.random.default_rng(1)
+    positions = np.concatenate(
+        [np.c_[np.arange(n), np.full(n, row), rng.normal(0, 0.3, n)] for row in range(3)]
+    )
+    i = np.arange(n - 1)
+    faces = np.concatenate(
+        [
+            np.r_[
+                np.c_[i + r * n, i + 1 + r * n, i + (r + 1) * n],
+                np.c_[i + 1 + r * n, i + 1 + (r + 1) * n, i + (r + 1) * n],
+            ]
+            for r in range(2)
+        ]
+    )
+    welded = normals.weld_ids(positions, faces)
+    unit = np.cross(
+        positions[faces[:, 1]] - positions[faces[:, 0]], positions[faces[:, 2]] - positions[faces[:, 0]]
+    )
+    unit /= np.linalg.norm(unit, axis=1)[:, None]
+    wide = normals.crease_vertices(welded, unit, 30.0)
+    narrow = normals.crease_vertices(welded.astype(np.int32), unit, 30.0)
+    assert welded.max() ** 2 > 2**31
+    np.testing.assert_array_equal(narrow, wide)
+    assert 0 < wide[n : 2 * n].sum() < n  # some of the middle row on creases, not all
+
+
+def test_content_digest_is_the_triangles():
+    box = trimesh.creation.box()
+    one = Model.from_arrays(box.vertices, box.faces)
+    assert Model.from_arrays(box.vertices.copy(), box.faces.copy()).content_digest() == one.content_digest()
+    others = [
+        Model.from_arrays(box.vertices, box.faces[::-1]),
+        Model.from_arrays(box.vertices, box.faces, np.arange(12) % 2),
+        Model.from_arrays(box.vertices, box.faces, part_names=["a", "b"]),
+        Model.from_arrays(np.zeros((0, 3)), np.zeros((0, 3), int)),
+    ]
+    assert len({m.content_digest() for m in [one, *others]}) == 5
