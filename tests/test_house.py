@@ -1,14 +1,14 @@
 """Measures of the house (issue 37), read from the code: how many functions outside cli/ take
-more than 12 parameters, and that the drawing options' modules import no file that imports
-them back. The counters are tested on small sources of their own, so that they cannot pass by
-finding nothing."""
+more than 12 parameters, and that no file of the package imports a file that imports it back,
+through any number of files. The counters are tested on small sources of their own, so that
+they cannot pass by finding nothing."""
 
 from __future__ import annotations
 
 import ast
 from pathlib import Path
 
-from test_layers import find_modules, imports_of
+from test_layers import components, find_modules, imports_of
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "blueprint"
@@ -44,16 +44,41 @@ def long_parameter_lists(root: Path, most: int = MOST) -> dict[str, int]:
     return found
 
 
-def file_cycles(modules: dict[str, Path], within: str) -> list[tuple[str, str]]:
-    """Pairs of modules below package ``within`` (its ``__init__`` left out: it imports its
-    modules, and its shared renderer is looked up from them) that import each other, at any
-    depth of the file."""
-    edges = set()
+# File-level import cycles still to be broken (issue 37), each to be taken out here by the
+# change that breaks it: the glyphs' and the GPU silhouettes' in their own refactorings, the
+# scene's with its preparation.
+KNOWN_CYCLES = {
+    frozenset({"blueprint.compose.glyphs.parse", "blueprint.compose.glyphs.values"}),
+    frozenset({"blueprint.silhouette.gpu.draw", "blueprint.silhouette.gpu.soup"}),
+    frozenset({"blueprint.scene.model", "blueprint.scene.units"}),
+    frozenset({"blueprint.viewer.controls", "blueprint.viewer.loop"}),
+    frozenset({"blueprint.compose.linestyle", "blueprint.compose.style"}),
+    frozenset(
+        {
+            "blueprint.pipeline.bind",
+            "blueprint.pipeline.expressions",
+            "blueprint.pipeline.graph",
+            "blueprint.pipeline.spec",
+            "blueprint.pipeline.user",
+        }
+    ),
+}
+
+
+def file_cycles(modules: dict[str, Path]) -> list[set[str]]:
+    """The sets of modules that import one another round a cycle of any length (the strongly
+    connected components of the file import graph), imports inside functions and those for
+    annotations (``if TYPE_CHECKING:``) included. Left out: shader paths (they name a package's
+    files, not its modules), and a package's ``__init__`` importing its own modules (it holds
+    them: a module may look a name up in its package's ``__init__``)."""
+    graph: dict[str, list[str]] = {name: [] for name in modules}
     for name, path in modules.items():
-        if name.startswith(within + "."):
-            for imp in imports_of(name, path.read_text(encoding="utf-8"), str(path), modules):
-                edges.add((name, imp.imported))
-    return sorted((a, b) for a, b in edges if a < b and (b, a) in edges)
+        package = path.name == "__init__.py"
+        for imp in imports_of(name, path.read_text(encoding="utf-8"), str(path), modules):
+            inside = package and imp.imported.startswith(name + ".")
+            if imp.how != "shader" and imp.imported in modules and imp.imported != name and not inside:
+                graph[name].append(imp.imported)
+    return components(graph)
 
 
 def test_at_most_two_functions_outside_cli_take_more_than_twelve_parameters():
@@ -62,8 +87,9 @@ def test_at_most_two_functions_outside_cli_take_more_than_twelve_parameters():
     assert set(found) - CAPTURE <= ALLOWED, {k: v for k, v in found.items() if k not in CAPTURE | ALLOWED}
 
 
-def test_the_api_modules_import_no_file_that_imports_them():
-    assert file_cycles(find_modules(SRC), "blueprint.api") == []
+def test_no_file_imports_a_file_that_imports_it():
+    found = {frozenset(cycle) for cycle in file_cycles(find_modules(SRC))}
+    assert found <= KNOWN_CYCLES, [sorted(cycle) for cycle in found - KNOWN_CYCLES]
 
 
 def test_the_counters_find_what_they_should(tmp_path):
@@ -80,10 +106,25 @@ def test_the_counters_find_what_they_should(tmp_path):
 
     package = tmp_path / "src" / "blueprint"
     (package / "api").mkdir(parents=True)
+    (package / "gpu").mkdir(parents=True)
     (package / "__init__.py").write_text("")
     (package / "api" / "__init__.py").write_text("from blueprint.api import three\n")
     (package / "api" / "one.py").write_text("def f():\n    from blueprint.api import two\n")
     (package / "api" / "two.py").write_text("from blueprint.api.one import f\n")
     (package / "api" / "three.py").write_text("from blueprint.api import one\nimport blueprint.api\n")
+    (package / "gpu" / "__init__.py").write_text("")
+    (package / "gpu" / "a.py").write_text("from blueprint.gpu import b\n")
+    (package / "gpu" / "b.py").write_text("import blueprint.gpu.c\nSHADER = 'blueprint.gpu.d:glsl/x.frag'\n")
+    (package / "gpu" / "c.py").write_text("import blueprint.gpu.a\n")
+    (package / "gpu" / "d.py").write_text("from blueprint.gpu.b import SHADER\n")
+    (package / "gpu" / "e.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from blueprint.gpu.f import F\n"
+    )
+    (package / "gpu" / "f.py").write_text("from blueprint.gpu import e\n")
     modules = find_modules(tmp_path / "src")
-    assert file_cycles(modules, "blueprint.api") == [("blueprint.api.one", "blueprint.api.two")]
+    # three files round one cycle; an annotation's import closes one, a shader path none
+    assert file_cycles(modules) == [
+        {"blueprint.api.one", "blueprint.api.two"},
+        {"blueprint.gpu.a", "blueprint.gpu.b", "blueprint.gpu.c"},
+        {"blueprint.gpu.e", "blueprint.gpu.f"},
+    ]
