@@ -51,7 +51,6 @@ KNOWN_CYCLES = {
     frozenset({"blueprint.compose.glyphs.parse", "blueprint.compose.glyphs.values"}),
     frozenset({"blueprint.silhouette.gpu.draw", "blueprint.silhouette.gpu.soup"}),
     frozenset({"blueprint.scene.model", "blueprint.scene.units"}),
-    frozenset({"blueprint.compose.linestyle", "blueprint.compose.style"}),
     frozenset(
         {
             "blueprint.pipeline.bind",

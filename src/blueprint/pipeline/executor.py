@@ -38,7 +38,8 @@ from dataclasses import replace
 import numpy as np
 
 from blueprint.compose.compositor import TILES_VERT, Compositor, Shading
-from blueprint.compose.style import STYLES, Style, get_style
+from blueprint.compose.lookup import get_style
+from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.gpu import units
 from blueprint.gpu.device import Device

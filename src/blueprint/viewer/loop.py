@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from blueprint.compose.style import get_style
+from blueprint.compose.lookup import get_style
 from blueprint.errors import BlueprintError, InputError
 from blueprint.gpu.device import check_size
 from blueprint.scene.model import Model
