@@ -51,15 +51,6 @@ KNOWN_CYCLES = {
     frozenset({"blueprint.compose.glyphs.parse", "blueprint.compose.glyphs.values"}),
     frozenset({"blueprint.silhouette.gpu.draw", "blueprint.silhouette.gpu.soup"}),
     frozenset({"blueprint.scene.model", "blueprint.scene.units"}),
-    frozenset(
-        {
-            "blueprint.pipeline.bind",
-            "blueprint.pipeline.expressions",
-            "blueprint.pipeline.graph",
-            "blueprint.pipeline.spec",
-            "blueprint.pipeline.user",
-        }
-    ),
 }
 
 

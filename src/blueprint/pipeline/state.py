@@ -14,7 +14,7 @@ from blueprint.gpu.device import Device
 from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import PendingRead
-from blueprint.pipeline.spec import Bound
+from blueprint.pipeline.schema import Bound
 from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.renderer import straight_alpha
 from blueprint.scene.camera import Camera
