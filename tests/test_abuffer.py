@@ -26,7 +26,7 @@ from test_layers_oracle import nested_round
 import blueprint
 from blueprint import examples
 from blueprint.pipeline.blueprint import stream_blueprint
-from blueprint.pipeline.peel import LayerCapture
+from blueprint.pipeline.layers import LayerCapture
 from blueprint.render.abuffer import NODE_BYTES, ABufferSource
 from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.table import (

@@ -2,7 +2,7 @@
 
 Per frame: upload image inputs; capture the front surface of the chosen parts that attributes
 ask for; if any other attribute is read, peel the model in the one peel loop
-(``blueprint.render.capture.peel``, with its stop rules), one G-buffer per attribute scale,
+(``blueprint.render.capture.layer_loop``, with its stop rules), one G-buffer per attribute scale,
 plus this package's attribute pass for the attributes the renderer's G-buffer lacks; run the
 per-layer passes after each layer (and the once-passes at layer 0); then the passes that need
 every layer (the compositor); read back the output and any dumps.
@@ -52,7 +52,7 @@ from blueprint.pipeline.inputs import (
     read_texture_later,
     texture_bytes,
 )
-from blueprint.pipeline.peel import IN_PLACE, LayerCapture
+from blueprint.pipeline.layers import IN_PLACE, LayerCapture
 from blueprint.pipeline.programs import FULLSCREEN, Programs
 from blueprint.pipeline.spec import Bound, PipelineSpec
 from blueprint.pipeline.state import Result, RunState
@@ -287,7 +287,7 @@ class Executor:
             self.capture.capture_parts(st, parts)
 
         def draw(blind: bool):
-            """The frame from the peel to its read-back; ``blind`` as ``LayerCapture.peel``."""
+            """The frame from the peel to its read-back; ``blind`` as ``LayerCapture.draw_layers``."""
             counts: list[int] | None = []
             revealed, left, counting = None, 0, None
             if pl.peel:
@@ -301,7 +301,7 @@ class Executor:
                 # its counts are known
                 out = bound.passes.get(pl.output)
                 blind = blind and pl.readback == [pl.output] and out is not None and not out.per_layer
-                counts, layers = self.capture.peel(st, max_layers, rules, blind)
+                counts, layers = self.capture.draw_layers(st, max_layers, rules, blind)
                 revealed = None if reveal is None else reveal.shown
             else:
                 self.ensure_stacks(st, 1)
@@ -417,7 +417,7 @@ class Executor:
 
     def _standard_rules(self, max_layers: int | None, min_fraction: float) -> tuple:
         """``standard_rules``, the same tuple while the settings stay (none of them holds
-        state): the capture then knows them again without looking (``LayerCapture.peel``)."""
+        state): the capture then knows them again without looking (``LayerCapture.draw_layers``)."""
         if self._rules[0] != (max_layers, min_fraction):
             self._rules = (max_layers, min_fraction), tuple(standard_rules(max_layers, min_fraction))
         return self._rules[1]

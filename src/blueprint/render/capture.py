@@ -1,6 +1,6 @@
 """A frame's layer capture: the sources the capture table chose for it (``Capture``), the front
-surface of chosen parts, and the one peel loop every caller runs, with its stop rules
-(``blueprint.render.stop``).
+surface of chosen parts, and the one loop every caller draws layers with, under its stop rules
+(``layer_loop``, ``blueprint.render.stop``).
 """
 
 from __future__ import annotations
@@ -168,7 +168,7 @@ def capture_parts(
     return gb
 
 
-def peel(
+def layer_loop(
     draw: Callable[[int, object, object], None],
     queries: Sequence,
     rules: Sequence[StopRule],
@@ -177,10 +177,11 @@ def peel(
     samples: Callable[[int, object], int] | None = None,
     eager: bool = False,
 ) -> tuple[list[int], int]:
-    """The one peel loop. ``draw(layer, query, guard)`` issues layer ``layer``'s geometry pass
-    (counting its samples in ``query``, skipped on the GPU when ``guard``, the layer before's
-    query, counted none) and whatever runs per layer. Returns the samples of every layer
-    peeled and how many of them count under ``rules``.
+    """The one loop that draws a frame's layers, whatever source captures them (a geometry
+    pass a layer, a k-buffer, an A-buffer). ``draw(layer, query, guard)`` issues layer
+    ``layer``'s geometry pass (counting its samples in ``query``, skipped on the GPU when
+    ``guard``, the layer before's query, counted none) and whatever runs per layer. Returns the
+    samples of every layer peeled and how many of them count under ``rules``.
 
     The CPU looks at the counts after every layer where a rule needs it or where the caller
     reads each counted layer back (``on_counted``, called once the layer is known to count);

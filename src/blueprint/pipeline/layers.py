@@ -1,6 +1,7 @@
-"""A run's layer capture: the front surface of chosen parts, depth masking's stop rule, one
-G-buffer (and the attribute pass's targets) a scale, and the one peel loop, running the
-executor's per-layer passes after each layer."""
+"""A run's layer capture (``LayerCapture``): the front surface of chosen parts, depth masking's
+stop rule, one G-buffer (and the attribute pass's targets) a scale, and the frame's layers
+drawn through the one layer loop (``render.capture.layer_loop``), the executor's per-layer
+passes run after each layer."""
 
 from __future__ import annotations
 
@@ -14,8 +15,7 @@ from blueprint.pipeline.inputs import read_texture
 from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
 from blueprint.render.abuffer import Overflow
-from blueprint.render.capture import Capture, GBuffer, capture_parts, revealed_pixels
-from blueprint.render.capture import peel as peel_layers
+from blueprint.render.capture import Capture, GBuffer, capture_parts, layer_loop, revealed_pixels
 from blueprint.render.remaining import layers_left
 from blueprint.render.stop import EmptyLayer, MaxLayers, MinFraction, Reveal, StopRule
 
@@ -99,9 +99,11 @@ class LayerCapture:
 
         return Reveal(stop.fraction, wanted, revealed)
 
-    def peel(self, st: RunState, max_layers, rules, blind: bool = False) -> tuple[list[int] | None, int]:
+    def draw_layers(
+        self, st: RunState, max_layers, rules, blind: bool = False
+    ) -> tuple[list[int] | None, int]:
         """Peel ``st``'s layers under ``rules``, running the per-layer passes after each; the
-        samples of every layer peeled and how many count (``blueprint.render.capture.peel``).
+        samples of every layer peeled and how many count (``render.capture.layer_loop``).
         Where nothing looks at a layer before the next is issued (a GPU, no rule or read-back
         per layer), the A-buffer's counts are read only once the layers are issued, so the CPU
         does not wait for the capture; one that then proves short of room is drawn again.
@@ -248,9 +250,9 @@ class LayerCapture:
 
         samples = groups[0].capture.samples
         if blind:
-            peeled = None, peel_layers(draw, groups[0].queries, rules, look=False)[1]
+            peeled = None, layer_loop(draw, groups[0].queries, rules, look=False)[1]
         else:
-            peeled = peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
+            peeled = layer_loop(draw, groups[0].queries, rules, samples=samples, eager=eager)
             for g in groups:
                 g.capture.settle()
         if listed:
