@@ -168,7 +168,7 @@ class LayerCapture:
                 st.camera,
                 g.gb,
                 face_ids=layout.face_ids,
-                batch=max_layers,
+                layers=max_layers,
                 tiles=tiled and g.primary,
                 defer=defer,
                 unpack=not (from_lists or layer_lists),

@@ -281,7 +281,7 @@ class Capturer:
         ctx.depth_func = "<"
         gb = gbuffer(self.device.pool, size, "idb", normals=False)
         mesh = self.mesh(model, None)
-        return Capture(self, mesh, camera, gb, batch=max_layers, tie_break=True, surfaces=True), gb
+        return Capture(self, mesh, camera, gb, layers=max_layers, tie_break=True, surfaces=True), gb
 
     def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read) -> None:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth
@@ -293,7 +293,7 @@ class Capturer:
         if normals:
             mesh = self.mesh(model, crease_angle)
             gb = gbuffer(device.pool, size)
-            capture = Capture(self, mesh, camera, gb, batch=max_layers)
+            capture = Capture(self, mesh, camera, gb, layers=max_layers)
         else:
             mesh = self.mesh(model, None)
             gb = gbuffer(device.pool, size, "idb", normals=False)
