@@ -136,6 +136,12 @@ class LayerCapture:
         # as a peel that looks would have stopped: at the first empty layer
         return counts[: layers + 1], layers
 
+    def counted_late(self, st: RunState, rules, drawn: int) -> tuple[list[int], int, int]:
+        """``counted`` and ``left`` of a streamed frame, once its picture is read
+        (``Result.counting``)."""
+        counts, layers = self.counted(st, rules, drawn)
+        return counts, layers, self.left(st, rules, counts, layers)
+
     def _peel(
         self, st: RunState, max_layers, rules, eager: bool, defer: bool, blind: bool
     ) -> tuple[list[int] | None, int]:
