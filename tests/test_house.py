@@ -6,6 +6,8 @@ tested on small sources of their own, so that they cannot pass by finding nothin
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from pathlib import Path
 
 from test_layers import components, find_modules, imports_of
@@ -108,6 +110,18 @@ def test_at_most_five_functions_are_longer_than_a_hundred_lines():
 def test_no_file_imports_a_file_that_imports_it():
     found = {frozenset(cycle) for cycle in file_cycles(find_modules(SRC))}
     assert found <= KNOWN_CYCLES, [sorted(cycle) for cycle in found - KNOWN_CYCLES]
+
+
+def test_the_function_blueprint_render_is_not_hidden_by_the_subpackage_render():
+    # (the subpackage keeps its name: renaming it would touch most files of the tree)
+    code = (
+        "import blueprint.render.capture, blueprint\n"
+        "from blueprint.render.table import choose\n"
+        "from blueprint.api.frames import peel, render\n"
+        "assert (blueprint.render, blueprint.peel) == (render, peel), blueprint.render\n"
+    )
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
 
 
 def test_the_counters_find_what_they_should(tmp_path):
