@@ -22,9 +22,10 @@ Uniforms the executor sets whenever a program declares them:
 ``u_layer``, ``u_frame``                     depth layer of a per-layer pass; frame of a video
 ``u_shade_ink``                              the style's colour of shaded parts
 
-A uniform is written only when its value changed since the program last got it. What one
-run holds (its plan, camera, stacks of layers, targets of chosen parts, passes counted) is a
-``RunState``, made anew for each run.
+A uniform is written only when its value changed since the program last got it. A run's
+keywords are a ``RunRequest``; what one run holds (its plan, camera, stacks of layers, targets
+of chosen parts, passes counted) is a ``RunState``, made anew for each run, and what its frame
+drew and read a ``Drawn``.
 """
 
 from __future__ import annotations
