@@ -180,21 +180,21 @@ class Executor:
         watch.stage("read")
         out = st.pl.output
         return Result(
-            drawn.outputs.get(out),
-            bound.format_of(out),
-            out in bound.passes and bound.passes[out].kind == "composite",  # premultiplied
-            drawn.layers,
-            drawn.layer_pixels,
-            st.camera,
-            watch.ms(),
-            st.draws,
-            watch.stages,
-            {d: drawn.outputs[st.pl.resolve(d)] for d in req.dumps},
-            drawn.revealed,
-            drawn.layers_left,
-            drawn.pending,
-            drawn.counting,
-            drawn.texture,
+            output=drawn.outputs.get(out),
+            format=bound.format_of(out),
+            premultiplied=out in bound.passes and bound.passes[out].kind == "composite",
+            layers=drawn.layers,
+            layer_pixels=drawn.layer_pixels,
+            camera=st.camera,
+            ms=watch.ms(),
+            draws=st.draws,
+            stages=watch.stages,
+            dumps={d: drawn.outputs[st.pl.resolve(d)] for d in req.dumps},
+            revealed=drawn.revealed,
+            layers_left=drawn.layers_left,
+            pending=drawn.pending,
+            counting=drawn.counting,
+            texture=drawn.texture,
         )
 
     def _start(

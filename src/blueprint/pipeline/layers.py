@@ -145,22 +145,15 @@ class LayerCapture:
     def _peel(
         self, st: RunState, max_layers, rules, eager: bool, defer: bool, blind: bool
     ) -> tuple[list[int] | None, int]:
+        """``draw_layers``, its counts read late where ``defer``: the G-buffers and captures
+        opened, the layers drawn, and the passes that read every layer from the lists run."""
         layout = self._layout(st.pl)
         self._open_groups(st, layout)
         # a software rasteriser looks at every layer's count before its passes run (``eager``),
         # and at where the layer lies, for passes that need only be drawn there (pipeline.tiles)
         tiled = self.ex.tiled and st.arrays is None
         tiled = tiled and any(self.ex.reach(st, n) is not None for n in st.pl.per_layer)
-        # edges read straight from an A-buffer's lists, all layers after the peel, where nothing
-        # else reads the layers: none is unpacked then
-        from_lists = self._from_lists(st) if defer and st.arrays is not None else ()
-        # ...or, where passes run a layer at a time (a software rasteriser), read each layer
-        # from the lists as it comes, unless a stop rule reads the layers (depth masking)
-        looks = any(rule.every_layer for rule in rules)
-        layer_lists = self._from_lists(st) if st.arrays is None and not looks else ()
-        # ...or from the surfaces of a k-buffer that finds every layer in one pass, where no
-        # rule looks at each layer
-        from_surfaces = self._from_surfaces(st) if not from_lists and not self._rules[1] else ()
+        from_lists, layer_lists, from_surfaces = self._in_place(st, rules, defer)
         for g in st.groups:
             g.capture = Capture(
                 self.capturer,
@@ -196,6 +189,22 @@ class LayerCapture:
             for name in frame.listed:
                 self.ex.run_in_place(st, name, primary.capture, layers)
         return peeled
+
+    def _in_place(self, st: RunState, rules, defer: bool) -> tuple[tuple[str, ...], ...]:
+        """The passes that read the layers where the capture may hold them: from an A-buffer's
+        lists every layer after the peel, or each layer as it comes, or from a k-buffer's
+        surfaces."""
+        # edges read straight from an A-buffer's lists, all layers after the peel, where nothing
+        # else reads the layers: none is unpacked then
+        from_lists = self._from_lists(st) if defer and st.arrays is not None else ()
+        # ...or, where passes run a layer at a time (a software rasteriser), read each layer
+        # from the lists as it comes, unless a stop rule reads the layers (depth masking)
+        looks = any(rule.every_layer for rule in rules)
+        layer_lists = self._from_lists(st) if st.arrays is None and not looks else ()
+        # ...or from the surfaces of a k-buffer that finds every layer in one pass, where no
+        # rule looks at each layer
+        from_surfaces = self._from_surfaces(st) if not from_lists and not self._rules[1] else ()
+        return from_lists, layer_lists, from_surfaces
 
     def _open_groups(self, st: RunState, layout: Layout) -> None:
         """One G-buffer (with the attribute pass's targets) for each scale of the attributes."""
