@@ -19,7 +19,7 @@ MOST = 12
 # Public entry points that may list every drawing option as keywords: none needs to, since
 # ``blueprint.api.options.takes_options`` makes their keywords from DrawOptions' fields.
 ALLOWED: set[str] = set()
-# The layer capture's own, in its refactoring (render/, pipeline/executor.py, vector/occlusion/).
+# The vector occlusion's own, to be taken out by its refactoring (issue 37).
 CAPTURE = {"vector/occlusion/gpu.py:gpu_levels"}
 
 LONGEST = 100
