@@ -26,7 +26,10 @@ EXTRA = ("linear_depth", "position", "uv", "base_color", "triangle", "part", "la
 FROM_FILE = object()
 
 
-@dataclass(frozen=True, slots=True)
+# Made every frame and never changed, yet not frozen: a frozen dataclass sets each field through
+# object.__setattr__, several times the cost of a plain one's, and the executor's Python is per
+# frame.
+@dataclass(slots=True)
 class RunRequest:
     """What one run of a pipeline is asked for besides the pipeline, model and camera: the
     keywords of ``Executor.run``.
