@@ -18,7 +18,7 @@ import pytest
 from PIL import Image
 
 from blueprint import examples
-from blueprint.compose.style import get_style
+from blueprint.compose.lookup import get_style
 
 GOLDEN = Path(__file__).parent / "golden"
 FRAMES = GOLDEN / "frames.json"

@@ -26,7 +26,7 @@ from test_layers_oracle import nested_round
 import blueprint
 from blueprint import examples
 from blueprint.pipeline.blueprint import stream_blueprint
-from blueprint.pipeline.peel import LayerCapture
+from blueprint.pipeline.layers import LayerCapture
 from blueprint.render.abuffer import NODE_BYTES, ABufferSource
 from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.table import (
@@ -153,13 +153,13 @@ def test_more_than_the_memory_allows_is_peeled(renderer, abuffer):
     abuffer(True, max_bytes=NODE_BYTES * 64 * 64 * 8)
     renderer.abuffer_room[(64, 64)] = 64 * 64 * 4
     assert (
-        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
+        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), layers=5).way
         == "A-buffer"
     )
     # the gearbox has more fragments than 8 a pixel once counted
     renderer.abuffer_room[(64, 64)] = 64 * 64 * 9
     assert (
-        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), batch=5).way
+        Capture(renderer.capturer, mesh, camera, gbuffer(renderer.pool, (64, 64), "test.ab"), layers=5).way
         == "peel"
     )
     renderer.abuffer_room.pop((64, 64))
@@ -245,7 +245,7 @@ def test_after_a_kbuffer_pass_that_holds_every_layer(renderer, abuffer):
 def _tiled_layers(renderer, mesh, camera, size, tiles: bool) -> tuple[list, Capture]:
     """Every layer's (depth, normal, ids) of a capture, zero where the layer has no fragment."""
     gb = gbuffer(renderer.pool, size, f"test.ab.tiles{tiles}")
-    capture = Capture(renderer.capturer, mesh, camera, gb, batch=None, tiles=tiles)
+    capture = Capture(renderer.capturer, mesh, camera, gb, layers=None, tiles=tiles)
     assert capture.way == "A-buffer"
     got = []
     layer = 0

@@ -39,7 +39,8 @@ from golden_helpers import (
 from PIL import Image
 
 from blueprint import render_frame
-from blueprint.compose.style import STYLES, get_style
+from blueprint.compose.lookup import get_style
+from blueprint.compose.style import STYLES
 
 # Where depth masking stopped today, written here rather than in frames.json so that
 # --regen-goldens cannot move it: (layers, share of the highlighted parts uncovered).

@@ -199,7 +199,7 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     (edges_surfaces.frag), ``batch`` layers a pass: the same drawing, covered pixels and layers
     left as from the layers unpacked into the G-buffer, depths rounded as the 24-bit depth
     target rounds them."""
-    from blueprint.pipeline.peel import LayerCapture
+    from blueprint.pipeline.layers import LayerCapture
 
     surfaces_kbuffer(True)
     model = examples.gearbox()
@@ -232,7 +232,7 @@ def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfac
     """The k-buffer pass that finds every layer of a capped frame counts the surfaces each pixel
     let go behind its K: no counting pass runs (remaining.py), and the layers drawn and left
     add up to those the frame draws without a cap (peeled in batches, unpacked)."""
-    from blueprint.pipeline import peel
+    from blueprint.pipeline import layers
 
     def no_counting_pass(*args):
         raise AssertionError("a counting pass ran")
@@ -247,7 +247,7 @@ def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfac
             continue
         capped_some = True
         with monkeypatch.context() as m:
-            m.setattr(peel, "layers_left", no_counting_pass)
+            m.setattr(layers, "layers_left", no_counting_pass)
             capped = renderer.render(model, camera, max_layers=cap, **options)
         assert renderer.executor.last_run.from_surfaces == ("edges",)
         assert (capped.layers, capped.layers + capped.layers_left) == (cap, full.layers), view
@@ -270,7 +270,7 @@ def test_surfaces_an_earlier_frame_left_change_nothing(renderer, surfaces_kbuffe
     """Only a k-buffer's first surface and its count are cleared before a pass: the surfaces
     a deeper frame left behind a pixel's last one are never read as layers. A frame drawn over
     them is the one drawn from its layers unpacked (where the count alone says what is held)."""
-    from blueprint.pipeline.peel import LayerCapture
+    from blueprint.pipeline.layers import LayerCapture
 
     surfaces_kbuffer(True)
     model = examples.gearbox()

@@ -9,6 +9,11 @@ An AST walk over ``src/blueprint`` finds every import, function-level ones inclu
 * no import cycle joins two members (packages, or modules placed on their own);
 * only cli/ and viewer/ import the GUI libraries (click, glfw).
 
+A shader named by its package path counts as an import of that package: a string such as
+``"blueprint.ops:glsl/idsil_lines.geom"`` in a module, or an ``#include`` of another package's
+shader in a shader file (whose module is the package its ``glsl`` folder lies in; an unqualified
+include not found beside it is ``blueprint.gpu``'s, as ``gpu.shaders`` looks it up).
+
 The checker itself is tested at the bottom on tiny fake packages, so that it cannot pass by
 finding nothing.
 """
@@ -16,6 +21,7 @@ finding nothing.
 from __future__ import annotations
 
 import ast
+import re
 from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
@@ -79,6 +85,9 @@ class Import:
     imported: str  # a module of the package, or the top-level name of another distribution
     file: str
     line: int
+    # how: "import" (Python), "typing" (under ``if TYPE_CHECKING:``: never run), or "shader"
+    # (a shader file named by its package path)
+    how: str = "import"
 
     def where(self) -> str:
         return f"{self.file}:{self.line}: {self.importer} imports {self.imported}"
@@ -113,21 +122,45 @@ def _resolve(name: str, modules) -> str:
     return ".".join(parts) if parts else name
 
 
+SHADER_SUFFIXES = (".glsl", ".frag", ".vert", ".geom", ".comp")
+
+
+def shader_package(text: str, package: str = "blueprint") -> str | None:
+    """The package a shader path such as ``"blueprint.ops:glsl/edges.frag"`` names, else None."""
+    match = re.fullmatch(rf"({re.escape(package)}(?:\.\w+)*):([\w./-]+)", text)
+    return match.group(1) if match and match.group(2).endswith(SHADER_SUFFIXES) else None
+
+
+def _typing_only(tree: ast.AST) -> set[int]:
+    """ids of the import nodes under ``if TYPE_CHECKING:`` (annotations only; never run)."""
+    held = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and (
+            (isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING")
+            or (isinstance(node.test, ast.Attribute) and node.test.attr == "TYPE_CHECKING")
+        ):
+            held.update(id(n) for top in node.body for n in ast.walk(top))
+    return held
+
+
 def imports_of(module: str, source: str, file: str, modules, package: str = "blueprint") -> list[Import]:
     """Every import in ``source`` at any depth: ``import``, ``from ... import`` (relative ones
-    resolved, ``from pkg import submodule`` as the submodule) and ``importlib.import_module``
-    with a constant name."""
+    resolved, ``from pkg import submodule`` as the submodule), ``importlib.import_module``
+    with a constant name, and shader files named by their package path (``how`` "shader");
+    those under ``if TYPE_CHECKING:`` have ``how`` "typing"."""
     is_package = file.endswith("__init__.py")
     found: dict[Import, None] = {}
+    tree = ast.parse(source, file)
+    typing = _typing_only(tree)
 
-    def add(name: str, node: ast.AST) -> None:
+    def add(name: str, node: ast.AST, how: str = "import") -> None:
         if name == package or name.startswith(package + "."):
             name = _resolve(name, modules)
         else:
             name = name.split(".")[0]
-        found[Import(module, name, file, node.lineno)] = None
+        found[Import(module, name, file, node.lineno, "typing" if id(node) in typing else how)] = None
 
-    for node in ast.walk(ast.parse(source, file)):
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             for alias in node.names:
                 add(alias.name, node)
@@ -136,6 +169,10 @@ def imports_of(module: str, source: str, file: str, modules, package: str = "blu
             for alias in node.names:
                 sub = f"{base}.{alias.name}"
                 add(sub if sub in modules else base, node)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+            named = shader_package(node.value, package)
+            if named is not None:
+                add(named, node, "shader")
         elif (
             isinstance(node, ast.Call)
             and isinstance(node.func, ast.Attribute | ast.Name)
@@ -194,25 +231,39 @@ def violations(imports, layers=LAYERS, only=ONLY) -> list[tuple[Import, str]]:
     return out
 
 
-def member_cycles(imports, layers=LAYERS) -> list[list[Import]]:
-    """Import cycles between members, one per strongly connected component of the member graph:
-    the shortest cycle through the component's first member, as the imports that make it."""
-    edges: dict[tuple[str, str], Import] = {}
-    for imp in imports:
-        a, b = member_of(imp.importer, layers), member_of(imp.imported, layers)
-        if a and b and a != b:
-            edges.setdefault((a, b), imp)
-    graph: dict[str, list[str]] = {}
-    for a, b in sorted(edges):
-        graph.setdefault(a, []).append(b)
-        graph.setdefault(b, [])
+def shader_imports(src: Path = SRC, package: str = "blueprint") -> list[Import]:
+    """The ``#include`` lines of every shader file of ``package`` as imports of the package its
+    ``glsl`` folder lies in: a qualified one of the package it names, an unqualified one not
+    found beside the file of ``blueprint.gpu`` (as ``gpu.shaders`` resolves it)."""
+    include = re.compile(r'^\s*#include\s+"([^"]+)"', re.MULTILINE)
+    found = []
+    for path in sorted((src / package).rglob("*")):
+        if path.suffix not in SHADER_SUFFIXES or "glsl" not in path.parts:
+            continue
+        folder = next(up for up in path.parents if up.name == "glsl")
+        module = ".".join(folder.parent.relative_to(src).parts)
+        text = path.read_text(encoding="utf-8")
+        for match in include.finditer(text):
+            ref = match.group(1)
+            if ":" in ref:
+                named = ref.split(":", 1)[0]
+            elif (path.parent / ref).is_file():
+                continue
+            else:
+                named = f"{package}.gpu"
+            line = text.count("\n", 0, match.start()) + 1
+            found.append(Import(module, named, str(path.relative_to(src.parent)), line, "shader"))
+    return found
 
-    # Tarjan's algorithm, iterative
+
+def components(graph: dict[str, list[str]]) -> list[set[str]]:
+    """The strongly connected components of more than one node of ``graph`` (node -> the nodes
+    it points to), by Tarjan's algorithm, iterative."""
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
     on_stack: set[str] = set()
-    components: list[set[str]] = []
+    found: list[set[str]] = []
     for start in sorted(graph):
         if start in index:
             continue
@@ -235,7 +286,7 @@ def member_cycles(imports, layers=LAYERS) -> list[list[Import]]:
                         on_stack.discard(top)
                         component.add(top)
                     if len(component) > 1:
-                        components.append(component)
+                        found.append(component)
             elif child not in index:
                 index[child] = low[child] = len(index)
                 stack.append(child)
@@ -243,9 +294,19 @@ def member_cycles(imports, layers=LAYERS) -> list[list[Import]]:
                 work.append((child, iter(graph[child])))
             elif child in on_stack:
                 low[node] = min(low[node], index[child])
+    return sorted(found, key=min)
 
+
+def cycles_of(edges: dict[tuple[str, str], Import]) -> list[list[Import]]:
+    """One cycle per strongly connected component of the graph of ``edges`` ((a, b) -> the
+    import that makes a point to b): the shortest through the component's first node, as the
+    imports that make it."""
+    graph: dict[str, list[str]] = {}
+    for a, b in sorted(edges):
+        graph.setdefault(a, []).append(b)
+        graph.setdefault(b, [])
     cycles = []
-    for component in sorted(components, key=min):
+    for component in components(graph):
         first = min(component)
         # breadth-first from the first member back to it, inside the component
         parent: dict[str, str] = {}
@@ -266,6 +327,17 @@ def member_cycles(imports, layers=LAYERS) -> list[list[Import]]:
     return cycles
 
 
+def member_cycles(imports, layers=LAYERS) -> list[list[Import]]:
+    """Import cycles between members (``cycles_of`` the member graph): any import counts, a
+    shader named or an annotation's too, since each ties one member to the other."""
+    edges: dict[tuple[str, str], Import] = {}
+    for imp in imports:
+        a, b = member_of(imp.importer, layers), member_of(imp.imported, layers)
+        if a and b and a != b:
+            edges.setdefault((a, b), imp)
+    return cycles_of(edges)
+
+
 def problems(imports, layers=LAYERS, only=ONLY) -> list[str]:
     """Every broken rule as one line naming the file, the line and the rule."""
     lines = [f"{imp.where()}: {rule}" for imp, rule in violations(imports, layers, only)]
@@ -279,12 +351,13 @@ def problems(imports, layers=LAYERS, only=ONLY) -> list[str]:
 
 
 def package_imports(src: Path = SRC) -> list[Import]:
+    """Every import of the package's modules, and its shader files' includes."""
     modules = find_modules(src)
     found = []
     for module, path in modules.items():
         file = str(path.relative_to(src.parent))
         found.extend(imports_of(module, path.read_text(encoding="utf-8"), file, modules))
-    return found
+    return found + shader_imports(src)
 
 
 # -- the package -----------------------------------------------------------------------------------
@@ -303,6 +376,8 @@ def test_the_walk_sees_function_level_and_relative_imports():
     assert ("blueprint.cli.render", "blueprint.api") in found  # inside the command's function
     assert ("blueprint.silhouette.edges", "blueprint.silhouette.mesh") in found  # from .mesh import
     assert ("blueprint.viewer.window", "glfw") in found  # inside a function, another distribution
+    # a shader file of pipeline/glsl includes one of render/glsl
+    assert ("blueprint.pipeline", "blueprint.render") in found
 
 
 # -- the checker on tiny fake packages ---------------------------------------------------------------
@@ -406,4 +481,45 @@ def test_checker_fails_an_import_outside_an_only_list_and_a_module_without_a_lay
     assert problems(imports, FAKE, {"pkg.tool": ("pkg.base",)}) == [
         "pkg/tool.py:1: pkg.tool imports pkg.left: pkg.tool may import only pkg.base",
         "pkg/extra.py:1: pkg.extra imports os: pkg.extra is in no layer: add it to LAYERS",
+    ]
+
+
+def test_checker_counts_a_shader_named_by_its_package_path():
+    imports = fake(
+        {
+            "pkg.base": 'LINES = "pkg.app:glsl/lines.geom"\nNOTES = "pkg.app:notes.txt"\nTEXT = "pkg.app"',
+            "pkg.app": "",
+        }
+    )
+    assert [(i.importer, i.imported, i.how) for i in imports] == [("pkg.base", "pkg.app", "shader")]
+    assert problems(imports, FAKE, {}) == [
+        "pkg/base.py:1: pkg.base imports pkg.app: upward: layer low imports layer high above it"
+    ]
+
+
+def test_checker_reads_the_includes_of_shader_files(tmp_path):
+    shaders = tmp_path / "src" / "pkg" / "left" / "glsl"
+    shaders.mkdir(parents=True)
+    (shaders / "near.glsl").write_text("float near;\n")
+    (shaders / "main.frag").write_text(
+        '#include "pkg.app:glsl/other.glsl"\n#include "near.glsl"\nvoid main() {}\n#include "shared.glsl"\n'
+    )
+    (shaders / "notes.txt").write_text('#include "pkg.app:glsl/ignored.glsl"\n')
+    assert shader_imports(tmp_path / "src", "pkg") == [
+        Import("pkg.left", "pkg.app", "src/pkg/left/glsl/main.frag", 1, "shader"),
+        Import("pkg.left", "pkg.gpu", "src/pkg/left/glsl/main.frag", 4, "shader"),
+    ]
+
+
+def test_checker_marks_imports_for_annotations_only():
+    imports = fake(
+        {
+            "pkg.base": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg.app import App\n",
+            "pkg.app": "",
+        }
+    )
+    assert {(i.imported, i.how) for i in imports} == {("typing", "import"), ("pkg.app", "typing")}
+    # an annotation pointing up still breaks the layers
+    assert problems(imports, FAKE, {}) == [
+        "pkg/base.py:3: pkg.base imports pkg.app: upward: layer low imports layer high above it"
     ]

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from blueprint import examples
-from blueprint.compose.style import STYLES, Style, get_style, hex_color
+from blueprint.compose.lookup import get_style
+from blueprint.compose.style import STYLES, Style, hex_color
 from blueprint.errors import InputError
 from blueprint.scene.camera import SHEET_CELLS, VIEWS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.model import Model

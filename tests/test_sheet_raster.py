@@ -12,8 +12,8 @@ import pytest
 from test_bad_input import run
 
 import blueprint
+from blueprint.compose.lookup import get_style
 from blueprint.compose.sheet import over, paper_image
-from blueprint.compose.style import get_style
 from blueprint.examples import gearbox
 from blueprint.scene.camera import SHEET_CELLS
 from blueprint.scene.sheet import BORDER_WIDTH, RULE_WIDTH, lay_out_sheet, picture_per_mm, sheet_fields

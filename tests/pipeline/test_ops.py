@@ -89,7 +89,7 @@ def test_capabilities_the_pipeline_plans_by():
     silhouettes need face IDs, and no in-place form reads them."""
     from importlib import resources
 
-    from blueprint.pipeline.peel import IN_PLACE
+    from blueprint.pipeline.layers import IN_PLACE
 
     for op in OPS.values():
         assert op.compute_form in (None, "slice", "array"), op.name

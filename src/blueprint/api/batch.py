@@ -282,63 +282,18 @@ def batch(
     start = time.perf_counter()
     paths = collect_inputs(inputs)
     views, formats = _check_outputs(views, formats)
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers must be at least 1, got {workers}")
-    if scheduler is not None and (gpus is not None or workers is not None):
-        raise InputError(
-            "--scheduler uses the cluster's own workers: leave out --workers and --gpus "
-            "(start workers with BLUEPRINT_GL_DEVICE=N and --resources GPU=1 to place them)"
-        )
-    outdir = Path(outdir)
-    if outdir.exists() and not outdir.is_dir():
-        raise InputError(f"{printable(str(outdir))}: not a folder")
-    outdir.mkdir(parents=True, exist_ok=True)
+    _check_workers(workers, scheduler, gpus)
+    outdir = _output_folder(outdir)
     devices = choose_devices(gpus)
     count = workers or (len(devices) if devices else 1)
     options = dict(size=tuple(int(v) for v in size), style=style, max_layers=max_layers)
-
-    root = _root(paths)
-    previous = _previous_records(outdir / MANIFEST)
-    records: dict[str, dict] = {}
-    todo = []
-    for path in paths:
-        outputs = outputs_for(path, root, outdir, views, formats)
-        if _up_to_date(path, outputs) and str(path) in previous:
-            records[str(path)] = {**previous[str(path)], "skipped": True}
-        else:
-            todo.append((path, outputs))
-    total, done = len(paths), len(records)
+    records, todo = _records_kept(paths, outdir, views, formats)
     if progress is not None:
-        progress(done, total)
+        progress(len(records), len(paths))
     if todo:
         cluster, client = _client(scheduler, count, devices)
         try:
-            needs = _resources(client)
-            futures = {
-                client.submit(
-                    draw_input,
-                    str(path),
-                    [str(p) for p in outputs],
-                    views,
-                    options,
-                    key=f"blueprint-{k}-{path.name}",
-                    resources=needs,
-                    pure=False,
-                ): str(path)
-                for k, (path, outputs) in enumerate(todo)
-            }
-            from dask.distributed import as_completed
-
-            for future in as_completed(futures):
-                path = futures[future]
-                try:
-                    records[path] = future.result()
-                except Exception as exc:  # a worker lost for good: its inputs are reported, not redrawn
-                    records[path] = {"input": path, "outputs": [], "layers": {}, "ms": None}
-                    records[path]["error"] = printable(f"worker lost: {type(exc).__name__}: {exc}")
-                done += 1
-                if progress is not None:
-                    progress(done, total)
+            _draw_all(client, todo, views, options, records, progress, len(paths))
             count = len(client.scheduler_info()["workers"]) or count
         finally:
             client.close()
@@ -359,6 +314,73 @@ def batch(
     text = json.dumps(manifest, indent=1)
     atomic_write(outdir / MANIFEST, lambda tmp: tmp.write_text(text, encoding="utf-8"))
     return manifest
+
+
+def _check_workers(workers: int | None, scheduler: str | None, gpus) -> None:
+    """Workers of a local cluster, or a running scheduler's own: not both."""
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers must be at least 1, got {workers}")
+    if scheduler is not None and (gpus is not None or workers is not None):
+        raise InputError(
+            "--scheduler uses the cluster's own workers: leave out --workers and --gpus "
+            "(start workers with BLUEPRINT_GL_DEVICE=N and --resources GPU=1 to place them)"
+        )
+
+
+def _output_folder(outdir: str | os.PathLike) -> Path:
+    outdir = Path(outdir)
+    if outdir.exists() and not outdir.is_dir():
+        raise InputError(f"{printable(str(outdir))}: not a folder")
+    outdir.mkdir(parents=True, exist_ok=True)
+    return outdir
+
+
+def _records_kept(
+    paths: list[Path], outdir: Path, views: list[str], formats: list[str]
+) -> tuple[dict[str, dict], list[tuple[Path, list[Path]]]]:
+    """The records an earlier manifest holds of inputs whose outputs are newer than they
+    (marked ``skipped``), by input, and the (input, outputs) still to draw."""
+    root = _root(paths)
+    previous = _previous_records(outdir / MANIFEST)
+    records: dict[str, dict] = {}
+    todo = []
+    for path in paths:
+        outputs = outputs_for(path, root, outdir, views, formats)
+        if _up_to_date(path, outputs) and str(path) in previous:
+            records[str(path)] = {**previous[str(path)], "skipped": True}
+        else:
+            todo.append((path, outputs))
+    return records, todo
+
+
+def _draw_all(client, todo, views: list[str], options: dict, records: dict, progress, total: int) -> None:
+    """Each input of ``todo`` drawn by a task on ``client``'s workers, its record put in
+    ``records`` as it finishes (``progress(done, total)`` told)."""
+    from dask.distributed import as_completed
+
+    needs = _resources(client)
+    futures = {
+        client.submit(
+            draw_input,
+            str(path),
+            [str(p) for p in outputs],
+            views,
+            options,
+            key=f"blueprint-{k}-{path.name}",
+            resources=needs,
+            pure=False,
+        ): str(path)
+        for k, (path, outputs) in enumerate(todo)
+    }
+    for future in as_completed(futures):
+        path = futures[future]
+        try:
+            records[path] = future.result()
+        except Exception as exc:  # a worker lost for good: its inputs are reported, not redrawn
+            records[path] = {"input": path, "outputs": [], "layers": {}, "ms": None}
+            records[path]["error"] = printable(f"worker lost: {type(exc).__name__}: {exc}")
+        if progress is not None:
+            progress(len(records), total)
 
 
 def _client(scheduler: str | None, workers: int, devices: list[int] | None):

@@ -100,7 +100,7 @@ class Drawing:
 
     @property
     def lines(self):
-        """The vector drawing (``blueprint.vector.drawing.Drawing``: polylines with their
+        """The vector drawing (``blueprint.vector.VectorDrawing``: polylines with their
         occlusion levels and parts), drawn on first use with this drawing's options."""
         if self._lines is None:
             self._lines = vector_drawing(self.model, self.options, shared(self._renderer))

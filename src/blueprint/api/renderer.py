@@ -41,13 +41,16 @@ class _Of:
         setattr(getattr(renderer, self.part), self.name, value)
 
 
-def _of_capturer(method):
-    """``method`` of ``Capturer`` as the renderer's own, its signature and docstring kept."""
+def _of_capturer(method, name: str | None = None):
+    """``method`` of ``Capturer`` as the renderer's own (called ``name`` where the renderer
+    names it otherwise), its signature and docstring kept."""
 
     @functools.wraps(method)
     def delegate(renderer, *args, **kwargs):
         return method(renderer.capturer, *args, **kwargs)
 
+    if name is not None:
+        delegate.__name__ = name
     return delegate
 
 
@@ -55,9 +58,9 @@ class Renderer:
     """Owns one OpenGL context and composes what draws with it: its ``device`` (context,
     targets, programs, queries and capabilities: ``gpu.Device``, whose attributes are the
     renderer's too), its ``capturer`` (the models uploaded to it and how their layers are
-    captured: ``render.renderer.Capturer``, whose ``mesh``, ``forget``, ``peel``,
-    ``triangles_at``, ``face_kbuffer``, ``each_face_layer`` and sources' memory are the
-    renderer's too) and its
+    captured: ``render.renderer.Capturer``, whose ``mesh``, ``forget``, ``read_layers`` (the
+    renderer's ``peel``), ``triangles_at``, ``face_kbuffer``, ``each_face_layer`` and sources'
+    memory are the renderer's too) and its
     ``executor`` (the pipeline's, made on first use). Draws blueprints (``render``) and peels
     depth layers (``peel``, ``triangles_at``).
 
@@ -91,7 +94,7 @@ class Renderer:
     depth_snap_px = _Of("device")
     mesh = _of_capturer(Capturer.mesh)
     forget = _of_capturer(Capturer.forget)
-    peel = _of_capturer(Capturer.peel)
+    peel = _of_capturer(Capturer.read_layers, "peel")
     triangles_at = _of_capturer(Capturer.triangles_at)
     face_kbuffer = _of_capturer(Capturer.face_kbuffer)
     each_face_layer = _of_capturer(Capturer.each_face_layer)

@@ -141,7 +141,7 @@ def check_command(file, settings):
 def ops(as_json):
     """List the image-space operations with their inputs, output and parameters."""
     from blueprint.ops import ChoiceParam
-    from blueprint.pipeline.spec import OPERATIONS
+    from blueprint.pipeline.schema import OPERATIONS
 
     records = []
     for op in OPERATIONS.values():

@@ -8,7 +8,7 @@ import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from blueprint.compose.style import FILE_SUFFIXES, STYLES, Style, get_style, hex_color
+from blueprint.compose.style import FILE_SUFFIXES, STYLES, Style, hex_color
 from blueprint.errors import InputError
 
 __all__ = [
@@ -137,7 +137,7 @@ def vector_style(
         return load_vector_style(style)
     if isinstance(style, str) and style not in STYLES:
         raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)} or a line style file)")
-    raster = get_style(style)
+    raster = STYLES[style] if isinstance(style, str) else style
     inks = raster.layer_inks(len(DASHES))
     levels = [
         LineStyle(

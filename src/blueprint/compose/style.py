@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -126,19 +125,3 @@ STYLES: dict[str, Style] = {
 #: A style that ends in one of these is a line style file (``blueprint.compose.linestyle``), not
 #: a name.
 FILE_SUFFIXES = (".toml", ".json")
-
-
-def get_style(style: str | os.PathLike | Style, grid: float | None = None) -> Style:
-    """A style of ``STYLES`` by name, a line style file (a path, or a name ending in ``.toml``
-    or ``.json``: ``blueprint.compose.linestyle.load_raster_style``), or a Style; ``grid``
-    overrides its grid spacing (pixels)."""
-    if isinstance(style, str) and style in STYLES:
-        style = STYLES[style]
-    elif isinstance(style, str | os.PathLike):
-        # the line style module loads only for a file: a style by name is most drawings'
-        from blueprint.compose.linestyle import is_style_file, load_raster_style
-
-        if not (isinstance(style, os.PathLike) or is_style_file(style)):
-            raise InputError(f"unknown style {style!r} (choose {', '.join(STYLES)})")
-        style = load_raster_style(style)
-    return style if grid is None else style.with_options(grid=float(grid))

@@ -34,7 +34,7 @@ class Kind(StrEnum):
     """What a writer takes.
 
     ``IMAGE``: an (H, W, 3 or 4) uint8 array, row 0 at the top. ``LAYERS``: peeled layers
-    (``blueprint.Layers``). ``DRAWING``: a vector drawing (``blueprint.vector.Drawing``).
+    (``blueprint.Layers``). ``DRAWING``: a vector drawing (``blueprint.vector.VectorDrawing``).
     ``VIDEO``: an iterable of (H, W, 3 or 4) uint8 frames of one size, with ``fps`` and ``crf``.
     """
 

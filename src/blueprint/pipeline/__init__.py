@@ -17,7 +17,7 @@ _EXPORTS = {
     "Executor": "blueprint.pipeline.executor",
     "Plan": "blueprint.pipeline.graph",
     "plan": "blueprint.pipeline.graph",
-    "ATTRIBUTES": "blueprint.pipeline.spec",
+    "ATTRIBUTES": "blueprint.pipeline.schema",
     "PipelineSpec": "blueprint.pipeline.spec",
     "load_pipeline": "blueprint.pipeline.spec",
     "parse": "blueprint.pipeline.spec",
@@ -42,7 +42,8 @@ if TYPE_CHECKING:
     from blueprint.pipeline.blueprint import render_blueprint
     from blueprint.pipeline.executor import Executor
     from blueprint.pipeline.graph import Plan, plan
-    from blueprint.pipeline.spec import ATTRIBUTES, PipelineSpec, load_pipeline, parse, preset_names
+    from blueprint.pipeline.schema import ATTRIBUTES
+    from blueprint.pipeline.spec import PipelineSpec, load_pipeline, parse, preset_names
     from blueprint.pipeline.state import Result
 
 

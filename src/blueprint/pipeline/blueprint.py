@@ -8,7 +8,8 @@ from collections.abc import Iterable, Iterator
 
 import numpy as np
 
-from blueprint.compose.style import Style, get_style
+from blueprint.compose.lookup import get_style
+from blueprint.compose.style import Style
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.pipeline.spec import PipelineSpec, load_pipeline

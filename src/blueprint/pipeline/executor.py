@@ -2,7 +2,7 @@
 
 Per frame: upload image inputs; capture the front surface of the chosen parts that attributes
 ask for; if any other attribute is read, peel the model in the one peel loop
-(``blueprint.render.capture.peel``, with its stop rules), one G-buffer per attribute scale,
+(``blueprint.render.capture.layer_loop``, with its stop rules), one G-buffer per attribute scale,
 plus this package's attribute pass for the attributes the renderer's G-buffer lacks; run the
 per-layer passes after each layer (and the once-passes at layer 0); then the passes that need
 every layer (the compositor); read back the output and any dumps.
@@ -22,9 +22,10 @@ Uniforms the executor sets whenever a program declares them:
 ``u_layer``, ``u_frame``                     depth layer of a per-layer pass; frame of a video
 ``u_shade_ink``                              the style's colour of shaded parts
 
-A uniform is written only when its value changed since the program last got it. What one
-run holds (its plan, camera, stacks of layers, targets of chosen parts, passes counted) is a
-``RunState``, made anew for each run.
+A uniform is written only when its value changed since the program last got it. A run's
+keywords are a ``RunRequest``; what one run holds (its plan, camera, stacks of layers, targets
+of chosen parts, passes counted) is a ``RunState``, made anew for each run, and what its frame
+drew and read a ``Drawn``.
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ from dataclasses import replace
 import numpy as np
 
 from blueprint.compose.compositor import TILES_VERT, Compositor, Shading
-from blueprint.compose.style import STYLES, Style, get_style
+from blueprint.compose.lookup import get_style
+from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.gpu import units
 from blueprint.gpu.device import Device
@@ -51,10 +53,11 @@ from blueprint.pipeline.inputs import (
     read_texture_later,
     texture_bytes,
 )
-from blueprint.pipeline.peel import IN_PLACE, LayerCapture
+from blueprint.pipeline.layers import IN_PLACE, LayerCapture
 from blueprint.pipeline.programs import FULLSCREEN, Programs
-from blueprint.pipeline.spec import Bound, PipelineSpec
-from blueprint.pipeline.state import Result, RunState
+from blueprint.pipeline.schema import Bound
+from blueprint.pipeline.spec import PipelineSpec
+from blueprint.pipeline.state import FROM_FILE, Drawn, Result, RunRequest, RunState, Sizes
 from blueprint.pipeline.tiles import Tiles
 from blueprint.render.abuffer import Overflow
 from blueprint.render.gbuffer import depth_range, peel_eps
@@ -74,7 +77,6 @@ EDGE_BATCH = 8
 _FRAME_UNIFORMS = ("u_texel", "u_size", "u_layer", "u_frame", "u_shade_ink")
 _CAMERA_SCALARS = ("u_depth_range", "u_peel_eps", "u_pixel_angle", "u_normal_cos")
 _CAMERA_MATRICES = ("u_view", "u_projection")
-_UNSET = object()
 
 
 class Executor:
@@ -98,7 +100,7 @@ class Executor:
         self._declared: dict[object, tuple[bool, bool, bool, bool]] = {}
         self._rules: tuple = (None, ())  # (settings, rules): _standard_rules
         # the sizes of each plan's scales at the last output size it ran at, all checked
-        self._sizes: dict[int, tuple[Plan, tuple[int, int], dict]] = {}
+        self._sizes: dict[int, tuple[Plan, Sizes]] = {}
         self._checked: tuple | None = None  # the last peel settings check_frame_args passed
         self.last_run: RunState | None = None
         self.tiles = Tiles(device.ctx)
@@ -140,22 +142,7 @@ class Executor:
         pipeline: PipelineSpec | Bound,
         model: Model | None = None,
         camera: Camera | None = None,
-        *,
-        size: tuple[int, int] | None = None,
-        view: str = "iso",
-        variables: dict | None = None,
-        images: dict | None = None,
-        style: str | Style | None = None,
-        max_layers=_UNSET,
-        min_fraction: float | None = None,
-        crease_angle: float | None = None,
-        parts: dict[str, np.ndarray] | None = None,
-        dumps: tuple[str, ...] = (),
-        profile: bool = False,
-        frame: int | None = None,
-        read_later=None,
-        keep: bool = False,
-        slot: int = 2,
+        **request,
     ) -> Result:
         """Run a pipeline once.
 
@@ -165,85 +152,68 @@ class Executor:
             From ``load_pipeline``; ``variables`` override its declared variables.
         model, camera
             The model whose attributes are rendered (needed when any attribute is read);
-            ``camera`` defaults to ``Camera.fit`` from ``view``.
-        size : (int, int), optional
-            Output size; default the file's ``size``, else the first image input's, else 1024².
-        images : dict, optional
-            Image inputs by name: (H, W, 3 or 4) uint8 arrays (row 0 at the top) or file paths,
-            overriding the files the pipeline names.
-        style : str or Style, optional
-            Paper and inks of every composite pass (default: the pass's ``style`` parameter).
-        max_layers, min_fraction, crease_angle
-            Override the file's peeling settings (``max_layers=None``: every layer).
-        parts : dict, optional
-            Sets of parts by name, (P,) bool each, for the attributes of chosen parts
-            (``{ of = "depth", parts = "NAME" }``) that the pipeline reads.
-        dumps : names whose targets are read back into ``Result.dumps``.
-        read_later : pixel buffer, optional
-            Copy a one-texture output into it instead of reading it back (``stream``): the
-            result comes with ``pending`` set and ``output`` None.
-        keep : bool
-            Leave a one-texture output on the GPU, unread: ``Result.texture`` (a window shows it
-            from there). Such a frame reads nothing back, so it does not count the layers a cap
-            left (``Result.layers_left`` is 0): that count is a geometry pass and a read-back.
-        slot : int
-            Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2
-            for a frame read at once (never those of a stream still to be read).
+            ``camera`` defaults to ``fit_camera`` from ``view``.
+        **request
+            The fields of ``RunRequest``: ``size``, ``view``, ``variables``, ``images``,
+            ``style``, ``max_layers``, ``min_fraction``, ``crease_angle``, ``parts``,
+            ``dumps``, ``profile``, ``frame``, ``read_later``, ``keep``, ``slot``.
         """
-        t0 = clock = time.perf_counter()
-        ctx = self.ctx
+        req = RunRequest(**request)
+        watch = _Stopwatch(self.ctx, req.profile)
         self.r.make_current()
-        stages: dict[str, float] = {}
+        st = self.last_run = self._start(pipeline, model, camera, req)
+        bound, images = st.pl.bound, req.images or {}
+        for name in st.pl.images:
+            self.images.upload(bound, name, images.get(name), st.size_of(bound.images[name].scale))
+        watch.stage("upload")
+        self.ctx.enable_only(self.ctx.NOTHING)
+        self.tiles.forget()  # what an earlier run found, even one an error ended
+        if st.pl.needs_model:
+            st.mesh = self.capturer.mesh(model, st.crease)
+            self.capture.capture_parts(st, req.parts or {})
+        try:
+            drawn = self._draw(st, req, watch, blind=True)
+        except Overflow:
+            # a frame issued whole found its A-buffer short of room once read: again, looking
+            st.groups.clear()
+            drawn = self._draw(st, req, watch, blind=False)
+        watch.stage("read")
+        out = st.pl.output
+        return Result(
+            output=drawn.outputs.get(out),
+            format=bound.format_of(out),
+            premultiplied=out in bound.passes and bound.passes[out].kind == "composite",
+            layers=drawn.layers,
+            layer_pixels=drawn.layer_pixels,
+            camera=st.camera,
+            ms=watch.ms(),
+            draws=st.draws,
+            stages=watch.stages,
+            dumps={d: drawn.outputs[st.pl.resolve(d)] for d in req.dumps},
+            revealed=drawn.revealed,
+            layers_left=drawn.layers_left,
+            pending=drawn.pending,
+            counting=drawn.counting,
+            texture=drawn.texture,
+        )
 
-        def stage(name: str) -> None:
-            nonlocal clock
-            if profile:
-                ctx.finish()
-                now = time.perf_counter()
-                stages[name] = (now - clock) * 1e3
-                clock = now
-
-        pl = self.plan(pipeline, variables, dumps)
+    def _start(
+        self, pipeline: PipelineSpec | Bound, model: Model | None, camera: Camera | None, req
+    ) -> RunState:
+        """A run's state: its plan, the sizes of its scales, its peel settings and camera, with
+        what the plan reads (images, parts, the model) checked given."""
+        pl = self.plan(pipeline, req.variables, req.dumps)
         bound = pl.bound
-        images = dict(images or {})
+        images = req.images or {}
         for name in images:
             if name not in bound.images:
                 raise InputError(
                     f"{bound.source}: no image called {name!r} (choose {', '.join(bound.images) or 'none'})"
                 )
-        w, h = output_size(bound, pl.images, size, images, self.r.max_texture)
-        held = self._sizes.get(id(pl))
-        checked = held is not None and held[0] is pl and held[1] == (w, h)
-        sizes: dict[float, tuple[int, int]] = held[2] if checked else {}
-
-        def size_of(scale: float) -> tuple[int, int]:
-            if scale not in sizes:
-                sizes[scale] = (max(1, round(w * scale)), max(1, round(h * scale)))
-                if max(sizes[scale]) > self.r.max_texture:
-                    raise InputError(
-                        f"size {w}x{h} at scale {scale:g} is {sizes[scale][0]}x{sizes[scale][1]}: "
-                        f"this GPU allows {self.r.max_texture} pixels per side"
-                    )
-            return sizes[scale]
-
-        if not checked:
-            for scale in {bound.scale_of(n) for n in (*pl.attributes, *pl.images)} | {
-                bound.passes[n].scale for n in pl.passes
-            }:
-                size_of(scale)
-            # every scale checked: later runs of the plan at this size need not check again
-            self._sizes[id(pl)] = (pl, (w, h), sizes)
-        if max_layers is _UNSET:
-            max_layers = bound.layers if bound.layers is not None else 8
-            max_layers = max_layers or None
-        if not pl.layered:
-            max_layers = 1
-        min_fraction = bound.min_fraction if min_fraction is None else min_fraction
-        crease = bound.crease_angle if crease_angle is None else crease_angle
-        if (max_layers, min_fraction, crease) != self._checked:
-            check_frame_args(max_layers, min_fraction, crease, 1.0)
-            self._checked = (max_layers, min_fraction, crease)
-        parts = dict(parts or {})
+        size = output_size(bound, pl.images, req.size, images, self.r.max_texture)
+        sizes = self._sizes_of(pl, size)
+        max_layers, min_fraction, crease = self._peel_settings(pl, req)
+        parts = req.parts or {}
         for name in pl.parts:
             wanted = bound.attributes[name].parts
             if parts.get(wanted) is None:
@@ -257,124 +227,127 @@ class Executor:
                     f"{bound.source}: this pipeline renders attributes ({', '.join(pl.attributes)}): "
                     "give a model"
                 )
-            camera = camera or fit_camera(model, (w, h), view)
-        self._frame = self._frame + 1 if frame is None else frame
-        chosen = None if style is None else get_style(style)
-        st = self.last_run = RunState(
+            camera = camera or fit_camera(model, size, req.view)
+        self._frame = self._frame + 1 if req.frame is None else req.frame
+        chosen = None if req.style is None else get_style(req.style)
+        st = RunState(
             pl=pl,
             camera=camera,
             crease=crease,
             style=chosen,
             shade_ink=tuple((chosen or _named_style(bound)).shade),
-            size_of=size_of,
+            size_of=sizes,
             frame=self._frame,
-            slot=slot,
+            slot=req.slot,
             arrays=self._arrays(pl) if self.r.use_compute else None,
+            max_layers=max_layers,
+            min_fraction=min_fraction,
         )
         st.attr_dumps = {
             n: [] for n in pl.readback if n in bound.attributes and bound.attributes[n].parts is None
         }
-        for name in pl.images:
-            self.images.upload(bound, name, images.get(name), size_of(bound.images[name].scale))
-        stage("upload")
+        return st
 
-        ctx.enable_only(ctx.NOTHING)
-        self.tiles.forget()  # what an earlier run found, even one an error ended
-        out_name = pl.output
-        if pl.needs_model:
-            st.mesh = self.capturer.mesh(model, crease)
-            self.capture.capture_parts(st, parts)
+    def _sizes_of(self, pl: Plan, size: tuple[int, int]) -> Sizes:
+        """The sizes of ``pl``'s scales at output size ``size``, every one checked: kept, so that
+        later runs of the plan at this size need not check them again."""
+        held = self._sizes.get(id(pl))
+        if held is not None and held[0] is pl and held[1].size == size:
+            return held[1]
+        sizes = Sizes(size, self.r.max_texture)
+        bound = pl.bound
+        for scale in {bound.scale_of(n) for n in (*pl.attributes, *pl.images)} | {
+            bound.passes[n].scale for n in pl.passes
+        }:
+            sizes(scale)
+        self._sizes[id(pl)] = (pl, sizes)
+        return sizes
 
-        def draw(blind: bool):
-            """The frame from the peel to its read-back; ``blind`` as ``LayerCapture.peel``."""
-            counts: list[int] | None = []
-            revealed, left, counting = None, 0, None
-            if pl.peel:
-                reveal = self.capture.reveal_rule(st)
-                # depth masking peels as deep as it needs: the cap would stop it short silently
-                if reveal is None:
-                    rules = self._standard_rules(max_layers, min_fraction)
-                else:
-                    rules = (*standard_rules(None, min_fraction), reveal)
-                # a frame that reads back its output alone, once a frame, can be issued whole before
-                # its counts are known
-                out = bound.passes.get(pl.output)
-                blind = blind and pl.readback == [pl.output] and out is not None and not out.per_layer
-                counts, layers = self.capture.peel(st, max_layers, rules, blind)
-                revealed = None if reveal is None else reveal.shown
-            else:
-                self.ensure_stacks(st, 1)
-                for name in pl.iteration0:
-                    self.run_pass(st, name, 0, 1)
-                layers = 1
-            if st.arrays is not None:
-                self._run_batches(st, layers)
-            stage("peel_edges")
-            for name in pl.after:
-                self.run_pass(st, name, 0, layers)
-            self.tiles.forget()
-            stage("compose")
-            ctx.disable(ctx.BLEND)
-            if self.r.use_compute:
-                ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
-            pending = kept = None
-            if out_name in pl.bound.passes and out_name not in pl.stacked:
-                if keep:
-                    kept = self._value(st, out_name, 0)
-                elif read_later is not None:
-                    tex = self._value(st, out_name, 0)
-                    pending = read_texture_later(tex, bound.format_of(out_name), read_later(tex))
-            dumps_out = {
-                name: self._read(st, name, layers)
-                for name in pl.readback
-                if (pending is None and kept is None) or name != out_name
-            }
-            counting = None
-            if pl.peel:
-                if counts is None and pending is not None and self.capture.lists_only(st):
-                    # a streamed frame's counts are read with its picture, after the next is issued
-                    drawn = layers
+    def _peel_settings(self, pl: Plan, req: RunRequest) -> tuple[int | None, float, float]:
+        """(max_layers, min_fraction, crease_angle) of a run: the request's, else the file's;
+        one layer where no pass runs per layer."""
+        bound = pl.bound
+        max_layers = req.max_layers
+        if max_layers is FROM_FILE:
+            max_layers = bound.layers if bound.layers is not None else 8
+            max_layers = max_layers or None
+        if not pl.layered:
+            max_layers = 1
+        min_fraction = bound.min_fraction if req.min_fraction is None else req.min_fraction
+        crease = bound.crease_angle if req.crease_angle is None else req.crease_angle
+        if (max_layers, min_fraction, crease) != self._checked:
+            check_frame_args(max_layers, min_fraction, crease, 1.0)
+            self._checked = (max_layers, min_fraction, crease)
+        return max_layers, min_fraction, crease
 
-                    def counting():
-                        counts, layers = self.capture.counted(st, rules, drawn)
-                        return counts, layers, self.capture.left(st, rules, counts, layers)
+    def _draw(self, st: RunState, req: RunRequest, watch: _Stopwatch, blind: bool) -> Drawn:
+        """The frame from its layers to its read-back; ``blind`` as ``LayerCapture.draw_layers``."""
+        ctx, pl = self.ctx, st.pl
+        drawn = Drawn()
+        if pl.peel:
+            self._draw_layers(st, drawn, blind)
+        else:
+            self.ensure_stacks(st, 1)
+            for name in pl.iteration0:
+                self.run_pass(st, name, 0, 1)
+            drawn.layers = 1
+        if st.arrays is not None:
+            self._run_batches(st, drawn.layers)
+        watch.stage("peel_edges")
+        for name in pl.after:
+            self.run_pass(st, name, 0, drawn.layers)
+        self.tiles.forget()
+        watch.stage("compose")
+        ctx.disable(ctx.BLEND)
+        if self.r.use_compute:
+            ctx.memory_barrier(ctx.TEXTURE_UPDATE_BARRIER_BIT | ctx.FRAMEBUFFER_BARRIER_BIT)
+        self._read_back(st, req, drawn)
+        if pl.peel:
+            self._count(st, req, drawn)
+        return drawn
 
-                else:
-                    if counts is None:
-                        counts, layers = self.capture.counted(st, rules, layers)
-                    # a window's frame shows no count: its pass and read-back would be a stall
-                    left = 0 if keep else self.capture.left(st, rules, counts, layers)
-            return counts, layers, revealed, left, pending, kept, dumps_out, counting
+    def _draw_layers(self, st: RunState, drawn: Drawn, blind: bool) -> None:
+        """The frame's layers under its stop rules, the per-layer passes run after each."""
+        pl = st.pl
+        reveal = self.capture.reveal_rule(st)
+        # depth masking peels as deep as it needs: the cap would stop it short silently
+        if reveal is None:
+            drawn.rules = self._standard_rules(st.max_layers, st.min_fraction)
+        else:
+            drawn.rules = (*standard_rules(None, st.min_fraction), reveal)
+        # a frame that reads back its output alone, once a frame, can be issued whole before its
+        # counts are known
+        out = pl.bound.passes.get(pl.output)
+        blind = blind and pl.readback == [pl.output] and out is not None and not out.per_layer
+        drawn.layer_pixels, drawn.layers = self.capture.draw_layers(st, st.max_layers, drawn.rules, blind)
+        drawn.revealed = None if reveal is None else reveal.shown
 
-        try:
-            counts, layers, revealed, left, pending, kept, dumps_out, counting = draw(blind=True)
-        except Overflow:
-            # a frame issued whole found its A-buffer short of room once read: again, looking
-            st.groups.clear()
-            counts, layers, revealed, left, pending, kept, dumps_out, counting = draw(blind=False)
-        stage("read")
-        output = dumps_out.get(out_name)
-        fmt = bound.format_of(out_name)
-        premultiplied = out_name in bound.passes and bound.passes[out_name].kind == "composite"
-        result_dumps = {d: dumps_out[pl.resolve(d)] for d in dumps}
-        ms = (time.perf_counter() - t0) * 1e3
-        return Result(
-            output,
-            fmt,
-            premultiplied,
-            layers,
-            counts,
-            camera,
-            ms,
-            st.draws,
-            stages,
-            result_dumps,
-            revealed,
-            left,
-            pending,
-            counting,
-            kept,
-        )
+    def _read_back(self, st: RunState, req: RunRequest, drawn: Drawn) -> None:
+        """The outputs and dumps read back; a one-texture output left on the GPU (``keep``) or
+        copied to be read late (``read_later``) instead."""
+        pl, out = st.pl, st.pl.output
+        if out in pl.bound.passes and out not in pl.stacked:
+            if req.keep:
+                drawn.texture = self._value(st, out, 0)
+            elif req.read_later is not None:
+                tex = self._value(st, out, 0)
+                drawn.pending = read_texture_later(tex, pl.bound.format_of(out), req.read_later(tex))
+        late = drawn.pending is not None or drawn.texture is not None
+        drawn.outputs = {
+            name: self._read(st, name, drawn.layers) for name in pl.readback if not late or name != out
+        }
+
+    def _count(self, st: RunState, req: RunRequest, drawn: Drawn) -> None:
+        """The layers drawn counted, where a blind peel left them uncounted, and the layers a cap
+        left; a streamed frame's counted with its picture, after the next frame is issued."""
+        if drawn.layer_pixels is None and drawn.pending is not None and self.capture.lists_only(st):
+            drawn.counting = functools.partial(self.capture.counted_late, st, drawn.rules, drawn.layers)
+            return
+        if drawn.layer_pixels is None:
+            drawn.layer_pixels, drawn.layers = self.capture.counted(st, drawn.rules, drawn.layers)
+        # a window's frame shows no count: its pass and read-back would be a stall
+        if not req.keep:
+            drawn.layers_left = self.capture.left(st, drawn.rules, drawn.layer_pixels, drawn.layers)
 
     def stream(
         self, pipeline: PipelineSpec | Bound, model: Model | None, frames: Iterable[dict], **options
@@ -416,7 +389,7 @@ class Executor:
 
     def _standard_rules(self, max_layers: int | None, min_fraction: float) -> tuple:
         """``standard_rules``, the same tuple while the settings stay (none of them holds
-        state): the capture then knows them again without looking (``LayerCapture.peel``)."""
+        state): the capture then knows them again without looking (``LayerCapture.draw_layers``)."""
         if self._rules[0] != (max_layers, min_fraction):
             self._rules = (max_layers, min_fraction), tuple(standard_rules(max_layers, min_fraction))
         return self._rules[1]
@@ -772,6 +745,26 @@ class Executor:
         count = len(arrays[op.stacks[0]]) if op.stacks else 1
         self.run_pass(st, "out", 0, count)
         return read_texture(self.target(st, "out", 0), bound.passes["out"].format)[::-1]
+
+
+class _Stopwatch:
+    """A run's milliseconds, and with ``profile`` its milliseconds per stage, each stage's GPU
+    work waited for."""
+
+    def __init__(self, ctx, profile: bool) -> None:
+        self.ctx, self.profile = ctx, profile
+        self.start = self.clock = time.perf_counter()
+        self.stages: dict[str, float] = {}
+
+    def stage(self, name: str) -> None:
+        if self.profile:
+            self.ctx.finish()
+            now = time.perf_counter()
+            self.stages[name] = (now - self.clock) * 1e3
+            self.clock = now
+
+    def ms(self) -> float:
+        return (time.perf_counter() - self.start) * 1e3
 
 
 @functools.lru_cache(maxsize=16)

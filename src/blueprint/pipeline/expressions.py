@@ -6,7 +6,7 @@ from __future__ import annotations
 import ast
 import operator
 
-from blueprint.pipeline.spec import fail
+from blueprint.pipeline.schema import fail
 
 _BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv}
 _UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}

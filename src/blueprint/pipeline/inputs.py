@@ -11,7 +11,7 @@ import numpy as np
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.gpu.targets import FORMATS
-from blueprint.pipeline.spec import Bound
+from blueprint.pipeline.schema import Bound
 
 _DTYPES = {"f1": np.uint8, "f2": np.float16, "f4": np.float32, "i4": np.int32}
 

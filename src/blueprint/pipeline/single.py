@@ -7,7 +7,7 @@ import numpy as np
 
 from blueprint.pipeline.bind import check_params
 from blueprint.pipeline.inputs import default_format
-from blueprint.pipeline.spec import OPERATIONS, Bound, BoundPass, ImageSpec
+from blueprint.pipeline.schema import OPERATIONS, Bound, BoundPass, ImageSpec
 
 
 def single_op(

@@ -59,46 +59,23 @@ import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from blueprint.compose.compositor import COMPOSITE
 from blueprint.errors import InputError
 from blueprint.gpu.shaders import package_files
-from blueprint.gpu.targets import FORMATS
-from blueprint.ops import OPS, Op
+from blueprint.pipeline.bind import bind
+from blueprint.pipeline.schema import (
+    ATTRIBUTES,
+    OPERATIONS,
+    PART_ATTRIBUTES,
+    Bound,
+    ParsedPipeline,
+    PassSpec,
+    check_name,
+    fail,
+)
 from blueprint.settings import SETTINGS_FILE_LIMIT, parse_text, read_file
 
-#: The operations a pass may name: the image-space library (``blueprint.ops.OPS``) and the
-#: compositor, which compose declares beside its shader and styles.
-OPERATIONS: dict[str, Op] = {**OPS, COMPOSITE.name: COMPOSITE}
-
-# name: (default format, allowed formats, from the renderer's G-buffer, what it holds)
-ATTRIBUTES: dict[str, tuple[str, tuple[str, ...], bool, str]] = {
-    "depth": ("depth", ("depth",), True, "window depth in [0, 1]; 1 where there is no surface"),
-    "normal": ("rgba16f", ("rgba16f",), True, "eye-space unit normal facing the viewer, w = 1; 0 where none"),
-    "ids": ("rg32i", ("rg32i",), True, "(triangle + 1, part + 1); 0 where none"),
-    "linear_depth": ("r32f", ("r32f",), False, "distance along the view axis; 0 where none"),
-    "position": ("rgba32f", ("rgba32f", "rgba16f"), False, "model-space position, w = 1; 0 where none"),
-    "triangle": ("r32i", ("r32i",), False, "face index in the model; -1 where none"),
-    "part": ("r32i", ("r32i",), False, "part index; -1 where none"),
-    "base_color": ("rgba8", ("rgba8", "rgba16f"), False, "a colour per part, alpha 1; 0 where none"),
-    "uv": (
-        "rg32f",
-        ("rg32f", "rgba16f", "rgba32f"),
-        False,
-        "box projection of the model bounds; 0 where none",
-    ),
-    "layer": ("r32i", ("r32i",), False, "index of the depth layer; -1 where none"),
-}
-IMAGE_FORMATS = ("rgba8", "r8", "rgba16f", "rgba32f", "r32f")
-VIDEO_SUFFIXES = (".mp4", ".mov", ".avi", ".mkv", ".webm", ".gif", ".m4v")
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
-# every target format a pass may write, with what its shader samples it as
-ALL_FORMATS = (*FORMATS, "depth")
-UNIFORM_TYPES = {"float": 1, "int": 1, "bool": 1, "vec2": 2, "vec3": 3, "vec4": 4}
-MAX_SCALE = 8.0
-MAX_LAYERS = 256
 PRESETS = "blueprint.pipeline:presets"
 
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _SECTIONS = ("pipeline", "variables", "attributes", "images", "passes", "stop")
 _PIPELINE_KEYS = ("name", "description", "output", "layers", "min_fraction", "crease_angle", "size")
 _PASS_KEYS = (
@@ -113,57 +90,16 @@ _PASS_KEYS = (
     "accumulate",
     "when",
 )
-# attributes of the G-buffer that may be captured for chosen parts alone (``of`` and ``parts``)
-PART_ATTRIBUTES = ("depth", "normal", "ids")
 # stop rules a pipeline may declare, with their keys
 _STOP_RULES = {"reveal": ("depth", "fraction", "when")}
 _UNIFORM_KEYS = ("type", "default", "min", "max")
 
 
-def fail(source: str, key: str, message: str) -> InputError:
-    """The one error of a pipeline file: file, key, message (with the allowed values)."""
-    return InputError(f"{source}: {key}: {message}")
-
-
-def is_int_format(fmt: str) -> bool:
-    return fmt.endswith("i")
-
-
-def channels(fmt: str) -> int:
-    return 1 if fmt == "depth" else FORMATS[fmt][0]
-
-
 # -- the parsed file -------------------------------------------------------------------------------
 @dataclass(frozen=True)
-class PassSpec:
-    name: str
-    op: str | None
-    shader: Path | None
-    inputs: dict[str, str]
-    params: dict
-    uniforms: dict[str, dict]
-    format: object
-    scale: object
-    per_layer: object
-    accumulate: object = False
-    when: object = True
-
-
-@dataclass(frozen=True)
-class PipelineSpec:
+class PipelineSpec(ParsedPipeline):
     """A parsed pipeline file. ``bind`` resolves variables and validates the whole of it."""
 
-    source: str
-    folder: Path | None
-    name: str
-    description: str
-    output: str
-    settings: dict
-    variables: dict
-    attributes: dict[str, dict]
-    images: dict[str, dict]
-    passes: dict[str, PassSpec]
-    stops: dict[str, dict] = field(default_factory=dict)
     _bound: dict = field(default_factory=dict, repr=False, compare=False)
 
     def bind(self, variables: dict | None = None) -> Bound:
@@ -178,95 +114,8 @@ class PipelineSpec:
         key = tuple(sorted((k, repr(v)) for k, v in values.items()))
         bound = self._bound.get(key)
         if bound is None:
-            from blueprint.pipeline.bind import bind
-
             bound = self._bound[key] = bind(self, values)
         return bound
-
-
-@dataclass(frozen=True)
-class AttributeSpec:
-    """``of``: the G-buffer attribute it holds (its own name but for part attributes);
-    ``parts``: the run-time part set whose front surface alone it holds, or None (every layer)."""
-
-    name: str
-    format: str
-    scale: float
-    of: str = ""
-    parts: str | None = None
-
-
-@dataclass(frozen=True)
-class ImageSpec:
-    name: str
-    file: Path | None
-    format: str
-    scale: float
-
-    @property
-    def video(self) -> bool:
-        return self.file is not None and self.file.suffix.lower() in VIDEO_SUFFIXES
-
-
-@dataclass(frozen=True)
-class BoundPass:
-    name: str
-    op: Op
-    inputs: dict[str, str]
-    uniforms: dict
-    format: str
-    scale: float
-    per_layer: bool
-    user: Path | None = None
-    accumulate: bool = False
-
-    @property
-    def kind(self) -> str:
-        return self.op.kind
-
-    @property
-    def stacks(self) -> tuple[str, ...]:
-        return self.op.stacks
-
-
-@dataclass(frozen=True)
-class Bound:
-    """A pipeline with every value concrete and checked; the graph module plans it. ``passes``
-    are in dependency order (every pass after the passes it reads)."""
-
-    source: str
-    name: str
-    output: str
-    layers: int | None
-    min_fraction: float
-    crease_angle: float
-    size: tuple[int, int] | None
-    attributes: dict[str, AttributeSpec]
-    images: dict[str, ImageSpec]
-    passes: dict[str, BoundPass]
-    variables: dict
-    stops: tuple[StopSpec, ...] = ()
-
-    def format_of(self, name: str) -> str:
-        for table in (self.attributes, self.images, self.passes):
-            if name in table:
-                return table[name].format
-        raise KeyError(name)
-
-    def scale_of(self, name: str) -> float:
-        for table in (self.attributes, self.images, self.passes):
-            if name in table:
-                return table[name].scale
-        raise KeyError(name)
-
-
-@dataclass(frozen=True)
-class StopSpec:
-    """A declared stop rule: ``rule`` (``reveal``), the part attribute it reads, its fraction."""
-
-    rule: str
-    depth: str
-    fraction: float
 
 
 #: The preset every picture is drawn with (``blueprint.pipeline.blueprint``).
@@ -329,35 +178,82 @@ def _only(source: str, key: str, table: dict, allowed) -> None:
             raise fail(source, f"{key}.{k}" if key else k, f"unknown key (choose {', '.join(allowed)})")
 
 
-def _name(source: str, key: str, name: str) -> str:
-    if not _NAME.match(name):
-        raise fail(source, key, "names are letters, digits and _, not starting with a digit")
-    return name
-
-
 def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
     """Parse pipeline TOML; structure only (``bind`` checks values and the graph)."""
     data = parse_text(text, source, "toml")
     _only(source, "", data, _SECTIONS)
+    head = _head(source, data)
+    variables = _variables(source, data)
+    names = _Names(source)
+    attributes = _attributes(source, data, names)
+    images = {}
+    for name, entry in _table(source, "images", data.get("images", {})).items():
+        key = f"images.{name}"
+        entry = _table(source, key, entry)
+        _only(source, key, entry, ("file", "format", "scale"))
+        names.claim(name, key)
+        images[name] = entry
+    passes = {}
+    for name, entry in _table(source, "passes", data.get("passes", {})).items():
+        key = f"passes.{name}"
+        entry = _table(source, key, entry)
+        _only(source, key, entry, _PASS_KEYS)
+        names.claim(name, key)
+        passes[name] = _pass(source, folder, name, entry)
+    settings = {k: head[k] for k in ("layers", "min_fraction", "crease_angle", "size") if k in head}
+    return PipelineSpec(
+        source,
+        folder,
+        str(head.get("name", Path(source).stem)),
+        str(head.get("description", "")),
+        head["output"],
+        settings,
+        variables,
+        attributes,
+        images,
+        passes,
+        _stops(source, data),
+    )
+
+
+class _Names:
+    """The names of a file's attributes, images and passes: each names one thing."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self.taken: dict[str, str] = {}
+
+    def claim(self, name: str, key: str) -> None:
+        check_name(self.source, key, name)
+        if name in self.taken:
+            raise fail(self.source, key, f"name {name!r} is already used by {self.taken[name]}")
+        self.taken[name] = key
+
+
+def _head(source: str, data: dict) -> dict:
+    """The ``[pipeline]`` table, which names the output."""
     head = _table(source, "pipeline", data.get("pipeline", {}))
     _only(source, "pipeline", head, _PIPELINE_KEYS)
     if "output" not in head:
         raise fail(source, "pipeline.output", "missing: name the pass, attribute or image that is the result")
     if not isinstance(head["output"], str):
         raise fail(source, "pipeline.output", "must be a name")
+    return head
+
+
+def _variables(source: str, data: dict) -> dict:
+    """The ``[variables]``: plain values, which expressions elsewhere read."""
     variables = _table(source, "variables", data.get("variables", {}))
     for k, v in variables.items():
-        _name(source, f"variables.{k}", k)
+        check_name(source, f"variables.{k}", k)
         if not isinstance(v, int | float | bool | str) or (isinstance(v, str) and v.lstrip().startswith("=")):
             raise fail(source, f"variables.{k}", "must be a number, true/false or a string")
-    names: dict[str, str] = {}
+    return dict(variables)
 
-    def claim(name: str, key: str) -> None:
-        _name(source, key, name)
-        if name in names:
-            raise fail(source, key, f"name {name!r} is already used by {names[name]}")
-        names[name] = key
 
+def _attributes(source: str, data: dict, names: _Names) -> dict[str, dict]:
+    """The ``[attributes]``: of every layer by their own name, or of chosen parts (``of`` and
+    ``parts``)."""
     attributes = {}
     for name, entry in _table(source, "attributes", data.get("attributes", {})).items():
         key = f"attributes.{name}"
@@ -370,60 +266,56 @@ def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
                 raise fail(source, f"{key}.of", f"must be one of {', '.join(PART_ATTRIBUTES)}")
             if not isinstance(entry["parts"], str):
                 raise fail(source, f"{key}.parts", "must name a set of parts given at run time")
-            _name(source, f"{key}.parts", entry["parts"])
+            check_name(source, f"{key}.parts", entry["parts"])
         elif name not in ATTRIBUTES:
             raise fail(source, key, f"unknown attribute (choose {', '.join(ATTRIBUTES)})")
-        claim(name, key)
+        names.claim(name, key)
         attributes[name] = entry
-    images = {}
-    for name, entry in _table(source, "images", data.get("images", {})).items():
-        key = f"images.{name}"
-        entry = _table(source, key, entry)
-        _only(source, key, entry, ("file", "format", "scale"))
-        claim(name, key)
-        images[name] = entry
-    passes = {}
-    for name, entry in _table(source, "passes", data.get("passes", {})).items():
-        key = f"passes.{name}"
-        entry = _table(source, key, entry)
-        _only(source, key, entry, _PASS_KEYS)
-        claim(name, key)
-        if ("op" in entry) == ("shader" in entry):
-            raise fail(
-                source, key, "give either op (an operation of the library) or shader (a file of your own)"
-            )
-        if "op" in entry and "uniforms" in entry:
-            raise fail(source, f"{key}.uniforms", "only a pass with its own shader declares uniforms")
-        shader = None
-        if "shader" in entry:
-            if not isinstance(entry["shader"], str):
-                raise fail(source, f"{key}.shader", "must be a file name")
-            shader = Path(entry["shader"])
-            if not shader.is_absolute():
-                shader = (folder or Path.cwd()) / shader
-        op = entry.get("op")
-        if op is not None and not isinstance(op, str):
-            raise fail(source, f"{key}.op", f"must be a name (choose {', '.join(OPERATIONS)})")
-        inputs = _table(source, f"{key}.inputs", entry.get("inputs", {}))
-        for k, v in inputs.items():
-            if not isinstance(v, str):
-                raise fail(source, f"{key}.inputs.{k}", "must name an attribute, image or pass")
-        uniforms = _table(source, f"{key}.uniforms", entry.get("uniforms", {}))
-        for k, v in uniforms.items():
-            _only(source, f"{key}.uniforms.{k}", _table(source, f"{key}.uniforms.{k}", v), _UNIFORM_KEYS)
-        passes[name] = PassSpec(
-            name,
-            op,
-            shader,
-            dict(inputs),
-            dict(_table(source, f"{key}.params", entry.get("params", {}))),
-            dict(uniforms),
-            entry.get("format"),
-            entry.get("scale"),
-            entry.get("per_layer", False),
-            entry.get("accumulate", False),
-            entry.get("when", True),
-        )
+    return attributes
+
+
+def _pass(source: str, folder: Path | None, name: str, entry: dict) -> PassSpec:
+    """A ``[passes.NAME]`` table: an operation of the library or a shader of the user's own,
+    its inputs, parameters and switches as written (``bind`` evaluates them)."""
+    key = f"passes.{name}"
+    if ("op" in entry) == ("shader" in entry):
+        raise fail(source, key, "give either op (an operation of the library) or shader (a file of your own)")
+    if "op" in entry and "uniforms" in entry:
+        raise fail(source, f"{key}.uniforms", "only a pass with its own shader declares uniforms")
+    shader = None
+    if "shader" in entry:
+        if not isinstance(entry["shader"], str):
+            raise fail(source, f"{key}.shader", "must be a file name")
+        shader = Path(entry["shader"])
+        if not shader.is_absolute():
+            shader = (folder or Path.cwd()) / shader
+    op = entry.get("op")
+    if op is not None and not isinstance(op, str):
+        raise fail(source, f"{key}.op", f"must be a name (choose {', '.join(OPERATIONS)})")
+    inputs = _table(source, f"{key}.inputs", entry.get("inputs", {}))
+    for k, v in inputs.items():
+        if not isinstance(v, str):
+            raise fail(source, f"{key}.inputs.{k}", "must name an attribute, image or pass")
+    uniforms = _table(source, f"{key}.uniforms", entry.get("uniforms", {}))
+    for k, v in uniforms.items():
+        _only(source, f"{key}.uniforms.{k}", _table(source, f"{key}.uniforms.{k}", v), _UNIFORM_KEYS)
+    return PassSpec(
+        name,
+        op,
+        shader,
+        dict(inputs),
+        dict(_table(source, f"{key}.params", entry.get("params", {}))),
+        dict(uniforms),
+        entry.get("format"),
+        entry.get("scale"),
+        entry.get("per_layer", False),
+        entry.get("accumulate", False),
+        entry.get("when", True),
+    )
+
+
+def _stops(source: str, data: dict) -> dict[str, dict]:
+    """The ``[stop.RULE]`` tables, each with the keys its rule needs."""
     stops = {}
     for rule, entry in _table(source, "stop", data.get("stop", {})).items():
         key = f"stop.{rule}"
@@ -435,20 +327,7 @@ def parse(text: str, source: str, folder: Path | None) -> PipelineSpec:
             if needed not in entry:
                 raise fail(source, f"{key}.{needed}", "missing")
         stops[rule] = dict(entry)
-    settings = {k: head[k] for k in ("layers", "min_fraction", "crease_angle", "size") if k in head}
-    return PipelineSpec(
-        source,
-        folder,
-        str(head.get("name", Path(source).stem)),
-        str(head.get("description", "")),
-        head["output"],
-        settings,
-        dict(variables),
-        attributes,
-        images,
-        passes,
-        stops,
-    )
+    return stops
 
 
 def with_file(spec: PipelineSpec, image: str, path: Path) -> PipelineSpec:

@@ -1,5 +1,6 @@
-"""What a pipeline run holds and gives back: the G-buffer of each attribute scale, the run's
-state (made anew each run), and its result."""
+"""What a pipeline run is asked for, holds and gives back: the request (``RunRequest``), the
+G-buffer of each attribute scale, the run's state (made anew each run), what its frame drew and
+read (``Drawn``), and its result."""
 
 from __future__ import annotations
 
@@ -14,13 +15,78 @@ from blueprint.gpu.device import Device
 from blueprint.pipeline.arrays import ArrayPlan
 from blueprint.pipeline.graph import Plan
 from blueprint.pipeline.inputs import PendingRead
-from blueprint.pipeline.spec import Bound
+from blueprint.pipeline.schema import Bound
 from blueprint.render.capture import Capture, gbuffer
 from blueprint.render.renderer import straight_alpha
 from blueprint.scene.camera import Camera
 
 # attributes the attribute pass draws (the rest are the renderer's G-buffer)
 EXTRA = ("linear_depth", "position", "uv", "base_color", "triangle", "part", "layer")
+#: ``RunRequest.max_layers`` where the pipeline file's setting holds.
+FROM_FILE = object()
+
+
+# Made every frame and never changed, yet not frozen: a frozen dataclass sets each field through
+# object.__setattr__, several times the cost of a plain one's, and the executor's Python is per
+# frame.
+@dataclass(slots=True)
+class RunRequest:
+    """What one run of a pipeline is asked for besides the pipeline, model and camera: the
+    keywords of ``Executor.run``.
+
+    Attributes
+    ----------
+    size : (int, int), optional
+        Output size; default the file's ``size``, else the first image input's, else 1024².
+    view : str
+        The named view ``camera`` defaults to (``fit_camera``).
+    variables : dict, optional
+        Values overriding the pipeline's declared variables.
+    images : dict, optional
+        Image inputs by name: (H, W, 3 or 4) uint8 arrays (row 0 at the top) or file paths,
+        overriding the files the pipeline names.
+    style : str or Style, optional
+        Paper and inks of every composite pass (default: the pass's ``style`` parameter).
+    max_layers, min_fraction, crease_angle
+        Override the file's peeling settings (``max_layers=None``: every layer; ``FROM_FILE``:
+        the file's).
+    parts : dict, optional
+        Sets of parts by name, (P,) bool each, for the attributes of chosen parts
+        (``{ of = "depth", parts = "NAME" }``) that the pipeline reads.
+    dumps : tuple of str
+        Names whose targets are read back into ``Result.dumps``.
+    profile : bool
+        Wait for the GPU after each stage, timing it (``Result.stages``).
+    frame : int, optional
+        The frame of a video (``u_frame``); default: the executor's count of runs.
+    read_later : callable, optional
+        Gives a pixel buffer for the output's texture: a one-texture output is copied into it
+        instead of read back (``Executor.stream``), and the result comes with ``pending`` set
+        and ``output`` None.
+    keep : bool
+        Leave a one-texture output on the GPU, unread: ``Result.texture`` (a window shows it
+        from there). Such a frame reads nothing back, so it does not count the layers a cap
+        left (``Result.layers_left`` is 0): that count is a geometry pass and a read-back.
+    slot : int
+        Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2 for
+        a frame read at once (never those of a stream still to be read).
+    """
+
+    size: tuple[int, int] | None = None
+    view: str = "iso"
+    variables: dict | None = None
+    images: dict | None = None
+    style: str | Style | None = None
+    max_layers: object = FROM_FILE
+    min_fraction: float | None = None
+    crease_angle: float | None = None
+    parts: dict[str, np.ndarray] | None = None
+    dumps: tuple[str, ...] = ()
+    profile: bool = False
+    frame: int | None = None
+    read_later: Callable | None = None
+    keep: bool = False
+    slot: int = 2
 
 
 @dataclass
@@ -89,6 +155,46 @@ class Result:
         return out
 
 
+class Sizes:
+    """The target size of each scale of a plan at the output size ``size``, each checked against
+    the most pixels a side the GPU allows (``most``) when first asked for."""
+
+    def __init__(self, size: tuple[int, int], most: int) -> None:
+        self.size, self.most = size, most
+        self.held: dict[float, tuple[int, int]] = {}
+
+    def __call__(self, scale: float) -> tuple[int, int]:
+        held = self.held.get(scale)
+        if held is None:
+            w, h = self.size
+            held = (max(1, round(w * scale)), max(1, round(h * scale)))
+            if max(held) > self.most:
+                raise InputError(
+                    f"size {w}x{h} at scale {scale:g} is {held[0]}x{held[1]}: "
+                    f"this GPU allows {self.most} pixels per side"
+                )
+            self.held[scale] = held
+        return held
+
+
+@dataclass(slots=True)
+class Drawn:
+    """What one attempt at a run's frame drew and read: the samples of every layer drawn
+    (None until counted), how many layers count, what depth masking uncovered, the layers a cap
+    left, the outputs and dumps read back (by resolved name), and where the output is read late
+    (``pending``), left on the GPU (``texture``) or counted late (``counting``, a stream's)."""
+
+    layer_pixels: list[int] | None = field(default_factory=list)
+    layers: int = 0
+    revealed: float | None = None
+    layers_left: int = 0
+    outputs: dict[str, np.ndarray] = field(default_factory=dict)
+    pending: PendingRead | None = None
+    texture: object | None = None
+    counting: Callable | None = None
+    rules: tuple = ()  # the stop rules the layers were drawn under
+
+
 class Group:
     """The G-buffer of one attribute scale, its geometry passes and queries, plus the attribute
     pass's targets."""
@@ -142,6 +248,8 @@ class RunState:
     frame: int
     arrays: ArrayPlan | None  # the compute form, where it runs
     slot: int = 2  # which buffers read late (Executor.run)
+    max_layers: int | None = 1  # the layers the frame draws at most (None: every layer)
+    min_fraction: float = 0.0
     mesh: object = None
     stacks: dict[str, list] = field(default_factory=dict)
     stacked_layers: int = 0  # layers ``stacks`` hold room for

@@ -10,7 +10,7 @@ from pathlib import Path
 from blueprint.errors import InputError, ShaderError
 from blueprint.gpu.shaders import preprocess
 from blueprint.ops import IntParam, Op, Param
-from blueprint.pipeline.spec import UNIFORM_TYPES, PassSpec, PipelineSpec, _name, fail
+from blueprint.pipeline.schema import UNIFORM_TYPES, ParsedPipeline, PassSpec, check_name, fail
 
 _UNIFORM = re.compile(r"\buniform\s+(?:(?:lowp|mediump|highp)\s+)?(\w+)\s+(\w+)\s*(\[[^\]]*\])?\s*;")
 
@@ -42,7 +42,7 @@ class VecParam(Param):
         return tuple(Param(self.name, 0.0, self.minimum, self.maximum).check(op, v) for v in value)
 
 
-def user_op(spec: PipelineSpec, p: PassSpec, values: dict) -> Op:
+def user_op(spec: ParsedPipeline, p: PassSpec, values: dict) -> Op:
     key = f"passes.{p.name}"
     assert p.shader is not None
     if not p.shader.is_file():
@@ -63,7 +63,7 @@ def user_op(spec: PipelineSpec, p: PassSpec, values: dict) -> Op:
     params = []
     for name, decl in p.uniforms.items():
         ukey = f"{key}.uniforms.{name}"
-        _name(spec.source, ukey, name)
+        check_name(spec.source, ukey, name)
         kind = decl.get("type", "float")
         if kind not in UNIFORM_TYPES:
             raise fail(

@@ -1,6 +1,6 @@
 """A frame's layer capture: the sources the capture table chose for it (``Capture``), the front
-surface of chosen parts, and the one peel loop every caller runs, with its stop rules
-(``blueprint.render.stop``).
+surface of chosen parts, and the one loop every caller draws layers with, under its stop rules
+(``layer_loop``, ``blueprint.render.stop``).
 """
 
 from __future__ import annotations
@@ -29,49 +29,31 @@ class Capture:
     the frame after all (an A-buffer's lists past its memory) hands it to the peel, the last
     row, which takes any frame and unpacks every layer as its readers then expect.
 
-    ``face_ids`` false leaves the face channel 0 (a software rasteriser pays for tracking
-    primitive IDs, and the blueprint needs only parts). ``tie_break`` pushes back faces behind
-    coincident front faces (``gbuffer.BACK_OFFSET``); ID-only passes break no ties unless
-    asked. ``batch``: the layers the frame draws at most (None: all of them), which lets a
-    k-buffer find several a pass or an A-buffer every layer. ``selected`` (P,) bool draws only
-    those parts. ``tiles``, ``defer``, ``unpack`` and ``slot``: an A-buffer's (its tiles'
-    layers, counts read late, layers left in the lists for their readers, counts' buffer:
-    ``ABufferSource``); ``surfaces``: the readers read a k-buffer's surfaces in place where
-    one pass finds every layer of the frame (``KBufferSource``).
+    ``selected`` (P,) bool draws only those parts. ``asked``: what else the frame asks of its
+    capture, as the fields of ``table.Request`` that name it: ``layers`` the frame draws at
+    most (default 1; None: all of them), which lets a k-buffer find several a pass or an
+    A-buffer every layer; ``face_ids`` false leaves the face channel 0 (a software rasteriser
+    pays for tracking primitive IDs, and the blueprint needs only parts); ``tie_break`` pushes
+    back faces behind coincident front faces (``gbuffer.BACK_OFFSET``; default: where the
+    G-buffer has normals, ID-only passes break no ties unless asked); ``tiles``, ``defer``,
+    ``unpack`` and ``slot``: an A-buffer's (its tiles' layers, counts read late, layers left in
+    the lists for their readers, counts' buffer: ``ABufferSource``); ``surfaces``: the readers
+    read a k-buffer's surfaces in place where one pass finds every layer of the frame
+    (``KBufferSource``).
     """
 
     def __init__(
-        self,
-        capturer,
-        mesh,
-        camera: Camera,
-        gb: GBuffer,
-        *,
-        face_ids: bool = True,
-        batch: int | None = 1,
-        tie_break: bool | None = None,
-        selected: np.ndarray | None = None,
-        tiles: bool = False,
-        defer: bool = False,
-        unpack: bool = True,
-        slot: int = 0,
-        surfaces: bool = False,
+        self, capturer, mesh, camera: Camera, gb: GBuffer, *, selected: np.ndarray | None = None, **asked
     ) -> None:
         normals = gb.normal is not None
+        asked.setdefault("tie_break", normals)
         request = Request(
             tuple(gb.size),
             mesh.triangles,
             mesh.part_count,
-            batch,
-            normals,
-            selected is not None,
-            surfaces,
-            face_ids,
-            normals if tie_break is None else tie_break,
-            tiles,
-            defer,
-            unpack,
-            slot,
+            normals=normals,
+            selected=selected is not None,
+            **asked,
         )
         rows = choose(capturer.table, request)
 
@@ -168,7 +150,7 @@ def capture_parts(
     return gb
 
 
-def peel(
+def layer_loop(
     draw: Callable[[int, object, object], None],
     queries: Sequence,
     rules: Sequence[StopRule],
@@ -177,10 +159,11 @@ def peel(
     samples: Callable[[int, object], int] | None = None,
     eager: bool = False,
 ) -> tuple[list[int], int]:
-    """The one peel loop. ``draw(layer, query, guard)`` issues layer ``layer``'s geometry pass
-    (counting its samples in ``query``, skipped on the GPU when ``guard``, the layer before's
-    query, counted none) and whatever runs per layer. Returns the samples of every layer
-    peeled and how many of them count under ``rules``.
+    """The one loop that draws a frame's layers, whatever source captures them (a geometry
+    pass a layer, a k-buffer, an A-buffer). ``draw(layer, query, guard)`` issues layer
+    ``layer``'s geometry pass (counting its samples in ``query``, skipped on the GPU when
+    ``guard``, the layer before's query, counted none) and whatever runs per layer. Returns the
+    samples of every layer peeled and how many of them count under ``rules``.
 
     The CPU looks at the counts after every layer where a rule needs it or where the caller
     reads each counted layer back (``on_counted``, called once the layer is known to count);

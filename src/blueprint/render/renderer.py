@@ -11,7 +11,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
-from blueprint.render.capture import Capture, peel
+from blueprint.render.capture import Capture, layer_loop
 from blueprint.render.gbuffer import gbuffer
 from blueprint.render.mesh import GpuMesh
 from blueprint.render.raster import ComputeRaster
@@ -141,7 +141,7 @@ class Capturer:
 
     # -- layers for other tools ----------------------------------------------------------------
     @current
-    def peel(
+    def read_layers(
         self,
         model: Model,
         camera: Camera | None = None,
@@ -225,7 +225,7 @@ class Capturer:
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
 
         rules = standard_rules(max_layers, min_fraction)
-        peel(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
+        layer_loop(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
         capture.release()
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
 
@@ -281,7 +281,7 @@ class Capturer:
         ctx.depth_func = "<"
         gb = gbuffer(self.device.pool, size, "idb", normals=False)
         mesh = self.mesh(model, None)
-        return Capture(self, mesh, camera, gb, batch=max_layers, tie_break=True, surfaces=True), gb
+        return Capture(self, mesh, camera, gb, layers=max_layers, tie_break=True, surfaces=True), gb
 
     def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read) -> None:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth
@@ -293,14 +293,14 @@ class Capturer:
         if normals:
             mesh = self.mesh(model, crease_angle)
             gb = gbuffer(device.pool, size)
-            capture = Capture(self, mesh, camera, gb, batch=max_layers)
+            capture = Capture(self, mesh, camera, gb, layers=max_layers)
         else:
             mesh = self.mesh(model, None)
             gb = gbuffer(device.pool, size, "idb", normals=False)
             capture = Capture(self, mesh, camera, gb, tie_break=True)
         rules = standard_rules(max_layers, min_fraction)
         queries = device.queries("peel")
-        peel(capture.draw, queries, rules, lambda layer: read(gb, layer), samples=capture.samples)
+        layer_loop(capture.draw, queries, rules, lambda layer: read(gb, layer), samples=capture.samples)
 
 
 class LayerRenderer(Protocol):
@@ -308,7 +308,8 @@ class LayerRenderer(Protocol):
     ``device`` whose attributes it shows as its own (``ctx``, ``pool``, ``uniforms``,
     ``queries``, ``program``, ``compute``, ``fullscreen``, the capabilities: ``gpu.Device``)
     and the ``capturer`` of the models uploaded to it, whose methods it shows as its own too
-    (``mesh``, ``peel``, ``triangles_at``, ``face_kbuffer``, ``each_face_layer``)."""
+    (``mesh``, ``read_layers`` as ``peel``, ``triangles_at``, ``face_kbuffer``,
+    ``each_face_layer``)."""
 
     device: Device
     capturer: Capturer

@@ -1,4 +1,5 @@
-"""When peeling stops: small rules that the one peel loop (``blueprint.render.peel``) asks.
+"""When peeling stops: small rules that the one loop drawing layers asks
+(``blueprint.render.capture.layer_loop``).
 
 A rule may cap the layers (``limit``), end the peel once it has seen the occlusion counts of
 the layers drawn so far (``done``), and say how many of the peeled layers count (``count``).

@@ -8,8 +8,8 @@ the GPU: how many surfaces lie in front of it.
 from .drawing import (
     FORMATS,
     UNITS_MM,
-    Drawing,
     Page,
+    VectorDrawing,
     draw_vector,
     draw_vector_sheet,
     parse_scale,
@@ -20,9 +20,9 @@ from .style import LineStyle, VectorStyle, load_vector_style, vector_style
 __all__ = [
     "FORMATS",
     "UNITS_MM",
-    "Drawing",
     "LineStyle",
     "Page",
+    "VectorDrawing",
     "VectorStyle",
     "draw_vector",
     "draw_vector_sheet",

@@ -169,7 +169,7 @@ def dimension_marks(
 
 
 def with_dimension_glyphs(drawing, glyphs: Glyphs, mm_per_model: float):
-    """``drawing`` (a one-view ``Drawing``) with the dimensions of ``glyphs`` added to its marks,
+    """``drawing`` (a one-view ``VectorDrawing``) with the dimensions of ``glyphs`` added to its marks,
     as a picture draws them (``blueprint.compose.glyphs.marks``), in mm from ``mm_per_model``
     (its boxes, arrows, paths and labels are the vector glyphs', ``blueprint.vector.glyphs``).
     """

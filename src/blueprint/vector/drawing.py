@@ -1,6 +1,6 @@
 """Vector drawings: object-space lines, occlusion levels from peeled layers, files.
 
-``draw_vector`` builds a :class:`Drawing` (2D polylines in pixels, each with its part and its
+``draw_vector`` builds a :class:`VectorDrawing` (2D polylines in pixels, each with its part and its
 occlusion level); ``save_drawing`` writes it as SVG, PDF or DXF. The whole way from a model file
 to a drawing file is ``blueprint.api.files.render_vector_file``.
 """
@@ -78,8 +78,8 @@ log = logging.getLogger("blueprint")
 __all__ = [
     "FORMATS",
     "UNITS_MM",
-    "Drawing",
     "Page",
+    "VectorDrawing",
     "VectorOptions",
     "draw_lines",
     "draw_sheet",
@@ -120,7 +120,7 @@ class Page:
 
 
 @dataclass
-class Drawing:
+class VectorDrawing:
     """A vector drawing of one view.
 
     Attributes
@@ -319,7 +319,7 @@ def draw_vector(
     renderer: LayerRenderer,
     layers: Layers | None = None,
     **options,
-) -> Drawing:
+) -> VectorDrawing:
     """Draw the visible and hidden lines of a model as vectors, each with its occlusion level.
 
     ``options`` are the fields of ``VectorOptions`` as keywords, checked.
@@ -386,7 +386,7 @@ def draw_lines(
     renderer: LayerRenderer,
     options: VectorOptions,
     layers: Layers | None = None,
-) -> Drawing:
+) -> VectorDrawing:
     """``draw_vector`` with its options as one value, checked already."""
     view, style, max_layers = options.view, options.style, options.max_layers
     crease_angle, line_width, highlight = options.crease_angle, options.line_width, options.highlight
@@ -581,7 +581,7 @@ def draw_lines(
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
         title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
-    return Drawing(
+    return VectorDrawing(
         width=size[0],
         height=size[1],
         points=pieces.points,
@@ -624,7 +624,7 @@ def draw_vector_sheet(
     sheet: str | None = None,
     section: tuple[SectionPlane, np.ndarray] | None = None,
     **options,
-) -> Drawing:
+) -> VectorDrawing:
     """A drawing sheet: the orthographic top view above the front view, the right view beside
     it, all at one scale, and an iso view in the free corner, each drawn at a quarter of
     ``size``, labelled, and laid out with even gaps fitted to their sizes inside a border with
@@ -649,7 +649,7 @@ def draw_sheet(
     fov: float = 30.0,
     sheet: str | None = None,
     section: tuple[SectionPlane, np.ndarray] | None = None,
-) -> Drawing:
+) -> VectorDrawing:
     """``draw_vector_sheet`` with its views' options as one value, checked already: its
     ``scale``, ``units``, ``title`` and ``dimensions`` are the sheet's."""
     for option in ("glyphs", "shade"):
@@ -731,7 +731,7 @@ def draw_sheet(
     )
 
 
-def _view_extent(cell: Drawing, size: tuple[int, int]) -> np.ndarray:
+def _view_extent(cell: VectorDrawing, size: tuple[int, int]) -> np.ndarray:
     """A view's lines' extent in its cell, its section's outline included."""
     points = cell.points
     if cell.section is not None and len(cell.section.outline):
@@ -760,24 +760,24 @@ def _sheet_scale(cells, camera: Camera, size, paper, units, model) -> float:
     return fit_scale(model_per_px * UNITS_MM[unit] / factor)
 
 
-def save_drawing(path: str | os.PathLike, drawing: Drawing, format: str | None = None) -> Path:
+def save_drawing(path: str | os.PathLike, drawing: VectorDrawing, format: str | None = None) -> Path:
     """Write a drawing as SVG, PDF or DXF (from ``format`` or the file's suffix), atomically."""
     suffix = "." + format.lower().lstrip(".") if format else None
     path, writer = WRITERS.choose(path, Kind.DRAWING, suffix=suffix)
     return writer(path, drawing)
 
 
-def _write_svg(path: Path, drawing: Drawing) -> Path:
+def _write_svg(path: Path, drawing: VectorDrawing) -> Path:
     data = svg_bytes(drawing)
     return atomic_write(path, lambda tmp: tmp.write_bytes(data))
 
 
-def _write_pdf(path: Path, drawing: Drawing) -> Path:
+def _write_pdf(path: Path, drawing: VectorDrawing) -> Path:
     data = pdf_bytes(drawing)
     return atomic_write(path, lambda tmp: tmp.write_bytes(data))
 
 
-def _write_dxf(path: Path, drawing: Drawing) -> Path:
+def _write_dxf(path: Path, drawing: VectorDrawing) -> Path:
     return atomic_write(path, lambda tmp: write_dxf(drawing, tmp))
 
 

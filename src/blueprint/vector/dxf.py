@@ -122,7 +122,7 @@ def fit_arc(points: np.ndarray, tolerance: float, sagitta: float, min_points: in
 
 
 def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: float, base_mm: float) -> None:
-    """The lines of ``groups`` (``Drawing.groups``) as LWPOLYLINEs, a layer per part and
+    """The lines of ``groups`` (``VectorDrawing.groups``) as LWPOLYLINEs, a layer per part and
     level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists); lines
     that are circles or arcs at the drawing's resolution (``fit_arc``: the rims of round
     holes and shafts seen square on) as CIRCLE and ARC entities."""

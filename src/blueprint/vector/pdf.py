@@ -148,7 +148,7 @@ def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
 
 
 def _lines(pdf, drawing, groups, points, offsets, base: float) -> None:
-    """The lines of ``groups`` (``Drawing.groups``), each group marked as content of its
+    """The lines of ``groups`` (``VectorDrawing.groups``), each group marked as content of its
     part's layer and its level's."""
     style = drawing.style
     for part, level, index in groups:

@@ -215,7 +215,7 @@ def svg_bytes(drawing) -> bytes:
 
 
 def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decimals: int, base: float) -> str:
-    """The lines of ``groups`` (``Drawing.groups``) as the group ``gid``: a layer per part, a
+    """The lines of ``groups`` (``VectorDrawing.groups``) as the group ``gid``: a layer per part, a
     path per level."""
     style = drawing.style
     out = [f'<g id="{gid}" fill="none" stroke-linecap="round" stroke-linejoin="round">\n']

@@ -8,9 +8,9 @@ from pathlib import Path
 
 from blueprint.api.options import DrawOptions
 from blueprint.compose.style import STYLES
-from blueprint.viewer.loop import Options, Viewer
+from blueprint.viewer.loop import Viewer
 from blueprint.viewer.snapshots import DUMP_ENV
-from blueprint.viewer.state import ViewState
+from blueprint.viewer.state import Options, ViewState
 from blueprint.viewer.window import import_glfw
 
 

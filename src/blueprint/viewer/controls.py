@@ -5,17 +5,38 @@ behind it). Every change asks the viewer for a new frame or a repaint."""
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-from blueprint.viewer.state import VIEW_KEYS
-
-if TYPE_CHECKING:
-    from blueprint.viewer.loop import Viewer
+from blueprint.scene.model import Model
+from blueprint.viewer.state import VIEW_KEYS, Options, ViewState
+from blueprint.viewer.window import Window
 
 # A press that moves less than this (pixels) before release is a click, not a drag.
 CLICK_SLOP = 3.0
 # Layers searched for the parts behind a clicked spot (clicking it again).
 PICK_DEPTH = 12
+
+
+class Steered(Protocol):
+    """What the controls steer: the viewer (``viewer.loop.Viewer``), as they see it."""
+
+    window: Window
+    state: ViewState
+    model: Model
+    options: Options
+
+    @property
+    def layers_drawn(self) -> int: ...
+
+    def invalidate(self) -> None: ...
+
+    def repaint(self) -> None: ...
+
+    def refine_later(self) -> None: ...
+
+    def toggle_turntable(self) -> None: ...
+
+    def screenshot(self) -> None: ...
 
 
 class Controls:
@@ -29,7 +50,7 @@ class Controls:
         ``time.perf_counter()`` of the last wheel event.
     """
 
-    def __init__(self, viewer: Viewer) -> None:
+    def __init__(self, viewer: Steered) -> None:
         self.viewer = viewer
         self.glfw = viewer.window.glfw
         self.moved = False

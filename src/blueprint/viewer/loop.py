@@ -10,12 +10,11 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from blueprint.compose.style import get_style
+from blueprint.compose.lookup import get_style
 from blueprint.errors import BlueprintError, InputError
 from blueprint.gpu.device import check_size
 from blueprint.scene.model import Model
@@ -23,7 +22,7 @@ from blueprint.viewer.controls import Controls
 from blueprint.viewer.pacing import Drafts, FrameRate
 from blueprint.viewer.present import Presenter, hud_lines
 from blueprint.viewer.snapshots import FrameDump, save_screenshot
-from blueprint.viewer.state import ViewState
+from blueprint.viewer.state import Options, ViewState
 from blueprint.viewer.window import Window
 
 # Seconds the view rests before a full-quality frame follows the drafts.
@@ -35,18 +34,6 @@ STATUS_SECONDS = 5.0
 # The frame rate in the heads-up lines changes at most this often: readable while the view
 # moves, and the lines are drawn again only when they change.
 RATE_SECONDS = 0.5
-
-
-@dataclass
-class Options:
-    """Rendering options passed through to ``Renderer.render`` (see there)."""
-
-    grid: float | None = None
-    min_fraction: float = 0.0
-    crease_angle: float = 30.0
-    line_width: float = 1.0
-    supersample: int = 2
-    interactive_scale: float = 0.0  # 0: automatic; otherwise a fixed fraction of the window
 
 
 class Viewer:

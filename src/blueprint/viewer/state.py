@@ -27,6 +27,18 @@ MAX_ORBIT_ELEVATION = 89.0
 
 
 @dataclass
+class Options:
+    """Rendering options passed through to ``Renderer.render`` (see there)."""
+
+    grid: float | None = None
+    min_fraction: float = 0.0
+    crease_angle: float = 30.0
+    line_width: float = 1.0
+    supersample: int = 2
+    interactive_scale: float = 0.0  # 0: automatic; otherwise a fixed fraction of the window
+
+
+@dataclass
 class ViewState:
     """The viewer's state.
 

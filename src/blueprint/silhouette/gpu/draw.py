@@ -11,7 +11,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
-from blueprint.render.capture import Capture, gbuffer, peel
+from blueprint.render.capture import Capture, gbuffer, layer_loop
 from blueprint.render.renderer import LayerRenderer
 from blueprint.render.stop import MaxLayers
 from blueprint.scene.camera import Camera, fit_camera
@@ -184,5 +184,5 @@ class GpuSilhouettes:
                 sil.run(layer)
 
         peeled = sil.peeled if method == LINES else layers
-        peel(draw, r.queries("peel"), [MaxLayers(peeled)], look=read)
+        layer_loop(draw, r.queries("peel"), [MaxLayers(peeled)], look=read)
         return sil.read() if read else None

@@ -1,6 +1,7 @@
-"""A run's layer capture: the front surface of chosen parts, depth masking's stop rule, one
-G-buffer (and the attribute pass's targets) a scale, and the one peel loop, running the
-executor's per-layer passes after each layer."""
+"""A run's layer capture (``LayerCapture``): the front surface of chosen parts, depth masking's
+stop rule, one G-buffer (and the attribute pass's targets) a scale, and the frame's layers
+drawn through the one layer loop (``render.capture.layer_loop``), the executor's per-layer
+passes run after each layer."""
 
 from __future__ import annotations
 
@@ -14,8 +15,7 @@ from blueprint.pipeline.inputs import read_texture
 from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
 from blueprint.render.abuffer import Overflow
-from blueprint.render.capture import Capture, GBuffer, capture_parts, revealed_pixels
-from blueprint.render.capture import peel as peel_layers
+from blueprint.render.capture import Capture, GBuffer, capture_parts, layer_loop, revealed_pixels
 from blueprint.render.remaining import layers_left
 from blueprint.render.stop import EmptyLayer, MaxLayers, MinFraction, Reveal, StopRule
 
@@ -99,9 +99,11 @@ class LayerCapture:
 
         return Reveal(stop.fraction, wanted, revealed)
 
-    def peel(self, st: RunState, max_layers, rules, blind: bool = False) -> tuple[list[int] | None, int]:
+    def draw_layers(
+        self, st: RunState, max_layers, rules, blind: bool = False
+    ) -> tuple[list[int] | None, int]:
         """Peel ``st``'s layers under ``rules``, running the per-layer passes after each; the
-        samples of every layer peeled and how many count (``blueprint.render.capture.peel``).
+        samples of every layer peeled and how many count (``render.capture.layer_loop``).
         Where nothing looks at a layer before the next is issued (a GPU, no rule or read-back
         per layer), the A-buffer's counts are read only once the layers are issued, so the CPU
         does not wait for the capture; one that then proves short of room is drawn again.
@@ -134,21 +136,64 @@ class LayerCapture:
         # as a peel that looks would have stopped: at the first empty layer
         return counts[: layers + 1], layers
 
+    def counted_late(self, st: RunState, rules, drawn: int) -> tuple[list[int], int, int]:
+        """``counted`` and ``left`` of a streamed frame, once its picture is read
+        (``Result.counting``)."""
+        counts, layers = self.counted(st, rules, drawn)
+        return counts, layers, self.left(st, rules, counts, layers)
+
     def _peel(
         self, st: RunState, max_layers, rules, eager: bool, defer: bool, blind: bool
     ) -> tuple[list[int] | None, int]:
-        r, ctx, pl = self.r, self.r.ctx, st.pl
-        bound = pl.bound
-        layout = self._layout(pl)
-        groups = st.groups
-        for scale, names, primary in layout.scales:
-            groups.append(Group(r, scale, st.size_of(scale), names, primary, bound, layout.clear_gb))
-        st.by_attr = {n: g for g in groups for n in g.names}
-        ctx.depth_func = "<"
+        """``draw_layers``, its counts read late where ``defer``: the G-buffers and captures
+        opened, the layers drawn, and the passes that read every layer from the lists run."""
+        layout = self._layout(st.pl)
+        self._open_groups(st, layout)
         # a software rasteriser looks at every layer's count before its passes run (``eager``),
         # and at where the layer lies, for passes that need only be drawn there (pipeline.tiles)
         tiled = self.ex.tiled and st.arrays is None
-        tiled = tiled and any(self.ex.reach(st, n) is not None for n in pl.per_layer)
+        tiled = tiled and any(self.ex.reach(st, n) is not None for n in st.pl.per_layer)
+        from_lists, layer_lists, from_surfaces = self._in_place(st, rules, defer)
+        for g in st.groups:
+            g.capture = Capture(
+                self.capturer,
+                st.mesh,
+                st.camera,
+                g.gb,
+                face_ids=layout.face_ids,
+                layers=max_layers,
+                tiles=tiled and g.primary,
+                defer=defer,
+                unpack=not (from_lists or layer_lists),
+                slot=st.slot,
+                surfaces=bool(from_surfaces),
+            )
+        if st.groups[0].capture.reads == "surfaces":
+            st.from_surfaces = from_surfaces
+        extras = self._attribute_programs(st) if layout.extra else None
+        for name in st.pl.accumulated:
+            self.r.pool.framebuffer((self.ex.target(st, name, 0),)).clear()
+        frame = _LayerPasses(self, st, max_layers, eager, tiled, (from_lists, layer_lists), extras)
+        primary = st.groups[0]
+        if blind:
+            peeled = None, layer_loop(frame.draw, primary.queries, rules, look=False)[1]
+        else:
+            peeled = layer_loop(
+                frame.draw, primary.queries, rules, samples=primary.capture.samples, eager=eager
+            )
+            for g in st.groups:
+                g.capture.settle()
+        if frame.listed:
+            layers = peeled[1]
+            self.ex.ensure_stacks(st, max(layers, 1))
+            for name in frame.listed:
+                self.ex.run_in_place(st, name, primary.capture, layers)
+        return peeled
+
+    def _in_place(self, st: RunState, rules, defer: bool) -> tuple[tuple[str, ...], ...]:
+        """The passes that read the layers where the capture may hold them: from an A-buffer's
+        lists every layer after the peel, or each layer as it comes, or from a k-buffer's
+        surfaces."""
         # edges read straight from an A-buffer's lists, all layers after the peel, where nothing
         # else reads the layers: none is unpacked then
         from_lists = self._from_lists(st) if defer and st.arrays is not None else ()
@@ -159,106 +204,16 @@ class LayerCapture:
         # ...or from the surfaces of a k-buffer that finds every layer in one pass, where no
         # rule looks at each layer
         from_surfaces = self._from_surfaces(st) if not from_lists and not self._rules[1] else ()
-        for g in groups:
-            g.capture = Capture(
-                self.capturer,
-                st.mesh,
-                st.camera,
-                g.gb,
-                face_ids=layout.face_ids,
-                batch=max_layers,
-                tiles=tiled and g.primary,
-                defer=defer,
-                unpack=not (from_lists or layer_lists),
-                slot=st.slot,
-                surfaces=bool(from_surfaces),
+        return from_lists, layer_lists, from_surfaces
+
+    def _open_groups(self, st: RunState, layout: Layout) -> None:
+        """One G-buffer (with the attribute pass's targets) for each scale of the attributes."""
+        for scale, names, primary in layout.scales:
+            st.groups.append(
+                Group(self.r, scale, st.size_of(scale), names, primary, st.pl.bound, layout.clear_gb)
             )
-        if groups[0].capture.reads == "surfaces":
-            st.from_surfaces = from_surfaces
-        extras = self._attribute_programs(st) if layout.extra else None
-        for name in pl.accumulated:
-            r.pool.framebuffer((self.ex.target(st, name, 0),)).clear()
-
-        listed: list[str] = []
-        # the passes run after each layer: not those over whole arrays after the peel, nor those
-        # read from the lists (known once layer 0 is drawn)
-        batches = st.arrays.batches if st.arrays is not None else ()
-        first = [n for n in pl.iteration0 if n not in batches]
-        later = [n for n in pl.per_layer if n not in batches]
-
-        def batch_span(layer: int) -> int:
-            """The layers from ``layer`` on that hold pixels and the cap allows, up to a batch;
-            one where the counts are not looked at as the layers come (a GPU's frame)."""
-            if st.edge_step == 1:
-                return 1
-            capture = groups[0].capture
-            last = layer + st.edge_step
-            if max_layers is not None:
-                last = min(last, max_layers)
-            span = 1
-            while layer + span < last and capture.samples(layer + span, None):
-                span += 1
-            return span
-
-        def draw(layer: int, query, guard) -> None:
-            self.ex.ensure_stacks(st, layer + 1)
-            for g in groups:
-                if g.attr_clear is not None:
-                    g.attr_clear.clear()
-                if g.primary:
-                    st.draws += g.capture.draw(layer, query, guard)
-                else:
-                    st.draws += g.capture.draw(
-                        layer, g.queries[layer], g.queries[layer - 1] if layer else None
-                    )
-                if g.extra:
-                    self._attributes(st, g, layer, extras)
-            if layer == 0 and groups[0].capture.reads == "lists" and from_lists:
-                # (an A-buffer without room in memory peeled instead, unpacking as it goes)
-                listed.extend(from_lists)
-                first[:] = [n for n in first if n not in listed]
-                later[:] = [n for n in later if n not in listed]
-            if layer == 0:
-                st.layer_lists = layer_lists if groups[0].capture.reads == "lists" else ()
-                # (a pass whose layers share one target, read by the next pass of each layer,
-                # draws one at a time)
-                batched = eager and all(n in pl.stacked for n in (*st.layer_lists, *st.from_surfaces))
-                st.edge_step = self.ex.edge_batch if batched else 1
-            for name, held in st.attr_dumps.items():
-                tex = st.by_attr[name].texture(name, layer)
-                held.append(read_texture(tex, bound.attributes[name].format))
-            if eager and layer and not groups[0].capture.samples(layer, groups[0].queries[layer]):
-                return  # an empty layer ends the peel (EmptyLayer): nothing reads its passes
-            if tiled:
-                primary = groups[0]
-                if primary.capture.tile_layers is not None:
-                    self.ex.tiles.layer_of(primary.capture.tile_layers, layer, primary.size)
-                else:
-                    self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
-            for name in first if layer == 0 else later:
-                if name in st.layer_lists or name in st.from_surfaces:
-                    # a batch of layers at once, at the batch's first
-                    if layer % st.edge_step:
-                        continue
-                    span = batch_span(layer)
-                    self.ex.ensure_stacks(st, layer + span)
-                    self.ex.run_pass(st, name, layer, layer + 1, span)
-                else:
-                    self.ex.run_pass(st, name, layer, layer + 1)
-
-        samples = groups[0].capture.samples
-        if blind:
-            peeled = None, peel_layers(draw, groups[0].queries, rules, look=False)[1]
-        else:
-            peeled = peel_layers(draw, groups[0].queries, rules, samples=samples, eager=eager)
-            for g in groups:
-                g.capture.settle()
-        if listed:
-            layers = peeled[1]
-            self.ex.ensure_stacks(st, max(layers, 1))
-            for name in listed:
-                self.ex.run_in_place(st, name, groups[0].capture, layers)
-        return peeled
+        st.by_attr = {n: g for g in st.groups for n in g.names}
+        self.r.ctx.depth_func = "<"
 
     def _from_lists(self, st: RunState) -> tuple[str, ...]:
         """The passes that may read their layers from an A-buffer's lists: every layer
@@ -330,15 +285,110 @@ class LayerCapture:
             progs[g.scale] = (draw, clear)
         return progs
 
-    def _attributes(self, st: RunState, g: Group, layer: int, progs) -> None:
-        draw, clear = progs[g.scale]
+
+class _LayerPasses:
+    """One frame's layers as the layer loop draws them (``draw``): each G-buffer's capture and
+    attribute pass, the attributes read back, and the passes run after each layer, a batch of
+    layers at once for those that read the layers where the capture holds them."""
+
+    def __init__(self, side: LayerCapture, st: RunState, max_layers, eager: bool, tiled: bool, lists, extras):
+        self.ex, self.programs, self.st = side.ex, side.programs, st
+        self.max_layers, self.eager, self.tiled, self.extras = max_layers, eager, tiled, extras
+        # passes that read the A-buffer's lists: all layers after the peel, or each as it comes
+        self.from_lists, self.layer_lists = lists
+        # the passes run after each layer: not those over whole arrays after the peel, nor those
+        # read from the lists (known once layer 0 is drawn)
+        batches = st.arrays.batches if st.arrays is not None else ()
+        self.first = [n for n in st.pl.iteration0 if n not in batches]
+        self.later = [n for n in st.pl.per_layer if n not in batches]
+        self.listed: list[str] = []
+
+    def draw(self, layer: int, query, guard) -> None:
+        st = self.st
+        self.ex.ensure_stacks(st, layer + 1)
+        self._capture(layer, query, guard)
+        if layer == 0:
+            self._readers_known()
+        for name, held in st.attr_dumps.items():
+            tex = st.by_attr[name].texture(name, layer)
+            held.append(read_texture(tex, st.pl.bound.attributes[name].format))
+        primary = st.groups[0]
+        if self.eager and layer and not primary.capture.samples(layer, primary.queries[layer]):
+            return  # an empty layer ends the peel (EmptyLayer): nothing reads its passes
+        if self.tiled:
+            if primary.capture.tile_layers is not None:
+                self.ex.tiles.layer_of(primary.capture.tile_layers, layer, primary.size)
+            else:
+                self.ex.tiles.look(primary.gb.layer_depth(layer), layer)
+        self._run_passes(layer)
+
+    def _capture(self, layer: int, query, guard) -> None:
+        """Layer ``layer`` of every G-buffer, and its attribute pass."""
+        st = self.st
+        for g in st.groups:
+            if g.attr_clear is not None:
+                g.attr_clear.clear()
+            if g.primary:
+                st.draws += g.capture.draw(layer, query, guard)
+            else:
+                st.draws += g.capture.draw(layer, g.queries[layer], g.queries[layer - 1] if layer else None)
+            if g.extra:
+                self._attributes(g, layer)
+
+    def _attributes(self, g: Group, layer: int) -> None:
+        """The attribute pass's targets of layer ``layer`` of ``g``, after its geometry pass."""
+        programs = self.programs
+        draw, clear = self.extras[g.scale]
         g.extra_fbo.use()
-        self.programs.vao(clear).render(vertices=3)
+        programs.vao(clear).render(vertices=3)
         g.gb.layer_depth(layer).use(BASE_UNIT)
         g.gb.ids.use(BASE_UNIT + 1)
-        self.programs.set(draw, "u_layer", layer)
-        st.mesh.vao(draw).render()
-        st.draws += 2
+        programs.set(draw, "u_layer", layer)
+        self.st.mesh.vao(draw).render()
+        self.st.draws += 2
+
+    def _readers_known(self) -> None:
+        """Once layer 0 is drawn the capture is known to hold the layers in its lists or not:
+        the passes that read them there, and how many layers each of their passes draws."""
+        st, reads = self.st, self.st.groups[0].capture.reads
+        if reads == "lists" and self.from_lists:
+            # (an A-buffer without room in memory peeled instead, unpacking as it goes)
+            self.listed.extend(self.from_lists)
+            self.first[:] = [n for n in self.first if n not in self.listed]
+            self.later[:] = [n for n in self.later if n not in self.listed]
+        st.layer_lists = self.layer_lists if reads == "lists" else ()
+        # (a pass whose layers share one target, read by the next pass of each layer, draws one
+        # at a time)
+        batched = self.eager and all(n in st.pl.stacked for n in (*st.layer_lists, *st.from_surfaces))
+        st.edge_step = self.ex.edge_batch if batched else 1
+
+    def _run_passes(self, layer: int) -> None:
+        st, ex = self.st, self.ex
+        for name in self.first if layer == 0 else self.later:
+            if name in st.layer_lists or name in st.from_surfaces:
+                # a batch of layers at once, at the batch's first
+                if layer % st.edge_step:
+                    continue
+                span = self._batch_span(layer)
+                ex.ensure_stacks(st, layer + span)
+                ex.run_pass(st, name, layer, layer + 1, span)
+            else:
+                ex.run_pass(st, name, layer, layer + 1)
+
+    def _batch_span(self, layer: int) -> int:
+        """The layers from ``layer`` on that hold pixels and the cap allows, up to a batch; one
+        where the counts are not looked at as the layers come (a GPU's frame)."""
+        st = self.st
+        if st.edge_step == 1:
+            return 1
+        capture = st.groups[0].capture
+        last = layer + st.edge_step
+        if self.max_layers is not None:
+            last = min(last, self.max_layers)
+        span = 1
+        while layer + span < last and capture.samples(layer + span, None):
+            span += 1
+        return span
 
 
 @dataclass(frozen=True)
