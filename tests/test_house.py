@@ -61,7 +61,6 @@ def long_parameter_lists(root: Path, most: int = MOST) -> dict[str, int]:
 KNOWN_CYCLES = {
     frozenset({"blueprint.compose.glyphs.parse", "blueprint.compose.glyphs.values"}),
     frozenset({"blueprint.silhouette.gpu.draw", "blueprint.silhouette.gpu.soup"}),
-    frozenset({"blueprint.scene.model", "blueprint.scene.units"}),
 }
 
 

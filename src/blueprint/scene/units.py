@@ -7,12 +7,9 @@ millimetres (dimensions, the page of a drawing to scale): ``UNITS_MM`` a model u
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from blueprint.errors import InputError
-
-if TYPE_CHECKING:
-    from blueprint.scene.model import Model
 
 log = logging.getLogger("blueprint")
 
@@ -115,7 +112,17 @@ def file_unit(name: str, ext: str, stated: str | None = None) -> tuple[str | Non
     return None, f"{ext.upper()} files carry no unit"
 
 
-def drawing_unit(model: Model, units: str | None = None) -> str:
+class Measured(Protocol):
+    """What a drawing's unit is read from: a ``Model`` (its unit, why, and its file), named
+    by its fields so that the model, which checks its unit against ``UNITS_MM``, imports
+    this module and not the other way round."""
+
+    unit: str | None
+    unit_reason: str
+    source: str | None
+
+
+def drawing_unit(model: Measured, units: str | None = None) -> str:
     """The unit a drawing measures ``model`` in: ``units`` where given (it states the
     model's unit, whatever the file says), else the model's own (``Model.unit``), else
     ``ASSUMED_UNIT``, which a drawing that measures says with ``warn_if_assumed``.
@@ -130,7 +137,7 @@ def drawing_unit(model: Model, units: str | None = None) -> str:
     return model.unit or ASSUMED_UNIT
 
 
-def warn_if_assumed(model: Model, units: str | None = None) -> None:
+def warn_if_assumed(model: Measured, units: str | None = None) -> None:
     """Warn, naming the file, that a drawing measured ``model`` in ``ASSUMED_UNIT``: where
     neither ``units`` nor the file gave its unit. Called once a drawing is made, so that a
     drawing refused says nothing but why."""
