@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.scene.camera import clip_to_pixels, transform
 from blueprint.scene.normals import lone_creases
 
 from .mesh import Adjacency
@@ -181,19 +182,16 @@ def classify_edges(
 
     chosen = np.flatnonzero(kind)
     model = adj.positions[adj.edges[chosen]]
-    homogeneous = np.concatenate([model, np.ones(model.shape[:2] + (1,))], axis=2)
-    clip = homogeneous @ (projection @ view).T
+    clip = transform(model, projection @ view)
     # Near plane of an OpenGL frustum: z_clip >= -w_clip; then keep the divide safe.
     clip, model, keep = _clip(clip, model, clip[..., 2] + clip[..., 3])
     chosen = chosen[keep]
     clip, model, keep = _clip(clip, model, clip[..., 3] - _MIN_W)
     chosen = chosen[keep]
 
-    ndc = clip[..., :2] / clip[..., 3:]
-    pixels = np.stack([(ndc[..., 0] + 1.0) * 0.5 * width, (1.0 - ndc[..., 1]) * 0.5 * height], -1)
     return EdgeSet(
         segments3d=model,
-        segments2d=pixels,
+        segments2d=clip_to_pixels(clip, (width, height)),
         kind=kind[chosen],
         faces=side_faces[chosen],
     )
