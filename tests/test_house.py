@@ -18,7 +18,7 @@ MOST = 12
 # ``blueprint.api.options.takes_options`` makes their keywords from DrawOptions' fields.
 ALLOWED: set[str] = set()
 # The layer capture's own, in its refactoring (render/, pipeline/executor.py, vector/occlusion/).
-CAPTURE = {"pipeline/executor.py:run", "vector/occlusion/gpu.py:gpu_levels", "render/capture.py:__init__"}
+CAPTURE = {"pipeline/executor.py:run", "render/capture.py:__init__"}
 
 
 def parameters(node: ast.FunctionDef | ast.AsyncFunctionDef) -> list[str]:
