@@ -10,11 +10,11 @@ from scipy import ndimage
 from blueprint import InputError, Model, ShaderError, load_model
 from blueprint.examples import box, gearbox, prism
 from blueprint.gpu.shaders import build_program
+from blueprint.gpu_silhouettes import GpuSilhouettes, composite, render_silhouettes
+from blueprint.gpu_silhouettes.lines import LINES_FRAG, LINES_VERT
 from blueprint.scene.camera import fit_camera
 from blueprint.silhouette import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments
 from blueprint.silhouette.edgerecords import edge_records
-from blueprint.silhouette.gpu import GpuSilhouettes, composite, render_silhouettes
-from blueprint.silhouette.gpu.lines import LINES_FRAG, LINES_VERT
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
 
 SIZE = (384, 288)
