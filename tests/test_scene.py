@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import project
 
 from blueprint import examples
 from blueprint.compose.style import STYLES, Style, get_style, hex_color
@@ -28,14 +29,6 @@ from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, weld_ids
 
 S3 = 1 / math.sqrt(3)
-
-
-def project(camera: Camera, points: np.ndarray) -> np.ndarray:
-    """(N, 3) normalised device coordinates of model points through the camera's matrices."""
-    homogeneous = np.c_[np.asarray(points, np.float64), np.ones(len(points))]
-    clip = homogeneous @ (camera.projection_matrix() @ camera.view_matrix()).T
-    assert (clip[:, 3] > 0).all(), "a point lies behind the camera"
-    return clip[:, :3] / clip[:, 3:4]
 
 
 def view_direction(camera: Camera) -> np.ndarray:
@@ -227,7 +220,7 @@ def test_named_view_direction_exact(gearbox_points, view, up):
 def test_fit_puts_every_point_inside_the_margin(gearbox_points, view, ortho, up):
     margin, aspect = 0.05, 4 / 3
     cam = Camera.fit(gearbox_points, view, ortho=ortho, aspect=aspect, margin=margin, up=up)
-    ndc = project(cam, gearbox_points)
+    ndc = project(gearbox_points, cam)
     fill = 1 - 2 * margin
     reach = np.abs(ndc[:, :2]).max(axis=0)
     assert (reach <= fill + 1e-9).all(), f"points outside the margin: {reach}"
@@ -249,7 +242,7 @@ def test_top_view_keeps_the_front_at_the_bottom(up, ortho):
     }[up]
     points = np.array([front, np.negative(front), right, np.negative(right), up_axis], float)
     cam = Camera.fit(points, "top", up=up, ortho=ortho)
-    ndc = project(cam, points)
+    ndc = project(points, cam)
     assert ndc[0, 1] < ndc[1, 1], "front is not below the back"
     assert ndc[0, 1] == pytest.approx(-ndc[1, 1], abs=1e-9)
     assert ndc[2, 0] > ndc[3, 0], "right is not on the right"
@@ -259,7 +252,7 @@ def test_top_view_keeps_the_front_at_the_bottom(up, ortho):
 def test_front_view_of_z_up_model_shows_z_upwards():
     points = np.array([[0, 0, 0], [0, 0, 10], [5, 0, 0]], float)
     cam = Camera.fit(points, "front", up="z", ortho=True)
-    ndc = project(cam, points)
+    ndc = project(points, cam)
     assert ndc[1, 1] > ndc[0, 1]  # +Z is up in the image
     assert ndc[2, 0] > ndc[0, 0]  # +X is to the right
     np.testing.assert_allclose(cam.up, (0, 0, 1), atol=1e-12)
