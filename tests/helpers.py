@@ -1,4 +1,5 @@
-"""Helpers the tests share: the command line in a subprocess, and model points to pixels.
+"""Helpers the tests share: the command line in a subprocess and its one-line errors, and model
+points to pixels.
 
 Importable from every test folder as ``helpers`` (pytest puts this folder, the conftest's, on
 ``sys.path``).
@@ -38,6 +39,26 @@ def run_cli(*args, cwd=None, env=None, limits=None, timeout: float = 300) -> sub
         timeout=timeout,
         preexec_fn=apply_limits if limits else None,
     )
+
+
+def one_error(proc: subprocess.CompletedProcess, *mentions: str, blank_stdout: bool = False) -> str:
+    """The single error line of a failed run, checked; ``mentions`` must appear in it.
+    ``blank_stdout`` tolerates whitespace on stdout (bench's progress bar, see test_cli)."""
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert proc.returncode == 2, (proc.returncode, proc.stderr)
+    assert (proc.stdout.strip() if blank_stdout else proc.stdout) == "", proc.stdout
+    assert proc.stderr.endswith("\n") and proc.stderr.count("\n") == 1, f"not one line: {proc.stderr!r}"
+    line = proc.stderr.rstrip("\n")
+    assert line.startswith("blueprint: error: "), line
+    for text in mentions:
+        assert text.lower() in line.lower(), f"{text!r} not in {line!r}"
+    return line
+
+
+def no_output(folder: Path) -> None:
+    """Nothing left in ``folder`` (by a run that failed)."""
+    left = sorted(p.name for p in folder.iterdir())
+    assert left == [], f"left in the output folder: {left}"
 
 
 def project(points, view, projection=None, size=None) -> np.ndarray:

@@ -19,31 +19,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from helpers import needs_cli, run_cli
+from helpers import needs_cli, no_output, one_error, run_cli
 from PIL import Image
 
 from blueprint import examples
 
 pytestmark = needs_cli
-
-
-def one_error(proc: subprocess.CompletedProcess, *mentions: str, blank_stdout: bool = False) -> str:
-    """The single error line of a failed run, checked; ``mentions`` must appear in it.
-    ``blank_stdout`` tolerates whitespace on stdout (bench's progress bar, see test_cli)."""
-    assert "Traceback" not in proc.stderr, proc.stderr
-    assert proc.returncode == 2, (proc.returncode, proc.stderr)
-    assert (proc.stdout.strip() if blank_stdout else proc.stdout) == "", proc.stdout
-    assert proc.stderr.endswith("\n") and proc.stderr.count("\n") == 1, f"not one line: {proc.stderr!r}"
-    line = proc.stderr.rstrip("\n")
-    assert line.startswith("blueprint: error: "), line
-    for text in mentions:
-        assert text.lower() in line.lower(), f"{text!r} not in {line!r}"
-    return line
-
-
-def no_output(folder: Path) -> None:
-    left = sorted(p.name for p in folder.iterdir())
-    assert left == [], f"left in the output folder: {left}"
 
 
 @pytest.fixture

@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from test_bad_input import no_output, one_error
+from helpers import no_output, one_error
 
 from blueprint import examples
 
