@@ -157,6 +157,8 @@ def test_to_pixels_from_the_side_and_in_any_shape():
     # rows from the bottom (OpenGL's window coordinates) are the same rows counted from the other edge
     bottom = clip_to_pixels(transform(points, projection @ view), (100, 100), origin="bottom")
     np.testing.assert_array_equal(bottom, np.stack([expected[..., 0], 100 - expected[..., 1]], -1))
+    with pytest.raises(ValueError, match="origin"):
+        clip_to_pixels(transform(points, projection @ view), (100, 100), origin="left")
 
 
 def test_transform_is_the_matrix_on_homogeneous_points():

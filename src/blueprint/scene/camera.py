@@ -88,6 +88,8 @@ def clip_to_pixels(
     np.ndarray
         (..., 2) float64 pixels x, y; with ``depth``, (..., 3): x, y and NDC z.
     """
+    if origin not in ("top", "bottom"):
+        raise ValueError(f"origin must be 'top' or 'bottom', got {origin!r}")
     clip = np.asarray(clip, np.float64)
     w = clip[..., 3:4]
     ndc = clip[..., : 3 if depth else 2] / np.where(np.abs(w) > 0, w, 1.0)
