@@ -130,7 +130,8 @@ def classify_edges(
     if not 0.0 <= crease_angle <= 180.0:
         raise ValueError(f"crease_angle must be in [0, 180] degrees, got {crease_angle}")
 
-    normal_ok = (adj.face_normals != 0).any(axis=1)
+    normals = adj.face_normals
+    normal_ok = (normals[:, 0] != 0) | (normals[:, 1] != 0) | (normals[:, 2] != 0)
     front = _front_facing(adj, view, projection) & normal_ok
     count, f0, f1 = _first_two_faces(adj)
     # The lowest-index front and back face of every edge; "no face" stays at len(faces).
