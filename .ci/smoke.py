@@ -596,7 +596,7 @@ def _draw(s: Smoke):
 def _broken(s: Smoke):
     copy = s.work / "broken"
     shutil.copytree(PACKAGE, copy / "blueprint", ignore=shutil.ignore_patterns("__pycache__"))
-    (copy / "blueprint" / "ops" / "glsl" / "idsil_lines.geom").unlink(missing_ok=True)
+    (copy / "blueprint" / "gpu_silhouettes" / "glsl" / "idsil_lines.geom").unlink(missing_ok=True)
     out = s.work / "broken.png"
     env = {**os.environ, "PYTHONPATH": str(copy)}
     proc = cli(

@@ -29,8 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import Camera, Renderer
+from blueprint.gpu_silhouettes import GpuSilhouettes
 from blueprint.silhouette import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments, weld
-from blueprint.silhouette.gpu import GpuSilhouettes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from table1 import ROOT, find, make_model, median_ms  # noqa: E402

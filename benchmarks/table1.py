@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import Camera, Model, Renderer, load_model
+from blueprint.gpu_silhouettes import GpuSilhouettes
 from blueprint.silhouette import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments
-from blueprint.silhouette.gpu import GpuSilhouettes
 from blueprint.silhouette.teapot import teapot_model
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -13,57 +13,18 @@ import os
 import resource
 import struct
 import subprocess
-import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import needs_cli, no_output, one_error, run_cli
 from PIL import Image
 
 from blueprint import examples
 
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
-
-pytestmark = pytest.mark.skipif(not BLUEPRINT.exists(), reason=f"console script not found at {BLUEPRINT}")
-
-
-def run(*args, cwd=None, env=None, limits=None) -> subprocess.CompletedProcess:
-    """Run the console script; ``limits`` maps resource.RLIMIT_* to a soft and hard limit."""
-
-    def apply_limits() -> None:
-        for which, value in (limits or {}).items():
-            resource.setrlimit(which, (value, value))
-
-    return subprocess.run(
-        [str(BLUEPRINT), *map(str, args)],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        env=env,
-        timeout=120,
-        preexec_fn=apply_limits if limits else None,
-    )
-
-
-def one_error(proc: subprocess.CompletedProcess, *mentions: str, blank_stdout: bool = False) -> str:
-    """The single error line of a failed run, checked; ``mentions`` must appear in it.
-    ``blank_stdout`` tolerates whitespace on stdout (bench's progress bar, see test_cli)."""
-    assert "Traceback" not in proc.stderr, proc.stderr
-    assert proc.returncode == 2, (proc.returncode, proc.stderr)
-    assert (proc.stdout.strip() if blank_stdout else proc.stdout) == "", proc.stdout
-    assert proc.stderr.endswith("\n") and proc.stderr.count("\n") == 1, f"not one line: {proc.stderr!r}"
-    line = proc.stderr.rstrip("\n")
-    assert line.startswith("blueprint: error: "), line
-    for text in mentions:
-        assert text.lower() in line.lower(), f"{text!r} not in {line!r}"
-    return line
-
-
-def no_output(folder: Path) -> None:
-    left = sorted(p.name for p in folder.iterdir())
-    assert left == [], f"left in the output folder: {left}"
+pytestmark = needs_cli
 
 
 @pytest.fixture
@@ -230,7 +191,7 @@ def runs(bad_dir, box_obj, tmp_path_factory) -> dict[str, tuple[subprocess.Compl
     add("partly", lambda out: ["render", bad_dir / "partly.obj", "-o", out / "x.png", "--size", 32, 24])
     add("long-name", lambda out: ["render", box_obj, "-o", out / ("a" * 250 + ".png"), "--size", 16, 16])
     with ThreadPoolExecutor(max_workers=max(2, os.cpu_count() or 1)) as pool:
-        futures = {key: pool.submit(run, *args) for key, (args, _) in jobs.items()}
+        futures = {key: pool.submit(run_cli, *args) for key, (args, _) in jobs.items()}
         return {key: (future.result(), jobs[key][1]) for key, future in futures.items()}
 
 
@@ -254,7 +215,7 @@ def test_bad_model_file(bad_dir, runs, name, command):
 @pytest.mark.parametrize("command", ["render", "layers", "info"])
 def test_directory_as_model(bad_dir, out, command):
     model = bad_dir / "folder.stl"
-    one_error(run(*_command(command, model, out)), str(model), "directory")
+    one_error(run_cli(*_command(command, model, out)), str(model), "directory")
     no_output(out)
 
 
@@ -299,7 +260,7 @@ def test_unwritable_output(box_obj, out, command, output, mentions):
     (out / "a_folder.npz").mkdir()
     (out / "box_file").write_text("a file, not a folder")
     target = out / output
-    one_error(run(command, box_obj, "-o", target, "--size", 32, 32), str(target), *mentions)
+    one_error(run_cli(command, box_obj, "-o", target, "--size", 32, 32), str(target), *mentions)
     assert sorted(p.name for p in out.iterdir()) == ["a_folder.npz", "a_folder.png", "box_file"]
     assert not any((out / "a_folder.png").iterdir())
 
@@ -309,7 +270,7 @@ def test_write_failure_leaves_no_file(box_obj, out, command, suffix):
     """A write that fails half way (file size limit of 100 bytes: EFBIG) is reported in one
     line, and neither the output nor the temporary file stays behind."""
     target = out / f"x{suffix}"
-    proc = run(command, box_obj, "-o", target, "--size", 64, 64, limits={resource.RLIMIT_FSIZE: 100})
+    proc = run_cli(command, box_obj, "-o", target, "--size", 64, 64, limits={resource.RLIMIT_FSIZE: 100})
     one_error(proc, str(target), "cannot write")
     no_output(out)
 
@@ -324,7 +285,7 @@ def test_size_too_large_for_memory(box_obj, out, command, size):
     cannot allocate the G-buffer and moderngl raises "the framebuffer is not complete
     (INCOMPLETE_ATTACHMENT)", which escapes as a traceback with exit code 1."""
     suffix = ".png" if command == "render" else ".npz"
-    proc = run(
+    proc = run_cli(
         command, box_obj, "-o", out / f"x{suffix}", "--size", *size,
         limits={resource.RLIMIT_AS: 1536 * 2**20},
     )  # fmt: skip
@@ -333,8 +294,7 @@ def test_size_too_large_for_memory(box_obj, out, command, size):
 
 
 def test_no_opengl_is_one_line():
-    env = {**os.environ, "BLUEPRINT_GL_BACKEND": "no-such-backend"}
-    one_error(run("info", env=env), "OpenGL")
+    one_error(run_cli("info", env={"BLUEPRINT_GL_BACKEND": "no-such-backend"}), "OpenGL")
 
 
 # -- bench -------------------------------------------------------------------------------------------

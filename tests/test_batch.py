@@ -6,13 +6,12 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import needs_cli, run_cli
 from PIL import Image
 
 import blueprint
@@ -20,7 +19,6 @@ from blueprint import InputError
 from blueprint.api.batch import MANIFEST, MODEL_SUFFIXES, batch, choose_devices, collect_inputs, outputs_for
 from blueprint.gpu.context import create_context, egl_device_count, egl_devices
 
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
 SIZE = (72, 64)
 
 
@@ -161,21 +159,11 @@ def test_a_context_on_a_device_that_does_not_exist_is_one_line():
     ctx.release()
 
 
-def _run(*args, env=None):
-    return subprocess.run(
-        [str(BLUEPRINT), *map(str, args)],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, **(env or {})},
-    )
-
-
-@pytest.mark.skipif(not BLUEPRINT.exists(), reason=f"console script not found at {BLUEPRINT}")
+@needs_cli
 def test_command_line_exit_codes(tmp_path):
     paths = _models(tmp_path / "models")
     out = tmp_path / "out"
-    failed = _run("batch", paths["box"], paths["broken"], "-o", out, "--size", *SIZE)
+    failed = run_cli("batch", paths["box"], paths["broken"], "-o", out, "--size", *SIZE)
     assert failed.returncode == 1, failed.stderr
     assert failed.stderr.splitlines() == [f"blueprint: failed: {paths['broken']}: no triangles in the file"]
     assert failed.stdout.startswith(f"{out / MANIFEST}: 1 drawn, 0 up to date, 1 failed")
@@ -186,11 +174,11 @@ def test_command_line_exit_codes(tmp_path):
         (("--gpus", "9,"), "blueprint: error: --gpus: EGL device 9 does not exist"),
         (("--workers", "0"), "blueprint: error: --workers must be at least 1, got 0"),
     ]:
-        bad = _run("batch", paths["box"], "-o", tmp_path / "bad", *args)
+        bad = run_cli("batch", paths["box"], "-o", tmp_path / "bad", *args)
         assert bad.returncode == 2 and len(bad.stderr.splitlines()) == 1, bad.stderr
         assert bad.stderr.startswith(message)
         assert not (tmp_path / "bad" / "box.iso.png").exists()
-    device = _run("render", paths["box"], "-o", tmp_path / "x.png", env={"BLUEPRINT_GL_DEVICE": "9"})
+    device = run_cli("render", paths["box"], "-o", tmp_path / "x.png", env={"BLUEPRINT_GL_DEVICE": "9"})
     assert device.returncode == 2 and device.stderr.startswith(
         "blueprint: error: EGL device 9 does not exist"
     )

@@ -12,26 +12,19 @@ import re
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import needs_cli, run_cli
 from PIL import Image
 
 from blueprint import examples, load_model
 
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
 EXAMPLE = examples.example_path()
 PAPER = (0x12, 0x45, 0x7A, 255)  # the blueprint style's paper colour
 
-pytestmark = pytest.mark.skipif(not BLUEPRINT.exists(), reason=f"console script not found at {BLUEPRINT}")
-
-
-def run(*args, cwd=None) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [str(BLUEPRINT), *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=120
-    )
+pytestmark = needs_cli
 
 
 def ok(proc: subprocess.CompletedProcess) -> str:
@@ -49,14 +42,14 @@ def gearbox_parts() -> dict[str, int]:
 
 @pytest.fixture(scope="module")
 def gl() -> dict:
-    return json.loads(ok(run("info", "--json")))
+    return json.loads(ok(run_cli("info", "--json")))
 
 
 # -- info ---------------------------------------------------------------------------------------
 
 
 def test_info_prints_renderer_and_gl_version(gl):
-    lines = ok(run("info")).splitlines()
+    lines = ok(run_cli("info")).splitlines()
     assert lines[0] == f"renderer: {gl['renderer']}"
     assert lines[1] == f"vendor: {gl['vendor']}"
     assert lines[2] == f"OpenGL: {gl['version']}"
@@ -86,7 +79,7 @@ def test_info_prints_renderer_and_gl_version(gl):
 
 def test_info_model_lists_parts(gearbox_parts):
     assert sum(gearbox_parts.values()) == 2144 and len(gearbox_parts) == 13
-    lines = ok(run("info", EXAMPLE)).splitlines()
+    lines = ok(run_cli("info", EXAMPLE)).splitlines()
     assert lines[0] == f"{EXAMPLE}: 2144 triangles, 13 parts, up y (by the format)"
     assert lines[1] == "bounds: [-70, 0, -35] - [70, 73.5, 35]"
     # glTF is in metres by its specification
@@ -99,7 +92,7 @@ def test_info_model_lists_parts(gearbox_parts):
 
 
 def test_info_model_json(gearbox_parts):
-    data = json.loads(ok(run("info", EXAMPLE, "--json")))
+    data = json.loads(ok(run_cli("info", EXAMPLE, "--json")))
     assert data["file"] == str(EXAMPLE)
     assert data["triangles"] == 2144 and data["up"] == "y"
     assert data["bounds"] == [[-70.0, 0.0, -35.0], [70.0, 73.5, 35.0]]
@@ -123,7 +116,7 @@ def test_render_writes_png_of_requested_size(tmp_path, gl):
     out.mkdir()
     target = out / "gear.png"
     target.write_bytes(b"an older file that must be replaced")
-    stdout = ok(run("render", EXAMPLE, "-o", target, "--size", 96, 64))
+    stdout = ok(run_cli("render", EXAMPLE, "-o", target, "--size", 96, 64))
     match = RENDER_LINE.fullmatch(stdout.strip())
     assert match, stdout
     assert match["file"] == str(target) and (match["w"], match["h"]) == ("96", "64")
@@ -132,7 +125,7 @@ def test_render_writes_png_of_requested_size(tmp_path, gl):
     # the default cap of 8 says what it left: at least as many as a peel without the cap draws
     # (the count takes the touching faces of two parts, which the peel merges, as two)
     every = RENDER_LINE.fullmatch(
-        ok(run("render", EXAMPLE, "-o", target, "--size", 96, 64, "--max-layers", 0)).strip()
+        ok(run_cli("render", EXAMPLE, "-o", target, "--size", 96, 64, "--max-layers", 0)).strip()
     )
     assert every["total"] is None and int(every["layers"]) <= int(match["total"]) <= int(every["layers"]) + 1
     assert sorted(p.name for p in out.iterdir()) == ["gear.png"]  # no temporary file left
@@ -148,7 +141,7 @@ def test_render_writes_png_of_requested_size(tmp_path, gl):
 def test_render_accepts_every_option(tmp_path):
     target = tmp_path / "all.png"
     stdout = ok(
-        run(
+        run_cli(
             "render",
             EXAMPLE,
             "-o",
@@ -198,7 +191,7 @@ def test_layers_npz_contract_by_ray_casting(tmp_path):
     trimesh.Trimesh(vertices, faces, process=False).export(source)
     model = load_model(source)
     target = tmp_path / "box.npz"
-    stdout = ok(run("layers", source, "-o", target, "--size", 64, 48))
+    stdout = ok(run_cli("layers", source, "-o", target, "--size", 64, 48))
     assert stdout.strip() == f"{target}: 2 layers of 64x48"
     with np.load(target) as npz:
         data = {k: npz[k] for k in npz.files}
@@ -249,7 +242,7 @@ def test_layers_npz_contract_by_ray_casting(tmp_path):
 @pytest.fixture(scope="module")
 def bench_run() -> subprocess.CompletedProcess:
     args = ("--size", 64, 64, "--max-layers", 2, "--frames", 2, "--warmup", 1)
-    return run("bench", EXAMPLE, *args)
+    return run_cli("bench", EXAMPLE, *args)
 
 
 def test_bench_prints_one_record_per_configuration(bench_run, gl):
@@ -391,7 +384,7 @@ def test_render_svg_reports_its_own_time(tmp_path, gl):
     """The seconds printed are the drawing's, not the sum of its stages and their total."""
     target = tmp_path / "gear.svg"
     start = time.perf_counter()
-    stdout = ok(run("render", EXAMPLE, "-o", target, "--size", 96, 64))
+    stdout = ok(run_cli("render", EXAMPLE, "-o", target, "--size", 96, 64))
     wall = time.perf_counter() - start
     match = re.fullmatch(r".+: (\d+) bytes, polylines .+, (\d+\.\d+) s on .+", stdout.strip())
     assert match, stdout
@@ -401,7 +394,7 @@ def test_render_svg_reports_its_own_time(tmp_path, gl):
 
 def test_render_plan_sheet_as_vectors(tmp_path, gl):
     out = tmp_path / "sheet.dxf"
-    stdout = ok(run("render", EXAMPLE, "-o", out, "--size", 160, 120, "--view", "plan"))
+    stdout = ok(run_cli("render", EXAMPLE, "-o", out, "--size", 160, 120, "--view", "plan"))
     assert stdout.startswith(f"{out}: ") and "polylines level 0" in stdout
     assert out.stat().st_size > 1000
 
@@ -434,10 +427,10 @@ def test_success_lines_print_names_safely(tmp_path):
     """A file name holding a newline is one line on stdout too, the newline shown as ``\\n``."""
     model = tmp_path / "two\nlines.stl"
     trimesh.creation.box((1.0, 2.0, 3.0)).export(model)
-    lines = ok(run("info", model)).splitlines()
+    lines = ok(run_cli("info", model)).splitlines()
     assert lines[0].startswith(str(tmp_path / "two\\nlines.stl") + ": 12 triangles, 1 parts")
     assert len(lines) == 5  # the model, its bounds, unit and size, its one part
     out = tmp_path / "out\nfile.png"
-    lines = ok(run("render", model, "-o", out, "--size", "64", "48")).splitlines()
+    lines = ok(run_cli("render", model, "-o", out, "--size", "64", "48")).splitlines()
     assert len(lines) == 1 and lines[0].startswith(str(tmp_path / "out\\nfile.png") + ": 64x48")
     assert out.exists()

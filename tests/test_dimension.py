@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import shapely.geometry as sg
 import trimesh
-from test_bad_input import no_output, one_error, run
+from helpers import no_output, one_error, run_cli
 
 import blueprint
 from blueprint.api.files import render_vector_file
@@ -259,7 +259,7 @@ def test_bad_dimension_glyph_is_one_line(tmp_path, entry, mentions, suffix):
     glyphs.write_text(f"[[dimension]]\n{entry}\n")
     folder = tmp_path / "out"
     folder.mkdir()
-    proc = run(
+    proc = run_cli(
         "render",
         model,
         "-o",

@@ -155,7 +155,7 @@ PICTURE_HEAVY += ["dask", "PIL", "click", "blueprint.compose.glyphs", "blueprint
 PICTURE_HEAVY += ["blueprint.api.files", "importlib.resources", "zipfile", "difflib"]
 # what a vector drawing does without (benchmarks/vector.py, whole processes)
 VECTOR_HEAVY = ["scipy", "networkx", "trimesh", "PIL", "dask", "tomllib", "blueprint.pipeline.executor"]
-VECTOR_HEAVY += ["blueprint.ops", "blueprint.silhouette.gpu", "blueprint.compose.glyphs.values"]
+VECTOR_HEAVY += ["blueprint.ops", "blueprint.gpu_silhouettes", "blueprint.compose.glyphs.values"]
 
 
 def _loaded_after(code: str, heavy: list[str] = PICTURE_HEAVY) -> set[str]:

@@ -12,6 +12,7 @@ import itertools
 
 import numpy as np
 import pytest
+from helpers import project
 
 import blueprint
 from blueprint import examples
@@ -36,14 +37,6 @@ def _render(renderer, model, **options):
     frame = renderer.render(model, _camera(model), size=SIZE, style="paper", **options)
     assert frame.image.shape == (SIZE[1], SIZE[0], 4) and frame.image.dtype == np.uint8
     return frame
-
-
-def _project(frame: blueprint.Frame, points: np.ndarray) -> np.ndarray:
-    """(N, 2) pixel coordinates (x right, y down) of model-space points."""
-    matrix = frame.camera.projection_matrix() @ frame.camera.view_matrix()
-    clip = np.column_stack([points, np.ones(len(points))]) @ matrix.T
-    ndc = clip[:, :2] / clip[:, 3:4]
-    return np.column_stack([(ndc[:, 0] + 1) / 2 * SIZE[0], (1 - ndc[:, 1]) / 2 * SIZE[1]])
 
 
 def _segment_distance(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -136,7 +129,7 @@ def test_cube_shows_all_twelve_edges(renderer):
     hidden = [e for e in edges if not e[2]]
     assert len(visible) == 9 and len(hidden) == 3, "a general view of a cube hides 3 edges"
 
-    ends = [(_project(frame, np.array([a, b]))) for a, b, _ in edges]
+    ends = [(project(np.array([a, b]), frame.camera, size=SIZE)) for a, b, _ in edges]
     seg_a = np.array([p[0] for p in ends])
     seg_b = np.array([p[1] for p in ends])
     is_visible = np.array([e[2] for e in edges])
@@ -172,8 +165,8 @@ def test_cube_faces_are_clean_paper(renderer):
     """No speckle: every pixel farther than 3 px from all 12 projected edges is paper."""
     frame = _render(renderer, cube_model())
     edges = _cube_edges((-1, -1, -1), (1, 1, 1), np.array(frame.camera.eye))
-    a = _project(frame, np.array([e[0] for e in edges]))
-    b = _project(frame, np.array([e[1] for e in edges]))
+    a = project(np.array([e[0] for e in edges]), frame.camera, size=SIZE)
+    b = project(np.array([e[1] for e in edges]), frame.camera, size=SIZE)
     far = _segment_distance(_pixel_centres(), a, b).min(axis=1).reshape(SIZE[1], SIZE[0]) > 3.0
     strength = np.abs(_ink(frame.image)).max(axis=-1)
     dirty = far & (strength > PAPER_NOISE)
@@ -197,11 +190,11 @@ def _boundary_samples(frame):
     assert eye[2] > 0.5 and eye[1] > 0.5, "the camera sees the front (z+) and top (y+) faces"
     outline = [((0, -0.5, 0.5), (0, 0.5, 0.5)), ((0, 0.5, -0.5), (0, 0.5, 0.5))]
     samples = np.concatenate(
-        [_samples(*_project(frame, np.array([a, b], float))) for a, b in outline], axis=0
+        [_samples(*project(np.array([a, b], float), frame.camera, size=SIZE)) for a, b in outline], axis=0
     )
     edges = _cube_edges((-1, -0.5, -0.5), (1, 0.5, 0.5), eye)
-    a = _project(frame, np.array([e[0] for e in edges]))
-    b = _project(frame, np.array([e[1] for e in edges]))
+    a = project(np.array([e[0] for e in edges]), frame.camera, size=SIZE)
+    b = project(np.array([e[1] for e in edges]), frame.camera, size=SIZE)
     keep = _segment_distance(samples, a, b).min(axis=1) > 3.0
     assert keep.sum() >= 40
     return samples[keep]
@@ -261,6 +254,6 @@ def test_cube_edges_at_other_supersampling(renderer, supersample):
     ink = _ink(frame.image)
     edges = _cube_edges((-1, -1, -1), (1, 1, 1), np.array(frame.camera.eye))
     for a, b, _ in edges:
-        samples = _samples(*_project(frame, np.array([a, b])))
+        samples = _samples(*project(np.array([a, b]), frame.camera, size=SIZE))
         strength = _strongest_near(ink, samples).max(axis=-1)
         assert (strength >= INK).all(), f"edge {a} - {b} at supersample {supersample}"

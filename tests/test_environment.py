@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import json
 import logging
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import run_cli
 
 from blueprint import load_model
 from blueprint.api.files import render_vector_file
@@ -24,7 +23,6 @@ from blueprint.errors import InputError
 from blueprint.scene.camera import fit_camera
 from blueprint.scene.environment import environment_parts
 
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
 BUILDINGS = [f"building{i}" for i in range(16)]
 
 
@@ -101,12 +99,7 @@ def test_the_skybox_no_longer_hides_the_city(city_file, renderer):
 
 @pytest.mark.parametrize("option", ["--exclude", "--include"])
 def test_patterns_matching_nothing_are_one_line(city_file, tmp_path, option):
-    proc = subprocess.run(
-        [str(BLUEPRINT), "render", str(city_file), "-o", str(tmp_path / "c.png"), option, "tower*"],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    proc = run_cli("render", city_file, "-o", tmp_path / "c.png", option, "tower*")
     assert proc.returncode == 2 and proc.stdout == "" and not (tmp_path / "c.png").exists()
     assert proc.stderr.startswith(f"blueprint: error: {city_file}: {option}: no part matches 'tower*'")
     assert len(proc.stderr.splitlines()) == 1
@@ -118,14 +111,10 @@ def test_nothing_left_is_an_error(city_file):
 
 
 def test_info_marks_the_environment_and_render_warns(city_file, tmp_path):
-    info = subprocess.run([str(BLUEPRINT), "info", str(city_file), "--json"], capture_output=True, text=True)
+    info = run_cli("info", city_file, "--json")
     parts = {p["name"]: p["environment"] for p in json.loads(info.stdout)["parts"]}
     assert parts == {**dict.fromkeys(BUILDINGS, False), "Skybox": True, "Ground": True}
-    proc = subprocess.run(
-        [str(BLUEPRINT), "layers", str(city_file), "-o", str(tmp_path / "c.npz"), "--size", "32", "32"],
-        capture_output=True,
-        text=True,
-    )
+    proc = run_cli("layers", city_file, "-o", tmp_path / "c.npz", "--size", "32", "32")
     assert proc.returncode == 0
     warning = f"{city_file}: left out Ground, Skybox, which surround the scene (--include to keep)"
     assert proc.stderr == f"blueprint: warning: {warning}\n"

@@ -1,9 +1,9 @@
 """Glyphs drawn into the blueprint's depth: where they land, what hides them, how hidden pieces
 look in each mode, labels, and one-line errors for bad glyph files.
 
-Positions are checked against the camera's own matrices, projected here; hidden or visible is
-decided by hand-built scenes (a cube, a thin wall in front of a line), so every expected pixel
-is known without the code under test.
+Positions are checked against the camera's own matrices, projected by the tests' own helper;
+hidden or visible is decided by hand-built scenes (a cube, a thin wall in front of a line), so
+every expected pixel is known without the code under test.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import project
 
 from blueprint import Camera, InputError, examples
 from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
@@ -21,16 +22,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 # -- helpers -----------------------------------------------------------------------------------
-def project(camera: Camera, point, size) -> tuple[float, float]:
-    """Model point -> pixel coordinates (x right, y down, pixel centres at +0.5)."""
-    clip = camera.projection_matrix() @ camera.view_matrix() @ np.append(np.asarray(point, float), 1.0)
-    ndc = clip[:3] / clip[3]
-    return (ndc[0] + 1) / 2 * size[0], (1 - ndc[1]) / 2 * size[1]
-
-
 def alpha_at(image, camera, point, size, radius: int = 0) -> int:
     """Largest alpha within ``radius`` pixels of the point's pixel."""
-    x, y = (int(np.floor(v)) for v in project(camera, point, size))
+    x, y = (int(np.floor(v)) for v in project(point, camera, size=size))
     patch = image[max(y - radius, 0) : y + radius + 1, max(x - radius, 0) : x + radius + 1, 3]
     return int(patch.max())
 
@@ -76,7 +70,7 @@ def test_box_glyph_lands_on_its_projected_corners(cube_depth):
     image = draw_glyphs(blank(CUBE_SIZE), glyphs("none", box=[box]), CUBE_CAMERA, cube_depth)
     for corner in CORNERS:
         point = corner * 1.25
-        x, y = (int(np.floor(v)) for v in project(CUBE_CAMERA, point, CUBE_SIZE))
+        x, y = (int(np.floor(v)) for v in project(point, CUBE_CAMERA, size=CUBE_SIZE))
         if (corner == FAR).all():
             # behind the cube, with the three edges that meet there: nothing in mode none
             assert image[y - 2 : y + 3, x - 2 : x + 3, 3].max() == 0
@@ -101,7 +95,7 @@ def test_glyph_lying_on_visible_faces_is_visible(cube_depth):
     assert len(edges) == 12
     behind = [(a == FAR).all() or (b == FAR).all() for a, b in edges]
     seen = [
-        np.array([project(CUBE_CAMERA, p, CUBE_SIZE) for p in edge])
+        np.array([project(p, CUBE_CAMERA, size=CUBE_SIZE) for p in edge])
         for edge, hidden in zip(edges, behind, strict=True)
         if not hidden
     ]
@@ -111,7 +105,7 @@ def test_glyph_lying_on_visible_faces_is_visible(cube_depth):
             point = a + t * (b - a)
             if hidden:
                 # where a hidden edge crosses a visible one on screen, the visible one shows
-                if min(_distance(project(CUBE_CAMERA, point, CUBE_SIZE), s) for s in seen) < 4:
+                if min(_distance(project(point, CUBE_CAMERA, size=CUBE_SIZE), s) for s in seen) < 4:
                     continue
                 checked_hidden += 1
             alpha = alpha_at(image, CUBE_CAMERA, point, CUBE_SIZE)
@@ -147,10 +141,10 @@ def wall_depth(renderer):
 def line_row(image) -> tuple[np.ndarray, np.ndarray]:
     """Alpha along the line's row: columns behind the wall and columns in the open, each kept
     clear of the wall's outline and the line's ends."""
-    _, y = project(WALL_CAMERA, [0, 0, -0.5], WALL_SIZE)
+    _, y = project([0, 0, -0.5], WALL_CAMERA, size=WALL_SIZE)
     row = image[int(np.floor(y)), :, 3]
-    x_hidden = [project(WALL_CAMERA, [x, 0, -0.5], WALL_SIZE)[0] for x in (-0.9, -0.15)]
-    x_open = [project(WALL_CAMERA, [x, 0, -0.5], WALL_SIZE)[0] for x in (0.15, 0.9)]
+    x_hidden = [project([x, 0, -0.5], WALL_CAMERA, size=WALL_SIZE)[0] for x in (-0.9, -0.15)]
+    x_open = [project([x, 0, -0.5], WALL_CAMERA, size=WALL_SIZE)[0] for x in (0.15, 0.9)]
     return row[int(x_hidden[0]) : int(x_hidden[1])], row[int(x_open[0]) : int(x_open[1])]
 
 
@@ -188,9 +182,9 @@ def test_orthographic_camera_hides_the_same(renderer):
     depth = front_depth(renderer, WALL, camera, WALL_SIZE)
     data = {"hidden": {"mode": "dim", "opacity": 0.35}, "path": [LINE]}
     image = draw_glyphs(blank(WALL_SIZE), Glyphs.from_dict(data, "t"), camera, depth)
-    y = int(np.floor(project(camera, [0, 0, -0.5], WALL_SIZE)[1]))
+    y = int(np.floor(project([0, 0, -0.5], camera, size=WALL_SIZE)[1]))
     for x, alpha in ((-0.6, round(0.35 * 255)), (-0.3, round(0.35 * 255)), (0.3, 255), (0.6, 255)):
-        assert image[y, int(project(camera, [x, 0, -0.5], WALL_SIZE)[0]), 3] == alpha, x
+        assert image[y, int(project([x, 0, -0.5], camera, size=WALL_SIZE)[0]), 3] == alpha, x
 
 
 def test_render_with_glyphs_peels_the_front_layer_itself(renderer, wall_depth):
@@ -207,7 +201,7 @@ def test_label_draws_text_beside_its_anchor(wall_depth):
     at = [0.3, 0.3, -0.5]
     g = glyphs("none", label=[{"at": at, "text": "gear", "color": "#00ff00", "anchor": "left"}])
     image = draw_glyphs(blank(WALL_SIZE), g, WALL_CAMERA, wall_depth)
-    x, y = (int(v) for v in project(WALL_CAMERA, at, WALL_SIZE))
+    x, y = (int(v) for v in project(at, WALL_CAMERA, size=WALL_SIZE))
     ink = image[..., 3] > 0
     assert ink[y - 10 : y + 11, x + 1 : x + 50].sum() >= 20  # text to the right of the point
     assert ink.sum() == ink[y - 10 : y + 11, x + 1 : x + 50].sum()  # and nowhere else
@@ -231,11 +225,11 @@ def test_glyphs_composite_over_the_image_and_leave_the_rest(wall_depth):
     out = draw_glyphs(image, glyphs("none", path=[LINE]), WALL_CAMERA, wall_depth)
     np.testing.assert_array_equal(image, before)  # a new image; the input is untouched
     touched = np.any(out != image, axis=-1)
-    _, y = project(WALL_CAMERA, [0, 0, -0.5], WALL_SIZE)
+    _, y = project([0, 0, -0.5], WALL_CAMERA, size=WALL_SIZE)
     rows = np.flatnonzero(touched.any(axis=1))
     assert rows.min() >= int(y) - 3 and rows.max() <= int(y) + 2
     # full coverage over any background: the glyph's colour, opaque
-    x = int(project(WALL_CAMERA, [0.5, 0, -0.5], WALL_SIZE)[0])
+    x = int(project([0.5, 0, -0.5], WALL_CAMERA, size=WALL_SIZE)[0])
     assert tuple(out[int(np.floor(y)), x]) == (*GREEN, 255)
     empty = draw_glyphs(image, Glyphs(), WALL_CAMERA, wall_depth)
     np.testing.assert_array_equal(empty, image)

@@ -9,18 +9,15 @@ nothing; depth masking of the last square peels past the default cap until it sh
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import run_cli
 
 from blueprint import Model
 from blueprint.api import render_frame
 
 SQUARES = 10
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
 
 
 def squares() -> Model:
@@ -58,12 +55,20 @@ def test_the_printed_line_names_the_layers_left(tmp_path):
     import trimesh
 
     trimesh.Trimesh(model.positions, model.faces, process=False).export(path)
-    proc = subprocess.run(
-        [str(BLUEPRINT), "render", str(path), "-o", str(tmp_path / "s.png"), "--size", "64", "64"]
-        + ["--view", "front", "--max-layers", "3", "--up", "y"],
-        capture_output=True,
-        text=True,
-        timeout=300,
+    proc = run_cli(
+        "render",
+        path,
+        "-o",
+        tmp_path / "s.png",
+        "--size",
+        "64",
+        "64",
+        "--view",
+        "front",
+        "--max-layers",
+        "3",
+        "--up",
+        "y",
     )
     assert proc.returncode == 0, proc.stderr
     assert re.search(r", 3 of 10 layers, ", proc.stdout), proc.stdout

@@ -60,9 +60,8 @@ LAYERS = (
     Layer("gpu", ("blueprint.gpu",)),
     # ops work on textures, not on peeling: neither knows the other
     Layer("render/ops", ("blueprint.render", "blueprint.ops"), siblings=True),
-    # the ID-buffer silhouettes use render and ops, so they sit at the compose level, not with
-    # the CPU method whose package they live in
-    Layer("compose", ("blueprint.compose", "blueprint.silhouette.gpu"), siblings=True),
+    # the GPU silhouettes (edge lines, ID buffer) use render and ops: they sit at the compose level
+    Layer("compose", ("blueprint.compose", "blueprint.gpu_silhouettes"), siblings=True),
     Layer("pipeline", ("blueprint.pipeline",)),
     Layer("vector", ("blueprint.vector",)),
     Layer("api", ("blueprint.api", "blueprint")),

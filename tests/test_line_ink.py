@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import project
 
 import blueprint
 from blueprint import examples
@@ -60,14 +61,6 @@ def square_tube() -> blueprint.Model:
     vertices[:, 1], vertices[:, 2] = c * (y - z), c * (y + z)
     # off-centre, so the lines do not all fall on pixel boundaries alike
     return examples.assemble({"tube": (vertices + [0.013, 0.0, 0.031], faces)})
-
-
-def _project(frame, points: np.ndarray) -> np.ndarray:
-    matrix = frame.camera.projection_matrix() @ frame.camera.view_matrix()
-    clip = np.column_stack([points, np.ones(len(points))]) @ matrix.T
-    ndc = clip[:, :2] / clip[:, 3:4]
-    w, h = frame.image.shape[1], frame.image.shape[0]
-    return np.column_stack([(ndc[:, 0] + 1) / 2 * w, (1 - ndc[:, 1]) / 2 * h])
 
 
 def line_ink(ink: np.ndarray, a: np.ndarray, b: np.ndarray, band: float = 3.0, trim: float = 6.0) -> float:
@@ -114,8 +107,12 @@ def test_coincident_hidden_lines_are_one_line_fainter_than_visible(renderer, mon
     ink, front_ink = ink_of(full.image, style), ink_of(front.image, style)
     x0, x1 = -HALF_LENGTH + 0.013, HALF_LENGTH + 0.013
     # the three hidden rims on the inner wall, and the outer silhouette (visible) beside it
-    hidden_a, hidden_b = _project(full, np.array([[x0, 0.0, INNER + 0.031], [x1, 0.0, INNER + 0.031]]))
-    vis_a, vis_b = _project(full, np.array([[x0, 0.0, OUTER + 0.031], [x1, 0.0, OUTER + 0.031]]))
+    hidden_a, hidden_b = project(
+        np.array([[x0, 0.0, INNER + 0.031], [x1, 0.0, INNER + 0.031]]), full.camera, size=SIZE
+    )
+    vis_a, vis_b = project(
+        np.array([[x0, 0.0, OUTER + 0.031], [x1, 0.0, OUTER + 0.031]]), full.camera, size=SIZE
+    )
     hidden = line_ink(ink, hidden_a, hidden_b)
     visible = line_ink(ink, vis_a, vis_b)
     # one line of layer 1, not three summed: its ink per unit length is layer 1's ink over one
@@ -159,8 +156,12 @@ def test_hidden_lines_are_half_as_wide(renderer, monkeypatch, line_width, comput
     full, _ = _frames(renderer, model, "paper", line_width=line_width)
     ink = ink_of(full.image, style)
     x0, x1 = -HALF_LENGTH + 0.013, HALF_LENGTH + 0.013
-    hidden_a, hidden_b = _project(full, np.array([[x0, 0.0, INNER + 0.031], [x1, 0.0, INNER + 0.031]]))
-    vis_a, vis_b = _project(full, np.array([[x0, 0.0, OUTER + 0.031], [x1, 0.0, OUTER + 0.031]]))
+    hidden_a, hidden_b = project(
+        np.array([[x0, 0.0, INNER + 0.031], [x1, 0.0, INNER + 0.031]]), full.camera, size=SIZE
+    )
+    vis_a, vis_b = project(
+        np.array([[x0, 0.0, OUTER + 0.031], [x1, 0.0, OUTER + 0.031]]), full.camera, size=SIZE
+    )
     band = line_width + 2.0
     visible_width = line_ink(ink, vis_a, vis_b, band) / single_line_ink(style, 0)
     hidden_width = line_ink(ink, hidden_a, hidden_b, band) / single_line_ink(style, 1)

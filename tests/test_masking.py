@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import project
 from oracle import raycast_layers
 
 from blueprint import InputError, load_model
@@ -176,11 +177,10 @@ def test_shaded_part_hides_what_is_behind_it_and_keeps_edges_in_front(renderer):
 
     plain, opaque = draw(), draw(shade=np.array([False, True]))
     glass = draw(shade=np.array([False, True]), shade_opacity=0.4)
-    project = camera.projection_matrix() @ camera.view_matrix()
 
     def pixel(x, y, z):
-        clip = project @ np.array([x, y, z, 1.0])
-        return int((1 - clip[1] / clip[3]) / 2 * size[1]), int((clip[0] / clip[3] + 1) / 2 * size[0])
+        column, row = project([x, y, z], camera, size=size)
+        return int(row), int(column)
 
     row, plate_col = pixel(1.0, 0.0, -3.0)
     _, box_col = pixel(1.5, 0.0, 4.5)

@@ -15,7 +15,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
-from test_bad_input import no_output, one_error
+from helpers import no_output, one_error
 
 from blueprint import examples
 
@@ -106,7 +106,7 @@ def test_a_missing_shader_file_is_one_line(tmp_path):
     """A broken install (a shader left out of the wheel): exit 2 and the file named, no traceback."""
     copy = tmp_path / "site"
     shutil.copytree(PACKAGE, copy / "blueprint", ignore=shutil.ignore_patterns("__pycache__"))
-    (copy / "blueprint" / "ops" / "glsl" / "idsil_lines.geom").unlink()
+    (copy / "blueprint" / "gpu_silhouettes" / "glsl" / "idsil_lines.geom").unlink()
     out = tmp_path / "out"
     out.mkdir()
     args = ["silhouettes", str(examples.example_path()), "-o", str(out / "s.png"), "--size", "64", "48"]
@@ -118,7 +118,7 @@ def test_a_missing_shader_file_is_one_line(tmp_path):
         env={**os.environ, "PYTHONPATH": str(copy)},
         timeout=120,
     )
-    one_error(proc, "shader file", "ops/glsl/idsil_lines.geom", "not found")
+    one_error(proc, "shader file", "gpu_silhouettes/glsl/idsil_lines.geom", "not found")
     no_output(out)
 
 

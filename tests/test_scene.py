@@ -10,24 +10,26 @@ import math
 
 import numpy as np
 import pytest
+from helpers import project
 
 from blueprint import examples
 from blueprint.compose.lookup import get_style
 from blueprint.compose.style import STYLES, Style, hex_color
 from blueprint.errors import InputError
-from blueprint.scene.camera import SHEET_CELLS, VIEWS, Camera, fit_camera, sheet_cameras
+from blueprint.scene.camera import (
+    SHEET_CELLS,
+    VIEWS,
+    Camera,
+    clip_to_pixels,
+    fit_camera,
+    sheet_cameras,
+    to_pixels,
+    transform,
+)
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, weld_ids
 
 S3 = 1 / math.sqrt(3)
-
-
-def project(camera: Camera, points: np.ndarray) -> np.ndarray:
-    """(N, 3) normalised device coordinates of model points through the camera's matrices."""
-    homogeneous = np.c_[np.asarray(points, np.float64), np.ones(len(points))]
-    clip = homogeneous @ (camera.projection_matrix() @ camera.view_matrix()).T
-    assert (clip[:, 3] > 0).all(), "a point lies behind the camera"
-    return clip[:, :3] / clip[:, 3:4]
 
 
 def view_direction(camera: Camera) -> np.ndarray:
@@ -106,6 +108,75 @@ def test_pixel_angle_exact():
     assert ortho.pixel_angle(100) == pytest.approx(0.04, abs=1e-15)
 
 
+# -- camera: model points to pixels, hand-computed ----------------------------------------------
+
+# eye at +5 on Z looking at the origin; a 200 x 100 picture (aspect 2)
+PERSPECTIVE = Camera(eye=(0, 0, 5), target=(0, 0, 0), up=(0, 1, 0), near=1, far=10, aspect=2, fov=90)
+ORTHOGRAPHIC = Camera(
+    eye=(0, 0, 5), target=(0, 0, 0), up=(0, 1, 0), near=1, far=10, aspect=2, ortho=True, height=4
+)
+
+
+def test_to_pixels_perspective_by_hand():
+    # tan(45°) = 1: at eye depth d a point (x, y) lies at NDC (x / (2 d), y / d); pixels x right
+    # from the left edge, y down from the top: ((ndc_x + 1) 100, (1 - ndc_y) 50)
+    points = np.array([[2.0, 1.0, 1.0], [0.0, 0.0, 4.0], [-10.0, -5.0, -5.0], [0.0, 2.0, 3.0]])
+    expected = np.array([[125.0, 37.5], [100.0, 50.0], [50.0, 75.0], [100.0, 0.0]])
+    # (1 / tan 45° is 1 + 2e-16 in floating point)
+    np.testing.assert_allclose(PERSPECTIVE.to_pixels(points, (200, 100)), expected, rtol=0, atol=1e-12)
+    with_depth = PERSPECTIVE.to_pixels(points, (200, 100), depth=True)
+    np.testing.assert_allclose(with_depth[:, :2], expected, rtol=0, atol=1e-12)
+    # NDC z = (f + n) / (f - n) - 2 f n / ((f - n) d): -1 at the near plane, 1 at the far one
+    d = 5.0 - points[:, 2]
+    np.testing.assert_allclose(with_depth[:, 2], 11 / 9 - 20 / (9 * d), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(with_depth[1:3, 2], [-1.0, 1.0], rtol=0, atol=1e-15)
+
+
+def test_to_pixels_orthographic_by_hand():
+    # a view 8 wide and 4 high: NDC (x / 4, y / 2) at any depth
+    points = np.array([[2.0, 1.0, 1.0], [2.0, 1.0, -3.0], [-4.0, -2.0, 0.0], [1.0, -0.5, 2.0]])
+    expected = np.array([[150.0, 25.0], [150.0, 25.0], [0.0, 100.0], [125.0, 62.5]])
+    np.testing.assert_array_equal(ORTHOGRAPHIC.to_pixels(points, (200, 100)), expected)
+    # NDC z linear in the eye depth d: -1 at n = 1, 1 at f = 10
+    d = 5.0 - points[:, 2]
+    z = ORTHOGRAPHIC.to_pixels(points, (200, 100), depth=True)[:, 2]
+    np.testing.assert_allclose(z, 2 * (d - 1) / 9 - 1, rtol=0, atol=1e-15)
+
+
+def test_to_pixels_from_the_side_and_in_any_shape():
+    # eye on +X: image right is -Z, up +Y; orthographic 4 high on a 100 x 100 picture
+    side = Camera(eye=(5, 0, 0), target=(0, 0, 0), up=(0, 1, 0), near=1, far=10, ortho=True, height=4)
+    points = np.array([[[0.0, 0.0, -1.0], [3.0, 1.0, 0.0]], [[0.0, -2.0, 2.0], [-1.0, 0.0, 0.0]]])
+    expected = np.array([[[75.0, 50.0], [50.0, 25.0]], [[0.0, 100.0], [50.0, 50.0]]])
+    pixels = side.to_pixels(points, (100, 100))
+    assert pixels.shape == (2, 2, 2) and pixels.dtype == np.float64
+    np.testing.assert_array_equal(pixels, expected)
+    # the function over matrices is the method's, and its two steps make it
+    view, projection = side.view_matrix(), side.projection_matrix()
+    np.testing.assert_array_equal(to_pixels(points, view, projection, (100, 100)), expected)
+    np.testing.assert_array_equal(clip_to_pixels(transform(points, projection @ view), (100, 100)), expected)
+    # rows from the bottom (OpenGL's window coordinates) are the same rows counted from the other edge
+    bottom = clip_to_pixels(transform(points, projection @ view), (100, 100), origin="bottom")
+    np.testing.assert_array_equal(bottom, np.stack([expected[..., 0], 100 - expected[..., 1]], -1))
+    with pytest.raises(ValueError, match="origin"):
+        clip_to_pixels(transform(points, projection @ view), (100, 100), origin="left")
+
+
+def test_transform_is_the_matrix_on_homogeneous_points():
+    rng = np.random.default_rng(3)
+    matrix, points = rng.normal(size=(4, 4)), rng.normal(size=(5, 3))
+    expected = np.array([matrix @ np.r_[p, 1.0] for p in points])
+    np.testing.assert_allclose(transform(points, matrix), expected, rtol=1e-14, atol=1e-14)
+    assert transform(points.astype(np.float32), matrix).dtype == np.float64
+
+
+def test_a_point_in_the_eyes_plane_stays_finite():
+    # w = 0 in perspective: the divide takes w = 1 there instead of making infinities
+    pixels = PERSPECTIVE.to_pixels(np.array([[1.0, 1.0, 5.0], [2.0, 1.0, 1.0]]), (200, 100))
+    assert np.isfinite(pixels).all()
+    np.testing.assert_allclose(pixels[1], [125.0, 37.5], rtol=0, atol=1e-12)
+
+
 # -- camera: named views ------------------------------------------------------------------------
 
 # expected unit direction from the target to the eye, per up axis
@@ -152,7 +223,7 @@ def test_named_view_direction_exact(gearbox_points, view, up):
 def test_fit_puts_every_point_inside_the_margin(gearbox_points, view, ortho, up):
     margin, aspect = 0.05, 4 / 3
     cam = Camera.fit(gearbox_points, view, ortho=ortho, aspect=aspect, margin=margin, up=up)
-    ndc = project(cam, gearbox_points)
+    ndc = project(gearbox_points, cam)
     fill = 1 - 2 * margin
     reach = np.abs(ndc[:, :2]).max(axis=0)
     assert (reach <= fill + 1e-9).all(), f"points outside the margin: {reach}"
@@ -174,7 +245,7 @@ def test_top_view_keeps_the_front_at_the_bottom(up, ortho):
     }[up]
     points = np.array([front, np.negative(front), right, np.negative(right), up_axis], float)
     cam = Camera.fit(points, "top", up=up, ortho=ortho)
-    ndc = project(cam, points)
+    ndc = project(points, cam)
     assert ndc[0, 1] < ndc[1, 1], "front is not below the back"
     assert ndc[0, 1] == pytest.approx(-ndc[1, 1], abs=1e-9)
     assert ndc[2, 0] > ndc[3, 0], "right is not on the right"
@@ -184,7 +255,7 @@ def test_top_view_keeps_the_front_at_the_bottom(up, ortho):
 def test_front_view_of_z_up_model_shows_z_upwards():
     points = np.array([[0, 0, 0], [0, 0, 10], [5, 0, 0]], float)
     cam = Camera.fit(points, "front", up="z", ortho=True)
-    ndc = project(cam, points)
+    ndc = project(points, cam)
     assert ndc[1, 1] > ndc[0, 1]  # +Z is up in the image
     assert ndc[2, 0] > ndc[0, 0]  # +X is to the right
     np.testing.assert_allclose(cam.up, (0, 0, 1), atol=1e-12)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import shapely.geometry as sg
 import trimesh
-from test_bad_input import no_output, one_error, run
+from helpers import no_output, one_error, run_cli
 
 import blueprint
 from blueprint.api.files import render_vector_file
@@ -270,7 +270,7 @@ def test_adjacent_parts_hatched_differently_in_vectors(renderer, two_parts):
 
 def test_cli_section_png_and_plan_sheet(two_parts, tmp_path):
     for name, extra in (("s.png", ["--view", "front"]), ("p.svg", ["--view", "plan"])):
-        proc = run(
+        proc = run_cli(
             "render",
             two_parts,
             "--up",
@@ -303,7 +303,7 @@ def test_cli_section_png_and_plan_sheet(two_parts, tmp_path):
 def test_cli_bad_section(two_parts, tmp_path, args, mentions, suffix):
     folder = tmp_path / "out"
     folder.mkdir()
-    proc = run("render", two_parts, "--up", "z", "-o", folder / f"x{suffix}", "--size", 64, 64, *args)
+    proc = run_cli("render", two_parts, "--up", "z", "-o", folder / f"x{suffix}", "--size", 64, 64, *args)
     one_error(proc, *mentions)
     no_output(folder)
 

@@ -9,7 +9,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from test_bad_input import no_output, one_error, run
+from helpers import no_output, one_error, run_cli
 
 from blueprint import load_model
 from blueprint.api.files import render_vector_file
@@ -115,7 +115,7 @@ def test_bad_sheet(tmp_path, args, mentions):
     folder = tmp_path / "out"
     folder.mkdir()
     args = [folder / a if a.startswith("x.") else a for a in args]
-    proc = run("render", model, "--size", 64, 64, *args)
+    proc = run_cli("render", model, "--size", 64, 64, *args)
     one_error(proc, *mentions)
     no_output(folder)
 
@@ -123,7 +123,7 @@ def test_bad_sheet(tmp_path, args, mentions):
 def test_dimensions_of_featuretype_to_scale_in_inches(tmp_path, shared_models):
     model = shared_models / "trimesh" / "featuretype.STL"  # 5 x 2.5 x 1.375 in
     path = tmp_path / "dims.svg"
-    proc = run(
+    proc = run_cli(
         "render", model, "-o", path, "--view", "plan", "--units", "in", "--sheet", "A3", "--dimensions"
     )
     assert proc.returncode == 0, proc.stderr

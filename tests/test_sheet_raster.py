@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_bad_input import run
+from helpers import run_cli
 
 import blueprint
 from blueprint.compose.lookup import get_style
@@ -158,7 +158,7 @@ def test_cli_plan_picture_with_title_and_dimensions(tmp_path):
     out = tmp_path / "sheet.png"
     model = tmp_path / "box.obj"
     model.write_text("v 0 0 0\nv 2 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
-    proc = run(
+    proc = run_cli(
         "render", model, "-o", out, "--size", 320, 240, "--view", "plan", "--title", "Wedge", "--dimensions"
     )
     assert proc.returncode == 0, proc.stderr

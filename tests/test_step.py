@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_bad_input import no_output, one_error, run
+from helpers import no_output, one_error, run_cli
 
 import blueprint
 from blueprint.errors import InputError
@@ -36,7 +36,7 @@ def test_step_parts_are_named_from_the_file(trimesh_models):
 
 
 def test_step_renders_from_the_command_line(trimesh_models, tmp_path):
-    proc = run("render", trimesh_models / "featuretype.STEP", "-o", tmp_path / "f.png", "--size", 64, 64)
+    proc = run_cli("render", trimesh_models / "featuretype.STEP", "-o", tmp_path / "f.png", "--size", 64, 64)
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "f.png").stat().st_size > 0
 
@@ -56,7 +56,7 @@ def test_broken_step_is_one_line(trimesh_models, tmp_path, name, data, mentions)
     model.write_bytes(data)
     folder = tmp_path / "out"
     folder.mkdir()
-    proc = run("render", model, "-o", folder / "x.png", "--size", 64, 64)
+    proc = run_cli("render", model, "-o", folder / "x.png", "--size", 64, 64)
     one_error(proc, name, "cannot read as STEP", *mentions)
     no_output(folder)
 

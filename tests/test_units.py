@@ -17,7 +17,7 @@ import zipfile
 import numpy as np
 import pytest
 import trimesh
-from test_bad_input import no_output, one_error, run
+from helpers import no_output, one_error, run_cli
 
 import blueprint
 from blueprint.api.files import render_vector_file
@@ -379,16 +379,16 @@ def test_assumed_unit_is_a_warning_in_python(renderer, stl, tmp_path, caplog):
 )
 def test_assumed_unit_is_a_warning_line(stl, tmp_path, args):
     args = [tmp_path / a if a.startswith("x.") else a for a in args]
-    proc = run("render", stl, "--size", 64, 48, "--view", "top", "--ortho", *args)
+    proc = run_cli("render", stl, "--size", 64, 48, "--view", "top", "--ortho", *args)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == f"blueprint: warning: {stl}: STL files carry no unit; assumed mm (set --units)\n"
-    stated = run("render", stl, "--size", 64, 48, "--view", "top", "--ortho", "--units", "mm", *args)
+    stated = run_cli("render", stl, "--size", 64, 48, "--view", "top", "--ortho", "--units", "mm", *args)
     assert stated.returncode == 0 and stated.stderr == ""
 
 
 def test_refused_drawing_says_only_why(stl, tmp_path):
     # dimensions of a perspective view: the error, no warning about the unit before it
-    proc = run("render", stl, "-o", tmp_path / "x.svg", "--size", 64, 48, "--dimensions")
+    proc = run_cli("render", stl, "-o", tmp_path / "x.svg", "--size", 64, 48, "--dimensions")
     one_error(proc, "dimensions need an orthographic view")
 
 
@@ -401,13 +401,13 @@ def test_unknown_unit_in_a_file_is_one_line(tmp_path, command):
     folder = tmp_path / "out"
     folder.mkdir()
     args = [folder / a if a.startswith("x.") else a for a in command[1:]]
-    one_error(run(command[0], model, *args), str(model), "unknown length unit 'furlong'", "inch")
+    one_error(run_cli(command[0], model, *args), str(model), "unknown length unit 'furlong'", "inch")
     no_output(folder)
 
 
 def test_unknown_units_option_is_one_line(stl, tmp_path):
     for output in ("x.png", "x.svg"):
-        proc = run("render", stl, "-o", tmp_path / output, "--units", "furlong")
+        proc = run_cli("render", stl, "-o", tmp_path / output, "--units", "furlong")
         one_error(proc, "unknown units 'furlong'", ", ".join(UNITS_MM))
     with pytest.raises(InputError, match="unknown units 'parsec'"):
         drawing_unit(blueprint.load_model(stl), "parsec")
@@ -418,16 +418,16 @@ def test_unknown_units_option_is_one_line(stl, tmp_path):
 
 def test_info_prints_the_unit_and_size(tmp_path, stl):
     model = write_3mf(tmp_path / "box.3mf", (2.0, 1.0, 0.5), "inch")
-    lines = run("info", model).stdout.splitlines()
+    lines = run_cli("info", model).stdout.splitlines()
     assert lines[2] == "unit: in, from the file (the 3MF model's unit, millimetres where it states none)"
     assert lines[3] == "size: 2 x 1 x 0.5 in = 50.8 x 25.4 x 12.7 mm"
-    lines = run("info", stl).stdout.splitlines()
+    lines = run_cli("info", stl).stdout.splitlines()
     assert lines[2] == "unit: mm, assumed (STL files carry no unit; render --units sets it)"
     assert lines[3] == "size: 2 x 1 x 0.5 mm"
-    data = json.loads(run("info", model, "--json").stdout)
+    data = json.loads(run_cli("info", model, "--json").stdout)
     assert (data["unit"], data["unit_assumed"], data["size"]) == ("in", False, [2.0, 1.0, 0.5])
     np.testing.assert_allclose(data["size_mm"], [50.8, 25.4, 12.7])
-    assert json.loads(run("info", stl, "--json").stdout)["unit_assumed"] is True
+    assert json.loads(run_cli("info", stl, "--json").stdout)["unit_assumed"] is True
 
 
 # -- the models of the report: featuretype in STEP (metres) and STL (inches) ---------------------
@@ -469,19 +469,19 @@ def test_featuretype_step_is_dimensioned_as_its_stl_in_inches(
 def test_featuretype_step_from_the_command_line(featuretype, tmp_path, shared_models):
     path = tmp_path / "f.svg"
     step = shared_models / "trimesh" / "featuretype.STEP"
-    proc = run("render", step, "-o", path, "--view", "top", "--ortho", "--dimensions")
+    proc = run_cli("render", step, "-o", path, "--view", "top", "--ortho", "--dimensions")
     assert proc.returncode == 0 and proc.stderr == "", proc.stderr
     assert svg_texts(path) == ["127", "63.5", "8× Ø 11.1", "8× Ø 6.8"]
     # 1:1 lays the page out as large as the part: as the STL in inches does
     pages = []
     for model, units in ((step, []), (featuretype[1], ["--units", "in"])):
         scaled = tmp_path / "scaled.svg"
-        proc = run("render", model, "-o", scaled, "--view", "top", "--scale", "1:1", *units)
+        proc = run_cli("render", model, "-o", scaled, "--view", "top", "--scale", "1:1", *units)
         assert proc.returncode == 0, proc.stderr
         root = ET.parse(scaled).getroot()
         pages.append([float(root.get(k).removesuffix("mm")) for k in ("width", "height")])
     assert pages[0] == pytest.approx(pages[1], rel=1e-5)
     assert pages[0][0] > 127.0  # the part and the fit's margin
-    lines = run("info", step).stdout.splitlines()
+    lines = run_cli("info", step).stdout.splitlines()
     assert lines[2] == "unit: m, from the file (OpenCASCADE meshes STEP in metres)"
     assert lines[3] == "size: 0.127 x 0.0635 x 0.034925 m = 127 x 63.5 x 34.925 mm"

@@ -9,22 +9,14 @@ line: ``render --help`` names every output, ``--scale`` on an iso view says it g
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import run_cli
 
 from blueprint import load_model
 from blueprint.scene.up import base_fraction, guess_up
-
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
-
-
-def run(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([str(BLUEPRINT), *map(str, args)], capture_output=True, text=True, timeout=300)
 
 
 def statue(up: int) -> trimesh.Trimesh:
@@ -81,27 +73,27 @@ def test_y_up_scans_stay_y_up(shared_models, name):
 def test_info_and_render_report_the_guess(tmp_path):
     path = tmp_path / "statue.obj"
     statue(2).export(path)
-    info = run("info", path)
+    info = run_cli("info", path)
     assert info.returncode == 0, info.stderr
     assert info.stdout.splitlines()[0].endswith("up z (guessed from a flat base at the bottom of z)")
-    assert json.loads(run("info", path, "--json").stdout)["up_reason"].startswith("guessed")
-    out = run("render", path, "-o", tmp_path / "s.png", "--size", "64", "64")
+    assert json.loads(run_cli("info", path, "--json").stdout)["up_reason"].startswith("guessed")
+    out = run_cli("render", path, "-o", tmp_path / "s.png", "--size", "64", "64")
     assert out.returncode == 0, out.stderr
     assert ", up z guessed from a flat base at the bottom of z, " in out.stdout
-    given = run("render", path, "-o", tmp_path / "s.png", "--size", "64", "64", "--up", "z")
+    given = run_cli("render", path, "-o", tmp_path / "s.png", "--size", "64", "64", "--up", "z")
     assert given.returncode == 0 and "guessed" not in given.stdout
 
 
 def test_bad_up_is_one_line(tmp_path):
     path = tmp_path / "statue.obj"
     statue(2).export(path)
-    proc = run("render", path, "-o", tmp_path / "s.png", "--up", "x")
+    proc = run_cli("render", path, "-o", tmp_path / "s.png", "--up", "x")
     assert proc.returncode == 2 and proc.stdout == ""
     assert len(proc.stderr.strip().splitlines()) == 1 and "'x'" in proc.stderr
 
 
 def test_render_help_names_every_output():
-    text = " ".join(run("render", "--help").stdout.split())
+    text = " ".join(run_cli("render", "--help").stdout.split())
     for suffix in (".png", ".svg", ".pdf", ".dxf", ".npz"):
         assert suffix in text
 
@@ -109,7 +101,7 @@ def test_render_help_names_every_output():
 def test_scale_on_an_iso_view_says_it_goes_orthographic(tmp_path):
     path = tmp_path / "statue.stl"
     statue(2).export(path)
-    proc = run(
+    proc = run_cli(
         "render", path, "-o", tmp_path / "s.svg", "--size", "64", "64", "--scale", "1:10", "--units", "m"
     )
     assert proc.returncode == 0, proc.stderr
@@ -117,7 +109,7 @@ def test_scale_on_an_iso_view_says_it_goes_orthographic(tmp_path):
         "blueprint: warning: --scale 1:10 draws the iso view orthographic "
         "(a drawing to scale has no perspective)\n"
     )
-    quiet = run(
+    quiet = run_cli(
         "render",
         path,
         "-o",

@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from blueprint import Camera, Model
-from blueprint.silhouette.gpu import GpuSilhouettes
+from blueprint.gpu_silhouettes import GpuSilhouettes
 
 SIZE = (160, 120)
 

@@ -10,11 +10,11 @@ from click.testing import CliRunner
 
 from blueprint import Camera, InputError, Model
 from blueprint.cli.silhouettes import silhouettes
+from blueprint.gpu_silhouettes import GpuSilhouettes, animate_silhouettes
 from blueprint.pipeline.media import write_video
 from blueprint.scene.camera import fit_camera
 from blueprint.silhouette import build_adjacency, classify_edges, draw_segments
 from blueprint.silhouette.deform import Animation
-from blueprint.silhouette.gpu import GpuSilhouettes, animate_silhouettes
 
 SIZE = (192, 144)
 
@@ -234,7 +234,7 @@ def test_command_draws_visible_and_hidden_edges_by_default(renderer, tmp_path):
 
     from blueprint import load_model
     from blueprint.examples import box
-    from blueprint.silhouette.gpu import render_silhouettes
+    from blueprint.gpu_silhouettes import render_silhouettes
 
     (p0, f0), (p1, f1) = box((-1, -1, -1), (1, 1, 1)), box((-0.5, -0.5, -3.0), (0.5, 0.5, -2.0))
     path = tmp_path / "boxes.stl"

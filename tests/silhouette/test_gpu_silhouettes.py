@@ -5,16 +5,17 @@ import functools
 import numpy as np
 import pytest
 import trimesh
+from helpers import project
 from scipy import ndimage
 
 from blueprint import InputError, Model, ShaderError, load_model
 from blueprint.examples import box, gearbox, prism
 from blueprint.gpu.shaders import build_program
+from blueprint.gpu_silhouettes import GpuSilhouettes, composite, render_silhouettes
+from blueprint.gpu_silhouettes.lines import LINES_FRAG, LINES_VERT
 from blueprint.scene.camera import fit_camera
 from blueprint.silhouette import BORDER, SILHOUETTE, build_adjacency, classify_edges, draw_segments
 from blueprint.silhouette.edgerecords import edge_records
-from blueprint.silhouette.gpu import GpuSilhouettes, composite, render_silhouettes
-from blueprint.silhouette.gpu.lines import LINES_FRAG, LINES_VERT
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
 
 SIZE = (384, 288)
@@ -89,11 +90,8 @@ def visible_cpu_pixels(model: Model, camera, size, depth0: np.ndarray) -> np.nda
     owner = np.repeat(np.arange(len(ends3)), count)
     t = (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count)) / np.repeat(count - 1, count)
     points = ends3[owner, 0] + t[:, None] * (ends3[owner, 1] - ends3[owner, 0])
-    homogeneous = np.c_[points, np.ones(len(points))]
-    clip = homogeneous @ (camera.projection_matrix() @ camera.view_matrix()).T
-    x = np.floor((clip[:, 0] / clip[:, 3] + 1) * 0.5 * w).astype(int)
-    y = np.floor((1 - clip[:, 1] / clip[:, 3]) * 0.5 * h).astype(int)
-    eye = -(homogeneous @ camera.view_matrix().T)[:, 2]
+    x, y = np.floor(project(points, camera, size=size)).astype(int).T
+    eye = -(points @ camera.view_matrix()[2, :3] + camera.view_matrix()[2, 3])
     inside = (x >= 0) & (x < w) & (y >= 0) & (y < h)
     x, y, eye = x[inside], y[inside], eye[inside]
     near, far = camera.near, camera.far

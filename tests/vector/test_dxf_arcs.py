@@ -3,7 +3,7 @@ circle; a hexagon stays a polyline."""
 
 import numpy as np
 import pytest
-from vector_helpers import project
+from helpers import project
 
 from blueprint.examples import assemble, prism
 from blueprint.scene.camera import Camera
@@ -21,9 +21,7 @@ def _dxf(renderer, tmp_path, sides):
     drawing = draw_vector(model, camera, SIZE, renderer=renderer)
     doc = ezdxf.readfile(save_drawing(tmp_path / f"can{sides}.dxf", drawing))
     # the rim's projected radius and centre, in the DXF's y-up pixels
-    rim = project(
-        np.array([[0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]), camera.view_matrix(), camera.projection_matrix(), SIZE
-    )
+    rim = project(np.array([[0.0, 1.0, 0.0], [1.0, 1.0, 0.0]]), camera, size=SIZE)
     centre = np.array([rim[0, 0], SIZE[1] - rim[0, 1]])
     return doc.modelspace(), centre, float(np.linalg.norm(rim[1] - rim[0]))
 

@@ -10,6 +10,7 @@ from blueprint.scene.camera import Camera
 from blueprint.vector import draw_vector
 from blueprint.vector.lines import join_polylines, model_segments
 from blueprint.vector.occlusion import (
+    DepthTest,
     PixelLayers,
     classify_samples,
     draw_faces,
@@ -40,7 +41,7 @@ def _setup(renderer, model, camera):
     planes = face_planes(model, view)
     footprint = camera.pixel_angle(SIZE[1])
     got = gpu_levels(
-        renderer, model, camera, samples, planes, SIZE, max_layers=8, ortho=camera.ortho, footprint=footprint
+        renderer, model, camera, samples, planes, SIZE, max_layers=8, test=DepthTest(camera.ortho, footprint)
     )
     if got is None:
         pytest.skip(
@@ -70,8 +71,7 @@ def test_faces_drawn_ahead_read_as_drawn_in_place(renderer, source, monkeypatch)
         planes,
         SIZE,
         max_layers=8,
-        ortho=camera.ortho,
-        footprint=footprint,
+        test=DepthTest(camera.ortho, footprint),
         drawn=drawn,
     )
     assert ahead.layers == in_place.layers
@@ -91,7 +91,8 @@ def test_gpu_levels_equal_the_cpu_reference(renderer, source, ortho):
         pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), len(faces), *SIZE[::-1]
     )
     assert got.layers == len(faces)
-    cpu = classify_samples(samples, peeled, planes, camera.ortho, footprint)
+    test = DepthTest(camera.ortho, footprint)
+    cpu = classify_samples(samples, peeled, planes, test)
     assert len(cpu) > 5000 and len(set(cpu.tolist())) >= 5
     np.testing.assert_array_equal(got.level, cpu)
     # the crease check from the faces the pass saw to either side of the lines
@@ -104,10 +105,9 @@ def test_gpu_levels_equal_the_cpu_reference(renderer, source, ortho):
         got.sides[rows, 1],
         planes,
         model.face_part,
-        ortho,
-        footprint,
+        test,
     )
-    cpu_final = verify_creases(samples, cpu, peeled, planes, model.face_part, camera.ortho, footprint)
+    cpu_final = verify_creases(samples, cpu, peeled, planes, model.face_part, test)
     np.testing.assert_array_equal(gpu_final, cpu_final)
 
 

@@ -5,12 +5,12 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
+from helpers import project
 from vector_helpers import (
     SVG,
     box_edges,
     boxes_in_front,
     point_segment_distance,
-    project,
     split_at_corners,
 )
 

@@ -4,13 +4,12 @@ and pictures, from the command line too."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import run_cli
 from PIL import Image
 from vector_helpers import SVG
 
@@ -20,7 +19,6 @@ from blueprint.vector import LineStyle, draw_vector, load_vector_style, save_dra
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "lines.toml"
-BLUEPRINT = Path(sys.executable).parent / "blueprint"
 
 
 def test_the_example_file():
@@ -96,11 +94,7 @@ def test_svg_strokes_each_level_as_the_file_says(renderer, tmp_path):
 def test_command_line(tmp_path):
     model = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
     svg = tmp_path / "g.svg"
-    done = subprocess.run(
-        [BLUEPRINT, "render", model, "-o", svg, "--size", "96", "72", "--style", EXAMPLE],
-        capture_output=True,
-        text=True,
-    )
+    done = run_cli("render", model, "-o", svg, "--size", "96", "72", "--style", EXAMPLE)
     assert done.returncode == 0, done.stderr
     assert 'stroke="#1d4f91"' in svg.read_text()
 
@@ -110,11 +104,7 @@ def test_a_picture_takes_the_file_too(tmp_path):
     colour (the darkest pixels), hidden ones in level 1's at its opacity."""
     model = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
     png = tmp_path / "g.png"
-    done = subprocess.run(
-        [BLUEPRINT, "render", model, "-o", png, "--size", "256", "192", "--style", EXAMPLE],
-        capture_output=True,
-        text=True,
-    )
+    done = run_cli("render", model, "-o", png, "--size", "256", "192", "--style", EXAMPLE)
     assert done.returncode == 0, done.stderr
     image = np.asarray(Image.open(png).convert("RGB")).astype(int)
     assert (image[0] == 255).all()  # paper "#ffffff" along the top margin
@@ -131,9 +121,7 @@ def test_a_picture_refuses_a_bad_file_in_one_line(tmp_path):
     bad = tmp_path / "bad.toml"
     bad.write_text("[[levels]]\nwidth = 'wide'\n")
     png = tmp_path / "g.png"
-    done = subprocess.run(
-        [BLUEPRINT, "render", model, "-o", png, "--style", bad], capture_output=True, text=True
-    )
+    done = run_cli("render", model, "-o", png, "--style", bad)
     assert done.returncode == 2 and not png.exists()
     assert done.stderr.strip().count("\n") == 0
     assert f"{bad}: levels 0: width must be a number" in done.stderr, done.stderr

@@ -6,7 +6,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from vector_helpers import SVG, parse_path, project
+from helpers import project
+from vector_helpers import SVG, parse_path
 
 from blueprint.compose.glyphs import Glyphs
 from blueprint.examples import assemble, box

@@ -83,14 +83,6 @@ def point_segment_distance(points: np.ndarray, segments: np.ndarray) -> np.ndarr
     return np.linalg.norm(rel - t[..., None] * d, axis=-1)
 
 
-def project(points: np.ndarray, view: np.ndarray, projection: np.ndarray, size) -> np.ndarray:
-    """Model points (N, 3) to pixels (N, 2), y down."""
-    homogeneous = np.concatenate([points, np.ones((len(points), 1))], axis=1)
-    clip = homogeneous @ (projection @ view).T
-    ndc = clip[:, :2] / clip[:, 3:]
-    return np.stack([(ndc[:, 0] + 1) * 0.5 * size[0], (1 - ndc[:, 1]) * 0.5 * size[1]], axis=1)
-
-
 def box_edges(lo, hi) -> np.ndarray:
     """The 12 edges (12, 2, 3) of an axis-aligned box."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import project
 
 from blueprint import VIEWS, Camera, InputError, Model
 from blueprint.cli import STYLE_NAMES
@@ -20,12 +21,6 @@ def _model(up: str = "y") -> Model:
     return Model.from_arrays(
         positions, np.concatenate([faces, faces + 8]), np.repeat([0, 1], 12), ("left", "right"), up=up
     )
-
-
-def _project(camera: Camera, point) -> np.ndarray:
-    """Window position (pixels from the centre, x right, y up) per pixel of image height 1."""
-    clip = camera.projection_matrix() @ camera.view_matrix() @ np.append(np.asarray(point, float), 1.0)
-    return clip[:3] / clip[3]
 
 
 def test_start_is_exactly_the_fitted_named_view():
@@ -131,7 +126,7 @@ def test_pan_moves_the_model_with_the_mouse():
         height = 400
         pivot = state.camera(model, 1.5).target
         state.pan_by(100, -60, height)  # right and up on the screen
-        ndc = _project(state.camera(model, 1.5), pivot)
+        ndc = project(pivot, state.camera(model, 1.5))
         # NDC spans the window: pixels = ndc * height / 2 in y, ndc * width / 2 in x
         assert ndc[0] * 1.5 * height / 2 == pytest.approx(100)
         assert ndc[1] * height / 2 == pytest.approx(60)

@@ -20,7 +20,7 @@ from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
-from blueprint.scene.dimension import UNITS_MM, dimension_margin, screen_points
+from blueprint.scene.dimension import UNITS_MM, dimension_margin
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
@@ -195,7 +195,7 @@ def _crop_boxes(drawn: Model, cameras: dict[str, Camera], cell: tuple[int, int])
     used = drawn.positions[np.unique(drawn.faces)].astype(np.float64)
     boxes = {}
     for name, cam in cameras.items():
-        px = screen_points(used, cam.view_matrix(), cam.projection_matrix(), cell)
+        px = cam.to_pixels(used, cell)
         lo = np.clip(np.floor(px.min(axis=0)) - _CROP_PAD, 0, cell)
         hi = np.clip(np.ceil(px.max(axis=0)) + _CROP_PAD, 0, cell)
         boxes[name] = np.array([lo, hi])

@@ -1,5 +1,5 @@
 """Silhouette pictures and videos from a model file: ``blueprint silhouettes`` over the Python
-API. A module of its own so that the GPU silhouette methods (``blueprint.silhouette.gpu`` and
+API. A module of its own so that the GPU silhouette methods (``blueprint.gpu_silhouettes`` and
 the operations it declares) load for this workflow only, not with every drawing."""
 
 from __future__ import annotations
@@ -17,16 +17,16 @@ from blueprint.api.options import DrawOptions, takes_options
 from blueprint.api.renderer import Renderer
 from blueprint.errors import InputError
 from blueprint.export.writers import WRITERS, Kind
-from blueprint.scene.camera import VIEWS
-from blueprint.scene.model import Model
-from blueprint.settings import FRAME_LIMIT
-from blueprint.silhouette.gpu import (
+from blueprint.gpu_silhouettes import (
     DEFAULT_LAYERS,
     DEFAULT_METHOD,
     MAX_LAYERS,
     animate_silhouettes,
     render_silhouettes,
 )
+from blueprint.scene.camera import VIEWS
+from blueprint.scene.model import Model
+from blueprint.settings import FRAME_LIMIT
 
 __all__ = ["render_silhouettes_file"]
 
@@ -53,7 +53,7 @@ def render_silhouettes_file(
     """From a model (file or ``Model``) to a PNG of its silhouettes or, with
     ``animate`` (``twist`` or ``wave``), to an MP4 of ``frames`` frames of them as the model
     deforms, splitting in two after ``split_at`` of the animation (see
-    ``blueprint.silhouette.gpu.render_silhouettes`` and ``animate_silhouettes``). ``options``
+    ``blueprint.gpu_silhouettes.render_silhouettes`` and ``animate_silhouettes``). ``options``
     (``DrawOptions``, its fields ``size``, ``view``, ``azimuth``, ``elevation``, ``fov``,
     ``ortho``, ``up``, ``include`` and ``exclude`` keywords too) place the camera and load the
     model. Arguments are checked before the model is loaded or the GPU touched.

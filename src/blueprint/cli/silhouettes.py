@@ -12,8 +12,8 @@ import click
 from blueprint.cli.options import camera_options, progress_bar
 from blueprint.cli.shell import run
 from blueprint.errors import printable
+from blueprint.gpu_silhouettes import DEFAULT_LAYERS, DEFAULT_METHOD, STILL_METHODS
 from blueprint.silhouette.deform import KINDS
-from blueprint.silhouette.gpu import DEFAULT_LAYERS, DEFAULT_METHOD, STILL_METHODS
 
 DEFAULT_SIZE = (800, 600)
 

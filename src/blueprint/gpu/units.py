@@ -6,6 +6,6 @@ SELECTED = 2  # part flags of a capture of chosen parts (render.capture)
 KBUFFER = 3  # the k-buffer surface being unpacked into the G-buffer (render.capture)
 CORNERS = 4  # face corners of triangle-ID silhouettes (the edges operation)
 INPUTS = 5  # a pass's inputs, from here up (pipeline executor, compositor)
-# GPU silhouettes (silhouette.gpu) are frames of their own, never interleaved with pipeline
+# GPU silhouettes (gpu_silhouettes) are frames of their own, never interleaved with pipeline
 # passes: their ID buffer and then their tables take the corner and input units
 SILHOUETTE_IDS = CORNERS

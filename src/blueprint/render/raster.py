@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.scene.camera import clip_to_pixels
+
 RASTER_COMP = "blueprint.render:glsl/abuffer_raster.comp"
 # pixels along a tile's side, and threads a triangle's tiles are walked by (abuffer_raster.comp)
 TILE, ROWS = 16, 8
@@ -57,7 +59,7 @@ class ComputeRaster:
         w = clip[:, 3]
         if not (w > 0.0).all():
             return False
-        window = (clip[:, :2] / w[:, None] * 0.5 + 0.5) * np.asarray(size, float)
+        window = clip_to_pixels(clip, size, origin="bottom")
         return bool(np.abs(window).max() < REACH)
 
     def room(self, size: tuple[int, int], triangles: int) -> int:

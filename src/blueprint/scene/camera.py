@@ -1,6 +1,10 @@
-"""Cameras: named views, auto-fit to a model, OpenGL view and projection matrices.
+"""Cameras: named views, auto-fit to a model, OpenGL view and projection matrices, and the
+projection of model points to pixels.
 
-``fit_camera`` is the one way a drawing gets its camera from a view name and an image size.
+``fit_camera`` is the one way a drawing gets its camera from a view name and an image size;
+``to_pixels`` (``Camera.to_pixels``) the one way a point finds its pixel, and ``transform`` with
+``clip_to_pixels`` its two steps, for code that works between them (clipping at the near plane,
+lighting in eye space).
 """
 
 from __future__ import annotations
@@ -35,6 +39,80 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.cross`` of two 3-vectors, the same products and differences, without its general
     machinery, which every new camera of a turntable's frames pays twice."""
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """Points through a matrix acting on column vectors, as homogeneous points of w = 1.
+
+    Parameters
+    ----------
+    points : np.ndarray
+        (..., 3) points.
+    matrix : np.ndarray
+        (4, 4): ``view`` (model to eye), ``projection`` (eye to clip) or their product.
+
+    Returns
+    -------
+    np.ndarray
+        (..., 4) float64 transformed points (clip coordinates through a projection).
+    """
+    points = np.asarray(points, np.float64)
+    homogeneous = np.concatenate([points, np.ones((*points.shape[:-1], 1))], axis=-1)
+    return homogeneous @ np.asarray(matrix, np.float64).T
+
+
+def clip_to_pixels(
+    clip: np.ndarray, size: tuple[int, int], *, depth: bool = False, origin: str = "top"
+) -> np.ndarray:
+    """Clip coordinates to pixels of a picture ``size`` (width, height) pixels large.
+
+    Pixels run x right from the left edge and y down from the top edge (row 0 at the top, as the
+    drawings have them; ``origin="bottom"``: y up from the bottom edge, OpenGL's window
+    coordinates), a pixel's centre at +0.5. The perspective divide takes w = 1 where w is 0 (or
+    not a number), so points in the eye's plane stay finite; points behind the eye (w < 0) come
+    out mirrored, for callers that drop them.
+
+    Parameters
+    ----------
+    clip : np.ndarray
+        (..., 4) clip coordinates.
+    size : tuple[int, int]
+        Width and height in pixels.
+    depth : bool
+        Also return each point's NDC z (-1 at the near plane, 1 at the far one).
+    origin : str
+        ``"top"`` or ``"bottom"``: the edge that y counts from.
+
+    Returns
+    -------
+    np.ndarray
+        (..., 2) float64 pixels x, y; with ``depth``, (..., 3): x, y and NDC z.
+    """
+    if origin not in ("top", "bottom"):
+        raise ValueError(f"origin must be 'top' or 'bottom', got {origin!r}")
+    clip = np.asarray(clip, np.float64)
+    w = clip[..., 3:4]
+    ndc = clip[..., : 3 if depth else 2] / np.where(np.abs(w) > 0, w, 1.0)
+    width, height = size
+    x = (ndc[..., 0] + 1.0) * 0.5 * width
+    y = ((1.0 - ndc[..., 1]) if origin == "top" else (ndc[..., 1] + 1.0)) * 0.5 * height
+    return np.stack([x, y, ndc[..., 2]] if depth else [x, y], axis=-1)
+
+
+def to_pixels(
+    points: np.ndarray,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+    *,
+    depth: bool = False,
+) -> np.ndarray:
+    """(..., 3) model points to (..., 2) float64 pixels (with ``depth``, (..., 3) with NDC z)
+    seen through ``view`` and ``projection`` ((4, 4), OpenGL conventions, column vectors) on a
+    picture of ``size`` (width, height) pixels: ``transform`` by their product, then
+    ``clip_to_pixels`` (x right, y down from the top-left corner)."""
+    mvp = np.asarray(projection, np.float64) @ np.asarray(view, np.float64)
+    return clip_to_pixels(transform(points, mvp), size, depth=depth)
 
 
 @dataclass(frozen=True)
@@ -101,6 +179,12 @@ class Camera:
             m[2, 2], m[2, 3] = -(f + n) / (f - n), -2 * f * n / (f - n)
             m[3, 2] = -1
         return m
+
+    def to_pixels(self, points: np.ndarray, size: tuple[int, int], *, depth: bool = False) -> np.ndarray:
+        """(..., 3) model points to (..., 2) float64 pixels of a picture of ``size`` (width,
+        height): x right, y down from the top-left corner; with ``depth``, (..., 3) with NDC z.
+        See ``to_pixels``."""
+        return to_pixels(points, self.view_matrix(), self.projection_matrix(), size, depth=depth)
 
     def pixel_angle(self, height_px: int) -> float:
         """Size of one pixel at unit distance (perspective) or in model units (orthographic)."""

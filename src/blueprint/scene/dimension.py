@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from blueprint.scene.camera import clip_to_pixels, transform
 from blueprint.scene.sheet import Marks, Text
 from blueprint.scene.units import UNITS_MM
 
@@ -24,7 +25,6 @@ __all__ = [
     "format_value",
     "linear_dimension",
     "overall_dimensions",
-    "screen_points",
 ]
 
 # ISO 129 measures in millimetres on paper: the gap between the part and an extension line,
@@ -111,14 +111,6 @@ def linear_dimension(
     return _marks(lines, [Text(float(middle[0]), float(middle[1]), height, text, "middle", angle)])
 
 
-def screen_points(points: np.ndarray, view: np.ndarray, projection: np.ndarray, size) -> np.ndarray:
-    """(N, 3) model points to (N, 2) pixels (x right, y down) through ``view`` and ``projection``."""
-    w, h = size
-    clip = np.c_[np.asarray(points, np.float64), np.ones(len(points))] @ (projection @ view).T
-    ndc = clip[:, :2] / clip[:, 3:4]
-    return np.c_[(ndc[:, 0] + 1) * 0.5 * w, (1 - ndc[:, 1]) * 0.5 * h]
-
-
 def overall_dimensions(
     positions: np.ndarray,
     view: np.ndarray,
@@ -133,12 +125,9 @@ def overall_dimensions(
     The values come from the vertices in the camera's frame, exact, not from the pixels, in mm
     (``mm_per_model``); ``per_mm`` pixels a mm of ISO 129's measures.
     """
-    eye = np.c_[positions, np.ones(len(positions))] @ view.T
+    eye = transform(positions, view)
     lo, hi = eye[:, :2].min(axis=0), eye[:, :2].max(axis=0)
-    corners = np.array([[lo[0], lo[1], 0, 1], [hi[0], hi[1], 0, 1]]) @ projection.T
-    ndc = corners[:, :2] / corners[:, 3:4]
-    w, h = size
-    px = np.c_[(ndc[:, 0] + 1) * 0.5 * w, (1 - ndc[:, 1]) * 0.5 * h]
+    px = clip_to_pixels(transform(np.array([[lo[0], lo[1], 0.0], [hi[0], hi[1], 0.0]]), projection), size)
     left, right = sorted(px[:, 0])
     top, bottom = sorted(px[:, 1])
     width = format_value(float(hi[0] - lo[0]) * mm_per_model)

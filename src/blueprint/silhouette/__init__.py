@@ -8,7 +8,7 @@ The method has two timed stages, kept as separate calls so a benchmark can time 
   camera, followed by drawing with :func:`draw_segments`.
 
 :func:`silhouette_image` chains all three. The GPU method, triangle-ID silhouettes, is
-:mod:`blueprint.silhouette.gpu`: it draws with the renderer, so it lies in a layer above this
+:mod:`blueprint.gpu_silhouettes`: it draws with the renderer, so it lies in a layer above this
 package's (numpy only) and is imported by name where it is used.
 """
 

@@ -7,7 +7,7 @@ cut are duplicated, so the pieces open along a jagged border. That is the case t
 vertex-storage method handles with no preprocessing at all (its per-face positions keep their
 layout), while the object-space method must weld, connect and orient from scratch.
 
-Everything here is GPU-free: an animation hands out positions; :class:`blueprint.silhouette.gpu.
+Everything here is GPU-free: an animation hands out positions; :class:`blueprint.gpu_silhouettes.
 SoupMesh` uploads them.
 """
 

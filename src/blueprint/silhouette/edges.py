@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.scene.camera import clip_to_pixels, transform
 from blueprint.scene.normals import lone_creases
 
 from .mesh import Adjacency
@@ -132,47 +133,14 @@ def classify_edges(
     normals = adj.face_normals
     normal_ok = (normals[:, 0] != 0) | (normals[:, 1] != 0) | (normals[:, 2] != 0)
     front = _front_facing(adj, view, projection) & normal_ok
-    back = ~front & normal_ok
-
-    edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
-    num_edges = len(adj.edges)
-    count = np.bincount(edge, minlength=num_edges)
-    # Incidences are sorted by edge then face, so each edge's first two faces sit at its start.
-    start = np.cumsum(count) - count
-    f0 = np.where(count >= 1, face[np.minimum(start, len(face) - 1)], -1)
-    f1 = np.where(count >= 2, face[np.minimum(start + 1, len(face) - 1)], -1)
-
+    count, f0, f1 = _first_two_faces(adj)
     # The lowest-index front and back face of every edge; "no face" stays at len(faces).
-    no_face = len(adj.faces)
-    first_front = np.full(num_edges, no_face, dtype=np.int64)
-    first_back = np.full(num_edges, no_face, dtype=np.int64)
-    # incidences run by edge, then face: an edge's first front (back) one is its lowest
-    for first, facing in ((first_front, front[face]), (first_back, back[face])):
-        e, f = edge[facing], face[facing]
-        lead = np.r_[True, e[1:] != e[:-1]] if len(e) else np.zeros(0, bool)
-        first[e[lead]] = f[lead]
-    silhouette = (first_front < no_face) & (first_back < no_face)
-
+    first_front, first_back = _first_face(adj, front), _first_face(adj, ~front & normal_ok)
+    silhouette = (first_front < len(adj.faces)) & (first_back < len(adj.faces))
     border = count == 1
-    # the angle at every two-face edge, once: for the creases (those that are no silhouette)
-    # and for the lone-crease test (every sharp one, silhouette or not)
-    sharp = np.flatnonzero(count == 2)
-    both_ok = normal_ok[f0[sharp]] & normal_ok[f1[sharp]]
-    limit = np.cos(np.radians(crease_angle))
-    cos_angle = np.einsum("ij,ij->i", normals[f0[sharp]], normals[f1[sharp]])
-    crease = np.zeros(num_edges, dtype=bool)
-    crease[sharp] = both_ok & (cos_angle < limit) & ~silhouette[sharp]
+    crease = _creases(adj, count, f0, f1, normal_ok, silhouette, crease_angle)
 
-    # a lone crease edge is a scan's noise, as the raster drawing's normals take it
-    # (scene.normals.lone_creases), whether or not this view makes it a silhouette
-    sharp = sharp[~(both_ok & (cos_angle >= limit))]
-    anchored = np.zeros(len(adj.positions), bool)
-    anchored[adj.edges[count != 2].ravel()] = True
-    alone = np.zeros(num_edges, bool)
-    alone[sharp] = lone_creases(adj.edges[sharp], anchored)
-    crease &= ~alone
-
-    kind = np.zeros(num_edges, dtype=np.uint8)
+    kind = np.zeros(len(adj.edges), dtype=np.uint8)
     kind[crease] = CREASE
     kind[border] = BORDER
     kind[silhouette] = SILHOUETTE
@@ -180,20 +148,63 @@ def classify_edges(
     side_faces[silhouette] = np.stack([first_front, first_back], axis=1)[silhouette]
 
     chosen = np.flatnonzero(kind)
-    model = adj.positions[adj.edges[chosen]]
-    homogeneous = np.concatenate([model, np.ones(model.shape[:2] + (1,))], axis=2)
-    clip = homogeneous @ (projection @ view).T
+    model, pixels, keep = _projected(adj.positions[adj.edges[chosen]], view, projection, (width, height))
+    chosen = chosen[keep]
+    return EdgeSet(segments3d=model, segments2d=pixels, kind=kind[chosen], faces=side_faces[chosen])
+
+
+def _first_two_faces(adj: Adjacency) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(E,) the number of faces of every edge, and its first two faces (-1 where it has fewer)."""
+    edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
+    count = np.bincount(edge, minlength=len(adj.edges))
+    # Incidences are sorted by edge then face, so each edge's first two faces sit at its start.
+    start = np.cumsum(count) - count
+    f0 = np.where(count >= 1, face[np.minimum(start, len(face) - 1)], -1)
+    f1 = np.where(count >= 2, face[np.minimum(start + 1, len(face) - 1)], -1)
+    return count, f0, f1
+
+
+def _first_face(adj: Adjacency, chosen: np.ndarray) -> np.ndarray:
+    """(E,) the lowest-index face of every edge among the ``chosen`` faces (F,) bool; "no
+    face" is len(faces)."""
+    edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
+    first = np.full(len(adj.edges), len(adj.faces), dtype=np.int64)
+    # incidences run by edge, then face: an edge's first chosen one is its lowest
+    picked = chosen[face]
+    e, f = edge[picked], face[picked]
+    lead = np.r_[True, e[1:] != e[:-1]] if len(e) else np.zeros(0, bool)
+    first[e[lead]] = f[lead]
+    return first
+
+
+def _creases(adj, count, f0, f1, normal_ok, silhouette, crease_angle: float) -> np.ndarray:
+    """(E,) bool: two-face edges, no silhouette, whose faces' normals differ by more than
+    ``crease_angle`` degrees, lone crease edges left out."""
+    normals = adj.face_normals
+    # the angle at every two-face edge, once: for the creases (those that are no silhouette)
+    # and for the lone-crease test (every sharp one, silhouette or not)
+    sharp = np.flatnonzero(count == 2)
+    both_ok = normal_ok[f0[sharp]] & normal_ok[f1[sharp]]
+    limit = np.cos(np.radians(crease_angle))
+    cos_angle = np.einsum("ij,ij->i", normals[f0[sharp]], normals[f1[sharp]])
+    crease = np.zeros(len(adj.edges), dtype=bool)
+    crease[sharp] = both_ok & (cos_angle < limit) & ~silhouette[sharp]
+
+    # a lone crease edge is a scan's noise, as the raster drawing's normals take it
+    # (scene.normals.lone_creases), whether or not this view makes it a silhouette
+    sharp = sharp[~(both_ok & (cos_angle >= limit))]
+    anchored = np.zeros(len(adj.positions), bool)
+    anchored[adj.edges[count != 2].ravel()] = True
+    alone = np.zeros(len(adj.edges), bool)
+    alone[sharp] = lone_creases(adj.edges[sharp], anchored)
+    return crease & ~alone
+
+
+def _projected(model: np.ndarray, view, projection, size) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments (N, 2, 3) clipped to the near plane (and to w > 0) and projected: the kept
+    model endpoints (M, 2, 3), their pixels (M, 2, 2) and the indices (M,) of the kept rows."""
+    clip = transform(model, projection @ view)
     # Near plane of an OpenGL frustum: z_clip >= -w_clip; then keep the divide safe.
     clip, model, keep = _clip(clip, model, clip[..., 2] + clip[..., 3])
-    chosen = chosen[keep]
-    clip, model, keep = _clip(clip, model, clip[..., 3] - _MIN_W)
-    chosen = chosen[keep]
-
-    ndc = clip[..., :2] / clip[..., 3:]
-    pixels = np.stack([(ndc[..., 0] + 1.0) * 0.5 * width, (1.0 - ndc[..., 1]) * 0.5 * height], -1)
-    return EdgeSet(
-        segments3d=model,
-        segments2d=pixels,
-        kind=kind[chosen],
-        faces=side_faces[chosen],
-    )
+    clip, model, kept = _clip(clip, model, clip[..., 3] - _MIN_W)
+    return model, clip_to_pixels(clip, size), keep[kept]

@@ -15,7 +15,8 @@ import numpy as np
 
 from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.glyphs.marks import dimension_glyph_marks
-from blueprint.scene.dimension import diameter_marks, format_value, overall_dimensions, screen_points
+from blueprint.scene.camera import to_pixels
+from blueprint.scene.dimension import diameter_marks, format_value, overall_dimensions
 from blueprint.scene.model import Model
 from blueprint.scene.sheet import Marks
 
@@ -147,7 +148,7 @@ def dimension_marks(
     if circles is None:
         circles = find_circles(model, view, projection, size, crease_angle)
     for circle in circles:
-        centre = screen_points(circle.centre[None], view, projection, size)[0]
+        centre = to_pixels(circle.centre[None], view, projection, size)[0]
         radius = circle.radius / model_per_px
         value = format_value(2.0 * circle.radius * mm_per_model)
         places = seen.setdefault(value, [])

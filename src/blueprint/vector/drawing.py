@@ -49,6 +49,7 @@ from .chain import chain_pieces
 from .dxf import write_dxf
 from .lines import join_polylines, model_segments
 from .occlusion import (
+    DepthTest,
     Pieces,
     PixelLayers,
     classify_samples,
@@ -78,8 +79,8 @@ log = logging.getLogger("blueprint")
 __all__ = [
     "FORMATS",
     "UNITS_MM",
-    "Page",
     "VectorDrawing",
+    "Page",
     "VectorOptions",
     "draw_lines",
     "draw_sheet",
@@ -388,28 +389,112 @@ def draw_lines(
     layers: Layers | None = None,
 ) -> VectorDrawing:
     """``draw_vector`` with its options as one value, checked already."""
-    view, style, max_layers = options.view, options.style, options.max_layers
-    crease_angle, line_width, highlight = options.crease_angle, options.line_width, options.highlight
-    scale, units, title, reveal = options.scale, options.units, options.title, options.reveal
-    intersections, spacing, depth_tolerance = options.intersections, options.spacing, options.depth_tolerance
-    tolerance, section, dimensions = options.tolerance, options.section, options.dimensions
-    glyphs, shade, shade_opacity = options.glyphs, options.shade, options.shade_opacity
     seconds: dict[str, float] = {}
-    shaded_parts = None if shade is None else designated_parts(model, shade)
+    shaded_parts = None if options.shade is None else designated_parts(model, options.shade)
+    glyphs = options.glyphs
     if glyphs is not None:
         # glyphs and dimensions load with the drawings that have them, not with every drawing
         from blueprint.compose.glyphs import Glyphs, load_glyphs
 
         if not isinstance(glyphs, Glyphs):
             glyphs = load_glyphs(glyphs)
-    vstyle = vector_style(style)
-    chosen = _highlight(highlight, model)
+    vstyle = vector_style(options.style)
+    chosen = _highlight(options.highlight, model)
+    frame = _frame(model, camera, size, renderer, options, layers, chosen)
+    camera, size = frame.camera, frame.size
+    page = _page(size, camera, options.scale, options.units, model)
+
+    # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
+    drawn = None if layers is not None else draw_faces(renderer, model, camera, size, frame.max_layers)
+    clock = time.perf_counter()
+    with model.holding_corners():  # the intersections and the faces' planes read every corner
+        segments = model_segments(
+            model, frame.view, frame.projection, size, options.crease_angle, options.intersections, renderer
+        )
+        lines = join_polylines(segments)
+        samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing)
+        seconds["lines"] = time.perf_counter() - clock
+
+        clock = time.perf_counter()
+        planes = face_planes(model, frame.view)
+    occlusion = _Occlusion(renderer, model, frame, samples, planes, options, layers, drawn)
+    levels, count = occlusion.levels(clock, seconds)
+    behind = None
+    if shaded_parts is not None:
+        # the same count of surfaces in front, of the shaded parts' surfaces alone
+        only_shaded = planes.copy()
+        only_shaded[:-1][~shaded_parts[model.face_part]] = 0.0
+        behind = occlusion.in_front(only_shaded) > 0
+    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
+    pieces = _chained(pieces, count)
+    seconds["occlusion"] = time.perf_counter() - clock - seconds["peel"]
+
+    clock = time.perf_counter()
+    pieces = _simplified(pieces, options.tolerance)
+    seconds["simplify"] = time.perf_counter() - clock
+
+    hatching = _hatching(frame, options, page)
+    marks = _dimension_marks(model, frame, options, page)
+    shading = None
+    if shaded_parts is not None:
+        faces = np.flatnonzero(shaded_parts[model.face_part])
+        color = _shade_color(options.style)
+        shading = shaded_faces(model, faces, frame.view, frame.projection, size, color, options.shade_opacity)
+    glyph_drawing = None if glyphs is None else _glyph_lines(glyphs, model, frame, renderer, layers, seconds)
+    if page.scale is not None or options.dimensions:
+        warn_if_assumed(model, options.units)
+    return VectorDrawing(
+        width=size[0],
+        height=size[1],
+        points=pieces.points,
+        offsets=pieces.offsets,
+        part=pieces.part,
+        level=pieces.level,
+        part_names=tuple(model.part_names),
+        layers=count,
+        style=vstyle,
+        line_width=float(options.line_width),
+        page=page,
+        camera=camera,
+        highlight=chosen,
+        title=_title(options.title, model, camera, page),
+        section=hatching,
+        marks=marks,
+        glyphs=glyph_drawing,
+        shading=shading,
+        behind=pieces.behind if shading is not None else None,
+        name=Path(model.source).stem if model.source else "drawing",
+        seconds=seconds,
+    )
+
+
+@dataclass(frozen=True)
+class _Frame:
+    """A vector drawing's camera and size (width, height) in pixels, its (4, 4) float64 view
+    and projection matrices, and the layers it peels at most."""
+
+    camera: Camera
+    size: tuple[int, int]
+    view: np.ndarray
+    projection: np.ndarray
+    max_layers: int | None
+
+    @property
+    def ortho(self) -> bool:
+        return bool(np.isclose(self.projection[3, 3], 1.0))
+
+
+def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen) -> _Frame:
+    """The frame of a drawing: from the camera (fitted from ``options.view`` where None) at
+    ``size``, its layer cap found by depth masking where ``options.reveal`` asks; or from
+    ``layers`` already peeled."""
+    max_layers, reveal = options.max_layers, options.reveal
     if layers is None:
         w, h = check_size(size, 1, renderer.max_texture)
         if camera is None:
-            camera = fit_camera(model, (w, h), view)
-        view_m = np.asarray(camera.view_matrix(), np.float64)
-        proj = np.asarray(camera.projection_matrix(), np.float64)
+            camera = fit_camera(model, (w, h), options.view)
+        view = np.asarray(camera.view_matrix(), np.float64)
+        projection = np.asarray(camera.projection_matrix(), np.float64)
         if reveal is not None:
             max_layers = _revealing_layers(renderer, model, camera, (w, h), chosen, reveal, max_layers)
     elif reveal is not None:
@@ -417,112 +502,92 @@ def draw_lines(
     else:
         h, w = layers.depth.shape[1:]
         camera = camera or layers.camera
-        view_m, proj = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
-    size = (int(w), int(h))
-    page = _page(size, camera, scale, units, model)
+        view, projection = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
+    return _Frame(camera, (int(w), int(h)), view, projection, max_layers)
 
-    # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
-    drawn = None if layers is not None else draw_faces(renderer, model, camera, size, max_layers)
-    clock = time.perf_counter()
-    with model.holding_corners():  # the intersections and the faces' planes read every corner
-        segments = model_segments(model, view_m, proj, size, crease_angle, intersections, renderer)
-        lines = join_polylines(segments)
-        samples = sample_polylines(lines, view_m, proj, size, spacing)
-        seconds["lines"] = time.perf_counter() - clock
 
-        clock = time.perf_counter()
-        planes = face_planes(model, view_m)
-    ortho = bool(np.isclose(proj[3, 3], 1.0))
-    footprint = camera.pixel_angle(size[1])
-    on_gpu = None
-    if layers is None:
-        on_gpu = gpu_levels(
-            renderer,
-            model,
-            camera,
-            samples,
+class _Occlusion:
+    """Where a drawing's samples find the surfaces in front of them: the faces k-buffer read on
+    the GPU (``gpu_levels``) where the renderer can, else the layers' faces read back at the
+    pixels the tests probe (or the ``layers`` given) and classified on the CPU."""
+
+    def __init__(
+        self, renderer, model, frame: _Frame, samples, planes, options: VectorOptions, layers, drawn
+    ):
+        self.renderer, self.model, self.frame, self.samples = renderer, model, frame, samples
+        self.planes, self.layers, self.drawn = planes, layers, drawn
+        self.crease_angle = options.crease_angle
+        self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), options.depth_tolerance)
+        self.peeled: PixelLayers | None = None
+
+    def _on_gpu(self, planes):
+        frame = self.frame
+        return gpu_levels(
+            self.renderer,
+            self.model,
+            frame.camera,
+            self.samples,
             planes,
-            size,
-            max_layers=max_layers,
-            ortho=ortho,
-            footprint=footprint,
-            tolerance=depth_tolerance,
-            drawn=drawn,
+            frame.size,
+            max_layers=frame.max_layers,
+            test=self.test,
+            drawn=self.drawn,
         )
-    if on_gpu is not None:
-        count = on_gpu.layers
-        rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))
-        levels = drop_phantoms(
-            samples,
-            on_gpu.level,
-            rows,
-            on_gpu.sides[rows, 0],
-            on_gpu.sides[rows, 1],
-            planes,
-            model.face_part,
-            ortho,
-            footprint,
-            crease_angle,
-            depth_tolerance,
-        )
-        seconds["peel"] = on_gpu.peel_seconds
-        clock += on_gpu.peel_seconds
-    else:
-        if layers is None:
-            # occlusion needs only the layers' triangles, and only at the pixels it probes
-            pixels = probe_pixels(samples, size)
-            faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)
-            count = len(faces)
-            peeled = PixelLayers(pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w)
-        else:
-            count = len(layers.depth)
-            peeled = PixelLayers.from_layers(layers.triangle)
-        seconds["peel"] = time.perf_counter() - clock
-        clock = time.perf_counter()
-        levels = classify_samples(samples, peeled, planes, ortho, footprint, depth_tolerance)
-        levels = verify_creases(
-            samples,
-            levels,
-            peeled,
-            planes,
-            model.face_part,
-            ortho,
-            footprint,
-            crease_angle,
-            depth_tolerance,
-        )
-    behind = None
-    if shaded_parts is not None:
-        # the same count of surfaces in front, of the shaded parts' surfaces alone
-        only_shaded = planes.copy()
-        only_shaded[:-1][~shaded_parts[model.face_part]] = 0.0
+
+    def levels(self, clock: float, seconds: dict[str, float]) -> tuple[np.ndarray, int]:
+        """(S,) occlusion level of each sample (-1: left out) and the layers counted; the
+        seconds of the peel (of those since ``clock``) into ``seconds["peel"]``."""
+        samples, planes, part, test = self.samples, self.planes, self.model.face_part, self.test
+        on_gpu = None if self.layers is not None else self._on_gpu(planes)
         if on_gpu is not None:
-            # of the same faces k-buffer: nothing has drawn since
-            in_front = gpu_levels(
-                renderer,
-                model,
-                camera,
-                samples,
-                only_shaded,
-                size,
-                max_layers=max_layers,
-                ortho=ortho,
-                footprint=footprint,
-                tolerance=depth_tolerance,
-                drawn=drawn,
-            ).level
+            rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))
+            sides = on_gpu.sides[rows]
+            levels = drop_phantoms(
+                samples, on_gpu.level, rows, sides[:, 0], sides[:, 1], planes, part, test, self.crease_angle
+            )
+            seconds["peel"] = on_gpu.peel_seconds
+            return levels, on_gpu.layers
+        frame = self.frame
+        if self.layers is None:
+            # occlusion needs only the layers' triangles, and only at the pixels it probes
+            pixels = probe_pixels(samples, frame.size)
+            faces = self.renderer.triangles_at(
+                self.model, frame.camera, pixels, size=frame.size, max_layers=frame.max_layers
+            )
+            count = len(faces)
+            w, h = frame.size
+            self.peeled = PixelLayers(
+                pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), count, h, w
+            )
         else:
-            in_front = classify_samples(samples, peeled, only_shaded, ortho, footprint, depth_tolerance)
-        behind = in_front > 0
-    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
+            count = len(self.layers.depth)
+            self.peeled = PixelLayers.from_layers(self.layers.triangle)
+        seconds["peel"] = time.perf_counter() - clock
+        levels = classify_samples(samples, self.peeled, planes, test)
+        levels = verify_creases(samples, levels, self.peeled, planes, part, test, self.crease_angle)
+        return levels, count
+
+    def in_front(self, planes: np.ndarray) -> np.ndarray:
+        """(S,) surfaces in front of each sample of those with ``planes`` (as ``face_planes``),
+        after ``levels``, from the same layers: nothing has drawn since."""
+        if self.peeled is None:
+            return self._on_gpu(planes).level
+        return classify_samples(self.samples, self.peeled, planes, self.test)
+
+
+def _chained(pieces: Pieces, count: int) -> Pieces:
+    """Pieces of one part, level and side of the shading (of ``count`` levels) that meet end to
+    end joined into one."""
     key = (pieces.part.astype(np.int64) * (count + 1) + pieces.level) * 2 + pieces.behind
     points, offsets, first = chain_pieces(pieces.points, pieces.offsets, key)
-    pieces = Pieces(points, offsets, pieces.part[first], pieces.level[first], pieces.behind[first])
-    seconds["occlusion"] = time.perf_counter() - clock
+    return Pieces(points, offsets, pieces.part[first], pieces.level[first], pieces.behind[first])
 
-    clock = time.perf_counter()
+
+def _simplified(pieces: Pieces, tolerance: float) -> Pieces:
+    """The pieces simplified (Douglas-Peucker, ``tolerance`` pixels), those no longer than
+    ``_MIN_LENGTH_PX`` left out: lines along the view direction project to points, nothing to
+    draw."""
     points, offsets, _ = douglas_peucker(pieces.points, pieces.offsets, tolerance)
-    # lines along the view direction project to points: nothing to draw
     step = np.linalg.norm(np.diff(points, axis=0), axis=1) if len(points) > 1 else np.zeros(0)
     within = np.ones(len(step), bool)
     within[offsets[1:-1] - 1] = False  # steps between two polylines
@@ -534,76 +599,59 @@ def draw_lines(
     length[np.diff(offsets) < 2] = 0.0
     keep = length > _MIN_LENGTH_PX
     rows = np.repeat(keep, np.diff(offsets))
-    points = points[rows]
     offsets = np.r_[0, np.cumsum(np.diff(offsets)[keep])].astype(np.int64)
-    pieces = Pieces(points, offsets, pieces.part[keep], pieces.level[keep], pieces.behind[keep])
-    seconds["simplify"] = time.perf_counter() - clock
+    return Pieces(points[rows], offsets, pieces.part[keep], pieces.level[keep], pieces.behind[keep])
 
-    hatching = None
-    if section is not None:
-        spacing_px = (
-            SECTION_HATCH_MM / page.factor if page.unit == "mm" else hatch_spacing_px(size, line_width)
-        )
-        hatching = section_lines(section, view_m, proj, size, spacing_px)
 
-    marks = None
-    if dimensions:
-        if not camera.ortho:
-            raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
-        unit = page.model_unit or drawing_unit(model, units)
-        mm_per_px = page.factor if page.unit == "mm" else None
-        from .dimension import dimension_marks
-
-        marks = dimension_marks(model, view_m, proj, size, UNITS_MM[unit], mm_per_px, crease_angle)
-
-    shading = None
-    if shaded_parts is not None:
-        faces = np.flatnonzero(shaded_parts[model.face_part])
-        shading = shaded_faces(model, faces, view_m, proj, size, _shade_color(style), shade_opacity)
-
-    glyph_drawing = None
-    if glyphs is not None:
-        from .glyphs import glyph_lines
-
-        clock = time.perf_counter()
-        # the front surface is all the depth test of glyphs needs
-        front = (
-            layers
-            if layers is not None
-            else renderer.peel(model, camera, size=size, max_layers=1, normals=False)
-        )
-        depth = front.depth[0] if len(front.depth) else None
-        glyph_drawing = glyph_lines(glyphs, camera, size, depth)
-        seconds["glyphs"] = time.perf_counter() - clock
-
-    if page.scale is not None or dimensions:
-        warn_if_assumed(model, units)
+def _title(title: str | None, model: Model, camera: Camera, page: Page) -> str | None:
+    """The title given, or on a drawing to scale "<model> — <view> view — 1:50 (mm)"."""
     if title is None and page.scale is not None:
         name = Path(model.source).stem if model.source and model.source != "generated" else "model"
         title = f"{name} — {camera.name} view — {page.scale_label} ({page.model_unit})"
-    return VectorDrawing(
-        width=size[0],
-        height=size[1],
-        points=pieces.points,
-        offsets=pieces.offsets,
-        part=pieces.part,
-        level=pieces.level,
-        part_names=tuple(model.part_names),
-        layers=count,
-        style=vstyle,
-        line_width=float(line_width),
-        page=page,
-        camera=camera,
-        highlight=chosen,
-        title=title,
-        section=hatching,
-        marks=marks,
-        glyphs=glyph_drawing,
-        shading=shading,
-        behind=pieces.behind if shading is not None else None,
-        name=Path(model.source).stem if model.source else "drawing",
-        seconds=seconds,
+    return title
+
+
+def _hatching(frame: _Frame, options: VectorOptions, page: Page) -> SectionLines | None:
+    """The cut faces' hatching and outline of a section view (2.5 mm apart to scale)."""
+    if options.section is None:
+        return None
+    if page.unit == "mm":
+        spacing_px = SECTION_HATCH_MM / page.factor
+    else:
+        spacing_px = hatch_spacing_px(frame.size, options.line_width)
+    return section_lines(options.section, frame.view, frame.projection, frame.size, spacing_px)
+
+
+def _dimension_marks(model: Model, frame: _Frame, options: VectorOptions, page: Page) -> Marks | None:
+    """The view's dimensions, where asked: orthographic views only."""
+    if not options.dimensions:
+        return None
+    if not frame.camera.ortho:
+        raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
+    unit = page.model_unit or drawing_unit(model, options.units)
+    mm_per_px = page.factor if page.unit == "mm" else None
+    from .dimension import dimension_marks
+
+    return dimension_marks(
+        model, frame.view, frame.projection, frame.size, UNITS_MM[unit], mm_per_px, options.crease_angle
     )
+
+
+def _glyph_lines(glyphs: Glyphs, model: Model, frame: _Frame, renderer, layers, seconds) -> GlyphLines:
+    """The glyphs as lines, their stretches behind the front surface apart."""
+    from .glyphs import glyph_lines
+
+    clock = time.perf_counter()
+    # the front surface is all the depth test of glyphs needs
+    front = (
+        layers
+        if layers is not None
+        else renderer.peel(model, frame.camera, size=frame.size, max_layers=1, normals=False)
+    )
+    depth = front.depth[0] if len(front.depth) else None
+    drawn = glyph_lines(glyphs, frame.camera, frame.size, depth)
+    seconds["glyphs"] = time.perf_counter() - clock
+    return drawn
 
 
 def _shade_color(style) -> tuple[float, float, float]:

@@ -12,9 +12,10 @@ import numpy as np
 
 from blueprint.color import RGBA
 from blueprint.compose.glyphs.draw import glyph_labels
+from blueprint.compose.glyphs.parse import Glyphs
 from blueprint.compose.glyphs.projection import View
 from blueprint.compose.glyphs.strokes import arrow_stroke, box_stroke, path_stroke, stroke_samples
-from blueprint.compose.glyphs.values import Glyphs, Hidden
+from blueprint.compose.glyphs.values import Hidden
 from blueprint.scene.camera import Camera
 
 __all__ = ["GlyphLines", "GlyphText", "glyph_lines"]

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.compose.hatch import HATCH_PATTERNS
+from blueprint.scene.camera import to_pixels
 from blueprint.scene.section import Cut
 
 __all__ = ["SECTION_HATCH_WIDTH", "SECTION_OUTLINE_WIDTH", "SectionLines", "section_lines"]
@@ -64,13 +65,6 @@ class SectionLines:
         )
 
 
-def _project(points: np.ndarray, view: np.ndarray, projection: np.ndarray, size) -> np.ndarray:
-    w, h = size
-    homogeneous = np.c_[points, np.ones(len(points))] @ (projection @ view).T
-    ndc = homogeneous[:, :2] / homogeneous[:, 3:4]
-    return np.c_[(ndc[:, 0] + 1.0) * 0.5 * w, (1.0 - ndc[:, 1]) * 0.5 * h]
-
-
 def _segments(geometry) -> list[np.ndarray]:
     """(2, 2) segments of every line string in a shapely geometry."""
     out = []
@@ -95,7 +89,7 @@ def section_lines(
     from shapely.geometry import LineString, MultiLineString
 
     model = cut.model
-    projected = _project(model.positions.astype(np.float64), view, projection, size)
+    projected = to_pixels(model.positions.astype(np.float64), view, projection, size)
     polygons = {}
     for part in cut.cap_parts().tolist():
         faces = model.faces[cut.cap & (model.face_part == part)]

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.scene.camera import clip_to_pixels, transform
 from blueprint.scene.model import Model
 
 __all__ = ["AMBIENT", "ShadedFaces", "shaded_faces"]
@@ -44,15 +45,13 @@ def shaded_faces(
     on screen). Depth order is by the eye depth of each face's centroid, farthest first.
     """
     tri = model.positions[model.faces[faces]].astype(np.float64)
-    eye = tri @ view[:3, :3].T + view[:3, 3]
-    clip = np.concatenate([eye, np.ones((*eye.shape[:2], 1))], axis=-1) @ projection.T
-    w = clip[..., 3]
-    in_front = np.all(w > 1e-12, axis=1)
-    ndc = clip[..., :2] / np.where(w > 1e-12, w, 1.0)[..., None]
-    pixels = np.stack([(ndc[..., 0] + 1) * 0.5 * size[0], (1 - ndc[..., 1]) * 0.5 * size[1]], axis=-1)
+    eye = transform(tri, view)[..., :3]
+    clip = transform(eye, projection)
+    in_front = np.all(clip[..., 3] > 1e-12, axis=1)
+    eye, pixels = eye[in_front], clip_to_pixels(clip[in_front], size)
     edge_a, edge_b = pixels[:, 1] - pixels[:, 0], pixels[:, 2] - pixels[:, 0]
     area = 0.5 * np.abs(edge_a[:, 0] * edge_b[:, 1] - edge_a[:, 1] * edge_b[:, 0])
-    keep = in_front & (area > 1e-9)
+    keep = area > 1e-9
     eye, pixels = eye[keep], pixels[keep]
     normal = np.cross(eye[:, 1] - eye[:, 0], eye[:, 2] - eye[:, 0])
     normal /= np.maximum(np.linalg.norm(normal, axis=1), 1e-300)[:, None]

@@ -44,9 +44,9 @@ image, given the camera and the blueprint's front depth layer; ``render_with_gly
 that layer itself. No GPU here except through ``render_with_glyphs``.
 
 The modules, in the order a drawing goes through them: ``values`` (the glyph types),
-``parse`` (files and plain data into them), ``projection`` (to the screen, clipping, the depth
-test), ``strokes`` (line glyphs into screen pieces), ``raster`` (pieces and texts into pixels),
-``draw`` (the two entries above).
+``parse`` (``Glyphs``, a whole file of them, from files and plain data), ``projection`` (to the
+screen, clipping, the depth test), ``strokes`` (line glyphs into screen pieces), ``raster``
+(pieces and texts into pixels), ``draw`` (the two entries above).
 """
 
 from __future__ import annotations
@@ -59,9 +59,9 @@ from blueprint.lazy import lazy_names
 # loads without the others, which a drawing without glyphs never runs.
 _EXPORTS = {
     **dict.fromkeys(("draw_glyphs", "render_with_glyphs"), "blueprint.compose.glyphs.draw"),
-    "load_glyphs": "blueprint.compose.glyphs.parse",
+    **dict.fromkeys(("Glyphs", "load_glyphs"), "blueprint.compose.glyphs.parse"),
     **dict.fromkeys(
-        ("ANCHORS", "HIDDEN_MODES", "Arrow", "Box", "Dimension", "Glyphs", "Hidden", "Label", "Path3D"),
+        ("ANCHORS", "HIDDEN_MODES", "Arrow", "Box", "Dimension", "Hidden", "Label", "Path3D"),
         "blueprint.compose.glyphs.values",
     ),
 }
@@ -83,14 +83,13 @@ __all__ = [
 
 if TYPE_CHECKING:
     from blueprint.compose.glyphs.draw import draw_glyphs, render_with_glyphs
-    from blueprint.compose.glyphs.parse import load_glyphs
+    from blueprint.compose.glyphs.parse import Glyphs, load_glyphs
     from blueprint.compose.glyphs.values import (
         ANCHORS,
         HIDDEN_MODES,
         Arrow,
         Box,
         Dimension,
-        Glyphs,
         Hidden,
         Label,
         Path3D,

@@ -10,11 +10,10 @@ import numpy as np
 
 from blueprint.color import RGBA
 from blueprint.compose.glyphs.marks import dimension_glyph_marks, draw_marks
-from blueprint.compose.glyphs.parse import load_glyphs
+from blueprint.compose.glyphs.parse import Glyphs, load_glyphs
 from blueprint.compose.glyphs.projection import View
 from blueprint.compose.glyphs.raster import draw_pieces, draw_text
 from blueprint.compose.glyphs.strokes import arrow_stroke, box_corners, box_stroke, path_stroke, stroke_pieces
-from blueprint.compose.glyphs.values import Glyphs
 from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model

@@ -14,7 +14,8 @@ import numpy as np
 from blueprint.color import RGBA
 from blueprint.compose.glyphs.raster import composite, draw_pieces
 from blueprint.compose.glyphs.values import Dimension
-from blueprint.scene.dimension import format_value, linear_dimension, screen_points
+from blueprint.scene.camera import to_pixels
+from blueprint.scene.dimension import format_value, linear_dimension
 from blueprint.scene.sheet import Marks, Text
 
 __all__ = ["SHEET_FONTS", "dimension_glyph_marks", "draw_mark_text", "draw_marks"]
@@ -91,7 +92,7 @@ def dimension_glyph_marks(
     def screen(point: np.ndarray) -> np.ndarray | None:
         if (mvp @ np.r_[point, 1.0])[3] <= 0:
             return None
-        return screen_points(point[None], view, projection, size)[0]
+        return to_pixels(point[None], view, projection, size)[0]
 
     start, end = np.asarray(dimension.start, np.float64), np.asarray(dimension.end, np.float64)
     a, b = screen(start), screen(end)

@@ -1,9 +1,11 @@
-"""Glyph files (TOML or JSON) and plain data into ``Glyphs``, checked: any problem is one
-``InputError`` line naming the file, the entry (``box 2``) and what is wrong."""
+"""``Glyphs``, everything in one glyph file, and glyph files (TOML or JSON) and plain data into
+it, checked: any problem is one ``InputError`` line naming the file, the entry (``box 2``) and
+what is wrong."""
 
 from __future__ import annotations
 
 import os
+from dataclasses import dataclass, field
 from typing import Any
 
 from blueprint.color import RGBA
@@ -14,7 +16,6 @@ from blueprint.compose.glyphs.values import (
     Arrow,
     Box,
     Dimension,
-    Glyphs,
     Hidden,
     Label,
     Path3D,
@@ -22,7 +23,7 @@ from blueprint.compose.glyphs.values import (
 from blueprint.errors import InputError
 from blueprint.settings import GLYPH_LIMIT, Entry, is_number, read_settings, show
 
-__all__ = ["load_glyphs", "parse_glyphs"]
+__all__ = ["Glyphs", "load_glyphs", "parse_glyphs"]
 
 _MAX_WIDTH = 64.0
 _SIZE_RANGE = (4.0, 256.0)
@@ -46,6 +47,35 @@ _REQUIRED = {
 _MAX_OFFSET = 1e12
 _HIDDEN_KEYS = ("mode", "opacity", "dash")
 _TOP = (*sorted(_KINDS), "hidden")
+
+
+# what errors name when the glyphs come from no file
+_DEFAULT_SOURCE = "glyphs"
+
+
+@dataclass(frozen=True)
+class Glyphs:
+    """Everything in one glyph file. Drawn in this order: paths, boxes, arrows, labels,
+    dimensions."""
+
+    boxes: tuple[Box, ...] = ()
+    arrows: tuple[Arrow, ...] = ()
+    paths: tuple[Path3D, ...] = ()
+    labels: tuple[Label, ...] = ()
+    hidden: Hidden = field(default_factory=Hidden)
+    source: str = _DEFAULT_SOURCE
+    dimensions: tuple[Dimension, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.boxes) + len(self.arrows) + len(self.paths) + len(self.labels) + len(self.dimensions)
+
+    @classmethod
+    def from_dict(cls, data: Any, source: str = _DEFAULT_SOURCE) -> Glyphs:
+        """Validate plain data (a parsed TOML or JSON document) into ``Glyphs``.
+
+        Raises ``InputError`` naming ``source``, the entry (``box 2``) and the problem.
+        """
+        return parse_glyphs(data, str(source))
 
 
 def load_glyphs(path: str | os.PathLike) -> Glyphs:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.scene.camera import Camera
+from blueprint.scene.camera import Camera, clip_to_pixels, transform
 
 __all__ = ["DEPTH_TOLERANCE", "View", "near_clip", "screen_range"]
 
@@ -33,14 +33,12 @@ class View:
 
     def clip(self, points: np.ndarray) -> np.ndarray:
         """(..., 3) model points -> (..., 4) clip coordinates."""
-        return points @ self.mvp[:, :3].T + self.mvp[:, 3]
+        return transform(points, self.mvp)
 
     def screen(self, clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(..., 4) clip coordinates in front of the near plane -> (..., 2) pixels, (...) NDC z."""
-        ndc = clip[..., :3] / clip[..., 3:4]
-        x = (ndc[..., 0] + 1) * 0.5 * self.width
-        y = (1 - ndc[..., 1]) * 0.5 * self.height
-        return np.stack([x, y], axis=-1), ndc[..., 2]
+        pixels = clip_to_pixels(clip, (self.width, self.height), depth=True)
+        return pixels[..., :2], pixels[..., 2]
 
     def eye_depth(self, z_ndc: np.ndarray) -> np.ndarray:
         """Distance along the view axis from NDC z (the inverse of the projection's z)."""

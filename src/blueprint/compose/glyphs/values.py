@@ -1,10 +1,10 @@
-"""The glyph value types: boxes, arrows, paths and labels in model coordinates, and how the
-pieces of them behind a surface are drawn. Plain frozen data, checked where it is read (``parse``)."""
+"""The glyph value types: boxes, arrows, paths, labels and dimensions in model coordinates, and
+how the pieces of them behind a surface are drawn. Plain frozen data, checked where it is read
+(``parse``, which holds ``Glyphs``, a whole glyph file of them)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 from blueprint.color import RGBA, hex_color
 
@@ -15,7 +15,6 @@ __all__ = [
     "Arrow",
     "Box",
     "Dimension",
-    "Glyphs",
     "Hidden",
     "Label",
     "Path3D",
@@ -35,8 +34,6 @@ ANCHORS = (
     "bottom-left",
     "bottom-right",
 )
-# what errors name when the glyphs come from no file
-_DEFAULT_SOURCE = "glyphs"
 
 
 @dataclass(frozen=True)
@@ -115,31 +112,3 @@ class Dimension:
     offset: float | None = None
     color: RGBA = hex_color(DEFAULT_COLOR)
     width: float = 1.0
-
-
-@dataclass(frozen=True)
-class Glyphs:
-    """Everything in one glyph file. Drawn in this order: paths, boxes, arrows, labels,
-    dimensions."""
-
-    boxes: tuple[Box, ...] = ()
-    arrows: tuple[Arrow, ...] = ()
-    paths: tuple[Path3D, ...] = ()
-    labels: tuple[Label, ...] = ()
-    hidden: Hidden = field(default_factory=Hidden)
-    source: str = _DEFAULT_SOURCE
-    dimensions: tuple[Dimension, ...] = ()
-
-    def __len__(self) -> int:
-        return len(self.boxes) + len(self.arrows) + len(self.paths) + len(self.labels) + len(self.dimensions)
-
-    @classmethod
-    def from_dict(cls, data: Any, source: str = _DEFAULT_SOURCE) -> Glyphs:
-        """Validate plain data (a parsed TOML or JSON document) into ``Glyphs``.
-
-        Raises ``InputError`` naming ``source``, the entry (``box 2``) and the problem.
-        """
-        # the parser builds these types, so it can only be imported once they exist
-        from blueprint.compose.glyphs.parse import parse_glyphs
-
-        return parse_glyphs(data, str(source))

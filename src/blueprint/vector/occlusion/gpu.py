@@ -17,6 +17,7 @@ from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
 from ..lines import BORDER, CREASE, SILHOUETTE
+from .levels import DepthTest
 from .pixels import across_line
 from .samples import Samples
 
@@ -149,9 +150,7 @@ def gpu_levels(
     size: tuple[int, int],
     *,
     max_layers: int | None,
-    ortho: bool,
-    footprint: float,
-    tolerance: float = 1.0,
+    test: DepthTest,
     min_fraction: float = 0.0,
     offset: float = 1.0,
     drawn: FacesDrawn | None = None,
@@ -161,9 +160,10 @@ def gpu_levels(
     than ``MAX_LAYERS`` layers or more planes than a texture holds (then ``triangles_at`` and
     ``classify_samples``).
 
-    Parameters as ``levels.classify_samples`` and ``levels.verify_creases``; ``planes`` from
-    ``levels.face_planes``; ``size`` (width, height) in pixels; ``drawn`` the faces k-buffer
-    of this model, camera, size and ``max_layers`` from ``draw_faces``, else drawn here.
+    Parameters as ``levels.classify_samples`` and ``levels.verify_creases`` (``test`` the depth
+    test of both); ``planes`` from ``levels.face_planes``; ``size`` (width, height) in pixels;
+    ``drawn`` the faces k-buffer of this model, camera, size and ``max_layers`` from
+    ``draw_faces``, else drawn here.
     """
     if not table_fits(len(planes), renderer.max_texture):
         return None
@@ -212,8 +212,8 @@ def gpu_levels(
     put(prog, "u_count", len(inside))
     put(prog, "u_layers", layers)
     put(prog, "u_size", tuple(size))
-    put(prog, "u_ortho", bool(ortho))
-    put(prog, "u_limit", float(np.float32(tolerance * footprint)))
+    put(prog, "u_ortho", bool(test.ortho))
+    put(prog, "u_limit", float(test.limit))
     put(prog, "u_offset", float(offset))
     plane_texture = table_texture(ctx, planes.astype(np.float32))
     plane_texture.use(location=MAX_LAYERS)

@@ -24,6 +24,8 @@ one flat surface of one part, which pixels alone cannot tell from an edge.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from blueprint.columns import row_norm
@@ -34,12 +36,35 @@ from ..lines import BORDER, CREASE, SILHOUETTE
 from .pixels import NEIGHBOURS, PixelLayers, across_line, flat_index
 from .samples import Samples
 
-__all__ = ["classify_samples", "drop_phantoms", "face_planes", "verify_creases"]
+__all__ = ["DepthTest", "classify_samples", "drop_phantoms", "face_planes", "verify_creases"]
 
 # Model-space face normals and corners, per mesh (see ``face_planes``).
 PLANES = ModelCache()
 # Samples classified per NumPy pass (times 9 pixels times the layers at them).
 _CHUNK = 1 << 15
+
+
+@dataclass(frozen=True)
+class DepthTest:
+    """When a surface counts as in front of a sample, on the sample's view ray.
+
+    ortho : bool, orthographic camera (rays along -z) or perspective (rays from the eye at the
+        origin)
+    footprint : float, size of a pixel at unit distance (perspective) or in model units
+        (orthographic): ``Camera.pixel_angle``
+    tolerance : float, surfaces nearer than this many pixel footprints in depth do not count as
+        in front
+    """
+
+    ortho: bool
+    footprint: float
+    tolerance: float = 1.0
+
+    @property
+    def limit(self) -> np.float32:
+        """The tolerance in model units (orthographic) or relative to the distance (perspective),
+        in float32 as the gathers compare it."""
+        return np.float32(self.tolerance * self.footprint)
 
 
 def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
@@ -70,9 +95,7 @@ def classify_samples(
     samples: Samples,
     triangle: PixelLayers,
     planes: np.ndarray,
-    ortho: bool,
-    footprint: float,
-    tolerance: float = 1.0,
+    test: DepthTest,
 ) -> np.ndarray:
     """Occlusion level of every sample (-1 outside the view).
 
@@ -83,12 +106,8 @@ def classify_samples(
         Face index of each peeled layer, -1 where none, at least at ``probe_pixels``.
     planes : (F + 1, 4) float64
         From :func:`face_planes`.
-    ortho : bool
-        Orthographic camera (rays along -z) or perspective (rays from the eye at the origin).
-    footprint : float
-        Size of a pixel at unit distance (perspective) or in model units (orthographic).
-    tolerance : float
-        Surfaces nearer than this many pixel footprints in depth do not count as in front.
+    test : DepthTest
+        The camera's kind, its pixel footprint and the depth tolerance.
 
     Returns
     -------
@@ -107,7 +126,7 @@ def classify_samples(
     # float32 halves the memory traffic of the gathers; depths are compared at a relative
     # tolerance of ~1e-4 or coarser, far above float32 rounding
     planes = planes.astype(np.float32)
-    limit = np.float32(tolerance * footprint)  # orthographic: model units; perspective: relative
+    ortho, limit = test.ortho, test.limit
     for start in range(0, len(inside), _CHUNK):
         idx = inside[start : start + _CHUNK]
         px = np.floor(samples.pixel[idx]).astype(np.int64)
@@ -151,10 +170,8 @@ def verify_creases(
     triangle: PixelLayers,
     planes: np.ndarray,
     face_part: np.ndarray,
-    ortho: bool,
-    footprint: float,
+    test: DepthTest,
     crease_angle: float = 30.0,
-    tolerance: float = 1.0,
     offset: float = 1.0,
 ) -> np.ndarray:
     """Leave out samples of mesh edges (silhouettes, borders, creases) where the drawing shows no
@@ -179,7 +196,7 @@ def verify_creases(
     eye = samples.eye[rows].astype(np.float32)
     own0, own1 = samples.faces[rows, 0], samples.faces[rows, 1]
     planes32 = planes.astype(np.float32)
-    limit = np.float32(tolerance * footprint)
+    ortho, limit = test.ortho, test.limit
     seen = []
     for side in (1.0, -1.0):
         q = flat_index(np.floor(pixel[rows] + side * offset * across).astype(np.int64), height, width)
@@ -192,9 +209,7 @@ def verify_creases(
         index = np.minimum(front, layers - 1)
         tri = np.where(front < depth_count, stack[np.arange(len(rows)), index], -1)
         seen.append(tri)
-    return drop_phantoms(
-        samples, level, rows, *seen, planes, face_part, ortho, footprint, crease_angle, tolerance
-    )
+    return drop_phantoms(samples, level, rows, *seen, planes, face_part, test, crease_angle)
 
 
 def drop_phantoms(
@@ -205,15 +220,13 @@ def drop_phantoms(
     tri_b: np.ndarray,
     planes: np.ndarray,
     face_part: np.ndarray,
-    ortho: bool,
-    footprint: float,
+    test: DepthTest,
     crease_angle: float = 30.0,
-    tolerance: float = 1.0,
 ) -> np.ndarray:
     """The second half of :func:`verify_creases`, given the faces ``tri_a`` and ``tri_b`` seen
     at the line's depth to either side of the samples ``rows`` (-1 where none): their levels
     set to -1 where both are one flat surface of one part through the line's point."""
-    level = level.copy()
+    level, ortho = level.copy(), test.ortho
     # only samples with a face of one part to either side can be phantoms
     same_part = face_part[np.maximum(tri_a, 0)] == face_part[np.maximum(tri_b, 0)]
     maybe = np.flatnonzero((tri_a >= 0) & (tri_b >= 0) & same_part)
@@ -230,7 +243,7 @@ def drop_phantoms(
 
     def through(plane):
         gap = np.einsum("ij,ij->i", plane[:, :3], point) - plane[:, 3]
-        return np.abs(gap) <= 2.0 * tolerance * footprint * scale
+        return np.abs(gap) <= 2.0 * test.tolerance * test.footprint * scale
 
     phantom = flat & through(plane_a) & through(plane_b)
     level[rows[phantom]] = -1

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.columns import row_norm
+from blueprint.scene.camera import clip_to_pixels, transform
 
 from ..lines import Polylines
 
@@ -35,12 +36,6 @@ class Samples:
     inside: np.ndarray
 
 
-def _to_pixels(clip: np.ndarray, size: tuple[int, int]) -> np.ndarray:
-    w = clip[..., 3:4]
-    ndc = clip[..., :2] / np.where(np.abs(w) > 0, w, 1.0)
-    return np.stack([(ndc[..., 0] + 1.0) * 0.5 * size[0], (1.0 - ndc[..., 1]) * 0.5 * size[1]], -1)
-
-
 def sample_polylines(
     lines: Polylines,
     view: np.ndarray,
@@ -66,10 +61,8 @@ def sample_polylines(
             none,
             none,
         )
-    mvp = projection @ view
-    homogeneous = np.concatenate([points, np.ones((len(points), 1))], axis=1)
-    clip = homogeneous @ mvp.T
-    pix = _to_pixels(clip, size)
+    clip = transform(points, projection @ view)
+    pix = clip_to_pixels(clip, size)
     line_of_point = np.repeat(np.arange(len(lines)), np.diff(offsets))
     is_last = np.zeros(len(points), bool)
     is_last[offsets[1:] - 1] = True
@@ -103,8 +96,7 @@ def sample_polylines(
     line = np.concatenate([seg_line, np.arange(len(lines))])
     model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
     kind = kind[order]
-    homogeneous = np.concatenate([model, np.ones((len(model), 1))], axis=1)
-    eye = homogeneous @ view.T
+    eye = transform(model, view)
     clip = eye @ projection.T
     inside = (
         (clip[:, 3] > 0)
@@ -113,4 +105,4 @@ def sample_polylines(
         & (np.abs(clip[:, 0]) <= clip[:, 3])
         & (np.abs(clip[:, 1]) <= clip[:, 3])
     )
-    return Samples(eye[:, :3], _to_pixels(clip, size), faces, kind, line, vertex, inside)
+    return Samples(eye[:, :3], clip_to_pixels(clip, size), faces, kind, line, vertex, inside)

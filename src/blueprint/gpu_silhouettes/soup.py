@@ -2,21 +2,17 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.render.renderer import LayerRenderer
 from blueprint.silhouette.edgerecords import edge_records
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
 from blueprint.silhouette.mesh import build_adjacency, connect
 
-from .context import on_gl
+from .context import CurrentContext, on_gl
 from .lines import EdgeBuffer
 from .tables import Corners, ListTextures, diagonal
-
-if TYPE_CHECKING:
-    from .draw import GpuSilhouettes
 
 
 class SoupMesh:
@@ -28,7 +24,9 @@ class SoupMesh:
     vertex storage of the silhouette pass. The number of triangles is fixed; the topology may
     change freely (the ``"vertex"`` method never looks at it). For the ``"idlist"`` and
     ``"edges"`` methods pass the connectivity as `topology` whenever it changes; without one,
-    their tables are built once by welding the first positions.
+    their tables are built once by welding the first positions. ``renderer``, ``current``
+    (its context made current) and ``tolerance`` (a fraction of the diagonal) are those of the
+    ``GpuSilhouettes`` that made it.
 
     Attributes
     ----------
@@ -41,27 +39,35 @@ class SoupMesh:
     """
 
     def current(self):
-        return self.owner.current()
+        return self._current()
 
-    def __init__(self, owner: GpuSilhouettes, corners, face_part=None, topology=None) -> None:
-        self.owner = owner
+    def __init__(
+        self,
+        renderer: LayerRenderer,
+        current: CurrentContext,
+        tolerance: float,
+        corners,
+        face_part=None,
+        topology=None,
+    ) -> None:
+        self.renderer, self._current = renderer, current
         with self.current():
-            self._create(owner, corners, face_part, topology)
+            self._create(tolerance, corners, face_part, topology)
 
-    def _create(self, owner: GpuSilhouettes, corners, face_part, topology) -> None:
+    def _create(self, tolerance: float, corners, face_part, topology) -> None:
         corners = np.asarray(corners, dtype=np.float32)
         if corners.ndim != 3 or corners.shape[1:] != (3, 3) or len(corners) == 0:
             raise InputError(f"corners must have shape (F, 3, 3) with F > 0, got {corners.shape}")
         if not np.isfinite(corners).all():
             raise InputError("corner positions must be finite")
-        ctx = owner.renderer.ctx
+        ctx = self.renderer.ctx
         self.faces = len(corners)
         self.corners = Corners(ctx, self.faces)
         self.corners.write(corners)
         points = corners.reshape(-1, 3).astype(np.float64)
         self.bounds = np.array([points.min(axis=0), points.max(axis=0)])
         self.diagonal = diagonal(points)
-        self.tolerance = owner.tolerance * self.diagonal
+        self.tolerance = tolerance * self.diagonal
         # what the renderer's geometry pass needs of a mesh: vertex arrays, the part per vertex
         self._vaos: dict[int, object] = {}
         parts = np.zeros(self.faces, np.int32) if face_part is None else np.asarray(face_part, np.int32)
@@ -86,7 +92,7 @@ class SoupMesh:
             layout = [(self.corners.buffer, "3f", "in_position")]
             if "in_part" in program:
                 layout.append((self._corner_parts, "1i", "in_part"))
-            vao = self._vaos[program.glo] = self.owner.renderer.ctx.vertex_array(program, layout)
+            vao = self._vaos[program.glo] = self.renderer.ctx.vertex_array(program, layout)
             vao.vertices = 3 * self.faces
         return vao
 
@@ -117,7 +123,7 @@ class SoupMesh:
                 lists = build_id_lists(flat, np.arange(len(flat)).reshape(-1, 3), self.tolerance)
             if len(lists.face_vertices) != self.faces:
                 raise InputError(f"topology has {len(lists.face_vertices)} faces, the mesh {self.faces}")
-            self._lists = ListTextures(self.owner.renderer.ctx, lists)
+            self._lists = ListTextures(self.renderer.ctx, lists)
         return self._lists
 
     @on_gl
@@ -136,7 +142,7 @@ class SoupMesh:
                 adjacency = connect(positions, faces)
             else:
                 adjacency = build_adjacency(flat, np.arange(len(flat)).reshape(-1, 3), self.tolerance)
-            self._edges = EdgeBuffer(self.owner.renderer.ctx, edge_records(adjacency))
+            self._edges = EdgeBuffer(self.renderer.ctx, edge_records(adjacency))
         return self._edges
 
     @on_gl

@@ -7,7 +7,7 @@ from blueprint.ops import Op, Param
 
 IDSIL_VERTEX = Op(
     name="idsil_vertex",
-    shader="blueprint.ops:glsl/idsil_vertex.frag",
+    shader="blueprint.gpu_silhouettes:glsl/idsil_vertex.frag",
     inputs={"depth": "depth", "ids": "rg32i", "corners": "rgb32f"},
     output="r8",
     params=(
@@ -16,11 +16,11 @@ IDSIL_VERTEX = Op(
         ),
     ),
     doc="triangle-ID silhouettes, adjacency from per-face corner positions (no preprocessing)",
-    compute="blueprint.ops:glsl/idsil_vertex.comp",
+    compute="blueprint.gpu_silhouettes:glsl/idsil_vertex.comp",
 )
 IDSIL_LIST = Op(
     name="idsil_list",
-    shader="blueprint.ops:glsl/idsil_list.frag",
+    shader="blueprint.gpu_silhouettes:glsl/idsil_list.frag",
     inputs={
         "depth": "depth",
         "ids": "rg32i",
@@ -30,6 +30,6 @@ IDSIL_LIST = Op(
     },
     output="r8",
     doc="triangle-ID silhouettes, adjacency from precomputed vertex-to-triangle lists",
-    compute="blueprint.ops:glsl/idsil_list.comp",
+    compute="blueprint.gpu_silhouettes:glsl/idsil_list.comp",
 )
 METHODS = {"vertex": IDSIL_VERTEX, "idlist": IDSIL_LIST}

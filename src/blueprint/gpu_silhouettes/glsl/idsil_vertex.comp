@@ -2,7 +2,7 @@
 // (OpenGL 4.3 path); corner positions come straight from the buffer the ID pass drew.
 layout(local_size_x = 8, local_size_y = 8) in;
 #define IDSIL_CORNERS_SSBO
-#include "idsil_vertex.glsl"
+#include "blueprint.ops:glsl/idsil_vertex.glsl"
 #include "idsil_pixel.glsl"
 
 layout(r8, binding = 1) uniform writeonly image2DArray u_out;  // set by binding: moderngl cannot set image-array uniforms

@@ -81,7 +81,7 @@ class GpuSilhouettes:
 
     def soup(self, corners, face_part=None, topology=None) -> SoupMesh:
         """A deforming mesh on the GPU from (F, 3, 3) corner positions (see :class:`SoupMesh`)."""
-        return SoupMesh(self, corners, face_part, topology)
+        return SoupMesh(self.renderer, self._current, self.tolerance, corners, face_part, topology)
 
     @on_gl
     def id_lists(self, model: Model) -> IdLists:

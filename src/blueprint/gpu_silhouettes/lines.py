@@ -15,9 +15,9 @@ from blueprint.scene.camera import Camera
 
 from .tables import Corners
 
-LINES_VERT = "blueprint.ops:glsl/idsil_lines.vert"
-LINES_GEOM = "blueprint.ops:glsl/idsil_lines.geom"
-LINES_FRAG = "blueprint.ops:glsl/idsil_lines.frag"
+LINES_VERT = "blueprint.gpu_silhouettes:glsl/idsil_lines.vert"
+LINES_GEOM = "blueprint.gpu_silhouettes:glsl/idsil_lines.geom"
+LINES_FRAG = "blueprint.gpu_silhouettes:glsl/idsil_lines.frag"
 # The CPU method's default width (draw_segments): coverage reaches 0 one pixel from the segment.
 LINE_WIDTH = 1.0
 # Eye-depth tolerance of the layer test, as a fraction of the model's bounding-box diagonal:

@@ -1,5 +1,5 @@
 // Triangle-ID silhouettes of one layer, vertex adjacency, as a full-screen pass (OpenGL 3.3).
-#include "idsil_vertex.glsl"
+#include "blueprint.ops:glsl/idsil_vertex.glsl"
 #include "idsil_pixel.glsl"
 
 out vec4 o_edge;
