@@ -1,4 +1,4 @@
-"""The NumPy GLB reader (``blueprint.scene.gltf``) against trimesh, which it stands in for: the
+"""The NumPy GLB reader (``blueprint.scene.formats.gltf``) against trimesh, which it stands in for: the
 same instances joined into the same arrays and part names where it reads a file, None (trimesh
 then reads it, or refuses it in one line) for anything else."""
 
@@ -18,7 +18,7 @@ import blueprint
 from blueprint import examples
 from blueprint.errors import InputError
 from blueprint.scene import loader
-from blueprint.scene.gltf import read_glb
+from blueprint.scene.formats.gltf import read_glb
 
 MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
 GEARBOX = Path(blueprint.__file__).parent / "data" / "gearbox.glb"

@@ -1,4 +1,4 @@
-"""The plain OBJ reader (``blueprint.scene.obj``) against trimesh, which it stands in for: the
+"""The plain OBJ reader (``blueprint.scene.formats.obj``) against trimesh, which it stands in for: the
 same vertices and faces where it reads a file, None (trimesh then reads it) for anything else."""
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import trimesh
 
 import blueprint
 from blueprint.scene import loader
-from blueprint.scene.obj import plain_obj
+from blueprint.scene.formats.obj import plain_obj
 
 MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
 

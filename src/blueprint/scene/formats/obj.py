@@ -1,4 +1,6 @@
-"""Plain Wavefront OBJ files read with NumPy alone: the scans and meshes written as nothing
+"""Wavefront OBJ: no up axis of its own (the shape decides), no unit.
+
+Plain OBJ files are read with NumPy alone: the scans and meshes written as nothing
 but ``v x y z`` and ``f i j k`` lines (MeshLab, many exporters). trimesh parses OBJ a line at a
 time in Python, which took most of a drawing's time on a 70K-triangle scan; here every line
 is classified, counted and converted in a few whole-file passes.
@@ -11,11 +13,17 @@ answers None for them.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from blueprint import settings
+from blueprint.errors import InputError
+from blueprint.scene.formats.base import Format, Mesh
+from blueprint.scene.headers import check_triangle_count, read_all
+from blueprint.settings import read_file
 
-__all__ = ["PLAIN_OBJ_LIMIT", "plain_obj", "short_vertex"]
+__all__ = ["FORMAT", "PLAIN_OBJ_LIMIT", "check", "plain_obj", "read_obj", "short_vertex"]
 
 # Files read here at most: the passes hold up to some 50 bytes of index per byte of the file
 # (a file of nothing but newlines), so larger files go to trimesh, as every OBJ did before.
@@ -153,3 +161,27 @@ def short_vertex(data: bytes) -> tuple[int, int] | None:
         line += len(newline)
         start = end
     return None
+
+
+def read_obj(path: Path, size: int) -> Mesh | None:
+    """The mesh of a plain OBJ file (``plain_obj``), or None for trimesh."""
+    if size > PLAIN_OBJ_LIMIT:
+        return None
+    found = plain_obj(read_file(path, settings.MODEL_FILE_LIMIT, "a model file"))
+    if found is None:
+        return None
+    check_triangle_count(path, len(found[1]))
+    return Mesh(*found)
+
+
+def check(path: Path, size: int, data: bytes | None = None) -> None:
+    """Refuse a vertex line of fewer than three numbers, which trimesh reads as 2-D vertices
+    (or, where the counts happen to add up, as vertices shifted by a number)."""
+    found = short_vertex(read_all(path, data))
+    if found is not None:
+        line, numbers = found
+        counted = f"{numbers} number" + ("" if numbers == 1 else "s")
+        raise InputError(f"{path}: line {line}: a vertex of {counted} (x, y and z are needed)")
+
+
+FORMAT = Format("OBJ", ("obj",), up="guess", check=check, read=read_obj, common=True)

@@ -1,4 +1,6 @@
-"""Binary glTF 2.0 (GLB) read with NumPy alone, as trimesh loads it: importing trimesh (with the
+"""glTF 2.0, binary (GLB) and JSON: Y-up and in metres by its specification.
+
+GLB files are read with NumPy alone, as trimesh loads it: importing trimesh (with the
 scipy and networkx it loads) took a CPU second of every glTF drawing's process, more than most
 drawings themselves.
 
@@ -20,11 +22,16 @@ from __future__ import annotations
 import json
 import math
 import struct
-from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Instance", "read_glb"]
+from blueprint import settings
+from blueprint.scene.formats.base import Format, Instance
+from blueprint.scene.headers import check_gltf_graph
+from blueprint.settings import read_file
+
+__all__ = ["GLB", "GLTF", "Instance", "read_glb"]
 
 _GLB, _JSON, _BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 _TRIANGLES = 4
@@ -35,20 +42,6 @@ _INDEX_TYPES = (5121, 5123, 5125)
 _BASE_FRAME = "world"
 # trimesh.transformations' threshold of a zero quaternion
 _EPS = np.finfo(float).eps * 4.0
-
-
-@dataclass(frozen=True)
-class Instance:
-    """One mesh placed in a scene: ``vertices`` (V, 3) and ``faces`` (F, 3) of its mesh
-    (None where it is not a triangle mesh), ``transform`` (4, 4) float64 from the mesh to the
-    scene (None: the identity), the names of its node and mesh (``node`` None: a frame with
-    no name of its own, named after its mesh)."""
-
-    node: str | None
-    geometry: str
-    vertices: np.ndarray | None
-    faces: np.ndarray | None
-    transform: np.ndarray | None
 
 
 class _Leave(Exception):
@@ -384,3 +377,26 @@ def _numbers(value, count: int) -> np.ndarray:
     if not isinstance(value, list) or len(value) != count or not all(_number(v) for v in value):
         raise _Leave
     return np.array(value, dtype=np.float64)
+
+
+def read(path: Path, size: int) -> list[Instance] | None:
+    """The mesh instances of a GLB file (``read_glb``), its node graph checked first; None
+    where trimesh reads it."""
+    data = read_file(path, settings.MODEL_FILE_LIMIT, "a model file")
+    check_gltf_graph(path, "glb", size, data)
+    return read_glb(data)
+
+
+def check_glb(path: Path, size: int, data: bytes | None = None) -> None:
+    """``check_gltf_graph`` of a GLB file."""
+    check_gltf_graph(path, "glb", size, data)
+
+
+def check_gltf(path: Path, size: int, data: bytes | None = None) -> None:
+    """``check_gltf_graph`` of a glTF file."""
+    check_gltf_graph(path, "gltf", size, data)
+
+
+_METRES = "glTF is in metres by its specification"
+GLB = Format("glTF", ("glb",), unit="m", unit_reason=_METRES, check=check_glb, read=read, common=True)
+GLTF = Format("glTF", ("gltf",), unit="m", unit_reason=_METRES, check=check_gltf, common=True)
