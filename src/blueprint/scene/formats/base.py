@@ -8,6 +8,7 @@ NumPy reader of the common file, which answers None to leave the rest to trimesh
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -94,6 +95,9 @@ class Format:
         An archive of model files: a zip, or one compressed stream (gz, bz2, xz).
     common : bool
         Named in messages and searched for in folders (``blueprint batch``).
+    needs : tuple of (str, str)
+        Optional packages trimesh's reader of the format imports, as (module, package to
+        install): a file of the format is refused in one line where one is missing.
     """
 
     name: str
@@ -107,6 +111,7 @@ class Format:
     trimesh: bool = True
     container: str | None = None
     common: bool = False
+    needs: tuple[tuple[str, str], ...] = ()
 
     def __post_init__(self) -> None:
         if self.up not in ("y", "z", "guess"):
@@ -122,7 +127,11 @@ class Format:
         return _no_unit(self, name, stated)
 
     def check_header(self, path: Path, size: int, data: bytes | None = None) -> None:
-        """Run ``check`` where the format has one."""
+        """Run ``check`` where the format has one, after refusing a file whose reader needs a
+        package that is not installed."""
+        for module, package in self.needs:
+            if importlib.util.find_spec(module) is None:
+                raise InputError(f"{path}: reading this file needs the Python package '{package}'")
         if self.check is not None:
             self.check(path, size, data)
 

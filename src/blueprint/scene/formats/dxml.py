@@ -16,4 +16,6 @@ def check(path: Path, size: int, data: bytes | None = None) -> None:
     check_zip(path, data)
 
 
-FORMAT = Format("3DXML", ("3dxml",), up="z", check=check, common=True)
+FORMAT = Format(
+    "3DXML", ("3dxml",), up="z", check=check, common=True, needs=(("lxml", "lxml"), ("networkx", "networkx"))
+)

@@ -8,7 +8,7 @@ from blueprint.scene.formats.base import Format
 
 __all__ = ["DAE", "DXF", "XAML", "XYZ"]
 
-DAE = Format("DAE", ("dae",), up="z")
+DAE = Format("DAE", ("dae",), up="z", needs=(("collada", "pycollada"),))
 XAML = Format("XAML", ("xaml",))
 DXF = Format("DXF", ("dxf",))
 XYZ = Format("XYZ", ("xyz",))
