@@ -25,6 +25,12 @@ ASCII_VALUE = 2
 NODE_DEPTH_LIMIT = 64
 
 
+def all_of(values: list, *types: type) -> bool:
+    """Whether every one of ``values`` is of one of ``types`` exactly (a bool is no int here,
+    as in JSON), found by one pass in C."""
+    return set(map(type, values)) <= set(types)
+
+
 def read_head(path: Path, data: bytes | None = None, size: int = HEADER_BYTES) -> bytes:
     """The first ``size`` bytes of a model file: of ``data`` where its contents are in memory
     already (a member of an archive), else read from ``path``."""
@@ -51,15 +57,33 @@ def refuse_count(path: Path, count: int, what: str, size: int) -> InputError:
 
 
 def check_gltf_graph(path: Path, ext: str, size: int, data: bytes | None = None) -> None:
-    """Raise ``InputError`` where a glTF or GLB file's node graph has a cycle (node 0 a child of
-    node 1 and node 1 of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT``
-    levels, more than ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT``
-    triangles in all. The graph is walked once, without recursion, before any loader follows
-    it: trimesh's walk of a cycle never ends, and of a deep chain takes time quadratic in its
-    depth. ``data``: the file's bytes where they are in memory, else the file is read."""
-    doc = _gltf_json(path, ext, size, settings.MODEL_FILE_LIMIT, data)
-    if doc is None:
-        return  # not a document we can read: the loader says what is wrong
+    """Raise ``InputError`` where a glTF or GLB file's document is not shaped as the
+    specification says, or its node graph is hostile (``check_gltf_document``). ``data``: the
+    file's bytes where they are in memory, else the file is read."""
+    doc = gltf_document(path, ext, size, data)
+    if doc is not None:
+        check_gltf_document(path, doc)
+
+
+def gltf_document(path: Path, ext: str, size: int, data: bytes | None = None):
+    """The JSON document of a glTF or GLB file, or None where it is not one a reader can
+    follow (trimesh then says what is wrong). ``data`` as for ``check_gltf_graph``.
+
+    Raises
+    ------
+    InputError
+        A GLB header that declares more JSON than the file holds, or JSON nested too deeply.
+    """
+    return _gltf_json(path, ext, size, settings.MODEL_FILE_LIMIT, data)
+
+
+def check_gltf_document(path: Path, doc) -> None:
+    """Raise ``InputError`` where a glTF document is not shaped as the specification says
+    (``check_gltf_shape``), or its node graph has a cycle (node 0 a child of node 1 and node 1
+    of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT`` levels, more than
+    ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT`` triangles in all. The
+    graph is walked once, without recursion, before any loader follows it: trimesh's walk of
+    a cycle never ends, and of a deep chain takes time quadratic in its depth."""
     check_gltf_shape(path, doc)
     nodes = doc.get("nodes")
     if not isinstance(nodes, list) or not nodes:
@@ -75,7 +99,36 @@ def check_gltf_graph(path: Path, ext: str, size: int, data: bytes | None = None)
             return 1, triangles[mesh]
         return 0, 0
 
+    if _forest_within_limits(path, nodes, roots, triangles):
+        return
     walk_graph(path, roots, lambda node: _children(path, nodes, node), own, "nodes")
+
+
+def _forest_within_limits(path: Path, nodes: list, roots: list, triangles: list[int]) -> bool:
+    """Whether the scene is a forest (no node placed twice, every child a node that exists)
+    within the depth, instance and triangle limits, found a level of the tree at a time;
+    where not, ``walk_graph`` walks it and names the first problem as it meets it."""
+    children = [node.get("children") or [] for node in nodes]
+    if not all_of(children, list):
+        return False
+    placed = [child for below in children for child in below]
+    if not all_of(placed, int) or len(set(placed)) != len(placed) or set(placed) & set(roots):
+        return False
+    if placed and (min(placed) < 0 or max(placed) >= len(nodes)):
+        return False
+    level, depth, instances, drawn = list(roots), 0, 0, 0
+    while level:
+        if depth >= NODE_DEPTH_LIMIT:
+            return False
+        meshes = [nodes[n].get("mesh") for n in level]
+        held = [m for m in meshes if type(m) is int and 0 <= m < len(triangles)]
+        instances += len(held)
+        drawn += sum(triangles[m] for m in held)
+        level = [child for n in level for child in children[n]]
+        depth += 1
+    if instances > settings.INSTANCE_LIMIT or drawn > settings.TRIANGLE_LIMIT:
+        return False
+    return True
 
 
 # The fields of a glTF 2.0 document that place and shape its triangles, by the type the
@@ -122,7 +175,8 @@ def check_gltf_shape(path: Path, doc) -> None:
     says, in one line naming the field (``nodes[3].mesh is a string, not a whole number``),
     or where an index refers past the end of its array; checked once before any reader
     trusts a type. The children of nodes and the nodes of scenes are left to the walk of
-    the graph, which names them as nodes."""
+    the graph, which names them as nodes. Each array is checked a field at a time over all
+    its items first; an array where that finds a problem, item by item for its message."""
     if not isinstance(doc, dict):
         raise InputError(f"{path}: not a glTF document (its JSON is {_kind(doc)}, not an object)")
     for name in _GLTF_ARRAYS:
@@ -130,7 +184,10 @@ def check_gltf_shape(path: Path, doc) -> None:
             raise InputError(f"{path}: {name} is {_kind(doc[name])}, not a list")
     _check_field(path, doc, "scene", doc, "scenes", "")
     for name, fields in _GLTF_ARRAYS.items():
-        for index, item in enumerate(doc.get(name, [])):
+        items = doc.get(name, [])
+        if _all_fine(doc, items, fields) and (name != "meshes" or _primitives_fine(doc, items)):
+            continue
+        for index, item in enumerate(items):
             where = f"{name}[{index}]"
             if not isinstance(item, dict):
                 raise InputError(f"{path}: {where} is {_kind(item)}, not an object")
@@ -138,6 +195,44 @@ def check_gltf_shape(path: Path, doc) -> None:
             if name == "meshes":
                 for k, primitive in enumerate(item.get("primitives", [])):
                     _check_fields(path, doc, primitive, _PRIMITIVE, f"{where}.primitives[{k}].")
+
+
+def _primitives_fine(doc: dict, meshes: list) -> bool:
+    primitives = [p for mesh in meshes for p in mesh.get("primitives", [])]
+    return all_of(primitives, dict) and _all_fine(doc, primitives, _PRIMITIVE)
+
+
+def _all_fine(doc: dict, items: list, fields: dict) -> bool:
+    """Whether every item is an object whose fields are as ``fields`` wants them (see
+    ``_GLTF_ARRAYS``), checked a field at a time over all the items."""
+    if not all_of(items, dict):
+        return False
+    for key, want in fields.items():
+        values = [item[key] for item in items if key in item]
+        if values and not _values_fine(doc, values, want):
+            return False
+    return True
+
+
+def _values_fine(doc: dict, values: list, want) -> bool:
+    if want is int:
+        return all_of(values, int) and min(values) >= 0
+    if want is str:
+        return all_of(values, str)
+    if want == "nodes[]":
+        return all_of(values, list)
+    if want == "objects":
+        return all_of(values, list) and all_of([v for value in values for v in value], dict)
+    if isinstance(want, tuple):
+        if not all_of(values, list) or {len(v) for v in values} != {want[1]}:
+            return False
+        return all_of([v for value in values for v in value], int, float)
+    if want.endswith("{}"):
+        if not all_of(values, dict):
+            return False
+        return _values_fine(doc, [v for value in values for v in value.values()], want[:-2])
+    count = len(doc.get(want, []))
+    return all_of(values, int) and min(values) >= 0 and max(values) < count
 
 
 def _check_fields(path: Path, doc: dict, item: dict, fields: dict, prefix: str) -> None:

@@ -72,6 +72,13 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
         scene, ext = _archive_scene(path, ext)
         return _scene_model(scene, path.stem, name, up, ext, include, exclude)
     found = fmt.read(path, info.st_size) if fmt.read is not None else None
+    if isinstance(found, Converted):
+        # read by the reader of the format it was converted to, or else by trimesh; its up
+        # axis and unit stay the file's format's
+        converted, target = found, FORMATS.find(found.ext)
+        found = target.read_data(path, converted.data) if target.read_data is not None else None
+        if found is None:
+            return _scene_model(_converted_scene(converted), path.stem, name, up, ext, include, exclude)
     if isinstance(found, Mesh):
         if len(found.faces) == 0:
             raise InputError(f"{name}: no triangles in the file")
@@ -80,12 +87,8 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
         return _loaded(joined, name, up, fmt, include, exclude)
     if isinstance(found, list):
         return _loaded(_joined(found, path.stem, name), name, up, fmt, include, exclude)
-    if isinstance(found, Converted):
-        scene = _converted_scene(found)
-    else:
-        fmt.check_header(path, info.st_size)
-        scene = _load_scene(path, ext)
-    return _scene_model(scene, path.stem, name, up, ext, include, exclude)
+    fmt.check_header(path, info.st_size)
+    return _scene_model(_load_scene(path, ext), path.stem, name, up, ext, include, exclude)
 
 
 def _scene_model(

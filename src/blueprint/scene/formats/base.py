@@ -89,6 +89,9 @@ class Format:
     read : callable, optional
         ``read(path, size) -> Mesh | list[Instance] | Converted | None``: the fast reader of a
         file of ``size`` bytes; None leaves the file to trimesh.
+    read_data : callable, optional
+        ``read_data(path, data) -> Mesh | list[Instance] | None``: the same of the bytes
+        ``data`` in memory (a file another format's reader converted to this one).
     trimesh : bool
         Whether trimesh reads what ``read`` leaves (and the members of archives of the format).
     container : {"zip", "stream"} or None
@@ -108,6 +111,7 @@ class Format:
     stated_unit: Callable[[str, str | None], tuple[str | None, str]] | None = None
     check: Callable[[Path, int, bytes | None], None] | None = None
     read: Callable[[Path, int], Read] | None = None
+    read_data: Callable[[Path, bytes], Read] | None = None
     trimesh: bool = True
     container: str | None = None
     common: bool = False
