@@ -395,7 +395,8 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
 
     The instances of one mesh are placed together, a block of them at a time (one matrix
     product a block), into arrays made once at their joined size: 10^5 instances of a box
-    cost their triangles, not 10^5 arrays of each kind."""
+    cost their triangles, not 10^5 arrays of each kind. Meshes placed once each (10^5 small
+    distinct parts) are placed a block of those of one vertex count at a time."""
     if len(instances) > settings.INSTANCE_LIMIT:
         raise InputError(
             f"{label}: {len(instances)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}"
@@ -413,6 +414,8 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
     by_mesh: dict[tuple[int, int], list[int]] = {}
     for k, instance in enumerate(drawn):
         by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
+    # the meshes placed once (many small distinct parts), by their vertex count
+    apart: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
     # NaN and infinite vertices are refused with their count once joined, not warned about here
     with np.errstate(all="ignore"):
         for members in by_mesh.values():
@@ -422,6 +425,9 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
                 # a loader's reading of a broken file (trimesh's OBJ reader cuts rows short)
                 raise InputError(f"{label}: the vertices of mesh {mesh.geometry!r} are not x, y, z")
             mesh_faces = np.asarray(mesh.faces, dtype=np.int64)
+            if len(members) == 1:
+                apart.setdefault(len(vertices), []).append((members[0], vertices, mesh_faces))
+                continue
             step = max(1, _PLACED_ROWS // max(len(vertices), len(mesh_faces)))
             for first in range(0, len(members), step):
                 block = np.array(members[first : first + step])
@@ -430,6 +436,17 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
                     mesh_faces,
                     [drawn[k].transform for k in block],
                     block,
+                    vertex_start,
+                    face_start,
+                    positions,
+                    faces,
+                )
+        for count, meshes in apart.items():
+            for first in range(0, len(meshes), max(1, _PLACED_ROWS // max(count, 1))):
+                block = meshes[first : first + max(1, _PLACED_ROWS // max(count, 1))]
+                _place_apart(
+                    block,
+                    [drawn[k].transform for k, _, _ in block],
                     vertex_start,
                     face_start,
                     positions,
@@ -460,6 +477,27 @@ def _place(vertices, mesh_faces, transforms, block, vertex_start, face_start, po
     positions[rows[~moved]] = vertices
     face_rows = face_start[block][:, None] + np.arange(len(mesh_faces))
     faces[face_rows] = mesh_faces[None] + vertex_start[block][:, None, None]
+
+
+def _place_apart(meshes, transforms, vertex_start, face_start, positions, faces) -> None:
+    """Place meshes of one vertex count, each at its one instance: ``meshes`` (instance number,
+    vertices, faces), by their ``transforms`` (None: as they are), into the joined
+    ``positions`` and ``faces``. One matrix product for them all, which multiplies each mesh
+    as ``_place`` would alone (a product of each one's vertices and its transform)."""
+    block = np.array([k for k, _, _ in meshes])
+    stacked = np.stack([vertices for _, vertices, _ in meshes])
+    rows = vertex_start[block][:, None] + np.arange(stacked.shape[1])
+    moved = np.array([t is not None for t in transforms])
+    if moved.any():
+        stack = np.array([t for t in transforms if t is not None])
+        positions[rows[moved]] = (
+            np.matmul(stacked[moved], stack[:, :3, :3].transpose(0, 2, 1)) + stack[:, None, :3, 3]
+        )
+    positions[rows[~moved]] = stacked[~moved]
+    counts = np.array([len(f) for _, _, f in meshes])
+    face_rows = np.repeat(face_start[block] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+    offsets = np.repeat(vertex_start[block], counts)[:, None]
+    faces[face_rows] = np.concatenate([f for _, _, f in meshes]) + offsets
 
 
 def _world_transforms(graph) -> dict:

@@ -373,6 +373,8 @@ def _node_matrix(node: dict) -> np.ndarray:
 def _quaternion_matrices(q: np.ndarray) -> np.ndarray:
     """(N, 4, 4): trimesh.transformations.quaternion_matrix of each (w, x, y, z) quaternion of
     ``q`` (N, 4), computed as it computes one (its squared norm by ``np.dot``, each's own)."""
+    # rows in memory one after another: np.dot sums a strided row in another order
+    q = np.ascontiguousarray(q)
     n = np.array([np.dot(row, row) for row in q], np.float64)
     scaled = ~(n < _EPS)
     q = q.copy()
