@@ -78,6 +78,36 @@ def test_reads_as_trimesh_does(name):
     assert found[0].dtype == np.float64 and found[1].dtype == np.int64
 
 
+def random_obj(seed: int) -> bytes:
+    """An OBJ of random faces of 3 to 6 corners (or all of one count), of one corner form
+    (v, v/vt, v//vn, v/vt/vn), with negative indices among them."""
+    rng = np.random.default_rng(seed)
+    nv, nt, nn = (int(n) for n in rng.integers((4, 1, 1), (40, 10, 5)))
+    lines = [f"v {x:.5f} {y:.5f} {z:.5f}" for x, y, z in rng.normal(size=(nv, 3))]
+    lines += [f"vt {a:.3f} {b:.3f}" for a, b in rng.random((nt, 2))] + ["vn 0 0 1"] * nn
+    form = seed % 4
+    for _ in range(int(rng.integers(1, 30))):
+        k = 3 + seed % 4 if seed % 3 == 0 else int(rng.integers(3, 7))
+        refs = []
+        for _ in range(k):
+            v = int(rng.integers(1, nv + 1))
+            v = v if rng.random() < 0.8 else v - nv - 1
+            t, n = int(rng.integers(1, nt + 1)), int(rng.integers(1, nn + 1))
+            refs.append([f"{v}", f"{v}/{t}", f"{v}//{n}", f"{v}/{t}/{n}"][form])
+        lines.append("f " + " ".join(refs))
+    return ("\n".join(lines) + "\n").encode()
+
+
+@pytest.mark.parametrize("seed", range(24))
+def test_random_files_read_as_trimesh_does(seed):
+    data = random_obj(seed)
+    found = obj_arrays(data)
+    assert found is not None
+    positions, faces = trimesh_arrays(data)
+    np.testing.assert_array_equal(found[0], positions)
+    np.testing.assert_array_equal(found[1], faces)
+
+
 @pytest.mark.parametrize("name", LEFT_TO_TRIMESH)
 def test_anything_else_is_left_to_trimesh(name):
     assert obj_arrays(LEFT_TO_TRIMESH[name]) is None
