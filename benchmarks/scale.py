@@ -19,7 +19,8 @@ Families, each with a size parameter:
 Each line: ``family``, ``size``, ``file`` (and its ``format`` and ``file_bytes``),
 ``triangles_drawn``, ``triangles_unique``, ``parts``, ``instances``, ``output``, ``seconds`` (the
 whole process, wall), ``stages`` (seconds: the command's own timings, ``BLUEPRINT_STAGES=1``,
-see ``blueprint.api.stages``), ``peak_rss_bytes`` (the process's peak resident memory),
+see ``blueprint.api.stages``), ``peak_rss_bytes`` (the process's peak resident memory, VmHWM,
+and ``bytes_per_triangle`` drawn),
 ``gpu_memory`` (bytes, where the driver tells), and ``error`` (its last line) where the command
 failed or ran past ``--timeout``. ``--src`` names the source tree to run (default: this one's),
 so that two trees can be timed in turns. The models are kept in ``--workdir`` and made once.
@@ -269,11 +270,22 @@ FAMILIES = {"scan": scan, "assembly": assembly, "parts": parts}
 
 
 # -- runs ----------------------------------------------------------------------------------------
+# Printed by the drawing's process as it exits: its peak resident memory (VmHWM, its own; the
+# ru_maxrss a parent sees carries over the parent's across fork and exec).
+_PEAK = """import atexit, json, sys
+def _peak():
+    with open("/proc/self/status") as fh:
+        kib = next(int(line.split()[1]) for line in fh if line.startswith("VmHWM"))
+    print(json.dumps({"peak_rss": kib * 1024}), file=sys.stderr, flush=True)
+atexit.register(_peak)
+"""
+
+
 def run(src: Path, model: Path, output: Path, size: tuple[int, int], layers: int, timeout: float) -> dict:
     """One ``blueprint render`` in a process of its own: its wall seconds, its peak resident
-    memory (``wait4``'s, the process's own), its stage timings, or its error."""
+    memory, its stage timings, or its error."""
     env = {**os.environ, "PYTHONPATH": str(src), "BLUEPRINT_STAGES": "1"}
-    code = "from blueprint.cli import main; main()"
+    code = _PEAK + "from blueprint.cli import main; main()"
     argv = [sys.executable, "-c", code, "render", str(model), "-o", str(output)]
     argv += ["--size", str(size[0]), str(size[1]), "--max-layers", str(layers)]
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
@@ -281,13 +293,14 @@ def run(src: Path, model: Path, output: Path, size: tuple[int, int], layers: int
         child = subprocess.Popen(argv, stdout=out, stderr=err, stdin=subprocess.DEVNULL, env=env)
         killer = threading.Timer(timeout, child.kill)
         killer.start()
-        _, status, usage = os.wait4(child.pid, 0)
+        _, status = os.waitpid(child.pid, 0)
         killer.cancel()
         child.returncode = os.waitstatus_to_exitcode(status)
         seconds = time.perf_counter() - start
         err.seek(0)
         lines = err.read().decode("utf-8", "replace").splitlines()
-    found = {"seconds": round(seconds, 3), "peak_rss_bytes": usage.ru_maxrss * 1024}
+    peaks = [json.loads(line)["peak_rss"] for line in lines if line.startswith('{"peak_rss"')]
+    found = {"seconds": round(seconds, 3), "peak_rss_bytes": peaks[-1] if peaks else None}
     reports = [json.loads(line) for line in lines if line.startswith('{"stages"')]
     if reports:
         found["stages"] = {k: round(v, 3) for k, v in reports[-1]["stages"].items()}
@@ -326,7 +339,10 @@ def main(argv: list[str] | None = None) -> None:
                     found = run(args.src, path, output, tuple(args.size), args.max_layers, args.timeout)
                     case = {"family": family, "size": size, "file": path.name, "format": path.suffix[1:]}
                     case |= {"file_bytes": path.stat().st_size, **counts, "output": kind, **found}
-                    case["bytes_per_triangle"] = round(found["peak_rss_bytes"] / counts["triangles_drawn"])
+                    if found["peak_rss_bytes"]:
+                        case["bytes_per_triangle"] = round(
+                            found["peak_rss_bytes"] / counts["triangles_drawn"]
+                        )
                     print(json.dumps(case), flush=True)
 
 

@@ -24,15 +24,11 @@ from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.scene.formats.base import Format, Mesh
 from blueprint.scene.formats.polygons import triangulated
-from blueprint.scene.formats.text import gathered, line_words, lines, only, parse, word_spans
+from blueprint.scene.formats.text import affordable, gathered, line_words, lines, only, parse, word_spans
 from blueprint.scene.headers import check_triangle_count, read_all
 from blueprint.settings import read_file
 
-__all__ = ["FORMAT", "OBJ_LIMIT", "check", "obj_arrays", "read_obj", "short_vertex"]
-
-# Files read here at most: the passes hold up to some 50 bytes of index per byte of the file
-# (a file of nothing but newlines), so larger files go to trimesh.
-OBJ_LIMIT = min(256 << 20, settings.MEMORY_BUDGET // 128)
+__all__ = ["FORMAT", "check", "obj_arrays", "read_obj", "short_vertex"]
 
 # the bytes the numbers of a line may hold besides whitespace: decimal numbers as NumPy and
 # Python read them alike (no "nan", "inf", hexadecimal or digit separators)
@@ -90,7 +86,7 @@ def obj_arrays(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         (V, 3) float64 and (F, 3) int64 zero-based, or None where the file is anything the
         module's docstring leaves to trimesh, or holds no face.
     """
-    if not data or len(data) > OBJ_LIMIT or b"\\" in data:
+    if not data or not affordable(data) or b"\\" in data:
         return None
     if data.count(b"\r") != data.count(b"\r\n"):
         return None  # trimesh splits lines at newlines only
@@ -280,8 +276,6 @@ def short_vertex(data: bytes) -> tuple[int, int] | None:
 
 def read_obj(path: Path, size: int) -> Mesh | None:
     """The mesh of an OBJ file (``obj_arrays``), or None for trimesh."""
-    if size > OBJ_LIMIT:
-        return None
     found = obj_arrays(read_file(path, settings.MODEL_FILE_LIMIT, "a model file"))
     if found is None:
         return None

@@ -18,7 +18,7 @@ from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.scene.formats.base import Format, Mesh
 from blueprint.scene.formats.polygons import triangulated
-from blueprint.scene.formats.text import blanked, is_ascii, line_words, lines, only, parse
+from blueprint.scene.formats.text import affordable, blanked, is_ascii, line_words, lines, only, parse
 from blueprint.scene.headers import ASCII_VALUE, check_triangle_count, read_all, read_head, refuse_count
 from blueprint.settings import read_file
 
@@ -100,6 +100,8 @@ def off_arrays(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         (V, 3) float64 and (F, 3) int64, or None where the file is anything the module's
         docstring leaves to trimesh.
     """
+    if not affordable(data):
+        return None
     buf = np.frombuffer(data, np.uint8)
     if not is_ascii(buf) or data.count(b"\r") != data.count(b"\r\n"):
         return None

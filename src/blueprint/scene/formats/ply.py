@@ -20,7 +20,7 @@ from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.scene.formats.base import Format, Mesh
 from blueprint.scene.formats.polygons import triangulated
-from blueprint.scene.formats.text import gathered, is_ascii, line_words, lines, only, parse
+from blueprint.scene.formats.text import affordable, gathered, is_ascii, line_words, lines, only, parse
 from blueprint.scene.headers import ASCII_VALUE, check_triangle_count, read_head, refuse_count
 from blueprint.settings import read_file
 
@@ -177,6 +177,8 @@ def ply_arrays(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         (V, 3) float64 and (F, 3) int64, or None where the file is anything the module's
         docstring leaves to trimesh.
     """
+    if not affordable(data):
+        return None
     header = _header(data)
     if header is None:
         return None

@@ -16,7 +16,7 @@ import numpy as np
 from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.scene.formats.base import Format, Mesh
-from blueprint.scene.formats.text import blanked, find_all, is_ascii, only, parse
+from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
 from blueprint.scene.headers import check_triangle_count
 from blueprint.settings import open_file
 
@@ -54,6 +54,8 @@ def _ascii(path: Path, data: bytes) -> Mesh | None:
     """The triangles of an ASCII STL file of one solid as trimesh reads them: the numbers after
     each ``vertex`` (any case) up to the end of its line, three a vertex; None for any other
     file (several solids, two ``vertex`` on a line, numbers NumPy does not read the same way)."""
+    if not affordable(data):
+        return None
     lower = data.lower()
     begin, end = lower.find(b"solid"), lower.find(b"endsolid")
     if begin < 0 or end < begin or lower.find(b"solid", end + len(b"endsolid")) >= 0:
