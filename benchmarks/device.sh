@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One device run: set up OpenGL and wheels, check a render, then time blueprint, its code-path
 # variants, streamed drawings a second and capture in compute against the graphics pipeline, the
-# textbook baseline, the extra features and vector drawings. The wheels a bare H200 lacks come from
+# textbook baseline, the extra features, vector drawings and generated models of growing size
+# (benchmarks/scale.py). The wheels a bare H200 lacks come from
 #   bash ../shared/tools/device-gl-prep fpdf2==2.8.9 ezdxf==1.4.5 pikepdf==10.18.0 lxml==6.2.0 \
 #     defusedxml==0.7.1 fonttools==4.68.0 pyparsing==3.3.3
 # (vector drawings write PDF layers with pikepdf). Models come in .models/ (copied from
@@ -29,4 +30,6 @@ python3 benchmarks/stream.py .models/cycloidal.glb .models/2CylinderEngine.glb -
 python3 benchmarks/compute_capture.py .models/rocker-arm.obj .models/cycloidal.glb .models/2CylinderEngine.glb > $OUT/compute_capture.jsonl
 python3 benchmarks/table1.py --models-dir .models --frames 20 --cpu-frames 1 > $OUT/table1.jsonl
 python3 benchmarks/vector.py --models-dir .models --runs 3 > $OUT/vector.jsonl
+python3 benchmarks/scale.py --size 2048 2048 --sizes scan=1310720,5242880,20971520 --sizes assembly=5,10,20 \
+  --sizes parts=100000 --timeout 300 --workdir /tmp/scale > $OUT/scale.jsonl
 python3 benchmarks/summary.py $OUT/*.jsonl

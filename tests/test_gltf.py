@@ -1,4 +1,4 @@
-"""The NumPy GLB reader (``blueprint.scene.gltf``) against trimesh, which it stands in for: the
+"""The NumPy GLB reader (``blueprint.scene.formats.gltf``) against trimesh, which it stands in for: the
 same instances joined into the same arrays and part names where it reads a file, None (trimesh
 then reads it, or refuses it in one line) for anything else."""
 
@@ -18,7 +18,7 @@ import blueprint
 from blueprint import examples
 from blueprint.errors import InputError
 from blueprint.scene import loader
-from blueprint.scene.gltf import read_glb
+from blueprint.scene.formats.gltf import read_glb
 
 MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
 GEARBOX = Path(blueprint.__file__).parent / "data" / "gearbox.glb"
@@ -139,6 +139,99 @@ def test_an_assembly_reads_as_trimesh_reads_it(tmp_path):
     assert_same(path)
     # trimesh's walk takes a node's last child first
     assert ours(path)[3] == ["GLTF", "bolt", "bolt_1", "bolt-left"]
+
+
+def test_many_nodes_placed_in_bulk_read_as_trimesh_reads_them(tmp_path):
+    """Node transforms composed in bulk (a level of the tree a matrix product) give trimesh's
+    arrays to the bit: 400 nodes four levels deep, by translation, rotation (zero and
+    unnormalised quaternions among them), scale, matrix, and matrix with TRS together."""
+    rng = np.random.default_rng(5)
+    glb = Glb(scene=0)
+    glb.doc["meshes"] = [
+        {
+            "name": "a",
+            "primitives": [glb.primitive(rng.normal(size=(5, 3)).astype(np.float32), (0, 1, 2, 2, 3, 4))],
+        },
+        {"name": "b", "primitives": [glb.primitive(), glb.primitive(QUAD, (0, 1, 2, 0, 2, 3), 5123)]},
+    ]
+    nodes = []
+    for k in range(400):
+        node = {"mesh": int(rng.integers(0, 2))}
+        kind = k % 6
+        if kind in (0, 3, 5):
+            node["translation"] = rng.normal(size=3).tolist()
+        if kind in (1, 3, 5):
+            node["rotation"] = [0, 0, 0, 0] if k % 50 == 1 else (rng.normal(size=4) * 3).tolist()
+        if kind in (2, 3):
+            node["scale"] = rng.uniform(0.5, 2, 3).tolist()
+        if kind in (4, 5):
+            node["matrix"] = np.r_[rng.normal(size=12), [0, 0, 0, 1]].reshape(4, 4).T.ravel().tolist()
+        nodes.append(node)
+    # four levels: nodes 0-3 roots, each of the rest under an earlier node of the level above
+    for k in range(4, 400):
+        level_start = 4 if k < 40 else (40 if k < 150 else 150)
+        parent = int(rng.integers(0 if level_start == 4 else {40: 4, 150: 40}[level_start], level_start))
+        nodes[parent].setdefault("children", []).append(k)
+    glb.doc["nodes"] = nodes
+    glb.doc["scenes"] = [{"nodes": [0, 1, 2, 3]}]
+    path = glb.write(tmp_path / "many.glb")
+    positions, faces, parts, names = ours(path)
+    trimeshs = theirs(path)
+    assert len(names) > 400
+    np.testing.assert_array_equal(faces, trimeshs[1])
+    np.testing.assert_array_equal(parts, trimeshs[2])
+    # trimesh multiplies a deep chain in another order: the last bits of a float64 differ
+    np.testing.assert_allclose(positions, trimeshs[0], rtol=0, atol=1e-12)
+    # to the bit, the transforms of one node at a time, composed down the tree as read
+    world = {}
+    stack = [(None, root) for root in glb.doc["scenes"][0]["nodes"]]
+    placed = []
+    while stack:
+        parent, index = stack.pop()
+        node = nodes[index]
+        stack.extend((index, child) for child in node.get("children", []))
+        local = one_node_matrix(node)
+        world[index] = local if parent is None else world[parent] @ local
+        mesh = glb.doc["meshes"][node["mesh"]]
+        placed += [world[index] if len(mesh["primitives"]) == 1 else world[index] @ np.eye(4)] * len(
+            mesh["primitives"]
+        )
+    instances = read_glb(path.read_bytes())
+    for instance, transform in zip(instances, placed, strict=True):
+        np.testing.assert_array_equal(instance.transform, transform)
+
+
+def quaternion_matrix(q) -> np.ndarray:
+    """trimesh.transformations.quaternion_matrix of one (w, x, y, z) quaternion, its squared
+    norm summed by ``np.dot`` (trimesh's ``diagonal_dot`` sums it in another order)."""
+    q = np.array(q, float)
+    n = np.dot(q, q)
+    if not n < np.finfo(float).eps * 4:
+        q = q * np.sqrt(2.0 / n)
+    q = np.outer(q, q)
+    return np.array(
+        [
+            [1.0 - q[2, 2] - q[3, 3], q[1, 2] - q[3, 0], q[1, 3] + q[2, 0], 0.0],
+            [q[1, 2] + q[3, 0], 1.0 - q[1, 1] - q[3, 3], q[2, 3] - q[1, 0], 0.0],
+            [q[1, 3] - q[2, 0], q[2, 3] + q[1, 0], 1.0 - q[1, 1] - q[2, 2], 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+def one_node_matrix(node: dict) -> np.ndarray:
+    """A node's transform as trimesh composes it, one matrix product a field: matrix, then
+    translation, rotation and scale."""
+    matrix = np.eye(4) if "matrix" not in node else np.array(node["matrix"], float).reshape(4, 4).T
+    if "translation" in node:
+        translation = np.eye(4)
+        translation[:3, 3] = node["translation"]
+        matrix = np.dot(matrix, translation)
+    if "rotation" in node:
+        matrix = np.dot(matrix, quaternion_matrix(np.roll(node["rotation"], 1)))
+    if "scale" in node:
+        matrix = np.dot(matrix, np.diag([*node["scale"], 1.0]))
+    return matrix
 
 
 def test_trimesh_exports_read_as_trimesh_reads_them(tmp_path):

@@ -22,6 +22,7 @@ import blueprint
 from blueprint import examples, settings
 from blueprint.errors import InputError, printable
 from blueprint.scene import loader
+from blueprint.scene.formats import gltf
 from blueprint.settings import check_file, read_file, read_settings
 
 TIMEOUT = 30  # seconds: a refusal takes well under one; only a hang reaches this
@@ -921,7 +922,7 @@ def _case(label: str):
 
 def test_short_vertex_lines_are_found_as_a_line_by_line_reading_finds_them(monkeypatch):
     """``short_vertex`` against a plain reading of every line, across blocks of a few bytes."""
-    from blueprint.scene import obj
+    from blueprint.scene.formats import obj
 
     rng = np.random.default_rng(36)
     for trial in range(200):
@@ -1040,7 +1041,7 @@ def test_instances_beyond_the_memory_budget_are_refused_before_any_is_made(tmp_p
     def made(data):
         raise AssertionError("the instances were read")
 
-    monkeypatch.setattr(loader, "read_glb", made)
+    monkeypatch.setattr(gltf, "read_glb", made)
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == (
@@ -1056,7 +1057,7 @@ def test_instances_beyond_the_memory_budget_are_refused_before_any_is_made(tmp_p
 def test_joined_instances_are_each_mesh_placed_by_its_transform(monkeypatch):
     """``_joined`` places the instances of a mesh a block at a time; the same arrays, to the
     bit, as placing them one by one in order."""
-    from blueprint.scene.gltf import Instance
+    from blueprint.scene.formats import Instance
 
     rng = np.random.default_rng(7)
     meshes = [(rng.normal(size=(n, 3)), rng.integers(0, n, size=(m, 3))) for n, m in ((4, 2), (9, 7), (3, 1))]

@@ -1,5 +1,6 @@
-"""The plain OBJ reader (``blueprint.scene.obj``) against trimesh, which it stands in for: the
-same vertices and faces where it reads a file, None (trimesh then reads it) for anything else."""
+"""The OBJ reader (``blueprint.scene.formats.obj``) against trimesh, which it stands in for: the
+same vertices and faces, in the same order, where it reads a file, None (trimesh then reads it)
+for anything else; and a small file against arrays written by hand."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ import trimesh
 
 import blueprint
 from blueprint.scene import loader
-from blueprint.scene.obj import plain_obj
+from blueprint.scene.formats.obj import obj_arrays
 
 MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
 
@@ -36,25 +37,40 @@ READ = {
     "signs and bare points": b"v .5 -.5 +1.\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
     "faces first": b"f 3 1 2\nf 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n",
     "interleaved": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0 0 1\nf 1 2 4\n# end\n",
+    "negative index": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -1\n",
+    "quads": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\nf 4 3 1 2\n",
+    "pentagons": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\nf 1 2 3 4 5\nf 5 4 3 2 1\n",
+    "mixed polygons": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 2 0\n"
+    b"f 1 2 3\nf 1 2 4 3\nf 1 2 3 4 5\nf 1 2\n",
+    "normals": b"vn 0 0 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n",
+    "normals not given": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n",
+    "vertex colour": b"v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\n",
+    "texture": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n"
+    b"f 1/1 2/2 3/3\nf 2/1 4/2 3/3\nf 1/3 2/2 3/1\n",
+    "objects, groups, texture and normals": b"o thing\ng part\ns 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+    b"vt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/1/1\ng other\nf 2/1/1 4/2/1 3/3/1 1/2/1\n",
+    "mixed polygons, texture, negative": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 3 3 3\nvt 0 0\nvt 1 0\n"
+    b"f 1/1 2/2 3/1\nf 1/2 -4/1 3/2 4/1\nf 1/1 2/2 3/1 4/2 -1/1\n",
 }
 
 LEFT_TO_TRIMESH = {
-    "negative index": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -1\n",
     "index out of range": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
     "nan": b"v 0 0 0\nv 1 0 0\nv 0 1 nan\nf 1 2 3\n",
     "not a number": b"v 0 0 0\nv 1-0 0\nv 0 1 0\nf 1 2 3\n",
-    "quad": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n",
-    "normals": b"vn 0 0 1\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n",
     "material": b"usemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
-    "vertex colour": b"v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\n",
     "no faces": b"v 0 0 0\n",
     "empty": b"",
+    "line continuation": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n3\n",
+    "corners of two forms": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2 3\n",
+    "rows of two lengths": b"v 0 0 0\nv 1 0 0 1\nv 0 1 0\nf 1 2 3\n",
+    "another keyword": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nf 1 2 3\n",
+    "faces of two corners": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n",
 }
 
 
 @pytest.mark.parametrize("name", READ)
 def test_reads_as_trimesh_does(name):
-    found = plain_obj(READ[name])
+    found = obj_arrays(READ[name])
     assert found is not None
     positions, faces = trimesh_arrays(READ[name])
     np.testing.assert_array_equal(found[0], positions)
@@ -62,18 +78,59 @@ def test_reads_as_trimesh_does(name):
     assert found[0].dtype == np.float64 and found[1].dtype == np.int64
 
 
+def random_obj(seed: int) -> bytes:
+    """An OBJ of random faces of 3 to 6 corners (or all of one count), of one corner form
+    (v, v/vt, v//vn, v/vt/vn), with negative indices among them."""
+    rng = np.random.default_rng(seed)
+    nv, nt, nn = (int(n) for n in rng.integers((4, 1, 1), (40, 10, 5)))
+    lines = [f"v {x:.5f} {y:.5f} {z:.5f}" for x, y, z in rng.normal(size=(nv, 3))]
+    lines += [f"vt {a:.3f} {b:.3f}" for a, b in rng.random((nt, 2))] + ["vn 0 0 1"] * nn
+    form = seed % 4
+    for _ in range(int(rng.integers(1, 30))):
+        k = 3 + seed % 4 if seed % 3 == 0 else int(rng.integers(3, 7))
+        refs = []
+        for _ in range(k):
+            v = int(rng.integers(1, nv + 1))
+            v = v if rng.random() < 0.8 else v - nv - 1
+            t, n = int(rng.integers(1, nt + 1)), int(rng.integers(1, nn + 1))
+            refs.append([f"{v}", f"{v}/{t}", f"{v}//{n}", f"{v}/{t}/{n}"][form])
+        lines.append("f " + " ".join(refs))
+    return ("\n".join(lines) + "\n").encode()
+
+
+@pytest.mark.parametrize("seed", range(24))
+def test_random_files_read_as_trimesh_does(seed):
+    data = random_obj(seed)
+    found = obj_arrays(data)
+    assert found is not None
+    positions, faces = trimesh_arrays(data)
+    np.testing.assert_array_equal(found[0], positions)
+    np.testing.assert_array_equal(found[1], faces)
+
+
 @pytest.mark.parametrize("name", LEFT_TO_TRIMESH)
 def test_anything_else_is_left_to_trimesh(name):
-    assert plain_obj(LEFT_TO_TRIMESH[name]) is None
+    assert obj_arrays(LEFT_TO_TRIMESH[name]) is None
 
 
-@pytest.mark.parametrize("name", ["stanford-bunny.obj", "fandisk.obj", "teapot.obj"])
+def test_a_file_written_by_hand_reads_as_written():
+    """Quads and a pentagon with texture indices: a vertex for each (vertex, texture) pair,
+    quads made two triangles each, the pentagon a fan, in trimesh's order (worked out by hand)."""
+    data = b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 1\nf 1/1 2/1 3/1 4/1\nf 1/2 2/1 3/1\n"
+    positions, faces = obj_arrays(data)
+    # corners (vertex, texture) 1/1 2/1 3/1 4/1 1/2 2/1 3/1; distinct: (1,1) (1,2) (2,1) (3,1) (4,1)
+    np.testing.assert_array_equal(positions, [[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    # lines of two corner counts: each face triangulated as read, the quad as (0 1 2) (2 3 0)
+    np.testing.assert_array_equal(faces, [[0, 2, 3], [3, 4, 0], [1, 2, 3]])
+
+
+@pytest.mark.parametrize("name", ["stanford-bunny.obj", "fandisk.obj", "teapot.obj", "spot.obj"])
 def test_real_scans_read_as_trimesh_does(name):
     path = MODELS / "common-3d-test-models" / name
     if not path.exists():
         pytest.skip(f"{path} not found (see ../shared/models/README.md)")
     data = path.read_bytes()
-    found = plain_obj(data)
+    found = obj_arrays(data)
     assert found is not None
     positions, faces = trimesh_arrays(data)
     np.testing.assert_array_equal(found[0], positions)
@@ -110,8 +167,8 @@ def loaded_in_a_process(path: Path, what: str) -> list[str]:
     return done.stdout.split()
 
 
-def test_plain_obj_loads_without_trimesh(tmp_path):
+def test_obj_loads_without_trimesh(tmp_path):
     """trimesh (with scipy and networkx) takes longer to import than a scan takes to read."""
     path = tmp_path / "triangle.obj"
-    path.write_bytes(READ["triangle"])
-    assert loaded_in_a_process(path, "len(m.faces)") == ["1", "False"]
+    path.write_bytes(READ["objects, groups, texture and normals"])
+    assert loaded_in_a_process(path, "len(m.faces)") == ["4", "False"]

@@ -9,7 +9,7 @@ from helpers import no_output, one_error, run_cli
 
 import blueprint
 from blueprint.errors import InputError
-from blueprint.scene import step
+from blueprint.scene.formats import step
 
 
 @pytest.fixture(scope="module")
@@ -70,6 +70,6 @@ def test_meshing_has_a_time_limit(trimesh_models):
 def test_step_size_limit(tmp_path, monkeypatch):
     model = tmp_path / "big.step"
     model.write_bytes(b"ISO-10303-21;\n" + b" " * 4096)
-    monkeypatch.setattr("blueprint.scene.loader.STEP_FILE_LIMIT", 1024)
+    monkeypatch.setattr("blueprint.scene.formats.step.STEP_FILE_LIMIT", 1024)
     with pytest.raises(InputError, match="over the limit of 1 KiB for a STEP file"):
         blueprint.load_model(model)

@@ -23,8 +23,9 @@ import blueprint
 from blueprint.api.files import render_vector_file
 from blueprint.errors import InputError
 from blueprint.scene.camera import fit_camera
+from blueprint.scene.formats import FORMATS
 from blueprint.scene.loader import model_from_object
-from blueprint.scene.units import UNITS_MM, drawing_unit, file_unit, named_unit
+from blueprint.scene.units import UNITS_MM, drawing_unit, named_unit
 
 SVG = "{http://www.w3.org/2000/svg}"
 CORNERS = np.array(list(itertools.product((0, 1), repeat=3)), np.float64)
@@ -228,16 +229,16 @@ def test_names_of_units():
     ]
     assert named_unit("furlong") is None
     with pytest.raises(InputError, match=r"^x\.3mf: unknown length unit 'furlong' \(3MF's units: micron, "):
-        file_unit("x.3mf", "3mf", "furlong")
+        FORMATS.unit("x.3mf", "3mf", "furlong")
 
 
 def test_formats_that_state_a_unit():
-    assert file_unit("a.glb", "glb") == ("m", "glTF is in metres by its specification")
-    assert file_unit("a.gltf", "gltf")[0] == "m"
-    assert file_unit("a.STEP", "step") == ("m", "OpenCASCADE meshes STEP in metres")
-    assert file_unit("a.3mf", "3mf", "inch")[0] == "in"
+    assert FORMATS.unit("a.glb", "glb") == ("m", "glTF is in metres by its specification")
+    assert FORMATS.unit("a.gltf", "gltf")[0] == "m"
+    assert FORMATS.unit("a.STEP", "step") == ("m", "OpenCASCADE meshes STEP in metres")
+    assert FORMATS.unit("a.3mf", "3mf", "inch")[0] == "in"
     for ext in ("stl", "obj", "ply", "off", "3dxml"):
-        assert file_unit(f"a.{ext}", ext) == (None, f"{ext.upper()} files carry no unit")
+        assert FORMATS.unit(f"a.{ext}", ext) == (None, f"{ext.upper()} files carry no unit")
 
 
 @pytest.mark.parametrize(

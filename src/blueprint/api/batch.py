@@ -16,6 +16,7 @@ from blueprint.api.draw import Drawing, draw, to_model
 from blueprint.api.renderer import Renderer
 from blueprint.errors import BlueprintError, InputError, printable
 from blueprint.export.files import atomic_write
+from blueprint.scene.formats import FORMATS
 
 __all__ = ["MANIFEST", "MODEL_SUFFIXES", "batch", "choose_devices", "collect_inputs", "outputs_for"]
 
@@ -23,7 +24,7 @@ __all__ = ["MANIFEST", "MODEL_SUFFIXES", "batch", "choose_devices", "collect_inp
 MANIFEST = "manifest.json"
 
 #: Suffixes a folder given as input is searched for (any case).
-MODEL_SUFFIXES = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".3mf", ".3dxml", ".step", ".stp")
+MODEL_SUFFIXES = tuple(f".{suffix}" for suffix in FORMATS.common_suffixes())
 
 #: The Dask resource each drawing worker holds one of: a task needs one, so a worker draws one
 #: input at a time, on its own device.

@@ -50,7 +50,7 @@ RENDER_OPTIONS = (
 )
 def render(model, output, highlight_model, **values):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
-    from blueprint.api import default_renderer, render_frame
+    from blueprint.api import default_renderer, render_frame, stages
     from blueprint.api.options import DrawOptions
     from blueprint.scene.loader import load_model
 
@@ -60,17 +60,26 @@ def render(model, output, highlight_model, **values):
         if chosen.get("highlight"):
             raise InputError("give --highlight or --highlight-model, not both")
         chosen["highlight"] = load_model(highlight_model, up=chosen.get("up"))
-    options = DrawOptions(**chosen)
+    # BLUEPRINT_STAGES: the stages timed, the frame's synchronised (blueprint.api.stages)
+    timing = stages.enabled()
+    options = DrawOptions(**chosen, **({"profile": True} if timing else {}))
     if write.kind is Kind.DRAWING:
         _render_vector(model, output, options)
         return
     if options.scale or options.sheet:
         raise InputError(f"--scale and --sheet are for vector drawings ({_suffixes(Kind.DRAWING)})")
     options.raster_style  # noqa: B018 - a line style file a picture cannot take fails before the model loads
-    loaded = load_model(model, up=options.up, include=options.include, exclude=options.exclude)
+    with stages.timed("read"):
+        loaded = load_model(model, up=options.up, include=options.include, exclude=options.exclude)
+    if timing:
+        stages.watch(default_renderer())
     frame = render_frame(loaded, options=options)
-    write(output, frame.image)
+    with stages.timed("write"):
+        write(output, frame.image)
     info = default_renderer().info
+    if timing:
+        stages.add_frame(frame.stages)
+        stages.report(default_renderer())
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
     click.echo(
         printable(
@@ -83,10 +92,15 @@ def render(model, output, highlight_model, **values):
 
 def _render_vector(model, output, options) -> None:
     """Write the vector drawing of ``options`` (a ``DrawOptions``) and print its line."""
-    from blueprint.api import default_renderer
+    from blueprint.api import default_renderer, stages
     from blueprint.api.files import render_vector_file
 
     summary = render_vector_file(model, output, options=options)
+    if stages.enabled():
+        for name, seconds in summary["seconds"].items():
+            if name != "total":
+                stages.add("read" if name == "load" else name, seconds)
+        stages.report(default_renderer())
     levels = ", ".join(f"level {k}: {n}" for k, n in sorted(summary["lines"].items()))
     click.echo(
         printable(

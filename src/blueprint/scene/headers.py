@@ -1,6 +1,9 @@
-"""Counts a model file's header declares, checked against the file's size before any loader
-believes them: an ASCII PLY that declares 10^12 faces, or an OFF that claims ten times the faces
-it holds, is refused at once instead of being read (or silently drawn short)."""
+"""Checks of what a model file declares, made before any loader believes it: counts in a
+header against the file's size (an ASCII PLY that declares 10^12 faces, or an OFF that claims
+ten times the faces it holds, is refused at once instead of being read or silently drawn
+short), and scene graphs walked once for cycles, depth, instances and triangles. The checks of
+one format live in its module of ``blueprint.scene.formats``; the glTF document's, shared by
+GLB and glTF files, and the walk of a graph, shared with 3MF, live here."""
 
 from __future__ import annotations
 
@@ -9,173 +12,78 @@ import io
 import json
 from pathlib import Path
 
+from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.settings import human_size, open_file
 
 # the most of a file read to find its header
 HEADER_BYTES = 1 << 16
-_PLY_SIZES = {
-    **dict.fromkeys(("char", "uchar", "int8", "uint8"), 1),
-    **dict.fromkeys(("short", "ushort", "int16", "uint16"), 2),
-    **dict.fromkeys(("int", "uint", "float", "int32", "uint32", "float32"), 4),
-    **dict.fromkeys(("double", "float64"), 8),
-}
 # the fewest bytes an ASCII value takes: a digit and a separator
-_ASCII_VALUE = 2
+ASCII_VALUE = 2
 # levels of nodes a glTF scene, or of components a 3MF object, may nest: CAD assemblies go a
 # dozen or two deep, and trimesh's 3MF loader takes time cubic in the depth
 NODE_DEPTH_LIMIT = 64
 
 
-def check_declared_counts(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
-    """Raise ``InputError`` where the header of a PLY or OFF file declares more elements than
-    ``size`` bytes can hold, or a vertex line of an OBJ file has fewer than three numbers
-    (other formats: nothing to check). ``data``: the file's contents where they are in memory
-    already (a member of an archive), else the file is read."""
-    if ext == "obj":
-        _check_obj(path, limit, data)
-        return
-    if ext not in ("ply", "off"):
-        return
+def all_of(values: list, *types: type) -> bool:
+    """Whether every one of ``values`` is of one of ``types`` exactly (a bool is no int here,
+    as in JSON), found by one pass in C."""
+    return set(map(type, values)) <= set(types)
+
+
+def read_head(path: Path, data: bytes | None = None, size: int = HEADER_BYTES) -> bytes:
+    """The first ``size`` bytes of a model file: of ``data`` where its contents are in memory
+    already (a member of an archive), else read from ``path``."""
     if data is not None:
-        head = data[:HEADER_BYTES]
-    else:
-        with open_file(path, limit, "a model file") as fh:
-            head = fh.read(HEADER_BYTES)
-    text = head.decode("latin-1")
-    if ext == "ply":
-        _check_ply(path, text, size)
-    elif _check_off(path, text, size):
-        if data is None:
-            with open_file(path, limit, "a model file") as fh:
-                data = fh.read(limit + 1)
-        _check_off_faces(path, data)
+        return data[:size]
+    with open_file(path, settings.MODEL_FILE_LIMIT, "a model file") as fh:
+        return fh.read(size)
 
 
-def _check_obj(path: Path, limit: int, data: bytes | None) -> None:
-    """Refuse a vertex line of fewer than three numbers, which trimesh reads as 2-D vertices
-    (or, where the counts happen to add up, as vertices shifted by a number)."""
-    from blueprint.scene.obj import short_vertex
-
-    if data is None:
-        with open_file(path, limit, "a model file") as fh:
-            data = fh.read(limit + 1)
-    found = short_vertex(data)
-    if found is not None:
-        line, numbers = found
-        counted = f"{numbers} number" + ("" if numbers == 1 else "s")
-        raise InputError(f"{path}: line {line}: a vertex of {counted} (x, y and z are needed)")
+def read_all(path: Path, data: bytes | None = None) -> bytes:
+    """The contents of a model file: ``data`` where given, else the file's, within the limit."""
+    if data is not None:
+        return data
+    limit = settings.MODEL_FILE_LIMIT
+    with open_file(path, limit, "a model file") as fh:
+        return fh.read(limit + 1)
 
 
-def _refuse(path: Path, count: int, what: str, size: int) -> InputError:
+def refuse_count(path: Path, count: int, what: str, size: int) -> InputError:
+    """The error of a header that declares ``count`` of ``what``, more than ``size`` bytes hold."""
     return InputError(
         f"{path}: the header declares {count} {what}, more than the file's {size} bytes can hold"
     )
 
 
-def _check_ply(path: Path, text: str, size: int) -> None:
-    end = text.find("end_header")
-    if not text.startswith("ply") or end < 0:
-        return  # not a header we can read: the loader says what is wrong
-    binary = False
-    elements: list[tuple[str, int, int]] = []  # name, count, fewest bytes each
-    for line in text[:end].splitlines():
-        words = line.split()
-        if not words:
-            continue
-        if words[0] == "format" and len(words) > 1:
-            binary = words[1].startswith("binary")
-        elif words[0] == "element" and len(words) == 3:
-            try:
-                count = int(words[2])
-            except ValueError:
-                raise InputError(f"{path}: element {words[1]!r} has no whole count ({words[2]!r})") from None
-            if count < 0:
-                raise InputError(f"{path}: element {words[1]!r} has a negative count ({count})")
-            elements.append((words[1], count, 0))
-        elif words[0] == "property" and elements and len(words) >= 3:
-            name, count, each = elements[-1]
-            if binary:
-                # a list takes at least its count; a scalar its type's size
-                kind = words[2] if words[1] == "list" else words[1]
-                each += _PLY_SIZES.get(kind, 1)
-            else:
-                each += _ASCII_VALUE
-            elements[-1] = (name, count, each)
-    body = size - end
-    need = 0
-    for name, count, each in elements:
-        need += count * max(each, 1)
-        if need > body:
-            raise _refuse(path, count, f"{name} elements", size)
+def check_gltf_graph(path: Path, ext: str, size: int, data: bytes | None = None) -> None:
+    """Raise ``InputError`` where a glTF or GLB file's document is not shaped as the
+    specification says, or its node graph is hostile (``check_gltf_document``). ``data``: the
+    file's bytes where they are in memory, else the file is read."""
+    doc = gltf_document(path, ext, size, data)
+    if doc is not None:
+        check_gltf_document(path, doc)
 
 
-def _check_off(path: Path, text: str, size: int) -> bool:
-    """Whether ``text`` begins an OFF header whose counts ``size`` bytes can hold (refused if not)."""
-    words: list[str] = []
-    for line in text.splitlines():
-        line = line.split("#", 1)[0].strip()
-        if line:
-            words += line.split()
-        if len(words) >= 4:
-            break
-    if not words or not words[0].endswith("OFF") or len(words) < 3:
-        return False
-    try:
-        vertices, faces = int(words[1]), int(words[2])
-    except ValueError:
-        return False
-    if vertices < 0 or faces < 0:
-        raise InputError(f"{path}: the header declares a negative count ({vertices} vertices, {faces} faces)")
-    # a vertex is at least three values, a face its corner count and three corners
-    if vertices * 3 * _ASCII_VALUE > size:
-        raise _refuse(path, vertices, "vertices", size)
-    if vertices * 3 * _ASCII_VALUE + faces * 4 * _ASCII_VALUE > size:
-        raise _refuse(path, faces, "faces", size)
-    return True
+def gltf_document(path: Path, ext: str, size: int, data: bytes | None = None):
+    """The JSON document of a glTF or GLB file, or None where it is not one a reader can
+    follow (trimesh then says what is wrong). ``data`` as for ``check_gltf_graph``.
+
+    Raises
+    ------
+    InputError
+        A GLB header that declares more JSON than the file holds, or JSON nested too deeply.
+    """
+    return _gltf_json(path, ext, size, settings.MODEL_FILE_LIMIT, data)
 
 
-def _check_off_faces(path: Path, data: bytes) -> None:
-    """Refuse an OFF face whose corner count is more than the values its line holds (a face
-    of 10^9 corners listing three): trimesh reads the first corners and says nothing."""
-    lines = (line.split(b"#", 1)[0].split() for line in data.splitlines())
-    lines = (words for words in lines if words)
-    header = next(lines, [])
-    counts = header[1:] if len(header) > 1 else next(lines, [])
-    try:
-        vertices, faces = int(counts[0]), int(counts[1])
-    except (ValueError, IndexError):
-        return  # the loader says what is wrong
-    for _ in range(vertices):
-        if next(lines, None) is None:
-            return
-    for index in range(faces):
-        words = next(lines, None)
-        if words is None:
-            return
-        try:
-            corners = int(words[0])
-        except ValueError:
-            raise InputError(f"{path}: face {index} does not begin with its corner count") from None
-        if corners < 1 or corners > len(words) - 1:
-            raise InputError(f"{path}: face {index} declares {corners} corners and lists {len(words) - 1}")
-
-
-def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes | None = None) -> None:
-    """Raise ``InputError`` where a glTF or GLB file's node graph has a cycle (node 0 a child of
-    node 1 and node 1 of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT``
-    levels, more than ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT``
-    triangles in all. The graph is walked once, without recursion, before any loader follows
-    it: trimesh's walk of a cycle never ends, and of a deep chain takes time quadratic in its
-    depth. ``data`` as for ``check_declared_counts``."""
-    if ext == "3mf":
-        _check_3mf(path, limit, data)
-        return
-    if ext not in ("glb", "gltf"):
-        return
-    doc = _gltf_json(path, ext, size, limit, data)
-    if doc is None:
-        return  # not a document we can read: the loader says what is wrong
+def check_gltf_document(path: Path, doc) -> None:
+    """Raise ``InputError`` where a glTF document is not shaped as the specification says
+    (``check_gltf_shape``), or its node graph has a cycle (node 0 a child of node 1 and node 1
+    of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT`` levels, more than
+    ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT`` triangles in all. The
+    graph is walked once, without recursion, before any loader follows it: trimesh's walk of
+    a cycle never ends, and of a deep chain takes time quadratic in its depth."""
     check_gltf_shape(path, doc)
     nodes = doc.get("nodes")
     if not isinstance(nodes, list) or not nodes:
@@ -191,7 +99,36 @@ def check_scene_graph(path: Path, ext: str, size: int, limit: int, data: bytes |
             return 1, triangles[mesh]
         return 0, 0
 
-    _walk(path, roots, lambda node: _children(path, nodes, node), own, "nodes")
+    if _forest_within_limits(path, nodes, roots, triangles):
+        return
+    walk_graph(path, roots, lambda node: _children(path, nodes, node), own, "nodes")
+
+
+def _forest_within_limits(path: Path, nodes: list, roots: list, triangles: list[int]) -> bool:
+    """Whether the scene is a forest (no node placed twice, every child a node that exists)
+    within the depth, instance and triangle limits, found a level of the tree at a time;
+    where not, ``walk_graph`` walks it and names the first problem as it meets it."""
+    children = [node.get("children") or [] for node in nodes]
+    if not all_of(children, list):
+        return False
+    placed = [child for below in children for child in below]
+    if not all_of(placed, int) or len(set(placed)) != len(placed) or set(placed) & set(roots):
+        return False
+    if placed and (min(placed) < 0 or max(placed) >= len(nodes)):
+        return False
+    level, depth, instances, drawn = list(roots), 0, 0, 0
+    while level:
+        if depth >= NODE_DEPTH_LIMIT:
+            return False
+        meshes = [nodes[n].get("mesh") for n in level]
+        held = [m for m in meshes if type(m) is int and 0 <= m < len(triangles)]
+        instances += len(held)
+        drawn += sum(triangles[m] for m in held)
+        level = [child for n in level for child in children[n]]
+        depth += 1
+    if instances > settings.INSTANCE_LIMIT or drawn > settings.TRIANGLE_LIMIT:
+        return False
+    return True
 
 
 # The fields of a glTF 2.0 document that place and shape its triangles, by the type the
@@ -238,7 +175,8 @@ def check_gltf_shape(path: Path, doc) -> None:
     says, in one line naming the field (``nodes[3].mesh is a string, not a whole number``),
     or where an index refers past the end of its array; checked once before any reader
     trusts a type. The children of nodes and the nodes of scenes are left to the walk of
-    the graph, which names them as nodes."""
+    the graph, which names them as nodes. Each array is checked a field at a time over all
+    its items first; an array where that finds a problem, item by item for its message."""
     if not isinstance(doc, dict):
         raise InputError(f"{path}: not a glTF document (its JSON is {_kind(doc)}, not an object)")
     for name in _GLTF_ARRAYS:
@@ -246,7 +184,10 @@ def check_gltf_shape(path: Path, doc) -> None:
             raise InputError(f"{path}: {name} is {_kind(doc[name])}, not a list")
     _check_field(path, doc, "scene", doc, "scenes", "")
     for name, fields in _GLTF_ARRAYS.items():
-        for index, item in enumerate(doc.get(name, [])):
+        items = doc.get(name, [])
+        if _all_fine(doc, items, fields) and (name != "meshes" or _primitives_fine(doc, items)):
+            continue
+        for index, item in enumerate(items):
             where = f"{name}[{index}]"
             if not isinstance(item, dict):
                 raise InputError(f"{path}: {where} is {_kind(item)}, not an object")
@@ -254,6 +195,44 @@ def check_gltf_shape(path: Path, doc) -> None:
             if name == "meshes":
                 for k, primitive in enumerate(item.get("primitives", [])):
                     _check_fields(path, doc, primitive, _PRIMITIVE, f"{where}.primitives[{k}].")
+
+
+def _primitives_fine(doc: dict, meshes: list) -> bool:
+    primitives = [p for mesh in meshes for p in mesh.get("primitives", [])]
+    return all_of(primitives, dict) and _all_fine(doc, primitives, _PRIMITIVE)
+
+
+def _all_fine(doc: dict, items: list, fields: dict) -> bool:
+    """Whether every item is an object whose fields are as ``fields`` wants them (see
+    ``_GLTF_ARRAYS``), checked a field at a time over all the items."""
+    if not all_of(items, dict):
+        return False
+    for key, want in fields.items():
+        values = [item[key] for item in items if key in item]
+        if values and not _values_fine(doc, values, want):
+            return False
+    return True
+
+
+def _values_fine(doc: dict, values: list, want) -> bool:
+    if want is int:
+        return all_of(values, int) and min(values) >= 0
+    if want is str:
+        return all_of(values, str)
+    if want == "nodes[]":
+        return all_of(values, list)
+    if want == "objects":
+        return all_of(values, list) and all_of([v for value in values for v in value], dict)
+    if isinstance(want, tuple):
+        if not all_of(values, list) or {len(v) for v in values} != {want[1]}:
+            return False
+        return all_of([v for value in values for v in value], int, float)
+    if want.endswith("{}"):
+        if not all_of(values, dict):
+            return False
+        return _values_fine(doc, [v for value in values for v in value.values()], want[:-2])
+    count = len(doc.get(want, []))
+    return all_of(values, int) and min(values) >= 0 and max(values) < count
 
 
 def _check_fields(path: Path, doc: dict, item: dict, fields: dict, prefix: str) -> None:
@@ -318,72 +297,6 @@ def _whole(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
-def _check_3mf(path: Path, limit: int, data: bytes | None) -> None:
-    """The component graph of each model part of a 3MF (a zip whose expanded size
-    ``blueprint.scene.archive.check_zip`` has bounded), walked as glTF nodes are: objects made
-    of components of other objects, placed by build items."""
-    import zipfile
-    import zlib
-
-    with contextlib.ExitStack() as stack:
-        fh = (
-            io.BytesIO(data)
-            if data is not None
-            else stack.enter_context(open_file(path, limit, "a model file"))
-        )
-        try:
-            archive = stack.enter_context(zipfile.ZipFile(fh))
-            parts = [i for i in archive.infolist() if i.filename.lower().endswith(".model")]
-            documents = [archive.read(i) for i in parts]
-        except (zipfile.BadZipFile, zlib.error, OSError, ValueError, EOFError, NotImplementedError):
-            return  # the loader says what is wrong
-    for document in documents:
-        _check_3mf_document(path, document)
-
-
-def _check_3mf_document(path: Path, document: bytes) -> None:
-    import xml.etree.ElementTree as ElementTree
-
-    objects: dict[str, tuple[int, list[str]]] = {}  # id: triangles, component object ids
-    items: list[str] = []
-    current = None
-    try:
-        for event, element in ElementTree.iterparse(io.BytesIO(document), events=("start", "end")):
-            tag = element.tag.rsplit("}", 1)[-1]
-            if event == "start":
-                if tag == "object":
-                    current = element.get("id", "")
-                    objects[current] = (0, [])
-                elif tag == "component" and current is not None and not _elsewhere(element):
-                    objects[current][1].append(element.get("objectid", ""))
-                elif tag == "triangle" and current is not None:
-                    count, components = objects[current]
-                    objects[current] = (count + 1, components)
-                elif tag == "item":
-                    items.append(element.get("objectid", ""))
-            else:
-                if tag == "object":
-                    current = None
-                element.clear()
-    except ElementTree.ParseError:
-        return  # the loader says what is wrong
-
-    def children(index: str) -> list[str]:
-        found = objects[index][1]
-        for child in found:
-            if child not in objects:
-                raise InputError(f"{path}: object {index} has a component {child!r}, which does not exist")
-        return found
-
-    roots = [item for item in items if item in objects]
-    _walk(path, roots, children, lambda index: (int(objects[index][0] > 0), objects[index][0]), "objects")
-
-
-def _elsewhere(component) -> bool:
-    """Whether a 3MF component names an object of another model part (``p:path``)."""
-    return any(key.rsplit("}", 1)[-1] == "path" for key in component.keys())
-
-
 def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
     with contextlib.ExitStack() as stack:
         fh = (
@@ -443,14 +356,12 @@ def _gltf_roots(doc: dict, count: int) -> list:
     return roots if roots else list(range(count))
 
 
-def _walk(path: Path, roots: list, children, own, what: str) -> None:
+def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
     """Walk a graph from ``roots`` once, without recursion: ``children(node)`` lists a node's
     children (checked), ``own(node)`` the mesh instances (0 or 1) and triangles a node holds
     itself; ``what`` names the nodes in messages ("nodes", "objects"). Refuses a cycle, more
     than ``NODE_DEPTH_LIMIT`` levels, and more instances or triangles than the limits, counted
     over every path (a node placed twice counts twice)."""
-    from blueprint import settings
-
     instances: dict = {}  # per node: mesh instances below it, itself included
     triangles: dict = {}
     on_path: dict = {}  # nodes of the current path, to their depth
@@ -490,8 +401,6 @@ def check_triangle_count(name, count: int, instances: int | None = None) -> None
     """Raise ``InputError`` where ``count`` triangles to draw (of ``instances`` mesh instances,
     where a scene places them) are more than ``TRIANGLE_LIMIT``, the memory budget's worth,
     naming ``name``, the count and the budget: before any of them is made."""
-    from blueprint import settings
-
     if count <= settings.TRIANGLE_LIMIT:
         return
     placed = "" if instances is None else f" ({instances} mesh instances)"

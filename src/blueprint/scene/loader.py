@@ -1,4 +1,5 @@
-"""Loading model files through trimesh, with validation that names the file and the problem."""
+"""Loading model files: the reader their format's record names (``blueprint.scene.formats``),
+else trimesh, with validation that names the file and the problem."""
 
 from __future__ import annotations
 
@@ -14,32 +15,24 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError, out_of_memory
-from blueprint.scene.archive import STREAM_SUFFIXES, ZIP_CONTAINERS, check_zip, members
+from blueprint.scene.archive import members
 from blueprint.scene.environment import PartGlobs, choose_parts
-from blueprint.scene.gltf import Instance, read_glb
-from blueprint.scene.headers import check_declared_counts, check_scene_graph, check_triangle_count
+from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh
+from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.model import Model
-from blueprint.scene.obj import PLAIN_OBJ_LIMIT, plain_obj
-from blueprint.scene.step import STEP_FILE_LIMIT, STEP_SUFFIXES, step_to_glb
-from blueprint.scene.units import file_unit, object_unit
+from blueprint.scene.units import object_unit
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
 log = logging.getLogger("blueprint")
 
-# CAD and printing formats are Z-up by convention; glTF (by its spec), OBJ and scans are Y-up.
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
 MAX_COORDINATE = settings.COORDINATE_LIMIT
-_Z_UP = {"stl", "3mf", "3dxml", "step", "stp", "dae"}
-# Formats with no up axis of their own: the shape decides (blueprint.scene.up).
-_GUESS_UP = {"obj", "ply", "off"}
 
 
 def supported_formats() -> list[str]:
-    """File extensions trimesh can load here, lower case without the dot."""
-    import trimesh
-
-    return sorted(set(trimesh.available_formats()) | set(STEP_SUFFIXES))
+    """File extensions of the model formats read here, lower case without the dot."""
+    return FORMATS.suffixes()
 
 
 def load_model(
@@ -70,71 +63,56 @@ def load_model(
 def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlobs) -> Model:
     name = str(path)
     info = check_file(path, MODEL_FILE_LIMIT, "a model file")
-    ext = path.suffix.lower().lstrip(".")
     if up is not None and up not in ("y", "z"):
         raise InputError(f"unknown up axis {up!r} (choose y or z)")
-    triangles = _binary_stl(path, info.st_size) if ext == "stl" else None
-    if triangles is not None:
-        if len(triangles) == 0:
-            raise InputError(f"{name}: no triangles in the file")
-        # as trimesh loads an STL unprocessed: three vertices a triangle, in file order
-        faces = np.arange(3 * len(triangles), dtype=np.int64).reshape(-1, 3)
-        parts = np.zeros(len(triangles), np.int32)
-        return _checked(
-            triangles.reshape(-1, 3),
-            faces,
-            parts,
-            [path.stem],
-            name,
-            up,
-            "z",
-            include=include,
-            exclude=exclude,
-            unit=file_unit(name, "stl"),
-        )
-    plain = _plain_obj(path, info.st_size) if ext == "obj" else None
-    if plain is not None:
-        parts = np.zeros(len(plain[1]), np.int32)
-        unit = file_unit(name, "obj")
-        return _checked(*plain, parts, [path.stem], name, up, "y", True, include, exclude, unit)
-    instances = _glb(path, info.st_size) if ext == "glb" else None
-    if instances is not None:
-        return _loaded(_joined(instances, path.stem, name), name, up, ext, include, exclude)
-    formats = supported_formats()
-    if ext not in formats and ext not in STREAM_SUFFIXES:
-        common = ("obj", "stl", "ply", "off", "glb", "gltf", "3mf", "step")
-        known = ", ".join(f for f in common if f in formats)
-        raise InputError(
-            f"{name}: unknown model format '.{ext}' (supported: {known} and more; zip, gz, bz2, xz of them)"
-        )
+    ext, fmt = FORMATS.choose(path)
     if info.st_size == 0:
         raise InputError(f"{name}: file is empty")
-    if ext in STREAM_SUFFIXES or ext == "zip":
+    if fmt.container is not None:
         scene, ext = _archive_scene(path, ext)
-    else:
-        check_declared_counts(path, ext, info.st_size, MODEL_FILE_LIMIT)
-        if ext in ZIP_CONTAINERS:
-            check_zip(path)
-        check_scene_graph(path, ext, info.st_size, MODEL_FILE_LIMIT)
-        scene = _load_scene(path, ext)
-    # trimesh reports the unit a 3MF file states (its default where it states none)
-    stated = scene.units if ext == "3mf" else None
-    return _loaded(_flatten(scene, path.stem, name), name, up, ext, include, exclude, stated)
+        return _scene_model(scene, path.stem, name, up, ext, include, exclude)
+    found = fmt.read(path, info.st_size) if fmt.read is not None else None
+    if isinstance(found, Converted):
+        # read by the reader of the format it was converted to, or else by trimesh; its up
+        # axis and unit stay the file's format's
+        converted, target = found, FORMATS.find(found.ext)
+        found = target.read_data(path, converted.data) if target.read_data is not None else None
+        if found is None:
+            return _scene_model(_converted_scene(converted), path.stem, name, up, ext, include, exclude)
+    if isinstance(found, Mesh):
+        if len(found.faces) == 0:
+            raise InputError(f"{name}: no triangles in the file")
+        parts = np.zeros(len(found.faces), np.int32)
+        joined = (found.positions, found.faces, parts, [path.stem])
+        return _loaded(joined, name, up, fmt, include, exclude)
+    if isinstance(found, list):
+        return _loaded(_joined(found, path.stem, name), name, up, fmt, include, exclude)
+    fmt.check_header(path, info.st_size)
+    return _scene_model(_load_scene(path, ext), path.stem, name, up, ext, include, exclude)
+
+
+def _scene_model(
+    scene, stem: str, name: str, up: str | None, ext: str, include: PartGlobs, exclude: PartGlobs
+) -> Model:
+    """The model of a trimesh scene read from a file of format ``ext`` (whose files may
+    state their unit: trimesh reports it as the scene's)."""
+    fmt = FORMATS.find(ext)
+    stated = scene.units if fmt.stated_unit is not None else None
+    return _loaded(_flatten(scene, stem, name), name, up, fmt, include, exclude, stated)
 
 
 def _loaded(
-    joined, name: str, up: str | None, ext: str, include: PartGlobs, exclude: PartGlobs, stated=None
+    joined, name: str, up: str | None, fmt: Format, include: PartGlobs, exclude: PartGlobs, stated=None
 ) -> Model:
     """The model of a scene's instances ``joined`` (``_joined``) read from a file of format
-    ``ext`` that states the unit ``stated`` (``blueprint.scene.units.file_unit``)."""
+    ``fmt`` that states the unit ``stated`` (``Format.unit_of``)."""
     positions, faces, face_part, names = joined
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
-    default = "z" if ext in _Z_UP else "y"
-    unit = file_unit(name, ext, stated)
-    return _checked(
-        positions, faces, face_part, names, name, up, default, ext in _GUESS_UP, include, exclude, unit
-    )
+    guess = fmt.up == "guess"
+    default = "y" if guess else fmt.up
+    unit = fmt.unit_of(name, stated)
+    return _checked(positions, faces, face_part, names, name, up, default, guess, include, exclude, unit)
 
 
 def model_from_object(
@@ -280,58 +258,6 @@ def _check_coincident(model: Model, name: str) -> None:
         )
 
 
-_STL_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
-
-
-def _binary_stl(path: Path, size: int) -> np.ndarray | None:
-    """(F, 3, 3) float32 triangles of a binary STL, read with numpy alone: trimesh, with the
-    scipy and networkx it imports, takes most of a small drawing's start. None where the
-    file is ASCII STL, or longer than its triangle count says: trimesh reads it. A binary
-    file shorter than its count says is refused, as is a count over ``TRIANGLE_LIMIT``."""
-    if size < 84:
-        return None
-    with open_file(path, MODEL_FILE_LIMIT, "a model file") as fh:
-        head = fh.read(84)
-        count = int.from_bytes(head[80:84], "little")
-        if size != 84 + _STL_RECORD.itemsize * count:
-            if size < 84 + _STL_RECORD.itemsize * count and not _ascii_stl(head):
-                raise InputError(
-                    f"{path}: the header declares {count} triangles, more than the file's {size} bytes "
-                    f"can hold ({84 + _STL_RECORD.itemsize * count} bytes)"
-                )
-            return None
-        check_triangle_count(path, count)
-        records = np.frombuffer(fh.read(_STL_RECORD.itemsize * count), dtype=_STL_RECORD, count=count)
-    return records["triangle"]
-
-
-def _glb(path: Path, size: int) -> list[Instance] | None:
-    """The mesh instances of a GLB file read with NumPy alone (``blueprint.scene.gltf``), its
-    node graph checked first; None where trimesh reads it."""
-    data = read_file(path, MODEL_FILE_LIMIT, "a model file")
-    check_scene_graph(path, "glb", size, MODEL_FILE_LIMIT, data)
-    return read_glb(data)
-
-
-def _plain_obj(path: Path, size: int) -> tuple[np.ndarray, np.ndarray] | None:
-    """Vertices and faces of an OBJ file of plain ``v`` and ``f`` lines, read with numpy alone
-    (``blueprint.scene.obj``); None for any other OBJ file: trimesh reads it."""
-    if size > PLAIN_OBJ_LIMIT:
-        return None
-    found = plain_obj(read_file(path, MODEL_FILE_LIMIT, "a model file"))
-    if found is not None:
-        check_triangle_count(path, len(found[1]))
-    return found
-
-
-def _ascii_stl(head: bytes) -> bool:
-    """Whether a file that begins with ``head`` can be ASCII STL: "solid", then text. Binary
-    files may begin with "solid" too, but rarely go on in text for 84 bytes."""
-    if not head.lstrip().lower().startswith(b"solid"):
-        return False
-    return all(32 <= b < 127 or b in (9, 10, 13) for b in head)
-
-
 def _archive_scene(path: Path, kind: str):
     """The models in a zip archive or a compressed file (``kind``: zip, gz, bz2, xz) as one
     scene, expanded within the limits of ``blueprint.scene.archive``, and the format of the
@@ -340,7 +266,7 @@ def _archive_scene(path: Path, kind: str):
     import trimesh
 
     files = members(path, kind)
-    loadable = set(supported_formats()) - {*STREAM_SUFFIXES, *STEP_SUFFIXES, "zip", "tar.gz", "tar.bz2"}
+    loadable = {s for f in FORMATS if f.trimesh and f.container is None for s in f.suffixes}
     found = [(n, ext) for n in files if (ext := Path(n).suffix.lower().lstrip(".")) in loadable]
     if not found:
         listed = ", ".join(sorted(files)[:5]) + (", ..." if len(files) > 5 else "")
@@ -350,26 +276,27 @@ def _archive_scene(path: Path, kind: str):
     for member, ext in found:
         where = f"{path}: {member}"
         data = files[member]
-        check_declared_counts(Path(where), ext, len(data), MODEL_FILE_LIMIT, data)
-        if ext in ZIP_CONTAINERS:
-            check_zip(Path(where), data)
-        check_scene_graph(Path(where), ext, len(data), MODEL_FILE_LIMIT, data)
+        FORMATS.find(ext).check_header(Path(where), len(data), data)
         scenes.append(_trimesh_scene(where, ext, io.BytesIO(data), resolver))
     scene = scenes[0] if len(scenes) == 1 else trimesh.scene.scene.append_scenes(scenes)
     return scene, found[0][1]
 
 
-def _load_scene(path: Path, ext: str):
+def _converted_scene(converted: Converted):
+    """trimesh's scene of a file converted to another format (STEP meshed into GLB)."""
     import trimesh
 
-    if ext in STEP_SUFFIXES:
-        glb = step_to_glb(path, read_file(path, STEP_FILE_LIMIT, "a STEP file"))
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                return trimesh.load_scene(io.BytesIO(glb), file_type="glb", process=False)
-        except Exception:  # OpenCASCADE wrote a GLB trimesh cannot read
-            raise InputError(f"{path}: cannot read the mesh OpenCASCADE made of it") from None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return trimesh.load_scene(io.BytesIO(converted.data), file_type=converted.ext, process=False)
+    except Exception:  # the converter wrote a file trimesh cannot read
+        raise InputError(converted.failure) from None
+
+
+def _load_scene(path: Path, ext: str):
+    """trimesh's scene of the file ``path`` of format ``ext``, the files it references read
+    through ``read_file``."""
     resolver = _resolver_type()(str(path))
     # an open file, not the name: trimesh names meshes after a file name and hashes the names
     # as UTF-8, which the bytes of a name that are not UTF-8 cannot be
@@ -468,7 +395,8 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
 
     The instances of one mesh are placed together, a block of them at a time (one matrix
     product a block), into arrays made once at their joined size: 10^5 instances of a box
-    cost their triangles, not 10^5 arrays of each kind."""
+    cost their triangles, not 10^5 arrays of each kind. Meshes placed once each (10^5 small
+    distinct parts) are placed a block of those of one vertex count at a time."""
     if len(instances) > settings.INSTANCE_LIMIT:
         raise InputError(
             f"{label}: {len(instances)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}"
@@ -486,6 +414,8 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
     by_mesh: dict[tuple[int, int], list[int]] = {}
     for k, instance in enumerate(drawn):
         by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
+    # the meshes placed once (many small distinct parts), by their vertex count
+    apart: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
     # NaN and infinite vertices are refused with their count once joined, not warned about here
     with np.errstate(all="ignore"):
         for members in by_mesh.values():
@@ -495,6 +425,9 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
                 # a loader's reading of a broken file (trimesh's OBJ reader cuts rows short)
                 raise InputError(f"{label}: the vertices of mesh {mesh.geometry!r} are not x, y, z")
             mesh_faces = np.asarray(mesh.faces, dtype=np.int64)
+            if len(members) == 1:
+                apart.setdefault(len(vertices), []).append((members[0], vertices, mesh_faces))
+                continue
             step = max(1, _PLACED_ROWS // max(len(vertices), len(mesh_faces)))
             for first in range(0, len(members), step):
                 block = np.array(members[first : first + step])
@@ -503,6 +436,17 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
                     mesh_faces,
                     [drawn[k].transform for k in block],
                     block,
+                    vertex_start,
+                    face_start,
+                    positions,
+                    faces,
+                )
+        for count, meshes in apart.items():
+            for first in range(0, len(meshes), max(1, _PLACED_ROWS // max(count, 1))):
+                block = meshes[first : first + max(1, _PLACED_ROWS // max(count, 1))]
+                _place_apart(
+                    block,
+                    [drawn[k].transform for k, _, _ in block],
                     vertex_start,
                     face_start,
                     positions,
@@ -533,6 +477,27 @@ def _place(vertices, mesh_faces, transforms, block, vertex_start, face_start, po
     positions[rows[~moved]] = vertices
     face_rows = face_start[block][:, None] + np.arange(len(mesh_faces))
     faces[face_rows] = mesh_faces[None] + vertex_start[block][:, None, None]
+
+
+def _place_apart(meshes, transforms, vertex_start, face_start, positions, faces) -> None:
+    """Place meshes of one vertex count, each at its one instance: ``meshes`` (instance number,
+    vertices, faces), by their ``transforms`` (None: as they are), into the joined
+    ``positions`` and ``faces``. One matrix product for them all, which multiplies each mesh
+    as ``_place`` would alone (a product of each one's vertices and its transform)."""
+    block = np.array([k for k, _, _ in meshes])
+    stacked = np.stack([vertices for _, vertices, _ in meshes])
+    rows = vertex_start[block][:, None] + np.arange(stacked.shape[1])
+    moved = np.array([t is not None for t in transforms])
+    if moved.any():
+        stack = np.array([t for t in transforms if t is not None])
+        positions[rows[moved]] = (
+            np.matmul(stacked[moved], stack[:, :3, :3].transpose(0, 2, 1)) + stack[:, None, :3, 3]
+        )
+    positions[rows[~moved]] = stacked[~moved]
+    counts = np.array([len(f) for _, _, f in meshes])
+    face_rows = np.repeat(face_start[block] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+    offsets = np.repeat(vertex_start[block], counts)[:, None]
+    faces[face_rows] = np.concatenate([f for _, _, f in meshes]) + offsets
 
 
 def _world_transforms(graph) -> dict:

@@ -1,6 +1,7 @@
-"""Length units: the unit a model file states (glTF and STEP: metres; 3MF: its model's
-``unit``), and the one a drawing measures the model in: ``--units`` where given, else the
-file's, else millimetres, with a warning that says it was assumed. Drawings print
+"""Length units: the unit a model file states (its format's record in ``blueprint.scene.formats``
+says which: glTF and STEP metres, 3MF its model's ``unit``), and the one a drawing measures the
+model in: ``--units`` where given, else the file's, else millimetres, with a warning that says
+it was assumed. Drawings print
 millimetres (dimensions, the page of a drawing to scale): ``UNITS_MM`` a model unit.
 """
 
@@ -18,7 +19,6 @@ __all__ = [
     "UNITS_MM",
     "check_units",
     "drawing_unit",
-    "file_unit",
     "named_unit",
     "object_unit",
     "warn_if_assumed",
@@ -57,10 +57,6 @@ _NAMES: dict[str, str] = {
     "foot": "ft",
     "feet": "ft",
 }
-# The units a 3MF file may state (3MF core specification, ``model@unit``).
-_3MF_UNITS = ("micron", "millimeter", "centimeter", "inch", "foot", "meter")
-_GLTF = ("glb", "gltf")
-_STEP = ("step", "stp")
 
 
 def check_units(units: str) -> str:
@@ -83,33 +79,6 @@ def object_unit(stated: str | None) -> tuple[str | None, str]:
         return None, "the object has no units"
     unit = named_unit(stated)
     return unit, f"its units, {stated}" if unit else f"its units {stated!r} are none blueprint knows"
-
-
-def file_unit(name: str, ext: str, stated: str | None = None) -> tuple[str | None, str]:
-    """The length unit of a model read from the file ``name`` of format ``ext`` (lower case,
-    no dot), and where it comes from: metres for glTF (its specification) and STEP (OpenCASCADE
-    meshes it in metres, whatever unit the file is written in), a 3MF's ``stated`` unit (its
-    model's ``unit``, as trimesh reports it); None for formats that carry none.
-
-    Raises
-    ------
-    InputError
-        A 3MF file states a unit blueprint does not know: the specification allows six, and
-        a drawing's sizes would be wrong by a factor nothing tells, so the file is refused
-        as a damaged one is.
-    """
-    if ext in _GLTF:
-        return "m", "glTF is in metres by its specification"
-    if ext in _STEP:
-        return "m", "OpenCASCADE meshes STEP in metres"
-    if ext == "3mf" and stated is not None:
-        unit = named_unit(stated)
-        if unit is None:
-            raise InputError(f"{name}: unknown length unit {stated!r} (3MF's units: {', '.join(_3MF_UNITS)})")
-        return unit, "the 3MF model's unit, millimetres where it states none"
-    if ext == "3mf":
-        return None, "the 3MF files state different units"
-    return None, f"{ext.upper()} files carry no unit"
 
 
 class Measured(Protocol):

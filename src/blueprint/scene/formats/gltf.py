@@ -1,4 +1,6 @@
-"""Binary glTF 2.0 (GLB) read with NumPy alone, as trimesh loads it: importing trimesh (with the
+"""glTF 2.0, binary (GLB) and JSON: Y-up and in metres by its specification.
+
+GLB files are read with NumPy alone, as trimesh loads it: importing trimesh (with the
 scipy and networkx it loads) took a CPU second of every glTF drawing's process, more than most
 drawings themselves.
 
@@ -17,14 +19,20 @@ so their parts are named after their meshes here whatever the node's name.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import struct
-from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-__all__ = ["Instance", "read_glb"]
+from blueprint import settings
+from blueprint.scene.formats.base import Format, Instance
+from blueprint.scene.headers import all_of, check_gltf_document, check_gltf_graph, gltf_document
+from blueprint.settings import read_file
+
+__all__ = ["GLB", "GLTF", "Instance", "read_glb"]
 
 _GLB, _JSON, _BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 _TRIANGLES = 4
@@ -37,60 +45,32 @@ _BASE_FRAME = "world"
 _EPS = np.finfo(float).eps * 4.0
 
 
-@dataclass(frozen=True)
-class Instance:
-    """One mesh placed in a scene: ``vertices`` (V, 3) and ``faces`` (F, 3) of its mesh
-    (None where it is not a triangle mesh), ``transform`` (4, 4) float64 from the mesh to the
-    scene (None: the identity), the names of its node and mesh (``node`` None: a frame with
-    no name of its own, named after its mesh)."""
-
-    node: str | None
-    geometry: str
-    vertices: np.ndarray | None
-    faces: np.ndarray | None
-    transform: np.ndarray | None
-
-
 class _Leave(Exception):
     """The file is not the common case: trimesh reads it."""
 
 
-def read_glb(data: bytes) -> list[Instance] | None:
+def read_glb(data: bytes, doc: dict | None = None) -> list[Instance] | None:
     """The mesh instances of a GLB file's scene in trimesh's order, or None to leave the file
-    to trimesh (see the module's docstring)."""
+    to trimesh (see the module's docstring). ``doc``: its JSON document, where it has been
+    parsed already."""
     try:
-        return _read(data)
+        return _read(data, doc)
     except _Leave:
         return None
 
 
-def _read(data: bytes) -> list[Instance]:
-    doc, binary = _chunks(data)
+def _read(data: bytes, doc: dict | None) -> list[Instance]:
+    doc, binary = _chunks(data, doc)
     access = _Accessors(doc, binary)
     geometries = _meshes(doc, access)
     nodes = _list(doc.get("nodes", []))
     names = _node_names(nodes)
     roots = _scene_roots(doc, len(nodes))
-    _once_each(nodes, roots)
-    cameras = doc.get("cameras")
-    camera_taken = False
-    world: dict[int, np.ndarray] = {}
+    visited, parents = _walk(doc, nodes, roots, _children(nodes, roots))
+    world = _world(nodes, visited, parents)
     instances = []
-    # trimesh's walk: a stack of (parent, child) edges, the last pushed taken first
-    stack = [(None, root) for root in roots]
-    while stack:
-        parent, index = stack.pop()
+    for k, index in enumerate(visited):
         node = nodes[index]
-        stack.extend((index, child) for child in _indices(node.get("children", []), len(nodes)))
-        matrix = _node_matrix(node)
-        if "camera" in node and not camera_taken:
-            # trimesh takes camera nodes (and so their subtrees) out of its graph until one
-            # makes a camera
-            camera_taken = _is_camera(cameras, node["camera"])
-            continue
-        if parent is not None and parent not in world:
-            continue  # below the camera taken out
-        world[index] = matrix if parent is None else world[parent] @ matrix
         if "mesh" not in node:
             continue
         mesh = node["mesh"]
@@ -98,25 +78,72 @@ def _read(data: bytes) -> list[Instance]:
             raise _Leave
         primitives = geometries[mesh]
         if len(primitives) == 1:
-            instances.append(Instance(names[index], *primitives[0], world[index]))
+            instances.append(Instance(names[index], *primitives[0], world[k]))
             continue
         # trimesh hangs the primitives under the node, each by an identity edge
-        below = world[index] @ np.eye(4)
+        below = world[k] @ np.eye(4)
         instances += [Instance(None, *primitive, below) for primitive in primitives]
     return instances
 
 
-def _chunks(data: bytes) -> tuple[dict, bytes | None]:
-    """The JSON document and the BIN chunk of a GLB file laid out as the format asks."""
+def _walk(doc: dict, nodes: list, roots: list[int], children: list[list[int]]) -> tuple[list[int], list[int]]:
+    """The nodes of the scene in trimesh's order (a stack of (parent, child) edges, the last
+    pushed taken first), without the camera nodes trimesh takes out of its graph (and what
+    hangs below them), and each one's parent's place in that order (-1 for a root)."""
+    cameras = doc.get("cameras")
+    camera_taken = False
+    placed: dict[int, int] = {}
+    visited, parents = [], []
+    stack = [(None, root) for root in roots]
+    while stack:
+        parent, index = stack.pop()
+        node = nodes[index]
+        stack.extend((index, child) for child in children[index])
+        if "camera" in node and not camera_taken:
+            # trimesh takes camera nodes (and so their subtrees) out of its graph until one
+            # makes a camera
+            _check_transform(node)
+            camera_taken = _is_camera(cameras, node["camera"])
+            continue
+        if parent is not None and parent not in placed:
+            _check_transform(node)
+            continue  # below the camera taken out
+        placed[index] = len(visited)
+        visited.append(index)
+        parents.append(-1 if parent is None else placed[parent])
+    return visited, parents
+
+
+def _world(nodes: list, visited: list[int], parents: list[int]) -> np.ndarray:
+    """(N, 4, 4) float64: the transforms from the visited nodes to the scene, as trimesh
+    composes them: a root's own, else its parent's times its own, a level of the tree at a
+    time (one matrix product a level)."""
+    local = _local_matrices([nodes[i] for i in visited])
+    parent = np.array(parents, np.int64)
+    depth = np.zeros(len(parent), np.int64)
+    for k, above in enumerate(parents):
+        if above >= 0:
+            depth[k] = depth[above] + 1
+    world = local.copy()
+    for level in range(1, int(depth.max(initial=0)) + 1):
+        chosen = np.flatnonzero(depth == level)
+        world[chosen] = np.matmul(world[parent[chosen]], local[chosen])
+    return world
+
+
+def _chunks(data: bytes, doc: dict | None = None) -> tuple[dict, bytes | None]:
+    """The JSON document (``doc`` where parsed already) and the BIN chunk of a GLB file laid
+    out as the format asks."""
     if len(data) < 20:
         raise _Leave
     magic, version, length, json_length, kind = struct.unpack_from("<5I", data)
     if magic != _GLB or version != 2 or length != len(data) or kind != _JSON or json_length > length - 20:
         raise _Leave
-    try:
-        doc = json.loads(data[20 : 20 + json_length].decode("utf-8"))
-    except (UnicodeDecodeError, ValueError, RecursionError):
-        raise _Leave from None
+    if doc is None:
+        try:
+            doc = json.loads(data[20 : 20 + json_length].decode("utf-8"))
+        except (UnicodeDecodeError, ValueError, RecursionError):
+            raise _Leave from None
     if not isinstance(doc, dict):
         raise _Leave
     rest = data[20 + json_length :]
@@ -262,17 +289,71 @@ def _scene_roots(doc: dict, count: int) -> list[int]:
     return _indices(scenes[chosen].get("nodes", []), count)
 
 
-def _once_each(nodes: list, roots: list[int]) -> None:
-    """Leave a node placed twice (in a scene or under two parents) to trimesh, whose graph
-    keeps one parent a node."""
-    seen = set(roots)
-    placed = len(roots)
-    for node in nodes:
-        children = _indices(node.get("children", []), len(nodes))
-        seen.update(children)
-        placed += len(children)
-    if len(seen) != placed:
+def _children(nodes: list, roots: list[int]) -> list[list[int]]:
+    """Each node's children, checked; leave a node placed twice (in a scene or under two
+    parents) to trimesh, whose graph keeps one parent a node."""
+    children = [node.get("children", []) for node in nodes]
+    if not all_of(children, list):
         raise _Leave
+    placed = [child for below in children for child in below]
+    if placed and (not all_of(placed, int) or min(placed) < 0 or max(placed) >= len(nodes)):
+        raise _Leave
+    if len(set(roots).union(placed)) != len(roots) + len(placed):
+        raise _Leave
+    return children
+
+
+# the fields of a node's transform, the numbers each holds
+_TRANSFORM = {"matrix": 16, "translation": 3, "rotation": 4, "scale": 3}
+
+
+def _check_transform(node: dict) -> None:
+    """Leave a node whose transform is not lists of numbers of the lengths glTF gives them."""
+    for key, count in _TRANSFORM.items():
+        if key in node:
+            _numbers(node[key], count)
+
+
+def _field(nodes: list[dict], key: str) -> tuple[np.ndarray, np.ndarray]:
+    """The nodes that have ``key`` (their places) and its numbers, (K, count) float64."""
+    count = _TRANSFORM[key]
+    have = [k for k, node in enumerate(nodes) if key in node]
+    values = [nodes[k][key] for k in have]
+    if values and (not all_of(values, list) or set(map(len, values)) != {count}):
+        raise _Leave
+    flat = list(itertools.chain.from_iterable(values))
+    if not all_of(flat, *_NUMBER):
+        raise _Leave
+    return np.array(have, np.int64), np.fromiter(flat, np.float64, len(flat)).reshape(-1, count)
+
+
+def _local_matrices(nodes: list[dict]) -> np.ndarray:
+    """(N, 4, 4) float64: each node's transform from its parent as trimesh composes it: its
+    matrix, then times translation, rotation and scale. Made in bulk: where a node has no
+    matrix, each entry of T R S is one product, which any order of summing gives alike."""
+    local = np.broadcast_to(np.eye(4), (len(nodes), 4, 4)).copy()
+    fields = {key: _field(nodes, key) for key in _TRANSFORM}
+    have, matrices = fields["matrix"]
+    local[have] = matrices.reshape(-1, 4, 4).transpose(0, 2, 1)
+    # a matrix and TRS (which glTF forbids): composed by matrix products, as trimesh does
+    both = np.zeros(len(nodes), bool)
+    for key in ("translation", "rotation", "scale"):
+        both[fields[key][0]] = True
+    with_matrix = np.zeros(len(nodes), bool)
+    with_matrix[have] = True
+    both &= with_matrix
+    for k in np.flatnonzero(both):
+        local[k] = _node_matrix(nodes[k])
+    have, translation = fields["translation"]
+    keep = ~both[have]
+    local[have[keep], :3, 3] = translation[keep]
+    have, rotation = fields["rotation"]
+    keep = ~both[have]
+    local[have[keep], :3, :3] = _quaternion_matrices(rotation[keep][:, [3, 0, 1, 2]])[:, :3, :3]
+    have, scale = fields["scale"]
+    keep = ~both[have]
+    local[have[keep], :3, :3] *= scale[keep][:, None, :]
+    return local
 
 
 def _node_matrix(node: dict) -> np.ndarray:
@@ -283,26 +364,34 @@ def _node_matrix(node: dict) -> np.ndarray:
         translation[:3, 3] = _numbers(node["translation"], 3)
         matrix = np.dot(matrix, translation)
     if "rotation" in node:
-        matrix = np.dot(matrix, _quaternion_matrix(_numbers(node["rotation"], 4)[[3, 0, 1, 2]]))
+        matrix = np.dot(matrix, _quaternion_matrices(_numbers(node["rotation"], 4)[None, [3, 0, 1, 2]])[0])
     if "scale" in node:
         matrix = np.dot(matrix, np.diag(np.concatenate((_numbers(node["scale"], 3), [1.0]))))
     return matrix
 
 
-def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    """trimesh.transformations.quaternion_matrix of one (w, x, y, z) quaternion."""
-    n = np.dot(q, q)
-    if not n < _EPS:
-        q = q * np.sqrt(2.0 / n)
-    q = q[None, :] * q[:, None]
-    return np.array(
-        [
-            [1.0 - q[2, 2] - q[3, 3], q[1, 2] - q[3, 0], q[1, 3] + q[2, 0], 0.0],
-            [q[1, 2] + q[3, 0], 1.0 - q[1, 1] - q[3, 3], q[2, 3] - q[1, 0], 0.0],
-            [q[1, 3] - q[2, 0], q[2, 3] + q[1, 0], 1.0 - q[1, 1] - q[2, 2], 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]
-    )
+def _quaternion_matrices(q: np.ndarray) -> np.ndarray:
+    """(N, 4, 4): trimesh.transformations.quaternion_matrix of each (w, x, y, z) quaternion of
+    ``q`` (N, 4), computed as it computes one (its squared norm by ``np.dot``, each's own)."""
+    # rows in memory one after another: np.dot sums a strided row in another order
+    q = np.ascontiguousarray(q)
+    n = np.array([np.dot(row, row) for row in q], np.float64)
+    scaled = ~(n < _EPS)
+    q = q.copy()
+    q[scaled] = q[scaled] * np.sqrt(2.0 / n[scaled])[:, None]
+    q = q[:, None, :] * q[:, :, None]
+    out = np.zeros((len(q), 4, 4))
+    out[:, 0, 0] = 1.0 - q[:, 2, 2] - q[:, 3, 3]
+    out[:, 0, 1] = q[:, 1, 2] - q[:, 3, 0]
+    out[:, 0, 2] = q[:, 1, 3] + q[:, 2, 0]
+    out[:, 1, 0] = q[:, 1, 2] + q[:, 3, 0]
+    out[:, 1, 1] = 1.0 - q[:, 1, 1] - q[:, 3, 3]
+    out[:, 1, 2] = q[:, 2, 3] - q[:, 1, 0]
+    out[:, 2, 0] = q[:, 1, 3] - q[:, 2, 0]
+    out[:, 2, 1] = q[:, 2, 3] + q[:, 1, 0]
+    out[:, 2, 2] = 1.0 - q[:, 1, 1] - q[:, 2, 2]
+    out[:, 3, 3] = 1.0
+    return out
 
 
 def _is_camera(cameras, index) -> bool:
@@ -362,8 +451,12 @@ def _list(value) -> list:
     return value
 
 
+# the types of JSON numbers (a bool is an int to isinstance, not to type)
+_NUMBER = (int, float)
+
+
 def _number(value) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
+    return type(value) in _NUMBER
 
 
 def _count(value) -> bool:
@@ -384,3 +477,43 @@ def _numbers(value, count: int) -> np.ndarray:
     if not isinstance(value, list) or len(value) != count or not all(_number(v) for v in value):
         raise _Leave
     return np.array(value, dtype=np.float64)
+
+
+def read(path: Path, size: int) -> list[Instance] | None:
+    """The mesh instances of a GLB file (``read_data``); None where trimesh reads it."""
+    return read_data(path, read_file(path, settings.MODEL_FILE_LIMIT, "a model file"))
+
+
+def read_data(path: Path, data: bytes) -> list[Instance] | None:
+    """The mesh instances of the GLB bytes ``data`` (``read_glb``) of the file ``path``, its
+    document and node graph checked first (``check_gltf_document``); None where trimesh
+    reads them."""
+    doc = gltf_document(path, "glb", len(data), data)
+    if doc is None:
+        return None
+    check_gltf_document(path, doc)
+    return read_glb(data, doc)
+
+
+def check_glb(path: Path, size: int, data: bytes | None = None) -> None:
+    """``check_gltf_graph`` of a GLB file."""
+    check_gltf_graph(path, "glb", size, data)
+
+
+def check_gltf(path: Path, size: int, data: bytes | None = None) -> None:
+    """``check_gltf_graph`` of a glTF file."""
+    check_gltf_graph(path, "gltf", size, data)
+
+
+_METRES = "glTF is in metres by its specification"
+GLB = Format(
+    "glTF",
+    ("glb",),
+    unit="m",
+    unit_reason=_METRES,
+    check=check_glb,
+    read=read,
+    read_data=read_data,
+    common=True,
+)
+GLTF = Format("glTF", ("gltf",), unit="m", unit_reason=_METRES, check=check_gltf, common=True)

@@ -1,9 +1,12 @@
-"""STEP files, meshed by OpenCASCADE (through ``cascadio``) in a child process.
+"""STEP: Z-up by the convention of CAD; meshed by OpenCASCADE in metres, whatever unit the file
+is written in.
+
+STEP files are meshed by OpenCASCADE (through ``cascadio``) in a child process.
 
 OpenCASCADE is native code: it prints its parse errors straight to the process's own stdout and
 stderr, and nothing bounds the time a hostile file can keep it busy. In a child process its
 output is captured (the first line of it goes into the one-line error) and a time limit can end
-it; the child writes a GLB that trimesh then reads like any glTF binary.
+it; the child writes a GLB that is read like any glTF binary.
 """
 
 from __future__ import annotations
@@ -14,10 +17,11 @@ import sys
 from pathlib import Path
 
 from blueprint.errors import InputError
+from blueprint.scene.formats.base import Converted, Format
+from blueprint.settings import read_file
 
-__all__ = ["STEP_FILE_LIMIT", "STEP_TIME_LIMIT", "STEP_SUFFIXES", "step_to_glb"]
+__all__ = ["FORMAT", "STEP_FILE_LIMIT", "STEP_TIME_LIMIT", "read_step", "step_to_glb"]
 
-STEP_SUFFIXES = ("step", "stp")
 # A STEP file is text of about a hundred bytes an entity; meshing takes OpenCASCADE far longer
 # per byte than any mesh format takes to parse, so its limits are much lower than a mesh's.
 STEP_FILE_LIMIT = 256 << 20
@@ -88,3 +92,21 @@ def _first_problem(output: str) -> str:
     parse = [line.split(":", 1)[1].strip() for line in lines if line.startswith("ERR StepFile")]
     other = [line.removeprefix("Error:").strip() for line in lines if line]
     return (parse or other or ["OpenCASCADE found no shapes in it"])[0]
+
+
+def read_step(path: Path, size: int) -> Converted:
+    """The file meshed into GLB bytes (``step_to_glb``), for the GLB reader."""
+    glb = step_to_glb(path, read_file(path, STEP_FILE_LIMIT, "a STEP file"))
+    return Converted(glb, "glb", f"{path}: cannot read the mesh OpenCASCADE made of it")
+
+
+FORMAT = Format(
+    "STEP",
+    ("step", "stp"),
+    up="z",
+    unit="m",
+    unit_reason="OpenCASCADE meshes STEP in metres",
+    read=read_step,
+    trimesh=False,
+    common=True,
+)

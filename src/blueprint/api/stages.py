@@ -1,0 +1,93 @@
+"""Stage timings of one command, for benchmarks (``benchmarks/scale.py``): with
+``BLUEPRINT_STAGES=1`` in its environment, ``blueprint render`` prints, as it ends, one JSON
+line on stderr: ``{"stages": {name: seconds}, "gpu_memory": {...} or null}``.
+
+A picture's stages: ``read`` (the model file to a ``Model``), ``prepare_upload`` (the mesh
+made ready for the GPU and uploaded: normals, welding, buffers), ``capture_edges`` (the peel
+or capture of layers and their edges), ``compose``, ``read_back`` and ``write``, the GPU ones
+synchronised after each (``DrawOptions.profile``). A vector drawing's are those its workflow
+measures (``read``, ``lines``, ``peel``, ``occlusion``, ``simplify``, ``write``). Nothing is
+timed or synchronised without the variable.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+__all__ = ["ENV", "add", "add_frame", "enabled", "gpu_memory", "report", "timed", "watch"]
+
+ENV = "BLUEPRINT_STAGES"
+
+_SECONDS: dict[str, float] = {}
+
+
+def enabled() -> bool:
+    """Whether stage timings are asked for (``BLUEPRINT_STAGES`` set to 1)."""
+    return os.environ.get(ENV, "") == "1"
+
+
+def add(name: str, seconds: float) -> None:
+    """Count ``seconds`` to the stage ``name``."""
+    _SECONDS[name] = _SECONDS.get(name, 0.0) + seconds
+
+
+@contextmanager
+def timed(name: str) -> Iterator[None]:
+    """Count the block's wall time to the stage ``name``."""
+    start = time.perf_counter()
+    try:
+        yield
+    finally:
+        add(name, time.perf_counter() - start)
+
+
+def watch(renderer) -> None:
+    """Time ``renderer``'s mesh preparation and upload (``Capturer.mesh``, which the frame
+    calls) as the stage ``prepare_upload``."""
+    capturer = renderer.capturer
+    mesh = capturer.mesh
+
+    def timed_mesh(*args, **kwargs):
+        with timed("prepare_upload"):
+            return mesh(*args, **kwargs)
+
+    capturer.mesh = timed_mesh
+
+
+def add_frame(stages_ms: dict[str, float]) -> None:
+    """Count a profiled frame's stages (``Frame.stages``, ms): its capture and edges less the
+    mesh preparation timed within them (``watch``), its composition, its read-back."""
+    capture = stages_ms.get("peel_edges", 0.0) / 1e3 - _SECONDS.get("prepare_upload", 0.0)
+    add("prepare_upload", stages_ms.get("upload", 0.0) / 1e3)  # the pipeline's images, if any
+    add("capture_edges", max(capture, 0.0))
+    add("compose", stages_ms.get("compose", 0.0) / 1e3)
+    add("read_back", stages_ms.get("read", 0.0) / 1e3)
+
+
+def gpu_memory(renderer) -> dict | None:
+    """The GPU's memory in bytes where the driver tells it (NVIDIA's GL_NVX_gpu_memory_info):
+    ``total`` and ``used`` now (by every process), else None."""
+    if "GL_NVX_gpu_memory_info" not in renderer.ctx.extensions:
+        return None
+    import ctypes
+
+    try:
+        gl = ctypes.CDLL("libOpenGL.so.0")
+        total, available = ctypes.c_int(0), ctypes.c_int(0)
+        gl.glGetIntegerv(0x9048, ctypes.byref(total))  # GPU_MEMORY_INFO_TOTAL_AVAILABLE_MEMORY_NVX, KiB
+        gl.glGetIntegerv(0x9049, ctypes.byref(available))  # ..._CURRENT_AVAILABLE_VIDMEM_NVX, KiB
+    except (OSError, AttributeError):
+        return None
+    return {"total": total.value * 1024, "used": (total.value - available.value) * 1024}
+
+
+def report(renderer=None) -> None:
+    """Print the stages counted, and the GPU memory of ``renderer`` where given, as one JSON
+    line on stderr."""
+    memory = gpu_memory(renderer) if renderer is not None else None
+    print(json.dumps({"stages": _SECONDS, "gpu_memory": memory}), file=sys.stderr, flush=True)

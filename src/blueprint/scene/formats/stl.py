@@ -1,0 +1,91 @@
+"""STL, binary and ASCII: Z-up by the convention of CAD and printing, no unit.
+
+Both are read with NumPy alone, as trimesh reads them (three vertices a triangle, in file
+order): trimesh, with the scipy and networkx it imports, takes most of a small drawing's start,
+and its ASCII reader splits the file into a Python string a vertex. An ASCII file is read here
+where it holds one solid whose ``vertex`` lines each hold three numbers; other ASCII files, and
+binary files longer than their triangle count says, go to trimesh.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from blueprint import settings
+from blueprint.errors import InputError
+from blueprint.scene.formats.base import Format, Mesh
+from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
+from blueprint.scene.headers import check_triangle_count
+from blueprint.settings import open_file
+
+__all__ = ["FORMAT", "read_stl"]
+
+_VERTEX = b"vertex"
+# the bytes the numbers of a vertex line may hold besides whitespace (no "nan", "inf", ...)
+_NUMBER = b"0123456789+-.eE"
+_RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
+
+
+def read_stl(path: Path, size: int) -> Mesh | None:
+    """The triangles of an STL file, or None for trimesh (see the module's docstring). A
+    binary file shorter than its count says is refused, as is a count over ``TRIANGLE_LIMIT``."""
+    with open_file(path, settings.MODEL_FILE_LIMIT, "a model file") as fh:
+        head = fh.read(84)
+        count = int.from_bytes(head[80:84], "little") if len(head) == 84 else -1
+        if size != 84 + _RECORD.itemsize * count:
+            if count >= 0 and size < 84 + _RECORD.itemsize * count and not _ascii_stl(head):
+                raise InputError(
+                    f"{path}: the header declares {count} triangles, more than the file's {size} bytes "
+                    f"can hold ({84 + _RECORD.itemsize * count} bytes)"
+                )
+            if not head.lstrip().lower().startswith(b"solid"):
+                return None
+            return _ascii(path, head + fh.read(settings.MODEL_FILE_LIMIT + 1 - len(head)))
+        check_triangle_count(path, count)
+        records = np.frombuffer(fh.read(_RECORD.itemsize * count), dtype=_RECORD, count=count)
+    triangles = records["triangle"]
+    faces = np.arange(3 * count, dtype=np.int64).reshape(-1, 3)
+    return Mesh(triangles.reshape(-1, 3), faces)
+
+
+def _ascii(path: Path, data: bytes) -> Mesh | None:
+    """The triangles of an ASCII STL file of one solid as trimesh reads them: the numbers after
+    each ``vertex`` (any case) up to the end of its line, three a vertex; None for any other
+    file (several solids, two ``vertex`` on a line, numbers NumPy does not read the same way)."""
+    if not affordable(data):
+        return None
+    lower = data.lower()
+    begin, end = lower.find(b"solid"), lower.find(b"endsolid")
+    if begin < 0 or end < begin or lower.find(b"solid", end + len(b"endsolid")) >= 0:
+        return None
+    buf = np.frombuffer(lower, np.uint8)
+    if not is_ascii(buf) or data.count(b"\r") != data.count(b"\r\n"):
+        return None
+    keyword = find_all(buf, _VERTEX, begin, end)
+    if len(keyword) == 0:
+        return None
+    newline = np.r_[np.flatnonzero(buf == ord("\n")), len(buf)]
+    line_end = np.minimum(newline[np.searchsorted(newline, keyword)], end)
+    if (line_end[:-1] > keyword[1:]).any():
+        return None  # two on a line: trimesh reads the first to the second
+    text = blanked(buf, keyword + len(_VERTEX), line_end)
+    if not only(text, _NUMBER):
+        return None
+    values = parse(text, np.float64)
+    if values is None or len(values) == 0 or len(values) % 9:
+        return None
+    check_triangle_count(path, len(values) // 9)
+    return Mesh(values.reshape(-1, 3), np.arange(len(values) // 3, dtype=np.int64).reshape(-1, 3))
+
+
+def _ascii_stl(head: bytes) -> bool:
+    """Whether a file that begins with ``head`` can be ASCII STL: "solid", then text. Binary
+    files may begin with "solid" too, but rarely go on in text for 84 bytes."""
+    if not head.lstrip().lower().startswith(b"solid"):
+        return False
+    return all(32 <= b < 127 or b in (9, 10, 13) for b in head)
+
+
+FORMAT = Format("STL", ("stl",), up="z", read=read_stl, common=True)
