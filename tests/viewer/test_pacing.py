@@ -11,6 +11,7 @@ from blueprint import InputError, Model
 from blueprint.cli import STYLE_NAMES
 from blueprint.viewer.lod import coarse_model
 from blueprint.viewer.pacing import (
+    COLD_SHARE,
     FORGET_SECONDS,
     PROBE_SHARE,
     UP_SHARE,
@@ -123,6 +124,14 @@ def test_the_pacer_measures_medians_forgets_and_starts_again_on_new_settings():
     pacer.current = 3
     pacer.settle((800, 600, 2, 5), 2, 5)
     assert pacer.current == 3 and pacer.costs(1.0)[1] == 100.0
+    # a frame drawn unlike the one before it, over the budget by less than COLD_SHARE: measured
+    # again by the next one
+    pacer.record(2, 150.0, 1.0, cold=True)
+    pacer.record(3, COLD_SHARE * 100.0 + 1, 1.0, cold=True)
+    pacer.record(4, 90.0, 1.0, cold=True)
+    assert pacer.costs(1.0)[2:5] == [None, COLD_SHARE * 100.0 + 1, 90.0]
+    pacer.record(2, 150.0, 1.0)
+    assert pacer.costs(1.0)[2] == 150.0
     # one layer: a shorter ladder, nothing measured, the step kept where it still is one
     pacer.settle((800, 600, 2, 1), 2, 1)
     assert [s.label for s in pacer.steps] == ["full", "supersample 1", "1/2 size", "1/4 size"]
@@ -139,11 +148,16 @@ def test_the_pacer_measures_medians_forgets_and_starts_again_on_new_settings():
 
 def test_frame_rate_report_counts_steps():
     rate = FrameRate()
-    for step in ("full", "full", "full", "2 layers", "2 layers"):
-        rate.tick(10.0, step)
+    steps = ("full", "full", "full", "2 layers", "full", "1/2 size", "1/2 size")
+    for now, step in zip((0.0, 1.0, 2.0, 2.5, 3.0, 3.125, 3.25), steps, strict=True):
+        rate.tick(10.0, step, now)
     report = rate.report()
-    assert report["frames"] == 3 and report["steps"] == {"full": 1, "2 layers": 2}
+    # after two frames of warm-up (the second's end starts the clock): five frames in 2.25 s
+    assert report["frames"] == 5 and report["fps"] == round(5 / 2.25, 2)
+    assert report["steps"] == {"full": 2, "2 layers": 1, "1/2 size": 2}
     assert report["draw_ms_median"] == 10.0
+    # the last two frames at 1/2 size, since 3.0 s: 0.25 s
+    assert (report["step"], report["step_frames"], report["step_fps"]) == ("1/2 size", 2, 8.0)
 
 
 def test_heads_up_line_names_the_quality_while_moving():

@@ -85,6 +85,7 @@ class Viewer:
         )
         self._coarse: Model | None = None
         self._drawn: set[int] = set()  # the models drawn once (their first frame uploads them)
+        self._drawn_as: tuple | None = None  # how the last frame was drawn: model, size, supersample, layers
         self._rate = FrameRate()
         self._shown_ms = (0.0, -RATE_SECONDS)  # (the frame time shown, when it was taken)
         # what needs doing
@@ -276,16 +277,18 @@ class Viewer:
             "frame_ms": ms,
         }
         self._needs_render = False
+        before, self._drawn_as = self._drawn_as, (id(model), rw, rh, step.supersample, step.layers)
+        # a model's first frame prepares and uploads it: not what its frames cost
+        first = id(model) not in self._drawn
+        self._drawn.add(id(model))
         if not present:
             self._needs_present = True
             return
         dumping = self._present()
         frame_ms = (time.perf_counter() - t0 - dumping) * 1e3
         self._last["frame_ms"] = frame_ms
-        # a model's first frame prepares and uploads it: not what its frames cost
-        if id(model) in self._drawn and index is not None:
-            pacer.record(index, frame_ms)
-        self._drawn.add(id(model))
+        if not first and index is not None:
+            pacer.record(index, frame_ms, cold=self._drawn_as != before)
         done = time.perf_counter()
         if done - self._shown_ms[1] >= RATE_SECONDS or not moving:
             self._shown_ms = (frame_ms, done)

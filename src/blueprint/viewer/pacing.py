@@ -30,6 +30,9 @@ PROBE_SHARE = 0.4
 # view, and with it the cost, changes).
 SAMPLES = 3
 FORGET_SECONDS = 10.0
+# A frame drawn unlike the one before it makes its targets anew, which can cost it half its
+# time again: one slower than the budget by less than this share is measured once more.
+COLD_SHARE = 2.0
 # The steps below the full drawing cap the layers at this many (the first hidden ones), then 1.
 FEW_LAYERS = 2
 # Models above this many triangles get coarse-mesh steps at the end of the ladder.
@@ -206,8 +209,14 @@ class Pacer:
         self.current = choose_step(self.current, self.costs(now), self.budget_ms)
         return self.current
 
-    def record(self, step: int, ms: float, now: float | None = None) -> None:
-        """A frame drawn at ``step`` took ``ms``; samples older than ``FORGET_SECONDS`` go."""
+    def record(self, step: int, ms: float, now: float | None = None, *, cold: bool = False) -> None:
+        """A frame drawn at ``step`` took ``ms``; samples older than ``FORGET_SECONDS`` go.
+
+        ``cold``: the frame before it was drawn otherwise (another size, supersampling, layers
+        or mesh), and this one paid for making its targets: over the budget by less than
+        ``COLD_SHARE``, it says nothing of the step, which the next frame measures again."""
+        if cold and self.budget_ms < ms <= COLD_SHARE * self.budget_ms:
+            return
         now = time.perf_counter() if now is None else now
         samples = self._samples[step]
         samples[:] = [s for s in samples[-SAMPLES:] if now - s[0] <= FORGET_SECONDS]
@@ -220,16 +229,17 @@ class FrameRate:
     def __init__(self) -> None:
         self._samples: list[tuple[float, float, str]] = []  # (when, draw ms, step label)
 
-    def tick(self, ms: float, step: str) -> None:
-        """One frame done, drawn at the ladder step labelled `step` in `ms`."""
-        self._samples.append((time.perf_counter(), ms, step))
+    def tick(self, ms: float, step: str, now: float | None = None) -> None:
+        """One frame done (at ``now``), drawn at the ladder step labelled `step` in `ms`."""
+        self._samples.append((time.perf_counter() if now is None else now, ms, step))
 
     def done(self, frames: int) -> bool:
         return len(self._samples) >= frames + WARMUP_FRAMES
 
     def report(self) -> dict:
-        """Frames, fps, mean and median ms, and how many frames each step drew; only the frame
-        count where fewer than two frames were timed."""
+        """Frames, fps, mean and median ms and how many frames each step drew; the last frame's
+        step and the frame rate of the frames at it since the step last changed (the ladder
+        settled); only the frame count where fewer than two frames were timed."""
         timed = self._samples[WARMUP_FRAMES:]
         if len(timed) < 2:
             return {"frames": len(timed)}
@@ -238,10 +248,16 @@ class FrameRate:
         steps: dict[str, int] = {}
         for _, _, step in timed:
             steps[step] = steps.get(step, 0) + 1
+        last = timed[-1][2]
+        tail = next((k for k, sample in enumerate(reversed(timed)) if sample[2] != last), len(timed))
+        tail_start = self._samples[len(self._samples) - tail - 1][0]
         return {
             "frames": len(timed),
             "fps": round(len(timed) / wall, 2),
             "ms": round(wall * 1e3 / len(timed), 2),
             "draw_ms_median": round(float(np.median([ms for _, ms, _ in timed])), 2),
             "steps": steps,
+            "step": last,
+            "step_frames": tail,
+            "step_fps": round(tail / (timed[-1][0] - tail_start), 2),
         }
