@@ -20,8 +20,10 @@ import pytest
 from PIL import Image
 
 import blueprint
+from blueprint.cli import STYLE_NAMES
 from blueprint.scene.camera import VIEWS
 from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT
+from blueprint.viewer.state import ViewState
 
 ROOT = Path(__file__).resolve().parents[2]
 GEARBOX = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
@@ -277,14 +279,74 @@ def test_keys_mouse_and_escape_under_xvfb(xdisplay, tmp_path, renderer):
         helped = viewer.wait_for(lambda r: r["help"])
         assert helped["ortho"] and (viewer.image(helped) != viewer.image(plain)).any()
 
-        # T: the turntable turns in draft frames until T again; then one full frame
+        # T: the turntable turns in moving frames until T again; then one full frame
         viewer.key("t")
         spin = [viewer.wait_for(lambda r: r["turntable"]) for _ in range(3)]
-        assert len({r["azimuth"] for r in spin}) == 3 and spin[-1]["quality"] == "draft"
+        assert len({r["azimuth"] for r in spin}) == 3 and spin[-1]["quality"] == "moving"
+        assert f"| moving: {spin[-1]['step']} |" in spin[-1]["hud"][0]
         viewer.key("t")
-        assert viewer.wait_for(lambda r: not r["turntable"] and r["quality"] == "full")
+        stopped = viewer.wait_for(lambda r: not r["turntable"] and r["quality"] == "full")
+        assert "moving" not in stopped["hud"][0]
 
         # Esc: exit code 0
+        viewer.key("Escape")
+        assert viewer.proc.wait(15) == 0
+    finally:
+        if viewer.proc.poll() is None:
+            viewer.proc.kill()
+            viewer.proc.wait()
+
+
+def test_moving_frames_walk_down_the_ladder_then_the_full_drawing_follows(xdisplay, tmp_path, renderer):
+    """Asked for 1000 fps, every frame is too slow: the turntable's frames walk down the ladder
+    one step a frame (each step tried once, being unmeasured) to its last, and stay there; once
+    the turntable stops, the full drawing of that view follows, the pixels of ``render``."""
+    model_path = tmp_path / "gearbox.glb"
+    shutil.copy(GEARBOX, model_path)
+    model = blueprint.load_model(model_path)
+    args = ["--size", str(SIZE[0]), str(SIZE[1]), "--moving-fps", "1000", "--style", "paper"]
+    viewer = Session(xdisplay, tmp_path, str(model_path), *args)
+    try:
+        assert viewer.first["quality"] == "full" and viewer.first["render_size"] == list(SIZE)
+        viewer.key("t")
+        spin = [viewer.wait_for(lambda r: r["turntable"]) for _ in range(8)]
+        # the first moving frame is the full drawing: the still frame before it uploaded the
+        # model, which is no measure of a frame
+        steps = [
+            ("full", 1.0, 2),
+            ("supersample 1", 1.0, 1),
+            ("2 layers", 1.0, 1),
+            ("1/2 size, 2 layers", 0.5, 1),
+            ("1/2 size, 1 layer", 0.5, 1),
+            ("1/4 size, 1 layer", 0.25, 1),
+            ("1/4 size, 1 layer", 0.25, 1),
+            ("1/4 size, 1 layer", 0.25, 1),
+        ]
+        assert [(r["step"], r["scale"], r["supersample"]) for r in spin] == steps
+        for record in spin:
+            assert record["quality"] == "moving"
+            assert record["render_size"] == [
+                round(SIZE[0] * record["scale"]),
+                round(SIZE[1] * record["scale"]),
+            ]
+            assert f"| moving: {record['step']} |" in record["hud"][0]
+        assert [r["layers"] for r in spin[2:]] == [2, 2, 1, 1, 1, 1]
+        # a smaller drawing is scaled up to the whole window
+        assert viewer.image(spin[-1]).shape[:2] == (SIZE[1] - spin[-1]["hud_height"], SIZE[0])
+        viewer.key("t")
+        still = viewer.wait_for(lambda r: r["quality"] == "full")
+        assert not still["turntable"] and still["render_size"] == list(SIZE) and still["supersample"] == 2
+        assert "moving" not in still["hud"][0]
+        state = ViewState.start(STYLE_NAMES, "paper", azimuth=still["azimuth"], elevation=still["elevation"])
+        state.base_azimuth, state.base_elevation = VIEWS["iso"]
+        camera = state.camera(model, SIZE[0] / SIZE[1])
+        expected = blueprint.render(
+            model, camera=camera, size=SIZE, style="paper", max_layers=5, renderer=renderer
+        )
+        hud = still["hud_height"]
+        np.testing.assert_array_equal(viewer.image(still), expected[hud:, :, :3])
+        # the frame after the still one: none, nothing changed
+        assert viewer.settle()["n"] == still["n"]
         viewer.key("Escape")
         assert viewer.proc.wait(15) == 0
     finally:

@@ -9,6 +9,7 @@ from pathlib import Path
 from blueprint.api.options import DrawOptions
 from blueprint.compose.style import STYLES
 from blueprint.viewer.loop import Viewer
+from blueprint.viewer.pacing import MOVING_FPS
 from blueprint.viewer.snapshots import DUMP_ENV
 from blueprint.viewer.state import Options, ViewState
 from blueprint.viewer.window import import_glfw
@@ -20,14 +21,20 @@ def run_viewer(
     *,
     styles: tuple[str, ...] = tuple(STYLES),
     interactive_scale: float = 0.0,
+    moving_fps: float = MOVING_FPS,
     frames: int = 0,
+    still_frames: int | None = None,
 ) -> dict | None:
     """Open the viewer on a model file; returns when the window closes (see ``Viewer.run``).
 
     ``options`` (default: a window of 800 x 600 peeling 5 layers) give the window's size, the
     first view and style, the model file's ``up``, ``include`` and ``exclude``, and the
     frames' settings (``grid``, ``max_layers``, ``min_fraction``, ``crease_angle``,
-    ``line_width``, ``supersample``); ``styles`` are those the S key cycles through.
+    ``line_width``, ``supersample``); ``styles`` are those the S key cycles through. While the
+    view moves, frames keep ``moving_fps`` (see ``viewer.pacing``), or with
+    ``interactive_scale`` > 0 are drawn at that fraction of the window. ``frames`` > 0
+    measures: that many turntable frames, then ``still_frames`` full drawings, and returns
+    their frame rates instead of waiting for the window to close.
     """
     from blueprint.scene.loader import load_model
 
@@ -42,6 +49,7 @@ def run_viewer(
         line_width=options.line_width,
         supersample=options.supersample,
         interactive_scale=interactive_scale,
+        moving_fps=moving_fps,
     )
     model = load_model(model_path, up=options.up, include=options.include, exclude=options.exclude)
     viewer = Viewer(
@@ -52,4 +60,4 @@ def run_viewer(
         options=frames_options,
         dump=os.environ.get(DUMP_ENV),
     )
-    return viewer.run(frames=frames)
+    return viewer.run(frames=frames, still_frames=still_frames)

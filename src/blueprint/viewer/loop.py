@@ -1,9 +1,9 @@
 """The viewer and its drawing loop: every picture comes from the same ``Renderer.render`` as
 ``blueprint render``, drawn only when something changed.
 
-While the view moves (drag, wheel, turntable) frames are drafts: supersample 1 and, when that
-is slower than 30 fps, a lower resolution scaled up; once the view rests for ``REFINE_DELAY``
-seconds one full-quality frame follows.
+While the view moves (drag, wheel, turntable) each frame is drawn at the richest quality of a
+ladder (``pacing``) that keeps the frame rate asked for, by what the last frames measured;
+once the view rests for ``REFINE_DELAY`` seconds, the full drawing follows, once.
 """
 
 from __future__ import annotations
@@ -15,17 +15,18 @@ from pathlib import Path
 import numpy as np
 
 from blueprint.compose.lookup import get_style
-from blueprint.errors import BlueprintError, InputError
+from blueprint.errors import BlueprintError
 from blueprint.gpu.device import check_size
 from blueprint.scene.model import Model
 from blueprint.viewer.controls import Controls
-from blueprint.viewer.pacing import Drafts, FrameRate
+from blueprint.viewer.lod import coarse_model
+from blueprint.viewer.pacing import COARSE_ABOVE, FrameRate, Pacer, Step
 from blueprint.viewer.present import Presenter, hud_lines
 from blueprint.viewer.snapshots import FrameDump, save_screenshot
 from blueprint.viewer.state import Options, ViewState
 from blueprint.viewer.window import Window
 
-# Seconds the view rests before a full-quality frame follows the drafts.
+# Seconds the view rests before the full drawing follows the moving frames.
 REFINE_DELAY = 0.2
 # Depth masking (M): peel until this fraction of the selected part's pixels shows.
 REVEAL = 0.95
@@ -54,9 +55,6 @@ class Viewer:
         self.state = state
         self.options = options or Options()
         check_size(size, self.options.supersample, 16384)
-        if self.options.interactive_scale and not 0.05 <= self.options.interactive_scale <= 1.0:
-            scale = self.options.interactive_scale
-            raise InputError(f"interactive-scale must be 0 (automatic) or in [0.05, 1], got {scale}")
         self.dump = FrameDump(Path(dump)) if dump else None
         self.window = Window(size, f"blueprint view - {self.model_path.name}")
         try:
@@ -66,21 +64,30 @@ class Viewer:
             raise
         self.presenter = Presenter(self.window)
         self.controls = Controls(self)
+        # kept from the resize callback: asking the window every frame waits on the display
+        self._size = self.window.size()
         self.window.listen(
             key=self.controls.on_key,
             button=self.controls.on_button,
             cursor=self.controls.on_cursor,
             scroll=self.controls.on_scroll,
-            resize=lambda *_: self.invalidate(),
+            resize=self._resized,
             refresh=lambda *_: self.repaint(),
         )
-        self._drawing: np.ndarray | None = None  # the last full-quality drawing (RGBA)
+        self._drawing: np.ndarray | None = None  # the last full drawing (RGBA), read back
         self._last: dict = {}  # how the last frame was drawn
         self._status = ""
         self._status_time = 0.0
-        self._drafts = Drafts(self.options.interactive_scale)
+        self.pacer = Pacer(
+            self.options.moving_fps,
+            fixed_scale=self.options.interactive_scale,
+            coarse=model.triangle_count > COARSE_ABOVE,
+        )
+        self._coarse: Model | None = None
+        self._drawn: set[int] = set()  # the models drawn once (their first frame uploads them)
+        self._drawn_as: tuple | None = None  # how the last frame was drawn: model, size, supersample, layers
         self._rate = FrameRate()
-        self._shown_ms = (0.0, -RATE_SECONDS)  # (the draw time shown, when it was taken)
+        self._shown_ms = (0.0, -RATE_SECONDS)  # (the frame time shown, when it was taken)
         # what needs doing
         self._needs_render = True
         self._needs_present = False
@@ -107,7 +114,7 @@ class Viewer:
         self._needs_present = True
 
     def refine_later(self) -> None:
-        """A full-quality frame once the view has rested for ``REFINE_DELAY``."""
+        """The full drawing once the view has rested for ``REFINE_DELAY``."""
         self._refine_at = time.perf_counter() + REFINE_DELAY
 
     def toggle_turntable(self) -> None:
@@ -123,20 +130,26 @@ class Viewer:
     def screenshot(self) -> None:
         """Save the current drawing (full quality, no heads-up lines) as NAME-N.png beside the model."""
         if self._drawing is None or self._needs_render:
-            self._render(draft=False, present=False)
+            self._render(moving=False, present=False)
         if self._drawing is None:  # minimised: nothing drawn
             return
         self._status = save_screenshot(self.model_path, self._drawing)
         self._status_time = time.perf_counter()
         self.repaint()
 
+    def _resized(self, window, width: int, height: int) -> None:
+        self._size = (int(width), int(height))
+        self.invalidate()
+
     # -- loop ----------------------------------------------------------------------------------
-    def run(self, frames: int = 0) -> dict | None:
+    def run(self, frames: int = 0, still_frames: int | None = None) -> dict | None:
         """Show the window until Esc or close. With ``frames`` > 0: spin the turntable for that
-        many frames (after a warm-up), close, and return the measured timings."""
+        many frames (after a warm-up), then draw ``still_frames`` (default ``frames``) full
+        drawings of the view it stopped at, close, and return both frame rates."""
         glfw, handle = self.window.glfw, self.window.handle
         if frames > 0:
             self.state.turntable = True
+        result = None
         try:
             while not glfw.window_should_close(handle):
                 self._wait()
@@ -148,20 +161,20 @@ class Viewer:
                 if glfw.window_should_close(handle):
                     break
                 if self._needs_render:
-                    draft = self._moving(now)
-                    self._render(draft)
-                    self._refine_at = time.perf_counter() + REFINE_DELAY if draft else None
+                    moving = self._moving(now)
+                    self._render(moving)
+                    self._refine_at = time.perf_counter() + REFINE_DELAY if moving else None
                 elif self._refine_at is not None and now >= self._refine_at:
-                    self._render(draft=False)
+                    self._render(moving=False)
                     self._refine_at = None
                 elif self._needs_present:
                     self._present()
                 if frames > 0:
-                    self._rate.tick(self._last.get("ms", 0.0))
+                    self._rate.tick(self._last.get("frame_ms", 0.0), self._last.get("step", ""))
                     if self._rate.done(frames):
+                        result = self._measured(frames if still_frames is None else still_frames)
                         break
         finally:
-            result = self._timings() if frames > 0 else None
             self.close()
         return result
 
@@ -179,24 +192,45 @@ class Viewer:
         controls = self.controls
         return self.state.turntable or controls.moved or now - controls.last_scroll < REFINE_DELAY
 
-    def _timings(self) -> dict:
+    def _measured(self, still_frames: int) -> dict:
+        """The turntable's frame rate, then that of ``still_frames`` full drawings."""
+        moving = self._rate.report()
+        self.state.turntable = False
+        still = FrameRate()
+        while not still.done(still_frames):
+            self._render(moving=False)
+            still.tick(self._last.get("frame_ms", 0.0), self._last.get("step", ""))
         about = {
             "model": self.model_path.name,
             "triangles": self.model.triangle_count,
             "renderer": self.window.renderer_name,
+            "size": list(self._size),
+            "moving_fps": self.options.moving_fps,
         }
-        return self._rate.report(about, self._last)
+        return {**about, **moving, "still": still.report()}
 
     # -- drawing -------------------------------------------------------------------------------
-    def _render(self, draft: bool, present: bool = True) -> None:
-        w, h = self.window.size()
+    def _model_for(self, step: Step) -> Model:
+        """The model, or its coarse mesh (made when first asked for) where ``step`` draws that."""
+        if not step.coarse:
+            return self.model
+        if self._coarse is None:
+            self._coarse = coarse_model(self.model)
+        return self._coarse
+
+    def _render(self, moving: bool, present: bool = True) -> None:
+        """A frame: the full drawing, or while ``moving`` the pacer's step; shown (and its time
+        from the render call to the swap measured for the pacer) unless ``present`` is False."""
+        w, h = self._size
         if w < 1 or h < 1:  # minimised
             self._needs_render = False
             return
-        state, opts = self.state, self.options
-        scale = self._drafts.scale() if draft else 1.0
-        supersample = 1 if draft else opts.supersample
-        rw, rh = max(1, round(w * scale)), max(1, round(h * scale))
+        state, opts, pacer = self.state, self.options, self.pacer
+        pacer.settle((w, h, opts.supersample, state.max_layers), opts.supersample, state.max_layers)
+        index = pacer.next_step() if moving else pacer.full_index
+        step = pacer.steps[index] if moving else pacer.full
+        model = self._model_for(step)
+        rw, rh = max(1, round(w * step.scale)), max(1, round(h * step.scale))
         camera = state.camera(self.model, w / h)
         highlight = reveal = None
         if state.part is not None:
@@ -208,62 +242,75 @@ class Viewer:
         opaque = style.paper is not None and style.paper[3] >= 1.0
         t0 = time.perf_counter()
         frame = self.window.renderer.render(
-            self.model,
+            model,
             camera,
             style=style,
             highlight=highlight,
             reveal=reveal,
             size=(rw, rh),
-            max_layers=state.max_layers,
+            max_layers=step.layers,
             min_fraction=opts.min_fraction,
             crease_angle=opts.crease_angle,
             line_width=opts.line_width,
-            supersample=supersample,
+            supersample=step.supersample,
             # shown from the GPU; a screenshot (not presented at once) reads its drawing back
             on_gpu=present,
         )
-        self._drawing = None if draft else frame.image
+        self._drawing = None if moving else frame.image
         if frame.texture is not None:
             self.presenter.show_texture(frame.texture, opaque)
         else:
             self.presenter.show(frame.image, opaque)
-        done = time.perf_counter()
-        ms = (done - t0) * 1e3
-        if done - self._shown_ms[1] >= RATE_SECONDS or not draft:
-            self._shown_ms = (ms, done)
-        if draft:
-            self._drafts.adapt(ms)
+        ms = (time.perf_counter() - t0) * 1e3
         self._last = {
-            "quality": "draft" if draft else "full",
+            "quality": "moving" if moving else "full",
+            "step": step.label if moving else "full",
             "size": [w, h],
             "render_size": [rw, rh],
-            "scale": scale,
-            "supersample": supersample,
+            "scale": step.scale,
+            "supersample": step.supersample,
             "layers": frame.layers,
+            "coarse": step.coarse,
+            "triangles": model.triangle_count,
             "revealed": frame.revealed,
             "ms": ms,
+            "frame_ms": ms,
         }
         self._needs_render = False
-        if present:
-            self._present()
-        else:
+        before, self._drawn_as = self._drawn_as, (id(model), rw, rh, step.supersample, step.layers)
+        # a model's first frame prepares and uploads it: not what its frames cost
+        first = id(model) not in self._drawn
+        self._drawn.add(id(model))
+        if not present:
             self._needs_present = True
+            return
+        dumping = self._present()
+        frame_ms = (time.perf_counter() - t0 - dumping) * 1e3
+        self._last["frame_ms"] = frame_ms
+        if not first and index is not None:
+            pacer.record(index, frame_ms, cold=self._drawn_as != before)
+        done = time.perf_counter()
+        if done - self._shown_ms[1] >= RATE_SECONDS or not moving:
+            self._shown_ms = (frame_ms, done)
 
-    def _present(self) -> None:
-        """The drawing, scaled to the window, the heads-up lines over it; dumped where asked; swap."""
+    def _present(self) -> float:
+        """The drawing, scaled to the window, the heads-up lines over it; dumped where asked; swap.
+        Returns the seconds the dump took."""
         self._needs_present = False
         if not self.presenter.has_picture:
             self._needs_render = True
-            return
-        size = self.window.size()
+            return 0.0
+        size = self._size
         if size[0] < 1 or size[1] < 1:
-            return
+            return 0.0
         fresh = self._status and time.perf_counter() - self._status_time < STATUS_SECONDS
         status = self._status if fresh else ""
         last = {**self._last, "ms": self._shown_ms[0]}
         lines = hud_lines(self.state, self.model, last, self.window.renderer_name, status)
         self.presenter.draw(size, lines, self.state.help)
+        dumping = 0.0
         if self.dump is not None:
+            start = time.perf_counter()
             self.dump.write(
                 self.presenter.read(size),
                 lines,
@@ -272,4 +319,6 @@ class Viewer:
                 model=self.model,
                 renderer_name=self.window.renderer_name,
             )
+            dumping = time.perf_counter() - start
         self.window.swap()
+        return dumping

@@ -1,8 +1,8 @@
 """Presenting: the drawing, uploaded once as a texture, drawn to the window over the backdrop
-(scaled up where it is a draft), with the overlay (help box and heads-up lines, drawn on the
-CPU) as a second texture over it. An opaque drawing of the window's size hides the backdrop:
-it is copied to the window instead, and the overlay drawn over the rows it covers alone, as a
-copy costs a software rasteriser less than a full-screen pass."""
+(scaled up where it is smaller: a moving frame), with the overlay (help box and heads-up lines,
+drawn on the CPU) as a second texture over it. An opaque drawing of the window's size hides the
+backdrop: it is copied to the window instead, and the overlay drawn over the rows it covers
+alone, as a copy costs a software rasteriser less than a full-screen pass."""
 
 from __future__ import annotations
 
@@ -20,12 +20,13 @@ OVERLAY_FRAG = "blueprint.viewer:glsl/overlay.frag"
 def hud_lines(state: ViewState, model: Model, last: dict, renderer_name: str, status: str) -> list[str]:
     """The heads-up lines: frame rate, layers, model, renderer, style and view; then the picked
     part and `status` (a passing message), where there are any. `last` describes the last
-    frame drawn (its ``ms``, ``layers``, ``quality``, ``scale`` and ``revealed``)."""
+    frame drawn (its ``ms``, ``layers``, ``quality`` and ladder ``step`` while moving, and
+    ``revealed``)."""
     ms = last.get("ms", 0.0)
     fps = 1000.0 / ms if ms > 0 else 0.0
     limit = "all" if state.max_layers is None else str(state.max_layers)
     view = state.view if state.at_fit() else f"{state.view} (orbited)"
-    quality = "" if last.get("quality") == "full" else f" | draft {last.get('scale', 1):g}"
+    quality = f" | moving: {last.get('step', 'full')}" if last.get("quality") == "moving" else ""
     lines = [
         f"{fps:.1f} fps | {last.get('layers', 0)} layers (max {limit}) | "
         f"{model.triangle_count:,} triangles | {renderer_name} | {state.style} | "
@@ -168,7 +169,7 @@ class Presenter:
                 self._fbos.pop(texture.glo).release()
                 texture.release()
             texture = self._textures[name] = ctx.texture(tuple(size), 4, alignment=1)
-            # drafts are scaled up bilinearly; a full-size picture lands on texel centres
+            # smaller drawings are scaled up bilinearly; a full-size picture lands on texel centres
             texture.filter = (ctx.LINEAR, ctx.LINEAR)
             texture.repeat_x = texture.repeat_y = False
             self._fbos[texture.glo] = ctx.framebuffer(color_attachments=[texture])

@@ -15,6 +15,7 @@ from blueprint.errors import InputError
 from blueprint.render.stop import HARD_MAX_LAYERS
 from blueprint.scene.camera import VIEWS, Camera, fit_camera
 from blueprint.scene.model import Model
+from blueprint.viewer.pacing import MOVING_FPS
 
 # Keys 1-7 in this order.
 VIEW_KEYS: tuple[str, ...] = ("iso", "front", "back", "left", "right", "top", "bottom")
@@ -28,14 +29,25 @@ MAX_ORBIT_ELEVATION = 89.0
 
 @dataclass
 class Options:
-    """Rendering options passed through to ``Renderer.render`` (see there)."""
+    """Rendering options passed through to ``Renderer.render`` (see there), and how frames are
+    drawn while the view moves: ``moving_fps``, the frame rate kept then (see ``pacing``), and
+    ``interactive_scale``, 0 for the ladder of qualities, else the one quality of those frames:
+    that fraction of the window at supersample 1."""
 
     grid: float | None = None
     min_fraction: float = 0.0
     crease_angle: float = 30.0
     line_width: float = 1.0
     supersample: int = 2
-    interactive_scale: float = 0.0  # 0: automatic; otherwise a fixed fraction of the window
+    interactive_scale: float = 0.0
+    moving_fps: float = MOVING_FPS
+
+    def __post_init__(self) -> None:
+        scale, fps = self.interactive_scale, self.moving_fps
+        if scale and not 0.05 <= scale <= 1.0:
+            raise InputError(f"interactive-scale must be 0 (automatic) or in [0.05, 1], got {scale}")
+        if not 0.1 <= fps <= 1000.0:
+            raise InputError(f"moving-fps must be in [0.1, 1000] frames a second, got {fps}")
 
 
 @dataclass

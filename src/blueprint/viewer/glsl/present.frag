@@ -1,8 +1,8 @@
 // The viewer's frame: the drawing (straight alpha, or premultiplied where it came from the
-// renderer's own target) over the backdrop, scaled to the window
-// (bilinear: a draft is smaller; a full-size drawing, SAME_SIZE, is fetched pixel for pixel,
-// what bilinear filtering gives at texel centres, which llvmpipe paid for all the same),
-// then the heads-up overlay (straight alpha) over that.
+// renderer's own target) over the backdrop, scaled to the window (bilinear: a moving frame may
+// be smaller; a full-size drawing, SAME_SIZE, is fetched pixel for pixel, what bilinear
+// filtering gives at texel centres, which llvmpipe paid for all the same), then the heads-up
+// overlay (straight alpha) over that.
 uniform sampler2D u_picture;
 uniform sampler2D u_overlay;
 uniform vec2 u_window;
