@@ -5,13 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from helpers import SHARED_MODELS, TESTS
 
 import blueprint.api
 from blueprint import Renderer
 
-ROOT = Path(__file__).resolve().parents[1]
-SHARED_MODELS = ROOT.parent / "shared" / "models"
-ARTIFACTS = ROOT / "tests" / "_artifacts"
+ARTIFACTS = TESTS / "_artifacts"
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

@@ -1,5 +1,5 @@
-"""Helpers the tests share: the command line in a subprocess and its one-line errors, and model
-points to pixels.
+"""Helpers the tests share: the project's paths, the command line in a subprocess and its
+one-line errors, a model loaded in a fresh process, and model points to pixels.
 
 Importable from every test folder as ``helpers`` (pytest puts this folder, the conftest's, on
 ``sys.path``).
@@ -16,6 +16,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import blueprint
+
+# the repository's root, whichever folder of tests/ a test lies in
+ROOT = Path(__file__).resolve().parents[1]
+TESTS = ROOT / "tests"
+# the shared test models beside the repository (present in CI; the ``shared_models`` fixture skips)
+SHARED_MODELS = ROOT.parent / "shared" / "models"
+# the geometry vertex shader with corners snapped to 1/256 px, as the H200's rasteriser snaps them
+SNAPPED_GEOMETRY = TESTS / "glsl" / "snapped_geometry.vert"
 # the console script of the environment running the tests
 BLUEPRINT = Path(sys.executable).parent / "blueprint"
 needs_cli = pytest.mark.skipif(not BLUEPRINT.exists(), reason=f"console script not found at {BLUEPRINT}")
@@ -53,6 +62,19 @@ def one_error(proc: subprocess.CompletedProcess, *mentions: str, blank_stdout: b
     for text in mentions:
         assert text.lower() in line.lower(), f"{text!r} not in {line!r}"
     return line
+
+
+def loaded_in_a_process(path: Path, what: str) -> list[str]:
+    """``what`` (an expression of the model ``m``) of ``path`` loaded in a fresh process, and
+    whether that process imported trimesh."""
+    code = (
+        "import sys; from blueprint.scene.loader import load_model; "
+        f"m = load_model({str(path)!r}); print({what}, 'trimesh' in sys.modules)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.split()
 
 
 def no_output(folder: Path) -> None:

@@ -13,15 +13,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_kbuffer import (
+from capture_helpers import (
     CASES,
-    _normal_tolerance,
-    _planes,
     assert_front_to_back,
     drawing_difference,
+    nested_round,
+    normal_tolerance,
     peel_both_ways,
+    planes,
 )
-from test_layers_oracle import nested_round
+from helpers import SNAPPED_GEOMETRY
 
 import blueprint
 from blueprint import examples
@@ -67,7 +68,7 @@ def abuffer(renderer, request):
 
 
 def _differ(fast, plain, renderer, slim: bool) -> np.ndarray:
-    tolerance = _normal_tolerance(renderer)
+    tolerance = normal_tolerance(renderer)
     if slim:
         # a slim fragment's normal is the resolve's sum of the corners' at the pixel centre, not
         # the rasteriser's: a half's last place apart (2^-11 for a unit vector's component); where
@@ -93,7 +94,7 @@ def test_any_drawing_order_gives_the_layers_front_to_back(renderer, abuffer, ord
 def test_of_coincident_faces_the_first_drawn_wins(renderer, abuffer):
     """Two squares in one plane and a third behind: one layer of the first square's faces,
     then the third, as a depth test that keeps the first of equal depths draws them."""
-    model = _planes([0, 0, 1])
+    model = planes([0, 0, 1])
     camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
     fast, plain = [], []
     for on, out in ((True, fast), (False, plain)):
@@ -124,7 +125,7 @@ def test_lists_too_long_to_sort_in_registers(renderer, abuffer):
     """60 squares one behind the other: every list is longer than the resolve sorts in
     registers (SORTED in abuffer_resolve.comp), so each layer is found by walking it."""
     order = [int(v) for v in np.random.default_rng(3).permutation(60)]
-    model = _planes(order)
+    model = planes(order)
     camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
     fast, plain = peel_both_ways(renderer, abuffer, model, camera=camera, size=(24, 24), max_layers=None)
     assert len(plain.depth) == 60
@@ -487,8 +488,6 @@ def test_slim_normals_are_taken_at_the_pixel_centre(renderer, abuffer, monkeypat
     tests/glsl/snapped_geometry.vert) move the samples of whole fragments' normals off the pixel
     centres, and on faces seen edge-on their normals with them; slim fragments' normals come
     from the true corners at the centre, the same with or without the snap."""
-    from pathlib import Path
-
     from blueprint.render import mesh
 
     abuffer(True)
@@ -496,7 +495,7 @@ def test_slim_normals_are_taken_at_the_pixel_centre(renderer, abuffer, monkeypat
     options = dict(size=(160, 120), max_layers=None, **camera)
     monkeypatch.setattr(renderer, "capture_table", replace(renderer.capture_table, exact_depth=True))
     plain = blueprint.peel(make(), renderer=renderer, **options)
-    monkeypatch.setattr(mesh, "GEOMETRY_VERT", Path(__file__).parent / "glsl" / "snapped_geometry.vert")
+    monkeypatch.setattr(mesh, "GEOMETRY_VERT", SNAPPED_GEOMETRY)
     snapped = blueprint.peel(make(), renderer=renderer, **options)
     # the snap moves which face covers a pixel beside an edge: compare where it does not
     same = (snapped.triangle == plain.triangle) & (plain.triangle >= 0)

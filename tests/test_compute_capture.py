@@ -11,8 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_kbuffer import peel_both_ways
-from test_layers_oracle import nested_boxes, nested_round
+from capture_helpers import nested_boxes, nested_round, peel_both_ways
 
 import blueprint
 from blueprint import examples

@@ -11,7 +11,7 @@ import warnings
 import numpy as np
 import pytest
 import trimesh
-from test_obj import loaded_in_a_process
+from helpers import loaded_in_a_process
 
 from blueprint.api.batch import MODEL_SUFFIXES
 from blueprint.errors import InputError

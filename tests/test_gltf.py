@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from test_obj import loaded_in_a_process
+from helpers import SHARED_MODELS, loaded_in_a_process
 
 import blueprint
 from blueprint import examples
@@ -20,7 +20,6 @@ from blueprint.errors import InputError
 from blueprint.scene import loader
 from blueprint.scene.formats.gltf import read_glb
 
-MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
 GEARBOX = Path(blueprint.__file__).parent / "data" / "gearbox.glb"
 SHARED = [
     "glTF-Sample-Models/2CylinderEngine.glb",
@@ -313,7 +312,7 @@ def test_a_mesh_of_several_primitives_names_its_parts_after_the_mesh(tmp_path):
 
 @pytest.mark.parametrize("name", [GEARBOX.name, *SHARED])
 def test_shipped_and_shared_models_read_as_trimesh_reads_them(name):
-    path = GEARBOX if name == GEARBOX.name else MODELS / name
+    path = GEARBOX if name == GEARBOX.name else SHARED_MODELS / name
     if not path.exists():
         pytest.skip(f"{path} not found (see ../shared/models/README.md)")
     assert_same(path)

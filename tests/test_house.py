@@ -10,7 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from test_layers import components, find_modules, imports_of
+from import_graph import components, find_modules, imports_of
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "blueprint"

@@ -10,9 +10,18 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from test_layers_oracle import nested_boxes, nested_round, sphere_in_cube
+from capture_helpers import (
+    CASES,
+    assert_front_to_back,
+    drawing_difference,
+    nested_boxes,
+    nested_round,
+    normal_tolerance,
+    peel_both_ways,
+    planes,
+    sphere_in_cube,
+)
 
-import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
 from blueprint.render.table import (
@@ -56,53 +65,10 @@ def surfaces_kbuffer(renderer, kbuffer):
     return kbuffer
 
 
-def peel_both_ways(renderer, switch, model, **options):
-    """``blueprint.peel`` of ``model`` with ``switch(True)`` (a way of capturing switched on),
-    then with ``switch(False)``: (on, off)."""
-    switch(True)
-    on = blueprint.peel(model, renderer=renderer, **options)
-    switch(False)
-    off = blueprint.peel(model, renderer=renderer, **options)
-    return on, off
-
-
-def _planes(order: list[int]) -> blueprint.Model:
-    """Squares at z = 0, -1, -2 facing the viewer, drawn in ``order``."""
-    positions, faces = [], []
-    for z in order:
-        b = len(positions)
-        positions += [(-1, -1, -z), (1, -1, -z), (1, 1, -z), (-1, 1, -z)]
-        faces += [(b, b + 1, b + 2), (b, b + 2, b + 3)]
-    return blueprint.Model.from_arrays(np.array(positions, np.float32), np.array(faces, np.int32))
-
-
-def assert_front_to_back(renderer, order: list[int]) -> None:
-    """The squares of ``_planes(order)`` peel nearest first, each layer one square's faces, with
-    the capture the renderer is set to."""
-    model = _planes(order)
-    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
-    layers = renderer.peel(model, camera, size=(32, 32), max_layers=4)
-    assert len(layers.depth) == 3
-    for k, z in enumerate((0, 1, 2)):
-        first_face = 2 * order.index(z)
-        assert set(np.unique(layers.triangle[k])) - {-1} == {first_face, first_face + 1}
-    inside = layers.depth[0] < 1.0
-    assert (np.diff(layers.depth[:, inside], axis=0) > 0).all()
-
-
 @pytest.mark.parametrize("order", [[0, 1, 2], [2, 1, 0], [1, 0, 2], [2, 0, 1]])
 def test_any_drawing_order_gives_the_layers_front_to_back(renderer, kbuffer, order):
     kbuffer(True)
     assert_front_to_back(renderer, order)
-
-
-CASES = {
-    "nested-boxes": (nested_boxes, {}),
-    "nested-round": (nested_round, dict(azimuth=20.0, elevation=35.0)),
-    "sphere-in-cube": (sphere_in_cube, {}),
-    "gearbox": (examples.gearbox, {}),
-    "gearbox-ortho": (examples.gearbox, dict(view="front", ortho=True)),
-}
 
 
 @pytest.mark.parametrize("max_layers", [None, 3, 10], ids=["all", "3", "10"])
@@ -117,7 +83,7 @@ def test_same_layers_as_a_pass_a_layer(renderer, kbuffer, name, max_layers):
         (fast.depth == plain.depth)
         & (fast.triangle == plain.triangle)
         & (fast.part == plain.part)
-        & (np.abs(fast.normal - plain.normal) <= _normal_tolerance(renderer)).all(axis=-1)
+        & (np.abs(fast.normal - plain.normal) <= normal_tolerance(renderer)).all(axis=-1)
     )
     # two surfaces about one peeling tolerance apart may be merged either way: a handful of pixels
     assert (~same).sum() <= max(2, 1e-4 * covered.sum()), f"{(~same).sum()} of {covered.sum()} differ"
@@ -142,29 +108,11 @@ def test_layer_counts_are_covered_pixels(renderer, kbuffer):
     assert frame.layer_pixels[frame.layers :] in ([], [0])
 
 
-def _normal_tolerance(renderer) -> float:
-    """Normals pass through halves either way: kbuffer.glsl rounds them toward zero as
-    llvmpipe's half-float targets do (the same bits there); another driver may round to
-    nearest, a last-place difference."""
-    return 0.0 if "llvmpipe" in renderer.info["renderer"] else 1e-3
-
-
-def drawing_difference(use, style: str, supersample: int) -> np.ndarray:
-    """(H, W): the largest channel difference between the gearbox drawn with ``use(True)`` and
-    with ``use(False)`` (a capture switched on and off)."""
-    images = []
-    for on in (True, False):
-        use(on)
-        options = dict(size=(200, 150), style=style, max_layers=6, supersample=supersample)
-        images.append(blueprint.render(examples.gearbox(), **options).astype(int))
-    return np.abs(images[0] - images[1]).max(axis=-1)
-
-
 @pytest.mark.parametrize("supersample", [1, 2])
 @pytest.mark.parametrize("style", ["blueprint", "paper"])
 def test_same_drawing(renderer, kbuffer, style, supersample):
     diff = drawing_difference(kbuffer, style, supersample)
-    if _normal_tolerance(renderer) == 0.0:
+    if normal_tolerance(renderer) == 0.0:
         assert (diff == 0).all(), f"{(diff > 0).sum()} pixels differ"
     assert (diff > 2).mean() <= 1e-3, f"{(diff > 2).sum()} pixels differ"
 
@@ -258,7 +206,7 @@ def test_a_fragment_part_of_a_held_surface_is_no_layer_left(renderer, surfaces_k
     """Squares at depths 0, 1 and 1 again, drawn in that order, capped at 2: the third is part
     of the second surface held, so the frame leaves no layer behind (the peel draws two)."""
     surfaces_kbuffer(True)
-    model = _planes([0, 1, 1])
+    model = planes([0, 1, 1])
     options = dict(size=(64, 64), supersample=1)
     camera = fit_camera(model, options["size"], "front")
     assert renderer.render(model, camera, max_layers=None, **options).layers == 2

@@ -18,15 +18,14 @@ stay in the denominator; failure messages count them.
 
 from __future__ import annotations
 
-import shutil
-import subprocess
-import sys
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from capture_helpers import nested_boxes, nested_round, sphere_in_cube
+from helpers import SNAPPED_GEOMETRY, run_cli
 from oracle import (
     accepted_faces,
     cast_oracle,
@@ -49,39 +48,6 @@ ID_AGREEMENT = 0.995
 # tolerance render/renderer.py documents (PEEL_EPSILON), far below any gap a model here has on
 # purpose (the thinnest, the gearbox cover's 1.5-unit walls, is about 1e-2 of its range).
 MERGE_TOL = 1e-5
-
-
-# -- models ------------------------------------------------------------------------------------
-def nested_boxes() -> blueprint.Model:
-    """Three concentric boxes: six surfaces along every ray through the middle."""
-    return examples.assemble(
-        {
-            "outer": examples.box((-3, -2.5, -2), (3, 2.5, 2)),
-            "middle": examples.box((-2, -1.5, -1.2), (2, 1.5, 1.2)),
-            "inner": examples.box((-1, -0.8, -0.5), (1, 0.8, 0.5)),
-        }
-    )
-
-
-def nested_round() -> blueprint.Model:
-    """A star prism inside a tube inside a box, on one axis: up to ten surfaces a ray."""
-    return examples.assemble(
-        {
-            "box": examples.box((-3, -3, -3), (3, 3, 3)),
-            "tube": examples.tube(1.6, 2.5, 5.0, 40),
-            "star": examples.prism([1.2, 0.7], 4.0, 16),
-        }
-    )
-
-
-def sphere_in_cube() -> blueprint.Model:
-    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.8)
-    return examples.assemble(
-        {
-            "cube": examples.box((-1, -1, -1), (1, 1, 1)),
-            "sphere": (np.asarray(sphere.vertices), np.asarray(sphere.faces)),
-        }
-    )
 
 
 @dataclass(frozen=True)
@@ -297,7 +263,7 @@ def test_exact_depth_undoes_snapped_corners(exact, method, renderer, monkeypatch
     depth moved along the true plane to the pixel centre) brings back the oracle's layers."""
     case = next(c for c in CASES if c.name == "gearbox")
     model, _, oracle = _peel_and_cast(case, renderer, request, method)
-    monkeypatch.setattr(mesh, "GEOMETRY_VERT", Path(__file__).parent / "glsl" / "snapped_geometry.vert")
+    monkeypatch.setattr(mesh, "GEOMETRY_VERT", SNAPPED_GEOMETRY)
     monkeypatch.setattr(renderer, "capture_table", replace(renderer.capture_table, exact_depth=exact))
     layers = blueprint.peel(model, size=case.size, renderer=renderer, normals=method != "ids-only")
     result = compare_layers(layers.depth, oracle)
@@ -399,14 +365,6 @@ def test_changing_size_between_frames_leaves_no_gl_error(renderer):
 
 
 # -- the command line, end to end ----------------------------------------------------------------
-def _cli() -> list[str]:
-    script = Path(sys.executable).with_name("blueprint")
-    if script.exists():
-        return [str(script)]
-    found = shutil.which("blueprint")
-    return [found] if found else [sys.executable, "-m", "blueprint.cli"]
-
-
 def test_cli_layers_npz_matches_oracle(shared_models, tmp_path):
     """`blueprint layers` writes the NPZ of the contract; rays cast through its own matrices at
     the mesh as trimesh loads the file (not through blueprint's loader) reproduce it."""
@@ -414,12 +372,7 @@ def test_cli_layers_npz_matches_oracle(shared_models, tmp_path):
     assert path.exists(), f"{path} is missing from the shared models"
     out = tmp_path / "layers.npz"
     width, height = 120, 96
-    run = subprocess.run(
-        [*_cli(), "layers", str(path), "-o", str(out), "--size", str(width), str(height), "--view", "iso"],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    run = run_cli("layers", path, "-o", out, "--size", width, height, "--view", "iso", timeout=120)
     assert run.returncode == 0, run.stderr
     with np.load(out) as npz:
         data = {key: npz[key] for key in npz.files}

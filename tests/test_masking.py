@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import project
+from helpers import project, run_cli
 from oracle import raycast_layers
 
 from blueprint import InputError, load_model
@@ -124,39 +124,15 @@ def test_bad_part_patterns_name_the_closest_parts():
 
 
 def test_cli_highlight_and_reveal(tmp_path):
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    exe = Path(sys.executable).with_name("blueprint")
     from blueprint.examples import example_path
 
     out = tmp_path / "hl.png"
-    done = subprocess.run(
-        [
-            exe,
-            "render",
-            example_path(),
-            "-o",
-            out,
-            "--size",
-            "96",
-            "64",
-            "--highlight",
-            "gear",
-            "--reveal",
-            "0.8",
-        ],
-        capture_output=True,
-        text=True,
+    done = run_cli(
+        "render", example_path(), "-o", out, "--size", 96, 64, "--highlight", "gear", "--reveal", 0.8
     )
     assert done.returncode == 0, done.stderr
     assert "of the highlighted parts shown" in done.stdout and out.exists()
-    bad = subprocess.run(
-        [exe, "render", example_path(), "-o", tmp_path / "x.png", "--highlight", "gera"],
-        capture_output=True,
-        text=True,
-    )
+    bad = run_cli("render", example_path(), "-o", tmp_path / "x.png", "--highlight", "gera")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "closest: gear" in bad.stderr
     assert not (tmp_path / "x.png").exists()
 

@@ -5,21 +5,15 @@ for anything else; and a small file against arrays written by hand."""
 from __future__ import annotations
 
 import io
-import os
-import subprocess
-import sys
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from helpers import SHARED_MODELS, loaded_in_a_process
 
-import blueprint
 from blueprint.scene import loader
 from blueprint.scene.formats.obj import obj_arrays
-
-MODELS = Path(__file__).resolve().parents[2] / "shared" / "models"
 
 
 def trimesh_arrays(data: bytes) -> tuple[np.ndarray, np.ndarray]:
@@ -126,7 +120,7 @@ def test_a_file_written_by_hand_reads_as_written():
 
 @pytest.mark.parametrize("name", ["stanford-bunny.obj", "fandisk.obj", "teapot.obj", "spot.obj"])
 def test_real_scans_read_as_trimesh_does(name):
-    path = MODELS / "common-3d-test-models" / name
+    path = SHARED_MODELS / "common-3d-test-models" / name
     if not path.exists():
         pytest.skip(f"{path} not found (see ../shared/models/README.md)")
     data = path.read_bytes()
@@ -152,19 +146,6 @@ def test_loader_model_is_the_trimesh_model(tmp_path):
         loader.up_of(None, "y", True, positions, faces).axis,
         loader.up_of(None, "y", True, positions, faces).reason,
     )
-
-
-def loaded_in_a_process(path: Path, what: str) -> list[str]:
-    """``what`` (an expression of the model ``m``) of ``path`` loaded in a fresh process, and
-    whether that process imported trimesh."""
-    code = (
-        "import sys; from blueprint.scene.loader import load_model; "
-        f"m = load_model({str(path)!r}); print({what}, 'trimesh' in sys.modules)"
-    )
-    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
-    assert done.returncode == 0, done.stderr
-    return done.stdout.split()
 
 
 def test_obj_loads_without_trimesh(tmp_path):

@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from helpers import project
+from helpers import project, run_cli
 from vector_helpers import SVG, parse_path
 
 from blueprint.compose.glyphs import Glyphs
@@ -95,25 +95,6 @@ def test_dim_and_none_modes(renderer, tmp_path):
     assert [t.text for t in group.findall(f"{SVG}text")] == ["front"]
 
 
-def _cli(*args):
-    """``python -m blueprint`` of the package under test."""
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
-
-    import blueprint
-
-    env = dict(os.environ, PYTHONPATH=str(Path(blueprint.__file__).parents[1]))
-    return subprocess.run(
-        [sys.executable, "-m", "blueprint", *map(str, args)],
-        capture_output=True,
-        text=True,
-        env=env,
-        timeout=300,
-    )
-
-
 def test_glyphs_on_the_command_line_for_an_svg(tmp_path):
     from blueprint.examples import gearbox, write_glb
 
@@ -122,14 +103,14 @@ def test_glyphs_on_the_command_line_for_an_svg(tmp_path):
     glyph_file = tmp_path / "marks.toml"
     glyph_file.write_text('[[box]]\nmin = [-7, 14, -26]\nmax = [7, 66, 26]\nlabel = "gear"\n')
     out = tmp_path / "g.svg"
-    result = _cli("render", model, "-o", out, "--size", 160, 120, "--glyphs", glyph_file)
+    result = run_cli("render", model, "-o", out, "--size", 160, 120, "--glyphs", glyph_file)
     assert result.returncode == 0, result.stderr
     root = ET.parse(out).getroot()
     group = next(g for g in root.iter(f"{SVG}g") if g.get("id") == "glyphs")
     assert len(group.findall(f"{SVG}path")) >= 2 and [t.text for t in group.findall(f"{SVG}text")] == ["gear"]
     bad = tmp_path / "bad.toml"
     bad.write_text("[[box]]\nmin = [0, 0]\n")
-    result = _cli("render", model, "-o", tmp_path / "b.svg", "--glyphs", bad)
+    result = run_cli("render", model, "-o", tmp_path / "b.svg", "--glyphs", bad)
     assert result.returncode == 2 and "bad.toml" in result.stderr and "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "b.svg").exists()

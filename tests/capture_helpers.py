@@ -1,0 +1,107 @@
+"""Helpers the layer-capture tests share: models with many depth layers a ray, the cases every
+way of capturing is compared on, and the comparison of a way switched on and off (the k-buffer,
+the A-buffer, the compute rasteriser against the peel that draws the model once a layer)."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+import blueprint
+from blueprint import examples
+
+
+# -- models ------------------------------------------------------------------------------------
+def nested_boxes() -> blueprint.Model:
+    """Three concentric boxes: six surfaces along every ray through the middle."""
+    return examples.assemble(
+        {
+            "outer": examples.box((-3, -2.5, -2), (3, 2.5, 2)),
+            "middle": examples.box((-2, -1.5, -1.2), (2, 1.5, 1.2)),
+            "inner": examples.box((-1, -0.8, -0.5), (1, 0.8, 0.5)),
+        }
+    )
+
+
+def nested_round() -> blueprint.Model:
+    """A star prism inside a tube inside a box, on one axis: up to ten surfaces a ray."""
+    return examples.assemble(
+        {
+            "box": examples.box((-3, -3, -3), (3, 3, 3)),
+            "tube": examples.tube(1.6, 2.5, 5.0, 40),
+            "star": examples.prism([1.2, 0.7], 4.0, 16),
+        }
+    )
+
+
+def sphere_in_cube() -> blueprint.Model:
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.8)
+    return examples.assemble(
+        {
+            "cube": examples.box((-1, -1, -1), (1, 1, 1)),
+            "sphere": (np.asarray(sphere.vertices), np.asarray(sphere.faces)),
+        }
+    )
+
+
+def planes(order: list[int]) -> blueprint.Model:
+    """Squares at z = 0, -1, -2 facing the viewer, drawn in ``order``."""
+    positions, faces = [], []
+    for z in order:
+        b = len(positions)
+        positions += [(-1, -1, -z), (1, -1, -z), (1, 1, -z), (-1, 1, -z)]
+        faces += [(b, b + 1, b + 2), (b, b + 2, b + 3)]
+    return blueprint.Model.from_arrays(np.array(positions, np.float32), np.array(faces, np.int32))
+
+
+# name: (function making the model, camera options)
+CASES = {
+    "nested-boxes": (nested_boxes, {}),
+    "nested-round": (nested_round, dict(azimuth=20.0, elevation=35.0)),
+    "sphere-in-cube": (sphere_in_cube, {}),
+    "gearbox": (examples.gearbox, {}),
+    "gearbox-ortho": (examples.gearbox, dict(view="front", ortho=True)),
+}
+
+
+# -- a way of capturing against the peel ----------------------------------------------------------
+def peel_both_ways(renderer, switch, model, **options):
+    """``blueprint.peel`` of ``model`` with ``switch(True)`` (a way of capturing switched on),
+    then with ``switch(False)``: (on, off)."""
+    switch(True)
+    on = blueprint.peel(model, renderer=renderer, **options)
+    switch(False)
+    off = blueprint.peel(model, renderer=renderer, **options)
+    return on, off
+
+
+def assert_front_to_back(renderer, order: list[int]) -> None:
+    """The squares of ``planes(order)`` peel nearest first, each layer one square's faces, with
+    the capture the renderer is set to."""
+    model = planes(order)
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    layers = renderer.peel(model, camera, size=(32, 32), max_layers=4)
+    assert len(layers.depth) == 3
+    for k, z in enumerate((0, 1, 2)):
+        first_face = 2 * order.index(z)
+        assert set(np.unique(layers.triangle[k])) - {-1} == {first_face, first_face + 1}
+    inside = layers.depth[0] < 1.0
+    assert (np.diff(layers.depth[:, inside], axis=0) > 0).all()
+
+
+def normal_tolerance(renderer) -> float:
+    """Normals pass through halves either way: kbuffer.glsl rounds them toward zero as
+    llvmpipe's half-float targets do (the same bits there); another driver may round to
+    nearest, a last-place difference."""
+    return 0.0 if "llvmpipe" in renderer.info["renderer"] else 1e-3
+
+
+def drawing_difference(use, style: str, supersample: int) -> np.ndarray:
+    """(H, W): the largest channel difference between the gearbox drawn with ``use(True)`` and
+    with ``use(False)`` (a capture switched on and off)."""
+    images = []
+    for on in (True, False):
+        use(on)
+        options = dict(size=(200, 150), style=style, max_layers=6, supersample=supersample)
+        images.append(blueprint.render(examples.gearbox(), **options).astype(int))
+    return np.abs(images[0] - images[1]).max(axis=-1)
