@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import run_cli
+from helpers import ROOT, run_cli
 from PIL import Image
 from vector_helpers import SVG
 
@@ -17,7 +16,6 @@ from blueprint.errors import InputError
 from blueprint.examples import gearbox
 from blueprint.vector import LineStyle, draw_vector, load_vector_style, save_drawing, vector_style
 
-ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "lines.toml"
 
 

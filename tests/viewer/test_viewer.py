@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import ROOT
 from PIL import Image
 
 import blueprint
@@ -25,7 +26,6 @@ from blueprint.scene.camera import VIEWS
 from blueprint.viewer.overlay import BACKDROP, LINE_HEIGHT
 from blueprint.viewer.state import ViewState
 
-ROOT = Path(__file__).resolve().parents[2]
 GEARBOX = ROOT / "src" / "blueprint" / "data" / "gearbox.glb"
 ENTRY = "from blueprint.cli.view import main; main()"
 SIZE = (320, 240)

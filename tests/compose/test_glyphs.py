@@ -9,16 +9,13 @@ every expected pixel is known without the code under test.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import project
+from helpers import ROOT, project
 
 from blueprint import Camera, InputError, examples
 from blueprint.compose.glyphs import Glyphs, draw_glyphs, load_glyphs, render_with_glyphs
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 # -- helpers -----------------------------------------------------------------------------------

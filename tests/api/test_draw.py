@@ -7,12 +7,12 @@ import io
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import ezdxf
 import numpy as np
 import pytest
 import trimesh
+from helpers import ROOT
 from IPython.core.formatters import DisplayFormatter
 from PIL import Image
 
@@ -279,7 +279,7 @@ def test_a_section_cuts_pictures_and_vectors(renderer, scene):
 def test_bad_options_raise_the_command_lines_line(renderer, tmp_path, capsys, flags, options):
     from blueprint import cli
 
-    marks = str(Path(__file__).resolve().parents[1] / "examples" / "marks.toml")
+    marks = str(ROOT / "examples" / "marks.toml")
     path = str(examples.example_path())
     flags = [marks if f == "MARKS" else f for f in flags]
     options = {k: marks if v == "MARKS" else v for k, v in options.items()}

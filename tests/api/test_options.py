@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import ROOT
 
 from blueprint import examples
 from blueprint.api.options import GROUPS, DrawOptions, option_fields, takes_options, zero_layers_are_all
@@ -18,7 +18,6 @@ from blueprint.compose.linestyle import load_raster_style, load_vector_style
 from blueprint.compose.style import STYLES
 from blueprint.errors import InputError
 
-ROOT = Path(__file__).resolve().parents[1]
 LINES = ROOT / "examples" / "lines.toml"
 MARKS = ROOT / "examples" / "marks.toml"
 

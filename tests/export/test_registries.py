@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from helpers import ROOT
 
 import blueprint.vector.drawing as drawing
 from blueprint import examples
@@ -30,7 +31,6 @@ from blueprint.pipeline.media import write_video
 from blueprint.pipeline.spec import OPERATIONS
 from blueprint.vector.style import is_style_file, vector_style
 
-ROOT = Path(__file__).resolve().parents[1]
 LINE_STYLE = ROOT / "examples" / "lines.toml"
 
 
