@@ -1,7 +1,8 @@
 """Measures of the house (issue 37), read from the code: how many functions outside cli/ take
-more than 12 parameters, how many functions are longer than 100 lines, and that no file of the
-package imports a file that imports it back, through any number of files. The counters are
-tested on small sources of their own, so that they cannot pass by finding nothing."""
+more than 12 parameters, how many functions are longer than 100 lines, that no file of the
+package imports a file that imports it back, through any number of files, and that the tests
+mirror the package. The counters are tested on small sources of their own, so that they cannot
+pass by finding nothing."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from import_graph import components, find_modules, imports_of
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "blueprint"
+TESTS = SRC.parent / "tests"
 MOST = 12
 
 # Public entry points that may list every drawing option as keywords: none needs to, since
@@ -81,6 +83,58 @@ def file_cycles(modules: dict[str, Path]) -> list[set[str]]:
     return components(graph)
 
 
+# The test files that stay at tests/, each testing the whole product rather than one package, and
+# why; any other there is named after a module at the package's root (test_sorting.py: sorting.py).
+WHOLE_PRODUCT = {
+    "test_golden.py": "golden frames of every style, through the whole drawing",
+    "test_layers_oracle.py": "every way of capturing layers, and `blueprint layers`, against ray casting",
+    "test_hostile.py": "every file the product reads or writes, through the command line",
+    "test_notebook.py": "the example notebook in a real Jupyter kernel",
+    "test_docs.py": "the README and docs/ against the code",
+    "test_package.py": "the wheel as pip builds it",
+    "test_layers.py": "the import layers of the whole package",
+    "test_house.py": "the measures of the whole package and of its tests",
+}
+
+
+def misplaced_tests(tests: Path, package: Path, whole_product=WHOLE_PRODUCT) -> list[str]:
+    """Every test file under ``tests`` out of the package's mirror, with why: one at the top
+    neither in ``whole_product`` nor named after a module at ``package``'s root, one in a folder
+    that is no package of ``package`` (``tests/scene/`` mirrors ``scene/``), or in a folder
+    without ``__init__.py`` (pytest would take two test files of one name for one module)."""
+    found = []
+    for path in sorted(tests.rglob("test_*.py")):
+        where = path.relative_to(tests)
+        folder = where.parent
+        if folder == Path("."):
+            module = package / where.name.removeprefix("test_")
+            if where.name not in whole_product and not module.is_file():
+                found.append(f"{where}: at the top, neither whole-product nor named after a module there")
+        elif not (package / folder / "__init__.py").is_file():
+            found.append(f"{where}: {folder.as_posix()}/ is no package of {package.name}")
+        elif not all((tests / up / "__init__.py").is_file() for up in [folder, *folder.parents[:-1]]):
+            found.append(f"{where}: {folder.as_posix()}/ or a folder above it has no __init__.py")
+    return found
+
+
+def imports_of_test_files(tests: Path) -> list[str]:
+    """``file:line`` of every import of a test module (``test_*``) under ``tests``: what tests
+    share lives in helper modules and ``conftest.py``."""
+    found = []
+    for path in sorted(tests.rglob("*.py")):
+        where = path.relative_to(tests).as_posix()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), where)):
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                names = [f"{node.module or ''}.{alias.name}" for alias in node.names]
+            else:
+                continue
+            if any(part.startswith("test_") for name in names for part in name.split(".")):
+                found.append(f"{where}:{node.lineno}")
+    return found
+
+
 def test_at_most_two_functions_outside_cli_take_more_than_twelve_parameters():
     found = long_parameter_lists(PACKAGE)
     assert len(ALLOWED) <= 2
@@ -96,6 +150,12 @@ def test_at_most_five_functions_are_longer_than_a_hundred_lines():
 def test_no_file_imports_a_file_that_imports_it():
     found = {frozenset(cycle) for cycle in file_cycles(find_modules(SRC))}
     assert found <= KNOWN_CYCLES, [sorted(cycle) for cycle in found - KNOWN_CYCLES]
+
+
+def test_the_tests_mirror_the_package():
+    assert misplaced_tests(TESTS, PACKAGE) == []
+    assert imports_of_test_files(TESTS) == []
+    assert all((TESTS / name).is_file() for name in WHOLE_PRODUCT)
 
 
 def test_the_function_blueprint_render_is_not_hidden_by_the_subpackage_render():
@@ -156,3 +216,36 @@ def test_the_counters_find_what_they_should(tmp_path):
         {"blueprint.gpu.a", "blueprint.gpu.b", "blueprint.gpu.c"},
         {"blueprint.gpu.e", "blueprint.gpu.f"},
     ]
+
+
+def test_the_mirror_check_finds_what_it_should(tmp_path):
+    package, tests = tmp_path / "src" / "blueprint", tmp_path / "tests"
+    for folder in (
+        package / "scene" / "formats",
+        package / "render",
+        tests / "scene" / "formats",
+        tests / "render",
+    ):
+        folder.mkdir(parents=True)
+    for module in ("scene/__init__.py", "scene/formats/__init__.py", "render/__init__.py", "sorting.py"):
+        (package / module).write_text("")
+    for name in ("scene/__init__.py", "scene/formats/__init__.py", "conftest.py", "helpers.py"):
+        (tests / name).write_text("")
+    (tests / "views").mkdir()
+    for name in (
+        "test_sorting.py",
+        "test_docs.py",
+        "test_stray.py",
+        "scene/test_model.py",
+        "scene/formats/test_obj.py",
+    ):
+        (tests / name).write_text("")
+    (tests / "render" / "test_peel.py").write_text("from test_sorting import x\n")
+    (tests / "views" / "test_front.py").write_text("import helpers\nfrom scene import test_model\n")
+    (tests / "views" / "__init__.py").write_text("")
+    assert misplaced_tests(tests, package, {"test_docs.py": "the docs"}) == [
+        "render/test_peel.py: render/ or a folder above it has no __init__.py",
+        "test_stray.py: at the top, neither whole-product nor named after a module there",
+        "views/test_front.py: views/ is no package of blueprint",
+    ]
+    assert imports_of_test_files(tests) == ["render/test_peel.py:1", "views/test_front.py:2"]
