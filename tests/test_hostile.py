@@ -516,8 +516,8 @@ def test_binary_stl_over_the_triangle_limit_is_refused(tmp_path, monkeypatch):
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == (
-        f"{path}: 12 triangles to draw, more than the 11 that the memory budget of 12 KiB holds at "
-        "1024 bytes a triangle (BLUEPRINT_MEMORY_LIMIT sets the budget)"
+        f"{path}: 12 triangles to draw need about 10.5 KiB of memory at 896 bytes a triangle, more "
+        "than the memory budget of 10.5 KiB (BLUEPRINT_MEMORY_LIMIT sets the budget)"
     )
 
 
@@ -1045,8 +1045,8 @@ def test_instances_beyond_the_memory_budget_are_refused_before_any_is_made(tmp_p
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == (
-        f"{path}: 24000 triangles to draw (2000 mesh instances), more than the 20000 that the memory "
-        "budget of 19.5 MiB holds at 1024 bytes a triangle (BLUEPRINT_MEMORY_LIMIT sets the budget)"
+        f"{path}: 24000 triangles to draw (2000 mesh instances) need about 20.5 MiB of memory at 896 "
+        "bytes a triangle, more than the memory budget of 17.1 MiB (BLUEPRINT_MEMORY_LIMIT sets the budget)"
     )
     monkeypatch.undo()
     model = loader.load_model(path)

@@ -34,6 +34,7 @@ __all__ = [
     "TRIANGLE_BYTES",
     "TRIANGLE_LIMIT",
     "Entry",
+    "available_memory",
     "check_file",
     "human_size",
     "memory_budget",
@@ -53,7 +54,7 @@ _MEMORY_CAP = 16 << 30
 _MEMORY_FLOOR = 64 << 20
 
 
-def _available_memory() -> int:
+def available_memory() -> int:
     """Bytes this process may still use: the memory the kernel reports available, or less
     where an address-space limit (``ulimit -v``) is set."""
     available = None
@@ -92,7 +93,7 @@ def memory_budget() -> int:
     # size leaves the default
     if digits.isdigit() and len(digits) <= 15:
         return max(int(digits) * scale, 1 << 20)
-    return max(min(_available_memory() // 4, _MEMORY_CAP), _MEMORY_FLOOR)
+    return max(min(available_memory() // 4, _MEMORY_CAP), _MEMORY_FLOOR)
 
 
 MEMORY_BUDGET = memory_budget()
@@ -110,12 +111,14 @@ SETTINGS_FILE_LIMIT = 16 << 20  # settings, line style, glyph and pipeline files
 # within the budget): its header is read before any pixel, and a few kilobytes of PNG can
 # declare an image larger than memory.
 IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
-# Memory a drawn triangle takes at the peak of a drawing's preparation (loading, welding,
-# smoothing normals, the GPU's copy), over what the process holds before it: measured, with a
-# margin, in benchmarks/notes/hostile-memory.md. From it, the triangles a model may have, all
-# instances together (refused before they are made); and mesh instances a scene may place
-# (each is a part, with a name).
-TRIANGLE_BYTES = 1024
+# Memory a drawn triangle takes at the peak of a drawing (loading, preparing, the GPU's copy,
+# the lines of a vector drawing), over what the process holds before it: the peak's growth a
+# triangle of the vector drawing, the larger, of benchmarks/scale.py's scans with a third more
+# as a margin (benchmarks/notes/memory-guard.md). From it, the peak a model's header counts
+# foretell (scene.headers.peak_estimate) and the triangles a model may have, all instances
+# together (refused before they are made); and mesh instances a scene may place (each is a
+# part, with a name).
+TRIANGLE_BYTES = 896
 TRIANGLE_LIMIT = MEMORY_BUDGET // TRIANGLE_BYTES
 INSTANCE_LIMIT = 200_000
 # Frames of a video (an hour at 30 frames a second would be 108 000), glyphs of a glyph file (each

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from blueprint.api import stages
 from blueprint.api.draw import output_writer as choose_writer
 from blueprint.api.draw import vector_drawing
 from blueprint.api.frames import as_model, shared
@@ -244,10 +245,13 @@ def render_vector_file(
     output, write = choose_writer(output, Kind.DRAWING)
     options.vector_style  # noqa: B018 - a style the drawing cannot take fails before the model loads
     clock = time.perf_counter()
+    stages.begin("read")
     loaded = as_model(model, options)
     load_s = time.perf_counter() - clock
+    stages.begin("lines")
     drawing = vector_drawing(loaded, options, shared(renderer))
     clock = time.perf_counter()
+    stages.begin("write")
     write(output, drawing)
     seconds = {"load": load_s, **drawing.seconds, "write": time.perf_counter() - clock}
     seconds["total"] = time.perf_counter() - start

@@ -8,6 +8,10 @@ or capture of layers and their edges), ``compose``, ``read_back`` and ``write``,
 synchronised after each (``DrawOptions.profile``). A vector drawing's are those its workflow
 measures (``read``, ``lines``, ``peel``, ``occlusion``, ``simplify``, ``write``). Nothing is
 timed or synchronised without the variable.
+
+The same boundaries mark the phases a progress display shows (``listen``): each stage's start
+is told to the listener, by name, as it begins; ``capture_edges`` begins when the mesh is on the
+GPU (``watch``). Nothing is told without a listener.
 """
 
 from __future__ import annotations
@@ -16,14 +20,27 @@ import json
 import os
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-__all__ = ["ENV", "add", "add_frame", "enabled", "gpu_memory", "report", "timed", "watch"]
+__all__ = [
+    "ENV",
+    "add",
+    "add_frame",
+    "begin",
+    "enabled",
+    "gpu_memory",
+    "listen",
+    "listening",
+    "report",
+    "timed",
+    "watch",
+]
 
 ENV = "BLUEPRINT_STAGES"
 
 _SECONDS: dict[str, float] = {}
+_LISTENERS: list[Callable[[str], None]] = []
 
 
 def enabled() -> bool:
@@ -37,8 +54,30 @@ def add(name: str, seconds: float) -> None:
 
 
 @contextmanager
+def listen(told: Callable[[str], None]) -> Iterator[None]:
+    """Within the block, call ``told(name)`` as each stage begins (``begin``)."""
+    _LISTENERS.append(told)
+    try:
+        yield
+    finally:
+        _LISTENERS.remove(told)
+
+
+def listening() -> bool:
+    """Whether a listener is told the stages (``listen``)."""
+    return bool(_LISTENERS)
+
+
+def begin(name: str) -> None:
+    """Tell the listeners that the stage ``name`` begins."""
+    for told in _LISTENERS:
+        told(name)
+
+
+@contextmanager
 def timed(name: str) -> Iterator[None]:
-    """Count the block's wall time to the stage ``name``."""
+    """Count the block's wall time to the stage ``name``, its start told (``begin``)."""
+    begin(name)
     start = time.perf_counter()
     try:
         yield
@@ -48,13 +87,19 @@ def timed(name: str) -> Iterator[None]:
 
 def watch(renderer) -> None:
     """Time ``renderer``'s mesh preparation and upload (``Capturer.mesh``, which the frame
-    calls) as the stage ``prepare_upload``."""
+    calls) as the stage ``prepare_upload``; the capture (``capture_edges``) begins after it."""
     capturer = renderer.capturer
     mesh = capturer.mesh
+    if getattr(mesh, "watched", False):
+        return
 
     def timed_mesh(*args, **kwargs):
         with timed("prepare_upload"):
-            return mesh(*args, **kwargs)
+            held = mesh(*args, **kwargs)
+        begin("capture_edges")
+        return held
+
+    timed_mesh.watched = True
 
     capturer.mesh = timed_mesh
 

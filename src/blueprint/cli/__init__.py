@@ -19,7 +19,10 @@ import click
 from blueprint import __version__
 from blueprint.cli.shell import run, setup_logging
 
-__all__ = ["COMMANDS", "STYLE_NAMES", "camera_options", "cli", "main", "progress_bar", "run"]
+# 0: the command runs in the program's own process (for profilers), not in a child
+SUPERVISE_ENV = "BLUEPRINT_SUPERVISE"
+
+__all__ = ["COMMANDS", "SUPERVISE_ENV", "STYLE_NAMES", "camera_options", "cli", "main", "progress_bar", "run"]
 
 # name: (module, attribute, its short help: tests/test_cli.py keeps it the command's own)
 COMMANDS: dict[str, tuple[str, str, str]] = {
@@ -108,12 +111,20 @@ def cli() -> None:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Entry point: user errors become one line on stderr and exit code 2."""
+    """Entry point: user errors become one line on stderr and exit code 2. Without ``argv`` (the
+    console script) the command runs in a child process that Ctrl-C stops at once, exit code
+    130 (``blueprint.cli.supervise``; ``BLUEPRINT_SUPERVISE=0`` runs it in this process)."""
     # Set before NumPy is imported, unless the user chose: the command's matrix products are
     # (N, 3) by 3 x 3, held to one BLAS thread anyway (blueprint.blas), so OpenBLAS starting a
     # thread a core at NumPy's import would only cost every process time.
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     _light_exit()
+    if argv is None and hasattr(os, "fork") and os.environ.get(SUPERVISE_ENV, "1") != "0":
+        # as the program (not called with arguments from Python): in a child that Ctrl-C can
+        # stop in any phase (blueprint.cli.supervise)
+        from blueprint.cli.supervise import supervised
+
+        supervised(lambda: run(cli, argv, "blueprint"))
     run(cli, argv, "blueprint")
 
 

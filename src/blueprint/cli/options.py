@@ -42,6 +42,55 @@ def progress_bar(label: str):
         yield update
 
 
+# what the progress display says as each stage of one drawing begins (blueprint.api.stages)
+PHASES = {
+    "read": "reading the model",
+    "prepare_upload": "preparing and uploading the mesh",
+    "capture_edges": "drawing",
+    "lines": "finding the lines",
+    "write": "writing",
+}
+
+
+@contextlib.contextmanager
+def phase_bar():
+    """The phases of one drawing (``PHASES``: the stages ``blueprint.api.stages`` tells as they
+    begin) with the time each has taken so far, on stderr, shown only on a terminal as
+    ``progress_bar`` is; in a pipe no stage is listened to."""
+    import sys
+
+    if not sys.stderr.isatty():
+        yield
+        return
+    from rich.console import Console
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from blueprint.api import stages
+
+    console = Console(stderr=True)
+    if not console.is_terminal:
+        yield
+        return
+    with Progress(
+        SpinnerColumn(),
+        TextColumn("{task.description}"),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    ) as progress:
+        shown = {"task": None, "phase": None}
+
+        def told(name: str) -> None:
+            if name not in PHASES or name == shown["phase"]:
+                return
+            if shown["task"] is not None:
+                progress.remove_task(shown["task"])
+            shown["task"], shown["phase"] = progress.add_task(PHASES[name], total=None), name
+
+        with stages.listen(told):
+            yield
+
+
 # The options of every command that places a camera, as DrawOptions names them.
 CAMERA_OPTIONS = ("size", "view", "azimuth", "elevation", "fov", "ortho", "include", "exclude", "up")
 

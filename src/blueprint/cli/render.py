@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from blueprint.api.draw import output_writer
-from blueprint.cli.options import CAMERA_OPTIONS, drawing_options, drawing_values
+from blueprint.cli.options import CAMERA_OPTIONS, drawing_options, drawing_values, phase_bar
 from blueprint.errors import InputError, printable
 from blueprint.export.writers import WRITERS, Kind
 from blueprint.scene.up import guessed_up
@@ -64,18 +64,23 @@ def render(model, output, highlight_model, **values):
     timing = stages.enabled()
     options = DrawOptions(**chosen, **({"profile": True} if timing else {}))
     if write.kind is Kind.DRAWING:
-        _render_vector(model, output, options)
+        from blueprint.api.files import render_vector_file
+
+        with phase_bar():
+            summary = render_vector_file(model, output, options=options)
+        _vector_done(output, summary)
         return
     if options.scale or options.sheet:
         raise InputError(f"--scale and --sheet are for vector drawings ({_suffixes(Kind.DRAWING)})")
     options.raster_style  # noqa: B018 - a line style file a picture cannot take fails before the model loads
-    with stages.timed("read"):
-        loaded = load_model(model, up=options.up, include=options.include, exclude=options.exclude)
-    if timing:
-        stages.watch(default_renderer())
-    frame = render_frame(loaded, options=options)
-    with stages.timed("write"):
-        write(output, frame.image)
+    with phase_bar():
+        with stages.timed("read"):
+            loaded = load_model(model, up=options.up, include=options.include, exclude=options.exclude)
+        if timing or stages.listening():
+            stages.watch(default_renderer())
+        frame = render_frame(loaded, options=options)
+        with stages.timed("write"):
+            write(output, frame.image)
     info = default_renderer().info
     if timing:
         stages.add_frame(frame.stages)
@@ -90,12 +95,10 @@ def render(model, output, highlight_model, **values):
     )
 
 
-def _render_vector(model, output, options) -> None:
-    """Write the vector drawing of ``options`` (a ``DrawOptions``) and print its line."""
+def _vector_done(output, summary: dict) -> None:
+    """Print the line of a vector drawing written (``render_vector_file``'s summary)."""
     from blueprint.api import default_renderer, stages
-    from blueprint.api.files import render_vector_file
 
-    summary = render_vector_file(model, output, options=options)
     if stages.enabled():
         for name, seconds in summary["seconds"].items():
             if name != "total":
@@ -123,11 +126,16 @@ def _render_vector(model, output, options) -> None:
 @drawing_options(*CAMERA_OPTIONS, "max_layers", "min_fraction", size=(512, 512), max_layers=0)
 def layers(model, output, **values):
     """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
-    from blueprint.api import peel
+    from blueprint.api import default_renderer, peel, stages
 
     output, write = output_writer(output, Kind.LAYERS)
-    result = peel(model, **drawing_values(values))
-    write(output, result)
+    with phase_bar():
+        if stages.listening():
+            stages.begin("read")
+            stages.watch(default_renderer())
+        result = peel(model, **drawing_values(values))
+        with stages.timed("write"):
+            write(output, result)
     click.echo(
         printable(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")
     )

@@ -86,9 +86,9 @@ def _run_arguments(
         raise TypeError(f"a blueprint frame takes no option {unknown[0]!r}")
     # as the preset declares them: an int, a float or a bool
     variables = {name: type(preset.variables[name])(value) for name, value in variables.items()}
-    w, h = check_size(
-        size, variables.get("supersample", preset.variables["supersample"]), renderer.max_texture
-    )
+    supersample = variables.get("supersample", preset.variables["supersample"])
+    w, h = check_size(size, supersample, renderer.max_texture)
+    renderer.capturer.check_memory(model, w * h * supersample**2, max_layers)
     if reveal is not None and highlight is None:
         raise InputError("reveal needs parts to reveal: give highlight as well")
     parts = {}

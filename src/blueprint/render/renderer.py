@@ -11,6 +11,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
+from blueprint.render.budget import check_frame_memory, frame_bytes
 from blueprint.render.capture import Capture, layer_loop
 from blueprint.render.gbuffer import gbuffer
 from blueprint.render.mesh import GpuMesh
@@ -132,6 +133,20 @@ class Capturer:
         if held is None or held[0] is not model:
             held = self._meshes[key] = (model, GpuMesh(self.device.ctx, model, crease_angle))
         return held[1]
+
+    def check_memory(self, model: Model, pixels: int, max_layers: int | None) -> None:
+        """Raise ``InputError`` where a frame of ``model`` at ``pixels`` supersampled pixels
+        and ``max_layers`` would allocate more GPU memory than the device has free
+        (``render.budget``), before it allocates any: its mesh where not uploaded yet."""
+        uploaded = any(held is model for held, _ in self._meshes.values())
+        abuffer = self.table.row("A-buffer")
+        need = frame_bytes(
+            0 if uploaded else model.triangle_count,
+            pixels,
+            max_layers,
+            abuffer.max_bytes if abuffer else None,
+        )
+        check_frame_memory(self.device, model.source or "the model", need)
 
     @current
     def forget(self, model: Model) -> None:

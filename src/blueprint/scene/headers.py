@@ -397,17 +397,25 @@ def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
     check_triangle_count(path, sum(triangles[r] for r in roots), placed)
 
 
+def peak_estimate(triangles: int) -> int:
+    """Bytes a drawing of ``triangles`` triangles (all instances together) is expected to take
+    at its peak over what the process holds before it (``settings.TRIANGLE_BYTES`` a triangle)."""
+    return int(triangles) * settings.TRIANGLE_BYTES
+
+
 def check_triangle_count(name, count: int, instances: int | None = None) -> None:
-    """Raise ``InputError`` where ``count`` triangles to draw (of ``instances`` mesh instances,
-    where a scene places them) are more than ``TRIANGLE_LIMIT``, the memory budget's worth,
-    naming ``name``, the count and the budget: before any of them is made."""
-    if count <= settings.TRIANGLE_LIMIT:
+    """Raise ``InputError`` where the peak memory of drawing ``count`` triangles (of
+    ``instances`` mesh instances, where a scene places them), ``peak_estimate``, passes the
+    memory budget (``settings.MEMORY_BUDGET``), naming ``name``, the count, the estimate and
+    the budget: from the header's counts, before any triangle is read or made."""
+    estimate = peak_estimate(count)
+    if estimate <= settings.MEMORY_BUDGET:
         return
     placed = "" if instances is None else f" ({instances} mesh instances)"
     raise InputError(
-        f"{name}: {count} triangles to draw{placed}, more than the {settings.TRIANGLE_LIMIT} that the "
-        f"memory budget of {human_size(settings.MEMORY_BUDGET)} holds at {settings.TRIANGLE_BYTES} bytes "
-        f"a triangle ({settings.MEMORY_ENV} sets the budget)"
+        f"{name}: {count} triangles to draw{placed} need about {human_size(estimate)} of memory at "
+        f"{settings.TRIANGLE_BYTES} bytes a triangle, more than the memory budget of "
+        f"{human_size(settings.MEMORY_BUDGET)} ({settings.MEMORY_ENV} sets the budget)"
     )
 
 

@@ -29,8 +29,8 @@ _INDEX = b"0123456789+-"
 
 
 def check(path: Path, size: int, data: bytes | None = None) -> None:
-    """Refuse negative counts, counts the file's ``size`` cannot hold, and a face whose corner
-    count is more than the values its line holds."""
+    """Refuse negative counts, counts the file's ``size`` cannot hold, faces whose drawing would
+    pass the memory budget, and a face whose corner count is more than the values its line holds."""
     if _check_counts(path, read_head(path, data).decode("latin-1"), size):
         _check_faces(path, read_all(path, data))
 
@@ -57,6 +57,7 @@ def _check_counts(path: Path, text: str, size: int) -> bool:
         raise refuse_count(path, vertices, "vertices", size)
     if vertices * 3 * ASCII_VALUE + faces * 4 * ASCII_VALUE > size:
         raise refuse_count(path, faces, "faces", size)
+    check_triangle_count(path, faces)  # each face a triangle at least: refused before the body is read
     return True
 
 

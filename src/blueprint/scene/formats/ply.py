@@ -56,7 +56,8 @@ _SIZES = {
 
 def check(path: Path, size: int, data: bytes | None = None) -> None:
     """Refuse a header whose element counts are not whole, are negative, or need more bytes
-    than the file's ``size`` holds (each value at least its type's size, or two characters)."""
+    than the file's ``size`` holds (each value at least its type's size, or two characters), and
+    faces whose drawing would pass the memory budget (each is a triangle at least)."""
     text = read_head(path, data).decode("latin-1")
     end = text.find("end_header")
     if not text.startswith("ply") or end < 0:
@@ -92,6 +93,8 @@ def check(path: Path, size: int, data: bytes | None = None) -> None:
         need += count * max(each, 1)
         if need > body:
             raise refuse_count(path, count, f"{name} elements", size)
+        if name == "face":
+            check_triangle_count(path, count)
 
 
 @dataclass

@@ -1,0 +1,72 @@
+"""The GPU memory a frame will allocate, sized from the model's triangles and the frame's size
+and layers before anything is allocated, against what the device has free: a frame that would
+not fit is refused in one line instead of failing in the driver."""
+
+from __future__ import annotations
+
+from blueprint import settings
+from blueprint.errors import InputError
+from blueprint.render.kbuffer import KBUFFER_MAX
+from blueprint.scene.prepare import VERTEX
+
+__all__ = [
+    "GBUFFER_BYTES",
+    "MESH_BYTES",
+    "NODE_BYTES",
+    "check_frame_memory",
+    "frame_bytes",
+    "free_gpu_memory",
+]
+
+# at most three vertex records (a soup's corners) and three uint32 indices a triangle
+MESH_BYTES = 3 * VERTEX.itemsize + 3 * 4
+# a G-buffer's pixel: two depth textures, the rgba16f normal and the rg32i IDs
+GBUFFER_BYTES = 4 + 4 + 8 + 8
+# an A-buffer fragment as llvmpipe lists it whole (a GPU's slim ones take half)
+NODE_BYTES = 16
+
+
+def free_gpu_memory(device) -> int | None:
+    """Bytes the device has free now: NVIDIA's ``GL_NVX_gpu_memory_info`` (current available
+    memory), the host's available memory on a software rasteriser (its textures are host
+    memory), else None (the driver does not tell)."""
+    if device.software:
+        return settings.available_memory()
+    if "GL_NVX_gpu_memory_info" not in device.ctx.extensions:
+        return None
+    import ctypes
+
+    try:
+        gl = ctypes.CDLL("libOpenGL.so.0")
+        value = ctypes.c_int(0)
+        gl.glGetIntegerv(0x9049, ctypes.byref(value))  # GPU_MEMORY_INFO_CURRENT_AVAILABLE_VIDMEM_NVX, KiB
+    except (OSError, AttributeError):
+        return None
+    return value.value * 1024 if value.value > 0 else None
+
+
+def frame_bytes(
+    triangles: int, pixels: int, max_layers: int | None, list_bytes: int | None
+) -> dict[str, int]:
+    """The GPU memory a frame allocates at most, by kind: ``mesh`` (vertex and index buffers
+    of ``triangles`` not yet uploaded), ``gbuffers`` (a G-buffer of ``pixels`` supersampled
+    pixels a layer a pass holds: up to ``KBUFFER_MAX``) and ``lists`` (an A-buffer's fragments,
+    a node a pixel a layer, at most ``list_bytes``, its row's cap; None: no A-buffer)."""
+    layers = KBUFFER_MAX if not max_layers else min(max_layers, KBUFFER_MAX)
+    lists = 0 if list_bytes is None else min(list_bytes, NODE_BYTES * pixels * layers)
+    return {"mesh": MESH_BYTES * triangles, "gbuffers": GBUFFER_BYTES * pixels * layers, "lists": lists}
+
+
+def check_frame_memory(device, name: str, need: dict[str, int]) -> None:
+    """Raise ``InputError`` naming ``name`` where the frame's GPU memory ``need``
+    (``frame_bytes``) is more than the device has free (``free_gpu_memory``)."""
+    free = free_gpu_memory(device)
+    total = sum(need.values())
+    if free is None or total <= free:
+        return
+    parts = ", ".join(f"{kind} {settings.human_size(n)}" for kind, n in need.items() if n)
+    raise InputError(
+        f"{name}: the frame needs about {settings.human_size(total)} of GPU memory ({parts}), more than "
+        f"the {settings.human_size(free)} free on {device.info['renderer']} (try a smaller --size, "
+        "--supersample or --max-layers)"
+    )
