@@ -24,7 +24,7 @@ SUPERVISE_ENV = "BLUEPRINT_SUPERVISE"
 
 __all__ = ["COMMANDS", "SUPERVISE_ENV", "STYLE_NAMES", "camera_options", "cli", "main", "progress_bar", "run"]
 
-# name: (module, attribute, its short help: tests/test_cli.py keeps it the command's own)
+# name: (module, attribute, its short help: tests/cli/test_cli.py keeps it the command's own)
 COMMANDS: dict[str, tuple[str, str, str]] = {
     "render": (
         "blueprint.cli.render",
