@@ -1,12 +1,35 @@
 """Environment meshes: parts that surround the scene rather than belong to it.
 
 Game and city models often sit inside a skybox (an inward-facing box or sphere), under a dome
-or on a ground plane far larger than everything else. Fitted to, such a part makes the scene
-a speck in the middle of the picture, and as the nearest surface at every pixel it hides the
-whole scene behind it. A part is taken for environment when the rest of the model lies
-inside its bounding box and either it faces inwards (most of its area turned towards its own
-centre: a skybox or dome seen from inside) or it is flat and many times wider than the rest
-(a ground plane). Models of one part have none.
+or on a ground plane far larger than everything else, each in one piece or in several (the six
+panels of a skybox, a ring of walls with a lid, the segments of a dome, the tiles of a ground).
+Fitted to, such parts make the scene a speck in the middle of the picture, and as the nearest
+surface at every pixel they hide the whole scene behind them. Models of one part have none.
+Three rules, applied in turn until none finds more, each against the rest as it stands (the
+parts not yet found):
+
+* **One part that encloses**: the rest lies inside its bounding box and most of its area
+  (``_INWARD``) faces its own centre, as a one-mesh skybox or dome seen from inside does.
+* **A group that encloses** (panels of a box or prism, segments of a dome): the parts are
+  sorted by size, largest first, and every split into a group (the first k) and the rest is
+  judged at once from running bounds. The group must hold the rest's standing content (the
+  rest less its horizontally flat parts: a ground inside a skybox does not count in its scale,
+  and may reach past a ring of walls) inside its bounding box; each of its parts must be
+  larger than that content, and together ``_WIDER`` times wider than it along both horizontal
+  axes. Of the splits that pass, those with the widest gap between the group's smallest part
+  and the content are tried first, a few at most, by their faces: each part of the group must
+  have most of its area (``_INWARD``) turned so that the whole of the content's bounding box
+  lies in front of each face's plane (the group's smallest part is tried alone first). The
+  scale is what sets a skybox apart from a room: the one-sided walls, floor and ceiling of a
+  room around its furniture pass every other test. Walls built as solid boxes fail the facing
+  test as well, their outer faces turned away from the content.
+* **A ground**: the horizontally flat parts at or below the foot of the lowest standing part,
+  together one flat slab, under the rest, ``_WIDER`` times wider than it along both horizontal
+  axes, around it, and covering at least ``_COVER`` of their bounding rectangle seen from above
+  (tiles, not a few pads far apart).
+
+Per-part work is done on the parts' bounds in NumPy (sorted once, running minima and maxima for
+every split at once); only the faces of the few groups tried are read.
 
 :func:`choose_parts` is what loading applies: explicit ``include`` / ``exclude`` name globs
 first, then, where ``include`` is not given, the environment left out with a warning naming it.
@@ -28,14 +51,24 @@ from blueprint.sorting import stable_argsort
 
 log = logging.getLogger("blueprint")
 
-# Inward-facing: this fraction of the part's area faces its centre.
+# Inward-facing: this fraction of the area faces the centre (one part) or the rest (a group).
 _INWARD = 0.8
-# The rest must lie inside the part's bounding box, grown by this fraction of its size.
+# The rest must lie inside the bounding box, grown by this fraction of its size.
 _INSIDE = 1e-3
-# A ground plane: thinner than this fraction of its width, and wider than the rest by this
-# factor along both horizontal axes.
+# Flat: thinner along the up axis than this fraction of the width; a ground or a group is wider
+# than the rest by this factor along both horizontal axes.
 _FLAT = 0.01
 _WIDER = 4.0
+# A ground's parts cover this fraction of their bounding rectangle seen from above.
+_COVER = 0.5
+# Relative rounding error of float32 positions, with room to spare.
+_ROUNDING = 1e-6
+# Splits of the parts by size whose faces are read, at most, per group search.
+_TRIES = 4
+# Rounds of the three rules; a round that finds nothing ends the search.
+_ROUNDS = 4
+# Names a warning lists before it counts the rest.
+_NAMED = 10
 
 PartGlobs = str | Iterable[str | int] | None
 
@@ -98,55 +131,152 @@ def _inward_fraction(model: Model, faces: np.ndarray | slice, centre: np.ndarray
     return float(area[towards].sum() / total) if total > 0 else 0.0
 
 
+def _facing_fractions(
+    model: Model, parts: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: float
+) -> np.ndarray:
+    """(P,) for each part flagged in ``parts`` (P,) bool, the fraction of its area whose faces
+    have the whole box ``lo`` to ``hi`` (3,) in front of their plane, within ``tol`` (0
+    elsewhere)."""
+    faces = np.flatnonzero(parts[model.face_part])
+    tri = model.positions[model.faces[faces]].astype(np.float64)
+    cross = face_cross(tri)
+    area = np.linalg.norm(cross, axis=1)
+    centre, half = (lo + hi) / 2, (hi - lo) / 2
+    # the box's corner nearest a face's plane is its centre less the half sizes along the normal
+    nearest = (cross * (centre - tri[:, 0])).sum(axis=1) - (np.abs(cross) * half).sum(axis=1)
+    owner = model.face_part[faces]
+    total = np.bincount(owner, area, len(parts))
+    facing = np.bincount(owner, np.where(nearest >= -tol * area, area, 0.0), len(parts))
+    return np.divide(facing, total, out=np.zeros(len(parts)), where=total > 0)
+
+
 def environment_parts(model: Model) -> np.ndarray:
     """(P,) bool: the parts that enclose the rest of the model (inward-facing boxes, spheres,
-    domes) or lie under it as a ground plane far wider than the rest."""
+    domes, in one part or as a group of panels or segments) or lie under it as a ground far
+    wider than the rest (in one part or in tiles); the rules are the module's."""
     count = len(model.part_names)
     found = np.zeros(count, bool)
     if count < 2:
         return found
+    bounds = _bounds_by_part(model)
+    for _ in range(_ROUNDS):
+        before = int(found.sum())
+        _enclosing_parts(model, bounds, found)
+        _enclosing_group(model, bounds, found)
+        _ground(model, bounds, found)
+        if found.sum() == before:
+            break
+    return found
+
+
+def _enclosing_parts(model: Model, bounds: tuple, found: np.ndarray) -> None:
+    """Mark in ``found`` the parts that alone enclose the rest and face their own centre."""
+    lo, hi, has, starts = bounds
+    count = len(found)
+    by_part = _faces_by_part(model)
+    grow = _INSIDE * (hi - lo).max(axis=1)
+    order = np.arange(count)
+    # All parts are tested at once against the rest as it stands; it changes only where a part
+    # is found, and the parts after it are then tested against the new rest.
+    start = 0
+    while start < count:
+        alive = has & ~found
+        others_lo = _lowest_of_the_rest(lo, alive)
+        others_hi = -_lowest_of_the_rest(-hi, alive)
+        eligible = alive & (alive.sum() - alive > 0) & (order >= start)
+        inside = (others_lo >= lo - grow[:, None]).all(axis=1) & (others_hi <= hi + grow[:, None]).all(axis=1)
+        start = count
+        for part in np.flatnonzero(eligible & inside):
+            part = int(part)
+            faces = slice(starts[part], starts[part + 1])
+            faces = faces if by_part is None else by_part[faces]
+            if _inward_fraction(model, faces, (lo[part] + hi[part]) / 2) >= _INWARD:
+                found[part] = True
+                start = part + 1
+                break
+
+
+def _enclosing_group(model: Model, bounds: tuple, found: np.ndarray) -> None:
+    """Mark in ``found`` the largest parts that together enclose the rest, far larger than it
+    and facing it, where there are such."""
+    lo_all, hi_all, has, _ = bounds
+    alive = np.flatnonzero(has & ~found)
+    if len(alive) < 2:
+        return
     up = AXES[model.up]
     across = [a for a in range(3) if a != up]
-    lo, hi, has, starts = _bounds_by_part(model)
-    by_part = _faces_by_part(model)
+    extent = (hi_all[alive] - lo_all[alive]).max(axis=1)
+    # largest first: split s puts parts[: s + 1] in the group and the others in the rest
+    order = np.argsort(-extent, kind="stable")
+    parts, extent = alive[order], extent[order]
+    lo, hi = lo_all[parts], hi_all[parts]
+    group_lo = np.minimum.accumulate(lo, axis=0)[:-1]
+    group_hi = np.maximum.accumulate(hi, axis=0)[:-1]
+    # the content each split's group must enclose: the rest less its horizontally flat parts
+    # (a ground may reach past the walls around it), or the whole rest where all are flat
     size = hi - lo
-    grow = _INSIDE * size.max(axis=1)
-    order = np.arange(count)
-    inward: dict[int, float] = {}
-    # Parts in order, each tested against the rest (the other parts not yet found), twice: a
-    # skybox found first no longer counts as the rest a ground plane must span. All parts are
-    # tested at once against the rest as it stands; it changes only where a part is found.
-    for _ in range(2):
-        start = 0
-        while start < count:
-            alive = has & ~found
-            others_lo = _lowest_of_the_rest(lo, alive)
-            others_hi = -_lowest_of_the_rest(-hi, alive)
-            other_size = others_hi - others_lo
-            eligible = alive & (alive.sum() - alive > 0) & (order >= start)
-            inside = (others_lo >= lo - grow[:, None]).all(axis=1) & (others_hi <= hi + grow[:, None]).all(
-                axis=1
-            )
-            flat = size[:, up] <= _FLAT * size[:, across].max(axis=1)
-            below = hi[:, up] <= others_lo[:, up] + grow
-            wider = (size[:, across] >= _WIDER * np.maximum(other_size[:, across], 1e-30)).all(axis=1)
-            within = ((lo[:, across] <= others_lo[:, across]) & (hi[:, across] >= others_hi[:, across])).all(
-                axis=1
-            )
-            ground = flat & below & wider & within
-            start = count
-            for part in np.flatnonzero(eligible & (inside | ground)):
-                part = int(part)
-                if not ground[part] and part not in inward:
-                    centre = (lo[part] + hi[part]) / 2
-                    faces = slice(starts[part], starts[part + 1])
-                    faces = faces if by_part is None else by_part[faces]
-                    inward[part] = _inward_fraction(model, faces, centre)
-                if ground[part] or inward[part] >= _INWARD:
-                    found[part] = True
-                    start = part + 1
-                    break
-    return found
+    flat = (size[:, up] <= _FLAT * size[:, across].max(axis=1))[:, None]
+    rest_lo = np.minimum.accumulate(lo[::-1], axis=0)[::-1][1:]
+    rest_hi = np.maximum.accumulate(hi[::-1], axis=0)[::-1][1:]
+    content_lo = np.minimum.accumulate(np.where(flat, np.inf, lo)[::-1], axis=0)[::-1][1:]
+    content_hi = np.maximum.accumulate(np.where(flat, -np.inf, hi)[::-1], axis=0)[::-1][1:]
+    none = np.isinf(content_lo[:, 0])
+    content_lo[none], content_hi[none] = rest_lo[none], rest_hi[none]
+    content = content_hi - content_lo
+    group_size = group_hi - group_lo
+    grow = _INSIDE * group_size.max(axis=1)[:, None]
+    inside = ((content_lo >= group_lo - grow) & (content_hi <= group_hi + grow)).all(axis=1)
+    wider = (group_size[:, across] >= _WIDER * np.maximum(content[:, across], 1e-30)).all(axis=1)
+    gap = extent[:-1] / np.maximum(content.max(axis=1), 1e-30)
+    splits = np.flatnonzero(inside & wider & (gap >= 1.0))
+    for split in splits[np.argsort(-gap[splits], kind="stable")][:_TRIES]:
+        # in front within a small fraction of the content, or the rounding of float32 positions
+        tol = max(_INSIDE * content[split].max(), _ROUNDING * group_size[split].max())
+        box = (content_lo[split], content_hi[split])
+        # the group's smallest part first, alone: where it turns away, the group's faces are not read
+        group = np.zeros(len(found), bool)
+        group[parts[split]] = True
+        if _facing_fractions(model, group, *box, tol)[parts[split]] < _INWARD:
+            continue
+        group[parts[:split]] = True
+        if (_facing_fractions(model, group, *box, tol)[group] >= _INWARD).all():
+            found |= group
+            return
+
+
+def _ground(model: Model, bounds: tuple, found: np.ndarray) -> None:
+    """Mark in ``found`` the flat parts at the foot of the rest that together are its ground."""
+    lo, hi, has, _ = bounds
+    up = AXES[model.up]
+    across = [a for a in range(3) if a != up]
+    alive = has & ~found
+    size = np.where(alive[:, None], hi - lo, 0.0)
+    width = size[:, across].max(axis=1)
+    flat = alive & (width > 0) & (size[:, up] <= _FLAT * width)
+    standing = alive & ~flat
+    if not standing.any():
+        return
+    ground = flat & (hi[:, up] <= lo[standing, up].min() + _INSIDE * width)
+    rest = alive & ~ground
+    if not ground.any() or not rest.any():
+        return
+    ground_lo, ground_hi = lo[ground].min(axis=0), hi[ground].max(axis=0)
+    rest_lo, rest_hi = lo[rest].min(axis=0), hi[rest].max(axis=0)
+    ground_size, rest_size = ground_hi - ground_lo, rest_hi - rest_lo
+    wide = ground_size[across].max()
+    tol = _INSIDE * wide
+    if not (
+        ground_size[up] <= _FLAT * wide
+        and ground_hi[up] <= rest_lo[up] + tol
+        and (ground_size[across] >= _WIDER * np.maximum(rest_size[across], 1e-30)).all()
+        and (ground_lo[across] <= rest_lo[across] + tol).all()
+        and (ground_hi[across] >= rest_hi[across] - tol).all()
+    ):
+        return
+    tri = model.positions[model.faces[ground[model.face_part]]].astype(np.float64)
+    seen_from_above = np.abs(face_cross(tri)[:, up]).sum() / 2
+    if seen_from_above >= _COVER * ground_size[across].prod():
+        found |= ground
 
 
 def choose_parts(model: Model, include: PartGlobs = None, exclude: PartGlobs = None) -> Model:
@@ -166,12 +296,15 @@ def choose_parts(model: Model, include: PartGlobs = None, exclude: PartGlobs = N
     if include is None:
         environment = environment_parts(model) & keep
         if environment.any() and environment.sum() < keep.sum():
-            names = ", ".join(model.part_names[i] for i in np.flatnonzero(environment))
+            which = np.flatnonzero(environment)
+            names = ", ".join(model.part_names[i] for i in which[:_NAMED])
+            more = f" and {len(which) - _NAMED} more" if len(which) > _NAMED else ""
             log.warning(
-                "%s: left out %s, which surround%s the scene (--include to keep)",
+                "%s: left out %s%s, which surround%s the scene (--include to keep)",
                 name,
                 names,
-                "s" if environment.sum() == 1 else "",
+                more,
+                "s" if len(which) == 1 else "",
             )
             keep &= ~environment
     if not keep.any():
