@@ -102,6 +102,7 @@ class Capturer:
         self.device = device
         self.table = capture_table(device) if table is None else table
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
+        self._checked: tuple | None = None
         self.abuffer_room: dict[tuple[int, int], int] = {}
         self.compute_raster = ComputeRaster(device)
 
@@ -137,7 +138,12 @@ class Capturer:
     def check_memory(self, model: Model, pixels: int, max_layers: int | None) -> None:
         """Raise ``InputError`` where a frame of ``model`` at ``pixels`` supersampled pixels
         and ``max_layers`` would allocate more GPU memory than the device has free
-        (``render.budget``), before it allocates any: its mesh where not uploaded yet."""
+        (``render.budget``), before it allocates any: its mesh where not uploaded yet. A frame
+        like the last one checked allocates nothing new, so it is not asked again: asking the
+        driver every frame costs a streamed frame time it need not spend."""
+        asked = (model, pixels, max_layers)
+        if self._checked is not None and self._checked[0] is model and self._checked[1:] == asked[1:]:
+            return
         uploaded = any(held is model for held, _ in self._meshes.values())
         abuffer = self.table.row("A-buffer")
         need = frame_bytes(
@@ -147,6 +153,7 @@ class Capturer:
             abuffer.max_bytes if abuffer else None,
         )
         check_frame_memory(self.device, model.source or "the model", need)
+        self._checked = asked
 
     @current
     def forget(self, model: Model) -> None:
