@@ -23,7 +23,7 @@ __all__ = ["Instances", "flatten", "instance_boxes", "worth_instancing"]
 # Drawn triangles at least this many times the unique ones: the scene is kept as instances.
 INSTANCED_FACTOR = 2.0
 # Rows (vertices or faces) transformed by one matrix product.
-_ROWS = 1 << 18
+_ROWS = 1 << 16
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,6 +178,16 @@ def flatten(inst: Instances) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                 faces[face_rows] = mesh_faces[None] + vstart[block][:, None, None].astype(np.int32)
     face_part = np.repeat(inst.part, fcounts).astype(np.int32)
     return positions, faces, face_part
+
+
+def placed_blocks(inst: Instances):
+    """Every instance's vertices placed as ``flatten`` places them (float32), in blocks of
+    (B, V, 3) of one mesh's instances."""
+    for m, members in inst.by_mesh():
+        vertices, _ = inst.mesh_arrays(m)
+        for block in _blocks(members, len(vertices)):
+            with np.errstate(all="ignore"):
+                yield _moved(vertices, inst.transform[block]).astype(np.float32)
 
 
 def instance_boxes(inst: Instances) -> np.ndarray:

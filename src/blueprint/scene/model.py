@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from blueprint.columns import column_max, column_min, face_cross, indexed_cross
-from blueprint.scene.instances import Instances, flatten, instance_boxes
+from blueprint.scene.instances import Instances, flatten, instance_boxes, placed_blocks
 from blueprint.scene.units import UNITS_MM
 
 
@@ -187,6 +187,13 @@ class Model:
             self._cache["instance_boxes"] = instance_boxes(self.instances)
         return self._cache["instance_boxes"]
 
+    def point_blocks(self):
+        """An iterator of (N, 3) float64 blocks of every vertex (the flattened positions), a
+        model kept as instances placing its meshes a block of instances at a time."""
+        if self.instances is None or self.is_flat:
+            return iter((self.positions.astype(np.float64),))
+        return (block.reshape(-1, 3).astype(np.float64) for block in placed_blocks(self.instances))
+
     def content_digest(self) -> bytes:
         """SHA-256 of the triangles (positions, faces, parts and the part count; of a model
         kept as instances, its meshes and instances): models with one digest draw alike, so
@@ -205,6 +212,14 @@ class Model:
             digest.update(str(len(self.part_names)).encode())
             self._cache["digest"] = digest.digest()
         return self._cache["digest"]
+
+    def parts_of(self, faces: np.ndarray) -> np.ndarray:
+        """The part of each face of ``faces`` (any shape, int): ``face_part[faces]``, of a
+        model kept as instances found from its instances' first faces."""
+        if self.instances is None or self.is_flat:
+            return self.face_part[faces]
+        i = self.instances
+        return i.part[np.searchsorted(i.first_face(), faces, side="right") - 1]
 
     def part_triangle_counts(self) -> np.ndarray:
         """(P,) int64: triangles per part."""
