@@ -201,6 +201,18 @@ class GpuMesh:
                 obj.release()
 
 
+def identity_instance(ctx):
+    """A buffer of one instance at the identity, part 0, first face 0: what a vertex array of a
+    geometry program (``instance_layout``) that draws corners of its own is placed by."""
+    return ctx.buffer(instance_records(np.eye(4)[None], np.zeros(1), np.zeros(1)))
+
+
+def instance_layout(buffer, program) -> tuple:
+    """A vertex array's entry for the instance records ``buffer`` (``INSTANCE``), one a draw's
+    instance, for a geometry ``program``."""
+    return _layout(buffer, _INSTANCE_FIELDS, program, "/i")
+
+
 def _layout(buffer, fields, program, suffix: str) -> tuple:
     """A vertex array's entry for ``buffer`` of ``fields`` (format, name), those ``program``
     does not read skipped over."""
