@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.errors import InputError
+from blueprint.render.mesh import identity_instance, instance_layout
 from blueprint.render.renderer import LayerRenderer
 from blueprint.silhouette.edgerecords import edge_records
 from blueprint.silhouette.idlist import build_id_lists, id_lists_from_topology
@@ -72,6 +73,7 @@ class SoupMesh:
         self._vaos: dict[int, object] = {}
         parts = np.zeros(self.faces, np.int32) if face_part is None else np.asarray(face_part, np.int32)
         self._corner_parts = ctx.buffer(np.repeat(parts, 3).astype(np.int32))
+        self._instance = identity_instance(ctx)
         # ...and what the capture table's thresholds weigh (render.table.Request)
         self.triangles, self.part_count = self.faces, int(parts.max(initial=0)) + 1
         self._first = corners
@@ -92,6 +94,7 @@ class SoupMesh:
             layout = [(self.corners.buffer, "3f", "in_position")]
             if "in_part" in program:
                 layout.append((self._corner_parts, "1i", "in_part"))
+            layout.append(instance_layout(self._instance, program))
             vao = self._vaos[program.glo] = self.renderer.ctx.vertex_array(program, layout)
             vao.vertices = 3 * self.faces
         return vao
@@ -147,7 +150,7 @@ class SoupMesh:
 
     @on_gl
     def release(self) -> None:
-        for obj in (*self._vaos.values(), self._corner_parts):
+        for obj in (*self._vaos.values(), self._corner_parts, self._instance):
             obj.release()
         self._vaos.clear()
         self.corners.release()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.scene.instances import flatten
 from blueprint.scene.model import Model
 from blueprint.scene.prepare import gpu_arrays
 
@@ -24,36 +25,155 @@ def target_uniform(r, prog, size: tuple[int, int]) -> None:
     r.uniforms.set(prog, "u_target", (float(size[0]), float(size[1])))
 
 
+# One instance of the instance buffer: rows of its affine transform, rows of its normals'
+# transform (instance.glsl), its part (added to the vertices') and its first face.
+INSTANCE = np.dtype(
+    [
+        ("x", "f4", 4),
+        ("y", "f4", 4),
+        ("z", "f4", 4),
+        ("nx", "f4", 3),
+        ("ny", "f4", 3),
+        ("nz", "f4", 3),
+        ("part", "i4"),
+        ("face", "i4"),
+    ]
+)
+_VERTEX_FIELDS = (("3f", "in_position"), ("3f", "in_normal"), ("1i", "in_part"))
+_INSTANCE_FIELDS = (
+    ("4f", "i_x"),
+    ("4f", "i_y"),
+    ("4f", "i_z"),
+    ("3f", "i_nx"),
+    ("3f", "i_ny"),
+    ("3f", "i_nz"),
+    ("1i", "i_part"),
+    ("1i", "i_face"),
+)
+
+
+def instance_records(transform: np.ndarray, part: np.ndarray, first_face: np.ndarray) -> np.ndarray:
+    """(N,) ``INSTANCE``: the records of instances placed by ``transform`` (N, 4, 4), of parts
+    ``part`` and first faces ``first_face`` (N,). Normals are carried by the cofactor matrix of
+    the transform's linear part (the inverse transpose times its determinant: a mirror turns
+    them as it turns the faces' winding, as they are in the flattened scene), scaled to keep
+    the length of a similarity's."""
+    linear = transform[:, :3, :3]
+    columns = [linear[:, :, k] for k in range(3)]
+    cofactor = np.stack(
+        [
+            np.cross(columns[1], columns[2]),
+            np.cross(columns[2], columns[0]),
+            np.cross(columns[0], columns[1]),
+        ],
+        axis=2,
+    )
+    det = np.abs(np.einsum("ni,ni->n", columns[0], cofactor[:, :, 0]))
+    scale = np.where(det > 0, det ** (2.0 / 3.0), 1.0)
+    cofactor /= scale[:, None, None]
+    out = np.zeros(len(transform), INSTANCE)
+    for k, row in enumerate("xyz"):
+        out[row] = transform[:, k, :]
+        out["n" + row] = cofactor[:, k, :]
+    out["part"] = part
+    out["face"] = first_face
+    return out
+
+
+def draw_groups(model: Model, crease_angle: float | None) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """What ``GpuMesh`` uploads: (vertices ``VERTEX``, indices uint32, instances ``INSTANCE``)
+    a draw call. A flattened model is one, its triangles placed by the identity. Of a model kept
+    as instances, each mesh used more than once is prepared (``prepare.gpu_arrays``) in its own
+    coordinates, once, and drawn at its instances; the instances of meshes used once are
+    flattened a run of them (consecutive in the scene's order) at a time, a draw a run, so that
+    thousands of distinct parts do not cost thousands of draws."""
+    identity = np.eye(4)[None]
+    inst = model.instances
+    if inst is None:
+        vertices, indices = gpu_arrays(model, crease_angle)
+        return [(vertices, indices, instance_records(identity, np.zeros(1), np.zeros(1)))]
+    first = inst.first_face()
+    shared = np.bincount(inst.mesh, minlength=inst.mesh_count)[inst.mesh] > 1
+    groups = []
+    for m, members in inst.by_mesh(shared):
+        positions, faces = inst.mesh_arrays(m)
+        mesh = Model.from_arrays(positions, faces)
+        vertices, indices = gpu_arrays(mesh, crease_angle)
+        groups.append(
+            (vertices, indices, instance_records(inst.transform[members], inst.part[members], first[members]))
+        )
+    alone = np.flatnonzero(~shared)
+    if len(alone):
+        breaks = np.flatnonzero(np.diff(alone) > 1) + 1
+        for run in np.split(alone, breaks):
+            keep = np.zeros(len(inst.mesh), bool)
+            keep[run] = True
+            part_number = np.arange(len(model.part_names))
+            positions, faces, face_part = flatten(inst.subset(keep, part_number))
+            block = Model(positions, faces, face_part, model.part_names)
+            vertices, indices = gpu_arrays(block, crease_angle)
+            groups.append((vertices, indices, instance_records(identity, np.zeros(1), first[run[:1]])))
+    return groups
+
+
 class GpuMesh:
-    """A model's triangles on the GPU: shared vertices (split only where crease-split normals
-    differ), every face in the index buffer in model order so ``gl_PrimitiveID`` is the face
-    index (degenerate faces rasterise to nothing), and each vertex's part. Without a
-    crease angle the normals are left zero, for passes that draw no normals (ID buffers): the
-    smoothing is most of the time of an upload."""
+    """A model's triangles on the GPU, drawn by ``vao(program).render()``: for each draw group
+    (``draw_groups``) its shared vertices (split only where crease-split normals differ), its
+    faces in the index buffer in model order, and its instances, so that a face's ID is its
+    instance's first face plus ``gl_PrimitiveID`` (degenerate faces rasterise to nothing).
+    Without a crease angle the normals are left zero, for passes that draw no normals (ID
+    buffers): the smoothing is most of the time of an upload.
+
+    ``vbo`` and ``ibo`` are the flattened model's vertex and index buffers, as
+    ``prepare.gpu_arrays`` makes them, for the passes that read faces by their ID (the compute
+    rasteriser, the slim A-buffer's resolve): a flattened model's draw buffers, and for a model
+    kept as instances made on first use from its flattened arrays."""
 
     def __init__(self, ctx, model: Model, crease_angle: float | None) -> None:
         self.ctx = ctx
-        vertices, indices = gpu_arrays(model, crease_angle)
-        self.vbo = ctx.buffer(vertices)
-        self.ibo = ctx.buffer(indices)
-        self._vaos: dict[int, object] = {}
+        self.groups = [
+            (ctx.buffer(vertices), ctx.buffer(indices), ctx.buffer(records), len(records))
+            for vertices, indices, records in draw_groups(model, crease_angle)
+        ]
+        self._flat = None if model.instances is not None else self.groups[0][:2]
+        self._crease_angle = crease_angle
+        self._vaos: dict[int, _Draws] = {}
         self._corners = None
         self._model = model
         self.part_count = len(model.part_names)
-        self.triangles = len(model.faces)
+        self.triangles = model.triangle_count
+        self.instanced = model.instances is not None
         self.bounds = model.bounds  # (2, 3): its used vertices' corners
 
-    def vao(self, program):
-        """The vertex array of these buffers for ``program`` (a vertex array binds one program)."""
-        vao = self._vaos.get(program.glo)
-        if vao is None:
+    @property
+    def vbo(self):
+        return self._flat_buffers()[0]
+
+    @property
+    def ibo(self):
+        return self._flat_buffers()[1]
+
+    def _flat_buffers(self):
+        if self._flat is None:
+            vertices, indices = gpu_arrays(self._model, self._crease_angle)
+            self._flat = (self.ctx.buffer(vertices), self.ctx.buffer(indices))
+        return self._flat
+
+    def vao(self, program) -> _Draws:
+        """The draws of these buffers for ``program`` (a vertex array binds one program)."""
+        draws = self._vaos.get(program.glo)
+        if draws is None:
             # attributes a program does not read (pipeline attribute passes need no part, ID
             # passes no normal) are skipped over
-            fields = [("3f", "in_position"), ("3f", "in_normal"), ("1i", "in_part")]
-            used = [(f, name) if name in program else (f"{4 * int(f[0])}x", None) for f, name in fields]
-            layout = [(self.vbo, " ".join(f for f, _ in used), *(name for _, name in used if name))]
-            vao = self._vaos[program.glo] = self.ctx.vertex_array(program, layout, index_buffer=self.ibo)
-        return vao
+            arrays = []
+            for vbo, ibo, records, count in self.groups:
+                layout = [
+                    _layout(vbo, _VERTEX_FIELDS, program, ""),
+                    _layout(records, _INSTANCE_FIELDS, program, "/i"),
+                ]
+                arrays.append((self.ctx.vertex_array(program, layout, index_buffer=ibo), count))
+            draws = self._vaos[program.glo] = _Draws(arrays)
+        return draws
 
     def bind_corners(self, prog, unit: int) -> None:
         """Give an edge program the corner positions of every face (3 texels per face, rows of
@@ -72,6 +192,40 @@ class GpuMesh:
         prog["u_tolerance2"].value = self._tolerance**2
 
     def release(self) -> None:
-        for obj in (*self._vaos.values(), self.vbo, self.ibo, self._corners):
+        held = [vao for draws in self._vaos.values() for vao, _ in draws.arrays]
+        held += [buffer for group in self.groups for buffer in group[:3]]
+        if self._flat is not None and self.instanced:
+            held += self._flat
+        for obj in (*held, self._corners):
             if obj is not None:
                 obj.release()
+
+
+def identity_instance(ctx):
+    """A buffer of one instance at the identity, part 0, first face 0: what a vertex array of a
+    geometry program (``instance_layout``) that draws corners of its own is placed by."""
+    return ctx.buffer(instance_records(np.eye(4)[None], np.zeros(1), np.zeros(1)))
+
+
+def instance_layout(buffer, program) -> tuple:
+    """A vertex array's entry for the instance records ``buffer`` (``INSTANCE``), one a draw's
+    instance, for a geometry ``program``."""
+    return _layout(buffer, _INSTANCE_FIELDS, program, "/i")
+
+
+def _layout(buffer, fields, program, suffix: str) -> tuple:
+    """A vertex array's entry for ``buffer`` of ``fields`` (format, name), those ``program``
+    does not read skipped over."""
+    used = [(f, name) if name in program else (f"{4 * int(f[0])}x", None) for f, name in fields]
+    return (buffer, " ".join(f for f, _ in used) + suffix, *(name for _, name in used if name))
+
+
+class _Draws:
+    """A mesh's draw calls for one program: each group's vertex array at its instances."""
+
+    def __init__(self, arrays: list) -> None:
+        self.arrays = arrays
+
+    def render(self) -> None:
+        for vao, count in self.arrays:
+            vao.render(instances=count)

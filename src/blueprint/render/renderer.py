@@ -203,7 +203,7 @@ class Capturer:
             depths, triangles = np.stack(depth), np.stack(tri)
         else:
             depths, triangles = np.zeros((0, h, w), np.float32), np.zeros((0, h, w), np.int32)
-        parts = np.where(triangles >= 0, model.face_part[np.maximum(triangles, 0)], -1).astype(np.int32)
+        parts = np.where(triangles >= 0, model.parts_of(np.maximum(triangles, 0)), -1).astype(np.int32)
         if normals:
             normal_stack = np.stack(normal_maps) if normal_maps else np.zeros((0, h, w, 3), np.float32)
         else:

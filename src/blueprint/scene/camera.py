@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
 
@@ -206,7 +207,8 @@ class Camera:
         margin: float = 0.05,
         up: str = "y",
     ) -> Camera:
-        """Aim at ``points`` (N, 3) from a named view and move back until all of them fit.
+        """Aim at ``points`` (N, 3) from a named view and move back until all of them fit
+        (or a function giving an iterator of (N, 3) blocks of them, read a few times over).
 
         ``azimuth`` / ``elevation`` (degrees) override the named view's angles. ``margin`` is
         the fraction of the image kept free at each side.
@@ -237,31 +239,34 @@ class Camera:
         cam_x /= np.linalg.norm(cam_x)
         cam_y = np.cross(cam_z, cam_x)
 
-        pts = np.asarray(points, np.float64).reshape(-1, 3)
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        blocks = points if callable(points) else _one_block(points)
+        lo = np.min([b.min(axis=0) for b in blocks()], axis=0)
+        hi = np.max([b.max(axis=0) for b in blocks()], axis=0)
         center = (lo + hi) / 2
         extent = float(np.linalg.norm(hi - lo)) or 1.0
-        rel = pts - center
-        x, y, z = rel @ cam_x, rel @ cam_y, rel @ cam_z
+        basis = np.stack([cam_x, cam_y, cam_z], axis=1)
+        # the points in the camera's axes, a block at a time: lowest and highest of each
+        ends = np.array([_ends((b - center) @ basis) for b in blocks()])
+        low, high = ends[:, 0].min(axis=0), ends[:, 1].max(axis=0)
         # re-centre on the projected extents so the drawing sits in the middle of the image
-        center = center + cam_x * (x.max() + x.min()) / 2 + cam_y * (y.max() + y.min()) / 2
-        x -= (x.max() + x.min()) / 2
-        y -= (y.max() + y.min()) / 2
+        middle = (high[:2] + low[:2]) / 2
+        origin, center = center, center + cam_x * middle[0] + cam_y * middle[1]
+        half = np.maximum(high[:2] - middle, middle - low[:2])
+        z_low, z_high = float(low[2]), float(high[2])
         fill = 1 - 2 * margin
         if ortho:
-            height = max(2 * np.abs(y).max(), 2 * np.abs(x).max() / aspect) / fill
+            height = max(2 * half[1], 2 * half[0] / aspect) / fill
             height = height if height > 0 else extent
-            distance = float(z.max()) + extent
+            distance = z_high + extent
         else:
             tan_y = math.tan(math.radians(fov) / 2) * fill
             tan_x = tan_y * aspect
-            distance = float(np.max(z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)))
-            distance = max(distance, float(z.max()) + extent * 1e-3)
+            distance = max(_farthest(b, origin, middle, basis, tan_x, tan_y) for b in blocks())
+            distance = max(distance, z_high + extent * 1e-3)
             height = 1.0
-        depth = distance - z
         pad = extent * 0.02
-        near = max(float(depth.min()) - pad, distance * 1e-3)
-        far = float(depth.max()) + pad
+        near = max(distance - z_high - pad, distance * 1e-3)
+        far = distance - z_low + pad
         eye = center + cam_z * distance
         return cls(
             eye=tuple(eye),
@@ -275,6 +280,25 @@ class Camera:
             height=float(height),
             name=view,
         )
+
+
+def _one_block(points: np.ndarray):
+    """The blocks of points ``Camera.fit`` reads: ``points`` whole, as float64."""
+    pts = np.asarray(points, np.float64).reshape(-1, 3)
+    return lambda: iter((pts,))
+
+
+def _ends(values: np.ndarray) -> np.ndarray:
+    """(2, 3): the lowest and highest of each column of (N, 3) ``values``."""
+    return np.array([column_min(values), column_max(values)])
+
+
+def _farthest(points, origin, middle, basis, tan_x: float, tan_y: float) -> float:
+    """How far back along the view from the re-centred centre (``middle`` across the view
+    from ``origin``) the perspective view holds every point of the block."""
+    rel = (points - origin) @ basis
+    x, y = rel[:, 0] - middle[0], rel[:, 1] - middle[1]
+    return float(np.max(rel[:, 2] + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)))
 
 
 def fit_camera(
@@ -295,7 +319,7 @@ def fit_camera(
     ``up`` is the model's up axis: by default the model's own, or ``"y"`` for bare points.
     """
     if isinstance(model, Model):
-        points, up = model.positions, up or model.up
+        points, up = model.point_blocks, up or model.up
     else:
         points, up = model, up or "y"
     width, height = size

@@ -290,11 +290,27 @@ def choose_parts(model: Model, include: PartGlobs = None, exclude: PartGlobs = N
     InputError
         A pattern matches no part, or nothing is left to draw; the message names the file.
     """
+    keep = parts_to_draw(model, include, exclude)
+    return model if keep.all() else subset(model, keep)
+
+
+def parts_to_draw(
+    model: Model, include: PartGlobs = None, exclude: PartGlobs = None, shape: Model | None = None
+) -> np.ndarray:
+    """(P,) bool: the parts of ``model`` that ``choose_parts`` keeps, the environment found in
+    ``shape`` (the model itself where None; a stand-in with its parts, for a model kept as
+    instances), and the warning that names what was left out.
+
+    Raises
+    ------
+    InputError
+        A pattern matches no part, or nothing is left to draw; the message names the file.
+    """
     name = model.source or "the model"
     keep = _matching(model, include, "--include", True)
     keep &= ~_matching(model, exclude, "--exclude", False)
     if include is None:
-        environment = environment_parts(model) & keep
+        environment = environment_parts(model if shape is None else shape) & keep
         if environment.any() and environment.sum() < keep.sum():
             which = np.flatnonzero(environment)
             names = ", ".join(model.part_names[i] for i in which[:_NAMED])
@@ -309,9 +325,7 @@ def choose_parts(model: Model, include: PartGlobs = None, exclude: PartGlobs = N
             keep &= ~environment
     if not keep.any():
         raise InputError(f"{name}: --include/--exclude leave no part to draw")
-    if keep.all():
-        return model
-    return subset(model, keep)
+    return keep
 
 
 def _matching(model: Model, patterns: PartGlobs, option: str, empty: bool) -> np.ndarray:

@@ -8,7 +8,6 @@ import io
 import logging
 import os
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +18,8 @@ from blueprint.scene.archive import members
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh
 from blueprint.scene.headers import check_triangle_count
+from blueprint.scene.instanced_parts import choose_instanced_parts
+from blueprint.scene.instances import Instances, mesh_degenerate, most_coincident, worth_instancing
 from blueprint.scene.model import Model
 from blueprint.scene.units import object_unit
 from blueprint.scene.up import up_of
@@ -86,7 +87,8 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
         joined = (found.positions, found.faces, parts, [path.stem])
         return _loaded(joined, name, up, fmt, include, exclude)
     if isinstance(found, list):
-        return _loaded(_joined(found, path.stem, name), name, up, fmt, include, exclude)
+        joined = _joined(found, path.stem, name, instanced=fmt.up != "guess")
+        return _loaded(joined, name, up, fmt, include, exclude)
     fmt.check_header(path, info.st_size)
     return _scene_model(_load_scene(path, ext), path.stem, name, up, ext, include, exclude)
 
@@ -98,7 +100,8 @@ def _scene_model(
     state their unit: trimesh reports it as the scene's)."""
     fmt = FORMATS.find(ext)
     stated = scene.units if fmt.stated_unit is not None else None
-    return _loaded(_flatten(scene, stem, name), name, up, fmt, include, exclude, stated)
+    joined = _flatten(scene, stem, name, instanced=fmt.up != "guess")
+    return _loaded(joined, name, up, fmt, include, exclude, stated)
 
 
 def _loaded(
@@ -107,6 +110,10 @@ def _loaded(
     """The model of a scene's instances ``joined`` (``_joined``) read from a file of format
     ``fmt`` that states the unit ``stated`` (``Format.unit_of``)."""
     positions, faces, face_part, names = joined
+    if faces is None:  # kept as instances: the formats that do are not the ones guessing up
+        return _checked_instances(
+            positions, names, name, up, fmt.up, include, exclude, fmt.unit_of(name, stated)
+        )
     if len(faces) == 0:
         raise InputError(f"{name}: no triangles in the file")
     guess = fmt.up == "guess"
@@ -143,8 +150,11 @@ def model_from_object(
     if up is not None and up not in ("y", "z"):
         raise InputError(f"unknown up axis {up!r} (choose y or z)")
     if isinstance(obj, Model):
-        model = obj if up is None or up == obj.up else replace(obj, up=up, _cache={})
-        return model if include is None and exclude is None else choose_parts(model, include, exclude)
+        model = obj if up is None or up == obj.up else obj.replaced(up=up)
+        if include is None and exclude is None:
+            return model
+        choose = choose_parts if model.instances is None else choose_instanced_parts
+        return choose(model, include, exclude)
     if isinstance(obj, tuple | list) and len(obj) == 2:
         label = name or "(vertices, faces)"
         positions, faces = _pair(obj, label)
@@ -157,7 +167,10 @@ def model_from_object(
 
     if isinstance(obj, trimesh.Scene):
         label = name or "trimesh.Scene"
-        positions, faces, face_part, names = _flatten(obj, None)
+        positions, faces, face_part, names = _flatten(obj, None, instanced=True)
+        if faces is None:
+            unit = object_unit(obj.units)
+            return _checked_instances(positions, names, label, up, "y", include, exclude, unit)
         if len(faces) == 0:
             raise InputError(f"{label}: no triangles in the scene (it holds no meshes with faces)")
     elif isinstance(obj, trimesh.Trimesh):
@@ -235,6 +248,45 @@ def _checked(
         if degenerate.any():
             log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
         return choose_parts(model, include, exclude)
+
+
+def _checked_instances(
+    inst: Instances,
+    names,
+    name: str,
+    up: str | None,
+    default_up: str,
+    include: PartGlobs,
+    exclude: PartGlobs,
+    unit: tuple[str | None, str],
+) -> Model:
+    """``_checked`` of a scene kept as instances, from its unique meshes and transforms: it is
+    never flattened here."""
+    bad = ~np.isfinite(inst.positions).all(axis=1)
+    bad_per_mesh = np.add.reduceat(bad.astype(np.int64), inst.vertex_start[:-1])
+    unplaced = ~np.isfinite(inst.transform).all(axis=(1, 2))
+    count = int(np.where(unplaced, inst.mesh_vertices()[inst.mesh], bad_per_mesh[inst.mesh]).sum())
+    if count:
+        raise InputError(f"{name}: {count} vertices have NaN or infinite coordinates")
+    chosen = up_of(up, default_up, False, None, None)
+    model = Model(None, None, None, tuple(names), chosen.axis, name, chosen.reason, *unit, instances=inst)
+    bounds = model.bounds
+    if not np.isfinite(bounds).all() or np.abs(bounds).max() > MAX_COORDINATE:
+        raise InputError(f"{name}: coordinates beyond {MAX_COORDINATE:g} cannot be drawn")
+    degenerate = mesh_degenerate(inst)
+    per_mesh = np.add.reduceat(degenerate.astype(np.int64), inst.face_start[:-1])
+    dropped = int(per_mesh[inst.mesh].sum())
+    if dropped == model.triangle_count:
+        raise InputError(f"{name}: all {dropped} faces are degenerate (zero area)")
+    limit = settings.COINCIDENT_LIMIT
+    if model.triangle_count > limit and (most := most_coincident(inst)) > limit:
+        raise InputError(
+            f"{name}: {most} faces lie on one another (one triangle over and over), more than the "
+            f"{limit} layers a drawing can peel"
+        )
+    if dropped:
+        log.warning("%s: dropped %d degenerate faces", name, dropped)
+    return choose_instanced_parts(model, include, exclude)
 
 
 def _check_coincident(model: Model, name: str) -> None:
@@ -371,8 +423,9 @@ def _resolver_type():
     return CheckedResolver
 
 
-def _flatten(scene, stem: str | None, label: str = "the scene"):
-    """Concatenate every mesh instance of a trimesh Scene in graph order (``_joined``)."""
+def _flatten(scene, stem: str | None, label: str = "the scene", instanced: bool = False):
+    """Concatenate every mesh instance of a trimesh Scene in graph order, or keep them as
+    instances (``_joined``)."""
     import trimesh
 
     world = _world_transforms(scene.graph)
@@ -385,11 +438,13 @@ def _flatten(scene, stem: str | None, label: str = "the scene"):
         mesh = scene.geometry.get(geometry)
         arrays = (mesh.vertices, mesh.faces) if isinstance(mesh, trimesh.Trimesh) else (None, None)
         instances.append(Instance(str(node), str(geometry), *arrays, world[node]))
-    return _joined(instances, stem, label)
+    return _joined(instances, stem, label, instanced)
 
 
-def _joined(instances: list[Instance], stem: str | None, label: str):
-    """Concatenate mesh instances; a scene of one instance names its part ``stem`` (a
+def _joined(instances: list[Instance], stem: str | None, label: str, instanced: bool = False):
+    """Concatenate mesh instances, or where ``instanced`` and the scene draws its meshes
+    several times over (``instances.worth_instancing``) keep them as instances: then
+    (``Instances``, None, None, names). A scene of one instance names its part ``stem`` (a
     file's), or after its node where ``stem`` is None. More than ``INSTANCE_LIMIT`` instances
     or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``, before any is placed.
 
@@ -406,25 +461,28 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
     check_triangle_count(label, int(face_counts.sum()))
     if not drawn:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
+    by_mesh: dict[tuple[int, int], list[int]] = {}
+    for k, instance in enumerate(drawn):
+        by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
+    single = len(instances) == 1 and stem is not None
+    taken: set[str] = set()
+    counts: dict[str, int] = {}
+    names = [stem if single else _part_name(i.node, i.geometry, taken, counts) for i in drawn]
+    unique = sum(len(drawn[members[0]].faces) for members in by_mesh.values())
+    if instanced and worth_instancing(int(face_counts.sum()), unique):
+        return _kept_instances(drawn, list(by_mesh.values()), label), None, None, names
     vertex_counts = np.array([len(i.vertices) for i in drawn], np.int64)
     vertex_start = np.cumsum(vertex_counts) - vertex_counts
     face_start = np.cumsum(face_counts) - face_counts
     positions = np.empty((int(vertex_counts.sum()), 3))
     faces = np.empty((int(face_counts.sum()), 3), np.int64)
-    by_mesh: dict[tuple[int, int], list[int]] = {}
-    for k, instance in enumerate(drawn):
-        by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
     # the meshes placed once (many small distinct parts), by their vertex count
     apart: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
     # NaN and infinite vertices are refused with their count once joined, not warned about here
     with np.errstate(all="ignore"):
         for members in by_mesh.values():
             mesh = drawn[members[0]]
-            vertices = np.asarray(mesh.vertices, dtype=np.float64)
-            if vertices.ndim != 2 or vertices.shape[1] != 3:
-                # a loader's reading of a broken file (trimesh's OBJ reader cuts rows short)
-                raise InputError(f"{label}: the vertices of mesh {mesh.geometry!r} are not x, y, z")
-            mesh_faces = np.asarray(mesh.faces, dtype=np.int64)
+            vertices, mesh_faces = _mesh_arrays(mesh, label)
             if len(members) == 1:
                 apart.setdefault(len(vertices), []).append((members[0], vertices, mesh_faces))
                 continue
@@ -453,11 +511,41 @@ def _joined(instances: list[Instance], stem: str | None, label: str):
                     faces,
                 )
     parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_counts)
-    single = len(instances) == 1 and stem is not None
-    taken: set[str] = set()
-    counts: dict[str, int] = {}
-    names = [stem if single else _part_name(i.node, i.geometry, taken, counts) for i in drawn]
     return positions, faces, parts, names
+
+
+def _mesh_arrays(mesh: Instance, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """An instance's mesh: (V, 3) float64 vertices and (F, 3) int64 faces."""
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        # a loader's reading of a broken file (trimesh's OBJ reader cuts rows short)
+        raise InputError(f"{label}: the vertices of mesh {mesh.geometry!r} are not x, y, z")
+    return vertices, np.asarray(mesh.faces, dtype=np.int64)
+
+
+def _kept_instances(drawn: list[Instance], by_mesh: list[list[int]], label: str) -> Instances:
+    """The instances ``drawn`` as unique meshes (``by_mesh``: the instances of each, in order
+    of first use) placed by their transforms, a part each."""
+    vertices, faces = [], []
+    mesh = np.empty(len(drawn), np.int32)
+    for m, users in enumerate(by_mesh):
+        mesh_vertices, mesh_faces = _mesh_arrays(drawn[users[0]], label)
+        if mesh_faces.min() < 0 or mesh_faces.max() >= len(mesh_vertices):
+            raise InputError(f"{label}: faces refer to vertices that do not exist")
+        vertices.append(mesh_vertices)
+        faces.append(mesh_faces.astype(np.int32))
+        mesh[users] = m
+    identity = np.eye(4)
+    transform = np.array([identity if i.transform is None else i.transform for i in drawn], np.float64)
+    return Instances(
+        np.concatenate(vertices),
+        np.concatenate(faces),
+        np.r_[0, np.cumsum([len(v) for v in vertices])].astype(np.int64),
+        np.r_[0, np.cumsum([len(f) for f in faces])].astype(np.int64),
+        mesh,
+        transform,
+        np.arange(len(drawn), dtype=np.int32),
+    )
 
 
 # rows (vertices or faces) of instances placed by one matrix product

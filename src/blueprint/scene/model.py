@@ -5,15 +5,40 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
 from blueprint.columns import column_max, column_min, face_cross, indexed_cross
+from blueprint.scene.instances import Instances, flatten, instance_boxes, placed_blocks
 from blueprint.scene.units import UNITS_MM
 
 
-@dataclass(frozen=True, eq=False)
+class _Flattened:
+    """A model's ``positions``, ``faces`` or ``face_part``: the array given, or for a model
+    kept as instances (given None) the flattened scene's, made on first read and kept."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name, self.key = name, "_" + name
+
+    def __get__(self, model, owner=None):
+        if model is None:
+            raise AttributeError(self.name)  # a field without a default
+        value = model.__dict__[self.key]
+        if value is None:
+            positions, faces, face_part = flatten(model.instances)
+            model.__dict__.update(_positions=positions, _faces=faces, _face_part=face_part)
+            value = model.__dict__[self.key]
+        return value
+
+    def __set__(self, model, value) -> None:
+        model.__dict__[self.key] = value
+
+
+_FLATTENED = ("positions", "faces", "face_part")
+
+
+@dataclass(frozen=True, eq=False, repr=False)
 class Model:
     """A triangle model split into named parts.
 
@@ -40,20 +65,36 @@ class Model:
         drawings to scale assume millimetres (``blueprint.scene.units.drawing_unit``).
     unit_reason : str
         Where ``unit`` came from, or why there is none, for ``blueprint info`` and warnings.
+    instances : Instances or None
+        The scene as unique meshes and instances placing them (``blueprint.scene.instances``),
+        where it is kept so; ``positions``, ``faces`` and ``face_part`` are then given as None
+        and are the flattened scene's, made on first read (``is_flat`` says whether they are).
     """
 
-    positions: np.ndarray
-    faces: np.ndarray
-    face_part: np.ndarray
+    positions: np.ndarray = _Flattened()
+    faces: np.ndarray = _Flattened()
+    face_part: np.ndarray = _Flattened()
     part_names: tuple[str, ...]
     up: str = "y"
     source: str | None = None
     up_reason: str = "given"
     unit: str | None = None
     unit_reason: str = "no unit given"
+    instances: Instances | None = None
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        if self.up not in ("y", "z"):
+            raise ValueError(f"up must be 'y' or 'z', got {self.up!r}")
+        if self.unit is not None and self.unit not in UNITS_MM:
+            raise ValueError(f"unit must be one of {', '.join(UNITS_MM)} or None, got {self.unit!r}")
+        if self.instances is not None:
+            part = self.instances.part
+            if len(part) and (part.min() < 0 or part.max() >= len(self.part_names)):
+                raise ValueError("instances refer to parts that do not exist")
+            return
+        if self.__dict__["_positions"] is None:
+            raise ValueError("a model without positions must be kept as instances")
         if self.positions.ndim != 2 or self.positions.shape[1] != 3:
             raise ValueError(f"positions must be (V, 3), got {self.positions.shape}")
         if self.faces.ndim != 2 or self.faces.shape[1] != 3:
@@ -64,10 +105,32 @@ class Model:
             raise ValueError("faces refer to vertices that do not exist")
         if len(self.face_part) and (self.face_part.min() < 0 or self.face_part.max() >= len(self.part_names)):
             raise ValueError("face_part refers to parts that do not exist")
-        if self.up not in ("y", "z"):
-            raise ValueError(f"up must be 'y' or 'z', got {self.up!r}")
-        if self.unit is not None and self.unit not in UNITS_MM:
-            raise ValueError(f"unit must be one of {', '.join(UNITS_MM)} or None, got {self.unit!r}")
+
+    def __repr__(self) -> str:
+        kind = f"{len(self.instances.mesh)} instances" if self.instances is not None else "flat"
+        return (
+            f"Model({self.source or 'arrays'}: {self.triangle_count} triangles, "
+            f"{len(self.part_names)} parts, {kind}, up {self.up})"
+        )
+
+    @property
+    def is_flat(self) -> bool:
+        """Whether the flattened arrays are at hand: always, unless the model is kept as
+        instances and no reader has asked for them yet."""
+        return self.__dict__["_positions"] is not None
+
+    def replaced(self, **changes) -> Model:
+        """``dataclasses.replace`` that leaves a model kept as instances unflattened (its cache
+        dropped, as the values it holds may change)."""
+        given = {
+            f.name: getattr(self, f.name)
+            for f in fields(self)
+            if f.init and f.name not in (*_FLATTENED, "_cache")
+        }
+        # a model's own flattened arrays, unless its instances change
+        kept = self.instances is None or "instances" not in changes
+        given.update({name: self.__dict__["_" + name] if kept else None for name in _FLATTENED})
+        return Model(**{**given, **changes})
 
     @classmethod
     def from_arrays(
@@ -95,12 +158,17 @@ class Model:
 
     @property
     def triangle_count(self) -> int:
+        if self.instances is not None:
+            return self.instances.triangle_count
         return len(self.faces)
 
     @property
     def bounds(self) -> np.ndarray:
         """(2, 3) float64: minimum and maximum corner of the used vertices."""
         # every camera fit asks (the viewer: every frame), and a model's arrays do not change
+        if "bounds" not in self._cache and self.instances is not None:
+            boxes = self.instance_boxes()
+            self._cache["bounds"] = np.array([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
         if "bounds" not in self._cache:
             used = self.positions
             if len(self.faces):
@@ -112,20 +180,53 @@ class Model:
             self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
         return self._cache["bounds"].copy()
 
+    def instance_boxes(self) -> np.ndarray:
+        """(N, 2, 3) float64: each instance's bounds (``instances.instance_boxes``), made once;
+        only for a model kept as instances."""
+        if "instance_boxes" not in self._cache:
+            self._cache["instance_boxes"] = instance_boxes(self.instances)
+        return self._cache["instance_boxes"]
+
+    def point_blocks(self):
+        """An iterator of (N, 3) float64 blocks of every vertex (the flattened positions), a
+        model kept as instances placing its meshes a block of instances at a time."""
+        if self.instances is None or self.is_flat:
+            return iter((self.positions.astype(np.float64),))
+        return (block.reshape(-1, 3).astype(np.float64) for block in placed_blocks(self.instances))
+
     def content_digest(self) -> bytes:
-        """SHA-256 of the triangles (positions, faces, parts and the part count): models with
-        one digest draw alike, so work kept by it serves a file loaded again. Made once."""
+        """SHA-256 of the triangles (positions, faces, parts and the part count; of a model
+        kept as instances, its meshes and instances): models with one digest draw alike, so
+        work kept by it serves a file loaded again. Made once."""
         if "digest" not in self._cache:
             digest = hashlib.sha256()
-            for array in (self.positions, self.faces, self.face_part):
+            i = self.instances
+            arrays = (
+                (self.positions, self.faces, self.face_part)
+                if i is None
+                else (i.positions, i.faces, i.vertex_start, i.face_start, i.mesh, i.transform, i.part)
+            )
+            for array in arrays:
                 digest.update(str((array.dtype.str, array.shape)).encode())
                 digest.update(np.ascontiguousarray(array).reshape(-1).view(np.uint8))
             digest.update(str(len(self.part_names)).encode())
             self._cache["digest"] = digest.digest()
         return self._cache["digest"]
 
+    def parts_of(self, faces: np.ndarray) -> np.ndarray:
+        """The part of each face of ``faces`` (any shape, int): ``face_part[faces]``, of a
+        model kept as instances found from its instances' first faces."""
+        if self.instances is None or self.is_flat:
+            return self.face_part[faces]
+        i = self.instances
+        return i.part[np.searchsorted(i.first_face(), faces, side="right") - 1]
+
     def part_triangle_counts(self) -> np.ndarray:
         """(P,) int64: triangles per part."""
+        if self.instances is not None:
+            i = self.instances
+            counts = np.bincount(i.part, weights=i.instance_faces(), minlength=len(self.part_names))
+            return counts.astype(np.int64)
         return np.bincount(self.face_part, minlength=len(self.part_names))
 
     def corners(self) -> np.ndarray:

@@ -13,6 +13,7 @@ uniform vec3 u_bounds_size;
 in vec3 v_model;
 in vec3 v_eye;
 flat in vec3 v_normal;
+flat in int v_first_face;  // the instance's (attributes.vert)
 #endif
 
 #if OUT_LINEAR_DEPTH >= 0
@@ -61,11 +62,11 @@ void main() {
     ivec2 ids = texelFetch(u_ids, p, 0).xy;
     // (the isnan tests keep in_normal in the program when uv is not asked for, so the mesh's
     // vertex layout always fits, and the steps to the centre before the discard)
-    if (isnan(model.x + eye.z) || texelFetch(u_layer_depth, p, 0).r >= 1.0 || ids.x - 1 != gl_PrimitiveID
+    if (isnan(model.x + eye.z) || texelFetch(u_layer_depth, p, 0).r >= 1.0 || ids.x - 1 != v_first_face + gl_PrimitiveID
         || isnan(v_normal.x)) {
         discard;
     }
-    int face = gl_PrimitiveID;
+    int face = v_first_face + gl_PrimitiveID;
     int part = ids.y - 1;
     int layer = u_layer;
     float linear_depth = -eye.z;

@@ -58,13 +58,14 @@ uint next_node() {
 in vec3 v_eye;
 in vec3 v_normal;
 flat in int v_part;
+flat in int v_first_face;  // the instance's (geometry.vert)
 
 void main() {
     float z = fragment_depth();
 #if SLIM
     uint node = next_node();
     if (node < capacity) {
-        slim[node] = uvec2(floatBitsToUint(z) | (gl_FrontFacing ? 0u : KB_BACK), uint(gl_PrimitiveID + 1));
+        slim[node] = uvec2(floatBitsToUint(z) | (gl_FrontFacing ? 0u : KB_BACK), uint(v_first_face + gl_PrimitiveID + 1));
         PUSH(node);
     }
 #else
@@ -75,7 +76,7 @@ void main() {
         n = -n;
     }
     // faces cost a GPU nothing, and order the fragments of one depth as drawing them would
-    int face = gl_PrimitiveID;
+    int face = v_first_face + gl_PrimitiveID;
     uint node = next_node();
     if (node < capacity) {
         AB_SET_NODE(node, kb_pack(z, !gl_FrontFacing, n, face, v_part));

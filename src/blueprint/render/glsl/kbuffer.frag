@@ -37,6 +37,7 @@ uniform float u_back_bias;
 in vec3 v_eye;
 in vec3 v_normal;
 flat in int v_part;
+flat in int v_first_face;  // the instance's (geometry.vert)
 
 #if INTERLOCK
 layout(pixel_interlock_ordered) in;
@@ -107,7 +108,7 @@ void main() {
     }
 #endif
 #if FACE_IDS
-    int face = gl_PrimitiveID;
+    int face = v_first_face + gl_PrimitiveID;
 #else
     int face = -1;
 #endif

@@ -16,6 +16,7 @@ uniform isampler2D u_selected;  // 1 for each designated part (depth masking, hi
 in vec3 v_eye;
 in vec3 v_normal;
 flat in int v_part;
+flat in int v_first_face;  // the instance's (geometry.vert)
 
 #if NORMALS
 layout(location = 0) out vec4 o_normal;   // eye-space normal facing the viewer
@@ -45,7 +46,7 @@ void main() {
     gl_FragDepth = z;
 #endif
 #if FACE_IDS
-    int face = gl_PrimitiveID;
+    int face = v_first_face + gl_PrimitiveID;
 #else
     int face = -1;
 #endif

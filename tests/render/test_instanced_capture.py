@@ -1,0 +1,204 @@
+"""Models kept as instances, drawn instanced: the same layers, pictures and drawings as their
+flattened twins (tests/instanced_scenes.py), by every capture way, and the ray-casting
+oracle's layers (tests/oracle.py)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from instanced_scenes import (
+    copies,
+    exact_scene,
+    flattened,
+    l_prism,
+    placed,
+    trimesh_scene,
+    turned_scene,
+    wedge,
+)
+from oracle import cast_oracle, compare_layers
+
+import blueprint
+from blueprint.render.mesh import GpuMesh, draw_groups, instance_records
+from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
+from blueprint.scene.loader import model_from_object
+
+SIZE = (96, 80)
+CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
+WAYS = ["peel", "k-buffer", "a-buffer"]
+
+
+@pytest.fixture(params=WAYS)
+def way(request, renderer):
+    """The renderer capturing every frame one way (a capture table of that way alone)."""
+    default = capture_table(renderer)
+    if request.param == "k-buffer":
+        if default.row("k-buffer") is None:
+            pytest.skip("no k-buffer on this driver")
+        rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
+    elif request.param == "a-buffer":
+        if renderer.ctx.version_code < 430:
+            pytest.skip("the A-buffer needs OpenGL 4.3")
+        rows = (ABufferRow(1 << 30, min_layers=1), PeelRow())
+    else:
+        rows = (PeelRow(),)
+    saved = renderer.capture_table
+    renderer.capture_table = CaptureTable(rows, default.exact_depth)
+    yield request.param
+    renderer.capture_table = saved
+
+
+def test_primitive_ids_start_again_for_each_instance(renderer):
+    """``gl_PrimitiveID`` counts from 0 again at each instance of an instanced draw on this
+    driver: each copy's pixels carry its own faces' IDs (its first face plus its mesh's face),
+    which the layers' parts confirm independently (from the G-buffer's part channel)."""
+    model = model_from_object(copies(9), name="copies")
+    assert model.instances is not None and model.instances.mesh_count == 1
+    layers = blueprint.peel(model, size=(120, 120), renderer=renderer, view="top", ortho=True, max_layers=1)
+    faces, parts = layers.triangle[0], layers.part[0]
+    seen = faces >= 0
+    per_copy = len(model.instances.faces)
+    assert len(np.unique(parts[seen])) == 9
+    assert np.array_equal(faces[seen] // per_copy, parts[seen])
+    # every copy shows its top's faces, the same local faces in each
+    local = {p: set(np.unique(faces[seen & (parts == p)] % per_copy)) for p in range(9)}
+    assert all(found == local[0] for found in local.values()) and len(local[0]) >= 2
+
+
+def test_instanced_layers_are_the_flattened_ones(way, renderer):
+    """Every capture way gives an instanced scene (rotated, scaled, mirrored copies) the depths,
+    faces and parts of its flattened twin to the bit, and normals within float16 rounding."""
+    model = exact_scene()
+    flat = flattened(model)
+    ours = blueprint.peel(model, size=SIZE, renderer=renderer, **CAMERA)
+    theirs = blueprint.peel(flat, size=SIZE, renderer=renderer, **CAMERA)
+    assert ours.depth.shape == theirs.depth.shape and ours.depth.shape[0] >= 4
+    assert np.array_equal(ours.depth, theirs.depth)
+    assert np.array_equal(ours.triangle, theirs.triangle)
+    assert np.array_equal(ours.part, theirs.part)
+    assert np.abs(ours.normal - theirs.normal).max() <= 2e-3
+    # every copy is seen
+    assert set(np.unique(ours.part[ours.part >= 0])) == set(range(len(model.part_names)))
+
+
+def test_instanced_layers_match_the_oracle(way, renderer):
+    """The layers of the instanced scene, turned copies included, agree with ray casting the
+    flattened triangles (in float64, no GL) as the flattened scene's must
+    (test_layers_oracle.py's agreement)."""
+    model = turned_scene()
+    layers = blueprint.peel(model, size=SIZE, renderer=renderer, **CAMERA)
+    oracle = cast_oracle(model.positions, model.faces, layers.view, layers.projection, *SIZE, merge_tol=1e-5)
+    result = compare_layers(layers.depth, oracle)
+    assert result.compared.sum() > 0.25 * result.covered.sum(), result.describe()
+    assert result.fraction >= 0.998, result.describe()
+    front = (oracle.face[0] >= 0) & ~oracle.boundary & (layers.triangle[0] >= 0)
+    assert (layers.triangle[0][front] == oracle.face[0][front]).mean() >= 0.995
+
+
+def test_instanced_picture_and_drawing_are_the_flattened_ones(renderer):
+    """The PNG and the SVG of the instanced scene are the flattened scene's, byte for byte."""
+    model = exact_scene()
+    flat = flattened(exact_scene())
+    options = {"size": (160, 120), **CAMERA}
+    assert blueprint.draw(model, **options).png() == blueprint.draw(flat, **options).png()
+    assert (
+        blueprint.draw(model, vector=True, **options).svg()
+        == blueprint.draw(flat, vector=True, **options).svg()
+    )
+
+
+def test_turned_instances_draw_within_rounding_of_the_flattened(renderer):
+    """Copies turned by 30 degrees are placed on the GPU in float32 and by the loader in
+    float64: the pictures differ only where the rounding moves an edge across a pixel."""
+    model = turned_scene()
+    options = {"size": (160, 120), **CAMERA}
+    ours = np.asarray(blueprint.draw(model, **options).image, np.int16)
+    theirs = np.asarray(blueprint.draw(flattened(turned_scene()), **options).image, np.int16)
+    differ = np.abs(ours - theirs).max(axis=2) > 0
+    assert differ.mean() < 0.002
+
+
+def test_meshes_used_once_are_drawn_in_runs(renderer):
+    """A draw group per mesh used more than once, and one per run of consecutive instances of
+    meshes used once, their triangles flattened: the draws follow unique meshes, not parts;
+    and the layers are the flattened scene's."""
+    meshes = {"l": l_prism(), "wedge": wedge(), "w1": wedge(), "w2": wedge()}
+    order = ["l", "w1", "w2", "l", "wedge", "l", "wedge"]
+    scene = trimesh_scene([(name, placed(None, (2 * k, 0, 0))) for k, name in enumerate(order)], meshes)
+    model = model_from_object(scene, name="mixed")
+    assert model.instances is not None and model.instances.mesh_count == 4
+    groups = draw_groups(model, 30.0)
+    assert len(groups) == 3
+    first = model.instances.first_face()
+    drawn = np.sort(np.concatenate([records["face"] for _, _, records in groups]))
+    assert np.array_equal(drawn, first[[0, 1, 3, 4, 5, 6]])
+    ours = blueprint.peel(model, size=SIZE, renderer=renderer, **CAMERA)
+    theirs = blueprint.peel(flattened(model), size=SIZE, renderer=renderer, **CAMERA)
+    assert np.array_equal(ours.triangle, theirs.triangle) and np.array_equal(ours.depth, theirs.depth)
+
+
+def test_normals_follow_the_transform_as_the_flattened_faces_turn():
+    """The normals' transform is the cofactor matrix: a mirror turns normals as it turns the
+    faces' winding, a scale by 2 keeps their length, a turn turns them."""
+    transforms = np.stack([np.eye(4), np.diag([-1.0, 1, 1, 1]), np.diag([2.0, 2, 2, 1])])
+    records = instance_records(transforms, np.arange(3), np.arange(3) * 10)
+    normal = lambda r: np.stack([r["nx"], r["ny"], r["nz"]])  # noqa: E731
+    assert np.array_equal(normal(records[0]), np.eye(3))
+    assert np.allclose(normal(records[1]), np.diag([1.0, -1, -1]))
+    assert np.allclose(normal(records[2]), np.eye(3))
+    a, b, c = np.array([0.0, 0, 0]), np.array([1.0, 0.5, 0]), np.array([0.25, 1, 0.5])
+    for transform, record in zip(transforms, records, strict=True):
+        m = transform[:3, :3]
+        moved = np.cross(m @ b - m @ a, m @ c - m @ a)
+        turned = normal(record) @ np.cross(b - a, c - a)
+        assert np.allclose(moved / np.linalg.norm(moved), turned / np.linalg.norm(turned))
+
+
+def test_instanced_upload_holds_unique_geometry(renderer):
+    """400 copies upload one mesh and 400 instance records, not 400 copies."""
+    model = model_from_object(copies(400), name="copies")
+    mesh = GpuMesh(renderer.ctx, model, 30.0)
+    try:
+        uploaded = sum(vbo.size + ibo.size for vbo, ibo, _, _ in mesh.groups)
+        assert mesh.triangles == 400 * len(model.instances.faces)
+        assert uploaded < 2 * 12 * len(model.instances.faces) * 28
+        assert not model.is_flat
+    finally:
+        mesh.release()
+
+
+MEMORY = textwrap.dedent(
+    """
+    import sys, tracemalloc
+    sys.path.insert(0, sys.argv[1])
+    import trimesh
+    import blueprint
+    from instanced_scenes import copies
+    from blueprint.scene.loader import model_from_object
+    scene = copies(int(sys.argv[2]), trimesh.creation.icosphere(4))
+    tracemalloc.start()
+    model = model_from_object(scene, name="copies")
+    blueprint.draw(model, size=(128, 128)).png()
+    peak = tracemalloc.get_traced_memory()[1]
+    flat = model.positions.nbytes + model.faces.nbytes + model.face_part.nbytes
+    print(peak, flat, model.instances is not None)
+    """
+)
+
+
+def test_memory_of_loading_and_drawing_follows_unique_geometry(tmp_path):
+    """Loading and drawing 400 copies of a mesh of 5 120 triangles takes far less host memory
+    than the flattened arrays alone would (measured in a process of its own, by tracemalloc)."""
+    tests = str(__import__("pathlib").Path(__file__).resolve().parents[1])
+    proc = subprocess.run(
+        [sys.executable, "-c", MEMORY, tests, "400"], capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, proc.stderr
+    peak, flat, instanced = proc.stdout.split()[-3:]
+    assert instanced == "True"
+    assert int(peak) < int(flat) / 4, (peak, flat)
