@@ -5,15 +5,11 @@ bounds and the triangles of the few parts that could enclose the rest."""
 
 from __future__ import annotations
 
-import logging
-
 import numpy as np
 
 from blueprint.scene import environment
 from blueprint.scene.instances import instance_corners
 from blueprint.scene.model import Model
-
-log = logging.getLogger("blueprint")
 
 # Parts found enclosing the rest in one model at most, for choosing which parts the stand-in
 # holds whole: an enclosing part holds every other part but those found before it.
