@@ -237,12 +237,7 @@ def _gather(values: np.ndarray, offsets: np.ndarray, index: np.ndarray) -> tuple
 def runs_of(values: np.ndarray, owner: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
     """CSR of ``values`` (n,) grouped by ``owner`` (n,) ascending, repeats of a value next to
     itself within one owner dropped: (kept values, (count + 1,) offsets)."""
-    keep = (
-        np.r_[True, (owner[1:] != owner[:-1]) | (values[1:] != values[:-1])]
-        if len(values)
-        else np.zeros(0, bool)
-    )
-    kept, kept_owner = values[keep], owner[keep]
-    return kept.astype(np.int64), np.r_[0, np.cumsum(np.bincount(kept_owner, minlength=count))].astype(
-        np.int64
-    )
+    keep = np.ones(len(values), bool)
+    keep[1:] = (owner[1:] != owner[:-1]) | (values[1:] != values[:-1])
+    offsets = np.r_[0, np.cumsum(np.bincount(owner[keep], minlength=count))]
+    return values[keep].astype(np.int64), offsets.astype(np.int64)

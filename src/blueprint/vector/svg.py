@@ -10,7 +10,7 @@ import numpy as np
 
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
 
-from .linework import KINDS, Lines
+from .linework import KINDS, Lines, runs_of
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .style import LineStyle
 
@@ -338,15 +338,9 @@ def edge_text(lines: Lines, index: np.ndarray) -> str:
         return ""
     values, owner = _edges_of(lines, index)
     order = np.lexsort((values, owner))
-    values, owner = values[order], owner[order]
-    fresh = (
-        np.r_[True, (owner[1:] != owner[:-1]) | (values[1:] != values[:-1])]
-        if len(values)
-        else np.zeros(0, bool)
-    )
-    values, owner = values[fresh], owner[fresh]
+    values, offsets = runs_of(values[order], owner[order], len(index))
     steps = np.diff(values, prepend=0).tolist()
-    count = np.bincount(owner, minlength=len(index)).tolist()
+    count = np.diff(offsets).tolist()
     out, at = [], 0
     for n in count:
         out.append(" ".join(map(str, steps[at : at + n])))
