@@ -41,15 +41,46 @@ def parse_path(d: str) -> list[np.ndarray]:
     return [np.array(line) for line in lines]
 
 
+def group_scale(group) -> float:
+    """The factor of a group's ``transform="scale(s)"`` (1 without one)."""
+    found = re.fullmatch(r"scale\(([^)]*)\)", group.get("transform") or "scale(1)")
+    return float(found.group(1))
+
+
+def svg_line_paths(path):
+    """(part group, level group, path, scale) of every line path of an SVG file: a part's layer
+    holds a group per level (``data-level``), that a path per kind (``data-kind``), in line
+    groups scaled to the output grid."""
+    root = ET.parse(path).getroot()
+    for lines in root.iter(f"{SVG}g"):
+        if lines.get("id") not in ("lines", "lines-behind-shading"):
+            continue
+        scale = group_scale(lines)
+        for part in lines.findall(f"{SVG}g"):
+            for level in part.findall(f"{SVG}g"):
+                for element in level.findall(f"{SVG}path"):
+                    yield part, level, element, scale
+
+
 def svg_lines(path) -> dict[tuple[str, int], list[np.ndarray]]:
     """{(part group id, level): polylines in view-box units} read from an SVG file."""
-    root = ET.parse(path).getroot()
     found: dict[tuple[str, int], list[np.ndarray]] = {}
-    for group in root.iter(f"{SVG}g"):
-        for element in group.findall(f"{SVG}path"):
-            level = int(element.get("class").split("-")[1])
-            found.setdefault((group.get("id"), level), []).extend(parse_path(element.get("d")))
+    for part, level, element, scale in svg_line_paths(path):
+        key = (part.get("id"), int(level.get("data-level")))
+        found.setdefault(key, []).extend(line * scale for line in parse_path(element.get("d")))
     return found
+
+
+def svg_edges(text: str | None) -> list[np.ndarray]:
+    """The source edges of each subpath from a path's ``data-edges``: entries apart by ``;``,
+    every number the difference from the one before it in the attribute."""
+    if not text:
+        return []
+    entries = text.split(";")
+    steps = [np.array(entry.split(), np.int64) for entry in entries]
+    flat = np.cumsum(np.concatenate(steps)) if steps else np.zeros(0, np.int64)
+    cuts = np.cumsum([len(s) for s in steps])[:-1]
+    return np.split(flat, cuts)
 
 
 def segments_of(polylines: list[np.ndarray]) -> np.ndarray:

@@ -50,6 +50,9 @@ _EXPORTS = {
     "cut_model": "blueprint.scene.section",
     "parse_section": "blueprint.scene.section",
     "Marks": "blueprint.scene.sheet",
+    "KINDS": "blueprint.vector.linework",
+    "Lines": "blueprint.vector.linework",
+    "edge_numbers": "blueprint.vector.linework",
     "lay_out_sheet": "blueprint.scene.sheet",
 }
 
@@ -63,7 +66,9 @@ __all__ = [
     "GLUnavailableError",
     "Glyphs",
     "InputError",
+    "KINDS",
     "Layers",
+    "Lines",
     "Marks",
     "Model",
     "Renderer",
@@ -78,6 +83,7 @@ __all__ = [
     "default_renderer",
     "draw",
     "draw_glyphs",
+    "edge_numbers",
     "environment_parts",
     "guess_up",
     "lay_out_sheet",
@@ -108,6 +114,7 @@ if TYPE_CHECKING:
     from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
     from blueprint.scene.sheet import Marks, lay_out_sheet
     from blueprint.scene.up import guess_up
+    from blueprint.vector.linework import KINDS, Lines, edge_numbers
 
 
 class _Package(types.ModuleType):

@@ -21,6 +21,7 @@ def _samples(lines: list[np.ndarray]) -> Samples:
         pixel,
         np.full((n, 2), -1),
         np.full(n, CREASE, np.uint8),
+        np.full(n, -1, np.int64),
         line,
         vertex,
         np.ones(n, bool),

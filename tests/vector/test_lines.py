@@ -145,6 +145,7 @@ def test_join_chains_and_closes_loops():
         np.full((6, 2), -1),
         np.zeros(6, np.int32),
         np.full(6, CREASE, np.uint8),
+        np.arange(6),
     )
     lines = join_polylines(segments)
     lengths = sorted(np.diff(lines.offsets).tolist())

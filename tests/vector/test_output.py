@@ -4,7 +4,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from vector_helpers import SVG, svg_lines
+from vector_helpers import SVG, svg_line_paths, svg_lines
 
 from blueprint.api.files import render_vector_file
 from blueprint.errors import InputError
@@ -19,6 +19,7 @@ from blueprint.vector import (
     vector_style,
 )
 from blueprint.vector.dxf import layer_name
+from blueprint.vector.linework import KINDS
 from blueprint.vector.svg import safe_id
 
 SIZE = (200, 160)
@@ -47,7 +48,7 @@ def test_svg_parses_with_the_image_as_view_box_and_groups_per_part(gear_drawing,
     assert points.min() >= -0.05 and points[:, 0].max() <= 200.05 and points[:, 1].max() <= 160.05
     assert sum(len(v) for v in lines.values()) == len(gear_drawing)
     # level 0 solid in the ink, deeper levels dashed and fading; the highlighted part orange
-    paths = {(g.get("id"), p.get("class")): p for g in groups.values() for p in g.findall(f"{SVG}path")}
+    paths = {(part.get("id"), level.get("class")): level for part, level, _, _ in svg_line_paths(path)}
     base0, base1 = paths[("base", "level-0")], paths.get(("base", "level-1"))
     assert base0.get("stroke") == "#0a1f44" and base0.get("stroke-dasharray") is None
     deeper = [p for (gid, cls), p in paths.items() if cls != "level-0" and gid != "gear"]
@@ -69,10 +70,10 @@ def test_dxf_parts_whose_names_sanitise_alike_get_layers_of_their_own(renderer, 
     by_layer = {}
     for entity in doc.modelspace().query("LWPOLYLINE"):
         by_layer.setdefault(entity.dxf.layer, []).append(min(x for x, *_ in entity.get_points()))
-    visible = {name: xs for name, xs in by_layer.items() if name.endswith("-L0")}
-    assert set(visible) == {layer_name("a/b", 0), "a_b_1-L0"}
+    visible = {name: xs for name, xs in by_layer.items() if name.endswith("-silhouette-L0")}
+    assert set(visible) == {layer_name("a/b", 0, "silhouette"), "a_b_1-silhouette-L0"}
     # each layer holds one box's lines: the boxes lie apart along x
-    left, right = max(visible[layer_name("a/b", 0)]), min(visible["a_b_1-L0"])
+    left, right = max(visible[layer_name("a/b", 0, "silhouette")]), min(visible["a_b_1-silhouette-L0"])
     assert left < right
 
 
@@ -80,13 +81,17 @@ def test_svg_parses_back_to_the_drawing_within_the_output_grid(gear_drawing, tmp
     path = save_drawing(tmp_path / "gear.svg", gear_drawing)
     lines = svg_lines(path)
     by_group = {}
-    for part, level, index in gear_drawing.groups():
-        by_group[(gear_drawing.part_names[part], level)] = [gear_drawing.polyline(i) for i in index]
+    for part, _, level, index in gear_drawing.groups():
+        by_group.setdefault((gear_drawing.part_names[part], level), []).extend(
+            gear_drawing.polyline(i) for i in index
+        )
     for key, polylines in lines.items():
         original = by_group[key]
         assert len(polylines) == len(original)
-        for got, want in zip(polylines, original, strict=True):
+        # a path's lines go in the order of their edges: matched here by their first point
+        for got in polylines:
             # repeated points on the 0.1 px grid are dropped, the rest round to it
+            want = min(original, key=lambda w: np.abs(w[0] - got[0]).max() + np.abs(w[-1] - got[-1]).max())
             assert np.abs(got[0] - want[0]).max() <= 0.05 + 1e-9
             assert np.abs(got[-1] - want[-1]).max() <= 0.05 + 1e-6
 
@@ -98,12 +103,14 @@ def test_dxf_opens_with_one_layer_per_part_and_level(gear_drawing, tmp_path):
     doc = ezdxf.readfile(path)
     polylines = doc.modelspace().query("LWPOLYLINE")
     assert len(polylines) == len(gear_drawing)
-    expected = {layer_name(gear_drawing.part_names[p], k) for p, k, _ in gear_drawing.groups()}
+    base1 = next(c for p, c, k, _ in gear_drawing.groups() if gear_drawing.part_names[p] == "base" and k == 1)
+    base0 = next(c for p, c, k, _ in gear_drawing.groups() if gear_drawing.part_names[p] == "base" and k == 0)
+    expected = {layer_name(gear_drawing.part_names[p], k, KINDS[c]) for p, c, k, _ in gear_drawing.groups()}
     assert expected <= {layer.dxf.name for layer in doc.layers}
     assert {e.dxf.layer for e in polylines} == expected
-    hidden = doc.layers.get(layer_name("base", 1))
+    hidden = doc.layers.get(layer_name("base", 1, KINDS[base1]))
     assert hidden.dxf.linetype == "BP_L1" and hidden.transparency > 0
-    assert doc.layers.get(layer_name("base", 0)).dxf.linetype == "CONTINUOUS"
+    assert doc.layers.get(layer_name("base", 0, KINDS[base0])).dxf.linetype == "CONTINUOUS"
     # y points up in DXF
     ys = np.concatenate([np.array(e.get_points("xy"))[:, 1] for e in polylines])
     assert ys.min() >= -0.05 and ys.max() <= 160.05
@@ -121,26 +128,30 @@ def test_pdf_has_a_layer_per_part_and_per_level_as_the_svg_has(gear_drawing, tmp
     properties = reader.trailer["/Root"]["/OCProperties"]
     names = [group.get_object()["/Name"] for group in properties["/OCGs"]]
     drawn_parts = sorted(set(gear_drawing.part.tolist()))
+    drawn_kinds = sorted(set(gear_drawing.kind.tolist()))
     drawn_levels = sorted(set(gear_drawing.level.tolist()))
-    assert names == [gear_drawing.part_names[p] for p in drawn_parts] + [
+    assert names == [gear_drawing.part_names[p] for p in drawn_parts] + [KINDS[k] for k in drawn_kinds] + [
         "visible" if k == 0 else f"hidden {k}" for k in drawn_levels
     ]
     assert len(drawn_parts) == 13 and len(drawn_levels) >= 6
     # the SVG's groups carry the same names and levels
     svg = svg_lines(save_drawing(tmp_path / "gear.svg", gear_drawing))
     assert {level for _, level in svg} == set(drawn_levels)
-    # the viewer's panel: parts, then levels
+    # the viewer's panel: parts, kinds, then levels
     order = properties["/D"]["/Order"]
-    assert [branch[0] for branch in order] == ["parts", "levels"]
-    assert len(order[0]) == 1 + len(drawn_parts) and len(order[1]) == 1 + len(drawn_levels)
+    assert [branch[0] for branch in order] == ["parts", "kinds", "levels"]
+    assert len(order[0]) == 1 + len(drawn_parts) and len(order[2]) == 1 + len(drawn_levels)
+    assert len(order[1]) == 1 + len(drawn_kinds)
     page = reader.pages[0]
     keys = page["/Resources"]["/Properties"]
     assert keys["/P6"].get_object()["/Name"] == "gear" and keys["/L0"].get_object()["/Name"] == "visible"
     content = page.get_contents().get_data().decode("latin-1")
-    marked = re.findall(r"/OC /P(\d+) BDC\n/OC /L(\d+) BDC\n(.*?)EMC\nEMC", content, re.S)
+    marked = re.findall(
+        r"/OC /P(\d+) BDC\n/OC /K(\d+) BDC\n/OC /L(\d+) BDC\n(.*?)EMC\nEMC\nEMC", content, re.S
+    )
     assert len(marked) == len(list(gear_drawing.groups()))
-    for (part, level, index), (p, k, body) in zip(gear_drawing.groups(), marked, strict=True):
-        assert (int(p), int(k)) == (part, level)
+    for (part, kind, level, index), (p, c, k, body) in zip(gear_drawing.groups(), marked, strict=True):
+        assert (int(p), int(c), int(k)) == (part, kind, level)
         strokes = len(re.findall(r"^ ?S$", body, re.M))
         assert strokes == len(index)
 

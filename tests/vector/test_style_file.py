@@ -4,13 +4,12 @@ and pictures, from the command line too."""
 from __future__ import annotations
 
 import json
-import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
 from helpers import ROOT, run_cli
 from PIL import Image
-from vector_helpers import SVG
+from vector_helpers import svg_line_paths
 
 from blueprint.errors import InputError
 from blueprint.examples import gearbox
@@ -82,8 +81,12 @@ def test_missing_file(tmp_path):
 def test_svg_strokes_each_level_as_the_file_says(renderer, tmp_path):
     drawing = draw_vector(gearbox(), size=(200, 150), style=load_vector_style(EXAMPLE), renderer=renderer)
     save_drawing(tmp_path / "g.svg", drawing)
-    paths = ET.parse(tmp_path / "g.svg").getroot().iter(f"{SVG}path")
-    seen = {p.get("class"): (p.get("stroke"), p.get("stroke-dasharray")) for p in paths}
+    # each level's stroke on its group, in the lines group's grid units (a tenth of a pixel)
+    seen = {}
+    for _, level, _, scale in svg_line_paths(tmp_path / "g.svg"):
+        dash = level.get("stroke-dasharray")
+        dash = dash and " ".join(f"{float(v) * scale:g}" for v in dash.split())
+        seen[level.get("class")] = (level.get("stroke"), dash)
     assert seen["level-0"] == ("#000000", None)
     assert seen["level-1"] == ("#1d4f91", "6 3")
     assert seen["level-2"] == ("#1d4f91", "3 3")

@@ -100,8 +100,9 @@ class Drawing:
 
     @property
     def lines(self):
-        """The vector drawing (``blueprint.vector.VectorDrawing``: polylines with their
-        occlusion levels and parts), drawn on first use with this drawing's options."""
+        """The vector drawing (``blueprint.vector.VectorDrawing``: polylines with their parts,
+        kinds, occlusion levels and source edges, as arrays in its ``lines``, a
+        ``blueprint.Lines``), drawn on first use with this drawing's options."""
         if self._lines is None:
             self._lines = vector_drawing(self.model, self.options, shared(self._renderer))
         return self._lines

@@ -1,6 +1,7 @@
-"""Line styles: colour, width, dash and opacity per occlusion level, and the line style files
-that describe them. Vector drawings stroke lines with them (``blueprint.vector.style``); a
-picture takes the same file as a raster ``Style`` (``raster_style``). GPU-free."""
+"""Line styles: colour, width, dash and opacity per occlusion level and per kind of line, and the
+line style files that describe them. Vector drawings stroke lines with them
+(``blueprint.vector.style``); a picture takes the same file as a raster ``Style``
+(``raster_style``), its levels only: a picture's edges do not know their kind. GPU-free."""
 
 from __future__ import annotations
 
@@ -13,6 +14,9 @@ from blueprint.errors import InputError
 
 __all__ = [
     "FILE_SUFFIXES",
+    "ISO_128",
+    "KINDS",
+    "KindStyle",
     "LineStyle",
     "VectorStyle",
     "is_style_file",
@@ -23,6 +27,23 @@ __all__ = [
 ]
 
 RGB = tuple[float, float, float]
+
+# The kinds of line by code (``blueprint.vector.linework`` numbers them): what ``data-kind``,
+# DXF layers and PDF groups say, and what a line style file's ``[kinds.NAME]`` names.
+KINDS: tuple[str, ...] = (
+    "",
+    "silhouette",
+    "border",
+    "crease",
+    "boundary",
+    "intersection",
+    "section",
+    "hatch",
+    "glyph",
+    "dimension",
+    "sheet",
+    "smooth",
+)
 
 
 def _rgb(value) -> RGB:
@@ -67,13 +88,75 @@ class LineStyle:
 
 
 @dataclass(frozen=True)
+class KindStyle:
+    """How lines of one kind differ from their level's style.
+
+    ``width`` multiplies the level's width; ``color``, ``dash`` and ``opacity`` replace the
+    level's where given (``None``: the level's own). ``levels[k]`` holds the same for level
+    ``k`` alone (the last entry for deeper levels), over the kind's own values. ``show`` False
+    leaves the kind out of the drawing (TechDraw's "smooth lines" switch, for ``smooth``).
+    """
+
+    width: float = 1.0
+    color: RGB | None = None
+    dash: tuple[float, ...] | None = None
+    opacity: float | None = None
+    show: bool = True
+    levels: tuple[KindStyle, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.color is not None:
+            object.__setattr__(self, "color", _rgb(self.color))
+        if self.dash is not None:
+            object.__setattr__(self, "dash", tuple(float(d) for d in self.dash))
+        object.__setattr__(self, "levels", tuple(self.levels))
+        if not (self.width > 0):
+            raise InputError(f"line width must be > 0, got {self.width}")
+        if self.opacity is not None and not 0.0 <= self.opacity <= 1.0:
+            raise InputError(f"opacity must be in [0, 1], got {self.opacity}")
+
+    def applied(self, line: LineStyle, level: int) -> LineStyle:
+        """``line``, a level's style, as this kind draws it at ``level``."""
+        for entry in (self, self.levels[min(level, len(self.levels) - 1)] if self.levels else None):
+            if entry is None:
+                continue
+            line = replace(
+                line,
+                width=line.width * entry.width,
+                color=line.color if entry.color is None else entry.color,
+                dash=line.dash if entry.dash is None else entry.dash,
+                opacity=line.opacity if entry.opacity is None else entry.opacity,
+            )
+        return line
+
+
+# ISO 128's line widths by kind, in multiples of a level's width (visible lines 1, hidden 0.5 in
+# the named styles; the pen is 0.25 mm on a drawing to scale): outlines, edges and
+# intersections wide (0.5 mm visible, 0.25 mm hidden), tangent edges of smooth blends narrow,
+# a section's outline wide and its hatching narrow, dimensions narrow.
+ISO_128: dict[str, KindStyle] = {
+    "silhouette": KindStyle(2.0),
+    "border": KindStyle(2.0),
+    "crease": KindStyle(2.0),
+    "boundary": KindStyle(2.0),
+    "intersection": KindStyle(2.0),
+    "smooth": KindStyle(1.0),
+    "section": KindStyle(2.0),
+    "hatch": KindStyle(0.7),
+    "dimension": KindStyle(1.0),
+}
+
+
+@dataclass(frozen=True)
 class VectorStyle:
     """Paper and line styles of a vector drawing.
 
     ``levels[k]`` styles lines hidden behind ``k`` surfaces; levels past the last entry reuse
-    it with the opacity multiplied by ``fade`` per level. Parts named in a drawing's highlight
-    take ``highlight_color`` and ``highlight_width`` times the width, keeping the level's dash and
-    opacity. ``paper`` is an (r, g, b) background or ``None`` (transparent).
+    it with the opacity multiplied by ``fade`` per level. ``kinds`` maps a kind's name
+    (``KINDS``) to how its lines differ from their level's style (``line``); kinds not in it
+    draw in their level's style. Parts named in a drawing's highlight take ``highlight_color``
+    and ``highlight_width`` times the width, keeping the dash and opacity. ``paper`` is an
+    (r, g, b) background or ``None`` (transparent).
     """
 
     name: str = "custom"
@@ -83,6 +166,7 @@ class VectorStyle:
     highlight_color: RGB = (1.0, 0.48, 0.0)
     highlight_width: float = 1.5
     title_color: RGB = field(default=(0.0, 0.0, 0.0))
+    kinds: dict[str, KindStyle] = field(default_factory=lambda: dict(ISO_128), hash=False)
 
     def __post_init__(self) -> None:
         if not self.levels:
@@ -96,9 +180,12 @@ class VectorStyle:
             raise InputError(f"fade must be in [0, 1], got {self.fade}")
         if not self.highlight_width > 0:
             raise InputError(f"highlight width must be > 0, got {self.highlight_width}")
+        for kind in self.kinds:
+            if kind not in KINDS or not kind:
+                raise InputError(f"unknown kind of line {kind!r} (choose {', '.join(KINDS[1:])})")
 
     def level(self, k: int, highlighted: bool = False) -> LineStyle:
-        """The style of lines at occlusion level ``k``."""
+        """The style of lines at occlusion level ``k``, whatever their kind."""
         last = len(self.levels) - 1
         line = self.levels[min(k, last)]
         if k > last:
@@ -106,6 +193,23 @@ class VectorStyle:
         if highlighted:
             line = replace(line, color=self.highlight_color, width=line.width * self.highlight_width)
         return line
+
+    def line(self, kind: int | str, k: int, highlighted: bool = False) -> LineStyle:
+        """The style of lines of ``kind`` (a code or a name of ``KINDS``) at level ``k``: the
+        level's, as the kind's entry changes it, then the highlight's colour and width."""
+        name = KINDS[kind] if isinstance(kind, int) else kind
+        line = self.level(k)
+        entry = self.kinds.get(name)
+        if entry is not None:
+            line = entry.applied(line, k)
+        if highlighted:
+            line = replace(line, color=self.highlight_color, width=line.width * self.highlight_width)
+        return line
+
+    def shows(self, kind: int | str) -> bool:
+        """Whether lines of ``kind`` are drawn at all."""
+        entry = self.kinds.get(KINDS[kind] if isinstance(kind, int) else kind)
+        return entry is None or entry.show
 
     def with_levels(self, *levels: LineStyle) -> VectorStyle:
         return replace(self, levels=tuple(levels))
@@ -159,8 +263,18 @@ def vector_style(
     )
 
 
-_STYLE_KEYS = ("base", "paper", "fade", "highlight_color", "highlight_width", "title_color", "levels")
+_STYLE_KEYS = (
+    "base",
+    "paper",
+    "fade",
+    "highlight_color",
+    "highlight_width",
+    "title_color",
+    "levels",
+    "kinds",
+)
 _LEVEL_KEYS = ("color", "width", "dash", "opacity")
+_KIND_KEYS = ("color", "width", "dash", "opacity", "show", "levels")
 
 
 def load_vector_style(path: str | os.PathLike) -> VectorStyle:
@@ -183,8 +297,20 @@ def load_vector_style(path: str | os.PathLike) -> VectorStyle:
         dash = [6, 3]               # on, off, ... in line widths
         opacity = 0.8
 
+        [kinds.silhouette]          # a kind at every level (KINDS names them)
+        width = 2.0                 # times its level's width
+        color = "#000000"           # colour, dash and opacity replace the level's
+
+        [[kinds.crease.levels]]     # a kind at level 0, then 1, ... (the last for deeper ones)
+        width = 1.5
+
+        [kinds.smooth]
+        show = false                # tangent edges of smooth blends left out
+
     A level leaves out what it takes from the base's level at the same depth; ``levels``
-    left out keeps the base's. Raises ``InputError`` naming the file and the entry.
+    left out keeps the base's. A kind's entry replaces the base's (ISO 128 widths: ``ISO_128``),
+    its width, where left out, the base's; kinds left out keep the base's. Raises
+    ``InputError`` naming the file and the entry.
     """
     from blueprint.settings import Entry, read_settings, show
 
@@ -215,14 +341,49 @@ def load_vector_style(path: str | os.PathLike) -> VectorStyle:
                     opacity=entry.number("opacity", like.opacity, 0.0, 1.0),
                 )
             )
+    kinds = dict(base.kinds)
+    raw = top.table.get("kinds", {})
+    if not isinstance(raw, dict):
+        raise top.fail(f"kinds must be a table of kinds ([kinds.silhouette] in TOML), got {show(raw)}")
+    for kind, table in raw.items():
+        if kind not in KINDS or not kind:
+            raise top.fail(f"kinds: unknown kind {kind!r} (choose {', '.join(KINDS[1:])})")
+        kinds[kind] = _kind_style(Entry(f"{name}: kinds.{kind}", table, _KIND_KEYS), base.kinds.get(kind))
     return VectorStyle(
         name=Path(path).stem,
         paper=paper,
         levels=tuple(levels),
+        kinds=kinds,
         fade=top.number("fade", base.fade, 0.0, 1.0),
         highlight_color=rgb(top, "highlight_color", base.highlight_color),
         highlight_width=top.number("highlight_width", base.highlight_width, 0.0, 16.0, lo_open=True),
         title_color=rgb(top, "title_color", base.title_color),
+    )
+
+
+def _kind_style(entry, base: KindStyle | None) -> KindStyle:
+    """A kind's entry of a line style file, its width where left out the ``base``'s."""
+    from blueprint.settings import Entry, show
+
+    def own(item, default_width: float) -> dict:
+        return dict(
+            width=item.number("width", default_width, 0.0, 16.0, lo_open=True),
+            color=item.color("color", "#000000")[:3] if "color" in item.table else None,
+            dash=item.dash("dash", None, unit="line widths", solid_ok=True),
+            opacity=item.number("opacity", 1.0, 0.0, 1.0) if "opacity" in item.table else None,
+        )
+
+    raw = entry.table.get("levels", [])
+    if not isinstance(raw, list):
+        raise entry.fail(f"levels must be a list of tables ([[kinds.NAME.levels]] in TOML), got {show(raw)}")
+    levels = tuple(
+        KindStyle(**own(Entry(f"{entry.where}: levels {k}", table, _LEVEL_KEYS), 1.0))
+        for k, table in enumerate(raw)
+    )
+    return KindStyle(
+        **own(entry, 1.0 if base is None else base.width),
+        show=entry.boolean("show", True),
+        levels=levels,
     )
 
 

@@ -43,12 +43,15 @@ class EdgeSet:
     faces : np.ndarray
         (N, 2) int64 faces beside each edge: (front-facing, back-facing) for silhouettes,
         (face, -1) for borders, both faces in index order for creases.
+    edges : np.ndarray
+        (N,) int64 index of each edge in the adjacency's ``edges``.
     """
 
     segments3d: np.ndarray
     segments2d: np.ndarray
     kind: np.ndarray
     faces: np.ndarray
+    edges: np.ndarray
 
 
 def _check_matrix(name: str, matrix: np.ndarray) -> np.ndarray:
@@ -150,7 +153,9 @@ def classify_edges(
     chosen = np.flatnonzero(kind)
     model, pixels, keep = _projected(adj.positions[adj.edges[chosen]], view, projection, (width, height))
     chosen = chosen[keep]
-    return EdgeSet(segments3d=model, segments2d=pixels, kind=kind[chosen], faces=side_faces[chosen])
+    return EdgeSet(
+        segments3d=model, segments2d=pixels, kind=kind[chosen], faces=side_faces[chosen], edges=chosen
+    )
 
 
 def _first_two_faces(adj: Adjacency) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -119,7 +119,7 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 def chain_pieces(
     points: np.ndarray, offsets: np.ndarray, key: np.ndarray, quantum: float = 1e-3
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Chain 2D polylines of one key (part and occlusion level) that meet end to end.
 
     Pieces of one level on lines that meet at a corner or a junction of the model's edges become
@@ -137,12 +137,17 @@ def chain_pieces(
 
     Returns
     -------
-    points, offsets, first : the chained polylines, and for each the index of its first piece
-    (whose key it has).
+    points, offsets : the chained polylines.
+    piece : (P,) int64
+        The pieces in walking order, chain after chain (a chain has its first piece's key).
+    reverse : (P,) bool
+        Whether each piece is walked from its end to its start.
+    lengths : (C,) int64
+        Pieces per chain.
     """
     count = len(offsets) - 1
     if count < 2:
-        return points, offsets, np.arange(count)
+        return points, offsets, np.arange(count), np.zeros(count, bool), np.ones(count, np.int64)
     first_point, last_point = offsets[:-1], offsets[1:] - 1
     ends = np.stack([points[first_point], points[last_point]], axis=1).reshape(-1, 2)
     cell = np.round(ends / quantum).astype(np.int64)
@@ -175,4 +180,4 @@ def chain_pieces(
     out = points[index[keep]]
     kept_per_piece = size - (~is_first).astype(np.int64)
     per_chain = np.add.reduceat(kept_per_piece, chain_start) if len(piece) else np.zeros(0, np.int64)
-    return out, np.r_[0, np.cumsum(per_chain)].astype(np.int64), piece[chain_start]
+    return out, np.r_[0, np.cumsum(per_chain)].astype(np.int64), piece, reverse, lengths

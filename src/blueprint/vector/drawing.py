@@ -48,9 +48,9 @@ from blueprint.scene.units import drawing_unit, warn_if_assumed
 from .chain import chain_pieces
 from .dxf import write_dxf
 from .lines import join_polylines, model_segments
+from .linework import KINDS, Lines, runs_of
 from .occlusion import (
     DepthTest,
-    Pieces,
     PixelLayers,
     classify_samples,
     draw_faces,
@@ -128,13 +128,10 @@ class VectorDrawing:
     ----------
     width, height : int
         Image size in pixels; line coordinates are pixels (x right, y down, origin top-left).
-    points : (N, 2) float64
-        All polylines' points; polyline ``i`` is ``points[offsets[i]:offsets[i + 1]]``.
-    offsets : (P + 1,) int64
-    part : (P,) int32
-        Part index of each polyline (into ``part_names``).
-    level : (P,) int32
-        Occlusion level of each polyline: how many surfaces lie in front of it.
+    lines : Lines
+        The polylines, each with its part, kind, occlusion level and source edges (the model's
+        edges it was drawn from, rows of ``linework.edge_numbers``); ``points``, ``offsets``,
+        ``part``, ``kind`` and ``level`` are its arrays.
     part_names : tuple of str
     layers : int
         Depth layers peeled: levels up to ``layers - 1`` are drawn.
@@ -153,9 +150,7 @@ class VectorDrawing:
     glyphs : GlyphLines or None
         Boxes, arrows, paths and labels, drawn as their own group over the lines.
     shading : ShadedFaces or None
-        Shaded parts' faces, filled back to front after the lines behind them.
-    behind : (P,) bool or None
-        With shading: the polylines behind a shaded part's surface, drawn before the shading.
+        Shaded parts' faces, filled back to front after the lines behind them (``lines.behind``).
     camera : Camera
     seconds : dict
         Time per stage.
@@ -163,10 +158,7 @@ class VectorDrawing:
 
     width: int
     height: int
-    points: np.ndarray
-    offsets: np.ndarray
-    part: np.ndarray
-    level: np.ndarray
+    lines: Lines
     part_names: tuple[str, ...]
     layers: int
     style: VectorStyle
@@ -179,37 +171,73 @@ class VectorDrawing:
     marks: Marks | None = None
     glyphs: GlyphLines | None = None
     shading: ShadedFaces | None = None
-    behind: np.ndarray | None = None
     name: str = "drawing"
     seconds: dict[str, float] = field(default_factory=dict)
 
     def __len__(self) -> int:
-        return len(self.offsets) - 1
+        return len(self.lines)
+
+    @property
+    def points(self) -> np.ndarray:
+        """(N, 2) float64: all polylines' points."""
+        return self.lines.points
+
+    @property
+    def offsets(self) -> np.ndarray:
+        """(P + 1,) int64: polyline ``i`` is ``points[offsets[i]:offsets[i + 1]]``."""
+        return self.lines.offsets
+
+    @property
+    def part(self) -> np.ndarray:
+        """(P,) int32: part index of each polyline (into ``part_names``)."""
+        return self.lines.part
+
+    @property
+    def kind(self) -> np.ndarray:
+        """(P,) uint8: kind code of each polyline (``linework.KINDS`` names them)."""
+        return self.lines.kind
+
+    @property
+    def level(self) -> np.ndarray:
+        """(P,) int32: occlusion level of each polyline, how many surfaces lie in front of it."""
+        return self.lines.level
+
+    @property
+    def behind(self) -> np.ndarray | None:
+        """With shading, (P,) bool: the polylines behind a shaded part's surface."""
+        return self.lines.behind if self.shading is not None else None
 
     def lines_per_level(self) -> dict[int, int]:
         """Polylines per occlusion level."""
         levels, counts = np.unique(self.level, return_counts=True)
         return {int(k): int(c) for k, c in zip(levels, counts, strict=True)}
 
-    def groups(self, behind: bool | None = None) -> Iterable[tuple[int, int, np.ndarray]]:
-        """(part, level, polyline indices) in drawing order: parts in model order, and within a
-        part the deepest level first so that visible lines lie on top. ``behind`` True or
-        False keeps only the polylines behind the shading or only the others."""
+    def lines_per_kind(self) -> dict[str, int]:
+        """Polylines per kind, by name."""
+        counts = np.bincount(self.kind, minlength=len(KINDS))
+        return {KINDS[k]: int(counts[k]) for k in np.flatnonzero(counts).tolist()}
+
+    def groups(self, behind: bool | None = None) -> Iterable[tuple[int, int, int, np.ndarray]]:
+        """(part, kind, level, polyline indices) in drawing order: parts in model order, within
+        a part the deepest level first so that visible lines lie on top, and within a level
+        the kinds by code. ``behind`` True or False keeps only the polylines behind the shading
+        or only the others."""
         if len(self) == 0:
             return
-        order = np.lexsort((-self.level, self.part))
+        order = np.lexsort((self.kind, -self.level, self.part))
         if behind is not None:
             flags = self.behind if self.behind is not None else np.zeros(len(self), bool)
             order = order[flags[order] == behind]
             if len(order) == 0:
                 return
-        key = np.stack([self.part[order], self.level[order]], axis=1)
+        key = np.stack([self.part[order], self.level[order], self.kind[order]], axis=1)
         cut = np.flatnonzero(np.any(key[1:] != key[:-1], axis=1)) + 1
         for chunk in np.split(order, cut):
-            yield int(self.part[chunk[0]]), int(self.level[chunk[0]]), chunk
+            first = chunk[0]
+            yield int(self.part[first]), int(self.kind[first]), int(self.level[first]), chunk
 
     def polyline(self, i: int) -> np.ndarray:
-        return self.points[self.offsets[i] : self.offsets[i + 1]]
+        return self.lines.polyline(i)
 
     def page_width(self) -> float:
         """Base line width in page units."""
@@ -446,10 +474,7 @@ def draw_lines(
     return VectorDrawing(
         width=size[0],
         height=size[1],
-        points=pieces.points,
-        offsets=pieces.offsets,
-        part=pieces.part,
-        level=pieces.level,
+        lines=pieces,
         part_names=tuple(model.part_names),
         layers=count,
         style=vstyle,
@@ -462,7 +487,6 @@ def draw_lines(
         marks=marks,
         glyphs=glyph_drawing,
         shading=shading,
-        behind=pieces.behind if shading is not None else None,
         name=Path(model.source).stem if model.source else "drawing",
         seconds=seconds,
     )
@@ -575,15 +599,37 @@ class _Occlusion:
         return classify_samples(self.samples, self.peeled, planes, self.test)
 
 
-def _chained(pieces: Pieces, count: int) -> Pieces:
-    """Pieces of one part, level and side of the shading (of ``count`` levels) that meet end to
-    end joined into one."""
-    key = (pieces.part.astype(np.int64) * (count + 1) + pieces.level) * 2 + pieces.behind
-    points, offsets, first = chain_pieces(pieces.points, pieces.offsets, key)
-    return Pieces(points, offsets, pieces.part[first], pieces.level[first], pieces.behind[first])
+def _chained(pieces: Lines, count: int) -> Lines:
+    """Pieces of one part, kind, level and side of the shading (of ``count`` levels) that meet
+    end to end joined into one, keeping the edges of every piece in the order walked."""
+    key = (
+        (pieces.part.astype(np.int64) * 256 + pieces.kind) * (count + 1) + pieces.level
+    ) * 2 + pieces.behind
+    points, offsets, piece, reverse, lengths = chain_pieces(pieces.points, pieces.offsets, key)
+    starts = pieces.edge_offsets
+    size = np.diff(starts)[piece]
+    within = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    index = np.where(
+        np.repeat(reverse, size),
+        np.repeat(starts[1:][piece] - 1, size) - within,
+        np.repeat(starts[:-1][piece], size) + within,
+    )
+    owner = np.repeat(np.repeat(np.arange(len(lengths)), lengths), size)
+    edges, edge_offsets = runs_of(pieces.edges[index], owner, len(lengths))
+    first = piece[np.cumsum(lengths) - lengths]
+    return Lines(
+        points,
+        offsets,
+        pieces.part[first],
+        pieces.kind[first],
+        pieces.level[first],
+        edges,
+        edge_offsets,
+        pieces.behind[first],
+    )
 
 
-def _simplified(pieces: Pieces, tolerance: float) -> Pieces:
+def _simplified(pieces: Lines, tolerance: float) -> Lines:
     """The pieces simplified (Douglas-Peucker, ``tolerance`` pixels), those no longer than
     ``_MIN_LENGTH_PX`` left out: lines along the view direction project to points, nothing to
     draw."""
@@ -598,9 +644,17 @@ def _simplified(pieces: Pieces, tolerance: float) -> Pieces:
     )
     length[np.diff(offsets) < 2] = 0.0
     keep = length > _MIN_LENGTH_PX
-    rows = np.repeat(keep, np.diff(offsets))
-    offsets = np.r_[0, np.cumsum(np.diff(offsets)[keep])].astype(np.int64)
-    return Pieces(points[rows], offsets, pieces.part[keep], pieces.level[keep], pieces.behind[keep])
+    simple = Lines(
+        points,
+        offsets,
+        pieces.part,
+        pieces.kind,
+        pieces.level,
+        pieces.edges,
+        pieces.edge_offsets,
+        pieces.behind,
+    )
+    return simple.take(keep)
 
 
 def _title(title: str | None, model: Model, camera: Camera, page: Page) -> str | None:
@@ -753,19 +807,13 @@ def draw_sheet(
         + [cells[n].marks.shifted(shifts[n]) for n in cells if cells[n].marks is not None]
     )
     order = list(cells)
-    counts = [len(cells[n].points) for n in order]
-    starts = np.cumsum([0, *counts[:-1]])
-    ends = [cells[n].offsets[1:] + start for n, start in zip(order, starts, strict=True)]
     if measures:
         warn_if_assumed(model, given)
     return replace(
         first,
         width=int(math.ceil(width)),
         height=int(math.ceil(height)),
-        points=np.concatenate([cells[n].points + shifts[n] for n in order]).reshape(-1, 2),
-        offsets=np.concatenate([[0], *ends]).astype(np.int64),
-        part=np.concatenate([cells[n].part for n in order]),
-        level=np.concatenate([cells[n].level for n in order]),
+        lines=Lines.concatenate([cells[n].lines.shifted(shifts[n]) for n in order]),
         layers=max(c.layers for c in cells.values()),
         page=page,
         camera=cameras["front"],

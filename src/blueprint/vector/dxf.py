@@ -1,8 +1,11 @@
-"""DXF output through ezdxf: one layer per part and occlusion level, LWPOLYLINE entities.
+"""DXF output through ezdxf: one layer per part, kind of line and occlusion level, LWPOLYLINE
+entities (circles and arcs where a line is one), each with its source edges as XDATA.
 
 Coordinates are the page's (pixels, or paper millimetres for a drawing to scale) with y up,
-as CAD expects. Every layer carries its level's colour (true colour), linetype (a dash
-pattern of its own, ``BP_L<k>``), lineweight and transparency.
+as CAD expects. Every layer carries its kind's and level's colour (true colour), linetype (a
+dash pattern of its own, ``BP_L<k>``, or ``BP_<kind>_L<k>`` where the kind's dash is not the
+level's), lineweight and transparency. XDATA of the application ``BLUEPRINT`` on every line:
+its kind's name (group code 1000), then its source edges, one long (1071) each.
 """
 
 from __future__ import annotations
@@ -12,10 +15,14 @@ import re
 
 import numpy as np
 
+from .linework import KINDS
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .svg import _decimals
 
-__all__ = ["ARC_SAGITTA", "ARC_TOLERANCE", "fit_arc", "layer_name", "write_dxf"]
+__all__ = ["APP_ID", "ARC_SAGITTA", "ARC_TOLERANCE", "fit_arc", "layer_name", "write_dxf"]
+
+# The application name of the XDATA that carries each line's kind and source edges.
+APP_ID = "BLUEPRINT"
 
 # A line is drawn as a circle or an arc where its vertices lie this close to one (pixels) and
 # no chord strays from its arc by more than ARC_SAGITTA: what the simplified polyline of a
@@ -53,10 +60,10 @@ _WEIGHTS = (
 )
 
 
-def layer_name(part: str, level: int) -> str:
-    """A DXF layer name for a part's lines at one level: 'gear-L1'."""
+def layer_name(part: str, level: int, kind: str = "") -> str:
+    """A DXF layer name for a part's lines of one kind at one level: 'gear-crease-L1'."""
     base = _BAD.sub("_", part).strip() or "part"
-    return f"{base[:200]}-L{level}"
+    return f"{base[:200]}{'-' + kind if kind else ''}-L{level}"
 
 
 def _lineweight(mm: float) -> int:
@@ -122,19 +129,24 @@ def fit_arc(points: np.ndarray, tolerance: float, sagitta: float, min_points: in
 
 
 def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: float, base_mm: float) -> None:
-    """The lines of ``groups`` (``VectorDrawing.groups``) as LWPOLYLINEs, a layer per part and
-    level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists); lines
-    that are circles or arcs at the drawing's resolution (``fit_arc``: the rims of round
-    holes and shafts seen square on) as CIRCLE and ARC entities."""
-    style, names, offsets = drawing.style, drawing.part_names, drawing.offsets
+    """The lines of ``groups`` (``VectorDrawing.groups``) as LWPOLYLINEs, a layer per part,
+    kind and level (made on first use, ``layers`` and ``made_linetypes`` keeping what exists);
+    lines that are circles or arcs at the drawing's resolution (``fit_arc``: the rims of round
+    holes and shafts seen square on) as CIRCLE and ARC entities; each with its kind and source
+    edges as XDATA."""
+    style, names, lines = drawing.style, drawing.part_names, drawing.lines
+    offsets = lines.offsets
     page_per_px = drawing.page.factor
     # the names taken, looked up once a new layer is named (not a scan of every layer made)
     taken = set(layers.values())
-    for part, level, index in groups:
-        line = style.level(level, part in drawing.highlight)
+    for part, kind, level, index in groups:
+        if not style.shows(kind):
+            continue
+        line = style.line(kind, level, part in drawing.highlight)
         linetype = "CONTINUOUS"
         if line.dash:
-            linetype = f"BP_L{level}"
+            own = line.dash != style.level(level).dash
+            linetype = f"BP_{KINDS[kind]}_L{level}" if own else f"BP_L{level}"
             if linetype not in made_linetypes:
                 on = line.dash[0] * base
                 off = (line.dash[1] if len(line.dash) > 1 else line.dash[0]) * base
@@ -142,12 +154,13 @@ def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: floa
                     linetype, pattern=[on + off, on, -off], description=f"blueprint level {level}"
                 )
                 made_linetypes.add(linetype)
-        name = layers.get((part, level))
+        name = layers.get((part, kind, level))
         if name is None:
-            name = layer_name(names[part] if part < len(names) else f"part{part}", level)
-            while name in taken:  # two parts whose names sanitise alike
-                name = name[: name.rfind("-L")] + f"_{part}-L{level}"
-            layers[(part, level)] = name
+            part_name = names[part] if part < len(names) else f"part{part}"
+            name = layer_name(part_name, level, KINDS[kind])
+            if name in taken:  # two parts whose names sanitise alike
+                name = layer_name(f"{part_name}_{part}", level, KINDS[kind])
+            layers[(part, kind, level)] = name
             taken.add(name)
             layer = doc.layers.add(name)
             layer.rgb = tuple(round(c * 255) for c in line.color)
@@ -155,17 +168,19 @@ def _lines(doc, msp, drawing, groups, points, layers, made_linetypes, base: floa
             layer.dxf.lineweight = _lineweight(line.width * base_mm)
             layer.transparency = 1.0 - line.opacity
         attribs = {"layer": name}
+        head = [(1000, KINDS[kind])]
         for i in index.tolist():
             chunk = points[offsets[i] : offsets[i + 1]]
             if len(chunk) < 2 or not np.ptp(chunk, axis=0).any():
                 continue
             arc = fit_arc(chunk, ARC_TOLERANCE * page_per_px, ARC_SAGITTA * page_per_px)
             if arc is None:
-                msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+                entity = msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
             elif arc[3] is None:
-                msp.add_circle(arc[:2], arc[2], dxfattribs=attribs)
+                entity = msp.add_circle(arc[:2], arc[2], dxfattribs=attribs)
             else:
-                msp.add_arc(arc[:2], arc[2], arc[3], arc[4], dxfattribs=attribs)
+                entity = msp.add_arc(arc[:2], arc[2], arc[3], arc[4], dxfattribs=attribs)
+            entity.set_xdata(APP_ID, head + [(1071, e) for e in lines.edges_of(i).tolist()])
 
 
 def _shading(doc, msp, drawing) -> None:
@@ -250,7 +265,8 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
     # the SVG writer's grid (a tenth of a pixel or finer): shorter numbers, same drawing
     points = np.round(points, _decimals(page.factor))
     made_linetypes: set[str] = set()
-    layers: dict[tuple[int, int], str] = {}
+    layers: dict[tuple[int, int, int], str] = {}
+    doc.appids.add(APP_ID)
     if drawing.shading is None:
         _lines(doc, msp, drawing, drawing.groups(), points, layers, made_linetypes, base, base_mm)
     else:

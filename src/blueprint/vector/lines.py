@@ -22,6 +22,7 @@ from blueprint.sorting import stable_argsort, unique_first
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
 from .cuts import gpu_cut_pairs
+from .linework import BOUNDARY, INTERSECTION, SMOOTH
 
 __all__ = [
     "BORDER",
@@ -29,6 +30,7 @@ __all__ = [
     "INTERSECTION",
     "PART_BOUNDARY",
     "SILHOUETTE",
+    "SMOOTH",
     "Polylines",
     "Segments",
     "adjacency",
@@ -38,9 +40,13 @@ __all__ = [
     "model_segments",
 ]
 
-PART_BOUNDARY = 4
-INTERSECTION = 5
+PART_BOUNDARY = BOUNDARY
 
+# Creases whose faces meet at less than this many degrees are tangent edges of smooth blends
+# (a fillet's boundary): kind ``SMOOTH``.
+SMOOTH_ANGLE = 5.0
+# Faces whose normal is this close (a cosine) to square with the view direction are seen edge-on.
+_EDGE_ON = 1e-9
 # Endpoints closer than this fraction of the model's diagonal are one point when joining.
 _JOIN_REL = 1e-6
 # Signed plane distances below this fraction of the diagonal count as zero (touching, not cutting).
@@ -77,18 +83,26 @@ class Segments:
     part : (N,) int32
         Part the segment is drawn with.
     kind : (N,) uint8
-        ``SILHOUETTE``, ``BORDER``, ``CREASE``, ``PART_BOUNDARY`` or ``INTERSECTION``.
+        ``SILHOUETTE``, ``BORDER``, ``CREASE``, ``PART_BOUNDARY``, ``SMOOTH`` or
+        ``INTERSECTION``.
+    edge : (N,) int64
+        The model's edge the segment lies on (``linework.edge_numbers``), -1 for intersections.
     """
 
     points: np.ndarray
     faces: np.ndarray
     part: np.ndarray
     kind: np.ndarray
+    edge: np.ndarray
 
     @classmethod
     def empty(cls) -> Segments:
         return cls(
-            np.zeros((0, 2, 3)), np.zeros((0, 2), np.int64), np.zeros(0, np.int32), np.zeros(0, np.uint8)
+            np.zeros((0, 2, 3)),
+            np.zeros((0, 2), np.int64),
+            np.zeros(0, np.int32),
+            np.zeros(0, np.uint8),
+            np.zeros(0, np.int64),
         )
 
     def __len__(self) -> int:
@@ -102,6 +116,7 @@ class Segments:
             np.concatenate([s.faces for s in items]),
             np.concatenate([s.part for s in items]).astype(np.int32),
             np.concatenate([s.kind for s in items]).astype(np.uint8),
+            np.concatenate([s.edge for s in items]).astype(np.int64),
         )
 
 
@@ -109,8 +124,8 @@ class Segments:
 class Polylines:
     """Joined segments: polyline ``i`` is ``points[offsets[i]:offsets[i + 1]]``.
 
-    ``faces[j]`` and ``kind[j]`` belong to the segment from point ``j`` to point ``j + 1`` (the
-    rows of each polyline's last point are unused); ``part`` is per polyline.
+    ``faces[j]``, ``kind[j]`` and ``edge[j]`` belong to the segment from point ``j`` to point
+    ``j + 1`` (the rows of each polyline's last point are unused); ``part`` is per polyline.
     """
 
     points: np.ndarray
@@ -118,6 +133,7 @@ class Polylines:
     faces: np.ndarray
     part: np.ndarray
     kind: np.ndarray
+    edge: np.ndarray
 
     def __len__(self) -> int:
         return len(self.offsets) - 1
@@ -183,10 +199,13 @@ def feature_segments(
     size: tuple[int, int],
     crease_angle: float = 30.0,
 ) -> Segments:
-    """Silhouettes, borders and creases of every part (from ``classify_edges``).
+    """Silhouettes, borders and creases of every part (from ``classify_edges``), each with
+    its edge (``linework.edge_numbers``).
 
     Borders that coincide with a border of another part are part boundaries (a surface split
-    into parts) and come out with that kind.
+    into parts) and come out with that kind. Creases whose faces meet at less than
+    ``SMOOTH_ANGLE`` (drawn where the crease angle is lower still) are tangent edges of smooth
+    blends: kind ``SMOOTH``.
     """
     adj = adjacency(model)
     width, height = size
@@ -194,6 +213,15 @@ def feature_segments(
     face_part = model.face_part.astype(np.int64)
     part = face_part[np.maximum(edges.faces[:, 0], 0)]
     kind = edges.kind.copy()
+    normals = adj.face_normals
+    # an outline edge beside a face seen edge-on (a box's side in a plan view) is a silhouette
+    # whichever side of zero that face's facing rounds to
+    crease = np.flatnonzero(kind == CREASE)
+    kind[crease[_edge_on(adj, edges.faces[crease], view, projection).any(axis=1)]] = SILHOUETTE
+    min_cos = np.cos(np.radians(SMOOTH_ANGLE))
+    crease = np.flatnonzero(kind == CREASE)
+    cos = np.einsum("ij,ij->i", normals[edges.faces[crease, 0]], normals[edges.faces[crease, 1]])
+    kind[crease[cos >= min_cos]] = SMOOTH
     border = np.flatnonzero(kind == BORDER)
     if len(border) > 1 and len(model.part_names) > 1:
         ends = edges.segments3d[border].reshape(-1, 3)
@@ -204,11 +232,24 @@ def feature_segments(
         # a key held by more than one part: its first and last entries differ in part
         first = np.r_[True, key_sorted[1:] != key_sorted[:-1]]
         group = np.cumsum(first) - 1
-        lo = part_sorted[first]
-        hi = part_sorted[np.r_[np.flatnonzero(first)[1:] - 1, len(key_sorted) - 1]]
-        shared = (lo != hi)[group]
+        first_at = np.flatnonzero(first)
+        last_at = np.r_[first_at[1:] - 1, len(key_sorted) - 1]
+        shared = (part_sorted[first_at] != part_sorted[last_at])[group]
         kind[border[order[shared]]] = PART_BOUNDARY
-    return Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind)
+    return Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind, edges.edges)
+
+
+def _edge_on(adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """(N, 2) bool: which of the faces ``faces`` (N, 2) the camera sees edge-on, within
+    ``_EDGE_ON`` of a right angle."""
+    camera_to_model = np.linalg.inv(view)
+    normal = adj.face_normals[faces]
+    if projection[3, 3] == 1.0:
+        toward = np.broadcast_to(camera_to_model[:3, 2], normal.shape)
+    else:
+        toward = camera_to_model[:3, 3] - adj.positions[adj.faces[faces, 0]]
+    cos = np.einsum("nki,nki->nk", normal, toward) / np.maximum(np.linalg.norm(toward, axis=2), 1e-300)
+    return np.abs(cos) <= _EDGE_ON
 
 
 # -- intersections between parts ------------------------------------------------------------------
@@ -644,6 +685,7 @@ def _intersections(model: Model, renderer) -> Segments:
                 np.stack([a, b], axis=1),
                 np.minimum(part[a], part[b]).astype(np.int32),
                 np.full(len(a), INTERSECTION, np.uint8),
+                np.full(len(a), -1, np.int64),
             )
     return result
 
@@ -681,7 +723,8 @@ def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
 
 
 def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
-    """Drop repeated segments and chain the rest into polylines, part by part.
+    """Drop repeated segments and chain the rest into polylines, part by part (the pieces of
+    one occlusion level are cut where the kind changes, ``occlusion.split_by_level``).
 
     A chain continues through an endpoint shared by exactly two segments of the same part, and
     through a junction of more along the straightest pair of segments there that turn by at
@@ -697,6 +740,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
             np.zeros((0, 2), np.int64),
             np.zeros(0, np.int32),
             np.zeros(0, np.uint8),
+            np.zeros(0, np.int64),
         )
     points = segments.points.reshape(-1, 3)
     quantum = _JOIN_REL * _diagonal(points)
@@ -709,6 +753,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     seg_points = segments.points[keep]
     seg_faces = segments.faces[keep]
     seg_kind = segments.kind[keep]
+    seg_edge = segments.edge[keep]
     seg_part = segments.part[keep].astype(np.int64)
     pid = pid[keep]
     n = len(keep)
@@ -729,11 +774,13 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     out_points = np.empty((offsets[-1], 3))
     out_faces = np.full((offsets[-1], 2), -1, np.int64)
     out_kind = np.zeros(offsets[-1], np.uint8)
+    out_edge = np.full(offsets[-1], -1, np.int64)
     chain_of = np.repeat(np.arange(len(lengths)), lengths)
     slot = offsets[chain_of] + (np.arange(len(seg)) - chain_start[chain_of])
     out_points[slot] = tails[:, 0]
     out_faces[slot] = faces
     out_kind[slot] = seg_kind[seg]
+    out_edge[slot] = seg_edge[seg]
     out_points[offsets[1:] - 1] = tails[chain_start + lengths - 1, 1]
     return Polylines(
         out_points,
@@ -741,4 +788,5 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
         out_faces,
         seg_part[seg[chain_start]].astype(np.int32),
         out_kind,
+        out_edge,
     )

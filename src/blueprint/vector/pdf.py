@@ -3,11 +3,11 @@
 A pixel drawing becomes a page of 0.75 pt per pixel (96 per inch, as browsers show SVG); a
 drawing to scale a page in millimetres. Every part's lines come together, deepest level
 first, as in the SVG; and as the SVG's part layers and level classes let an editor hide them,
-the PDF has layers a viewer toggles: one optional content group per part and one per
-occlusion level (and one for a section, one for a sheet's marks). Each group of lines is
-marked as content of both its part's and its level's group, so it shows only while both are
-on. fpdf2 writes no named optional content, so the marks go into its content stream as they
-are and pikepdf adds the groups to the document afterwards.
+the PDF has layers a viewer toggles: one optional content group per part, one per kind of
+line and one per occlusion level (and one for a section, one for a sheet's marks). Each group
+of lines is marked as content of its part's, its kind's and its level's group, so it shows
+only while all three are on. fpdf2 writes no named optional content, so the marks go into its
+content stream as they are and pikepdf adds the groups to the document afterwards.
 """
 
 from __future__ import annotations
@@ -15,8 +15,11 @@ from __future__ import annotations
 import io
 import os
 
+import numpy as np
+
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
 
+from .linework import KINDS
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 
 __all__ = ["level_name", "pdf_bytes"]
@@ -149,11 +152,13 @@ def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
 
 def _lines(pdf, drawing, groups, points, offsets, base: float) -> None:
     """The lines of ``groups`` (``VectorDrawing.groups``), each group marked as content of its
-    part's layer and its level's."""
+    part's layer, its kind's and its level's."""
     style = drawing.style
-    for part, level, index in groups:
-        line = style.level(level, part in drawing.highlight)
-        _begin(pdf, f"P{part}", f"L{level}")
+    for part, kind, level, index in groups:
+        if not style.shows(kind):
+            continue
+        line = style.line(kind, level, part in drawing.highlight)
+        _begin(pdf, f"P{part}", f"K{kind}", f"L{level}")
         with pdf.local_context(stroke_opacity=line.opacity):
             pdf.set_draw_color(*(round(c * 255) for c in line.color))
             pdf.set_line_width(line.width * base)
@@ -167,7 +172,7 @@ def _lines(pdf, drawing, groups, points, offsets, base: float) -> None:
                 chunk = points[offsets[i] : offsets[i + 1]]
                 if len(chunk) >= 2:
                     pdf.polyline([tuple(p) for p in chunk.tolist()], style="D")
-        _end(pdf, 2)
+        _end(pdf, 3)
 
 
 def _shading(pdf, shading, to_page: float) -> None:
@@ -244,11 +249,18 @@ def pdf_bytes(drawing) -> bytes:
         pdf.rect(0, 0, width, height, style="F")
     points = drawing.points * to_page
     offsets = drawing.offsets.tolist()
-    parts = sorted({int(p) for p in drawing.part.tolist()})
-    levels = sorted({int(k) for k in drawing.level.tolist()})
+    shown = np.array([style.shows(k) for k in range(len(KINDS))])[drawing.kind]
+    parts = sorted({int(p) for p in drawing.part[shown].tolist()})
+    kinds = sorted({int(k) for k in drawing.kind[shown].tolist()})
+    levels = sorted({int(k) for k in drawing.level[shown].tolist()})
     layers = {f"P{p}": drawing.part_names[p] for p in parts}
+    layers.update({f"K{k}": KINDS[k] for k in kinds})
     layers.update({f"L{k}": level_name(k) for k in levels})
-    order: list = [["parts", *(f"P{p}" for p in parts)], ["levels", *(f"L{k}" for k in levels)]]
+    order: list = [
+        ["parts", *(f"P{p}" for p in parts)],
+        ["kinds", *(f"K{k}" for k in kinds)],
+        ["levels", *(f"L{k}" for k in levels)],
+    ]
     if drawing.shading is None:
         _lines(pdf, drawing, drawing.groups(), points, offsets, base)
     else:

@@ -8,6 +8,8 @@ them, by these names.
 from blueprint.compose.linestyle import (
     DASHES,
     FILE_SUFFIXES,
+    ISO_128,
+    KindStyle,
     LineStyle,
     VectorStyle,
     is_style_file,
@@ -18,6 +20,8 @@ from blueprint.compose.linestyle import (
 __all__ = [
     "DASHES",
     "FILE_SUFFIXES",
+    "ISO_128",
+    "KindStyle",
     "LineStyle",
     "VectorStyle",
     "is_style_file",

@@ -10,10 +10,11 @@ import numpy as np
 
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
 
+from .linework import KINDS, Lines, runs_of
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .style import LineStyle
 
-__all__ = ["format_numbers", "path_data", "safe_id", "svg_bytes"]
+__all__ = ["edge_text", "format_numbers", "path_data", "safe_id", "svg_bytes"]
 
 # Coordinates are written to a grid no coarser than this many pixels (well inside the
 # Douglas–Peucker tolerance).
@@ -67,10 +68,19 @@ def path_data(points: np.ndarray, offsets: np.ndarray, factor: float, decimals: 
 
 
 def paths_data(
-    points: np.ndarray, offsets: np.ndarray, groups: np.ndarray, factor: float, decimals: int
+    points: np.ndarray,
+    offsets: np.ndarray,
+    groups: np.ndarray,
+    factor: float,
+    decimals: int,
+    drawn: np.ndarray | None = None,
+    relative: bool = False,
 ) -> list[str]:
     """``path_data`` of each run of polylines ``groups[g]:groups[g + 1]``, in one pass over all
-    of them: a drawing's paths are many, and most are short."""
+    of them: a drawing's paths are many, and most are short. ``drawn`` (P,) bool, where given,
+    is set to whether each polyline is drawn (not shrunk to one point on the grid).
+    ``relative`` moves to each polyline's start but a path's first from the end of the one
+    before (``m``): nearby lines take shorter numbers."""
     unit = 10.0**decimals
     grid = np.rint(points * factor * unit).astype(np.int64)
     first = np.zeros(len(grid), bool)
@@ -80,17 +90,24 @@ def paths_data(
     owner = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
     counts = np.bincount(owner[keep], minlength=len(offsets) - 1)
     keep &= counts[owner] >= 2
+    if drawn is not None:
+        drawn[:] = counts >= 2
     grid, first, owner = grid[keep], first[keep], owner[keep]
     # numbers of each group: two a point kept
     ends = 2 * np.searchsorted(owner, groups, side="left")
     if len(grid) == 0:
         return [""] * (len(groups) - 1)
     step = np.diff(grid, axis=0, prepend=grid[:1])
-    ticks = np.where(first[:, None], grid, step).reshape(-1)
-    # each number's lead: M before a polyline's start, l before its first step, else a space
+    absolute = first.copy()
+    if relative:
+        absolute[:] = False
+        absolute[np.searchsorted(owner, groups[:-1])[np.diff(ends) > 0]] = True
+    ticks = np.where(absolute[:, None], grid, step).reshape(-1)
+    # each number's lead: M (m) before a polyline's start, l before its first step, else a space
     lead = np.full(len(ticks), ord(" "), np.uint8)
     starts = np.flatnonzero(first)
-    lead[2 * starts] = ord("M")
+    lead[2 * starts] = ord("m")
+    lead[2 * np.flatnonzero(absolute)] = ord("M")
     lead[2 * starts + 2] = ord("l")
     if decimals <= _TEXT_DECIMALS and np.abs(ticks).max() < 10**15:
         table, mask = _number_table(ticks, lead, decimals)
@@ -105,7 +122,13 @@ def paths_data(
 
 def _shorten(text: str) -> str:
     """A minus sign separates numbers by itself, and leading zeros are optional."""
-    return text.replace(" -", "-").replace("-0.", "-.").replace(" 0.", " .").replace("l0.", "l.")
+    return (
+        text.replace(" -", "-")
+        .replace("-0.", "-.")
+        .replace(" 0.", " .")
+        .replace("l0.", "l.")
+        .replace("m0.", "m.")
+    )
 
 
 def _number_table(ticks: np.ndarray, lead: np.ndarray, decimals: int) -> tuple[np.ndarray, np.ndarray]:
@@ -148,14 +171,30 @@ def _number_table(ticks: np.ndarray, lead: np.ndarray, decimals: int) -> tuple[n
     return np.concatenate(columns, axis=1), np.concatenate(shown, axis=1)
 
 
-def _stroke(line: LineStyle, base: float) -> str:
-    attrs = [f'stroke="{line.hex}"', f'stroke-width="{line.width * base:.4g}"']
+def _stroke_attributes(line: LineStyle, base: float) -> dict[str, str]:
+    attrs = {"stroke": line.hex, "stroke-width": f"{line.width * base:.4g}"}
     if line.opacity < 1.0:
-        attrs.append(f'stroke-opacity="{line.opacity:.3g}"')
+        attrs["stroke-opacity"] = f"{line.opacity:.3g}"
     if line.dash:
-        dash = " ".join(f"{d * base:.4g}" for d in line.dash)
-        attrs.append(f'stroke-dasharray="{dash}"')
-    return " ".join(attrs)
+        attrs["stroke-dasharray"] = " ".join(f"{d * base:.4g}" for d in line.dash)
+    return attrs
+
+
+def _stroke(line: LineStyle, base: float) -> str:
+    return " ".join(f'{k}="{v}"' for k, v in _stroke_attributes(line, base).items())
+
+
+# what a stroke attribute left out stands for, where a path must undo its group's
+_STROKE_DEFAULTS = {"stroke-opacity": "1", "stroke-dasharray": "none"}
+
+
+def _stroke_changes(line: LineStyle, shared: LineStyle, base: float) -> str:
+    """The stroke attributes of ``line`` that differ from ``shared``'s, each after a space."""
+    mine, theirs = _stroke_attributes(line, base), _stroke_attributes(shared, base)
+    for key, value in _STROKE_DEFAULTS.items():
+        if key in theirs:
+            mine.setdefault(key, value)
+    return "".join(f' {k}="{v}"' for k, v in mine.items() if theirs.get(k) != v)
 
 
 def svg_bytes(drawing) -> bytes:
@@ -215,37 +254,98 @@ def svg_bytes(drawing) -> bytes:
 
 
 def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decimals: int, base: float) -> str:
-    """The lines of ``groups`` (``VectorDrawing.groups``) as the group ``gid``: a layer per part, a
-    path per level."""
-    style = drawing.style
-    out = [f'<g id="{gid}" fill="none" stroke-linecap="round" stroke-linejoin="round">\n']
+    """The lines of ``groups`` (``VectorDrawing.groups``) as the group ``gid``: a layer per part
+    (``data-part``), in it a group per level (``data-level``, the class ``level-K`` and the
+    level's stroke), in that a path per kind (``data-kind``, its own stroke where it differs
+    from the level's), a subpath a line, and the lines' source edges (``edge_text``).
+
+    The group is scaled by the output grid (``transform="scale(.1)"`` on a drawing in pixels)
+    and its coordinates and widths are whole multiples of the grid: no decimal point in the
+    many numbers of the paths."""
+    style, lines = drawing.style, drawing.lines
+    unit = 10**decimals
+    factor, base = factor * unit, base * unit
+    scaled = f' transform="scale({_shorten(repr(1 / unit))})"' if decimals else ""
+    out = [f'<g id="{gid}"{scaled} fill="none" stroke-linecap="round" stroke-linejoin="round">\n']
+    groups = [g for g in groups if style.shows(g[1])]
+    if not groups:
+        return out[0] + "</g>\n"
+    # within a path its lines by their lowest edge: the edges' differences stay small
+    index = np.concatenate([_by_lowest_edge(lines, g[3]) for g in groups])
+    lengths = lines.offsets[index + 1] - lines.offsets[index]
+    sub_offsets = np.r_[0, np.cumsum(lengths)]
+    rows = np.repeat(lines.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
+    bounds = np.r_[0, np.cumsum([len(g[3]) for g in groups])]
+    drawn = np.zeros(len(index), bool)
+    texts = paths_data(lines.points[rows], sub_offsets, bounds, factor, 0, drawn, relative=True)
     current = None
-    groups = list(groups)
-    if groups:
-        index = np.concatenate([g[2] for g in groups])
-        lengths = drawing.offsets[index + 1] - drawing.offsets[index]
-        sub_offsets = np.r_[0, np.cumsum(lengths)]
-        rows = np.repeat(drawing.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
-        bounds = np.r_[0, np.cumsum([len(g[2]) for g in groups])]
-        texts = paths_data(drawing.points[rows], sub_offsets, bounds, factor, decimals)
-    for (part, level, _), d in zip(groups, texts if groups else [], strict=True):
-        if part != current:
+    for (part, kind, level, _), d, a, b in zip(groups, texts, bounds[:-1], bounds[1:], strict=True):
+        if not d:
+            continue
+        highlighted = part in drawing.highlight
+        if current is None or current[0] != part:
             if current is not None:
-                out.append("</g>\n")
+                out.append("</g>\n</g>\n")
             name = drawing.part_names[part] if part < len(drawing.part_names) else f"part{part}"
             part_id = safe_id(name, taken)
             out.append(
                 f'<g id="{part_id}" inkscape:groupmode="layer" inkscape:label="{_escape(name)}" '
                 f'data-part="{_escape(str(part))}">\n'
             )
-            current = part
-        line = style.level(level, part in drawing.highlight)
-        if d:
-            out.append(f'<path class="level-{level}" {_stroke(line, base)} d="{d}"/>\n')
+        elif current[1] != level:
+            out.append("</g>\n")
+        if current is None or current != (part, level):
+            # the level's stroke is its outlines' (ISO 128's wide lines): most lines are those
+            shared = style.line("silhouette", level, highlighted)
+            out.append(f'<g class="level-{level}" data-level="{level}" {_stroke(shared, base)}>\n')
+            current = (part, level)
+        own = _stroke_changes(style.line(kind, level, highlighted), shared, base)
+        edges = edge_text(lines, index[a:b][drawn[a:b]])
+        edges = f' data-edges="{edges}"' if edges.strip(";") else ""
+        out.append(f'<path data-kind="{KINDS[kind]}"{own}{edges} d="{d}"/>\n')
     if current is not None:
-        out.append("</g>\n")
+        out.append("</g>\n</g>\n")
     out.append("</g>\n")
     return "".join(out)
+
+
+def _by_lowest_edge(lines: Lines, index: np.ndarray) -> np.ndarray:
+    """The lines ``index`` ordered by their lowest source edge, those without edges first."""
+    values, owner = _edges_of(lines, index)
+    lowest = np.full(len(index), -1, np.int64)
+    if len(values):
+        order = np.lexsort((values, owner))
+        first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]
+        lowest[owner[first]] = values[first]
+    return index[np.argsort(lowest, kind="stable")]
+
+
+def _edges_of(lines: Lines, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The source edges of the lines ``index``, one after the other, and the position in
+    ``index`` of the line of each."""
+    starts, ends = lines.edge_offsets[index], lines.edge_offsets[index + 1]
+    size = ends - starts
+    rows = np.repeat(starts - (np.cumsum(size) - size), size) + np.arange(int(size.sum()))
+    return lines.edges[rows], np.repeat(np.arange(len(index)), size)
+
+
+def edge_text(lines: Lines, index: np.ndarray) -> str:
+    """``data-edges`` of a path whose subpaths are the lines ``index``: each line's source edges
+    ascending, lines apart by ``;``, and every number written as its difference from the number
+    before it in the attribute (the first as itself): a running sum over all the numbers, read
+    in order, gives the edges back. A line with no edges (an intersection) has an empty entry."""
+    if len(index) == 0:
+        return ""
+    values, owner = _edges_of(lines, index)
+    order = np.lexsort((values, owner))
+    values, offsets = runs_of(values[order], owner[order], len(index))
+    steps = np.diff(values, prepend=0).tolist()
+    count = np.diff(offsets).tolist()
+    out, at = [], 0
+    for n in count:
+        out.append(" ".join(map(str, steps[at : at + n])))
+        at += n
+    return ";".join(out)
 
 
 def _shading_group(shading, factor: float, decimals: int) -> str:
@@ -272,14 +372,16 @@ def _section_group(drawing, factor: float, decimals: int, base: float) -> str:
     section = drawing.section
     color = drawing.style.level(0).hex
     out = [f'<g id="section" class="section" fill="none" stroke="{color}" stroke-linecap="round">\n']
-    for name, segments, width in (
-        ("section-hatch", section.hatch, SECTION_HATCH_WIDTH),
-        ("section-outline", section.outline, SECTION_OUTLINE_WIDTH),
+    for name, kind, segments, width in (
+        ("section-hatch", "hatch", section.hatch, SECTION_HATCH_WIDTH),
+        ("section-outline", "section", section.outline, SECTION_OUTLINE_WIDTH),
     ):
         offsets = np.arange(0, 2 * len(segments) + 1, 2)
         d = path_data(segments.reshape(-1, 2), offsets, factor, decimals)
         if d:
-            out.append(f'<path class="{name}" stroke-width="{width * base:.4g}" d="{d}"/>\n')
+            out.append(
+                f'<path class="{name}" data-kind="{kind}" stroke-width="{width * base:.4g}" d="{d}"/>\n'
+            )
     out.append("</g>\n")
     return "".join(out)
 
@@ -309,7 +411,7 @@ def _glyph_group(glyphs, factor: float, decimals: int) -> str:
     """Glyphs as the layer ``glyphs``: one path per polyline in its glyph's style, class
     ``glyph-hidden`` where it runs behind the model (dashed or dimmed there), then the labels."""
     out = [
-        '<g id="glyphs" inkscape:groupmode="layer" inkscape:label="glyphs" fill="none" '
+        '<g id="glyphs" inkscape:groupmode="layer" inkscape:label="glyphs" data-kind="glyph" fill="none" '
         'stroke-linecap="round" stroke-linejoin="round">\n'
     ]
     for i in range(len(glyphs)):

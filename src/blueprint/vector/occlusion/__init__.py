@@ -19,14 +19,13 @@ from .coincident import suppress_coincident
 from .gpu import FacesDrawn, GpuLevels, draw_faces, gpu_levels
 from .levels import DepthTest, classify_samples, drop_phantoms, face_planes, verify_creases
 from .pixels import PixelLayers, probe_pixels
-from .runs import Pieces, split_by_level
+from .runs import split_by_level
 from .samples import Samples, sample_polylines
 
 __all__ = [
     "DepthTest",
     "FacesDrawn",
     "GpuLevels",
-    "Pieces",
     "PixelLayers",
     "Samples",
     "classify_samples",

@@ -16,7 +16,7 @@ from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
-from ..lines import BORDER, CREASE, SILHOUETTE
+from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
 from .levels import DepthTest
 from .pixels import across_line
 from .samples import Samples
@@ -187,7 +187,7 @@ def gpu_levels(
     checked = np.zeros(count, bool)
     inside = np.flatnonzero(samples.inside)
     edge_rows, across = across_line(
-        samples, np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
+        samples, np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE, SMOOTH)) & samples.inside)
     )
     checked[edge_rows] = True
     if len(inside) == 0:

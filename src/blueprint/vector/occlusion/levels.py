@@ -32,7 +32,7 @@ from blueprint.columns import row_norm
 from blueprint.scene.model import Model
 
 from ..cache import ModelCache
-from ..lines import BORDER, CREASE, SILHOUETTE
+from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
 from .pixels import NEIGHBOURS, PixelLayers, across_line, flat_index
 from .samples import Samples
 
@@ -186,7 +186,7 @@ def verify_creases(
     half the crease angle keeps the crease.
     """
     level = level.copy()
-    rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & (level >= 0))
+    rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE, SMOOTH)) & (level >= 0))
     layers, height, width = triangle.layers, triangle.height, triangle.width
     if len(rows) == 0 or layers == 0:
         return level

@@ -1,40 +1,15 @@
-"""Sampled polylines cut into 2D pieces of one occlusion level each: what the writers draw."""
+"""Sampled polylines cut into 2D pieces of one occlusion level each (``Lines``, each with the
+kind and the edges of the line it was cut from): what the writers draw."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from ..linework import Lines, runs_of
 from .coincident import suppress_coincident
 from .samples import Samples
 
-__all__ = ["Pieces", "split_by_level"]
-
-
-@dataclass(frozen=True)
-class Pieces:
-    """2D polylines of one level each: piece ``i`` is ``points[offsets[i]:offsets[i + 1]]``;
-    ``behind`` marks pieces behind a shaded part's surface (all False without shading)."""
-
-    points: np.ndarray
-    offsets: np.ndarray
-    part: np.ndarray
-    level: np.ndarray
-    behind: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.offsets) - 1
-
-    @classmethod
-    def empty(cls) -> Pieces:
-        return cls(
-            np.zeros((0, 2)),
-            np.zeros(1, np.int64),
-            np.zeros(0, np.int32),
-            np.zeros(0, np.int32),
-            np.zeros(0, bool),
-        )
+__all__ = ["split_by_level"]
 
 
 def _along(line: np.ndarray, pixel: np.ndarray) -> np.ndarray:
@@ -124,22 +99,24 @@ def split_by_level(
     coincident: float = 0.5,
     behind: np.ndarray | None = None,
     renderer=None,
-) -> Pieces:
-    """Cut the sampled polylines into 2D pieces of one level each.
+) -> Lines:
+    """Cut the sampled polylines into 2D pieces of one level each, with their polyline's part
+    and kind and the edges their samples lie on.
 
-    A piece runs over consecutive samples of one polyline with one level; its ends are the
-    midpoints towards the neighbouring samples of other levels (so pieces of different levels
-    meet), and of its inner samples only the polyline's vertices are kept (the others lie on
-    the straight segments between them). Samples outside the view or deeper than
-    ``max_level`` are dropped, and so are samples on a line of lower level (see
-    :func:`suppress_coincident`, within ``coincident`` pixels; 0 keeps them). A level change
-    must hold for ``min_run`` pixels (see :func:`_smooth`). ``behind`` (S,) bool, samples
-    behind a shaded part's surface, cuts pieces too (a change must hold as long). A
+    A piece runs over consecutive samples of one polyline with one level and kind; its ends
+    are the midpoints towards the neighbouring samples of other levels (so pieces of different
+    levels meet), or where only the kind changes the vertex where it does, and of its inner
+    samples only the polyline's vertices are kept (the others lie on the straight segments
+    between them). Samples outside the view or deeper than ``max_level`` are dropped, and so
+    are samples on a line of lower level (see :func:`suppress_coincident`, within
+    ``coincident`` pixels; 0 keeps them). A level change must hold for ``min_run`` pixels (see
+    :func:`_smooth`). ``behind`` (S,) bool, samples behind a shaded part's surface, cuts pieces
+    too (a change must hold as long). A
     ``renderer`` runs the search for coincident samples on the GPU.
     """
     n = len(level)
     if n == 0:
-        return Pieces.empty()
+        return Lines.empty()
     behind = (
         np.zeros(n, bool)
         if behind is None
@@ -155,7 +132,11 @@ def split_by_level(
     line, pixel = samples.line, samples.pixel
     keep = (level >= 0) & (level <= max_level)
     # runs: consecutive samples of one line with one level (and one side of the shading)
-    change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1]) | (behind[1:] != behind[:-1])]
+    kind = samples.kind
+    same = (line[1:] == line[:-1]) & (level[1:] == level[:-1]) & (behind[1:] == behind[:-1])
+    # where only the kind changes, at a vertex of the line, the pieces meet at that vertex
+    kind_only = np.r_[False, same & (kind[1:] != kind[:-1])]
+    change = np.r_[True, ~same] | kind_only
     run = np.cumsum(change) - 1
     run_start = np.flatnonzero(change)
     run_end = np.r_[run_start[1:], n]  # exclusive
@@ -169,10 +150,13 @@ def split_by_level(
     is_point[run_end - 1] = True
     chosen = np.flatnonzero(is_point & run_keep[run])
     runs = np.flatnonzero(run_keep)
-    before = runs[joined_before[runs]]
+    before = runs[joined_before[runs] & ~kind_only[run_start[runs]]]
     after = runs[joined_after[runs]]
     mid_before = 0.5 * (pixel[run_start[before]] + pixel[run_start[before] - 1])
-    mid_after = 0.5 * (pixel[run_end[after] - 1] + pixel[run_end[after]])
+    at_vertex = kind_only[run_end[after]][:, None]
+    mid_after = np.where(
+        at_vertex, pixel[run_end[after]], 0.5 * (pixel[run_end[after] - 1] + pixel[run_end[after]])
+    )
     # order all points by (run, position): midpoints before go first, after go last
     pts = np.concatenate([pixel[chosen], mid_before, mid_after])
     owner = np.concatenate([run[chosen], before, after])
@@ -186,10 +170,20 @@ def split_by_level(
     pts, owner = pts[point_keep], owner[point_keep]
     pieces = np.flatnonzero(good)
     offsets = np.r_[0, np.cumsum(per_run[pieces])].astype(np.int64)
-    return Pieces(
+    # each piece's edges: those of its samples, in order, each run of one edge once
+    piece_of_run = np.full(len(run_start), -1, np.int64)
+    piece_of_run[pieces] = np.arange(len(pieces))
+    owner = piece_of_run[run]
+    on_edge = (owner >= 0) & (samples.edge >= 0)
+    edges, edge_offsets = runs_of(samples.edge[on_edge], owner[on_edge], len(pieces))
+    first = run_start[pieces]
+    return Lines(
         pts,
         offsets,
-        part[line[run_start[pieces]]].astype(np.int32),
-        level[run_start[pieces]].astype(np.int32),
-        behind[run_start[pieces]],
+        part[line[first]].astype(np.int32),
+        samples.kind[first].astype(np.uint8),
+        level[first].astype(np.int32),
+        edges,
+        edge_offsets,
+        behind[first],
     )

@@ -22,6 +22,7 @@ class Samples:
     pixel : (S, 2) float64, pixel coordinates (x right, y down, origin top-left)
     faces : (S, 2) int64, faces of the segment each sample lies on
     kind : (S,) uint8, kind of the segment each sample lies on (``lines.SILHOUETTE``, ...)
+    edge : (S,) int64, the model's edge each sample lies on (-1: none, an intersection)
     line : (S,) int64, polyline of each sample
     vertex : (S,) bool, True where the sample is a vertex of its polyline
     inside : (S,) bool, True where the sample lies inside the view volume
@@ -31,6 +32,7 @@ class Samples:
     pixel: np.ndarray
     faces: np.ndarray
     kind: np.ndarray
+    edge: np.ndarray
     line: np.ndarray
     vertex: np.ndarray
     inside: np.ndarray
@@ -58,6 +60,7 @@ def sample_polylines(
             np.zeros((0, 2), np.int64),
             np.zeros(0, np.uint8),
             np.zeros(0, np.int64),
+            np.zeros(0, np.int64),
             none,
             none,
         )
@@ -79,12 +82,14 @@ def sample_polylines(
     model = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
     faces = lines.faces[seg]
     kind = lines.kind[seg]
+    edge = lines.edge[seg]
     vertex = k == 0
     # each polyline's last point, inserted after its last segment's samples
     lasts = offsets[1:] - 1
     model = np.concatenate([model, points[lasts]])
     faces = np.concatenate([faces, lines.faces[np.maximum(lasts - 1, 0)]])
     kind = np.concatenate([kind, lines.kind[np.maximum(lasts - 1, 0)]])
+    edge = np.concatenate([edge, lines.edge[np.maximum(lasts - 1, 0)]])
     vertex = np.concatenate([vertex, np.ones(len(lasts), bool)])
     # a polyline's samples run in order, its last point after them: where each one goes
     seg_line = line_of_point[seg]
@@ -95,7 +100,7 @@ def sample_polylines(
     order[np.concatenate([out_first[seg_line] + within, out_first + per_line])] = np.arange(len(order))
     line = np.concatenate([seg_line, np.arange(len(lines))])
     model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
-    kind = kind[order]
+    kind, edge = kind[order], edge[order]
     eye = transform(model, view)
     clip = eye @ projection.T
     inside = (
@@ -105,4 +110,4 @@ def sample_polylines(
         & (np.abs(clip[:, 0]) <= clip[:, 3])
         & (np.abs(clip[:, 1]) <= clip[:, 3])
     )
-    return Samples(eye[:, :3], clip_to_pixels(clip, size), faces, kind, line, vertex, inside)
+    return Samples(eye[:, :3], clip_to_pixels(clip, size), faces, kind, edge, line, vertex, inside)
