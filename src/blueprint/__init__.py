@@ -52,7 +52,7 @@ _EXPORTS = {
     "Marks": "blueprint.scene.sheet",
     "KINDS": "blueprint.vector.linework",
     "Lines": "blueprint.vector.linework",
-    "edge_numbers": "blueprint.vector.linework",
+    "edge_numbers": "blueprint.vector.lines",
     "lay_out_sheet": "blueprint.scene.sheet",
 }
 
@@ -114,7 +114,8 @@ if TYPE_CHECKING:
     from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
     from blueprint.scene.sheet import Marks, lay_out_sheet
     from blueprint.scene.up import guess_up
-    from blueprint.vector.linework import KINDS, Lines, edge_numbers
+    from blueprint.vector.lines import edge_numbers
+    from blueprint.vector.linework import KINDS, Lines
 
 
 class _Package(types.ModuleType):

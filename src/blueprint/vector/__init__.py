@@ -16,7 +16,8 @@ from .drawing import (
     parse_scale,
     save_drawing,
 )
-from .linework import KINDS, Lines, edge_numbers, edge_segments
+from .lines import edge_numbers, edge_segments
+from .linework import KINDS, Lines
 from .style import KindStyle, LineStyle, VectorStyle, load_vector_style, vector_style
 
 __all__ = [

@@ -130,7 +130,7 @@ class VectorDrawing:
         Image size in pixels; line coordinates are pixels (x right, y down, origin top-left).
     lines : Lines
         The polylines, each with its part, kind, occlusion level and source edges (the model's
-        edges it was drawn from, rows of ``linework.edge_numbers``); ``points``, ``offsets``,
+        edges it was drawn from, rows of ``lines.edge_numbers``); ``points``, ``offsets``,
         ``part``, ``kind`` and ``level`` are its arrays.
     part_names : tuple of str
     layers : int

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
+from blueprint.errors import InputError
 from blueprint.scene.model import Model
 from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
 from blueprint.sorting import stable_argsort, unique_first
@@ -34,6 +35,8 @@ __all__ = [
     "Polylines",
     "Segments",
     "adjacency",
+    "edge_numbers",
+    "edge_segments",
     "feature_segments",
     "intersection_segments",
     "join_polylines",
@@ -86,7 +89,7 @@ class Segments:
         ``SILHOUETTE``, ``BORDER``, ``CREASE``, ``PART_BOUNDARY``, ``SMOOTH`` or
         ``INTERSECTION``.
     edge : (N,) int64
-        The model's edge the segment lies on (``linework.edge_numbers``), -1 for intersections.
+        The model's edge the segment lies on (``edge_numbers``), -1 for intersections.
     """
 
     points: np.ndarray
@@ -158,6 +161,34 @@ def adjacency(model: Model) -> Adjacency:
     return ADJACENCY.get(model, lambda: _welded_adjacency(model))
 
 
+def edge_numbers(model: Model) -> np.ndarray:
+    """(E, 2) int64: the model's undirected edges as (lower, higher) welded vertex pairs, in
+    their stable order; a line's source edge ``i`` is row ``i``.
+
+    The one place the numbering is made: the adjacency of the model welded within each part
+    (``adjacency``, cached per mesh), whose edges are the sorted unique pairs of welded
+    vertices, themselves numbered in the order of the model's vertices. It numbers the flattened
+    model that ``Model.faces`` and ``Model.positions`` give.
+    """
+    return adjacency(model).edges
+
+
+def edge_segments(model: Model, edges: np.ndarray) -> np.ndarray:
+    """(N, 2, 3) float64 model-space ends of the edges numbered ``edges`` (N,) int.
+
+    Raises ``InputError`` naming the first index that is no edge of the model.
+    """
+    adj = adjacency(model)
+    edges = np.asarray(edges, np.int64).reshape(-1)
+    bad = (edges < 0) | (edges >= len(adj.edges))
+    if bad.any():
+        raise InputError(
+            f"{model.source or 'model'}: edge {int(edges[np.argmax(bad)])} is no edge of the model "
+            f"(it has {len(adj.edges)}: 0 to {len(adj.edges) - 1})"
+        )
+    return adj.positions[adj.edges[edges]]
+
+
 def _welded_adjacency(model: Model) -> Adjacency:
     positions = model.positions.astype(np.float64)
     faces = model.faces.astype(np.int64)
@@ -200,7 +231,7 @@ def feature_segments(
     crease_angle: float = 30.0,
 ) -> Segments:
     """Silhouettes, borders and creases of every part (from ``classify_edges``), each with
-    its edge (``linework.edge_numbers``).
+    its edge (``edge_numbers``).
 
     Borders that coincide with a border of another part are part boundaries (a surface split
     into parts) and come out with that kind. Creases whose faces meet at less than

@@ -15,7 +15,6 @@ import numpy as np
 
 from blueprint.compose.linestyle import KINDS
 from blueprint.errors import InputError
-from blueprint.scene.model import Model
 
 __all__ = [
     "BORDER",
@@ -31,8 +30,6 @@ __all__ = [
     "SILHOUETTE",
     "SMOOTH",
     "Lines",
-    "edge_numbers",
-    "edge_segments",
     "kind_code",
 ]
 
@@ -55,38 +52,6 @@ def kind_code(name: str) -> int:
     if name not in KINDS or not name:
         raise InputError(f"unknown kind of line {name!r} (choose {', '.join(k for k in KINDS if k)})")
     return KINDS.index(name)
-
-
-def edge_numbers(model: Model) -> np.ndarray:
-    """(E, 2) int64: the model's undirected edges as (lower, higher) welded vertex pairs, in
-    their stable order; a line's source edge ``i`` is row ``i``.
-
-    The one place the numbering is made: the adjacency of the model welded within each part
-    (``lines.adjacency``, cached per mesh), whose edges are the sorted unique pairs of welded
-    vertices, themselves numbered in the order of the model's vertices. It numbers the flattened
-    model that ``Model.faces`` and ``Model.positions`` give.
-    """
-    from .lines import adjacency
-
-    return adjacency(model).edges
-
-
-def edge_segments(model: Model, edges: np.ndarray) -> np.ndarray:
-    """(N, 2, 3) float64 model-space ends of the edges numbered ``edges`` (N,) int.
-
-    Raises ``InputError`` naming the first index that is no edge of the model.
-    """
-    from .lines import adjacency
-
-    adj = adjacency(model)
-    edges = np.asarray(edges, np.int64).reshape(-1)
-    bad = (edges < 0) | (edges >= len(adj.edges))
-    if bad.any():
-        raise InputError(
-            f"{model.source or 'model'}: edge {int(edges[np.argmax(bad)])} is no edge of the model "
-            f"(it has {len(adj.edges)}: 0 to {len(adj.edges) - 1})"
-        )
-    return adj.positions[adj.edges[edges]]
 
 
 @dataclass(frozen=True)
