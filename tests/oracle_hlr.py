@@ -202,6 +202,7 @@ def model_of(path: str):
 
 @cache
 def _step(path: str):
+    """``read_step``, once a session: Open CASCADE reads a file once for all its views."""
     return read_step(path)
 
 
