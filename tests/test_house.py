@@ -88,6 +88,7 @@ def file_cycles(modules: dict[str, Path]) -> list[set[str]]:
 WHOLE_PRODUCT = {
     "test_golden.py": "golden frames of every style, through the whole drawing",
     "test_layers_oracle.py": "every way of capturing layers, and `blueprint layers`, against ray casting",
+    "test_hlr_oracle.py": "drawings of STEP parts, through the command, against exact hidden-line removal",
     "test_hostile.py": "every file the product reads or writes, through the command line",
     "test_notebook.py": "the example notebook in a real Jupyter kernel",
     "test_docs.py": "the README and docs/ against the code",
