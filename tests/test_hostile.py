@@ -1035,21 +1035,26 @@ def _box_rows(path: Path, count: int) -> None:
 def test_instances_beyond_the_memory_budget_are_refused_before_any_is_made(tmp_path, monkeypatch):
     path = tmp_path / "rows.glb"
     _box_rows(path, 2000)
-    monkeypatch.setattr(settings, "MEMORY_BUDGET", 20_000 * settings.TRIANGLE_BYTES)
-    monkeypatch.setattr(settings, "TRIANGLE_LIMIT", 20_000)
+    # kept as instances: the box's 12 triangles and 2000 instances, one short of the budget
+    estimate = 12 * settings.TRIANGLE_BYTES + 2000 * settings.INSTANCE_BYTES
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate - 1)
 
-    def made(data):
+    def made(*args):
         raise AssertionError("the instances were read")
 
     monkeypatch.setattr(gltf, "read_glb", made)
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == (
-        f"{path}: 24000 triangles to draw (2000 mesh instances) need about 20.5 MiB of memory at 896 "
-        "bytes a triangle, more than the memory budget of 17.1 MiB (BLUEPRINT_MEMORY_LIMIT sets the budget)"
+        f"{path}: 24000 triangles to draw (2000 mesh instances of 12 unique triangles) need about "
+        f"{settings.human_size(estimate)} of memory at 896 bytes a unique triangle and "
+        f"{settings.INSTANCE_BYTES} an instance, more than the memory budget of "
+        f"{settings.human_size(estimate - 1)} (BLUEPRINT_MEMORY_LIMIT sets the budget)"
     )
     monkeypatch.undo()
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate)
     model = loader.load_model(path)
+    assert model.instances is not None
     assert model.triangle_count == 24_000 and len(model.part_names) == 2000
     assert model.bounds.tolist() == [[0, 0, 0], [2.0 * 49 + 1, 3.0 * 39 + 2, 3]]
 

@@ -26,6 +26,7 @@ __all__ = [
     "GLYPH_LIMIT",
     "IMAGE_FILE_LIMIT",
     "IMAGE_PIXEL_LIMIT",
+    "INSTANCE_BYTES",
     "INSTANCE_LIMIT",
     "MEMORY_BUDGET",
     "MEMORY_ENV",
@@ -119,6 +120,10 @@ IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
 # together (refused before they are made); and mesh instances a scene may place (each is a
 # part, with a name).
 TRIANGLE_BYTES = 896
+# ...and an instance of a scene kept as instances (scene.instances): the peak's growth an
+# instance of a GLB of 10^5 instances of a box drawn to a PNG, with a third more as a margin
+# (benchmarks/notes/instances.md); its unique triangles count at TRIANGLE_BYTES.
+INSTANCE_BYTES = 3072
 TRIANGLE_LIMIT = MEMORY_BUDGET // TRIANGLE_BYTES
 INSTANCE_LIMIT = 200_000
 # Frames of a video (an hour at 30 frames a second would be 108 000), glyphs of a glyph file (each

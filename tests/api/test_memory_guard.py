@@ -2,9 +2,12 @@
 budget is refused in one line before its body is read; a frame whose GPU buffers would pass the
 memory the device has free is refused before any is allocated (``render.budget``)."""
 
+import importlib.util
 import os
 import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +18,7 @@ from blueprint.errors import InputError
 from blueprint.examples import assemble, box
 from blueprint.render import budget
 from blueprint.scene.headers import peak_estimate
+from blueprint.scene.loader import load_model
 
 FACES = 400_000
 
@@ -64,6 +68,85 @@ def test_a_model_over_the_budget_is_refused_from_its_header(tmp_path):
 def test_the_estimate_is_the_triangles_at_the_measured_bytes():
     assert peak_estimate(0) == 0
     assert peak_estimate(5_242_880) == 5_242_880 * settings.TRIANGLE_BYTES
+    # a scene kept as instances (drawn at least twice its unique triangles): its unique
+    # triangles and its instances; one drawn less than twice over is flattened
+    kept = 12 * settings.TRIANGLE_BYTES + 100_000 * settings.INSTANCE_BYTES
+    assert peak_estimate(1_200_000, 12, 100_000) == kept
+    assert peak_estimate(24, 12, 2) == 12 * settings.TRIANGLE_BYTES + 2 * settings.INSTANCE_BYTES
+    assert peak_estimate(23, 12, 2) == 23 * settings.TRIANGLE_BYTES
+
+
+def _hostile():
+    """benchmarks/hostile.py, whose GLB writer the instanced files are made with."""
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "hostile.py"
+    spec = importlib.util.spec_from_file_location("hostile_corpus", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    return module
+
+
+COPIES = 100_000
+
+
+@needs_cli
+def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
+    """A GLB of 10^5 instances of a box is drawn under a memory budget that refuses the same
+    triangles flattened into one mesh (its unique triangles and instance records weigh far
+    less than 1.2 M drawn ones); its SVG, which flattens the scene, is refused in one line
+    there, when the flattened arrays would be made."""
+    hostile = _hostile()
+    corners, faces = hostile.box_arrays()
+    side = 400
+    moves = np.c_[2.0 * (np.arange(COPIES) % side), 3.0 * (np.arange(COPIES) // side), np.zeros(COPIES)]
+    nodes = [{"mesh": 0, "translation": move} for move in moves.tolist()]
+    kept, flat = tmp_path / "kept.glb", tmp_path / "flat.glb"
+    kept.write_bytes(hostile.glb(nodes, list(range(COPIES)), corners, faces=faces))
+    positions = (corners[None] + moves[:, None]).reshape(-1, 3)
+    flat_faces = (faces[None] + 8 * np.arange(COPIES)[:, None, None]).reshape(-1, 3)
+    flat.write_bytes(hostile.glb([{"mesh": 0}], [0], positions, faces=flat_faces))
+    drawn = 12 * COPIES
+    budget_bytes = 512 << 20
+    assert 12 * settings.TRIANGLE_BYTES + COPIES * settings.INSTANCE_BYTES <= budget_bytes
+    assert drawn * settings.TRIANGLE_BYTES > budget_bytes
+    env = {**os.environ, "BLUEPRINT_MEMORY_LIMIT": "512M"}
+    options = ["--size", "64", "64", "--max-layers", "1"]
+
+    def render(model: Path, out: str) -> subprocess.CompletedProcess:
+        command = [str(BLUEPRINT), "render", str(model), "-o", str(tmp_path / out), *options]
+        return subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
+
+    proc = render(flat, "flat.png")
+    one_error(
+        proc,
+        f"{flat}: {drawn} triangles to draw (1 mesh instances) need about "
+        f"{settings.human_size(drawn * settings.TRIANGLE_BYTES)} of memory at 896 bytes a triangle, more "
+        "than the memory budget of 512 MiB",
+    )
+    proc = render(kept, "kept.png")
+    assert proc.returncode == 0, proc.stderr
+    assert f"{drawn} triangles" in proc.stdout
+    assert (tmp_path / "kept.png").stat().st_size > 0
+    proc = render(kept, "kept.svg")
+    one_error(proc, f"{kept}: {drawn} triangles to draw ({COPIES} mesh instances) need about")
+    assert not (tmp_path / "kept.svg").exists()
+
+
+def test_an_instanced_upload_is_weighed_by_its_unique_meshes(tmp_path):
+    """``budget.uploaded``: a model kept as instances uploads each mesh it places once and a
+    record an instance; a flattened one its triangles."""
+    hostile = _hostile()
+    corners, faces = hostile.box_arrays()
+    nodes = [{"mesh": 0, "translation": [2.0 * k, 0.0, 0.0]} for k in range(50)]
+    path = tmp_path / "rows.glb"
+    path.write_bytes(hostile.glb(nodes, list(range(50)), corners, faces=faces))
+    model = load_model(path)
+    assert model.instances is not None
+    assert budget.uploaded(model) == (12, 50)
+    need = budget.frame_bytes(12, 100, 1, None, instances=50)
+    assert need["mesh"] == 12 * budget.MESH_BYTES + 50 * (92 + 112)
+    flat = assemble({"box": box((0, 0, 0), (1, 2, 3))})
+    assert budget.uploaded(flat) == (12, 0)
 
 
 def test_a_frames_gpu_memory_is_sized_by_kind():

@@ -12,25 +12,42 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from instanced_scenes import (
+    MIRROR_X,
     copies,
     exact_scene,
     flattened,
     l_prism,
     placed,
     trimesh_scene,
+    turn,
     turned_scene,
     wedge,
 )
 from oracle import cast_oracle, compare_layers
 
 import blueprint
-from blueprint.render.mesh import GpuMesh, draw_groups, instance_records
+from blueprint.render.mesh import GpuMesh, draw_groups, instance_records, placements
+from blueprint.render.raster import ComputeRaster
 from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
 from blueprint.scene.loader import model_from_object
+from blueprint.scene.model import Model
 
 SIZE = (96, 80)
 CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
-WAYS = ["peel", "k-buffer", "a-buffer"]
+WAYS = ["peel", "k-buffer", "a-buffer", "a-buffer-slim", "a-buffer-compute", "a-buffer-compute-slim"]
+# the A-buffer's ways that read faces by their ID through the faces table (GpuMesh.bind_faces):
+# (slim fragments, the compute rasteriser lists them)
+FACES_TABLE = {
+    "a-buffer-slim": (True, False),
+    "a-buffer-compute": (False, True),
+    "a-buffer-compute-slim": (True, True),
+}
+
+
+def abuffer_row(way: str) -> ABufferRow:
+    """The A-buffer row of ``way`` (an ``a-buffer`` entry of ``WAYS``), on every frame."""
+    slim, compute = FACES_TABLE.get(way, (False, False))
+    return ABufferRow(1 << 30, min_layers=1, slim=slim, compute_from=0 if compute else None)
 
 
 @pytest.fixture(params=WAYS)
@@ -41,10 +58,10 @@ def way(request, renderer):
         if default.row("k-buffer") is None:
             pytest.skip("no k-buffer on this driver")
         rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
-    elif request.param == "a-buffer":
+    elif request.param.startswith("a-buffer"):
         if renderer.ctx.version_code < 430:
             pytest.skip("the A-buffer needs OpenGL 4.3")
-        rows = (ABufferRow(1 << 30, min_layers=1), PeelRow())
+        rows = (abuffer_row(request.param), PeelRow())
     else:
         rows = (PeelRow(),)
     saved = renderer.capture_table
@@ -142,6 +159,84 @@ def test_meshes_used_once_are_drawn_in_runs(renderer):
     assert np.array_equal(ours.triangle, theirs.triangle) and np.array_equal(ours.depth, theirs.depth)
 
 
+def mixed_scene() -> Model:
+    """Meshes used three times and twice (turned, mirrored, scaled) between meshes used once,
+    drawn as a group per shared mesh and two runs of flattened blocks."""
+    meshes = {"l": l_prism(), "wedge": wedge(), "w1": wedge(), "w2": wedge()}
+    order = ["l", "w1", "l", "w2", "wedge", "l", "wedge"]
+    linear = [None, turn(1, 90), MIRROR_X, 2 * np.eye(3), turn(0, 90), MIRROR_X @ turn(2, 90), None]
+    instances = [
+        (name, placed(m, (3 * k, 0, 0))) for k, (name, m) in enumerate(zip(order, linear, strict=True))
+    ]
+    return model_from_object(trimesh_scene(instances, meshes), name="mixed")
+
+
+@pytest.mark.parametrize("faces_way", list(FACES_TABLE))
+def test_faces_read_by_id_are_placed_from_the_unique_meshes(renderer, monkeypatch, faces_way):
+    """The compute rasteriser and the slim A-buffer's resolve read faces by their ID from the
+    unique meshes, each face's instance found in the faces table: the layers of a scene of
+    shared meshes and runs of meshes used once are its flattened twin's (depths, faces and
+    parts to the bit), its normals those the graphics pipeline's instanced draws give (within
+    float16 rounding, where both draw the same face: the compute rasteriser's coverage differs
+    from the driver's at a few edge pixels, test_compute_capture.py), and its flattened arrays
+    are never made (``Model``'s lazy arrays)."""
+    if renderer.ctx.version_code < 430:
+        pytest.skip("the A-buffer needs OpenGL 4.3")
+    model, flat = mixed_scene(), flattened(mixed_scene())
+    assert model.instances is not None and len(draw_groups(model, None)) == 4
+    default = capture_table(renderer)
+    saved = renderer.capture_table
+    renderer.capture_table = CaptureTable((abuffer_row("a-buffer"), PeelRow()), default.exact_depth)
+    drawn = blueprint.peel(mixed_scene(), size=SIZE, renderer=renderer, **CAMERA)
+    renderer.capture_table = CaptureTable((abuffer_row(faces_way), PeelRow()), default.exact_depth)
+    listed = []
+    fragments = ComputeRaster.fragments
+    monkeypatch.setattr(ComputeRaster, "fragments", lambda *a: listed.append(1) or fragments(*a))
+    try:
+        theirs = blueprint.peel(flat, size=SIZE, renderer=renderer, **CAMERA)
+
+        def refused(_):
+            raise AssertionError("the instanced model was flattened")
+
+        monkeypatch.setattr("blueprint.scene.model.flatten", refused)
+        ours = blueprint.peel(model, size=SIZE, renderer=renderer, **CAMERA)
+    finally:
+        renderer.capture_table = saved
+    assert not model.is_flat
+    assert len(listed) == (2 if FACES_TABLE[faces_way][1] else 0)
+    assert ours.depth.shape == theirs.depth.shape and ours.depth.shape[0] >= 3
+    assert np.array_equal(ours.depth, theirs.depth)
+    assert np.array_equal(ours.triangle, theirs.triangle)
+    assert np.array_equal(ours.part, theirs.part)
+    same = (ours.triangle == drawn.triangle) & (ours.triangle >= 0)
+    assert same.sum() >= 0.99 * (drawn.triangle >= 0).sum()
+    assert np.abs(ours.normal - drawn.normal)[same].max() <= 2e-3
+    assert set(np.unique(ours.part[ours.part >= 0])) == set(range(7))
+
+
+def test_the_faces_table_places_every_face_id():
+    """Each face ID of the mixed scene finds, as instance.glsl's binary search does (the last
+    placement whose first face is at most it), the index-buffer face, transform and part the
+    flattened scene has for it: every face's corners and part, on the CPU."""
+    model = mixed_scene()
+    groups = draw_groups(model, None)
+    table = placements(groups)
+    assert np.all(np.diff(table["face"]) > 0) and table["face"][0] == 0
+    counts = np.array([len(v) for v, _, _ in groups])
+    vertices = np.concatenate([v for v, _, _ in groups])
+    indices = np.concatenate(
+        [i.reshape(-1, 3) + b for (_, i, _), b in zip(groups, np.cumsum(counts) - counts, strict=True)]
+    )
+    ids = np.arange(model.triangle_count)
+    which = np.searchsorted(table["face"], ids, side="right") - 1
+    face = table["base"][which] + ids - table["face"][which]
+    rows = np.stack([table["x"], table["y"], table["z"]], axis=1)[which].astype(np.float64)  # (F, 3, 4)
+    corners = vertices["p"][indices[face]].astype(np.float64)  # (F, 3, 3)
+    placed_corners = np.einsum("fij,fkj->fki", rows[:, :, :3], corners) + rows[:, None, :, 3]
+    assert np.array_equal(placed_corners.astype(np.float32), model.positions[model.faces])
+    assert np.array_equal(table["part"][which] + vertices["part"][indices[face, 0]], model.face_part)
+
+
 def test_normals_follow_the_transform_as_the_flattened_faces_turn():
     """The normals' transform is the cofactor matrix: a mirror turns normals as it turns the
     faces' winding, a scale by 2 keeps their length, a turn turns them."""
@@ -164,7 +259,7 @@ def test_instanced_upload_holds_unique_geometry(renderer):
     model = model_from_object(copies(400), name="copies")
     mesh = GpuMesh(renderer.ctx, model, 30.0)
     try:
-        uploaded = sum(vbo.size + ibo.size for vbo, ibo, _, _ in mesh.groups)
+        uploaded = mesh.vbo.size + mesh.ibo.size
         assert mesh.triangles == 400 * len(model.instances.faces)
         assert uploaded < 2 * 12 * len(model.instances.faces) * 28
         assert not model.is_flat

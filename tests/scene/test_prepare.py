@@ -242,10 +242,11 @@ def test_a_model_of_the_same_content_skips_the_sorts(monkeypatch):
         prepare.gpu_arrays(Model.from_arrays(moved, faces, face_part), 30.0)
     with pytest.raises(AssertionError, match="sorted again"):
         prepare.gpu_arrays(first, 20.0)  # another crease angle: its crease vertices
-    # GpuMesh uploads the arrays (and the one instance that places them)
+    # GpuMesh uploads the arrays (and the one instance that places them, and its row of the
+    # faces table)
     buffers = _Buffers()
     GpuMesh(buffers, first, 30.0)
-    assert buffers.data[:2] == [made[0].tobytes(), made[1].tobytes()] and len(buffers.data) == 3
+    assert buffers.data[:2] == [made[0].tobytes(), made[1].tobytes()] and len(buffers.data) == 4
 
 
 def test_topologies_kept_are_bounded(monkeypatch):

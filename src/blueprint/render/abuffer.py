@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms
-from blueprint.render.mesh import geometry_program, target_uniform
+from blueprint.render.mesh import PLACEMENTS_BINDING, geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
 ABUFFER_FRAG = "blueprint.render:glsl/abuffer.frag"
@@ -103,8 +103,10 @@ class ABufferSource:
         self.geometry = geometry_program(capturer, ABUFFER_FRAG, defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
         # the resolve runs over the tiles with fragments alone (``_resolve``)
+        # a slim fragment's face is found in the mesh's faces table (GpuMesh.bind_faces)
+        resolving = {**capture, "PLACEMENTS": PLACEMENTS_BINDING} if self.slim else capture
         self.resolve = r.compute(
-            RESOLVE_COMP, {**capture, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else capture
+            RESOLVE_COMP, {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else resolving
         )
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera_names = ("u_view", "u_projection", "u_ortho")
@@ -318,8 +320,7 @@ class ABufferSource:
             cursor.bind_to_image(1, read=False, write=True)
             layer_count.bind_to_image(2, read=False, write=True)
             if self.slim:
-                self.mesh.vbo.bind_to_storage_buffer(VERTICES_BINDING)
-                self.mesh.ibo.bind_to_storage_buffer(INDICES_BINDING)
+                self.mesh.bind_faces(VERTICES_BINDING, INDICES_BINDING)
                 target_uniform(self.r, self.resolve, size)
             self._resolve(name, head, (cursor, layer_count), groups)
             ctx.memory_barrier()

@@ -9,6 +9,9 @@ from blueprint.scene.model import Model
 from blueprint.scene.prepare import gpu_arrays
 
 GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
+# the storage binding of the placements (instance.glsl's PLACEMENTS), free in every program
+# that reads faces by their ID (the compute rasteriser, the A-buffer's resolve)
+PLACEMENTS_BINDING = 10
 
 
 def geometry_program(capturer, fragment: str, defines=None, modern: bool = False):
@@ -49,6 +52,25 @@ _INSTANCE_FIELDS = (
     ("3f", "i_nz"),
     ("1i", "i_part"),
     ("1i", "i_face"),
+)
+
+
+# One placement of the faces table (instance.glsl's ``Placement``, std430): an instance's
+# transform and normals' transform as ``INSTANCE`` has them (each normal row padded to four),
+# its part, its first face ID and where its faces start in the uploaded index buffer (in faces).
+PLACEMENT = np.dtype(
+    [
+        ("x", "f4", 4),
+        ("y", "f4", 4),
+        ("z", "f4", 4),
+        ("nx", "f4", 4),
+        ("ny", "f4", 4),
+        ("nz", "f4", 4),
+        ("part", "i4"),
+        ("face", "i4"),
+        ("base", "i4"),
+        ("pad", "i4"),
+    ]
 )
 
 
@@ -116,27 +138,63 @@ def draw_groups(model: Model, crease_angle: float | None) -> list[tuple[np.ndarr
     return groups
 
 
-class GpuMesh:
-    """A model's triangles on the GPU, drawn by ``vao(program).render()``: for each draw group
-    (``draw_groups``) its shared vertices (split only where crease-split normals differ), its
-    faces in the index buffer in model order, and its instances, so that a face's ID is its
-    instance's first face plus ``gl_PrimitiveID`` (degenerate faces rasterise to nothing).
-    Without a crease angle the normals are left zero, for passes that draw no normals (ID
-    buffers): the smoothing is most of the time of an upload.
+def placements(groups: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> np.ndarray:
+    """(P,) ``PLACEMENT``: the faces table of ``draw_groups``'s groups uploaded one after
+    another, each instance record with its group's first face in the index buffer, ordered by
+    first face ID; records of no faces are left out, so the first face IDs rise strictly and
+    face ID ``t`` is placed by the last record whose first face is at most ``t``."""
+    faces = np.array([len(indices) // 3 for _, indices, _ in groups], np.int64)
+    base = np.cumsum(faces) - faces
+    records = [(records, b) for (_, _, records), b, f in zip(groups, base, faces, strict=True) if f]
+    if not records:
+        records = [(instance_records(np.eye(4)[None], np.zeros(1), np.zeros(1)), 0)]
+    out = np.zeros(sum(len(r) for r, _ in records), PLACEMENT)
+    at = 0
+    for r, b in records:
+        block = out[at : at + len(r)]
+        for row in "xyz":
+            block[row] = r[row]
+            block["n" + row][:, :3] = r["n" + row]
+        block["part"], block["face"], block["base"] = r["part"], r["face"], b
+        at += len(r)
+    return out[np.argsort(out["face"], kind="stable")]
 
-    ``vbo`` and ``ibo`` are the flattened model's vertex and index buffers, as
-    ``prepare.gpu_arrays`` makes them, for the passes that read faces by their ID (the compute
-    rasteriser, the slim A-buffer's resolve): a flattened model's draw buffers, and for a model
-    kept as instances made on first use from its flattened arrays."""
+
+class GpuMesh:
+    """A model's triangles on the GPU, drawn by ``vao(program).render()``: every draw group's
+    (``draw_groups``) shared vertices (split only where crease-split normals differ) in one
+    vertex buffer (``vbo``), its faces in model order in one index buffer (``ibo``, indices into
+    the whole vertex buffer), and each group's instances, so that a face's ID is its instance's
+    first face plus ``gl_PrimitiveID`` (degenerate faces rasterise to nothing). Without a
+    crease angle the normals are left zero, for passes that draw no normals (ID buffers): the
+    smoothing is most of the time of an upload.
+
+    Passes that read faces by their ID (the compute rasteriser, the slim A-buffer's resolve)
+    read the same buffers through the faces table (``bind_faces``): a placement an instance,
+    ordered by first face (``placements``), in which ``instance.glsl`` finds a face's instance
+    by a binary search; so a model kept as instances is never flattened for them."""
 
     def __init__(self, ctx, model: Model, crease_angle: float | None) -> None:
         self.ctx = ctx
+        groups = draw_groups(model, crease_angle)
+        vertex_count = np.array([len(vertices) for vertices, _, _ in groups], np.int64)
+        index_count = np.array([len(indices) for _, indices, _ in groups], np.int64)
+        vertex_base, index_base = np.cumsum(vertex_count) - vertex_count, np.cumsum(index_count) - index_count
+        if len(groups) == 1:
+            vertices, indices = groups[0][:2]
+        else:
+            vertices = np.concatenate([v for v, _, _ in groups])
+            indices = np.concatenate(
+                [i + np.uint32(b) for (_, i, _), b in zip(groups, vertex_base, strict=True)]
+            )
+        self.vbo, self.ibo = ctx.buffer(vertices), ctx.buffer(indices)
+        # (instance records, the group's first index and index count) a draw
         self.groups = [
-            (ctx.buffer(vertices), ctx.buffer(indices), ctx.buffer(records), len(records))
-            for vertices, indices, records in draw_groups(model, crease_angle)
+            (ctx.buffer(records), len(records), int(first), int(count))
+            for (_, _, records), first, count in zip(groups, index_base, index_count, strict=True)
         ]
-        self._flat = None if model.instances is not None else self.groups[0][:2]
-        self._crease_angle = crease_angle
+        self._placements = ctx.buffer(placements(groups))
+        del groups, vertices, indices
         self._vaos: dict[int, _Draws] = {}
         self._corners = None
         self._model = model
@@ -145,19 +203,12 @@ class GpuMesh:
         self.instanced = model.instances is not None
         self.bounds = model.bounds  # (2, 3): its used vertices' corners
 
-    @property
-    def vbo(self):
-        return self._flat_buffers()[0]
-
-    @property
-    def ibo(self):
-        return self._flat_buffers()[1]
-
-    def _flat_buffers(self):
-        if self._flat is None:
-            vertices, indices = gpu_arrays(self._model, self._crease_angle)
-            self._flat = (self.ctx.buffer(vertices), self.ctx.buffer(indices))
-        return self._flat
+    def bind_faces(self, vertices: int, indices: int) -> None:
+        """Bind the vertex and index buffers to storage bindings ``vertices`` and ``indices``,
+        and the faces table to ``PLACEMENTS_BINDING`` (instance.glsl with PLACEMENTS)."""
+        self.vbo.bind_to_storage_buffer(vertices)
+        self.ibo.bind_to_storage_buffer(indices)
+        self._placements.bind_to_storage_buffer(PLACEMENTS_BINDING)
 
     def vao(self, program) -> _Draws:
         """The draws of these buffers for ``program`` (a vertex array binds one program)."""
@@ -165,13 +216,12 @@ class GpuMesh:
         if draws is None:
             # attributes a program does not read (pipeline attribute passes need no part, ID
             # passes no normal) are skipped over
+            vertices = _layout(self.vbo, _VERTEX_FIELDS, program, "")
             arrays = []
-            for vbo, ibo, records, count in self.groups:
-                layout = [
-                    _layout(vbo, _VERTEX_FIELDS, program, ""),
-                    _layout(records, _INSTANCE_FIELDS, program, "/i"),
-                ]
-                arrays.append((self.ctx.vertex_array(program, layout, index_buffer=ibo), count))
+            for records, count, first, indices in self.groups:
+                layout = [vertices, _layout(records, _INSTANCE_FIELDS, program, "/i")]
+                vao = self.ctx.vertex_array(program, layout, index_buffer=self.ibo, index_element_size=4)
+                arrays.append((vao, count, first, indices))
             draws = self._vaos[program.glo] = _Draws(arrays)
         return draws
 
@@ -192,11 +242,9 @@ class GpuMesh:
         prog["u_tolerance2"].value = self._tolerance**2
 
     def release(self) -> None:
-        held = [vao for draws in self._vaos.values() for vao, _ in draws.arrays]
-        held += [buffer for group in self.groups for buffer in group[:3]]
-        if self._flat is not None and self.instanced:
-            held += self._flat
-        for obj in (*held, self._corners):
+        held = [draw[0] for draws in self._vaos.values() for draw in draws.arrays]
+        held += [records for records, *_ in self.groups]
+        for obj in (*held, self.vbo, self.ibo, self._placements, self._corners):
             if obj is not None:
                 obj.release()
 
@@ -221,11 +269,13 @@ def _layout(buffer, fields, program, suffix: str) -> tuple:
 
 
 class _Draws:
-    """A mesh's draw calls for one program: each group's vertex array at its instances."""
+    """A mesh's draw calls for one program: each group's vertex array, (vertex array,
+    instances, first index, indices), its indices at its instances."""
 
     def __init__(self, arrays: list) -> None:
         self.arrays = arrays
 
     def render(self) -> None:
-        for vao, count in self.arrays:
-            vao.render(instances=count)
+        for vao, count, first, indices in self.arrays:
+            if indices:
+                vao.render(vertices=indices, first=first, instances=count)

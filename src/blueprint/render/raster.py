@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.render.mesh import PLACEMENTS_BINDING
 from blueprint.scene.camera import clip_to_pixels
 
 RASTER_COMP = "blueprint.render:glsl/abuffer_raster.comp"
@@ -43,6 +44,7 @@ class ComputeRaster:
         self.rooms: dict[tuple[int, int], int] = {}
 
     def stages(self, defines: dict) -> list:
+        defines = {**defines, "PLACEMENTS": PLACEMENTS_BINDING}
         return [self.r.compute(RASTER_COMP, {"STAGE": k, **defines}) for k in range(4)]
 
     def sees(self, bounds: np.ndarray, uniforms: dict, size) -> bool:
@@ -90,8 +92,7 @@ class ComputeRaster:
         room = self.room(size, triangles)
         count = pool.buffer("raster.count", 4 * tiles)
         count.clear()
-        mesh.vbo.bind_to_storage_buffer(VERTICES)
-        mesh.ibo.bind_to_storage_buffer(INDICES)
+        mesh.bind_faces(VERTICES, INDICES)
         for binding, name, nbytes in (
             (SETUP, "setup", SETUP_BYTES * triangles),
             (START, "start", 4 * (tiles + 1)),

@@ -11,7 +11,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu.device import Device, check_size, current
-from blueprint.render.budget import check_frame_memory, frame_bytes
+from blueprint.render.budget import check_frame_memory, frame_bytes, uploaded
 from blueprint.render.capture import Capture, layer_loop
 from blueprint.render.gbuffer import gbuffer
 from blueprint.render.mesh import GpuMesh
@@ -144,13 +144,11 @@ class Capturer:
         asked = (model, pixels, max_layers)
         if self._checked is not None and self._checked[0] is model and self._checked[1:] == asked[1:]:
             return
-        uploaded = any(held is model for held, _ in self._meshes.values())
+        held = any(held is model for held, _ in self._meshes.values())
+        triangles, instances = (0, 0) if held else uploaded(model)
         abuffer = self.table.row("A-buffer")
         need = frame_bytes(
-            0 if uploaded else model.triangle_count,
-            pixels,
-            max_layers,
-            abuffer.max_bytes if abuffer else None,
+            triangles, pixels, max_layers, abuffer.max_bytes if abuffer else None, instances=instances
         )
         check_frame_memory(self.device, model.source or "the model", need)
         self._checked = asked

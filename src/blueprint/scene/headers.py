@@ -14,6 +14,7 @@ from pathlib import Path
 
 from blueprint import settings
 from blueprint.errors import InputError
+from blueprint.scene.instances import worth_instancing
 from blueprint.settings import human_size, open_file
 
 # the most of a file read to find its header
@@ -81,7 +82,8 @@ def check_gltf_document(path: Path, doc) -> None:
     """Raise ``InputError`` where a glTF document is not shaped as the specification says
     (``check_gltf_shape``), or its node graph has a cycle (node 0 a child of node 1 and node 1
     of node 0), a child that does not exist, more than ``NODE_DEPTH_LIMIT`` levels, more than
-    ``INSTANCE_LIMIT`` mesh instances or more than ``TRIANGLE_LIMIT`` triangles in all. The
+    ``INSTANCE_LIMIT`` mesh instances or more triangles than the memory budget holds
+    (``check_triangle_count``: their unique ones where the scene is kept as instances). The
     graph is walked once, without recursion, before any loader follows it: trimesh's walk of
     a cycle never ends, and of a deep chain takes time quadratic in its depth."""
     check_gltf_shape(path, doc)
@@ -93,11 +95,11 @@ def check_gltf_document(path: Path, doc) -> None:
     for root in roots:
         _node(path, nodes, root, None)
 
-    def own(node: int) -> tuple[int, int]:
+    def own(node: int) -> tuple[int, int, int | None]:
         mesh = nodes[node].get("mesh")
         if isinstance(mesh, int) and not isinstance(mesh, bool) and 0 <= mesh < len(triangles):
-            return 1, triangles[mesh]
-        return 0, 0
+            return 1, triangles[mesh], mesh
+        return 0, 0, None
 
     if _forest_within_limits(path, nodes, roots, triangles):
         return
@@ -117,6 +119,7 @@ def _forest_within_limits(path: Path, nodes: list, roots: list, triangles: list[
     if placed and (min(placed) < 0 or max(placed) >= len(nodes)):
         return False
     level, depth, instances, drawn = list(roots), 0, 0, 0
+    used: set[int] = set()  # the meshes placed
     while level:
         if depth >= NODE_DEPTH_LIMIT:
             return False
@@ -124,11 +127,12 @@ def _forest_within_limits(path: Path, nodes: list, roots: list, triangles: list[
         held = [m for m in meshes if type(m) is int and 0 <= m < len(triangles)]
         instances += len(held)
         drawn += sum(triangles[m] for m in held)
+        used.update(held)
         level = [child for n in level for child in children[n]]
         depth += 1
-    if instances > settings.INSTANCE_LIMIT or drawn > settings.TRIANGLE_LIMIT:
-        return False
-    return True
+    unique = sum(triangles[m] for m in used)
+    estimate = peak_estimate(drawn, unique, instances)
+    return instances <= settings.INSTANCE_LIMIT and estimate <= settings.MEMORY_BUDGET
 
 
 # The fields of a glTF 2.0 document that place and shape its triangles, by the type the
@@ -359,11 +363,13 @@ def _gltf_roots(doc: dict, count: int) -> list:
 def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
     """Walk a graph from ``roots`` once, without recursion: ``children(node)`` lists a node's
     children (checked), ``own(node)`` the mesh instances (0 or 1) and triangles a node holds
-    itself; ``what`` names the nodes in messages ("nodes", "objects"). Refuses a cycle, more
-    than ``NODE_DEPTH_LIMIT`` levels, and more instances or triangles than the limits, counted
-    over every path (a node placed twice counts twice)."""
+    itself and its mesh (a key, None where it holds none); ``what`` names the nodes in
+    messages ("nodes", "objects"). Refuses a cycle, more than ``NODE_DEPTH_LIMIT`` levels,
+    and more instances or triangles than the limits, counted over every path (a node placed
+    twice counts twice; ``check_triangle_count`` weighs the meshes' unique triangles too)."""
     instances: dict = {}  # per node: mesh instances below it, itself included
     triangles: dict = {}
+    meshes: dict = {}  # the triangles of each mesh placed
     on_path: dict = {}  # nodes of the current path, to their depth
     for root in roots:
         if root in instances:
@@ -377,7 +383,9 @@ def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
                 stack.pop()
                 del on_path[node]
                 kids = children(node)
-                count, held = own(node)
+                count, held, mesh = own(node)
+                if mesh is not None:
+                    meshes[mesh] = held
                 instances[node] = count + sum(instances[c] for c in kids)
                 triangles[node] = held + sum(triangles[c] for c in kids)
                 _limit(path, instances[node], settings.INSTANCE_LIMIT, "mesh instances")
@@ -394,27 +402,38 @@ def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
             stack.append((child, iter(children(child))))
     placed = sum(instances[r] for r in roots)
     _limit(path, placed, settings.INSTANCE_LIMIT, "mesh instances")
-    check_triangle_count(path, sum(triangles[r] for r in roots), placed)
+    check_triangle_count(path, sum(triangles[r] for r in roots), placed, sum(meshes.values()))
 
 
-def peak_estimate(triangles: int) -> int:
+def peak_estimate(triangles: int, unique: int | None = None, instances: int = 0) -> int:
     """Bytes a drawing of ``triangles`` triangles (all instances together) is expected to take
-    at its peak over what the process holds before it (``settings.TRIANGLE_BYTES`` a triangle)."""
+    at its peak over what the process holds before it: ``settings.TRIANGLE_BYTES`` a triangle;
+    where they are ``instances`` mesh instances of ``unique`` triangles that the loader keeps
+    as instances (``instances.worth_instancing``), its unique triangles' and
+    ``settings.INSTANCE_BYTES`` an instance."""
+    if unique is not None and worth_instancing(triangles, unique):
+        return int(unique) * settings.TRIANGLE_BYTES + int(instances) * settings.INSTANCE_BYTES
     return int(triangles) * settings.TRIANGLE_BYTES
 
 
-def check_triangle_count(name, count: int, instances: int | None = None) -> None:
+def check_triangle_count(name, count: int, instances: int | None = None, unique: int | None = None) -> None:
     """Raise ``InputError`` where the peak memory of drawing ``count`` triangles (of
-    ``instances`` mesh instances, where a scene places them), ``peak_estimate``, passes the
-    memory budget (``settings.MEMORY_BUDGET``), naming ``name``, the count, the estimate and
-    the budget: from the header's counts, before any triangle is read or made."""
-    estimate = peak_estimate(count)
+    ``instances`` mesh instances of ``unique`` triangles, where a scene places meshes),
+    ``peak_estimate``, passes the memory budget (``settings.MEMORY_BUDGET``), naming ``name``,
+    the counts, the estimate and the budget: from the header's counts, before any triangle is
+    read or made."""
+    kept = unique is not None and worth_instancing(count, unique)
+    estimate = peak_estimate(count, unique if kept else None, instances or 0)
     if estimate <= settings.MEMORY_BUDGET:
         return
     placed = "" if instances is None else f" ({instances} mesh instances)"
+    rate = f"{settings.TRIANGLE_BYTES} bytes a triangle"
+    if kept:
+        placed = f" ({instances} mesh instances of {unique} unique triangles)"
+        rate = f"{settings.TRIANGLE_BYTES} bytes a unique triangle and {settings.INSTANCE_BYTES} an instance"
     raise InputError(
         f"{name}: {count} triangles to draw{placed} need about {human_size(estimate)} of memory at "
-        f"{settings.TRIANGLE_BYTES} bytes a triangle, more than the memory budget of "
+        f"{rate}, more than the memory budget of "
         f"{human_size(settings.MEMORY_BUDGET)} ({settings.MEMORY_ENV} sets the budget)"
     )
 

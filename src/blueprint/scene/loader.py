@@ -446,7 +446,9 @@ def _joined(instances: list[Instance], stem: str | None, label: str, instanced: 
     several times over (``instances.worth_instancing``) keep them as instances: then
     (``Instances``, None, None, names). A scene of one instance names its part ``stem`` (a
     file's), or after its node where ``stem`` is None. More than ``INSTANCE_LIMIT`` instances
-    or ``TRIANGLE_LIMIT`` triangles are refused naming ``label``, before any is placed.
+    or more triangles than the memory budget holds (``headers.check_triangle_count``, by their
+    unique triangles where they are kept as instances) are refused naming ``label``, before any
+    is placed.
 
     The instances of one mesh are placed together, a block of them at a time (one matrix
     product a block), into arrays made once at their joined size: 10^5 instances of a box
@@ -458,17 +460,20 @@ def _joined(instances: list[Instance], stem: str | None, label: str, instanced: 
         )
     drawn = [i for i in instances if i.faces is not None and len(i.faces) > 0]
     face_counts = np.array([len(i.faces) for i in drawn], np.int64)
-    check_triangle_count(label, int(face_counts.sum()))
-    if not drawn:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     by_mesh: dict[tuple[int, int], list[int]] = {}
     for k, instance in enumerate(drawn):
         by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
+    unique = sum(len(drawn[members[0]].faces) for members in by_mesh.values())
+    if instanced:
+        check_triangle_count(label, int(face_counts.sum()), len(drawn), unique)
+    else:
+        check_triangle_count(label, int(face_counts.sum()))
+    if not drawn:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     single = len(instances) == 1 and stem is not None
     taken: set[str] = set()
     counts: dict[str, int] = {}
     names = [stem if single else _part_name(i.node, i.geometry, taken, counts) for i in drawn]
-    unique = sum(len(drawn[members[0]].faces) for members in by_mesh.values())
     if instanced and worth_instancing(int(face_counts.sum()), unique):
         return _kept_instances(drawn, list(by_mesh.values()), label), None, None, names
     vertex_counts = np.array([len(i.vertices) for i in drawn], np.int64)

@@ -10,13 +10,16 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from blueprint.columns import column_max, column_min, face_cross, indexed_cross
+from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.instances import Instances, flatten, instance_boxes, placed_blocks
 from blueprint.scene.units import UNITS_MM
 
 
 class _Flattened:
     """A model's ``positions``, ``faces`` or ``face_part``: the array given, or for a model
-    kept as instances (given None) the flattened scene's, made on first read and kept."""
+    kept as instances (given None) the flattened scene's, made on first read and kept; refused
+    in one line (``headers.check_triangle_count``) where its drawn triangles, flattened, would
+    pass the memory budget that its unique ones passed."""
 
     def __set_name__(self, owner, name: str) -> None:
         self.name, self.key = name, "_" + name
@@ -26,7 +29,9 @@ class _Flattened:
             raise AttributeError(self.name)  # a field without a default
         value = model.__dict__[self.key]
         if value is None:
-            positions, faces, face_part = flatten(model.instances)
+            inst = model.instances
+            check_triangle_count(model.source or "the model", inst.triangle_count, len(inst.mesh))
+            positions, faces, face_part = flatten(inst)
             model.__dict__.update(_positions=positions, _faces=faces, _face_part=face_part)
             value = model.__dict__[self.key]
         return value

@@ -11,6 +11,7 @@
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 #include "blueprint.render:glsl/abuffer.glsl"
+#include "instance.glsl"
 
 #define TILE 16
 #define SNAP 256.0
@@ -23,7 +24,9 @@ layout(local_size_x = TILE, local_size_y = TILE) in;
 layout(local_size_x = 64) in;
 #endif
 
-// the mesh's interleaved vertices (position, normal, part as int bits) and faces
+// the mesh's interleaved vertices (position, normal, part as int bits) and faces, in their
+// meshes' own coordinates: triangle t is face ID t, placed by its instance (instance.glsl's
+// faces table)
 layout(std430, binding = 5) readonly buffer Vertices { float vertices[]; };
 layout(std430, binding = 6) readonly buffer Indices { uint indices[]; };
 // a triangle's setup, five ivec4: snapped corners (x0, y0, x1, y1), (x2, y2, z0, z1), (z2,
@@ -133,8 +136,10 @@ void main() {
     vec2 exact[3];
     float z[3], inv_w[3];
     bool behind = false;
+    int placed = placement_of(t);
+    uint face = placed_face(placed, t);
     for (int k = 0; k < 3; ++k) {
-        vec4 clip = u_projection * (u_view * vec4(position(indices[3 * t + k]), 1.0));
+        vec4 clip = u_projection * (u_view * vec4(placed_point(placed, position(indices[3u * face + uint(k)])), 1.0));
         behind = behind || clip.w <= 0.0;
         vec3 ndc = clip.xyz / clip.w;
         vec2 window = (ndc.xy * 0.5 + 0.5) * vec2(u_size);
@@ -259,6 +264,9 @@ shared vec3 held_z[BATCH];
 shared vec4 held_p01[BATCH];
 shared vec2 held_p2[BATCH];
 shared int held_face[BATCH];
+#if !SLIM
+shared int held_placement[BATCH];
+#endif
 shared bool held_front[BATCH];
 shared dvec3 held_at[BATCH];
 shared dvec3 held_dx[BATCH];
@@ -312,6 +320,9 @@ void main() {
             held_p01[lane] = intBitsToFloat(setup[5 * t + 4]);
             held_p2[lane] = intBitsToFloat(setup[5 * t + 3].zw);
             held_face[lane] = t;
+#if !SLIM
+            held_placement[lane] = placement_of(t);
+#endif
             dvec3 a = dvec3(edge_eq[9 * t], edge_eq[9 * t + 3], edge_eq[9 * t + 6]);
             dvec3 b = dvec3(edge_eq[9 * t + 1], edge_eq[9 * t + 4], edge_eq[9 * t + 7]);
             dvec3 c = dvec3(edge_eq[9 * t + 2], edge_eq[9 * t + 5], edge_eq[9 * t + 8]);
@@ -386,17 +397,19 @@ void main() {
 #else
                 if (node < capacity) {
                     ivec4 s2 = setup[5 * held_face[k] + 2];
-                    int face = held_face[k];
+                    int face = held_face[k], placed = held_placement[k];
                     vec3 v = w * vec3(intBitsToFloat(s2.y), intBitsToFloat(s2.z), intBitsToFloat(s2.w));
                     v /= v.x + v.y + v.z;
-                    uint v0 = indices[3 * face], v1 = indices[3 * face + 1], v2 = indices[3 * face + 2];
-                    vec3 n = normalize(turn * (v.x * normal(v0) + v.y * normal(v1) + v.z * normal(v2)));
-                    vec3 eye = (u_view * vec4(v.x * position(v0) + v.y * position(v1) + v.z * position(v2), 1.0)).xyz;
+                    uint f = placed_face(placed, face);
+                    uint v0 = indices[3u * f], v1 = indices[3u * f + 1u], v2 = indices[3u * f + 2u];
+                    vec3 n = normalize(turn * placed_normal(placed, v.x * normal(v0) + v.y * normal(v1) + v.z * normal(v2)));
+                    vec3 at = placed_point(placed, v.x * position(v0) + v.y * position(v1) + v.z * position(v2));
+                    vec3 eye = (u_view * vec4(at, 1.0)).xyz;
                     vec3 to_eye = u_ortho ? vec3(0.0, 0.0, 1.0) : -eye;
                     if (dot(n, to_eye) < 0.0) {
                         n = -n;
                     }
-                    int part = floatBitsToInt(vertices[7u * v0 + 6u]);
+                    int part = floatBitsToInt(vertices[7u * v0 + 6u]) + placements[placed].part;
                     AB_SET_NODE(node, kb_pack(z, !front, n, face, part));
                     AB_SET_LINK(node, head);
                     head = node + 1u;

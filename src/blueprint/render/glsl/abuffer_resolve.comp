@@ -12,6 +12,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "depth.glsl"
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
+#if SLIM
+#include "instance.glsl"
+#endif
 
 // lists up to this long are sorted in registers; longer ones are walked once a layer, which
 // costs most where lists run long
@@ -25,7 +28,8 @@ uniform float u_back_bias;
 uniform float u_peel_eps;
 
 #if SLIM
-// the mesh (render.mesh.GpuMesh): 7 words a vertex (position, normal, part), 3 indices a face
+// the mesh (render.mesh.GpuMesh): 7 words a vertex (position, normal, part), 3 indices a face,
+// each face placed by its instance (instance.glsl's faces table)
 layout(std430, binding = 8) readonly buffer Vertices {
     float vertices[];
 };
@@ -47,6 +51,8 @@ vec3 vertex_vec3(uint v, uint at) {
 void keep(ivec2 p, uint i) {
     uvec2 s = slim[i];
     uint face = s.y - 1u;
+    int placed = placement_of(int(face));
+    uint f = placed_face(placed, int(face));
     vec2 q = (vec2(p) + 0.5) / u_target * 2.0 - 1.0;
     vec3 eye[3];
     vec3 normal[3];
@@ -54,14 +60,14 @@ void keep(ivec2 p, uint i) {
     vec3 across_y;
     int part = 0;
     for (int k = 0; k < 3; ++k) {
-        uint v = indices[3u * face + uint(k)];
-        vec4 e = u_view * vec4(vertex_vec3(v, 0u), 1.0);
+        uint v = indices[3u * f + uint(k)];
+        vec4 e = u_view * vec4(placed_point(placed, vertex_vec3(v, 0u)), 1.0);
         vec4 c = u_projection * e;
         eye[k] = e.xyz;
-        normal[k] = mat3(u_view) * vertex_vec3(v, 3u);
+        normal[k] = mat3(u_view) * placed_normal(placed, vertex_vec3(v, 3u));
         across_x[k] = c.x - q.x * c.w;
         across_y[k] = c.y - q.y * c.w;
-        part = floatBitsToInt(vertices[7u * v + 6u]);
+        part = floatBitsToInt(vertices[7u * v + 6u]) + placements[placed].part;
     }
     vec3 w = cross(across_x, across_y);
     w /= w.x + w.y + w.z;

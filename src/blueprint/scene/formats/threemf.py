@@ -104,7 +104,15 @@ def _check_3mf_document(path: Path, document: bytes) -> None:
 
     roots = [item for item in items if item in objects]
     walk_graph(
-        path, roots, children, lambda index: (int(objects[index][0] > 0), objects[index][0]), "objects"
+        path,
+        roots,
+        children,
+        lambda index: (
+            int(objects[index][0] > 0),
+            objects[index][0],
+            index if objects[index][0] > 0 else None,
+        ),
+        "objects",
     )
 
 
