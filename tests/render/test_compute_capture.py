@@ -16,6 +16,7 @@ from capture_helpers import nested_boxes, nested_round, peel_both_ways
 import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
+from blueprint.render import raster
 from blueprint.render.gbuffer import abuffer_uniforms
 from blueprint.render.raster import REACH, ComputeRaster
 from blueprint.render.table import CaptureTable, capture_table
@@ -81,6 +82,22 @@ def test_compute_lists_the_graphics_pipelines_layers(renderer, capture, make, vi
     same_face = compute.triangle == graphics.triangle
     assert same_face[covered].mean() >= 0.998
     assert np.array_equal(compute.part[covered & same_face], graphics.part[covered & same_face])
+
+
+def test_set_up_in_rows_of_workgroups(renderer, capture, monkeypatch):
+    """Models of more triangles than one dispatch dimension's workgroups (a driver may allow
+    only 65535) are set up over rows of workgroups: forced here with rows of three, the layers
+    are the one-row dispatch's."""
+    model = examples.gearbox()
+    options = dict(size=(96, 80))
+    capture(True)
+    one_row = blueprint.peel(model, renderer=renderer, **options)
+    monkeypatch.setattr(raster, "ACROSS", 3)
+    rows = blueprint.peel(model, renderer=renderer, **options)
+    assert -(-model.triangle_count * raster.ROWS // 64) > 3 * 3
+    assert len(one_row.depth) >= 2
+    assert np.array_equal(rows.depth, one_row.depth)
+    assert np.array_equal(rows.triangle, one_row.triangle)
 
 
 def test_short_bins_are_drawn_again(renderer, capture):

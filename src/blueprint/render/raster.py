@@ -23,6 +23,8 @@ from blueprint.scene.camera import clip_to_pixels
 RASTER_COMP = "blueprint.render:glsl/abuffer_raster.comp"
 # pixels along a tile's side, and threads a triangle's tiles are walked by (abuffer_raster.comp)
 TILE, ROWS = 16, 8
+# workgroups in a row of the set-up dispatches: a dispatch's dimension holds 65535 at least
+ACROSS = 32768
 # storage bindings of the mesh, the triangles' set-up, the tiles' counts and starts, the bins
 # and the edge equations (abuffer_raster.comp)
 VERTICES, INDICES, SETUP, COUNT, START, BINS, EDGES = 5, 6, 11, 12, 13, 14, 15
@@ -116,12 +118,14 @@ class ComputeRaster:
                 if name in prog:
                     put(prog, name, value)
         groups = -(-triangles * ROWS // 64)
+        across = min(groups, ACROSS)
+        down = -(-groups // across)
         ctx = r.ctx
-        stages[0].run(groups)
+        stages[0].run(across, down)
         ctx.memory_barrier()
         stages[1].run(1)
         ctx.memory_barrier()
-        stages[2].run(groups)
+        stages[2].run(across, down)
         ctx.memory_barrier()
         stages[3].run(columns, rows)
         return room

@@ -56,6 +56,12 @@ vec3 position(uint v) { return vec3(vertices[7u * v], vertices[7u * v + 1u], ver
 vec3 normal(uint v) { return vec3(vertices[7u * v + 3u], vertices[7u * v + 4u], vertices[7u * v + 5u]); }
 
 #if STAGE == 0 || STAGE == 2
+// this invocation's index over a two-dimensional dispatch: a dimension holds at most 65535
+// workgroups, fewer than a big model's triangles need
+int invocation() {
+    return int(gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64 + int(gl_LocalInvocationID.x);
+}
+
 // the tiles' corners of triangle t, or false where it covers no pixel centre
 bool tiles_of(int t, out ivec2 first, out ivec2 last) {
     ivec4 s = setup[5 * t + 3];
@@ -128,7 +134,7 @@ void put_edge(int i, ivec2 p, ivec2 q, inout dvec3 a, inout dvec3 b, inout dvec3
 }
 
 void main() {
-    int t = int(gl_GlobalInvocationID.x) / ROWS, row = int(gl_GlobalInvocationID.x) % ROWS;
+    int t = invocation() / ROWS, row = invocation() % ROWS;
     if (t >= u_triangles) {
         return;
     }
@@ -230,7 +236,7 @@ void main() {
 }
 #elif STAGE == 2
 void main() {
-    int t = int(gl_GlobalInvocationID.x) / ROWS, row = int(gl_GlobalInvocationID.x) % ROWS;
+    int t = invocation() / ROWS, row = invocation() % ROWS;
     ivec2 first, last;
     if (t >= u_triangles || !tiles_of(t, first, last)) {
         return;
