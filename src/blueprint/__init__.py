@@ -53,6 +53,7 @@ _EXPORTS = {
     "KINDS": "blueprint.vector.linework",
     "Lines": "blueprint.vector.linework",
     "edge_numbers": "blueprint.vector.lines",
+    "anchor_glyphs": "blueprint.vector.anchors",
     "lay_out_sheet": "blueprint.scene.sheet",
 }
 
@@ -77,6 +78,7 @@ __all__ = [
     "ShaderError",
     "Style",
     "VIEWS",
+    "anchor_glyphs",
     "batch",
     "choose_parts",
     "cut_model",
@@ -114,6 +116,7 @@ if TYPE_CHECKING:
     from blueprint.scene.section import Cut, SectionPlane, cut_model, parse_section
     from blueprint.scene.sheet import Marks, lay_out_sheet
     from blueprint.scene.up import guess_up
+    from blueprint.vector.anchors import anchor_glyphs
     from blueprint.vector.lines import edge_numbers
     from blueprint.vector.linework import KINDS, Lines
 

@@ -188,6 +188,11 @@ def vector_drawing(model: Model, options: DrawOptions, renderer: Renderer):
     )
     cut = section_of(model, options)
     glyphs = options.glyphs
+    if glyphs is not None and any(d.edges for d in glyphs.dimensions):
+        # the edges are the loaded model's, numbered before any section cuts it
+        from blueprint.vector.anchors import anchor_glyphs
+
+        glyphs = anchor_glyphs(glyphs, model)
     measures = scale is not None or options.dimensions or options.sheet is not None
     measures = measures or (glyphs is not None and bool(glyphs.dimensions))
     if view == PLAN:

@@ -102,6 +102,11 @@ def render_frame(
     if options.title is not None:
         raise InputError("--title names a plan sheet's title block: give --view plan")
     glyphs, dimensions, size = options.glyphs, options.dimensions, options.size
+    if glyphs is not None and any(d.edges for d in glyphs.dimensions):
+        # the edges are the loaded model's, numbered before any section cuts it
+        from blueprint.vector.anchors import anchor_glyphs
+
+        glyphs = anchor_glyphs(glyphs, model)
     measures = dimensions or (glyphs is not None and bool(glyphs.dimensions))
     mm_per_model = UNITS_MM[drawing_unit(model, options.units)]
     # room for the dimensions below and right of the model

@@ -59,7 +59,8 @@ def _arrow(tip: np.ndarray, direction: np.ndarray, length: float) -> list:
 
 def _marks(lines: list, texts: list[Text]) -> Marks:
     segments = np.asarray(lines, np.float64).reshape(-1, 2, 2)
-    return Marks(segments, np.full(len(segments), DIMENSION_WIDTH), tuple(texts))
+    kinds = np.full(len(segments), "dimension")
+    return Marks(segments, np.full(len(segments), DIMENSION_WIDTH), tuple(texts), kinds)
 
 
 def _measures(per_mm: float) -> tuple[float, float, float, float, float]:
@@ -108,7 +109,9 @@ def linear_dimension(
     middle = (start + end) / 2 + above * 0.4 * height
     angle = math.degrees(math.atan2(-read[1], read[0]))
     angle = 0.0 if abs(angle) < 1e-9 else angle
-    return _marks(lines, [Text(float(middle[0]), float(middle[1]), height, text, "middle", angle)])
+    return _marks(
+        lines, [Text(float(middle[0]), float(middle[1]), height, text, "middle", angle, "dimension")]
+    )
 
 
 def overall_dimensions(
@@ -158,4 +161,4 @@ def diameter_marks(
     lines += _arrow(far, u, arrow)
     lines += _arrow(near, -u, arrow)
     middle = (knee + shoulder) / 2 - np.array([0.0, 0.4 * height])
-    return _marks(lines, [Text(float(middle[0]), float(middle[1]), height, text, "middle")])
+    return _marks(lines, [Text(float(middle[0]), float(middle[1]), height, text, "middle", kind="dimension")])

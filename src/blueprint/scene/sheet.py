@@ -23,6 +23,7 @@ from blueprint.scene.camera import SHEET_CELLS
 from blueprint.scene.model import Model
 
 __all__ = [
+    "MARK_KINDS",
     "PAPER_MM",
     "Marks",
     "SheetLayout",
@@ -56,10 +57,16 @@ BORDER_WIDTH = 2.8
 RULE_WIDTH = 1.4
 
 
+#: What a mark is, as the vector writers tag it (the kinds of line ``blueprint.KINDS`` names):
+#: the sheet's own (border, title block, view labels) or a dimension's.
+MARK_KINDS = ("sheet", "dimension")
+
+
 @dataclass(frozen=True)
 class Text:
     """A line of text at ``(x, y)`` pixels (its baseline), ``height`` pixels high; ``anchor``
-    'start' or 'middle'; ``angle`` degrees anticlockwise on the page."""
+    'start' or 'middle'; ``angle`` degrees anticlockwise on the page; ``kind`` one of
+    ``MARK_KINDS``."""
 
     x: float
     y: float
@@ -67,22 +74,29 @@ class Text:
     text: str
     anchor: str = "start"
     angle: float = 0.0
+    kind: str = "sheet"
 
 
 @dataclass(frozen=True)
 class Marks:
-    """The sheet's own lines and texts: ``lines`` (K, 2, 2) pixels with ``widths`` (K,) in base
-    line widths, and ``texts``."""
+    """The sheet's own lines and texts and its dimensions': ``lines`` (K, 2, 2) pixels with
+    ``widths`` (K,) in base line widths, ``texts``, and ``kinds`` (K,) str, each line's kind
+    (one of ``MARK_KINDS``; None: all ``sheet``)."""
 
     lines: np.ndarray
     widths: np.ndarray
     texts: tuple[Text, ...]
+    kinds: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.kinds is None:
+            object.__setattr__(self, "kinds", np.full(len(self.widths), MARK_KINDS[0]))
 
     def shifted(self, by: np.ndarray) -> Marks:
         """The same marks moved by ``by`` (2,) pixels."""
         dx, dy = (float(v) for v in by)
         texts = tuple(replace(t, x=t.x + dx, y=t.y + dy) for t in self.texts)
-        return Marks(self.lines + np.array([dx, dy]), self.widths, texts)
+        return Marks(self.lines + np.array([dx, dy]), self.widths, texts, self.kinds)
 
     @staticmethod
     def concatenate(items: list[Marks]) -> Marks:
@@ -91,6 +105,7 @@ class Marks:
             np.concatenate([m.lines for m in items]).reshape(-1, 2, 2),
             np.concatenate([m.widths for m in items]),
             tuple(t for m in items for t in m.texts),
+            np.concatenate([m.kinds for m in items]),
         )
 
 

@@ -172,7 +172,8 @@ def dimension_marks(
 def with_dimension_glyphs(drawing, glyphs: Glyphs, mm_per_model: float):
     """``drawing`` (a one-view ``VectorDrawing``) with the dimensions of ``glyphs`` added to its marks,
     as a picture draws them (``blueprint.compose.glyphs.marks``), in mm from ``mm_per_model``
-    (its boxes, arrows, paths and labels are the vector glyphs', ``blueprint.vector.glyphs``).
+    (its boxes, arrows, paths and labels are the vector glyphs', ``blueprint.vector.glyphs``);
+    those given by edges anchored already (``blueprint.vector.anchors.anchor_glyphs``).
     """
     if not glyphs.dimensions:
         return drawing

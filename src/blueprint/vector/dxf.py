@@ -5,7 +5,9 @@ Coordinates are the page's (pixels, or paper millimetres for a drawing to scale)
 as CAD expects. Every layer carries its kind's and level's colour (true colour), linetype (a
 dash pattern of its own, ``BP_L<k>``, or ``BP_<kind>_L<k>`` where the kind's dash is not the
 level's), lineweight and transparency. XDATA of the application ``BLUEPRINT`` on every line:
-its kind's name (group code 1000), then its source edges, one long (1071) each.
+its kind's name (group code 1000), then its source edges, one long (1071) each; a section's
+lines (layer SECTION), a sheet's marks (SHEET), dimensions (DIMENSIONS) and glyphs (GLYPHS)
+carry their kind alone.
 """
 
 from __future__ import annotations
@@ -29,6 +31,9 @@ APP_ID = "BLUEPRINT"
 # finely tessellated rim is (Douglas-Peucker at 0.25 px leaves chords of about that sagitta).
 ARC_TOLERANCE = 0.1
 ARC_SAGITTA = 0.5
+
+# the layers of a sheet's marks, by their kind
+_MARK_LAYERS = {"sheet": "SHEET", "dimension": "DIMENSIONS"}
 
 _BAD = re.compile(r'[<>/\\":;?*|=`,\x00-\x1f]+')
 # DXF lineweights, 1/100 mm.
@@ -72,20 +77,25 @@ def _lineweight(mm: float) -> int:
 
 
 def _sheet(doc, msp, drawing, base_mm: float) -> None:
-    """A sheet's border, title block and view labels on the layer SHEET."""
-    page = drawing.page
-    layer = doc.layers.add("SHEET")
-    layer.rgb = tuple(round(c * 255) for c in drawing.style.title_color)
-    marks = drawing.marks
+    """A sheet's border, title block and view labels on the layer SHEET, dimensions on the
+    layer DIMENSIONS, every line and text with its kind as XDATA."""
+    page, marks = drawing.page, drawing.marks
+    for kind in sorted({*marks.kinds.tolist(), *(t.kind for t in marks.texts)}):
+        layer = doc.layers.add(_MARK_LAYERS[kind])
+        layer.rgb = tuple(round(c * 255) for c in drawing.style.title_color)
     ends = marks.lines.reshape(-1, 2) * page.factor
     ends[:, 1] = page.height - ends[:, 1]
-    for (start, end), width in zip(ends.reshape(-1, 2, 2).tolist(), marks.widths.tolist(), strict=True):
-        msp.add_line(start, end, dxfattribs={"layer": "SHEET", "lineweight": _lineweight(width * base_mm)})
+    for (start, end), width, kind in zip(
+        ends.reshape(-1, 2, 2).tolist(), marks.widths.tolist(), marks.kinds.tolist(), strict=True
+    ):
+        attribs = {"layer": _MARK_LAYERS[kind], "lineweight": _lineweight(width * base_mm)}
+        msp.add_line(start, end, dxfattribs=attribs).set_xdata(APP_ID, [(1000, kind)])
     for text in marks.texts:
-        attribs = {"layer": "SHEET", "rotation": text.angle}
+        attribs = {"layer": _MARK_LAYERS[text.kind], "rotation": text.angle}
         entity = msp.add_text(text.text, height=text.height * page.factor, dxfattribs=attribs)
         align = "BOTTOM_CENTER" if text.anchor == "middle" else "BOTTOM_LEFT"
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor), align=_align(align))
+        entity.set_xdata(APP_ID, [(1000, text.kind)])
 
 
 def fit_arc(points: np.ndarray, tolerance: float, sagitta: float, min_points: int = 6):
@@ -220,7 +230,9 @@ def _glyphs(doc, msp, drawing) -> None:
             "true_color": _true_color(color),
             "lineweight": _lineweight(width * px_mm),
         }
-        msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs)
+        msp.add_lwpolyline(chunk.tolist(), format="xy", dxfattribs=attribs).set_xdata(
+            APP_ID, [(1000, "glyph")]
+        )
     for text in glyphs.texts:
         attribs = {
             "layer": "GLYPHS-HIDDEN" if text.hidden else "GLYPHS",
@@ -228,6 +240,7 @@ def _glyphs(doc, msp, drawing) -> None:
         }
         entity = msp.add_text(text.text, height=0.72 * text.size * page.factor, dxfattribs=attribs)
         entity.set_placement((text.x * page.factor, page.height - text.y * page.factor))
+        entity.set_xdata(APP_ID, [(1000, "glyph")])
 
 
 def _true_color(color) -> int:
@@ -278,15 +291,16 @@ def write_dxf(drawing, path: str | os.PathLike) -> None:
     if drawing.section is not None:
         section_layer = doc.layers.add("SECTION")
         section_layer.rgb = tuple(round(c * 255) for c in style.level(0).color)
-        for segments, width in (
-            (drawing.section.hatch, SECTION_HATCH_WIDTH),
-            (drawing.section.outline, SECTION_OUTLINE_WIDTH),
+        for segments, width, kind in (
+            (drawing.section.hatch, SECTION_HATCH_WIDTH, "hatch"),
+            (drawing.section.outline, SECTION_OUTLINE_WIDTH, "section"),
         ):
             ends = segments.reshape(-1, 2) * page.factor
             ends[:, 1] = page.height - ends[:, 1]
             attribs = {"layer": "SECTION", "lineweight": _lineweight(width * base_mm)}
+            # a cut's lines run across faces: their XDATA is their kind, with no source edges
             for start, end in ends.reshape(-1, 2, 2).tolist():
-                msp.add_line(start, end, dxfattribs=attribs)
+                msp.add_line(start, end, dxfattribs=attribs).set_xdata(APP_ID, [(1000, kind)])
     if drawing.marks is not None:
         _sheet(doc, msp, drawing, base_mm)
     if drawing.glyphs is not None:

@@ -6,7 +6,9 @@ first, as in the SVG; and as the SVG's part layers and level classes let an edit
 the PDF has layers a viewer toggles: one optional content group per part, one per kind of
 line and one per occlusion level (and one for a section, one for a sheet's marks). Each group
 of lines is marked as content of its part's, its kind's and its level's group, so it shows
-only while all three are on. fpdf2 writes no named optional content, so the marks go into its
+only while all three are on; a section's hatching and outline, a sheet's own marks, its
+dimensions and glyphs are content of their kind's group too (``hatch``, ``section``, ``sheet``,
+``dimension``, ``glyph``). fpdf2 writes no named optional content, so the marks go into its
 content stream as they are and pikepdf adds the groups to the document afterwards.
 """
 
@@ -18,8 +20,9 @@ import os
 import numpy as np
 
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
+from blueprint.scene.sheet import MARK_KINDS
 
-from .linework import KINDS
+from .linework import GLYPH, HATCH, KINDS, SECTION
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 
 __all__ = ["level_name", "pdf_bytes"]
@@ -115,39 +118,63 @@ def _add_layers(data: bytes, layers: dict[str, str], order: list) -> bytes:
 
 
 def _section(pdf, drawing, to_page: float, base: float) -> None:
-    """A section's hatching and heavy cut outline in a graphics state group of their own."""
+    """A section's hatching and heavy cut outline in a graphics state group of their own, each
+    marked as content of its kind's layer."""
     color = tuple(round(c * 255) for c in drawing.style.level(0).color)
-    for segments, width in (
-        (drawing.section.hatch, SECTION_HATCH_WIDTH),
-        (drawing.section.outline, SECTION_OUTLINE_WIDTH),
+    for segments, width, kind in (
+        (drawing.section.hatch, SECTION_HATCH_WIDTH, HATCH),
+        (drawing.section.outline, SECTION_OUTLINE_WIDTH, SECTION),
     ):
+        if not len(segments):
+            continue
+        _begin(pdf, f"K{kind}")
         with pdf.local_context():
             pdf.set_draw_color(*color)
             pdf.set_line_width(width * base)
             for (x0, y0), (x1, y1) in (segments * to_page).tolist():
                 pdf.line(x0, y0, x1, y1)
+        _end(pdf)
+
+
+def _section_kinds(section) -> list[int]:
+    """The kinds of line a section draws: its hatching and its outline, where it has them."""
+    return [k for k, lines in ((SECTION, section.outline), (HATCH, section.hatch)) if len(lines)]
+
+
+def _mark_kinds(marks) -> list[int]:
+    """The kinds of a sheet's marks drawn: ``sheet`` and ``dimension``, where there are some."""
+    found = {*marks.kinds.tolist(), *(t.kind for t in marks.texts)}
+    return [KINDS.index(kind) for kind in MARK_KINDS if kind in found]
 
 
 def _sheet(pdf, drawing, to_page: float, base: float, unit: str) -> None:
-    """A sheet's border, title block and view labels, in a graphics state group of their own."""
+    """A sheet's border, title block and view labels, and dimensions, in a graphics state group
+    of their own, each kind marked as content of its kind's layer."""
     marks = drawing.marks
     color = tuple(round(c * 255) for c in drawing.style.title_color)
     points_per_unit = 72 / 25.4 if unit == "mm" else 1.0
-    with pdf.local_context():
-        pdf.set_draw_color(*color)
-        pdf.set_text_color(*color)
-        for ((x0, y0), (x1, y1)), width in zip(
-            (marks.lines * to_page).tolist(), marks.widths.tolist(), strict=True
-        ):
-            pdf.set_line_width(width * base)
-            pdf.line(x0, y0, x1, y1)
-        for text in marks.texts:
-            _font(pdf, text.height * to_page * points_per_unit)
-            value = _text(pdf, text.text)
-            x, y = text.x * to_page, text.y * to_page
-            shift = pdf.get_string_width(value) / 2 if text.anchor == "middle" else 0.0
-            with pdf.rotation(text.angle, x, y):
-                pdf.text(x - shift, y, value)
+    for code in _mark_kinds(marks):
+        kind = KINDS[code]
+        of_kind = marks.kinds == kind
+        _begin(pdf, f"K{code}")
+        with pdf.local_context():
+            pdf.set_draw_color(*color)
+            pdf.set_text_color(*color)
+            for ((x0, y0), (x1, y1)), width in zip(
+                (marks.lines[of_kind] * to_page).tolist(), marks.widths[of_kind].tolist(), strict=True
+            ):
+                pdf.set_line_width(width * base)
+                pdf.line(x0, y0, x1, y1)
+            for text in marks.texts:
+                if text.kind != kind:
+                    continue
+                _font(pdf, text.height * to_page * points_per_unit)
+                value = _text(pdf, text.text)
+                x, y = text.x * to_page, text.y * to_page
+                shift = pdf.get_string_width(value) / 2 if text.anchor == "middle" else 0.0
+                with pdf.rotation(text.angle, x, y):
+                    pdf.text(x - shift, y, value)
+        _end(pdf)
 
 
 def _lines(pdf, drawing, groups, points, offsets, base: float) -> None:
@@ -253,6 +280,14 @@ def pdf_bytes(drawing) -> bytes:
     parts = sorted({int(p) for p in drawing.part[shown].tolist()})
     kinds = sorted({int(k) for k in drawing.kind[shown].tolist()})
     levels = sorted({int(k) for k in drawing.level[shown].tolist()})
+    # the kinds of what is drawn besides the lines: a section, a sheet's marks, glyphs
+    if drawing.section is not None:
+        kinds += _section_kinds(drawing.section)
+    if drawing.marks is not None:
+        kinds += _mark_kinds(drawing.marks)
+    if drawing.glyphs is not None:
+        kinds.append(GLYPH)
+    kinds = sorted(set(kinds))
     layers = {f"P{p}": drawing.part_names[p] for p in parts}
     layers.update({f"K{k}": KINDS[k] for k in kinds})
     layers.update({f"L{k}": level_name(k) for k in levels})
@@ -288,9 +323,9 @@ def pdf_bytes(drawing) -> bytes:
     if drawing.glyphs is not None:
         layers["GLYPHS"] = "glyphs"
         order.append("GLYPHS")
-        _begin(pdf, "GLYPHS")
+        _begin(pdf, "GLYPHS", f"K{GLYPH}")
         _glyphs(pdf, drawing.glyphs, to_page, unit)
-        _end(pdf)
+        _end(pdf, 2)
     if drawing.title:
         size_pt = 0.022 * drawing.height * to_page * (72 / 25.4 if unit == "mm" else 1.0)
         _font(pdf, size_pt)

@@ -9,6 +9,7 @@ from html import escape as _escape
 import numpy as np
 
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
+from blueprint.scene.sheet import MARK_KINDS
 
 from .linework import KINDS, Lines, runs_of
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
@@ -387,19 +388,23 @@ def _section_group(drawing, factor: float, decimals: int, base: float) -> str:
 
 
 def _sheet_group(drawing, factor: float, decimals: int, base: float) -> str:
-    """A sheet's border, title block and view labels as the group ``sheet``."""
+    """A sheet's border, title block and view labels, and dimensions, as the group ``sheet``:
+    a path per kind of mark (``data-kind`` ``sheet`` or ``dimension``) and width, then the
+    texts, each with its kind."""
     marks = drawing.marks
     color = LineStyle(drawing.style.title_color).hex
     out = [f'<g id="sheet" class="sheet" fill="none" stroke="{color}" stroke-linecap="square">\n']
-    for width in np.unique(marks.widths).tolist():
-        segments = marks.lines[marks.widths == width]
-        d = path_data(segments.reshape(-1, 2), np.arange(0, 2 * len(segments) + 1, 2), factor, decimals)
-        out.append(f'<path stroke-width="{width * base:.4g}" d="{d}"/>\n')
+    for kind in MARK_KINDS:
+        of_kind = marks.kinds == kind
+        for width in np.unique(marks.widths[of_kind]).tolist():
+            segments = marks.lines[of_kind & (marks.widths == width)]
+            d = path_data(segments.reshape(-1, 2), np.arange(0, 2 * len(segments) + 1, 2), factor, decimals)
+            out.append(f'<path data-kind="{kind}" stroke-width="{width * base:.4g}" d="{d}"/>\n')
     for text in marks.texts:
         x, y = text.x * factor, text.y * factor
         turn = f' transform="rotate({-text.angle:g} {x:.6g} {y:.6g})"' if text.angle else ""
         out.append(
-            f'<text x="{x:.6g}" y="{y:.6g}"{turn} font-family="sans-serif" '
+            f'<text data-kind="{text.kind}" x="{x:.6g}" y="{y:.6g}"{turn} font-family="sans-serif" '
             f'font-size="{text.height * factor:.4g}" text-anchor="{text.anchor}" fill="{color}" '
             f'stroke="none">{_text(text.text)}</text>\n'
         )

@@ -38,8 +38,13 @@ A glyph file is TOML or JSON (chosen by extension)::
     text = "90 h7"                # optional: default the distance in mm (see units)
     offset = 12                   # optional, model units, left of from -> to on screen
 
+    [[dimension]]                 # the model's edge 118 (blueprint.edge_numbers), end to end
+    edge = 118                    # or edges = [118, 240]: the distance between two edges
+
 ``load_glyphs`` reads a file and ``Glyphs.from_dict`` validates plain data (both raise
-``InputError`` with one line naming the file and the entry); ``draw_glyphs`` draws them over an
+``InputError`` with one line naming the file and the entry); dimensions given by edges get
+their points from a model (``blueprint.vector.anchors.anchor_glyphs``, which ``render`` and
+``draw`` call); ``draw_glyphs`` draws them over an
 image, given the camera and the blueprint's front depth layer; ``render_with_glyphs`` peels
 that layer itself. No GPU here except through ``render_with_glyphs``.
 

@@ -14,6 +14,7 @@ from blueprint.compose.glyphs.parse import Glyphs, load_glyphs
 from blueprint.compose.glyphs.projection import View
 from blueprint.compose.glyphs.raster import draw_pieces, draw_text
 from blueprint.compose.glyphs.strokes import arrow_stroke, box_corners, box_stroke, path_stroke, stroke_pieces
+from blueprint.errors import InputError
 from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
@@ -90,7 +91,19 @@ def draw_glyphs(
     -------
     np.ndarray
         A new image of the same shape and dtype uint8.
+
+    Raises
+    ------
+    InputError
+        A dimension given by edges that is not anchored to a model yet
+        (``blueprint.anchor_glyphs``).
     """
+    for i, dimension in enumerate(glyphs.dimensions, 1):
+        if dimension.start is None:
+            raise InputError(
+                f"{glyphs.source}: dimension {i} is given by edges: anchor the glyphs to the model "
+                "drawn first (blueprint.anchor_glyphs)"
+            )
     image = np.asarray(image)
     if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype != np.uint8:
         raise ValueError(f"image must be (H, W, 4) uint8, got {image.shape} {image.dtype}")
@@ -152,7 +165,8 @@ def render_with_glyphs(
     """Peel the front depth layer of ``model`` at ``camera`` and ``size`` and draw ``glyphs``
     (a ``Glyphs`` or a glyph file) over ``frame_image`` (the blueprint drawn with the same
     camera and size); dimensions' values in mm from ``mm_per_model``. Returns a new
-    (H, W, 4) uint8 image."""
+    (H, W, 4) uint8 image. Dimensions given by edges must be anchored first
+    (``blueprint.anchor_glyphs(glyphs, model)``): ``blueprint.render`` does it."""
     if not isinstance(glyphs, Glyphs):
         glyphs = load_glyphs(glyphs)
     w, h = (int(v) for v in size)

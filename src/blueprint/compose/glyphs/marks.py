@@ -87,6 +87,8 @@ def dimension_glyph_marks(
     points in millimetres (``mm_per_model``) unless it has a text; ``per_mm`` pixels a mm of
     ISO 129's measures. Nothing where a point lies behind the camera or the two points are seen
     one behind the other."""
+    if dimension.start is None or dimension.end is None:
+        raise ValueError("a dimension given by edges has no points until anchored (blueprint.anchor_glyphs)")
     mvp = np.asarray(projection, np.float64) @ np.asarray(view, np.float64)
 
     def screen(point: np.ndarray) -> np.ndarray | None:

@@ -32,19 +32,21 @@ _MAX_POINTS = 100_000
 _KINDS = {
     "arrow": ("from", "to", "head", "color", "width", "dash", "label"),
     "box": ("min", "max", "color", "width", "dash", "label"),
-    "dimension": ("from", "to", "text", "offset", "color", "width"),
+    "dimension": ("from", "to", "edge", "edges", "text", "offset", "color", "width"),
     "label": ("at", "text", "color", "size", "anchor"),
     "path": ("points", "closed", "color", "width", "dash", "label"),
 }
 _REQUIRED = {
     "arrow": ("from", "to"),
     "box": ("min", "max"),
-    "dimension": ("from", "to"),
+    "dimension": (),
     "label": ("at", "text"),
     "path": ("points",),
 }
 # a dimension's offset from its points, in model units, either way
 _MAX_OFFSET = 1e12
+# edge numbers beyond this are no model's (and would not fit an int64 sum)
+_MAX_EDGE = 2**53
 _HIDDEN_KEYS = ("mode", "opacity", "dash")
 _TOP = (*sorted(_KINDS), "hidden")
 
@@ -184,12 +186,43 @@ def _model_point(e: _Entry, key: str) -> tuple[float, float, float]:
     return e.point(key)
 
 
+def _edge_number(e: _Entry, key: str, value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= _MAX_EDGE:
+        raise e.fail(f"{key} must be an edge number (a whole number from 0), got {show(value)}")
+    return value
+
+
+def _anchors(e: _Entry) -> tuple[tuple | None, tuple | None, tuple[int, ...]]:
+    """(start, end, edges) of a dimension: two model points, one edge or two edges."""
+    given = [key for key in ("edge", "edges") if key in e.table]
+    points = [key for key in ("from", "to") if key in e.table]
+    if (given and points) or len(given) > 1:
+        raise e.fail(f"give from and to, edge or edges, one of them alone (got {', '.join(points + given)})")
+    if not given:
+        if not points:
+            raise e.fail("give from and to (model points), edge = N or edges = [N, M] (edge numbers)")
+        for key in ("from", "to"):
+            if key not in e.table:
+                raise e.fail(f"{key} is missing")
+        start, end = _model_point(e, "from"), _model_point(e, "to")
+        if start == end:
+            raise e.fail("from and to are the same point: a dimension measures between two")
+        return start, end, ()
+    if given == ["edge"]:
+        return None, None, (_edge_number(e, "edge", e.table["edge"]),)
+    value = e.table["edges"]
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        raise e.fail(f"edges must be two edge numbers [N, M], got {show(value)}")
+    edges = tuple(_edge_number(e, "edges", v) for v in value)
+    if edges[0] == edges[1]:
+        raise e.fail(f"edges names edge {edges[0]} twice: a dimension measures between two")
+    return None, None, edges
+
+
 def _dimension(e: _Entry) -> Dimension:
-    start, end = _model_point(e, "from"), _model_point(e, "to")
-    if start == end:
-        raise e.fail("from and to are the same point: a dimension measures between two")
+    start, end, edges = _anchors(e)
     offset = None
     if "offset" in e.table:
         offset = e.number("offset", 0.0, -_MAX_OFFSET, _MAX_OFFSET)
     width = e.number("width", 1.0, 0.0, _MAX_WIDTH, lo_open=True)
-    return Dimension(start, end, e.string("text", ""), offset, e.color(), width)
+    return Dimension(start, end, e.string("text", ""), offset, e.color(), width, edges)

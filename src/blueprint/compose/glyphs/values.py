@@ -104,11 +104,18 @@ class Dimension:
     millimetres). ``offset`` is the dimension line's distance from the points in model units,
     to the left of ``start`` -> ``end`` on screen where positive; None: ISO 129's 8 mm on
     paper. Drawn over everything, as drawings show dimensions; ``width`` is the base line
-    width in pixels (dimension lines are thin: 0.7 of it)."""
+    width in pixels (dimension lines are thin: 0.7 of it).
 
-    start: tuple[float, float, float]
-    end: tuple[float, float, float]
+    ``edges`` anchors it to the model instead of to points: one edge number (rows of
+    ``blueprint.edge_numbers``) measures that edge between its two ends, two measure the
+    distance between those edges (``blueprint.vector.anchors.edge_distance`` says which).
+    ``start`` and ``end`` are None until ``blueprint.vector.anchors.anchor_glyphs`` finds
+    them on the model drawn."""
+
+    start: tuple[float, float, float] | None
+    end: tuple[float, float, float] | None
     text: str = ""
     offset: float | None = None
     color: RGBA = hex_color(DEFAULT_COLOR)
     width: float = 1.0
+    edges: tuple[int, ...] = ()
