@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 from pathlib import Path
 
 from blueprint import settings
@@ -164,6 +163,8 @@ _KINDS = {dict: "an object", list: "a list", str: "a string"}
 
 def _kind(value) -> str:
     """What a JSON value is, in a message: its kind, or a number, true, false or null itself."""
+    import json
+
     if type(value) in _KINDS:
         return _KINDS[type(value)]
     shown = json.dumps(value)
@@ -298,6 +299,9 @@ def _whole(value) -> bool:
 
 
 def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
+    # imported here: the files of one mesh (STL, OBJ, PLY, OFF) parse no JSON
+    import json
+
     with contextlib.ExitStack() as stack:
         fh = (
             io.BytesIO(data)
