@@ -15,7 +15,6 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError, out_of_memory
-from blueprint.scene.archive import members
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh
 from blueprint.scene.headers import check_triangle_count
@@ -29,8 +28,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("blueprint")
 
-# The instances' modules are imported by the scenes that may be kept as instances: a drawing of
-# one mesh (STL, OBJ, PLY, OFF) loads none of them.
+# The instances' modules and the archives' are imported by the files that need them: a drawing
+# of one mesh (STL, OBJ, PLY, OFF) loads none of them.
 
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
 MAX_COORDINATE = settings.COORDINATE_LIMIT
@@ -327,6 +326,8 @@ def _archive_scene(path: Path, kind: str):
     first (which decides the default up axis). Files the models reference (materials,
     textures, buffers) are looked up among the archive's members."""
     import trimesh
+
+    from blueprint.scene.archive import members
 
     files = members(path, kind)
     loadable = {s for f in FORMATS if f.trimesh and f.container is None for s in f.suffixes}
