@@ -7,7 +7,6 @@ read: regular files only, of a bounded size, both known from ``stat`` before any
 from __future__ import annotations
 
 import errno
-import json
 import math
 import os
 import stat
@@ -246,24 +245,38 @@ def _number_text(name: str, kind: type):
 def parse_text(text: str, name: str, fmt: str) -> Any:
     """The data of TOML or JSON ``text`` (``fmt`` "toml" or "json") from the file ``name``, with
     nesting depth and number sizes bounded: a one-line InputError naming the file and the key."""
-    import tomllib  # its regular expressions are compiled at import: most runs read no TOML
-
+    # each parser imported by the runs that read its format: tomllib compiles regular
+    # expressions at import, and a picture reads its pipeline's TOML but no JSON
     floats = _number_text(name, float)
     try:
         if fmt == "toml":
-            data = tomllib.loads(text, parse_float=floats)
+            data = _toml(text, name, floats)
         else:
-            data = json.loads(text, parse_int=_number_text(name, int), parse_float=floats)
+            data = _json(text, name, floats)
     except RecursionError:
         raise InputError(f"{name}: tables or arrays nested deeper than {SETTINGS_DEPTH_LIMIT}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{name}: not valid TOML ({one_line(exc)})") from None
-    except json.JSONDecodeError as exc:
-        raise InputError(f"{name}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
     except ValueError:  # Python's own limit on the digits of an integer, met inside tomllib
         raise InputError(f"{name}: a number of too many digits (at most {SETTINGS_DIGITS_LIMIT})") from None
     _check_tree(data, name)
     return data
+
+
+def _toml(text: str, name: str, floats) -> Any:
+    import tomllib
+
+    try:
+        return tomllib.loads(text, parse_float=floats)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{name}: not valid TOML ({one_line(exc)})") from None
+
+
+def _json(text: str, name: str, floats) -> Any:
+    import json
+
+    try:
+        return json.loads(text, parse_int=_number_text(name, int), parse_float=floats)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{name}: not valid JSON ({exc.msg} at line {exc.lineno})") from None
 
 
 def _check_tree(data: Any, name: str) -> None:

@@ -154,6 +154,12 @@ def test_objects_that_cannot_be_drawn_raise_one_line(obj, message):
 PICTURE_HEAVY = ["scipy", "networkx", "trimesh", "moderngl", "blueprint.silhouette", "blueprint.vector"]
 PICTURE_HEAVY += ["dask", "PIL", "click", "blueprint.compose.glyphs", "blueprint.api.sections"]
 PICTURE_HEAVY += ["blueprint.api.files", "importlib.resources", "zipfile", "difflib"]
+# the other formats' readers, plan sheets, dimensions and models kept as instances
+PICTURE_HEAVY += [
+    f"blueprint.scene.formats.{m}" for m in ("gltf", "obj", "ply", "off", "step", "threemf", "dxml")
+]
+PICTURE_HEAVY += ["blueprint.scene.sheet", "blueprint.scene.dimension", "blueprint.compose.sheet"]
+PICTURE_HEAVY += ["blueprint.scene.instances", "blueprint.scene.instanced_parts"]
 # what a vector drawing does without (benchmarks/vector.py, whole processes)
 VECTOR_HEAVY = ["scipy", "networkx", "trimesh", "PIL", "dask", "tomllib", "blueprint.pipeline.executor"]
 VECTOR_HEAVY += ["blueprint.ops", "blueprint.gpu_silhouettes", "blueprint.compose.glyphs.values"]

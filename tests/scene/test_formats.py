@@ -6,13 +6,18 @@ against arrays written by hand."""
 from __future__ import annotations
 
 import io
+import os
+import subprocess
+import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
 from helpers import loaded_in_a_process
 
+import blueprint
 from blueprint.api.batch import MODEL_SUFFIXES
 from blueprint.errors import InputError
 from blueprint.scene import loader
@@ -74,6 +79,44 @@ def test_folders_are_searched_for_the_common_formats():
     assert MODEL_SUFFIXES == tuple(f".{s}" for s in FORMATS.common_suffixes())
     assert {".obj", ".stl", ".ply", ".off", ".glb", ".step"} <= set(MODEL_SUFFIXES)
     assert set(loader.supported_formats()) >= {s.lstrip(".") for s in MODEL_SUFFIXES} | {"zip", "gz", "xz"}
+
+
+def test_every_function_a_record_names_is_in_its_module():
+    """The records name their formats' functions without importing them (``deferred``): each
+    name must be a function of its module, or a file of the format fails only when read."""
+    import importlib
+
+    named = [
+        (fmt.name, getattr(fmt, role))
+        for fmt in FORMATS
+        for role in ("check", "read", "read_data", "stated_unit")
+        if getattr(fmt, role) is not None
+    ]
+    assert len(named) == 15
+    for name, function in named:
+        assert callable(getattr(importlib.import_module(function.module), function.name)), (name, function)
+
+
+def test_the_readers_are_imported_by_the_files_that_need_them(tmp_path):
+    """``import blueprint`` and the API import no format's module; a binary STL imports the STL
+    reader's (and its text helpers) and no other."""
+    path = tmp_path / "a.stl"
+    triangle = np.array([0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0], "<f4").tobytes() + b"\0\0"
+    path.write_bytes(b"\0" * 80 + (1).to_bytes(4, "little") + triangle)
+    code = (
+        "import sys, blueprint\nfrom blueprint.api import draw, renderer\n"
+        "from blueprint.export import writers\n"
+        "def readers(): return sorted(m for m in sys.modules if m.startswith('blueprint.scene.formats.'))\n"
+        f"print(readers()); blueprint.load_model({str(path)!r}); print(readers())"
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(blueprint.__file__).parents[1])}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    at_import, after_stl = done.stdout.splitlines()
+    assert at_import == "['blueprint.scene.formats.base']"
+    assert after_stl == str(
+        ["blueprint.scene.formats.base", "blueprint.scene.formats.stl", "blueprint.scene.formats.text"]
+    )
 
 
 def test_a_suffix_is_registered_once():

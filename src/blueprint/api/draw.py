@@ -16,11 +16,10 @@ from blueprint.api.options import PLAN, DrawOptions, options_but, takes_options,
 from blueprint.api.renderer import Renderer
 from blueprint.errors import InputError
 from blueprint.render.renderer import Frame
-from blueprint.scene.dimension import UNITS_MM, dimension_margin
 from blueprint.scene.environment import PartGlobs
 from blueprint.scene.loader import load_model, model_from_object
 from blueprint.scene.model import Model
-from blueprint.scene.units import drawing_unit, warn_if_assumed
+from blueprint.scene.units import UNITS_MM, drawing_unit, warn_if_assumed
 
 if TYPE_CHECKING:
     from blueprint.export.writers import Kind, Writer
@@ -203,8 +202,13 @@ def vector_drawing(model: Model, options: DrawOptions, renderer: Renderer):
         if measures:
             warn_if_assumed(model, options.units)
         return drawing
-    # room for the dimensions below and right of the model
-    margin = dimension_margin(size, 96.0 / 25.4) if options.dimensions else 0.05
+    margin = 0.05
+    if options.dimensions:
+        # the dimensions' module loads with the drawings that have them
+        from blueprint.scene.dimension import dimension_margin
+
+        # room for the dimensions below and right of the model
+        margin = dimension_margin(size, 96.0 / 25.4)
     camera = options.fit_camera(model, size, margin=margin)
     if cut is not None:
         made = cut.cut(model, camera)

@@ -15,23 +15,19 @@ import numpy as np
 from blueprint.api.options import PLAN, DrawOptions, PartSpec, options_but, takes_options
 from blueprint.api.picture import blueprint_frame
 from blueprint.api.renderer import Renderer
-from blueprint.compose.sheet import over, paper_image
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
-from blueprint.scene.dimension import UNITS_MM, dimension_margin
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
-from blueprint.scene.parts import designated_parts
-from blueprint.scene.sheet import Marks, lay_out_sheet, model_name, picture_per_mm, sheet_fields
-from blueprint.scene.units import drawing_unit, warn_if_assumed
+from blueprint.scene.units import UNITS_MM, drawing_unit, warn_if_assumed
 
 if TYPE_CHECKING:
     from blueprint.api.sections import Section
 
-# Sections, glyphs and marks are imported where a frame has them: a plain drawing's start-up
-# (benchmarks/startup.py) loads none of them.
+# Sections, glyphs, marks, dimensions and plan sheets are imported where a frame has them: a
+# plain drawing's start-up (benchmarks/startup.py) loads none of them.
 
 __all__ = ["PLAN", "PartSpec", "peel", "render", "render_frame"]
 
@@ -109,8 +105,13 @@ def render_frame(
         glyphs = anchor_glyphs(glyphs, model)
     measures = dimensions or (glyphs is not None and bool(glyphs.dimensions))
     mm_per_model = UNITS_MM[drawing_unit(model, options.units)]
-    # room for the dimensions below and right of the model
-    margin = dimension_margin(size, picture_per_mm(size)) if dimensions else 0.05
+    margin = 0.05
+    if dimensions:
+        from blueprint.scene.dimension import dimension_margin
+        from blueprint.scene.sheet import picture_per_mm
+
+        # room for the dimensions below and right of the model
+        margin = dimension_margin(size, picture_per_mm(size))
     cam = options.fit_camera(model, margin=margin)
     if dimensions and not cam.ortho:
         raise InputError("dimensions need an orthographic view (--ortho, or --view plan)")
@@ -150,7 +151,11 @@ def render_frame(
 
 def _parts(model: Model, spec: PartSpec | None) -> np.ndarray | None:
     """The parts of ``model`` that ``spec`` designates, (P,) bool, or None."""
-    return None if spec is None else designated_parts(model, spec)
+    if spec is None:
+        return None
+    from blueprint.scene.parts import designated_parts
+
+    return designated_parts(model, spec)
 
 
 def _section_of(model: Model, options: DrawOptions) -> Section | None:
@@ -174,6 +179,7 @@ def _dimensions(
     """The dimensions of an orthographic view in its pixels (``Marks``), as the vector drawing
     has them, and the circles its lines find."""
     # the vector lines find the circles; they load only where a drawing has dimensions
+    from blueprint.scene.sheet import picture_per_mm
     from blueprint.vector.dimension import dimension_marks, find_circles
 
     view, projection = camera.view_matrix(), camera.projection_matrix()
@@ -212,6 +218,8 @@ def _plan_layout(model: Model, drawn: Model, options: DrawOptions, unit: str, ro
     pixels large: the views are drawn at one cell size, scaled until, laid out, they fill the
     room the border and title block leave (the gaps, labels and border scale with the cell;
     the title block and the dimensions' measures do not, hence the steps)."""
+    from blueprint.scene.sheet import lay_out_sheet
+
     circles: dict[str, list] = {}
     size, crease_angle = options.size, options.crease_angle
 
@@ -251,6 +259,8 @@ def _plan_frame(model: Model, options: DrawOptions, renderer: Renderer, section:
     ``blueprint.scene.sheet.lay_out_sheet`` (as the vector sheet is) with their labels, a border
     and a title block; a section cuts the model as the front view sees it, in every view."""
     from blueprint.compose.glyphs.marks import draw_marks
+    from blueprint.compose.sheet import over, paper_image
+    from blueprint.scene.sheet import Marks, model_name, sheet_fields
 
     size = options.size
     if size[0] < 2 or size[1] < 2:

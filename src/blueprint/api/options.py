@@ -29,7 +29,6 @@ from blueprint.gpu.device import check_size
 from blueprint.render.stop import HARD_MAX_LAYERS
 from blueprint.scene.camera import VIEWS, Camera
 from blueprint.scene.model import Model
-from blueprint.scene.sheet import paper_size, parse_scale
 from blueprint.scene.units import check_units
 
 if TYPE_CHECKING:
@@ -303,12 +302,16 @@ class DrawOptions:
         object.__setattr__(self, "_plane", self._section_plane())
         if self.units is not None:
             check_units(self.units)
-        if self.scale is not None:
-            parse_scale(self.scale)
-        if self.sheet is not None:
-            paper_size(self.sheet)
-            if self.view != PLAN:
-                raise InputError(f"--sheet {self.sheet} sets the paper of a plan sheet: give --view plan")
+        if self.scale is not None or self.sheet is not None:
+            # the sheet's module loads with the drawings to scale and on paper
+            from blueprint.scene.sheet import paper_size, parse_scale
+
+            if self.scale is not None:
+                parse_scale(self.scale)
+            if self.sheet is not None:
+                paper_size(self.sheet)
+                if self.view != PLAN:
+                    raise InputError(f"--sheet {self.sheet} sets the paper of a plan sheet: give --view plan")
         if self.glyphs is not None:
             if self.view == PLAN:
                 raise InputError("glyphs need one view; the plan sheet draws four")
@@ -448,8 +451,9 @@ def takes_options(
     A call makes the ``DrawOptions`` once, from the fields given (``prepare`` may rewrite them
     first) over ``options`` where it is given, else over those defaults, and passes it on.
     """
-    chosen = names or tuple(option_fields())
-    unknown = set(chosen) - set(option_fields()) | set(defaults) - set(chosen)
+    known = option_fields()
+    chosen = names or tuple(known)
+    unknown = set(chosen) - set(known) | set(defaults) - set(chosen)
     assert not unknown, unknown
     keyword = inspect.Parameter.KEYWORD_ONLY
 
@@ -461,8 +465,8 @@ def takes_options(
             inspect.Parameter(
                 name,
                 keyword,
-                default=defaults.get(name, option_fields()[name].default),
-                annotation=option_fields()[name].type,
+                default=defaults.get(name, known[name].default),
+                annotation=known[name].type,
             )
             for name in chosen
         ]

@@ -16,7 +16,6 @@ GPU (``watch``). Nothing is told without a listener.
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -134,5 +133,7 @@ def gpu_memory(renderer) -> dict | None:
 def report(renderer=None) -> None:
     """Print the stages counted, and the GPU memory of ``renderer`` where given, as one JSON
     line on stderr."""
+    import json  # the runs that time their stages alone write JSON
+
     memory = gpu_memory(renderer) if renderer is not None else None
     print(json.dumps({"stages": _SECONDS, "gpu_memory": memory}), file=sys.stderr, flush=True)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.scene.instances import flatten
 from blueprint.scene.model import Model
 from blueprint.scene.prepare import gpu_arrays
 
@@ -131,6 +130,8 @@ def draw_groups(model: Model, crease_angle: float | None) -> list[tuple[np.ndarr
             keep = np.zeros(len(inst.mesh), bool)
             keep[run] = True
             part_number = np.arange(len(model.part_names))
+            from blueprint.scene.instances import flatten
+
             positions, faces, face_part = flatten(inst.subset(keep, part_number))
             block = Model(positions, faces, face_part, model.part_names)
             vertices, indices = gpu_arrays(block, crease_angle)

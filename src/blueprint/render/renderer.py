@@ -5,7 +5,7 @@ depth layers peeled and read back for other tools; what code below the API takes
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -20,7 +20,9 @@ from blueprint.render.stop import standard_rules
 from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
-from blueprint.scene.sheet import Marks
+
+if TYPE_CHECKING:
+    from blueprint.scene.sheet import Marks
 
 
 @dataclass

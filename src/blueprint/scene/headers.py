@@ -9,12 +9,10 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 from pathlib import Path
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.scene.instances import worth_instancing
 from blueprint.settings import human_size, open_file
 
 # the most of a file read to find its header
@@ -168,6 +166,8 @@ _KINDS = {dict: "an object", list: "a list", str: "a string"}
 
 def _kind(value) -> str:
     """What a JSON value is, in a message: its kind, or a number, true, false or null itself."""
+    import json
+
     if type(value) in _KINDS:
         return _KINDS[type(value)]
     shown = json.dumps(value)
@@ -302,6 +302,9 @@ def _whole(value) -> bool:
 
 
 def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
+    # imported here: the files of one mesh (STL, OBJ, PLY, OFF) parse no JSON
+    import json
+
     with contextlib.ExitStack() as stack:
         fh = (
             io.BytesIO(data)
@@ -405,13 +408,23 @@ def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
     check_triangle_count(path, sum(triangles[r] for r in roots), placed, sum(meshes.values()))
 
 
+def _kept(triangles: int, unique: int | None) -> bool:
+    """Whether the loader keeps a scene of ``triangles`` drawn of ``unique`` as instances;
+    a single mesh (``unique`` None) loads nothing of the instances' module."""
+    if unique is None:
+        return False
+    from blueprint.scene.instances import worth_instancing
+
+    return worth_instancing(triangles, unique)
+
+
 def peak_estimate(triangles: int, unique: int | None = None, instances: int = 0) -> int:
     """Bytes a drawing of ``triangles`` triangles (all instances together) is expected to take
     at its peak over what the process holds before it: ``settings.TRIANGLE_BYTES`` a triangle;
     where they are ``instances`` mesh instances of ``unique`` triangles that the loader keeps
     as instances (``instances.worth_instancing``), its unique triangles' and
     ``settings.INSTANCE_BYTES`` an instance."""
-    if unique is not None and worth_instancing(triangles, unique):
+    if _kept(triangles, unique):
         return int(unique) * settings.TRIANGLE_BYTES + int(instances) * settings.INSTANCE_BYTES
     return int(triangles) * settings.TRIANGLE_BYTES
 
@@ -422,7 +435,7 @@ def check_triangle_count(name, count: int, instances: int | None = None, unique:
     ``peak_estimate``, passes the memory budget (``settings.MEMORY_BUDGET``), naming ``name``,
     the counts, the estimate and the budget: from the header's counts, before any triangle is
     read or made."""
-    kept = unique is not None and worth_instancing(count, unique)
+    kept = _kept(count, unique)
     estimate = peak_estimate(count, unique if kept else None, instances or 0)
     if estimate <= settings.MEMORY_BUDGET:
         return

@@ -9,23 +9,27 @@ import logging
 import os
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError, out_of_memory
-from blueprint.scene.archive import members
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh
 from blueprint.scene.headers import check_triangle_count
-from blueprint.scene.instanced_parts import choose_instanced_parts
-from blueprint.scene.instances import Instances, mesh_degenerate, most_coincident, worth_instancing
 from blueprint.scene.model import Model
 from blueprint.scene.units import object_unit
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
 
+if TYPE_CHECKING:
+    from blueprint.scene.instances import Instances
+
 log = logging.getLogger("blueprint")
+
+# The instances' modules and the archives' are imported by the files that need them: a drawing
+# of one mesh (STL, OBJ, PLY, OFF) loads none of them.
 
 # Beyond this, view and projection matrices overflow the GPU's 32-bit floats.
 MAX_COORDINATE = settings.COORDINATE_LIMIT
@@ -153,8 +157,11 @@ def model_from_object(
         model = obj if up is None or up == obj.up else obj.replaced(up=up)
         if include is None and exclude is None:
             return model
-        choose = choose_parts if model.instances is None else choose_instanced_parts
-        return choose(model, include, exclude)
+        if model.instances is None:
+            return choose_parts(model, include, exclude)
+        from blueprint.scene.instanced_parts import choose_instanced_parts
+
+        return choose_instanced_parts(model, include, exclude)
     if isinstance(obj, tuple | list) and len(obj) == 2:
         label = name or "(vertices, faces)"
         positions, faces = _pair(obj, label)
@@ -262,6 +269,9 @@ def _checked_instances(
 ) -> Model:
     """``_checked`` of a scene kept as instances, from its unique meshes and transforms: it is
     never flattened here."""
+    from blueprint.scene.instanced_parts import choose_instanced_parts
+    from blueprint.scene.instances import mesh_degenerate, most_coincident
+
     bad = ~np.isfinite(inst.positions).all(axis=1)
     bad_per_mesh = np.add.reduceat(bad.astype(np.int64), inst.vertex_start[:-1])
     unplaced = ~np.isfinite(inst.transform).all(axis=(1, 2))
@@ -316,6 +326,8 @@ def _archive_scene(path: Path, kind: str):
     first (which decides the default up axis). Files the models reference (materials,
     textures, buffers) are looked up among the archive's members."""
     import trimesh
+
+    from blueprint.scene.archive import members
 
     files = members(path, kind)
     loadable = {s for f in FORMATS if f.trimesh and f.container is None for s in f.suffixes}
@@ -474,6 +486,8 @@ def _joined(instances: list[Instance], stem: str | None, label: str, instanced: 
     taken: set[str] = set()
     counts: dict[str, int] = {}
     names = [stem if single else _part_name(i.node, i.geometry, taken, counts) for i in drawn]
+    from blueprint.scene.instances import worth_instancing
+
     if instanced and worth_instancing(int(face_counts.sum()), unique):
         return _kept_instances(drawn, list(by_mesh.values()), label), None, None, names
     vertex_counts = np.array([len(i.vertices) for i in drawn], np.int64)
@@ -531,6 +545,8 @@ def _mesh_arrays(mesh: Instance, label: str) -> tuple[np.ndarray, np.ndarray]:
 def _kept_instances(drawn: list[Instance], by_mesh: list[list[int]], label: str) -> Instances:
     """The instances ``drawn`` as unique meshes (``by_mesh``: the instances of each, in order
     of first use) placed by their transforms, a part each."""
+    from blueprint.scene.instances import Instances
+
     vertices, faces = [], []
     mesh = np.empty(len(drawn), np.int32)
     for m, users in enumerate(by_mesh):

@@ -2,17 +2,22 @@
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from blueprint.columns import column_max, column_min, face_cross, indexed_cross
 from blueprint.scene.headers import check_triangle_count
-from blueprint.scene.instances import Instances, flatten, instance_boxes, placed_blocks
 from blueprint.scene.units import UNITS_MM
+
+if TYPE_CHECKING:
+    from blueprint.scene.instances import Instances
+
+# The instances' module is imported by the models kept as instances: a flat model's drawing
+# loads none of it.
 
 
 class _Flattened:
@@ -29,6 +34,8 @@ class _Flattened:
             raise AttributeError(self.name)  # a field without a default
         value = model.__dict__[self.key]
         if value is None:
+            from blueprint.scene.instances import flatten
+
             inst = model.instances
             check_triangle_count(model.source or "the model", inst.triangle_count, len(inst.mesh))
             positions, faces, face_part = flatten(inst)
@@ -189,6 +196,8 @@ class Model:
         """(N, 2, 3) float64: each instance's bounds (``instances.instance_boxes``), made once;
         only for a model kept as instances."""
         if "instance_boxes" not in self._cache:
+            from blueprint.scene.instances import instance_boxes
+
             self._cache["instance_boxes"] = instance_boxes(self.instances)
         return self._cache["instance_boxes"]
 
@@ -197,6 +206,8 @@ class Model:
         model kept as instances placing its meshes a block of instances at a time."""
         if self.instances is None or self.is_flat:
             return iter((self.positions.astype(np.float64),))
+        from blueprint.scene.instances import placed_blocks
+
         return (block.reshape(-1, 3).astype(np.float64) for block in placed_blocks(self.instances))
 
     def content_digest(self) -> bytes:
@@ -204,6 +215,9 @@ class Model:
         kept as instances, its meshes and instances): models with one digest draw alike, so
         work kept by it serves a file loaded again. Made once."""
         if "digest" not in self._cache:
+            # imported at the first digest: what draws nothing (info, --help) loads no OpenSSL
+            import hashlib
+
             digest = hashlib.sha256()
             i = self.instances
             arrays = (

@@ -3,11 +3,14 @@
 A format is one ``Format`` record: its suffixes, the up axis and length unit its specification
 states, the checks of its header that run before any reader believes them, and its reader: a
 NumPy reader of the common file, which answers None to leave the rest to trimesh. The loader
-(``blueprint.scene.loader``) asks the registry, never the suffix itself.
+(``blueprint.scene.loader``) asks the registry, never the suffix itself. A record names the
+functions of its format's module with ``deferred``: the module is imported when a file of the
+format is first checked or read, not with the registry.
 """
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -17,7 +20,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 
-__all__ = ["Converted", "Format", "Formats", "Instance", "Mesh"]
+__all__ = ["Converted", "Format", "Formats", "Instance", "Mesh", "deferred"]
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,37 @@ class Converted:
 #: What a reader gives back: one mesh, a scene's mesh instances in order, the file converted
 #: to another format, or None where trimesh reads the file.
 Read = Mesh | list[Instance] | Converted | None
+
+
+class _Deferred:
+    """A function of a module of ``blueprint.scene.formats``, imported at the first call."""
+
+    __slots__ = ("_function", "module", "name")
+
+    def __init__(self, module: str, name: str) -> None:
+        self.module, self.name, self._function = module, name, None
+
+    def __call__(self, *args, **kwargs):
+        if self._function is None:
+            self._function = getattr(importlib.import_module(self.module), self.name)
+        return self._function(*args, **kwargs)
+
+    def __repr__(self) -> str:
+        return f"deferred({self.module.rsplit('.', 1)[-1]!r}, {self.name!r})"
+
+
+def deferred(module: str, name: str) -> Callable:
+    """The function ``name`` of ``blueprint.scene.formats.<module>``, which is imported when the
+    function is first called: every format is registered, few are read in one process.
+
+    Parameters
+    ----------
+    module : str
+        The format's module in ``blueprint.scene.formats`` ("stl").
+    name : str
+        A function of it ("read_stl").
+    """
+    return _Deferred(f"{__package__}.{module}", name)
 
 
 def _no_unit(fmt: Format, name: str, stated: str | None) -> tuple[str | None, str]:

@@ -6,16 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from blueprint.scene.archive import check_zip
-from blueprint.scene.formats.base import Format
 
-__all__ = ["FORMAT"]
+__all__ = ["check"]
 
 
 def check(path: Path, size: int, data: bytes | None = None) -> None:
     """Refuse a zip whose directory declares too much (``check_zip``): trimesh expands it whole."""
     check_zip(path, data)
-
-
-FORMAT = Format(
-    "3DXML", ("3dxml",), up="z", check=check, common=True, needs=(("lxml", "lxml"), ("networkx", "networkx"))
-)

@@ -28,11 +28,11 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import settings
-from blueprint.scene.formats.base import Format, Instance
+from blueprint.scene.formats.base import Instance
 from blueprint.scene.headers import all_of, check_gltf_document, check_gltf_graph, gltf_document
 from blueprint.settings import read_file
 
-__all__ = ["GLB", "GLTF", "Instance", "read_glb"]
+__all__ = ["Instance", "check_glb", "check_gltf", "read", "read_data", "read_glb"]
 
 _GLB, _JSON, _BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 _TRIANGLES = 4
@@ -503,17 +503,3 @@ def check_glb(path: Path, size: int, data: bytes | None = None) -> None:
 def check_gltf(path: Path, size: int, data: bytes | None = None) -> None:
     """``check_gltf_graph`` of a glTF file."""
     check_gltf_graph(path, "gltf", size, data)
-
-
-_METRES = "glTF is in metres by its specification"
-GLB = Format(
-    "glTF",
-    ("glb",),
-    unit="m",
-    unit_reason=_METRES,
-    check=check_glb,
-    read=read,
-    read_data=read_data,
-    common=True,
-)
-GLTF = Format("glTF", ("gltf",), unit="m", unit_reason=_METRES, check=check_gltf, common=True)

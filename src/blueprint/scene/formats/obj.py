@@ -22,13 +22,13 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.scene.formats.base import Format, Mesh
+from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.polygons import triangulated
 from blueprint.scene.formats.text import affordable, gathered, line_words, lines, only, parse, word_spans
 from blueprint.scene.headers import check_triangle_count, read_all
 from blueprint.settings import read_file
 
-__all__ = ["FORMAT", "check", "obj_arrays", "read_obj", "short_vertex"]
+__all__ = ["check", "obj_arrays", "read_obj", "short_vertex"]
 
 # the bytes the numbers of a line may hold besides whitespace: decimal numbers as NumPy and
 # Python read them alike (no "nan", "inf", hexadecimal or digit separators)
@@ -291,6 +291,3 @@ def check(path: Path, size: int, data: bytes | None = None) -> None:
         line, numbers = found
         counted = f"{numbers} number" + ("" if numbers == 1 else "s")
         raise InputError(f"{path}: line {line}: a vertex of {counted} (x, y and z are needed)")
-
-
-FORMAT = Format("OBJ", ("obj",), up="guess", check=check, read=read_obj, common=True)

@@ -16,13 +16,13 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.scene.formats.base import Format, Mesh
+from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.polygons import triangulated
 from blueprint.scene.formats.text import affordable, blanked, is_ascii, line_words, lines, only, parse
 from blueprint.scene.headers import ASCII_VALUE, check_triangle_count, read_all, read_head, refuse_count
 from blueprint.settings import read_file
 
-__all__ = ["FORMAT", "check", "off_arrays", "read_off"]
+__all__ = ["check", "off_arrays", "read_off"]
 
 _NUMBER = b"0123456789+-.eE"
 _INDEX = b"0123456789+-"
@@ -198,6 +198,3 @@ def read_off(path: Path, size: int) -> Mesh | None:
         return None
     check_triangle_count(path, len(found[1]))
     return Mesh(*found)
-
-
-FORMAT = Format("OFF", ("off",), up="guess", check=check, read=read_off, common=True)

@@ -18,13 +18,13 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.scene.formats.base import Format, Mesh
+from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.polygons import triangulated
 from blueprint.scene.formats.text import affordable, gathered, is_ascii, line_words, lines, only, parse
 from blueprint.scene.headers import ASCII_VALUE, check_triangle_count, read_head, refuse_count
 from blueprint.settings import read_file
 
-__all__ = ["FORMAT", "check", "ply_arrays", "read_ply"]
+__all__ = ["check", "ply_arrays", "read_ply"]
 
 # NumPy's types of PLY's, as trimesh maps them (the specification's names and others in use)
 _TYPES = {
@@ -306,6 +306,3 @@ def read_ply(path: Path, size: int) -> Mesh | None:
         return None
     check_triangle_count(path, len(found[1]))
     return Mesh(*found)
-
-
-FORMAT = Format("PLY", ("ply",), up="guess", check=check, read=read_ply, common=True)

@@ -13,14 +13,16 @@ from __future__ import annotations
 
 import os
 import re
+import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 from blueprint.errors import InputError
-from blueprint.scene.formats.base import Converted, Format
+from blueprint.scene.formats.base import Converted
 from blueprint.settings import read_file
 
-__all__ = ["FORMAT", "STEP_FILE_LIMIT", "STEP_TIME_LIMIT", "read_step", "step_to_glb"]
+__all__ = ["STEP_FILE_LIMIT", "STEP_TIME_LIMIT", "read_step", "step_to_glb"]
 
 # A STEP file is text of about a hundred bytes an entity; meshing takes OpenCASCADE far longer
 # per byte than any mesh format takes to parse, so its limits are much lower than a mesh's.
@@ -53,10 +55,6 @@ def step_to_glb(path: Path, data: bytes, time_limit: float | None = None) -> byt
         ``cascadio`` is not installed, OpenCASCADE cannot read the file, or meshing it takes
         longer than the limit.
     """
-    # imported here: every drawing imports this module, few mesh a STEP file
-    import subprocess
-    import tempfile
-
     limit = STEP_TIME_LIMIT if time_limit is None else time_limit
     with tempfile.TemporaryDirectory(prefix="blueprint-step-") as folder:
         source = os.path.join(folder, "model.step")
@@ -98,15 +96,3 @@ def read_step(path: Path, size: int) -> Converted:
     """The file meshed into GLB bytes (``step_to_glb``), for the GLB reader."""
     glb = step_to_glb(path, read_file(path, STEP_FILE_LIMIT, "a STEP file"))
     return Converted(glb, "glb", f"{path}: cannot read the mesh OpenCASCADE made of it")
-
-
-FORMAT = Format(
-    "STEP",
-    ("step", "stp"),
-    up="z",
-    unit="m",
-    unit_reason="OpenCASCADE meshes STEP in metres",
-    read=read_step,
-    trimesh=False,
-    common=True,
-)

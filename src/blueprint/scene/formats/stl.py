@@ -15,12 +15,12 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.scene.formats.base import Format, Mesh
+from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
 from blueprint.scene.headers import check_triangle_count
 from blueprint.settings import open_file
 
-__all__ = ["FORMAT", "read_stl"]
+__all__ = ["read_stl"]
 
 _VERTEX = b"vertex"
 # the bytes the numbers of a vertex line may hold besides whitespace (no "nan", "inf", ...)
@@ -86,6 +86,3 @@ def _ascii_stl(head: bytes) -> bool:
     if not head.lstrip().lower().startswith(b"solid"):
         return False
     return all(32 <= b < 127 or b in (9, 10, 13) for b in head)
-
-
-FORMAT = Format("STL", ("stl",), up="z", read=read_stl, common=True)

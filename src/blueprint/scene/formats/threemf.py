@@ -10,12 +10,11 @@ from pathlib import Path
 from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.scene.archive import check_zip
-from blueprint.scene.formats.base import Format
 from blueprint.scene.headers import walk_graph
 from blueprint.scene.units import named_unit
 from blueprint.settings import open_file
 
-__all__ = ["FORMAT"]
+__all__ = ["check", "stated_unit"]
 
 # The units a 3MF file may state (3MF core specification, ``model@unit``).
 _UNITS = ("micron", "millimeter", "centimeter", "inch", "foot", "meter")
@@ -119,6 +118,3 @@ def _check_3mf_document(path: Path, document: bytes) -> None:
 def _elsewhere(component) -> bool:
     """Whether a 3MF component names an object of another model part (``p:path``)."""
     return any(key.rsplit("}", 1)[-1] == "path" for key in component.keys())
-
-
-FORMAT = Format("3MF", ("3mf",), up="z", stated_unit=stated_unit, check=check, common=True)
