@@ -237,31 +237,34 @@ class Camera:
         cam_x /= np.linalg.norm(cam_x)
         cam_y = np.cross(cam_z, cam_x)
 
-        pts = np.asarray(points, np.float64).reshape(-1, 3)
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        center = (lo + hi) / 2
+        pts = np.asarray(points)
+        pts = (pts if pts.dtype.kind == "f" else pts.astype(np.float64)).reshape(-1, 3)
+        # the extremes of float32 points are those of their float64 copies
+        lo, hi = (np.array([f(pts[:, k]) for k in range(3)], np.float64) for f in (np.min, np.max))
+        middle = (lo + hi) / 2
         extent = float(np.linalg.norm(hi - lo)) or 1.0
-        rel = pts - center
-        x, y, z = rel @ cam_x, rel @ cam_y, rel @ cam_z
+        axes = (cam_x, cam_y, cam_z)
+        (x_lo, x_hi), (y_lo, y_hi), (z_lo, z_hi) = _projected_ranges(pts, middle, axes)
         # re-centre on the projected extents so the drawing sits in the middle of the image
-        center = center + cam_x * (x.max() + x.min()) / 2 + cam_y * (y.max() + y.min()) / 2
-        x -= (x.max() + x.min()) / 2
-        y -= (y.max() + y.min()) / 2
+        center = middle + cam_x * (x_hi + x_lo) / 2 + cam_y * (y_hi + y_lo) / 2
+        x_mid, y_mid = (x_hi + x_lo) / 2, (y_hi + y_lo) / 2
         fill = 1 - 2 * margin
         if ortho:
-            height = max(2 * np.abs(y).max(), 2 * np.abs(x).max() / aspect) / fill
+            half_x = max(abs(x_hi - x_mid), abs(x_lo - x_mid))
+            half_y = max(abs(y_hi - y_mid), abs(y_lo - y_mid))
+            height = max(2 * half_y, 2 * half_x / aspect) / fill
             height = height if height > 0 else extent
-            distance = float(z.max()) + extent
+            distance = float(z_hi) + extent
         else:
             tan_y = math.tan(math.radians(fov) / 2) * fill
             tan_x = tan_y * aspect
-            distance = float(np.max(z + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)))
-            distance = max(distance, float(z.max()) + extent * 1e-3)
+            distance = _farthest_back(pts, middle, axes, (x_mid, y_mid), (tan_x, tan_y))
+            distance = max(distance, float(z_hi) + extent * 1e-3)
             height = 1.0
-        depth = distance - z
         pad = extent * 0.02
-        near = max(float(depth.min()) - pad, distance * 1e-3)
-        far = float(depth.max()) + pad
+        # distance - z falls as z grows, rounding and all: its extremes are at z's
+        near = max(float(distance - z_hi) - pad, distance * 1e-3)
+        far = float(distance - z_lo) + pad
         eye = center + cam_z * distance
         return cls(
             eye=tuple(eye),
@@ -275,6 +278,39 @@ class Camera:
             height=float(height),
             name=view,
         )
+
+
+# Points projected at a time by ``Camera.fit``: all at once they would take 72 bytes a point.
+_FIT_BLOCK = 1 << 16
+
+
+def _projected(pts: np.ndarray, middle: np.ndarray, axes, start: int) -> tuple[np.ndarray, ...]:
+    """The float64 coordinates along ``axes`` of the block of ``pts`` from ``start``, relative
+    to ``middle``: each row the same products as the whole array's."""
+    rel = pts[start : start + _FIT_BLOCK].astype(np.float64) - middle
+    return tuple(rel @ axis for axis in axes)
+
+
+def _projected_ranges(pts: np.ndarray, middle: np.ndarray, axes) -> list[tuple[float, float]]:
+    """(smallest, largest) of the points' coordinates along each of ``axes``, relative to
+    ``middle``, a block at a time."""
+    lows, highs = [math.inf] * len(axes), [-math.inf] * len(axes)
+    for start in range(0, len(pts), _FIT_BLOCK):
+        for k, along in enumerate(_projected(pts, middle, axes, start)):
+            lows[k], highs[k] = min(lows[k], along.min()), max(highs[k], along.max())
+    return list(zip(lows, highs, strict=True))
+
+
+def _farthest_back(pts: np.ndarray, middle: np.ndarray, axes, mids, tans) -> float:
+    """How far back along the view a perspective camera stands to see every point: the
+    largest of ``z + max(|x - x_mid| / tan_x, |y - y_mid| / tan_y)``, a block at a time."""
+    farthest = -math.inf
+    for start in range(0, len(pts), _FIT_BLOCK):
+        x, y, z = _projected(pts, middle, axes, start)
+        x -= mids[0]
+        y -= mids[1]
+        farthest = max(farthest, float(np.max(z + np.maximum(np.abs(x) / tans[0], np.abs(y) / tans[1]))))
+    return farthest
 
 
 def fit_camera(
