@@ -11,7 +11,16 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["column_max", "column_min", "column_ptp", "cross", "face_cross", "indexed_cross", "row_norm"]
+__all__ = [
+    "column_cross",
+    "column_max",
+    "column_min",
+    "column_ptp",
+    "cross",
+    "face_cross",
+    "indexed_cross",
+    "row_norm",
+]
 
 # Faces whose cross products ``indexed_cross`` makes at a time.
 _BLOCK = 1 << 15
@@ -43,6 +52,11 @@ def row_norm(values: np.ndarray) -> np.ndarray:
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.cross(a, b)`` of two (N, 3) arrays."""
     return _cross((a[:, 0], a[:, 1], a[:, 2]), (b[:, 0], b[:, 1], b[:, 2]), np.result_type(a, b))
+
+
+def column_cross(a, b) -> np.ndarray:
+    """(N, 3) float64: ``cross`` of two (N, 3) arrays given as their three columns each."""
+    return _cross(a, b, np.dtype(np.float64))
 
 
 def face_cross(tri: np.ndarray) -> np.ndarray:

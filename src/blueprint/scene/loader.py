@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import settings
-from blueprint.columns import face_cross
+from blueprint.columns import column_cross
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.archive import members
 from blueprint.scene.environment import PartGlobs, choose_parts
@@ -254,10 +254,18 @@ def _check_coincident(model: Model, name: str) -> None:
         return
     key = np.empty(len(model.faces))
     weights = np.array([1.0, np.pi, np.e])
+    columns = [model.positions[:, k] for k in range(3)]
     for start in range(0, len(key), _BLOCK):
-        tri = model.positions[model.faces[start : start + _BLOCK]].astype(np.float64)
-        cross = face_cross(tri)
-        key[start : start + len(tri)] = (tri[:, 0] + tri[:, 1] + tri[:, 2]) @ weights + np.sqrt(
+        block = model.faces[start : start + _BLOCK]
+        # the corners a coordinate at a time: the sums and differences of (F, 3, 3) corners
+        centre, u, v = np.empty((len(block), 3)), [], []
+        for k, column in enumerate(columns):
+            a, b, c = (column[block[:, j]].astype(np.float64) for j in range(3))
+            np.add(a + b, c, out=centre[:, k])
+            u.append(b - a)
+            v.append(c - a)
+        cross = column_cross(u, v)
+        key[start : start + len(block)] = centre @ weights + np.sqrt(
             np.einsum("ij,ij->i", cross, cross)
         ) * np.sqrt(2)
     if _bucketed_most(key) <= limit:
