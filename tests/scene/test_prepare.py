@@ -183,8 +183,34 @@ def test_gpu_arrays_equal_unique_rows(shape, crease):
     model = Model.from_arrays(positions, faces, face_part)
     vertices, indices = prepare._prepare(model, crease, None)
     expected_vertices, expected_indices = reference_arrays(model, crease)
+    if shape == "soup":
+        # each corner a vertex of the model: merged where they draw alike
+        assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
+        assert len(vertices) < len(expected_vertices)
+        return
     assert vertices.tobytes() == expected_vertices.tobytes()
     np.testing.assert_array_equal(indices, expected_indices)
+
+
+@pytest.mark.parametrize("parts", [1, 2])
+def test_a_smooth_soup_draws_its_corners_from_its_welded_vertices(parts):
+    """A sphere's soup: one vertex a point and part, whose corners all draw alike (each the
+    corner's own position, part and normal, bit for bit), as many as the indexed sphere's."""
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    face_part = np.arange(len(sphere.faces)) % parts
+    soup = Model.from_arrays(
+        sphere.vertices[sphere.faces].reshape(-1, 3),
+        np.arange(3 * len(sphere.faces)).reshape(-1, 3),
+        face_part,
+    )
+    vertices, indices = prepare._prepare(soup, 30.0, None)
+    corners = soup.faces.reshape(-1)
+    corner_normals = normals.corner_normals(soup.positions, soup.faces, 30.0).reshape(-1, 3)
+    assert vertices["p"][indices].tobytes() == soup.positions[corners].tobytes()
+    assert vertices["n"][indices].tobytes() == corner_normals.tobytes()
+    np.testing.assert_array_equal(vertices["part"][indices], np.repeat(face_part, 3))
+    shared = np.unique(np.column_stack([sphere.faces.reshape(-1), np.repeat(face_part, 3)]), axis=0)
+    assert len(vertices) == len(shared)
 
 
 def test_gpu_arrays_without_normals_share_vertices_of_one_part():

@@ -37,6 +37,8 @@ SLIM_BYTES = 8
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 # room for this many fragments a pixel before a first frame has counted them
 FIRST_ROOM = 4
+# faces whose areas on the picture ``projected_fragments`` sums at a time
+AREA_BLOCK = 1 << 15
 # pixels along a side of the tiles whose layers are counted, for a software rasteriser to unpack
 # and draw each layer only where it has pixels (blueprint.pipeline.tiles)
 TILE = 16
@@ -82,6 +84,7 @@ class ABufferSource:
     def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
         r = self.r = capturer.device
         self.mesh, self.gb, self.max_bytes = mesh, gb, row.max_bytes
+        self.camera, self.model = camera, capturer.model_of(mesh)
         # the room of the frames before, by G-buffer size (``Capturer.abuffer_room``)
         self.rooms = capturer.abuffer_room
         self.back_bias, self.unpacks, self.slot = BACK_BIAS, request.unpack, request.slot
@@ -191,6 +194,19 @@ class ABufferSource:
     def _room(self, size: tuple[int, int]) -> int:
         held = self.rooms.get(tuple(size))
         return held if held is not None else FIRST_ROOM * size[0] * size[1]
+
+    def _first_room(self, size: tuple[int, int]) -> int:
+        """The room a capture at ``size`` starts with: the last one's there (``_room``), else,
+        where the lists live in the host's memory (a software rasteriser's images), the
+        fragments the faces' areas on the picture foretell, with a counted room's spare, up to
+        ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers. A model kept as
+        instances starts with the whole room: foretelling would flatten it."""
+        room = self._room(size)
+        if tuple(size) in self.rooms or not self.images or self.model is None or not self.model.is_flat:
+            return room
+        model = self.model
+        foretold = projected_fragments(model.positions, model.faces, self.camera, size)
+        return room if foretold is None else min(room, spare_room(foretold))
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
         """Layer ``layer`` into the G-buffer: its depth into ``flat[layer % 2]``, two float
@@ -302,8 +318,8 @@ class ABufferSource:
         layer_count = pool.texture(f"{name}.layer_count", size, "r32ui")
         groups = (-(-size[0] // 8), -(-size[1] // 8))
         calls = 0
+        room = self._first_room(size)
         while True:
-            room = self._room(size)
             if not self._holds(room, size):
                 return None
             totals, depths = self._buffers(name, room)
@@ -337,6 +353,7 @@ class ABufferSource:
                 return calls
             if self._count(seen.read, nbytes, room, size, name):
                 return calls
+            room = self._room(size)
 
     def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int]) -> None:
         """The resolve's dispatch: over every group, or with tiles over the tiles that hold a
@@ -398,8 +415,7 @@ class ABufferSource:
         counts = np.frombuffer(read(size=nbytes), np.uint32).astype(np.int64)
         drawn = int(counts[0])
         if drawn > room or size not in self.rooms:
-            # room to spare for a model turning
-            self.rooms[size] = int(drawn * 1.25) + 1024
+            self.rooms[size] = spare_room(drawn)
         # the compute rasteriser's bins (render.raster) take the same turn where they were short
         binned = self._binned is None or self.raster.pairs(self._binned[1], int(counts[3]), self._binned[0])
         if drawn > room or not binned:
@@ -460,6 +476,37 @@ class ABufferSource:
             self.unpack["u_groups"].value = groups
             self.unpack.run(min(groups, ROW), -(-groups // ROW))
         ctx.memory_barrier()
+
+
+def spare_room(fragments: float) -> int:
+    """The room kept for a frame of ``fragments``: some to spare for a model turning."""
+    return int(fragments * 1.25) + 1024
+
+
+def projected_fragments(
+    positions: np.ndarray, faces: np.ndarray, camera: Camera, size: tuple[int, int]
+) -> float | None:
+    """About the fragments a geometry pass of ``faces`` (F, 3) of ``positions`` (V, 3) draws
+    into a target of ``size`` through ``camera``: the sum of their areas in pixels, front and
+    back faces alike (a pixel's centre lies in as many faces as cross it), a block of faces at
+    a time; None where a corner lies on or behind the eye's plane, whose area is unbounded.
+    Faces off the picture count too: more than are drawn, never fewer."""
+    rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
+    turn, shift = rows[:, :3].T.astype(np.float32), rows[:, 3].astype(np.float32)
+    total = 0.0
+    for start in range(0, len(faces), AREA_BLOCK):
+        block = faces[start : start + AREA_BLOCK]
+        corners = []
+        for k in range(3):
+            clip = positions[block[:, k]] @ turn + shift
+            if not (clip[:, 2] > 0).all():
+                return None
+            corners.append((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]))
+        (x0, y0), (x1, y1), (x2, y2) = corners
+        twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+        total += float(np.abs(twice).sum(dtype=np.float64))
+    # normalised device coordinates span 2 a side: a pixel is (2 / w) by (2 / h) of them
+    return total / 2 * size[0] * size[1] / 4
 
 
 def tile_max(values: np.ndarray) -> np.ndarray:

@@ -137,6 +137,10 @@ class Capturer:
             held = self._meshes[key] = (model, GpuMesh(self.device.ctx, model, crease_angle))
         return held[1]
 
+    def model_of(self, mesh: GpuMesh) -> Model | None:
+        """The model uploaded as ``mesh``, or None where it is not this capturer's."""
+        return next((model for model, held in self._meshes.values() if held is mesh), None)
+
     def check_memory(self, model: Model, pixels: int, max_layers: int | None) -> None:
         """Raise ``InputError`` where a frame of ``model`` at ``pixels`` supersampled pixels
         and ``max_layers`` would allocate more GPU memory than the device has free

@@ -282,10 +282,21 @@ class Camera:
         )
 
 
+# Points read at a time by ``Camera.fit``: a float64 copy of all at once would take 24 bytes a
+# point more than the model holds.
+_FIT_BLOCK = 1 << 16
+
+
 def _one_block(points: np.ndarray):
-    """The blocks of points ``Camera.fit`` reads: ``points`` whole, as float64."""
-    pts = np.asarray(points, np.float64).reshape(-1, 3)
-    return lambda: iter((pts,))
+    """The blocks of points ``Camera.fit`` reads from an array of them: float64 copies of
+    ``_FIT_BLOCK`` rows at a time (each row's products the same as the whole array's)."""
+    pts = np.asarray(points).reshape(-1, 3)
+
+    def blocks():
+        for start in range(0, max(len(pts), 1), _FIT_BLOCK):
+            yield pts[start : start + _FIT_BLOCK].astype(np.float64)
+
+    return blocks
 
 
 def _ends(values: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint import settings
+from blueprint.columns import column_cross
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh
@@ -228,10 +229,12 @@ def _checked(
     """The checks every model passes, whether from a file or an object, named ``name``; its up
     axis ``up`` where given, else guessed from the shape (``guess_up``) or ``default_up``; the
     parts ``include`` and ``exclude`` choose; its length ``unit`` and where that came from."""
-    bad = ~np.isfinite(positions).all(axis=1)
-    if bad.any():
+    finite = np.isfinite(positions)
+    if not finite.all():
+        bad = ~finite.all(axis=1)
         raise InputError(f"{name}: {int(bad.sum())} vertices have NaN or infinite coordinates")
-    if np.abs(positions).max() > MAX_COORDINATE:
+    del finite
+    if max(positions.max(), -positions.min()) > MAX_COORDINATE:
         raise InputError(f"{name}: coordinates beyond {MAX_COORDINATE:g} cannot be drawn")
     if faces.min() < 0 or faces.max() >= len(positions):
         raise InputError(f"{name}: faces refer to vertices that do not exist")
@@ -247,14 +250,19 @@ def _checked(
         chosen.reason,
         *unit,
     )
-    with model.holding_corners():  # every check reads the faces' corners
-        degenerate = model.degenerate_faces()
-        if degenerate.all():
-            raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
-        _check_coincident(model, name)
-        if degenerate.any():
-            log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
-        return choose_parts(model, include, exclude)
+    # the checks read the faces' corners a block at a time or a coordinate at a time: all of
+    # them at once in float64 would take 72 bytes a face
+    degenerate = model.degenerate_faces()
+    if degenerate.all():
+        raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
+    _check_coincident(model, name)
+    if degenerate.any():
+        log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
+    return choose_parts(model, include, exclude)
+
+
+# Faces whose corners the coincidence check reads at a time.
+_BLOCK = 1 << 16
 
 
 def _checked_instances(
@@ -306,11 +314,24 @@ def _check_coincident(model: Model, name: str) -> None:
     limit = settings.COINCIDENT_LIMIT
     if len(model.faces) <= limit:
         return
-    tri = model.corners()
-    cross = model.corner_cross()
-    key = (tri[:, 0] + tri[:, 1] + tri[:, 2]) @ np.array([1.0, np.pi, np.e]) + np.sqrt(
-        np.einsum("ij,ij->i", cross, cross)
-    ) * np.sqrt(2)
+    key = np.empty(len(model.faces))
+    weights = np.array([1.0, np.pi, np.e])
+    columns = [model.positions[:, k] for k in range(3)]
+    for start in range(0, len(key), _BLOCK):
+        block = model.faces[start : start + _BLOCK]
+        # the corners a coordinate at a time: the sums and differences of (F, 3, 3) corners
+        centre, u, v = np.empty((len(block), 3)), [], []
+        for k, column in enumerate(columns):
+            a, b, c = (column[block[:, j]].astype(np.float64) for j in range(3))
+            np.add(a + b, c, out=centre[:, k])
+            u.append(b - a)
+            v.append(c - a)
+        cross = column_cross(u, v)
+        key[start : start + len(block)] = centre @ weights + np.sqrt(
+            np.einsum("ij,ij->i", cross, cross)
+        ) * np.sqrt(2)
+    if _bucketed_most(key) <= limit:
+        return
     _, counts = np.unique(key, return_counts=True)
     most = int(counts.max())
     if most > limit:
@@ -318,6 +339,17 @@ def _check_coincident(model: Model, name: str) -> None:
             f"{name}: {most} faces lie on one another (one triangle over and over), more than the "
             f"{limit} layers a drawing can peel"
         )
+
+
+def _bucketed_most(key: np.ndarray) -> int:
+    """The most values of ``key`` (float64) in one bucket of a hash of their bits, about as
+    many buckets as values: at least the most copies of one value, found without a sort."""
+    bits = (key + 0.0).view(np.uint64)  # -0.0 is 0.0, as np.unique counts them
+    if np.isnan(key).any():
+        return len(key)
+    shift = np.uint64(64 - min(22, max(10, len(key).bit_length())))
+    buckets = (bits * np.uint64(0x9E3779B97F4A7C15)) >> shift
+    return int(np.bincount(buckets.astype(np.intp)).max())
 
 
 def _archive_scene(path: Path, kind: str):

@@ -57,12 +57,15 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
 
     Every corner of every face becomes a vertex, corners of one vertex of the model merged
     where their part and their normal (``corner_normals`` with ``crease_angle``, quantized to
-    16 bits) are the same; without a crease angle (None) the normals are left zero.
+    16 bits) are the same; without a crease angle (None) the normals are left zero. A triangle
+    soup's corners (each a vertex of the model) are merged where they lie at one position, in
+    one part, with one normal, bit for bit: the vertex draws as each of them would.
 
     Returns
     -------
     vertices : (N,) ``VERTEX``
-        Ordered by model vertex, then part, then normal.
+        Ordered by model vertex, then part, then normal; a soup's by welded vertex and part,
+        then the corners kept apart.
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
@@ -95,14 +98,15 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
             inverse = inverse.astype(np.uint32)
         del key
     else:
+        known = {} if known is None else known
         normals = corner_normals(model.positions, model.faces, crease_angle, known).reshape(-1, 3)
         key = corner_vertex
         if parts > 1:
             key = corner_vertex.astype(np.int64) * parts
             key += np.repeat(model.face_part, 3)
         if np.all(key[1:] > key[:-1]):
-            # every corner a vertex of its own (a triangle soup): nothing to merge
-            chosen, inverse = None, np.arange(len(key), dtype=np.uint32)
+            # every corner a vertex of its own (a triangle soup): merged where they are the same
+            chosen, inverse = _soup_vertices(model, normals, known.get("welded"))
         else:
             chosen, inverse = _split_vertices(key, normals)
         del key
@@ -117,6 +121,41 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
             vertices["n"][rows] = np.take(normals, corner, axis=0)
         vertices["part"][rows] = model.face_part[corner // 3]
     return vertices, inverse
+
+
+def _soup_vertices(
+    model: Model, normals: np.ndarray, welded: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The vertices of a triangle soup's corners: one for the corners of a welded vertex
+    (``welded``, (F, 3), None: none welded) and a part whose position and normal are those of
+    its first corner, bit for bit, so that each corner draws as its own vertex would; one of
+    its own for every other corner (where a weld joined close positions, or a crease split
+    the normals). Returns the corner of each vertex and each corner's vertex (uint32)."""
+    n = len(normals)
+    if welded is None:
+        return None, np.arange(n, dtype=np.uint32)
+    key = welded.reshape(-1)
+    if len(model.part_names) > 1:
+        key = key.astype(np.int64) * len(model.part_names)
+        key += np.repeat(model.face_part, 3)
+    _, first, inverse = unique_first(key)
+    del key
+    corner_vertex = model.faces.reshape(-1)
+    bits = model.positions.view(np.uint32)
+    normal_bits = normals.view(np.uint32)
+    apart = np.zeros(n, bool)
+    for lo in range(0, n, _BLOCK):
+        first_corner = first[inverse[lo : lo + _BLOCK]]
+        mine = slice(lo, lo + len(first_corner))
+        differs = np.take(normal_bits, first_corner, axis=0) != normal_bits[mine]
+        differs |= np.take(bits, corner_vertex[first_corner], axis=0) != np.take(
+            bits, corner_vertex[mine], axis=0
+        )
+        apart[mine] = differs.any(axis=1)
+    own = np.flatnonzero(apart)
+    vertex = inverse.astype(np.uint32)
+    vertex[own] = np.arange(len(first), len(first) + len(own), dtype=np.uint32)
+    return np.concatenate([first, own]), vertex
 
 
 def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

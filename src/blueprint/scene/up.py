@@ -62,21 +62,31 @@ def _base_fractions(positions: np.ndarray, faces: np.ndarray, axes) -> dict[int,
         if extent[axis] > 0 and np.prod(np.delete(extent, axis)) > 0:
             flat_areas[axis] = []
     for start in range(0, len(faces) if flat_areas else 0, _BLOCK):
-        tri = positions[faces[start : start + _BLOCK]].astype(np.float64)
-        cross = face_cross(tri)
+        block = faces[start : start + _BLOCK]
+        # the faces in a bottom slab, from their heights in the positions' own type (the
+        # highest of float32 corners is that of their float64 copies): few faces are, and
+        # only theirs are read in float64
+        low = {}
+        for axis in flat_areas:
+            column = positions[:, axis]
+            top = np.maximum(np.maximum(column[block[:, 0]], column[block[:, 1]]), column[block[:, 2]])
+            low[axis] = top.astype(np.float64) <= lo[axis] + _SLAB * extent[axis]
+        chosen = np.flatnonzero(np.logical_or.reduce(list(low.values())))
+        if not len(chosen):
+            continue
+        cross = face_cross(positions[block[chosen]].astype(np.float64))
         area = row_norm(cross)
         for axis, found in flat_areas.items():
             with np.errstate(invalid="ignore", divide="ignore"):
                 along = np.abs(cross[:, axis]) / area
-            heights = tri[:, :, axis]
-            top = np.maximum(np.maximum(heights[:, 0], heights[:, 1]), heights[:, 2])
-            low = top <= lo[axis] + _SLAB * extent[axis]
             # either winding: scans and soups do not orient their faces consistently
-            found.append(area[low & (along >= _DOWN)])
+            found.append(area[low[axis][chosen] & (along >= _DOWN)])
     fractions = dict.fromkeys(axes, 0.0)
     for axis, found in flat_areas.items():
         # the flat faces' areas summed in one array, in face order, as they would be at once
-        fractions[axis] = float(np.concatenate(found).sum() / 2.0 / np.prod(np.delete(extent, axis)))
+        fractions[axis] = float(
+            np.concatenate([np.zeros(0), *found]).sum() / 2.0 / np.prod(np.delete(extent, axis))
+        )
     return fractions
 
 

@@ -26,6 +26,8 @@ _VERTEX = b"vertex"
 # the bytes the numbers of a vertex line may hold besides whitespace (no "nan", "inf", ...)
 _NUMBER = b"0123456789+-.eE"
 _RECORD = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
+# Binary records read at a time.
+_RECORDS = 1 << 16
 
 
 def read_stl(path: Path, size: int) -> Mesh | None:
@@ -44,10 +46,15 @@ def read_stl(path: Path, size: int) -> Mesh | None:
                 return None
             return _ascii(path, head + fh.read(settings.MODEL_FILE_LIMIT + 1 - len(head)))
         check_triangle_count(path, count)
-        records = np.frombuffer(fh.read(_RECORD.itemsize * count), dtype=_RECORD, count=count)
-    triangles = records["triangle"]
-    faces = np.arange(3 * count, dtype=np.int64).reshape(-1, 3)
-    return Mesh(triangles.reshape(-1, 3), faces)
+        positions = np.empty((3 * count, 3), np.float32)
+        # a block of records at a time: the file's bytes are never all held beside the positions
+        for start in range(0, count, _RECORDS):
+            n = min(_RECORDS, count - start)
+            records = np.frombuffer(fh.read(_RECORD.itemsize * n), dtype=_RECORD, count=n)
+            positions[3 * start : 3 * (start + n)] = records["triangle"].reshape(-1, 3)
+    # three vertices a triangle, in order; int32 where they fit, as the model keeps them
+    dtype = np.int32 if 3 * count <= np.iinfo(np.int32).max else np.int64
+    return Mesh(positions, np.arange(3 * count, dtype=dtype).reshape(-1, 3))
 
 
 def _ascii(path: Path, data: bytes) -> Mesh | None:
