@@ -20,7 +20,7 @@ at all (past the object's outline) are left out of that minimum: a hidden edge t
 outline stays hidden to its end.
 
 :func:`verify_creases` then drops mesh edges where the surfaces to both sides of the line are
-one flat surface of one part, which pixels alone cannot tell from an edge.
+one flat surface of the line's own part, which pixels alone cannot tell from an edge.
 """
 
 from __future__ import annotations
@@ -182,7 +182,7 @@ def verify_creases(
 ) -> np.ndarray:
     """Leave out samples of mesh edges (silhouettes, borders, creases) where the drawing shows no
     edge: the surfaces seen a pixel to either side of the line, at the line's depth, are one flat
-    surface of one part.
+    surface of the line's own part.
 
     That happens where solids of one part touch: the box that is a lid sitting on the boxes that
     are walls has edges all round its bottom, but the lid's front face and the wall's front face
@@ -231,11 +231,14 @@ def drop_phantoms(
 ) -> np.ndarray:
     """The second half of :func:`verify_creases`, given the faces ``tri_a`` and ``tri_b`` seen
     at the line's depth to either side of the samples ``rows`` (-1 where none): their levels
-    set to -1 where both are one flat surface of one part through the line's point."""
+    set to -1 where both are one flat surface of the line's own part through the line's point."""
     level, ortho = level.copy(), test.ortho
-    # only samples with a face of one part to either side can be phantoms
-    same_part = face_part[np.maximum(tri_a, 0)] == face_part[np.maximum(tri_b, 0)]
-    maybe = np.flatnonzero((tri_a >= 0) & (tri_b >= 0) & same_part)
+    # only samples with a face of the line's part to either side can be phantoms: another
+    # part's face covering both sides (a panel a fraction of a pixel in front of a slot's edge)
+    # hides the line, it does not continue its surface
+    part_a, part_b = face_part[np.maximum(tri_a, 0)], face_part[np.maximum(tri_b, 0)]
+    own_part = face_part[np.maximum(samples.faces[rows, 0], 0)]
+    maybe = np.flatnonzero((tri_a >= 0) & (tri_b >= 0) & (part_a == part_b) & (part_a == own_part))
     rows, tri_a, tri_b = rows[maybe], tri_a[maybe], tri_b[maybe]
     point = samples.eye[rows]
     plane_a, plane_b = planes[tri_a], planes[tri_b]
