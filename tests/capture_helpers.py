@@ -44,6 +44,32 @@ def sphere_in_cube() -> blueprint.Model:
     )
 
 
+def tab_in_slot(clearance: float = 1e-3) -> blueprint.Model:
+    """A square tab through the square slot of a plate (both squares turned 45 degrees about
+    the vertical), ``clearance`` times the bounding diagonal (6) between the tab's sides and the
+    slot's walls: parts that nearly touch."""
+    gap = clearance * 6.0
+    return examples.assemble(
+        {
+            "plate": examples.tube(0.5, 2.0, 0.5, 4, axis=1),
+            # a square's sides lie its corner radius over sqrt 2 from the middle
+            "tab": examples.prism([0.5 - gap * np.sqrt(2.0)], 2.0, 4, axis=1),
+        }
+    )
+
+
+def touching_blocks(step: float = 1e-3) -> blueprint.Model:
+    """Two blocks side by side, touching along x = 0, their fronts flush (one plane), the left
+    one's top ``step`` times the bounding diagonal lower than the right one's."""
+    diag = float(np.linalg.norm([4.0, 1.0, 1.0]))
+    return examples.assemble(
+        {
+            "left": examples.box((-2.0, -0.5, -0.5), (0.0, 0.5 - step * diag, 0.5)),
+            "right": examples.box((0.0, -0.5, -0.5), (2.0, 0.5, 0.5)),
+        }
+    )
+
+
 def planes(order: list[int]) -> blueprint.Model:
     """Squares at z = 0, -1, -2 facing the viewer, drawn in ``order``."""
     positions, faces = [], []

@@ -494,3 +494,30 @@ def compare_layers(
         gpu_layers=len(gpu_depth),
         oracle_layers=len(oracle.depth),
     )
+
+
+def surfaces_in_front(positions, faces, points, toward_eye, start: float, merge: float) -> np.ndarray:
+    """(N,) surfaces in front of each of ``points`` (N, 3): the rays from them towards the eye
+    (``toward_eye``, (3,) for every point or (N, 3), any length), starting ``start`` along the
+    ray (past the faces through the point itself), cross this many surfaces, hits closer than
+    ``merge`` along the ray to the last surface counted being part of it (coincident faces).
+    The occlusion level a drawing's line has at those points, ray cast in float64."""
+    points = np.asarray(points, np.float64).reshape(-1, 3)
+    direction = np.broadcast_to(np.asarray(toward_eye, np.float64), points.shape)
+    direction = direction / np.linalg.norm(direction, axis=1, keepdims=True)
+    origins = points + start * direction
+    positions = np.asarray(positions, np.float64)
+    mesh = trimesh.Trimesh(positions, np.asarray(faces), process=False, validate=False)
+    _, ray, locations = _all_hits(RayMeshIntersector(mesh), origins, np.ascontiguousarray(direction))
+    count = np.zeros(len(points), np.int64)
+    if len(ray) == 0:
+        return count
+    t = np.einsum("ij,ij->i", locations - origins[ray], direction[ray])
+    order = np.lexsort((t, ray))
+    ray, t = ray[order], t[order]
+    last = np.full(len(points), -np.inf)
+    for r, at in zip(ray.tolist(), t.tolist(), strict=True):
+        if at > last[r] + merge:
+            count[r] += 1
+            last[r] = at
+    return count

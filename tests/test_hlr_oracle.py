@@ -56,10 +56,6 @@ BELOW_TARGET = {
     ("featuretype", "top", "visible recall"): 0.9949,
     # visible lines run on 1-2 px past the T-junctions where they pass behind a face
     ("featuretype", "iso", "visible precision"): 0.9946,
-    # notch edges 0.19 mm from a touching coplanar panel come out hidden
-    ("box_sides", "right", "visible recall"): 0.9927,
-    # the slot walls 0.12 mm from the tabs merge with them within the depth tolerance
-    ("box_sides", "iso", "hidden recall"): 0.9442,
     # the outline has gaps of 1-2 px where the side walls turn into the corner's blend, edge-on
     ("block", "top", "visible recall"): 0.9947,
 }

@@ -39,15 +39,23 @@ from oracle import (
 import blueprint
 from blueprint import examples
 from blueprint.render import mesh
+from blueprint.render.gbuffer import depth_tolerance
 from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
 
 # share of compared pixels that must agree (depth layers) and of interior pixels (IDs)
 DEPTH_AGREEMENT = 0.998
 ID_AGREEMENT = 0.995
-# Hits closer than this (eye depth, fraction of the depth range) are one surface: the peeling
-# tolerance render/renderer.py documents (PEEL_EPSILON), far below any gap a model here has on
-# purpose (the thinnest, the gearbox cover's 1.5-unit walls, is about 1e-2 of its range).
+# Hits closer than this (eye depth, fraction of the depth range) are one surface in the oracle's
+# own test of coincident faces below
 MERGE_TOL = 1e-5
+
+
+def merge_tol(model: blueprint.Model, camera: blueprint.Camera) -> float:
+    """The oracle's merge tolerance for ``model`` seen by ``camera`` (a fraction of the depth
+    range): the capture's depth tolerance (``gbuffer.depth_tolerance``), far below any gap a
+    model here has on purpose (the thinnest, the gearbox cover's 1.5-unit walls, is about 1e-2
+    of its range): where two hits lie that close, "one surface" is the renderer's rule."""
+    return depth_tolerance(camera, model.bounds) / (camera.far - camera.near)
 
 
 @dataclass(frozen=True)
@@ -155,7 +163,12 @@ def _peel_and_cast(case: Case, renderer, request, method: str = "pass-a-layer"):
     if case.name not in _ORACLES:
         model = case.model(request)
         oracle = cast_oracle(
-            model.positions, model.faces, layers.view, layers.projection, *case.size, merge_tol=MERGE_TOL
+            model.positions,
+            model.faces,
+            layers.view,
+            layers.projection,
+            *case.size,
+            merge_tol=merge_tol(model, layers.camera),
         )
         _ORACLES[case.name] = (model, oracle)
     model, oracle = _ORACLES[case.name]
@@ -326,7 +339,8 @@ def test_every_shared_model_matches_oracle(path, camera, renderer, shared_models
     size = (64, 64)
     layers = blueprint.peel(model, size=size, renderer=renderer, **camera)
     view, projection = layers.view, layers.projection
-    oracle = cast_oracle(model.positions, model.faces, view, projection, *size, merge_tol=MERGE_TOL)
+    tol = merge_tol(model, layers.camera)
+    oracle = cast_oracle(model.positions, model.faces, view, projection, *size, merge_tol=tol)
     result = compare_layers(layers.depth, oracle)
     # a sheet seen edge-on (the tray from the top) is nothing to either
     assert result.fraction >= DEPTH_AGREEMENT or not result.covered.any(), result.describe()

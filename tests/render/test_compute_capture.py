@@ -17,7 +17,7 @@ import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
 from blueprint.render import raster
-from blueprint.render.gbuffer import abuffer_uniforms
+from blueprint.render.gbuffer import abuffer_uniforms, depth_tolerance
 from blueprint.render.raster import REACH, ComputeRaster
 from blueprint.render.table import CaptureTable, capture_table
 from blueprint.scene.camera import Camera, fit_camera
@@ -131,13 +131,16 @@ def test_what_it_sees(renderer):
     raster = renderer.compute_raster
     model = nested_boxes()
     size = (256, 256)
-    outside = abuffer_uniforms(fit_camera(model, size))
-    assert raster.sees(model.bounds, outside, size)
+
+    def uniforms(camera):
+        return abuffer_uniforms(camera, depth_tolerance(camera, model.bounds))
+
+    assert raster.sees(model.bounds, uniforms(fit_camera(model, size)), size)
     inside = Camera(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, -1.0), up=(0.0, 1.0, 0.0), near=0.05, far=20.0)
-    assert not raster.sees(model.bounds, abuffer_uniforms(inside), size)
+    assert not raster.sees(model.bounds, uniforms(inside), size)
     # in front of the eye, but projected past the range its edge tests stay exact in
     near = Camera(eye=(0.0, 0.0, 2.0 + 1e-4), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), near=1e-5, far=20.0)
-    assert not raster.sees(model.bounds, abuffer_uniforms(near), (4096, 4096))
+    assert not raster.sees(model.bounds, uniforms(near), (4096, 4096))
     assert REACH <= 1 << 17
 
 

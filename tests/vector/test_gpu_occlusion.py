@@ -6,6 +6,7 @@ import pytest
 import trimesh
 
 from blueprint.examples import gearbox
+from blueprint.render.gbuffer import depth_tolerance
 from blueprint.scene.camera import Camera
 from blueprint.vector import draw_vector
 from blueprint.vector.lines import join_polylines, model_segments
@@ -40,9 +41,8 @@ def _setup(renderer, model, camera):
     samples = sample_polylines(lines, view, proj, SIZE)
     planes = face_planes(model, view)
     footprint = camera.pixel_angle(SIZE[1])
-    got = gpu_levels(
-        renderer, model, camera, samples, planes, SIZE, max_layers=8, test=DepthTest(camera.ortho, footprint)
-    )
+    test = DepthTest(camera.ortho, footprint, depth_tolerance(camera, model.bounds))
+    got = gpu_levels(renderer, model, camera, samples, planes, SIZE, max_layers=8, test=test)
     if got is None:
         pytest.skip(
             "this renderer draws no faces k-buffer (it peels a pass a layer): occlusion runs on the CPU"
@@ -71,7 +71,7 @@ def test_faces_drawn_ahead_read_as_drawn_in_place(renderer, source, monkeypatch)
         planes,
         SIZE,
         max_layers=8,
-        test=DepthTest(camera.ortho, footprint),
+        test=DepthTest(camera.ortho, footprint, depth_tolerance(camera, model.bounds)),
         drawn=drawn,
     )
     assert ahead.layers == in_place.layers
@@ -91,7 +91,7 @@ def test_gpu_levels_equal_the_cpu_reference(renderer, source, ortho):
         pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), len(faces), *SIZE[::-1]
     )
     assert got.layers == len(faces)
-    test = DepthTest(camera.ortho, footprint)
+    test = DepthTest(camera.ortho, footprint, depth_tolerance(camera, model.bounds))
     cpu = classify_samples(samples, peeled, planes, test)
     assert len(cpu) > 5000 and len(set(cpu.tolist())) >= 5
     np.testing.assert_array_equal(got.level, cpu)

@@ -16,7 +16,7 @@ Uniforms the executor sets whenever a program declares them:
 ``u_<input>_components``                     channels of the input's format
 ``u_<input>_factor``                         input size / target size (resampling inputs)
 ``u_depth_range``, ``u_pixel_angle``         camera depth range, pixel footprint (see depth.glsl)
-``u_peel_eps``                               the peel's tolerance in eye depth
+``u_peel_eps``                               the depth tolerance in eye depth (gbuffer.depth_tolerance)
 ``u_normal_cos``                             crease thresholds from the crease angle (edges)
 ``u_view``, ``u_projection``                 camera matrices
 ``u_layer``, ``u_frame``                     depth layer of a per-layer pass; frame of a video
@@ -60,7 +60,7 @@ from blueprint.pipeline.spec import PipelineSpec
 from blueprint.pipeline.state import FROM_FILE, Drawn, Result, RunRequest, RunState, Sizes
 from blueprint.pipeline.tiles import Tiles
 from blueprint.render.abuffer import Overflow
-from blueprint.render.gbuffer import depth_range, peel_eps
+from blueprint.render.gbuffer import depth_range, depth_tolerance
 from blueprint.render.renderer import Capturer, check_frame_args
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera, fit_camera
@@ -477,7 +477,9 @@ class Executor:
         if st.camera is None:
             return
         if scalars:
-            put(prog, _camera_scalars(st.camera, st.crease, size[1]))
+            # without a model there are no surfaces to tell apart
+            tolerance = depth_tolerance(st.camera, st.mesh.bounds) if st.mesh is not None else 0.0
+            put(prog, _camera_scalars(st.camera, st.crease, size[1], tolerance))
         if matrices:
             put(prog, _camera_matrices(st.camera))
         if corners and st.mesh is not None:
@@ -768,14 +770,14 @@ class _Stopwatch:
 
 
 @functools.lru_cache(maxsize=16)
-def _camera_scalars(camera: Camera, crease: float, height: int) -> dict:
+def _camera_scalars(camera: Camera, crease: float, height: int, tolerance: float) -> dict:
     """The uniforms a pass takes from ``camera`` but its matrices, for targets ``height``
-    pixels high (kept by the camera's value: a frame runs dozens of passes, a stream may
-    draw from one camera again and again)."""
+    pixels high, with the model's depth ``tolerance`` (kept by the camera's value: a frame runs
+    dozens of passes, a stream may draw from one camera again and again)."""
     half = math.radians(crease)
     return {
         "u_depth_range": depth_range(camera),
-        "u_peel_eps": peel_eps(camera),
+        "u_peel_eps": tolerance,
         "u_pixel_angle": camera.pixel_angle(height),
         # The mesh splits normals across edges past the crease angle, but a pixel beside one
         # blends its corners' split normals with the smooth ones of the triangles' other

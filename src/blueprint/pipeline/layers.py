@@ -16,6 +16,7 @@ from blueprint.pipeline.programs import FULLSCREEN
 from blueprint.pipeline.state import EXTRA, Group, RunState
 from blueprint.render.abuffer import Overflow
 from blueprint.render.capture import Capture, GBuffer, capture_parts, layer_loop, revealed_pixels
+from blueprint.render.gbuffer import depth_tolerance
 from blueprint.render.remaining import layers_left
 from blueprint.render.stop import EmptyLayer, MaxLayers, MinFraction, Reveal, StopRule
 
@@ -90,12 +91,13 @@ class LayerCapture:
             return None
         stop = stops[0]
         mask = st.parts[stop.depth]
-        wanted = revealed_pixels(self.r, st.camera, mask)
+        tolerance = depth_tolerance(st.camera, st.mesh.bounds)
+        wanted = revealed_pixels(self.r, st.camera, tolerance, mask)
         st.draws += 1
 
         def revealed(layer: int) -> int:
             st.draws += 1
-            return revealed_pixels(self.r, st.camera, mask, st.groups[0].gb.layer_depth(layer))
+            return revealed_pixels(self.r, st.camera, tolerance, mask, st.groups[0].gb.layer_depth(layer))
 
         return Reveal(stop.fraction, wanted, revealed)
 

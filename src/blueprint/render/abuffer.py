@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms
+from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms, depth_tolerance
 from blueprint.render.mesh import PLACEMENTS_BINDING, geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
@@ -89,7 +89,7 @@ class ABufferSource:
         self.rooms = capturer.abuffer_room
         self.back_bias, self.unpacks, self.slot = BACK_BIAS, request.unpack, request.slot
         self.reads = None if self.unpacks else "lists"
-        uniforms = abuffer_uniforms(camera)
+        uniforms = abuffer_uniforms(camera, depth_tolerance(camera, mesh.bounds))
         tiles, defer = request.tiles, request.defer
         self.images = r.software
         self.defines = list_defines(r)

@@ -11,7 +11,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.gpu import units
-from blueprint.render.gbuffer import GBuffer, depth_range, gbuffer, peel_eps
+from blueprint.render.gbuffer import GBuffer, depth_range, gbuffer
 from blueprint.render.stop import HARD_MAX_LAYERS, StopRule
 from blueprint.render.table import Request, choose
 from blueprint.scene.camera import Camera
@@ -206,13 +206,14 @@ def layer_loop(
     return counts[: counted + 1], counted
 
 
-def revealed_pixels(r, camera: Camera, mask, layer_depth=None) -> int:
+def revealed_pixels(r, camera: Camera, tolerance: float, mask, layer_depth=None) -> int:
     """Pixels of the chosen parts' front surface ``mask`` (a depth texture) that lie in or in
-    front of ``layer_depth``, i.e. are uncovered once that layer is peeled (all of the mask's
-    pixels without a layer), counted by an occlusion query and read back: depth masking."""
+    front of ``layer_depth`` (within the depth ``tolerance``: ``gbuffer.depth_tolerance``),
+    i.e. are uncovered once that layer is peeled (all of the mask's pixels without a layer),
+    counted by an occlusion query and read back: depth masking."""
     prog, vao = r.fullscreen(REVEAL_FRAG)
     prog["u_depth_range"].value = depth_range(camera)
-    prog["u_peel_eps"].value = peel_eps(camera)
+    prog["u_peel_eps"].value = tolerance
     mask.use(units.INPUTS)
     prog["u_mask_depth"].value = units.INPUTS
     (layer_depth or mask).use(units.INPUTS + 1)

@@ -1,23 +1,29 @@
-"""The G-buffer a frame's layers are captured into, and what every geometry pass of a capture
-takes from the camera (its matrices, depth range and peeling tolerance)."""
+"""The G-buffer a frame's layers are captured into, what every geometry pass of a capture
+takes from the camera (its matrices and depth range), and the depth tolerance under which two
+surfaces are one, which the capture and the vector drawings' occlusion both take."""
 
 from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
 
+import numpy as np
+
 from blueprint.scene.camera import Camera
 
-# Peeling tolerance in eye depth, as a fraction of the camera's depth range: surfaces closer
-# than this count as one (coplanar faces, duplicates, touching parts).
-PEEL_EPSILON = 1e-5
+# Surfaces closer in eye depth than this fraction of the model's bounding diagonal are one
+# (coplanar faces, duplicates, touching parts): a hundred times float32's rounding of positions
+# and depths, far below any gap a part is made with (a slot's clearance).
+DEPTH_FRACTION = 1e-5
+# Steps of a 24-bit depth buffer (and of float32's mantissa) in a unit
+_STEP = 1.0 / (1 << 24)
 # Touching solids have coincident faces of opposite winding (the top of one, the bottom of the
 # other). Drawing back faces in a second draw pushed back by this polygon offset (in steps of
 # the depth buffer) makes the front face win every pixel of the tie, instead of whichever
-# rounds nearer (speckle); it is far below the peeling tolerance, so both still peel as one.
+# rounds nearer (speckle); it is below the depth tolerance, so both still peel as one.
 BACK_OFFSET = 16.0
 # ...and the same push as a window depth, where a shader applies it
-BACK_BIAS = BACK_OFFSET / (1 << 24)
+BACK_BIAS = BACK_OFFSET * _STEP
 
 
 @dataclass
@@ -55,25 +61,26 @@ def gbuffer(pool, size: tuple[int, int], name: str = "gb", normals: bool = True)
     return GBuffer(depth, normal, ids, fbos, clears)
 
 
-def peel_uniforms(prog, camera: Camera) -> None:
-    """What every geometry pass of the peel takes from the camera."""
+def peel_uniforms(prog, camera: Camera, tolerance: float) -> None:
+    """What every geometry pass of the peel takes from the camera, and the depth tolerance
+    (``depth_tolerance``)."""
     prog["u_view"].write(camera.view_matrix().T.astype("f4").tobytes())
     prog["u_projection"].write(camera.projection_matrix().T.astype("f4").tobytes())
     prog["u_depth_range"].value = depth_range(camera)
-    prog["u_peel_eps"].value = peel_eps(camera)
+    prog["u_peel_eps"].value = tolerance
 
 
 @functools.lru_cache(maxsize=16)
-def abuffer_uniforms(camera: Camera) -> dict:
-    """What an A-buffer's geometry pass and resolve take from the camera (``ABufferSource``);
-    kept by the camera's value, as streams may draw from one camera again and again (read
-    only)."""
+def abuffer_uniforms(camera: Camera, tolerance: float) -> dict:
+    """What an A-buffer's geometry pass and resolve take from the camera (``ABufferSource``),
+    and the depth tolerance; kept by the camera's value, as streams may draw from one camera
+    again and again (read only)."""
     return {
         "u_view": camera.view_matrix().T.astype("f4").tobytes(),
         "u_projection": camera.projection_matrix().T.astype("f4").tobytes(),
         "u_ortho": camera.ortho,
         "u_depth_range": depth_range(camera),
-        "u_peel_eps": peel_eps(camera),
+        "u_peel_eps": tolerance,
     }
 
 
@@ -82,6 +89,32 @@ def depth_range(camera: Camera) -> tuple[float, float, float]:
     return (camera.near, camera.far, 1.0 if camera.ortho else 0.0)
 
 
-def peel_eps(camera: Camera) -> float:
-    """The peeling tolerance in eye depth for ``camera``."""
-    return PEEL_EPSILON * (camera.far - camera.near)
+def depth_tolerance(camera: Camera, bounds: np.ndarray) -> float:
+    """The eye depth under which two surfaces of a model within ``bounds`` seen by ``camera``
+    are one: in the peel, the k-buffer, the A-buffer and the vector drawings' occlusion alike.
+
+    ``DEPTH_FRACTION`` of the bounding diagonal, unless the depth buffer cannot tell that much
+    apart. A window depth step is ``f - n`` in eye depth on an orthographic camera and
+    ``d² (f - n) / (n f)`` at eye depth ``d`` on a perspective one, largest at the far plane:
+    ``f (f - n) / n``. The bound is twice the back faces' push (``BACK_OFFSET`` steps there,
+    which must stay within it for coincident faces of opposite winding to peel as one), plus
+    float32's rounding of eye positions (8 steps of the farthest eye depth and the largest
+    coordinate: a model far from the origin, or placed by instances).
+
+    Parameters
+    ----------
+    camera : Camera
+    bounds : (2, 3) float
+        The model's lowest and highest corner.
+
+    Returns
+    -------
+    float
+        In the model's units, eye depth (along the view axis).
+    """
+    lo, hi = np.asarray(bounds, np.float64)
+    n, f = camera.near, camera.far
+    step = (f - n) if camera.ortho else f * (f - n) / n
+    reach = f + float(np.abs(np.concatenate([lo, hi])).max())
+    precision = _STEP * (2.0 * BACK_OFFSET * step + 8.0 * reach)
+    return max(DEPTH_FRACTION * float(np.linalg.norm(hi - lo)), precision)

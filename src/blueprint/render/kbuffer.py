@@ -11,7 +11,7 @@ import numpy as np
 
 from blueprint.gpu import units
 from blueprint.render.abuffer import tile_max
-from blueprint.render.gbuffer import BACK_BIAS, GBuffer, peel_uniforms
+from blueprint.render.gbuffer import BACK_BIAS, GBuffer, depth_tolerance, peel_uniforms
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
@@ -74,7 +74,7 @@ class KBufferSource:
         if self.ids_only:
             defines = {"K": self.k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
             self.prog = geometry_program(capturer, KBUFFER_FRAG, defines)
-            peel_uniforms(self.prog, camera)
+            peel_uniforms(self.prog, camera, depth_tolerance(camera, mesh.bounds))
             target_uniform(r, self.prog, gb.size)
             self.prog["u_back_bias"].value = BACK_BIAS
             name, size = f"kbuffer.faces.{gb.size[0]}x{gb.size[1]}", gb.size
@@ -93,7 +93,7 @@ class KBufferSource:
         if self.unpacks:  # (one pass finds every layer otherwise)
             self.behind = geometry_program(capturer, KBUFFER_FRAG, {**defines, "PEEL": True}, modern=modern)
         for prog in (self.prog, self.behind) if self.behind is not None else (self.prog,):
-            peel_uniforms(prog, camera)
+            peel_uniforms(prog, camera, depth_tolerance(camera, mesh.bounds))
             target_uniform(r, prog, gb.size)
             prog["u_ortho"].value = camera.ortho
             if request.tie_break:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.gpu import units
-from blueprint.render.gbuffer import peel_uniforms
+from blueprint.render.gbuffer import depth_tolerance, peel_uniforms
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
@@ -33,7 +33,7 @@ def layers_left(capturer, mesh, camera: Camera, last_depth) -> int:
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
     prog = geometry_program(capturer, REMAINING_FRAG)
-    peel_uniforms(prog, camera)
+    peel_uniforms(prog, camera, depth_tolerance(camera, mesh.bounds))
     target_uniform(r, prog, size)
     last_depth.use(units.PEEL_DEPTH)
     prog["u_prev_depth"].value = units.PEEL_DEPTH

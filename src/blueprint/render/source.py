@@ -12,7 +12,7 @@ from typing import Protocol
 import numpy as np
 
 from blueprint.gpu import units
-from blueprint.render.gbuffer import BACK_BIAS, BACK_OFFSET, GBuffer, peel_uniforms
+from blueprint.render.gbuffer import BACK_BIAS, BACK_OFFSET, GBuffer, depth_tolerance, peel_uniforms
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
@@ -94,7 +94,7 @@ class PeelSource:
             "NORMALS": normals,
         }
         prog = self.prog = geometry_program(capturer, PEEL_FRAG, defines)
-        peel_uniforms(prog, camera)
+        peel_uniforms(prog, camera, depth_tolerance(camera, mesh.bounds))
         target_uniform(r, prog, gb.size)
         if normals:  # only the normal's orientation needs it
             prog["u_ortho"].value = camera.ortho

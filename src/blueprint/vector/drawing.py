@@ -25,6 +25,7 @@ from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
 from blueprint.export.writers import WRITERS, Kind, Writers
 from blueprint.gpu.device import check_size
+from blueprint.render.gbuffer import depth_tolerance
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.dimension import UNITS_MM
@@ -316,7 +317,6 @@ class VectorOptions:
     intersections: bool = True
     spacing: float = 1.0
     tolerance: float = 0.25
-    depth_tolerance: float = 1.0
     title: str | None = None
     section: Cut | None = None
     dimensions: bool = False
@@ -386,8 +386,6 @@ def draw_vector(
         Pixels between occlusion samples along a line.
     tolerance : float
         Douglas–Peucker tolerance in pixels.
-    depth_tolerance : float
-        Surfaces closer than this many pixel footprints in depth do not hide a line.
     title : str, optional
         A title line; drawings to scale get "<model> — <view> — 1:50 (mm)" by default.
     section : Cut, optional
@@ -541,7 +539,9 @@ class _Occlusion:
         self.renderer, self.model, self.frame, self.samples = renderer, model, frame, samples
         self.planes, self.layers, self.drawn = planes, layers, drawn
         self.crease_angle = options.crease_angle
-        self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), options.depth_tolerance)
+        # surfaces the capture takes for one do not hide each other's lines
+        tolerance = depth_tolerance(frame.camera, model.bounds)
+        self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), tolerance)
         self.peeled: PixelLayers | None = None
 
     def _on_gpu(self, planes):

@@ -3,7 +3,7 @@
 // surfaces running up to the first with face 0). The rules are those of
 // vector/occlusion/levels.py, which is the reference: a surface is in front of a sample when
 // the plane of its triangle meets the sample's view ray nearer to the eye by more than
-// u_limit; the line's own faces never count; the level is the minimum over the 3 x 3 pixels
+// u_tolerance (eye depth); the line's own faces never count; the level is the minimum over the 3 x 3 pixels
 // around the sample, where off contours a pixel with no surface at all does not take part.
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
@@ -57,22 +57,25 @@ uniform int u_count;     // samples
 uniform int u_layers;    // layers that count (the peel's stop rules), at most K
 uniform ivec2 u_size;
 uniform bool u_ortho;
-uniform float u_limit;   // tolerance times the pixel footprint
+uniform float u_tolerance;  // the depth tolerance, eye depth
+uniform float u_footprint;  // a pixel's size at unit distance (perspective) or in model units
 uniform float u_offset;  // pixels to either side of a line for the crease check
 
 const int BIG = 0x7fffffff;
 
-bool in_front(vec4 plane, vec3 eye) {
+// more than ``limit`` (eye depth) in front
+bool in_front(vec4 plane, vec3 eye, float limit) {
     precise float d = plane.x * eye.x + plane.y * eye.y + plane.z * eye.z;
     float c = plane.w;
     if (u_ortho) {
         // the plane meets the ray eye + u (0, 0, 1) at u = (c - n . eye) / n_z
         precise float ahead = (c - d) * sign(plane.z);
-        precise float bound = u_limit * abs(plane.z);
+        precise float bound = limit * abs(plane.z);
         return ahead > bound;
     }
-    // the ray t * eye meets the plane at t = c / (n . eye); in front: 0 < t < 1 - limit
-    precise float far = abs(d) * (1.0 - u_limit);
+    // the ray t * eye meets the plane at t = c / (n . eye), (1 - t) times the eye depth -eye.z
+    // in front: 0 < t < 1 - limit / -eye.z
+    precise float far = abs(d) * (1.0 - limit / -eye.z);
     return c * d > 0.0 && abs(c) < far;
 }
 
@@ -92,13 +95,13 @@ ivec2 texel(ivec2 p) {
         seen[I] = tri;                                                              \
         if (tri < 0) return ivec2(front, count);                                    \
         ++count;                                                                    \
-        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye)) ++front;      \
+        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye, limit)) ++front; \
         if (front >= bound) return ivec2(front, count);                             \
     }
 
-// (surfaces counted in front, surfaces there), unrolled over the K targets; counting stops
-// at ``bound`` surfaces in front; seen: the faces of the surfaces counted
-ivec2 stack_at(ivec2 q, vec3 eye, int own0, int own1, int bound, out int seen[K]) {
+// (surfaces counted in front by more than ``limit``, surfaces there), unrolled over the K
+// targets; counting stops at ``bound`` surfaces in front; seen: the faces of the surfaces counted
+ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, out int seen[K]) {
     int front = 0;
     int count = 0;
     SURFACE(u_s0, 0)
@@ -140,17 +143,19 @@ void main() {
     // goes below zero
     int seen[K];
     for (int n = 0; n < 9 && best > 0; ++n) {
-        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, own0, own1, best, seen);
+        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, u_tolerance, own0, own1, best, seen);
         int front = (solid && st.y == 0) ? BIG : st.x;
         best = min(best, front);
     }
     if (best == BIG) best = 0;
     ivec2 sides = ivec2(-1);
     if ((s.own.z & 2) != 0) {
+        // the surface at the line's depth beside it: within a pixel's footprint (levels.py's side_limit)
+        float side_limit = u_ortho ? u_footprint : u_footprint * -eye.z;
         for (int side = 0; side < 2; ++side) {
             vec2 spot = s.pixel.xy + (side == 0 ? 1.0 : -1.0) * u_offset * s.pixel.zw;
             ivec2 q = texel(ivec2(floor(spot)));
-            ivec2 st = stack_at(q, eye, own0, own1, BIG, seen);
+            ivec2 st = stack_at(q, eye, side_limit, own0, own1, BIG, seen);
             sides[side] = st.x < st.y ? seen[st.x] : -1;
         }
     }

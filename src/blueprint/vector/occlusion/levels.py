@@ -3,9 +3,10 @@
 The surface of layer ``k`` at a pixel is known exactly, as a triangle of the model, so instead
 of comparing against the layer's depth at the pixel centre (which is the depth *somewhere else*
 on a sloped surface) the triangle's plane is evaluated on the sample's own view ray. A surface
-counts as in front when it meets that ray nearer to the eye than the sample by more than a
-tolerance of ``tolerance`` pixel footprints at the sample's distance (the same measure in
-perspective and orthographic views). The faces a line lies on never count.
+counts as in front when it meets that ray nearer to the eye than the sample by more than the
+depth tolerance in eye depth: the capture's (``render.gbuffer.depth_tolerance``), a small
+fraction of the model, so parts that nearly touch (a tab in a slot) hide each other's lines
+as exactly as the layers tell them apart. The faces a line lies on never count.
 
 Near an outline the pixel under a sample may show a surface that does not reach the sample's
 ray at all (the plane of a triangle beside a silhouette, at a grazing angle, meets the ray far
@@ -19,7 +20,7 @@ at all (past the object's outline) are left out of that minimum: a hidden edge t
 outline stays hidden to its end.
 
 :func:`verify_creases` then drops mesh edges where the surfaces to both sides of the line are
-one flat surface of one part, which pixels alone cannot tell from an edge.
+one flat surface of the line's own part, which pixels alone cannot tell from an edge.
 """
 
 from __future__ import annotations
@@ -52,19 +53,22 @@ class DepthTest:
         origin)
     footprint : float, size of a pixel at unit distance (perspective) or in model units
         (orthographic): ``Camera.pixel_angle``
-    tolerance : float, surfaces nearer than this many pixel footprints in depth do not count as
-        in front
+    tolerance : float, surfaces nearer than this in eye depth (model units) do not count as in
+        front: ``render.gbuffer.depth_tolerance``, the capture's
     """
 
     ortho: bool
     footprint: float
-    tolerance: float = 1.0
+    tolerance: float
 
-    @property
-    def limit(self) -> np.float32:
-        """The tolerance in model units (orthographic) or relative to the distance (perspective),
-        in float32 as the gathers compare it."""
-        return np.float32(self.tolerance * self.footprint)
+    def side_limit(self, eye: np.ndarray) -> np.ndarray:
+        """(N,) float32: a pixel's footprint in eye depth at eye points (N, 3), the depth within
+        which :func:`verify_creases` takes a surface beside a line as at the line's depth (the
+        surfaces a pixel away on a curved surface lie off the line's tangent plane by about
+        that)."""
+        if self.ortho:
+            return np.full(len(eye), self.footprint, np.float32)
+        return (self.footprint * -eye[:, 2]).astype(np.float32)
 
 
 def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
@@ -123,10 +127,10 @@ def classify_samples(
     if layers == 0:
         level[inside] = 0
         return level
-    # float32 halves the memory traffic of the gathers; depths are compared at a relative
-    # tolerance of ~1e-4 or coarser, far above float32 rounding
+    # float32 halves the memory traffic of the gathers; the depth tolerance is far above its
+    # rounding (``depth_tolerance`` holds eight steps of the farthest eye depth)
     planes = planes.astype(np.float32)
-    ortho, limit = test.ortho, test.limit
+    ortho, limit = test.ortho, np.float32(test.tolerance)
     for start in range(0, len(inside), _CHUNK):
         idx = inside[start : start + _CHUNK]
         px = np.floor(samples.pixel[idx]).astype(np.int64)
@@ -152,16 +156,18 @@ def classify_samples(
     return level
 
 
-def _in_front(plane: np.ndarray, eye: np.ndarray, ortho: bool, limit: float) -> np.ndarray:
-    """Whether planes (N, 4) meet the view rays of eye points (N, 3) in front of them."""
+def _in_front(plane: np.ndarray, eye: np.ndarray, ortho: bool, limit) -> np.ndarray:
+    """Whether planes (N, 4) meet the view rays of eye points (N, 3) in front of them by more
+    than ``limit`` in eye depth (a scalar or (N,))."""
     dot = plane[:, 0] * eye[:, 0] + plane[:, 1] * eye[:, 1] + plane[:, 2] * eye[:, 2]
     c = plane[:, 3]
     if ortho:
         # the plane meets the ray x = eye + u (0, 0, 1) at u = (c - n . eye) / n_z
         nz = plane[:, 2]
         return (c - dot) * np.sign(nz) > limit * np.abs(nz)
-    # the ray t * eye meets the plane at t = c / (n . eye); in front: 0 < t < 1 - limit
-    return (c * dot > 0) & (np.abs(c) < np.abs(dot) * (1 - limit))
+    # the ray t * eye meets the plane at t = c / (n . eye), (1 - t) times the eye depth -eye_z
+    # in front: 0 < t < 1 - limit / -eye_z
+    return (c * dot > 0) & (np.abs(c) < np.abs(dot) * (1 - limit / -eye[:, 2]))
 
 
 def verify_creases(
@@ -176,7 +182,7 @@ def verify_creases(
 ) -> np.ndarray:
     """Leave out samples of mesh edges (silhouettes, borders, creases) where the drawing shows no
     edge: the surfaces seen a pixel to either side of the line, at the line's depth, are one flat
-    surface of one part.
+    surface of the line's own part.
 
     That happens where solids of one part touch: the box that is a lid sitting on the boxes that
     are walls has edges all round its bottom, but the lid's front face and the wall's front face
@@ -196,7 +202,7 @@ def verify_creases(
     eye = samples.eye[rows].astype(np.float32)
     own0, own1 = samples.faces[rows, 0], samples.faces[rows, 1]
     planes32 = planes.astype(np.float32)
-    ortho, limit = test.ortho, test.limit
+    ortho, limit = test.ortho, test.side_limit(eye)
     seen = []
     for side in (1.0, -1.0):
         q = flat_index(np.floor(pixel[rows] + side * offset * across).astype(np.int64), height, width)
@@ -225,11 +231,14 @@ def drop_phantoms(
 ) -> np.ndarray:
     """The second half of :func:`verify_creases`, given the faces ``tri_a`` and ``tri_b`` seen
     at the line's depth to either side of the samples ``rows`` (-1 where none): their levels
-    set to -1 where both are one flat surface of one part through the line's point."""
+    set to -1 where both are one flat surface of the line's own part through the line's point."""
     level, ortho = level.copy(), test.ortho
-    # only samples with a face of one part to either side can be phantoms
-    same_part = face_part[np.maximum(tri_a, 0)] == face_part[np.maximum(tri_b, 0)]
-    maybe = np.flatnonzero((tri_a >= 0) & (tri_b >= 0) & same_part)
+    # only samples with a face of the line's part to either side can be phantoms: another
+    # part's face covering both sides (a panel a fraction of a pixel in front of a slot's edge)
+    # hides the line, it does not continue its surface
+    part_a, part_b = face_part[np.maximum(tri_a, 0)], face_part[np.maximum(tri_b, 0)]
+    own_part = face_part[np.maximum(samples.faces[rows, 0], 0)]
+    maybe = np.flatnonzero((tri_a >= 0) & (tri_b >= 0) & (part_a == part_b) & (part_a == own_part))
     rows, tri_a, tri_b = rows[maybe], tri_a[maybe], tri_b[maybe]
     point = samples.eye[rows]
     plane_a, plane_b = planes[tri_a], planes[tri_b]
@@ -243,7 +252,7 @@ def drop_phantoms(
 
     def through(plane):
         gap = np.einsum("ij,ij->i", plane[:, :3], point) - plane[:, 3]
-        return np.abs(gap) <= 2.0 * test.tolerance * test.footprint * scale
+        return np.abs(gap) <= 2.0 * test.footprint * scale
 
     phantom = flat & through(plane_a) & through(plane_b)
     level[rows[phantom]] = -1
