@@ -18,8 +18,16 @@ from blueprint.columns import column_max, column_min, column_ptp, cross, face_cr
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
 from blueprint.scene.weld import _components
-from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
-from blueprint.silhouette.contours import smooth_contours, smooth_surface
+from blueprint.silhouette import (
+    BORDER,
+    CREASE,
+    SILHOUETTE,
+    Adjacency,
+    build_adjacency,
+    classify_edges,
+    smooth_contours,
+    smooth_surface,
+)
 from blueprint.sorting import stable_argsort, unique_first
 
 from .cache import ModelCache
