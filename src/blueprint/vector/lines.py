@@ -64,6 +64,9 @@ _MIN_CONTOUR_PX = 30.0
 SMOOTH_ANGLE = 5.0
 # Faces whose normal is this close (a cosine) to square with the view direction are seen edge-on.
 _EDGE_ON = 1e-9
+# Faces this close (a cosine) to edge-on keep the mesh's silhouette edges instead of smooth
+# contours: the vertex normals of a surface along the view round to either side.
+_EDGE_ON_SMOOTH = 1e-6
 # Endpoints closer than this fraction of the model's diagonal are one point when joining.
 _JOIN_REL = 1e-6
 # Signed plane distances below this fraction of the diagonal count as zero (touching, not cutting).
@@ -310,6 +313,11 @@ def feature_segments(
     if crease_angle not in surface:
         surface[crease_angle] = smooth_surface(adj, crease_angle)
     surface = surface[crease_angle]
+    # faces seen edge-on (a hole's wall along the view) have no contour to give: their
+    # vertices' n . v rounds either way, so the mesh's outline edges stay there
+    all_faces = np.arange(len(adj.faces))
+    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
+    surface = replace(surface, smooth=surface.smooth & ~edge_on)
     contours = smooth_contours(adj, surface, view, projection, size)
     # where a contour runs only a few pixels before it meets a feature, the mesh's own
     # silhouette there stays: one line in one piece, not a stub between two gaps
@@ -327,6 +335,12 @@ def feature_segments(
     sides = edges.faces
     replaced = (edges.kind == SILHOUETTE) & (kind == SILHOUETTE)
     replaced &= ~exact[np.maximum(sides, 0)].any(axis=1) & (sides >= 0).all(axis=1)
+    bridge, bridge_face, bridge_edge = _bridges(
+        adj, contours, edges.edges[(edges.kind == SILHOUETTE) & ~replaced]
+    )
+    points = np.concatenate([contours.segments3d, bridge])
+    faces = np.concatenate([contours.faces, bridge_face])
+    edge_pairs = np.concatenate([contours.edges, np.stack([bridge_edge, bridge_edge], axis=1)])
     return Segments.concatenate(
         [
             Segments(
@@ -337,15 +351,37 @@ def feature_segments(
                 found.edge[~replaced],
             ),
             Segments(
-                contours.segments3d,
-                np.stack([contours.faces, np.full(len(contours.faces), -1)], axis=1),
-                face_part[contours.faces].astype(np.int32),
-                np.full(len(contours.faces), SILHOUETTE, np.uint8),
-                contours.edges[:, 0],
-                contours.edges[:, 1],
+                points,
+                np.stack([faces, np.full(len(faces), -1)], axis=1),
+                face_part[faces].astype(np.int32),
+                np.full(len(faces), SILHOUETTE, np.uint8),
+                edge_pairs[:, 0],
+                edge_pairs[:, 1],
             ),
         ]
     )
+
+
+def _bridges(adj: Adjacency, contours, kept: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments (K, 2, 3) from each open end of the ``contours`` (a ``ContourSet``) to the end
+    of its edge where a ``kept`` mesh silhouette edge (adjacency edge numbers) starts, their
+    faces (K,) and edges (K,): where a contour meets a feature, the outline runs on without a
+    gap of a triangle."""
+    none = np.zeros((0, 2, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if len(contours.faces) == 0 or len(kept) == 0:
+        return none
+    ends = contours.segments3d.reshape(-1, 3)
+    ids = _point_ids(ends, _JOIN_REL * _diagonal(adj.positions))
+    open_end = np.flatnonzero(np.bincount(ids)[ids] == 1)
+    on_kept = np.zeros(len(adj.positions), bool)
+    on_kept[adj.edges[kept].reshape(-1)] = True
+    edge = contours.edges.reshape(-1)[open_end]
+    a, b = adj.edges[edge, 0], adj.edges[edge, 1]
+    vertex = np.where(on_kept[a], a, b)
+    joined = on_kept[vertex]
+    open_end, edge, vertex = open_end[joined], edge[joined], vertex[joined]
+    bridge = np.stack([ends[open_end], adj.positions[vertex]], axis=1)
+    return bridge, contours.faces[open_end // 2], edge
 
 
 def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> np.ndarray:
@@ -359,9 +395,11 @@ def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> np.n
     return length[run] < shortest
 
 
-def _edge_on(adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+def _edge_on(
+    adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray, within: float = _EDGE_ON
+) -> np.ndarray:
     """(N, 2) bool: which of the faces ``faces`` (N, 2) the camera sees edge-on, within
-    ``_EDGE_ON`` of a right angle."""
+    ``within`` (a cosine) of a right angle."""
     camera_to_model = np.linalg.inv(view)
     normal = adj.face_normals[faces]
     if projection[3, 3] == 1.0:
@@ -369,7 +407,7 @@ def _edge_on(adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray) -
     else:
         toward = camera_to_model[:3, 3] - adj.positions[adj.faces[faces, 0]]
     cos = np.einsum("nki,nki->nk", normal, toward) / np.maximum(np.linalg.norm(toward, axis=2), 1e-300)
-    return np.abs(cos) <= _EDGE_ON
+    return np.abs(cos) <= within
 
 
 # -- intersections between parts ------------------------------------------------------------------
