@@ -309,6 +309,15 @@ def feature_segments(
     found = Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind, edges.edges)
     if not smooth or len(adj.faces) == 0:
         return found
+    return _with_smooth_contours(model, adj, edges, found, view, projection, size, crease_angle)
+
+
+def _with_smooth_contours(
+    model, adj, edges, found: Segments, view, projection, size, crease_angle
+) -> Segments:
+    """``found``, the lines of ``classify_edges``' ``edges``, with the silhouettes where the
+    surface is smooth replaced by its smooth contours (``feature_segments``)."""
+    kind = found.kind
     surface = SURFACES.get(model, dict)
     if crease_angle not in surface:
         surface[crease_angle] = smooth_surface(adj, crease_angle)
@@ -353,7 +362,7 @@ def feature_segments(
             Segments(
                 points,
                 np.stack([faces, np.full(len(faces), -1)], axis=1),
-                face_part[faces].astype(np.int32),
+                model.face_part[faces].astype(np.int32),
                 np.full(len(faces), SILHOUETTE, np.uint8),
                 edge_pairs[:, 0],
                 edge_pairs[:, 1],
