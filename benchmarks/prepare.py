@@ -173,7 +173,7 @@ def child(path: str, name: str) -> dict:
     length = np.linalg.norm(cross, axis=1)
     unit = cross / np.where(length > 0, length, 1.0)[:, None]
     del cross, length
-    stage("creases", partial(normals.crease_vertices, welded, unit, 30.0))
+    stage("creases", partial(normals.crease_vertices, welded, unit, 30.0, model.positions, model.faces))
     del welded, unit
     stage("normals", lambda: normals.corner_normals(model.positions, model.faces, 30.0))
     prepared = sys.modules.get("blueprint.scene.prepare")

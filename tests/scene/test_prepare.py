@@ -342,8 +342,8 @@ def test_crease_vertices_of_more_welded_vertices_than_an_int32_key_holds():
         positions[faces[:, 1]] - positions[faces[:, 0]], positions[faces[:, 2]] - positions[faces[:, 0]]
     )
     unit /= np.linalg.norm(unit, axis=1)[:, None]
-    wide = normals.crease_vertices(welded, unit, 30.0)
-    narrow = normals.crease_vertices(welded.astype(np.int32), unit, 30.0)
+    wide = normals.crease_vertices(welded, unit, 30.0, positions, faces)
+    narrow = normals.crease_vertices(welded.astype(np.int32), unit, 30.0, positions, faces)
     assert welded.max() ** 2 > 2**31
     np.testing.assert_array_equal(narrow, wide)
     assert 0 < wide[n : 2 * n].sum() < n  # some of the middle row on creases, not all

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.columns import column_max, column_min, indexed_cross
-from blueprint.scene.weld import check_mesh, weld_groups
+from blueprint.scene.weld import _components, check_mesh, weld_groups
 from blueprint.sorting import sorted_with_order, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
@@ -18,6 +18,12 @@ _CONE = 44.0
 _CROSS_BLOCK = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
+# A run of crease edges touching no border is a scan's noise while it has fewer edges than this
+# and is shorter than ``_RUN_REL`` of the model's diagonal (``noise_creases``): the creases of
+# made things run on, and where they are short the mesh is coarse, so they have few edges yet
+# are long.
+_RUN_EDGES = 8
+_RUN_REL = 0.05
 
 
 def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
@@ -41,10 +47,12 @@ def _welded(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> 
     return np.take(group.astype(np.int32), faces)
 
 
-def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -> np.ndarray:
+def crease_vertices(
+    welded: np.ndarray, unit: np.ndarray, crease_angle: float, positions: np.ndarray, faces: np.ndarray
+) -> np.ndarray:
     """(V,) bool: the welded vertex lies on a crease (an edge whose two faces' normals differ,
-    up to sign, by more than ``crease_angle`` degrees, unless it is a crease edge on its own),
-    a border or a non-manifold edge.
+    up to sign, by more than ``crease_angle`` degrees, unless it is in a run of noise,
+    ``noise_creases``), a border or a non-manifold edge.
 
     Parameters
     ----------
@@ -54,6 +62,9 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
         Unit face normals (zero for degenerate faces).
     crease_angle : float
         Degrees.
+    positions : (P, 3) float
+        The vertices ``faces`` index: the crease edges' lengths.
+    faces : (F, 3) int
     """
     vertices = int(welded.max(initial=-1)) + 1
     # edge k of a face joins its corners k and k + 1; its key is lo * vertices + hi
@@ -74,8 +85,14 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
         at = pair[lo : lo + _CROSS_BLOCK]
         one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
         cos[lo : lo + len(at)] = np.einsum("ij,ij->i", one, other)
+    sharp_pair = pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]
+    # the crease edges' lengths, from the first face of each
+    corner = order[sharp_pair]
     del order
-    crease = key[pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]]
+    face, k = corner // 3, corner % 3
+    ends = np.asarray(positions, np.float64)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])]
+    length = np.linalg.norm(ends[1] - ends[0], axis=1)
+    crease = key[sharp_pair]
     del pair, cos
     # every other edge is a border or a non-manifold edge
     apart = np.ones(len(key), bool)
@@ -88,14 +105,28 @@ def crease_vertices(welded: np.ndarray, unit: np.ndarray, crease_angle: float) -
     sharp[open_edges // vertices] = True
     sharp[open_edges % vertices] = True
     crease = np.stack([crease // vertices, crease % vertices], axis=1)
-    sharp[crease[~lone_creases(crease, sharp)].ravel()] = True
+    noise = noise_creases(crease, sharp, length, _diagonal(positions, faces))
+    sharp[crease[~noise].ravel()] = True
     return sharp
 
 
-def lone_creases(crease: np.ndarray, anchored: np.ndarray) -> np.ndarray:
-    """(E,) bool: which of the crease edges are alone: both ends on no other crease edge and
-    not ``anchored`` (on a border or non-manifold edge). A scan's noise lifts single edges past
-    the crease angle; a crease of a made thing runs on into others or to a border.
+def _diagonal(positions: np.ndarray, faces: np.ndarray) -> float:
+    """The diagonal of the bounding box of the vertices the faces use (1 where it is 0)."""
+    used = np.zeros(len(positions), bool)
+    used[np.asarray(faces).reshape(-1)] = True
+    points = positions if used.all() else positions[used]
+    if len(points) == 0:
+        return 1.0
+    extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
+    return float(np.linalg.norm(extent)) or 1.0
+
+
+def noise_creases(crease: np.ndarray, anchored: np.ndarray, length: np.ndarray, size: float) -> np.ndarray:
+    """(E,) bool: which of the crease edges are a scan's noise: in a run of crease edges (those
+    joined end to end, junctions included) that touches no ``anchored`` vertex (on a border or
+    a non-manifold edge), has fewer than ``_RUN_EDGES`` edges and is shorter than ``_RUN_REL``
+    of ``size``. Noise lifts single edges and short runs of them past the crease angle; a crease
+    of a made thing runs on into others or to a border, and is long where it has few edges.
 
     Parameters
     ----------
@@ -103,10 +134,23 @@ def lone_creases(crease: np.ndarray, anchored: np.ndarray) -> np.ndarray:
         The crease edges' (welded) vertex indices.
     anchored : (V,) bool
         Vertices on a border or non-manifold edge.
+    length : (E,) float
+        The crease edges' lengths.
+    size : float
+        The model's size (its bounding-box diagonal), in the units of ``length``.
     """
-    free = np.bincount(crease.ravel(), minlength=len(anchored))[: len(anchored)] == 1
-    free &= ~anchored
-    return free[crease[:, 0]] & free[crease[:, 1]]
+    if len(crease) == 0:
+        return np.zeros(0, bool)
+    # runs over the crease edges' own vertices only: the rest of the mesh takes no part
+    used, local = np.unique(crease, return_inverse=True)
+    local = local.reshape(-1, 2)
+    run = _components(np.arange(len(used)), local[:, 0], local[:, 1])[local[:, 0]]
+    edges = np.bincount(run)
+    total = np.bincount(run, np.asarray(length, np.float64))
+    held = np.zeros(len(edges), bool)
+    held[run[anchored[used[local[:, 0]]] | anchored[used[local[:, 1]]]]] = True
+    noise = ~held & (edges < _RUN_EDGES) & (total < _RUN_REL * size)
+    return noise[run]
 
 
 def corner_normals(
@@ -119,8 +163,8 @@ def corner_normals(
     A scan's noise tilts faces that share only a vertex by more than the crease angle while
     every edge between them stays below it; splitting the normal there would draw a crease
     fragment, a speck, at each such vertex. A crease is an edge: where no edge is one, the
-    surface is smooth; nor is a crease edge on its own, touching no other crease edge, border
-    or non-manifold edge, one: the creases of made things run on. Vertices on borders and
+    surface is smooth; nor is a short run of crease edges touching no border or non-manifold
+    edge (``noise_creases``): the creases of made things run on. Vertices on borders and
     non-manifold edges keep the pairwise rule: where patches meet without sharing edges
     (T-junctions, open seams), their edges say nothing about the angle between them.
 
@@ -156,7 +200,9 @@ def corner_normals(
         welded = topology["welded"] = _welded(positions, faces)
     sharp = topology.get(("sharp", float(crease_angle)))
     if sharp is None:
-        sharp = topology[("sharp", float(crease_angle))] = crease_vertices(welded, unit, crease_angle)
+        sharp = topology[("sharp", float(crease_angle))] = crease_vertices(
+            welded, unit, crease_angle, positions, faces
+        )
     vertices = len(sharp)
     vertex = welded.reshape(-1)
     # Where no pair of the faces around a vertex is told apart (no crease there, and every two

@@ -20,6 +20,7 @@ import numpy as np
 
 from blueprint.scene.weld import weld
 
+from .contours import ContourSet, SmoothSurface, smooth_contours, smooth_surface
 from .deform import Animation, Pose
 from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges
 from .idlist import IdLists, build_id_lists, id_lists_from_topology
@@ -32,15 +33,19 @@ __all__ = [
     "SILHOUETTE",
     "Adjacency",
     "Animation",
+    "ContourSet",
     "EdgeSet",
     "IdLists",
     "Pose",
+    "SmoothSurface",
     "build_adjacency",
     "build_id_lists",
     "classify_edges",
     "draw_segments",
     "id_lists_from_topology",
     "silhouette_image",
+    "smooth_contours",
+    "smooth_surface",
     "weld",
 ]
 

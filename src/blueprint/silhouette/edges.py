@@ -12,11 +12,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.scene.camera import clip_to_pixels, transform
-from blueprint.scene.normals import lone_creases
+from blueprint.scene.normals import noise_creases
 
 from .mesh import Adjacency
 
-__all__ = ["BORDER", "CREASE", "SILHOUETTE", "EdgeSet", "classify_edges"]
+__all__ = ["BORDER", "CREASE", "SILHOUETTE", "EdgeSet", "classify_edges", "feature_vertices", "sharp_edges"]
 
 SILHOUETTE = 1
 BORDER = 2
@@ -158,6 +158,19 @@ def classify_edges(
     )
 
 
+def feature_vertices(adj: Adjacency, crease_angle: float = 30.0) -> np.ndarray:
+    """(V,) bool: the vertices on a crease (``sharp_edges``, silhouette or not), a border, a
+    non-manifold edge or a degenerate face: where the surface is not smooth."""
+    normals = adj.face_normals
+    normal_ok = (normals[:, 0] != 0) | (normals[:, 1] != 0) | (normals[:, 2] != 0)
+    count, f0, f1 = _first_two_faces(adj)
+    apart = sharp_edges(adj, count, f0, f1, normal_ok, crease_angle) | (count != 2)
+    feature = np.zeros(len(adj.positions), bool)
+    feature[adj.edges[apart].reshape(-1)] = True
+    feature[adj.faces[~normal_ok].reshape(-1)] = True
+    return feature
+
+
 def _first_two_faces(adj: Adjacency) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(E,) the number of faces of every edge, and its first two faces (-1 where it has fewer)."""
     edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
@@ -184,25 +197,39 @@ def _first_face(adj: Adjacency, chosen: np.ndarray) -> np.ndarray:
 
 def _creases(adj, count, f0, f1, normal_ok, silhouette, crease_angle: float) -> np.ndarray:
     """(E,) bool: two-face edges, no silhouette, whose faces' normals differ by more than
-    ``crease_angle`` degrees, lone crease edges left out."""
+    ``crease_angle`` degrees, runs of noise left out (``sharp_edges``)."""
+    return sharp_edges(adj, count, f0, f1, normal_ok, crease_angle) & ~silhouette
+
+
+def sharp_edges(adj, count, f0, f1, normal_ok, crease_angle: float) -> np.ndarray:
+    """(E,) bool: two-face edges whose faces' normals differ by more than ``crease_angle``
+    degrees, silhouettes or not, but for runs of a scan's noise, as the raster drawing's
+    normals take them (``scene.normals.noise_creases``)."""
     normals = adj.face_normals
-    # the angle at every two-face edge, once: for the creases (those that are no silhouette)
-    # and for the lone-crease test (every sharp one, silhouette or not)
     sharp = np.flatnonzero(count == 2)
     both_ok = normal_ok[f0[sharp]] & normal_ok[f1[sharp]]
-    limit = np.cos(np.radians(crease_angle))
     cos_angle = np.einsum("ij,ij->i", normals[f0[sharp]], normals[f1[sharp]])
-    crease = np.zeros(len(adj.edges), dtype=bool)
-    crease[sharp] = both_ok & (cos_angle < limit) & ~silhouette[sharp]
-
-    # a lone crease edge is a scan's noise, as the raster drawing's normals take it
-    # (scene.normals.lone_creases), whether or not this view makes it a silhouette
-    sharp = sharp[~(both_ok & (cos_angle >= limit))]
+    limit = np.cos(np.radians(crease_angle))
+    # runs are found among every edge that is not smooth, those beside a degenerate face too
+    apart = ~(both_ok & (cos_angle >= limit))
+    creased, sharp = (both_ok & (cos_angle < limit))[apart], sharp[apart]
     anchored = np.zeros(len(adj.positions), bool)
     anchored[adj.edges[count != 2].ravel()] = True
-    alone = np.zeros(len(adj.edges), bool)
-    alone[sharp] = lone_creases(adj.edges[sharp], anchored)
-    return crease & ~alone
+    ends = adj.positions[adj.edges[sharp]]
+    length = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
+    crease = np.zeros(len(adj.edges), dtype=bool)
+    crease[sharp] = creased & ~noise_creases(adj.edges[sharp], anchored, length, _size(adj))
+    return crease
+
+
+def _size(adj) -> float:
+    """The diagonal of the bounding box of the vertices the faces use (1 where it is 0)."""
+    used = np.zeros(len(adj.positions), bool)
+    used[adj.faces.reshape(-1)] = True
+    points = adj.positions[used]
+    if len(points) == 0:
+        return 1.0
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) or 1.0
 
 
 def _projected(model: np.ndarray, view, projection, size) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -17,7 +17,17 @@ import numpy as np
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
-from blueprint.silhouette import BORDER, CREASE, SILHOUETTE, Adjacency, build_adjacency, classify_edges
+from blueprint.scene.weld import _components
+from blueprint.silhouette import (
+    BORDER,
+    CREASE,
+    SILHOUETTE,
+    Adjacency,
+    build_adjacency,
+    classify_edges,
+    smooth_contours,
+    smooth_surface,
+)
 from blueprint.sorting import stable_argsort, unique_first
 
 from .cache import ModelCache
@@ -45,11 +55,18 @@ __all__ = [
 
 PART_BOUNDARY = BOUNDARY
 
+# Smooth contours that run fewer pixels than this before they end at a feature leave the mesh's
+# own silhouette in their faces: a stub between two gaps breaks a line into pieces, while the
+# zigzag of a mesh's silhouette shows along long contours.
+_MIN_CONTOUR_PX = 30.0
 # Creases whose faces meet at less than this many degrees are tangent edges of smooth blends
 # (a fillet's boundary): kind ``SMOOTH``.
 SMOOTH_ANGLE = 5.0
 # Faces whose normal is this close (a cosine) to square with the view direction are seen edge-on.
 _EDGE_ON = 1e-9
+# Faces this close (a cosine) to edge-on keep the mesh's silhouette edges instead of smooth
+# contours: the vertex normals of a surface along the view round to either side.
+_EDGE_ON_SMOOTH = 1e-6
 # Endpoints closer than this fraction of the model's diagonal are one point when joining.
 _JOIN_REL = 1e-6
 # Signed plane distances below this fraction of the diagonal count as zero (touching, not cutting).
@@ -69,6 +86,8 @@ _DENSE_PAIRS = 1 << 22
 _BLOCK_WORDS = 64
 
 ADJACENCY = ModelCache()
+# The smooth faces and vertex normals of each mesh, by crease angle (``smooth_surface``).
+SURFACES = ModelCache()
 INTERSECTIONS = ModelCache()
 
 
@@ -89,7 +108,11 @@ class Segments:
         ``SILHOUETTE``, ``BORDER``, ``CREASE``, ``PART_BOUNDARY``, ``SMOOTH`` or
         ``INTERSECTION``.
     edge : (N,) int64
-        The model's edge the segment lies on (``edge_numbers``), -1 for intersections.
+        The model's edge the segment lies on (``edge_numbers``), -1 for intersections; for a
+        smooth contour, which lies inside a face, the edge its first point lies on.
+    edge_end : (N,) int64, optional
+        The edge the segment's second point lies on, where that is another (smooth contours:
+        the edge where the contour leaves the face); None: ``edge``.
     """
 
     points: np.ndarray
@@ -97,6 +120,11 @@ class Segments:
     part: np.ndarray
     kind: np.ndarray
     edge: np.ndarray
+    edge_end: np.ndarray | None = None
+
+    def end_edges(self) -> np.ndarray:
+        """(N,) int64: the edge each segment's second point lies on."""
+        return self.edge if self.edge_end is None else self.edge_end
 
     @classmethod
     def empty(cls) -> Segments:
@@ -114,12 +142,16 @@ class Segments:
     @staticmethod
     def concatenate(items: list[Segments]) -> Segments:
         items = [s for s in items if len(s)] or [Segments.empty()]
+        ends = None
+        if any(s.edge_end is not None for s in items):
+            ends = np.concatenate([s.end_edges() for s in items]).astype(np.int64)
         return Segments(
             np.concatenate([s.points for s in items]),
             np.concatenate([s.faces for s in items]),
             np.concatenate([s.part for s in items]).astype(np.int32),
             np.concatenate([s.kind for s in items]).astype(np.uint8),
             np.concatenate([s.edge for s in items]).astype(np.int64),
+            ends,
         )
 
 
@@ -229,9 +261,16 @@ def feature_segments(
     projection: np.ndarray,
     size: tuple[int, int],
     crease_angle: float = 30.0,
+    smooth: bool = True,
 ) -> Segments:
     """Silhouettes, borders and creases of every part (from ``classify_edges``), each with
     its edge (``edge_numbers``).
+
+    With ``smooth``, silhouettes where the surface is smooth are its smooth contours
+    (``silhouette.smooth_contours``: the zero set of the interpolated ``n . v`` inside the
+    faces, kind ``SILHOUETTE``, faces ``(face, -1)``, its source edges those it crosses); the
+    mesh's own silhouette edges are kept where a face beside them is not smooth (on a crease,
+    a border).
 
     Borders that coincide with a border of another part are part boundaries (a surface split
     into parts) and come out with that kind. Creases whose faces meet at less than
@@ -267,12 +306,109 @@ def feature_segments(
         last_at = np.r_[first_at[1:] - 1, len(key_sorted) - 1]
         shared = (part_sorted[first_at] != part_sorted[last_at])[group]
         kind[border[order[shared]]] = PART_BOUNDARY
-    return Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind, edges.edges)
+    found = Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind, edges.edges)
+    if not smooth or len(adj.faces) == 0:
+        return found
+    return _with_smooth_contours(model, adj, edges, found, view, projection, size, crease_angle)
 
 
-def _edge_on(adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+def _with_smooth_contours(
+    model, adj, edges, found: Segments, view, projection, size, crease_angle
+) -> Segments:
+    """``found``, the lines of ``classify_edges``' ``edges``, with the silhouettes where the
+    surface is smooth replaced by its smooth contours (``feature_segments``)."""
+    kind = found.kind
+    surface = SURFACES.get(model, dict)
+    if crease_angle not in surface:
+        surface[crease_angle] = smooth_surface(adj, crease_angle)
+    surface = surface[crease_angle]
+    # faces seen edge-on (a hole's wall along the view) have no contour to give: their
+    # vertices' n . v rounds either way, so the mesh's outline edges stay there
+    all_faces = np.arange(len(adj.faces))
+    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
+    surface = replace(surface, smooth=surface.smooth & ~edge_on)
+    contours = smooth_contours(adj, surface, view, projection, size)
+    # where a contour runs only a few pixels before it meets a feature, the mesh's own
+    # silhouette there stays: one line in one piece, not a stub between two gaps
+    short = _short_runs(contours.segments3d, contours.segments2d, _MIN_CONTOUR_PX)
+    exact = ~surface.smooth
+    exact[contours.faces[short]] = True
+    contours = replace(
+        contours,
+        segments3d=contours.segments3d[~short],
+        segments2d=contours.segments2d[~short],
+        faces=contours.faces[~short],
+        edges=contours.edges[~short],
+    )
+    # a silhouette edge whose faces are all smooth is replaced by the contour across them
+    sides = edges.faces
+    replaced = (edges.kind == SILHOUETTE) & (kind == SILHOUETTE)
+    replaced &= ~exact[np.maximum(sides, 0)].any(axis=1) & (sides >= 0).all(axis=1)
+    bridge, bridge_face, bridge_edge = _bridges(
+        adj, contours, edges.edges[(edges.kind == SILHOUETTE) & ~replaced]
+    )
+    points = np.concatenate([contours.segments3d, bridge])
+    faces = np.concatenate([contours.faces, bridge_face])
+    edge_pairs = np.concatenate([contours.edges, np.stack([bridge_edge, bridge_edge], axis=1)])
+    return Segments.concatenate(
+        [
+            Segments(
+                found.points[~replaced],
+                found.faces[~replaced],
+                found.part[~replaced],
+                found.kind[~replaced],
+                found.edge[~replaced],
+            ),
+            Segments(
+                points,
+                np.stack([faces, np.full(len(faces), -1)], axis=1),
+                model.face_part[faces].astype(np.int32),
+                np.full(len(faces), SILHOUETTE, np.uint8),
+                edge_pairs[:, 0],
+                edge_pairs[:, 1],
+            ),
+        ]
+    )
+
+
+def _bridges(adj: Adjacency, contours, kept: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments (K, 2, 3) from each open end of the ``contours`` (a ``ContourSet``) to the end
+    of its edge where a ``kept`` mesh silhouette edge (adjacency edge numbers) starts, their
+    faces (K,) and edges (K,): where a contour meets a feature, the outline runs on without a
+    gap of a triangle."""
+    none = np.zeros((0, 2, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if len(contours.faces) == 0 or len(kept) == 0:
+        return none
+    ends = contours.segments3d.reshape(-1, 3)
+    ids = _point_ids(ends, _JOIN_REL * _diagonal(adj.positions))
+    open_end = np.flatnonzero(np.bincount(ids)[ids] == 1)
+    on_kept = np.zeros(len(adj.positions), bool)
+    on_kept[adj.edges[kept].reshape(-1)] = True
+    edge = contours.edges.reshape(-1)[open_end]
+    a, b = adj.edges[edge, 0], adj.edges[edge, 1]
+    vertex = np.where(on_kept[a], a, b)
+    joined = on_kept[vertex]
+    open_end, edge, vertex = open_end[joined], edge[joined], vertex[joined]
+    bridge = np.stack([ends[open_end], adj.positions[vertex]], axis=1)
+    return bridge, contours.faces[open_end // 2], edge
+
+
+def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> np.ndarray:
+    """(N,) bool: the segments (model ``points`` (N, 2, 3), ``pixels`` (N, 2, 2)) in runs (those
+    joined end to end) shorter than ``shortest`` pixels on screen."""
+    if len(points) == 0:
+        return np.zeros(0, bool)
+    ids = _point_ids(points.reshape(-1, 3), _JOIN_REL * _diagonal(points.reshape(-1, 3))).reshape(-1, 2)
+    run = _components(np.arange(int(ids.max()) + 1), ids[:, 0], ids[:, 1])[ids[:, 0]]
+    length = np.bincount(run, np.linalg.norm(pixels[:, 1] - pixels[:, 0], axis=1))
+    return length[run] < shortest
+
+
+def _edge_on(
+    adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray, within: float = _EDGE_ON
+) -> np.ndarray:
     """(N, 2) bool: which of the faces ``faces`` (N, 2) the camera sees edge-on, within
-    ``_EDGE_ON`` of a right angle."""
+    ``within`` (a cosine) of a right angle."""
     camera_to_model = np.linalg.inv(view)
     normal = adj.face_normals[faces]
     if projection[3, 3] == 1.0:
@@ -280,7 +416,7 @@ def _edge_on(adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray) -
     else:
         toward = camera_to_model[:3, 3] - adj.positions[adj.faces[faces, 0]]
     cos = np.einsum("nki,nki->nk", normal, toward) / np.maximum(np.linalg.norm(toward, axis=2), 1e-300)
-    return np.abs(cos) <= _EDGE_ON
+    return np.abs(cos) <= within
 
 
 # -- intersections between parts ------------------------------------------------------------------
@@ -785,6 +921,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     seg_faces = segments.faces[keep]
     seg_kind = segments.kind[keep]
     seg_edge = segments.edge[keep]
+    seg_edge_end = segments.end_edges()[keep]
     seg_part = segments.part[keep].astype(np.int64)
     pid = pid[keep]
     n = len(keep)
@@ -811,7 +948,8 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     out_points[slot] = tails[:, 0]
     out_faces[slot] = faces
     out_kind[slot] = seg_kind[seg]
-    out_edge[slot] = seg_edge[seg]
+    # a segment walked backwards starts on its second point's edge
+    out_edge[slot] = np.where(rev, seg_edge_end[seg], seg_edge[seg])
     out_points[offsets[1:] - 1] = tails[chain_start + lengths - 1, 1]
     return Polylines(
         out_points,

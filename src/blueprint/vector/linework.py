@@ -74,7 +74,8 @@ class Lines:
         Occlusion level: how many surfaces lie in front of the polyline.
     edges : (M,) int64
         Source edges (rows of ``edge_numbers``) of every polyline, one after the other, in the
-        order the line runs along them; none for lines that lie inside faces (intersections).
+        order the line runs along them: for a smooth contour (a silhouette inside faces), the
+        edges it crosses; none for intersections.
     edge_offsets : (P + 1,) int64
     behind : (P,) bool
         Polylines behind a shaded part's surface (all False without shading).

@@ -1,0 +1,59 @@
+"""Specks on scans (issue 39, point 2), with the issue's measure (``scan_helpers.specks``: an
+8-connected blob of at most 12 px of ink, ink more than 60 off the paper in summed RGB) at
+1024 x 1024, and the features that must stay."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scan_helpers import ink, noisy_bust, noisy_sphere, specks
+
+import blueprint
+from blueprint.scene.camera import Camera, clip_to_pixels, transform
+
+SIZE = (1024, 1024)
+
+
+def _bunny(shared_models):
+    path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is missing from the shared models")
+    return blueprint.load_model(path)
+
+
+def test_stanford_bunny_specks(renderer, shared_models):
+    """42 specks when a crease was every edge but a lone one past the crease angle; 24 since a
+    run of crease edges of fewer than 8 edges and 5 % of the model, touching no border, is
+    noise (llvmpipe). Most of those left are faint: hidden contours of the noise's folds."""
+    assert specks(np.asarray(blueprint.render(_bunny(shared_models), size=SIZE))) <= 24
+
+
+@pytest.mark.xfail(strict=True, reason="24 specks on the bunny at 1024², the issue's target is 15")
+def test_stanford_bunny_specks_target(renderer, shared_models):
+    assert specks(np.asarray(blueprint.render(_bunny(shared_models), size=SIZE))) <= 15
+
+
+@pytest.mark.parametrize(("name", "most"), [("noisy sphere", 34), ("noisy bust", 19)])
+def test_generated_scan_specks(renderer, name, most):
+    """The generated scans' specks, as measured (llvmpipe): the sphere's 34 are all along its
+    outline (the depth jump's band broken by the noise), as before the crease runs; the bust
+    had 20."""
+    model = noisy_sphere(0.006) if name == "noisy sphere" else noisy_bust()[0]
+    assert specks(np.asarray(blueprint.render(model, size=SIZE))) <= most
+
+
+def test_bust_ridge_is_inked(renderer):
+    """The bust's ridge, seen from the front, is a crease run of about 60 edges: inked along
+    its crest (every crest vertex within 1 px of ink) while runs of noise are not."""
+    model, crest = noisy_bust()
+    camera = Camera.fit(model.positions, "front", aspect=1.0)
+    image = np.asarray(blueprint.render(model, size=SIZE, camera=camera))
+    view = np.asarray(camera.view_matrix(), float)
+    projection = np.asarray(camera.projection_matrix(), float)
+    crest_px = np.floor(clip_to_pixels(transform(crest, projection @ view), SIZE)).astype(int)
+    inked = ink(image)
+    near = np.zeros(len(crest_px), bool)
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            near |= inked[crest_px[:, 1] + dy, crest_px[:, 0] + dx]
+    assert near.all(), crest_px[~near]
