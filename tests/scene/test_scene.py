@@ -599,12 +599,12 @@ def test_weld_components_equal_scipy_connected_components():
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from blueprint.scene.weld import _components
+    from blueprint.scene.weld import connected_components_of
 
     rng = np.random.default_rng(7)
     for n, pairs in ((50, 40), (300, 100), (1000, 900)):
         i, j = rng.integers(0, n, pairs), rng.integers(0, n, pairs)
-        ours = _components(np.arange(n), i, j)
+        ours = connected_components_of(np.arange(n), i, j)
         _, theirs = connected_components(coo_matrix((np.ones(pairs), (i, j)), shape=(n, n)), directed=False)
         # the same partition: labels map one to one
         assert len(set(zip(ours.tolist(), theirs.tolist(), strict=True))) == len(set(theirs.tolist()))

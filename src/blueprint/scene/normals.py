@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint.columns import column_max, column_min, indexed_cross
-from blueprint.scene.weld import _components, check_mesh, weld_groups
+from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import sorted_with_order, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
@@ -144,7 +144,7 @@ def noise_creases(crease: np.ndarray, anchored: np.ndarray, length: np.ndarray, 
     # runs over the crease edges' own vertices only: the rest of the mesh takes no part
     used, local = np.unique(crease, return_inverse=True)
     local = local.reshape(-1, 2)
-    run = _components(np.arange(len(used)), local[:, 0], local[:, 1])[local[:, 0]]
+    run = connected_components_of(np.arange(len(used)), local[:, 0], local[:, 1])[local[:, 0]]
     edges = np.bincount(run)
     total = np.bincount(run, np.asarray(length, np.float64))
     held = np.zeros(len(edges), bool)

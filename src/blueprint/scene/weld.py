@@ -11,7 +11,7 @@ import numpy as np
 from blueprint.columns import column_max, column_min
 from blueprint.sorting import unique_first
 
-__all__ = ["check_mesh", "default_tolerance", "weld", "weld_groups"]
+__all__ = ["check_mesh", "connected_components_of", "default_tolerance", "weld", "weld_groups"]
 
 # Default weld tolerance, relative to the bounding-box diagonal.
 _REL_TOL = 1e-6
@@ -135,7 +135,7 @@ def _grid_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]
     return np.concatenate(firsts), np.concatenate(seconds)
 
 
-def _components(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+def connected_components_of(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     """Connected components of the graph whose edges are the pairs (i, j): each vertex gets the
     smallest vertex index of its component. Clusters of near-duplicates are a few vertices
     across, so this takes a few rounds; in numpy, so that drawing does not load scipy.
@@ -301,7 +301,9 @@ def weld_groups(positions: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarr
     if tol > 0 and len(first) > 1:
         i, j = _close_pairs(positions[first].astype(np.float64), tol)
         if len(i):
-            label = _components(np.arange(len(first)), np.asarray(i, np.int64), np.asarray(j, np.int64))
+            label = connected_components_of(
+                np.arange(len(first)), np.asarray(i, np.int64), np.asarray(j, np.int64)
+            )
             # components are numbered by their lowest member, and members by first vertex
             first = first[unique_first(label)[1]]
             inverse = label[inverse]

@@ -17,7 +17,7 @@ import numpy as np
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
-from blueprint.scene.weld import _components
+from blueprint.scene.weld import connected_components_of
 from blueprint.silhouette import (
     BORDER,
     CREASE,
@@ -399,7 +399,7 @@ def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> np.n
     if len(points) == 0:
         return np.zeros(0, bool)
     ids = _point_ids(points.reshape(-1, 3), _JOIN_REL * _diagonal(points.reshape(-1, 3))).reshape(-1, 2)
-    run = _components(np.arange(int(ids.max()) + 1), ids[:, 0], ids[:, 1])[ids[:, 0]]
+    run = connected_components_of(np.arange(int(ids.max()) + 1), ids[:, 0], ids[:, 1])[ids[:, 0]]
     length = np.bincount(run, np.linalg.norm(pixels[:, 1] - pixels[:, 0], axis=1))
     return length[run] < shortest
 
