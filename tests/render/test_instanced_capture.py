@@ -26,6 +26,8 @@ from instanced_scenes import (
 from oracle import cast_oracle, compare_layers
 
 import blueprint
+from blueprint.render import mesh as mesh_module
+from blueprint.render import renderer as renderer_module
 from blueprint.render.mesh import GpuMesh, draw_groups, instance_records, placements
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
@@ -157,6 +159,36 @@ def test_meshes_used_once_are_drawn_in_runs(renderer):
     ours = blueprint.peel(model, size=SIZE, renderer=renderer, **CAMERA)
     theirs = blueprint.peel(flattened(model), size=SIZE, renderer=renderer, **CAMERA)
     assert np.array_equal(ours.triangle, theirs.triangle) and np.array_equal(ours.depth, theirs.depth)
+
+
+def test_groups_drawn_in_pieces_give_the_same_layers(way, renderer, monkeypatch):
+    """Every group drawn as draws of at most 5 faces (flattened runs and meshes shared by
+    several instances alike, on any device), each at its instances with their first faces
+    moved on: the layers of the mixed scene and of its flattened twin are those of one draw a
+    group, bit for bit, normals included."""
+    ours, theirs, draws = [], [], []
+    monkeypatch.setattr(mesh_module, "PIECE_FACES", 5)
+    for pieces in (False, True):
+
+        def upload(ctx, model, crease_angle, pieces, forced=pieces):
+            mesh = GpuMesh(ctx, model, crease_angle, forced)
+            draws.append((forced, model.is_flat or model.instances is None, len(mesh.groups)))
+            return mesh
+
+        monkeypatch.setattr(renderer_module, "GpuMesh", upload)
+        for model, out in ((mixed_scene(), ours), (flattened(mixed_scene()), theirs)):
+            out.append(blueprint.peel(model, size=SIZE, renderer=renderer, **CAMERA))
+            renderer.forget(model)
+    groups = len(draw_groups(mixed_scene(), None))
+    faces = mixed_scene().triangle_count
+    assert {(p, f, n) for p, f, n in draws if not p} == {(False, False, groups), (False, True, 1)}
+    split = {(f, n) for p, f, n in draws if p}
+    assert (True, -(-faces // 5)) in split and any(not f and n > groups for f, n in split)
+    for split, whole in ((ours[1], ours[0]), (theirs[1], theirs[0])):
+        assert split.depth.shape == whole.depth.shape and split.depth.shape[0] >= 3
+        for name in ("depth", "triangle", "part", "normal"):
+            assert np.array_equal(getattr(split, name), getattr(whole, name)), name
+    assert np.array_equal(ours[1].triangle, theirs[1].triangle)
 
 
 def mixed_scene() -> Model:

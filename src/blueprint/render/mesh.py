@@ -11,6 +11,10 @@ GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 # the storage binding of the placements (instance.glsl's PLACEMENTS), free in every program
 # that reads faces by their ID (the compute rasteriser, the A-buffer's resolve)
 PLACEMENTS_BINDING = 10
+# the most faces a draw call of a software rasteriser draws: llvmpipe holds every triangle of a
+# draw call until it has rasterised them, so a big group is drawn a run of faces at a time, each
+# finished before the next is given (flushed only, they would all be held at once again)
+PIECE_FACES = 1 << 17
 
 
 def geometry_program(capturer, fragment: str, defines=None, modern: bool = False):
@@ -166,7 +170,9 @@ class GpuMesh:
     (``draw_groups``) shared vertices (split only where crease-split normals differ) in one
     vertex buffer (``vbo``), its faces in model order in one index buffer (``ibo``, indices into
     the whole vertex buffer), and each group's instances, so that a face's ID is its instance's
-    first face plus ``gl_PrimitiveID`` (degenerate faces rasterise to nothing). Without a
+    first face plus ``gl_PrimitiveID`` (degenerate faces rasterise to nothing). With ``pieces``
+    (a software rasteriser) a group of more than ``PIECE_FACES`` faces is drawn as draws of at
+    most that many, each at its instances with their first faces moved on by the piece's. Without a
     crease angle the normals are left zero, for passes that draw no normals (ID buffers): the
     smoothing is most of the time of an upload.
 
@@ -175,7 +181,7 @@ class GpuMesh:
     ordered by first face (``placements``), in which ``instance.glsl`` finds a face's instance
     by a binary search; so a model kept as instances is never flattened for them."""
 
-    def __init__(self, ctx, model: Model, crease_angle: float | None) -> None:
+    def __init__(self, ctx, model: Model, crease_angle: float | None, pieces: bool = False) -> None:
         self.ctx = ctx
         groups = draw_groups(model, crease_angle)
         vertex_count = np.array([len(vertices) for vertices, _, _ in groups], np.int64)
@@ -189,10 +195,13 @@ class GpuMesh:
                 [i + np.uint32(b) for (_, i, _), b in zip(groups, vertex_base, strict=True)]
             )
         self.vbo, self.ibo = ctx.buffer(vertices), ctx.buffer(indices)
-        # (instance records, the group's first index and index count) a draw
+        # (instance records, the draw's first index and index count, whether another piece of
+        # its group follows) a draw
+        limit = PIECE_FACES if pieces else None
         self.groups = [
-            (ctx.buffer(records), len(records), int(first), int(count))
-            for (_, _, records), first, count in zip(groups, index_base, index_count, strict=True)
+            (ctx.buffer(piece_records), len(piece_records), int(first + at), int(count), wait)
+            for (_, _, records), first, faces in zip(groups, index_base, index_count // 3, strict=True)
+            for piece_records, at, count, wait in _pieces(records, int(faces), limit)
         ]
         self._placements = ctx.buffer(placements(groups))
         del groups, vertices, indices
@@ -219,10 +228,10 @@ class GpuMesh:
             # passes no normal) are skipped over
             vertices = _layout(self.vbo, _VERTEX_FIELDS, program, "")
             arrays = []
-            for records, count, first, indices in self.groups:
+            for records, count, first, indices, wait in self.groups:
                 layout = [vertices, _layout(records, _INSTANCE_FIELDS, program, "/i")]
                 vao = self.ctx.vertex_array(program, layout, index_buffer=self.ibo, index_element_size=4)
-                arrays.append((vao, count, first, indices))
+                arrays.append((vao, count, first, indices, wait))
             draws = self._vaos[program.glo] = _Draws(arrays)
         return draws
 
@@ -250,6 +259,21 @@ class GpuMesh:
                 obj.release()
 
 
+def _pieces(records: np.ndarray, faces: int, limit: int | None) -> list[tuple[np.ndarray, int, int, bool]]:
+    """The draws of a group of ``faces`` faces at instances ``records`` (``INSTANCE``): (the
+    instance records, first index from the group's, index count, whether another piece
+    follows) a draw of at most ``limit`` faces (None: one draw), each draw's records with first
+    faces moved on by the draw's first face."""
+    if limit is None or faces <= limit:
+        return [(records, 0, 3 * faces, False)]
+    out = []
+    for start in range(0, faces, limit):
+        moved = records.copy()
+        moved["face"] += start
+        out.append((moved, 3 * start, 3 * min(limit, faces - start), start + limit < faces))
+    return out
+
+
 def identity_instance(ctx):
     """A buffer of one instance at the identity, part 0, first face 0: what a vertex array of a
     geometry program (``instance_layout``) that draws corners of its own is placed by."""
@@ -270,13 +294,16 @@ def _layout(buffer, fields, program, suffix: str) -> tuple:
 
 
 class _Draws:
-    """A mesh's draw calls for one program: each group's vertex array, (vertex array,
-    instances, first index, indices), its indices at its instances."""
+    """A mesh's draw calls for one program: each draw's vertex array, (vertex array,
+    instances, first index, indices, wait), its indices at its instances, finished before the
+    next draw where ``wait`` (a piece of a group drawn in pieces)."""
 
     def __init__(self, arrays: list) -> None:
         self.arrays = arrays
 
     def render(self) -> None:
-        for vao, count, first, indices in self.arrays:
+        for vao, count, first, indices, wait in self.arrays:
             if indices:
                 vao.render(vertices=indices, first=first, instances=count)
+                if wait:
+                    vao.ctx.finish()

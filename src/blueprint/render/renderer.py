@@ -134,7 +134,8 @@ class Capturer:
         key = (id(model), None if crease_angle is None else float(crease_angle))
         held = self._meshes.get(key)
         if held is None or held[0] is not model:
-            held = self._meshes[key] = (model, GpuMesh(self.device.ctx, model, crease_angle))
+            mesh = GpuMesh(self.device.ctx, model, crease_angle, pieces=self.device.software)
+            held = self._meshes[key] = (model, mesh)
         return held[1]
 
     def model_of(self, mesh: GpuMesh) -> Model | None:
