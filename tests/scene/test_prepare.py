@@ -360,3 +360,26 @@ def test_content_digest_is_the_triangles():
         Model.from_arrays(np.zeros((0, 3)), np.zeros((0, 3), int)),
     ]
     assert len({m.content_digest() for m in [one, *others]}) == 5
+
+
+@pytest.mark.parametrize("small", [True, False])
+def test_content_digest_hash_by_size(monkeypatch, small):
+    """A mesh below ``_SMALL_DIGEST`` bytes is digested by BLAKE2b (no OpenSSL to load), a
+    bigger one by SHA-256: each the hash of the arrays' types, shapes and bytes, and the part
+    count, as hashlib computes it."""
+    import hashlib
+
+    from blueprint.scene import model as model_module
+
+    box = trimesh.creation.box()
+    m = Model.from_arrays(box.vertices, box.faces, np.arange(12) % 3)
+    arrays = (m.positions, m.faces, m.face_part)
+    if not small:
+        monkeypatch.setattr(model_module, "_SMALL_DIGEST", sum(a.nbytes for a in arrays))
+    expected = hashlib.blake2b() if small else hashlib.sha256()
+    for a in arrays:
+        expected.update(str((a.dtype.str, a.shape)).encode())
+        expected.update(a.tobytes())
+    expected.update(b"3")
+    assert len(m.part_names) == 3
+    assert m.content_digest() == expected.digest()

@@ -44,7 +44,8 @@ class Kind(StrEnum):
     VIDEO = "video frames"
 
 
-@dataclass(frozen=True)
+# compared by identity: one record a registered kind and suffix
+@dataclass(frozen=True, eq=False)
 class Writer:
     """Writes one ``kind`` of result to files ending in ``suffix``: ``writer(path, value,
     **options)`` writes atomically and returns the path."""

@@ -38,7 +38,8 @@ class Slot:
         return f"pipeline.{self.space}{self.index}.{self.format}.{self.scale:g}"
 
 
-@dataclass
+# compared by identity, never by value: no generated equality to build when the module loads
+@dataclass(eq=False)
 class Plan:
     bound: Bound
     output: str

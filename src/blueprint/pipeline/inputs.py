@@ -114,7 +114,8 @@ def _received(read_into, size: tuple[int, int], fmt: str) -> np.ndarray:
     return array[::-1]
 
 
-@dataclass
+# compared by identity, never by value: no generated equality to build when the module loads
+@dataclass(eq=False)
 class PendingRead:
     """A target copied into a pixel buffer on the GPU, not yet brought back: ``collect`` waits
     only for that copy, so frames issued after it overlap the transfer."""

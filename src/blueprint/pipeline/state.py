@@ -28,8 +28,8 @@ FROM_FILE = object()
 
 # Made every frame and never changed, yet not frozen: a frozen dataclass sets each field through
 # object.__setattr__, several times the cost of a plain one's, and the executor's Python is per
-# frame.
-@dataclass(slots=True)
+# frame. Compared by identity, never by value: no generated equality to build at import.
+@dataclass(slots=True, eq=False)
 class RunRequest:
     """What one run of a pipeline is asked for besides the pipeline, model and camera: the
     keywords of ``Executor.run``.
@@ -89,7 +89,8 @@ class RunRequest:
     slot: int = 2
 
 
-@dataclass
+# compared by identity, never by value: no generated equality to build when the module loads
+@dataclass(eq=False)
 class Result:
     """What a pipeline run produced.
 
@@ -177,7 +178,8 @@ class Sizes:
         return held
 
 
-@dataclass(slots=True)
+# compared by identity, never by value: no generated equality to build when the module loads
+@dataclass(slots=True, eq=False)
 class Drawn:
     """What one attempt at a run's frame drew and read: the samples of every layer drawn
     (None until counted), how many layers count, what depth masking uncovered, the layers a cap
@@ -235,7 +237,8 @@ class Group:
         return self.textures[name]
 
 
-@dataclass
+# compared by identity, never by value: no generated equality to build when the module loads
+@dataclass(eq=False)
 class RunState:
     """What one run of a pipeline holds, from its plan to the passes it ran."""
 

@@ -26,7 +26,8 @@ BACK_OFFSET = 16.0
 BACK_BIAS = BACK_OFFSET * _STEP
 
 
-@dataclass
+# compared by identity: its GL objects have no equality worth generating at import
+@dataclass(eq=False)
 class GBuffer:
     """The targets layers are peeled into: two depth textures that alternate (layer ``i`` in
     ``depth[i % 2]``, the previous layer in the other; in ``flat`` where the A-buffer

@@ -25,7 +25,9 @@ if TYPE_CHECKING:
     from blueprint.scene.sheet import Marks
 
 
-@dataclass
+# Frames and layers hold arrays, which make a generated equality raise: they compare by
+# identity, and their modules load without building one.
+@dataclass(eq=False)
 class Frame:
     """One rendered blueprint.
 
@@ -67,7 +69,7 @@ class Frame:
         return f"{self.layers} layers"
 
 
-@dataclass
+@dataclass(eq=False)
 class Layers:
     """Depth layers read back from the GPU.
 

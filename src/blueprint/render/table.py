@@ -23,7 +23,8 @@ MOST_PARTS = 0xFFFF
 DEFAULT_ABUFFER_BYTES = 1 << 30
 
 
-@dataclass(frozen=True)
+# made and read once a capture, never kept, compared or hashed: the cheapest dataclass
+@dataclass(eq=False)
 class Request:
     """What a frame asks of its capture.
 
@@ -61,7 +62,9 @@ class Request:
         return self.normals and not self.selected and self.parts < MOST_PARTS
 
 
-@dataclass(frozen=True)
+# A device's rows and table stay frozen, being shared by every frame it draws; one object a
+# way, they compare by identity, which spares the generated comparisons' cost at import.
+@dataclass(frozen=True, eq=False)
 class PeelRow:
     """A geometry pass a layer: takes every frame.
 
@@ -90,7 +93,7 @@ class PeelRow:
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class KBufferRow:
     """Several layers a geometry pass: each pixel's nearest surfaces sorted into ``KBUFFER_MAX``
     targets at most, through framebuffer fetch (a target a layer) or, with ``interlock``,
@@ -142,7 +145,7 @@ class KBufferRow:
         )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ABufferRow:
     """Every layer from one geometry pass: per-pixel fragment lists sorted in compute.
 
@@ -168,7 +171,7 @@ class ABufferRow:
 Row = PeelRow | KBufferRow | ABufferRow
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class CaptureTable:
     """The ways a device captures layers, best first, the peel last; ``exact_depth``: every
     geometry pass takes its depths from the true planes (the driver's come from snapped

@@ -47,6 +47,9 @@ class _Flattened:
         model.__dict__[self.key] = value
 
 
+# Mesh bytes below which BLAKE2b, loaded without OpenSSL, digests sooner than SHA-256 through
+# OpenSSL, loading included (docs/performance.md).
+_SMALL_DIGEST = 1 << 21
 _FLATTENED = ("positions", "faces", "face_part")
 
 
@@ -211,20 +214,26 @@ class Model:
         return (block.reshape(-1, 3).astype(np.float64) for block in placed_blocks(self.instances))
 
     def content_digest(self) -> bytes:
-        """SHA-256 of the triangles (positions, faces, parts and the part count; of a model
-        kept as instances, its meshes and instances): models with one digest draw alike, so
-        work kept by it serves a file loaded again. Made once."""
+        """A cryptographic digest of the triangles (positions, faces, parts and the part count;
+        of a model kept as instances, its meshes and instances): models with one digest draw
+        alike, so work kept by it serves a file loaded again. BLAKE2b of a mesh of fewer than
+        ``_SMALL_DIGEST`` bytes, else SHA-256. Made once."""
         if "digest" not in self._cache:
-            # imported at the first digest: what draws nothing (info, --help) loads no OpenSSL
-            import hashlib
-
-            digest = hashlib.sha256()
             i = self.instances
             arrays = (
                 (self.positions, self.faces, self.face_part)
                 if i is None
                 else (i.positions, i.faces, i.vertex_start, i.face_start, i.mesh, i.transform, i.part)
             )
+            if sum(array.nbytes for array in arrays) < _SMALL_DIGEST:
+                # a small mesh hashes faster than hashlib's OpenSSL loads; the digests live in
+                # this process's caches alone, and the size fixes the hash of each content
+                from _blake2 import blake2b as new_digest
+            else:
+                import hashlib
+
+                new_digest = hashlib.sha256
+            digest = new_digest()
             for array in arrays:
                 digest.update(str((array.dtype.str, array.shape)).encode())
                 digest.update(np.ascontiguousarray(array).reshape(-1).view(np.uint8))

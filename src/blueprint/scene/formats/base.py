@@ -23,37 +23,46 @@ from blueprint.errors import InputError
 __all__ = ["Converted", "Format", "Formats", "Instance", "Mesh", "deferred"]
 
 
-@dataclass(frozen=True)
+# The reader's records are plain classes with slots: built at every import of the registry and
+# made once a file, they need neither the generated methods nor a frozen dataclass's cost.
 class Mesh:
     """One mesh read from a file, one part named after the file: ``positions`` (V, 3) float32
     or float64, ``faces`` (F, 3) integer indices into them."""
 
-    positions: np.ndarray
-    faces: np.ndarray
+    __slots__ = ("positions", "faces")
+
+    def __init__(self, positions: np.ndarray, faces: np.ndarray) -> None:
+        self.positions, self.faces = positions, faces
 
 
-@dataclass(frozen=True)
 class Instance:
     """One mesh placed in a scene: ``vertices`` (V, 3) and ``faces`` (F, 3) of its mesh
     (None where it is not a triangle mesh), ``transform`` (4, 4) float64 from the mesh to the
     scene (None: the identity), the names of its node and mesh (``node`` None: a frame with
     no name of its own, named after its mesh)."""
 
-    node: str | None
-    geometry: str
-    vertices: np.ndarray | None
-    faces: np.ndarray | None
-    transform: np.ndarray | None
+    __slots__ = ("node", "geometry", "vertices", "faces", "transform")
+
+    def __init__(
+        self,
+        node: str | None,
+        geometry: str,
+        vertices: np.ndarray | None,
+        faces: np.ndarray | None,
+        transform: np.ndarray | None,
+    ) -> None:
+        self.node, self.geometry, self.vertices, self.faces = node, geometry, vertices, faces
+        self.transform = transform
 
 
-@dataclass(frozen=True)
 class Converted:
     """A file turned into the bytes ``data`` of another format ``ext`` (STEP meshed into GLB),
     which that format's reader reads; ``failure`` is the message where trimesh cannot."""
 
-    data: bytes
-    ext: str
-    failure: str
+    __slots__ = ("data", "ext", "failure")
+
+    def __init__(self, data: bytes, ext: str, failure: str) -> None:
+        self.data, self.ext, self.failure = data, ext, failure
 
 
 #: What a reader gives back: one mesh, a scene's mesh instances in order, the file converted
@@ -96,7 +105,8 @@ def _no_unit(fmt: Format, name: str, stated: str | None) -> tuple[str | None, st
     return fmt.unit, fmt.unit_reason or f"{fmt.name} files carry no unit"
 
 
-@dataclass(frozen=True)
+# compared and hashed by identity: each format is one registered record
+@dataclass(frozen=True, eq=False)
 class Format:
     """A model file format.
 
