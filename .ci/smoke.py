@@ -139,6 +139,12 @@ def svg_paths(path) -> tuple[ET.Element, dict[str, int]]:
     return root, groups
 
 
+def subpaths(path) -> int:
+    """The polylines an SVG path holds: its moves, absolute or relative."""
+    d = path.get("d", "")
+    return d.count("M") + d.count("m")
+
+
 def bracket_step(name: str = "bracket") -> str:
     """A STEP (AP214) file of the BRACKET outline extruded along z, as one advanced B-rep solid
     in millimetres: planes bounded by lines, every edge shared by two faces."""
@@ -278,7 +284,7 @@ def _render_svg(s: Smoke):
     root, groups = svg_paths(s.render("iso.svg"))
     parts = [n for n in GEARBOX_PARTS if groups.get(n, 0) > 0]
     check(parts == list(GEARBOX_PARTS), f"part groups with lines: {parts}")
-    s.polylines["svg"] = sum(p.get("d").count("M") for p in root.iter("{http://www.w3.org/2000/svg}path"))
+    s.polylines["svg"] = sum(subpaths(p) for p in root.iter("{http://www.w3.org/2000/svg}path"))
     check(s.polylines["svg"] > 50, f"{s.polylines['svg']} polylines")
     paths = sum(groups[n] for n in parts)
     return f"{s.polylines['svg']} polylines in {paths} paths, a group for each of {len(parts)} parts"
@@ -327,11 +333,12 @@ def _style(s: Smoke):
     corner = tuple(image[0, 0])
     check(corner[:3] != tuple(s.images["iso"][0, 0][:3]), f"paper style keeps the blue paper {corner}")
     root, _ = svg_paths(s.render("lines.svg", "--style", s.work / "lines.toml"))
-    paths = list(root.iter("{http://www.w3.org/2000/svg}path"))
-    strokes = {p.get("stroke") for p in paths}
-    dashed = sum(p.get("stroke-dasharray") is not None for p in paths)
+    # a level's stroke sits on its group, a kind's own on its path
+    styled = [e for e in root.iter() if e.get("stroke") is not None]
+    strokes = {e.get("stroke") for e in styled}
+    dashed = sum(e.get("stroke-dasharray") is not None for e in styled)
     check({"#000000", "#1d4f91"} <= strokes and dashed > 0, f"strokes {strokes}, {dashed} dashed")
-    return f"paper png ink {paper:.1%}; line style file: strokes {sorted(strokes)}, {dashed} dashed paths"
+    return f"paper png ink {paper:.1%}; line style file: strokes {sorted(strokes)}, {dashed} dashed"
 
 
 @case("--include --exclude")
@@ -383,7 +390,7 @@ def _section_png(s: Smoke):
 def _section_svg(s: Smoke):
     root, groups = svg_paths(s.render("section.svg", "--view", "front", "--ortho", "--section", "z=0"))
     (section,) = [g for g in root.iter("{http://www.w3.org/2000/svg}g") if g.get("id") == "section"]
-    cuts = sum(p.get("d", "").count("M") for p in section.iter("{http://www.w3.org/2000/svg}path"))
+    cuts = sum(subpaths(p) for p in section.iter("{http://www.w3.org/2000/svg}path"))
     check(cuts > 20, f"the section group holds {cuts} hatch and outline lines")
     parts = sum(groups.get(n, 0) for n in GEARBOX_PARTS)
     return f"section group: {cuts} hatch and outline lines in {groups['section']} paths; {parts} part paths"
