@@ -284,7 +284,9 @@ atexit.register(_peak)
 def run(src: Path, model: Path, output: Path, size: tuple[int, int], layers: int, timeout: float) -> dict:
     """One ``blueprint render`` in a process of its own: its wall seconds, its peak resident
     memory, its stage timings, or its error."""
-    env = {**os.environ, "PYTHONPATH": str(src), "BLUEPRINT_STAGES": "1"}
+    # the tree first, the environment's own paths after it (a device's carried wheels)
+    path = os.pathsep.join(p for p in (str(src), os.environ.get("PYTHONPATH")) if p)
+    env = {**os.environ, "PYTHONPATH": path, "BLUEPRINT_STAGES": "1"}
     code = _PEAK + "from blueprint.cli import main; main()"
     argv = [sys.executable, "-c", code, "render", str(model), "-o", str(output)]
     argv += ["--size", str(size[0]), str(size[1]), "--max-layers", str(layers)]
