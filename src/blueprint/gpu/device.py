@@ -229,3 +229,23 @@ def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tup
             f"size {w}x{h} is too large: at supersample {supersample} this GPU allows {limit} pixels per side"
         )
     return w, h
+
+
+# GL_NVX_gpu_memory_info's queries: the memory the GPU has in all, and free now
+TOTAL_AVAILABLE_NVX, CURRENT_AVAILABLE_NVX = 0x9048, 0x9049
+
+
+def nvx_memory(ctx, query: int) -> int | None:
+    """Bytes of NVIDIA's ``GL_NVX_gpu_memory_info`` ``query`` (``TOTAL_AVAILABLE_NVX``,
+    ``CURRENT_AVAILABLE_NVX``) on ``ctx``, or None where the driver does not tell."""
+    if "GL_NVX_gpu_memory_info" not in ctx.extensions:
+        return None
+    import ctypes
+
+    try:
+        gl = ctypes.CDLL("libOpenGL.so.0")
+        value = ctypes.c_int(0)
+        gl.glGetIntegerv(query, ctypes.byref(value))  # in KiB
+    except (OSError, AttributeError):
+        return None
+    return value.value * 1024 if value.value > 0 else None

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory
 from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms, depth_tolerance
 from blueprint.render.mesh import PLACEMENTS_BINDING, geometry_program, target_uniform
 from blueprint.scene.camera import Camera
@@ -523,14 +524,4 @@ def tile_max(values: np.ndarray) -> np.ndarray:
 
 def gpu_memory_bytes(r) -> int | None:
     """The GPU's memory where the driver tells it (NVIDIA's GL_NVX_gpu_memory_info), else None."""
-    if "GL_NVX_gpu_memory_info" not in r.ctx.extensions:
-        return None
-    import ctypes
-
-    try:
-        gl = ctypes.CDLL("libOpenGL.so.0")
-        value = ctypes.c_int(0)
-        gl.glGetIntegerv(0x9048, ctypes.byref(value))  # GPU_MEMORY_INFO_TOTAL_AVAILABLE_MEMORY_NVX, KiB
-    except (OSError, AttributeError):
-        return None
-    return value.value * 1024 if value.value > 0 else None
+    return nvx_memory(r.ctx, TOTAL_AVAILABLE_NVX)

@@ -8,6 +8,7 @@ import numpy as np
 
 from blueprint import settings
 from blueprint.errors import InputError
+from blueprint.gpu.device import CURRENT_AVAILABLE_NVX, nvx_memory
 from blueprint.render.kbuffer import KBUFFER_MAX
 from blueprint.render.mesh import INSTANCE, PLACEMENT
 from blueprint.scene.prepare import VERTEX
@@ -39,17 +40,7 @@ def free_gpu_memory(device) -> int | None:
     memory), else None (the driver does not tell)."""
     if device.software:
         return settings.available_memory()
-    if "GL_NVX_gpu_memory_info" not in device.ctx.extensions:
-        return None
-    import ctypes
-
-    try:
-        gl = ctypes.CDLL("libOpenGL.so.0")
-        value = ctypes.c_int(0)
-        gl.glGetIntegerv(0x9049, ctypes.byref(value))  # GPU_MEMORY_INFO_CURRENT_AVAILABLE_VIDMEM_NVX, KiB
-    except (OSError, AttributeError):
-        return None
-    return value.value * 1024 if value.value > 0 else None
+    return nvx_memory(device.ctx, CURRENT_AVAILABLE_NVX)
 
 
 def uploaded(model) -> tuple[int, int]:
