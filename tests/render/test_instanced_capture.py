@@ -264,6 +264,22 @@ def test_the_faces_table_places_every_face_id():
     assert np.array_equal(table["part"][which] + vertices["part"][indices[face, 0]], model.face_part)
 
 
+def test_only_a_flattened_model_skips_the_faces_table(renderer):
+    """A flattened model's faces table is the identity alone, so its programs look nothing up
+    (ONE_PLACEMENT); a model kept as instances, or one placed off the identity, looks up."""
+    instanced = mixed_scene()
+    flat = flattened(instanced)
+    moved = instance_records(np.diag([1.0, 1.0, 1.0, 1.0]) + np.eye(4, k=3)[None], np.zeros(1), np.zeros(1))
+    for model, one in ((flat, True), (instanced, False)):
+        mesh = GpuMesh(renderer.ctx, model, 30.0)
+        try:
+            assert mesh.one_placement is one
+            assert mesh.placement_defines["ONE_PLACEMENT"] is one
+        finally:
+            mesh.release()
+    assert not mesh_module._identity(placements([(np.zeros(3), np.zeros(3, np.uint32), moved)])[0])
+
+
 def test_normals_follow_the_transform_as_the_flattened_faces_turn():
     """The normals' transform is the cofactor matrix: a mirror turns normals as it turns the
     faces' winding, a scale by 2 keeps their length, a turn turns them."""

@@ -19,7 +19,7 @@ import numpy as np
 
 from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory
 from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms, depth_tolerance
-from blueprint.render.mesh import PLACEMENTS_BINDING, geometry_program, target_uniform
+from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
 
 ABUFFER_FRAG = "blueprint.render:glsl/abuffer.frag"
@@ -108,7 +108,7 @@ class ABufferSource:
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
         # the resolve runs over the tiles with fragments alone (``_resolve``)
         # a slim fragment's face is found in the mesh's faces table (GpuMesh.bind_faces)
-        resolving = {**capture, "PLACEMENTS": PLACEMENTS_BINDING} if self.slim else capture
+        resolving = {**capture, **mesh.placement_defines} if self.slim else capture
         self.resolve = r.compute(
             RESOLVE_COMP, {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else resolving
         )

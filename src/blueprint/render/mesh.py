@@ -203,7 +203,10 @@ class GpuMesh:
             for (_, _, records), first, faces in zip(groups, index_base, index_count // 3, strict=True)
             for piece_records, at, count, wait in _pieces(records, int(faces), limit)
         ]
-        self._placements = ctx.buffer(placements(groups))
+        table = placements(groups)
+        # a flattened model's one placement, the identity from face 0: programs look up nothing
+        self.one_placement = len(table) == 1 and _identity(table[0])
+        self._placements = ctx.buffer(table)
         del groups, vertices, indices
         self._vaos: dict[int, _Draws] = {}
         self._corners = None
@@ -212,6 +215,12 @@ class GpuMesh:
         self.triangles = model.triangle_count
         self.instanced = model.instances is not None
         self.bounds = model.bounds  # (2, 3): its used vertices' corners
+
+    @property
+    def placement_defines(self) -> dict:
+        """The defines of a program that reads these faces by their ID (instance.glsl's
+        PLACEMENTS, and ONE_PLACEMENT where the faces table is the identity alone)."""
+        return {"PLACEMENTS": PLACEMENTS_BINDING, "ONE_PLACEMENT": self.one_placement}
 
     def bind_faces(self, vertices: int, indices: int) -> None:
         """Bind the vertex and index buffers to storage bindings ``vertices`` and ``indices``,
@@ -257,6 +266,20 @@ class GpuMesh:
         for obj in (*held, self.vbo, self.ibo, self._placements, self._corners):
             if obj is not None:
                 obj.release()
+
+
+def _identity(placement) -> bool:
+    """Whether a ``PLACEMENT`` places faces from 0 where they are, unturned, in part 0."""
+    rows = np.stack([placement[k] for k in ("x", "y", "z")])
+    turns = np.stack([placement[k][:3] for k in ("nx", "ny", "nz")])
+    eye = np.eye(4)[:3]
+    return bool(
+        (rows == eye).all()
+        and (turns == eye[:, :3]).all()
+        and placement["part"] == 0
+        and placement["face"] == 0
+        and placement["base"] == 0
+    )
 
 
 def _pieces(records: np.ndarray, faces: int, limit: int | None) -> list[tuple[np.ndarray, int, int, bool]]:

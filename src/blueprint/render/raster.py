@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from blueprint.render.mesh import PLACEMENTS_BINDING
 from blueprint.scene.camera import clip_to_pixels
 
 RASTER_COMP = "blueprint.render:glsl/abuffer_raster.comp"
@@ -45,8 +44,8 @@ class ComputeRaster:
         self.r = r
         self.rooms: dict[tuple[int, int], int] = {}
 
-    def stages(self, defines: dict) -> list:
-        defines = {**defines, "PLACEMENTS": PLACEMENTS_BINDING}
+    def stages(self, defines: dict, mesh) -> list:
+        defines = {**defines, **mesh.placement_defines}
         return [self.r.compute(RASTER_COMP, {"STAGE": k, **defines}) for k in range(4)]
 
     def sees(self, bounds: np.ndarray, uniforms: dict, size) -> bool:
@@ -112,7 +111,7 @@ class ComputeRaster:
             "u_bin_room": room,
             **{k: uniforms[k] for k in ("u_view", "u_projection", "u_ortho")},
         }
-        stages = self.stages(ab.capture_defines)
+        stages = self.stages(ab.capture_defines, mesh)
         for prog in stages:
             for name, value in values.items():
                 if name in prog:

@@ -4,7 +4,8 @@
 // give its vertices to the bit. Every geometry program's vertex stage reads the vertex and
 // its instance as attributes; with PLACEMENTS (a storage binding) a program that reads faces
 // by their ID (the compute rasteriser, the A-buffer's resolve) finds a face's instance in the
-// faces table instead (GpuMesh.bind_faces), placed by the same products.
+// faces table instead (GpuMesh.bind_faces), placed by the same products; with ONE_PLACEMENT
+// (a flattened model) it looks up nothing.
 
 // point p placed by the transform's rows x, y, z
 vec3 place_point(vec4 x, vec4 y, vec4 z, vec3 p) {
@@ -18,6 +19,29 @@ vec3 place_normal(vec3 nx, vec3 ny, vec3 nz, vec3 n) {
 }
 
 #ifdef PLACEMENTS
+#if ONE_PLACEMENT
+// a flattened model: its one placement is the identity from face 0, so nothing is looked up
+// (the products of the identity give its points to the bit)
+int placement_of(int t) {
+    return 0;
+}
+
+uint placed_face(int i, int t) {
+    return uint(t);
+}
+
+vec3 placed_point(int i, vec3 p) {
+    return p;
+}
+
+vec3 placed_normal(int i, vec3 n) {
+    return n;
+}
+
+int placement_part(int i) {
+    return 0;
+}
+#else
 // render.mesh.PLACEMENT: ordered by first face ID, which rises strictly; base is where the
 // instance's faces start in the index buffer (in faces)
 struct Placement {
@@ -62,6 +86,11 @@ vec3 placed_point(int i, vec3 p) {
 vec3 placed_normal(int i, vec3 n) {
     return place_normal(placements[i].nx.xyz, placements[i].ny.xyz, placements[i].nz.xyz, n);
 }
+
+int placement_part(int i) {
+    return placements[i].part;
+}
+#endif
 #else
 in vec3 in_position;
 in vec3 in_normal;

@@ -415,7 +415,7 @@ void main() {
                     if (dot(n, to_eye) < 0.0) {
                         n = -n;
                     }
-                    int part = floatBitsToInt(vertices[7u * v0 + 6u]) + placements[placed].part;
+                    int part = floatBitsToInt(vertices[7u * v0 + 6u]) + placement_part(placed);
                     AB_SET_NODE(node, kb_pack(z, !front, n, face, part));
                     AB_SET_LINK(node, head);
                     head = node + 1u;

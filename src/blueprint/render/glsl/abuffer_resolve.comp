@@ -67,7 +67,7 @@ void keep(ivec2 p, uint i) {
         normal[k] = mat3(u_view) * placed_normal(placed, vertex_vec3(v, 3u));
         across_x[k] = c.x - q.x * c.w;
         across_y[k] = c.y - q.y * c.w;
-        part = floatBitsToInt(vertices[7u * v + 6u]) + placements[placed].part;
+        part = floatBitsToInt(vertices[7u * v + 6u]) + placement_part(placed);
     }
     vec3 w = cross(across_x, across_y);
     w /= w.x + w.y + w.z;
