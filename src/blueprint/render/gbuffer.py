@@ -113,7 +113,13 @@ def depth_tolerance(camera: Camera, bounds: np.ndarray) -> float:
     float
         In the model's units, eye depth (along the view axis).
     """
-    lo, hi = np.asarray(bounds, np.float64)
+    # every pass of every frame asks: kept by the camera's value and the bounds' bytes
+    return _tolerance(camera, np.asarray(bounds, np.float64).tobytes())
+
+
+@functools.lru_cache(maxsize=64)
+def _tolerance(camera: Camera, bounds: bytes) -> float:
+    lo, hi = np.frombuffer(bounds, np.float64).reshape(2, 3)
     n, f = camera.near, camera.far
     step = (f - n) if camera.ortho else f * (f - n) / n
     reach = f + float(np.abs(np.concatenate([lo, hi])).max())
