@@ -226,8 +226,9 @@ def instanced_features(
     instances: a dict of the edges' model-space ``points`` (N, 2, 3), ``faces`` (N, 2) in the
     flattened numbering, ``part``, ``kind`` (edge-on creases made silhouettes, near-flat ones
     ``SMOOTH``), ``edge`` (flattened numbering), ``silhouette`` (N,) bool (silhouettes of
-    ``classify_edges``' own), ``exact`` (N, 2) bool (side faces where the mesh's own
-    silhouette stays), and the smooth contours' ``contour_points`` (K, 2, 3), ``contour_face``
+    ``classify_edges``' own), ``vertices`` (N, 2) (their flattened welded vertices),
+    ``exact`` (N, 2) bool (side faces where the mesh's own silhouette stays), and the smooth
+    contours' ``contour_points`` (K, 2, 3), ``contour_pixels`` (K, 2, 2), ``contour_face``
     (K,), ``contour_part``, ``contour_edges`` (K, 2), ``contour_vertices`` (K, 2, 2) (the
     flattened welded vertices of each end's edge) and ``contour_vertex_points`` (K, 2, 2, 3);
     everything in the order of the flattened scene."""

@@ -881,7 +881,8 @@ def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None
 
 
 def intersection_segments(model: Model, renderer=None) -> Segments:
-    """Lines where triangles of different parts cut through each other (view-independent).
+    """Lines where triangles of different parts cut through each other (view-independent), in
+    the order of their two faces (the lower first).
 
     Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
     triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
@@ -910,6 +911,11 @@ def _intersections(model: Model, renderer) -> Segments:
     points, a, b = triangle_cuts(model.corners(), part, row_norm(model.corner_cross()) > 0, eps, renderer)
     if len(a) == 0:
         return Segments.empty()
+    # in the order of their faces, the lower first: the order a model kept as instances finds
+    # them in, so both draw one drawing (joining and sampling follow the order)
+    a, b = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((b, a))
+    points, a, b = points[order], a[order], b[order]
     return Segments(
         points,
         np.stack([a, b], axis=1),
