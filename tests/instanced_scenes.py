@@ -119,3 +119,28 @@ def copies(n: int, mesh: trimesh.Trimesh | None = None) -> trimesh.Scene:
     side = int(np.ceil(np.sqrt(n)))
     grid = [("m", placed(None, (3 * (k % side), 0, 3 * (k // side)))) for k in range(n)]
     return trimesh_scene(grid, {"m": l_prism() if mesh is None else mesh})
+
+
+# (mesh, transform) of smooth_scene's instances: smooth meshes among the prisms, turned by
+# quarter turns, mirrored and scaled by 2, cutting through each other in places
+SMOOTH = [
+    ("ball", placed()),
+    ("post", placed(None, (0.75, 0, 0))),
+    ("ball", placed(turn(1, 90), (3, 0, 0))),
+    ("post", placed(MIRROR_X @ turn(0, 90), (3, 0.5, 0.25))),
+    ("l", placed(None, (-2, -1, 0))),
+    ("ball", placed(2 * np.eye(3), (0, 4, 0))),
+    ("wedge", placed(MIRROR_Z, (-2, 2, 0.5))),
+]
+
+
+def smooth_scene() -> Model:
+    """The scene of ``SMOOTH`` (an icosphere, a cylinder, ``l_prism`` and ``wedge``), kept as
+    instances: lines of every kind, smooth contours among them."""
+    meshes = {
+        "ball": trimesh.creation.icosphere(3),
+        "post": trimesh.creation.cylinder(0.5, 2.0, sections=48),
+        "l": l_prism(),
+        "wedge": wedge(),
+    }
+    return model_from_object(trimesh_scene(SMOOTH, meshes), name="smooth scene")

@@ -12,6 +12,7 @@ import math
 import os
 import time
 from collections.abc import Iterable
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -48,6 +49,7 @@ from blueprint.scene.units import drawing_unit, warn_if_assumed
 
 from .chain import chain_pieces
 from .dxf import write_dxf
+from .instanced import face_parts
 from .lines import join_polylines, model_segments
 from .linework import KINDS, Lines, runs_of
 from .occlusion import (
@@ -433,7 +435,9 @@ def draw_lines(
     # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
     drawn = None if layers is not None else draw_faces(renderer, model, camera, size, frame.max_layers)
     clock = time.perf_counter()
-    with model.holding_corners():  # the intersections and the faces' planes read every corner
+    # the intersections and the faces' planes read every corner of a flat model; a model kept
+    # as instances places its meshes' instead (``instanced``)
+    with model.holding_corners() if model.instances is None else nullcontext():
         segments = model_segments(
             model, frame.view, frame.projection, size, options.crease_angle, options.intersections, renderer
         )
@@ -449,7 +453,7 @@ def draw_lines(
     if shaded_parts is not None:
         # the same count of surfaces in front, of the shaded parts' surfaces alone
         only_shaded = planes.copy()
-        only_shaded[:-1][~shaded_parts[model.face_part]] = 0.0
+        only_shaded[:-1][~shaded_parts[face_parts(model)]] = 0.0
         behind = occlusion.in_front(only_shaded) > 0
     pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
     pieces = _chained(pieces, count)
@@ -463,7 +467,7 @@ def draw_lines(
     marks = _dimension_marks(model, frame, options, page)
     shading = None
     if shaded_parts is not None:
-        faces = np.flatnonzero(shaded_parts[model.face_part])
+        faces = np.flatnonzero(shaded_parts[face_parts(model)])
         color = _shade_color(options.style)
         shading = shaded_faces(model, faces, frame.view, frame.projection, size, color, options.shade_opacity)
     glyph_drawing = None if glyphs is None else _glyph_lines(glyphs, model, frame, renderer, layers, seconds)
@@ -561,7 +565,7 @@ class _Occlusion:
     def levels(self, clock: float, seconds: dict[str, float]) -> tuple[np.ndarray, int]:
         """(S,) occlusion level of each sample (-1: left out) and the layers counted; the
         seconds of the peel (of those since ``clock``) into ``seconds["peel"]``."""
-        samples, planes, part, test = self.samples, self.planes, self.model.face_part, self.test
+        samples, planes, part, test = self.samples, self.planes, face_parts(self.model), self.test
         on_gpu = None if self.layers is not None else self._on_gpu(planes)
         if on_gpu is not None:
             rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))

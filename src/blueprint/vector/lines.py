@@ -200,8 +200,13 @@ def edge_numbers(model: Model) -> np.ndarray:
     The one place the numbering is made: the adjacency of the model welded within each part
     (``adjacency``, cached per mesh), whose edges are the sorted unique pairs of welded
     vertices, themselves numbered in the order of the model's vertices. It numbers the flattened
-    model that ``Model.faces`` and ``Model.positions`` give.
+    model that ``Model.faces`` and ``Model.positions`` give; that of a model kept as instances
+    is made arithmetically, instance after instance (``instanced``), without flattening it.
     """
+    if model.instances is not None:
+        from .instanced import instanced_edge_numbers
+
+        return instanced_edge_numbers(model)
     return adjacency(model).edges
 
 
@@ -210,6 +215,10 @@ def edge_segments(model: Model, edges: np.ndarray) -> np.ndarray:
 
     Raises ``InputError`` naming the first index that is no edge of the model.
     """
+    if model.instances is not None:
+        from .instanced import instanced_edge_segments
+
+        return instanced_edge_segments(model, edges)
     adj = adjacency(model)
     edges = np.asarray(edges, np.int64).reshape(-1)
     bad = (edges < 0) | (edges >= len(adj.edges))
@@ -276,7 +285,12 @@ def feature_segments(
     into parts) and come out with that kind. Creases whose faces meet at less than
     ``SMOOTH_ANGLE`` (drawn where the crease angle is lower still) are tangent edges of smooth
     blends: kind ``SMOOTH``.
+
+    A model kept as instances gives its lines from its unique meshes, placed per instance
+    (``instanced``), never flattened.
     """
+    if model.instances is not None:
+        return _instanced_feature_segments(model, view, projection, size, crease_angle, smooth)
     adj = adjacency(model)
     width, height = size
     edges = classify_edges(adj, view, projection, width, height, crease_angle)
@@ -292,24 +306,96 @@ def feature_segments(
     crease = np.flatnonzero(kind == CREASE)
     cos = np.einsum("ij,ij->i", normals[edges.faces[crease, 0]], normals[edges.faces[crease, 1]])
     kind[crease[cos >= min_cos]] = SMOOTH
-    border = np.flatnonzero(kind == BORDER)
-    if len(border) > 1 and len(model.part_names) > 1:
-        ends = edges.segments3d[border].reshape(-1, 3)
-        ids = _point_ids(ends, _JOIN_REL * _diagonal(adj.positions)).reshape(-1, 2)
-        key = np.sort(ids, axis=1) @ np.array([int(ids.max()) + 1, 1])
-        order = np.lexsort((part[border], key))
-        key_sorted, part_sorted = key[order], part[border][order]
-        # a key held by more than one part: its first and last entries differ in part
-        first = np.r_[True, key_sorted[1:] != key_sorted[:-1]]
-        group = np.cumsum(first) - 1
-        first_at = np.flatnonzero(first)
-        last_at = np.r_[first_at[1:] - 1, len(key_sorted) - 1]
-        shared = (part_sorted[first_at] != part_sorted[last_at])[group]
-        kind[border[order[shared]]] = PART_BOUNDARY
+    _mark_part_boundaries(kind, edges.segments3d, part, len(model.part_names), _diagonal(adj.positions))
     found = Segments(edges.segments3d, edges.faces, part.astype(np.int32), kind, edges.edges)
     if not smooth or len(adj.faces) == 0:
         return found
     return _with_smooth_contours(model, adj, edges, found, view, projection, size, crease_angle)
+
+
+def _mark_part_boundaries(
+    kind: np.ndarray, points: np.ndarray, part: np.ndarray, parts: int, diagonal: float
+):
+    """Set to ``PART_BOUNDARY`` in ``kind`` (N,) the borders whose ends (``points`` (N, 2, 3))
+    are those of a border of another part (``part`` (N,)): a surface split into parts."""
+    border = np.flatnonzero(kind == BORDER)
+    if len(border) <= 1 or parts <= 1:
+        return
+    ends = points[border].reshape(-1, 3)
+    ids = _point_ids(ends, _JOIN_REL * diagonal).reshape(-1, 2)
+    key = np.sort(ids, axis=1) @ np.array([int(ids.max()) + 1, 1])
+    order = np.lexsort((part[border], key))
+    key_sorted, part_sorted = key[order], part[border][order]
+    # a key held by more than one part: its first and last entries differ in part
+    first = np.r_[True, key_sorted[1:] != key_sorted[:-1]]
+    group = np.cumsum(first) - 1
+    first_at = np.flatnonzero(first)
+    last_at = np.r_[first_at[1:] - 1, len(key_sorted) - 1]
+    shared = (part_sorted[first_at] != part_sorted[last_at])[group]
+    kind[border[order[shared]]] = PART_BOUNDARY
+
+
+def _instanced_feature_segments(model: Model, view, projection, size, crease_angle: float, smooth: bool):
+    """``feature_segments`` of a model kept as instances: the lines of ``instanced_features``,
+    part boundaries and smooth contours joined to the silhouettes as ``_with_smooth_contours``
+    joins them."""
+    from .instanced import instanced_features
+
+    found = instanced_features(
+        model, view, projection, size, crease_angle, smooth, SMOOTH_ANGLE, _EDGE_ON, _EDGE_ON_SMOOTH
+    )
+    diagonal = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
+    kind, faces = found["kind"], found["faces"]
+    _mark_part_boundaries(kind, found["points"], found["part"], len(model.part_names), diagonal)
+    edges = Segments(found["points"], faces, found["part"], kind, found["edge"])
+    if not smooth:
+        return edges
+    points, pixels = found["contour_points"], found["contour_pixels"]
+    short = _short_runs(points, pixels, _MIN_CONTOUR_PX)
+    exact = found["exact"] | np.isin(faces, found["contour_face"][short])
+    replaced = found["silhouette"] & ~exact.any(axis=1) & (faces >= 0).all(axis=1)
+    keep = ~short
+    points, face, edge_pairs = points[keep], found["contour_face"][keep], found["contour_edges"][keep]
+    part, vertices = found["contour_part"][keep], found["contour_vertices"][keep]
+    vertex_points = found["contour_vertex_points"][keep]
+    # open contour ends run on to the end of their edge where a kept silhouette starts
+    bridge = np.zeros((0, 2, 3))
+    bridge_face = bridge_part = bridge_edge = np.zeros(0, np.int64)
+    kept = found["vertices"][found["silhouette"] & ~replaced].reshape(-1)
+    if len(points) and len(kept):
+        ends = points.reshape(-1, 3)
+        ids = _point_ids(ends, _JOIN_REL * diagonal)
+        open_end = np.flatnonzero(np.bincount(ids)[ids] == 1)
+        pair = vertices.reshape(-1, 2)[open_end]
+        on_kept = np.isin(pair, kept)
+        second = ~on_kept[:, 0]
+        joined = on_kept[np.arange(len(pair)), second.astype(np.int64)]
+        open_end, second = open_end[joined], second[joined]
+        end_points = vertex_points.reshape(-1, 2, 3)[open_end, second.astype(np.int64)]
+        bridge = np.stack([ends[open_end], end_points], axis=1)
+        bridge_face, bridge_part = face[open_end // 2], part[open_end // 2]
+        bridge_edge = edge_pairs.reshape(-1)[open_end]
+    contour_faces = np.concatenate([face, bridge_face])
+    edge_pairs = np.concatenate([edge_pairs, np.stack([bridge_edge, bridge_edge], axis=1)])
+    return Segments.concatenate(
+        [
+            Segments(
+                edges.points[~replaced],
+                faces[~replaced],
+                edges.part[~replaced],
+                kind[~replaced],
+                edges.edge[~replaced],
+            ),
+            Segments(
+                np.concatenate([points, bridge]),
+                np.stack([contour_faces, np.full(len(contour_faces), -1)], axis=1),
+                np.concatenate([part, bridge_part]).astype(np.int32),
+                np.full(len(contour_faces), SILHOUETTE, np.uint8),
+                edge_pairs[:, 0],
+                edge_pairs[:, 1],
+            ),
+        ]
+    )
 
 
 def _with_smooth_contours(
@@ -795,7 +881,8 @@ def _triangle_pairs_cut(ta: np.ndarray, tb: np.ndarray, eps: float, normals=None
 
 
 def intersection_segments(model: Model, renderer=None) -> Segments:
-    """Lines where triangles of different parts cut through each other (view-independent).
+    """Lines where triangles of different parts cut through each other (view-independent), in
+    the order of their two faces (the lower first).
 
     Broad phase: part boxes limit the triangles to those near another part, a uniform grid pairs
     triangles of different parts with overlapping boxes. Narrow phase: the exact segment of two
@@ -804,57 +891,97 @@ def intersection_segments(model: Model, renderer=None) -> Segments:
     that may cut (``cuts.gpu_cut_pairs``): the same lines, bit for bit. Cached per mesh
     (``cache``).
     """
+    if model.instances is not None:
+        from .instanced import instanced_intersections
+
+        eps = _TOUCH_REL * (float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0)
+        points, faces, part = instanced_intersections(model, eps, renderer)
+        return Segments(
+            points, faces, part, np.full(len(part), INTERSECTION, np.uint8), np.full(len(part), -1, np.int64)
+        )
     return INTERSECTIONS.get(model, lambda: _intersections(model, renderer))
 
 
 def _intersections(model: Model, renderer) -> Segments:
-    result = Segments.empty()
     parts = len(model.part_names)
-    faces = model.faces.astype(np.int64)
-    if parts > 1 and len(faces):
-        positions = model.positions.astype(np.float64)
-        tri = model.corners()
-        lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
-        hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
-        part = model.face_part.astype(np.int64)
-        eps = _TOUCH_REL * _diagonal(positions)
-        area = row_norm(model.corner_cross())
-        candidates = _candidate_triangles(lo, hi, part, parts, eps)
-        candidates = candidates[area[candidates] > 0]
-        lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
-        pairs = shared = None
-        if renderer is not None and len(candidates) > 1:
+    if parts <= 1 or len(model.faces) == 0:
+        return Segments.empty()
+    eps = _TOUCH_REL * _diagonal(model.positions.astype(np.float64))
+    part = model.face_part.astype(np.int64)
+    points, a, b = triangle_cuts(model.corners(), part, row_norm(model.corner_cross()) > 0, eps, renderer)
+    if len(a) == 0:
+        return Segments.empty()
+    # in the order of their faces, the lower first: the order a model kept as instances finds
+    # them in, so both draw one drawing (joining and sampling follow the order)
+    a, b = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((b, a))
+    points, a, b = points[order], a[order], b[order]
+    return Segments(
+        points,
+        np.stack([a, b], axis=1),
+        np.minimum(part[a], part[b]).astype(np.int32),
+        np.full(len(a), INTERSECTION, np.uint8),
+        np.full(len(a), -1, np.int64),
+    )
+
+
+def triangle_cuts(tri: np.ndarray, part: np.ndarray, solid: np.ndarray, eps: float, renderer=None):
+    """Where triangles of different parts cut through each other (``intersection_segments``).
+
+    Parameters
+    ----------
+    tri : (F, 3, 3) float64
+        The triangles' corners.
+    part : (F,) int64
+        The part of each triangle; only triangles of different parts are paired.
+    solid : (F,) bool
+        The triangles with an area (the others cut nothing).
+    eps : float
+        Plane distances below this count as zero (touching, not cutting).
+    renderer : LayerRenderer, optional
+        Makes the candidate pairs on the GPU (``cuts.gpu_cut_pairs``).
+
+    Returns
+    -------
+    points : (K, 2, 3) float64
+        The segments.
+    a, b : (K,) int64
+        The two triangles each segment lies on.
+    """
+    none = np.zeros((0, 2, 3)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    if len(tri) == 0:
+        return none
+    lo = np.minimum(np.minimum(tri[:, 0], tri[:, 1]), tri[:, 2])
+    hi = np.maximum(np.maximum(tri[:, 0], tri[:, 1]), tri[:, 2])
+    candidates = _candidate_triangles(lo, hi, part, int(part.max()) + 1, eps)
+    candidates = candidates[solid[candidates]]
+    lo, hi, part_c = lo[candidates], hi[candidates], part[candidates]
+    pairs = shared = None
+    if renderer is not None and len(candidates) > 1:
+        shared = _unit_normals(tri[candidates])
+        grid = cell_grid(lo, hi, part_c, eps)
+        pairs = gpu_cut_pairs(renderer, grid, tri[candidates], *shared, hi + eps, eps)
+    if pairs is None:
+        pairs = _candidate_pairs(lo, hi, part_c, eps)
+        # normals once a triangle where there are more pairs than triangles, else a pair
+        if shared is None and len(pairs[0]) > len(candidates):
             shared = _unit_normals(tri[candidates])
-            grid = cell_grid(lo, hi, part_c, eps)
-            pairs = gpu_cut_pairs(renderer, grid, tri[candidates], *shared, hi + eps, eps)
-        if pairs is None:
-            pairs = _candidate_pairs(lo, hi, part_c, eps)
-            # normals once a triangle where there are more pairs than triangles, else a pair
-            if shared is None and len(pairs[0]) > len(candidates):
-                shared = _unit_normals(tri[candidates])
-        ci, cj = pairs
-        i, j = candidates[ci], candidates[cj]
-        found, fa, fb = [], [], []
-        for start in range(0, len(i), _PAIR_CHUNK):
-            a, b = i[start : start + _PAIR_CHUNK], j[start : start + _PAIR_CHUNK]
-            normals = None
-            if shared is not None:
-                ca, cb = ci[start : start + _PAIR_CHUNK], cj[start : start + _PAIR_CHUNK]
-                normals = (shared[0][ca], shared[1][ca]), (shared[0][cb], shared[1][cb])
-            segments, which = _triangle_pairs_cut(tri[a], tri[b], eps, normals)
-            found.append(segments)
-            fa.append(a[which])
-            fb.append(b[which])
-        if found and sum(len(s) for s in found):
-            a, b = np.concatenate(fa), np.concatenate(fb)
-            result = Segments(
-                np.concatenate(found),
-                np.stack([a, b], axis=1),
-                np.minimum(part[a], part[b]).astype(np.int32),
-                np.full(len(a), INTERSECTION, np.uint8),
-                np.full(len(a), -1, np.int64),
-            )
-    return result
+    ci, cj = pairs
+    i, j = candidates[ci], candidates[cj]
+    found, fa, fb = [], [], []
+    for start in range(0, len(i), _PAIR_CHUNK):
+        a, b = i[start : start + _PAIR_CHUNK], j[start : start + _PAIR_CHUNK]
+        normals = None
+        if shared is not None:
+            ca, cb = ci[start : start + _PAIR_CHUNK], cj[start : start + _PAIR_CHUNK]
+            normals = (shared[0][ca], shared[1][ca]), (shared[0][cb], shared[1][cb])
+        segments, which = _triangle_pairs_cut(tri[a], tri[b], eps, normals)
+        found.append(segments)
+        fa.append(a[which])
+        fb.append(b[which])
+    if not found or not sum(len(s) for s in found):
+        return none
+    return np.concatenate(found), np.concatenate(fa), np.concatenate(fb)
 
 
 def model_segments(

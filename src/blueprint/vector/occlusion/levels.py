@@ -74,7 +74,12 @@ class DepthTest:
 def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
     """(F + 1, 4) float64 eye-space planes ``n . x = c`` of every face (unit n), zero for
     degenerate faces and for the extra last row, which stands for "no face". The model-space
-    normals and corners do not depend on the view: computed once per mesh (``PLANES``)."""
+    normals and corners do not depend on the view: computed once per mesh (``PLANES``); a
+    model kept as instances moves its meshes' planes instead (``instanced``)."""
+    if model.instances is not None:
+        from ..instanced import instanced_face_planes
+
+        return instanced_face_planes(model, view)
     normal, corner = PLANES.get(model, lambda: _model_planes(model))
     rotation, shift = view[:3, :3], view[:3, 3]
     n_eye = normal @ rotation.T

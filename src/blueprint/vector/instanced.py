@@ -1,0 +1,596 @@
+"""The lines of a model kept as instances (``Model.instances``), found without flattening it.
+
+What does not depend on the view is found once per unique mesh, cached by the mesh's content:
+its adjacency (welded on its own), the edges that are borders and creases, the smooth faces and
+vertex normals of its smooth contours, and the planes of its faces. Each instance then places
+them: the view moved into the mesh's frame (the eye or the view direction through the inverse
+of the instance's transform) gives every face's facing and every vertex's ``n . v`` for a block
+of instances at once (one matrix product), from which the silhouettes and smooth contours of
+each instance follow as ``lines.feature_segments`` finds them on a flat model; the segments are
+then placed by the instances' transforms. Intersection lines between parts are found once for
+each pair of meshes that touch in one relative placement and placed at every pair of instances
+placed so.
+
+Edge numbers (``lines.edge_numbers``) of a model kept as instances are its flattened scene's,
+made arithmetically: instance after instance, each instance's mesh's own edges (its adjacency's
+sorted welded vertex pairs) moved by the welded vertices of the instances before it. The lines
+are those of the flattened scene, welded a part at a time, wherever no two instances of one part
+share a vertex and the transforms keep angles (rotations, mirrors, uniform scales); a mesh's
+creases are its own (the picture's per-mesh preparation takes them so too).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from blueprint.columns import row_norm
+from blueprint.errors import InputError
+from blueprint.scene.instances import Instances
+from blueprint.scene.model import Model
+from blueprint.silhouette import Adjacency, SmoothSurface, build_adjacency, smooth_surface
+from blueprint.silhouette.contours import _EDGE_ON as _VERTEX_EDGE_ON
+from blueprint.silhouette.contours import _edge_keys
+from blueprint.silhouette.edges import _first_two_faces, _projected, sharp_edges
+from blueprint.sorting import stable_argsort
+
+from .cache import ModelCache
+from .linework import BORDER, CREASE, SILHOUETTE, SMOOTH
+
+__all__ = [
+    "face_parts",
+    "instanced_edge_numbers",
+    "instanced_edge_segments",
+    "instanced_face_planes",
+    "instanced_features",
+    "instanced_intersections",
+]
+
+# Rows (faces, edges or vertices times instances) of one block's arrays.
+_ROWS = 1 << 16
+# Relative transforms between two instances equal to this many digits (of the model's size for
+# their translations) are one placement: the intersection lines of one pair serve the other.
+_PLACEMENT_DIGITS = 9
+
+# Each unique mesh's view-independent line work, by its content.
+MESH_LINES = ModelCache(entries=4096)
+INTERSECTIONS = ModelCache()
+
+
+@dataclass(frozen=True, eq=False)
+class _MeshLines:
+    """A unique mesh's adjacency and what its lines need of it in every view.
+
+    count, f0, f1 : (E,) faces of each edge and its first two (``edges._first_two_faces``)
+    normal_ok : (F,) bool, faces with a normal
+    planes : (F, 4) float64, ``(n, -n . p0)`` of every face (unit n, zero where none): its
+        facing towards a point ``(e, 1)`` or a direction ``(d, 0)`` is one product
+    vertex_planes : (V, 4) float64, the same of the vertex normals (per crease angle, below)
+    many : (K,) edges of three faces or more, ``many_start`` (K + 1,) where each one's
+        incidences start in ``many_face``
+    by_angle : dict, per crease angle: (static kind (E,) uint8, smooth crease (E,) bool,
+        SmoothSurface, vertex planes (V, 4))
+    """
+
+    adj: Adjacency
+    count: np.ndarray
+    f0: np.ndarray
+    f1: np.ndarray
+    normal_ok: np.ndarray
+    planes: np.ndarray
+    many: np.ndarray
+    many_start: np.ndarray
+    many_face: np.ndarray
+    keys: np.ndarray
+    by_angle: dict
+
+    def at_angle(self, crease_angle: float, smooth_angle: float):
+        """(static kind, smooth creases, surface, vertex planes) at ``crease_angle``."""
+        if crease_angle not in self.by_angle:
+            adj = self.adj
+            sharp = sharp_edges(adj, self.count, self.f0, self.f1, self.normal_ok, crease_angle)
+            static = np.zeros(len(adj.edges), np.uint8)
+            static[sharp] = CREASE
+            static[self.count == 1] = BORDER
+            normals = adj.face_normals
+            cos = np.einsum("ij,ij->i", normals[self.f0], normals[np.maximum(self.f1, 0)])
+            smooth_crease = (self.f1 >= 0) & (cos >= np.cos(np.radians(smooth_angle)))
+            surface = smooth_surface(adj, crease_angle)
+            vertex_planes = np.c_[surface.normals, -np.einsum("ij,ij->i", surface.normals, adj.positions)]
+            self.by_angle[crease_angle] = (static, smooth_crease, surface, vertex_planes)
+        return self.by_angle[crease_angle]
+
+
+def _mesh_lines(inst: Instances, m: int) -> _MeshLines:
+    positions, faces = inst.mesh_arrays(m)
+    key = Model(positions, faces, np.zeros(len(faces), np.int32), ("mesh",))
+    return MESH_LINES.get(key, lambda: _build_mesh_lines(positions, faces))
+
+
+def _build_mesh_lines(positions: np.ndarray, faces: np.ndarray) -> _MeshLines:
+    adj = build_adjacency(positions.astype(np.float64), faces.astype(np.int64))
+    count, f0, f1 = _first_two_faces(adj)
+    normals = adj.face_normals
+    normal_ok = row_norm(normals) > 0
+    planes = np.c_[normals, -np.einsum("ij,ij->i", normals, adj.positions[adj.faces[:, 0]])]
+    many = np.flatnonzero(count >= 3)
+    starts = np.cumsum(count) - count
+    many_start = np.r_[0, np.cumsum(count[many])]
+    incidences = np.repeat(starts[many], count[many]) + (
+        np.arange(int(many_start[-1])) - np.repeat(many_start[:-1], count[many])
+    )
+    many_face = adj.edge_faces[incidences, 1]
+    return _MeshLines(adj, count, f0, f1, normal_ok, planes, many, many_start, many_face, _edge_keys(adj), {})
+
+
+def _mesh_lines_all(model: Model) -> list[_MeshLines]:
+    """Every unique mesh's ``_MeshLines``, held by the model."""
+    if "mesh_lines" not in model._cache:
+        inst = model.instances
+        model._cache["mesh_lines"] = [_mesh_lines(inst, m) for m in range(inst.mesh_count)]
+    return model._cache["mesh_lines"]
+
+
+def _starts(counts: np.ndarray) -> np.ndarray:
+    """(N + 1,) int64: where each of ``counts`` (N,) starts, their total last."""
+    return np.r_[0, np.cumsum(counts)].astype(np.int64)
+
+
+def _numbering(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """(N + 1,) each instance's first welded vertex and first edge in the flattened numbering."""
+    meshes = _mesh_lines_all(model)
+    mesh = model.instances.mesh
+    vertices = np.array([len(m.adj.positions) for m in meshes], np.int64)
+    edges = np.array([len(m.adj.edges) for m in meshes], np.int64)
+    return _starts(vertices[mesh]), _starts(edges[mesh])
+
+
+def _blocks(members: np.ndarray, rows: int):
+    step = max(1, _ROWS // max(rows, 1))
+    for first in range(0, len(members), step):
+        yield members[first : first + step]
+
+
+def _placed(points: np.ndarray, transforms: np.ndarray) -> np.ndarray:
+    """Points (K, ..., 3) placed each by its transform (K, 4, 4)."""
+    shape = points.shape
+    flat = points.reshape(len(points), int(np.prod(shape[1:-1], dtype=np.int64)), 3)
+    out = np.einsum("kij,kpj->kpi", transforms[:, :3, :3], flat) + transforms[:, None, :3, 3]
+    return out.reshape(shape)
+
+
+def _view_in_meshes(inst: Instances, view: np.ndarray, projection: np.ndarray):
+    """(N, 4) the eye ``(e, 1)`` (perspective) or the direction towards it ``(d, 0)``
+    (orthographic) in each instance's mesh frame, and (N,) the sign of each transform's
+    determinant (-1: a mirror, whose faces turn the other way once placed)."""
+    camera_to_model = np.linalg.inv(np.asarray(view, np.float64))
+    linear = inst.transform[:, :3, :3]
+    det = np.linalg.det(linear)
+    flat = np.abs(det) <= 1e-300
+    inverse = np.linalg.inv(np.where(flat[:, None, None], np.eye(3), linear))
+    q = np.zeros((len(inst.mesh), 4))
+    if projection[3, 3] == 1.0:
+        q[:, :3] = np.einsum("nij,j->ni", inverse, camera_to_model[:3, 2])
+    else:
+        q[:, :3] = np.einsum("nij,nj->ni", inverse, camera_to_model[:3, 3] - inst.transform[:, :3, 3])
+        q[:, 3] = 1.0
+    # a transform that flattens its mesh leaves faces of no area: no facing, no line of it
+    sign = np.where(flat, 0.0, np.sign(det))
+    return q, sign
+
+
+def _toward_length(q: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(B, P) length of the vector from each of ``points`` (P, 3) to the eye ``q`` (B, 4) (the
+    direction's length where ``q[:, 3]`` is 0)."""
+    eye = q[:, :3]
+    square = np.einsum("bi,bi->b", eye, eye)[:, None] + q[:, 3:] * (
+        np.einsum("pi,pi->p", points, points)[None] - 2.0 * eye @ points.T
+    )
+    return np.sqrt(np.maximum(square, 0.0))
+
+
+@dataclass
+class _Found:
+    """What the blocks of one view collect, instance and local numbers with each row."""
+
+    edge_inst: list
+    edge: list
+    edge_kind: list
+    edge_sides: list
+    edge_points: list
+    edge_vertices: list
+    side_exact: list
+    edge_on: list
+    smooth_crease: list
+    contour_inst: list
+    contour_face: list
+    contour_edges: list
+    contour_points: list
+    contour_vertices: list
+    contour_vertex_points: list
+
+
+def instanced_features(
+    model: Model,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+    crease_angle: float,
+    smooth: bool,
+    smooth_angle: float,
+    edge_on_cos: float,
+    edge_on_smooth_cos: float,
+):
+    """The arrays ``lines.feature_segments`` builds its segments from, for a model kept as
+    instances: a dict of the edges' model-space ``points`` (N, 2, 3), ``faces`` (N, 2) in the
+    flattened numbering, ``part``, ``kind`` (edge-on creases made silhouettes, near-flat ones
+    ``SMOOTH``), ``edge`` (flattened numbering), ``silhouette`` (N,) bool (silhouettes of
+    ``classify_edges``' own), ``vertices`` (N, 2) (their flattened welded vertices),
+    ``exact`` (N, 2) bool (side faces where the mesh's own silhouette stays), and the smooth
+    contours' ``contour_points`` (K, 2, 3), ``contour_pixels`` (K, 2, 2), ``contour_face``
+    (K,), ``contour_part``, ``contour_edges`` (K, 2), ``contour_vertices`` (K, 2, 2) (the
+    flattened welded vertices of each end's edge) and ``contour_vertex_points`` (K, 2, 2, 3);
+    everything in the order of the flattened scene."""
+    inst = model.instances
+    meshes = _mesh_lines_all(model)
+    first_vertex, first_edge = _numbering(model)
+    first_face = _starts(inst.instance_faces())
+    q_all, sign_all = _view_in_meshes(inst, view, projection)
+    found = _Found(*([] for _ in range(15)))
+    for m, members in inst.by_mesh():
+        ml = meshes[m]
+        if len(ml.adj.faces) == 0:
+            continue
+        static, smooth_crease, surface, vertex_planes = ml.at_angle(crease_angle, smooth_angle)
+        rows = max(len(ml.adj.edges), len(ml.adj.faces), len(ml.adj.positions))
+        for block in _blocks(members, rows):
+            _block_features(
+                ml,
+                block,
+                q_all[block],
+                sign_all[block],
+                static,
+                smooth_crease,
+                surface,
+                vertex_planes,
+                smooth,
+                edge_on_cos,
+                edge_on_smooth_cos,
+                inst,
+                found,
+            )
+    return _assembled(found, inst, first_vertex, first_edge, first_face, view, projection, size)
+
+
+def _block_features(
+    ml: _MeshLines,
+    block,
+    q,
+    sign,
+    static,
+    smooth_crease,
+    surface: SmoothSurface,
+    vertex_planes,
+    smooth: bool,
+    edge_on_cos,
+    edge_on_smooth_cos,
+    inst,
+    found: _Found,
+):
+    adj = ml.adj
+    raw = (ml.planes @ q.T).T * sign[:, None]  # (B, F) facing, placed
+    ok = ml.normal_ok[None] & (sign[:, None] != 0)
+    front = (raw > 0.0) & ok
+    back = ~front & ok
+    cos = np.abs(raw) / np.maximum(_toward_length(q, adj.positions[adj.faces[:, 0]]), 1e-300)
+    f0, f1 = ml.f0, np.maximum(ml.f1, 0)
+    two = ml.count == 2
+    silhouette = ((front[:, f0] | front[:, f1]) & (back[:, f0] | back[:, f1])) & two[None]
+    first_front = np.where(front[:, f0], f0, f1)
+    first_back = np.where(back[:, f0], f0, f1)
+    if len(ml.many):
+        fr, bk = front[:, ml.many_face], back[:, ml.many_face]
+        cut = ml.many_start[:-1]
+        any_front = np.logical_or.reduceat(fr, cut, axis=1)
+        any_back = np.logical_or.reduceat(bk, cut, axis=1)
+        silhouette[:, ml.many] = any_front & any_back
+        none = len(adj.faces)
+        first_front[:, ml.many] = np.minimum.reduceat(np.where(fr, ml.many_face, none), cut, axis=1)
+        first_back[:, ml.many] = np.minimum.reduceat(np.where(bk, ml.many_face, none), cut, axis=1)
+    b, e = np.nonzero(silhouette | (static != 0)[None])
+    is_sil = silhouette[b, e]
+    kind = np.where(is_sil, SILHOUETTE, static[e]).astype(np.uint8)
+    sides = np.stack([ml.f0[e], np.where(kind == BORDER, -1, ml.f1[e])], axis=1)
+    sides[is_sil] = np.stack([first_front[b[is_sil], e[is_sil]], first_back[b[is_sil], e[is_sil]]], axis=1)
+    which = block[b]
+    found.edge_inst.append(which)
+    found.edge.append(e)
+    found.edge_kind.append(kind)
+    found.edge_sides.append(sides)
+    found.edge_points.append(_placed(adj.positions[adj.edges[e]], inst.transform[which]))
+    found.edge_vertices.append(adj.edges[e])
+    side_cos = cos[b[:, None], np.maximum(sides, 0)]
+    found.edge_on.append((side_cos <= edge_on_cos) & (sides >= 0))
+    found.smooth_crease.append(smooth_crease[e])
+    if not smooth:
+        found.side_exact.append(np.ones(sides.shape, bool))
+        return
+    smooth_faces = surface.smooth[None] & (cos > edge_on_smooth_cos)
+    found.side_exact.append(~smooth_faces[b[:, None], np.maximum(sides, 0)])
+    g = (vertex_planes @ q.T).T * sign[:, None]  # (B, V) n . v at the vertices, placed
+    near = _VERTEX_EDGE_ON * _toward_length(q, adj.positions)
+    corners = (g > near)[:, adj.faces]  # (B, F, 3)
+    cb, cf = np.nonzero(smooth_faces & corners.any(axis=2) & ~corners.all(axis=2))
+    corners = corners[cb, cf]
+    changes = corners != corners[:, [1, 2, 0]]
+    ends, edges, vertices = [], [], []
+    for k in (np.argmax(changes, axis=1), 2 - np.argmax(changes[:, ::-1], axis=1)):
+        a = adj.faces[cf, k]
+        c = adj.faces[cf, (k + 1) % 3]
+        lo, hi = np.minimum(a, c), np.maximum(a, c)
+        t = g[cb, lo] / (g[cb, lo] - g[cb, hi])
+        ends.append(adj.positions[lo] + t[:, None] * (adj.positions[hi] - adj.positions[lo]))
+        edges.append(np.searchsorted(ml.keys, lo * len(adj.positions) + hi))
+        vertices.append(np.stack([lo, hi], axis=1))
+    which = block[cb]
+    vertices = np.stack(vertices, axis=1)  # (K, 2 ends, 2 vertices)
+    found.contour_inst.append(which)
+    found.contour_face.append(cf)
+    found.contour_edges.append(np.stack(edges, axis=1))
+    found.contour_points.append(_placed(np.stack(ends, axis=1), inst.transform[which]))
+    found.contour_vertices.append(vertices)
+    found.contour_vertex_points.append(_placed(adj.positions[vertices], inst.transform[which]))
+
+
+def _joined(items: list, shape: tuple, dtype) -> np.ndarray:
+    return np.concatenate(items) if items else np.zeros((0, *shape), dtype)
+
+
+def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_face, view, projection, size):
+    which = _joined(found.edge_inst, (), np.int64)
+    edge = first_edge[which] + _joined(found.edge, (), np.int64)
+    order = stable_argsort(edge)
+    which, edge = which[order], edge[order]
+    sides = _joined(found.edge_sides, (2,), np.int64)[order]
+    faces = np.where(sides >= 0, first_face[which][:, None] + sides, -1)
+    kind = _joined(found.edge_kind, (), np.uint8)[order]
+    silhouette = kind == SILHOUETTE
+    # an outline edge beside a face seen edge-on is a silhouette whichever way it rounds
+    edge_on = _joined(found.edge_on, (2,), bool)[order].any(axis=1)
+    kind[(kind == CREASE) & edge_on] = SILHOUETTE
+    kind[(kind == CREASE) & _joined(found.smooth_crease, (), bool)[order]] = SMOOTH
+    points, _, keep = _projected(
+        _joined(found.edge_points, (2, 3), np.float64)[order], view, projection, size
+    )
+    out = {
+        "points": points,
+        "faces": faces[keep],
+        "part": inst.part[which[keep]].astype(np.int32),
+        "kind": kind[keep],
+        "edge": edge[keep],
+        "silhouette": silhouette[keep],
+        "vertices": first_vertex[which[keep]][:, None]
+        + _joined(found.edge_vertices, (2,), np.int64)[order][keep],
+        "exact": _joined(found.side_exact, (2,), bool)[order][keep],
+    }
+    which = _joined(found.contour_inst, (), np.int64)
+    face = first_face[which] + _joined(found.contour_face, (), np.int64)
+    order = stable_argsort(face)
+    which, face = which[order], face[order]
+    points, pixels, keep = _projected(
+        _joined(found.contour_points, (2, 3), np.float64)[order], view, projection, size
+    )
+    which = which[keep]
+    out.update(
+        contour_points=points,
+        contour_pixels=pixels,
+        contour_face=face[keep],
+        contour_part=inst.part[which].astype(np.int32),
+        contour_edges=first_edge[which][:, None] + _joined(found.contour_edges, (2,), np.int64)[order][keep],
+        contour_vertices=first_vertex[which][:, None, None]
+        + _joined(found.contour_vertices, (2, 2), np.int64)[order][keep],
+        contour_vertex_points=_joined(found.contour_vertex_points, (2, 2, 3), np.float64)[order][keep],
+    )
+    return out
+
+
+# -- edges by number ------------------------------------------------------------------------------
+
+
+def instanced_edge_numbers(model: Model) -> np.ndarray:
+    """(E, 2) int64: ``lines.edge_numbers`` of a model kept as instances (module docstring)."""
+    inst = model.instances
+    meshes = _mesh_lines_all(model)
+    first_vertex, first_edge = _numbering(model)
+    out = np.empty((int(first_edge[-1]), 2), np.int64)
+    for m, members in inst.by_mesh():
+        edges = meshes[m].adj.edges
+        for block in _blocks(members, len(edges)):
+            rows = first_edge[block][:, None] + np.arange(len(edges))
+            out[rows] = edges[None] + first_vertex[block][:, None, None]
+    return out
+
+
+def instanced_edge_segments(model: Model, edges: np.ndarray) -> np.ndarray:
+    """(N, 2, 3) float64 ends of the edges numbered ``edges`` (N,) of a model kept as instances;
+    ``InputError`` naming the first number that is no edge."""
+    inst = model.instances
+    meshes = _mesh_lines_all(model)
+    _, first_edge = _numbering(model)
+    total = int(first_edge[-1])
+    edges = np.asarray(edges, np.int64).reshape(-1)
+    bad = (edges < 0) | (edges >= total)
+    if bad.any():
+        raise InputError(
+            f"{model.source or 'model'}: edge {int(edges[np.argmax(bad)])} is no edge of the model "
+            f"(it has {total}: 0 to {total - 1})"
+        )
+    which = np.searchsorted(first_edge, edges, side="right") - 1
+    local = edges - first_edge[which]
+    out = np.empty((len(edges), 2, 3))
+    for m in np.unique(inst.mesh[which]).tolist():
+        rows = np.flatnonzero(inst.mesh[which] == m)
+        adj = meshes[m].adj
+        out[rows] = _placed(adj.positions[adj.edges[local[rows]]], inst.transform[which[rows]])
+    return out
+
+
+# -- occlusion ------------------------------------------------------------------------------------
+
+
+def face_parts(model: Model) -> np.ndarray:
+    """(F,) int32: the part of every drawn face, ``Model.face_part`` without flattening a model
+    kept as instances."""
+    if model.instances is None:
+        return model.face_part
+    inst = model.instances
+    return np.repeat(inst.part, inst.instance_faces()).astype(np.int32)
+
+
+def instanced_face_planes(model: Model, view: np.ndarray) -> np.ndarray:
+    """``occlusion.face_planes`` of a model kept as instances: every instance's faces' planes
+    in eye space, from its mesh's planes through the view and its transform."""
+    inst = model.instances
+    first_face = _starts(inst.instance_faces())
+    planes = np.zeros((int(first_face[-1]) + 1, 4))
+    for m, members in inst.by_mesh():
+        vertices, faces = inst.mesh_arrays(m)
+        if not len(faces):
+            continue
+        corners = vertices[faces]
+        cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        good = row_norm(cross) > 0
+        for block in _blocks(members, len(faces)):
+            moved = np.asarray(view, np.float64)[None] @ inst.transform[block]  # (B, 4, 4)
+            linear = moved[:, :3, :3]
+            # normals move by the cofactors: they stay square to the moved faces, mirrors too
+            cofactor = np.linalg.det(linear)[:, None, None] * np.linalg.inv(
+                np.where((np.abs(np.linalg.det(linear)) > 1e-300)[:, None, None], linear, np.eye(3))
+            ).transpose(0, 2, 1)
+            normal = np.einsum("bij,fj->bfi", cofactor, cross)
+            length = np.linalg.norm(normal, axis=2)
+            normal = np.where(
+                (length > 0)[..., None] & good[None, :, None],
+                normal / np.maximum(length, 1e-300)[..., None],
+                0.0,
+            )
+            corner = np.einsum("bij,fj->bfi", linear, corners[:, 0]) + moved[:, None, :3, 3]
+            rows = first_face[block][:, None] + np.arange(len(faces))
+            planes[rows, :3] = normal
+            planes[rows, 3] = np.einsum("bfi,bfi->bf", normal, corner)
+    return planes
+
+
+# -- intersections ----------------------------------------------------------------------------------
+
+
+def _grouped(values: np.ndarray):
+    """(value, the indices holding it) for every value of ``values`` (N,) int."""
+    order = stable_argsort(values)
+    sorted_values = values[order]
+    cuts = np.flatnonzero(np.r_[True, sorted_values[1:] != sorted_values[:-1], True])
+    for start, stop in zip(cuts[:-1], cuts[1:], strict=True):
+        yield int(sorted_values[start]), order[start:stop]
+
+
+def _near_box(corners: np.ndarray, transforms: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(R, F) bool: the triangles (F, 3, 3) of a mesh whose box, placed by each of ``transforms``
+    (R, 4, 4), may meet the box ``lo``, ``hi`` (R, 3): the box moved into the mesh's frame
+    (the box around its moved corners) against the triangles' own boxes."""
+    pick = np.array(np.meshgrid([0, 1], [0, 1], [0, 1], indexing="ij")).reshape(3, -1).T  # (8, 3)
+    box = np.where(pick[None] == 0, lo[:, None], hi[:, None])  # (R, 8, 3)
+    back = np.linalg.inv(transforms)
+    moved = np.einsum("rij,rkj->rki", back[:, :3, :3], box) + back[:, None, :3, 3]
+    box_lo, box_hi = moved.min(axis=1), moved.max(axis=1)
+    tri_lo, tri_hi = corners.min(axis=1), corners.max(axis=1)
+    near = np.ones((len(lo), len(corners)), bool)
+    for axis in range(3):
+        near &= (tri_hi[None, :, axis] >= box_lo[:, None, axis]) & (
+            tri_lo[None, :, axis] <= box_hi[:, None, axis]
+        )
+    return near
+
+
+def instanced_intersections(model: Model, eps: float, renderer=None):
+    """``lines.intersection_segments``' lines of a model kept as instances, cached by its
+    content: (K, 2, 3) points, (K, 2) flattened faces, (K,) parts."""
+    return INTERSECTIONS.get(model, lambda: _intersections(model, eps, renderer))
+
+
+def _intersections(model: Model, eps: float, renderer):
+    from .lines import _overlapping_boxes, triangle_cuts
+
+    inst = model.instances
+    none = np.zeros((0, 2, 3)), np.zeros((0, 2), np.int64), np.zeros(0, np.int32)
+    boxes = model.instance_boxes()
+    lo, hi = boxes[:, 0] - eps, boxes[:, 1] + eps
+    live = np.flatnonzero(np.isfinite(lo).all(axis=1))
+    i, j = _overlapping_boxes(lo[live], hi[live])
+    i, j = live[i], live[j]
+    apart = inst.part[i] != inst.part[j]
+    i, j = i[apart], j[apart]
+    if len(i) == 0:
+        return none
+    # pairs placed alike (one mesh's instance seen from the other's frame): one computation
+    size = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
+    relative = np.linalg.inv(inst.transform[i]) @ inst.transform[j]
+    scale = np.ones(16)
+    scale[[3, 7, 11]] = 1.0 / size  # the translations, relative to the model's size
+    key = np.round(relative.reshape(-1, 16) * scale, _PLACEMENT_DIGITS)
+    key = np.c_[inst.mesh[i], inst.mesh[j], key]
+    _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    group = group.reshape(-1)
+    ri, rj = i[first], j[first]
+    # each pair's two instances' triangles near the other's box, the pairs moved apart
+    span = 4.0 * size + 4.0 * float(np.abs(model.bounds).max())
+    me = np.r_[ri, rj]
+    other = np.r_[rj, ri]
+    pair_part = np.r_[2 * np.arange(len(ri)), 2 * np.arange(len(ri)) + 1]
+    tri, part, local = [], [], []
+    for m, sides in _grouped(inst.mesh[me]):
+        vertices, faces = inst.mesh_arrays(m)
+        corners = vertices[faces]
+        near = _near_box(corners, inst.transform[me[sides]], lo[other[sides]], hi[other[sides]])
+        side, face = np.nonzero(near)
+        placed = _placed(corners[face], inst.transform[me[sides[side]]])
+        # the placed triangles' own boxes against the other's: the moved box held more
+        held = other[sides[side]]
+        meets = (placed.max(axis=1) >= lo[held]).all(axis=1) & (placed.min(axis=1) <= hi[held]).all(axis=1)
+        side, face, placed = side[meets], face[meets], placed[meets]
+        placed[..., 0] += ((pair_part[sides[side]] // 2) * span)[:, None]
+        tri.append(placed)
+        part.append(pair_part[sides[side]])
+        local.append(face)
+    tri = np.concatenate(tri)
+    part = np.concatenate(part)
+    local = np.concatenate(local)
+    origin = part // 2
+    solid = row_norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])) > 0
+    points, ta, tb = triangle_cuts(tri, part, solid, eps, renderer)
+    if len(ta) == 0:
+        return none
+    k = origin[ta]
+    points[..., 0] -= (k * span)[:, None]
+    # the first triangle on the pair's first instance, the second on its other
+    swap = part[ta] % 2 == 1
+    la, lb = np.where(swap, local[tb], local[ta]), np.where(swap, local[ta], local[tb])
+    # into the frame of the pair's first instance, then placed at every pair of its group
+    back = np.linalg.inv(inst.transform[ri[k]])
+    points = _placed(points, back)
+    members = stable_argsort(group)
+    counts = np.bincount(group, minlength=len(ri))
+    member_start = np.r_[0, np.cumsum(counts)]
+    seg_order = stable_argsort(k)
+    # every (segment, pair of its group) once
+    repeat = counts[k[seg_order]]
+    seg = np.repeat(seg_order, repeat)
+    within = np.arange(len(seg)) - np.repeat(np.cumsum(repeat) - repeat, repeat)
+    pair = members[member_start[k[seg]] + within]
+    first_face = _starts(inst.instance_faces())
+    pa, pb = i[pair], j[pair]
+    faces = np.stack([first_face[pa] + la[seg], first_face[pb] + lb[seg]], axis=1)
+    placed = _placed(points[seg], inst.transform[pa])
+    part_out = np.minimum(inst.part[pa], inst.part[pb]).astype(np.int32)
+    order = np.lexsort((faces[:, 1], faces[:, 0]))
+    return placed[order], faces[order], part_out[order]

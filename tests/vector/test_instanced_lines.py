@@ -1,0 +1,95 @@
+"""Vector drawings of models kept as instances: lines found per unique mesh and placed per
+instance, occlusion against the whole scene, all without flattening the model, and the same
+lines, edge numbers and drawings as its flattened twin gives."""
+
+import numpy as np
+import pytest
+from instanced_scenes import exact_scene, flattened, l_prism, placed, smooth_scene, trimesh_scene, wedge
+
+from blueprint.errors import InputError
+from blueprint.scene.camera import fit_camera
+from blueprint.scene.loader import model_from_object
+from blueprint.vector.drawing import draw_vector
+from blueprint.vector.lines import edge_numbers, edge_segments, intersection_segments, model_segments
+from blueprint.vector.linework import CREASE, INTERSECTION, SILHOUETTE
+
+SIZE = (512, 512)
+
+
+def _segments(model, twin, view):
+    camera = fit_camera(twin, SIZE, view)
+    return model_segments(model, camera.view_matrix(), camera.projection_matrix(), SIZE)
+
+
+@pytest.mark.parametrize("view", ["iso", "front", "top"])
+def test_lines_are_the_flattened_scenes(view):
+    model = smooth_scene()
+    twin = flattened(smooth_scene())
+    ours, theirs = _segments(model, twin, view), _segments(twin, twin, view)
+    assert not model.is_flat
+    assert len(ours) == len(theirs)
+    assert {SILHOUETTE, CREASE, INTERSECTION} <= set(ours.kind.tolist())
+    # smooth contours cross faces: their two ends lie on different edges
+    assert (ours.end_edges() != ours.edge).sum() > 50
+    np.testing.assert_allclose(ours.points, theirs.points, atol=1e-5)
+    for name in ("faces", "part", "kind", "edge"):
+        np.testing.assert_array_equal(getattr(ours, name), getattr(theirs, name), err_msg=name)
+    np.testing.assert_array_equal(ours.end_edges(), theirs.end_edges())
+
+
+def _by_class(drawing) -> dict:
+    """(part, kind, level) to (polylines, their length in pixels)."""
+    lines, out = drawing.lines, {}
+    for i in range(len(lines)):
+        length = float(np.linalg.norm(np.diff(lines.polyline(i), axis=0), axis=1).sum())
+        key = (int(lines.part[i]), int(lines.kind[i]), int(lines.level[i]))
+        count, total = out.get(key, (0, 0.0))
+        out[key] = (count + 1, total + length)
+    return out
+
+
+@pytest.mark.parametrize("view", ["iso", "front"])
+def test_drawing_is_the_flattened_scenes(renderer, view):
+    model = smooth_scene()
+    ours = draw_vector(model, size=SIZE, renderer=renderer, view=view)
+    theirs = draw_vector(flattened(smooth_scene()), size=SIZE, renderer=renderer, view=view)
+    assert not model.is_flat
+    mine, twin = _by_class(ours), _by_class(theirs)
+    assert len(mine) > 20 and mine.keys() == twin.keys()
+    for key, (count, length) in mine.items():
+        assert count == twin[key][0], key
+        assert length == pytest.approx(twin[key][1], abs=0.01), key
+
+
+def test_edge_numbers_are_the_flattened_scenes():
+    model = exact_scene()
+    twin = flattened(exact_scene())
+    numbers = edge_numbers(model)
+    np.testing.assert_array_equal(numbers, edge_numbers(twin))
+    every = np.arange(len(numbers))
+    np.testing.assert_allclose(edge_segments(model, every), edge_segments(twin, every), atol=1e-6)
+    with pytest.raises(InputError, match=f"edge {len(numbers)} is no edge of the model"):
+        edge_segments(model, [0, len(numbers)])
+    assert not model.is_flat
+
+
+def test_intersections_of_repeated_pairs_are_placed_at_each():
+    # four copies of a wedge cutting through an L prism, one of them turned a quarter
+    pairs = []
+    for k in range(4):
+        pairs += [("l", placed(None, (5.0 * k, 0, 0))), ("wedge", placed(None, (5.0 * k + 0.25, 0.25, 0.25)))]
+    pairs[-2] = ("l", placed(np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]]), (15.0, 0, 0)))
+    scene = trimesh_scene(pairs, {"l": l_prism(), "wedge": wedge()})
+    model = model_from_object(scene, name="pairs")
+    twin = flattened(model_from_object(scene, name="pairs"))
+    assert model.instances is not None
+    ours, theirs = intersection_segments(model), intersection_segments(twin)
+    assert not model.is_flat
+    assert len(ours) == len(theirs) > 0
+    np.testing.assert_allclose(ours.points, theirs.points, atol=1e-6)
+    np.testing.assert_array_equal(ours.faces, theirs.faces)
+    np.testing.assert_array_equal(ours.part, theirs.part)
+    # the three alike pairs give the same lines, moved by their translation
+    first = ours.part == 0
+    second = ours.part == 2
+    np.testing.assert_allclose(ours.points[second], ours.points[first] + [5.0, 0, 0], atol=1e-9)
