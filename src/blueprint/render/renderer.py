@@ -109,9 +109,8 @@ class Capturer:
         self.table = capture_table(device) if table is None else table
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
         self._checked: tuple | None = None
-        # the most faces a mesh uploaded from now on uploads at a time (None: as its frame's
-        # memory allows), and (model, faces) the last frame checked planned for its model
-        self.chunk_faces: int | None = None
+        self.chunk_faces = None
+        # (model, faces a chunk) the last frame checked planned for its model
         self._planned: tuple[Model, int | None] | None = None
         self.abuffer_room: dict[tuple[int, int], int] = {}
         self.compute_raster = ComputeRaster(device)
@@ -126,6 +125,18 @@ class Capturer:
         if not isinstance(table, CaptureTable):
             raise TypeError(f"a capture table must be a CaptureTable, got {type(table).__name__}")
         self._table = table
+
+    @property
+    def chunk_faces(self) -> int | None:
+        """The most faces a mesh uploaded from now on uploads at a time, drawn in chunks where
+        it has more (None: as its frame's GPU memory allows, ``check_memory``)."""
+        return self._chunk_faces
+
+    @chunk_faces.setter
+    def chunk_faces(self, faces: int | None) -> None:
+        if faces is not None and (isinstance(faces, bool) or not isinstance(faces, int) or faces < 1):
+            raise InputError(f"chunk_faces must be a positive whole number of faces or None, got {faces!r}")
+        self._chunk_faces = faces
 
     def make_current(self) -> None:
         self.device.make_current()
@@ -156,6 +167,14 @@ class Capturer:
                 mesh = ChunkedMesh(self.device.ctx, model, crease_angle, faces, pieces=software)
             held = self._meshes[key] = (model, mesh)
         return held[1]
+
+    def chunks(self, model: Model) -> int:
+        """The chunks ``model``'s mesh is drawn in (the most of its uploads), 0 where it was
+        uploaded whole or not at all."""
+        return max(
+            (len(mesh.chunks) for held, mesh in self._meshes.values() if held is model and mesh.chunk_faces),
+            default=0,
+        )
 
     def _chunk_of(self, model: Model) -> int | None:
         """The faces a chunk of ``model``'s mesh holds at most: ``chunk_faces``, or fewer where
