@@ -22,7 +22,7 @@ from blueprint.api import stages
 from blueprint.errors import InputError
 from blueprint.examples import assemble, gearbox
 from blueprint.render import budget
-from blueprint.render.mesh import ChunkedMesh, GpuMesh, _chunks, draw_groups, joined
+from blueprint.render.mesh import ChunkedMesh, GpuMesh, _chunks, _used, draw_groups, joined
 from blueprint.render.table import CaptureTable, PeelRow, capture_table
 from blueprint.scene.loader import model_from_object
 from blueprint.scene.model import Model
@@ -102,6 +102,17 @@ def test_the_chunks_draw_the_one_uploads_faces(name, limit):
             assert max(n for _, _, n, _ in draws) <= 3 * limit
     if name != "flat":
         assert any(len(draws) > 1 for _, _, draws in chunks)  # a chunk crossing groups
+
+
+@pytest.mark.parametrize("vertices", [50, 100_000])
+def test_a_chunks_vertices_are_those_its_corners_use(vertices):
+    """By flags over the vertices (few vertices) or by sorting (many): what ``np.unique``
+    finds, the corners renumbered into them."""
+    corners = np.random.default_rng(7).integers(0, vertices, 3000).astype(np.uint32)
+    used, local = _used(corners, vertices)
+    expected, inverse = np.unique(corners, return_inverse=True)
+    assert np.array_equal(used, expected) and np.array_equal(local, inverse)
+    assert local.dtype == np.uint32 and np.array_equal(used[local], corners)
 
 
 @pytest.fixture(params=["peel", "k-buffer", "A-buffer"])

@@ -341,7 +341,7 @@ def _chunks(
     out = []
     for start in range(0, total, chunk_faces):
         end = min(start + chunk_faces, total)
-        used, local = np.unique(indices[3 * start : 3 * end], return_inverse=True)
+        used, local = _used(indices[3 * start : 3 * end], len(vertices))
         draws = []
         first = int(np.searchsorted(group_end, start, side="right"))
         last = int(np.searchsorted(group_face, end, side="left"))
@@ -353,8 +353,20 @@ def _chunks(
             moved["face"] += lo - int(group_face[g])
             for piece, at, count, wait in _pieces(moved, hi - lo, limit):
                 draws.append((piece, 3 * (lo - start) + at, count, wait))
-        out.append((vertices[used], local.astype(np.uint32), draws))
+        out.append((vertices[used], local, draws))
     return out
+
+
+def _used(corners: np.ndarray, vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """(the vertices ``corners`` (N,) uint32 use, ascending; ``corners`` as indices into them,
+    uint32) of ``vertices`` vertices: by flags over every vertex where the corners are not far
+    fewer, else by sorting the corners."""
+    if vertices > 4 * len(corners):
+        used, local = np.unique(corners, return_inverse=True)
+        return used, local.astype(np.uint32)
+    seen = np.zeros(vertices, bool)
+    seen[corners] = True
+    return np.flatnonzero(seen), (np.cumsum(seen, dtype=np.uint32) - np.uint32(1))[corners]
 
 
 def _pieces(records: np.ndarray, faces: int, limit: int | None) -> list[tuple[np.ndarray, int, int, bool]]:
