@@ -98,7 +98,7 @@ def check_frame_memory(device, name: str, need: dict[str, int], instances: int =
     total = sum(need.values())
     if free is None or total <= free:
         return None
-    left = free - total + need["mesh"] - RECORD_BYTES * instances
+    left = free - need["gbuffers"] - need["lists"] - RECORD_BYTES * instances
     if left >= MESH_BYTES * MIN_CHUNK_FACES:
         return left // MESH_BYTES
     parts = ", ".join(f"{kind} {settings.human_size(n)}" for kind, n in need.items() if n)
