@@ -33,8 +33,9 @@ def suppress_coincident(
     a longer run of it, then an earlier polyline): within ``distance`` pixels across it and
     running within ``angle`` degrees of it. Hidden lines right under visible ones (the bottom
     outline of a plate under its top outline in a plan view) and lines drawn twice at one level
-    come out once, the longest whole. Left-out samples get level -1. With a ``renderer`` (``LayerRenderer``) the search runs as a compute pass
-    (coincident.comp), with the same arithmetic: the same samples are left out.
+    come out once, the longest whole. Left-out samples get level -1. With a ``renderer``
+    (``LayerRenderer``) the search runs as a compute pass (coincident.comp), with the same
+    arithmetic: the same samples are left out.
     """
     level = level.copy()
     live = np.flatnonzero(level >= 0)
