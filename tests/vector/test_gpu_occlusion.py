@@ -113,7 +113,7 @@ def test_gpu_levels_equal_the_cpu_reference(renderer, source, ortho):
 
 def test_gpu_levels_match_ray_casting_at_sample_points(renderer, source):
     """At every sample whose answer does not change within 1.5 pixels (off the outlines of
-    occluders, where the 3 x 3 minimum decides), the level is the number of surfaces a ray from
+    occluders, where the 2 x 2 minimum decides), the level is the number of surfaces a ray from
     the sample towards the eye crosses, found by trimesh's ray caster in float64."""
     model = gearbox()
     camera = Camera.fit(model.positions, "iso", azimuth=35, elevation=25, aspect=1.0, ortho=True)

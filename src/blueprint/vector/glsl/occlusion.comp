@@ -3,8 +3,9 @@
 // surfaces running up to the first with face 0). The rules are those of
 // vector/occlusion/levels.py, which is the reference: a surface is in front of a sample when
 // the plane of its triangle meets the sample's view ray nearer to the eye by more than
-// u_tolerance (eye depth); the line's own faces never count; the level is the minimum over the 3 x 3 pixels
-// around the sample, where off contours a pixel with no surface at all does not take part.
+// u_tolerance (eye depth); the line's own faces never count; the level is the minimum over the
+// 2 x 2 pixels whose centres surround the sample, where off contours a pixel with no surface at
+// all does not take part.
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
 // With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
@@ -137,13 +138,13 @@ void main() {
     int own0 = s.own.x;
     int own1 = s.own.y;
     bool solid = (s.own.z & 1) != 0;
-    ivec2 px = ivec2(floor(s.pixel.xy));
+    ivec2 px = ivec2(floor(s.pixel.xy - 0.5));
     int best = BIG;
     // a pixel can only lower the minimum: its count stops at the best so far, and none
     // goes below zero
     int seen[K];
-    for (int n = 0; n < 9 && best > 0; ++n) {
-        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, u_tolerance, own0, own1, best, seen);
+    for (int n = 0; n < 4 && best > 0; ++n) {
+        ivec2 st = stack_at(texel(px + ivec2(n % 2, n / 2)), eye, u_tolerance, own0, own1, best, seen);
         int front = (solid && st.y == 0) ? BIG : st.x;
         best = min(best, front);
     }
