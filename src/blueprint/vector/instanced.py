@@ -29,7 +29,7 @@ from blueprint.columns import row_norm
 from blueprint.errors import InputError
 from blueprint.scene.instances import Instances
 from blueprint.scene.model import Model
-from blueprint.silhouette import Adjacency, SmoothSurface, build_adjacency, smooth_surface
+from blueprint.silhouette import Adjacency, build_adjacency, smooth_surface
 from blueprint.silhouette.contours import _EDGE_ON as _VERTEX_EDGE_ON
 from blueprint.silhouette.contours import _edge_keys
 from blueprint.silhouette.edges import _first_two_faces, _projected, sharp_edges
@@ -242,7 +242,7 @@ def instanced_features(
         ml = meshes[m]
         if len(ml.adj.faces) == 0:
             continue
-        static, smooth_crease, surface, vertex_planes = ml.at_angle(crease_angle, smooth_angle)
+        at_angle = ml.at_angle(crease_angle, smooth_angle)
         rows = max(len(ml.adj.edges), len(ml.adj.faces), len(ml.adj.positions))
         for block in _blocks(members, rows):
             _block_features(
@@ -250,10 +250,7 @@ def instanced_features(
                 block,
                 q_all[block],
                 sign_all[block],
-                static,
-                smooth_crease,
-                surface,
-                vertex_planes,
+                at_angle,
                 smooth,
                 edge_on_cos,
                 edge_on_smooth_cos,
@@ -268,16 +265,15 @@ def _block_features(
     block,
     q,
     sign,
-    static,
-    smooth_crease,
-    surface: SmoothSurface,
-    vertex_planes,
+    at_angle: tuple,
     smooth: bool,
     edge_on_cos,
     edge_on_smooth_cos,
     inst,
     found: _Found,
 ):
+    # the mesh's lines at the crease angle (``_MeshLines.at_angle``)
+    static, smooth_crease, surface, vertex_planes = at_angle
     adj = ml.adj
     raw = (ml.planes @ q.T).T * sign[:, None]  # (B, F) facing, placed
     ok = ml.normal_ok[None] & (sign[:, None] != 0)
@@ -512,15 +508,16 @@ def _near_box(corners: np.ndarray, transforms: np.ndarray, lo: np.ndarray, hi: n
     return near
 
 
-def instanced_intersections(model: Model, eps: float, renderer=None):
+def instanced_intersections(model: Model, eps: float, phases, renderer=None):
     """``lines.intersection_segments``' lines of a model kept as instances, cached by its
-    content: (K, 2, 3) points, (K, 2) flattened faces, (K,) parts."""
-    return INTERSECTIONS.get(model, lambda: _intersections(model, eps, renderer))
+    content: (K, 2, 3) points, (K, 2) flattened faces, (K,) parts. ``phases``: the flat
+    path's broad phase over boxes and its cut of triangles (``lines._overlapping_boxes``,
+    ``lines.triangle_cuts``), given by ``lines`` (which imports this module)."""
+    return INTERSECTIONS.get(model, lambda: _intersections(model, eps, phases, renderer))
 
 
-def _intersections(model: Model, eps: float, renderer):
-    from .lines import _overlapping_boxes, triangle_cuts
-
+def _intersections(model: Model, eps: float, phases, renderer):
+    _overlapping_boxes, triangle_cuts = phases
     inst = model.instances
     none = np.zeros((0, 2, 3)), np.zeros((0, 2), np.int64), np.zeros(0, np.int32)
     boxes = model.instance_boxes()

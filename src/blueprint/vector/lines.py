@@ -945,7 +945,9 @@ def intersection_segments(model: Model, renderer=None) -> Segments:
         from .instanced import instanced_intersections
 
         eps = _TOUCH_REL * (float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0)
-        points, faces, part = instanced_intersections(model, eps, renderer)
+        points, faces, part = instanced_intersections(
+            model, eps, (_overlapping_boxes, triangle_cuts), renderer
+        )
         return Segments(
             points, faces, part, np.full(len(part), INTERSECTION, np.uint8), np.full(len(part), -1, np.int64)
         )
