@@ -8,6 +8,8 @@
 // where a pixel's lanes may stop. The samples are those the unpack would have written: the
 // depth as the G-buffer's 24-bit depth holds it, 1 where the layer has no surface (its normal
 // and IDs are never read then: edge_value reads a neighbour's only where it is covered).
+// With COMPOSE the batch holds every layer of the frame and is composed here, into the
+// composite's target, instead of written a target a layer (compose_batch.glsl).
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 
@@ -16,6 +18,9 @@ uniform sampler2D u_count;
 uniform int u_layer;  // the batch's first layer
 uniform int u_batch;  // its layers, 1 to BATCH: outputs 0 to u_batch - 1
 uniform float u_back_bias;
+#ifndef COMPOSE
+#define COMPOSE 0
+#endif
 
 #include "edges_held.glsl"
 #define EDGE_LAST (textureSize(u_count, 0) - 1)
@@ -24,6 +29,10 @@ float ring_held;  // counts above it hold the layer edge_value is looking at
 #define EDGE_RING_COVERED(q, r) (ring_count[r] > ring_held)
 #include "blueprint.ops:glsl/edges.glsl"
 
+#if COMPOSE
+// the batch composed where it is found, into the composite's target (compose_batch.glsl)
+#include "blueprint.compose:glsl/compose_batch.glsl"
+#else
 layout(location = 0) out vec4 o_edge0;
 #if BATCH > 1
 layout(location = 1) out vec4 o_edge1;
@@ -45,6 +54,7 @@ layout(location = 6) out vec4 o_edge6;
 #endif
 #if BATCH > 7
 layout(location = 7) out vec4 o_edge7;
+#endif
 #endif
 
 // A window depth as a 24-bit depth target stores it and a shader reads it back (llvmpipe's
@@ -105,6 +115,9 @@ void main() {
         e[k] = layer_edge_value(p, layer);
         ++k;
     } while (k < u_batch);
+#if COMPOSE
+    o_value = compose_batch(e);
+#else
     o_edge0 = vec4(e[0]);
 #if BATCH > 1
     o_edge1 = vec4(e[1]);
@@ -126,5 +139,6 @@ void main() {
 #endif
 #if BATCH > 7
     o_edge7 = vec4(e[7]);
+#endif
 #endif
 }
