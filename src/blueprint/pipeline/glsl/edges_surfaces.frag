@@ -97,15 +97,14 @@ void main() {
     for (int k = 0; k < BATCH; ++k) {
         e[k] = 0.0;
     }
-    // tested at the loop's end, where a software rasteriser leaves a loop once every lane
-    // has (a test at the top runs the body once more with every lane masked off)
+    // the layers the pixel and its neighbours hold tested at the loop's end, where a software
+    // rasteriser leaves a loop once every lane has (a break at the top runs the body once more
+    // with every lane masked off); the batch's first layer is not asked: where none of them
+    // holds it, edge_value finds nothing covered and gives 0
     int k = 0;
     do {
         int layer = u_layer + k;
         ring_held = (float(layer) + 0.5) / 255.0;
-        if (deepest <= ring_held) {
-            break;
-        }
         for (int i = 0; i < 5; ++i) {
             uvec4 s = texelFetch(u_surfaces[k], q[i], 0);
             sample_depth[i] = count[i] > ring_held ? depth24(kb_depth(s, u_back_bias)) : 1.0;
@@ -114,7 +113,7 @@ void main() {
         }
         e[k] = layer_edge_value(p, layer);
         ++k;
-    } while (k < u_batch);
+    } while (k < u_batch && deepest > (float(u_layer + k) + 0.5) / 255.0);
 #if COMPOSE
     o_value = compose_batch(e);
 #else
