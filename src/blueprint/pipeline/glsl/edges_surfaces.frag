@@ -13,7 +13,18 @@
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 
+#ifndef SURFACE_ARRAY
+#define SURFACE_ARRAY 0
+#endif
+#if SURFACE_ARRAY
+// every layer's surfaces, slice k layer k's: one sampler, where a sampler array indexed in the
+// loop below costs a software rasteriser a branch a fetch
+uniform usampler2DArray u_surfaces;
+#define SURFACE(k, q) texelFetch(u_surfaces, ivec3(q, u_layer + (k)), 0)
+#else
 uniform usampler2D u_surfaces[BATCH];  // the batch's layers, the first one's surfaces first
+#define SURFACE(k, q) texelFetch(u_surfaces[k], q, 0)
+#endif
 uniform sampler2D u_count;
 uniform int u_layer;  // the batch's first layer
 uniform int u_batch;  // its layers, 1 to BATCH: outputs 0 to u_batch - 1
@@ -106,7 +117,7 @@ void main() {
         int layer = u_layer + k;
         ring_held = (float(layer) + 0.5) / 255.0;
         for (int i = 0; i < 5; ++i) {
-            uvec4 s = texelFetch(u_surfaces[k], q[i], 0);
+            uvec4 s = SURFACE(k, q[i]);
             sample_depth[i] = count[i] > ring_held ? depth24(kb_depth(s, u_back_bias)) : 1.0;
             sample_normal[i] = kb_normal(s);
             sample_ids[i] = kb_ids(s);
