@@ -289,6 +289,57 @@ def test_pool_unknown_format_keeps_the_held_texture(pool):
     assert pool.texture("t", (8, 4), "r32f") is held
 
 
+def test_pool_sliced_array_is_drawn_a_slice_at_a_time_and_read_whole(renderer, pool):
+    """Each slice of a ``SlicedArray`` a render target of its own; one sampler of the array
+    reads them all back; a new size drops the old array, its slices and their framebuffer."""
+    if not pool.slices_viewed:
+        pytest.skip("this context makes no texture views")
+    ctx = renderer.ctx
+    w, h, k = 24, 10, 5
+    array = pool.sliced("s", (w, h), "rgba32ui", k)
+    assert pool.sliced("s", (w, h), "rgba32ui", k) is array
+    assert [t.size for t in array.slices] == [(w, h)] * k
+    fbo = pool.framebuffer(array.slices)
+    fbo.use()
+    vertex = (
+        "#version 330\nvoid main() { vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);"
+        " gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }"
+    )
+    draw = ctx.program(
+        vertex_shader=vertex,
+        fragment_shader="#version 330\n"
+        + "".join(f"layout(location = {i}) out uvec4 o{i};\n" for i in range(k))
+        + "void main() { uvec2 p = uvec2(gl_FragCoord.xy);"
+        + "".join(f" o{i} = uvec4(p, {i}u, {100 + i}u);" for i in range(k))
+        + " }",
+    )
+    read = ctx.program(
+        vertex_shader=vertex,
+        fragment_shader="#version 330\nuniform usampler2DArray u_array; uniform int u_slice; out uvec4 o;"
+        " void main() { o = texelFetch(u_array, ivec3(ivec2(gl_FragCoord.xy), u_slice), 0); }",
+    )
+    vaos = [ctx.vertex_array(draw, []), ctx.vertex_array(read, [])]
+    vaos[0].render(vertices=3)
+    out = pool.texture("out", (w, h), "rgba32ui")
+    pool.framebuffer((out,)).use()
+    array.use(3)
+    read["u_array"].value = 3
+    ys, xs = np.mgrid[0:h, 0:w]
+    for i in range(k):
+        read["u_slice"].value = i
+        vaos[1].render(vertices=3)
+        got = np.frombuffer(out.read(), np.uint32).reshape(h, w, 4)
+        want = np.stack([xs, ys, np.full_like(xs, i), np.full_like(xs, 100 + i)], axis=-1)
+        np.testing.assert_array_equal(got, want)
+    for held in (*vaos, draw, read):
+        held.release()
+    names = [t.glo for t in array.slices] + [array.glo]
+    bigger = pool.sliced("s", (w + 8, h), "rgba32ui", k)
+    assert bigger is not array and bigger.slices[0].size == (w + 8, h)
+    assert _released(fbo) and not array.slices
+    assert not any(pool._gl.glIsTexture(name) for name in names)
+
+
 # -- sizes are checked before any rendering ---------------------------------------------------------
 
 

@@ -175,6 +175,31 @@ def test_edges_from_the_surfaces_are_those_of_unpacked_layers(
     np.testing.assert_array_equal(direct.image, unpacked.image)
 
 
+@pytest.mark.parametrize("batch", [8, 3])
+def test_edges_from_one_array_of_the_surfaces_are_those_from_a_sampler_each(
+    renderer, surfaces_kbuffer, monkeypatch, batch
+):
+    """The surfaces as the slices of one array read by one sampler (``TargetPool.sliced``), or
+    as textures of their own read by a sampler each: the same drawing, batches starting at
+    every layer."""
+    from blueprint.gpu.targets import TargetPool
+
+    if not renderer.pool.slices_viewed:
+        pytest.skip("this context makes no texture views")
+    surfaces_kbuffer(True)
+    monkeypatch.setattr(renderer.executor, "edge_batch", batch)
+    model = examples.gearbox()
+    options = dict(size=(160, 120), max_layers=6, supersample=1)
+    sliced = renderer.render(model, **options)
+    assert renderer.executor.last_run.groups[0].capture.source.defines == {"SURFACE_ARRAY": True}
+    monkeypatch.setattr(TargetPool, "slices_viewed", property(lambda self: False))
+    apart = renderer.render(model, sliced.camera, **options)
+    assert renderer.executor.last_run.groups[0].capture.source.defines == {}
+    assert renderer.executor.last_run.from_surfaces == ("edges",)
+    assert (sliced.layers, sliced.layer_pixels) == (apart.layers, apart.layer_pixels)
+    np.testing.assert_array_equal(sliced.image, apart.image)
+
+
 @pytest.mark.parametrize("cap", [2, 3, 5, 7])
 def test_a_capped_frame_counts_the_layers_it_leaves_in_one_pass(renderer, surfaces_kbuffer, monkeypatch, cap):
     """The k-buffer pass that finds every layer of a capped frame counts the surfaces each pixel

@@ -129,22 +129,7 @@ class Compositor:
         ``TILES_VERT``) instead of over the whole target."""
         r, ctx = self.r, self.r.ctx
         put = r.uniforms.set
-        fbo = r.pool.framebuffer((target,))
-        fbo.use()
-        ctx.disable(ctx.BLEND)
-        passes = 0
-        if style.paper is None:
-            fbo.clear(0.0, 0.0, 0.0, 0.0)
-        elif not style.grid:
-            # plain paper is one colour: a clear, far cheaper than a full-screen pass on a
-            # software rasteriser; paper.glsl's premultiplication, in float32
-            paper = np.asarray(style.paper, np.float32)
-            fbo.clear(*(float(v) for v in paper[:3] * paper[3]), float(paper[3]))
-        else:
-            prog, vao = r.fullscreen(PAPER_FRAG)
-            set_paper(r.uniforms, prog, style)
-            vao.render(vertices=3)
-            passes += 1
+        passes = self.paper(target, style)
         sprites = []  # (maps, inks, first layer, shading, drawn over the layers' tiles)
         if layers:
             for first in _groups(layers):
@@ -174,6 +159,45 @@ class Compositor:
             else:
                 vao.render(vertices=3)
                 passes += 1
+        ctx.disable(ctx.BLEND)
+        return passes
+
+    def paper(self, target, style: Style) -> int:
+        """``target`` made the style's paper, left bound for drawing with blending off; returns
+        the draw calls issued."""
+        r, ctx = self.r, self.r.ctx
+        fbo = r.pool.framebuffer((target,))
+        fbo.use()
+        ctx.disable(ctx.BLEND)
+        if style.paper is None:
+            fbo.clear(0.0, 0.0, 0.0, 0.0)
+            return 0
+        if not style.grid:
+            # plain paper is one colour: a clear, far cheaper than a full-screen pass on a
+            # software rasteriser; paper.glsl's premultiplication, in float32
+            paper = np.asarray(style.paper, np.float32)
+            fbo.clear(*(float(v) for v in paper[:3] * paper[3]), float(paper[3]))
+            return 0
+        prog, vao = r.fullscreen(PAPER_FRAG)
+        set_paper(r.uniforms, prog, style)
+        vao.render(vertices=3)
+        return 1
+
+    def composed_in_place(self, target, prog, style: Style, layers: int, batch: int, draw) -> int:
+        """Compose ``layers`` layers onto ``target`` through ``prog``, a pass that composes its
+        batch of ``batch`` layers' edge values where it finds them (compose_batch.glsl) instead
+        of writing a map a layer for ``fragment`` to read: the paper, then ``draw()`` (the
+        pass's draw calls, returned) blended over it as ``fragment`` blends its sprites.
+        Returns the draw calls issued."""
+        r, ctx = self.r, self.r.ctx
+        passes = self.paper(target, style)
+        put = r.uniforms.set
+        put(prog, "u_threshold", bool(style.threshold))
+        # the layers' inks, none past them (their values are 0, whatever the ink)
+        put(prog, "u_ink", group_inks(style, 0, layers)[: 16 * batch])
+        ctx.enable(ctx.BLEND)
+        ctx.blend_func = ctx.ONE, ctx.ONE_MINUS_SRC_ALPHA
+        passes += draw()
         ctx.disable(ctx.BLEND)
         return passes
 

@@ -27,6 +27,78 @@ INTERNAL_FORMATS: dict[str, tuple[int, str]] = {
 }
 
 
+# GL enums the slices of a viewed array (``SlicedArray``) are made with
+_TEXTURE_2D, _TEXTURE_2D_ARRAY, _TEXTURE0 = 0x0DE1, 0x8C1A, 0x84C0
+_NEAREST, _MIN_FILTER, _MAG_FILTER, _IMMUTABLE_FORMAT = 0x2600, 0x2801, 0x2800, 0x912F
+_INTERNAL_FORMATS = {"rgba32ui": 0x8D70}
+
+
+def _gl_entry_points():
+    """The GL's own entry points of the current context (GLVND's libOpenGL), or None."""
+    import ctypes
+
+    try:
+        gl = ctypes.CDLL("libOpenGL.so.0")
+    except OSError:
+        return None
+    gl.glIsTexture.restype = ctypes.c_ubyte  # a GLboolean: one byte of the return register
+    return gl
+
+
+class SlicedArray:
+    """A 2D texture array whose slices are also 2D textures (texture views, OpenGL 4.3): render
+    targets a slice each (``slices``: moderngl attaches whole 2D textures alone), read by one
+    sampler (``use``) where a sampler array indexed in a loop costs a software rasteriser a
+    branch a fetch. Made through the GL's own entry points ``gl``: moderngl makes no views."""
+
+    def __init__(self, ctx, gl, size: tuple[int, int], layers: int, fmt: str) -> None:
+        import ctypes
+
+        self.gl, self.size, self.layers = gl, tuple(size), layers
+        internal, (components, dtype) = _INTERNAL_FORMATS[fmt], INTERNAL_FORMATS[fmt]
+        name = ctypes.c_uint(0)
+        gl.glGenTextures(1, ctypes.byref(name))
+        self.glo = name.value
+        gl.glBindTexture(_TEXTURE_2D_ARRAY, self.glo)
+        gl.glTexStorage3D(_TEXTURE_2D_ARRAY, 1, internal, size[0], size[1], layers)
+        gl.glTexParameteri(_TEXTURE_2D_ARRAY, _MIN_FILTER, _NEAREST)
+        gl.glTexParameteri(_TEXTURE_2D_ARRAY, _MAG_FILTER, _NEAREST)
+        # storage refused leaves the format mutable, a view refused leaves its name no texture:
+        # asked so, not through the GL's error, which may hold another call's
+        stored = ctypes.c_int(0)
+        gl.glGetTexParameteriv(_TEXTURE_2D_ARRAY, _IMMUTABLE_FORMAT, ctypes.byref(stored))
+        gl.glBindTexture(_TEXTURE_2D_ARRAY, 0)
+        self.slices = ()
+        for k in range(layers if stored.value else 0):
+            view = ctypes.c_uint(0)
+            gl.glGenTextures(1, ctypes.byref(view))
+            gl.glTextureView(view.value, _TEXTURE_2D, self.glo, internal, 0, 1, k, 1)
+            if not gl.glIsTexture(view.value):
+                gl.glDeleteTextures(1, ctypes.byref(view))
+                break
+            tex = ctx.external_texture(view.value, tuple(size), components, 0, dtype)
+            tex.filter = (ctx.NEAREST, ctx.NEAREST)
+            self.slices += (tex,)
+        if len(self.slices) < layers:  # (``_allocating`` says so)
+            self.release()
+            raise MemoryError
+
+    def use(self, unit: int) -> None:
+        """Bind the array to texture unit ``unit``."""
+        self.gl.glActiveTexture(_TEXTURE0 + unit)
+        self.gl.glBindTexture(_TEXTURE_2D_ARRAY, self.glo)
+
+    def release(self) -> None:
+        import ctypes
+
+        # moderngl lets go of a texture it did not make without deleting it
+        names = [tex.glo for tex in self.slices] + [self.glo]
+        for tex in self.slices:
+            tex.release()
+        self.gl.glDeleteTextures(len(names), (ctypes.c_uint * len(names))(*names))
+        self.slices = ()
+
+
 class TargetPool:
     """Creates textures lazily, keeps them while their size and format stay, drops them on
     change. Passes borrow targets by name; only the pool releases them."""
@@ -40,6 +112,27 @@ class TargetPool:
         self._buffers: dict[str, tuple[int, object]] = {}
         # objects made of the pool's targets (``held``), dropped with any target
         self._held: dict[tuple, object] = {}
+        # the GL's own entry points, where the context makes texture views (``sliced``)
+        self._gl = _gl_entry_points() if ctx.version_code >= 430 else None
+
+    @property
+    def slices_viewed(self) -> bool:
+        """Whether ``sliced`` makes arrays whose slices are render targets."""
+        return self._gl is not None
+
+    def sliced(self, name: str, size: tuple[int, int], fmt: str, layers: int) -> SlicedArray:
+        """The ``SlicedArray`` called ``name``, (re)created at ``size`` with ``layers`` slices of
+        format ``fmt`` (``rgba32ui``); framebuffers over its ``slices`` as over textures."""
+        key = ((*size, layers), fmt, "sliced")
+        held = self._textures[name] if name in self._textures else None
+        if held is not None and held[0] == key:
+            return held[1]
+        if held is not None:
+            self._drop(name)
+        with _allocating(size):
+            array = SlicedArray(self.ctx, self._gl, size, layers, fmt)
+        self._textures[name] = (key, array)
+        return array
 
     def texture(self, name: str, size: tuple[int, int], fmt: str, layers: int = 0):
         """The texture called ``name``, (re)created at ``size`` in format ``fmt``; with
@@ -104,8 +197,9 @@ class TargetPool:
     def _drop(self, name: str) -> None:
         self._held.clear()
         old = self._textures.pop(name)[1]
+        parts = (old, *getattr(old, "slices", ()))
         for key, (fbo, colors, depth) in list(self._framebuffers.items()):
-            if any(c is old for c in colors) or depth is old:
+            if any(c is part for c in colors for part in parts) or depth is old:
                 self._unbind(fbo)
                 fbo.release()
                 del self._framebuffers[key]

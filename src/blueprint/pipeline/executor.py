@@ -111,6 +111,10 @@ class Executor:
         # once, a target each: the layer counts (and cursors) are read once a batch, not once a
         # layer
         self.edge_batch = min(EDGE_BATCH, device.max_draw_buffers)
+        # an edges pass whose one batch holds every layer of the frame, read from a k-buffer's
+        # surfaces, composes them where it finds them when the composite would only read its
+        # maps (``composed``): a software rasteriser pays for every map written and read again
+        self.compose_in_place = True
 
     def release(self) -> None:
         """Programs of user shaders and pixel buffers (pool targets belong to the renderer)."""
@@ -295,7 +299,8 @@ class Executor:
             self._run_batches(st, drawn.layers)
         watch.stage("peel_edges")
         for name in pl.after:
-            self.run_pass(st, name, 0, drawn.layers)
+            if st.composed is None or name != st.composed[1]:  # (drawn with the edges)
+                self.run_pass(st, name, 0, drawn.layers)
         self.tiles.forget()
         watch.stage("compose")
         ctx.disable(ctx.BLEND)
@@ -510,7 +515,8 @@ class Executor:
         if p.kind == "composite":
             self._composite(st, p, self.target(st, name, layer), layers)
             return
-        target = self.target(st, name, layer)
+        composed = st.composed is not None and st.composed[0] == name
+        target = self.target(st, st.composed[1] if composed else name, layer)
         size = tuple(target.size)
         inputs = {key: pl.resolve(t) for key, t in p.inputs.items()}
         reach = self.reach(st, name) if size == self.tiles.size else None
@@ -523,7 +529,7 @@ class Executor:
         elif in_place:
             capture = st.groups[0].capture
             shader = IN_PLACE[p.op.name].fragment[capture.reads]
-            defines = {**_defines(p), **capture.defines, "BATCH": self.edge_batch}
+            defines = {**_defines(p), **capture.defines, "BATCH": self.edge_batch, "COMPOSE": composed}
             prog = self.programs.library(shader, vertex, defines, modern=True)
         else:
             prog = self.programs.library(p.op.shader, vertex, _defines(p))
@@ -535,6 +541,17 @@ class Executor:
         else:
             for unit, (key, source) in enumerate(inputs.items(), BASE_UNIT):
                 self._bind_input(prog, key, self._value(st, source, layer), unit, size)
+        if composed:
+
+            def draw() -> int:
+                if reach is not None:
+                    return self.tiles.draw(prog, reach)
+                self.programs.vao(prog).render(vertices=3)
+                return 1
+
+            style = self._style(st, pl.bound.passes[st.composed[1]])
+            st.draws += self.compositor.composed_in_place(target, prog, style, span, self.edge_batch, draw)
+            return
         if span > 1:
             targets = tuple(self.target(st, name, k) for k in range(layer, layer + span))
         else:
@@ -647,11 +664,42 @@ class Executor:
                 st.draws += 1
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
+    def composed(self, st: RunState, capped: bool) -> tuple[str, str] | None:
+        """(edges pass, composite pass) where the one pass reading the layers from a k-buffer's
+        surfaces draws every layer of the frame in one batch (a cap of at most a batch, and
+        ``capped``: no rule but the cap and empty layers stops the peel, so the batch's layers
+        are those drawn) and the one pass reading it is a composite of its maps alone at their
+        size, shading and highlight aside: then it composes them where it finds them, into the
+        composite's target, which is not drawn again; else None."""
+        pl = st.pl
+        if not (self.compose_in_place and capped and st.edge_step > 1 and len(st.from_surfaces) == 1):
+            return None
+        if st.max_layers is None or st.max_layers > st.edge_step:
+            return None
+        (name,) = st.from_surfaces
+        if name in pl.readback:
+            return None
+        passes = pl.bound.passes
+        readers = [n for n in pl.passes if any(pl.resolve(t) == name for t in passes[n].inputs.values())]
+        if len(readers) != 1:
+            return None
+        p = passes[readers[0]]
+        if p.kind != "composite" or {k: pl.resolve(t) for k, t in p.inputs.items()} != {"layers": name}:
+            return None
+        if st.size_of(p.scale) != st.size_of(passes[name].scale):
+            return None
+        return name, readers[0]
+
+    @staticmethod
+    def _style(st: RunState, p) -> Style:
+        """The style composite pass ``p`` draws in: the run's, else its own parameter's."""
+        return st.style or STYLES[p.op.params[0].choices[p.uniforms["u_style"]]]
+
     def _composite(self, st: RunState, p, target, layers: int) -> None:
         """The compositor over the pass's stack of layers, with the shading and highlight
         maps wired to it; in compute form where the layers live in 8-slice arrays."""
         pl = st.pl
-        style = st.style or STYLES[p.op.params[0].choices[p.uniforms["u_style"]]]
+        style = self._style(st, p)
         wired = {key: pl.resolve(t) for key, t in p.inputs.items()}
         highlight = self._value(st, wired["highlight"], 0) if "highlight" in wired else None
         shading = None

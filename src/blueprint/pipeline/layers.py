@@ -175,7 +175,8 @@ class LayerCapture:
         extras = self._attribute_programs(st) if layout.extra else None
         for name in st.pl.accumulated:
             self.r.pool.framebuffer((self.ex.target(st, name, 0),)).clear()
-        frame = _LayerPasses(self, st, max_layers, eager, tiled, (from_lists, layer_lists), extras)
+        lists = (from_lists, layer_lists)
+        frame = _LayerPasses(self, st, max_layers, eager, tiled, lists, extras, self._rules[2])
         primary = st.groups[0]
         if blind:
             peeled = None, layer_loop(frame.draw, primary.queries, rules, look=False)[1]
@@ -293,9 +294,12 @@ class _LayerPasses:
     attribute pass, the attributes read back, and the passes run after each layer, a batch of
     layers at once for those that read the layers where the capture holds them."""
 
-    def __init__(self, side: LayerCapture, st: RunState, max_layers, eager: bool, tiled: bool, lists, extras):
+    def __init__(
+        self, side: LayerCapture, st: RunState, max_layers, eager: bool, tiled: bool, lists, extras, capped
+    ):
         self.ex, self.programs, self.st = side.ex, side.programs, st
         self.max_layers, self.eager, self.tiled, self.extras = max_layers, eager, tiled, extras
+        self.capped = capped  # only the cap and empty layers stop the peel
         # passes that read the A-buffer's lists: all layers after the peel, or each as it comes
         self.from_lists, self.layer_lists = lists
         # the passes run after each layer: not those over whole arrays after the peel, nor those
@@ -363,6 +367,7 @@ class _LayerPasses:
         # at a time)
         batched = self.eager and all(n in st.pl.stacked for n in (*st.layer_lists, *st.from_surfaces))
         st.edge_step = self.ex.edge_batch if batched else 1
+        st.composed = self.ex.composed(st, self.capped)
 
     def _run_passes(self, layer: int) -> None:
         st, ex = self.st, self.ex

@@ -269,4 +269,7 @@ class RunState:
     from_surfaces: tuple[str, ...] = ()
     # the layers between the starts of two passes of those (their batch): each draws that many
     edge_step: int = 1
+    # (edges pass, composite pass) where the first composes its layers into the second's target
+    # (Executor.composed)
+    composed: tuple[str, str] | None = None
     draws: int = 0

@@ -105,6 +105,9 @@ class KBufferSource:
             self.unpack["u_back_bias"].value = BACK_BIAS
         self._held = self._surfaces(gb.size)
         self.surfaces = self._held[0]
+        if self._held[4] is not None:
+            # readers fetch every layer from one array sampler (edges_surfaces.frag)
+            self.defines = {"SURFACE_ARRAY": True}
 
     @classmethod
     def open(cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> KBufferSource:
@@ -113,21 +116,28 @@ class KBufferSource:
     def _surfaces(self, size: tuple[int, int]) -> tuple:
         """(targets, their framebuffer (with the count's target, without unpack), the one of
         the targets cleared before a pass (the first, and the count's), the count's target or
-        None) at ``size``, kept by the pool; named by size, as pipelines peel G-buffers of
-        several sizes in turn."""
+        None, the array whose slices the targets are or None) at ``size``, kept by the pool;
+        named by size, as pipelines peel G-buffers of several sizes in turn. Surfaces read in
+        place are the slices of one array where the context makes them (``TargetPool.sliced``)."""
         pool, name, k, unpacks = self.r.pool, f"kbuffer.{size[0]}x{size[1]}", self.k, self.unpacks
 
         def make() -> tuple:
-            surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(k))
+            array = None
+            if unpacks or not pool.slices_viewed:
+                surfaces = tuple(pool.texture(f"{name}.{i}", size, "rgba32ui") for i in range(k))
+            else:
+                array = pool.sliced(f"{name}.slices", size, "rgba32ui", k)
+                surfaces = array.slices
             count = None if unpacks else pool.texture(f"{name}.count", size, "rg8")
             return (
                 surfaces,
                 pool.framebuffer(surfaces if count is None else (*surfaces, count)),
                 pool.framebuffer(surfaces[:1] if count is None else (surfaces[0], count)),
                 count,
+                array,
             )
 
-        return pool.held(("kbuffer", tuple(size), k, unpacks), make)
+        return pool.held(("kbuffer", tuple(size), k, unpacks, pool.slices_viewed), make)
 
     def draw(self, layer: int, query, guard=None) -> int:
         gb = self.gb
@@ -150,7 +160,7 @@ class KBufferSource:
     def _find(self, layer: int) -> None:
         """The pass that finds layers ``layer`` to ``layer + k - 1``."""
         ctx, gb = self.r.ctx, self.gb
-        surfaces, target, cleared, _ = self._held
+        surfaces, target, cleared, _, _ = self._held
         # the first target alone is cleared (and the count): kbuffer.frag keeps the rest valid
         # up to a pixel's first empty one, and readers look no further (the count says where)
         cleared.clear()
@@ -177,12 +187,15 @@ class KBufferSource:
         self._find(0)
         w, h = self.gb.size
         self.count = self._held[3]
-        counts = np.frombuffer(self.count.read(), np.uint8).reshape(h, w, 2)
-        held = np.ascontiguousarray(counts[..., 0])
-        self._layer_pixels = [int(np.count_nonzero(held > k)) for k in range(self.k)]
-        self._tile_layers = tile_max(held)
-        # only pixels holding K let surfaces go; layers are nested (a pixel holding k + 1 holds k)
-        self._deepest = sum(1 for pixels in self._layer_pixels if pixels) + int(counts[..., 1].max())
+        # a pixel's (held, let go) as one word, held + 256 * let go, read whole: only pixels
+        # holding K, the most, let surfaces go, so the words order pixels as the layers they
+        # hold do, and the largest is 256 times the most let go past K (one contiguous pass
+        # each, where the two bytes apart cost several times as much)
+        counts = np.frombuffer(self.count.read(), "<u2").reshape(h, w)
+        self._layer_pixels = [int(np.count_nonzero(counts > k)) for k in range(self.k)]
+        self._tile_layers = np.minimum(tile_max(counts), self.k)
+        # layers are nested (a pixel holding k + 1 holds k)
+        self._deepest = sum(1 for pixels in self._layer_pixels if pixels) + (int(counts.max()) >> 8)
         return 1
 
     def _find_faces(self) -> int:
@@ -235,22 +248,22 @@ class KBufferSource:
         return None if self.unpacks else self._tile_layers
 
     def bind(self, prog, layer: int, step: int) -> None:
-        """The surfaces of the layers from ``layer`` on (the last repeated past them) and the
-        count, for a reader of ``u_surfaces[BATCH]`` and ``u_count`` (edges_surfaces.frag): one
-        fetch a pixel and layer gives its depth, normal and IDs."""
-        surfaces = self._held[0]
-        batch = prog["u_surfaces"].array_length
-        for k in range(batch):
-            surfaces[min(layer + k, len(surfaces) - 1)].use(units.INPUTS + 1 + k)
+        """The surfaces of the layers from ``layer`` on and the count, for a reader of
+        ``u_surfaces`` and ``u_count`` (edges_surfaces.frag): one fetch a pixel and layer gives
+        its depth, normal and IDs. ``u_surfaces`` is the array of every layer where the
+        surfaces are its slices (``defines``' SURFACE_ARRAY), else ``BATCH`` samplers from
+        ``layer`` on (the last repeated past them)."""
+        surfaces, array = self._held[0], self._held[4]
         self.count.use(units.INPUTS)
-        self.r.uniforms.update(
-            prog,
-            {
-                "u_count": units.INPUTS,
-                "u_surfaces": tuple(range(units.INPUTS + 1, units.INPUTS + 1 + batch)),
-                "u_back_bias": BACK_BIAS,
-            },
-        )
+        if array is not None:
+            array.use(units.INPUTS + 1)
+            bound = units.INPUTS + 1
+        else:
+            batch = prog["u_surfaces"].array_length
+            for k in range(batch):
+                surfaces[min(layer + k, len(surfaces) - 1)].use(units.INPUTS + 1 + k)
+            bound = tuple(range(units.INPUTS + 1, units.INPUTS + 1 + batch))
+        self.r.uniforms.update(prog, {"u_count": units.INPUTS, "u_surfaces": bound, "u_back_bias": BACK_BIAS})
 
     def settle(self) -> None:
         """Nothing is read late."""

@@ -8,14 +8,30 @@
 // where a pixel's lanes may stop. The samples are those the unpack would have written: the
 // depth as the G-buffer's 24-bit depth holds it, 1 where the layer has no surface (its normal
 // and IDs are never read then: edge_value reads a neighbour's only where it is covered).
+// With COMPOSE the batch holds every layer of the frame and is composed here, into the
+// composite's target, instead of written a target a layer (compose_batch.glsl).
 #extension GL_ARB_shading_language_packing : require
 #include "blueprint.render:glsl/kbuffer.glsl"
 
+#ifndef SURFACE_ARRAY
+#define SURFACE_ARRAY 0
+#endif
+#if SURFACE_ARRAY
+// every layer's surfaces, slice k layer k's: one sampler, where a sampler array indexed in the
+// loop below costs a software rasteriser a branch a fetch
+uniform usampler2DArray u_surfaces;
+#define SURFACE(k, q) texelFetch(u_surfaces, ivec3(q, u_layer + (k)), 0)
+#else
 uniform usampler2D u_surfaces[BATCH];  // the batch's layers, the first one's surfaces first
+#define SURFACE(k, q) texelFetch(u_surfaces[k], q, 0)
+#endif
 uniform sampler2D u_count;
 uniform int u_layer;  // the batch's first layer
 uniform int u_batch;  // its layers, 1 to BATCH: outputs 0 to u_batch - 1
 uniform float u_back_bias;
+#ifndef COMPOSE
+#define COMPOSE 0
+#endif
 
 #include "edges_held.glsl"
 #define EDGE_LAST (textureSize(u_count, 0) - 1)
@@ -24,6 +40,10 @@ float ring_held;  // counts above it hold the layer edge_value is looking at
 #define EDGE_RING_COVERED(q, r) (ring_count[r] > ring_held)
 #include "blueprint.ops:glsl/edges.glsl"
 
+#if COMPOSE
+// the batch composed where it is found, into the composite's target (compose_batch.glsl)
+#include "blueprint.compose:glsl/compose_batch.glsl"
+#else
 layout(location = 0) out vec4 o_edge0;
 #if BATCH > 1
 layout(location = 1) out vec4 o_edge1;
@@ -45,6 +65,7 @@ layout(location = 6) out vec4 o_edge6;
 #endif
 #if BATCH > 7
 layout(location = 7) out vec4 o_edge7;
+#endif
 #endif
 
 // A window depth as a 24-bit depth target stores it and a shader reads it back (llvmpipe's
@@ -87,24 +108,26 @@ void main() {
     for (int k = 0; k < BATCH; ++k) {
         e[k] = 0.0;
     }
-    // tested at the loop's end, where a software rasteriser leaves a loop once every lane
-    // has (a test at the top runs the body once more with every lane masked off)
+    // the layers the pixel and its neighbours hold tested at the loop's end, where a software
+    // rasteriser leaves a loop once every lane has (a break at the top runs the body once more
+    // with every lane masked off); the batch's first layer is not asked: where none of them
+    // holds it, edge_value finds nothing covered and gives 0
     int k = 0;
     do {
         int layer = u_layer + k;
         ring_held = (float(layer) + 0.5) / 255.0;
-        if (deepest <= ring_held) {
-            break;
-        }
         for (int i = 0; i < 5; ++i) {
-            uvec4 s = texelFetch(u_surfaces[k], q[i], 0);
+            uvec4 s = SURFACE(k, q[i]);
             sample_depth[i] = count[i] > ring_held ? depth24(kb_depth(s, u_back_bias)) : 1.0;
             sample_normal[i] = kb_normal(s);
             sample_ids[i] = kb_ids(s);
         }
         e[k] = layer_edge_value(p, layer);
         ++k;
-    } while (k < u_batch);
+    } while (k < u_batch && deepest > (float(u_layer + k) + 0.5) / 255.0);
+#if COMPOSE
+    o_value = compose_batch(e);
+#else
     o_edge0 = vec4(e[0]);
 #if BATCH > 1
     o_edge1 = vec4(e[1]);
@@ -126,5 +149,6 @@ void main() {
 #endif
 #if BATCH > 7
     o_edge7 = vec4(e[7]);
+#endif
 #endif
 }
