@@ -93,8 +93,8 @@ COPIES = 100_000
 def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     """A GLB of 10^5 instances of a box is drawn under a memory budget that refuses the same
     triangles flattened into one mesh (its unique triangles and instance records weigh far
-    less than 1.2 M drawn ones); its SVG, which flattens the scene, is refused in one line
-    there, when the flattened arrays would be made."""
+    less than 1.2 M drawn ones). (Its vector drawing keeps the instances too: the tests of
+    ``vector.instanced`` hold that it never flattens them.)"""
     hostile = _hostile()
     corners, faces = hostile.box_arrays()
     side = 400
@@ -127,9 +127,6 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"{drawn} triangles" in proc.stdout
     assert (tmp_path / "kept.png").stat().st_size > 0
-    proc = render(kept, "kept.svg")
-    one_error(proc, f"{kept}: {drawn} triangles to draw ({COPIES} mesh instances) need about")
-    assert not (tmp_path / "kept.svg").exists()
 
 
 def test_an_instanced_upload_is_weighed_by_its_unique_meshes(tmp_path):
