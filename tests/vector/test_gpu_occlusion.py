@@ -161,6 +161,7 @@ def test_a_drawing_reads_back_levels_only(renderer, source, monkeypatch):
         on_gpu = draw_vector(model, camera, SIZE, renderer=renderer)
     with monkeypatch.context() as patch:
         patch.setattr(blueprint.vector.drawing, "gpu_levels", lambda *a, **k: None)
+        patch.setattr(blueprint.vector.drawing, "stack_levels", lambda *a, **k: None)
         on_cpu = draw_vector(model, camera, SIZE, renderer=renderer)
     assert len(on_gpu) > 100 and on_gpu.layers == on_cpu.layers
     np.testing.assert_array_equal(on_gpu.offsets, on_cpu.offsets)
@@ -187,3 +188,74 @@ def test_layer_count_is_the_deepest_pixels_surfaces(renderer, shape, max_layers)
     assert deepest == (2 if shape == "box" else max_layers)
     assert _layer_count(renderer, surfaces, SIZE, 0.0) == deepest
     assert _layer_count(renderer, surfaces, SIZE, 1e-9) == deepest
+
+
+@pytest.mark.parametrize(
+    ("ortho", "max_layers", "whole"),
+    [(False, None, False), (True, None, False), (False, 3, False), (False, None, True)],
+    ids=["perspective", "orthographic", "three-layers", "whole-layers"],
+)
+def test_stack_levels_equal_the_cpu_reference(renderer, ortho, max_layers, whole):
+    """Layers read back (at the pixels probed, or whole), any number of them, classified by the
+    compute pass: the CPU reference's levels and, through the faces to either side, its crease
+    check, sample for sample."""
+    from blueprint.vector.occlusion import stack_levels
+
+    if renderer.ctx.version_code < 430:
+        pytest.skip("this renderer runs no compute passes")
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", azimuth=20, aspect=1.0, ortho=ortho)
+    view, proj = camera.view_matrix(), camera.projection_matrix()
+    samples = sample_polylines(join_polylines(model_segments(model, view, proj, SIZE)), view, proj, SIZE)
+    planes = face_planes(model, view)
+    test = DepthTest(camera.ortho, camera.pixel_angle(SIZE[1]), depth_tolerance(camera, model.bounds))
+    if whole:
+        faces = renderer.peel(model, camera, size=SIZE, max_layers=max_layers).triangle
+        peeled = PixelLayers.from_layers(faces)
+    else:
+        pixels = probe_pixels(samples, SIZE)
+        faces = renderer.triangles_at(model, camera, pixels, size=SIZE, max_layers=max_layers)
+        peeled = PixelLayers(
+            pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), len(faces), *SIZE[::-1]
+        )
+    # more layers than the passes over textures bind (gpu.MAX_LAYERS), or a cap
+    assert peeled.layers == 3 if max_layers == 3 else peeled.layers > 8
+    got = stack_levels(renderer, samples, planes, peeled, test=test)
+    cpu = classify_samples(samples, peeled, planes, test)
+    assert len(set(cpu.tolist())) >= 4
+    np.testing.assert_array_equal(got.level, cpu)
+    assert got.layers == peeled.layers
+    rows = np.flatnonzero(got.checked & (got.level >= 0))
+    sides = got.sides[rows]
+    gpu_final = drop_phantoms(
+        samples, got.level, rows, sides[:, 0], sides[:, 1], planes, model.face_part, test
+    )
+    cpu_final = verify_creases(samples, cpu, peeled, planes, model.face_part, test)
+    assert (cpu_final != cpu).sum() > 0
+    np.testing.assert_array_equal(gpu_final, cpu_final)
+
+
+@pytest.mark.parametrize("shade", [None, "gear*"], ids=["lines", "shaded"])
+def test_a_drawing_of_every_layer_classified_by_the_pass_is_the_cpu_one(renderer, monkeypatch, shade):
+    """Every layer peeled (more than the k-buffer holds), read back at the probed pixels and
+    classified by the compute pass: the drawing the CPU reference makes, shaded parts too."""
+    import blueprint.vector.drawing
+
+    if renderer.ctx.version_code < 430:
+        pytest.skip("this renderer runs no compute passes")
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    drawings = []
+    for cpu in (False, True):
+        with monkeypatch.context() as patch:
+            patch.setattr(blueprint.vector.drawing, "gpu_levels", lambda *a, **k: None)
+            if cpu:
+                patch.setattr(blueprint.vector.drawing, "stack_levels", lambda *a, **k: None)
+            drawings.append(draw_vector(model, camera, SIZE, renderer=renderer, max_layers=None, shade=shade))
+    on_gpu, on_cpu = drawings
+    assert len(on_gpu) > 100 and on_gpu.layers == on_cpu.layers > 8
+    np.testing.assert_array_equal(on_gpu.offsets, on_cpu.offsets)
+    np.testing.assert_array_equal(on_gpu.points, on_cpu.points)
+    np.testing.assert_array_equal(on_gpu.level, on_cpu.level)
+    assert shade is None or on_gpu.lines.behind.any()
+    np.testing.assert_array_equal(on_gpu.lines.behind, on_cpu.lines.behind)

@@ -8,7 +8,9 @@
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
 // With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
-// r32i, face + 1, 0 where none).
+// r32i, face + 1, 0 where none). With STACKS they come as read back at the pixels probed
+// (levels.PixelLayers), any number of layers: u_where holds a pixel's first row of the u_faces
+// table and its surface count.
 #include "table.glsl"
 
 layout(local_size_x = 64) in;
@@ -31,7 +33,12 @@ layout(std430, binding = 0) readonly buffer Samples { Sample samples[]; };
 layout(std430, binding = 2) writeonly buffer Levels { ivec4 result[]; };  // level, side faces
 uniform sampler2D u_planes;  // a table (gpu/tables.py) of the faces' planes n, c; last row: none
 
+#if STACKS
+uniform isampler2D u_where;  // (first row in u_faces, surfaces) of every pixel, OpenGL rows
+uniform isampler2D u_faces;  // a table of the faces of every pixel's surfaces, front first
+#else
 uniform SAMPLER u_s0;
+#endif
 #if K > 1
 uniform SAMPLER u_s1;
 #endif
@@ -85,6 +92,26 @@ ivec2 texel(ivec2 p) {
     return ivec2(p.x, u_size.y - 1 - p.y);
 }
 
+#if STACKS
+// (surfaces counted in front by more than ``limit``, surfaces there) from the read-back stack
+// at q; counting stops at ``bound`` surfaces in front; seen[0]: the stack's first row
+ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, out int seen[K]) {
+    ivec2 where = texelFetch(u_where, q, 0).xy;
+    seen[0] = where.x;
+    int front = 0;
+    for (int k = 0; k < where.y; ++k) {
+        int tri = TABLE_ROW(u_faces, where.x + k).r;
+        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye, limit)) ++front;
+        if (front >= bound) return ivec2(front, k + 1);
+    }
+    return ivec2(front, where.y);
+}
+
+// the face of surface ``index`` of the stack that stack_at read
+int seen_face(int seen[K], int index) {
+    return TABLE_ROW(u_faces, seen[0] + index).r;
+}
+#else
 // one surface of the stack: stop at the first empty one, count it in front or not; stop
 // too once ``bound`` surfaces are in front (the caller wants no more); its face kept in
 // seen[I] for the sides' check (reading it again there would be K more texel fetches:
@@ -129,6 +156,11 @@ ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, ou
     return ivec2(front, count);
 }
 
+int seen_face(int seen[K], int index) {
+    return seen[index];
+}
+#endif
+
 void main() {
     int i = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
     if (i >= u_count) return;
@@ -156,7 +188,7 @@ void main() {
             vec2 spot = s.pixel.xy + (side == 0 ? 1.0 : -1.0) * u_offset * s.pixel.zw;
             ivec2 q = texel(ivec2(floor(spot)));
             ivec2 st = stack_at(q, eye, side_limit, own0, own1, BIG, seen);
-            sides[side] = st.x < st.y ? seen[st.x] : -1;
+            sides[side] = st.x < st.y ? seen_face(seen, st.x) : -1;
         }
     }
     result[i] = ivec4(best, sides, 0);
