@@ -1,6 +1,8 @@
 """Occlusion levels from the compute pass over the faces k-buffer: equal to the CPU reference,
 and right against ray casting at the sample points."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import trimesh
@@ -259,3 +261,37 @@ def test_a_drawing_of_every_layer_classified_by_the_pass_is_the_cpu_one(renderer
     np.testing.assert_array_equal(on_gpu.level, on_cpu.level)
     assert shade is None or on_gpu.lines.behind.any()
     np.testing.assert_array_equal(on_gpu.lines.behind, on_cpu.lines.behind)
+
+
+def test_a_sample_a_hair_above_a_pixel_row_looks_at_the_rows_the_cpu_does(renderer):
+    """A sample at y = 1.99999997 lies in pixel row 1 (single precision rounds it to 2.0): its
+    3 x 3 pixels are rows 0 to 2, and row 0, which shows no surface, gives a silhouette's level
+    0, where rows 1 to 3 would all show the face in front of it."""
+    from blueprint.vector.lines import SILHOUETTE
+    from blueprint.vector.occlusion import Samples, stack_levels
+
+    if renderer.ctx.version_code < 430:
+        pytest.skip("this renderer runs no compute passes")
+    assert np.float32(1.99999997) == 2.0
+    triangle = np.zeros((1, 4, 4), np.int32)
+    triangle[0, 0] = -1
+    peeled = PixelLayers.from_layers(triangle)
+    # face 0 the plane z = -1 in eye space, before the sample at depth 5
+    planes = np.array([[0.0, 0.0, 1.0, -1.0], [0.0, 0.0, 0.0, 0.0]])
+    one = np.ones(1, bool)
+    samples = Samples(
+        np.array([[0.0, 0.0, -5.0]]),
+        np.array([[1.5, 1.99999997]]),
+        np.full((1, 2), -1, np.int64),
+        np.array([SILHOUETTE], np.uint8),
+        np.full(1, -1, np.int64),
+        np.zeros(1, np.int64),
+        one,
+        one,
+    )
+    test = DepthTest(False, 1e-3, 1e-4)
+    assert classify_samples(samples, peeled, planes, test).tolist() == [0]
+    samples_lower = dataclasses.replace(samples, pixel=np.array([[1.5, 2.0]]))
+    assert classify_samples(samples_lower, peeled, planes, test).tolist() == [1]
+    assert stack_levels(renderer, samples, planes, peeled, test=test).level.tolist() == [0]
+    assert stack_levels(renderer, samples_lower, planes, peeled, test=test).level.tolist() == [1]

@@ -23,10 +23,13 @@ layout(local_size_x = 64) in;
 #define FACE1(S, q) int(texelFetch(S, q, 0).y)
 #endif
 
+// pixels as the CPU reference floors them in double precision (a pixel coordinate a hair below
+// a whole number rounds up to it in single precision)
 struct Sample {
-    vec4 eye;      // eye coordinates, w unused
-    vec4 pixel;    // pixel x, y (y down), unit vector across the line x, y
-    ivec4 own;     // own faces (-1: none), flags (1: off contours, 2: check the sides), unused
+    vec3 eye;      // eye coordinates
+    int flags;     // 1: off contours, 2: check the sides
+    ivec4 pixel;   // the sample's pixel x, y (y down); the pixel a step to one side of the line x, y
+    ivec4 own;     // the pixel a step to the other side x, y; own faces (-1: none)
 };
 
 layout(std430, binding = 0) readonly buffer Samples { Sample samples[]; };
@@ -66,7 +69,6 @@ uniform ivec2 u_size;
 uniform bool u_ortho;
 uniform float u_tolerance;  // the depth tolerance, eye depth
 uniform float u_footprint;  // a pixel's size at unit distance (perspective) or in model units
-uniform float u_offset;  // pixels to either side of a line for the crease check
 
 const int BIG = 0x7fffffff;
 
@@ -165,11 +167,11 @@ void main() {
     int i = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
     if (i >= u_count) return;
     Sample s = samples[i];
-    vec3 eye = s.eye.xyz;
-    int own0 = s.own.x;
-    int own1 = s.own.y;
-    bool solid = (s.own.z & 1) != 0;
-    ivec2 px = ivec2(floor(s.pixel.xy));
+    vec3 eye = s.eye;
+    int own0 = s.own.z;
+    int own1 = s.own.w;
+    bool solid = (s.flags & 1) != 0;
+    ivec2 px = s.pixel.xy;
     int best = BIG;
     // a pixel can only lower the minimum: its count stops at the best so far, and none
     // goes below zero
@@ -181,12 +183,11 @@ void main() {
     }
     if (best == BIG) best = 0;
     ivec2 sides = ivec2(-1);
-    if ((s.own.z & 2) != 0) {
+    if ((s.flags & 2) != 0) {
         // the surface at the line's depth beside it: within a pixel's footprint (levels.py's side_limit)
         float side_limit = u_ortho ? u_footprint : u_footprint * -eye.z;
         for (int side = 0; side < 2; ++side) {
-            vec2 spot = s.pixel.xy + (side == 0 ? 1.0 : -1.0) * u_offset * s.pixel.zw;
-            ivec2 q = texel(ivec2(floor(spot)));
+            ivec2 q = texel(side == 0 ? s.pixel.zw : s.own.xy);
             ivec2 st = stack_at(q, eye, side_limit, own0, own1, BIG, seen);
             sides[side] = st.x < st.y ? seen_face(seen, st.x) : -1;
         }

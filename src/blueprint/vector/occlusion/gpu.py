@@ -266,15 +266,18 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     if layers == 0:
         level[inside] = 0
         return level, sides, checked
-    across_all = np.zeros((count, 2))
-    across_all[edge_rows] = across
     flags = (~np.isin(samples.kind, (SILHOUETTE, BORDER))).astype(np.int32) | (checked.astype(np.int32) << 1)
-    packed = np.zeros(len(inside), [("eye", "<f4", 4), ("pixel", "<f4", 4), ("own", "<i4", 4)])
-    packed["eye"][:, :3] = samples.eye[inside]
-    packed["pixel"][:, :2] = samples.pixel[inside]
-    packed["pixel"][:, 2:] = across_all[inside]
-    packed["own"][:, :2] = samples.faces[inside]
-    packed["own"][:, 2] = flags[inside]
+    packed = np.zeros(
+        len(inside), [("eye", "<f4", 3), ("flags", "<i4"), ("pixel", "<i4", 4), ("own", "<i4", 4)]
+    )
+    packed["eye"] = samples.eye[inside]
+    packed["flags"] = flags[inside]
+    # pixels floored here in double precision, as the CPU reference has them
+    packed["pixel"][:, :2] = np.floor(samples.pixel[inside])
+    at = np.flatnonzero(checked[inside])
+    packed["pixel"][at, 2:] = np.floor(samples.pixel[edge_rows] + offset * across)
+    packed["own"][at, :2] = np.floor(samples.pixel[edge_rows] - offset * across)
+    packed["own"][:, 2:] = samples.faces[inside]
 
     ctx = renderer.ctx
     prog = renderer.compute(OCCLUSION_COMP, defines)
@@ -285,7 +288,6 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     put(prog, "u_ortho", bool(test.ortho))
     put(prog, "u_tolerance", float(np.float32(test.tolerance)))
     put(prog, "u_footprint", float(test.footprint))
-    put(prog, "u_offset", float(offset))
     plane_texture = table_texture(ctx, planes.astype(np.float32))
     plane_texture.use(location=MAX_LAYERS)
     put(prog, "u_planes", MAX_LAYERS)
