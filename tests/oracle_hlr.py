@@ -206,24 +206,56 @@ def _step(path: str):
     return read_step(path)
 
 
+def _picture(path: str, view: str, size: tuple[int, int]):
+    """(shape, deflection, to_pixels) of the STEP file at ``path`` seen from ``view``, framed as
+    blueprint frames the mesh it makes of the file (``model_of``): its shape, a hundredth of a
+    pixel in the shape's units (polylines that near stand for the exact curves at the tests'
+    scale), and the map from (N, 2) view-plane points in those units to the picture's pixels."""
+    shape, metres = _step(path)
+    centre, scale = framing(model_of(path).positions, view, size)
+    width, height = size
+    half = np.array([width / 2, height / 2])
+    flip = np.array([1.0, -1.0])
+
+    def to_pixels(points: np.ndarray) -> np.ndarray:
+        return half + (points * metres - centre) * scale * flip
+
+    return shape, 0.01 / (scale * metres), to_pixels
+
+
 @cache
 def oracle(path: str, view: str, size: tuple[int, int] = (1024, 1024)) -> HLRLines:
     """The exact drawing of the STEP file at ``path`` from ``view``, orthographic, framed as
     blueprint frames the mesh it makes of the file (``model_of``), in that picture's pixels;
     cached per (file, view, size) for the session."""
-    shape, metres = _step(path)
-    centre, scale = framing(model_of(path).positions, view, size)
-    pixels_per_unit = scale * metres
-    # a hundredth of a pixel: the polylines stand for the exact curves at the tests' scale
-    plane = hidden_lines(shape, view, deflection=0.01 / pixels_per_unit)
-    width, height = size
-    half = np.array([width / 2, height / 2])
-    flip = np.array([1.0, -1.0])
-    lines = {
-        key: [half + (polyline * metres - centre) * scale * flip for polyline in polylines]
-        for key, polylines in plane.items()
-    }
-    return HLRLines(lines)
+    shape, deflection, to_pixels = _picture(path, view, size)
+    plane = hidden_lines(shape, view, deflection)
+    return HLRLines({key: [to_pixels(line) for line in lines] for key, lines in plane.items()})
+
+
+def edge_in_picture(path: str, view: str, size: tuple[int, int], chosen) -> np.ndarray:
+    """(N, 2) pixels, within a hundredth of a pixel, of the one edge of the STEP file's shape
+    that ``chosen(face, edge)`` (``TopoDS`` objects) accepts, in the picture ``oracle`` draws."""
+    from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    shape, deflection, to_pixels = _picture(path, view, size)
+    right, up, _ = view_basis(view)
+    found = []
+    faces = TopExp_Explorer(shape, TopAbs_FACE)
+    while faces.More():
+        face = TopoDS.Face(faces.Current())
+        edges = TopExp_Explorer(face, TopAbs_EDGE)
+        while edges.More():
+            edge = TopoDS.Edge(edges.Current())
+            if chosen(face, edge):
+                found.append(edge)
+            edges.Next()
+        faces.Next()
+    if len(found) != 1:
+        raise ValueError(f"{path}: {len(found)} edges chosen, not one")
+    return to_pixels(_edge_points(found[0], deflection) @ np.stack([right, up], axis=1))
 
 
 def resample(polylines: list[np.ndarray], spacing: float) -> np.ndarray:

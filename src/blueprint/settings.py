@@ -41,6 +41,7 @@ __all__ = [
     "is_number",
     "one_line",
     "open_file",
+    "parse_size",
     "parse_text",
     "read_file",
     "read_settings",
@@ -86,14 +87,23 @@ def memory_budget() -> int:
     """Bytes of memory the limits on inputs are set from: a quarter of the memory available,
     at most 16 GiB; the environment variable ``BLUEPRINT_MEMORY_LIMIT`` (bytes, or with a
     suffix K, M or G; at least 1 MiB) sets it instead."""
-    text = os.environ.get(MEMORY_ENV, "").strip()
-    scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30}.get(text[-1:].upper(), 1)
-    digits = text[:-1] if scale > 1 else text
     # checked here, at import, where an error could not be one line: a value that is not a
     # size leaves the default
-    if digits.isdigit() and len(digits) <= 15:
-        return max(int(digits) * scale, 1 << 20)
+    size = parse_size(os.environ.get(MEMORY_ENV, ""))
+    if size is not None:
+        return max(size, 1 << 20)
     return max(min(available_memory() // 4, _MEMORY_CAP), _MEMORY_FLOOR)
+
+
+def parse_size(text: str) -> int | None:
+    """Bytes as an environment variable gives them: digits, or digits and a suffix K, M or G
+    (powers of 1024); None where ``text`` is no such size."""
+    text = text.strip()
+    scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30}.get(text[-1:].upper(), 1)
+    digits = text[:-1] if scale > 1 else text
+    if digits.isdigit() and len(digits) <= 15:
+        return int(digits) * scale
+    return None
 
 
 MEMORY_BUDGET = memory_budget()

@@ -76,7 +76,7 @@ def test_tab_in_slot_keeps_the_slots_hidden_edges(renderer, tmp_path):
     assert agree[slot].mean() >= 0.99, f"{off.sum()} of {slot.sum()} points off: {points[off][:5]}"
     assert agree[slot & (rays >= 1)].mean() >= 0.99
     # the tab's corners are silhouettes seen through the slot's corner, a sliver narrower than a
-    # pixel, which the 3 x 3 minimum sees past (levels.py): one surface short there
+    # pixel, which the 2 x 2 minimum sees past (levels.py): one surface short there
     assert agree.mean() >= 0.97
     # the SVG carries them: hidden lines of the plate over the slot's projected walls
     lines = svg_lines(save_drawing(tmp_path / "slot.svg", drawing))

@@ -115,7 +115,7 @@ def test_gpu_levels_equal_the_cpu_reference(renderer, source, ortho):
 
 def test_gpu_levels_match_ray_casting_at_sample_points(renderer, source):
     """At every sample whose answer does not change within 1.5 pixels (off the outlines of
-    occluders, where the 3 x 3 minimum decides), the level is the number of surfaces a ray from
+    occluders, where the 2 x 2 minimum decides), the level is the number of surfaces a ray from
     the sample towards the eye crosses, found by trimesh's ray caster in float64."""
     model = gearbox()
     camera = Camera.fit(model.positions, "iso", azimuth=35, elevation=25, aspect=1.0, ortho=True)
@@ -264,15 +264,16 @@ def test_a_drawing_of_every_layer_classified_by_the_pass_is_the_cpu_one(renderer
 
 
 def test_a_sample_a_hair_above_a_pixel_row_looks_at_the_rows_the_cpu_does(renderer):
-    """A sample at y = 1.99999997 lies in pixel row 1 (single precision rounds it to 2.0): its
-    3 x 3 pixels are rows 0 to 2, and row 0, which shows no surface, gives a silhouette's level
-    0, where rows 1 to 3 would all show the face in front of it."""
+    """A sample at y = 1.49999997 lies above the centres of pixel row 1 (single precision
+    rounds it to 1.5, on them): its 2 x 2 pixels are rows 0 and 1, and row 0, which shows no
+    surface, gives a silhouette's level 0, where rows 1 and 2 would both show the face in front
+    of it."""
     from blueprint.vector.lines import SILHOUETTE
     from blueprint.vector.occlusion import Samples, stack_levels
 
     if renderer.ctx.version_code < 430:
         pytest.skip("this renderer runs no compute passes")
-    assert np.float32(1.99999997) == 2.0
+    assert np.float32(1.49999997) == 1.5
     triangle = np.zeros((1, 4, 4), np.int32)
     triangle[0, 0] = -1
     peeled = PixelLayers.from_layers(triangle)
@@ -281,7 +282,7 @@ def test_a_sample_a_hair_above_a_pixel_row_looks_at_the_rows_the_cpu_does(render
     one = np.ones(1, bool)
     samples = Samples(
         np.array([[0.0, 0.0, -5.0]]),
-        np.array([[1.5, 1.99999997]]),
+        np.array([[1.5, 1.49999997]]),
         np.full((1, 2), -1, np.int64),
         np.array([SILHOUETTE], np.uint8),
         np.full(1, -1, np.int64),
@@ -291,7 +292,7 @@ def test_a_sample_a_hair_above_a_pixel_row_looks_at_the_rows_the_cpu_does(render
     )
     test = DepthTest(False, 1e-3, 1e-4)
     assert classify_samples(samples, peeled, planes, test).tolist() == [0]
-    samples_lower = dataclasses.replace(samples, pixel=np.array([[1.5, 2.0]]))
+    samples_lower = dataclasses.replace(samples, pixel=np.array([[1.5, 1.5]]))
     assert classify_samples(samples_lower, peeled, planes, test).tolist() == [1]
     assert stack_levels(renderer, samples, planes, peeled, test=test).level.tolist() == [0]
     assert stack_levels(renderer, samples_lower, planes, peeled, test=test).level.tolist() == [1]

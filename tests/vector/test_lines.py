@@ -181,3 +181,20 @@ def test_view_independent_lines_are_found_again_for_the_same_mesh():
     assert adjacency(again) is adjacency(first)
     assert len(intersection_segments(first)) > 0
     assert intersection_segments(moved) is not intersection_segments(first)
+
+
+def test_an_edge_where_a_face_seen_edge_on_meets_a_tangent_one_is_a_silhouette():
+    """Two faces meeting at 10 degrees along the x axis, seen from the top: one hangs down
+    edge-on (its normal 1e-12 off square with the view, turned to the eye by rounding), the
+    other rises towards the eye. Both face the eye and the angle is under the crease angle, so
+    the faces alone make no line there; but ``n . v`` is zero on the edge-on face, so the
+    outline runs along the edge (a fillet seen along its axis, where it meets a blend)."""
+    rise = np.tan(np.radians(10.0))
+    positions = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1e-12, -1.0], [0.0, -rise, 1.0]])
+    model = assemble({"fold": (positions, np.array([[0, 1, 2], [1, 0, 3]]))})
+    cam = Camera(eye=(0.5, 0, 10), target=(0.5, 0, 0), up=(0, 1, 0), near=1, far=20, ortho=True, height=3.0)
+    found = feature_segments(model, cam.view_matrix(), cam.projection_matrix(), SIZE, smooth=False)
+    shared = np.all(found.points[:, :, 1:] == 0.0, axis=(1, 2))
+    assert shared.sum() == 1
+    assert found.kind[shared][0] == SILHOUETTE
+    assert sorted(found.faces[shared][0]) == [0, 1]

@@ -59,8 +59,9 @@ class Renderer:
     targets, programs, queries and capabilities: ``gpu.Device``, whose attributes are the
     renderer's too), its ``capturer`` (the models uploaded to it and how their layers are
     captured: ``render.renderer.Capturer``, whose ``mesh``, ``forget``, ``read_layers`` (the
-    renderer's ``peel``), ``triangles_at``, ``face_kbuffer``, ``each_face_layer`` and sources'
-    memory are the renderer's too) and its
+    renderer's ``peel``), ``triangles_at``, ``face_kbuffer``, ``each_face_layer``, sources'
+    memory and ``chunk_faces``, the most faces a mesh uploads at a time, are the renderer's
+    too) and its
     ``executor`` (the pipeline's, made on first use). Draws blueprints (``render``) and peels
     depth layers (``peel``, ``triangles_at``).
 
@@ -99,6 +100,7 @@ class Renderer:
     face_kbuffer = _of_capturer(Capturer.face_kbuffer)
     each_face_layer = _of_capturer(Capturer.each_face_layer)
     abuffer_room = _Of("capturer")
+    chunk_faces = _Of("capturer")
     compute_raster = _Of("capturer")
 
     def __init__(self, ctx=None, *, capture: str | CaptureTable | None = None) -> None:

@@ -11,7 +11,8 @@ timed or synchronised without the variable.
 
 The same boundaries mark the phases a progress display shows (``listen``): each stage's start
 is told to the listener, by name, as it begins; ``capture_edges`` begins when the mesh is on the
-GPU (``watch``). Nothing is told without a listener.
+GPU (``watch``), and where the mesh is drawn in chunks (``render.mesh.ChunkedMesh``) each chunk
+drawn is told as its progress (``progress``). Nothing is told without a listener.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ __all__ = [
     "gpu_memory",
     "listen",
     "listening",
+    "progress",
     "report",
     "timed",
     "watch",
@@ -53,8 +55,9 @@ def add(name: str, seconds: float) -> None:
 
 
 @contextmanager
-def listen(told: Callable[[str], None]) -> Iterator[None]:
-    """Within the block, call ``told(name)`` as each stage begins (``begin``)."""
+def listen(told: Callable[..., None]) -> Iterator[None]:
+    """Within the block, call ``told(name)`` as each stage begins (``begin``), and
+    ``told(name, detail)`` as it makes progress (``progress``)."""
     _LISTENERS.append(told)
     try:
         yield
@@ -73,6 +76,12 @@ def begin(name: str) -> None:
         told(name)
 
 
+def progress(name: str, detail: str) -> None:
+    """Tell the listeners how far the stage ``name`` has come, in words (``"chunk 2 of 5"``)."""
+    for told in _LISTENERS:
+        told(name, detail)
+
+
 @contextmanager
 def timed(name: str) -> Iterator[None]:
     """Count the block's wall time to the stage ``name``, its start told (``begin``)."""
@@ -86,7 +95,8 @@ def timed(name: str) -> Iterator[None]:
 
 def watch(renderer) -> None:
     """Time ``renderer``'s mesh preparation and upload (``Capturer.mesh``, which the frame
-    calls) as the stage ``prepare_upload``; the capture (``capture_edges``) begins after it."""
+    calls) as the stage ``prepare_upload``; the capture (``capture_edges``) begins after it,
+    and a mesh drawn in chunks tells each chunk drawn as its progress."""
     capturer = renderer.capturer
     mesh = capturer.mesh
     if getattr(mesh, "watched", False):
@@ -96,11 +106,17 @@ def watch(renderer) -> None:
         with timed("prepare_upload"):
             held = mesh(*args, **kwargs)
         begin("capture_edges")
+        if held.chunk_faces is not None:
+            held.on_chunk = _chunk_drawn
         return held
 
     timed_mesh.watched = True
 
     capturer.mesh = timed_mesh
+
+
+def _chunk_drawn(done: int, total: int) -> None:
+    progress("capture_edges", f"chunk {done} of {total}")
 
 
 def add_frame(stages_ms: dict[str, float]) -> None:

@@ -55,8 +55,9 @@ PHASES = {
 @contextlib.contextmanager
 def phase_bar():
     """The phases of one drawing (``PHASES``: the stages ``blueprint.api.stages`` tells as they
-    begin) with the time each has taken so far, on stderr, shown only on a terminal as
-    ``progress_bar`` is; in a pipe no stage is listened to."""
+    begin) with the time each has taken so far and how far it has come where it tells that (a
+    mesh drawn in chunks), on stderr, shown only on a terminal as ``progress_bar`` is; in a
+    pipe no stage is listened to."""
     import sys
 
     if not sys.stderr.isatty():
@@ -80,12 +81,15 @@ def phase_bar():
     ) as progress:
         shown = {"task": None, "phase": None}
 
-        def told(name: str) -> None:
-            if name not in PHASES or name == shown["phase"]:
+        def told(name: str, detail: str | None = None) -> None:
+            if name not in PHASES:
                 return
-            if shown["task"] is not None:
-                progress.remove_task(shown["task"])
-            shown["task"], shown["phase"] = progress.add_task(PHASES[name], total=None), name
+            if name != shown["phase"]:
+                if shown["task"] is not None:
+                    progress.remove_task(shown["task"])
+                shown["task"], shown["phase"] = progress.add_task(PHASES[name], total=None), name
+            if detail is not None:
+                progress.update(shown["task"], description=f"{PHASES[name]} ({detail})")
 
         with stages.listen(told):
             yield

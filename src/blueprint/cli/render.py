@@ -86,6 +86,9 @@ def render(model, output, highlight_model, **values):
         stages.add_frame(frame.stages)
         stages.report(default_renderer())
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
+    chunks = default_renderer().capturer.chunks(loaded)
+    # a mesh that did not fit the GPU beside the frame: drawn, slower, a chunk at a time
+    shown += f", drawn in {chunks} chunks" if chunks else ""
     click.echo(
         printable(
             f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"

@@ -94,7 +94,8 @@ class ABufferSource:
         tiles, defer = request.tiles, request.defer
         self.images = r.software
         self.defines = list_defines(r)
-        self.slim = row.slim
+        # a mesh drawn in chunks is not on the GPU whole when the resolve would read its faces
+        self.slim = row.slim and mesh.chunk_faces is None
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
@@ -129,7 +130,8 @@ class ABufferSource:
         self.uniforms = uniforms
         # the compute rasteriser where the row lists fragments in compute (render.raster), and
         # (its bins' room, the size) of the capture in hand where it drew it
-        self.raster = capturer.compute_raster if row.compute_from is not None else None
+        chunked = mesh.chunk_faces is not None
+        self.raster = capturer.compute_raster if row.compute_from is not None and not chunked else None
         self.compute_from = row.compute_from
         self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []

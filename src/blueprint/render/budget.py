@@ -1,8 +1,12 @@
 """The GPU memory a frame will allocate, sized from the model's triangles and the frame's size
-and layers before anything is allocated, against what the device has free: a frame that would
-not fit is refused in one line instead of failing in the driver."""
+and layers before anything is allocated, against what the device has free: a frame whose mesh
+does not fit beside its G-buffers and A-buffer lists is drawn with its mesh uploaded a chunk of
+faces at a time (``render.mesh.ChunkedMesh``), and one whose buffers would not fit even with a
+small chunk is refused in one line instead of failing in the driver."""
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 
@@ -15,7 +19,9 @@ from blueprint.scene.prepare import VERTEX
 
 __all__ = [
     "GBUFFER_BYTES",
+    "GPU_MEMORY_ENV",
     "MESH_BYTES",
+    "MIN_CHUNK_FACES",
     "NODE_BYTES",
     "RECORD_BYTES",
     "check_frame_memory",
@@ -32,12 +38,27 @@ RECORD_BYTES = INSTANCE.itemsize + PLACEMENT.itemsize
 GBUFFER_BYTES = 4 + 4 + 8 + 8
 # an A-buffer fragment as llvmpipe lists it whole (a GPU's slim ones take half)
 NODE_BYTES = 16
+# the fewest faces a chunk of a mesh drawn in chunks uploads: below it the draws' and uploads'
+# overhead would be all of a chunk's cost, and a frame is refused instead
+MIN_CHUNK_FACES = 1 << 12
+# bytes (or with a suffix K, M or G) taken as the GPU's free memory in place of what the device
+# says: to draw as a smaller GPU would, in chunks or refused
+GPU_MEMORY_ENV = "BLUEPRINT_GPU_MEMORY"
 
 
 def free_gpu_memory(device) -> int | None:
-    """Bytes the device has free now: NVIDIA's ``GL_NVX_gpu_memory_info`` (current available
-    memory), the host's available memory on a software rasteriser (its textures are host
-    memory), else None (the driver does not tell)."""
+    """Bytes the device has free now: ``BLUEPRINT_GPU_MEMORY`` where set (``GPU_MEMORY_ENV``),
+    else NVIDIA's ``GL_NVX_gpu_memory_info`` (current available memory), the host's available
+    memory on a software rasteriser (its textures are host memory), else None (the driver does
+    not tell)."""
+    text = os.environ.get(GPU_MEMORY_ENV, "").strip()
+    if text:
+        size = settings.parse_size(text)
+        if size is None:
+            raise InputError(
+                f"{GPU_MEMORY_ENV}={text!r} is not a size in bytes (a number, or with K, M or G)"
+            )
+        return size
     if device.software:
         return settings.available_memory()
     return nvx_memory(device.ctx, CURRENT_AVAILABLE_NVX)
@@ -67,13 +88,19 @@ def frame_bytes(
     return {"mesh": mesh, "gbuffers": GBUFFER_BYTES * pixels * layers, "lists": lists}
 
 
-def check_frame_memory(device, name: str, need: dict[str, int]) -> None:
-    """Raise ``InputError`` naming ``name`` where the frame's GPU memory ``need``
-    (``frame_bytes``) is more than the device has free (``free_gpu_memory``)."""
+def check_frame_memory(device, name: str, need: dict[str, int], instances: int = 0) -> int | None:
+    """The faces a chunk of the mesh uploads where the frame's GPU memory ``need``
+    (``frame_bytes``, its mesh of ``instances`` instance records) is more than the device has
+    free (``free_gpu_memory``) but its G-buffers, lists, instance records and ``MIN_CHUNK_FACES``
+    faces are not; None where it fits whole (or the driver does not tell). Raise ``InputError``
+    naming ``name`` where even that would not fit."""
     free = free_gpu_memory(device)
     total = sum(need.values())
     if free is None or total <= free:
-        return
+        return None
+    left = free - need["gbuffers"] - need["lists"] - RECORD_BYTES * instances
+    if left >= MESH_BYTES * MIN_CHUNK_FACES:
+        return left // MESH_BYTES
     parts = ", ".join(f"{kind} {settings.human_size(n)}" for kind, n in need.items() if n)
     raise InputError(
         f"{name}: the frame needs about {settings.human_size(total)} of GPU memory ({parts}), more than "

@@ -143,6 +143,21 @@ def draw_groups(model: Model, crease_angle: float | None) -> list[tuple[np.ndarr
     return groups
 
 
+def joined(groups: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> tuple:
+    """``draw_groups``'s groups as one vertex array and one index array: (vertices ``VERTEX``,
+    indices uint32 into the whole vertex array, each group's first index and index count
+    (G,) int64)."""
+    vertex_count = np.array([len(vertices) for vertices, _, _ in groups], np.int64)
+    index_count = np.array([len(indices) for _, indices, _ in groups], np.int64)
+    vertex_base, index_base = np.cumsum(vertex_count) - vertex_count, np.cumsum(index_count) - index_count
+    if len(groups) == 1:
+        vertices, indices = groups[0][:2]
+    else:
+        vertices = np.concatenate([v for v, _, _ in groups])
+        indices = np.concatenate([i + np.uint32(b) for (_, i, _), b in zip(groups, vertex_base, strict=True)])
+    return vertices, indices, index_base, index_count
+
+
 def placements(groups: list[tuple[np.ndarray, np.ndarray, np.ndarray]]) -> np.ndarray:
     """(P,) ``PLACEMENT``: the faces table of ``draw_groups``'s groups uploaded one after
     another, each instance record with its group's first face in the index buffer, ordered by
@@ -181,19 +196,13 @@ class GpuMesh:
     ordered by first face (``placements``), in which ``instance.glsl`` finds a face's instance
     by a binary search; so a model kept as instances is never flattened for them."""
 
+    # the faces uploaded at a time (None: all of them, once: ``ChunkedMesh`` draws chunks)
+    chunk_faces: int | None = None
+
     def __init__(self, ctx, model: Model, crease_angle: float | None, pieces: bool = False) -> None:
         self.ctx = ctx
         groups = draw_groups(model, crease_angle)
-        vertex_count = np.array([len(vertices) for vertices, _, _ in groups], np.int64)
-        index_count = np.array([len(indices) for _, indices, _ in groups], np.int64)
-        vertex_base, index_base = np.cumsum(vertex_count) - vertex_count, np.cumsum(index_count) - index_count
-        if len(groups) == 1:
-            vertices, indices = groups[0][:2]
-        else:
-            vertices = np.concatenate([v for v, _, _ in groups])
-            indices = np.concatenate(
-                [i + np.uint32(b) for (_, i, _), b in zip(groups, vertex_base, strict=True)]
-            )
+        vertices, indices, index_base, index_count = joined(groups)
         self.vbo, self.ibo = ctx.buffer(vertices), ctx.buffer(indices)
         # (instance records, the draw's first index and index count, whether another piece of
         # its group follows) a draw
@@ -282,6 +291,107 @@ def _identity(placement) -> bool:
     )
 
 
+class ChunkedMesh(GpuMesh):
+    """A model drawn ``chunk_faces`` faces at a time, for a GPU whose free memory holds the
+    frame's buffers but not the whole mesh beside them (``render.budget``): the prepared arrays
+    (``draw_groups``, ``joined``) stay on the host cut into chunks of consecutive faces, each
+    with the vertices its faces use and a draw for each piece of a group it holds, at the
+    group's instances with their first faces moved on by the piece's (as ``_pieces`` moves
+    them); ``vao(program).render()`` uploads a chunk, draws it, waits for it and releases it
+    before the next, so the GPU holds one chunk at a time. Every face keeps its ID, corners and
+    vertex values, so a pass whose result does not hang on the order of faces of different
+    chunks (the A-buffer's lists, sorted by depth and then face) draws what one upload draws.
+    It has no faces table (``bind_faces``): the passes that read faces by their ID after the
+    geometry pass (the slim A-buffer's resolve, the compute rasteriser) are not used on it.
+    ``on_chunk(done, total)``, where set, is told each chunk drawn."""
+
+    def __init__(
+        self, ctx, model: Model, crease_angle: float | None, chunk_faces: int, pieces: bool = False
+    ) -> None:
+        self.ctx = ctx
+        self.chunk_faces = int(chunk_faces)
+        groups = draw_groups(model, crease_angle)
+        vertices, indices, index_base, index_count = joined(groups)
+        records = [records for _, _, records in groups]
+        del groups
+        limit = PIECE_FACES if pieces else None
+        self.chunks = _chunks(
+            vertices, indices, index_base // 3, index_count // 3, records, self.chunk_faces, limit
+        )
+        del vertices, indices, records
+        self.on_chunk = None
+        self._vaos: dict[int, _ChunkDraws] = {}
+        self._corners = None
+        self._model = model
+        self.part_count = len(model.part_names)
+        self.triangles = model.triangle_count
+        self.instanced = model.instances is not None
+        self.bounds = model.bounds
+
+    def bind_faces(self, vertices: int, indices: int) -> None:
+        raise TypeError("a mesh drawn in chunks has no faces table on the GPU")
+
+    def vao(self, program) -> _ChunkDraws:
+        """The chunks' draws for ``program``."""
+        draws = self._vaos.get(program.glo)
+        if draws is None:
+            draws = self._vaos[program.glo] = _ChunkDraws(self, program)
+        return draws
+
+    def release(self) -> None:
+        if self._corners is not None:
+            self._corners.release()
+        self.chunks = []
+
+
+def _chunks(
+    vertices: np.ndarray,
+    indices: np.ndarray,
+    group_face: np.ndarray,
+    group_faces: np.ndarray,
+    records: list[np.ndarray],
+    chunk_faces: int,
+    limit: int | None,
+) -> list[tuple[np.ndarray, np.ndarray, list]]:
+    """The chunks of ``ChunkedMesh``: (vertices ``VERTEX`` the chunk's faces use, indices
+    uint32 into them, draws (instance records, first index, index count, whether another piece
+    of its group follows)) a run of at most ``chunk_faces`` of the joined faces (``joined``'s
+    ``vertices`` and ``indices``), the groups' first faces ``group_face`` and face counts
+    ``group_faces`` (G,) and instance ``records`` (G arrays of ``INSTANCE``); each draw of at
+    most ``limit`` faces (None: any)."""
+    group_end = group_face + group_faces
+    total = len(indices) // 3
+    out = []
+    for start in range(0, total, chunk_faces):
+        end = min(start + chunk_faces, total)
+        used, local = _used(indices[3 * start : 3 * end], len(vertices))
+        draws = []
+        first = int(np.searchsorted(group_end, start, side="right"))
+        last = int(np.searchsorted(group_face, end, side="left"))
+        for g in range(first, last):
+            lo, hi = max(start, int(group_face[g])), min(end, int(group_end[g]))
+            if hi <= lo:
+                continue
+            moved = records[g].copy()
+            moved["face"] += lo - int(group_face[g])
+            for piece, at, count, wait in _pieces(moved, hi - lo, limit):
+                draws.append((piece, 3 * (lo - start) + at, count, wait))
+        out.append((vertices[used], local, draws))
+    return out
+
+
+def _used(corners: np.ndarray, vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """(the vertices ``corners`` (N,) uint32 use, ascending; ``corners`` as indices into them,
+    uint32) of ``vertices`` vertices: by flags over every vertex where the corners are not far
+    fewer, else by sorting the corners."""
+    if vertices > 4 * len(corners):
+        used, local = np.unique(corners, return_inverse=True)
+        return used, local.astype(np.uint32)
+    seen = np.zeros(vertices, bool)
+    seen[corners] = True
+    return np.flatnonzero(seen), (np.cumsum(seen, dtype=np.uint32) - np.uint32(1))[corners]
+
+
 def _pieces(records: np.ndarray, faces: int, limit: int | None) -> list[tuple[np.ndarray, int, int, bool]]:
     """The draws of a group of ``faces`` faces at instances ``records`` (``INSTANCE``): (the
     instance records, first index from the group's, index count, whether another piece
@@ -330,3 +440,37 @@ class _Draws:
                 vao.render(vertices=indices, first=first, instances=count)
                 if wait:
                     vao.ctx.finish()
+
+
+class _ChunkDraws:
+    """A ``ChunkedMesh``'s draws for one ``program``: each chunk uploaded, drawn, finished and
+    released before the next is uploaded."""
+
+    def __init__(self, mesh: ChunkedMesh, program) -> None:
+        self.mesh, self.program = mesh, program
+
+    def render(self) -> None:
+        mesh, program = self.mesh, self.program
+        ctx = mesh.ctx
+        for k, (vertices, indices, draws) in enumerate(mesh.chunks):
+            vbo, ibo = ctx.buffer(vertices), ctx.buffer(indices)
+            held = [vbo, ibo]
+            layout = _layout(vbo, _VERTEX_FIELDS, program, "")
+            for records, first, count, wait in draws:
+                placed = ctx.buffer(records)
+                vao = ctx.vertex_array(
+                    program,
+                    [layout, _layout(placed, _INSTANCE_FIELDS, program, "/i")],
+                    index_buffer=ibo,
+                    index_element_size=4,
+                )
+                held += [placed, vao]
+                vao.render(vertices=count, first=first, instances=len(records))
+                if wait:
+                    ctx.finish()
+            # the driver frees the chunk's buffers only once its draws are done
+            ctx.finish()
+            for obj in reversed(held):
+                obj.release()
+            if mesh.on_chunk is not None:
+                mesh.on_chunk(k + 1, len(mesh.chunks))

@@ -14,7 +14,7 @@ from blueprint.gpu.device import Device, check_size, current
 from blueprint.render.budget import check_frame_memory, frame_bytes, uploaded
 from blueprint.render.capture import Capture, layer_loop
 from blueprint.render.gbuffer import gbuffer
-from blueprint.render.mesh import GpuMesh
+from blueprint.render.mesh import ChunkedMesh, GpuMesh
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.stop import standard_rules
 from blueprint.render.table import CaptureTable, capture_table
@@ -99,7 +99,9 @@ class Capturer:
     ``triangles_at``) or left on the GPU (``face_kbuffer``, ``each_face_layer``).
 
     Release it (its models) before its device. Models and cameras stay GPU-free; a model is
-    uploaded once per (model, crease angle).
+    uploaded once per (model, crease angle), whole, or where the frame checked for it
+    (``check_memory``) would not fit on the GPU with it, or ``chunk_faces`` is set, a chunk of
+    faces at a time at every draw (``render.mesh.ChunkedMesh``).
     """
 
     def __init__(self, device: Device, table: CaptureTable | None = None) -> None:
@@ -107,6 +109,9 @@ class Capturer:
         self.table = capture_table(device) if table is None else table
         self._meshes: dict[tuple, tuple[Model, GpuMesh]] = {}
         self._checked: tuple | None = None
+        self.chunk_faces = None
+        # (model, faces a chunk) the last frame checked planned for its model
+        self._planned: tuple[Model, int | None] | None = None
         self.abuffer_room: dict[tuple[int, int], int] = {}
         self.compute_raster = ComputeRaster(device)
 
@@ -120,6 +125,18 @@ class Capturer:
         if not isinstance(table, CaptureTable):
             raise TypeError(f"a capture table must be a CaptureTable, got {type(table).__name__}")
         self._table = table
+
+    @property
+    def chunk_faces(self) -> int | None:
+        """The most faces a mesh uploaded from now on uploads at a time, drawn in chunks where
+        it has more (None: as its frame's GPU memory allows, ``check_memory``)."""
+        return self._chunk_faces
+
+    @chunk_faces.setter
+    def chunk_faces(self, faces: int | None) -> None:
+        if faces is not None and (isinstance(faces, bool) or not isinstance(faces, int) or faces < 1):
+            raise InputError(f"chunk_faces must be a positive whole number of faces or None, got {faces!r}")
+        self._chunk_faces = faces
 
     def make_current(self) -> None:
         self.device.make_current()
@@ -135,31 +152,60 @@ class Capturer:
         """``model`` on the GPU, uploaded once per crease angle (None: no normals)."""
         key = (id(model), None if crease_angle is None else float(crease_angle))
         held = self._meshes.get(key)
+        faces = self._chunk_of(model)
+        if held is not None and held[0] is model and faces is not None:
+            uploaded_faces = held[1].chunk_faces
+            # uploaded whole, or in chunks bigger than its frame now leaves room for
+            if uploaded_faces is None or uploaded_faces > faces:
+                self._meshes.pop(key)[1].release()
+                held = None
         if held is None or held[0] is not model:
-            mesh = GpuMesh(self.device.ctx, model, crease_angle, pieces=self.device.software)
+            software = self.device.software
+            if faces is None:
+                mesh = GpuMesh(self.device.ctx, model, crease_angle, pieces=software)
+            else:
+                mesh = ChunkedMesh(self.device.ctx, model, crease_angle, faces, pieces=software)
             held = self._meshes[key] = (model, mesh)
         return held[1]
+
+    def chunks(self, model: Model) -> int:
+        """The chunks ``model``'s mesh is drawn in (the most of its uploads), 0 where it was
+        uploaded whole or not at all."""
+        return max(
+            (len(mesh.chunks) for held, mesh in self._meshes.values() if held is model and mesh.chunk_faces),
+            default=0,
+        )
+
+    def _chunk_of(self, model: Model) -> int | None:
+        """The faces a chunk of ``model``'s mesh holds at most: ``chunk_faces``, or fewer where
+        its frame's memory needs them (``check_memory``); None: uploaded whole."""
+        planned = self._planned[1] if self._planned is not None and self._planned[0] is model else None
+        chosen = [faces for faces in (self.chunk_faces, planned) if faces is not None]
+        return min(chosen) if chosen else None
 
     def model_of(self, mesh: GpuMesh) -> Model | None:
         """The model uploaded as ``mesh``, or None where it is not this capturer's."""
         return next((model for model, held in self._meshes.values() if held is mesh), None)
 
     def check_memory(self, model: Model, pixels: int, max_layers: int | None) -> None:
-        """Raise ``InputError`` where a frame of ``model`` at ``pixels`` supersampled pixels
-        and ``max_layers`` would allocate more GPU memory than the device has free
-        (``render.budget``), before it allocates any: its mesh where not uploaded yet. A frame
-        like the last one checked allocates nothing new, so it is not asked again: asking the
-        driver every frame costs a streamed frame time it need not spend."""
+        """Size a frame of ``model`` at ``pixels`` supersampled pixels and ``max_layers``
+        against the GPU memory the device has free (``render.budget``), before it allocates
+        any: its mesh where not uploaded whole yet. Where the mesh does not fit beside the
+        frame's other buffers it is drawn in chunks that do (``mesh``); where those buffers
+        and a small chunk would not fit either, raise ``InputError``. A frame like the last one
+        checked allocates nothing new, so it is not asked again: asking the driver every frame
+        costs a streamed frame time it need not spend."""
         asked = (model, pixels, max_layers)
         if self._checked is not None and self._checked[0] is model and self._checked[1:] == asked[1:]:
             return
-        held = any(held is model for held, _ in self._meshes.values())
-        triangles, instances = (0, 0) if held else uploaded(model)
+        whole = any(held is model and mesh.chunk_faces is None for held, mesh in self._meshes.values())
+        triangles, instances = (0, 0) if whole else uploaded(model)
         abuffer = self.table.row("A-buffer")
         need = frame_bytes(
             triangles, pixels, max_layers, abuffer.max_bytes if abuffer else None, instances=instances
         )
-        check_frame_memory(self.device, model.source or "the model", need)
+        faces = check_frame_memory(self.device, model.source or "the model", need, instances)
+        self._planned = (model, faces)
         self._checked = asked
 
     @current

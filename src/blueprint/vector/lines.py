@@ -16,6 +16,7 @@ import numpy as np
 
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.errors import InputError
+from blueprint.scene.camera import clip_to_pixels, transform
 from blueprint.scene.model import Model
 from blueprint.scene.weld import connected_components_of
 from blueprint.silhouette import (
@@ -23,6 +24,7 @@ from blueprint.silhouette import (
     CREASE,
     SILHOUETTE,
     Adjacency,
+    EdgeSet,
     build_adjacency,
     classify_edges,
     smooth_contours,
@@ -281,6 +283,9 @@ def feature_segments(
     mesh's own silhouette edges are kept where a face beside them is not smooth (on a crease,
     a border).
 
+    An edge where a face seen edge-on meets one that is not is a silhouette too (the outline
+    runs along it, whichever way the faces' facing rounds).
+
     Borders that coincide with a border of another part are part boundaries (a surface split
     into parts) and come out with that kind. Creases whose faces meet at less than
     ``SMOOTH_ANGLE`` (drawn where the crease angle is lower still) are tangent edges of smooth
@@ -293,7 +298,9 @@ def feature_segments(
         return _instanced_feature_segments(model, view, projection, size, crease_angle, smooth)
     adj = adjacency(model)
     width, height = size
-    edges = classify_edges(adj, view, projection, width, height, crease_angle)
+    edges = _with_edge_on_outlines(
+        adj, classify_edges(adj, view, projection, width, height, crease_angle), view, projection, size
+    )
     face_part = model.face_part.astype(np.int64)
     part = face_part[np.maximum(edges.faces[:, 0], 0)]
     kind = edges.kind.copy()
@@ -395,6 +402,49 @@ def _instanced_feature_segments(model: Model, view, projection, size, crease_ang
                 edge_pairs[:, 1],
             ),
         ]
+    )
+
+
+def _with_edge_on_outlines(adj: Adjacency, edges: EdgeSet, view, projection, size) -> EdgeSet:
+    """``edges`` (``classify_edges``' of ``adj``) with the two-face edges where a face seen
+    edge-on meets one that is not, as silhouettes, in edge order, for the edge-on faces that
+    have no such edge among ``edges`` yet. ``n . v`` is zero all over the edge-on face, so the
+    outline runs along such an edge; where the faces meet at less than the crease angle and
+    their facing rounds to one side (a fillet seen along its axis, where it meets the blend at
+    its end) ``classify_edges`` finds nothing there, and the outline had a gap. A face that has
+    one already (a sphere's face on its outline, between faces turned to and from the eye)
+    projects onto it: its other edges would only draw the line again, in pieces."""
+    edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
+    count = np.bincount(edge, minlength=len(adj.edges))
+    start = np.cumsum(count) - count
+    two = np.flatnonzero(count == 2)
+    pair = np.stack([face[start[two]], face[start[two] + 1]], axis=1)
+    edge_on = _edge_on(adj, pair, view, projection)
+    one_side = edge_on[:, 0] != edge_on[:, 1]
+    flat_side = np.where(edge_on[:, 0], pair[:, 0], pair[:, 1])
+    found = np.zeros(len(adj.edges), bool)
+    found[edges.edges[np.isin(edges.kind, (SILHOUETTE, CREASE))]] = True
+    outlined = np.zeros(len(adj.faces), bool)
+    outlined[flat_side[one_side & found[two]]] = True
+    found[edges.edges] = True
+    chosen = one_side & ~found[two] & ~outlined[flat_side]
+    # wholly in front of the eye, as no clipping is done here (a sample nearer than the near
+    # plane falls outside the view and is left out)
+    ends = adj.positions[adj.edges[two[chosen]]].reshape(-1, 3)
+    clip = transform(ends, projection @ view)
+    ahead = (clip[:, 3] > 0).reshape(-1, 2).all(axis=1)
+    new, pair = two[chosen][ahead], pair[chosen][ahead]
+    if len(new) == 0:
+        return edges
+    points = adj.positions[adj.edges[new]]
+    pixels = clip_to_pixels(clip.reshape(-1, 2, 4)[ahead].reshape(-1, 4), size).reshape(-1, 2, 2)
+    order = stable_argsort(np.r_[edges.edges, new])
+    return EdgeSet(
+        segments3d=np.concatenate([edges.segments3d, points])[order],
+        segments2d=np.concatenate([edges.segments2d, pixels])[order],
+        kind=np.r_[edges.kind, np.full(len(new), SILHOUETTE, np.uint8)][order],
+        faces=np.concatenate([edges.faces, pair])[order],
+        edges=np.r_[edges.edges, new][order],
     )
 
 

@@ -3,8 +3,9 @@
 // surfaces running up to the first with face 0). The rules are those of
 // vector/occlusion/levels.py, which is the reference: a surface is in front of a sample when
 // the plane of its triangle meets the sample's view ray nearer to the eye by more than
-// u_tolerance (eye depth); the line's own faces never count; the level is the minimum over the 3 x 3 pixels
-// around the sample, where off contours a pixel with no surface at all does not take part.
+// u_tolerance (eye depth); the line's own faces never count; the level is the minimum over the
+// 2 x 2 pixels whose centres surround the sample, where off contours a pixel with no surface at
+// all does not take part.
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
 // With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
@@ -28,7 +29,8 @@ layout(local_size_x = 64) in;
 struct Sample {
     vec3 eye;      // eye coordinates
     int flags;     // 1: off contours, 2: check the sides
-    ivec4 pixel;   // the sample's pixel x, y (y down); the pixel a step to one side of the line x, y
+    ivec4 pixel;   // the first of the 2 x 2 pixels around the sample x, y (pixels.around, y down);
+                   // the pixel a step to one side of the line x, y
     ivec4 own;     // the pixel a step to the other side x, y; own faces (-1: none)
 };
 
@@ -176,8 +178,8 @@ void main() {
     // a pixel can only lower the minimum: its count stops at the best so far, and none
     // goes below zero
     int seen[K];
-    for (int n = 0; n < 9 && best > 0; ++n) {
-        ivec2 st = stack_at(texel(px + ivec2(n % 3 - 1, n / 3 - 1)), eye, u_tolerance, own0, own1, best, seen);
+    for (int n = 0; n < 4 && best > 0; ++n) {
+        ivec2 st = stack_at(texel(px + ivec2(n % 2, n / 2)), eye, u_tolerance, own0, own1, best, seen);
         int front = (solid && st.y == 0) ? BIG : st.x;
         best = min(best, front);
     }

@@ -3,8 +3,8 @@
 Each polyline is sampled along its screen projection about a pixel apart, its own vertices
 always among the samples (``samples``). A sample's level is the number of peeled surfaces in
 front of it, found from the planes of the layers' triangles on the sample's own view ray, the
-minimum over the 3 x 3 pixels around it (``levels``); a peel keeps its layers' triangle IDs only
-at the pixels those tests look at (``pixels``).
+minimum over the 2 x 2 pixels whose centres surround it (``levels``); a peel keeps its layers'
+triangle IDs only at the pixels those tests look at (``pixels``).
 
 Two more passes clean what pixels cannot tell: :func:`verify_creases` drops mesh edges where
 the surfaces to both sides of the line are one flat surface of one part (solids of one part

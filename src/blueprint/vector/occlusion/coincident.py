@@ -29,12 +29,13 @@ def suppress_coincident(
     angle: float = 10.0,
     renderer=None,
 ) -> np.ndarray:
-    """Leave out samples that lie on another line of lower level (or of the same level and an
-    earlier polyline): within ``distance`` pixels across it and running within ``angle`` degrees
-    of it. Hidden lines right under visible ones (the bottom outline of a plate under its top
-    outline in a plan view) and lines drawn twice at one level come out once. Left-out samples
-    get level -1. With a ``renderer`` (``LayerRenderer``) the search runs as a compute pass
-    (coincident.comp), with the same arithmetic: the same samples are left out.
+    """Leave out samples that lie on another line of lower level (or of the same level and
+    a longer run of it, then an earlier polyline): within ``distance`` pixels across it and
+    running within ``angle`` degrees of it. Hidden lines right under visible ones (the bottom
+    outline of a plate under its top outline in a plan view) and lines drawn twice at one level
+    come out once, the longest whole. Left-out samples get level -1. With a ``renderer``
+    (``LayerRenderer``) the search runs as a compute pass (coincident.comp), with the same
+    arithmetic: the same samples are left out.
     """
     level = level.copy()
     live = np.flatnonzero(level >= 0)
@@ -92,7 +93,7 @@ class _Search:
         unit = forward / np.where(length > 0, length, 1.0)[:, None]
         # a stretch that is hidden deeper or left out covers nothing
         covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
-        rank = level.astype(np.int64) * (int(line.max()) + 1) + line
+        rank = _run_ranks(level, line, length)
         # the direction of each sample's own line there (its last sample looks back)
         direction = np.where(has_next[:, None], unit, np.r_[unit[:1], unit[:-1]]).astype(np.float32)
         inv_length2 = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0)
@@ -108,10 +109,7 @@ class _Search:
         # stretches ranked below its own at the cell's start, found by one search, so pairs that
         # the rank rules out are never made
         src_cell = cell_of(source)
-        ranks = int(rank.max()) + 1
-        if float(span[0]) * float(span[1]) * ranks >= 2.0**62:  # keys would overflow: ranks in order only
-            rank = np.unique(rank, return_inverse=True)[1].reshape(-1)
-            ranks = int(rank.max()) + 1
+        ranks = int(rank.max()) + 1  # ranks run 0 to R - 1 over the R runs: the keys fit
         src_key = src_cell * ranks + rank[source]
         order = stable_argsort(src_key)  # the order within a run of one key does not matter
         cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
@@ -133,6 +131,23 @@ class _Search:
             cell_of(live),
             rank[live],
         )
+
+
+def _run_ranks(level: np.ndarray, line: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """(S,) int64 rank of every sample's run (its polyline's consecutive samples of one level):
+    by level, then the longest run first, then by polyline and place, so that of two lines drawn
+    over each other at one level the one in longer pieces stays whole (the top edge of a wall
+    seen edge-on, not the wall's own short mesh edges along it); ``step`` the pixels from each
+    sample to the next of its line (0 at a line's last sample)."""
+    new_run = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
+    start = np.flatnonzero(new_run)
+    run = np.cumsum(new_run) - 1
+    # a run's pixels: its steps but the last, which leads into the next run
+    length = np.bincount(run, weights=step, minlength=len(start)) - step[np.r_[start[1:], len(level)] - 1]
+    order = np.lexsort((start, -length, level[start]))
+    rank = np.empty(len(start), np.int64)
+    rank[order] = np.arange(len(start))
+    return rank[run]
 
 
 def _cpu_drop(search: _Search, distance: float, sin_limit: float) -> np.ndarray:

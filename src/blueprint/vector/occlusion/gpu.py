@@ -18,7 +18,7 @@ from blueprint.scene.model import Model
 
 from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
 from .levels import DepthTest
-from .pixels import PixelLayers, across_line
+from .pixels import PixelLayers, across_line, around
 from .samples import Samples
 
 __all__ = ["FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels", "stack_levels"]
@@ -273,7 +273,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     packed["eye"] = samples.eye[inside]
     packed["flags"] = flags[inside]
     # pixels floored here in double precision, as the CPU reference has them
-    packed["pixel"][:, :2] = np.floor(samples.pixel[inside])
+    packed["pixel"][:, :2] = around(samples.pixel[inside])
     at = np.flatnonzero(checked[inside])
     packed["pixel"][at, 2:] = np.floor(samples.pixel[edge_rows] + offset * across)
     packed["own"][at, :2] = np.floor(samples.pixel[edge_rows] - offset * across)

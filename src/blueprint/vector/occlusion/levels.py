@@ -10,10 +10,10 @@ as exactly as the layers tell them apart. The faces a line lies on never count.
 
 Near an outline the pixel under a sample may show a surface that does not reach the sample's
 ray at all (the plane of a triangle beside a silhouette, at a grazing angle, meets the ray far
-in front). The level is therefore the minimum over the 3 x 3 pixels around the sample: the
-pixels on the open side of an outline see past it. The price is that occluders narrower than
-about two pixels hide nothing, and hidden lines reach up to a pixel further out from behind an
-occluder's edge, both below the drawing's resolution.
+in front). The level is therefore the minimum over the 2 x 2 pixels whose centres surround the
+sample (``pixels.around``): one of them lies on the open side of an outline through it and sees
+past. The price is that occluders narrower than about a pixel hide nothing, and visible lines
+run on up to a pixel's diagonal behind an occluder's edge, both below the drawing's resolution.
 
 Off silhouettes and borders a line's own surfaces surround it, so pixels that show no surface
 at all (past the object's outline) are left out of that minimum: a hidden edge that ends on the
@@ -34,7 +34,7 @@ from blueprint.scene.model import Model
 
 from ..cache import ModelCache
 from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
-from .pixels import NEIGHBOURS, PixelLayers, across_line, flat_index
+from .pixels import NEIGHBOURS, PixelLayers, across_line, around, flat_index
 from .samples import Samples
 
 __all__ = ["DepthTest", "classify_samples", "drop_phantoms", "face_planes", "verify_creases"]
@@ -121,7 +121,7 @@ def classify_samples(
     Returns
     -------
     (S,) int32
-        Number of layers in front of each sample, the minimum over its 3 x 3 pixels.
+        Number of layers in front of each sample, the minimum over its 2 x 2 pixels.
     """
     layers, height, width = triangle.layers, triangle.height, triangle.width
     count = len(samples.line)
@@ -138,7 +138,7 @@ def classify_samples(
     ortho, limit = test.ortho, np.float32(test.tolerance)
     for start in range(0, len(inside), _CHUNK):
         idx = inside[start : start + _CHUNK]
-        px = np.floor(samples.pixel[idx]).astype(np.int64)
+        px = around(samples.pixel[idx])
         eye = samples.eye[idx].astype(np.float32)
         own0, own1 = samples.faces[idx, 0], samples.faces[idx, 1]
         # off a contour the line's own surfaces surround it: a pixel showing no surface at all

@@ -13,9 +13,16 @@ from blueprint.columns import row_norm
 from ..lines import BORDER, CREASE, SILHOUETTE
 from .samples import Samples
 
-__all__ = ["NEIGHBOURS", "PixelLayers", "across_line", "flat_index", "probe_pixels"]
+__all__ = ["NEIGHBOURS", "PixelLayers", "across_line", "around", "flat_index", "probe_pixels"]
 
-NEIGHBOURS = np.array([(dx, dy) for dy in (-1, 0, 1) for dx in (-1, 0, 1)], np.int64)
+# The pixels whose centres surround a point, from the one ``around`` gives.
+NEIGHBOURS = np.array([(0, 0), (1, 0), (0, 1), (1, 1)], np.int64)
+
+
+def around(pixel: np.ndarray) -> np.ndarray:
+    """(N, 2) int64: for (N, 2) pixel positions, the pixel up and left of each one whose centre
+    is one corner of the square of pixel centres the position lies in (``NEIGHBOURS`` the four)."""
+    return np.floor(pixel - 0.5).astype(np.int64)
 
 
 @dataclass(frozen=True)
@@ -66,7 +73,7 @@ def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -
     width, height = size
     probed = np.zeros(height * width, bool)
     inside = np.flatnonzero(samples.inside)
-    px = np.floor(samples.pixel[inside]).astype(np.int64)
+    px = around(samples.pixel[inside])
     for step in NEIGHBOURS:
         probed[flat_index(px + step, height, width)] = True
     rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
