@@ -9,8 +9,6 @@ first. A chain walks from piece to piece through paired half-ends.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, depth_first_order
 
 from blueprint.sorting import stable_argsort
 
@@ -73,11 +71,6 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """Walk the pieces into chains: pieces paired at neither end first, then open chains from
     their free ends, then closed loops.
 
-    An open chain is walked from the lower of its two free half-ends, the chains in the order
-    of those; a loop from the start of its lowest piece, forwards, the loops in the order of
-    those pieces. The chains are the pieces' connected components, and one depth-first walk
-    from a root joined to every chain's start walks them all (SciPy's graph routines).
-
     Returns
     -------
     piece : (n,) int64
@@ -87,56 +80,40 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     lengths : (C,) int64
         Pieces per chain, in order.
     """
-    count = len(partner) // 2
     # pieces paired at neither end are chains of their own, found without walking
     alone = (partner[0::2] < 0) & (partner[1::2] < 0)
+    partner_list = partner.tolist()
+    visited = bytearray(alone.astype(np.uint8).tobytes())
+    walked: list[int] = []  # (piece << 1) | reversed
+    lengths: list[int] = []
+
+    def walk(h: int) -> None:
+        # leave through half-end h: the walk begins at that end of its piece
+        count = 0
+        while True:
+            s = h >> 1
+            if visited[s]:
+                break
+            visited[s] = 1
+            walked.append(h)  # starting at end 1 means walking the piece backwards
+            count += 1
+            h = partner_list[h ^ 1]
+            if h < 0:
+                break
+        lengths.append(count)
+
+    for h in np.flatnonzero((partner < 0) & ~np.repeat(alone, 2)).tolist():
+        if not visited[h >> 1]:
+            walk(h)
+    for s in np.flatnonzero(~alone).tolist():
+        if not visited[s]:
+            walk(s << 1)
+    flat = np.array(walked, np.int64)
     single = np.flatnonzero(alone)
-    paired = np.flatnonzero(partner >= 0)
-    if len(paired) == 0:
-        return single, np.zeros(count, bool), np.ones(count, np.int64)
-    pieces = csr_matrix((np.ones(len(paired), np.int8), (paired >> 1, partner[paired] >> 1)), (count, count))
-    label = connected_components(pieces, directed=False)[1]
-    # a chain's start: its lowest free half-end, or on a loop the start of its lowest piece
-    free = np.flatnonzero((partner < 0) & ~np.repeat(alone, 2))
-    chains, first_free = np.unique(label[free >> 1], return_index=True)
-    start = np.full(int(label.max()) + 1, -1, np.int64)
-    start[chains] = free[first_free]
-    loop_chains, first_piece = np.unique(label, return_index=True)
-    loop = start[loop_chains] < 0
-    start[loop_chains[loop]] = 2 * first_piece[loop]
-    start[label[single]] = -1
-    starts = start[start >= 0]
-    on_loop = np.zeros(len(partner), bool)
-    on_loop[2 * first_piece[loop]] = True
-    # entering piece h >> 1 through half-end h, a walk goes on into the one paired with its
-    # other end; a binary tree of nodes after the half-ends leads from its root to every start
-    # (a node of many branches costs the walk a scan of them at every return)
-    ahead = np.flatnonzero(partner[np.arange(len(partner)) ^ 1] >= 0)
-    root = len(partner)
-    inner = max(len(starts) - 1, 1)
-    branch = np.arange(len(starts) + inner - 1) + 1
-    rows = np.r_[ahead, root + (branch - 1) // 2]
-    cols = np.r_[
-        partner[ahead ^ 1], np.where(branch < inner, root + branch, starts[np.maximum(branch - inner, 0)])
-    ]
-    nodes = root + inner
-    walks = csr_matrix((np.ones(len(rows), np.int8), (rows, cols)), (nodes, nodes))
-    walked = depth_first_order(walks, root, return_predecessors=False)
-    walked = walked[walked < root]
-    # the chains as walked, put in order: open ones by their start, then loops
-    is_start = np.zeros(root, bool)
-    is_start[starts] = True
-    begin = np.flatnonzero(is_start[walked])
-    lengths = np.diff(np.r_[begin, len(walked)])
-    key = walked[begin] + on_loop[walked[begin]] * root
-    order = np.argsort(key)
-    size = lengths[order]
-    within = np.arange(len(walked)) - np.repeat(np.cumsum(size) - size, size)
-    kept = walked[np.repeat(begin[order], size) + within]
     return (
-        np.concatenate([single, kept >> 1]),
-        np.concatenate([np.zeros(len(single), bool), (kept & 1).astype(bool)]),
-        np.concatenate([np.ones(len(single), np.int64), size.astype(np.int64)]),
+        np.concatenate([single, flat >> 1]),
+        np.concatenate([np.zeros(len(single), bool), (flat & 1).astype(bool)]),
+        np.concatenate([np.ones(len(single), np.int64), np.array(lengths, np.int64)]),
     )
 
 
