@@ -158,7 +158,7 @@ def gpu_levels(
     """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
     draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
     than ``MAX_LAYERS`` layers or more planes than a texture holds (then ``triangles_at`` and
-    ``classify_samples``).
+    ``stack_levels``, or ``classify_samples`` without compute passes).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases`` (``test`` the depth
     test of both); ``planes`` from ``levels.face_planes``; ``size`` (width, height) in pixels;
