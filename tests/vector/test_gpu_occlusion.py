@@ -1,6 +1,8 @@
 """Occlusion levels from the compute pass over the faces k-buffer: equal to the CPU reference,
 and right against ray casting at the sample points."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import trimesh
@@ -161,6 +163,7 @@ def test_a_drawing_reads_back_levels_only(renderer, source, monkeypatch):
         on_gpu = draw_vector(model, camera, SIZE, renderer=renderer)
     with monkeypatch.context() as patch:
         patch.setattr(blueprint.vector.drawing, "gpu_levels", lambda *a, **k: None)
+        patch.setattr(blueprint.vector.drawing, "stack_levels", lambda *a, **k: None)
         on_cpu = draw_vector(model, camera, SIZE, renderer=renderer)
     assert len(on_gpu) > 100 and on_gpu.layers == on_cpu.layers
     np.testing.assert_array_equal(on_gpu.offsets, on_cpu.offsets)
@@ -187,3 +190,109 @@ def test_layer_count_is_the_deepest_pixels_surfaces(renderer, shape, max_layers)
     assert deepest == (2 if shape == "box" else max_layers)
     assert _layer_count(renderer, surfaces, SIZE, 0.0) == deepest
     assert _layer_count(renderer, surfaces, SIZE, 1e-9) == deepest
+
+
+@pytest.mark.parametrize(
+    ("ortho", "max_layers", "whole"),
+    [(False, None, False), (True, None, False), (False, 3, False), (False, None, True)],
+    ids=["perspective", "orthographic", "three-layers", "whole-layers"],
+)
+def test_stack_levels_equal_the_cpu_reference(renderer, ortho, max_layers, whole):
+    """Layers read back (at the pixels probed, or whole), any number of them, classified by the
+    compute pass: the CPU reference's levels and, through the faces to either side, its crease
+    check, sample for sample."""
+    from blueprint.vector.occlusion import stack_levels
+
+    if renderer.ctx.version_code < 430:
+        pytest.skip("this renderer runs no compute passes")
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", azimuth=20, aspect=1.0, ortho=ortho)
+    view, proj = camera.view_matrix(), camera.projection_matrix()
+    samples = sample_polylines(join_polylines(model_segments(model, view, proj, SIZE)), view, proj, SIZE)
+    planes = face_planes(model, view)
+    test = DepthTest(camera.ortho, camera.pixel_angle(SIZE[1]), depth_tolerance(camera, model.bounds))
+    if whole:
+        faces = renderer.peel(model, camera, size=SIZE, max_layers=max_layers).triangle
+        peeled = PixelLayers.from_layers(faces)
+    else:
+        pixels = probe_pixels(samples, SIZE)
+        faces = renderer.triangles_at(model, camera, pixels, size=SIZE, max_layers=max_layers)
+        peeled = PixelLayers(
+            pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), len(faces), *SIZE[::-1]
+        )
+    # more layers than the passes over textures bind (gpu.MAX_LAYERS), or a cap
+    assert peeled.layers == 3 if max_layers == 3 else peeled.layers > 8
+    got = stack_levels(renderer, samples, planes, peeled, test=test)
+    cpu = classify_samples(samples, peeled, planes, test)
+    assert len(set(cpu.tolist())) >= 4
+    np.testing.assert_array_equal(got.level, cpu)
+    assert got.layers == peeled.layers
+    rows = np.flatnonzero(got.checked & (got.level >= 0))
+    sides = got.sides[rows]
+    gpu_final = drop_phantoms(
+        samples, got.level, rows, sides[:, 0], sides[:, 1], planes, model.face_part, test
+    )
+    cpu_final = verify_creases(samples, cpu, peeled, planes, model.face_part, test)
+    assert (cpu_final != cpu).sum() > 0
+    np.testing.assert_array_equal(gpu_final, cpu_final)
+
+
+@pytest.mark.parametrize("shade", [None, "gear*"], ids=["lines", "shaded"])
+def test_a_drawing_of_every_layer_classified_by_the_pass_is_the_cpu_one(renderer, monkeypatch, shade):
+    """Every layer peeled (more than the k-buffer holds), read back at the probed pixels and
+    classified by the compute pass: the drawing the CPU reference makes, shaded parts too."""
+    import blueprint.vector.drawing
+
+    if renderer.ctx.version_code < 430:
+        pytest.skip("this renderer runs no compute passes")
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    drawings = []
+    for cpu in (False, True):
+        with monkeypatch.context() as patch:
+            patch.setattr(blueprint.vector.drawing, "gpu_levels", lambda *a, **k: None)
+            if cpu:
+                patch.setattr(blueprint.vector.drawing, "stack_levels", lambda *a, **k: None)
+            drawings.append(draw_vector(model, camera, SIZE, renderer=renderer, max_layers=None, shade=shade))
+    on_gpu, on_cpu = drawings
+    assert len(on_gpu) > 100 and on_gpu.layers == on_cpu.layers > 8
+    np.testing.assert_array_equal(on_gpu.offsets, on_cpu.offsets)
+    np.testing.assert_array_equal(on_gpu.points, on_cpu.points)
+    np.testing.assert_array_equal(on_gpu.level, on_cpu.level)
+    assert shade is None or on_gpu.lines.behind.any()
+    np.testing.assert_array_equal(on_gpu.lines.behind, on_cpu.lines.behind)
+
+
+def test_a_sample_a_hair_above_a_pixel_row_looks_at_the_rows_the_cpu_does(renderer):
+    """A sample at y = 1.49999997 lies above the centres of pixel row 1 (single precision
+    rounds it to 1.5, on them): its 2 x 2 pixels are rows 0 and 1, and row 0, which shows no
+    surface, gives a silhouette's level 0, where rows 1 and 2 would both show the face in front
+    of it."""
+    from blueprint.vector.lines import SILHOUETTE
+    from blueprint.vector.occlusion import Samples, stack_levels
+
+    if renderer.ctx.version_code < 430:
+        pytest.skip("this renderer runs no compute passes")
+    assert np.float32(1.49999997) == 1.5
+    triangle = np.zeros((1, 4, 4), np.int32)
+    triangle[0, 0] = -1
+    peeled = PixelLayers.from_layers(triangle)
+    # face 0 the plane z = -1 in eye space, before the sample at depth 5
+    planes = np.array([[0.0, 0.0, 1.0, -1.0], [0.0, 0.0, 0.0, 0.0]])
+    one = np.ones(1, bool)
+    samples = Samples(
+        np.array([[0.0, 0.0, -5.0]]),
+        np.array([[1.5, 1.49999997]]),
+        np.full((1, 2), -1, np.int64),
+        np.array([SILHOUETTE], np.uint8),
+        np.full(1, -1, np.int64),
+        np.zeros(1, np.int64),
+        one,
+        one,
+    )
+    test = DepthTest(False, 1e-3, 1e-4)
+    assert classify_samples(samples, peeled, planes, test).tolist() == [0]
+    samples_lower = dataclasses.replace(samples, pixel=np.array([[1.5, 1.5]]))
+    assert classify_samples(samples_lower, peeled, planes, test).tolist() == [1]
+    assert stack_levels(renderer, samples, planes, peeled, test=test).level.tolist() == [0]
+    assert stack_levels(renderer, samples_lower, planes, peeled, test=test).level.tolist() == [1]

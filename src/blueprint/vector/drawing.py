@@ -54,6 +54,7 @@ from .lines import join_polylines, model_segments
 from .linework import KINDS, Lines, runs_of
 from .occlusion import (
     DepthTest,
+    GpuLevels,
     PixelLayers,
     classify_samples,
     draw_faces,
@@ -63,6 +64,7 @@ from .occlusion import (
     probe_pixels,
     sample_polylines,
     split_by_level,
+    stack_levels,
     verify_creases,
 )
 from .pdf import pdf_bytes
@@ -568,13 +570,8 @@ class _Occlusion:
         samples, planes, part, test = self.samples, self.planes, face_parts(self.model), self.test
         on_gpu = None if self.layers is not None else self._on_gpu(planes)
         if on_gpu is not None:
-            rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))
-            sides = on_gpu.sides[rows]
-            levels = drop_phantoms(
-                samples, on_gpu.level, rows, sides[:, 0], sides[:, 1], planes, part, test, self.crease_angle
-            )
             seconds["peel"] = on_gpu.peel_seconds
-            return levels, on_gpu.layers
+            return self._phantoms_dropped(on_gpu), on_gpu.layers
         frame = self.frame
         if self.layers is None:
             # occlusion needs only the layers' triangles, and only at the pixels it probes
@@ -591,15 +588,39 @@ class _Occlusion:
             count = len(self.layers.depth)
             self.peeled = PixelLayers.from_layers(self.layers.triangle)
         seconds["peel"] = time.perf_counter() - clock
+        on_gpu = stack_levels(self.renderer, samples, planes, self.peeled, test=test)
+        if on_gpu is not None:
+            return self._phantoms_dropped(on_gpu), count
         levels = classify_samples(samples, self.peeled, planes, test)
         levels = verify_creases(samples, levels, self.peeled, planes, part, test, self.crease_angle)
         return levels, count
+
+    def _phantoms_dropped(self, on_gpu: GpuLevels) -> np.ndarray:
+        """The levels the compute pass found, mesh edges that are no edges left out
+        (``drop_phantoms`` with the faces it saw to either side)."""
+        rows = np.flatnonzero(on_gpu.checked & (on_gpu.level >= 0))
+        sides = on_gpu.sides[rows]
+        part = face_parts(self.model)
+        return drop_phantoms(
+            self.samples,
+            on_gpu.level,
+            rows,
+            sides[:, 0],
+            sides[:, 1],
+            self.planes,
+            part,
+            self.test,
+            self.crease_angle,
+        )
 
     def in_front(self, planes: np.ndarray) -> np.ndarray:
         """(S,) surfaces in front of each sample of those with ``planes`` (as ``face_planes``),
         after ``levels``, from the same layers: nothing has drawn since."""
         if self.peeled is None:
             return self._on_gpu(planes).level
+        on_gpu = stack_levels(self.renderer, self.samples, planes, self.peeled, test=self.test)
+        if on_gpu is not None:
+            return on_gpu.level
         return classify_samples(self.samples, self.peeled, planes, self.test)
 
 

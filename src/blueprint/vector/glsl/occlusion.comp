@@ -9,7 +9,9 @@
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
 // With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
-// r32i, face + 1, 0 where none).
+// r32i, face + 1, 0 where none). With STACKS they come as read back at the pixels probed
+// (levels.PixelLayers), any number of layers: u_where holds a pixel's first row of the u_faces
+// table and its surface count.
 #include "table.glsl"
 
 layout(local_size_x = 64) in;
@@ -22,17 +24,26 @@ layout(local_size_x = 64) in;
 #define FACE1(S, q) int(texelFetch(S, q, 0).y)
 #endif
 
+// pixels as the CPU reference floors them in double precision (a pixel coordinate a hair below
+// a whole number rounds up to it in single precision)
 struct Sample {
-    vec4 eye;      // eye coordinates, w unused
-    vec4 pixel;    // pixel x, y (y down), unit vector across the line x, y
-    ivec4 own;     // own faces (-1: none), flags (1: off contours, 2: check the sides), unused
+    vec3 eye;      // eye coordinates
+    int flags;     // 1: off contours, 2: check the sides
+    ivec4 pixel;   // the first of the 2 x 2 pixels around the sample x, y (pixels.around, y down);
+                   // the pixel a step to one side of the line x, y
+    ivec4 own;     // the pixel a step to the other side x, y; own faces (-1: none)
 };
 
 layout(std430, binding = 0) readonly buffer Samples { Sample samples[]; };
 layout(std430, binding = 2) writeonly buffer Levels { ivec4 result[]; };  // level, side faces
 uniform sampler2D u_planes;  // a table (gpu/tables.py) of the faces' planes n, c; last row: none
 
+#if STACKS
+uniform isampler2D u_where;  // (first row in u_faces, surfaces) of every pixel, OpenGL rows
+uniform isampler2D u_faces;  // a table of the faces of every pixel's surfaces, front first
+#else
 uniform SAMPLER u_s0;
+#endif
 #if K > 1
 uniform SAMPLER u_s1;
 #endif
@@ -60,7 +71,6 @@ uniform ivec2 u_size;
 uniform bool u_ortho;
 uniform float u_tolerance;  // the depth tolerance, eye depth
 uniform float u_footprint;  // a pixel's size at unit distance (perspective) or in model units
-uniform float u_offset;  // pixels to either side of a line for the crease check
 
 const int BIG = 0x7fffffff;
 
@@ -86,6 +96,26 @@ ivec2 texel(ivec2 p) {
     return ivec2(p.x, u_size.y - 1 - p.y);
 }
 
+#if STACKS
+// (surfaces counted in front by more than ``limit``, surfaces there) from the read-back stack
+// at q; counting stops at ``bound`` surfaces in front; seen[0]: the stack's first row
+ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, out int seen[K]) {
+    ivec2 where = texelFetch(u_where, q, 0).xy;
+    seen[0] = where.x;
+    int front = 0;
+    for (int k = 0; k < where.y; ++k) {
+        int tri = TABLE_ROW(u_faces, where.x + k).r;
+        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye, limit)) ++front;
+        if (front >= bound) return ivec2(front, k + 1);
+    }
+    return ivec2(front, where.y);
+}
+
+// the face of surface ``index`` of the stack that stack_at read
+int seen_face(int seen[K], int index) {
+    return TABLE_ROW(u_faces, seen[0] + index).r;
+}
+#else
 // one surface of the stack: stop at the first empty one, count it in front or not; stop
 // too once ``bound`` surfaces are in front (the caller wants no more); its face kept in
 // seen[I] for the sides' check (reading it again there would be K more texel fetches:
@@ -130,15 +160,20 @@ ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, ou
     return ivec2(front, count);
 }
 
+int seen_face(int seen[K], int index) {
+    return seen[index];
+}
+#endif
+
 void main() {
     int i = int(gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * gl_WorkGroupSize.x);
     if (i >= u_count) return;
     Sample s = samples[i];
-    vec3 eye = s.eye.xyz;
-    int own0 = s.own.x;
-    int own1 = s.own.y;
-    bool solid = (s.own.z & 1) != 0;
-    ivec2 px = ivec2(floor(s.pixel.xy - 0.5));
+    vec3 eye = s.eye;
+    int own0 = s.own.z;
+    int own1 = s.own.w;
+    bool solid = (s.flags & 1) != 0;
+    ivec2 px = s.pixel.xy;
     int best = BIG;
     // a pixel can only lower the minimum: its count stops at the best so far, and none
     // goes below zero
@@ -150,14 +185,13 @@ void main() {
     }
     if (best == BIG) best = 0;
     ivec2 sides = ivec2(-1);
-    if ((s.own.z & 2) != 0) {
+    if ((s.flags & 2) != 0) {
         // the surface at the line's depth beside it: within a pixel's footprint (levels.py's side_limit)
         float side_limit = u_ortho ? u_footprint : u_footprint * -eye.z;
         for (int side = 0; side < 2; ++side) {
-            vec2 spot = s.pixel.xy + (side == 0 ? 1.0 : -1.0) * u_offset * s.pixel.zw;
-            ivec2 q = texel(ivec2(floor(spot)));
+            ivec2 q = texel(side == 0 ? s.pixel.zw : s.own.xy);
             ivec2 st = stack_at(q, eye, side_limit, own0, own1, BIG, seen);
-            sides[side] = st.x < st.y ? seen[st.x] : -1;
+            sides[side] = st.x < st.y ? seen_face(seen, st.x) : -1;
         }
     }
     result[i] = ivec4(best, sides, 0);

@@ -16,7 +16,7 @@ first (``runs``).
 """
 
 from .coincident import suppress_coincident
-from .gpu import FacesDrawn, GpuLevels, draw_faces, gpu_levels
+from .gpu import FacesDrawn, GpuLevels, draw_faces, gpu_levels, stack_levels
 from .levels import DepthTest, classify_samples, drop_phantoms, face_planes, verify_creases
 from .pixels import PixelLayers, probe_pixels
 from .runs import split_by_level
@@ -36,6 +36,7 @@ __all__ = [
     "gpu_levels",
     "sample_polylines",
     "split_by_level",
+    "stack_levels",
     "suppress_coincident",
     "verify_creases",
 ]

@@ -18,10 +18,10 @@ from blueprint.scene.model import Model
 
 from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
 from .levels import DepthTest
-from .pixels import across_line
+from .pixels import PixelLayers, across_line, around
 from .samples import Samples
 
-__all__ = ["FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels"]
+__all__ = ["FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels", "stack_levels"]
 
 OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
 LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
@@ -158,7 +158,7 @@ def gpu_levels(
     """Peel and classify every sample on the GPU: from the faces k-buffer where the renderer
     draws one, else from the layers peeled a pass a layer and copied on the GPU; None for more
     than ``MAX_LAYERS`` layers or more planes than a texture holds (then ``triangles_at`` and
-    ``classify_samples``).
+    ``stack_levels``, or ``classify_samples`` without compute passes).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases`` (``test`` the depth
     test of both); ``planes`` from ``levels.face_planes``; ``size`` (width, height) in pixels;
@@ -181,6 +181,77 @@ def gpu_levels(
         surfaces = _copied_layers(renderer, model, camera, size, max_layers, min_fraction)
         layers = len(surfaces)
     peel_seconds = time.perf_counter() - clock + drawn.seconds
+
+    def bind(prog) -> None:
+        _bind_surfaces(renderer, prog, surfaces)
+        renderer.uniforms.set(prog, "u_layers", layers)
+
+    defines = {"K": len(surfaces), "LAYERED": layered, "STACKS": False}
+    level, sides, checked = _classify(renderer, defines, bind, samples, planes, size, test, offset, layers)
+    return GpuLevels(level, sides, checked, layers, peel_seconds)
+
+
+def stack_levels(
+    renderer: LayerRenderer,
+    samples: Samples,
+    planes: np.ndarray,
+    peeled: PixelLayers,
+    *,
+    test: DepthTest,
+    offset: float = 1.0,
+) -> GpuLevels | None:
+    """``gpu_levels`` from layers read back already (``triangles_at`` at ``pixels.probe_pixels``,
+    or whole layers), any number of them: the stacks go to the GPU as a table, and the same
+    compute pass classifies the samples and finds the faces to either side of mesh edges, as
+    ``levels.classify_samples`` and ``levels.verify_creases`` do on the CPU. None where the
+    renderer runs no compute passes or a table would not fit a texture.
+
+    Parameters as ``gpu_levels``; ``peeled`` the faces of the layers at the pixels the samples
+    probe. ``peel_seconds`` is 0: the layers were peeled by the caller.
+    """
+    renderer.make_current()
+    height, width = peeled.height, peeled.width
+    stacks, count = peeled.stacks, peeled.count.astype(np.int64)
+    faces = stacks[np.arange(stacks.shape[1]) < count[:, None]]
+    if (
+        renderer.ctx.version_code < 430
+        or not table_fits(max(len(planes), len(faces)), renderer.max_texture)
+        or max(width, height) > renderer.max_texture
+    ):
+        return None
+    # a pixel's surfaces run from the front: its row of the table and their count
+    where = np.zeros((height * width, 2), np.int32)
+    rows = np.arange(height * width) if peeled.pixels is None else peeled.pixels
+    where[rows, 0] = np.cumsum(count) - count
+    where[rows, 1] = count
+    ctx = renderer.ctx
+    # a face -1 inside a stack (none there) reads the all-zero last plane, as on the CPU
+    face_table = table_texture(ctx, np.where(faces < 0, len(planes) - 1, faces).astype(np.int32))
+    where_texture = ctx.texture(
+        (width, height), 2, where.reshape(height, width, 2)[::-1].tobytes(), dtype="i4"
+    )
+    where_texture.filter = (ctx.NEAREST, ctx.NEAREST)
+
+    def bind(prog) -> None:
+        for unit, (name, texture) in enumerate((("u_where", where_texture), ("u_faces", face_table))):
+            texture.use(location=unit)
+            renderer.uniforms.set(prog, name, unit)
+
+    try:
+        defines = {"K": 1, "LAYERED": False, "STACKS": True}
+        level, sides, checked = _classify(
+            renderer, defines, bind, samples, planes, (width, height), test, offset, peeled.layers
+        )
+    finally:
+        face_table.release()
+        where_texture.release()
+    sides[sides == len(planes) - 1] = -1
+    return GpuLevels(level, sides, checked, peeled.layers, 0.0)
+
+
+def _classify(renderer, defines, bind, samples, planes, size, test, offset, layers):
+    """(level, sides, checked) of ``GpuLevels`` from occlusion.comp with ``defines``, its
+    faces bound by ``bind(program)``, for ``layers`` layers."""
     count = len(samples.line)
     level = np.full(count, -1, np.int32)
     sides = np.full((count, 2), -1, np.int64)
@@ -191,31 +262,32 @@ def gpu_levels(
     )
     checked[edge_rows] = True
     if len(inside) == 0:
-        return GpuLevels(level, sides, checked, layers, peel_seconds)
+        return level, sides, checked
     if layers == 0:
         level[inside] = 0
-        return GpuLevels(level, sides, checked, layers, peel_seconds)
-    across_all = np.zeros((count, 2))
-    across_all[edge_rows] = across
+        return level, sides, checked
     flags = (~np.isin(samples.kind, (SILHOUETTE, BORDER))).astype(np.int32) | (checked.astype(np.int32) << 1)
-    packed = np.zeros(len(inside), [("eye", "<f4", 4), ("pixel", "<f4", 4), ("own", "<i4", 4)])
-    packed["eye"][:, :3] = samples.eye[inside]
-    packed["pixel"][:, :2] = samples.pixel[inside]
-    packed["pixel"][:, 2:] = across_all[inside]
-    packed["own"][:, :2] = samples.faces[inside]
-    packed["own"][:, 2] = flags[inside]
+    packed = np.zeros(
+        len(inside), [("eye", "<f4", 3), ("flags", "<i4"), ("pixel", "<i4", 4), ("own", "<i4", 4)]
+    )
+    packed["eye"] = samples.eye[inside]
+    packed["flags"] = flags[inside]
+    # pixels floored here in double precision, as the CPU reference has them
+    packed["pixel"][:, :2] = around(samples.pixel[inside])
+    at = np.flatnonzero(checked[inside])
+    packed["pixel"][at, 2:] = np.floor(samples.pixel[edge_rows] + offset * across)
+    packed["own"][at, :2] = np.floor(samples.pixel[edge_rows] - offset * across)
+    packed["own"][:, 2:] = samples.faces[inside]
 
     ctx = renderer.ctx
-    prog = renderer.compute(OCCLUSION_COMP, {"K": len(surfaces), "LAYERED": layered})
-    _bind_surfaces(renderer, prog, surfaces)
+    prog = renderer.compute(OCCLUSION_COMP, defines)
+    bind(prog)
     put = renderer.uniforms.set
     put(prog, "u_count", len(inside))
-    put(prog, "u_layers", layers)
     put(prog, "u_size", tuple(size))
     put(prog, "u_ortho", bool(test.ortho))
     put(prog, "u_tolerance", float(np.float32(test.tolerance)))
     put(prog, "u_footprint", float(test.footprint))
-    put(prog, "u_offset", float(offset))
     plane_texture = table_texture(ctx, planes.astype(np.float32))
     plane_texture.use(location=MAX_LAYERS)
     put(prog, "u_planes", MAX_LAYERS)
@@ -234,4 +306,4 @@ def gpu_levels(
         plane_texture.release()
     level[inside] = result[:, 0]
     sides[inside] = result[:, 1:3]
-    return GpuLevels(level, sides, checked, layers, peel_seconds)
+    return level, sides, checked
