@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint import parallel
+
 __all__ = ["sorted_with_order", "stable_argsort", "unique_first"]
 
 # Indices packed into keys at a time (``sorted_with_order``).
@@ -33,7 +35,7 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
         packed -= low
         packed <<= bits
         packed |= np.arange(n)
-        packed.sort()
+        parallel.sort(packed)
         packed &= (1 << bits) - 1
         return packed
     return np.argsort(key, kind="stable")
@@ -49,15 +51,26 @@ def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndar
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
     if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
-        packed = key if overwrite and key.dtype == np.int64 else key.astype(np.int64)
-        packed -= low
-        packed <<= bits
-        for start in range(0, n, _BLOCK):
-            packed[start : start + _BLOCK] |= np.arange(start, min(start + _BLOCK, n))
-        packed.sort()
-        ordered = packed >> bits
-        ordered += low
-        packed &= (1 << bits) - 1
+        packed = key if overwrite and key.dtype == np.int64 else np.empty(n, np.int64)
+
+        def pack(lo: int, hi: int) -> None:
+            block = packed[lo:hi]
+            block[:] = key[lo:hi]
+            block -= low
+            block <<= bits
+            for start in range(lo, hi, _BLOCK):
+                packed[start : min(start + _BLOCK, hi)] |= np.arange(start, min(start + _BLOCK, hi))
+
+        parallel.run(pack, n)
+        parallel.sort(packed)
+        ordered = np.empty(n, np.int64)
+
+        def unpack(lo: int, hi: int) -> None:
+            np.right_shift(packed[lo:hi], bits, out=ordered[lo:hi])
+            ordered[lo:hi] += low
+            packed[lo:hi] &= (1 << bits) - 1
+
+        parallel.run(unpack, n)
         return ordered, packed
     order = np.argsort(key, kind="stable")
     return key[order].astype(np.int64), order
