@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
 
@@ -32,7 +33,11 @@ from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
         "too-wide-to-pack",
     ],
 )
-def test_sorts_equal_numpys(count, low, high):
+@pytest.mark.parametrize("threads", [1, 3])
+def test_sorts_equal_numpys(count, low, high, threads, monkeypatch):
+    # blocks of a few keys each, so that even small arrays are split over the threads
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
     key = np.random.default_rng(count).integers(low, high, count)
     np.testing.assert_array_equal(stable_argsort(key), np.argsort(key, kind="stable"))
     ordered, order = sorted_with_order(key)
