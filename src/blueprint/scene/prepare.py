@@ -115,15 +115,29 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         del key
     count = len(corner_vertex) if chosen is None else len(chosen)
     vertices = np.zeros(count, VERTEX)
-    # a block of vertices at a time: their gathered fields are as large as the vertices
-    for lo in range(0, count, _BLOCK):
-        corner = np.arange(lo, min(lo + _BLOCK, count)) if chosen is None else chosen[lo : lo + _BLOCK]
-        rows = slice(lo, lo + len(corner))
-        vertices["p"][rows] = np.take(model.positions, corner_vertex[corner], axis=0)
-        if normals is not None:
-            vertices["n"][rows] = np.take(normals, corner, axis=0)
-        vertices["part"][rows] = model.face_part[corner // 3]
+    parallel.run(partial(_filled, model, corner_vertex, chosen, normals, vertices), count)
     return vertices, inverse
+
+
+def _filled(
+    model: Model,
+    corner_vertex: np.ndarray,
+    chosen: np.ndarray | None,
+    normals: np.ndarray | None,
+    out: np.ndarray,
+    lo: int,
+    hi: int,
+) -> None:
+    """``out[lo:hi]`` (``VERTEX``): the fields of the corners ``chosen`` (None: every corner)
+    from lo to hi. A block of vertices at a time: their gathered fields are as large as the
+    vertices."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        corner = np.arange(start, stop) if chosen is None else chosen[start:stop]
+        out["p"][start:stop] = np.take(model.positions, corner_vertex[corner], axis=0)
+        if normals is not None:
+            out["n"][start:stop] = np.take(normals, corner, axis=0)
+        out["part"][start:stop] = model.face_part[corner // 3]
 
 
 def _soup_vertices(
@@ -143,22 +157,36 @@ def _soup_vertices(
         key += np.repeat(model.face_part, 3)
     _, first, inverse = unique_first(key)
     del key
-    corner_vertex = model.faces.reshape(-1)
-    bits = model.positions.view(np.uint32)
-    normal_bits = normals.view(np.uint32)
     apart = np.zeros(n, bool)
-    for lo in range(0, n, _BLOCK):
-        first_corner = first[inverse[lo : lo + _BLOCK]]
-        mine = slice(lo, lo + len(first_corner))
-        differs = np.take(normal_bits, first_corner, axis=0) != normal_bits[mine]
-        differs |= np.take(bits, corner_vertex[first_corner], axis=0) != np.take(
-            bits, corner_vertex[mine], axis=0
-        )
-        apart[mine] = differs.any(axis=1)
+    parallel.run(partial(_apart, model, normals, first, inverse, apart), n)
     own = np.flatnonzero(apart)
     vertex = inverse.astype(np.uint32)
     vertex[own] = np.arange(len(first), len(first) + len(own), dtype=np.uint32)
     return np.concatenate([first, own]), vertex
+
+
+def _apart(
+    model: Model,
+    normals: np.ndarray,
+    first: np.ndarray,
+    inverse: np.ndarray,
+    out: np.ndarray,
+    lo: int,
+    hi: int,
+) -> None:
+    """``out[lo:hi]``: the soup's corner differs from the first corner of its welded vertex and
+    part (``first[inverse]``) in position or normal, bit for bit."""
+    corner_vertex = model.faces.reshape(-1)
+    bits = model.positions.view(np.uint32)
+    normal_bits = normals.view(np.uint32)
+    for start in range(lo, hi, _BLOCK):
+        first_corner = first[inverse[start : min(start + _BLOCK, hi)]]
+        mine = slice(start, start + len(first_corner))
+        differs = np.take(normal_bits, first_corner, axis=0) != normal_bits[mine]
+        differs |= np.take(bits, corner_vertex[first_corner], axis=0) != np.take(
+            bits, corner_vertex[mine], axis=0
+        )
+        out[mine] = differs.any(axis=1)
 
 
 def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
