@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from blueprint import parallel, settings
 from blueprint.render.mesh import GpuMesh
 from blueprint.scene import environment, normals, prepare, up, weld
 from blueprint.scene.model import Model
@@ -166,9 +167,13 @@ def reference_arrays(model: Model, crease: float) -> tuple[np.ndarray, np.ndarra
     return vertices, inverse.reshape(-1).astype(np.uint32)
 
 
+@pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("crease", [15.0, 30.0])
 @pytest.mark.parametrize("shape", ["mixed", "indexed-box", "soup"])
-def test_gpu_arrays_equal_unique_rows(shape, crease):
+def test_gpu_arrays_equal_unique_rows(shape, crease, threads, monkeypatch):
+    # blocks of a few rows, so that these small meshes are split over the threads
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 8)
     positions, faces, face_part = mixed_mesh()
     if shape == "indexed-box":
         # an indexed box whose parts share vertices: corners split by part and by crease
@@ -383,3 +388,43 @@ def test_content_digest_hash_by_size(monkeypatch, small):
     expected.update(b"3")
     assert len(m.part_names) == 3
     assert m.content_digest() == expected.digest()
+
+
+def _noisy_sphere(soup: bool) -> Model:
+    """An icosphere of 5 120 faces, its vertices moved along their radius by noise, in three
+    parts, as an indexed mesh or as a triangle soup (a third of its faces wound the other way)."""
+    sphere = trimesh.creation.icosphere(subdivisions=4)
+    rng = np.random.default_rng(9)
+    v = sphere.vertices * (1 + rng.normal(0, 0.02, (len(sphere.vertices), 1)))
+    f = sphere.faces.copy()
+    f[::3] = f[::3, ::-1]
+    face_part = (np.arange(len(f)) // 7) % 3
+    if soup:
+        return Model.from_arrays(v[f].reshape(-1, 3), np.arange(3 * len(f)).reshape(-1, 3), face_part)
+    return Model.from_arrays(v, f, face_part)
+
+
+@pytest.mark.parametrize("soup", [False, True])
+def test_preparing_over_threads_gives_the_same_bits_as_one(soup, monkeypatch):
+    model = _noisy_sphere(soup)
+    made = {}
+    for threads, block in ((1, parallel.MIN_BLOCK), (4, 16), (7, 1000)):
+        monkeypatch.setattr(settings, "THREADS", threads)
+        monkeypatch.setattr(parallel, "MIN_BLOCK", block)
+        topology = {}
+        made[threads] = (
+            *prepare._prepare(model, 20.0, topology),
+            *prepare._prepare(model, None, None),
+            topology["welded"],
+            topology[("sharp", 20.0)],
+            normals.corner_normals(model.positions, model.faces, 20.0),
+            weld.weld_groups(model.positions, 1e-3)[0],
+        )
+    for threads in (4, 7):
+        for got, expected in zip(made[threads], made[1], strict=True):
+            assert got.dtype == expected.dtype and got.tobytes() == expected.tobytes()
+    vertices, indices = made[1][:2]
+    assert (
+        vertices[indices].tobytes()
+        == reference_arrays(model, 20.0)[0][reference_arrays(model, 20.0)[1]].tobytes()
+    )
