@@ -423,8 +423,8 @@ def test_preparing_over_threads_gives_the_same_bits_as_one(soup, monkeypatch):
     for threads in (4, 7):
         for got, expected in zip(made[threads], made[1], strict=True):
             assert got.dtype == expected.dtype and got.tobytes() == expected.tobytes()
+    # the corners draw as the reference's; some vertices lie on creases
     vertices, indices = made[1][:2]
-    assert (
-        vertices[indices].tobytes()
-        == reference_arrays(model, 20.0)[0][reference_arrays(model, 20.0)[1]].tobytes()
-    )
+    expected_vertices, expected_indices = reference_arrays(model, 20.0)
+    assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
+    assert made[1][5].any()
