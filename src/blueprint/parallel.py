@@ -26,6 +26,9 @@ T = TypeVar("T")
 # more than the work.
 MIN_BLOCK = 1 << 16
 
+# mallopt's parameter for the most arenas glibc's allocator makes
+_M_ARENA_MAX = -8
+
 _lock = threading.Lock()
 # the pool and the process that made it: a forked child makes its own (its parent's threads
 # are not in it)
@@ -37,11 +40,24 @@ def _executor() -> ThreadPoolExecutor:
     global _pool
     with _lock:
         if _pool is None or _pool[0] != os.getpid():
+            _one_arena()
             _pool = (
                 os.getpid(),
                 ThreadPoolExecutor(settings.THREADS, "blueprint", initializer=_mark_worker),
             )
         return _pool[1]
+
+
+def _one_arena() -> None:
+    """Have glibc's allocator serve every thread from one arena: by default each thread that
+    allocates gets an arena of its own, whose freed blocks the others never reuse, so the
+    memory a pool's thread frees stays with the process through the drawing after it."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").mallopt(_M_ARENA_MAX, 1)
+    except (OSError, AttributeError):
+        pass  # not glibc: its allocator's own ways
 
 
 def _mark_worker() -> None:
