@@ -87,7 +87,8 @@ def crease_vertices(
     corner = order[sharp_pair]
     del order
     face, k = corner // 3, corner % 3
-    ends = np.asarray(positions, np.float64)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])]
+    # the ends alone in float64, not every position
+    ends = np.asarray(positions)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])].astype(np.float64)
     length = np.linalg.norm(ends[1] - ends[0], axis=1)
     crease = key[sharp_pair]
     del pair, cos
