@@ -87,12 +87,44 @@ def run(work: Callable[[int, int], T], n: int, min_block: int | None = None) -> 
 
 
 def sort(values: np.ndarray, min_block: int | None = None) -> None:
-    """Sort the 1-D integer array ``values`` in place: blocks of it sorted side by side, then
-    merged by one stable sort, which finds the sorted runs and merges them (a sort of values:
-    the same result as ``values.sort()``)."""
+    """Sort the 1-D integer array ``values`` in place, as ``values.sort()`` does: blocks of it
+    sorted side by side; then cut by value at the blocks' quantiles into as many ranges, the
+    pieces of each range from every block merged by a stable sort (which finds their sorted
+    runs and merges them), the ranges side by side."""
     blocks = cuts(len(values), min_block)
     if len(blocks) == 1:
         values.sort()
         return
     run(lambda start, stop: values[start:stop].sort(), len(values), min_block)
-    values.sort(kind="stable")
+    count = len(blocks)
+    picks = np.concatenate(
+        [
+            values[start:stop][np.linspace(0, stop - start - 1, 4 * count).astype(np.int64)]
+            for start, stop in blocks
+        ]
+    )
+    picks.sort()
+    splitters = picks[np.linspace(0, len(picks) - 1, count + 1)[1:-1].astype(np.int64)]
+    # where each range begins and ends in each block: values up to a splitter go before it
+    bounds = np.array(
+        [
+            np.r_[start, start + np.searchsorted(values[start:stop], splitters, side="right"), stop]
+            for start, stop in blocks
+        ]
+    )
+    sizes = (bounds[:, 1:] - bounds[:, :-1]).sum(axis=0)
+    offsets = np.r_[0, np.cumsum(sizes)]
+    merged = np.empty_like(values)
+
+    def merge(first: int, last: int) -> None:
+        for k in range(first, last):
+            piece = np.concatenate([values[b[k] : b[k + 1]] for b in bounds])
+            piece.sort(kind="stable")
+            merged[offsets[k] : offsets[k + 1]] = piece
+
+    run(merge, count, min_block=1)
+
+    def copy(start: int, stop: int) -> None:
+        values[start:stop] = merged[start:stop]
+
+    run(copy, len(values), min_block)
