@@ -367,24 +367,33 @@ def test_content_digest_is_the_triangles():
     assert len({m.content_digest() for m in [one, *others]}) == 5
 
 
+@pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("small", [True, False])
-def test_content_digest_hash_by_size(monkeypatch, small):
+def test_content_digest_hash_by_size(monkeypatch, small, threads):
     """A mesh below ``_SMALL_DIGEST`` bytes is digested by BLAKE2b (no OpenSSL to load), a
-    bigger one by SHA-256: each the hash of the arrays' types, shapes and bytes, and the part
+    bigger one by SHA-256: each the hash of the arrays' types, shapes and bytes (a big one's
+    as the SHA-256 digests of their blocks of ``_DIGEST_BLOCK`` bytes, in order), and the part
     count, as hashlib computes it."""
     import hashlib
 
     from blueprint.scene import model as model_module
 
+    monkeypatch.setattr(settings, "THREADS", threads)
     box = trimesh.creation.box()
     m = Model.from_arrays(box.vertices, box.faces, np.arange(12) % 3)
     arrays = (m.positions, m.faces, m.face_part)
     if not small:
         monkeypatch.setattr(model_module, "_SMALL_DIGEST", sum(a.nbytes for a in arrays))
+        monkeypatch.setattr(model_module, "_DIGEST_BLOCK", 40)
     expected = hashlib.blake2b() if small else hashlib.sha256()
     for a in arrays:
         expected.update(str((a.dtype.str, a.shape)).encode())
-        expected.update(a.tobytes())
+        data = a.tobytes()
+        if small:
+            expected.update(data)
+        else:
+            for start in range(0, len(data), 40):
+                expected.update(hashlib.sha256(data[start : start + 40]).digest())
     expected.update(b"3")
     assert len(m.part_names) == 3
     assert m.content_digest() == expected.digest()
