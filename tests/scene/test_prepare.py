@@ -437,3 +437,19 @@ def test_preparing_over_threads_gives_the_same_bits_as_one(soup, monkeypatch):
     expected_vertices, expected_indices = reference_arrays(model, 20.0)
     assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
     assert made[1][5].any()
+
+
+@pytest.mark.parametrize("parts", [1, 2])
+def test_a_soup_with_unused_vertices_between_its_corners_draws_them_as_its_own(parts):
+    """Corners in vertex order, with vertices no face uses between them (each welded apart
+    from every corner, or onto one): the welded ids of the corners are not dense."""
+    sphere = trimesh.creation.icosphere(subdivisions=1)
+    soup = sphere.vertices[sphere.faces].reshape(-1, 3)
+    lone = np.array([[5.0, 5.0, 5.0], [-5.0, 0.0, 0.0]])
+    positions = np.concatenate([soup[:30], lone[:1], soup[30:], lone[1:], soup[:1]])
+    corners = np.r_[np.arange(30), 31 + np.arange(len(soup) - 30)]
+    model = Model.from_arrays(positions, corners.reshape(-1, 3), np.arange(len(sphere.faces)) % parts)
+    vertices, indices = prepare._prepare(model, 30.0, None)
+    expected_vertices, expected_indices = reference_arrays(model, 30.0)
+    assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
+    assert indices.max() + 1 == len(vertices) < len(corners)

@@ -152,10 +152,23 @@ def _soup_vertices(
     if welded is None:
         return None, np.arange(n, dtype=np.uint32)
     key = welded.reshape(-1)
+    first = None
     if len(model.part_names) > 1:
         key = key.astype(np.int64) * len(model.part_names)
         key += np.repeat(model.face_part, 3)
-    _, first, inverse = unique_first(key)
+    else:
+        # the welded ids are numbered by their first vertex, here their first corner: a corner
+        # is its id's first where the id passes every id before it
+        new = np.empty(n, bool)
+        new[0] = True
+        np.greater(key[1:], np.maximum.accumulate(key)[:-1], out=new[1:])
+        first = np.flatnonzero(new)
+        del new
+        inverse = key
+        if int(key.max(initial=-1)) + 1 != len(first):
+            first = None  # ids of vertices no corner uses lie between: numbered anew
+    if first is None:
+        _, first, inverse = unique_first(key)
     del key
     apart = np.zeros(n, bool)
     parallel.run(partial(_apart, model, normals, first, inverse, apart), n)
