@@ -243,8 +243,8 @@ class Camera:
         cam_y = np.cross(cam_z, cam_x)
 
         each = _each_block(points)
-        lo = np.min(each(lambda b: b.min(axis=0)), axis=0)
-        hi = np.max(each(lambda b: b.max(axis=0)), axis=0)
+        lo = np.min(each(column_min), axis=0)
+        hi = np.max(each(column_max), axis=0)
         center = (lo + hi) / 2
         extent = float(np.linalg.norm(hi - lo)) or 1.0
         basis = np.stack([cam_x, cam_y, cam_z], axis=1)

@@ -245,7 +245,8 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     pair -= np.maximum.accumulate(np.where(new_key, pair, 0))
     inverse[inside] = offset[inside_key] + pair
     chosen = last[np.repeat(np.arange(keys), count)]
-    ends = np.flatnonzero(np.r_[new[1:], True])[: len(new)]
+    # the last corner of each run of one pair
+    ends = np.flatnonzero(np.r_[new[1:], True]) if len(inside) else np.zeros(0, np.int64)
     chosen[offset[inside_key[ends]] + pair[ends]] = inside[ends]
     return chosen, inverse
 
