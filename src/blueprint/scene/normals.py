@@ -7,7 +7,7 @@ from functools import partial
 import numpy as np
 
 from blueprint import parallel
-from blueprint.columns import column_max, column_min, indexed_cross
+from blueprint.columns import column_max, column_min, indexed_cross, row_norm
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import sorted_with_order, stable_argsort
 
@@ -262,12 +262,12 @@ def _vertex_sums(
 
 def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: ``rows[lo:hi]`` (N, 3) over their lengths (zero rows stay zero)."""
-    length = np.linalg.norm(rows[lo:hi], axis=1)
+    length = row_norm(rows[lo:hi])
     np.divide(rows[lo:hi], np.where(length > 0, length, 1.0)[:, None], out=out[lo:hi])
 
 
 def _row_norms(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    out[lo:hi] = np.linalg.norm(rows[lo:hi], axis=1)
+    out[lo:hi] = row_norm(rows[lo:hi])
 
 
 def _taken(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
