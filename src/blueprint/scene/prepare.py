@@ -199,7 +199,9 @@ def _apart(
         differs |= np.take(bits, corner_vertex[first_corner], axis=0) != np.take(
             bits, corner_vertex[mine], axis=0
         )
-        out[mine] = differs.any(axis=1)
+        # a column at a time: NumPy reduces short rows slowly
+        np.logical_or(differs[:, 0], differs[:, 1], out=out[mine])
+        out[mine] |= differs[:, 2]
 
 
 def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -274,7 +276,8 @@ def _differs_from(
     for start in range(lo, hi, _BLOCK):
         rows = slice(start, min(start + _BLOCK, hi))
         differs = np.take(bits, last[key[rows]], axis=0) != bits[rows]
-        np.any(differs, axis=1, out=out[rows])
+        np.logical_or(differs[:, 0], differs[:, 1], out=out[rows])
+        out[rows] |= differs[:, 2]
 
 
 def _gathered(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
