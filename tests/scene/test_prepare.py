@@ -292,15 +292,18 @@ def test_topologies_kept_are_bounded(monkeypatch):
     assert not prepare._topologies
 
 
-def test_up_guess_a_block_at_a_time_equals_all_at_once(monkeypatch):
-    """Flat faces at the bottom of every axis in several blocks: a finely split box under the
-    mixed mesh."""
+@pytest.mark.parametrize("threads", [1, 3])
+def test_up_guess_a_block_at_a_time_equals_all_at_once(monkeypatch, threads):
+    """Flat faces at the bottom of every axis in several blocks (over several threads): a
+    finely split box under the mixed mesh."""
     positions, faces, _ = mixed_mesh()
     box = trimesh.creation.box(extents=(2, 2, 2)).subdivide().subdivide()
     faces = np.r_[faces, box.faces + len(positions)]
     positions = np.r_[positions, box.vertices - 4.0]
     whole = [up.base_fraction(positions, faces, axis) for axis in range(3)]
     monkeypatch.setattr(up, "_BLOCK", 7)
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 20)
     assert [up.base_fraction(positions, faces, axis) for axis in range(3)] == whole
     assert all(value > 0 for value in whole)
 
