@@ -19,6 +19,8 @@ _MAX_DEGREE = 64
 _CONE = 44.0
 # Pairs of faces whose normals are compared at a time.
 _CROSS_BLOCK = 1 << 18
+# Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
+_ROWS = 1 << 16
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
 # A run of crease edges touching no border is a scan's noise while it has fewer edges than this
@@ -111,10 +113,12 @@ def crease_vertices(
 def _edge_keys(welded: np.ndarray, vertices: int, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]`` (F, 3) int64: edge ``k`` of each face, from its corner ``k`` to ``k + 1``,
     keyed ``lo * vertices + hi`` of its welded vertices."""
-    for k in range(3):
-        a, b = welded[lo:hi, k], welded[lo:hi, (k + 1) % 3]
-        np.multiply(np.minimum(a, b), vertices, out=out[lo:hi, k], dtype=np.int64)
-        out[lo:hi, k] += np.maximum(a, b)
+    for start in range(lo, hi, _ROWS):
+        rows = slice(start, min(start + _ROWS, hi))
+        for k in range(3):
+            a, b = welded[rows, k], welded[rows, (k + 1) % 3]
+            np.multiply(np.minimum(a, b), vertices, out=out[rows, k], dtype=np.int64)
+            out[rows, k] += np.maximum(a, b)
 
 
 def _pair_cos(
@@ -262,8 +266,10 @@ def _vertex_sums(
 
 def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: ``rows[lo:hi]`` (N, 3) over their lengths (zero rows stay zero)."""
-    length = row_norm(rows[lo:hi])
-    np.divide(rows[lo:hi], np.where(length > 0, length, 1.0)[:, None], out=out[lo:hi])
+    for start in range(lo, hi, _ROWS):
+        block = slice(start, min(start + _ROWS, hi))
+        length = row_norm(rows[block])
+        np.divide(rows[block], np.where(length > 0, length, 1.0)[:, None], out=out[block])
 
 
 def _row_norms(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
@@ -285,10 +291,12 @@ def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length:
 
     def marked(lo: int, hi: int) -> None:
         # only True is written, by any thread, so the marks do not depend on their order
-        for j in range(3):
-            at = welded[lo:hi, j]
-            dot = np.einsum("ij,ij->i", unit[lo:hi], np.take(axis, at, axis=0))
-            outside[at[dot <= limit[at]]] = True
+        for start in range(lo, hi, _ROWS):
+            rows = slice(start, min(start + _ROWS, hi))
+            for j in range(3):
+                at = welded[rows, j]
+                dot = np.einsum("ij,ij->i", unit[rows], np.take(axis, at, axis=0))
+                outside[at[dot <= limit[at]]] = True
 
     parallel.run(marked, len(welded))
     return ~outside

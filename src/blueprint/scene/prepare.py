@@ -27,7 +27,7 @@ VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
 _KEPT = 4
 _KEPT_BYTES = settings.MEMORY_BUDGET // 32
 # Vertices whose fields are gathered at a time.
-_BLOCK = 1 << 20
+_BLOCK = 1 << 16
 # Keys numbered by a table over their range, not a sort, up to this many times their number.
 _TABLE_PER_KEY = 4
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.

@@ -234,7 +234,9 @@ def _hashed(positions: np.ndarray, low: np.uint64, key: np.ndarray, lo: int, hi:
 
 def _same_hash(key: np.ndarray, low: np.uint64, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: sorted keys ``i`` and ``i + 1`` are equal above the bits of ``low``."""
-    np.less_equal(np.bitwise_xor(key[lo + 1 : hi + 1], key[lo:hi]), low, out=out[lo:hi])
+    for start in range(lo, hi, _HASH_BLOCK):
+        stop = min(start + _HASH_BLOCK, hi)
+        np.less_equal(np.bitwise_xor(key[start + 1 : stop + 1], key[start:stop]), low, out=out[start:stop])
 
 
 def _unpacked(key: np.ndarray, low: np.uint64, lo: int, hi: int) -> None:
