@@ -34,7 +34,7 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
         return np.zeros(0, np.int64)
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
-    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
+    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
         packed = key.astype(np.int64)
         packed -= low
         packed <<= bits
@@ -55,7 +55,7 @@ def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndar
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
-    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
+    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
         packed = key if overwrite and key.dtype == np.int64 else np.empty(n, np.int64)
 
         def pack(lo: int, hi: int) -> None:
@@ -91,8 +91,8 @@ def _by_buckets(key: np.ndarray, low: int, high: int) -> tuple[np.ndarray, np.nd
     it and sorted, the buckets side by side; None where a bucket's still do not fit."""
     n = len(key)
     span = (high - low).bit_length()
-    if span > 62:
-        return None
+    if span > 62 or high >= 1 << 63:
+        return None  # not held by int64 keys
     fewest = max(1, -(-(span + n.bit_length() - 62) // 2), (4 * settings.THREADS - 1).bit_length())
     for power in range(fewest, _MAX_BUCKETS.bit_length()):
         shift = max(span - power, 0)
