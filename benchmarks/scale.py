@@ -4,6 +4,7 @@ own, to a PNG and to an SVG; one JSON line a case.
     python benchmarks/scale.py [--families scan,assembly,parts] [--sizes FAMILY=S1,S2 ...]
                                [--quick] [--size 1024 1024] [--max-layers 0]
                                [--outputs png,svg] [--src DIR] [--workdir DIR] [--timeout 900]
+                               [--threads 1,16]
 
 Families, each with a size parameter:
 
@@ -17,12 +18,13 @@ Families, each with a size parameter:
   part count.
 
 Each line: ``family``, ``size``, ``file`` (and its ``format`` and ``file_bytes``),
-``triangles_drawn``, ``triangles_unique``, ``parts``, ``instances``, ``output``, ``seconds`` (the
-whole process, wall), ``stages`` (seconds: the command's own timings, ``BLUEPRINT_STAGES=1``,
-see ``blueprint.api.stages``), ``peak_rss_bytes`` (the process's peak resident memory, VmHWM,
-and ``bytes_per_triangle`` drawn),
-``gpu_memory`` (bytes, where the driver tells), and ``error`` (its last line) where the command
-failed or ran past ``--timeout``. ``--src`` names the source tree to run (default: this one's),
+``triangles_drawn``, ``triangles_unique``, ``parts``, ``instances``, ``output``, ``threads`` (with
+``--threads``: the preparation's, ``BLUEPRINT_THREADS``), ``seconds`` (the whole process, wall),
+``cpu_seconds`` (its user and system time, every thread's), ``stages`` (seconds: the command's
+own timings, ``BLUEPRINT_STAGES=1``, see ``blueprint.api.stages``), ``peak_rss_bytes`` (the
+process's peak resident memory, VmHWM, and ``bytes_per_triangle`` drawn), ``gpu_memory``
+(bytes, where the driver tells), and ``error`` (its last line) where the command failed or ran
+past ``--timeout``. ``--src`` names the source tree to run (default: this one's),
 so that two trees can be timed in turns. The models are kept in ``--workdir`` and made once.
 """
 
@@ -281,12 +283,23 @@ atexit.register(_peak)
 """
 
 
-def run(src: Path, model: Path, output: Path, size: tuple[int, int], layers: int, timeout: float) -> dict:
-    """One ``blueprint render`` in a process of its own: its wall seconds, its peak resident
-    memory, its stage timings, or its error."""
+def run(
+    src: Path,
+    model: Path,
+    output: Path,
+    size: tuple[int, int],
+    layers: int,
+    timeout: float,
+    threads: int | None = None,
+) -> dict:
+    """One ``blueprint render`` in a process of its own (its preparation on ``threads``
+    threads, ``BLUEPRINT_THREADS``; None: the tree's default): its wall seconds, its CPU
+    seconds (threads included), its peak resident memory, its stage timings, or its error."""
     # the tree first, the environment's own paths after it (a device's carried wheels)
     path = os.pathsep.join(p for p in (str(src), os.environ.get("PYTHONPATH")) if p)
     env = {**os.environ, "PYTHONPATH": path, "BLUEPRINT_STAGES": "1"}
+    if threads is not None:
+        env["BLUEPRINT_THREADS"] = str(threads)
     code = _PEAK + "from blueprint.cli import main; main()"
     argv = [sys.executable, "-c", code, "render", str(model), "-o", str(output)]
     argv += ["--size", str(size[0]), str(size[1]), "--max-layers", str(layers)]
@@ -295,14 +308,18 @@ def run(src: Path, model: Path, output: Path, size: tuple[int, int], layers: int
         child = subprocess.Popen(argv, stdout=out, stderr=err, stdin=subprocess.DEVNULL, env=env)
         killer = threading.Timer(timeout, child.kill)
         killer.start()
-        _, status = os.waitpid(child.pid, 0)
+        _, status, usage = os.wait4(child.pid, 0)
         killer.cancel()
         child.returncode = os.waitstatus_to_exitcode(status)
         seconds = time.perf_counter() - start
         err.seek(0)
         lines = err.read().decode("utf-8", "replace").splitlines()
     peaks = [json.loads(line)["peak_rss"] for line in lines if line.startswith('{"peak_rss"')]
-    found = {"seconds": round(seconds, 3), "peak_rss_bytes": peaks[-1] if peaks else None}
+    found = {
+        "seconds": round(seconds, 3),
+        "cpu_seconds": round(usage.ru_utime + usage.ru_stime, 3),
+        "peak_rss_bytes": peaks[-1] if peaks else None,
+    }
     reports = [json.loads(line) for line in lines if line.startswith('{"stages"')]
     if reports:
         found["stages"] = {k: round(v, 3) for k, v in reports[-1]["stages"].items()}
@@ -326,7 +343,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--src", type=Path, default=ROOT / "src", help="the source tree to run")
     parser.add_argument("--workdir", type=Path, default=Path(tempfile.gettempdir()) / "blueprint-scale")
     parser.add_argument("--timeout", type=float, default=900.0)
+    parser.add_argument(
+        "--threads", default="", help="thread counts to prepare on, each a case (BLUEPRINT_THREADS): 1,16"
+    )
     args = parser.parse_args(argv)
+    thread_counts = [int(t) for t in args.threads.split(",") if t] or [None]
     sizes = dict(QUICK if args.quick else SIZES)
     for given in args.sizes:
         family, _, values = given.partition("=")
@@ -337,15 +358,19 @@ def main(argv: list[str] | None = None) -> None:
             files, counts = FAMILIES[family](size, args.workdir)
             for path in files:
                 for kind in args.outputs.split(","):
-                    output = args.workdir / f"{path.stem}.{path.suffix[1:]}.{kind}"
-                    found = run(args.src, path, output, tuple(args.size), args.max_layers, args.timeout)
-                    case = {"family": family, "size": size, "file": path.name, "format": path.suffix[1:]}
-                    case |= {"file_bytes": path.stat().st_size, **counts, "output": kind, **found}
-                    if found["peak_rss_bytes"]:
-                        case["bytes_per_triangle"] = round(
-                            found["peak_rss_bytes"] / counts["triangles_drawn"]
+                    for threads in thread_counts:
+                        output = args.workdir / f"{path.stem}.{path.suffix[1:]}.{kind}"
+                        found = run(
+                            args.src, path, output, tuple(args.size), args.max_layers, args.timeout, threads
                         )
-                    print(json.dumps(case), flush=True)
+                        case = {"family": family, "size": size, "file": path.name, "format": path.suffix[1:]}
+                        case |= {"file_bytes": path.stat().st_size, **counts, "output": kind}
+                        case |= ({"threads": threads} if threads else {}) | found
+                        if found["peak_rss_bytes"]:
+                            case["bytes_per_triangle"] = round(
+                                found["peak_rss_bytes"] / counts["triangles_drawn"]
+                            )
+                        print(json.dumps(case), flush=True)
 
 
 if __name__ == "__main__":

@@ -51,6 +51,7 @@ LAYERS = (
             "blueprint.blas",
             "blueprint.columns",
             "blueprint.sorting",
+            "blueprint.parallel",
             "blueprint.lazy",
         ),
     ),

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
 
@@ -19,6 +20,7 @@ from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
         (1000, 0, 2**51),
         (1000, 0, 2**53),
         (300, 0, 2**62),
+        (300, 2**63, 2**64 - 1),
     ],
     ids=[
         "empty",
@@ -30,14 +32,21 @@ from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
         "widest-packed",
         "just-too-wide-to-pack",
         "too-wide-to-pack",
+        "beyond-int64",
     ],
 )
-def test_sorts_equal_numpys(count, low, high):
-    key = np.random.default_rng(count).integers(low, high, count)
+@pytest.mark.parametrize("threads", [1, 3])
+def test_sorts_equal_numpys(count, low, high, threads, monkeypatch):
+    # blocks of a few keys each, so that even small arrays are split over the threads
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
+    key = np.random.default_rng(count).integers(
+        low, high, count, dtype=np.uint64 if low >= 2**63 else np.int64
+    )
     np.testing.assert_array_equal(stable_argsort(key), np.argsort(key, kind="stable"))
     ordered, order = sorted_with_order(key)
     np.testing.assert_array_equal(order, np.argsort(key, kind="stable"))
-    np.testing.assert_array_equal(ordered, np.sort(key))
+    np.testing.assert_array_equal(ordered, np.sort(key).astype(np.int64))  # int64 by its contract
     assert ordered.dtype == order.dtype == np.int64
     for got, expected in zip(
         unique_first(key), np.unique(key, return_index=True, return_inverse=True), strict=True

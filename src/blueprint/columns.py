@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint import parallel
+
 __all__ = [
     "column_cross",
     "column_max",
@@ -70,17 +72,22 @@ def face_cross(tri: np.ndarray) -> np.ndarray:
 def indexed_cross(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """``face_cross(positions[faces].astype(np.float64))`` of (V, 3) positions and (F, 3)
     faces, a block of faces and a coordinate at a time: without the (F, 3, 3) float64 corners,
-    and each block's differences still in the cache when their products read them."""
+    and each block's differences still in the cache when their products read them; the blocks
+    side by side (``blueprint.parallel``)."""
     out = np.empty((len(faces), 3), np.float64)
     columns = [positions[:, k] for k in range(3)]
-    for start in range(0, len(faces), _BLOCK):
-        block = faces[start : start + _BLOCK]
-        u, v = [], []
-        for column in columns:
-            first = column[block[:, 0]].astype(np.float64)
-            u.append(column[block[:, 1]].astype(np.float64) - first)
-            v.append(column[block[:, 2]].astype(np.float64) - first)
-        _cross(u, v, out=out[start : start + len(block)])
+
+    def crossed(lo: int, hi: int) -> None:
+        for start in range(lo, hi, _BLOCK):
+            block = faces[start : min(start + _BLOCK, hi)]
+            u, v = [], []
+            for column in columns:
+                first = column[block[:, 0]].astype(np.float64)
+                u.append(column[block[:, 1]].astype(np.float64) - first)
+                v.append(column[block[:, 2]].astype(np.float64) - first)
+            _cross(u, v, out=out[start : start + len(block)])
+
+    parallel.run(crossed, len(faces))
     return out
 
 

@@ -31,6 +31,8 @@ __all__ = [
     "MEMORY_ENV",
     "MODEL_FILE_LIMIT",
     "SETTINGS_FILE_LIMIT",
+    "THREADS",
+    "THREADS_ENV",
     "TRIANGLE_BYTES",
     "TRIANGLE_LIMIT",
     "Entry",
@@ -46,6 +48,7 @@ __all__ = [
     "read_file",
     "read_settings",
     "show",
+    "thread_count",
 ]
 
 # The memory one run may plan to use: what the limits below are derived from, so that a
@@ -107,6 +110,27 @@ def parse_size(text: str) -> int | None:
 
 
 MEMORY_BUDGET = memory_budget()
+# The threads a model's preparation splits its work over (blueprint.parallel).
+THREADS_ENV = "BLUEPRINT_THREADS"
+
+
+def thread_count() -> int:
+    """Threads for the work on large arrays: the cores this process may run on (at most 64);
+    the environment variable ``BLUEPRINT_THREADS`` (a whole number, at least 1) sets it
+    instead."""
+    text = os.environ.get(THREADS_ENV, "").strip()
+    # checked at import, where an error could not be one line: a value that is not a count
+    # leaves the default
+    if text.isdigit() and 0 < int(text) <= 1024:
+        return int(text)
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, 64))
+
+
+THREADS = thread_count()
 # Largest files read, in bytes: they are read whole into memory (trimesh, Pillow, the TOML and
 # JSON parsers) and copied a few times over, so a sparse or endless file must be refused before
 # it is read, not while.

@@ -11,12 +11,18 @@ them, faster again.
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
+
+from blueprint import parallel, settings
 
 __all__ = ["sorted_with_order", "stable_argsort", "unique_first"]
 
 # Indices packed into keys at a time (``sorted_with_order``).
 _BLOCK = 1 << 20
+# Buckets ``_by_buckets`` cuts the keys into, at most (a byte's values).
+_MAX_BUCKETS = 256
 # unique_first counts over the keys' range, not sorting, up to this many times their number.
 _TABLE_PER_KEY = 4
 
@@ -28,15 +34,16 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
         return np.zeros(0, np.int64)
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
-    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
+    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
         packed = key.astype(np.int64)
         packed -= low
         packed <<= bits
         packed |= np.arange(n)
-        packed.sort()
+        parallel.sort(packed)
         packed &= (1 << bits) - 1
         return packed
-    return np.argsort(key, kind="stable")
+    found = _by_buckets(key, low, high)
+    return np.argsort(key, kind="stable") if found is None else found[1]
 
 
 def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndarray, np.ndarray]:
@@ -48,19 +55,84 @@ def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndar
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
-    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62:
-        packed = key if overwrite and key.dtype == np.int64 else key.astype(np.int64)
-        packed -= low
-        packed <<= bits
-        for start in range(0, n, _BLOCK):
-            packed[start : start + _BLOCK] |= np.arange(start, min(start + _BLOCK, n))
-        packed.sort()
-        ordered = packed >> bits
-        ordered += low
-        packed &= (1 << bits) - 1
+    if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
+        packed = key if overwrite and key.dtype == np.int64 else np.empty(n, np.int64)
+
+        def pack(lo: int, hi: int) -> None:
+            block = packed[lo:hi]
+            block[:] = key[lo:hi]
+            block -= low
+            block <<= bits
+            for start in range(lo, hi, _BLOCK):
+                packed[start : min(start + _BLOCK, hi)] |= np.arange(start, min(start + _BLOCK, hi))
+
+        parallel.run(pack, n)
+        parallel.sort(packed)
+        ordered = np.empty(n, np.int64)
+
+        def unpack(lo: int, hi: int) -> None:
+            np.right_shift(packed[lo:hi], bits, out=ordered[lo:hi])
+            ordered[lo:hi] += low
+            packed[lo:hi] &= (1 << bits) - 1
+
+        parallel.run(unpack, n)
         return ordered, packed
+    found = _by_buckets(key, low, high)
+    if found is not None:
+        return found
     order = np.argsort(key, kind="stable")
     return key[order].astype(np.int64), order
+
+
+def _by_buckets(key: np.ndarray, low: int, high: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """``sorted_with_order`` of keys too wide to sort packed with their positions: the keys
+    split by the top bits of ``key - low`` into at most ``_MAX_BUCKETS`` buckets (a stable
+    counting sort), then each bucket's keys, less those bits, packed with their positions in
+    it and sorted, the buckets side by side; None where a bucket's still do not fit."""
+    n = len(key)
+    span = (high - low).bit_length()
+    if span > 62 or high >= 1 << 63:
+        return None  # not held by int64 keys
+    fewest = max(1, -(-(span + n.bit_length() - 62) // 2), (4 * settings.THREADS - 1).bit_length())
+    for power in range(fewest, _MAX_BUCKETS.bit_length()):
+        shift = max(span - power, 0)
+        bucket = np.empty(n, np.uint8)
+        parallel.run(partial(_bucket_of, key, low, shift, bucket), n)
+        counts = np.bincount(bucket, minlength=1 << power)
+        bits = int(counts.max()).bit_length()
+        if shift + bits <= 62:
+            break
+    else:
+        return None
+    order = np.argsort(bucket, kind="stable")  # a radix sort of bytes
+    del bucket
+    ends = np.cumsum(counts)
+    ordered, positions = np.empty(n, np.int64), np.empty(n, np.int64)
+
+    def sort_buckets(first: int, last: int) -> None:
+        for b in range(first, last):
+            start, stop = int(ends[b] - counts[b]), int(ends[b])
+            at = order[start:stop]
+            packed = key[at].astype(np.int64)
+            packed -= low + (b << shift)
+            packed <<= bits
+            packed |= np.arange(stop - start)
+            packed.sort()
+            np.take(at, packed & ((1 << bits) - 1), out=positions[start:stop])
+            packed >>= bits
+            packed += low + (b << shift)
+            ordered[start:stop] = packed
+
+    parallel.run(sort_buckets, len(counts), min_block=1)
+    return ordered, positions
+
+
+def _bucket_of(key: np.ndarray, low: int, shift: int, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: ``(key - low) >> shift`` of ``key[lo:hi]``, as bytes."""
+    block = key[lo:hi].astype(np.int64)
+    block -= low
+    block >>= shift
+    out[lo:hi] = block
 
 
 def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

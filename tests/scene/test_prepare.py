@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from blueprint import parallel, settings
 from blueprint.render.mesh import GpuMesh
 from blueprint.scene import environment, normals, prepare, up, weld
 from blueprint.scene.model import Model
@@ -166,9 +167,13 @@ def reference_arrays(model: Model, crease: float) -> tuple[np.ndarray, np.ndarra
     return vertices, inverse.reshape(-1).astype(np.uint32)
 
 
+@pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("crease", [15.0, 30.0])
 @pytest.mark.parametrize("shape", ["mixed", "indexed-box", "soup"])
-def test_gpu_arrays_equal_unique_rows(shape, crease):
+def test_gpu_arrays_equal_unique_rows(shape, crease, threads, monkeypatch):
+    # blocks of a few rows, so that these small meshes are split over the threads
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 8)
     positions, faces, face_part = mixed_mesh()
     if shape == "indexed-box":
         # an indexed box whose parts share vertices: corners split by part and by crease
@@ -287,15 +292,18 @@ def test_topologies_kept_are_bounded(monkeypatch):
     assert not prepare._topologies
 
 
-def test_up_guess_a_block_at_a_time_equals_all_at_once(monkeypatch):
-    """Flat faces at the bottom of every axis in several blocks: a finely split box under the
-    mixed mesh."""
+@pytest.mark.parametrize("threads", [1, 3])
+def test_up_guess_a_block_at_a_time_equals_all_at_once(monkeypatch, threads):
+    """Flat faces at the bottom of every axis in several blocks (over several threads): a
+    finely split box under the mixed mesh."""
     positions, faces, _ = mixed_mesh()
     box = trimesh.creation.box(extents=(2, 2, 2)).subdivide().subdivide()
     faces = np.r_[faces, box.faces + len(positions)]
     positions = np.r_[positions, box.vertices - 4.0]
     whole = [up.base_fraction(positions, faces, axis) for axis in range(3)]
     monkeypatch.setattr(up, "_BLOCK", 7)
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 20)
     assert [up.base_fraction(positions, faces, axis) for axis in range(3)] == whole
     assert all(value > 0 for value in whole)
 
@@ -362,24 +370,89 @@ def test_content_digest_is_the_triangles():
     assert len({m.content_digest() for m in [one, *others]}) == 5
 
 
+@pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("small", [True, False])
-def test_content_digest_hash_by_size(monkeypatch, small):
+def test_content_digest_hash_by_size(monkeypatch, small, threads):
     """A mesh below ``_SMALL_DIGEST`` bytes is digested by BLAKE2b (no OpenSSL to load), a
-    bigger one by SHA-256: each the hash of the arrays' types, shapes and bytes, and the part
+    bigger one by SHA-256: each the hash of the arrays' types, shapes and bytes (a big one's
+    as the SHA-256 digests of their blocks of ``_DIGEST_BLOCK`` bytes, in order), and the part
     count, as hashlib computes it."""
     import hashlib
 
     from blueprint.scene import model as model_module
 
+    monkeypatch.setattr(settings, "THREADS", threads)
     box = trimesh.creation.box()
     m = Model.from_arrays(box.vertices, box.faces, np.arange(12) % 3)
     arrays = (m.positions, m.faces, m.face_part)
     if not small:
         monkeypatch.setattr(model_module, "_SMALL_DIGEST", sum(a.nbytes for a in arrays))
+        monkeypatch.setattr(model_module, "_DIGEST_BLOCK", 40)
     expected = hashlib.blake2b() if small else hashlib.sha256()
     for a in arrays:
         expected.update(str((a.dtype.str, a.shape)).encode())
-        expected.update(a.tobytes())
+        data = a.tobytes()
+        if small:
+            expected.update(data)
+        else:
+            for start in range(0, len(data), 40):
+                expected.update(hashlib.sha256(data[start : start + 40]).digest())
     expected.update(b"3")
     assert len(m.part_names) == 3
     assert m.content_digest() == expected.digest()
+
+
+def _noisy_sphere(soup: bool) -> Model:
+    """An icosphere of 5 120 faces, its vertices moved along their radius by noise, in three
+    parts, as an indexed mesh or as a triangle soup (a third of its faces wound the other way)."""
+    sphere = trimesh.creation.icosphere(subdivisions=4)
+    rng = np.random.default_rng(9)
+    v = sphere.vertices * (1 + rng.normal(0, 0.02, (len(sphere.vertices), 1)))
+    f = sphere.faces.copy()
+    f[::3] = f[::3, ::-1]
+    face_part = (np.arange(len(f)) // 7) % 3
+    if soup:
+        return Model.from_arrays(v[f].reshape(-1, 3), np.arange(3 * len(f)).reshape(-1, 3), face_part)
+    return Model.from_arrays(v, f, face_part)
+
+
+@pytest.mark.parametrize("soup", [False, True])
+def test_preparing_over_threads_gives_the_same_bits_as_one(soup, monkeypatch):
+    model = _noisy_sphere(soup)
+    made = {}
+    for threads, block in ((1, parallel.MIN_BLOCK), (4, 16), (7, 1000)):
+        monkeypatch.setattr(settings, "THREADS", threads)
+        monkeypatch.setattr(parallel, "MIN_BLOCK", block)
+        topology = {}
+        made[threads] = (
+            *prepare._prepare(model, 20.0, topology),
+            *prepare._prepare(model, None, None),
+            topology["welded"],
+            topology[("sharp", 20.0)],
+            normals.corner_normals(model.positions, model.faces, 20.0),
+            weld.weld_groups(model.positions, 1e-3)[0],
+        )
+    for threads in (4, 7):
+        for got, expected in zip(made[threads], made[1], strict=True):
+            assert got.dtype == expected.dtype and got.tobytes() == expected.tobytes()
+    # the corners draw as the reference's; some vertices lie on creases
+    vertices, indices = made[1][:2]
+    expected_vertices, expected_indices = reference_arrays(model, 20.0)
+    assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
+    assert made[1][5].any()
+
+
+@pytest.mark.parametrize("parts", [1, 2])
+def test_a_soup_with_unused_vertices_between_its_corners_draws_them_as_its_own(parts):
+    """Corners in vertex order, with vertices no face uses between them (each welded apart
+    from every corner, or onto one): the welded ids of the corners are not dense."""
+    sphere = trimesh.creation.icosphere(subdivisions=1)
+    soup = sphere.vertices[sphere.faces].reshape(-1, 3)
+    lone = np.array([[5.0, 5.0, 5.0], [-5.0, 0.0, 0.0]])
+    positions = np.concatenate([soup[:30], lone[:1], soup[30:], lone[1:], soup[:1]])
+    corners = np.r_[np.arange(30), 31 + np.arange(len(soup) - 30)]
+    model = Model.from_arrays(positions, corners.reshape(-1, 3), np.arange(len(sphere.faces)) % parts)
+    vertices, indices = prepare._prepare(model, 30.0, None)
+    expected_vertices, expected_indices = reference_arrays(model, 30.0)
+    assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
+    assert indices.max() + 1 == len(vertices) < len(corners)

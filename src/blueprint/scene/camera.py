@@ -10,10 +10,13 @@ lighting in eye space).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from typing import TypeVar
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
@@ -239,14 +242,14 @@ class Camera:
         cam_x /= np.linalg.norm(cam_x)
         cam_y = np.cross(cam_z, cam_x)
 
-        blocks = points if callable(points) else _one_block(points)
-        lo = np.min([b.min(axis=0) for b in blocks()], axis=0)
-        hi = np.max([b.max(axis=0) for b in blocks()], axis=0)
+        each = _each_block(points)
+        lo = np.min(each(column_min), axis=0)
+        hi = np.max(each(column_max), axis=0)
         center = (lo + hi) / 2
         extent = float(np.linalg.norm(hi - lo)) or 1.0
         basis = np.stack([cam_x, cam_y, cam_z], axis=1)
         # the points in the camera's axes, a block at a time: lowest and highest of each
-        ends = np.array([_ends((b - center) @ basis) for b in blocks()])
+        ends = np.array(each(lambda b: _ends((b - center) @ basis)))
         low, high = ends[:, 0].min(axis=0), ends[:, 1].max(axis=0)
         # re-centre on the projected extents so the drawing sits in the middle of the image
         middle = (high[:2] + low[:2]) / 2
@@ -261,7 +264,7 @@ class Camera:
         else:
             tan_y = math.tan(math.radians(fov) / 2) * fill
             tan_x = tan_y * aspect
-            distance = max(_farthest(b, origin, middle, basis, tan_x, tan_y) for b in blocks())
+            distance = max(each(lambda b: _farthest(b, origin, middle, basis, tan_x, tan_y)))
             distance = max(distance, z_high + extent * 1e-3)
             height = 1.0
         pad = extent * 0.02
@@ -282,21 +285,31 @@ class Camera:
         )
 
 
+T = TypeVar("T")
+
 # Points read at a time by ``Camera.fit``: a float64 copy of all at once would take 24 bytes a
 # point more than the model holds.
 _FIT_BLOCK = 1 << 16
 
 
-def _one_block(points: np.ndarray):
-    """The blocks of points ``Camera.fit`` reads from an array of them: float64 copies of
-    ``_FIT_BLOCK`` rows at a time (each row's products the same as the whole array's)."""
+def _each_block(points) -> Callable[[Callable[[np.ndarray], T]], list[T]]:
+    """``each(work)``: ``work`` of every block of the points ``Camera.fit`` reads, in order.
+    Of an array, float64 copies of ``_FIT_BLOCK`` rows (each row's products the same as the
+    whole array's), the blocks side by side (``blueprint.parallel``); of a function giving an
+    iterator of blocks, its blocks."""
+    if callable(points):
+        return lambda work: [work(block) for block in points()]
     pts = np.asarray(points).reshape(-1, 3)
+    count = max(-(-len(pts) // _FIT_BLOCK), 1)
 
-    def blocks():
-        for start in range(0, max(len(pts), 1), _FIT_BLOCK):
-            yield pts[start : start + _FIT_BLOCK].astype(np.float64)
+    def each(work):
+        def blocks(first: int, last: int) -> list:
+            rows = (pts[k * _FIT_BLOCK : (k + 1) * _FIT_BLOCK] for k in range(first, last))
+            return [work(block.astype(np.float64)) for block in rows]
 
-    return blocks
+        return [found for done in parallel.run(blocks, count, min_block=4) for found in done]
+
+    return each
 
 
 def _ends(values: np.ndarray) -> np.ndarray:
@@ -330,7 +343,9 @@ def fit_camera(
     ``up`` is the model's up axis: by default the model's own, or ``"y"`` for bare points.
     """
     if isinstance(model, Model):
-        points, up = model.point_blocks, up or model.up
+        # a flat model's positions are read a block at a time, never all in float64 at once
+        flat = model.instances is None or model.is_flat
+        points, up = (model.positions if flat else model.point_blocks), up or model.up
     else:
         points, up = model, up or "y"
     width, height = size

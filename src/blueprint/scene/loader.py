@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from blueprint import settings
+from blueprint import parallel, settings
 from blueprint.columns import column_cross
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.environment import PartGlobs, choose_parts
@@ -315,21 +315,7 @@ def _check_coincident(model: Model, name: str) -> None:
     if len(model.faces) <= limit:
         return
     key = np.empty(len(model.faces))
-    weights = np.array([1.0, np.pi, np.e])
-    columns = [model.positions[:, k] for k in range(3)]
-    for start in range(0, len(key), _BLOCK):
-        block = model.faces[start : start + _BLOCK]
-        # the corners a coordinate at a time: the sums and differences of (F, 3, 3) corners
-        centre, u, v = np.empty((len(block), 3)), [], []
-        for k, column in enumerate(columns):
-            a, b, c = (column[block[:, j]].astype(np.float64) for j in range(3))
-            np.add(a + b, c, out=centre[:, k])
-            u.append(b - a)
-            v.append(c - a)
-        cross = column_cross(u, v)
-        key[start : start + len(block)] = centre @ weights + np.sqrt(
-            np.einsum("ij,ij->i", cross, cross)
-        ) * np.sqrt(2)
+    parallel.run(functools.partial(_coincidence_keys, model, key), len(key), min_block=_BLOCK)
     if _bucketed_most(key) <= limit:
         return
     _, counts = np.unique(key, return_counts=True)
@@ -339,6 +325,26 @@ def _check_coincident(model: Model, name: str) -> None:
             f"{name}: {most} faces lie on one another (one triangle over and over), more than the "
             f"{limit} layers a drawing can peel"
         )
+
+
+def _coincidence_keys(model: Model, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: the key ``_check_coincident`` finds copies of a face by, of faces ``lo``
+    to ``hi``, a block of faces and a coordinate at a time: the sums and differences of
+    (F, 3, 3) corners would take 72 bytes a face."""
+    weights = np.array([1.0, np.pi, np.e])
+    columns = [model.positions[:, k] for k in range(3)]
+    for start in range(lo, hi, _BLOCK):
+        block = model.faces[start : min(start + _BLOCK, hi)]
+        centre, u, v = np.empty((len(block), 3)), [], []
+        for k, column in enumerate(columns):
+            a, b, c = (column[block[:, j]].astype(np.float64) for j in range(3))
+            np.add(a + b, c, out=centre[:, k])
+            u.append(b - a)
+            v.append(c - a)
+        cross = column_cross(u, v)
+        out[start : start + len(block)] = centre @ weights + np.sqrt(
+            np.einsum("ij,ij->i", cross, cross)
+        ) * np.sqrt(2)
 
 
 def _bucketed_most(key: np.ndarray) -> int:

@@ -5,10 +5,12 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field, fields
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min, face_cross, indexed_cross
 from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.units import UNITS_MM
@@ -51,6 +53,18 @@ class _Flattened:
 # OpenSSL, loading included (docs/performance.md).
 _SMALL_DIGEST = 1 << 21
 _FLATTENED = ("positions", "faces", "face_part")
+# Bytes of a big mesh's array digested at a time (``Model.content_digest``).
+_DIGEST_BLOCK = 1 << 23
+
+
+def _block_digests(data: np.ndarray, first: int, last: int) -> bytes:
+    """The SHA-256 digests of blocks ``first`` to ``last`` of ``_DIGEST_BLOCK`` bytes of
+    ``data`` (uint8), one after another."""
+    import hashlib
+
+    return b"".join(
+        hashlib.sha256(data[k * _DIGEST_BLOCK : (k + 1) * _DIGEST_BLOCK]).digest() for k in range(first, last)
+    )
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -217,7 +231,9 @@ class Model:
         """A cryptographic digest of the triangles (positions, faces, parts and the part count;
         of a model kept as instances, its meshes and instances): models with one digest draw
         alike, so work kept by it serves a file loaded again. BLAKE2b of a mesh of fewer than
-        ``_SMALL_DIGEST`` bytes, else SHA-256. Made once."""
+        ``_SMALL_DIGEST`` bytes, else SHA-256 with each array's bytes given as the SHA-256
+        digests of its blocks of ``_DIGEST_BLOCK`` bytes (digested side by side, whatever the
+        thread count the same). Made once."""
         if "digest" not in self._cache:
             i = self.instances
             arrays = (
@@ -225,7 +241,8 @@ class Model:
                 if i is None
                 else (i.positions, i.faces, i.vertex_start, i.face_start, i.mesh, i.transform, i.part)
             )
-            if sum(array.nbytes for array in arrays) < _SMALL_DIGEST:
+            small = sum(array.nbytes for array in arrays) < _SMALL_DIGEST
+            if small:
                 # a small mesh hashes faster than hashlib's OpenSSL loads; the digests live in
                 # this process's caches alone, and the size fixes the hash of each content
                 from _blake2 import blake2b as new_digest
@@ -236,7 +253,14 @@ class Model:
             digest = new_digest()
             for array in arrays:
                 digest.update(str((array.dtype.str, array.shape)).encode())
-                digest.update(np.ascontiguousarray(array).reshape(-1).view(np.uint8))
+                data = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
+                if small:
+                    digest.update(data)
+                else:
+                    # a big mesh's blocks digested side by side, their digests digested in order
+                    blocks = -(-len(data) // _DIGEST_BLOCK)
+                    for found in parallel.run(partial(_block_digests, data), blocks, min_block=1):
+                        digest.update(found)
             digest.update(str(len(self.part_names)).encode())
             self._cache["digest"] = digest.digest()
         return self._cache["digest"]

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
-from blueprint.columns import column_max, column_min, indexed_cross
+from blueprint import parallel
+from blueprint.columns import column_max, column_min, indexed_cross, row_norm
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import sorted_with_order, stable_argsort
 
@@ -16,6 +19,8 @@ _MAX_DEGREE = 64
 _CONE = 44.0
 # Pairs of faces whose normals are compared at a time.
 _CROSS_BLOCK = 1 << 18
+# Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
+_ROWS = 1 << 16
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
 # A run of crease edges touching no border is a scan's noise while it has fewer edges than this
@@ -69,10 +74,7 @@ def crease_vertices(
     vertices = int(welded.max(initial=-1)) + 1
     # edge k of a face joins its corners k and k + 1; its key is lo * vertices + hi
     key = np.empty((len(welded), 3), np.int64)
-    for k in range(3):
-        a, b = welded[:, k], welded[:, (k + 1) % 3]
-        np.multiply(np.minimum(a, b), vertices, out=key[:, k], dtype=np.int64)
-        key[:, k] += np.maximum(a, b)
+    parallel.run(partial(_edge_keys, welded, vertices, key), len(welded))
     key, order = sorted_with_order(key.reshape(-1), overwrite=True)
     # edges of two faces: runs of two equal keys (bool masks: run starts and lengths would take
     # eight bytes an edge each)
@@ -81,16 +83,14 @@ def crease_vertices(
     paired = same[1:-1] & ~same[:-2] & ~same[2:]
     pair = np.flatnonzero(paired)
     cos = np.empty(len(pair))
-    for lo in range(0, len(pair), _CROSS_BLOCK):
-        at = pair[lo : lo + _CROSS_BLOCK]
-        one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
-        cos[lo : lo + len(at)] = np.einsum("ij,ij->i", one, other)
+    parallel.run(partial(_pair_cos, unit, order, pair, cos), len(pair))
     sharp_pair = pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]
     # the crease edges' lengths, from the first face of each
     corner = order[sharp_pair]
     del order
     face, k = corner // 3, corner % 3
-    ends = np.asarray(positions, np.float64)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])]
+    # the ends alone in float64, not every position
+    ends = np.asarray(positions)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])].astype(np.float64)
     length = np.linalg.norm(ends[1] - ends[0], axis=1)
     crease = key[sharp_pair]
     del pair, cos
@@ -108,6 +108,28 @@ def crease_vertices(
     noise = noise_creases(crease, sharp, length, _diagonal(positions, faces))
     sharp[crease[~noise].ravel()] = True
     return sharp
+
+
+def _edge_keys(welded: np.ndarray, vertices: int, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]`` (F, 3) int64: edge ``k`` of each face, from its corner ``k`` to ``k + 1``,
+    keyed ``lo * vertices + hi`` of its welded vertices."""
+    for start in range(lo, hi, _ROWS):
+        rows = slice(start, min(start + _ROWS, hi))
+        for k in range(3):
+            a, b = welded[rows, k], welded[rows, (k + 1) % 3]
+            np.multiply(np.minimum(a, b), vertices, out=out[rows, k], dtype=np.int64)
+            out[rows, k] += np.maximum(a, b)
+
+
+def _pair_cos(
+    unit: np.ndarray, order: np.ndarray, pair: np.ndarray, out: np.ndarray, lo: int, hi: int
+) -> None:
+    """``out[lo:hi]``: the cosine between the faces of the edges ``order[pair]`` and
+    ``order[pair + 1]`` (corners, three a face), from their ``unit`` normals."""
+    for start in range(lo, hi, _CROSS_BLOCK):
+        at = pair[start : min(start + _CROSS_BLOCK, hi)]
+        one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
+        out[start : start + len(at)] = np.einsum("ij,ij->i", one, other)
 
 
 def _diagonal(positions: np.ndarray, faces: np.ndarray) -> float:
@@ -190,9 +212,8 @@ def corner_normals(
     topology = {} if topology is None else topology
     faces = np.asarray(faces)
     area_normals = indexed_cross(np.asarray(positions), faces)
-    length = np.linalg.norm(area_normals, axis=1)
-    unit = area_normals / np.where(length > 0, length, 1.0)[:, None]
-    del length
+    unit = np.empty_like(area_normals)
+    parallel.run(partial(_unit_rows, area_normals, unit), len(faces))
     if crease_angle <= 0 or len(faces) == 0:
         return np.repeat(unit.astype(np.float32)[:, None, :], 3, axis=1)
     welded = topology.get("welded")
@@ -209,16 +230,16 @@ def corner_normals(
     # faces' normals less than 90 degrees apart, so none counts with a flipped sign), each of
     # its corners sums the area normals of all of them, in corner order as the pairs would.
     summed = np.empty((vertices, 3))
-    for axis in range(3):
-        summed[:, axis] = np.bincount(vertex, np.repeat(area_normals[:, axis], 3), minlength=vertices)
-    norm = np.linalg.norm(summed, axis=1)
-    degree = np.bincount(vertex, minlength=vertices)
+    degree = np.empty(vertices, np.int64)
+    parallel.run(partial(_vertex_sums, vertex, area_normals, summed, degree), 4, min_block=1)
+    norm = np.empty(vertices)
+    parallel.run(partial(_row_norms, summed, norm), vertices)
     shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
     summed[shared] /= norm[shared, None]
     del norm
     result = np.empty((len(faces), 3, 3), np.float32)
     corners = result.reshape(-1, 3)
-    np.take(summed.astype(np.float32), vertex, axis=0, out=corners)
+    parallel.run(partial(_taken, summed.astype(np.float32), vertex, corners), len(vertex))
     del summed
     apart = np.flatnonzero(~shared[vertex])
     corners[apart] = np.take(unit, apart // 3, axis=0)
@@ -228,6 +249,38 @@ def corner_normals(
     return result
 
 
+def _vertex_sums(
+    vertex: np.ndarray, area: np.ndarray, summed: np.ndarray, degree: np.ndarray, first: int, last: int
+) -> None:
+    """Of the corners' ``vertex`` (3F,): for ``axis`` 0 to 2 from ``first`` to ``last``, the sum
+    of the ``area`` (F, 3) normals of each vertex's faces into ``summed[:, axis]``, and for 3,
+    each vertex's corners into ``degree``. A coordinate a thread: each sum runs over the
+    corners in order, as one ``bincount`` would."""
+    for axis in range(first, last):
+        if axis == 3:
+            degree[:] = np.bincount(vertex, minlength=len(degree))
+        else:
+            weights = np.repeat(area[:, axis], 3)
+            summed[:, axis] = np.bincount(vertex, weights, minlength=len(degree))
+
+
+def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: ``rows[lo:hi]`` (N, 3) over their lengths (zero rows stay zero)."""
+    for start in range(lo, hi, _ROWS):
+        block = slice(start, min(start + _ROWS, hi))
+        length = row_norm(rows[block])
+        np.divide(rows[block], np.where(length > 0, length, 1.0)[:, None], out=out[block])
+
+
+def _row_norms(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    out[lo:hi] = row_norm(rows[lo:hi])
+
+
+def _taken(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: the rows ``at[lo:hi]`` of ``table``."""
+    np.take(table, at[lo:hi], axis=0, out=out[lo:hi])
+
+
 def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length: np.ndarray) -> np.ndarray:
     """(V,) bool: every face around the vertex has a unit normal within ``_CONE`` degrees of the
     vertex's ``axis`` (V, 3) of ``length`` (V,) (degenerate faces never are), so any two of
@@ -235,10 +288,17 @@ def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length:
     positive."""
     outside = np.zeros(len(axis), bool)
     limit = np.cos(np.radians(_CONE)) * length
-    for j in range(3):
-        at = welded[:, j]
-        dot = np.einsum("ij,ij->i", unit, np.take(axis, at, axis=0))
-        outside[at[dot <= limit[at]]] = True
+
+    def marked(lo: int, hi: int) -> None:
+        # only True is written, by any thread, so the marks do not depend on their order
+        for start in range(lo, hi, _ROWS):
+            rows = slice(start, min(start + _ROWS, hi))
+            for j in range(3):
+                at = welded[rows, j]
+                dot = np.einsum("ij,ij->i", unit[rows], np.take(axis, at, axis=0))
+                outside[at[dot <= limit[at]]] = True
+
+    parallel.run(marked, len(welded))
     return ~outside
 
 

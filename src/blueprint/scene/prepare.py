@@ -10,13 +10,14 @@ triangle soup, would stay in memory through the drawing that uploaded them.
 from __future__ import annotations
 
 from collections import OrderedDict
+from functools import partial
 
 import numpy as np
 
-from blueprint import settings
+from blueprint import parallel, settings
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
-from blueprint.sorting import stable_argsort, unique_first
+from blueprint.sorting import unique_first
 
 __all__ = ["VERTEX", "gpu_arrays", "topology"]
 
@@ -26,7 +27,9 @@ VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
 _KEPT = 4
 _KEPT_BYTES = settings.MEMORY_BUDGET // 32
 # Vertices whose fields are gathered at a time.
-_BLOCK = 1 << 20
+_BLOCK = 1 << 16
+# Keys numbered by a table over their range, not a sort, up to this many times their number.
+_TABLE_PER_KEY = 4
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
@@ -112,15 +115,29 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         del key
     count = len(corner_vertex) if chosen is None else len(chosen)
     vertices = np.zeros(count, VERTEX)
-    # a block of vertices at a time: their gathered fields are as large as the vertices
-    for lo in range(0, count, _BLOCK):
-        corner = np.arange(lo, min(lo + _BLOCK, count)) if chosen is None else chosen[lo : lo + _BLOCK]
-        rows = slice(lo, lo + len(corner))
-        vertices["p"][rows] = np.take(model.positions, corner_vertex[corner], axis=0)
-        if normals is not None:
-            vertices["n"][rows] = np.take(normals, corner, axis=0)
-        vertices["part"][rows] = model.face_part[corner // 3]
+    parallel.run(partial(_filled, model, corner_vertex, chosen, normals, vertices), count)
     return vertices, inverse
+
+
+def _filled(
+    model: Model,
+    corner_vertex: np.ndarray,
+    chosen: np.ndarray | None,
+    normals: np.ndarray | None,
+    out: np.ndarray,
+    lo: int,
+    hi: int,
+) -> None:
+    """``out[lo:hi]`` (``VERTEX``): the fields of the corners ``chosen`` (None: every corner)
+    from lo to hi. A block of vertices at a time: their gathered fields are as large as the
+    vertices."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        corner = np.arange(start, stop) if chosen is None else chosen[start:stop]
+        out["p"][start:stop] = np.take(model.positions, corner_vertex[corner], axis=0)
+        if normals is not None:
+            out["n"][start:stop] = np.take(normals, corner, axis=0)
+        out["part"][start:stop] = model.face_part[corner // 3]
 
 
 def _soup_vertices(
@@ -135,27 +152,56 @@ def _soup_vertices(
     if welded is None:
         return None, np.arange(n, dtype=np.uint32)
     key = welded.reshape(-1)
+    first = None
     if len(model.part_names) > 1:
         key = key.astype(np.int64) * len(model.part_names)
         key += np.repeat(model.face_part, 3)
-    _, first, inverse = unique_first(key)
+    else:
+        # the welded ids are numbered by their first vertex, here their first corner: a corner
+        # is its id's first where the id passes every id before it
+        new = np.empty(n, bool)
+        new[0] = True
+        np.greater(key[1:], np.maximum.accumulate(key)[:-1], out=new[1:])
+        first = np.flatnonzero(new)
+        del new
+        inverse = key
+        if int(key.max(initial=-1)) + 1 != len(first):
+            first = None  # ids of vertices no corner uses lie between: numbered anew
+    if first is None:
+        _, first, inverse = unique_first(key)
     del key
-    corner_vertex = model.faces.reshape(-1)
-    bits = model.positions.view(np.uint32)
-    normal_bits = normals.view(np.uint32)
     apart = np.zeros(n, bool)
-    for lo in range(0, n, _BLOCK):
-        first_corner = first[inverse[lo : lo + _BLOCK]]
-        mine = slice(lo, lo + len(first_corner))
-        differs = np.take(normal_bits, first_corner, axis=0) != normal_bits[mine]
-        differs |= np.take(bits, corner_vertex[first_corner], axis=0) != np.take(
-            bits, corner_vertex[mine], axis=0
-        )
-        apart[mine] = differs.any(axis=1)
+    parallel.run(partial(_apart, model, normals, first, inverse, apart), n)
     own = np.flatnonzero(apart)
     vertex = inverse.astype(np.uint32)
     vertex[own] = np.arange(len(first), len(first) + len(own), dtype=np.uint32)
     return np.concatenate([first, own]), vertex
+
+
+def _apart(
+    model: Model,
+    normals: np.ndarray,
+    first: np.ndarray,
+    inverse: np.ndarray,
+    out: np.ndarray,
+    lo: int,
+    hi: int,
+) -> None:
+    """``out[lo:hi]``: the soup's corner differs from the first corner of its welded vertex and
+    part (``first[inverse]``) in position or normal, bit for bit."""
+    corner_vertex = model.faces.reshape(-1)
+    bits = model.positions.view(np.uint32)
+    normal_bits = normals.view(np.uint32)
+    for start in range(lo, hi, _BLOCK):
+        first_corner = first[inverse[start : min(start + _BLOCK, hi)]]
+        mine = slice(start, start + len(first_corner))
+        differs = np.take(normal_bits, first_corner, axis=0) != normal_bits[mine]
+        differs |= np.take(bits, corner_vertex[first_corner], axis=0) != np.take(
+            bits, corner_vertex[mine], axis=0
+        )
+        # a column at a time: NumPy reduces short rows slowly
+        np.logical_or(differs[:, 0], differs[:, 1], out=out[mine])
+        out[mine] |= differs[:, 2]
 
 
 def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -163,32 +209,79 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     the last corner of each, and each corner's pair (its number among them, uint32).
 
     ``vertex_part`` (3F,) int orders the vertex and the part; the normals' three 16-bit
-    components pack into one more key. Corners are sorted by the first key, then, only in
-    the runs of one vertex whose normals differ, by both."""
+    components (``_normal_key``) order the rest. No sort of every corner: a vertex whose
+    corners' normals are one, bit for bit (every vertex off a crease), is one pair, its last
+    corner found by a table; only the corners of the other vertices are sorted, by both
+    keys."""
     n = len(vertex_part)
-    order = stable_argsort(vertex_part)
-    first = vertex_part[order]
-    same_first = first[1:] == first[:-1]
-    second = _normal_key(normals[order])
-    mixed = same_first & (second[1:] != second[:-1])
-    if mixed.any():
-        run = np.cumsum(np.r_[True, ~same_first])
-        at = np.flatnonzero(np.isin(run, run[1:][mixed]))
-        del run
-        # a stable sort: the corners of one pair keep their order
-        sub = np.lexsort((second[at], first[at]))
-        order[at] = order[at][sub]
-        second[at] = second[at][sub]
-    del first, mixed
-    new = np.empty(n, bool)
-    new[0] = True
-    np.not_equal(second[1:], second[:-1], out=new[1:])
-    new[1:] |= ~same_first
-    del second, same_first
+    key = _dense(vertex_part)
+    keys = int(key.max(initial=-1)) + 1
+    # the last corner of each key, and where a corner's normal differs from it, the key's
+    # corners are sorted by normal
+    last = np.full(keys, -1, np.int64)
+    np.maximum.at(last, key, np.arange(n))
+    bits = normals.view(np.uint32)
+    differs = np.zeros(n, bool)
+    parallel.run(partial(_differs_from, bits, last, key, differs), n)
+    mixed = np.zeros(keys, bool)
+    mixed[key[differs]] = True
+    del differs
+    inside = np.flatnonzero(mixed[key])
+    second = _normal_key(normals[inside])
+    sub = np.lexsort((second, key[inside]))  # stable: each pair's corners keep their order
+    inside, second = inside[sub], second[sub]
+    inside_key = key[inside]
+    new_key = np.ones(len(inside), bool)
+    np.not_equal(inside_key[1:], inside_key[:-1], out=new_key[1:])
+    new = new_key.copy()
+    new[1:] |= second[1:] != second[:-1]
+    del second
+    # pairs a key: one, or its distinct normals
+    count = np.ones(keys, np.int64)
+    count[mixed] = 0
+    np.add.at(count, inside_key[new], 1)
+    offset = np.cumsum(count) - count
     inverse = np.empty(n, np.uint32)
-    inverse[order] = np.cumsum(new, dtype=np.uint32) - np.uint32(1)
-    last = order[np.r_[np.flatnonzero(new)[1:] - 1, n - 1]]
-    return last, inverse
+    parallel.run(partial(_gathered, offset, key, inverse), n)
+    pair = np.cumsum(new) - 1
+    pair -= np.maximum.accumulate(np.where(new_key, pair, 0))
+    inverse[inside] = offset[inside_key] + pair
+    chosen = last[np.repeat(np.arange(keys), count)]
+    # the last corner of each run of one pair
+    ends = np.flatnonzero(np.r_[new[1:], True]) if len(inside) else np.zeros(0, np.int64)
+    chosen[offset[inside_key[ends]] + pair[ends]] = inside[ends]
+    return chosen, inverse
+
+
+def _dense(key: np.ndarray) -> np.ndarray:
+    """(N,) int64: each of the integer ``key`` (N,) numbered among the distinct ones, in order."""
+    if len(key) == 0:
+        return np.zeros(0, np.int64)
+    low = int(key.min())
+    span = int(key.max()) - low + 1
+    if span > _TABLE_PER_KEY * len(key):
+        return unique_first(key)[2]
+    present = np.zeros(span, bool)
+    present[key - low] = True
+    rank = np.cumsum(present, dtype=np.int64)
+    rank -= 1
+    return rank[key - low]
+
+
+def _differs_from(
+    bits: np.ndarray, last: np.ndarray, key: np.ndarray, out: np.ndarray, lo: int, hi: int
+) -> None:
+    """``out[lo:hi]``: corner ``i``'s normal ``bits`` (N, 3) differ from those of its key's last
+    corner."""
+    for start in range(lo, hi, _BLOCK):
+        rows = slice(start, min(start + _BLOCK, hi))
+        differs = np.take(bits, last[key[rows]], axis=0) != bits[rows]
+        np.logical_or(differs[:, 0], differs[:, 1], out=out[rows])
+        out[rows] |= differs[:, 2]
+
+
+def _gathered(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    out[lo:hi] = table[at[lo:hi]]
 
 
 def _normal_key(normals: np.ndarray) -> np.ndarray:

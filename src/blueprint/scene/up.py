@@ -11,9 +11,11 @@ shape nothing to go by and turning them would be a surprise.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min, face_cross, row_norm
 
 # The bottom slab, as a fraction of the model's extent along the axis.
@@ -61,13 +63,35 @@ def _base_fractions(positions: np.ndarray, faces: np.ndarray, axes) -> dict[int,
     for axis in axes:
         if extent[axis] > 0 and np.prod(np.delete(extent, axis)) > 0:
             flat_areas[axis] = []
-    for start in range(0, len(faces) if flat_areas else 0, _BLOCK):
-        block = faces[start : start + _BLOCK]
+    if flat_areas:
+        blocks = parallel.run(
+            partial(_flat_areas, positions, faces, lo, extent, tuple(flat_areas)), len(faces)
+        )
+        for found in blocks:
+            for axis, areas in found.items():
+                flat_areas[axis].extend(areas)
+    fractions = dict.fromkeys(axes, 0.0)
+    for axis, found in flat_areas.items():
+        # the flat faces' areas summed in one array, in face order, as they would be at once
+        fractions[axis] = float(
+            np.concatenate([np.zeros(0), *found]).sum() / 2.0 / np.prod(np.delete(extent, axis))
+        )
+    return fractions
+
+
+def _flat_areas(
+    positions: np.ndarray, faces: np.ndarray, lo: np.ndarray, extent: np.ndarray, axes, first: int, last: int
+) -> dict[int, list[np.ndarray]]:
+    """The areas (twice) of faces ``first`` to ``last`` that lie flat in the bottom slab of each
+    of ``axes``, facing down, a block of faces at a time, in face order."""
+    flat_areas: dict[int, list[np.ndarray]] = {axis: [] for axis in axes}
+    for start in range(first, last, _BLOCK):
+        block = faces[start : min(start + _BLOCK, last)]
         # the faces in a bottom slab, from their heights in the positions' own type (the
         # highest of float32 corners is that of their float64 copies): few faces are, and
         # only theirs are read in float64
         low = {}
-        for axis in flat_areas:
+        for axis in axes:
             column = positions[:, axis]
             top = np.maximum(np.maximum(column[block[:, 0]], column[block[:, 1]]), column[block[:, 2]])
             low[axis] = top.astype(np.float64) <= lo[axis] + _SLAB * extent[axis]
@@ -81,13 +105,7 @@ def _base_fractions(positions: np.ndarray, faces: np.ndarray, axes) -> dict[int,
                 along = np.abs(cross[:, axis]) / area
             # either winding: scans and soups do not orient their faces consistently
             found.append(area[low[axis][chosen] & (along >= _DOWN)])
-    fractions = dict.fromkeys(axes, 0.0)
-    for axis, found in flat_areas.items():
-        # the flat faces' areas summed in one array, in face order, as they would be at once
-        fractions[axis] = float(
-            np.concatenate([np.zeros(0), *found]).sum() / 2.0 / np.prod(np.delete(extent, axis))
-        )
-    return fractions
+    return flat_areas
 
 
 def guess_up(positions: np.ndarray, faces: np.ndarray, default: str = "y") -> UpGuess:

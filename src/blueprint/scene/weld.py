@@ -6,8 +6,11 @@ Smoothing normals (``blueprint.scene.normals``) and the object-space silhouette 
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min
 from blueprint.sorting import unique_first
 
@@ -26,6 +29,8 @@ _SWEEP_DIRECTION = np.array([1.0, np.sqrt(2.0), np.sqrt(3.0)]) / np.sqrt(6.0)
 _SWEEP_CANDIDATES = 16
 # Candidates of the sweep checked at a time.
 _SWEEP_BLOCK = 1 << 22
+# Rows hashed, and rows compared, at a time by a thread.
+_HASH_BLOCK = 1 << 16
 # Odd multipliers that mix a position's three 64-bit patterns into one key (wrapping).
 _BITS_HASH = np.array([0x9E3779B97F4A7C15, 0xC2B2AE3D27D4EB4F, 0x165667B19E3779F9], dtype=np.uint64)
 # Large odd multipliers for a spatial hash of integer cell coordinates (Teschner et al. 2003).
@@ -166,22 +171,15 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     n = len(positions)
     if n == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    unsigned = np.uint32 if positions.dtype == np.float32 else np.uint64
-    key = np.zeros(n, np.uint64)
-    for k, multiplier in enumerate(_BITS_HASH):
-        # adding 0.0 turns -0.0 into 0.0, which would hash apart by its bits
-        column = (positions[:, k] + positions.dtype.type(0.0)).view(unsigned).astype(np.uint64)
-        column *= multiplier
-        key += column
-        del column
     bits = max(1, (n - 1).bit_length())
     low = np.uint64((1 << bits) - 1)
-    key &= ~low
-    key |= np.arange(n, dtype=np.uint64)
-    key.sort()
+    key = np.empty(n, np.uint64)
+    parallel.run(partial(_hashed, positions, low, key), n)
+    parallel.sort(key)
     # equal above the index bits: their exclusive or is below them
-    same_hash = np.bitwise_xor(key[1:], key[:-1]) <= low
-    key &= low
+    same_hash = np.empty(n - 1, bool)
+    parallel.run(partial(_same_hash, key, low, same_hash), n - 1)
+    parallel.run(partial(_unpacked, key, low), n)
     order = key.view(np.int64)
     del key
     differs = _row_changes(positions, order)
@@ -213,18 +211,59 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     group -= 1
     np.take(rank, group, out=group)
     inverse = np.empty(n, np.int64)
-    inverse[order] = group
+    parallel.run(partial(_scattered, inverse, order, group), n)
     return inverse, np.flatnonzero(seen)
+
+
+def _hashed(positions: np.ndarray, low: np.uint64, key: np.ndarray, lo: int, hi: int) -> None:
+    """``key[lo:hi]`` (uint64): the hash of rows ``lo`` to ``hi`` of ``positions`` above the
+    bits of ``low``, each row's index in them."""
+    unsigned = np.uint32 if positions.dtype == np.float32 else np.uint64
+    for start in range(lo, hi, _HASH_BLOCK):
+        rows = slice(start, min(start + _HASH_BLOCK, hi))
+        block = key[rows]
+        block[:] = 0
+        for k, multiplier in enumerate(_BITS_HASH):
+            # adding 0.0 turns -0.0 into 0.0, which would hash apart by its bits
+            column = (positions[rows, k] + positions.dtype.type(0.0)).view(unsigned).astype(np.uint64)
+            column *= multiplier
+            block += column
+        block &= ~low
+        block |= np.arange(rows.start, rows.stop, dtype=np.uint64)
+
+
+def _same_hash(key: np.ndarray, low: np.uint64, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: sorted keys ``i`` and ``i + 1`` are equal above the bits of ``low``."""
+    for start in range(lo, hi, _HASH_BLOCK):
+        stop = min(start + _HASH_BLOCK, hi)
+        np.less_equal(np.bitwise_xor(key[start + 1 : stop + 1], key[start:stop]), low, out=out[start:stop])
+
+
+def _unpacked(key: np.ndarray, low: np.uint64, lo: int, hi: int) -> None:
+    key[lo:hi] &= low
+
+
+def _scattered(out: np.ndarray, at: np.ndarray, values: np.ndarray, lo: int, hi: int) -> None:
+    out[at[lo:hi]] = values[lo:hi]
 
 
 def _row_changes(positions: np.ndarray, order: np.ndarray) -> np.ndarray:
     """(V - 1,) bool: row ``order[i + 1]`` of ``positions`` differs from row ``order[i]`` (as
     values: -0.0 equals 0.0)."""
-    rows = np.take(positions, order, axis=0)  # NumPy takes rows faster than it indexes them
-    changes = rows[1:, 0] != rows[:-1, 0]
-    for k in (1, 2):
-        changes |= rows[1:, k] != rows[:-1, k]
+    changes = np.empty(max(len(order) - 1, 0), bool)
+    parallel.run(partial(_changes, positions, order, changes), len(changes))
     return changes
+
+
+def _changes(positions: np.ndarray, order: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    for start in range(lo, hi, _HASH_BLOCK):
+        stop = min(start + _HASH_BLOCK, hi)
+        # NumPy takes rows faster than it indexes them
+        rows = np.take(positions, order[start : stop + 1], axis=0)
+        block = out[start:stop]
+        np.not_equal(rows[1:, 0], rows[:-1, 0], out=block)
+        for k in (1, 2):
+            block |= rows[1:, k] != rows[:-1, k]
 
 
 def _exact_duplicates(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

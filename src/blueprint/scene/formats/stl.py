@@ -9,11 +9,13 @@ binary files longer than their triangle count says, go to trimesh.
 
 from __future__ import annotations
 
+import os
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from blueprint import settings
+from blueprint import parallel, settings
 from blueprint.errors import InputError
 from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
@@ -47,14 +49,21 @@ def read_stl(path: Path, size: int) -> Mesh | None:
             return _ascii(path, head + fh.read(settings.MODEL_FILE_LIMIT + 1 - len(head)))
         check_triangle_count(path, count)
         positions = np.empty((3 * count, 3), np.float32)
-        # a block of records at a time: the file's bytes are never all held beside the positions
-        for start in range(0, count, _RECORDS):
-            n = min(_RECORDS, count - start)
-            records = np.frombuffer(fh.read(_RECORD.itemsize * n), dtype=_RECORD, count=n)
-            positions[3 * start : 3 * (start + n)] = records["triangle"].reshape(-1, 3)
+        parallel.run(partial(_records, fh.fileno(), positions), count, min_block=_RECORDS)
     # three vertices a triangle, in order; int32 where they fit, as the model keeps them
     dtype = np.int32 if 3 * count <= np.iinfo(np.int32).max else np.int64
     return Mesh(positions, np.arange(3 * count, dtype=dtype).reshape(-1, 3))
+
+
+def _records(fd: int, positions: np.ndarray, lo: int, hi: int) -> None:
+    """Records ``lo`` to ``hi`` of a binary STL file open as ``fd`` into their rows of
+    ``positions`` (3 a record), a block of records at a time: the file's bytes are never all
+    held beside the positions."""
+    for start in range(lo, hi, _RECORDS):
+        n = min(_RECORDS, hi - start)
+        data = os.pread(fd, _RECORD.itemsize * n, 84 + _RECORD.itemsize * start)
+        records = np.frombuffer(data, dtype=_RECORD, count=n)
+        positions[3 * start : 3 * (start + n)] = records["triangle"].reshape(-1, 3)
 
 
 def _ascii(path: Path, data: bytes) -> Mesh | None:

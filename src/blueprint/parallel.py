@@ -1,0 +1,130 @@
+"""Work on large arrays split over threads: NumPy releases the GIL in its sorts, ufuncs, takes
+and copies of large arrays, so the blocks of one array's work run side by side, one a core.
+
+Every split is by rows into contiguous blocks, each written by one thread to its own rows, and
+no sum runs across blocks: the results are the same, bit for bit, whatever the thread count
+(``settings.THREADS``; 1 runs everything in the calling thread).
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+import numpy as np
+
+from blueprint import settings
+
+__all__ = ["MIN_BLOCK", "cuts", "run", "sort"]
+
+T = TypeVar("T")
+
+# Rows below which a block is not split off for a thread of its own: handing it over costs
+# more than the work.
+MIN_BLOCK = 1 << 16
+
+# mallopt's parameter for the most arenas glibc's allocator makes
+_M_ARENA_MAX = -8
+
+_lock = threading.Lock()
+# the pool and the process that made it: a forked child makes its own (its parent's threads
+# are not in it)
+_pool: tuple[int, ThreadPoolExecutor] | None = None
+_worker = threading.local()
+
+
+def _executor() -> ThreadPoolExecutor:
+    global _pool
+    with _lock:
+        if _pool is None or _pool[0] != os.getpid():
+            _one_arena()
+            _pool = (
+                os.getpid(),
+                ThreadPoolExecutor(settings.THREADS, "blueprint", initializer=_mark_worker),
+            )
+        return _pool[1]
+
+
+def _one_arena() -> None:
+    """Have glibc's allocator serve every thread from one arena: by default each thread that
+    allocates gets an arena of its own, whose freed blocks the others never reuse, so the
+    memory a pool's thread frees stays with the process through the drawing after it."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").mallopt(_M_ARENA_MAX, 1)
+    except (OSError, AttributeError):
+        pass  # not glibc: its allocator's own ways
+
+
+def _mark_worker() -> None:
+    _worker.busy = True
+
+
+def cuts(n: int, min_block: int | None = None, threads: int | None = None) -> list[tuple[int, int]]:
+    """``[0, n)`` cut into at most ``threads`` (default ``settings.THREADS``) contiguous blocks
+    of about equal size, each of at least ``min_block`` rows (default ``MIN_BLOCK``; one block
+    where ``n`` is smaller), as ``(start, stop)`` pairs in order."""
+    threads = settings.THREADS if threads is None else threads
+    min_block = MIN_BLOCK if min_block is None else min_block
+    count = max(1, min(threads, n // max(min_block, 1)))
+    edges = [n * k // count for k in range(count + 1)]
+    return list(zip(edges[:-1], edges[1:], strict=True))
+
+
+def run(work: Callable[[int, int], T], n: int, min_block: int | None = None) -> list[T]:
+    """``work(start, stop)`` for the blocks of ``cuts(n, min_block)``, side by side on the
+    pool's threads, and their results in the blocks' order. Called from one of the pool's own
+    threads, the blocks run one after another in that thread (a pool waiting on itself could
+    wait for ever)."""
+    blocks = cuts(n, min_block)
+    if len(blocks) == 1 or getattr(_worker, "busy", False):
+        return [work(start, stop) for start, stop in blocks]
+    return list(_executor().map(lambda block: work(*block), blocks))
+
+
+def sort(values: np.ndarray, min_block: int | None = None) -> None:
+    """Sort the 1-D integer array ``values`` in place, as ``values.sort()`` does: blocks of it
+    sorted side by side; then cut by value at the blocks' quantiles into as many ranges, the
+    pieces of each range from every block merged by a stable sort (which finds their sorted
+    runs and merges them), the ranges side by side."""
+    blocks = cuts(len(values), min_block)
+    if len(blocks) == 1:
+        values.sort()
+        return
+    run(lambda start, stop: values[start:stop].sort(), len(values), min_block)
+    count = len(blocks)
+    picks = np.concatenate(
+        [
+            values[start:stop][np.linspace(0, stop - start - 1, 4 * count).astype(np.int64)]
+            for start, stop in blocks
+        ]
+    )
+    picks.sort()
+    splitters = picks[np.linspace(0, len(picks) - 1, count + 1)[1:-1].astype(np.int64)]
+    # where each range begins and ends in each block: values up to a splitter go before it
+    bounds = np.array(
+        [
+            np.r_[start, start + np.searchsorted(values[start:stop], splitters, side="right"), stop]
+            for start, stop in blocks
+        ]
+    )
+    sizes = (bounds[:, 1:] - bounds[:, :-1]).sum(axis=0)
+    offsets = np.r_[0, np.cumsum(sizes)]
+    merged = np.empty_like(values)
+
+    def merge(first: int, last: int) -> None:
+        for k in range(first, last):
+            piece = np.concatenate([values[b[k] : b[k + 1]] for b in bounds])
+            piece.sort(kind="stable")
+            merged[offsets[k] : offsets[k + 1]] = piece
+
+    run(merge, count, min_block=1)
+
+    def copy(start: int, stop: int) -> None:
+        values[start:stop] = merged[start:stop]
+
+    run(copy, len(values), min_block)

@@ -1,0 +1,70 @@
+"""Work split over threads (``blueprint.parallel``) and the setting of their number."""
+
+import os
+import threading
+
+import numpy as np
+import pytest
+
+from blueprint import parallel, settings
+
+
+def test_cuts_are_contiguous_blocks_of_at_least_the_minimum():
+    assert parallel.cuts(10, min_block=3, threads=4) == [(0, 3), (3, 6), (6, 10)]
+    assert parallel.cuts(10, min_block=1, threads=4) == [(0, 2), (2, 5), (5, 7), (7, 10)]
+    assert parallel.cuts(5, min_block=8, threads=4) == [(0, 5)]
+    assert parallel.cuts(0, min_block=8, threads=4) == [(0, 0)]
+    assert parallel.cuts(100, min_block=1, threads=1) == [(0, 100)]
+
+
+def test_run_gives_each_block_to_a_thread_and_the_results_in_order(monkeypatch):
+    monkeypatch.setattr(settings, "THREADS", 4)
+    names = {}
+
+    def work(start, stop):
+        names[start] = threading.current_thread().name
+        return list(range(start, stop))
+
+    results = parallel.run(work, 40, min_block=10)
+    assert results == [list(range(k, k + 10)) for k in range(0, 40, 10)]
+    assert all(name.startswith("blueprint") for name in names.values())
+
+
+def test_run_within_a_thread_of_the_pool_runs_its_blocks_in_that_thread(monkeypatch):
+    monkeypatch.setattr(settings, "THREADS", 2)
+
+    def inner(start, stop):
+        return threading.current_thread().name, start, stop
+
+    def outer(start, stop):
+        return parallel.run(inner, stop - start, min_block=1)
+
+    found = parallel.run(outer, 4, min_block=2)
+    for blocks in found:
+        assert [b[1:] for b in blocks] == [(0, 1), (1, 2)]
+        assert len({b[0] for b in blocks}) == 1  # one thread ran both blocks
+
+
+@pytest.mark.parametrize("dtype", [np.int64, np.uint64, np.int32, np.uint8])
+@pytest.mark.parametrize("threads", [1, 2, 5])
+def test_sort_equals_numpys(dtype, threads, monkeypatch):
+    monkeypatch.setattr(settings, "THREADS", threads)
+    info = np.iinfo(dtype)
+    values = np.random.default_rng(threads).integers(info.min, info.max, 10_007, dtype=dtype, endpoint=True)
+    values[::13] = values[0]  # ties
+    expected = np.sort(values)
+    parallel.sort(values, min_block=100)
+    assert values.dtype == dtype
+    np.testing.assert_array_equal(values, expected)
+
+
+@pytest.mark.parametrize(("text", "expected"), [("3", 3), ("1", 1), (" 12 ", 12)])
+def test_the_thread_count_is_set_by_the_environment(monkeypatch, text, expected):
+    monkeypatch.setenv(settings.THREADS_ENV, text)
+    assert settings.thread_count() == expected
+
+
+@pytest.mark.parametrize("text", ["", "0", "-2", "many", "1.5"])
+def test_a_thread_count_that_is_not_one_leaves_the_cores(monkeypatch, text):
+    monkeypatch.setenv(settings.THREADS_ENV, text)
+    assert settings.thread_count() == max(1, min(len(os.sched_getaffinity(0)), 64))
