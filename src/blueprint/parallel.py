@@ -28,6 +28,9 @@ MIN_BLOCK = 1 << 16
 
 # mallopt's parameter for the most arenas glibc's allocator makes
 _M_ARENA_MAX = -8
+# set by the command line (blueprint.cli.main): its process may serve every thread from one
+# arena; a program that calls the library keeps its allocator as it set it
+ONE_ARENA_ENV = "BLUEPRINT_ONE_ARENA"
 
 _lock = threading.Lock()
 # the pool and the process that made it: a forked child makes its own (its parent's threads
@@ -40,7 +43,8 @@ def _executor() -> ThreadPoolExecutor:
     global _pool
     with _lock:
         if _pool is None or _pool[0] != os.getpid():
-            _one_arena()
+            if os.environ.get(ONE_ARENA_ENV) == "1":
+                _one_arena()
             _pool = (
                 os.getpid(),
                 ThreadPoolExecutor(settings.THREADS, "blueprint", initializer=_mark_worker),

@@ -118,6 +118,9 @@ def main(argv: list[str] | None = None) -> None:
     # (N, 3) by 3 x 3, held to one BLAS thread anyway (blueprint.blas), so OpenBLAS starting a
     # thread a core at NumPy's import would only cost every process time.
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    # the command's process serves the preparation's threads from one allocator arena
+    # (blueprint.parallel): memory their blocks free is reused by the drawing after them
+    os.environ.setdefault("BLUEPRINT_ONE_ARENA", "1")
     _light_exit()
     if argv is None and hasattr(os, "fork") and os.environ.get(SUPERVISE_ENV, "1") != "0":
         # as the program (not called with arguments from Python): in a child that Ctrl-C can
