@@ -349,7 +349,16 @@ def _instanced_feature_segments(model: Model, view, projection, size, crease_ang
     from .instanced import instanced_features
 
     found = instanced_features(
-        model, view, projection, size, crease_angle, smooth, SMOOTH_ANGLE, _EDGE_ON, _EDGE_ON_SMOOTH
+        model,
+        view,
+        projection,
+        size,
+        crease_angle,
+        smooth,
+        SMOOTH_ANGLE,
+        _EDGE_ON,
+        _EDGE_ON_SMOOTH,
+        _edge_on_outline_edges,
     )
     diagonal = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
     kind, faces = found["kind"], found["faces"]
