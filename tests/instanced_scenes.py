@@ -144,3 +144,46 @@ def smooth_scene() -> Model:
         "wedge": wedge(),
     }
     return model_from_object(trimesh_scene(SMOOTH, meshes), name="smooth scene")
+
+
+# the cross-section (y, z) of ``stepped_prism``, counter-clockwise: a wall leaning 14 degrees
+# (its slope 1/4) broken by a step square to the y axis, the same wall going on above it
+STEPPED_SECTION = np.array([[0, 0], [2, 0], [2.25, 1], [2.25, 1.5], [2.5, 2.5], [0, 2.5]], float)
+# the step's two long edges, along x, in the prism's frame
+STEP_EDGES = np.array([[[0, 2.25, 1], [1.5, 2.25, 1]], [[0, 2.25, 1.5], [1.5, 2.25, 1.5]]])
+
+
+def stepped_prism() -> trimesh.Trimesh:
+    """``STEPPED_SECTION`` drawn out 1.5 along x, closed, outward-wound: the step's face is seen
+    edge-on along z, where the walls on either side of it, 14 degrees from it (no crease), both
+    face away from the eye; only the flat path's edge-on rule (``lines._with_edge_on_outlines``)
+    draws its outline."""
+    n = len(STEPPED_SECTION)
+    vertices = np.r_[np.c_[np.zeros(n), STEPPED_SECTION], np.c_[np.full(n, 1.5), STEPPED_SECTION]]
+    caps = [[0, 1, 2], [0, 2, 3], [0, 3, 5], [3, 5, 4]]
+    faces = caps + [[a + n, c + n, b + n] for a, b, c in caps]
+    for k in range(n):
+        j = (k + 1) % n
+        faces += [[k, j, j + n], [k, j + n, k + n]]
+    mesh = trimesh.Trimesh(vertices, np.array(faces), process=False)
+    mesh.fix_normals()
+    return mesh
+
+
+# (mesh, transform) of stepped_scene's instances: turned about z (the step still edge-on along
+# z), mirrored through x and through z, scaled by 2, turned about x (the step faces z), an L
+STEPPED = [
+    ("step", placed()),
+    ("step", placed(turn(2, 90), (4, 0, 0))),
+    ("step", placed(MIRROR_X, (-1, 0, 0))),
+    ("step", placed(MIRROR_Z, (0, 0, -4))),
+    ("step", placed(2 * np.eye(3), (0, 5, 0))),
+    ("step", placed(turn(0, 90), (0, -4, 0))),
+    ("l", placed(None, (6, 0, 0))),
+]
+
+
+def stepped_scene() -> Model:
+    """The scene of ``STEPPED`` (``stepped_prism`` and ``l_prism``), kept as instances."""
+    meshes = {"step": stepped_prism(), "l": l_prism()}
+    return model_from_object(trimesh_scene(STEPPED, meshes), name="stepped scene")

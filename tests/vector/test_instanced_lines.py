@@ -4,10 +4,21 @@ lines, edge numbers and drawings as its flattened twin gives."""
 
 import numpy as np
 import pytest
-from instanced_scenes import exact_scene, flattened, l_prism, placed, smooth_scene, trimesh_scene, wedge
+from instanced_scenes import (
+    STEP_EDGES,
+    STEPPED,
+    exact_scene,
+    flattened,
+    l_prism,
+    placed,
+    smooth_scene,
+    stepped_scene,
+    trimesh_scene,
+    wedge,
+)
 
 from blueprint.errors import InputError
-from blueprint.scene.camera import fit_camera
+from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.loader import model_from_object
 from blueprint.vector.drawing import draw_vector
 from blueprint.vector.lines import edge_numbers, edge_segments, intersection_segments, model_segments
@@ -35,6 +46,56 @@ def test_lines_are_the_flattened_scenes(view):
     for name in ("faces", "part", "kind", "edge"):
         np.testing.assert_array_equal(getattr(ours, name), getattr(theirs, name), err_msg=name)
     np.testing.assert_array_equal(ours.end_edges(), theirs.end_edges())
+
+
+def _stepped_camera(view: str) -> Camera:
+    """An orthographic axis view of ``stepped_scene``, or ("cut") one along -z whose near plane
+    cuts through the scene: lines nearer than it are dropped and the edge-on outlines there
+    kept whole, as the flat path does."""
+    if view == "cut":
+        return Camera(eye=(1, 2, 3), target=(1, 2, 0), up=(0, 1, 0), near=1.75, far=40, ortho=True, height=12)
+    return fit_camera(flattened(stepped_scene()), SIZE, view, ortho=True)
+
+
+def _assert_same_segments(ours, theirs):
+    assert len(ours) == len(theirs)
+    np.testing.assert_allclose(ours.points, theirs.points, atol=1e-5)
+    for name in ("faces", "part", "kind", "edge"):
+        np.testing.assert_array_equal(getattr(ours, name), getattr(theirs, name), err_msg=name)
+    np.testing.assert_array_equal(ours.end_edges(), theirs.end_edges())
+
+
+@pytest.mark.parametrize("view", ["front", "top", "back", "cut"])
+def test_outlines_of_faces_seen_edge_on_are_the_flattened_scenes(view):
+    model, twin = stepped_scene(), flattened(stepped_scene())
+    camera = _stepped_camera(view)
+    view_matrix, projection = camera.view_matrix(), camera.projection_matrix()
+    ours = model_segments(model, view_matrix, projection, SIZE)
+    theirs = model_segments(twin, view_matrix, projection, SIZE)
+    assert not model.is_flat
+    _assert_same_segments(ours, theirs)
+
+
+def test_a_step_seen_edge_on_is_outlined_in_every_instance():
+    """Seen along z, the step of every instance whose step stays square to z (all but the one
+    turned about x) has its two long edges as silhouettes: the walls beside it face away
+    from the eye in all but the one mirrored through x, and meet it at 14 degrees, so only the
+    edge-on rule draws them there."""
+    model = stepped_scene()
+    camera = _stepped_camera("front")
+    found = model_segments(model, camera.view_matrix(), camera.projection_matrix(), SIZE, intersections=False)
+    outline = found.points[found.kind == SILHOUETTE]
+    expected = []
+    for name, transform in STEPPED:
+        normal = np.linalg.inv(transform[:3, :3]).T @ [0.0, 1.0, 0.0]
+        if name == "step" and normal[2] == 0.0:
+            expected += list(STEP_EDGES @ transform[:3, :3].T + transform[:3, 3])
+    assert len(expected) == 10
+    for edge in expected:
+        apart = np.minimum(
+            np.abs(outline - edge).max(axis=(1, 2)), np.abs(outline - edge[::-1]).max(axis=(1, 2))
+        )
+        assert apart.min() < 1e-6, edge
 
 
 def _by_class(drawing) -> dict:

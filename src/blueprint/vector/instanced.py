@@ -5,11 +5,11 @@ its adjacency (welded on its own), the edges that are borders and creases, the s
 vertex normals of its smooth contours, and the planes of its faces. Each instance then places
 them: the view moved into the mesh's frame (the eye or the view direction through the inverse
 of the instance's transform) gives every face's facing and every vertex's ``n . v`` for a block
-of instances at once (one matrix product), from which the silhouettes and smooth contours of
-each instance follow as ``lines.feature_segments`` finds them on a flat model; the segments are
-then placed by the instances' transforms. Intersection lines between parts are found once for
-each pair of meshes that touch in one relative placement and placed at every pair of instances
-placed so.
+of instances at once (one matrix product), from which the silhouettes (edge-on outlines among
+them) and smooth contours of each instance follow as ``lines.feature_segments`` finds them on a
+flat model; the segments are then placed by the instances' transforms. Intersection lines
+between parts are found once for each pair of meshes that touch in one relative placement and
+placed at every pair of instances placed so.
 
 Edge numbers (``lines.edge_numbers``) of a model kept as instances are its flattened scene's,
 made arithmetically: instance after instance, each instance's mesh's own edges (its adjacency's
@@ -21,12 +21,14 @@ creases are its own (the picture's per-mesh preparation takes them so too).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from blueprint.columns import row_norm
 from blueprint.errors import InputError
+from blueprint.scene.camera import transform
 from blueprint.scene.instances import Instances
 from blueprint.scene.model import Model
 from blueprint.silhouette import Adjacency, build_adjacency, smooth_surface
@@ -63,6 +65,7 @@ class _MeshLines:
     """A unique mesh's adjacency and what its lines need of it in every view.
 
     count, f0, f1 : (E,) faces of each edge and its first two (``edges._first_two_faces``)
+    two : (T,) the edges of two faces, ``pair`` (T, 2) their faces
     normal_ok : (F,) bool, faces with a normal
     planes : (F, 4) float64, ``(n, -n . p0)`` of every face (unit n, zero where none): its
         facing towards a point ``(e, 1)`` or a direction ``(d, 0)`` is one product
@@ -77,6 +80,8 @@ class _MeshLines:
     count: np.ndarray
     f0: np.ndarray
     f1: np.ndarray
+    two: np.ndarray
+    pair: np.ndarray
     normal_ok: np.ndarray
     planes: np.ndarray
     many: np.ndarray
@@ -121,7 +126,11 @@ def _build_mesh_lines(positions: np.ndarray, faces: np.ndarray) -> _MeshLines:
         np.arange(int(many_start[-1])) - np.repeat(many_start[:-1], count[many])
     )
     many_face = adj.edge_faces[incidences, 1]
-    return _MeshLines(adj, count, f0, f1, normal_ok, planes, many, many_start, many_face, _edge_keys(adj), {})
+    two = np.flatnonzero(count == 2)
+    pair = np.stack([f0[two], f1[two]], axis=1)
+    return _MeshLines(
+        adj, count, f0, f1, two, pair, normal_ok, planes, many, many_start, many_face, _edge_keys(adj), {}
+    )
 
 
 def _mesh_lines_all(model: Model) -> list[_MeshLines]:
@@ -190,11 +199,26 @@ def _toward_length(q: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum(square, 0.0))
 
 
+@dataclass(frozen=True)
+class _Tests:
+    """One view's camera and the flat path's tests of its lines, as ``lines`` gives them
+    (``instanced_features``)."""
+
+    view: np.ndarray
+    projection: np.ndarray
+    size: tuple[int, int]
+    smooth: bool
+    edge_on_cos: float
+    edge_on_smooth_cos: float
+    outlines: Callable
+
+
 @dataclass
 class _Found:
     """What the blocks of one view collect, instance and local numbers with each row."""
 
     edge_inst: list
+    outline: list
     edge: list
     edge_kind: list
     edge_sides: list
@@ -221,12 +245,15 @@ def instanced_features(
     smooth_angle: float,
     edge_on_cos: float,
     edge_on_smooth_cos: float,
+    outlines: Callable,
 ):
     """The arrays ``lines.feature_segments`` builds its segments from, for a model kept as
     instances: a dict of the edges' model-space ``points`` (N, 2, 3), ``faces`` (N, 2) in the
     flattened numbering, ``part``, ``kind`` (edge-on creases made silhouettes, near-flat ones
     ``SMOOTH``), ``edge`` (flattened numbering), ``silhouette`` (N,) bool (silhouettes of
-    ``classify_edges``' own), ``vertices`` (N, 2) (their flattened welded vertices),
+    ``classify_edges``' own and the edge-on outlines of ``lines._with_edge_on_outlines``, whose
+    rule ``outlines`` is, ``lines._edge_on_outline_edges``), ``vertices`` (N, 2) (their
+    flattened welded vertices),
     ``exact`` (N, 2) bool (side faces where the mesh's own silhouette stays), and the smooth
     contours' ``contour_points`` (K, 2, 3), ``contour_pixels`` (K, 2, 2), ``contour_face``
     (K,), ``contour_part``, ``contour_edges`` (K, 2), ``contour_vertices`` (K, 2, 2) (the
@@ -237,7 +264,8 @@ def instanced_features(
     first_vertex, first_edge = _numbering(model)
     first_face = _starts(inst.instance_faces())
     q_all, sign_all = _view_in_meshes(inst, view, projection)
-    found = _Found(*([] for _ in range(15)))
+    tests = _Tests(view, projection, size, smooth, edge_on_cos, edge_on_smooth_cos, outlines)
+    found = _Found(*([] for _ in range(16)))
     for m, members in inst.by_mesh():
         ml = meshes[m]
         if len(ml.adj.faces) == 0:
@@ -245,33 +273,11 @@ def instanced_features(
         at_angle = ml.at_angle(crease_angle, smooth_angle)
         rows = max(len(ml.adj.edges), len(ml.adj.faces), len(ml.adj.positions))
         for block in _blocks(members, rows):
-            _block_features(
-                ml,
-                block,
-                q_all[block],
-                sign_all[block],
-                at_angle,
-                smooth,
-                edge_on_cos,
-                edge_on_smooth_cos,
-                inst,
-                found,
-            )
+            _block_features(ml, block, q_all[block], sign_all[block], at_angle, tests, inst, found)
     return _assembled(found, inst, first_vertex, first_edge, first_face, view, projection, size)
 
 
-def _block_features(
-    ml: _MeshLines,
-    block,
-    q,
-    sign,
-    at_angle: tuple,
-    smooth: bool,
-    edge_on_cos,
-    edge_on_smooth_cos,
-    inst,
-    found: _Found,
-):
+def _block_features(ml: _MeshLines, block, q, sign, at_angle: tuple, tests: _Tests, inst, found: _Found):
     # the mesh's lines at the crease angle (``_MeshLines.at_angle``)
     static, smooth_crease, surface, vertex_planes = at_angle
     adj = ml.adj
@@ -299,20 +305,25 @@ def _block_features(
     kind = np.where(is_sil, SILHOUETTE, static[e]).astype(np.uint8)
     sides = np.stack([ml.f0[e], np.where(kind == BORDER, -1, ml.f1[e])], axis=1)
     sides[is_sil] = np.stack([first_front[b[is_sil], e[is_sil]], first_back[b[is_sil], e[is_sil]]], axis=1)
-    which = block[b]
-    found.edge_inst.append(which)
+    points = _placed(adj.positions[adj.edges[e]], inst.transform[block[b]])
+    edge_on = cos <= tests.edge_on_cos
+    nb, ne, new_points = _outline_edges(ml, edge_on, (b, e, points), inst.transform[block], tests)
+    b, e = np.r_[b, nb], np.r_[e, ne]
+    kind = np.r_[kind, np.full(len(ne), SILHOUETTE, np.uint8)]
+    sides = np.concatenate([sides, np.stack([ml.f0[ne], ml.f1[ne]], axis=1)])
+    found.outline.append(np.arange(len(e)) >= len(points))
+    found.edge_inst.append(block[b])
     found.edge.append(e)
     found.edge_kind.append(kind)
     found.edge_sides.append(sides)
-    found.edge_points.append(_placed(adj.positions[adj.edges[e]], inst.transform[which]))
+    found.edge_points.append(np.concatenate([points, new_points]))
     found.edge_vertices.append(adj.edges[e])
-    side_cos = cos[b[:, None], np.maximum(sides, 0)]
-    found.edge_on.append((side_cos <= edge_on_cos) & (sides >= 0))
+    found.edge_on.append(edge_on[b[:, None], np.maximum(sides, 0)] & (sides >= 0))
     found.smooth_crease.append(smooth_crease[e])
-    if not smooth:
+    if not tests.smooth:
         found.side_exact.append(np.ones(sides.shape, bool))
         return
-    smooth_faces = surface.smooth[None] & (cos > edge_on_smooth_cos)
+    smooth_faces = surface.smooth[None] & (cos > tests.edge_on_smooth_cos)
     found.side_exact.append(~smooth_faces[b[:, None], np.maximum(sides, 0)])
     g = (vertex_planes @ q.T).T * sign[:, None]  # (B, V) n . v at the vertices, placed
     near = _VERTEX_EDGE_ON * _toward_length(q, adj.positions)
@@ -339,6 +350,33 @@ def _block_features(
     found.contour_vertex_points.append(_placed(adj.positions[vertices], inst.transform[which]))
 
 
+def _outline_edges(ml: _MeshLines, edge_on: np.ndarray, lines: tuple, transforms: np.ndarray, tests: _Tests):
+    """The block's edges that the flat path's rule makes silhouettes (``tests.outlines``, as
+    ``lines._with_edge_on_outlines`` applies it): (K,) rows of the block, (K,) edges and (K, 2,
+    3) their placed ends, those wholly in front of the eye. ``edge_on`` (B, F): the faces seen
+    edge-on in each instance (``transforms`` (B, 4, 4)); ``lines``: the rows, edges and placed
+    ends (N, 2, 3) of the block's silhouettes, borders and creases."""
+    none = np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 2, 3))
+    # only the edges beside a face seen edge-on in some instance of the block can change
+    touched = edge_on.any(axis=0)[ml.pair].any(axis=1)
+    if not touched.any():
+        return none
+    pair, two = ml.pair[touched], ml.two[touched]
+    column = np.full(len(ml.adj.edges), -1)
+    column[two] = np.arange(len(two))
+    # found as the flat path finds them: where the near plane leaves a piece of them
+    b, e, points = lines
+    beside = column[e] >= 0
+    kept = _projected(points[beside], tests.view, tests.projection, tests.size)[2]
+    found = np.zeros((len(edge_on), len(two)), bool)
+    found[b[beside][kept], column[e[beside][kept]]] = True
+    rows, k = np.nonzero(tests.outlines(edge_on, pair, found))
+    edges = two[k]
+    placed = _placed(ml.adj.positions[ml.adj.edges[edges]], transforms[rows])
+    ahead = (transform(placed, tests.projection @ tests.view)[..., 3] > 0).all(axis=1)
+    return rows[ahead], edges[ahead], placed[ahead]
+
+
 def _joined(items: list, shape: tuple, dtype) -> np.ndarray:
     return np.concatenate(items) if items else np.zeros((0, *shape), dtype)
 
@@ -356,9 +394,17 @@ def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_f
     edge_on = _joined(found.edge_on, (2,), bool)[order].any(axis=1)
     kind[(kind == CREASE) & edge_on] = SILHOUETTE
     kind[(kind == CREASE) & _joined(found.smooth_crease, (), bool)[order]] = SMOOTH
-    points, _, keep = _projected(
-        _joined(found.edge_points, (2, 3), np.float64)[order], view, projection, size
-    )
+    points = _joined(found.edge_points, (2, 3), np.float64)[order]
+    # the edge-on outlines are wholly in front of the eye and kept whole, as the flat path keeps
+    # them; the other lines are clipped to the near plane
+    outline = _joined(found.outline, (), bool)[order]
+    clipped, _, kept = _projected(points[~outline], view, projection, size)
+    kept = np.flatnonzero(~outline)[kept]
+    points[kept] = clipped
+    keep = outline.copy()
+    keep[kept] = True
+    keep = np.flatnonzero(keep)
+    points = points[keep]
     out = {
         "points": points,
         "faces": faces[keep],

@@ -349,7 +349,16 @@ def _instanced_feature_segments(model: Model, view, projection, size, crease_ang
     from .instanced import instanced_features
 
     found = instanced_features(
-        model, view, projection, size, crease_angle, smooth, SMOOTH_ANGLE, _EDGE_ON, _EDGE_ON_SMOOTH
+        model,
+        view,
+        projection,
+        size,
+        crease_angle,
+        smooth,
+        SMOOTH_ANGLE,
+        _EDGE_ON,
+        _EDGE_ON_SMOOTH,
+        _edge_on_outline_edges,
     )
     diagonal = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
     kind, faces = found["kind"], found["faces"]
@@ -419,15 +428,11 @@ def _with_edge_on_outlines(adj: Adjacency, edges: EdgeSet, view, projection, siz
     start = np.cumsum(count) - count
     two = np.flatnonzero(count == 2)
     pair = np.stack([face[start[two]], face[start[two] + 1]], axis=1)
-    edge_on = _edge_on(adj, pair, view, projection)
-    one_side = edge_on[:, 0] != edge_on[:, 1]
-    flat_side = np.where(edge_on[:, 0], pair[:, 0], pair[:, 1])
+    all_faces = np.arange(len(adj.faces))
+    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection)[:, 0]
     found = np.zeros(len(adj.edges), bool)
-    found[edges.edges[np.isin(edges.kind, (SILHOUETTE, CREASE))]] = True
-    outlined = np.zeros(len(adj.faces), bool)
-    outlined[flat_side[one_side & found[two]]] = True
     found[edges.edges] = True
-    chosen = one_side & ~found[two] & ~outlined[flat_side]
+    chosen = _edge_on_outline_edges(edge_on, pair, found[two])
     # wholly in front of the eye, as no clipping is done here (a sample nearer than the near
     # plane falls outside the view and is left out)
     ends = adj.positions[adj.edges[two[chosen]]].reshape(-1, 3)
@@ -446,6 +451,31 @@ def _with_edge_on_outlines(adj: Adjacency, edges: EdgeSet, view, projection, siz
         faces=np.concatenate([edges.faces, pair])[order],
         edges=np.r_[edges.edges, new][order],
     )
+
+
+def _edge_on_outline_edges(edge_on: np.ndarray, pair: np.ndarray, found: np.ndarray) -> np.ndarray:
+    """(..., E) bool: the two-face edges that become silhouettes (``_with_edge_on_outlines``),
+    for one view or a block of instances of one mesh at once (the leading axes ``...``): those
+    where a face seen edge-on meets one that is not, not found already, whose edge-on face has
+    no such edge among those found.
+
+    Parameters
+    ----------
+    edge_on : np.ndarray
+        (..., F) bool, the faces seen edge-on.
+    pair : np.ndarray
+        (E, 2) int, the two faces of each two-face edge.
+    found : np.ndarray
+        (..., E) bool, those edges among the lines found already (silhouettes and creases,
+        as ``classify_edges`` keeps them).
+    """
+    side = edge_on[..., pair]
+    one_side = side[..., 0] != side[..., 1]
+    flat_side = np.where(side[..., 0], pair[:, 0], pair[:, 1])
+    outlined = np.zeros(edge_on.shape, bool)
+    at = np.nonzero(one_side & found)
+    outlined[(*at[:-1], flat_side[at])] = True
+    return one_side & ~found & ~np.take_along_axis(outlined, flat_side, axis=-1)
 
 
 def _with_smooth_contours(
