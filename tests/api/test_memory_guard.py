@@ -89,6 +89,21 @@ def _hostile():
 COPIES = 100_000
 
 
+def _box_moves() -> np.ndarray:
+    """(COPIES, 3) float64 translations of the boxes: a grid of 400 a row."""
+    side = 400
+    return np.c_[2.0 * (np.arange(COPIES) % side), 3.0 * (np.arange(COPIES) // side), np.zeros(COPIES)]
+
+
+def _box_field(path: Path) -> Path:
+    """A GLB of COPIES instances of one box (``_box_moves``) at ``path``."""
+    hostile = _hostile()
+    corners, faces = hostile.box_arrays()
+    nodes = [{"mesh": 0, "translation": move} for move in _box_moves().tolist()]
+    path.write_bytes(hostile.glb(nodes, list(range(COPIES)), corners, faces=faces))
+    return path
+
+
 @needs_cli
 def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     """A GLB of 10^5 instances of a box is drawn under a memory budget that refuses the same
@@ -97,11 +112,8 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     ``vector.instanced`` hold that it never flattens them.)"""
     hostile = _hostile()
     corners, faces = hostile.box_arrays()
-    side = 400
-    moves = np.c_[2.0 * (np.arange(COPIES) % side), 3.0 * (np.arange(COPIES) // side), np.zeros(COPIES)]
-    nodes = [{"mesh": 0, "translation": move} for move in moves.tolist()]
-    kept, flat = tmp_path / "kept.glb", tmp_path / "flat.glb"
-    kept.write_bytes(hostile.glb(nodes, list(range(COPIES)), corners, faces=faces))
+    moves = _box_moves()
+    kept, flat = _box_field(tmp_path / "kept.glb"), tmp_path / "flat.glb"
     positions = (corners[None] + moves[:, None]).reshape(-1, 3)
     flat_faces = (faces[None] + 8 * np.arange(COPIES)[:, None, None]).reshape(-1, 3)
     flat.write_bytes(hostile.glb([{"mesh": 0}], [0], positions, faces=flat_faces))
@@ -127,6 +139,21 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"{drawn} triangles" in proc.stdout
     assert (tmp_path / "kept.png").stat().st_size > 0
+
+
+@needs_cli
+def test_a_crowd_of_instances_in_a_few_pixels_draws_its_svg(tmp_path):
+    """10^5 boxes drawn into 64 x 64 pixels, thousands of their lines' stretches in a pixel: the
+    search for coincident lines looks at a bounded number each, so the SVG is written (it was
+    quadratic in a pixel's crowd) and holds the lines that stay."""
+    out = tmp_path / "boxes.svg"
+    command = [str(BLUEPRINT), "render", str(_box_field(tmp_path / "boxes.glb")), "-o", str(out)]
+    proc = subprocess.run(
+        [*command, "--size", "64", "64", "--max-layers", "1"], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "polylines level 0: " in proc.stdout
+    assert out.read_text().count(' d="M') >= 1
 
 
 def test_an_instanced_upload_is_weighed_by_its_unique_meshes(tmp_path):

@@ -92,3 +92,70 @@ def test_the_compute_pass_runs_in_the_renderers_own_context(renderer):
         got = suppress_coincident(samples, level, renderer=renderer)
     renderer.make_current()
     np.testing.assert_array_equal(got, suppress_coincident(samples, level))
+
+
+def _brute_force_drop(samples: Samples, level: np.ndarray) -> np.ndarray:
+    """The rule without bins or budget: every live sample against every covering stretch of
+    another line ranked below it that starts in its pixel or one beside it, in the search's
+    single-precision arithmetic."""
+    from blueprint.vector.occlusion.coincident import _Search
+
+    live = np.flatnonzero(level >= 0)
+    s = _Search.of(samples, level, live)
+    source = s.source
+    rel = s.pixel32[live][:, None] - s.pixel32[source][None]
+    f = s.forward32[source][None]
+    t = np.clip((rel[..., 0] * f[..., 0] + rel[..., 1] * f[..., 1]) * s.inv_length2[source][None], 0, 1)
+    gx, gy = rel[..., 0] - t * f[..., 0], rel[..., 1] - t * f[..., 1]
+    d, u = s.direction[live][:, None], s.unit32[source][None]
+    turn = np.abs(d[..., 0] * u[..., 1] - d[..., 1] * u[..., 0])
+    sin_limit = np.sin(np.radians(10.0))
+    hit = (gx * gx + gy * gy <= np.float32(0.25)) & (turn <= sin_limit)
+    hit &= (s.rank[source][None] < s.rank[live][:, None]) & (s.line[source][None] != s.line[live][:, None])
+    cells = np.floor(samples.pixel).astype(np.int64)
+    hit &= (np.abs(cells[live][:, None] - cells[source][None]) <= 1).all(axis=2)
+    out = level.copy()
+    out[live[hit.any(axis=1)]] = -1
+    return out
+
+
+@pytest.mark.parametrize("use_gpu", [False, True], ids=["numpy", "gpu"])
+def test_the_bounded_search_leaves_out_what_every_pair_tested_does(renderer, use_gpu):
+    """Crowded lines at all angles, near the distance and angle limits: the search by cell,
+    direction and budget gives the answer of testing every pair."""
+    rng = np.random.default_rng(7)
+    lines = []
+    for _ in range(120):
+        start, angle = rng.uniform(0, 60, 2), rng.uniform(0, 360)
+        lines.append(_line(start, angle, rng.uniform(2, 20)))
+        normal = np.array([-np.sin(np.radians(angle)), np.cos(np.radians(angle))])
+        for _ in range(2):
+            turned = angle + rng.choice([-10.5, -9.5, 0.0, 9.5, 10.5, 179.0])
+            lines.append(_line(start + rng.choice([0.3, 0.49, 0.51]) * normal, turned, rng.uniform(2, 20)))
+    samples = _samples(lines)
+    level = np.repeat(rng.integers(0, 3, len(lines)), [len(p) for p in lines]).astype(np.int32)
+    expected = _brute_force_drop(samples, level)
+    assert 0 < (expected[level >= 0] == -1).sum() < (level >= 0).sum() // 2
+    got = suppress_coincident(samples, level, renderer=renderer if use_gpu else None)
+    np.testing.assert_array_equal(got, expected)
+
+
+def test_a_crowded_pixel_costs_a_sample_its_budget_and_no_more(renderer):
+    """More stretches of its direction in a sample's own pixel than its budget, none of them
+    within reach, and the one that reaches it in the pixel beside: the sample looks at its
+    budget's worth and stays, where testing every pair leaves it out; NumPy and the compute pass
+    agree, and nothing is left out that every pair tested keeps."""
+    from blueprint.vector.occlusion.coincident import BUDGET
+
+    crowd = [np.array([[10.55 + 0.3 * k / BUDGET, 20.9], [10.85, 20.9]]) for k in range(BUDGET + 100)]
+    reach = np.array([[9.2, 20.25], [9.95, 20.25]])  # 0.2 px above the sample, the pixel before
+    sample = np.array([[10.05, 20.05], [10.3, 20.05]])
+    lines = [*crowd, reach, sample]
+    samples = _samples(lines)
+    level = np.r_[np.zeros(2 * len(crowd) + 2, np.int32), np.ones(2, np.int32)]
+    exact = _brute_force_drop(samples, level)
+    assert (exact[-2:] == -1).all()
+    cpu = suppress_coincident(samples, level)
+    np.testing.assert_array_equal(suppress_coincident(samples, level, renderer=renderer), cpu)
+    assert cpu[-2] == 1  # the budget spent in its own crowded pixel
+    assert ((cpu == -1) <= (exact == -1)).all()

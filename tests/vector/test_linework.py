@@ -378,3 +378,43 @@ def test_the_engine_svg_grows_by_at_most_30_percent_over_lines_without_kinds_or_
     old += parts * len('<g id="" inkscape:groupmode="layer" inkscape:label="" data-part="">\n</g>\n')
     assert len(drawing) > 5000
     assert new <= 1.3 * old, f"{new} bytes against {old}: {new / old - 1:.0%} more"
+
+
+def test_the_edge_lists_of_many_paths_read_back_to_each_lines_edges():
+    """``svg.edge_texts`` formats the ``data-edges`` of many paths in one pass: lines without
+    edges, repeated edges, differences below zero and numbers of many digits read back, path by
+    path, to each line's distinct edges ascending; a path of lines without edges writes none."""
+    from blueprint.vector.linework import Lines
+    from blueprint.vector.svg import edge_text, edge_texts
+
+    rng = np.random.default_rng(3)
+    n = 400
+    sizes = rng.integers(0, 4, n) * (rng.random(n) < 0.7)
+    edges = rng.integers(0, 10**9, sizes.sum()) // rng.choice([1, 10**7], sizes.sum())
+    zeros = np.zeros(n, np.int64)
+    lines = Lines(
+        np.zeros((2 * n, 2)),
+        np.arange(0, 2 * n + 1, 2),
+        zeros,
+        zeros.astype(np.uint8),
+        zeros,
+        edges,
+        np.r_[0, np.cumsum(sizes)],
+        zeros.astype(bool),
+    )
+    index = rng.permutation(n)[:350]
+    bare = index[sizes[index] == 0][:3]
+    index = np.r_[bare, index[sizes[index] > 0]]
+    cuts = np.r_[
+        0, len(bare), np.sort(rng.choice(np.arange(len(bare) + 1, len(index)), 40, replace=False)), len(index)
+    ]
+    texts = edge_texts(lines, index, cuts)
+    assert texts[0] == ""  # the lines without edges
+    for g in range(1, len(cuts) - 1):
+        own = index[cuts[g] : cuts[g + 1]]
+        assert texts[g] == edge_text(lines, own)
+        got = svg_edges(texts[g])
+        want = [np.unique(edges[lines.edge_offsets[i] : lines.edge_offsets[i + 1]]) for i in own]
+        assert len(got) == len(want)
+        for a, b in zip(got, want, strict=True):
+            np.testing.assert_array_equal(a, b)

@@ -11,7 +11,7 @@ import numpy as np
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
 from blueprint.scene.sheet import MARK_KINDS
 
-from .linework import KINDS, Lines, runs_of
+from .linework import KINDS, Lines
 from .section import SECTION_HATCH_WIDTH, SECTION_OUTLINE_WIDTH
 from .style import LineStyle
 
@@ -279,8 +279,9 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
     bounds = np.r_[0, np.cumsum([len(g[3]) for g in groups])]
     drawn = np.zeros(len(index), bool)
     texts = paths_data(lines.points[rows], sub_offsets, bounds, factor, 0, drawn, relative=True)
+    edge_lists = edge_texts(lines, index[drawn], np.r_[0, np.cumsum(drawn)][bounds])
     current = None
-    for (part, kind, level, _), d, a, b in zip(groups, texts, bounds[:-1], bounds[1:], strict=True):
+    for g, ((part, kind, level, _), d) in enumerate(zip(groups, texts, strict=True)):
         if not d:
             continue
         highlighted = part in drawing.highlight
@@ -301,8 +302,7 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
             out.append(f'<g class="level-{level}" data-level="{level}" {_stroke(shared, base)}>\n')
             current = (part, level)
         own = _stroke_changes(style.line(kind, level, highlighted), shared, base)
-        edges = edge_text(lines, index[a:b][drawn[a:b]])
-        edges = f' data-edges="{edges}"' if edges.strip(";") else ""
+        edges = f' data-edges="{edge_lists[g]}"' if edge_lists[g] else ""
         out.append(f'<path data-kind="{KINDS[kind]}"{own}{edges} d="{d}"/>\n')
     if current is not None:
         out.append("</g>\n</g>\n")
@@ -337,16 +337,65 @@ def edge_text(lines: Lines, index: np.ndarray) -> str:
     in order, gives the edges back. A line with no edges (an intersection) has an empty entry."""
     if len(index) == 0:
         return ""
+    text = edge_texts(lines, index, np.array([0, len(index)]))[0]
+    return text or ";" * (len(index) - 1)
+
+
+def edge_texts(lines: Lines, index: np.ndarray, groups: np.ndarray) -> list[str]:
+    """``edge_text`` of each run of lines ``index[groups[g]:groups[g + 1]]``, all formatted in
+    one pass ("" for a run whose lines have no edges at all, which writes no attribute)."""
     values, owner = _edges_of(lines, index)
+    if len(values) == 0:
+        return [""] * (len(groups) - 1)
     order = np.lexsort((values, owner))
-    values, offsets = runs_of(values[order], owner[order], len(index))
-    steps = np.diff(values, prepend=0).tolist()
-    count = np.diff(offsets).tolist()
-    out, at = [], 0
-    for n in count:
-        out.append(" ".join(map(str, steps[at : at + n])))
-        at += n
-    return ";".join(out)
+    values, owner = values[order], owner[order]
+    # an edge repeated within a line is written once
+    keep = np.r_[True, (owner[1:] != owner[:-1]) | (values[1:] != values[:-1])]
+    values, owner = values[keep], owner[keep]
+    group = np.searchsorted(groups, owner, side="right") - 1
+    opens = np.r_[True, group[1:] != group[:-1]]  # the group's first number: written as itself
+    steps = np.where(opens, values, np.diff(values, prepend=0))
+    line_first = np.r_[True, owner[1:] != owner[:-1]]
+    # semicolons before a line's first number: one a line since the number before in the group
+    previous = np.where(opens, groups[group], np.r_[0, owner[:-1]])
+    semis = np.where(line_first, owner - previous, 0)
+    closes = np.r_[opens[1:], True]
+    tail = np.where(closes, groups[group + 1] - 1 - owner, 0)
+    table, mask = _integer_table(steps, ~line_first)
+    written = mask.sum(axis=1)
+    chunk = semis + written + tail
+    start = np.cumsum(chunk) - chunk
+    out = np.full(int(chunk.sum()), ord(";"), np.uint8)
+    row, column = np.nonzero(mask)
+    out[start[row] + semis[row] + (np.cumsum(mask, axis=1) - 1)[row, column]] = table[row, column]
+    text = out.tobytes().decode("ascii")
+    first, last = np.flatnonzero(opens), np.flatnonzero(closes)
+    texts = [""] * (len(groups) - 1)
+    for g, a, b in zip(
+        group[first].tolist(), start[first].tolist(), (start + chunk)[last].tolist(), strict=True
+    ):
+        texts[g] = text[a:b]
+    return texts
+
+
+def _integer_table(numbers: np.ndarray, spaced: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, W) uint8 characters of the (N,) int64 ``numbers`` as ``str`` writes them, each after
+    a space where ``spaced``, and the (N, W) bool mask of those written, in order."""
+    magnitude = np.abs(numbers)
+    wide = max(len(str(int(magnitude.max()))), 1)
+    powers = 10 ** np.arange(wide - 1, -1, -1, dtype=np.int64)
+    digits = ((magnitude[:, None] // powers) % 10 + ord("0")).astype(np.uint8)
+    shown = np.arange(wide)[None] >= wide - (1 + (magnitude[:, None] >= powers[:-1]).sum(axis=1))[:, None]
+    table = np.concatenate(
+        [
+            np.full((len(numbers), 1), ord(" "), np.uint8),
+            np.full((len(numbers), 1), ord("-"), np.uint8),
+            digits,
+        ],
+        axis=1,
+    )
+    mask = np.concatenate([spaced[:, None], (numbers < 0)[:, None], shown], axis=1)
+    return table, mask
 
 
 def _shading_group(shading, factor: float, decimals: int) -> str:

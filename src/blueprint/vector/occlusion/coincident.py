@@ -20,6 +20,14 @@ _GROUP = 64
 # coincident.comp's tables, in the order of ``_gpu_drop``'s inputs after its storage buffers
 _TABLES = ("u_steps", "u_units", "u_keys", "u_cells")
 _MAX_GROUPS = 65535
+# Directions (modulo a half turn) fall in up to BINS bins, each a degree wider than the angle
+# limit, so a sample's matches lie in its own bin and the two beside it: stretches of other
+# directions crowding a cell are never looked at.
+BINS = 15
+# The stretches one sample looks at, at most: the answer is exact wherever a sample has fewer
+# candidates or finds its match sooner (every drawing of a real model), and the search stays
+# linear where thousands of stretches crowd a pixel.
+BUDGET = 1024
 
 
 def suppress_coincident(
@@ -33,20 +41,22 @@ def suppress_coincident(
     a longer run of it, then an earlier polyline): within ``distance`` pixels across it and
     running within ``angle`` degrees of it. Hidden lines right under visible ones (the bottom
     outline of a plate under its top outline in a plan view) and lines drawn twice at one level
-    come out once, the longest whole. Left-out samples get level -1. With a ``renderer``
-    (``LayerRenderer``) the search runs as a compute pass (coincident.comp), with the same
-    arithmetic: the same samples are left out.
+    come out once, the longest whole. A sample looks at ``BUDGET`` stretches at most (those of
+    its own cell first, then of the cells beside it, then of the corners; each cell's by
+    direction, then rank): where more crowd around it and none of those matches, it stays.
+    Left-out samples get level -1. With a ``renderer`` (``LayerRenderer``) the search runs as a
+    compute pass (coincident.comp), with the same arithmetic: the same samples are left out.
     """
     level = level.copy()
     live = np.flatnonzero(level >= 0)
     if len(live) < 2:
         return level
-    search = _Search.of(samples, level, live)
+    search = _Search.of(samples, level, live, _bins(angle))
     sin_limit = np.sin(np.radians(angle))
     if (
         renderer is not None
         and renderer.ctx.version_code >= 430
-        and search.ranks < 2**31
+        and search.ranks * search.bins < 2**31
         and table_fits(max(len(search.source), len(search.cell_count)), renderer.max_texture)
     ):
         drop = _gpu_drop(renderer, search, np.float32(distance * distance), _single_below(sin_limit))
@@ -56,14 +66,30 @@ def suppress_coincident(
     return level
 
 
+def _bins(angle: float) -> int:
+    """How many bins of direction the search sorts stretches into for an ``angle`` limit in
+    degrees: each a degree wider than the limit, so that its neighbours hold every match
+    whatever the rounding; one where three would cover every direction anyway."""
+    bins = int(min(BINS, 180.0 // (angle + 1.0)))
+    return bins if bins > 3 else 1
+
+
+def _direction_bin(unit: np.ndarray, bins: int) -> np.ndarray:
+    """(N,) int64 bin of each (N, 2) direction's angle modulo a half turn."""
+    turn = np.degrees(np.arctan2(unit[:, 1], unit[:, 0])) % 180.0
+    return np.minimum((turn * (bins / 180.0)).astype(np.int64), bins - 1)
+
+
 @dataclass(frozen=True)
 class _Search:
     """What the search for coincident stretches reads: every sample's stretch to the next
     sample of its line (``forward``, its ``unit`` direction and ``inv_length2``, float32 as the
     compute pass has them), the samples' own directions, and the stretches that cover others
     (``source``) sorted by their cell of a dense grid of 1-pixel cells (``span`` cells across,
-    one cell of margin all round), then by rank (level, then line); the live samples' cells
-    (``key``) and ranks."""
+    one cell of margin all round), then by their direction's bin (of ``bins``), then by rank
+    (level, then line: ``src_key``, cell, bin and rank in one number); the live samples' cells
+    (``key``), ranks, and the first (``first_bin``) and count (``bin_count``) of the bins they
+    look in: their own and the two beside it, every bin for a sample without a direction."""
 
     pixel32: np.ndarray
     direction: np.ndarray
@@ -73,17 +99,21 @@ class _Search:
     line: np.ndarray
     rank: np.ndarray
     ranks: int
+    bins: int
     source: np.ndarray
     src_key: np.ndarray
+    src_bin: np.ndarray
     cell_start: np.ndarray
     cell_count: np.ndarray
     span: np.ndarray
     live: np.ndarray
     key: np.ndarray
     live_rank: np.ndarray
+    first_bin: np.ndarray
+    bin_count: np.ndarray
 
     @classmethod
-    def of(cls, samples: Samples, level: np.ndarray, live: np.ndarray) -> _Search:
+    def of(cls, samples: Samples, level: np.ndarray, live: np.ndarray, bins: int = 1) -> _Search:
         pixel, line = samples.pixel, samples.line
         # every sample stands for the stretch to the next sample of its line
         has_next = np.r_[line[1:] == line[:-1], False]
@@ -96,6 +126,7 @@ class _Search:
         rank = _run_ranks(level, line, length)
         # the direction of each sample's own line there (its last sample looks back)
         direction = np.where(has_next[:, None], unit, np.r_[unit[:1], unit[:-1]]).astype(np.float32)
+        unit32 = unit.astype(np.float32)
         inv_length2 = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0)
         origin = np.floor(column_min(pixel[live])).astype(np.int64) - 1
         span = np.floor(column_max(pixel[live])).astype(np.int64) - origin + 2
@@ -105,31 +136,40 @@ class _Search:
             c = np.floor(pixel[rows]).astype(np.int64) - origin
             return np.clip(c[:, 1], 0, span[1] - 1) * span[0] + np.clip(c[:, 0], 0, span[0] - 1)
 
-        # stretches by cell, then by rank: a sample's candidates in a cell are the run of
-        # stretches ranked below its own at the cell's start, found by one search, so pairs that
-        # the rank rules out are never made
+        # stretches by cell, bin and rank: a sample's candidates in a cell and bin are the run
+        # of stretches ranked below its own at the run's start, found by one search, so pairs
+        # that the rank rules out are never made
         src_cell = cell_of(source)
+        src_bin = _direction_bin(unit32[source], bins)
         ranks = int(rank.max()) + 1  # ranks run 0 to R - 1 over the R runs: the keys fit
-        src_key = src_cell * ranks + rank[source]
+        src_key = (src_cell * bins + src_bin) * ranks + rank[source]
         order = stable_argsort(src_key)  # the order within a run of one key does not matter
         cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
+        mine = direction[live]
+        aimless = (mine[:, 0] == 0) & (mine[:, 1] == 0)
+        side = 1 if bins > 1 else 0
+        first_bin = np.where(aimless, 0, (_direction_bin(mine, bins) - side) % bins)
         return cls(
             pixel.astype(np.float32),
             direction,
-            unit.astype(np.float32),
+            unit32,
             forward.astype(np.float32),
             inv_length2.astype(np.float32),
             line,
             rank,
             ranks,
+            bins,
             source[order],
             src_key[order],
+            src_bin[order],
             np.cumsum(cell_count) - cell_count,
             cell_count,
             span,
             live,
             cell_of(live),
             rank[live],
+            first_bin,
+            np.where(aimless, bins, 1 + 2 * side),
         )
 
 
@@ -152,36 +192,52 @@ def _run_ranks(level: np.ndarray, line: np.ndarray, step: np.ndarray) -> np.ndar
 
 def _cpu_drop(search: _Search, distance: float, sin_limit: float) -> np.ndarray:
     """(L,) bool: the live samples within ``distance`` pixels of a stretch ranked below them
-    whose direction turns from theirs by a sine of at most ``sin_limit``, searched in NumPy."""
+    whose direction turns from theirs by a sine of at most ``sin_limit``, searched in NumPy
+    among the ``BUDGET`` candidates each that the compute pass looks at."""
     s = search
-    live, line, source = s.live, s.line, s.source
+    live = s.live
     drop = np.zeros(len(live), bool)
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            probe = s.key + dy * s.span[0] + dx  # the margin keeps probes inside the grid
-            lo = s.cell_start[probe]
-            count = np.searchsorted(s.src_key, probe * s.ranks + s.live_rank) - lo
-            for start in range(0, len(live), 1 << 16):
-                c = count[start : start + (1 << 16)]
-                total = int(c.sum())
-                if total == 0:
-                    continue
-                index = np.repeat(np.arange(start, start + len(c)), c)
-                within = np.arange(total) - np.repeat(np.cumsum(c) - c, c)
-                other = np.take(source, np.repeat(lo[start : start + len(c)], c) + within)
-                mine = np.take(live, index)
-                ok = np.take(line, other) != np.take(line, mine)
-                index, mine, other = index[ok], mine[ok], other[ok]
-                # distance from the sample to the other stretch, and the angle between them
-                rel = np.take(s.pixel32, mine, axis=0) - np.take(s.pixel32, other, axis=0)
-                f = np.take(s.forward32, other, axis=0)
-                t = np.clip((rel[:, 0] * f[:, 0] + rel[:, 1] * f[:, 1]) * np.take(s.inv_length2, other), 0, 1)
-                gx, gy = rel[:, 0] - t * f[:, 0], rel[:, 1] - t * f[:, 1]
-                d, u = np.take(s.direction, mine, axis=0), np.take(s.unit32, other, axis=0)
-                turn = np.abs(d[:, 0] * u[:, 1] - d[:, 1] * u[:, 0])
-                hit = (gx * gx + gy * gy <= distance * distance) & (turn <= sin_limit)
-                drop[index[hit]] = True
+    used = np.zeros(len(live), np.int64)
+    for dy, dx in _NEIGHBOURS:
+        probe = s.key + dy * s.span[0] + dx  # the margin keeps probes inside the grid
+        for step in range(int(s.bin_count.max())):
+            rows = np.flatnonzero((step < s.bin_count) & (used < BUDGET) & ~drop)
+            run = (probe[rows] * s.bins + (s.first_bin[rows] + step) % s.bins) * s.ranks
+            lo = np.searchsorted(s.src_key, run)
+            count = np.searchsorted(s.src_key, run + s.live_rank[rows]) - lo
+            count = np.minimum(count, BUDGET - used[rows])
+            used[rows] += count
+            _test_pairs(s, rows, lo, count, distance, sin_limit, drop)
     return drop
+
+
+# the cells a sample looks in, its own first, then those beside it, then the corners
+_NEIGHBOURS = ((0, 0), (-1, 0), (0, -1), (0, 1), (1, 0), (-1, -1), (-1, 1), (1, -1), (1, 1))
+
+
+def _test_pairs(s: _Search, rows, lo, count, distance: float, sin_limit: float, drop) -> None:
+    """Set ``drop`` of the live samples ``rows`` that lie on one of their ``count`` candidate
+    stretches from ``lo`` on (in the search's order), in chunks of bounded memory."""
+    for start in range(0, len(rows), 1 << 16):
+        c = count[start : start + (1 << 16)]
+        total = int(c.sum())
+        if total == 0:
+            continue
+        index = np.repeat(rows[start : start + len(c)], c)
+        within = np.arange(total) - np.repeat(np.cumsum(c) - c, c)
+        other = np.take(s.source, np.repeat(lo[start : start + len(c)], c) + within)
+        mine = np.take(s.live, index)
+        ok = np.take(s.line, other) != np.take(s.line, mine)
+        index, mine, other = index[ok], mine[ok], other[ok]
+        # distance from the sample to the other stretch, and the angle between them
+        rel = np.take(s.pixel32, mine, axis=0) - np.take(s.pixel32, other, axis=0)
+        f = np.take(s.forward32, other, axis=0)
+        t = np.clip((rel[:, 0] * f[:, 0] + rel[:, 1] * f[:, 1]) * np.take(s.inv_length2, other), 0, 1)
+        gx, gy = rel[:, 0] - t * f[:, 0], rel[:, 1] - t * f[:, 1]
+        d, u = np.take(s.direction, mine, axis=0), np.take(s.unit32, other, axis=0)
+        turn = np.abs(d[:, 0] * u[:, 1] - d[:, 1] * u[:, 0])
+        hit = (gx * gx + gy * gy <= distance * distance) & (turn <= sin_limit)
+        drop[index[hit]] = True
 
 
 def _single_below(value: float) -> np.float32:
@@ -198,7 +254,7 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     s, live, source = search, search.live, search.source
     inputs = [
         np.concatenate([s.pixel32[live], s.direction[live]], axis=1),
-        np.stack([s.key, s.live_rank, s.line[live], np.zeros_like(s.key)], axis=1),
+        np.stack([s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count], axis=1),
         np.concatenate([s.pixel32[source], s.forward32[source]], axis=1),
         np.stack(
             [
@@ -209,7 +265,7 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
             ],
             axis=1,
         ),
-        np.stack([s.rank[source], s.line[source]], axis=1),
+        np.stack([s.src_bin * s.ranks + s.rank[source], s.line[source]], axis=1),
         np.stack([s.cell_start, s.cell_count], axis=1),
     ]
     count = len(live)
@@ -219,6 +275,9 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     put = renderer.uniforms.set
     put(prog, "u_count", count)
     put(prog, "u_span", int(s.span[0]))
+    put(prog, "u_ranks", s.ranks)
+    put(prog, "u_bins", s.bins)
+    put(prog, "u_budget", BUDGET)
     put(prog, "u_distance2", float(dist2))
     put(prog, "u_sin_limit", float(sin_limit))
     singles = [
