@@ -4,11 +4,46 @@ the A-buffer, the compute rasteriser against the peel that draws the model once 
 
 from __future__ import annotations
 
+import contextlib
+from dataclasses import replace
+
 import numpy as np
+import pytest
 import trimesh
 
 import blueprint
 from blueprint import examples
+from blueprint.render.table import CaptureTable, PeelRow, capture_table
+
+
+# -- one way of capturing ----------------------------------------------------------------------
+@contextlib.contextmanager
+def one_way(renderer, way: str, abuffer=None, peel=None):
+    """``renderer`` capturing every frame ``way`` (``peel``, ``k-buffer`` or ``a-buffer``)
+    alone: a capture table of that way whatever its thresholds, the peel (``peel``, a
+    ``PeelRow``) taking what it cannot. ``abuffer(default)`` makes the A-buffer's row from the
+    device's own (None where it has none). A way the driver lacks skips the test: those are
+    capabilities, and the same cases run by the other ways."""
+    default = capture_table(renderer)
+    peel = peel or PeelRow()
+    if way == "k-buffer":
+        if default.row("k-buffer") is None:
+            pytest.skip(
+                "this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer"
+            )
+        rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), peel)
+    elif way == "a-buffer":
+        if renderer.ctx.version_code < 430:
+            pytest.skip("the A-buffer needs OpenGL 4.3")
+        rows = (abuffer(default.row("A-buffer")), peel)
+    else:
+        rows = (peel,)
+    saved = renderer.capture_table
+    renderer.capture_table = CaptureTable(rows, default.exact_depth)
+    try:
+        yield
+    finally:
+        renderer.capture_table = saved
 
 
 # -- models ------------------------------------------------------------------------------------

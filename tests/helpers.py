@@ -7,6 +7,7 @@ Importable from every test folder as ``helpers`` (pytest puts this folder, the c
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import resource
 import subprocess
@@ -28,6 +29,16 @@ SNAPPED_GEOMETRY = TESTS / "glsl" / "snapped_geometry.vert"
 # the console script of the environment running the tests
 BLUEPRINT = Path(sys.executable).parent / "blueprint"
 needs_cli = pytest.mark.skipif(not BLUEPRINT.exists(), reason=f"console script not found at {BLUEPRINT}")
+
+
+def hostile_corpus():
+    """benchmarks/hostile.py, the corpus of hostile inputs (and its GLB writer), as a module."""
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "hostile.py"
+    spec = importlib.util.spec_from_file_location("hostile_corpus", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up by name
+    spec.loader.exec_module(module)
+    return module
 
 
 def run_cli(*args, cwd=None, env=None, limits=None, timeout: float = 300) -> subprocess.CompletedProcess:

@@ -103,6 +103,22 @@ def exact_scene() -> Model:
     return model_from_object(trimesh_scene(EXACT), name="exact scene")
 
 
+# the order of the mixed scene's copies: meshes used three times and twice between meshes used once
+MIXED_ORDER = ("l", "w1", "l", "w2", "wedge", "l", "wedge")
+
+
+def mixed_scene(order=MIXED_ORDER) -> Model:
+    """Meshes used three times and twice (turned, mirrored, scaled) and meshes used once, in
+    ``order`` (names of an L prism ``l``, a wedge ``wedge``, and wedges ``w1``, ``w2`` used
+    once): a draw group per shared mesh and runs of flattened blocks."""
+    meshes = {"l": l_prism(), "wedge": wedge(), "w1": wedge(), "w2": wedge()}
+    linear = [None, turn(1, 90), MIRROR_X, 2 * np.eye(3), turn(0, 90), MIRROR_X @ turn(2, 90), None]
+    instances = [
+        (name, placed(m, (3 * k, 0, 0))) for k, (name, m) in enumerate(zip(order, linear, strict=True))
+    ]
+    return model_from_object(trimesh_scene(instances, meshes), name="mixed")
+
+
 def turned_scene() -> Model:
     """The scene of ``EXACT`` and ``TURNED``, kept as instances."""
     return model_from_object(trimesh_scene(EXACT + TURNED), name="turned scene")

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from helpers import hostile_corpus
 
 import blueprint
 from blueprint import examples, settings
@@ -800,17 +801,6 @@ def test_numpy_warnings_are_our_one_line_warnings():
 
 
 # -- the corpus of benchmarks/hostile.py: a fast subset --------------------------------------------
-def _corpus():
-    import importlib.util
-
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "hostile.py"
-    spec = importlib.util.spec_from_file_location("hostile_corpus", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    return module
-
-
 FAST = (
     "FIFO mtllib",
     "zip of no model",
@@ -831,7 +821,7 @@ def test_a_fast_subset_of_the_hostile_corpus_runs_clean(tmp_path):
     every cheap kind, and mutated files; each clean, or the reason it is not."""
     from concurrent.futures import ThreadPoolExecutor
 
-    corpus = _corpus()
+    corpus = hostile_corpus()
     kinds = (
         "special",
         "sparse",
@@ -856,7 +846,7 @@ def test_a_fast_subset_of_the_hostile_corpus_runs_clean(tmp_path):
 
 
 def _threemf(path: Path, components: int) -> None:
-    corpus = _corpus()
+    corpus = hostile_corpus()
     path.write_bytes(corpus.threemf(components))
 
 
@@ -906,7 +896,7 @@ def test_image_inputs_that_are_not_images_say_so_in_user_words(tmp_path):
 def test_corpus_finds_stay_fixed(tmp_path, label):
     """Mutated 3MF files whose deflate streams break mid-member: a traceback from zlib in the
     walk of the component graph, found by the whole corpus."""
-    (case,) = [c for c in _corpus().generate(17, 160, ("mutated",)) if c.label == label]
+    (case,) = [c for c in hostile_corpus().generate(17, 160, ("mutated",)) if c.label == label]
     case.make(tmp_path)
     with pytest.raises(InputError) as caught:
         loader.load_model(tmp_path / "m.3mf")
@@ -916,7 +906,7 @@ def test_corpus_finds_stay_fixed(tmp_path, label):
 
 # -- issue 36: OBJ rows cut short, glTF JSON of the wrong types, encrypted archives, instances ---------
 def _case(label: str):
-    (case,) = [c for c in _corpus().generate(17, 0) if c.label == label]
+    (case,) = [c for c in hostile_corpus().generate(17, 0) if c.label == label]
     return case
 
 
@@ -947,7 +937,7 @@ def test_an_obj_vertex_of_two_numbers_is_refused_naming_its_line(tmp_path):
     """trimesh reads every vertex cut to the shortest vertex line: a box of 2-D vertices, or a
     traceback where the vertices meet their transform."""
     path = tmp_path / "box.obj"
-    path.write_bytes(_corpus()._short_vertex_obj())
+    path.write_bytes(hostile_corpus()._short_vertex_obj())
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
     assert str(caught.value) == f"{path}: line 4: a vertex of 2 numbers (x, y and z are needed)"
@@ -966,7 +956,7 @@ def test_an_obj_vertex_of_two_numbers_is_refused_naming_its_line(tmp_path):
 )
 def test_obj_vertices_of_nan_or_huge_numbers_are_refused(tmp_path, line, message):
     path = tmp_path / "box.obj"
-    lines = _corpus()._short_vertex_obj().split(b"\n")
+    lines = hostile_corpus()._short_vertex_obj().split(b"\n")
     lines[3] = line
     path.write_bytes(b"\n".join(lines))
     with pytest.raises(InputError) as caught:
@@ -1000,7 +990,7 @@ SHAPES = {
 @pytest.mark.parametrize("suffix", ["gltf", "glb"])
 def test_gltf_json_of_the_wrong_shape_is_one_line_naming_the_field(tmp_path, suffix):
     """Every case of the corpus's kind ``shape``, once as .gltf and once as GLB."""
-    cases = [c for c in _corpus().generate(17, 0, ("shape",)) if c.args[1] == f"m.{suffix}"]
+    cases = [c for c in hostile_corpus().generate(17, 0, ("shape",)) if c.args[1] == f"m.{suffix}"]
     assert sorted(c.label.split(" ", 1)[1] for c in cases) == sorted(SHAPES)
     for k, case in enumerate(cases):
         folder = tmp_path / str(k)
@@ -1026,7 +1016,7 @@ def test_encrypted_archive_members_are_one_line(tmp_path, suffix, member):
 
 
 def _box_rows(path: Path, count: int) -> None:
-    corpus = _corpus()
+    corpus = hostile_corpus()
     box, faces = corpus.box_arrays()
     nodes = [{"mesh": 0, "translation": [2.0 * (i % 50), 3.0 * (i // 50), 0.0]} for i in range(count)]
     path.write_bytes(corpus.glb(nodes, list(range(count)), box, faces=faces))

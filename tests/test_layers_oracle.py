@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from capture_helpers import nested_boxes, nested_round, sphere_in_cube
+from capture_helpers import nested_boxes, nested_round, one_way, sphere_in_cube
 from helpers import SNAPPED_GEOMETRY, run_cli
 from oracle import (
     accepted_faces,
@@ -40,7 +40,7 @@ import blueprint
 from blueprint import examples
 from blueprint.render import mesh
 from blueprint.render.gbuffer import depth_tolerance
-from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
+from blueprint.render.table import ABufferRow, PeelRow
 
 # share of compared pixels that must agree (depth layers) and of interior pixels (IDs)
 DEPTH_AGREEMENT = 0.998
@@ -124,25 +124,17 @@ METHODS = [
 def method(request, renderer):
     """The renderer capturing every frame the method's way (``render.table``: a capture table
     of that way alone, whatever its thresholds, the peel taking what it cannot)."""
-    default = capture_table(renderer)
-    kbuffer = request.param == "k-buffer"
-    if kbuffer and default.row("k-buffer") is None:
-        pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock: no k-buffer")
-    abuffer = request.param.startswith("a-buffer")
-    if abuffer and renderer.ctx.version_code < 430:
-        pytest.skip("the A-buffer needs OpenGL 4.3")
-    if kbuffer:
-        rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
-    elif abuffer:
-        slim = request.param in ("a-buffer-slim", "a-buffer-compute")
-        compute_from = 0 if request.param == "a-buffer-compute" else None
-        rows = (ABufferRow(1 << 30, min_layers=2, slim=slim, compute_from=compute_from), PeelRow())
-    else:
-        rows = (PeelRow(culled_from=(0, 0) if request.param == "two-culled-draws" else None),)
-    saved = renderer.capture_table
-    renderer.capture_table = CaptureTable(rows, default.exact_depth)
-    yield request.param
-    renderer.capture_table = saved
+    way = "a-buffer" if request.param.startswith("a-buffer") else request.param
+    slim = request.param in ("a-buffer-slim", "a-buffer-compute")
+    compute_from = 0 if request.param == "a-buffer-compute" else None
+    peel = PeelRow(culled_from=(0, 0) if request.param == "two-culled-draws" else None)
+    with one_way(
+        renderer,
+        way,
+        abuffer=lambda _: ABufferRow(1 << 30, min_layers=2, slim=slim, compute_from=compute_from),
+        peel=peel,
+    ):
+        yield request.param
 
 
 # peeled Layers per (case, method) and the Oracle per case, shared by the depth and ID tests

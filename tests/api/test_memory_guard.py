@@ -2,16 +2,14 @@
 budget is refused in one line before its body is read; a frame whose GPU buffers would pass the
 memory the device has free is refused before any is allocated (``render.budget``)."""
 
-import importlib.util
 import os
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import BLUEPRINT, needs_cli, one_error
+from helpers import BLUEPRINT, hostile_corpus, needs_cli, one_error
 
 from blueprint import settings
 from blueprint.errors import InputError
@@ -76,16 +74,6 @@ def test_the_estimate_is_the_triangles_at_the_measured_bytes():
     assert peak_estimate(23, 12, 2) == 23 * settings.TRIANGLE_BYTES
 
 
-def _hostile():
-    """benchmarks/hostile.py, whose GLB writer the instanced files are made with."""
-    path = Path(__file__).resolve().parents[2] / "benchmarks" / "hostile.py"
-    spec = importlib.util.spec_from_file_location("hostile_corpus", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up by name
-    spec.loader.exec_module(module)
-    return module
-
-
 COPIES = 100_000
 
 
@@ -97,7 +85,7 @@ def _box_moves() -> np.ndarray:
 
 def _box_field(path: Path) -> Path:
     """A GLB of COPIES instances of one box (``_box_moves``) at ``path``."""
-    hostile = _hostile()
+    hostile = hostile_corpus()
     corners, faces = hostile.box_arrays()
     nodes = [{"mesh": 0, "translation": move} for move in _box_moves().tolist()]
     path.write_bytes(hostile.glb(nodes, list(range(COPIES)), corners, faces=faces))
@@ -110,7 +98,7 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     triangles flattened into one mesh (its unique triangles and instance records weigh far
     less than 1.2 M drawn ones). (Its vector drawing keeps the instances too: the tests of
     ``vector.instanced`` hold that it never flattens them.)"""
-    hostile = _hostile()
+    hostile = hostile_corpus()
     corners, faces = hostile.box_arrays()
     moves = _box_moves()
     kept, flat = _box_field(tmp_path / "kept.glb"), tmp_path / "flat.glb"
@@ -159,7 +147,7 @@ def test_a_crowd_of_instances_in_a_few_pixels_draws_its_svg(tmp_path):
 def test_an_instanced_upload_is_weighed_by_its_unique_meshes(tmp_path):
     """``budget.uploaded``: a model kept as instances uploads each mesh it places once and a
     record an instance; a flattened one its triangles."""
-    hostile = _hostile()
+    hostile = hostile_corpus()
     corners, faces = hostile.box_arrays()
     nodes = [{"mesh": 0, "translation": [2.0 * k, 0.0, 0.0]} for k in range(50)]
     path = tmp_path / "rows.glb"

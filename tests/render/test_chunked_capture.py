@@ -14,8 +14,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 import trimesh
+from capture_helpers import one_way
 from helpers import BLUEPRINT, needs_cli, one_error
-from instanced_scenes import MIRROR_X, exact_scene, l_prism, placed, trimesh_scene, turn, wedge
+from instanced_scenes import exact_scene, mixed_scene
 
 import blueprint
 from blueprint.api import stages
@@ -23,24 +24,16 @@ from blueprint.errors import InputError
 from blueprint.examples import assemble, gearbox
 from blueprint.render import budget
 from blueprint.render.mesh import ChunkedMesh, GpuMesh, _chunks, _used, draw_groups, joined
-from blueprint.render.table import CaptureTable, PeelRow, capture_table
-from blueprint.scene.loader import model_from_object
 from blueprint.scene.model import Model
 
 SIZE = (120, 96)
 CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
 
 
-def mixed_scene() -> Model:
-    """Shared meshes (an L prism thrice, a wedge twice) and two wedges used once, flattened
-    into a run: three draw groups, each split by small chunks."""
-    meshes = {"l": l_prism(), "wedge": wedge(), "w1": wedge(), "w2": wedge()}
-    order = ["l", "w1", "w2", "l", "wedge", "l", "wedge"]
-    linear = [None, turn(1, 90), MIRROR_X, 2 * np.eye(3), turn(0, 90), MIRROR_X @ turn(2, 90), None]
-    instances = [
-        (name, placed(m, (3 * k, 0, 0))) for k, (name, m) in enumerate(zip(order, linear, strict=True))
-    ]
-    return model_from_object(trimesh_scene(instances, meshes), name="mixed")
+def chunked_mixed_scene() -> Model:
+    """The mixed scene with its meshes used once side by side: three draw groups, each split
+    by small chunks."""
+    return mixed_scene(("l", "w1", "w2", "l", "wedge", "l", "wedge"))
 
 
 def dense_model() -> Model:
@@ -52,7 +45,7 @@ def dense_model() -> Model:
     return assemble(parts)
 
 
-MODELS = {"flat": (gearbox, 500), "instanced": (exact_scene, 7), "mixed": (mixed_scene, 9)}
+MODELS = {"flat": (gearbox, 500), "instanced": (exact_scene, 7), "mixed": (chunked_mixed_scene, 9)}
 
 
 def drawn_faces(draws) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -118,21 +111,8 @@ def test_a_chunks_vertices_are_those_its_corners_use(vertices):
 @pytest.fixture(params=["peel", "k-buffer", "A-buffer"])
 def way(request, renderer):
     """The renderer capturing every frame one way (a capture table of that way alone)."""
-    default = capture_table(renderer)
-    if request.param == "k-buffer":
-        if default.row("k-buffer") is None:
-            pytest.skip("no k-buffer on this driver")
-        rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
-    elif request.param == "A-buffer":
-        if default.row("A-buffer") is None:
-            pytest.skip("the A-buffer needs OpenGL 4.3")
-        rows = (replace(default.row("A-buffer"), min_layers=1), PeelRow())
-    else:
-        rows = (PeelRow(),)
-    saved = renderer.capture_table
-    renderer.capture_table = CaptureTable(rows, default.exact_depth)
-    yield request.param
-    renderer.capture_table = saved
+    with one_way(renderer, request.param.lower(), abuffer=lambda row: replace(row, min_layers=1)):
+        yield request.param
 
 
 def chunked(renderer, model: Model, chunk_faces: int | None, draw):

@@ -9,12 +9,12 @@ import dataclasses
 
 import numpy as np
 import pytest
-from capture_helpers import tab_in_slot
+from capture_helpers import one_way, tab_in_slot
 from oracle import cast_oracle, compare_layers, layer_count, window_to_eye_depth
 
 from blueprint import examples
 from blueprint.render.gbuffer import BACK_BIAS, depth_tolerance
-from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
+from blueprint.render.table import ABufferRow
 from blueprint.scene.camera import Camera
 
 SIZE = (96, 96)
@@ -25,21 +25,8 @@ ORACLE_MERGE = 1e-7
 @pytest.fixture(params=["peel", "k-buffer", "a-buffer"])
 def method(request, renderer):
     """The renderer capturing every frame that way alone (as tests/test_layers_oracle.py does)."""
-    default = capture_table(renderer)
-    if request.param == "k-buffer":
-        if default.row("k-buffer") is None:
-            pytest.skip("this driver has neither framebuffer fetch nor fragment shader interlock")
-        rows = (dataclasses.replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
-    elif request.param == "a-buffer":
-        if renderer.ctx.version_code < 430:
-            pytest.skip("the A-buffer needs OpenGL 4.3")
-        rows = (ABufferRow(1 << 30, min_layers=2), PeelRow())
-    else:
-        rows = (PeelRow(),)
-    saved = renderer.capture_table
-    renderer.capture_table = CaptureTable(rows, default.exact_depth)
-    yield request.param
-    renderer.capture_table = saved
+    with one_way(renderer, request.param, abuffer=lambda _: ABufferRow(1 << 30, min_layers=2)):
+        yield request.param
 
 
 def _deep_camera(model, depth: float) -> Camera:

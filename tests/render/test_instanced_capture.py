@@ -7,19 +7,18 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
-from dataclasses import replace
 
 import numpy as np
 import pytest
+from capture_helpers import one_way
 from instanced_scenes import (
-    MIRROR_X,
     copies,
     exact_scene,
     flattened,
     l_prism,
+    mixed_scene,
     placed,
     trimesh_scene,
-    turn,
     turned_scene,
     wedge,
 )
@@ -32,7 +31,6 @@ from blueprint.render.mesh import GpuMesh, draw_groups, instance_records, placem
 from blueprint.render.raster import ComputeRaster
 from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
 from blueprint.scene.loader import model_from_object
-from blueprint.scene.model import Model
 
 SIZE = (96, 80)
 CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
@@ -55,21 +53,9 @@ def abuffer_row(way: str) -> ABufferRow:
 @pytest.fixture(params=WAYS)
 def way(request, renderer):
     """The renderer capturing every frame one way (a capture table of that way alone)."""
-    default = capture_table(renderer)
-    if request.param == "k-buffer":
-        if default.row("k-buffer") is None:
-            pytest.skip("no k-buffer on this driver")
-        rows = (replace(default.row("k-buffer"), min_density=0.0, whole_frames=False), PeelRow())
-    elif request.param.startswith("a-buffer"):
-        if renderer.ctx.version_code < 430:
-            pytest.skip("the A-buffer needs OpenGL 4.3")
-        rows = (abuffer_row(request.param), PeelRow())
-    else:
-        rows = (PeelRow(),)
-    saved = renderer.capture_table
-    renderer.capture_table = CaptureTable(rows, default.exact_depth)
-    yield request.param
-    renderer.capture_table = saved
+    way = "a-buffer" if request.param.startswith("a-buffer") else request.param
+    with one_way(renderer, way, abuffer=lambda _: abuffer_row(request.param)):
+        yield request.param
 
 
 def test_primitive_ids_start_again_for_each_instance(renderer):
@@ -189,18 +175,6 @@ def test_groups_drawn_in_pieces_give_the_same_layers(way, renderer, monkeypatch)
         for name in ("depth", "triangle", "part", "normal"):
             assert np.array_equal(getattr(split, name), getattr(whole, name)), name
     assert np.array_equal(ours[1].triangle, theirs[1].triangle)
-
-
-def mixed_scene() -> Model:
-    """Meshes used three times and twice (turned, mirrored, scaled) between meshes used once,
-    drawn as a group per shared mesh and two runs of flattened blocks."""
-    meshes = {"l": l_prism(), "wedge": wedge(), "w1": wedge(), "w2": wedge()}
-    order = ["l", "w1", "l", "w2", "wedge", "l", "wedge"]
-    linear = [None, turn(1, 90), MIRROR_X, 2 * np.eye(3), turn(0, 90), MIRROR_X @ turn(2, 90), None]
-    instances = [
-        (name, placed(m, (3 * k, 0, 0))) for k, (name, m) in enumerate(zip(order, linear, strict=True))
-    ]
-    return model_from_object(trimesh_scene(instances, meshes), name="mixed")
 
 
 @pytest.mark.parametrize("faces_way", list(FACES_TABLE))
