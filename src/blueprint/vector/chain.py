@@ -12,7 +12,7 @@ import numpy as np
 
 from blueprint.sorting import stable_argsort
 
-__all__ = ["chain_order", "chain_pieces", "pair_ends"]
+__all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
 
 
 def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarray:
@@ -166,13 +166,7 @@ def chain_pieces(
     piece, reverse, lengths = chain_order(pair_ends(node, leaving, -1.0))
     # each piece's points in walking order; a piece after the first drops its first point,
     # which is the previous piece's last
-    size = np.diff(offsets)[piece]
-    within = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
-    index = np.where(
-        np.repeat(reverse, size),
-        np.repeat(offsets[1:][piece] - 1, size) - within,
-        np.repeat(offsets[:-1][piece], size) + within,
-    )
+    index, size, within = walked(offsets, piece, reverse)
     chain_start = np.cumsum(lengths) - lengths
     is_first = np.zeros(len(piece), bool)
     is_first[chain_start] = True
@@ -181,3 +175,17 @@ def chain_pieces(
     kept_per_piece = size - (~is_first).astype(np.int64)
     per_chain = np.add.reduceat(kept_per_piece, chain_start) if len(piece) else np.zeros(0, np.int64)
     return out, np.r_[0, np.cumsum(per_chain)].astype(np.int64), piece, reverse, lengths
+
+
+def walked(offsets: np.ndarray, piece: np.ndarray, reverse: np.ndarray):
+    """The rows of runs ``piece`` (run ``i`` is rows ``offsets[i]:offsets[i + 1]``), each
+    walked backwards where ``reverse``, one after another: (rows, each walked run's size, each
+    row's place within its run)."""
+    size = np.diff(offsets)[piece]
+    within = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    index = np.where(
+        np.repeat(reverse, size),
+        np.repeat(offsets[1:][piece] - 1, size) - within,
+        np.repeat(offsets[:-1][piece], size) + within,
+    )
+    return index, size, within

@@ -47,7 +47,7 @@ from blueprint.scene.sheet import (
 )
 from blueprint.scene.units import drawing_unit, warn_if_assumed
 
-from .chain import chain_pieces
+from .chain import chain_pieces, walked
 from .dxf import write_dxf
 from .instanced import face_parts
 from .lines import join_polylines, model_segments
@@ -631,14 +631,7 @@ def _chained(pieces: Lines, count: int) -> Lines:
         (pieces.part.astype(np.int64) * 256 + pieces.kind) * (count + 1) + pieces.level
     ) * 2 + pieces.behind
     points, offsets, piece, reverse, lengths = chain_pieces(pieces.points, pieces.offsets, key)
-    starts = pieces.edge_offsets
-    size = np.diff(starts)[piece]
-    within = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
-    index = np.where(
-        np.repeat(reverse, size),
-        np.repeat(starts[1:][piece] - 1, size) - within,
-        np.repeat(starts[:-1][piece], size) + within,
-    )
+    index, size, _ = walked(pieces.edge_offsets, piece, reverse)
     owner = np.repeat(np.repeat(np.arange(len(lengths)), lengths), size)
     edges, edge_offsets = runs_of(pieces.edges[index], owner, len(lengths))
     first = piece[np.cumsum(lengths) - lengths]
