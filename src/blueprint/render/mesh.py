@@ -218,6 +218,10 @@ class GpuMesh:
         self._placements = ctx.buffer(table)
         del groups, vertices, indices
         self._vaos: dict[int, _Draws] = {}
+        self._of_model(model)
+
+    def _of_model(self, model: Model) -> None:
+        """What passes read of the model drawn, whole or in chunks."""
         self._corners = None
         self._model = model
         self.part_count = len(model.part_names)
@@ -321,12 +325,7 @@ class ChunkedMesh(GpuMesh):
         del vertices, indices, records
         self.on_chunk = None
         self._vaos: dict[int, _ChunkDraws] = {}
-        self._corners = None
-        self._model = model
-        self.part_count = len(model.part_names)
-        self.triangles = model.triangle_count
-        self.instanced = model.instances is not None
-        self.bounds = model.bounds
+        self._of_model(model)
 
     def bind_faces(self, vertices: int, indices: int) -> None:
         raise TypeError("a mesh drawn in chunks has no faces table on the GPU")
