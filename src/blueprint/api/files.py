@@ -239,7 +239,8 @@ def render_vector_file(
         ``path``, ``format``, ``bytes`` (file size), ``lines`` (polylines per occlusion level),
         ``points``, ``layers`` (peeled), ``up`` and ``up_reason`` (the model's up axis and where
         it came from), ``parts``, ``width``, ``height``, ``seconds`` (per stage
-        and ``total``).
+        and ``total``), ``chunks`` (those the model's mesh was drawn in where it did not fit
+        the GPU whole, else 0: ``Capturer.chunks``).
     """
     start = time.perf_counter()
     output, write = choose_writer(output, Kind.DRAWING)
@@ -249,7 +250,8 @@ def render_vector_file(
     loaded = as_model(model, options)
     load_s = time.perf_counter() - clock
     stages.begin("lines")
-    drawing = vector_drawing(loaded, options, shared(renderer))
+    renderer = shared(renderer)
+    drawing = vector_drawing(loaded, options, renderer)
     clock = time.perf_counter()
     stages.begin("write")
     write(output, drawing)
@@ -268,4 +270,5 @@ def render_vector_file(
         "width": drawing.width,
         "height": drawing.height,
         "seconds": {k: round(v, 4) for k, v in seconds.items()},
+        "chunks": renderer.capturer.chunks(loaded),
     }

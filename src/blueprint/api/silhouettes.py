@@ -62,7 +62,8 @@ def render_silhouettes_file(
     -------
     dict
         ``path``, ``frames``, ``width``, ``height``, ``triangles``, ``method`` and ``ms``: the
-        still's time, or the median time of a frame's silhouettes.
+        still's time, or the median time of a frame's silhouettes; a still's ``chunks`` too
+        (those its mesh was drawn in where it did not fit the GPU whole, else 0).
     """
     if options.view not in VIEWS:
         raise InputError(f"unknown view {options.view!r} (choose {', '.join(VIEWS)})")
@@ -101,7 +102,7 @@ def render_silhouettes_file(
         )
         ms = (time.perf_counter() - t0) * 1e3
         write(output, image)
-        return {**summary, "frames": 1, "ms": ms}
+        return {**summary, "frames": 1, "ms": ms, "chunks": renderer.capturer.chunks(loaded)}
 
     times: list[float] = []
     pictures = animate_silhouettes(

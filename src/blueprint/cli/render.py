@@ -86,9 +86,7 @@ def render(model, output, highlight_model, **values):
         stages.add_frame(frame.stages)
         stages.report(default_renderer())
     shown = f", {frame.revealed:.0%} of the highlighted parts shown" if frame.revealed is not None else ""
-    chunks = default_renderer().capturer.chunks(loaded)
-    # a mesh that did not fit the GPU beside the frame: drawn, slower, a chunk at a time
-    shown += f", drawn in {chunks} chunks" if chunks else ""
+    shown += _chunked(default_renderer().capturer.chunks(loaded))
     click.echo(
         printable(
             f"{output}: {frame.image.shape[1]}x{frame.image.shape[0]}, {loaded.triangle_count} triangles"
@@ -96,6 +94,12 @@ def render(model, output, highlight_model, **values):
             f"on {info['renderer']}"
         )
     )
+
+
+def _chunked(chunks: int) -> str:
+    """What a command's line says of a mesh that did not fit the GPU beside its frame: drawn,
+    slower, a chunk at a time (``Capturer.chunks``)."""
+    return f", drawn in {chunks} chunks" if chunks else ""
 
 
 def _vector_done(output, summary: dict) -> None:
@@ -111,7 +115,7 @@ def _vector_done(output, summary: dict) -> None:
     click.echo(
         printable(
             f"{output}: {summary['bytes']} bytes{guessed_up(summary['up'], summary['up_reason'])}, "
-            f"polylines {levels or 'none'}, "
+            f"polylines {levels or 'none'}{_chunked(summary['chunks'])}, "
             f"{summary['seconds']['total']:.2f} s on {default_renderer().info['renderer']}"
         )
     )
@@ -129,16 +133,21 @@ def _vector_done(output, summary: dict) -> None:
 @drawing_options(*CAMERA_OPTIONS, "max_layers", "min_fraction", size=(512, 512), max_layers=0)
 def layers(model, output, **values):
     """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
-    from blueprint.api import default_renderer, peel, stages
+    from blueprint.api import default_renderer, load_model, peel, stages
 
     output, write = output_writer(output, Kind.LAYERS)
+    values = drawing_values(values)
     with phase_bar():
         if stages.listening():
             stages.begin("read")
             stages.watch(default_renderer())
-        result = peel(model, **drawing_values(values))
+        loaded = load_model(model, **{k: values.get(k) for k in ("up", "include", "exclude")})
+        result = peel(loaded, **values)
         with stages.timed("write"):
             write(output, result)
     click.echo(
-        printable(f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}")
+        printable(
+            f"{output}: {len(result.depth)} layers of {result.depth.shape[2]}x{result.depth.shape[1]}"
+            f"{_chunked(default_renderer().capturer.chunks(loaded))}"
+        )
     )

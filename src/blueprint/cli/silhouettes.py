@@ -100,6 +100,9 @@ def silhouettes(
     if animate is None:
         done = render_silhouettes_file(model, output, **options)
         shown, timing = f"{done['width']}x{done['height']}", f"{done['ms']:.1f} ms"
+        if done["chunks"]:
+            # a mesh that did not fit the GPU beside the frame: drawn, slower, a chunk at a time
+            shown += f", drawn in {done['chunks']} chunks"
     else:
         with progress_bar(f"{animate} {method}") as progress:
             done = render_silhouettes_file(model, output, progress=progress, **options)

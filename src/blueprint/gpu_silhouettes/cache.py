@@ -11,7 +11,7 @@ from blueprint.silhouette.idlist import build_id_lists
 from blueprint.silhouette.mesh import build_adjacency
 
 from .lines import EdgeBuffer
-from .tables import Corners, ListTextures, diagonal
+from .tables import TABLE_WIDTH, Corners, ListTextures, _rows, diagonal
 
 
 @dataclass
@@ -54,6 +54,25 @@ class ModelTables:
             size = diagonal(corners)
             held = self._held[id(model)] = Held(model, store, self.tolerance * size, size)
         return held
+
+    def to_upload(self, model: Model, *, lists: bool, edges: bool) -> dict[str, int]:
+        """The GPU bytes at most that drawing ``model`` uploads into its tables where not held
+        yet, by kind (``render.budget.frame_bytes``'s ``extra``): its corners (a buffer and the
+        texture it is copied into), its edge records where ``edges`` (at most three edges a
+        face), its ID lists where ``lists`` (at most a vertex and a list entry a corner). Each
+        table is padded to whole rows of ``TABLE_WIDTH`` entries."""
+        faces = model.triangle_count
+        held = self._held.get(id(model))
+        held = held if held is not None and held.model is model else None
+        out = {}
+        if held is None:
+            out["corners"] = 2 * _rows(3 * faces) * TABLE_WIDTH * 12
+        if edges and (held is None or held.edges is None):
+            out["edge records"] = 3 * faces * 16
+        if lists and (held is None or held.lists is None):
+            # (F, 3) face vertices, (V, 2) pointers and K list entries, V and K at most 3 F
+            out["ID lists"] = TABLE_WIDTH * (12 * _rows(faces) + 12 * _rows(3 * faces))
+        return out
 
     def lists(self, model: Model) -> ListTextures:
         """The model's ID lists, built (welded with its tolerance) on first use."""

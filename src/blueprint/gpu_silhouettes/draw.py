@@ -153,6 +153,10 @@ class GpuSilhouettes:
             if camera is None:
                 camera = fit_camera(box_corners(model.bounds), (w, h), view)
         elif isinstance(model, Model):
+            # sized before anything is uploaded: the ID capture (a layer a pass) in chunks
+            # where only the mesh does not fit, refused where the tables and targets do not
+            tables = self._tables.to_upload(model, lists=method == "idlist", edges=method == LINES)
+            r.capturer.check_memory(model, w * h, 1, _CREASE, {"targets": w * h * layers, **tables})
             mesh = r.mesh(model, _CREASE)
             held = self._tables.entry(model)
             corners, tolerance, diagonal = held.corners, held.tolerance, held.diagonal

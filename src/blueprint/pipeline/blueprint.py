@@ -88,7 +88,7 @@ def _run_arguments(
     variables = {name: type(preset.variables[name])(value) for name, value in variables.items()}
     supersample = variables.get("supersample", preset.variables["supersample"])
     w, h = check_size(size, supersample, renderer.max_texture)
-    renderer.capturer.check_memory(model, w * h * supersample**2, max_layers)
+    renderer.capturer.check_memory(model, w * h * supersample**2, max_layers, crease_angle)
     if reveal is not None and highlight is None:
         raise InputError("reveal needs parts to reveal: give highlight as well")
     parts = {}

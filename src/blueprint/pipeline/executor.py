@@ -167,6 +167,10 @@ class Executor:
         self.r.make_current()
         st = self.last_run = self._start(pipeline, model, camera, req)
         bound, images = st.pl.bound, req.images or {}
+        if st.pl.needs_model:
+            # sized before anything is allocated: the mesh in chunks, or the run refused
+            pixels = sum(w * h for w, h in map(st.size_of, {bound.scale_of(n) for n in st.pl.attributes}))
+            self.capturer.check_memory(model, pixels, st.max_layers, st.crease)
         for name in st.pl.images:
             self.images.upload(bound, name, images.get(name), st.size_of(bound.images[name].scale))
         watch.stage("upload")

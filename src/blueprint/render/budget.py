@@ -75,30 +75,42 @@ def uploaded(model) -> tuple[int, int]:
 
 
 def frame_bytes(
-    triangles: int, pixels: int, max_layers: int | None, list_bytes: int | None, instances: int = 0
+    triangles: int,
+    pixels: int,
+    max_layers: int | None,
+    list_bytes: int | None,
+    instances: int = 0,
+    extra: dict[str, int] | None = None,
 ) -> dict[str, int]:
     """The GPU memory a frame allocates at most, by kind: ``mesh`` (vertex and index buffers
     of ``triangles`` not yet uploaded, and the records of their ``instances``: ``uploaded``),
     ``gbuffers`` (a G-buffer of ``pixels`` supersampled
     pixels a layer a pass holds: up to ``KBUFFER_MAX``) and ``lists`` (an A-buffer's fragments,
-    a node a pixel a layer, at most ``list_bytes``, its row's cap; None: no A-buffer)."""
+    a node a pixel a layer, at most ``list_bytes``, its row's cap; None: no A-buffer); then the
+    kinds of ``extra``, what the frame's own passes allocate beside the capture (tables read by
+    face, targets a layer), none of which a mesh drawn in chunks makes smaller."""
     layers = KBUFFER_MAX if not max_layers else min(max_layers, KBUFFER_MAX)
     lists = 0 if list_bytes is None else min(list_bytes, NODE_BYTES * pixels * layers)
     mesh = MESH_BYTES * triangles + RECORD_BYTES * instances
-    return {"mesh": mesh, "gbuffers": GBUFFER_BYTES * pixels * layers, "lists": lists}
+    need = {"mesh": mesh, "gbuffers": GBUFFER_BYTES * pixels * layers, "lists": lists}
+    for kind, size in (extra or {}).items():
+        if kind in need:
+            raise ValueError(f"a frame's extra GPU memory cannot be called {kind!r}")
+        need[kind] = int(size)
+    return need
 
 
 def check_frame_memory(device, name: str, need: dict[str, int], instances: int = 0) -> int | None:
     """The faces a chunk of the mesh uploads where the frame's GPU memory ``need``
     (``frame_bytes``, its mesh of ``instances`` instance records) is more than the device has
-    free (``free_gpu_memory``) but its G-buffers, lists, instance records and ``MIN_CHUNK_FACES``
-    faces are not; None where it fits whole (or the driver does not tell). Raise ``InputError``
-    naming ``name`` where even that would not fit."""
+    free (``free_gpu_memory``) but everything else it needs (G-buffers, lists, the extra kinds),
+    its instance records and ``MIN_CHUNK_FACES`` faces are not; None where it fits whole (or the
+    driver does not tell). Raise ``InputError`` naming ``name`` where even that would not fit."""
     free = free_gpu_memory(device)
     total = sum(need.values())
     if free is None or total <= free:
         return None
-    left = free - need["gbuffers"] - need["lists"] - RECORD_BYTES * instances
+    left = free - (total - need["mesh"]) - RECORD_BYTES * instances
     if left >= MESH_BYTES * MIN_CHUNK_FACES:
         return left // MESH_BYTES
     parts = ", ".join(f"{kind} {settings.human_size(n)}" for kind, n in need.items() if n)

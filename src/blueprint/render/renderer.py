@@ -100,8 +100,9 @@ class Capturer:
 
     Release it (its models) before its device. Models and cameras stay GPU-free; a model is
     uploaded once per (model, crease angle), whole, or where the frame checked for it
-    (``check_memory``) would not fit on the GPU with it, or ``chunk_faces`` is set, a chunk of
-    faces at a time at every draw (``render.mesh.ChunkedMesh``).
+    (``check_memory``, which its own routes ask before they upload) would not fit on the GPU
+    with it, or ``chunk_faces`` is set, a chunk of faces at a time at every draw
+    (``render.mesh.ChunkedMesh``).
     """
 
     def __init__(self, device: Device, table: CaptureTable | None = None) -> None:
@@ -187,22 +188,40 @@ class Capturer:
         """The model uploaded as ``mesh``, or None where it is not this capturer's."""
         return next((model for model, held in self._meshes.values() if held is mesh), None)
 
-    def check_memory(self, model: Model, pixels: int, max_layers: int | None) -> None:
+    def check_memory(
+        self,
+        model: Model,
+        pixels: int,
+        max_layers: int | None,
+        crease_angle: float | None,
+        extra: dict[str, int] | None = None,
+    ) -> None:
         """Size a frame of ``model`` at ``pixels`` supersampled pixels and ``max_layers``
         against the GPU memory the device has free (``render.budget``), before it allocates
-        any: its mesh where not uploaded whole yet. Where the mesh does not fit beside the
-        frame's other buffers it is drawn in chunks that do (``mesh``); where those buffers
-        and a small chunk would not fit either, raise ``InputError``. A frame like the last one
-        checked allocates nothing new, so it is not asked again: asking the driver every frame
-        costs a streamed frame time it need not spend."""
-        asked = (model, pixels, max_layers)
+        any: its mesh at ``crease_angle`` (as ``mesh`` uploads it) where not uploaded whole
+        yet, and ``extra``, what the frame's own passes allocate beside the capture, by kind.
+        Where the mesh does not fit beside the frame's other buffers it is drawn in chunks that
+        do (``mesh``); where those buffers and a small chunk would not fit either, raise
+        ``InputError``. Every route that uploads a model asks first (a picture, the layers read
+        back or left on the GPU for the vector drawings, the GPU silhouettes, a pipeline's
+        run). A frame like the last one checked allocates nothing new, so it is not asked
+        again: asking the driver every frame costs a streamed frame time it need not spend."""
+        extra = dict(extra or {})
+        crease = None if crease_angle is None else float(crease_angle)
+        asked = (model, pixels, max_layers, crease, sorted(extra.items()))
         if self._checked is not None and self._checked[0] is model and self._checked[1:] == asked[1:]:
             return
-        whole = any(held is model and mesh.chunk_faces is None for held, mesh in self._meshes.values())
+        held = self._meshes.get((id(model), crease))
+        whole = held is not None and held[0] is model and held[1].chunk_faces is None
         triangles, instances = (0, 0) if whole else uploaded(model)
         abuffer = self.table.row("A-buffer")
         need = frame_bytes(
-            triangles, pixels, max_layers, abuffer.max_bytes if abuffer else None, instances=instances
+            triangles,
+            pixels,
+            max_layers,
+            abuffer.max_bytes if abuffer else None,
+            instances=instances,
+            extra=extra,
         )
         faces = check_frame_memory(self.device, model.source or "the model", need, instances)
         self._planned = (model, faces)
@@ -351,6 +370,7 @@ class Capturer:
         """(capture, G-buffer) of depths and faces alone, for readers of a k-buffer's surfaces
         where the capture table's k-buffer finds every layer in one pass (``reads``
         "surfaces"), else peeled a pass a layer into the G-buffer."""
+        self.check_memory(model, size[0] * size[1], max_layers, None)
         ctx = self.device.ctx
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
@@ -362,6 +382,7 @@ class Capturer:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth
         of layer ``i`` in ``depth[i % 2]``; ID target face + 1, with normals part + 1 too)."""
         check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
+        self.check_memory(model, size[0] * size[1], max_layers, crease_angle if normals else None)
         device = self.device
         device.ctx.enable_only(device.ctx.NOTHING)
         device.ctx.depth_func = "<"
