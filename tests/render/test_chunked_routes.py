@@ -23,6 +23,7 @@ from blueprint.errors import InputError
 from blueprint.examples import assemble, box
 from blueprint.gpu_silhouettes import GpuSilhouettes
 from blueprint.gpu_silhouettes.draw import LINES
+from blueprint.pipeline import load_pipeline
 from blueprint.render import budget
 from blueprint.scene.camera import fit_camera
 from blueprint.scene.model import Model
@@ -230,6 +231,50 @@ def test_a_route_whose_buffers_do_not_fit_is_refused_before_any_upload(renderer,
     assert message.startswith("ball-and-bar.ply: the frame needs about ") and "\n" not in message
     assert "of GPU memory (mesh " in message and "free on " in message
     assert uploads == [] and renderer.capturer.chunks(model) == 0
+
+
+TWO_SCALES = """
+[pipeline]
+output = "mark"
+layers = 3
+[attributes]
+depth = { scale = 2 }
+triangle = {}
+[passes.mark]
+op = "id_edges"
+inputs = { ids = "triangle" }
+per_layer = true
+"""
+
+
+def test_a_pipelines_run_is_sized_by_its_g_buffers(renderer, tmp_path, uploads, monkeypatch):
+    """A pipeline of attributes at two scales (a G-buffer each), run by the executor alone:
+    drawn in the chunks the room left beside both G-buffers allows, its output and dumps one
+    upload's to the bit; refused before any upload where the G-buffers do not fit."""
+    path = tmp_path / "two.toml"
+    path.write_text(TWO_SCALES, encoding="utf-8")
+    spec = load_pipeline(str(path))
+    w, h = SIZE
+    camera = fit_camera(ball_and_bar(), SIZE, "iso")
+
+    def run(model):
+        result = renderer.executor.run(spec, model, camera, size=SIZE, dumps=("depth", "triangle"))
+        return result.output, result.dumps
+
+    (whole, dumps), none = drawn(renderer, ball_and_bar, run, None, monkeypatch)
+    model = ball_and_bar()
+    free = room(renderer, model, 4 * w * h + w * h, 3, third(model))
+    (split, split_dumps), chunks = drawn(renderer, ball_and_bar, run, free, monkeypatch)
+    assert none == 0 and chunks == 3
+    assert whole.shape[0] == 3 and whole.any() and np.array_equal(whole, split)
+    assert dumps["depth"].shape[1:3] == (2 * h, 2 * w)
+    for name in dumps:
+        assert np.array_equal(dumps[name], split_dumps[name]), name
+    uploads.clear()
+    monkeypatch.setenv(budget.GPU_MEMORY_ENV, str(free - budget.MESH_BYTES * third(model)))
+    with pytest.raises(InputError, match="the frame needs about .* of GPU memory"):
+        run(ball_and_bar())
+    assert uploads == []
 
 
 def test_a_frame_checked_once_is_not_asked_again(renderer, monkeypatch):
