@@ -55,6 +55,14 @@ def room(renderer, model: Model, pixels: int, max_layers: int | None, mesh_faces
     return sum(need.values()) - need["mesh"] + budget.MESH_BYTES * mesh_faces
 
 
+def occlusion(model: Model, size, max_layers: int | None) -> dict[str, int]:
+    """What a vector drawing's occlusion allocates beside the capture: its table of face
+    planes (four float32 a face and one for none, in rows of 4 096) and, with a layer cap, a
+    copy of each layer's faces (int32 a pixel)."""
+    planes = {"planes": 16 * 4096 * -(-(model.triangle_count + 1) // 4096)}
+    return planes if max_layers is None else {**planes, "copies": 4 * size[0] * size[1] * max_layers}
+
+
 def third(model: Model) -> int:
     return -(-model.triangle_count // 3)
 
@@ -125,7 +133,9 @@ def test_an_svg_drawn_in_chunks_is_one_uploads(way, renderer, max_layers, monkey
     routes = sorted(set(taken))
     taken.clear()
     model = ball_and_bar()
-    free = room(renderer, model, SIZE[0] * SIZE[1], max_layers, third(model))
+    free = room(
+        renderer, model, SIZE[0] * SIZE[1], max_layers, third(model), occlusion(model, SIZE, max_layers)
+    )
     (split, _), chunks = drawn(renderer, ball_and_bar, svg, free, monkeypatch)
     assert none == 0 and chunks == 3
     assert sorted(set(taken)) == routes
@@ -308,7 +318,8 @@ def test_the_commands_draw_in_chunks_or_refuse_in_one_line(tmp_path, command):
         edges = 2 * -(-3 * triangles // 4096) * 4096 * 12 + 3 * triangles * 16
         need = budget.frame_bytes(triangles, pixels, 1, 1 << 30, extra={"other": pixels * layers + edges})
     else:
-        need = budget.frame_bytes(triangles, pixels, layers, 1 << 30)
+        extra = occlusion(model, (size, size), layers) if command == "svg" else None
+        need = budget.frame_bytes(triangles, pixels, layers, 1 << 30, extra=extra)
     quarter = sum(need.values()) - need["mesh"] + budget.MESH_BYTES * (triangles // 4)
     suffix = {"svg": "svg", "layers": "npz", "silhouettes": "png"}[command]
     arguments = {

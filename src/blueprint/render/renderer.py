@@ -204,12 +204,20 @@ class Capturer:
         do (``mesh``); where those buffers and a small chunk would not fit either, raise
         ``InputError``. Every route that uploads a model asks first (a picture, the layers read
         back or left on the GPU for the vector drawings, the GPU silhouettes, a pipeline's
-        run). A frame like the last one checked allocates nothing new, so it is not asked
-        again: asking the driver every frame costs a streamed frame time it need not spend."""
+        run). A frame like the last one checked, asking no more beside the capture, allocates
+        nothing new, so it is not asked again: asking the driver every frame costs a streamed
+        frame time it need not spend, and a caller that sized the frame with its own passes'
+        buffers keeps the chunks planned for them when the capture's route asks again."""
         extra = dict(extra or {})
         crease = None if crease_angle is None else float(crease_angle)
-        asked = (model, pixels, max_layers, crease, sorted(extra.items()))
-        if self._checked is not None and self._checked[0] is model and self._checked[1:] == asked[1:]:
+        asked = (model, pixels, max_layers, crease, extra)
+        last = self._checked
+        if (
+            last is not None
+            and last[0] is model
+            and last[1:4] == asked[1:4]
+            and all(size <= last[4].get(kind, -1) for kind, size in extra.items())
+        ):
             return
         held = self._meshes.get((id(model), crease))
         whole = held is not None and held[0] is model and held[1].chunk_faces is None

@@ -26,6 +26,7 @@ from blueprint.errors import InputError
 from blueprint.export.files import atomic_write
 from blueprint.export.writers import WRITERS, Kind, Writers
 from blueprint.gpu.device import check_size
+from blueprint.gpu.tables import table_rows
 from blueprint.render.gbuffer import depth_tolerance
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
@@ -67,6 +68,7 @@ from .occlusion import (
     stack_levels,
     verify_creases,
 )
+from .occlusion.gpu import MAX_LAYERS
 from .pdf import pdf_bytes
 from .section import SectionLines, section_lines
 from .shade import ShadedFaces, shaded_faces
@@ -434,8 +436,11 @@ def draw_lines(
     camera, size = frame.camera, frame.size
     page = _page(size, camera, options.scale, options.units, model)
 
-    # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
-    drawn = None if layers is not None else draw_faces(renderer, model, camera, size, frame.max_layers)
+    drawn = None
+    if layers is None:
+        _size_frame(renderer, model, frame)
+        # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
+        drawn = draw_faces(renderer, model, camera, size, frame.max_layers)
     clock = time.perf_counter()
     # the intersections and the faces' planes read every corner of a flat model; a model kept
     # as instances places its meshes' instead (``instanced``)
@@ -532,6 +537,19 @@ def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen
         camera = camera or layers.camera
         view, projection = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
     return _Frame(camera, (int(w), int(h)), view, projection, max_layers)
+
+
+def _size_frame(renderer, model: Model, frame: _Frame) -> None:
+    """Size the drawing's GPU memory before anything is drawn (``Capturer.check_memory``): the
+    capture's buffers at the drawing's size and layer cap, and beside them the occlusion's
+    table of face planes and, where it peels a pass a layer, its copy of each layer's faces;
+    the mesh drawn in chunks where it alone does not fit, the drawing refused where the rest
+    does not."""
+    w, h = frame.size
+    extra = {"planes": 16 * table_rows(model.triangle_count + 1)}
+    if frame.max_layers is not None:
+        extra["layer copies"] = 4 * w * h * min(frame.max_layers, MAX_LAYERS)
+    renderer.capturer.check_memory(model, w * h, frame.max_layers, None, extra)
 
 
 class _Occlusion:
