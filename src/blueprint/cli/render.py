@@ -133,16 +133,19 @@ def _vector_done(output, summary: dict) -> None:
 @drawing_options(*CAMERA_OPTIONS, "max_layers", "min_fraction", size=(512, 512), max_layers=0)
 def layers(model, output, **values):
     """Peel MODEL's depth layers and write them as NPZ (depth, triangle, part, view, projection)."""
-    from blueprint.api import default_renderer, load_model, peel, stages
+    from blueprint.api import default_renderer, peel, stages
+    from blueprint.api.frames import as_model
+    from blueprint.api.options import DrawOptions
 
     output, write = output_writer(output, Kind.LAYERS)
-    values = drawing_values(values)
+    # checked before the model loads; the model kept to tell the chunks its mesh was drawn in
+    options = DrawOptions(**drawing_values(values))
     with phase_bar():
         if stages.listening():
             stages.begin("read")
             stages.watch(default_renderer())
-        loaded = load_model(model, **{k: values.get(k) for k in ("up", "include", "exclude")})
-        result = peel(loaded, **values)
+        loaded = as_model(model, options)
+        result = peel(loaded, options=options)
         with stages.timed("write"):
             write(output, result)
     click.echo(
