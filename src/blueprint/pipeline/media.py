@@ -68,8 +68,10 @@ def _check_pixels(path: Path, size: tuple[int, int]) -> None:
         )
 
 
-def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.ndarray:
-    """An image file as (H, W, C) in target format ``fmt``, resized to ``size`` if given."""
+@contextlib.contextmanager
+def _opened(path: Path):
+    """Pillow's image of ``path`` (checked first), its errors and those of reading its pixels
+    in the ``with`` body as one-line ``InputError``s."""
     from PIL import Image, UnidentifiedImageError
 
     _check_image(path)
@@ -79,11 +81,7 @@ def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
             picture = Image.open(path)
         with picture:
-            _check_pixels(path, picture.size)
-            picture = picture.convert("RGBA")
-            if size is not None and picture.size != tuple(size):
-                picture = picture.resize(tuple(size), Image.Resampling.BILINEAR)
-            rgba = np.asarray(picture)
+            yield picture
     except FileNotFoundError:
         raise InputError(f"{path}: no such image file") from None
     except Image.DecompressionBombError:
@@ -92,6 +90,18 @@ def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.
         raise InputError(f"{path}: not an image in a format Pillow reads") from None
     except (OSError, ValueError, SyntaxError):  # Pillow's messages name its internals
         raise InputError(f"{path}: cannot read the image (it is damaged or cut short)") from None
+
+
+def read_image(path: Path, fmt: str, size: tuple[int, int] | None = None) -> np.ndarray:
+    """An image file as (H, W, C) in target format ``fmt``, resized to ``size`` if given."""
+    from PIL import Image
+
+    with _opened(path) as picture:
+        _check_pixels(path, picture.size)
+        picture = picture.convert("RGBA")
+        if size is not None and picture.size != tuple(size):
+            picture = picture.resize(tuple(size), Image.Resampling.BILINEAR)
+        rgba = np.asarray(picture)
     return to_format(rgba, fmt)
 
 
@@ -99,24 +109,8 @@ def image_size(path: Path) -> tuple[int, int]:
     """(width, height) of an image or of a video's frames."""
     if path.suffix.lower() in VIDEO_FORMATS or path.suffix.lower() in (".webm", ".gif"):
         return video_info(path)[0]
-    from PIL import Image, UnidentifiedImageError
-
-    _check_image(path)
-    try:
-        # the header's size is checked here, against our limit: Pillow's warning would be a second line
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
-            picture = Image.open(path)
-        with picture:
-            return picture.size
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such image file") from None
-    except Image.DecompressionBombError:
-        raise InputError(f"{path}: the image declares more than {IMAGE_PIXEL_LIMIT} pixels") from None
-    except UnidentifiedImageError:
-        raise InputError(f"{path}: not an image in a format Pillow reads") from None
-    except (OSError, ValueError, SyntaxError):  # Pillow's messages name its internals
-        raise InputError(f"{path}: cannot read the image (it is damaged or cut short)") from None
+    with _opened(path) as picture:
+        return picture.size
 
 
 def video_info(path: Path) -> tuple[tuple[int, int], float, int]:
