@@ -61,8 +61,9 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     Every corner of every face becomes a vertex, corners of one vertex of the model merged
     where their part and their normal (``corner_normals`` with ``crease_angle``, quantized to
     16 bits) are the same; without a crease angle (None) the normals are left zero. A triangle
-    soup's corners (each a vertex of the model) are merged where they lie at one position, in
-    one part, with one normal, bit for bit: the vertex draws as each of them would.
+    soup's corners (each a vertex of the model, or a vertex of a ``Model.soup`` each, prepared
+    as those corners apart would be) are merged where they lie at one position, in one part,
+    with one normal, bit for bit: the vertex draws as each of them would.
 
     Returns
     -------
@@ -81,6 +82,15 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
 
 def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tuple[np.ndarray, np.ndarray]:
     corner_vertex = model.faces.reshape(-1)
+    soup = model.soup
+    if soup and not _numbered_by_first_corner(corner_vertex, len(model.positions)):
+        # a soup's faces chosen or reordered since: its corners apart again, as the file had them
+        model = model.replaced(
+            positions=model.positions[corner_vertex],
+            faces=np.arange(len(corner_vertex), dtype=np.int32).reshape(-1, 3),
+            soup=False,
+        )
+        corner_vertex = model.faces.reshape(-1)
     parts = len(model.part_names)
     normals = None
     if crease_angle is None:
@@ -94,7 +104,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
             if not np.array_equal(vertex_part[corner_vertex], corner_part):
                 key = corner_vertex.astype(np.int64) * parts + corner_part
             del corner_part, vertex_part
-        if np.all(key[1:] > key[:-1]):
+        if soup or np.all(key[1:] > key[:-1]):
             chosen, inverse = None, np.arange(len(key), dtype=np.uint32)  # a triangle soup
         else:
             _, chosen, inverse = unique_first(key)
@@ -107,7 +117,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         if parts > 1:
             key = corner_vertex.astype(np.int64) * parts
             key += np.repeat(model.face_part, 3)
-        if np.all(key[1:] > key[:-1]):
+        if soup or np.all(key[1:] > key[:-1]):
             # every corner a vertex of its own (a triangle soup): merged where they are the same
             chosen, inverse = _soup_vertices(model, normals, known.get("welded"))
         else:
@@ -117,6 +127,20 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
     vertices = np.zeros(count, VERTEX)
     parallel.run(partial(_filled, model, corner_vertex, chosen, normals, vertices), count)
     return vertices, inverse
+
+
+def _numbered_by_first_corner(corner_vertex: np.ndarray, vertices: int) -> bool:
+    """Whether the corners (3F,) use every one of ``vertices`` vertices, each numbered after the
+    vertices of the corners before its first: then a soup's welded vertices (numbered by first
+    vertex) are numbered by first corner, as those of its corners apart would be."""
+    if len(corner_vertex) == 0:
+        return vertices == 0
+    seen = np.maximum.accumulate(corner_vertex)
+    new = np.empty(len(corner_vertex), bool)
+    new[0] = True
+    np.greater(corner_vertex[1:], seen[:-1], out=new[1:])
+    firsts = corner_vertex[new]
+    return len(firsts) == vertices and bool(np.array_equal(firsts, np.arange(vertices)))
 
 
 def _filled(
