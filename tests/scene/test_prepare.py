@@ -280,6 +280,26 @@ def test_a_model_of_the_same_content_skips_the_sorts(monkeypatch):
     assert buffers.data[:2] == [made[0].tobytes(), made[1].tobytes()] and len(buffers.data) == 4
 
 
+def test_a_drawing_that_keeps_no_topology_prepares_the_same(monkeypatch):
+    """Within ``topologies_kept(False)`` nothing is kept, nor the content digested, and the
+    arrays are those of a preparation that keeps its topology; the setting before comes back
+    after the block."""
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
+    positions, faces, face_part = mixed_mesh()
+    once = Model.from_arrays(positions, faces, face_part)
+    with prepare.topologies_kept(False):
+        made = prepare.gpu_arrays(once, 30.0)
+        with prepare.topologies_kept(True):
+            prepare.gpu_arrays(Model.from_arrays(positions, faces, face_part), 30.0)
+            assert len(prepare._topologies) == 1
+        prepare._topologies.clear()
+        prepare.gpu_arrays(once, 20.0)
+    assert not prepare._topologies and "digest" not in once._cache
+    kept = prepare.gpu_arrays(Model.from_arrays(positions, faces, face_part), 30.0)
+    assert len(prepare._topologies) == 1
+    assert kept[0].tobytes() == made[0].tobytes() and kept[1].tobytes() == made[1].tobytes()
+
+
 @pytest.mark.parametrize("crease_angle", [30.0, 10.0, 0.0, None])
 def test_a_soup_of_distinct_corners_prepares_as_its_corners_apart(monkeypatch, crease_angle):
     """A soup held as its distinct corners (``Model.soup``: a binary STL's) gives the vertex

@@ -4,12 +4,16 @@ differs, and the faces' corners as indices into them.
 What the sorts find (the welded vertices, the crease vertices) is kept by the model's content,
 so that another model of the same triangles (another view of a file loaded again, a batch)
 skips them: some 12 bytes a triangle, where the arrays themselves, 100 bytes a triangle of a
-triangle soup, would stay in memory through the drawing that uploaded them.
+triangle soup, would stay in memory through the drawing that uploaded them. A process that
+prepares each model once (the command line's ``render``) keeps none (``topologies_kept``): no
+later preparation would read them, and they would stay in memory through its drawing.
 """
 
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import partial
 
 import numpy as np
@@ -19,7 +23,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
 from blueprint.sorting import unique_first
 
-__all__ = ["VERTEX", "gpu_arrays", "topology"]
+__all__ = ["VERTEX", "gpu_arrays", "topologies_kept", "topology"]
 
 # One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
 VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
@@ -34,6 +38,21 @@ _TABLE_PER_KEY = 4
 _SHIFT = 1 << 16
 
 _topologies: OrderedDict[bytes, dict] = OrderedDict()
+# whether preparations keep the topologies they find, and read those kept (``topologies_kept``)
+_keeping = [True]
+
+
+@contextmanager
+def topologies_kept(keep: bool) -> Iterator[None]:
+    """Within the block, the preparations keep the topologies they find and read those kept
+    (``keep``), or keep and read none, nor digest the model's content to look them up: for a
+    process that prepares each model once, where what is kept would only hold memory through
+    its drawing. The prepared arrays are the same either way."""
+    _keeping.append(bool(keep))
+    try:
+        yield
+    finally:
+        _keeping.pop()
 
 
 def topology(model: Model) -> dict:
@@ -73,8 +92,8 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
-    if crease_angle is None:
-        return _prepare(model, None, None)
+    if crease_angle is None or not _keeping[-1]:
+        return _prepare(model, crease_angle, None)
     arrays = _prepare(model, crease_angle, topology(model))
     _bound()
     return arrays
