@@ -18,6 +18,7 @@ import trimesh
 from helpers import loaded_in_a_process
 
 import blueprint
+from blueprint import parallel, settings
 from blueprint.api.batch import MODEL_SUFFIXES
 from blueprint.errors import InputError
 from blueprint.scene import loader
@@ -327,11 +328,14 @@ def _binary_stl(path: Path, corners: np.ndarray) -> None:
     path.write_bytes(b"\0" * 80 + len(records).to_bytes(4, "little") + records.tobytes())
 
 
-def test_a_binary_stl_holds_each_distinct_corner_once(tmp_path):
+@pytest.mark.parametrize("threads", [1, 3])
+def test_a_binary_stl_holds_each_distinct_corner_once(tmp_path, monkeypatch, threads):
     """A binary STL's corners, repeated by every face around them, are the model's vertices
     once each, bit for bit, numbered by first corner (``np.unique`` of their bits in the order
-    of first occurrence); corners a bit apart stay apart, and a -0.0 anywhere keeps every
-    corner a vertex of its own."""
+    of first occurrence), on any number of threads; corners a bit apart stay apart, and a -0.0
+    anywhere keeps every corner a vertex of its own."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 100)
     corners = ICOSPHERE.vertices[ICOSPHERE.faces].reshape(-1, 3).astype(np.float32)
     corners[5] = np.nextafter(corners[5], np.float32(2))
     path = tmp_path / "a.stl"
