@@ -18,6 +18,7 @@ import trimesh
 from helpers import loaded_in_a_process
 
 import blueprint
+from blueprint import parallel, settings
 from blueprint.api.batch import MODEL_SUFFIXES
 from blueprint.errors import InputError
 from blueprint.scene import loader
@@ -318,6 +319,44 @@ def test_anything_else_ascii_stl_is_left_to_trimesh(data, tmp_path):
     path = tmp_path / "a.stl"
     path.write_bytes(data)
     assert read_stl(path, path.stat().st_size) is None
+
+
+def _binary_stl(path: Path, corners: np.ndarray) -> None:
+    """A binary STL of ``corners`` (3F, 3) float32, three a triangle, normals left zero."""
+    records = np.zeros(len(corners) // 3, [("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("a", "<u2")])
+    records["triangle"] = corners.reshape(-1, 3, 3)
+    path.write_bytes(b"\0" * 80 + len(records).to_bytes(4, "little") + records.tobytes())
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_a_binary_stl_holds_each_distinct_corner_once(tmp_path, monkeypatch, threads):
+    """A binary STL's corners, repeated by every face around them, are the model's vertices
+    once each, bit for bit, numbered by first corner (``np.unique`` of their bits in the order
+    of first occurrence), on any number of threads; corners a bit apart stay apart, and a -0.0
+    anywhere keeps every corner a vertex of its own."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 100)
+    corners = ICOSPHERE.vertices[ICOSPHERE.faces].reshape(-1, 3).astype(np.float32)
+    corners[5] = np.nextafter(corners[5], np.float32(2))
+    path = tmp_path / "a.stl"
+    _binary_stl(path, corners)
+    found = read_stl(path, path.stat().st_size)
+    bits = corners.view(np.uint32)
+    _, first = np.unique(bits.view(np.dtype((np.void, 12))).ravel(), return_index=True)
+    assert found.soup and found.faces.dtype == np.int32 and found.faces.shape == (len(ICOSPHERE.faces), 3)
+    np.testing.assert_array_equal(found.positions.view(np.uint32), bits[np.sort(first)])
+    np.testing.assert_array_equal(found.positions[found.faces].reshape(-1, 3).view(np.uint32), bits)
+    assert len(found.positions) == len(ICOSPHERE.vertices) + 1
+    model = loader.load_model(path)
+    assert model.soup and len(model.positions) == len(found.positions)
+
+    zero = np.flatnonzero(corners == 0)[0]
+    corners.reshape(-1)[zero] = -0.0
+    _binary_stl(path, corners)
+    found = read_stl(path, path.stat().st_size)
+    assert not found.soup
+    np.testing.assert_array_equal(found.positions.view(np.uint32), corners.view(np.uint32))
+    np.testing.assert_array_equal(found.faces.reshape(-1), np.arange(len(corners)))
 
 
 # -- the shared models and whole loads -------------------------------------------------------------

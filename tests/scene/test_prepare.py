@@ -280,6 +280,58 @@ def test_a_model_of_the_same_content_skips_the_sorts(monkeypatch):
     assert buffers.data[:2] == [made[0].tobytes(), made[1].tobytes()] and len(buffers.data) == 4
 
 
+def test_a_drawing_that_keeps_no_topology_prepares_the_same(monkeypatch):
+    """Within ``topologies_kept(False)`` nothing is kept, nor the content digested, and the
+    arrays are those of a preparation that keeps its topology; the setting before comes back
+    after the block."""
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
+    positions, faces, face_part = mixed_mesh()
+    once = Model.from_arrays(positions, faces, face_part)
+    with prepare.topologies_kept(False):
+        made = prepare.gpu_arrays(once, 30.0)
+        with prepare.topologies_kept(True):
+            prepare.gpu_arrays(Model.from_arrays(positions, faces, face_part), 30.0)
+            assert len(prepare._topologies) == 1
+        prepare._topologies.clear()
+        prepare.gpu_arrays(once, 20.0)
+    assert not prepare._topologies and "digest" not in once._cache
+    kept = prepare.gpu_arrays(Model.from_arrays(positions, faces, face_part), 30.0)
+    assert len(prepare._topologies) == 1
+    assert kept[0].tobytes() == made[0].tobytes() and kept[1].tobytes() == made[1].tobytes()
+
+
+@pytest.mark.parametrize("crease_angle", [30.0, 10.0, 0.0, None])
+def test_a_soup_of_distinct_corners_prepares_as_its_corners_apart(monkeypatch, crease_angle):
+    """A soup held as its distinct corners (``Model.soup``: a binary STL's) gives the vertex
+    and index arrays of its corners each a vertex of its own, bit for bit, three parts and
+    every case of the smoothing; and so does one whose faces were chosen and reordered since
+    (its corners no longer numbered by first corner)."""
+    monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
+    positions, faces, face_part = mixed_mesh()
+    corners = positions[faces].reshape(-1, 3).astype(np.float32)
+    by_corner = np.arange(len(corners)).reshape(-1, 3)
+    _, first, inverse = np.unique(
+        corners.view(np.uint32).view(np.dtype((np.void, 12))).ravel(), return_index=True, return_inverse=True
+    )
+    number = np.empty(len(first), np.int64)
+    number[np.argsort(first)] = np.arange(len(first))
+    apart = Model.from_arrays(corners, by_corner, face_part)
+    soup = apart.replaced(positions=corners[np.sort(first)], faces=number[inverse].reshape(-1, 3), soup=True)
+    assert len(soup.positions) < len(corners) // 2
+
+    def same(model: Model, expected: Model) -> None:
+        made, wanted = prepare.gpu_arrays(model, crease_angle), prepare.gpu_arrays(expected, crease_angle)
+        assert made[0].tobytes() == wanted[0].tobytes() and made[1].tobytes() == wanted[1].tobytes()
+
+    same(soup, apart)
+    chosen = np.random.default_rng(2).permutation(len(faces))[: len(faces) // 2]
+    expected = Model.from_arrays(corners.reshape(-1, 3, 3)[chosen].reshape(-1, 3), by_corner[: len(chosen)])
+    same(
+        soup.replaced(faces=soup.faces[chosen], face_part=np.zeros(len(chosen), np.int32), part_names=("a",)),
+        expected,
+    )
+
+
 def test_topologies_kept_are_bounded(monkeypatch):
     monkeypatch.setattr(prepare, "_topologies", type(prepare._topologies)())
     box = trimesh.creation.box()

@@ -53,6 +53,7 @@ def render(model, output, highlight_model, **values):
     from blueprint.api import default_renderer, render_frame, stages
     from blueprint.api.options import DrawOptions
     from blueprint.scene.loader import load_model
+    from blueprint.scene.prepare import topologies_kept
 
     output, write = output_writer(output, Kind.IMAGE, Kind.DRAWING)
     chosen = drawing_values(values)
@@ -66,14 +67,15 @@ def render(model, output, highlight_model, **values):
     if write.kind is Kind.DRAWING:
         from blueprint.api.files import render_vector_file
 
-        with phase_bar():
+        # one model drawn once: what its preparation finds has no later reader
+        with phase_bar(), topologies_kept(False):
             summary = render_vector_file(model, output, options=options)
         _vector_done(output, summary)
         return
     if options.scale or options.sheet:
         raise InputError(f"--scale and --sheet are for vector drawings ({_suffixes(Kind.DRAWING)})")
     options.raster_style  # noqa: B018 - a line style file a picture cannot take fails before the model loads
-    with phase_bar():
+    with phase_bar(), topologies_kept(False):
         with stages.timed("read"):
             loaded = load_model(model, up=options.up, include=options.include, exclude=options.exclude)
         if timing or stages.listening():

@@ -90,7 +90,7 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
             raise InputError(f"{name}: no triangles in the file")
         parts = np.zeros(len(found.faces), np.int32)
         joined = (found.positions, found.faces, parts, [path.stem])
-        return _loaded(joined, name, up, fmt, include, exclude)
+        return _loaded(joined, name, up, fmt, include, exclude, soup=found.soup)
     if isinstance(found, list):
         joined = _joined(found, path.stem, name, instanced=fmt.up != "guess")
         return _loaded(joined, name, up, fmt, include, exclude)
@@ -110,10 +110,18 @@ def _scene_model(
 
 
 def _loaded(
-    joined, name: str, up: str | None, fmt: Format, include: PartGlobs, exclude: PartGlobs, stated=None
+    joined,
+    name: str,
+    up: str | None,
+    fmt: Format,
+    include: PartGlobs,
+    exclude: PartGlobs,
+    stated=None,
+    soup: bool = False,
 ) -> Model:
     """The model of a scene's instances ``joined`` (``_joined``) read from a file of format
-    ``fmt`` that states the unit ``stated`` (``Format.unit_of``)."""
+    ``fmt`` that states the unit ``stated`` (``Format.unit_of``); a soup's (``Model.soup``)
+    where ``soup``."""
     positions, faces, face_part, names = joined
     if faces is None:  # kept as instances: the formats that do are not the ones guessing up
         return _checked_instances(
@@ -124,7 +132,9 @@ def _loaded(
     guess = fmt.up == "guess"
     default = "y" if guess else fmt.up
     unit = fmt.unit_of(name, stated)
-    return _checked(positions, faces, face_part, names, name, up, default, guess, include, exclude, unit)
+    return _checked(
+        positions, faces, face_part, names, name, up, default, guess, include, exclude, unit, soup=soup
+    )
 
 
 def model_from_object(
@@ -225,10 +235,12 @@ def _checked(
     include: PartGlobs = None,
     exclude: PartGlobs = None,
     unit: tuple[str | None, str] = (None, "no unit given"),
+    soup: bool = False,
 ) -> Model:
     """The checks every model passes, whether from a file or an object, named ``name``; its up
     axis ``up`` where given, else guessed from the shape (``guess_up``) or ``default_up``; the
-    parts ``include`` and ``exclude`` choose; its length ``unit`` and where that came from."""
+    parts ``include`` and ``exclude`` choose; its length ``unit`` and where that came from;
+    ``soup``: ``Model.soup``."""
     finite = np.isfinite(positions)
     if not finite.all():
         bad = ~finite.all(axis=1)
@@ -249,6 +261,7 @@ def _checked(
         name,
         chosen.reason,
         *unit,
+        soup=soup,
     )
     # the checks read the faces' corners a block at a time or a coordinate at a time: all of
     # them at once in float64 would take 72 bytes a face

@@ -98,6 +98,10 @@ class Model:
         The scene as unique meshes and instances placing them (``blueprint.scene.instances``),
         where it is kept so; ``positions``, ``faces`` and ``face_part`` are then given as None
         and are the flattened scene's, made on first read (``is_flat`` says whether they are).
+    soup : bool
+        The file listed every face's corners apart (a triangle soup: STL) and ``positions``
+        are its distinct corners, bit for bit, numbered by first corner: prepared for the GPU
+        (``scene.prepare``) as every corner a vertex of its own would be.
     """
 
     positions: np.ndarray = _Flattened()
@@ -110,6 +114,7 @@ class Model:
     unit: str | None = None
     unit_reason: str = "no unit given"
     instances: Instances | None = None
+    soup: bool = False
     _cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:

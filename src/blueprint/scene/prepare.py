@@ -4,12 +4,16 @@ differs, and the faces' corners as indices into them.
 What the sorts find (the welded vertices, the crease vertices) is kept by the model's content,
 so that another model of the same triangles (another view of a file loaded again, a batch)
 skips them: some 12 bytes a triangle, where the arrays themselves, 100 bytes a triangle of a
-triangle soup, would stay in memory through the drawing that uploaded them.
+triangle soup, would stay in memory through the drawing that uploaded them. A process that
+prepares each model once (the command line's ``render``) keeps none (``topologies_kept``): no
+later preparation would read them, and they would stay in memory through its drawing.
 """
 
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import partial
 
 import numpy as np
@@ -19,7 +23,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals
 from blueprint.sorting import unique_first
 
-__all__ = ["VERTEX", "gpu_arrays", "topology"]
+__all__ = ["VERTEX", "gpu_arrays", "topologies_kept", "topology"]
 
 # One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
 VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
@@ -34,6 +38,21 @@ _TABLE_PER_KEY = 4
 _SHIFT = 1 << 16
 
 _topologies: OrderedDict[bytes, dict] = OrderedDict()
+# whether preparations keep the topologies they find, and read those kept (``topologies_kept``)
+_keeping = [True]
+
+
+@contextmanager
+def topologies_kept(keep: bool) -> Iterator[None]:
+    """Within the block, the preparations keep the topologies they find and read those kept
+    (``keep``), or keep and read none, nor digest the model's content to look them up: for a
+    process that prepares each model once, where what is kept would only hold memory through
+    its drawing. The prepared arrays are the same either way."""
+    _keeping.append(bool(keep))
+    try:
+        yield
+    finally:
+        _keeping.pop()
 
 
 def topology(model: Model) -> dict:
@@ -61,8 +80,9 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     Every corner of every face becomes a vertex, corners of one vertex of the model merged
     where their part and their normal (``corner_normals`` with ``crease_angle``, quantized to
     16 bits) are the same; without a crease angle (None) the normals are left zero. A triangle
-    soup's corners (each a vertex of the model) are merged where they lie at one position, in
-    one part, with one normal, bit for bit: the vertex draws as each of them would.
+    soup's corners (each a vertex of the model, or a vertex of a ``Model.soup`` each, prepared
+    as those corners apart would be) are merged where they lie at one position, in one part,
+    with one normal, bit for bit: the vertex draws as each of them would.
 
     Returns
     -------
@@ -72,8 +92,8 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
-    if crease_angle is None:
-        return _prepare(model, None, None)
+    if crease_angle is None or not _keeping[-1]:
+        return _prepare(model, crease_angle, None)
     arrays = _prepare(model, crease_angle, topology(model))
     _bound()
     return arrays
@@ -81,6 +101,15 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
 
 def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tuple[np.ndarray, np.ndarray]:
     corner_vertex = model.faces.reshape(-1)
+    soup = model.soup
+    if soup and not _numbered_by_first_corner(corner_vertex, len(model.positions)):
+        # a soup's faces chosen or reordered since: its corners apart again, as the file had them
+        model = model.replaced(
+            positions=model.positions[corner_vertex],
+            faces=np.arange(len(corner_vertex), dtype=np.int32).reshape(-1, 3),
+            soup=False,
+        )
+        corner_vertex = model.faces.reshape(-1)
     parts = len(model.part_names)
     normals = None
     if crease_angle is None:
@@ -94,7 +123,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
             if not np.array_equal(vertex_part[corner_vertex], corner_part):
                 key = corner_vertex.astype(np.int64) * parts + corner_part
             del corner_part, vertex_part
-        if np.all(key[1:] > key[:-1]):
+        if soup or np.all(key[1:] > key[:-1]):
             chosen, inverse = None, np.arange(len(key), dtype=np.uint32)  # a triangle soup
         else:
             _, chosen, inverse = unique_first(key)
@@ -107,7 +136,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         if parts > 1:
             key = corner_vertex.astype(np.int64) * parts
             key += np.repeat(model.face_part, 3)
-        if np.all(key[1:] > key[:-1]):
+        if soup or np.all(key[1:] > key[:-1]):
             # every corner a vertex of its own (a triangle soup): merged where they are the same
             chosen, inverse = _soup_vertices(model, normals, known.get("welded"))
         else:
@@ -117,6 +146,20 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
     vertices = np.zeros(count, VERTEX)
     parallel.run(partial(_filled, model, corner_vertex, chosen, normals, vertices), count)
     return vertices, inverse
+
+
+def _numbered_by_first_corner(corner_vertex: np.ndarray, vertices: int) -> bool:
+    """Whether the corners (3F,) use every one of ``vertices`` vertices, each numbered after the
+    vertices of the corners before its first: then a soup's welded vertices (numbered by first
+    vertex) are numbered by first corner, as those of its corners apart would be."""
+    if len(corner_vertex) == 0:
+        return vertices == 0
+    seen = np.maximum.accumulate(corner_vertex)
+    new = np.empty(len(corner_vertex), bool)
+    new[0] = True
+    np.greater(corner_vertex[1:], seen[:-1], out=new[1:])
+    firsts = corner_vertex[new]
+    return len(firsts) == vertices and bool(np.array_equal(firsts, np.arange(vertices)))
 
 
 def _filled(

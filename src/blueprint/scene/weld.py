@@ -14,7 +14,14 @@ from blueprint import parallel
 from blueprint.columns import column_max, column_min
 from blueprint.sorting import unique_first
 
-__all__ = ["check_mesh", "connected_components_of", "default_tolerance", "weld", "weld_groups"]
+__all__ = [
+    "check_mesh",
+    "connected_components_of",
+    "default_tolerance",
+    "distinct_rows",
+    "weld",
+    "weld_groups",
+]
 
 # Default weld tolerance, relative to the bounding-box diagonal.
 _REL_TOL = 1e-6
@@ -264,6 +271,21 @@ def _changes(positions: np.ndarray, order: np.ndarray, out: np.ndarray, lo: int,
         np.not_equal(rows[1:, 0], rows[:-1, 0], out=block)
         for k in (1, 2):
             block |= rows[1:, k] != rows[:-1, k]
+
+
+def distinct_rows(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``positions`` (V, 3) float, as values (-0.0 equal to 0.0), in the
+    order of their first occurrence.
+
+    Returns
+    -------
+    first : (D,) int64
+        The index of each distinct row's first occurrence, ascending.
+    inverse : (V,) int64
+        Each row's number among them: ``positions[first][inverse]`` equals ``positions``.
+    """
+    inverse, first = _exact_groups(positions)
+    return first, inverse
 
 
 def _exact_duplicates(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -27,12 +27,13 @@ __all__ = ["Converted", "Format", "Formats", "Instance", "Mesh", "deferred"]
 # made once a file, they need neither the generated methods nor a frozen dataclass's cost.
 class Mesh:
     """One mesh read from a file, one part named after the file: ``positions`` (V, 3) float32
-    or float64, ``faces`` (F, 3) integer indices into them."""
+    or float64, ``faces`` (F, 3) integer indices into them; ``soup`` where the file lists
+    every face's corners apart and ``positions`` are its distinct corners (``Model.soup``)."""
 
-    __slots__ = ("positions", "faces")
+    __slots__ = ("positions", "faces", "soup")
 
-    def __init__(self, positions: np.ndarray, faces: np.ndarray) -> None:
-        self.positions, self.faces = positions, faces
+    def __init__(self, positions: np.ndarray, faces: np.ndarray, soup: bool = False) -> None:
+        self.positions, self.faces, self.soup = positions, faces, soup
 
 
 class Instance:

@@ -20,6 +20,7 @@ from blueprint.errors import InputError
 from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
 from blueprint.scene.headers import check_triangle_count
+from blueprint.scene.weld import distinct_rows
 from blueprint.settings import open_file
 
 __all__ = ["read_stl"]
@@ -50,9 +51,23 @@ def read_stl(path: Path, size: int) -> Mesh | None:
         check_triangle_count(path, count)
         positions = np.empty((3 * count, 3), np.float32)
         parallel.run(partial(_records, fh.fileno(), positions), count, min_block=_RECORDS)
-    # three vertices a triangle, in order; int32 where they fit, as the model keeps them
-    dtype = np.int32 if 3 * count <= np.iinfo(np.int32).max else np.int64
-    return Mesh(positions, np.arange(3 * count, dtype=dtype).reshape(-1, 3))
+    return _corners(positions)
+
+
+def _corners(positions: np.ndarray) -> Mesh:
+    """The mesh of a binary file's corners ``positions`` (3F, 3) float32, three a triangle in
+    order: its distinct corners, bit for bit, numbered by first corner, as a soup
+    (``Model.soup``): a corner is repeated by each face around it, some six times, and the
+    model holds its positions through the drawing. Where a coordinate is -0.0 (equal to 0.0,
+    apart in its bits) every corner stays a vertex of its own."""
+    # int32 where they fit, as the model keeps them
+    dtype = np.int32 if len(positions) <= np.iinfo(np.int32).max else np.int64
+    if np.signbit(positions[positions == 0]).any():
+        return Mesh(positions, np.arange(len(positions), dtype=dtype).reshape(-1, 3))
+    first, inverse = distinct_rows(positions)
+    faces = inverse.astype(dtype).reshape(-1, 3)
+    del inverse
+    return Mesh(positions[first], faces, soup=True)
 
 
 def _records(fd: int, positions: np.ndarray, lo: int, hi: int) -> None:
