@@ -161,11 +161,33 @@ def _blocks(members: np.ndarray, rows: int):
         yield members[first : first + step]
 
 
+def _moved(linear: np.ndarray, points: np.ndarray, in_order: bool = False) -> np.ndarray:
+    """``linear @ point`` for (..., 3, 3) matrices and (..., 3) points, broadcast, in
+    whole-array products instead of einsum's slow small-axis loop, to the same float64 values
+    as ``einsum("...ij,...j->...i")``: einsum adds the first product and the last before the
+    middle one, and adds them first to last (``in_order``) where ``linear`` is a transposed
+    view."""
+    x, y, z = points[..., 0:1], points[..., 1:2], points[..., 2:3]
+    if in_order:
+        out = (linear[..., 0] * x + linear[..., 1] * y) + linear[..., 2] * z
+    else:
+        out = (linear[..., 0] * x + linear[..., 2] * z) + linear[..., 1] * y
+    # einsum's sums start at +0, which leaves no -0
+    return np.add(out, 0.0, out=out)
+
+
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(...,) the dot products of (..., 3) rows, the same float64 values as
+    ``einsum("...i,...i->...")`` (see ``_moved``)."""
+    out = (a[..., 0] * b[..., 0] + a[..., 2] * b[..., 2]) + a[..., 1] * b[..., 1]
+    return np.add(out, 0.0, out=out)
+
+
 def _placed(points: np.ndarray, transforms: np.ndarray) -> np.ndarray:
     """Points (K, ..., 3) placed each by its transform (K, 4, 4)."""
     shape = points.shape
     flat = points.reshape(len(points), int(np.prod(shape[1:-1], dtype=np.int64)), 3)
-    out = np.einsum("kij,kpj->kpi", transforms[:, :3, :3], flat) + transforms[:, None, :3, 3]
+    out = _moved(transforms[:, None, :3, :3], flat) + transforms[:, None, :3, 3]
     return out.reshape(shape)
 
 
@@ -510,17 +532,17 @@ def instanced_face_planes(model: Model, view: np.ndarray) -> np.ndarray:
             cofactor = np.linalg.det(linear)[:, None, None] * np.linalg.inv(
                 np.where((np.abs(np.linalg.det(linear)) > 1e-300)[:, None, None], linear, np.eye(3))
             ).transpose(0, 2, 1)
-            normal = np.einsum("bij,fj->bfi", cofactor, cross)
+            normal = _moved(cofactor[:, None], cross[None], in_order=True)
             length = np.linalg.norm(normal, axis=2)
             normal = np.where(
                 (length > 0)[..., None] & good[None, :, None],
                 normal / np.maximum(length, 1e-300)[..., None],
                 0.0,
             )
-            corner = np.einsum("bij,fj->bfi", linear, corners[:, 0]) + moved[:, None, :3, 3]
+            corner = _moved(linear[:, None], corners[None, :, 0]) + moved[:, None, :3, 3]
             rows = first_face[block][:, None] + np.arange(len(faces))
             planes[rows, :3] = normal
-            planes[rows, 3] = np.einsum("bfi,bfi->bf", normal, corner)
+            planes[rows, 3] = _dot3(normal, corner)
     return planes
 
 
