@@ -15,7 +15,9 @@ from blueprint.sorting import stable_argsort
 __all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
 
 
-def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarray:
+def pair_ends(
+    node: np.ndarray, leaving: np.ndarray, min_cos: float, order: np.ndarray | None = None
+) -> np.ndarray:
     """Partner of every half-end (-1 where the chain stops there).
 
     Parameters
@@ -27,6 +29,8 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
     min_cos : float
         At junctions of three or more, two half-ends pair only if the line turns between them
         by an angle whose cosine is at least this (1: straight on only, -1: any turn).
+    order : (2 n,) int64, optional
+        ``stable_argsort(node)``, where the caller has it already.
 
     Returns
     -------
@@ -36,7 +40,8 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
     if len(node) == 0:
         return partner
     degree = np.bincount(node)
-    order = stable_argsort(node)
+    if order is None:
+        order = stable_argsort(node)
     starts = np.cumsum(degree) - degree
     two = np.flatnonzero(degree == 2)
     a, b = order[starts[two]], order[starts[two] + 1]
