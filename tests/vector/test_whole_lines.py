@@ -150,3 +150,51 @@ def test_at_most_two_percent_of_pieces_are_shorter_than_one_and_a_half_pixels(
     assert share <= 0.025, f"{share:.1%} of {len(length)} pieces under 1.5 px"
     if "featuretype" in name:
         assert (length[level == 4] >= 1.5).all()
+
+
+def _smooth_by_samples(level, line, pixel, min_run):
+    """The hysteresis rounds over every sample, runs found anew each round: the reference that
+    ``_smooth``'s rounds over runs must equal."""
+    from blueprint.vector.occlusion.runs import _along, _run_lengths
+
+    level = level.copy()
+    along = _along(line, pixel)
+    while True:
+        start, end, length = _run_lengths(level, line, along)
+        if len(start) < 2:
+            return level
+        run_line, run_level = line[start], level[start]
+        has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
+        has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
+        short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
+        if not short.any():
+            return level
+        key = length + 1e-6 * ((np.arange(len(start)) * 2654435761) % 1000) / 1000
+        prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
+        next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
+        merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
+        merge &= key < np.where(np.r_[short[1:], False], next_key, np.inf)
+        prev_len = np.where(has_prev, np.r_[0.0, length[:-1]], -1.0)
+        next_len = np.where(has_next, np.r_[length[1:], 0.0], -1.0)
+        prev_level, next_level = np.r_[-1, run_level[:-1]], np.r_[run_level[1:], -1]
+        take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
+        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
+        level = np.repeat(target, end - start).astype(level.dtype)
+
+
+def test_smoothing_over_runs_equals_smoothing_over_samples():
+    """``_smooth`` merges runs round by round on the runs themselves; every sample's level
+    equals that of the rounds over all samples, on noisy levels of many lines of uneven steps
+    (plateaus of equal lengths, levels -1 among them)."""
+    rng = np.random.default_rng(9)
+    line = np.repeat(np.arange(300), rng.integers(1, 60, 300))
+    step = rng.choice([0.5, 1.0, 1.0, 1.7], (len(line), 2))
+    pixel = np.cumsum(step, axis=0)
+    levels = np.repeat(rng.integers(-1, 5, len(line) // 3 + 1), 3)[: len(line)].astype(np.int32)
+    noise = rng.random(len(line)) < 0.2
+    levels[noise] = rng.integers(-1, 5, noise.sum())
+    want = _smooth_by_samples(levels, line, pixel, 2.5)
+    got = _smooth(levels, line, pixel, 2.5)
+    assert got.dtype == levels.dtype
+    np.testing.assert_array_equal(got, want)
+    assert (want != levels).sum() > 100
