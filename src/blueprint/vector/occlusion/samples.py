@@ -76,31 +76,23 @@ def sample_polylines(
     length = np.where((w[starts] > 0) & (w[starts + 1] > 0) & np.isfinite(length), length, 0.0)
     count = np.maximum(np.ceil(length / spacing), 1).astype(np.int64)
     count = np.minimum(count, 1 << 16)
-    seg = np.repeat(starts, count)
-    k = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-    t = k / np.repeat(count, count)
-    model = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
-    faces = lines.faces[seg]
-    kind = lines.kind[seg]
-    edge = lines.edge[seg]
+    # the samples in their final order, point after point: a segment's samples from its first
+    # point, a polyline's last point as one sample of its own after them
+    per_point = np.ones(len(points), np.int64)
+    per_point[starts] = count
+    at = np.repeat(np.arange(len(points)), per_point)
+    k = np.arange(len(at)) - np.repeat(np.cumsum(per_point) - per_point, per_point)
+    t = k / np.repeat(per_point, per_point)
+    ahead = np.minimum(at + 1, len(points) - 1)
+    model = points[at] + t[:, None] * (points[ahead] - points[at])
+    last_rows = np.cumsum(per_point)[offsets[1:] - 1] - 1
+    model[last_rows] = points[offsets[1:] - 1]
+    # a last point has the attributes of the segment before it
+    source = at.copy()
+    source[last_rows] -= 1
+    faces, kind, edge = lines.faces[source], lines.kind[source], lines.edge[source]
     vertex = k == 0
-    # each polyline's last point, inserted after its last segment's samples
-    lasts = offsets[1:] - 1
-    model = np.concatenate([model, points[lasts]])
-    faces = np.concatenate([faces, lines.faces[np.maximum(lasts - 1, 0)]])
-    kind = np.concatenate([kind, lines.kind[np.maximum(lasts - 1, 0)]])
-    edge = np.concatenate([edge, lines.edge[np.maximum(lasts - 1, 0)]])
-    vertex = np.concatenate([vertex, np.ones(len(lasts), bool)])
-    # a polyline's samples run in order, its last point after them: where each one goes
-    seg_line = line_of_point[seg]
-    per_line = np.bincount(seg_line, minlength=len(lines))
-    out_first = np.cumsum(per_line + 1) - (per_line + 1)
-    within = np.arange(len(seg)) - (np.cumsum(per_line) - per_line)[seg_line]
-    order = np.empty(len(seg) + len(lasts), np.int64)
-    order[np.concatenate([out_first[seg_line] + within, out_first + per_line])] = np.arange(len(order))
-    line = np.concatenate([seg_line, np.arange(len(lines))])
-    model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
-    kind, edge = kind[order], edge[order]
+    line = line_of_point[at]
     eye = transform(model, view)
     clip = eye @ projection.T
     inside = (
