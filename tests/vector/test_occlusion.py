@@ -324,3 +324,28 @@ def test_samples_of_polylines_equal_those_made_segment_by_segment():
     np.testing.assert_array_equal(got.vertex, vertex)
     np.testing.assert_array_equal(got.line, line)
     assert len(got.line) > 2 * len(points)
+
+
+def test_the_direction_across_each_line_found_once_equals_that_of_its_neighbours():
+    """``Samples.across`` finds every sample's unit vector across its line at once; at each
+    sample it equals the one from its neighbours on the same line (itself at a line's ends),
+    and samples whose neighbours lie on them have none."""
+    from blueprint.vector.occlusion.samples import Samples
+
+    rng = np.random.default_rng(6)
+    line = np.repeat(np.arange(50), rng.integers(1, 9, 50))
+    pixel = np.round(rng.normal(size=(len(line), 2)) * 3.0)  # repeated points: no direction
+    pixel[5:8] = pixel[6]
+    n = len(line)
+    zeros = np.zeros(n, np.int64)
+    samples = Samples(np.zeros((n, 3)), pixel, np.zeros((n, 2), np.int64), zeros, zeros, line, zeros, zeros)
+    good, across = samples.across
+    for i in range(n):
+        ahead = pixel[i + 1] if i + 1 < n and line[i + 1] == line[i] else pixel[i]
+        behind = pixel[i - 1] if i > 0 and line[i - 1] == line[i] else pixel[i]
+        tangent = ahead - behind
+        length = float(np.hypot(*tangent))
+        assert good[i] == (length > 0)
+        if length > 0:
+            np.testing.assert_allclose(across[i], [-tangent[1] / length, tangent[0] / length], rtol=1e-15)
+    assert 0 < good.sum() < n

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +37,25 @@ class Samples:
     line: np.ndarray
     vertex: np.ndarray
     inside: np.ndarray
+
+    @functools.cached_property
+    def across(self) -> tuple[np.ndarray, np.ndarray]:
+        """(S,) bool: whether each sample's line has a screen direction there (from the
+        neighbouring samples on the same line), and (S, 2) float64 the unit vector across it
+        (0 where none); found once for the several tests that look to either side."""
+        line, pixel = self.line, self.pixel
+        ahead, behind = pixel.copy(), pixel.copy()
+        same = line[1:] == line[:-1]
+        ahead[:-1][same] = pixel[1:][same]
+        behind[1:][same] = pixel[:-1][same]
+        tangent = ahead - behind
+        length = row_norm(tangent)
+        good = length > 0
+        tangent = tangent[good] / length[good, None]
+        across = np.zeros_like(pixel)
+        across[good, 0] = -tangent[:, 1]
+        across[good, 1] = tangent[:, 0]
+        return good, across
 
 
 def sample_polylines(
