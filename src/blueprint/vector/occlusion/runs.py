@@ -26,18 +26,19 @@ def _run_lengths(level, line, along):
     """Runs of one level along each polyline: start (inclusive), end (exclusive) and length in
     pixels, from halfway to the previous sample to halfway to the next one (the polyline's own
     ends where there is none); ``along`` from :func:`_along`."""
+    start, end, lo, hi = _runs(level, line, along)
+    return start, end, hi - lo
+
+
+def _runs(level, line, along):
+    """``_run_lengths``' start and end of every run, and where its pixels begin and end."""
+    n = len(level)
     change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
     start = np.flatnonzero(change)
-    end = np.r_[start[1:], len(level)]
-    return start, end, _span(start, end, along)
-
-
-def _span(start: np.ndarray, end: np.ndarray, along: np.ndarray) -> np.ndarray:
-    """Pixels of the runs of samples ``start`` to ``end`` (exclusive), as ``_run_lengths``."""
-    n = len(along) - 1
+    end = np.r_[start[1:], n]
     lo = np.where(start > 0, 0.5 * (along[start - 1] + along[start]), along[start])
     hi = np.where(end < n, 0.5 * (along[end - 1] + along[end]), along[end - 1])
-    return hi - lo
+    return start, end, lo, hi
 
 
 def _smooth(
@@ -58,7 +59,8 @@ def _smooth(
     if n < 2 or min_run <= 0:
         return level.copy()
     along = _along(line, pixel) if along is None else along
-    start, end, length = _run_lengths(level, line, along)
+    start, end, lo, hi = _runs(level, line, along)
+    length = hi - lo
     run_line, run_level = line[start], level[start]
     while len(start) >= 2:
         has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
@@ -78,10 +80,12 @@ def _smooth(
         next_level = np.r_[run_level[1:], -1]
         take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
         target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level).astype(level.dtype)
+        # a joined run begins where its first run began and ends where its last one ended
         first = np.r_[True, (run_line[1:] != run_line[:-1]) | (target[1:] != target[:-1])]
-        start, run_line, run_level = start[first], run_line[first], target[first]
-        end = np.r_[start[1:], n]
-        length = _span(start, end, along)
+        last = np.r_[first[1:], True]
+        start, lo, run_line, run_level = start[first], lo[first], run_line[first], target[first]
+        end, hi = end[last], hi[last]
+        length = hi - lo
     return np.repeat(run_level, end - start).astype(level.dtype)
 
 
