@@ -198,3 +198,66 @@ def test_smoothing_over_runs_equals_smoothing_over_samples():
     assert got.dtype == levels.dtype
     np.testing.assert_array_equal(got, want)
     assert (want != levels).sum() > 100
+
+
+def _walk_piece_by_piece(partner):
+    """The chains walked piece by piece, every piece checked for a visit: the reference that
+    ``chain_order``'s walks (open chains to their other free end, loops back to their start)
+    must equal."""
+    alone = (partner[0::2] < 0) & (partner[1::2] < 0)
+    visited = alone.copy()
+    walked, lengths = [], []
+    starts = [h for h in np.flatnonzero(partner < 0) if not alone[h >> 1]]
+    starts += [2 * s for s in np.flatnonzero(~alone)]
+    for h in starts:
+        count = 0
+        while not visited[h >> 1]:
+            visited[h >> 1] = True
+            walked.append(h)
+            count += 1
+            h = partner[h ^ 1]
+            if h < 0:
+                break
+        if count:
+            lengths.append(count)
+    walked = np.array(walked, np.int64)
+    single = np.flatnonzero(alone)
+    return (
+        np.r_[single, walked >> 1],
+        np.r_[np.zeros(len(single), bool), (walked & 1) == 1],
+        np.r_[np.ones(len(single), np.int64), lengths],
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_chains_walked_equal_a_walk_piece_by_piece(seed):
+    """``chain.chain_order`` on random graphs of pieces (junctions of up to six ends, lone
+    pieces, open chains, loops, pieces whose two ends pair with each other) gives the pieces,
+    directions and chain lengths of the walk that checks every piece."""
+    from blueprint.vector.chain import chain_order, pair_ends
+
+    rng = np.random.default_rng(seed)
+    n = 3000
+    node = rng.integers(0, 2200, 2 * n)
+    node[2 * rng.integers(0, n, 30) + 1] = node[2 * rng.integers(0, n, 30)]  # some ends meet
+    node[:20:2] = node[1:20:2]  # pieces that close on themselves
+    # rings of three to eight pieces on nodes of their own, some walked against their pieces
+    piece, fresh = 100, 10_000
+    for size in rng.integers(3, 9, 60).tolist():
+        ring = np.arange(piece, piece + size)
+        ends = np.stack([2 * ring + rng.integers(0, 2, size), 0 * ring], axis=1)
+        ends[:, 1] = ends[:, 0] ^ 1
+        node[ends[:, 1]] = fresh + np.arange(size)
+        node[np.roll(ends[:, 0], -1)] = fresh + np.arange(size)
+        piece, fresh = piece + size, fresh + size
+    leaving = rng.normal(size=(2 * n, 2))
+    leaving /= np.linalg.norm(leaving, axis=1)[:, None]
+    partner = pair_ends(node, leaving, -1.0)
+    got, want = chain_order(partner), _walk_piece_by_piece(partner)
+    for a, b in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    piece, reverse, lengths = want
+    first = 2 * piece[np.cumsum(lengths) - lengths] + reverse[np.cumsum(lengths) - lengths]
+    assert (lengths == 1).sum() > 10 and lengths.max() > 5
+    assert ((partner[first] >= 0) & (lengths > 1)).sum() > 5  # loops of several pieces
+    assert (partner[first] == first ^ 1).any()  # a piece closed on itself

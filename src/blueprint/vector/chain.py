@@ -87,32 +87,39 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """
     # pieces paired at neither end are chains of their own, found without walking
     alone = (partner[0::2] < 0) & (partner[1::2] < 0)
-    partner_list = partner.tolist()
-    visited = bytearray(alone.astype(np.uint8).tobytes())
-    walked: list[int] = []  # (piece << 1) | reversed
+    # entering a piece through half-end h, the walk leaves it through h ^ 1 for that one's partner
+    onward = partner[np.arange(len(partner)) ^ 1].tolist()
+    walked: list[int] = []  # (piece << 1) | reversed: entered through its end 1, walked backwards
     lengths: list[int] = []
-
-    def walk(h: int) -> None:
-        # leave through half-end h: the walk begins at that end of its piece
-        count = 0
-        while True:
-            s = h >> 1
-            if visited[s]:
-                break
-            visited[s] = 1
-            walked.append(h)  # starting at end 1 means walking the piece backwards
-            count += 1
-            h = partner_list[h ^ 1]
-            if h < 0:
-                break
-        lengths.append(count)
-
+    append = walked.append
+    # an open chain from the lower of its two free half-ends, to the other one
+    other_end = bytearray(len(partner))
     for h in np.flatnonzero((partner < 0) & ~np.repeat(alone, 2)).tolist():
-        if not visited[h >> 1]:
-            walk(h)
-    for s in np.flatnonzero(~alone).tolist():
-        if not visited[s]:
-            walk(s << 1)
+        if other_end[h]:
+            continue
+        first = len(walked)
+        while h >= 0:
+            append(h)
+            last = h
+            h = onward[h]
+        other_end[last ^ 1] = 1
+        lengths.append(len(walked) - first)
+    # what is left lies on closed loops, each walked from its lowest piece's start
+    on_chain = np.zeros(len(alone), bool)
+    on_chain[np.array(walked, np.int64) >> 1] = True
+    visited = bytearray(len(alone))
+    for piece in np.flatnonzero(~alone & ~on_chain).tolist():
+        if visited[piece]:
+            continue
+        first = len(walked)
+        start = h = piece << 1
+        while True:
+            append(h)
+            visited[h >> 1] = 1
+            h = onward[h]
+            if h == start:
+                break
+        lengths.append(len(walked) - first)
     flat = np.array(walked, np.int64)
     single = np.flatnonzero(alone)
     return (
