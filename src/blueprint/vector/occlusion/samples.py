@@ -45,16 +45,17 @@ class Samples:
         (0 where none); found once for the several tests that look to either side."""
         line, pixel = self.line, self.pixel
         ahead, behind = pixel.copy(), pixel.copy()
-        same = line[1:] == line[:-1]
-        ahead[:-1][same] = pixel[1:][same]
-        behind[1:][same] = pixel[:-1][same]
-        tangent = ahead - behind
+        same = (line[1:] == line[:-1])[:, None]
+        np.copyto(ahead[:-1], pixel[1:], where=same)
+        np.copyto(behind[1:], pixel[:-1], where=same)
+        tangent = np.subtract(ahead, behind, out=ahead)
         length = row_norm(tangent)
         good = length > 0
-        tangent = tangent[good] / length[good, None]
-        across = np.zeros_like(pixel)
-        across[good, 0] = -tangent[:, 1]
-        across[good, 1] = tangent[:, 0]
+        unit = np.divide(tangent, length[:, None], out=behind, where=good[:, None])
+        unit[~good] = 0.0
+        across = np.empty_like(pixel)
+        np.negative(unit[:, 1], out=across[:, 0])
+        across[:, 1] = unit[:, 0]
         return good, across
 
 
