@@ -218,7 +218,8 @@ def test_point_ids_rank_the_rounded_points_as_unique_does():
 
 def test_pair_ends_given_the_nodes_order_pairs_as_without_it():
     """``chain.pair_ends`` with the half-ends' order by node handed in pairs as it does sorting
-    them itself, on nodes of two to six half-ends (junctions with ties of straightness)."""
+    them itself, on nodes of two to six half-ends (junctions with ties of straightness), and
+    with the directions as a function of the half-ends as with them all in an array."""
     from blueprint.sorting import stable_argsort
     from blueprint.vector.chain import pair_ends
 
@@ -229,5 +230,11 @@ def test_pair_ends_given_the_nodes_order_pairs_as_without_it():
     want = pair_ends(node, leaving, np.cos(np.radians(30)))
     got = pair_ends(node, leaving, np.cos(np.radians(30)), stable_argsort(node))
     np.testing.assert_array_equal(got, want)
+    # the directions read only where asked, as the pieces' own turned at their ends
+    ahead = leaving[0::2]
+    leaving[1::2] = -ahead
+    want = pair_ends(node, leaving, np.cos(np.radians(30)))
+    asked = lambda h: np.where((h & 1)[:, None] == 1, -ahead[h >> 1], ahead[h >> 1])  # noqa: E731
+    np.testing.assert_array_equal(pair_ends(node, asked, np.cos(np.radians(30))), want)
     assert (want >= 0).sum() > 500
     np.testing.assert_array_equal(want[want[want >= 0]], np.flatnonzero(want >= 0))

@@ -8,6 +8,8 @@ first. A chain walks from piece to piece through paired half-ends.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from blueprint.sorting import stable_argsort
@@ -16,7 +18,10 @@ __all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
 
 
 def pair_ends(
-    node: np.ndarray, leaving: np.ndarray, min_cos: float, order: np.ndarray | None = None
+    node: np.ndarray,
+    leaving: np.ndarray | Callable[[np.ndarray], np.ndarray],
+    min_cos: float,
+    order: np.ndarray | None = None,
 ) -> np.ndarray:
     """Partner of every half-end (-1 where the chain stops there).
 
@@ -24,8 +29,9 @@ def pair_ends(
     ----------
     node : (2 n,) int64
         Node of each half-end; half-ends at one node meet there.
-    leaving : (2 n, d) float64
-        Unit direction in which each piece leaves its node through that half-end.
+    leaving : (2 n, d) float64, or a function of (K,) half-ends giving their (K, d) rows
+        Unit direction in which each piece leaves its node through that half-end (only those
+        at junctions are read).
     min_cos : float
         At junctions of three or more, two half-ends pair only if the line turns between them
         by an angle whose cosine is at least this (1: straight on only, -1: any turn).
@@ -60,7 +66,8 @@ def pair_ends(
         first_j.append((base[:, None] + j[None]).reshape(-1))
     ha, hb = order[np.concatenate(first_i)], order[np.concatenate(first_j)]
     # straight on: the two pieces leave the node in opposite directions
-    straight = -np.einsum("ij,ij->i", leaving[ha], leaving[hb])
+    direction = leaving if callable(leaving) else leaving.__getitem__
+    straight = -np.einsum("ij,ij->i", direction(ha), direction(hb))
     ok = straight >= min_cos
     rank = np.argsort(-straight[ok], kind="stable")
     used = bytearray(len(node))

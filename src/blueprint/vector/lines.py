@@ -1155,7 +1155,11 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     # as its start leaves backwards
     ahead = seg_points[:, 1] - seg_points[:, 0]
     ahead /= np.maximum(row_norm(ahead), 1e-300)[:, None]
-    leaving = np.stack([ahead, -ahead], axis=1).reshape(-1, 3)
+
+    def leaving(h: np.ndarray) -> np.ndarray:
+        direction = ahead[h >> 1]
+        return np.where((h & 1)[:, None] == 1, -direction, direction)
+
     partner = pair_ends(node, leaving, np.cos(np.radians(turn)), by_node)
     seg, rev, lengths = chain_order(partner)
     # points of chain c: the first segment's start, then every segment's end
