@@ -177,3 +177,28 @@ def test_points_moved_in_whole_arrays_equal_einsum_to_the_bit():
     corner = np.einsum("bij,fj->bfi", linear, cross)
     assert _moved(linear[:, None], cross[None]).tobytes() == corner.tobytes()
     assert _dot3(normal, corner).tobytes() == np.einsum("bfi,bfi->bf", normal, corner).tobytes()
+
+
+def test_blocks_of_instances_on_several_threads_find_what_one_thread_does(monkeypatch):
+    """The blocks of instances run side by side (``parallel.each``): the features and the
+    faces' planes, in blocks of an instance or two on three threads, equal byte for byte those
+    of one thread."""
+    from blueprint import settings
+    from blueprint.vector import instanced
+    from blueprint.vector.occlusion.levels import face_planes
+
+    def found():
+        model = smooth_scene()
+        camera = fit_camera(flattened(smooth_scene()), SIZE, "iso")
+        view = camera.view_matrix()
+        segments = model_segments(model, view, camera.projection_matrix(), SIZE)
+        return [segments.points, segments.faces, segments.kind, segments.edge, face_planes(model, view)]
+
+    monkeypatch.setattr(instanced, "_ROWS", 64)  # a block an instance or two
+    monkeypatch.setattr(settings, "THREADS", 1)
+    want = found()
+    monkeypatch.setattr(settings, "THREADS", 3)
+    got = found()
+    for a, b in zip(got, want, strict=True):
+        assert a.tobytes() == b.tobytes()
+    assert len(want[0]) > 100
