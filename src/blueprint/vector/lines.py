@@ -1136,9 +1136,11 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     pid = _point_ids(points, quantum).reshape(n, 2)
     # the same segment twice (an edge that is both a crease and a part boundary, ...): keep one
     lo, hi = np.minimum(pid[:, 0], pid[:, 1]), np.maximum(pid[:, 0], pid[:, 1])
-    proper = lo != hi
-    _, first, _ = unique_first((lo * (int(pid.max()) + 1) + hi)[proper])
-    keep = np.flatnonzero(proper)[np.sort(first)]
+    proper = np.flatnonzero(lo != hi)
+    first = unique_first(lo[proper] * (int(pid.max()) + 1) + hi[proper])[1]
+    chosen = np.zeros(len(proper), bool)
+    chosen[first] = True  # marked, not sorted: the kept segments stay in their order
+    keep = proper[chosen]
     seg_points = segments.points[keep]
     seg_faces = segments.faces[keep]
     seg_kind = segments.kind[keep]
