@@ -52,6 +52,29 @@ def test_each_runs_every_item_on_the_pool_and_gives_the_results_in_order(monkeyp
     assert {name for _, name in parallel.each(work, items)} == {threading.current_thread().name}
 
 
+def test_begin_runs_work_beside_the_caller_and_waits_for_it_when_asked(monkeypatch):
+    """``parallel.begin`` starts work on a thread of the pool while the caller goes on, its
+    result (or its error) read when asked for; with one thread it runs at once in the caller."""
+    monkeypatch.setattr(settings, "THREADS", 2)
+    started, go_on = threading.Event(), threading.Event()
+
+    def work(x):
+        started.set()
+        go_on.wait(5)
+        return x * 2, threading.current_thread().name
+
+    result = parallel.begin(work, 21)
+    assert started.wait(5)  # running while the caller is here
+    go_on.set()
+    value, name = result()
+    assert value == 42 and name.startswith("blueprint")
+    failed = parallel.begin(lambda: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        failed()
+    monkeypatch.setattr(settings, "THREADS", 1)
+    assert parallel.begin(work, 1)()[1] == threading.current_thread().name
+
+
 def test_run_within_a_thread_of_the_pool_runs_its_blocks_in_that_thread(monkeypatch):
     monkeypatch.setattr(settings, "THREADS", 2)
 

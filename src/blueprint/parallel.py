@@ -18,7 +18,7 @@ import numpy as np
 
 from blueprint import settings
 
-__all__ = ["MIN_BLOCK", "cuts", "each", "run", "sort"]
+__all__ = ["MIN_BLOCK", "begin", "cuts", "each", "run", "sort"]
 
 T = TypeVar("T")
 U = TypeVar("U")
@@ -89,6 +89,17 @@ def run(work: Callable[[int, int], T], n: int, min_block: int | None = None) -> 
     if len(blocks) == 1 or getattr(_worker, "busy", False):
         return [work(start, stop) for start, stop in blocks]
     return list(_executor().map(lambda block: work(*block), blocks))
+
+
+def begin(work: Callable[..., T], *args) -> Callable[[], T]:
+    """Start ``work(*args)`` on one of the pool's threads, beside what the caller does next,
+    and return a function that waits for its result (raising what it raised). Where there is
+    one thread, or called from one of the pool's own, the work runs at once in the calling
+    thread."""
+    if settings.THREADS == 1 or getattr(_worker, "busy", False):
+        result = work(*args)
+        return lambda: result
+    return _executor().submit(work, *args).result
 
 
 def each(work: Callable[[T], U], items: list[T]) -> list[U]:
