@@ -30,6 +30,51 @@ def test_run_gives_each_block_to_a_thread_and_the_results_in_order(monkeypatch):
     assert all(name.startswith("blueprint") for name in names.values())
 
 
+def test_each_runs_every_item_on_the_pool_and_gives_the_results_in_order(monkeypatch):
+    """``parallel.each`` hands items of uneven work to the pool's threads and returns their
+    results in the items' order; with one thread, or inside one of the pool's, it runs them in
+    the calling thread."""
+    monkeypatch.setattr(settings, "THREADS", 3)
+    items = [0.03, 0.0, 0.02, 0.0, 0.01, 0.0]  # the first ones finish last
+
+    def work(wait):
+        threading.Event().wait(wait)
+        return wait, threading.current_thread().name
+
+    found = parallel.each(work, items)
+    assert [f[0] for f in found] == items
+    assert all(name.startswith("blueprint") for _, name in found)
+    # inside a thread of the pool: no waiting on the pool itself
+    inner = parallel.each(lambda _: parallel.each(work, items[:2]), [0, 1])
+    for pair in inner:
+        assert len({name for _, name in pair}) == 1
+    monkeypatch.setattr(settings, "THREADS", 1)
+    assert {name for _, name in parallel.each(work, items)} == {threading.current_thread().name}
+
+
+def test_begin_runs_work_beside_the_caller_and_waits_for_it_when_asked(monkeypatch):
+    """``parallel.begin`` starts work on a thread of the pool while the caller goes on, its
+    result (or its error) read when asked for; with one thread it runs at once in the caller."""
+    monkeypatch.setattr(settings, "THREADS", 2)
+    started, go_on = threading.Event(), threading.Event()
+
+    def work(x):
+        started.set()
+        go_on.wait(5)
+        return x * 2, threading.current_thread().name
+
+    result = parallel.begin(work, 21)
+    assert started.wait(5)  # running while the caller is here
+    go_on.set()
+    value, name = result()
+    assert value == 42 and name.startswith("blueprint")
+    failed = parallel.begin(lambda: 1 / 0)
+    with pytest.raises(ZeroDivisionError):
+        failed()
+    monkeypatch.setattr(settings, "THREADS", 1)
+    assert parallel.begin(work, 1)()[1] == threading.current_thread().name
+
+
 def test_run_within_a_thread_of_the_pool_runs_its_blocks_in_that_thread(monkeypatch):
     monkeypatch.setattr(settings, "THREADS", 2)
 

@@ -18,9 +18,10 @@ import numpy as np
 
 from blueprint import settings
 
-__all__ = ["MIN_BLOCK", "cuts", "run", "sort"]
+__all__ = ["MIN_BLOCK", "begin", "cuts", "each", "run", "sort"]
 
 T = TypeVar("T")
+U = TypeVar("U")
 
 # Rows below which a block is not split off for a thread of its own: handing it over costs
 # more than the work.
@@ -88,6 +89,27 @@ def run(work: Callable[[int, int], T], n: int, min_block: int | None = None) -> 
     if len(blocks) == 1 or getattr(_worker, "busy", False):
         return [work(start, stop) for start, stop in blocks]
     return list(_executor().map(lambda block: work(*block), blocks))
+
+
+def begin(work: Callable[..., T], *args) -> Callable[[], T]:
+    """Start ``work(*args)`` on one of the pool's threads, beside what the caller does next,
+    and return a function that waits for its result (raising what it raised). Where there is
+    one thread, or called from one of the pool's own, the work runs at once in the calling
+    thread."""
+    if settings.THREADS == 1 or getattr(_worker, "busy", False):
+        result = work(*args)
+        return lambda: result
+    return _executor().submit(work, *args).result
+
+
+def each(work: Callable[[T], U], items: list[T]) -> list[U]:
+    """``work(item)`` for every one of ``items``, side by side on the pool's threads, and their
+    results in the items' order: for pieces of work of their own sizes (a mesh's block of
+    instances each), where ``run``'s equal blocks of rows do not fit. In the calling thread
+    where there is one thread or one item, or where it is one of the pool's own."""
+    if settings.THREADS == 1 or len(items) < 2 or getattr(_worker, "busy", False):
+        return [work(item) for item in items]
+    return list(_executor().map(work, items))
 
 
 def sort(values: np.ndarray, min_block: int | None = None) -> None:

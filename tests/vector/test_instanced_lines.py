@@ -154,3 +154,51 @@ def test_intersections_of_repeated_pairs_are_placed_at_each():
     first = ours.part == 0
     second = ours.part == 2
     np.testing.assert_allclose(ours.points[second], ours.points[first] + [5.0, 0, 0], atol=1e-9)
+
+
+def test_points_moved_in_whole_arrays_equal_einsum_to_the_bit():
+    """``instanced._moved`` and ``_dot3`` give einsum's float64 values bit for bit (zeros of
+    either sign included): for points placed by blocks of transforms, for face normals by
+    transposed cofactor matrices, and for the planes' dot products."""
+    from blueprint.vector.instanced import _dot3, _moved, _placed
+
+    rng = np.random.default_rng(11)
+    transforms = rng.normal(size=(6, 4, 4)) * 10.0 ** rng.integers(-3, 4, (6, 1, 1))
+    points = rng.normal(size=(6, 500, 3)) * 1e3
+    points[:, :40] = -0.0  # every product -0: einsum's sum is +0
+    transforms[0, :3, :3] = 0.0
+    want = np.einsum("kij,kpj->kpi", transforms[:, :3, :3], points) + transforms[:, None, :3, 3]
+    assert _placed(points, transforms).tobytes() == want.tobytes()
+    cofactor = np.linalg.inv(transforms[:, :3, :3] + 3 * np.eye(3)).transpose(0, 2, 1)
+    cross = np.r_[np.full((20, 3), -0.0), rng.normal(size=(300, 3))]
+    normal = np.einsum("bij,fj->bfi", cofactor, cross)
+    assert _moved(cofactor[:, None], cross[None], in_order=True).tobytes() == normal.tobytes()
+    linear = np.ascontiguousarray(transforms[:, :3, :3])
+    corner = np.einsum("bij,fj->bfi", linear, cross)
+    assert _moved(linear[:, None], cross[None]).tobytes() == corner.tobytes()
+    assert _dot3(normal, corner).tobytes() == np.einsum("bfi,bfi->bf", normal, corner).tobytes()
+
+
+def test_blocks_of_instances_on_several_threads_find_what_one_thread_does(monkeypatch):
+    """The blocks of instances run side by side (``parallel.each``): the features and the
+    faces' planes, in blocks of an instance or two on three threads, equal byte for byte those
+    of one thread."""
+    from blueprint import settings
+    from blueprint.vector import instanced
+    from blueprint.vector.occlusion.levels import face_planes
+
+    def found():
+        model = smooth_scene()
+        camera = fit_camera(flattened(smooth_scene()), SIZE, "iso")
+        view = camera.view_matrix()
+        segments = model_segments(model, view, camera.projection_matrix(), SIZE)
+        return [segments.points, segments.faces, segments.kind, segments.edge, face_planes(model, view)]
+
+    monkeypatch.setattr(instanced, "_ROWS", 64)  # a block an instance or two
+    monkeypatch.setattr(settings, "THREADS", 1)
+    want = found()
+    monkeypatch.setattr(settings, "THREADS", 3)
+    got = found()
+    for a, b in zip(got, want, strict=True):
+        assert a.tobytes() == b.tobytes()
+    assert len(want[0]) > 100

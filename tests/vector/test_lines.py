@@ -198,3 +198,43 @@ def test_an_edge_where_a_face_seen_edge_on_meets_a_tangent_one_is_a_silhouette()
     assert shared.sum() == 1
     assert found.kind[shared][0] == SILHOUETTE
     assert sorted(found.faces[shared][0]) == [0, 1]
+
+
+def test_point_ids_rank_the_rounded_points_as_unique_does():
+    """``lines._point_ids`` numbers points equal after rounding by their rank among the
+    distinct rounded points (ordered by z, then y, then x), as ``np.unique``'s inverse of the
+    rounded rows does."""
+    from blueprint.vector.lines import _point_ids
+
+    rng = np.random.default_rng(2)
+    grid = rng.integers(0, 10, (3000, 3)) * 0.25
+    points = grid + rng.uniform(-0.004, 0.004, grid.shape)  # within half a quantum of the grid
+    ids = _point_ids(points, 0.01)
+    rounded = np.round((points - points.min(axis=0)) / 0.01).astype(np.int64)
+    want = np.unique(rounded[:, ::-1], axis=0, return_inverse=True)[1].reshape(-1)
+    np.testing.assert_array_equal(ids, want)
+    assert ids.max() < len(points) - 100  # repeats did meet
+
+
+def test_pair_ends_given_the_nodes_order_pairs_as_without_it():
+    """``chain.pair_ends`` with the half-ends' order by node handed in pairs as it does sorting
+    them itself, on nodes of two to six half-ends (junctions with ties of straightness), and
+    with the directions as a function of the half-ends as with them all in an array."""
+    from blueprint.sorting import stable_argsort
+    from blueprint.vector.chain import pair_ends
+
+    rng = np.random.default_rng(4)
+    node = rng.integers(0, 900, 4000)
+    leaving = rng.integers(-1, 2, (4000, 3)).astype(float)  # few directions: ties
+    leaving /= np.maximum(np.linalg.norm(leaving, axis=1), 1e-300)[:, None]
+    want = pair_ends(node, leaving, np.cos(np.radians(30)))
+    got = pair_ends(node, leaving, np.cos(np.radians(30)), stable_argsort(node))
+    np.testing.assert_array_equal(got, want)
+    # the directions read only where asked, as the pieces' own turned at their ends
+    ahead = leaving[0::2]
+    leaving[1::2] = -ahead
+    want = pair_ends(node, leaving, np.cos(np.radians(30)))
+    asked = lambda h: np.where((h & 1)[:, None] == 1, -ahead[h >> 1], ahead[h >> 1])  # noqa: E731
+    np.testing.assert_array_equal(pair_ends(node, asked, np.cos(np.radians(30))), want)
+    assert (want >= 0).sum() > 500
+    np.testing.assert_array_equal(want[want[want >= 0]], np.flatnonzero(want >= 0))

@@ -418,3 +418,37 @@ def test_the_edge_lists_of_many_paths_read_back_to_each_lines_edges():
         assert len(got) == len(want)
         for a, b in zip(got, want, strict=True):
             np.testing.assert_array_equal(a, b)
+
+
+def test_the_lines_of_many_paths_ordered_by_lowest_edge_in_one_pass():
+    """``svg._by_lowest_edge`` orders the lines of every path at once: each path's lines by
+    their lowest source edge (ties and lines without edges in their given order, the latter
+    first), path after path, as a sort of each path alone does."""
+    from blueprint.vector.linework import Lines
+    from blueprint.vector.svg import _by_lowest_edge
+
+    rng = np.random.default_rng(5)
+    n = 500
+    sizes = rng.integers(0, 4, n) * (rng.random(n) < 0.8)
+    edges = rng.integers(0, 60, sizes.sum())  # few values: many ties
+    zeros = np.zeros(n, np.int64)
+    lines = Lines(
+        np.zeros((2 * n, 2)),
+        np.arange(0, 2 * n + 1, 2),
+        zeros,
+        zeros.astype(np.uint8),
+        zeros,
+        edges,
+        np.r_[0, np.cumsum(sizes)],
+        zeros.astype(bool),
+    )
+    order = rng.permutation(n)
+    cuts = np.r_[0, np.sort(rng.choice(np.arange(1, n), 30, replace=False)), n]
+    groups = [order[a:b] for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
+    want = []
+    for group in groups:
+        lowest = [
+            min(edges[lines.edge_offsets[i] : lines.edge_offsets[i + 1]], default=-1) for i in group.tolist()
+        ]
+        want += [int(group[j]) for j in sorted(range(len(group)), key=lambda j: lowest[j])]
+    assert _by_lowest_edge(lines, groups).tolist() == want

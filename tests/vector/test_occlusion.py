@@ -275,3 +275,77 @@ def test_highlight_by_a_second_model_on_the_command_line(tmp_path):
     assert {p.get("stroke") for p in group.iter(f"{SVG}path")} <= {colour, None}
     other = next(g for g in root.iter(f"{SVG}g") if g.get("id") == "cover")
     assert colour not in {g.get("stroke") for g in other.iter(f"{SVG}g")}
+
+
+def test_samples_of_polylines_equal_those_made_segment_by_segment():
+    """``sample_polylines`` lays out every sample in its final place in one pass: each equals,
+    bit for bit, the samples made polyline by polyline and segment by segment (``count``
+    samples from a segment's first point, the polyline's last point after them with its last
+    segment's faces, kind and edge), lines partly behind the eye included."""
+    from blueprint.scene.camera import clip_to_pixels, transform
+    from blueprint.vector.lines import Polylines
+    from blueprint.vector.occlusion.samples import sample_polylines
+
+    rng = np.random.default_rng(8)
+    sizes = rng.integers(2, 6, 40)
+    offsets = np.r_[0, np.cumsum(sizes)]
+    points = rng.normal(size=(offsets[-1], 3)) * [1.0, 1.0, 2.0]
+    lines = Polylines(
+        points,
+        offsets,
+        rng.integers(0, 99, (offsets[-1], 2)),
+        np.zeros(40, np.int32),
+        rng.integers(0, 5, offsets[-1]).astype(np.uint8),
+        rng.integers(-1, 999, offsets[-1]),
+    )
+    camera = Camera(
+        eye=(0.0, 0.0, 3.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), near=0.1, far=9.0, fov=60.0
+    )
+    view, projection = camera.view_matrix(), camera.projection_matrix()
+    got = sample_polylines(lines, view, projection, (64, 64), 1.5)
+    pix = clip_to_pixels(transform(points, projection @ view), (64, 64))
+    w = transform(points, projection @ view)[:, 3]
+    model, rows, vertex, line = [], [], [], []
+    for i in range(40):
+        for j in range(offsets[i], offsets[i + 1] - 1):
+            length = float(np.linalg.norm(pix[j + 1] - pix[j]))
+            length = length if w[j] > 0 and w[j + 1] > 0 and math.isfinite(length) else 0.0
+            count = min(max(math.ceil(length / 1.5), 1), 1 << 16)
+            for k in range(count):
+                model.append(points[j] + (k / count) * (points[j + 1] - points[j]))
+                rows.append(j), vertex.append(k == 0), line.append(i)
+        model.append(points[offsets[i + 1] - 1])
+        rows.append(offsets[i + 1] - 2), vertex.append(True), line.append(i)
+    eye = transform(np.array(model), view)
+    assert got.eye.tobytes() == eye[:, :3].tobytes()
+    np.testing.assert_array_equal(got.faces, lines.faces[rows])
+    np.testing.assert_array_equal(got.kind, lines.kind[rows])
+    np.testing.assert_array_equal(got.edge, lines.edge[rows])
+    np.testing.assert_array_equal(got.vertex, vertex)
+    np.testing.assert_array_equal(got.line, line)
+    assert len(got.line) > 2 * len(points)
+
+
+def test_the_direction_across_each_line_found_once_equals_that_of_its_neighbours():
+    """``Samples.across`` finds every sample's unit vector across its line at once; at each
+    sample it equals the one from its neighbours on the same line (itself at a line's ends),
+    and samples whose neighbours lie on them have none."""
+    from blueprint.vector.occlusion.samples import Samples
+
+    rng = np.random.default_rng(6)
+    line = np.repeat(np.arange(50), rng.integers(1, 9, 50))
+    pixel = np.round(rng.normal(size=(len(line), 2)) * 3.0)  # repeated points: no direction
+    pixel[5:8] = pixel[6]
+    n = len(line)
+    zeros = np.zeros(n, np.int64)
+    samples = Samples(np.zeros((n, 3)), pixel, np.zeros((n, 2), np.int64), zeros, zeros, line, zeros, zeros)
+    good, across = samples.across
+    for i in range(n):
+        ahead = pixel[i + 1] if i + 1 < n and line[i + 1] == line[i] else pixel[i]
+        behind = pixel[i - 1] if i > 0 and line[i - 1] == line[i] else pixel[i]
+        tangent = ahead - behind
+        length = float(np.hypot(*tangent))
+        assert good[i] == (length > 0)
+        if length > 0:
+            np.testing.assert_allclose(across[i], [-tangent[1] / length, tangent[0] / length], rtol=1e-15)
+    assert 0 < good.sum() < n

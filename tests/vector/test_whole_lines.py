@@ -150,3 +150,114 @@ def test_at_most_two_percent_of_pieces_are_shorter_than_one_and_a_half_pixels(
     assert share <= 0.025, f"{share:.1%} of {len(length)} pieces under 1.5 px"
     if "featuretype" in name:
         assert (length[level == 4] >= 1.5).all()
+
+
+def _smooth_by_samples(level, line, pixel, min_run):
+    """The hysteresis rounds over every sample, runs found anew each round: the reference that
+    ``_smooth``'s rounds over runs must equal."""
+    from blueprint.vector.occlusion.runs import _along, _run_lengths
+
+    level = level.copy()
+    along = _along(line, pixel)
+    while True:
+        start, end, length = _run_lengths(level, line, along)
+        if len(start) < 2:
+            return level
+        run_line, run_level = line[start], level[start]
+        has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
+        has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
+        short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
+        if not short.any():
+            return level
+        key = length + 1e-6 * ((np.arange(len(start)) * 2654435761) % 1000) / 1000
+        prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
+        next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
+        merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
+        merge &= key < np.where(np.r_[short[1:], False], next_key, np.inf)
+        prev_len = np.where(has_prev, np.r_[0.0, length[:-1]], -1.0)
+        next_len = np.where(has_next, np.r_[length[1:], 0.0], -1.0)
+        prev_level, next_level = np.r_[-1, run_level[:-1]], np.r_[run_level[1:], -1]
+        take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
+        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
+        level = np.repeat(target, end - start).astype(level.dtype)
+
+
+def test_smoothing_over_runs_equals_smoothing_over_samples():
+    """``_smooth`` merges runs round by round on the runs themselves; every sample's level
+    equals that of the rounds over all samples, on noisy levels of many lines of uneven steps
+    (plateaus of equal lengths, levels -1 among them)."""
+    rng = np.random.default_rng(9)
+    line = np.repeat(np.arange(300), rng.integers(1, 60, 300))
+    step = rng.choice([0.5, 1.0, 1.0, 1.7], (len(line), 2))
+    pixel = np.cumsum(step, axis=0)
+    levels = np.repeat(rng.integers(-1, 5, len(line) // 3 + 1), 3)[: len(line)].astype(np.int32)
+    noise = rng.random(len(line)) < 0.2
+    levels[noise] = rng.integers(-1, 5, noise.sum())
+    want = _smooth_by_samples(levels, line, pixel, 2.5)
+    got = _smooth(levels, line, pixel, 2.5)
+    assert got.dtype == levels.dtype
+    np.testing.assert_array_equal(got, want)
+    assert (want != levels).sum() > 100
+
+
+def _walk_piece_by_piece(partner):
+    """The chains walked piece by piece, every piece checked for a visit: the reference that
+    ``chain_order``'s walks (open chains to their other free end, loops back to their start)
+    must equal."""
+    alone = (partner[0::2] < 0) & (partner[1::2] < 0)
+    visited = alone.copy()
+    walked, lengths = [], []
+    starts = [h for h in np.flatnonzero(partner < 0) if not alone[h >> 1]]
+    starts += [2 * s for s in np.flatnonzero(~alone)]
+    for h in starts:
+        count = 0
+        while not visited[h >> 1]:
+            visited[h >> 1] = True
+            walked.append(h)
+            count += 1
+            h = partner[h ^ 1]
+            if h < 0:
+                break
+        if count:
+            lengths.append(count)
+    walked = np.array(walked, np.int64)
+    single = np.flatnonzero(alone)
+    return (
+        np.r_[single, walked >> 1],
+        np.r_[np.zeros(len(single), bool), (walked & 1) == 1],
+        np.r_[np.ones(len(single), np.int64), lengths],
+    )
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_chains_walked_equal_a_walk_piece_by_piece(seed):
+    """``chain.chain_order`` on random graphs of pieces (junctions of up to six ends, lone
+    pieces, open chains, loops, pieces whose two ends pair with each other) gives the pieces,
+    directions and chain lengths of the walk that checks every piece."""
+    from blueprint.vector.chain import chain_order, pair_ends
+
+    rng = np.random.default_rng(seed)
+    n = 3000
+    node = rng.integers(0, 2200, 2 * n)
+    node[2 * rng.integers(0, n, 30) + 1] = node[2 * rng.integers(0, n, 30)]  # some ends meet
+    node[:20:2] = node[1:20:2]  # pieces that close on themselves
+    # rings of three to eight pieces on nodes of their own, some walked against their pieces
+    piece, fresh = 100, 10_000
+    for size in rng.integers(3, 9, 60).tolist():
+        ring = np.arange(piece, piece + size)
+        ends = np.stack([2 * ring + rng.integers(0, 2, size), 0 * ring], axis=1)
+        ends[:, 1] = ends[:, 0] ^ 1
+        node[ends[:, 1]] = fresh + np.arange(size)
+        node[np.roll(ends[:, 0], -1)] = fresh + np.arange(size)
+        piece, fresh = piece + size, fresh + size
+    leaving = rng.normal(size=(2 * n, 2))
+    leaving /= np.linalg.norm(leaving, axis=1)[:, None]
+    partner = pair_ends(node, leaving, -1.0)
+    got, want = chain_order(partner), _walk_piece_by_piece(partner)
+    for a, b in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    piece, reverse, lengths = want
+    first = 2 * piece[np.cumsum(lengths) - lengths] + reverse[np.cumsum(lengths) - lengths]
+    assert (lengths == 1).sum() > 10 and lengths.max() > 5
+    assert ((partner[first] >= 0) & (lengths > 1)).sum() > 5  # loops of several pieces
+    assert (partner[first] == first ^ 1).any()  # a piece closed on itself

@@ -8,6 +8,8 @@ first. A chain walks from piece to piece through paired half-ends.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from blueprint.sorting import stable_argsort
@@ -15,18 +17,26 @@ from blueprint.sorting import stable_argsort
 __all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
 
 
-def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarray:
+def pair_ends(
+    node: np.ndarray,
+    leaving: np.ndarray | Callable[[np.ndarray], np.ndarray],
+    min_cos: float,
+    order: np.ndarray | None = None,
+) -> np.ndarray:
     """Partner of every half-end (-1 where the chain stops there).
 
     Parameters
     ----------
     node : (2 n,) int64
         Node of each half-end; half-ends at one node meet there.
-    leaving : (2 n, d) float64
-        Unit direction in which each piece leaves its node through that half-end.
+    leaving : (2 n, d) float64, or a function of (K,) half-ends giving their (K, d) rows
+        Unit direction in which each piece leaves its node through that half-end (only those
+        at junctions are read).
     min_cos : float
         At junctions of three or more, two half-ends pair only if the line turns between them
         by an angle whose cosine is at least this (1: straight on only, -1: any turn).
+    order : (2 n,) int64, optional
+        ``stable_argsort(node)``, where the caller has it already.
 
     Returns
     -------
@@ -36,7 +46,8 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
     if len(node) == 0:
         return partner
     degree = np.bincount(node)
-    order = stable_argsort(node)
+    if order is None:
+        order = stable_argsort(node)
     starts = np.cumsum(degree) - degree
     two = np.flatnonzero(degree == 2)
     a, b = order[starts[two]], order[starts[two] + 1]
@@ -55,7 +66,8 @@ def pair_ends(node: np.ndarray, leaving: np.ndarray, min_cos: float) -> np.ndarr
         first_j.append((base[:, None] + j[None]).reshape(-1))
     ha, hb = order[np.concatenate(first_i)], order[np.concatenate(first_j)]
     # straight on: the two pieces leave the node in opposite directions
-    straight = -np.einsum("ij,ij->i", leaving[ha], leaving[hb])
+    direction = leaving if callable(leaving) else leaving.__getitem__
+    straight = -np.einsum("ij,ij->i", direction(ha), direction(hb))
     ok = straight >= min_cos
     rank = np.argsort(-straight[ok], kind="stable")
     used = bytearray(len(node))
@@ -82,32 +94,39 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     """
     # pieces paired at neither end are chains of their own, found without walking
     alone = (partner[0::2] < 0) & (partner[1::2] < 0)
-    partner_list = partner.tolist()
-    visited = bytearray(alone.astype(np.uint8).tobytes())
-    walked: list[int] = []  # (piece << 1) | reversed
+    # entering a piece through half-end h, the walk leaves it through h ^ 1 for that one's partner
+    onward = partner[np.arange(len(partner)) ^ 1].tolist()
+    walked: list[int] = []  # (piece << 1) | reversed: entered through its end 1, walked backwards
     lengths: list[int] = []
-
-    def walk(h: int) -> None:
-        # leave through half-end h: the walk begins at that end of its piece
-        count = 0
-        while True:
-            s = h >> 1
-            if visited[s]:
-                break
-            visited[s] = 1
-            walked.append(h)  # starting at end 1 means walking the piece backwards
-            count += 1
-            h = partner_list[h ^ 1]
-            if h < 0:
-                break
-        lengths.append(count)
-
+    append = walked.append
+    # an open chain from the lower of its two free half-ends, to the other one
+    other_end = bytearray(len(partner))
     for h in np.flatnonzero((partner < 0) & ~np.repeat(alone, 2)).tolist():
-        if not visited[h >> 1]:
-            walk(h)
-    for s in np.flatnonzero(~alone).tolist():
-        if not visited[s]:
-            walk(s << 1)
+        if other_end[h]:
+            continue
+        first = len(walked)
+        while h >= 0:
+            append(h)
+            last = h
+            h = onward[h]
+        other_end[last ^ 1] = 1
+        lengths.append(len(walked) - first)
+    # what is left lies on closed loops, each walked from its lowest piece's start
+    on_chain = np.zeros(len(alone), bool)
+    on_chain[np.array(walked, np.int64) >> 1] = True
+    visited = bytearray(len(alone))
+    for piece in np.flatnonzero(~alone & ~on_chain).tolist():
+        if visited[piece]:
+            continue
+        first = len(walked)
+        start = h = piece << 1
+        while True:
+            append(h)
+            visited[h >> 1] = 1
+            h = onward[h]
+            if h == start:
+                break
+        lengths.append(len(walked) - first)
     flat = np.array(walked, np.int64)
     single = np.flatnonzero(alone)
     return (

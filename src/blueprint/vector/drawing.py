@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.blas import one_blas_thread
 from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
@@ -448,12 +449,14 @@ def draw_lines(
         segments = model_segments(
             model, frame.view, frame.projection, size, options.crease_angle, options.intersections, renderer
         )
+        # the faces' planes found beside the joining, whose chain walk holds one core
+        planes_found = parallel.begin(face_planes, model, frame.view)
         lines = join_polylines(segments)
         samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing)
         seconds["lines"] = time.perf_counter() - clock
 
         clock = time.perf_counter()
-        planes = face_planes(model, frame.view)
+        planes = planes_found()
     occlusion = _Occlusion(renderer, model, frame, samples, planes, options, layers, drawn)
     levels, count = occlusion.levels(clock, seconds)
     behind = None

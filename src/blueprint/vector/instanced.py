@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import row_norm
 from blueprint.errors import InputError
 from blueprint.scene.camera import transform
@@ -161,11 +162,33 @@ def _blocks(members: np.ndarray, rows: int):
         yield members[first : first + step]
 
 
+def _moved(linear: np.ndarray, points: np.ndarray, in_order: bool = False) -> np.ndarray:
+    """``linear @ point`` for (..., 3, 3) matrices and (..., 3) points, broadcast, in
+    whole-array products instead of einsum's slow small-axis loop, to the same float64 values
+    as ``einsum("...ij,...j->...i")``: einsum adds the first product and the last before the
+    middle one, and adds them first to last (``in_order``) where ``linear`` is a transposed
+    view."""
+    x, y, z = points[..., 0:1], points[..., 1:2], points[..., 2:3]
+    if in_order:
+        out = (linear[..., 0] * x + linear[..., 1] * y) + linear[..., 2] * z
+    else:
+        out = (linear[..., 0] * x + linear[..., 2] * z) + linear[..., 1] * y
+    # einsum's sums start at +0, which leaves no -0
+    return np.add(out, 0.0, out=out)
+
+
+def _dot3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(...,) the dot products of (..., 3) rows, the same float64 values as
+    ``einsum("...i,...i->...")`` (see ``_moved``)."""
+    out = (a[..., 0] * b[..., 0] + a[..., 2] * b[..., 2]) + a[..., 1] * b[..., 1]
+    return np.add(out, 0.0, out=out)
+
+
 def _placed(points: np.ndarray, transforms: np.ndarray) -> np.ndarray:
     """Points (K, ..., 3) placed each by its transform (K, 4, 4)."""
     shape = points.shape
     flat = points.reshape(len(points), int(np.prod(shape[1:-1], dtype=np.int64)), 3)
-    out = np.einsum("kij,kpj->kpi", transforms[:, :3, :3], flat) + transforms[:, None, :3, 3]
+    out = _moved(transforms[:, None, :3, :3], flat) + transforms[:, None, :3, 3]
     return out.reshape(shape)
 
 
@@ -265,15 +288,26 @@ def instanced_features(
     first_face = _starts(inst.instance_faces())
     q_all, sign_all = _view_in_meshes(inst, view, projection)
     tests = _Tests(view, projection, size, smooth, edge_on_cos, edge_on_smooth_cos, outlines)
-    found = _Found(*([] for _ in range(16)))
+    tasks = []
     for m, members in inst.by_mesh():
         ml = meshes[m]
         if len(ml.adj.faces) == 0:
             continue
         at_angle = ml.at_angle(crease_angle, smooth_angle)
         rows = max(len(ml.adj.edges), len(ml.adj.faces), len(ml.adj.positions))
-        for block in _blocks(members, rows):
-            _block_features(ml, block, q_all[block], sign_all[block], at_angle, tests, inst, found)
+        tasks += [(ml, block, at_angle) for block in _blocks(members, rows)]
+
+    def features(task) -> _Found:
+        ml, block, at_angle = task
+        found = _Found(*([] for _ in range(16)))
+        _block_features(ml, block, q_all[block], sign_all[block], at_angle, tests, inst, found)
+        return found
+
+    # the blocks side by side, what each found joined in the blocks' order
+    found = _Found(*([] for _ in range(16)))
+    for one in parallel.each(features, tasks):
+        for name in _Found.__dataclass_fields__:
+            getattr(found, name).extend(getattr(one, name))
     return _assembled(found, inst, first_vertex, first_edge, first_face, view, projection, size)
 
 
@@ -496,6 +530,8 @@ def instanced_face_planes(model: Model, view: np.ndarray) -> np.ndarray:
     inst = model.instances
     first_face = _starts(inst.instance_faces())
     planes = np.zeros((int(first_face[-1]) + 1, 4))
+    view = np.asarray(view, np.float64)
+    tasks = []
     for m, members in inst.by_mesh():
         vertices, faces = inst.mesh_arrays(m)
         if not len(faces):
@@ -503,24 +539,30 @@ def instanced_face_planes(model: Model, view: np.ndarray) -> np.ndarray:
         corners = vertices[faces]
         cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         good = row_norm(cross) > 0
-        for block in _blocks(members, len(faces)):
-            moved = np.asarray(view, np.float64)[None] @ inst.transform[block]  # (B, 4, 4)
-            linear = moved[:, :3, :3]
-            # normals move by the cofactors: they stay square to the moved faces, mirrors too
-            cofactor = np.linalg.det(linear)[:, None, None] * np.linalg.inv(
-                np.where((np.abs(np.linalg.det(linear)) > 1e-300)[:, None, None], linear, np.eye(3))
-            ).transpose(0, 2, 1)
-            normal = np.einsum("bij,fj->bfi", cofactor, cross)
-            length = np.linalg.norm(normal, axis=2)
-            normal = np.where(
-                (length > 0)[..., None] & good[None, :, None],
-                normal / np.maximum(length, 1e-300)[..., None],
-                0.0,
-            )
-            corner = np.einsum("bij,fj->bfi", linear, corners[:, 0]) + moved[:, None, :3, 3]
-            rows = first_face[block][:, None] + np.arange(len(faces))
-            planes[rows, :3] = normal
-            planes[rows, 3] = np.einsum("bfi,bfi->bf", normal, corner)
+        tasks += [(corners, cross, good, block) for block in _blocks(members, len(faces))]
+
+    def place(task) -> None:
+        # each block writes its own instances' rows
+        corners, cross, good, block = task
+        moved = view[None] @ inst.transform[block]  # (B, 4, 4)
+        linear = moved[:, :3, :3]
+        # normals move by the cofactors: they stay square to the moved faces, mirrors too
+        cofactor = np.linalg.det(linear)[:, None, None] * np.linalg.inv(
+            np.where((np.abs(np.linalg.det(linear)) > 1e-300)[:, None, None], linear, np.eye(3))
+        ).transpose(0, 2, 1)
+        normal = _moved(cofactor[:, None], cross[None], in_order=True)
+        length = np.linalg.norm(normal, axis=2)
+        normal = np.where(
+            (length > 0)[..., None] & good[None, :, None],
+            normal / np.maximum(length, 1e-300)[..., None],
+            0.0,
+        )
+        corner = _moved(linear[:, None], corners[None, :, 0]) + moved[:, None, :3, 3]
+        rows = first_face[block][:, None] + np.arange(len(corners))
+        planes[rows, :3] = normal
+        planes[rows, 3] = _dot3(normal, corner)
+
+    parallel.each(place, tasks)
     return planes
 
 

@@ -30,7 +30,7 @@ from blueprint.silhouette import (
     smooth_contours,
     smooth_surface,
 )
-from blueprint.sorting import stable_argsort, unique_first
+from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
 
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
@@ -1087,15 +1087,28 @@ def model_segments(
 
 
 def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
-    """Ids of points equal after rounding to ``quantum`` (one packed integer key per point)."""
+    """Ids of points equal after rounding to ``quantum``: each point's rank among the distinct
+    rounded points (one packed integer key per point, as ``np.unique``'s inverse)."""
     if len(points) == 0:
         return np.zeros(0, np.int64)
     q = np.round((points - column_min(points)) / quantum).astype(np.int64)
     span = column_max(q) + 1
     if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
         key = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
-        return np.unique(key, return_inverse=True)[1].reshape(-1)
+        return _ranks(*sorted_with_order(key, overwrite=True))
     return np.unique(q, axis=0, return_inverse=True)[1].reshape(-1)
+
+
+def _ranks(ordered: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """Each key's rank among the distinct keys, from the keys sorted and their order."""
+    if len(ordered) == 0:
+        return np.zeros(0, np.int64)
+    new = np.empty(len(ordered), np.int64)
+    new[0] = 0
+    np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
+    ranks = np.empty(len(ordered), np.int64)
+    ranks[order] = np.cumsum(new)
+    return ranks
 
 
 def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
@@ -1123,9 +1136,11 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     pid = _point_ids(points, quantum).reshape(n, 2)
     # the same segment twice (an edge that is both a crease and a part boundary, ...): keep one
     lo, hi = np.minimum(pid[:, 0], pid[:, 1]), np.maximum(pid[:, 0], pid[:, 1])
-    proper = lo != hi
-    _, first, _ = unique_first((lo * (int(pid.max()) + 1) + hi)[proper])
-    keep = np.flatnonzero(proper)[np.sort(first)]
+    proper = np.flatnonzero(lo != hi)
+    first = unique_first(lo[proper] * (int(pid.max()) + 1) + hi[proper])[1]
+    chosen = np.zeros(len(proper), bool)
+    chosen[first] = True  # marked, not sorted: the kept segments stay in their order
+    keep = proper[chosen]
     seg_points = segments.points[keep]
     seg_faces = segments.faces[keep]
     seg_kind = segments.kind[keep]
@@ -1134,16 +1149,21 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     seg_part = segments.part[keep].astype(np.int64)
     pid = pid[keep]
     n = len(keep)
-    # nodes: a point within one part
-    node_key = np.repeat(seg_part, 2) * (int(pid.max()) + 1) + pid.reshape(-1)
-    node = unique_first(node_key)[2]
-    # half-end h = 2 s + e is segment s's end e (0: start, 1: end)
-    leaving = seg_points[:, ::-1] - seg_points
-    leaving = leaving.reshape(-1, 3) / np.maximum(row_norm(leaving.reshape(-1, 3)), 1e-300)[:, None]
-    partner = pair_ends(node, leaving, np.cos(np.radians(turn)))
+    # nodes: a point within one part, numbered by point then part; the sort's order is the one
+    # ``pair_ends`` walks the nodes in
+    ordered, by_node = sorted_with_order(pid.reshape(-1) * (int(seg_part.max()) + 1) + np.repeat(seg_part, 2))
+    node = _ranks(ordered, by_node)
+    # half-end h = 2 s + e is segment s's end e (0: start, 1: end); a segment leaves its end
+    # as its start leaves backwards
+    ahead = seg_points[:, 1] - seg_points[:, 0]
+    ahead /= np.maximum(row_norm(ahead), 1e-300)[:, None]
+
+    def leaving(h: np.ndarray) -> np.ndarray:
+        direction = ahead[h >> 1]
+        return np.where((h & 1)[:, None] == 1, -direction, direction)
+
+    partner = pair_ends(node, leaving, np.cos(np.radians(turn)), by_node)
     seg, rev, lengths = chain_order(partner)
-    tails = np.where(rev[:, None, None], seg_points[seg][:, ::-1], seg_points[seg])  # (K, 2, 3)
-    faces = seg_faces[seg]
     # points of chain c: the first segment's start, then every segment's end
     chain_start = np.cumsum(lengths) - lengths
     out_len = lengths + 1
@@ -1154,12 +1174,15 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     out_edge = np.full(offsets[-1], -1, np.int64)
     chain_of = np.repeat(np.arange(len(lengths)), lengths)
     slot = offsets[chain_of] + (np.arange(len(seg)) - chain_start[chain_of])
-    out_points[slot] = tails[:, 0]
-    out_faces[slot] = faces
+    flat_points = seg_points.reshape(-1, 3)
+    # a segment walked backwards starts at its second point
+    out_points[slot] = flat_points[2 * seg + rev]
+    out_faces[slot] = seg_faces[seg]
     out_kind[slot] = seg_kind[seg]
     # a segment walked backwards starts on its second point's edge
     out_edge[slot] = np.where(rev, seg_edge_end[seg], seg_edge[seg])
-    out_points[offsets[1:] - 1] = tails[chain_start + lengths - 1, 1]
+    last = seg[chain_start + lengths - 1]
+    out_points[offsets[1:] - 1] = flat_points[2 * last + 1 - rev[chain_start + lengths - 1]]
     return Polylines(
         out_points,
         offsets.astype(np.int64),

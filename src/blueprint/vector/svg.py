@@ -272,7 +272,7 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
     if not groups:
         return out[0] + "</g>\n"
     # within a path its lines by their lowest edge: the edges' differences stay small
-    index = np.concatenate([_by_lowest_edge(lines, g[3]) for g in groups])
+    index = _by_lowest_edge(lines, [g[3] for g in groups])
     lengths = lines.offsets[index + 1] - lines.offsets[index]
     sub_offsets = np.r_[0, np.cumsum(lengths)]
     rows = np.repeat(lines.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
@@ -281,6 +281,9 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
     texts = paths_data(lines.points[rows], sub_offsets, bounds, factor, 0, drawn, relative=True)
     edge_lists = edge_texts(lines, index[drawn], np.r_[0, np.cumsum(drawn)][bounds])
     current = None
+    # a stroke is the same for every path of one kind, level and highlight: written once
+    strokes: dict[tuple[int, bool], tuple[LineStyle, str]] = {}
+    changes: dict[tuple[int, int, bool], str] = {}
     for g, ((part, kind, level, _), d) in enumerate(zip(groups, texts, strict=True)):
         if not d:
             continue
@@ -298,10 +301,16 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
             out.append("</g>\n")
         if current is None or current != (part, level):
             # the level's stroke is its outlines' (ISO 128's wide lines): most lines are those
-            shared = style.line("silhouette", level, highlighted)
-            out.append(f'<g class="level-{level}" data-level="{level}" {_stroke(shared, base)}>\n')
+            if (level, highlighted) not in strokes:
+                shared = style.line("silhouette", level, highlighted)
+                strokes[level, highlighted] = shared, _stroke(shared, base)
+            shared, stroke = strokes[level, highlighted]
+            out.append(f'<g class="level-{level}" data-level="{level}" {stroke}>\n')
             current = (part, level)
-        own = _stroke_changes(style.line(kind, level, highlighted), shared, base)
+        if (kind, level, highlighted) not in changes:
+            line = style.line(kind, level, highlighted)
+            changes[kind, level, highlighted] = _stroke_changes(line, shared, base)
+        own = changes[kind, level, highlighted]
         edges = f' data-edges="{edge_lists[g]}"' if edge_lists[g] else ""
         out.append(f'<path data-kind="{KINDS[kind]}"{own}{edges} d="{d}"/>\n')
     if current is not None:
@@ -310,15 +319,18 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
     return "".join(out)
 
 
-def _by_lowest_edge(lines: Lines, index: np.ndarray) -> np.ndarray:
-    """The lines ``index`` ordered by their lowest source edge, those without edges first."""
-    values, owner = _edges_of(lines, index)
+def _by_lowest_edge(lines: Lines, groups: list[np.ndarray]) -> np.ndarray:
+    """The lines of every group (an array of line indices each), group after group, each
+    group's ordered by their lowest source edge, those without edges first."""
+    index = np.concatenate(groups)
+    group = np.repeat(np.arange(len(groups)), [len(g) for g in groups])
+    size = lines.edge_offsets[index + 1] - lines.edge_offsets[index]
     lowest = np.full(len(index), -1, np.int64)
-    if len(values):
-        order = np.lexsort((values, owner))
-        first = order[np.r_[True, owner[order][1:] != owner[order][:-1]]]
-        lowest[owner[first]] = values[first]
-    return index[np.argsort(lowest, kind="stable")]
+    has = np.flatnonzero(size > 0)
+    if len(has):
+        values, _ = _edges_of(lines, index[has])
+        lowest[has] = np.minimum.reduceat(values, np.cumsum(size[has]) - size[has])
+    return index[np.lexsort((lowest, group))]
 
 
 def _edges_of(lines: Lines, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

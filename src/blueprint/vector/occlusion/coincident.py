@@ -252,21 +252,13 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     (``dist2`` the distance squared): the search's arrays laid out as the shader's inputs, two
     storage buffers, then its tables (``_TABLES``)."""
     s, live, source = search, search.live, search.source
-    inputs = [
-        np.concatenate([s.pixel32[live], s.direction[live]], axis=1),
-        np.stack([s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count], axis=1),
-        np.concatenate([s.pixel32[source], s.forward32[source]], axis=1),
-        np.stack(
-            [
-                s.unit32[source, 0],
-                s.unit32[source, 1],
-                s.inv_length2[source],
-                np.zeros(len(source), np.float32),
-            ],
-            axis=1,
-        ),
-        np.stack([s.src_bin * s.ranks + s.rank[source], s.line[source]], axis=1),
-        np.stack([s.cell_start, s.cell_count], axis=1),
+    singles = [
+        _columns(np.float32, s.pixel32[live], s.direction[live]),
+        _columns(np.int32, s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count),
+        _columns(np.float32, s.pixel32[source], s.forward32[source]),
+        _columns(np.float32, s.unit32[source], s.inv_length2[source], np.float32(0.0)),
+        _columns(np.int32, s.src_bin * s.ranks + s.rank[source], s.line[source]),
+        _columns(np.int32, s.cell_start, s.cell_count),
     ]
     count = len(live)
     renderer.make_current()
@@ -280,9 +272,6 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     put(prog, "u_budget", BUDGET)
     put(prog, "u_distance2", float(dist2))
     put(prog, "u_sin_limit", float(sin_limit))
-    singles = [
-        np.ascontiguousarray(data, np.int32 if data.dtype.kind in "iu" else np.float32) for data in inputs
-    ]
     buffers = [ctx.buffer(data) for data in singles[:2]]
     buffers.append(ctx.buffer(reserve=4 * count))
     tables = [table_texture(ctx, data) for data in singles[2:]]
@@ -302,3 +291,17 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
             buffer.release()
         for texture in tables:
             texture.release()
+
+
+def _columns(dtype, *columns) -> np.ndarray:
+    """(N, K) array of ``dtype`` whose columns are ``columns`` side by side (each (N,), (N, k)
+    or a scalar), each cast as it is written: one array, no wider copy first."""
+    rows = next(len(c) for c in columns if np.ndim(c))
+    width = sum(1 if np.ndim(c) < 2 else c.shape[1] for c in columns)
+    out = np.empty((rows, width), dtype)
+    at = 0
+    for column in columns:
+        k = 1 if np.ndim(column) < 2 else column.shape[1]
+        out[:, at : at + k] = column if np.ndim(column) == 2 else np.reshape(column, (-1, 1))
+        at += k
+    return out

@@ -8,8 +8,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.columns import row_norm
-
 from ..lines import BORDER, CREASE, SILHOUETTE
 from .samples import Samples
 
@@ -86,16 +84,9 @@ def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -
 
 def across_line(samples: Samples, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The rows whose line has a screen direction there (from the neighbouring samples on the
-    same line), and the unit vectors across it."""
-    line, pixel = samples.line, samples.pixel
+    same line), and the unit vectors across it (``Samples.across``)."""
     if len(rows) == 0:
         return rows, np.zeros((0, 2))
-    nxt = np.minimum(rows + 1, len(line) - 1)
-    prv = np.maximum(rows - 1, 0)
-    ahead = np.where((line[nxt] == line[rows])[:, None], pixel[nxt], pixel[rows])
-    behind = np.where((line[prv] == line[rows])[:, None], pixel[prv], pixel[rows])
-    tangent = ahead - behind
-    length = row_norm(tangent)
-    good = length > 0
-    rows, tangent = rows[good], tangent[good] / length[good, None]
-    return rows, np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+    good, across = samples.across
+    rows = rows[good[rows]]
+    return rows, across[rows]

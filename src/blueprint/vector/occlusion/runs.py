@@ -26,16 +26,24 @@ def _run_lengths(level, line, along):
     """Runs of one level along each polyline: start (inclusive), end (exclusive) and length in
     pixels, from halfway to the previous sample to halfway to the next one (the polyline's own
     ends where there is none); ``along`` from :func:`_along`."""
+    start, end, lo, hi = _runs(level, line, along)
+    return start, end, hi - lo
+
+
+def _runs(level, line, along):
+    """``_run_lengths``' start and end of every run, and where its pixels begin and end."""
     n = len(level)
     change = np.r_[True, (line[1:] != line[:-1]) | (level[1:] != level[:-1])]
     start = np.flatnonzero(change)
     end = np.r_[start[1:], n]
     lo = np.where(start > 0, 0.5 * (along[start - 1] + along[start]), along[start])
     hi = np.where(end < n, 0.5 * (along[end - 1] + along[end]), along[end - 1])
-    return start, end, hi - lo
+    return start, end, lo, hi
 
 
-def _smooth(level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: float) -> np.ndarray:
+def _smooth(
+    level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: float, along: np.ndarray | None = None
+) -> np.ndarray:
     """Hysteresis along each polyline: a level holds until another one has lasted ``min_run``
     pixels. Runs shorter than that (flicker where surfaces nearly coincide, a line's last pixel
     seeing past an outline) take a neighbour's level, the shortest runs first.
@@ -43,18 +51,18 @@ def _smooth(level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: flo
     Each round merges every short run whose length is a local minimum among its polyline's runs
     into the longer of its neighbours (the one of equal level where both are equal), so a
     staircase of short runs collapses from its shortest step outward and two runs never trade
-    places. Samples outside the view (level -1) neither take nor give a level.
+    places. Samples outside the view (level -1) neither take nor give a level. The rounds work
+    on the runs, not the samples: runs of one line that come to one level join. ``along``:
+    ``_along(line, pixel)``, where the caller has it.
     """
-    level = level.copy()
     n = len(level)
     if n < 2 or min_run <= 0:
-        return level
-    along = _along(line, pixel)
-    while True:
-        start, end, length = _run_lengths(level, line, along)
-        if len(start) < 2:
-            break
-        run_line, run_level = line[start], level[start]
+        return level.copy()
+    along = _along(line, pixel) if along is None else along
+    start, end, lo, hi = _runs(level, line, along)
+    length = hi - lo
+    run_line, run_level = line[start], level[start]
+    while len(start) >= 2:
         has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
         has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
         short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
@@ -71,17 +79,22 @@ def _smooth(level: np.ndarray, line: np.ndarray, pixel: np.ndarray, min_run: flo
         prev_level = np.r_[-1, run_level[:-1]]
         next_level = np.r_[run_level[1:], -1]
         take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
-        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
-        level = np.repeat(target, end - start).astype(level.dtype)
-    return level
+        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level).astype(level.dtype)
+        # a joined run begins where its first run began and ends where its last one ended
+        first = np.r_[True, (run_line[1:] != run_line[:-1]) | (target[1:] != target[:-1])]
+        last = np.r_[first[1:], True]
+        start, lo, run_line, run_level = start[first], lo[first], run_line[first], target[first]
+        end, hi = end[last], hi[last]
+        length = hi - lo
+    return np.repeat(run_level, end - start).astype(level.dtype)
 
 
-def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float) -> np.ndarray:
+def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float, along: np.ndarray) -> np.ndarray:
     """Leave out runs shorter than ``min_run`` pixels that border a left-out stretch of their
     own polyline (a coincident line or an edge that is no edge, level -1 inside the view): what
     a pixel test could not decide at the ends of such a stretch. A short line of its own, or
-    one running out of the view, stays."""
-    start, end, length = _run_lengths(level, samples.line, _along(samples.line, samples.pixel))
+    one running out of the view, stays; ``along`` as ``_along`` of the samples."""
+    start, end, length = _run_lengths(level, samples.line, along)
     run_line, run_level = samples.line[start], level[start]
     left_out = (run_level < 0) & samples.inside[start]
     before = np.r_[False, (run_line[1:] == run_line[:-1]) & left_out[:-1]]
@@ -117,18 +130,19 @@ def split_by_level(
     n = len(level)
     if n == 0:
         return Lines.empty()
+    along = _along(samples.line, samples.pixel)
     behind = (
         np.zeros(n, bool)
         if behind is None
-        else _smooth(behind.astype(np.int32), samples.line, samples.pixel, min_run) > 0
+        else _smooth(behind.astype(np.int32), samples.line, samples.pixel, min_run, along) > 0
     )
-    level = _smooth(level, samples.line, samples.pixel, min_run)
+    level = _smooth(level, samples.line, samples.pixel, min_run, along)
     level = np.where(level <= max_level, level, -1)
     if coincident > 0:
         level = suppress_coincident(samples, level, coincident, renderer=renderer)
         # a left-out stretch can end inside a run and leave a sliver of it beside another level
-        level = _smooth(level, samples.line, samples.pixel, min_run)
-    level = _drop_slivers(level, samples, min_run)
+        level = _smooth(level, samples.line, samples.pixel, min_run, along)
+    level = _drop_slivers(level, samples, min_run, along)
     line, pixel = samples.line, samples.pixel
     keep = (level >= 0) & (level <= max_level)
     # runs: consecutive samples of one line with one level (and one side of the shading)

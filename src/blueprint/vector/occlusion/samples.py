@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +37,26 @@ class Samples:
     line: np.ndarray
     vertex: np.ndarray
     inside: np.ndarray
+
+    @functools.cached_property
+    def across(self) -> tuple[np.ndarray, np.ndarray]:
+        """(S,) bool: whether each sample's line has a screen direction there (from the
+        neighbouring samples on the same line), and (S, 2) float64 the unit vector across it
+        (0 where none); found once for the several tests that look to either side."""
+        line, pixel = self.line, self.pixel
+        ahead, behind = pixel.copy(), pixel.copy()
+        same = (line[1:] == line[:-1])[:, None]
+        np.copyto(ahead[:-1], pixel[1:], where=same)
+        np.copyto(behind[1:], pixel[:-1], where=same)
+        tangent = np.subtract(ahead, behind, out=ahead)
+        length = row_norm(tangent)
+        good = length > 0
+        unit = np.divide(tangent, length[:, None], out=behind, where=good[:, None])
+        unit[~good] = 0.0
+        across = np.empty_like(pixel)
+        np.negative(unit[:, 1], out=across[:, 0])
+        across[:, 1] = unit[:, 0]
+        return good, across
 
 
 def sample_polylines(
@@ -76,31 +97,23 @@ def sample_polylines(
     length = np.where((w[starts] > 0) & (w[starts + 1] > 0) & np.isfinite(length), length, 0.0)
     count = np.maximum(np.ceil(length / spacing), 1).astype(np.int64)
     count = np.minimum(count, 1 << 16)
-    seg = np.repeat(starts, count)
-    k = np.arange(len(seg)) - np.repeat(np.cumsum(count) - count, count)
-    t = k / np.repeat(count, count)
-    model = points[seg] + t[:, None] * (points[seg + 1] - points[seg])
-    faces = lines.faces[seg]
-    kind = lines.kind[seg]
-    edge = lines.edge[seg]
+    # the samples in their final order, point after point: a segment's samples from its first
+    # point, a polyline's last point as one sample of its own after them
+    per_point = np.ones(len(points), np.int64)
+    per_point[starts] = count
+    at = np.repeat(np.arange(len(points)), per_point)
+    k = np.arange(len(at)) - np.repeat(np.cumsum(per_point) - per_point, per_point)
+    t = k / np.repeat(per_point, per_point)
+    ahead = np.minimum(at + 1, len(points) - 1)
+    model = points[at] + t[:, None] * (points[ahead] - points[at])
+    last_rows = np.cumsum(per_point)[offsets[1:] - 1] - 1
+    model[last_rows] = points[offsets[1:] - 1]
+    # a last point has the attributes of the segment before it
+    source = at.copy()
+    source[last_rows] -= 1
+    faces, kind, edge = lines.faces[source], lines.kind[source], lines.edge[source]
     vertex = k == 0
-    # each polyline's last point, inserted after its last segment's samples
-    lasts = offsets[1:] - 1
-    model = np.concatenate([model, points[lasts]])
-    faces = np.concatenate([faces, lines.faces[np.maximum(lasts - 1, 0)]])
-    kind = np.concatenate([kind, lines.kind[np.maximum(lasts - 1, 0)]])
-    edge = np.concatenate([edge, lines.edge[np.maximum(lasts - 1, 0)]])
-    vertex = np.concatenate([vertex, np.ones(len(lasts), bool)])
-    # a polyline's samples run in order, its last point after them: where each one goes
-    seg_line = line_of_point[seg]
-    per_line = np.bincount(seg_line, minlength=len(lines))
-    out_first = np.cumsum(per_line + 1) - (per_line + 1)
-    within = np.arange(len(seg)) - (np.cumsum(per_line) - per_line)[seg_line]
-    order = np.empty(len(seg) + len(lasts), np.int64)
-    order[np.concatenate([out_first[seg_line] + within, out_first + per_line])] = np.arange(len(order))
-    line = np.concatenate([seg_line, np.arange(len(lines))])
-    model, faces, vertex, line = model[order], faces[order], vertex[order], line[order]
-    kind, edge = kind[order], edge[order]
+    line = line_of_point[at]
     eye = transform(model, view)
     clip = eye @ projection.T
     inside = (
