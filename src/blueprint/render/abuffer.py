@@ -15,6 +15,8 @@ raises ``Overflow``: its caller draws the frame again, with the room now known.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory
@@ -222,7 +224,8 @@ class ABufferSource:
             return 0  # every layer was captured at layer 0, and none is unpacked
         drawn = self._draw(gb, layer)
         if drawn is not None:
-            gb.flat = self.flat(gb.size)
+            # layers left in the lists have no depth target to fill: made only where one is read
+            gb.flat = self.flat(gb.size) if self.unpacks else functools.partial(self.flat, gb.size)
         return drawn
 
     def samples(self, layer: int, query=None) -> int:
@@ -267,14 +270,15 @@ class ABufferSource:
         pass that reads the layers from them; returns two cursor images and the layer counts:
         the first cursor holds each pixel's layer 0 (the resolve's), the second is free for a
         pass to leave where each pixel's chain goes on; the counts image holds each pixel's
-        layers."""
+        layers. The second cursor is the lists' heads, which nothing reads once the resolve has
+        sorted them, and the next capture clears."""
         name = f"abuffer.{size[0]}x{size[1]}"
         self.r.ctx.memory_barrier()
         self._buffers(name)
         pool = self.r.pool
         return (
             pool.texture(f"{name}.cursor", size, "r32ui"),
-            pool.texture(f"{name}.cursor.next", size, "r32ui"),
+            pool.texture(f"{name}.head", size, "r32ui"),
             pool.texture(f"{name}.layer_count", size, "r32ui"),
         )
 
