@@ -1,20 +1,24 @@
 """What a frame holds on the GPU: the G-buffer's targets are made when first used, so a capture
 that leaves its layers where it found them (an A-buffer's lists, a k-buffer's surfaces read in
 place) holds none of them, nor the A-buffer's depth targets; its readers' second cursor is the
-lists' heads; and the memory guard (``budget.frame_bytes``) counts at least what each way of
-capturing holds, summed from the pool's own record of every target and buffer."""
+lists' heads; the memory guard (``budget.frame_bytes``) counts at least what each way of
+capturing holds, summed from the pool's own record of every target and buffer; and the first
+lists of a scene kept as instances are sized by the fragments its placed faces foretell."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 from capture_helpers import one_way
+from instanced_scenes import flattened, mixed_scene
 
 import blueprint
 from blueprint.examples import gearbox
 from blueprint.gpu.targets import FORMATS, INTERNAL_FORMATS
-from blueprint.render import budget
+from blueprint.render import abuffer, budget
+from blueprint.render.abuffer import placed_fragments, projected_fragments
 from blueprint.render.gbuffer import gbuffer
+from blueprint.scene.camera import fit_camera
 
 CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
 
@@ -112,3 +116,50 @@ def test_a_frame_holds_its_ways_targets_alone(renderer, way, max_layers, size, h
     need = budget.frame_bytes(0, size[0] * size[1], max_layers, table.max_bytes if table else None)
     holding = sum(target_bytes(key) for key in held.values()) + sum(frame_buffers(pool, size).values())
     assert 0 < holding <= need["gbuffers"] + need["lists"]
+
+
+def test_placed_fragments_are_the_flattened_scenes(monkeypatch):
+    """The fragments foretold of a scene kept as instances are those of its flattened twin,
+    whatever the block of faces placed at a time (one block, and blocks that cut instances
+    apart); None where a corner lies behind the eye."""
+    model = mixed_scene()
+    twin = flattened(mixed_scene())
+    size = (160, 120)
+    camera = fit_camera(twin, size)
+    expected = projected_fragments(twin.positions, twin.faces, camera, size)
+    assert expected > 0
+    assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
+    monkeypatch.setattr(abuffer, "AREA_BLOCK", 7)
+    assert len(twin.faces) > 7 * 3
+    assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
+    inside = blueprint.Camera(eye=(0, 0, 0), target=(0, 0, -1), up=(0, 1, 0), near=0.01, far=9)
+    assert placed_fragments(model.instances, inside, size) is None
+    assert not model.is_flat
+
+
+def test_a_scene_kept_as_instances_starts_with_the_room_its_fragments_foretell(renderer, monkeypatch):
+    """On a software rasteriser the first lists of a scene kept as instances hold the
+    fragments foretold (``placed_fragments``) with a counted room's spare, the scene never
+    flattened; one geometry pass holds them."""
+    if renderer.ctx.version_code < 430 or not renderer.device.software:
+        pytest.skip("the lists live in the host's memory on a software rasteriser alone")
+    model = mixed_scene()
+    size = (144, 104)
+    camera = fit_camera(model, size)
+    renderer.abuffer_room.pop(size, None)
+    foretold = placed_fragments(model.instances, camera, size)
+    assert foretold < abuffer.FIRST_ROOM * size[0] * size[1]
+    rooms = []
+    buffers = abuffer.ABufferSource._buffers
+
+    def listed(self, name, room=None):
+        rooms.append(room)
+        return buffers(self, name, room)
+
+    monkeypatch.setattr(abuffer.ABufferSource, "_buffers", listed)
+    with one_way(renderer, "a-buffer", abuffer=lambda row: row):
+        renderer.peel(model, camera, size=size, max_layers=None)
+    assert [r for r in rooms if r is not None] == [abuffer.spare_room(foretold)]
+    drawn = (renderer.abuffer_room[size] - 1024) / 1.25
+    assert drawn == pytest.approx(foretold, rel=0.02)
+    assert not model.is_flat

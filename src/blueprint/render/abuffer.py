@@ -204,13 +204,16 @@ class ABufferSource:
         """The room a capture at ``size`` starts with: the last one's there (``_room``), else,
         where the lists live in the host's memory (a software rasteriser's images), the
         fragments the faces' areas on the picture foretell, with a counted room's spare, up to
-        ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers. A model kept as
-        instances starts with the whole room: foretelling would flatten it."""
+        ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers; of a model kept
+        as instances, each instance's faces placed a block at a time, never flattened."""
         room = self._room(size)
-        if tuple(size) in self.rooms or not self.images or self.model is None or not self.model.is_flat:
+        if tuple(size) in self.rooms or not self.images or self.model is None:
             return room
         model = self.model
-        foretold = projected_fragments(model.positions, model.faces, self.camera, size)
+        if model.is_flat:
+            foretold = projected_fragments(model.positions, model.faces, self.camera, size)
+        else:
+            foretold = placed_fragments(model.instances, self.camera, size)
         return room if foretold is None else min(room, spare_room(foretold))
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
@@ -513,6 +516,39 @@ def projected_fragments(
         twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
         total += float(np.abs(twice).sum(dtype=np.float64))
     # normalised device coordinates span 2 a side: a pixel is (2 / w) by (2 / h) of them
+    return total / 2 * size[0] * size[1] / 4
+
+
+def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float | None:
+    """``projected_fragments`` of the scene ``instances`` (``scene.instances.Instances``) place:
+    each instance's faces through its transform, ``AREA_BLOCK`` faces of the flattened scene at
+    a time, so that no more than a block's corners are ever placed at once."""
+    rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
+    # each instance's rows from its mesh's coordinates to clip x, y and w: (N, 3, 4)
+    placed = np.einsum("ij,njk->nik", rows, instances.transform)
+    turn = np.ascontiguousarray(placed[:, :, :3].transpose(0, 2, 1)).astype(np.float32)
+    shift = placed[:, :, 3].astype(np.float32)
+    counts = instances.instance_faces()
+    ends = np.cumsum(counts)
+    starts = ends - counts
+    face_start, vertex_start = instances.face_start[instances.mesh], instances.vertex_start[instances.mesh]
+    total = 0.0
+    for start in range(0, int(ends[-1]) if len(ends) else 0, AREA_BLOCK):
+        flat = np.arange(start, min(start + AREA_BLOCK, int(ends[-1])))
+        inst = np.searchsorted(ends, flat, side="right")
+        face = face_start[inst] + (flat - starts[inst])
+        corners = instances.faces[face] + vertex_start[inst][:, None]
+        block_turn, block_shift = turn[inst], shift[inst]
+        projected = []
+        for k in range(3):
+            position = instances.positions[corners[:, k]].astype(np.float32)
+            clip = np.einsum("bi,bij->bj", position, block_turn) + block_shift
+            if not (clip[:, 2] > 0).all():
+                return None
+            projected.append((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]))
+        (x0, y0), (x1, y1), (x2, y2) = projected
+        twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+        total += float(np.abs(twice).sum(dtype=np.float64))
     return total / 2 * size[0] * size[1] / 4
 
 
