@@ -15,6 +15,8 @@ raises ``Overflow``: its caller draws the frame again, with the room now known.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory
@@ -202,13 +204,16 @@ class ABufferSource:
         """The room a capture at ``size`` starts with: the last one's there (``_room``), else,
         where the lists live in the host's memory (a software rasteriser's images), the
         fragments the faces' areas on the picture foretell, with a counted room's spare, up to
-        ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers. A model kept as
-        instances starts with the whole room: foretelling would flatten it."""
+        ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers; of a model kept
+        as instances, each instance's faces placed a block at a time, never flattened."""
         room = self._room(size)
-        if tuple(size) in self.rooms or not self.images or self.model is None or not self.model.is_flat:
+        if tuple(size) in self.rooms or not self.images or self.model is None:
             return room
         model = self.model
-        foretold = projected_fragments(model.positions, model.faces, self.camera, size)
+        if model.is_flat:
+            foretold = projected_fragments(model.positions, model.faces, self.camera, size)
+        else:
+            foretold = placed_fragments(model.instances, self.camera, size)
         return room if foretold is None else min(room, spare_room(foretold))
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
@@ -222,7 +227,8 @@ class ABufferSource:
             return 0  # every layer was captured at layer 0, and none is unpacked
         drawn = self._draw(gb, layer)
         if drawn is not None:
-            gb.flat = self.flat(gb.size)
+            # layers left in the lists have no depth target to fill: made only where one is read
+            gb.flat = self.flat(gb.size) if self.unpacks else functools.partial(self.flat, gb.size)
         return drawn
 
     def samples(self, layer: int, query=None) -> int:
@@ -267,14 +273,15 @@ class ABufferSource:
         pass that reads the layers from them; returns two cursor images and the layer counts:
         the first cursor holds each pixel's layer 0 (the resolve's), the second is free for a
         pass to leave where each pixel's chain goes on; the counts image holds each pixel's
-        layers."""
+        layers. The second cursor is the lists' heads, which nothing reads once the resolve has
+        sorted them, and the next capture clears."""
         name = f"abuffer.{size[0]}x{size[1]}"
         self.r.ctx.memory_barrier()
         self._buffers(name)
         pool = self.r.pool
         return (
             pool.texture(f"{name}.cursor", size, "r32ui"),
-            pool.texture(f"{name}.cursor.next", size, "r32ui"),
+            pool.texture(f"{name}.head", size, "r32ui"),
             pool.texture(f"{name}.layer_count", size, "r32ui"),
         )
 
@@ -509,6 +516,39 @@ def projected_fragments(
         twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
         total += float(np.abs(twice).sum(dtype=np.float64))
     # normalised device coordinates span 2 a side: a pixel is (2 / w) by (2 / h) of them
+    return total / 2 * size[0] * size[1] / 4
+
+
+def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float | None:
+    """``projected_fragments`` of the scene ``instances`` (``scene.instances.Instances``) place:
+    each instance's faces through its transform, ``AREA_BLOCK`` faces of the flattened scene at
+    a time, so that no more than a block's corners are ever placed at once."""
+    rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
+    # each instance's rows from its mesh's coordinates to clip x, y and w: (N, 3, 4)
+    placed = np.einsum("ij,njk->nik", rows, instances.transform)
+    turn = np.ascontiguousarray(placed[:, :, :3].transpose(0, 2, 1)).astype(np.float32)
+    shift = placed[:, :, 3].astype(np.float32)
+    counts = instances.instance_faces()
+    ends = np.cumsum(counts)
+    starts = ends - counts
+    face_start, vertex_start = instances.face_start[instances.mesh], instances.vertex_start[instances.mesh]
+    total = 0.0
+    for start in range(0, int(ends[-1]) if len(ends) else 0, AREA_BLOCK):
+        flat = np.arange(start, min(start + AREA_BLOCK, int(ends[-1])))
+        inst = np.searchsorted(ends, flat, side="right")
+        face = face_start[inst] + (flat - starts[inst])
+        corners = instances.faces[face] + vertex_start[inst][:, None]
+        block_turn, block_shift = turn[inst], shift[inst]
+        projected = []
+        for k in range(3):
+            position = instances.positions[corners[:, k]].astype(np.float32)
+            clip = np.einsum("bi,bij->bj", position, block_turn) + block_shift
+            if not (clip[:, 2] > 0).all():
+                return None
+            projected.append((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]))
+        (x0, y0), (x1, y1), (x2, y2) = projected
+        twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
+        total += float(np.abs(twice).sum(dtype=np.float64))
     return total / 2 * size[0] * size[1] / 4
 
 

@@ -45,7 +45,7 @@ class Capture:
     def __init__(
         self, capturer, mesh, camera: Camera, gb: GBuffer, *, selected: np.ndarray | None = None, **asked
     ) -> None:
-        normals = gb.normal is not None
+        normals = gb.normals
         asked.setdefault("tie_break", normals)
         request = Request(
             tuple(gb.size),

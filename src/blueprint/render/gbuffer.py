@@ -5,6 +5,7 @@ surfaces are one, which the capture and the vector drawings' occlusion both take
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,34 +33,52 @@ class GBuffer:
     """The targets layers are peeled into: two depth textures that alternate (layer ``i`` in
     ``depth[i % 2]``, the previous layer in the other; in ``flat`` where the A-buffer
     captured the layers: read them through ``layer_depth``), the normal target (None for ID-only
-    buffers) and the ID target: (face + 1, part + 1) as rg32i, or face + 1 alone as r32i."""
+    buffers) and the ID target: (face + 1, part + 1) as rg32i, or face + 1 alone as r32i.
 
-    depth: tuple
-    normal: object | None
-    ids: object
-    fbos: tuple
-    clears: tuple
-    # float targets that hold the layers' depths instead, where the A-buffer captured them
-    flat: tuple | None = None
+    Each target is taken from ``pool`` when first asked for: a capture that leaves its layers
+    where it found them (an A-buffer's lists, a k-buffer's surfaces) never asks for the targets
+    it does not unpack into, and so never holds them."""
+
+    pool: object
+    size: tuple[int, int]
+    name: str = "gb"
+    normals: bool = True
+    # float targets that hold the layers' depths instead, where the A-buffer captured them; or
+    # what makes them, called when a layer's depth is first asked for
+    flat: tuple | Callable[[], tuple] | None = None
 
     @functools.cached_property
-    def size(self) -> tuple[int, int]:
-        return tuple(self.depth[0].size)
+    def depth(self) -> tuple:
+        return tuple(self.pool.depth(f"{self.name}.depth{i}", self.size) for i in (0, 1))
+
+    @functools.cached_property
+    def normal(self):
+        return self.pool.texture(f"{self.name}.normal", self.size, "rgba16f") if self.normals else None
+
+    @functools.cached_property
+    def ids(self):
+        return self.pool.texture(f"{self.name}.ids", self.size, "rg32i" if self.normals else "r32i")
+
+    @functools.cached_property
+    def fbos(self) -> tuple:
+        colors = (self.normal, self.ids) if self.normals else (self.ids,)
+        return tuple(self.pool.framebuffer(colors, d) for d in self.depth)
+
+    @functools.cached_property
+    def clears(self) -> tuple:
+        return tuple(self.pool.framebuffer((), d) for d in self.depth)
 
     def layer_depth(self, layer: int):
+        if callable(self.flat):
+            self.flat = self.flat()
         return (self.flat or self.depth)[layer % 2]
 
 
 def gbuffer(pool, size: tuple[int, int], name: str = "gb", normals: bool = True) -> GBuffer:
-    """The G-buffer ``name`` at ``size`` from ``pool``; without ``normals``, face IDs alone (a
-    quarter of the bytes a fragment: what triangle-ID passes need)."""
-    depth = (pool.depth(f"{name}.depth0", size), pool.depth(f"{name}.depth1", size))
-    normal = pool.texture(f"{name}.normal", size, "rgba16f") if normals else None
-    ids = pool.texture(f"{name}.ids", size, "rg32i" if normals else "r32i")
-    colors = (normal, ids) if normals else (ids,)
-    fbos = tuple(pool.framebuffer(colors, d) for d in depth)
-    clears = tuple(pool.framebuffer((), d) for d in depth)
-    return GBuffer(depth, normal, ids, fbos, clears)
+    """The G-buffer ``name`` at ``size`` from ``pool``, its targets taken when first used;
+    without ``normals``, face IDs alone (a quarter of the bytes a fragment: what triangle-ID
+    passes need)."""
+    return GBuffer(pool, tuple(size), name, normals)
 
 
 def peel_uniforms(prog, camera: Camera, tolerance: float) -> None:

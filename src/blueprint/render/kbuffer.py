@@ -145,10 +145,9 @@ class KBufferSource:
         if self.ids_only:
             return self._find_faces() if layer == 0 else 0
         if not self.unpacks:
-            # every layer is found at layer 0 and read from the surfaces: no depth to clear;
-            # kbuffer.frag's previous layer is read though unused (llvmpipe runs the branch a
-            # uniform skips): a depth texture, never one the pass draws into
-            gb.depth[1].use(units.PEEL_DEPTH + 1)
+            # every layer is found at layer 0 and read from the surfaces: no depth to clear, and
+            # the first pass's program reads no previous layer (kbuffer.frag without PEEL), so
+            # the G-buffer's targets are never made
             return self._find_all() if layer == 0 else 0
         gb.clears[layer % 2].use()
         gb.clears[layer % 2].clear(depth=1.0)

@@ -84,7 +84,7 @@ class PeelSource:
     def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> None:
         r = self.r = capturer.device
         self.mesh, self.gb = mesh, gb
-        normals = gb.normal is not None
+        normals = gb.normals
         self.tie_break = request.tie_break
         self.shader_bias = self.tie_break and not row.culled(request, capturer.table.exact_depth)
         defines = {

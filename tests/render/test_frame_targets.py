@@ -1,0 +1,165 @@
+"""What a frame holds on the GPU: the G-buffer's targets are made when first used, so a capture
+that leaves its layers where it found them (an A-buffer's lists, a k-buffer's surfaces read in
+place) holds none of them, nor the A-buffer's depth targets; its readers' second cursor is the
+lists' heads; the memory guard (``budget.frame_bytes``) counts at least what each way of
+capturing holds, summed from the pool's own record of every target and buffer; and the first
+lists of a scene kept as instances are sized by the fragments its placed faces foretell."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from capture_helpers import one_way
+from instanced_scenes import flattened, mixed_scene
+
+import blueprint
+from blueprint.examples import gearbox
+from blueprint.gpu.targets import FORMATS, INTERNAL_FORMATS
+from blueprint.render import abuffer, budget
+from blueprint.render.abuffer import placed_fragments, projected_fragments
+from blueprint.render.gbuffer import gbuffer
+from blueprint.scene.camera import fit_camera
+
+CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
+
+
+def target_bytes(key: tuple) -> int:
+    """Bytes of a pool texture from its key (size (with slices), format): depth textures are
+    four bytes a texel."""
+    size, fmt = key[0], key[1]
+    if fmt == "depth":
+        per = 4
+    else:
+        components, dtype = {**FORMATS, **INTERNAL_FORMATS}[fmt]
+        per = components * int(dtype[1:])
+    return per * int(np.prod(size))
+
+
+def frame_targets(pool, size: tuple[int, int]) -> dict[str, tuple]:
+    """The pool's textures at ``size`` and those named by it (the A-buffer's lists, kept in rows
+    of their own), name -> key."""
+    named = f"{size[0]}x{size[1]}"
+    return {
+        name: key
+        for name, (key, _) in pool._textures.items()
+        if tuple(key[0][:2]) == tuple(size) or named in name
+    }
+
+
+def frame_buffers(pool, size: tuple[int, int]) -> dict[str, int]:
+    named = f"{size[0]}x{size[1]}"
+    return {name: nbytes for name, (nbytes, _) in pool._buffers.items() if named in name}
+
+
+def test_a_gbuffers_targets_are_made_when_first_used(renderer):
+    pool = renderer.pool
+    gb = gbuffer(pool, (40, 30), "test.lazy")
+    assert gb.size == (40, 30)
+    assert not [name for name in pool._textures if name.startswith("test.lazy.")]
+    assert gb.ids.size == (40, 30)
+    assert [name for name in pool._textures if name.startswith("test.lazy.")] == ["test.lazy.ids"]
+    assert pool._textures["test.lazy.ids"][0] == ((40, 30), "rg32i")
+    first, second = gb.depth
+    assert first.size == second.size == (40, 30) and first is not second
+    assert gb.layer_depth(3) is second
+    gb.fbos  # noqa: B018 (the framebuffers take the normal target too)
+    made = sorted(name for name in pool._textures if name.startswith("test.lazy."))
+    assert made == ["test.lazy.depth0", "test.lazy.depth1", "test.lazy.ids", "test.lazy.normal"]
+    assert pool._textures["test.lazy.normal"][0] == ((40, 30), "rgba16f")
+    # the A-buffer's depth targets stand in where it unpacked its layers: made when first read
+    made_flat = []
+    gb.flat = lambda: made_flat.append(1) or ("flat0", "flat1")
+    assert gb.layer_depth(2) == "flat0" and gb.layer_depth(1) == "flat1" and made_flat == [1]
+    ids_only = gbuffer(pool, (40, 30), "test.lazy.idb", normals=False)
+    assert ids_only.normal is None and ids_only.ids is not None
+    assert pool._textures["test.lazy.idb.ids"][0] == ((40, 30), "r32i")
+    assert "test.lazy.idb.normal" not in pool._textures
+
+
+@pytest.mark.parametrize(
+    ("way", "max_layers", "size", "holds"),
+    [
+        # llvmpipe's own table: every layer from the A-buffer, read from its lists
+        (None, 0, (136, 104), "abuffer.136x104.nodes"),
+        # ...and a capped frame from one k-buffer pass, read from its surfaces
+        (None, 4, (138, 104), "kbuffer.138x104"),
+        ("peel", 8, (140, 104), None),
+        ("k-buffer", 8, (142, 104), "kbuffer.142x104.0"),
+    ],
+)
+def test_a_frame_holds_its_ways_targets_alone(renderer, way, max_layers, size, holds):
+    """Each way's frame at a size no other frame takes (so that the pool's targets at it are
+    this frame's): the targets it holds, and the memory guard's count of the frame (G-buffers
+    and lists) no less than their bytes."""
+    if renderer.ctx.version_code < 430 or not renderer.device.software:
+        pytest.skip("the ways chosen here are llvmpipe's (framebuffer fetch, the A-buffer)")
+    model = gearbox()
+    options = {"size": size, "supersample": 1, "max_layers": max_layers, **CAMERA}
+    if way is None:
+        blueprint.draw(model, **options)
+    else:
+        with one_way(renderer, way):
+            blueprint.draw(model, **options)
+    pool = renderer.pool
+    held = frame_targets(pool, size)
+    gbuffer_targets = {"gb.depth0", "gb.depth1", "gb.normal", "gb.ids"}
+    if holds is not None:
+        assert [name for name in held if name.startswith(holds)], held
+    if way == "peel" or way == "k-buffer":
+        # layers unpacked into the G-buffer, a layer at a time
+        assert gbuffer_targets <= set(held)
+    else:
+        assert not gbuffer_targets & set(held)
+        named = f"abuffer.{size[0]}x{size[1]}"
+        assert not {f"{named}.depth0", f"{named}.depth1", f"{named}.cursor.next"} & set(held)
+    table = renderer.capture_table.row("A-buffer")
+    need = budget.frame_bytes(0, size[0] * size[1], max_layers, table.max_bytes if table else None)
+    holding = sum(target_bytes(key) for key in held.values()) + sum(frame_buffers(pool, size).values())
+    assert 0 < holding <= need["gbuffers"] + need["lists"]
+
+
+def test_placed_fragments_are_the_flattened_scenes(monkeypatch):
+    """The fragments foretold of a scene kept as instances are those of its flattened twin,
+    whatever the block of faces placed at a time (one block, and blocks that cut instances
+    apart); None where a corner lies behind the eye."""
+    model = mixed_scene()
+    twin = flattened(mixed_scene())
+    size = (160, 120)
+    camera = fit_camera(twin, size)
+    expected = projected_fragments(twin.positions, twin.faces, camera, size)
+    assert expected > 0
+    assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
+    monkeypatch.setattr(abuffer, "AREA_BLOCK", 7)
+    assert len(twin.faces) > 7 * 3
+    assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
+    inside = blueprint.Camera(eye=(0, 0, 0), target=(0, 0, -1), up=(0, 1, 0), near=0.01, far=9)
+    assert placed_fragments(model.instances, inside, size) is None
+    assert not model.is_flat
+
+
+def test_a_scene_kept_as_instances_starts_with_the_room_its_fragments_foretell(renderer, monkeypatch):
+    """On a software rasteriser the first lists of a scene kept as instances hold the
+    fragments foretold (``placed_fragments``) with a counted room's spare, the scene never
+    flattened; one geometry pass holds them."""
+    if renderer.ctx.version_code < 430 or not renderer.device.software:
+        pytest.skip("the lists live in the host's memory on a software rasteriser alone")
+    model = mixed_scene()
+    size = (144, 104)
+    camera = fit_camera(model, size)
+    renderer.abuffer_room.pop(size, None)
+    foretold = placed_fragments(model.instances, camera, size)
+    assert foretold < abuffer.FIRST_ROOM * size[0] * size[1]
+    rooms = []
+    buffers = abuffer.ABufferSource._buffers
+
+    def listed(self, name, room=None):
+        rooms.append(room)
+        return buffers(self, name, room)
+
+    monkeypatch.setattr(abuffer.ABufferSource, "_buffers", listed)
+    with one_way(renderer, "a-buffer", abuffer=lambda row: row):
+        renderer.peel(model, camera, size=size, max_layers=None)
+    assert [r for r in rooms if r is not None] == [abuffer.spare_room(foretold)]
+    drawn = (renderer.abuffer_room[size] - 1024) / 1.25
+    assert drawn == pytest.approx(foretold, rel=0.02)
+    assert not model.is_flat
