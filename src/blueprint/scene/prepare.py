@@ -299,8 +299,8 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
 
 
 def _dense(key: np.ndarray) -> np.ndarray:
-    """(N,) int32 (int64 beyond its range): each of the integer ``key`` (N,) numbered among the
-    distinct ones, in order."""
+    """(N,) int32 where a table over the keys' range numbers them, else int64: each of the
+    integer ``key`` (N,) numbered among the distinct ones, in order."""
     if len(key) == 0:
         return np.zeros(0, np.int32)
     low = int(key.min())
