@@ -16,6 +16,7 @@ from blueprint import parallel, settings
 from blueprint.render.mesh import GpuMesh
 from blueprint.scene import environment, normals, prepare, up, weld
 from blueprint.scene.model import Model
+from blueprint.sorting import SortedKeys
 
 
 def mixed_mesh() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -554,7 +555,8 @@ def test_sharp_edges_a_block_at_a_time_equal_the_cosines_compared(threads, monke
     pair = np.sort(rng.choice(59, 25, replace=False))
     limit = np.cos(np.radians(30.0)) - 1e-9
     sharp = np.zeros(len(pair), bool)
-    parallel.run(partial(normals._pair_sharp, unit, order, pair, limit, sharp), len(pair), min_block=5)
+    edges = SortedKeys(np.argsort(order))  # keys whose sorted order is ``order``
+    parallel.run(partial(normals._pair_sharp, unit, edges, pair, limit, sharp), len(pair), min_block=5)
     cos = np.einsum("ij,ij->i", unit[order[pair] // 3], unit[order[pair + 1] // 3])
     np.testing.assert_array_equal(sharp, np.abs(cos) < limit)
     assert 0 < sharp.sum() < len(pair)

@@ -9,7 +9,7 @@ import numpy as np
 from blueprint import parallel
 from blueprint.columns import column_max, column_min, indexed_cross, row_norm
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
-from blueprint.sorting import sorted_with_order, stable_argsort
+from blueprint.sorting import SortedKeys, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
@@ -75,34 +75,34 @@ def crease_vertices(
     # edge k of a face joins its corners k and k + 1; its key is lo * vertices + hi
     key = np.empty((len(welded), 3), np.int64)
     parallel.run(partial(_edge_keys, welded, vertices, key), len(welded))
-    key, order = sorted_with_order(key.reshape(-1), overwrite=True)
+    edges = SortedKeys(key.reshape(-1))
+    del key
     # edges of two faces: runs of two equal keys (bool masks: run starts and lengths would take
     # eight bytes an edge each)
-    same = np.zeros(len(key) + 1, bool)
-    np.equal(key[1:], key[:-1], out=same[1:-1])
+    same = np.zeros(edges.length + 1, bool)
+    parallel.run(partial(_same_keys, edges, same), edges.length - 1)
     paired = same[1:-1] & ~same[:-2] & ~same[2:]
     pair = np.flatnonzero(paired)
     sharp_edge = np.empty(len(pair), bool)
     limit = np.cos(np.radians(crease_angle)) - 1e-9
-    parallel.run(partial(_pair_sharp, unit, order, pair, limit, sharp_edge), len(pair))
+    parallel.run(partial(_pair_sharp, unit, edges, pair, limit, sharp_edge), len(pair))
     sharp_pair = pair[sharp_edge]
     del sharp_edge
     # the crease edges' lengths, from the first face of each
-    corner = order[sharp_pair]
-    del order
+    corner = edges.order(sharp_pair)
     face, k = corner // 3, corner % 3
     # the ends alone in float64, not every position
     ends = np.asarray(positions)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])].astype(np.float64)
     length = np.linalg.norm(ends[1] - ends[0], axis=1)
-    crease = key[sharp_pair]
+    crease = edges.keys(sharp_pair)
     del pair
     # every other edge is a border or a non-manifold edge
-    apart = np.ones(len(key), bool)
+    apart = np.ones(edges.length, bool)
     apart[:-1][paired] = False
     apart[1:][paired] = False
     del same, paired
-    open_edges = key[apart]
-    del apart, key
+    open_edges = edges.keys(np.flatnonzero(apart))
+    del apart, edges
     sharp = np.zeros(vertices, bool)
     sharp[open_edges // vertices] = True
     sharp[open_edges % vertices] = True
@@ -123,15 +123,24 @@ def _edge_keys(welded: np.ndarray, vertices: int, out: np.ndarray, lo: int, hi: 
             out[rows, k] += np.maximum(a, b)
 
 
+def _same_keys(edges: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[1 + i]`` for ``i`` from lo to hi: the sorted keys ``i`` and ``i + 1`` of ``edges``
+    are equal."""
+    for start in range(lo, hi, _ROWS):
+        stop = min(start + _ROWS, hi)
+        run = edges.keys(slice(start, stop + 1))
+        np.equal(run[1:], run[:-1], out=out[start + 1 : stop + 1])
+
+
 def _pair_sharp(
-    unit: np.ndarray, order: np.ndarray, pair: np.ndarray, limit: float, out: np.ndarray, lo: int, hi: int
+    unit: np.ndarray, edges: SortedKeys, pair: np.ndarray, limit: float, out: np.ndarray, lo: int, hi: int
 ) -> None:
-    """``out[lo:hi]``: the faces of the edges ``order[pair]`` and ``order[pair + 1]`` (corners,
+    """``out[lo:hi]``: the faces of the sorted ``edges`` ``pair`` and ``pair + 1`` (corners,
     three a face) have ``unit`` normals whose cosine is below ``limit`` up to sign; a block at
     a time, so that no cosine of every edge is held."""
     for start in range(lo, hi, _ROWS):
         at = pair[start : min(start + _ROWS, hi)]
-        one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
+        one, other = (np.take(unit, edges.order(at + k) // 3, axis=0) for k in (0, 1))
         np.less(np.abs(np.einsum("ij,ij->i", one, other)), limit, out=out[start : start + len(at)])
 
 
