@@ -21,8 +21,9 @@ __all__ = ["SortedKeys", "sorted_with_order", "stable_argsort", "unique_first"]
 
 # Indices packed into keys at a time (``sorted_with_order``).
 _BLOCK = 1 << 20
-# Buckets ``_by_buckets`` cuts the keys into, at most (a byte's values).
+# Buckets ``_by_buckets`` cuts the keys into, at most (a byte's values), and at least.
 _MAX_BUCKETS = 256
+_FEWEST_BUCKETS = 32
 # unique_first counts over the keys' range, not sorting, up to this many times their number.
 _TABLE_PER_KEY = 4
 
@@ -145,7 +146,13 @@ def _by_buckets(
     span = (high - low).bit_length()
     if span > 62 or high >= 1 << 63:
         return None  # not held by int64 keys
-    fewest = max(1, -(-(span + n.bit_length() - 62) // 2), (4 * settings.THREADS - 1).bit_length())
+    # some four buckets a thread, and at least ``_FEWEST_BUCKETS``: a bucket's sort holds
+    # temporaries of its keys
+    fewest = max(
+        _FEWEST_BUCKETS.bit_length() - 1,
+        -(-(span + n.bit_length() - 62) // 2),
+        (4 * settings.THREADS - 1).bit_length(),
+    )
     for power in range(fewest, _MAX_BUCKETS.bit_length()):
         shift = max(span - power, 0)
         bucket = np.empty(n, np.uint8)
@@ -158,6 +165,8 @@ def _by_buckets(
         return None
     order = np.argsort(bucket, kind="stable")  # a radix sort of bytes
     del bucket
+    if n <= np.iinfo(np.int32).max:
+        order = order.astype(np.int32)  # held through the buckets' sorts: half as wide
     ends = np.cumsum(counts)
     ordered, positions = np.empty(n, np.int64) if keys else None, np.empty(n, np.int64)
 
@@ -165,12 +174,12 @@ def _by_buckets(
         for b in range(first, last):
             start, stop = int(ends[b] - counts[b]), int(ends[b])
             at = order[start:stop]
-            packed = key[at].astype(np.int64)
+            packed = np.asarray(key[at], np.int64)
             packed -= low + (b << shift)
             packed <<= bits
             packed |= np.arange(stop - start)
             packed.sort()
-            np.take(at, packed & ((1 << bits) - 1), out=positions[start:stop], mode="clip")
+            positions[start:stop] = at[packed & ((1 << bits) - 1)]
             if keys:
                 packed >>= bits
                 packed += low + (b << shift)

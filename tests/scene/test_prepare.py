@@ -545,20 +545,22 @@ def test_rows_taken_a_block_at_a_time_equal_one_take(threads, monkeypatch):
 @pytest.mark.parametrize("threads", [1, 2])
 def test_sharp_edges_a_block_at_a_time_equal_the_cosines_compared(threads, monkeypatch):
     """The crease test of the paired edges: the cosine between their faces' unit normals below
-    the limit up to sign, as computed for every edge at once."""
+    the limit up to sign, as computed for every edge at once; the other edges never sharp."""
     monkeypatch.setattr(settings, "THREADS", threads)
     monkeypatch.setattr(normals, "_ROWS", 6)
     rng = np.random.default_rng(5)
     unit = rng.standard_normal((20, 3))
     unit /= np.linalg.norm(unit, axis=1)[:, None]
     order = rng.permutation(60)
-    pair = np.sort(rng.choice(59, 25, replace=False))
+    paired = np.zeros(59, bool)
+    paired[rng.choice(59, 25, replace=False)] = True
+    pair = np.flatnonzero(paired)
     limit = np.cos(np.radians(30.0)) - 1e-9
-    sharp = np.zeros(len(pair), bool)
+    sharp = np.zeros(59, bool)
     edges = SortedKeys(np.argsort(order))  # keys whose sorted order is ``order``
-    parallel.run(partial(normals._pair_sharp, unit, edges, pair, limit, sharp), len(pair), min_block=5)
+    parallel.run(partial(normals._pair_sharp, unit, edges, paired, limit, sharp), 59, min_block=5)
     cos = np.einsum("ij,ij->i", unit[order[pair] // 3], unit[order[pair + 1] // 3])
-    np.testing.assert_array_equal(sharp, np.abs(cos) < limit)
+    np.testing.assert_array_equal(np.flatnonzero(sharp), pair[np.abs(cos) < limit])
     assert 0 < sharp.sum() < len(pair)
 
 

@@ -82,11 +82,12 @@ def crease_vertices(
     same = np.zeros(edges.length + 1, bool)
     parallel.run(partial(_same_keys, edges, same), edges.length - 1)
     paired = same[1:-1] & ~same[:-2] & ~same[2:]
-    pair = np.flatnonzero(paired)
-    sharp_edge = np.empty(len(pair), bool)
+    # the pairs' crease test as a mask over the edges: their positions would take eight bytes
+    # a pair
+    sharp_edge = np.zeros(len(paired), bool)
     limit = np.cos(np.radians(crease_angle)) - 1e-9
-    parallel.run(partial(_pair_sharp, unit, edges, pair, limit, sharp_edge), len(pair))
-    sharp_pair = pair[sharp_edge]
+    parallel.run(partial(_pair_sharp, unit, edges, paired, limit, sharp_edge), len(paired))
+    sharp_pair = np.flatnonzero(sharp_edge)
     del sharp_edge
     # the crease edges' lengths, from the first face of each
     corner = edges.order(sharp_pair)
@@ -95,7 +96,6 @@ def crease_vertices(
     ends = np.asarray(positions)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])].astype(np.float64)
     length = np.linalg.norm(ends[1] - ends[0], axis=1)
     crease = edges.keys(sharp_pair)
-    del pair
     # every other edge is a border or a non-manifold edge
     apart = np.ones(edges.length, bool)
     apart[:-1][paired] = False
@@ -133,15 +133,16 @@ def _same_keys(edges: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
 
 
 def _pair_sharp(
-    unit: np.ndarray, edges: SortedKeys, pair: np.ndarray, limit: float, out: np.ndarray, lo: int, hi: int
+    unit: np.ndarray, edges: SortedKeys, paired: np.ndarray, limit: float, out: np.ndarray, lo: int, hi: int
 ) -> None:
-    """``out[lo:hi]``: the faces of the sorted ``edges`` ``pair`` and ``pair + 1`` (corners,
-    three a face) have ``unit`` normals whose cosine is below ``limit`` up to sign; a block at
-    a time, so that no cosine of every edge is held."""
+    """``out[i]`` for the ``paired`` sorted edges ``i`` from lo to hi: the faces of edges ``i``
+    and ``i + 1`` (corners, three a face) have ``unit`` normals whose cosine is below ``limit``
+    up to sign; a block at a time, so that no cosine of every edge is held."""
     for start in range(lo, hi, _ROWS):
-        at = pair[start : min(start + _ROWS, hi)]
+        at = np.flatnonzero(paired[start : min(start + _ROWS, hi)])
+        at += start
         one, other = (np.take(unit, edges.order(at + k) // 3, axis=0) for k in (0, 1))
-        np.less(np.abs(np.einsum("ij,ij->i", one, other)), limit, out=out[start : start + len(at)])
+        out[at] = np.abs(np.einsum("ij,ij->i", one, other)) < limit
 
 
 def _diagonal(positions: np.ndarray, faces: np.ndarray) -> float:
@@ -251,10 +252,12 @@ def corner_normals(
     shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
     summed[shared] /= norm[shared, None]
     del norm
+    vertex_normals = summed.astype(np.float32)
+    del summed  # before the corners' normals are made
     result = np.empty((len(faces), 3, 3), np.float32)
     corners = result.reshape(-1, 3)
-    parallel.run(partial(_taken, summed.astype(np.float32), vertex, corners), len(vertex))
-    del summed
+    parallel.run(partial(_taken, vertex_normals, vertex, corners), len(vertex))
+    del vertex_normals
     apart = np.flatnonzero(~shared[vertex])
     corners[apart] = np.take(unit, apart // 3, axis=0)
     paired = apart[degree[vertex[apart]] <= _MAX_DEGREE]
