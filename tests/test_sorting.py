@@ -5,7 +5,7 @@ import pytest
 
 from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
-from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
+from blueprint.sorting import SortedKeys, sorted_with_order, stable_argsort, unique_first
 
 
 @pytest.mark.parametrize(
@@ -53,6 +53,17 @@ def test_sorts_equal_numpys(count, low, high, threads, monkeypatch):
     ):
         np.testing.assert_array_equal(got, expected.reshape(-1))
         assert got.dtype == expected.dtype
+    if low < 2**63:
+        # the sorted keys read by position, over slices and index arrays, packed or not
+        expected_order = np.argsort(key, kind="stable")
+        sorted_keys = SortedKeys(key.copy())
+        assert sorted_keys.length == count
+        everything = slice(0, count)
+        np.testing.assert_array_equal(sorted_keys.order(everything), expected_order)
+        np.testing.assert_array_equal(sorted_keys.keys(everything), key[expected_order])
+        at = np.random.default_rng(1).integers(0, max(count, 1), min(count, 7))
+        np.testing.assert_array_equal(sorted_keys.order(at), expected_order[at])
+        np.testing.assert_array_equal(sorted_keys.keys(at), key[expected_order][at])
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int64])

@@ -143,10 +143,11 @@ def sort(values: np.ndarray, min_block: int | None = None) -> None:
     merged = np.empty_like(values)
 
     def merge(first: int, last: int) -> None:
+        # each range's pieces gathered where they end up, and sorted there: no copy of them
         for k in range(first, last):
-            piece = np.concatenate([values[b[k] : b[k + 1]] for b in bounds])
+            piece = merged[offsets[k] : offsets[k + 1]]
+            np.concatenate([values[b[k] : b[k + 1]] for b in bounds], out=piece)
             piece.sort(kind="stable")
-            merged[offsets[k] : offsets[k + 1]] = piece
 
     run(merge, count, min_block=1)
 

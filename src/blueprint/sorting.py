@@ -17,12 +17,13 @@ import numpy as np
 
 from blueprint import parallel, settings
 
-__all__ = ["sorted_with_order", "stable_argsort", "unique_first"]
+__all__ = ["SortedKeys", "sorted_with_order", "stable_argsort", "unique_first"]
 
 # Indices packed into keys at a time (``sorted_with_order``).
 _BLOCK = 1 << 20
-# Buckets ``_by_buckets`` cuts the keys into, at most (a byte's values).
+# Buckets ``_by_buckets`` cuts the keys into, at most (a byte's values), and at least.
 _MAX_BUCKETS = 256
+_FEWEST_BUCKETS = 32
 # unique_first counts over the keys' range, not sorting, up to this many times their number.
 _TABLE_PER_KEY = 4
 
@@ -84,16 +85,74 @@ def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndar
     return key[order].astype(np.int64), order
 
 
-def _by_buckets(key: np.ndarray, low: int, high: int) -> tuple[np.ndarray, np.ndarray] | None:
+class SortedKeys:
+    """The keys of a 1-D int64 array in stable order, read by position: ``keys(at)`` the
+    sorted keys at positions ``at`` (an index array or a slice), ``order(at)`` where they were
+    (``stable_argsort``). Held in one array where the keys packed with their positions fit in
+    63 bits (the keys' own array, sorted in place: the caller's array is then this one's),
+    else as the keys and their order: never the sorted keys beside both."""
+
+    def __init__(self, key: np.ndarray) -> None:
+        key = np.asarray(key, np.int64)
+        n = len(key)
+        self.length = n
+        self._packed = self._key = self._order = None
+        if n == 0:
+            self._key, self._order = key, np.zeros(0, np.int64)
+            return
+        low, high = int(key.min()), int(key.max())
+        bits = n.bit_length()
+        if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
+            self._low, self._bits = low, bits
+
+            def pack(lo: int, hi: int) -> None:
+                key[lo:hi] -= low
+                key[lo:hi] <<= bits
+                for start in range(lo, hi, _BLOCK):
+                    key[start : min(start + _BLOCK, hi)] |= np.arange(start, min(start + _BLOCK, hi))
+
+            parallel.run(pack, n)
+            parallel.sort(key)
+            self._packed = key
+            return
+        found = _by_buckets(key, low, high, keys=False)
+        self._key = key
+        self._order = np.argsort(key, kind="stable") if found is None else found[1]
+
+    def order(self, at) -> np.ndarray:
+        """(N,) int64: where the sorted keys at ``at`` were in the keys."""
+        if self._packed is None:
+            return self._order[at]
+        return self._packed[at] & ((1 << self._bits) - 1)
+
+    def keys(self, at) -> np.ndarray:
+        """(N,) int64: the sorted keys at ``at``."""
+        if self._packed is None:
+            return self._key[self._order[at]]
+        found = self._packed[at] >> self._bits
+        found += self._low
+        return found
+
+
+def _by_buckets(
+    key: np.ndarray, low: int, high: int, keys: bool = True
+) -> tuple[np.ndarray | None, np.ndarray] | None:
     """``sorted_with_order`` of keys too wide to sort packed with their positions: the keys
     split by the top bits of ``key - low`` into at most ``_MAX_BUCKETS`` buckets (a stable
     counting sort), then each bucket's keys, less those bits, packed with their positions in
-    it and sorted, the buckets side by side; None where a bucket's still do not fit."""
+    it and sorted, the buckets side by side; None where a bucket's still do not fit. Without
+    ``keys``, the order alone (the sorted keys None)."""
     n = len(key)
     span = (high - low).bit_length()
     if span > 62 or high >= 1 << 63:
         return None  # not held by int64 keys
-    fewest = max(1, -(-(span + n.bit_length() - 62) // 2), (4 * settings.THREADS - 1).bit_length())
+    # some four buckets a thread, and at least ``_FEWEST_BUCKETS``: a bucket's sort holds
+    # temporaries of its keys
+    fewest = max(
+        _FEWEST_BUCKETS.bit_length() - 1,
+        -(-(span + n.bit_length() - 62) // 2),
+        (4 * settings.THREADS - 1).bit_length(),
+    )
     for power in range(fewest, _MAX_BUCKETS.bit_length()):
         shift = max(span - power, 0)
         bucket = np.empty(n, np.uint8)
@@ -106,22 +165,25 @@ def _by_buckets(key: np.ndarray, low: int, high: int) -> tuple[np.ndarray, np.nd
         return None
     order = np.argsort(bucket, kind="stable")  # a radix sort of bytes
     del bucket
+    if n <= np.iinfo(np.int32).max:
+        order = order.astype(np.int32)  # held through the buckets' sorts: half as wide
     ends = np.cumsum(counts)
-    ordered, positions = np.empty(n, np.int64), np.empty(n, np.int64)
+    ordered, positions = np.empty(n, np.int64) if keys else None, np.empty(n, np.int64)
 
     def sort_buckets(first: int, last: int) -> None:
         for b in range(first, last):
             start, stop = int(ends[b] - counts[b]), int(ends[b])
             at = order[start:stop]
-            packed = key[at].astype(np.int64)
+            packed = np.asarray(key[at], np.int64)
             packed -= low + (b << shift)
             packed <<= bits
             packed |= np.arange(stop - start)
             packed.sort()
-            np.take(at, packed & ((1 << bits) - 1), out=positions[start:stop])
-            packed >>= bits
-            packed += low + (b << shift)
-            ordered[start:stop] = packed
+            positions[start:stop] = at[packed & ((1 << bits) - 1)]
+            if keys:
+                packed >>= bits
+                packed += low + (b << shift)
+                ordered[start:stop] = packed
 
     parallel.run(sort_buckets, len(counts), min_block=1)
     return ordered, positions

@@ -6,6 +6,7 @@ grouping with every row's hash the same; and the prepared arrays kept by content
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from blueprint import parallel, settings
 from blueprint.render.mesh import GpuMesh
 from blueprint.scene import environment, normals, prepare, up, weld
 from blueprint.scene.model import Model
+from blueprint.sorting import SortedKeys
 
 
 def mixed_mesh() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -508,3 +510,80 @@ def test_a_soup_with_unused_vertices_between_its_corners_draws_them_as_its_own(p
     expected_vertices, expected_indices = reference_arrays(model, 30.0)
     assert vertices[indices].tobytes() == expected_vertices[expected_indices].tobytes()
     assert indices.max() + 1 == len(vertices) < len(corners)
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_vertex_sums_a_block_at_a_time_equal_one_bincount(threads, monkeypatch):
+    """Summed a block of faces at a time from zero, each vertex's area normals are those of one
+    ``bincount`` over every corner, bit for bit (the same additions in the same order)."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(normals, "_ROWS", 7)
+    rng = np.random.default_rng(3)
+    faces, vertices = 100, 40
+    vertex = rng.integers(0, vertices - 3, 3 * faces).astype(np.int32)  # the last three unused
+    area = rng.standard_normal((faces, 3)) * 10.0 ** rng.integers(-6, 6, (faces, 1))
+    summed, degree = np.full((vertices, 3), np.nan), np.full(vertices, -1, np.int64)
+    parallel.run(partial(normals._vertex_sums, vertex, area, summed, degree), 4, min_block=1)
+    for axis in range(3):
+        expected = np.bincount(vertex, np.repeat(area[:, axis], 3), minlength=vertices)
+        assert summed[:, axis].tobytes() == expected.tobytes()
+    np.testing.assert_array_equal(degree, np.bincount(vertex, minlength=vertices))
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_rows_taken_a_block_at_a_time_equal_one_take(threads, monkeypatch):
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(normals, "_ROWS", 5)
+    rng = np.random.default_rng(4)
+    table = rng.standard_normal((30, 3)).astype(np.float32)
+    at = rng.integers(0, 30, 61).astype(np.int32)
+    out = np.full((61, 3), np.nan, np.float32)
+    parallel.run(partial(normals._taken, table, at, out), len(at), min_block=4)
+    np.testing.assert_array_equal(out, table[at])
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_sharp_edges_a_block_at_a_time_equal_the_cosines_compared(threads, monkeypatch):
+    """The crease test of the paired edges: the cosine between their faces' unit normals below
+    the limit up to sign, as computed for every edge at once; the other edges never sharp."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(normals, "_ROWS", 6)
+    rng = np.random.default_rng(5)
+    unit = rng.standard_normal((20, 3))
+    unit /= np.linalg.norm(unit, axis=1)[:, None]
+    order = rng.permutation(60)
+    paired = np.zeros(59, bool)
+    paired[rng.choice(59, 25, replace=False)] = True
+    pair = np.flatnonzero(paired)
+    limit = np.cos(np.radians(30.0)) - 1e-9
+    sharp = np.zeros(59, bool)
+    edges = SortedKeys(np.argsort(order))  # keys whose sorted order is ``order``
+    parallel.run(partial(normals._pair_sharp, unit, edges, paired, limit, sharp), 59, min_block=5)
+    cos = np.einsum("ij,ij->i", unit[order[pair] // 3], unit[order[pair + 1] // 3])
+    np.testing.assert_array_equal(np.flatnonzero(sharp), pair[np.abs(cos) < limit])
+    assert 0 < sharp.sum() < len(pair)
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64])
+def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype):
+    rng = np.random.default_rng(6)
+    key = (rng.integers(0, 50, 200) * 3 - 20).astype(dtype)
+    dense = prepare._dense(key)
+    assert dense.dtype == np.int32
+    np.testing.assert_array_equal(dense, np.unique(key, return_inverse=True)[1].reshape(-1))
+    sparse = key.astype(np.int64) * 1000  # a span beyond the table: numbered by a sort
+    np.testing.assert_array_equal(
+        prepare._dense(sparse), np.unique(sparse, return_inverse=True)[1].reshape(-1)
+    )
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_gathered_a_block_at_a_time_equals_one_take(threads, monkeypatch):
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(prepare, "_BLOCK", 9)
+    rng = np.random.default_rng(7)
+    table = rng.integers(0, 1 << 30, 40)
+    at = rng.integers(0, 40, 101).astype(np.int32)
+    out = np.zeros(101, np.uint32)
+    parallel.run(partial(prepare._gathered, table, at, out), len(at), min_block=10)
+    np.testing.assert_array_equal(out, table[at].astype(np.uint32))

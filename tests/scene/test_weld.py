@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from blueprint import parallel, settings
 from blueprint.scene import weld
 
 
@@ -51,3 +52,23 @@ def test_exact_duplicates_match_numpy_unique():
     unique, inverse = weld._exact_duplicates(points)
     np.testing.assert_array_equal(unique[inverse], points)
     assert len(unique) == len(np.unique(points, axis=0))
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_distinct_rows_numbered_as_int32_equal_those_as_int64(threads, monkeypatch):
+    """The rows' numbers asked for as int32 are those of int64, and those of ``np.unique``'s
+    rows renumbered by first occurrence; blocks of a few rows, so that every thread has some."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
+    monkeypatch.setattr(weld, "_HASH_BLOCK", 7)
+    rng = np.random.default_rng(8)
+    points = rng.integers(0, 5, (3000, 3)).astype(np.float32) * 0.5
+    first, inverse = weld.distinct_rows(points, np.int32)
+    wide_first, wide_inverse = weld.distinct_rows(points)
+    assert inverse.dtype == np.int32 and wide_inverse.dtype == np.int64
+    np.testing.assert_array_equal(first, wide_first)
+    np.testing.assert_array_equal(inverse, wide_inverse)
+    _, expected_first, expected = np.unique(points, axis=0, return_index=True, return_inverse=True)
+    by_first = np.argsort(np.argsort(expected_first))
+    np.testing.assert_array_equal(inverse, by_first[expected.reshape(-1)])
+    np.testing.assert_array_equal(first, np.sort(expected_first))

@@ -9,7 +9,7 @@ import numpy as np
 from blueprint import parallel
 from blueprint.columns import column_max, column_min, indexed_cross, row_norm
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
-from blueprint.sorting import sorted_with_order, stable_argsort
+from blueprint.sorting import SortedKeys, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
@@ -17,8 +17,6 @@ _MAX_DEGREE = 64
 # Around a vertex whose faces' normals all lie within this many degrees of the sum of their area
 # normals, no two are 90 degrees apart (``corner_normals``).
 _CONE = 44.0
-# Pairs of faces whose normals are compared at a time.
-_CROSS_BLOCK = 1 << 18
 # Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
 _ROWS = 1 << 16
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
@@ -49,7 +47,9 @@ def _welded(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> 
     extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
     diag = float(np.linalg.norm(extent))
     group, _ = weld_groups(positions, (diag or 1.0) * rel_tol)
-    return np.take(group.astype(np.int32), faces)
+    welded = np.empty(faces.shape, np.int32)
+    parallel.run(partial(_taken, group.astype(np.int32), faces, welded), len(faces))
+    return welded
 
 
 def crease_vertices(
@@ -75,32 +75,34 @@ def crease_vertices(
     # edge k of a face joins its corners k and k + 1; its key is lo * vertices + hi
     key = np.empty((len(welded), 3), np.int64)
     parallel.run(partial(_edge_keys, welded, vertices, key), len(welded))
-    key, order = sorted_with_order(key.reshape(-1), overwrite=True)
+    edges = SortedKeys(key.reshape(-1))
+    del key
     # edges of two faces: runs of two equal keys (bool masks: run starts and lengths would take
     # eight bytes an edge each)
-    same = np.zeros(len(key) + 1, bool)
-    np.equal(key[1:], key[:-1], out=same[1:-1])
+    same = np.zeros(edges.length + 1, bool)
+    parallel.run(partial(_same_keys, edges, same), edges.length - 1)
     paired = same[1:-1] & ~same[:-2] & ~same[2:]
-    pair = np.flatnonzero(paired)
-    cos = np.empty(len(pair))
-    parallel.run(partial(_pair_cos, unit, order, pair, cos), len(pair))
-    sharp_pair = pair[np.abs(cos) < np.cos(np.radians(crease_angle)) - 1e-9]
+    # the pairs' crease test as a mask over the edges: their positions would take eight bytes
+    # a pair
+    sharp_edge = np.zeros(len(paired), bool)
+    limit = np.cos(np.radians(crease_angle)) - 1e-9
+    parallel.run(partial(_pair_sharp, unit, edges, paired, limit, sharp_edge), len(paired))
+    sharp_pair = np.flatnonzero(sharp_edge)
+    del sharp_edge
     # the crease edges' lengths, from the first face of each
-    corner = order[sharp_pair]
-    del order
+    corner = edges.order(sharp_pair)
     face, k = corner // 3, corner % 3
     # the ends alone in float64, not every position
     ends = np.asarray(positions)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])].astype(np.float64)
     length = np.linalg.norm(ends[1] - ends[0], axis=1)
-    crease = key[sharp_pair]
-    del pair, cos
+    crease = edges.keys(sharp_pair)
     # every other edge is a border or a non-manifold edge
-    apart = np.ones(len(key), bool)
+    apart = np.ones(edges.length, bool)
     apart[:-1][paired] = False
     apart[1:][paired] = False
     del same, paired
-    open_edges = key[apart]
-    del apart, key
+    open_edges = edges.keys(np.flatnonzero(apart))
+    del apart, edges
     sharp = np.zeros(vertices, bool)
     sharp[open_edges // vertices] = True
     sharp[open_edges % vertices] = True
@@ -121,15 +123,26 @@ def _edge_keys(welded: np.ndarray, vertices: int, out: np.ndarray, lo: int, hi: 
             out[rows, k] += np.maximum(a, b)
 
 
-def _pair_cos(
-    unit: np.ndarray, order: np.ndarray, pair: np.ndarray, out: np.ndarray, lo: int, hi: int
+def _same_keys(edges: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[1 + i]`` for ``i`` from lo to hi: the sorted keys ``i`` and ``i + 1`` of ``edges``
+    are equal."""
+    for start in range(lo, hi, _ROWS):
+        stop = min(start + _ROWS, hi)
+        run = edges.keys(slice(start, stop + 1))
+        np.equal(run[1:], run[:-1], out=out[start + 1 : stop + 1])
+
+
+def _pair_sharp(
+    unit: np.ndarray, edges: SortedKeys, paired: np.ndarray, limit: float, out: np.ndarray, lo: int, hi: int
 ) -> None:
-    """``out[lo:hi]``: the cosine between the faces of the edges ``order[pair]`` and
-    ``order[pair + 1]`` (corners, three a face), from their ``unit`` normals."""
-    for start in range(lo, hi, _CROSS_BLOCK):
-        at = pair[start : min(start + _CROSS_BLOCK, hi)]
-        one, other = (np.take(unit, order[at + k] // 3, axis=0) for k in (0, 1))
-        out[start : start + len(at)] = np.einsum("ij,ij->i", one, other)
+    """``out[i]`` for the ``paired`` sorted edges ``i`` from lo to hi: the faces of edges ``i``
+    and ``i + 1`` (corners, three a face) have ``unit`` normals whose cosine is below ``limit``
+    up to sign; a block at a time, so that no cosine of every edge is held."""
+    for start in range(lo, hi, _ROWS):
+        at = np.flatnonzero(paired[start : min(start + _ROWS, hi)])
+        at += start
+        one, other = (np.take(unit, edges.order(at + k) // 3, axis=0) for k in (0, 1))
+        out[at] = np.abs(np.einsum("ij,ij->i", one, other)) < limit
 
 
 def _diagonal(positions: np.ndarray, faces: np.ndarray) -> float:
@@ -211,14 +224,16 @@ def corner_normals(
     """
     topology = {} if topology is None else topology
     faces = np.asarray(faces)
+    smoothed = crease_angle > 0 and len(faces) > 0
+    welded = topology.get("welded")
+    if welded is None and smoothed:
+        # welded before the faces' normals are made: the weld's temporaries never lie beside them
+        welded = topology["welded"] = _welded(positions, faces)
     area_normals = indexed_cross(np.asarray(positions), faces)
     unit = np.empty_like(area_normals)
     parallel.run(partial(_unit_rows, area_normals, unit), len(faces))
-    if crease_angle <= 0 or len(faces) == 0:
+    if not smoothed:
         return np.repeat(unit.astype(np.float32)[:, None, :], 3, axis=1)
-    welded = topology.get("welded")
-    if welded is None:
-        welded = topology["welded"] = _welded(positions, faces)
     sharp = topology.get(("sharp", float(crease_angle)))
     if sharp is None:
         sharp = topology[("sharp", float(crease_angle))] = crease_vertices(
@@ -237,10 +252,12 @@ def corner_normals(
     shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
     summed[shared] /= norm[shared, None]
     del norm
+    vertex_normals = summed.astype(np.float32)
+    del summed  # before the corners' normals are made
     result = np.empty((len(faces), 3, 3), np.float32)
     corners = result.reshape(-1, 3)
-    parallel.run(partial(_taken, summed.astype(np.float32), vertex, corners), len(vertex))
-    del summed
+    parallel.run(partial(_taken, vertex_normals, vertex, corners), len(vertex))
+    del vertex_normals
     apart = np.flatnonzero(~shared[vertex])
     corners[apart] = np.take(unit, apart // 3, axis=0)
     paired = apart[degree[vertex[apart]] <= _MAX_DEGREE]
@@ -254,14 +271,23 @@ def _vertex_sums(
 ) -> None:
     """Of the corners' ``vertex`` (3F,): for ``axis`` 0 to 2 from ``first`` to ``last``, the sum
     of the ``area`` (F, 3) normals of each vertex's faces into ``summed[:, axis]``, and for 3,
-    each vertex's corners into ``degree``. A coordinate a thread: each sum runs over the
-    corners in order, as one ``bincount`` would."""
+    each vertex's corners into ``degree``. A coordinate a thread, a block of ``_ROWS`` faces at
+    a time: each sum adds the corners in order from zero, as one ``bincount`` would, bit for
+    bit, without its copies of every corner's weight and index."""
+    faces = len(area)
     for axis in range(first, last):
         if axis == 3:
-            degree[:] = np.bincount(vertex, minlength=len(degree))
+            degree[:] = 0
+            # counts of longer blocks: each block's count is as long as every vertex
+            for start in range(0, faces, 4 * _ROWS):
+                corners = vertex[3 * start : 3 * min(start + 4 * _ROWS, faces)]
+                degree += np.bincount(corners, minlength=len(degree))
         else:
-            weights = np.repeat(area[:, axis], 3)
-            summed[:, axis] = np.bincount(vertex, weights, minlength=len(degree))
+            total = np.zeros(len(degree))
+            for start in range(0, faces, _ROWS):
+                stop = min(start + _ROWS, faces)
+                np.add.at(total, vertex[3 * start : 3 * stop], np.repeat(area[start:stop, axis], 3))
+            summed[:, axis] = total
 
 
 def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
@@ -277,8 +303,11 @@ def _row_norms(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
 
 
 def _taken(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    """``out[lo:hi]``: the rows ``at[lo:hi]`` of ``table``."""
-    np.take(table, at[lo:hi], axis=0, out=out[lo:hi])
+    """``out[lo:hi]``: the rows ``at[lo:hi]`` (in range) of ``table``, a block at a time; not
+    ``mode="raise"``, which takes into a copy of ``out`` first."""
+    for start in range(lo, hi, _ROWS):
+        stop = min(start + _ROWS, hi)
+        np.take(table, at[start:stop], axis=0, out=out[start:stop], mode="clip")
 
 
 def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length: np.ndarray) -> np.ndarray:

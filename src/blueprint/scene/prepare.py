@@ -262,7 +262,9 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     # the last corner of each key, and where a corner's normal differs from it, the key's
     # corners are sorted by normal
     last = np.full(keys, -1, np.int64)
-    np.maximum.at(last, key, np.arange(n))
+    for start in range(0, n, _BLOCK):
+        stop = min(start + _BLOCK, n)
+        np.maximum.at(last, key[start:stop], np.arange(start, stop))
     bits = normals.view(np.uint32)
     differs = np.zeros(n, bool)
     parallel.run(partial(_differs_from, bits, last, key, differs), n)
@@ -297,18 +299,21 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
 
 
 def _dense(key: np.ndarray) -> np.ndarray:
-    """(N,) int64: each of the integer ``key`` (N,) numbered among the distinct ones, in order."""
+    """(N,) int32 where a table over the keys' range numbers them, else int64: each of the
+    integer ``key`` (N,) numbered among the distinct ones, in order."""
     if len(key) == 0:
-        return np.zeros(0, np.int64)
+        return np.zeros(0, np.int32)
     low = int(key.min())
     span = int(key.max()) - low + 1
     if span > _TABLE_PER_KEY * len(key):
         return unique_first(key)[2]
+    # ranks below the span, which four corners a key bound: int32 for any mesh it can index
+    at = key - low
     present = np.zeros(span, bool)
-    present[key - low] = True
-    rank = np.cumsum(present, dtype=np.int64)
+    present[at] = True
+    rank = np.cumsum(present, dtype=np.int32 if span <= np.iinfo(np.int32).max else np.int64)
     rank -= 1
-    return rank[key - low]
+    return rank[at]
 
 
 def _differs_from(
@@ -324,7 +329,11 @@ def _differs_from(
 
 
 def _gathered(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    out[lo:hi] = table[at[lo:hi]]
+    """``out[lo:hi]``: ``table[at[lo:hi]]``, a block at a time (the values taken are as wide
+    as the table's)."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        out[start:stop] = table[at[start:stop]]
 
 
 def _normal_key(normals: np.ndarray) -> np.ndarray:

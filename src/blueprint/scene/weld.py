@@ -167,17 +167,18 @@ def connected_components_of(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> 
             return np.unique(label, return_inverse=True)[1].reshape(-1)
 
 
-def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np.ndarray]:
     """Each row of ``positions`` (V, 3) numbered among the distinct rows in the order of their
-    first occurrence, and the index of each distinct row's first occurrence: ``(inverse,
-    first)``, ``positions[first][inverse]`` equal to ``positions`` (-0.0 equal to 0.0).
+    first occurrence (as ``dtype``), and the index of each distinct row's first occurrence:
+    ``(inverse, first)``, ``positions[first][inverse]`` equal to ``positions`` (-0.0 equal to
+    0.0).
 
     Rows are sorted by a hash of their bits with their index in its low bits, one sort of
     values: rows that share the rest of their hash are one row, or (never seen; possible) a
     collision, whose rows alone are sorted by their values."""
     n = len(positions)
     if n == 0:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.zeros(0, dtype), np.zeros(0, np.int64)
     bits = max(1, (n - 1).bit_length())
     low = np.uint64((1 << bits) - 1)
     key = np.empty(n, np.uint64)
@@ -216,8 +217,8 @@ def _exact_groups(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     group = np.cumsum(new, dtype=np.int32)
     del new
     group -= 1
-    np.take(rank, group, out=group)
-    inverse = np.empty(n, np.int64)
+    parallel.run(partial(_ranked, rank, group), n)
+    inverse = np.empty(n, dtype)
     parallel.run(partial(_scattered, inverse, order, group), n)
     return inverse, np.flatnonzero(seen)
 
@@ -250,6 +251,14 @@ def _unpacked(key: np.ndarray, low: np.uint64, lo: int, hi: int) -> None:
     key[lo:hi] &= low
 
 
+def _ranked(rank: np.ndarray, group: np.ndarray, lo: int, hi: int) -> None:
+    """``group[lo:hi]`` (int32) replaced by its entries of ``rank``, a block at a time: no
+    copy of every entry as a wide index, nor of the output (``mode="raise"`` makes one)."""
+    for start in range(lo, hi, _HASH_BLOCK):
+        block = group[start : min(start + _HASH_BLOCK, hi)]
+        np.take(rank, block, out=block, mode="clip")
+
+
 def _scattered(out: np.ndarray, at: np.ndarray, values: np.ndarray, lo: int, hi: int) -> None:
     out[at[lo:hi]] = values[lo:hi]
 
@@ -273,18 +282,24 @@ def _changes(positions: np.ndarray, order: np.ndarray, out: np.ndarray, lo: int,
             block |= rows[1:, k] != rows[:-1, k]
 
 
-def distinct_rows(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def distinct_rows(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``positions`` (V, 3) float, as values (-0.0 equal to 0.0), in the
     order of their first occurrence.
+
+    Parameters
+    ----------
+    positions : (V, 3) float
+    dtype : integer dtype
+        Of ``inverse``: int32 where the rows fit, so that no int64 copy is made to narrow.
 
     Returns
     -------
     first : (D,) int64
         The index of each distinct row's first occurrence, ascending.
-    inverse : (V,) int64
+    inverse : (V,) ``dtype``
         Each row's number among them: ``positions[first][inverse]`` equals ``positions``.
     """
-    inverse, first = _exact_groups(positions)
+    inverse, first = _exact_groups(positions, dtype)
     return first, inverse
 
 

@@ -64,10 +64,8 @@ def _corners(positions: np.ndarray) -> Mesh:
     dtype = np.int32 if len(positions) <= np.iinfo(np.int32).max else np.int64
     if np.signbit(positions[positions == 0]).any():
         return Mesh(positions, np.arange(len(positions), dtype=dtype).reshape(-1, 3))
-    first, inverse = distinct_rows(positions)
-    faces = inverse.astype(dtype).reshape(-1, 3)
-    del inverse
-    return Mesh(positions[first], faces, soup=True)
+    first, inverse = distinct_rows(positions, dtype)
+    return Mesh(positions[first], inverse.reshape(-1, 3), soup=True)
 
 
 def _records(fd: int, positions: np.ndarray, lo: int, hi: int) -> None:
