@@ -380,19 +380,12 @@ def test_the_engine_svg_grows_by_at_most_30_percent_over_lines_without_kinds_or_
     assert new <= 1.3 * old, f"{new} bytes against {old}: {new / old - 1:.0%} more"
 
 
-def test_the_edge_lists_of_many_paths_read_back_to_each_lines_edges():
-    """``svg.edge_texts`` formats the ``data-edges`` of many paths in one pass: lines without
-    edges, repeated edges, differences below zero and numbers of many digits read back, path by
-    path, to each line's distinct edges ascending; a path of lines without edges writes none."""
-    from blueprint.vector.linework import Lines
-    from blueprint.vector.svg import edge_text, edge_texts
-
-    rng = np.random.default_rng(3)
-    n = 400
-    sizes = rng.integers(0, 4, n) * (rng.random(n) < 0.7)
-    edges = rng.integers(0, 10**9, sizes.sum()) // rng.choice([1, 10**7], sizes.sum())
+def _edged_lines(sizes: np.ndarray, edges: np.ndarray):
+    """``len(sizes)`` two-point lines of part, kind and level 0, line ``i`` with the next
+    ``sizes[i]`` of ``edges`` as its source edges."""
+    n = len(sizes)
     zeros = np.zeros(n, np.int64)
-    lines = Lines(
+    return Lines(
         np.zeros((2 * n, 2)),
         np.arange(0, 2 * n + 1, 2),
         zeros,
@@ -402,6 +395,19 @@ def test_the_edge_lists_of_many_paths_read_back_to_each_lines_edges():
         np.r_[0, np.cumsum(sizes)],
         zeros.astype(bool),
     )
+
+
+def test_the_edge_lists_of_many_paths_read_back_to_each_lines_edges():
+    """``svg.edge_texts`` formats the ``data-edges`` of many paths in one pass: lines without
+    edges, repeated edges, differences below zero and numbers of many digits read back, path by
+    path, to each line's distinct edges ascending; a path of lines without edges writes none."""
+    from blueprint.vector.svg import edge_text, edge_texts
+
+    rng = np.random.default_rng(3)
+    n = 400
+    sizes = rng.integers(0, 4, n) * (rng.random(n) < 0.7)
+    edges = rng.integers(0, 10**9, sizes.sum()) // rng.choice([1, 10**7], sizes.sum())
+    lines = _edged_lines(sizes, edges)
     index = rng.permutation(n)[:350]
     bare = index[sizes[index] == 0][:3]
     index = np.r_[bare, index[sizes[index] > 0]]
@@ -424,24 +430,13 @@ def test_the_lines_of_many_paths_ordered_by_lowest_edge_in_one_pass():
     """``svg._by_lowest_edge`` orders the lines of every path at once: each path's lines by
     their lowest source edge (ties and lines without edges in their given order, the latter
     first), path after path, as a sort of each path alone does."""
-    from blueprint.vector.linework import Lines
     from blueprint.vector.svg import _by_lowest_edge
 
     rng = np.random.default_rng(5)
     n = 500
     sizes = rng.integers(0, 4, n) * (rng.random(n) < 0.8)
     edges = rng.integers(0, 60, sizes.sum())  # few values: many ties
-    zeros = np.zeros(n, np.int64)
-    lines = Lines(
-        np.zeros((2 * n, 2)),
-        np.arange(0, 2 * n + 1, 2),
-        zeros,
-        zeros.astype(np.uint8),
-        zeros,
-        edges,
-        np.r_[0, np.cumsum(sizes)],
-        zeros.astype(bool),
-    )
+    lines = _edged_lines(sizes, edges)
     order = rng.permutation(n)
     cuts = np.r_[0, np.sort(rng.choice(np.arange(1, n), 30, replace=False)), n]
     groups = [order[a:b] for a, b in zip(cuts[:-1], cuts[1:], strict=True)]
