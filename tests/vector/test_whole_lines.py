@@ -153,9 +153,9 @@ def test_at_most_two_percent_of_pieces_are_shorter_than_one_and_a_half_pixels(
 
 
 def _smooth_by_samples(level, line, pixel, min_run):
-    """The hysteresis rounds over every sample, runs found anew each round: the reference that
-    ``_smooth``'s rounds over runs must equal."""
-    from blueprint.vector.occlusion.runs import _along, _run_lengths
+    """The rounds over every sample, runs found anew from the samples each round: the
+    reference that ``_smooth``, which joins its runs from round to round, must equal."""
+    from blueprint.vector.occlusion.runs import _along, _merged_levels, _run_lengths
 
     level = level.copy()
     along = _along(line, pixel)
@@ -163,22 +163,9 @@ def _smooth_by_samples(level, line, pixel, min_run):
         start, end, length = _run_lengths(level, line, along)
         if len(start) < 2:
             return level
-        run_line, run_level = line[start], level[start]
-        has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
-        has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
-        short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
-        if not short.any():
+        target = _merged_levels(length, line[start], level[start], min_run)
+        if target is None:
             return level
-        key = length + 1e-6 * ((np.arange(len(start)) * 2654435761) % 1000) / 1000
-        prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
-        next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
-        merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
-        merge &= key < np.where(np.r_[short[1:], False], next_key, np.inf)
-        prev_len = np.where(has_prev, np.r_[0.0, length[:-1]], -1.0)
-        next_len = np.where(has_next, np.r_[length[1:], 0.0], -1.0)
-        prev_level, next_level = np.r_[-1, run_level[:-1]], np.r_[run_level[1:], -1]
-        take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
-        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
         level = np.repeat(target, end - start).astype(level.dtype)
 
 

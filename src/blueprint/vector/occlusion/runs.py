@@ -63,23 +63,10 @@ def _smooth(
     length = hi - lo
     run_line, run_level = line[start], level[start]
     while len(start) >= 2:
-        has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
-        has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
-        short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
-        if not short.any():
+        target = _merged_levels(length, run_line, run_level, min_run)
+        if target is None:
             break
-        # ties between equal lengths broken by a hash of the run, so plateaus merge in few rounds
-        key = length + 1e-6 * ((np.arange(len(start)) * 2654435761) % 1000) / 1000
-        prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
-        next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
-        merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
-        merge &= key < np.where(np.r_[short[1:], False], next_key, np.inf)
-        prev_len = np.where(has_prev, np.r_[0.0, length[:-1]], -1.0)
-        next_len = np.where(has_next, np.r_[length[1:], 0.0], -1.0)
-        prev_level = np.r_[-1, run_level[:-1]]
-        next_level = np.r_[run_level[1:], -1]
-        take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
-        target = np.where(merge, np.where(take_prev, prev_level, next_level), run_level).astype(level.dtype)
+        target = target.astype(level.dtype)
         # a joined run begins where its first run began and ends where its last one ended
         first = np.r_[True, (run_line[1:] != run_line[:-1]) | (target[1:] != target[:-1])]
         last = np.r_[first[1:], True]
@@ -87,6 +74,30 @@ def _smooth(
         end, hi = end[last], hi[last]
         length = hi - lo
     return np.repeat(run_level, end - start).astype(level.dtype)
+
+
+def _merged_levels(length: np.ndarray, run_line: np.ndarray, run_level: np.ndarray, min_run: float):
+    """One round of ``_smooth`` over runs in order (their ``length`` in pixels, polyline and
+    level): each run under ``min_run`` pixels beside another of its line, and shorter than
+    its short neighbours, takes the level of its longer neighbour (of both, where they agree);
+    the runs' levels after the round, or None where no run is short."""
+    has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
+    has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
+    short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
+    if not short.any():
+        return None
+    # ties between equal lengths broken by a hash of the run, so plateaus merge in few rounds
+    key = length + 1e-6 * ((np.arange(len(length)) * 2654435761) % 1000) / 1000
+    prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
+    next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
+    merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
+    merge &= key < np.where(np.r_[short[1:], False], next_key, np.inf)
+    prev_len = np.where(has_prev, np.r_[0.0, length[:-1]], -1.0)
+    next_len = np.where(has_next, np.r_[length[1:], 0.0], -1.0)
+    prev_level = np.r_[-1, run_level[:-1]]
+    next_level = np.r_[run_level[1:], -1]
+    take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
+    return np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
 
 
 def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float, along: np.ndarray) -> np.ndarray:
