@@ -506,17 +506,11 @@ def projected_fragments(
     total = 0.0
     for start in range(0, len(faces), AREA_BLOCK):
         block = faces[start : start + AREA_BLOCK]
-        corners = []
-        for k in range(3):
-            clip = positions[block[:, k]] @ turn + shift
-            if not (clip[:, 2] > 0).all():
-                return None
-            corners.append((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]))
-        (x0, y0), (x1, y1), (x2, y2) = corners
-        twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-        total += float(np.abs(twice).sum(dtype=np.float64))
-    # normalised device coordinates span 2 a side: a pixel is (2 / w) by (2 / h) of them
-    return total / 2 * size[0] * size[1] / 4
+        area = _twice_area([positions[block[:, k]] @ turn + shift for k in range(3)])
+        if area is None:
+            return None
+        total += area
+    return _pixels(total, size)
 
 
 def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float | None:
@@ -539,17 +533,33 @@ def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float 
         face = face_start[inst] + (flat - starts[inst])
         corners = instances.faces[face] + vertex_start[inst][:, None]
         block_turn, block_shift = turn[inst], shift[inst]
-        projected = []
-        for k in range(3):
-            position = instances.positions[corners[:, k]].astype(np.float32)
-            clip = np.einsum("bi,bij->bj", position, block_turn) + block_shift
-            if not (clip[:, 2] > 0).all():
-                return None
-            projected.append((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]))
-        (x0, y0), (x1, y1), (x2, y2) = projected
-        twice = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)
-        total += float(np.abs(twice).sum(dtype=np.float64))
-    return total / 2 * size[0] * size[1] / 4
+        # a corner at a time: a block's corners placed at once would hold three times the memory
+        clips = [
+            np.einsum("bi,bij->bj", instances.positions[corners[:, k]].astype(np.float32), block_turn)
+            + block_shift
+            for k in range(3)
+        ]
+        area = _twice_area(clips)
+        if area is None:
+            return None
+        total += area
+    return _pixels(total, size)
+
+
+def _twice_area(clips: list[np.ndarray]) -> float | None:
+    """Twice the summed area on the picture, in normalised device coordinates, of triangles
+    whose corners are ``clips`` (three (B, 3) arrays of clip x, y and w); None where a corner
+    lies on or behind the eye's plane."""
+    if not all((clip[:, 2] > 0).all() for clip in clips):
+        return None
+    (x0, y0), (x1, y1), (x2, y2) = ((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]) for clip in clips)
+    return float(np.abs((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)).sum(dtype=np.float64))
+
+
+def _pixels(twice_area: float, size: tuple[int, int]) -> float:
+    """Twice an area in normalised device coordinates as pixels of a target of ``size``."""
+    # normalised device coordinates span 2 a side: a pixel is (2 / w) by (2 / h) of them
+    return twice_area / 2 * size[0] * size[1] / 4
 
 
 def tile_max(values: np.ndarray) -> np.ndarray:
