@@ -87,9 +87,11 @@ log = logging.getLogger("blueprint")
 __all__ = [
     "FORMATS",
     "UNITS_MM",
+    "Occlusion",
     "VectorDrawing",
     "Page",
     "VectorOptions",
+    "ViewFrame",
     "draw_lines",
     "draw_sheet",
     "draw_vector",
@@ -457,7 +459,7 @@ def draw_lines(
 
         clock = time.perf_counter()
         planes = planes_found()
-    occlusion = _Occlusion(renderer, model, frame, samples, planes, options, layers, drawn)
+    occlusion = Occlusion(renderer, model, frame, samples, planes, options.crease_angle, layers, drawn)
     levels, count = occlusion.levels(clock, seconds)
     behind = None
     if shaded_parts is not None:
@@ -505,7 +507,7 @@ def draw_lines(
 
 
 @dataclass(frozen=True)
-class _Frame:
+class ViewFrame:
     """A vector drawing's camera and size (width, height) in pixels, its (4, 4) float64 view
     and projection matrices, and the layers it peels at most."""
 
@@ -520,7 +522,7 @@ class _Frame:
         return bool(np.isclose(self.projection[3, 3], 1.0))
 
 
-def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen) -> _Frame:
+def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen) -> ViewFrame:
     """The frame of a drawing: from the camera (fitted from ``options.view`` where None) at
     ``size``, its layer cap found by depth masking where ``options.reveal`` asks; or from
     ``layers`` already peeled."""
@@ -539,10 +541,10 @@ def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen
         h, w = layers.depth.shape[1:]
         camera = camera or layers.camera
         view, projection = np.asarray(layers.view, np.float64), np.asarray(layers.projection, np.float64)
-    return _Frame(camera, (int(w), int(h)), view, projection, max_layers)
+    return ViewFrame(camera, (int(w), int(h)), view, projection, max_layers)
 
 
-def _size_frame(renderer, model: Model, frame: _Frame) -> None:
+def _size_frame(renderer, model: Model, frame: ViewFrame) -> None:
     """Size the drawing's GPU memory before anything is drawn (``Capturer.check_memory``): the
     capture's buffers at the drawing's size and layer cap, and beside them the occlusion's
     table of face planes and, where it peels a pass a layer, its copy of each layer's faces;
@@ -555,17 +557,17 @@ def _size_frame(renderer, model: Model, frame: _Frame) -> None:
     renderer.capturer.check_memory(model, w * h, frame.max_layers, None, extra)
 
 
-class _Occlusion:
+class Occlusion:
     """Where a drawing's samples find the surfaces in front of them: the faces k-buffer read on
     the GPU (``gpu_levels``) where the renderer can, else the layers' faces read back at the
     pixels the tests probe (or the ``layers`` given) and classified on the CPU."""
 
     def __init__(
-        self, renderer, model, frame: _Frame, samples, planes, options: VectorOptions, layers, drawn
+        self, renderer, model, frame: ViewFrame, samples, planes, crease_angle: float, layers, drawn
     ):
         self.renderer, self.model, self.frame, self.samples = renderer, model, frame, samples
         self.planes, self.layers, self.drawn = planes, layers, drawn
-        self.crease_angle = options.crease_angle
+        self.crease_angle = crease_angle
         # surfaces the capture takes for one do not hide each other's lines
         tolerance = depth_tolerance(frame.camera, model.bounds)
         self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), tolerance)
@@ -704,7 +706,7 @@ def _title(title: str | None, model: Model, camera: Camera, page: Page) -> str |
     return title
 
 
-def _hatching(frame: _Frame, options: VectorOptions, page: Page) -> SectionLines | None:
+def _hatching(frame: ViewFrame, options: VectorOptions, page: Page) -> SectionLines | None:
     """The cut faces' hatching and outline of a section view (2.5 mm apart to scale)."""
     if options.section is None:
         return None
@@ -715,7 +717,7 @@ def _hatching(frame: _Frame, options: VectorOptions, page: Page) -> SectionLines
     return section_lines(options.section, frame.view, frame.projection, frame.size, spacing_px)
 
 
-def _dimension_marks(model: Model, frame: _Frame, options: VectorOptions, page: Page) -> Marks | None:
+def _dimension_marks(model: Model, frame: ViewFrame, options: VectorOptions, page: Page) -> Marks | None:
     """The view's dimensions, where asked: orthographic views only."""
     if not options.dimensions:
         return None
@@ -730,7 +732,7 @@ def _dimension_marks(model: Model, frame: _Frame, options: VectorOptions, page: 
     )
 
 
-def _glyph_lines(glyphs: Glyphs, model: Model, frame: _Frame, renderer, layers, seconds) -> GlyphLines:
+def _glyph_lines(glyphs: Glyphs, model: Model, frame: ViewFrame, renderer, layers, seconds) -> GlyphLines:
     """The glyphs as lines, their stretches behind the front surface apart."""
     from .glyphs import glyph_lines
 

@@ -53,6 +53,7 @@ __all__ = [
     "intersection_segments",
     "join_polylines",
     "model_segments",
+    "smooth_contour_segments",
 ]
 
 PART_BOUNDARY = BOUNDARY
@@ -367,7 +368,7 @@ def _instanced_feature_segments(model: Model, view, projection, size, crease_ang
     if not smooth:
         return edges
     points, pixels = found["contour_points"], found["contour_pixels"]
-    short = _short_runs(points, pixels, _MIN_CONTOUR_PX)
+    short, _ = _short_runs(points, pixels, _MIN_CONTOUR_PX)
     exact = found["exact"] | np.isin(faces, found["contour_face"][short])
     replaced = found["silhouette"] & ~exact.any(axis=1) & (faces >= 0).all(axis=1)
     keep = ~short
@@ -483,7 +484,52 @@ def _with_smooth_contours(
 ) -> Segments:
     """``found``, the lines of ``classify_edges``' ``edges``, with the silhouettes where the
     surface is smooth replaced by its smooth contours (``feature_segments``)."""
-    kind = found.kind
+    contours, _, replaced, _ = _contour_segments(
+        model, adj, edges, found.kind, view, projection, size, crease_angle
+    )
+    return Segments.concatenate(
+        [
+            Segments(
+                found.points[~replaced],
+                found.faces[~replaced],
+                found.part[~replaced],
+                found.kind[~replaced],
+                found.edge[~replaced],
+            ),
+            contours,
+        ]
+    )
+
+
+def smooth_contour_segments(
+    model: Model, view: np.ndarray, projection: np.ndarray, size: tuple[int, int], crease_angle: float = 30.0
+) -> tuple[Segments, np.ndarray]:
+    """The smooth contours of a model not kept as instances, for one view, as
+    ``feature_segments`` draws them (with the bridges to the mesh silhouettes they meet), and
+    (F,) bool: the faces whose own silhouettes they replace there (smooth, not seen edge-on,
+    not on a contour run too short to stand for them unless it closes on itself)."""
+    adj = adjacency(model)
+    if len(adj.faces) == 0:
+        return Segments.empty(), np.zeros(model.triangle_count, bool)
+    width, height = size
+    edges = _with_edge_on_outlines(
+        adj, classify_edges(adj, view, projection, width, height, crease_angle), view, projection, size
+    )
+    contours, exact, _, loops = _contour_segments(
+        model, adj, edges, edges.kind, view, projection, size, crease_angle
+    )
+    # a short contour closed on itself is a bump of the surface's noise seen at its edge: the
+    # mesh's silhouette there would draw it again, as a speck
+    contoured = ~exact
+    contoured[loops] = True
+    return contours, contoured
+
+
+def _contour_segments(model, adj, edges, kind, view, projection, size, crease_angle):
+    """The smooth contours and their bridges (``smooth_contour_segments``), (F,) bool: the
+    faces that keep their mesh silhouettes, (E,) bool: the silhouette edges of ``edges`` (of
+    ``kind`` as the drawing has them) that the contours replace, and the faces of the short
+    contours left out that close on themselves."""
     surface = SURFACES.get(model, dict)
     if crease_angle not in surface:
         surface[crease_angle] = smooth_surface(adj, crease_angle)
@@ -496,9 +542,10 @@ def _with_smooth_contours(
     contours = smooth_contours(adj, surface, view, projection, size)
     # where a contour runs only a few pixels before it meets a feature, the mesh's own
     # silhouette there stays: one line in one piece, not a stub between two gaps
-    short = _short_runs(contours.segments3d, contours.segments2d, _MIN_CONTOUR_PX)
+    short, closed = _short_runs(contours.segments3d, contours.segments2d, _MIN_CONTOUR_PX)
     exact = ~surface.smooth
     exact[contours.faces[short]] = True
+    loops = contours.faces[short & closed]
     contours = replace(
         contours,
         segments3d=contours.segments3d[~short],
@@ -516,25 +563,15 @@ def _with_smooth_contours(
     points = np.concatenate([contours.segments3d, bridge])
     faces = np.concatenate([contours.faces, bridge_face])
     edge_pairs = np.concatenate([contours.edges, np.stack([bridge_edge, bridge_edge], axis=1)])
-    return Segments.concatenate(
-        [
-            Segments(
-                found.points[~replaced],
-                found.faces[~replaced],
-                found.part[~replaced],
-                found.kind[~replaced],
-                found.edge[~replaced],
-            ),
-            Segments(
-                points,
-                np.stack([faces, np.full(len(faces), -1)], axis=1),
-                model.face_part[faces].astype(np.int32),
-                np.full(len(faces), SILHOUETTE, np.uint8),
-                edge_pairs[:, 0],
-                edge_pairs[:, 1],
-            ),
-        ]
+    segments = Segments(
+        points,
+        np.stack([faces, np.full(len(faces), -1)], axis=1),
+        model.face_part[faces].astype(np.int32),
+        np.full(len(faces), SILHOUETTE, np.uint8),
+        edge_pairs[:, 0],
+        edge_pairs[:, 1],
     )
+    return segments, exact, replaced, loops
 
 
 def _bridges(adj: Adjacency, contours, kept: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -559,15 +596,18 @@ def _bridges(adj: Adjacency, contours, kept: np.ndarray) -> tuple[np.ndarray, np
     return bridge, contours.faces[open_end // 2], edge
 
 
-def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> np.ndarray:
-    """(N,) bool: the segments (model ``points`` (N, 2, 3), ``pixels`` (N, 2, 2)) in runs (those
-    joined end to end) shorter than ``shortest`` pixels on screen."""
+def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> tuple[np.ndarray, np.ndarray]:
+    """(N,) bool twice: the segments (model ``points`` (N, 2, 3), ``pixels`` (N, 2, 2)) in runs
+    (those joined end to end) shorter than ``shortest`` pixels on screen, and those in runs
+    that close on themselves (every end met by another)."""
     if len(points) == 0:
-        return np.zeros(0, bool)
+        return np.zeros(0, bool), np.zeros(0, bool)
     ids = _point_ids(points.reshape(-1, 3), _JOIN_REL * _diagonal(points.reshape(-1, 3))).reshape(-1, 2)
     run = connected_components_of(np.arange(int(ids.max()) + 1), ids[:, 0], ids[:, 1])[ids[:, 0]]
     length = np.bincount(run, np.linalg.norm(pixels[:, 1] - pixels[:, 0], axis=1))
-    return length[run] < shortest
+    alone = (np.bincount(ids.reshape(-1)) == 1)[ids].any(axis=1)
+    open_run = np.bincount(run, alone, minlength=len(length)) > 0
+    return length[run] < shortest, ~open_run[run]
 
 
 def _edge_on(
