@@ -202,6 +202,7 @@ VECTOR_OPTIONS = options_but(
     "depth_threshold",
     "part_edges",
     "id_silhouettes",
+    "smooth_contours",
     "profile",
 )
 

@@ -121,6 +121,12 @@ class DrawOptions:
         Draw the boundaries between parts.
     id_silhouettes : bool
         Also draw triangle-ID silhouettes in every layer's edge map.
+    smooth_contours : bool
+        In pictures, draw the outline of smooth surfaces as lines along the contour of their
+        interpolated normals (``blueprint.vector.contour_ink``), each in the layer of its
+        occlusion level, instead of the edges of the mesh's own outline there: vector drawings
+        always do. A scan's outline then runs smooth, without the specks of its noise's folds,
+        for a pass over the mesh on the CPU and one more capture a view.
     highlight : str, int, sequence, Model or (P,) bool, optional
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.
@@ -218,6 +224,12 @@ class DrawOptions:
     depth_threshold: float = _option(4.0, "style", "Pixel footprints.", cli=False)
     part_edges: bool = _option(True, "style", "Draw the boundaries between parts.", cli=False)
     id_silhouettes: bool = _option(False, "style", "Add triangle-ID silhouettes to every layer's edges.")
+    smooth_contours: bool = _option(
+        False,
+        "style",
+        "Pictures: outline smooth surfaces by the contour of their interpolated normals, as vector "
+        "drawings do (scans: no zigzag, fewer specks; a CPU pass a view).",
+    )
     # -- masking
     highlight: PartSpec | None = _option(
         None, "masking", "Parts to outline: name globs or indices, comma-separated.", kind=str

@@ -19,8 +19,8 @@ if TYPE_CHECKING:
 # The options of a blueprint frame (``Renderer.render``): the preset's, and how it is profiled.
 FRAME_KEYWORDS = (
     "size", "view", "style", "max_layers", "min_fraction", "crease_angle", "line_width", "supersample",
-    "depth_threshold", "part_edges", "id_silhouettes", "highlight", "reveal", "shade", "shade_opacity",
-    "profile",
+    "depth_threshold", "part_edges", "id_silhouettes", "smooth_contours", "highlight", "reveal", "shade",
+    "shade_opacity", "profile",
 )  # fmt: skip
 
 
@@ -162,7 +162,8 @@ class Renderer:
             are given (see ``blueprint.api.options.DrawOptions``): ``size``, ``view``, ``style``,
             ``max_layers``, ``min_fraction``, ``crease_angle``, ``line_width``, ``supersample``,
             ``depth_threshold``, ``part_edges``, ``id_silhouettes`` (triangle-ID silhouettes,
-            paper 002), ``highlight`` (their whole outline drawn over everything in the style's
+            paper 002), ``smooth_contours`` (smooth surfaces outlined by their contour lines),
+            ``highlight`` (their whole outline drawn over everything in the style's
             highlight ink and width), ``reveal`` (depth masking: stop peeling as soon as this
             fraction of the highlighted parts' pixels is uncovered), ``shade`` (parts shaded
             inside the blueprint, in depth order), ``shade_opacity`` and ``profile``
@@ -172,8 +173,8 @@ class Renderer:
             renderer's context to show it (``Frame.image`` is None then). Nothing is read
             back then: ``Frame.layers_left`` is not counted (0).
         """
-        # the pipeline is for pictures: vector drawings and depth layers start without it
-        from blueprint.pipeline.blueprint import render_blueprint
+        # the frame's own module, which loads the pipeline: vector drawings and depth layers
+        # start without it
+        from blueprint.api.picture import blueprint_frame
 
-        keywords = options.frame_keywords(model)
-        return render_blueprint(self, model, camera, profile=options.profile, on_gpu=on_gpu, **keywords)
+        return blueprint_frame(self, model, camera, options, on_gpu=on_gpu)

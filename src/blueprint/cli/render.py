@@ -33,8 +33,8 @@ class _OutputOption(click.Option):
 # every option of the API's that the command line has (DrawOptions' fields)
 RENDER_OPTIONS = (
     *CAMERA_OPTIONS, "supersample", "max_layers", "min_fraction", "reveal", "style", "grid", "line_width",
-    "crease_angle", "id_silhouettes", "highlight", "shade", "shade_opacity", "section", "section_plane",
-    "section_keep", "dimensions", "units", "title", "scale", "sheet", "glyphs",
+    "crease_angle", "id_silhouettes", "smooth_contours", "highlight", "shade", "shade_opacity", "section",
+    "section_plane", "section_keep", "dimensions", "units", "title", "scale", "sheet", "glyphs",
 )  # fmt: skip
 
 

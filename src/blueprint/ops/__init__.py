@@ -119,17 +119,23 @@ EDGES = Op(
         Param(
             "hidden_ink", 1.0, 0.0, 1.0, "ink of the lines of layers >= 1 of a per-layer pass over layer 0's"
         ),
+        Param(
+            "smooth_contours",
+            False,
+            doc="leave the outline of smooth faces to contour lines drawn with the run; needs face IDs",
+        ),
     ),
     doc="edge intensity from coverage, part-ID, normal and depth discontinuities",
     compute="blueprint.ops:glsl/edges.comp",
-    switches=("id_silhouettes",),
+    switches=("id_silhouettes", "smooth_contours"),
     # an empty pixel beside a covered one is marked too (both sides of a border)
     support="depth",
     reach=lambda u: 1,
     compute_form="slice",
     depth_first=True,
-    # triangle-ID silhouettes compare the faces' corners, which no in-place form reads
-    face_ids=lambda u: bool(u["u_id_silhouettes"]),
+    # triangle-ID silhouettes compare the faces' corners, which no in-place form reads; the
+    # contoured faces are looked up by face
+    face_ids=lambda u: bool(u["u_id_silhouettes"]) or bool(u["u_smooth_contours"]),
     in_place=lambda u: not u["u_id_silhouettes"],
 )
 

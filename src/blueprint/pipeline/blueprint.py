@@ -35,13 +35,19 @@ def render_blueprint(
     *,
     profile: bool = False,
     on_gpu: bool = False,
+    contours=None,
     **options,
 ) -> Frame:
     """``Renderer.render`` through the ``blueprint`` preset, run by ``renderer``'s executor (a
     ``blueprint.Renderer``); ``options`` are its drawing options (``size``, ``style``,
     ``highlight``...: see there), as ``_run_arguments`` takes them. Their ranges are the API's
-    to check (``blueprint.api.options.DrawOptions``), once."""
+    to check (``blueprint.api.options.DrawOptions``), once. ``contours``: smooth contour lines
+    of this camera at this size (``blueprint.vector.contour_ink``), drawn in place of the
+    outline of the faces they stand for."""
     style, arguments = _run_arguments(renderer, model, **options)
+    if contours is not None:
+        arguments["contours"] = contours
+        arguments["variables"]["smooth_contours"] = True
     result = renderer.executor.run(
         blueprint_preset(), model, camera, profile=profile, keep=on_gpu, **arguments
     )

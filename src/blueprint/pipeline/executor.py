@@ -44,7 +44,9 @@ from blueprint.compose.style import STYLES, Style
 from blueprint.errors import InputError
 from blueprint.gpu import units
 from blueprint.gpu.device import Device
+from blueprint.gpu.tables import TABLE_WIDTH, table_rows
 from blueprint.pipeline.arrays import SLICES, ArrayPlan, array_plan
+from blueprint.pipeline.contours import LineWidths, draw_contours
 from blueprint.pipeline.graph import Plan, plan
 from blueprint.pipeline.inputs import (
     ImageInputs,
@@ -247,14 +249,28 @@ class Executor:
             size_of=sizes,
             frame=self._frame,
             slot=req.slot,
-            arrays=self._arrays(pl) if self.r.use_compute else None,
+            # contour lines are drawn into maps of their own, not into slices of the arrays
+            arrays=self._arrays(pl) if self.r.use_compute and req.contours is None else None,
             max_layers=max_layers,
             min_fraction=min_fraction,
         )
         st.attr_dumps = {
             n: [] for n in pl.readback if n in bound.attributes and bound.attributes[n].parts is None
         }
+        if req.contours is not None:
+            st.contours = req.contours
+            st.contoured = self._contoured_table(req.contours.contoured)
         return st
+
+    def _contoured_table(self, contoured: np.ndarray):
+        """``contoured`` (F,) bool as a table (gpu/tables.py) by face + 1, as the IDs hold a
+        face (row 0, no face, is never read), in a pool texture kept for the next frame."""
+        rows = table_rows(len(contoured) + 1)
+        data = np.zeros(rows, np.int32)
+        data[1 : len(contoured) + 1] = contoured
+        texture = self.r.pool.texture("pipeline.contoured", (TABLE_WIDTH, rows // TABLE_WIDTH), "r32i")
+        texture.write(data.tobytes())
+        return texture
 
     def _sizes_of(self, pl: Plan, size: tuple[int, int]) -> Sizes:
         """The sizes of ``pl``'s scales at output size ``size``, every one checked: kept, so that
@@ -301,6 +317,8 @@ class Executor:
             drawn.layers = 1
         if st.arrays is not None:
             self._run_batches(st, drawn.layers)
+        if st.contours is not None:
+            self._draw_contours(st, drawn.layers)
         watch.stage("peel_edges")
         for name in pl.after:
             if st.composed is None or name != st.composed[1]:  # (drawn with the edges)
@@ -468,8 +486,9 @@ class Executor:
                 any(has(prog, name) for name in _CAMERA_SCALARS),
                 any(has(prog, name) for name in _CAMERA_MATRICES),
                 has(prog, "u_corners"),
+                has(prog, "u_contoured"),
             )
-        frame, scalars, matrices, corners = declared
+        frame, scalars, matrices, corners, contoured = declared
         put = self.programs.update
         if frame:
             w, h = size
@@ -493,6 +512,9 @@ class Executor:
             put(prog, _camera_matrices(st.camera))
         if corners and st.mesh is not None:
             st.mesh.bind_corners(prog, units.CORNERS)
+        if contoured and st.contoured is not None:
+            st.contoured.use(units.CONTOURED)
+            self.programs.set(prog, "u_contoured", units.CONTOURED)
 
     def _bind_input(self, prog, key: str, tex, unit: int, size) -> None:
         put = self.programs.set
@@ -668,6 +690,21 @@ class Executor:
                 st.draws += 1
             ctx.memory_barrier(ctx.TEXTURE_FETCH_BARRIER_BIT | ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
+    def _draw_contours(self, st: RunState, layers: int) -> None:
+        """The run's contour lines into the maps each composite reads, each piece into its
+        level's map, as wide and in the share of ink the edges and lines passes give lines."""
+        pl = st.pl
+        passes = pl.bound.passes
+        for name in pl.after:
+            p = passes[name]
+            if p.kind != "composite":
+                continue
+            source = pl.resolve(p.inputs[p.stacks[0]])
+            if source not in st.stacks:
+                continue
+            widths = _line_widths(pl, source)
+            st.draws += draw_contours(self.r, st.contours, st.stacks[source], layers, widths)
+
     def composed(self, st: RunState, capped: bool) -> tuple[str, str] | None:
         """(edges pass, composite pass) where the one pass reading the layers from a k-buffer's
         surfaces draws every layer of the frame in one batch (a cap of at most a batch, and
@@ -678,6 +715,8 @@ class Executor:
         pl = st.pl
         if not (self.compose_in_place and capped and st.edge_step > 1 and len(st.from_surfaces) == 1):
             return None
+        if st.contours is not None:
+            return None  # the contour lines go into the maps before they are composed
         if st.max_layers is None or st.max_layers > st.edge_step:
             return None
         (name,) = st.from_surfaces
@@ -720,7 +759,9 @@ class Executor:
             compose = self.compositor.compute
         else:
             compose = self.compositor.fragment
-            reach = self.reach(st, source) if self.tiles.layers and shading is None else None
+            # tiles where a layer lies: a contour line may stray a pixel past the tiles' reach
+            tiled = self.tiles.layers and shading is None and st.contours is None
+            reach = self.reach(st, source) if tiled else None
             if reach is not None and tuple(st.stacks[source][0].size) == self.tiles.size:
                 compose = functools.partial(
                     compose, tiles=functools.partial(self.tiles.draw_layers, reach=reach)
@@ -851,6 +892,21 @@ def _camera_matrices(camera: Camera) -> dict:
 
 def _defines(p) -> dict:
     return p.op.defines(p.uniforms) if p.op.switches else {}
+
+
+def _line_widths(pl: Plan, source: str) -> LineWidths:
+    """The widths of the lines in the maps of pass ``source``: an edges pass's own (the two
+    pixels beside a discontinuity), hidden ones in its share of the ink; widened by a
+    dilation's radius where ``source`` is one, hidden ones to its share of the width (the
+    blueprint preset never makes that narrower than the edges' own)."""
+    passes = pl.bound.passes
+    p = passes[source]
+    radius, hidden_width = 0.0, 1.0
+    if "u_radius" in p.uniforms:
+        radius, hidden_width = float(p.uniforms["u_radius"]), float(p.uniforms["u_hidden_width"])
+        p = passes[pl.resolve(next(iter(p.inputs.values())))]
+    hidden_ink = float(p.uniforms.get("u_hidden_ink", 1.0))
+    return LineWidths(1.0 + radius, (1.0 + radius) * hidden_width, hidden_ink)
 
 
 def part_color(part: np.ndarray) -> np.ndarray:

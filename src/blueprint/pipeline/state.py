@@ -70,6 +70,9 @@ class RunRequest:
     slot : int
         Which set of buffers read late: 0 and 1 for a stream's frames (they alternate), 2 for
         a frame read at once (never those of a stream still to be read).
+    contours : ContourInk, optional
+        Smooth contour lines (``vector.contour_ink``) drawn into the maps the composite reads,
+        in place of the outline of the faces they stand for (``pipeline.contours``).
     """
 
     size: tuple[int, int] | None = None
@@ -87,6 +90,7 @@ class RunRequest:
     read_later: Callable | None = None
     keep: bool = False
     slot: int = 2
+    contours: object | None = None
 
 
 # compared by identity, never by value: no generated equality to build when the module loads
@@ -272,4 +276,6 @@ class RunState:
     # (edges pass, composite pass) where the first composes its layers into the second's target
     # (Executor.composed)
     composed: tuple[str, str] | None = None
+    contours: object | None = None  # RunRequest.contours
+    contoured: object | None = None  # its faces' table on the GPU (edges.glsl's u_contoured)
     draws: int = 0

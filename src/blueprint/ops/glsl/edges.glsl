@@ -8,6 +8,20 @@
 #if ID_SILHOUETTES
 #include "idsil_vertex.glsl"
 #endif
+#ifndef SMOOTH_CONTOURS
+#define SMOOTH_CONTOURS 0
+#endif
+#if SMOOTH_CONTOURS
+#include "table.glsl"
+// 1 for each face whose outline is drawn as a line of the smooth surface's contour instead
+// (vector/contour_ink.py), by face + 1 as the IDs hold it
+uniform isampler2D u_contoured;
+
+// Whether a covered sample's face leaves its outline to the contour lines
+bool contoured(int face1) {
+    return TABLE_ROW(u_contoured, face1).r != 0;
+}
+#endif
 
 // The layer's samples at pixel q, the pixel itself (i = -1) or its neighbour OFFSETS[i]: from
 // the G-buffer's textures unless the including shader has them already (EDGE_SAMPLES).
@@ -69,6 +83,16 @@ float edge_value(ivec2 p) {
         return 0.0;
     }
     if (zc >= 1.0) {
+#if SMOOTH_CONTOURS
+        // beside surfaces whose outline the contour lines draw, the border is theirs
+        bool left = true;
+        for (int i = 0; i < 4; ++i) {
+            left = left && (!covered[i] || contoured(EDGE_IDS(clamp(p + OFFSETS[i], ivec2(0), last), i).x));
+        }
+        if (left) {
+            return 0.0;
+        }
+#endif
         // the ring read at once: a software rasteriser runs every lane through each read
         bool ring[8];
         for (int r = 0; r < 8; ++r) {
@@ -88,6 +112,22 @@ float edge_value(ivec2 p) {
     for (int i = 0; i < 4; ++i) {
         ids[i] = EDGE_IDS(clamp(p + OFFSETS[i], ivec2(0), last), i);
     }
+#if SMOOTH_CONTOURS
+    // Inside a smooth surface whose outline the contour lines draw, its borders, jumps and the
+    // normals' turns at its folds are that outline seen through the mesh's noise: only part
+    // boundaries are left to draw.
+    bool within = contoured(own.x);
+    for (int i = 0; i < 4; ++i) {
+        within = within && (!covered[i] || contoured(ids[i].x));
+    }
+    if (within) {
+        bool part_edge = false;
+        for (int i = 0; i < 4; ++i) {
+            part_edge = part_edge || (u_part_edges && covered[i] && ids[i].y != own.y);
+        }
+        return part_edge ? 1.0 : 0.0;
+    }
+#endif
     bool border = false;
     for (int i = 0; i < 4; ++i) {
         border = border || !covered[i] || (u_part_edges && ids[i].y != own.y);

@@ -1,0 +1,143 @@
+"""Smooth contours in pictures (issue 39, point 2): ``smooth_contours=True`` draws the outline of
+smooth surfaces as lines along the contour of their interpolated normals, each into the edge
+map of its occlusion level (``vector.contour_ink``, ``pipeline.contours``), and the edges pass
+leaves those faces' borders and jumps out. Checked against the vector drawing's contours,
+which the exact hidden-line tests hold, and by the issue's speck measure at 1024 x 1024."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from capture_helpers import one_way
+from scan_helpers import ink, noisy_bust, noisy_sphere, specks
+from scipy import ndimage
+
+import blueprint
+from blueprint import examples
+from blueprint.scene.camera import fit_camera
+from blueprint.vector.contour_ink import contour_ink
+from blueprint.vector.linework import SILHOUETTE
+
+SIZE = (1024, 1024)
+
+
+def _bunny(shared_models):
+    path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is missing from the shared models")
+    return blueprint.load_model(path)
+
+
+def test_stanford_bunny_specks(renderer, shared_models):
+    """The issue's target of 15 on the bunny: 24 with the mesh's outline, 10 with the contour
+    lines (llvmpipe)."""
+    model = _bunny(shared_models)
+    assert specks(np.asarray(blueprint.render(model, size=SIZE, smooth_contours=True))) <= 12
+
+
+@pytest.mark.parametrize(("name", "most"), [("noisy sphere", 11), ("noisy bust", 1)])
+def test_generated_scan_specks(renderer, name, most):
+    """The generated scans, as measured (llvmpipe): the sphere 34 with the mesh's outline, 11
+    with the contour lines; the bust 19 and 0."""
+    model = noisy_sphere(0.006) if name == "noisy sphere" else noisy_bust()[0]
+    assert specks(np.asarray(blueprint.render(model, size=SIZE, smooth_contours=True))) <= most
+
+
+def _visible_pixels(lines, silhouettes: bool) -> np.ndarray:
+    """(K, 2) pixels (x, y from the top) along the vector drawing's visible lines (its
+    silhouettes alone where ``silhouettes``), a quarter of a pixel apart."""
+    points = []
+    chosen = (lines.level == 0) & ((lines.kind == SILHOUETTE) | (not silhouettes))
+    for i in np.flatnonzero(chosen):
+        polyline = lines.points[lines.offsets[i] : lines.offsets[i + 1]]
+        for a, b in zip(polyline[:-1], polyline[1:], strict=True):
+            steps = max(int(np.ceil(np.linalg.norm(b - a) * 4)), 1)
+            points.append(a + np.linspace(0.0, 1.0, steps, endpoint=False)[:, None] * (b - a))
+    return np.concatenate(points)
+
+
+@pytest.mark.parametrize("name", ["noisy sphere", "noisy bust"])
+def test_outline_follows_the_vector_contours(renderer, name):
+    """Every point of the vector drawing's visible contours has the picture's ink within a
+    pixel, and the picture's visible lines (its strongest ink) lie within 1.5 px of the
+    drawing's: the picture draws the same smooth outline, not the mesh's zigzag beside it."""
+    model = noisy_sphere(0.006) if name == "noisy sphere" else noisy_bust()[0]
+    image = np.asarray(blueprint.render(model, size=SIZE, smooth_contours=True))
+    lines = blueprint.draw(model, size=SIZE, vector=True).lines.lines
+
+    def spots(silhouettes):
+        pixels = _visible_pixels(lines, silhouettes)
+        x = np.clip(np.floor(pixels[:, 0]).astype(int), 0, SIZE[0] - 1)
+        return x, np.clip(np.floor(pixels[:, 1]).astype(int), 0, SIZE[1] - 1)
+
+    x, y = spots(True)
+    near = ndimage.binary_dilation(ink(image), np.ones((3, 3), bool))
+    assert near[y, x].mean() >= 0.99, near[y, x].mean()
+    # the visible lines: ink as strong as layer 0's, against the faint hidden lines
+    paper = image[0, 0].astype(int)
+    strength = np.abs(image[..., :3].astype(int) - paper[:3]).sum(axis=-1)
+    outline = strength > 0.8 * strength.max()
+    drawn = np.zeros(SIZE[::-1], bool)
+    x, y = spots(False)
+    drawn[y, x] = True
+    distance = ndimage.distance_transform_edt(~drawn)
+    assert (distance[outline] <= 1.5).mean() >= 0.98, (distance[outline] <= 1.5).mean()
+
+
+def test_levels_come_from_the_layers(renderer):
+    """The contour lines of a smooth sphere half behind a plate (a box: two surfaces): the
+    visible half at level 0, the half behind the plate at level 2, as the vector drawing has
+    them, and drawn in those layers' inks."""
+    sphere = noisy_sphere(0.0)
+    plate = examples.box((-1.2, -1.2, 1.3), (0.0, 1.2, 1.35))
+    model = examples.assemble({"sphere": (sphere.positions, sphere.faces), "plate": plate})
+    camera = fit_camera(model, SIZE, "front")
+    found = contour_ink(renderer, model, camera, SIZE, max_layers=4)
+    assert set(found.level.tolist()) == {0, 2}
+    middle = 0.5 * (found.points[:, 0].min() + found.points[:, 0].max())
+    for level, side in ((0, 1), (2, -1)):
+        pieces = np.flatnonzero(found.level == level)
+        xs = np.concatenate([found.points[found.offsets[i] : found.offsets[i + 1], 0] for i in pieces])
+        # the plate's edge runs through the middle: points further from it are on their side
+        far = np.abs(xs - middle) > 10
+        assert (np.sign(xs[far] - middle) == side).all(), level
+    image = np.asarray(blueprint.render(model, size=SIZE, view="front", smooth_contours=True))
+    paper = image[0, 0].astype(int)
+    strength = np.abs(image[..., :3].astype(int) - paper[:3]).sum(axis=-1)
+    centre = int(0.5 * (found.points[:, 1].min() + found.points[:, 1].max()))
+    rows = np.arange(centre - 30, centre + 30)
+    # along the rows through the sphere's middle, the ink across its outline (a line a pixel
+    # wide, split between two pixels where it runs between them): a visible line's on the
+    # right, a hidden one's on the left
+    x0, x1 = int(found.points[:, 0].min()), int(found.points[:, 0].max())
+    right = strength[rows, x1 - 4 : x1 + 5].sum(axis=1)
+    left = strength[rows, x0 - 4 : x0 + 5].sum(axis=1)
+    full = strength.max()
+    assert (right > 0.8 * full).all(), right.min() / full
+    assert (left < 0.6 * full).all() and (left > 0.1 * full).all(), (left.min() / full, left.max() / full)
+
+
+def test_faces_without_a_smooth_surface_draw_as_before(renderer):
+    """A model of flat faces alone has no contour: the option changes no pixel."""
+    model = examples.assemble(
+        {"a": examples.box((0, 0, 0), (2, 1, 1)), "b": examples.box((1, 0.5, 0.5), (3, 2, 2))}
+    )
+    before = np.asarray(blueprint.render(model, size=(256, 256)))
+    after = np.asarray(blueprint.render(model, size=(256, 256), smooth_contours=True))
+    assert np.array_equal(before, after)
+
+
+@pytest.mark.parametrize("way", ["peel", "k-buffer", "a-buffer"])
+def test_every_capture_draws_them(renderer, way):
+    """The peel, the k-buffer and the A-buffer draw the same picture of the noisy sphere with
+    contour lines: the face IDs the edges pass reads come from each of them."""
+    model = noisy_sphere(0.006)
+    with one_way(renderer, "peel"):
+        reference = np.asarray(
+            blueprint.render(model, size=(512, 512), smooth_contours=True, renderer=renderer)
+        )
+    with one_way(renderer, way, abuffer=lambda row: row):
+        image = np.asarray(blueprint.render(model, size=(512, 512), smooth_contours=True, renderer=renderer))
+    differ = np.abs(image.astype(int) - reference.astype(int)).max(axis=-1) > 24
+    assert differ.mean() < 0.002, differ.sum()
+    assert specks(image) <= 8
