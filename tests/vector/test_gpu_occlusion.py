@@ -6,12 +6,13 @@ import dataclasses
 import numpy as np
 import pytest
 import trimesh
+from scan_helpers import noisy_sphere
 
 from blueprint.examples import gearbox
 from blueprint.render.gbuffer import depth_tolerance
 from blueprint.scene.camera import Camera
 from blueprint.vector import draw_vector
-from blueprint.vector.lines import join_polylines, model_segments
+from blueprint.vector.lines import grazing_band, join_polylines, model_segments
 from blueprint.vector.occlusion import (
     DepthTest,
     PixelLayers,
@@ -22,6 +23,7 @@ from blueprint.vector.occlusion import (
     gpu_levels,
     probe_pixels,
     sample_polylines,
+    stack_levels,
     verify_creases,
 )
 
@@ -296,3 +298,39 @@ def test_a_sample_a_hair_above_a_pixel_row_looks_at_the_rows_the_cpu_does(render
     assert classify_samples(samples_lower, peeled, planes, test).tolist() == [1]
     assert stack_levels(renderer, samples, planes, peeled, test=test).level.tolist() == [0]
     assert stack_levels(renderer, samples_lower, planes, peeled, test=test).level.tolist() == [1]
+
+
+@pytest.mark.parametrize("through", ["faces", "stacks"])
+def test_grazing_band_equal_on_the_cpu_and_the_gpu(renderer, source, through):
+    """The band where a noisy smooth surface folds over its own contour (``grazing_band``):
+    its faces hide a smooth contour's samples only from their reach in front, alike in the
+    compute pass (from the faces k-buffer or the peel's copies, and from the stacks read
+    back) and in the CPU reference; and the rule changes the levels of contour samples
+    alone."""
+    model = noisy_sphere(0.006)
+    camera = Camera.fit(model.positions, "front", aspect=1.0)
+    view, proj = camera.view_matrix(), camera.projection_matrix()
+    lines = join_polylines(model_segments(model, view, proj, SIZE))
+    samples = sample_polylines(lines, view, proj, SIZE)
+    planes = face_planes(model, view)
+    plain = DepthTest(camera.ortho, camera.pixel_angle(SIZE[1]), depth_tolerance(camera, model.bounds))
+    test = dataclasses.replace(plain, band=grazing_band(model, view, proj))
+    assert (test.band > 0).sum() > 100 and test.band[-1] == 0
+    pixels = probe_pixels(samples, SIZE)
+    faces = renderer.triangles_at(model, camera, pixels, size=SIZE, max_layers=8)
+    peeled = PixelLayers(
+        pixels, np.ascontiguousarray(faces.T), (faces >= 0).sum(axis=0), len(faces), *SIZE[::-1]
+    )
+    cpu = classify_samples(samples, peeled, planes, test)
+    if through == "faces":
+        got = gpu_levels(renderer, model, camera, samples, planes, SIZE, max_layers=8, test=test)
+    else:
+        got = stack_levels(renderer, samples, planes, peeled, test=test)
+    if got is None:
+        pytest.skip("this renderer runs the levels on the CPU alone here")
+    np.testing.assert_array_equal(got.level, cpu)
+    before = classify_samples(samples, peeled, planes, plain)
+    contour = test.contour_samples(samples, np.arange(len(samples.line)))
+    changed = before != cpu
+    assert changed.sum() > 100 and not changed[~contour].any()
+    assert (cpu[changed] < before[changed]).all()

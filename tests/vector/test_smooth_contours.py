@@ -236,3 +236,18 @@ def test_bust_ridge_is_still_drawn(renderer):
     t = np.clip(np.einsum("csk,sk->cs", offset, steps) / np.einsum("sk,sk->s", steps, steps), 0, 1)
     nearest = np.linalg.norm(offset - t[..., None] * steps[None], axis=2).min(axis=1)
     assert (nearest < 2.0).all(), np.round(nearest, 1)
+
+
+@pytest.mark.parametrize(("view", "least"), [("front", 0.95), ("iso", 0.99)])
+def test_noisy_sphere_outline_stays_visible(renderer, view, least):
+    """A noisy sphere alone: its whole outline is visible, though the contour of its
+    interpolated normals lies a little behind the mesh's rim, where the noise folds the rim
+    over it (``grazing_band``). Measured: 0.97 of the silhouettes' length at level 0 from the
+    front, 1.0 from the iso view; 0.67 and 0.72 before the band's rule."""
+    drawing = blueprint.draw(noisy_sphere(0.006), size=(1024, 1024), view=view, vector=True).lines
+    silhouettes = drawing.lines.where(kind="silhouette")
+
+    def length(part):
+        return sum(np.linalg.norm(np.diff(part.polyline(i), axis=0), axis=1).sum() for i in range(len(part)))
+
+    assert length(silhouettes.where(level=0)) >= least * length(silhouettes)

@@ -52,7 +52,7 @@ from blueprint.scene.units import drawing_unit, warn_if_assumed
 from .chain import chain_pieces, walked
 from .dxf import write_dxf
 from .instanced import face_parts
-from .lines import join_polylines, model_segments
+from .lines import grazing_band, join_polylines, model_segments
 from .linework import KINDS, Lines, runs_of
 from .occlusion import (
     DepthTest,
@@ -568,9 +568,11 @@ class Occlusion:
         self.renderer, self.model, self.frame, self.samples = renderer, model, frame, samples
         self.planes, self.layers, self.drawn = planes, layers, drawn
         self.crease_angle = crease_angle
-        # surfaces the capture takes for one do not hide each other's lines
+        # surfaces the capture takes for one do not hide each other's lines, nor a smooth
+        # surface's folds over its own contour the contour
         tolerance = depth_tolerance(frame.camera, model.bounds)
-        self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), tolerance)
+        band = grazing_band(model, frame.view, frame.projection, crease_angle)
+        self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), tolerance, band)
         self.peeled: PixelLayers | None = None
 
     def _on_gpu(self, planes):

@@ -52,6 +52,7 @@ __all__ = [
     "feature_segments",
     "intersection_segments",
     "join_polylines",
+    "grazing_band",
     "model_segments",
     "smooth_contour_segments",
 ]
@@ -62,6 +63,11 @@ PART_BOUNDARY = BOUNDARY
 # own silhouette in their faces: a stub between two gaps breaks a line into pieces, while the
 # zigzag of a mesh's silhouette shows along long contours.
 _MIN_CONTOUR_PX = 30.0
+# A smooth face with a vertex normal within this many degrees of square with the view lies in
+# the band where a noisy surface folds over its own contour (``grazing_band``); such faces hide
+# a smooth contour only from farther in front than this many of their own sizes.
+GRAZING_DEGREES = 12.0
+GRAZING_REACH = 4.0
 # Creases whose faces meet at less than this many degrees are tangent edges of smooth blends
 # (a fillet's boundary): kind ``SMOOTH``.
 SMOOTH_ANGLE = 5.0
@@ -523,6 +529,41 @@ def smooth_contour_segments(
     contoured = ~exact
     contoured[loops] = True
     return contours, contoured
+
+
+def grazing_band(model: Model, view: np.ndarray, projection: np.ndarray, crease_angle: float = 30.0):
+    """(F + 1,) float32: for each face of a model not kept as instances where its smooth
+    surface turns within ``GRAZING_DEGREES`` of the view (a smooth face, not seen edge-on,
+    with a vertex normal that close to square with the view), the length of its longest edge;
+    0 elsewhere and in the last row (no face). None for a model kept as instances.
+
+    Near its contour a noisy smooth surface folds over itself: the contour of its
+    interpolated normals lies a little behind the mesh's own rim, whose faces would hide it
+    from the view. Those faces do not hide a smooth contour unless they lie farther in front of
+    it than ``GRAZING_REACH`` of their own sizes (``occlusion.levels``)."""
+    if model.instances is not None:
+        return None
+    adj = adjacency(model)
+    band = np.zeros(len(adj.faces) + 1, np.float32)
+    if len(adj.faces) == 0:
+        return band
+    surface = SURFACES.get(model, dict)
+    if crease_angle not in surface:
+        surface[crease_angle] = smooth_surface(adj, crease_angle)
+    surface = surface[crease_angle]
+    camera_to_model = np.linalg.inv(np.asarray(view, np.float64))
+    if projection[3, 3] == 1.0:
+        toward = np.broadcast_to(camera_to_model[:3, 2], adj.positions.shape)
+    else:
+        toward = camera_to_model[:3, 3] - adj.positions
+    facing = np.einsum("ij,ij->i", surface.normals, toward) / np.linalg.norm(toward, axis=1)
+    grazing = (np.abs(facing) < np.sin(np.radians(GRAZING_DEGREES)))[adj.faces].any(axis=1)
+    all_faces = np.arange(len(adj.faces))
+    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
+    chosen = np.flatnonzero(grazing & surface.smooth & ~edge_on)
+    corners = adj.positions[adj.faces[chosen]]
+    band[chosen] = np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2).max(axis=1)
+    return band
 
 
 def _contour_segments(model, adj, edges, kind, view, projection, size, crease_angle):

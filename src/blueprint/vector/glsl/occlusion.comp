@@ -28,7 +28,7 @@ layout(local_size_x = 64) in;
 // a whole number rounds up to it in single precision)
 struct Sample {
     vec3 eye;      // eye coordinates
-    int flags;     // 1: off contours, 2: check the sides
+    int flags;     // 1: off contours, 2: check the sides, 4: a smooth contour (u_reach)
     ivec4 pixel;   // the first of the 2 x 2 pixels around the sample x, y (pixels.around, y down);
                    // the pixel a step to one side of the line x, y
     ivec4 own;     // the pixel a step to the other side x, y; own faces (-1: none)
@@ -71,6 +71,11 @@ uniform ivec2 u_size;
 uniform bool u_ortho;
 uniform float u_tolerance;  // the depth tolerance, eye depth
 uniform float u_footprint;  // a pixel's size at unit distance (perspective) or in model units
+#if BAND
+// per face, how far in front of a smooth contour's sample it must lie to hide it: its size
+// times levels.py's reach where a smooth surface folds over its own contour, 0 elsewhere
+uniform sampler2D u_reach;
+#endif
 
 const int BIG = 0x7fffffff;
 
@@ -90,6 +95,17 @@ bool in_front(vec4 plane, vec3 eye, float limit) {
     return c * d > 0.0 && abs(c) < far;
 }
 
+// surface ``tri`` more than ``limit`` in front of a sample, or, of a smooth contour's sample
+// (``contour``), more than its reach where the surface folds over the contour
+bool hides(int tri, vec3 eye, float limit, bool contour) {
+#if BAND
+    if (contour) {
+        limit = max(limit, TABLE_ROW(u_reach, tri).r);
+    }
+#endif
+    return in_front(TABLE_ROW(u_planes, tri), eye, limit);
+}
+
 // pixel (x right, y down) clamped to the image, in OpenGL rows
 ivec2 texel(ivec2 p) {
     p = clamp(p, ivec2(0), u_size - 1);
@@ -99,13 +115,13 @@ ivec2 texel(ivec2 p) {
 #if STACKS
 // (surfaces counted in front by more than ``limit``, surfaces there) from the read-back stack
 // at q; counting stops at ``bound`` surfaces in front; seen[0]: the stack's first row
-ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, out int seen[K]) {
+ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, bool contour, out int seen[K]) {
     ivec2 where = texelFetch(u_where, q, 0).xy;
     seen[0] = where.x;
     int front = 0;
     for (int k = 0; k < where.y; ++k) {
         int tri = TABLE_ROW(u_faces, where.x + k).r;
-        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye, limit)) ++front;
+        if (tri != own0 && tri != own1 && hides(tri, eye, limit, contour)) ++front;
         if (front >= bound) return ivec2(front, k + 1);
     }
     return ivec2(front, where.y);
@@ -126,13 +142,13 @@ int seen_face(int seen[K], int index) {
         seen[I] = tri;                                                              \
         if (tri < 0) return ivec2(front, count);                                    \
         ++count;                                                                    \
-        if (tri != own0 && tri != own1 && in_front(TABLE_ROW(u_planes, tri), eye, limit)) ++front; \
+        if (tri != own0 && tri != own1 && hides(tri, eye, limit, contour)) ++front;       \
         if (front >= bound) return ivec2(front, count);                             \
     }
 
 // (surfaces counted in front by more than ``limit``, surfaces there), unrolled over the K
 // targets; counting stops at ``bound`` surfaces in front; seen: the faces of the surfaces counted
-ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, out int seen[K]) {
+ivec2 stack_at(ivec2 q, vec3 eye, float limit, int own0, int own1, int bound, bool contour, out int seen[K]) {
     int front = 0;
     int count = 0;
     SURFACE(u_s0, 0)
@@ -173,13 +189,14 @@ void main() {
     int own0 = s.own.z;
     int own1 = s.own.w;
     bool solid = (s.flags & 1) != 0;
+    bool contour = (s.flags & 4) != 0;
     ivec2 px = s.pixel.xy;
     int best = BIG;
     // a pixel can only lower the minimum: its count stops at the best so far, and none
     // goes below zero
     int seen[K];
     for (int n = 0; n < 4 && best > 0; ++n) {
-        ivec2 st = stack_at(texel(px + ivec2(n % 2, n / 2)), eye, u_tolerance, own0, own1, best, seen);
+        ivec2 st = stack_at(texel(px + ivec2(n % 2, n / 2)), eye, u_tolerance, own0, own1, best, contour, seen);
         int front = (solid && st.y == 0) ? BIG : st.x;
         best = min(best, front);
     }
@@ -190,7 +207,7 @@ void main() {
         float side_limit = u_ortho ? u_footprint : u_footprint * -eye.z;
         for (int side = 0; side < 2; ++side) {
             ivec2 q = texel(side == 0 ? s.pixel.zw : s.own.xy);
-            ivec2 st = stack_at(q, eye, side_limit, own0, own1, BIG, seen);
+            ivec2 st = stack_at(q, eye, side_limit, own0, own1, BIG, false, seen);
             sides[side] = st.x < st.y ? seen_face(seen, st.x) : -1;
         }
     }

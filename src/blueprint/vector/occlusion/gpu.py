@@ -16,7 +16,7 @@ from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
-from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
+from ..lines import BORDER, CREASE, GRAZING_REACH, SILHOUETTE, SMOOTH
 from .levels import DepthTest
 from .pixels import PixelLayers, across_line, around
 from .samples import Samples
@@ -267,6 +267,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         level[inside] = 0
         return level, sides, checked
     flags = (~np.isin(samples.kind, (SILHOUETTE, BORDER))).astype(np.int32) | (checked.astype(np.int32) << 1)
+    flags[inside] |= test.contour_samples(samples, inside).astype(np.int32) << 2
     packed = np.zeros(
         len(inside), [("eye", "<f4", 3), ("flags", "<i4"), ("pixel", "<i4", 4), ("own", "<i4", 4)]
     )
@@ -280,7 +281,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     packed["own"][:, 2:] = samples.faces[inside]
 
     ctx = renderer.ctx
-    prog = renderer.compute(OCCLUSION_COMP, defines)
+    prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": test.band is not None})
     bind(prog)
     put = renderer.uniforms.set
     put(prog, "u_count", len(inside))
@@ -291,6 +292,11 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     plane_texture = table_texture(ctx, planes.astype(np.float32))
     plane_texture.use(location=MAX_LAYERS)
     put(prog, "u_planes", MAX_LAYERS)
+    band_texture = None
+    if test.band is not None:
+        band_texture = table_texture(ctx, (test.band * np.float32(GRAZING_REACH)).astype(np.float32))
+        band_texture.use(location=MAX_LAYERS + 1)
+        put(prog, "u_reach", MAX_LAYERS + 1)
     buffers = {0: ctx.buffer(packed.tobytes()), 2: ctx.buffer(reserve=16 * len(inside))}
     try:
         for binding, buffer in buffers.items():
@@ -304,6 +310,8 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         for buffer in buffers.values():
             buffer.release()
         plane_texture.release()
+        if band_texture is not None:
+            band_texture.release()
     level[inside] = result[:, 0]
     sides[inside] = result[:, 1:3]
     return level, sides, checked

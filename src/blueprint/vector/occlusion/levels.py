@@ -33,7 +33,7 @@ from blueprint.columns import row_norm
 from blueprint.scene.model import Model
 
 from ..cache import ModelCache
-from ..lines import BORDER, CREASE, SILHOUETTE, SMOOTH
+from ..lines import BORDER, CREASE, GRAZING_REACH, SILHOUETTE, SMOOTH
 from .pixels import NEIGHBOURS, PixelLayers, across_line, around, flat_index
 from .samples import Samples
 
@@ -55,11 +55,23 @@ class DepthTest:
         (orthographic): ``Camera.pixel_angle``
     tolerance : float, surfaces nearer than this in eye depth (model units) do not count as in
         front: ``render.gbuffer.depth_tolerance``, the capture's
+    band : (F + 1,) float32, optional, ``lines.grazing_band``: the faces where a smooth surface
+        folds over its own contour, with their sizes; such a face counts as in front of a
+        smooth contour's sample (a silhouette inside one face) only from ``GRAZING_REACH``
+        of its sizes in front
     """
 
     ortho: bool
     footprint: float
     tolerance: float
+    band: np.ndarray | None = None
+
+    def contour_samples(self, samples: Samples, rows: np.ndarray) -> np.ndarray:
+        """(N,) bool: which of the samples ``rows`` the band's rule applies to (none without a
+        band): those of smooth contours, silhouettes inside one face."""
+        if self.band is None:
+            return np.zeros(len(rows), bool)
+        return (samples.kind[rows] == SILHOUETTE) & (samples.faces[rows, 1] < 0)
 
     def side_limit(self, eye: np.ndarray) -> np.ndarray:
         """(N,) float32: a pixel's footprint in eye depth at eye points (N, 3), the depth within
@@ -136,11 +148,13 @@ def classify_samples(
     # rounding (``depth_tolerance`` holds eight steps of the farthest eye depth)
     planes = planes.astype(np.float32)
     ortho, limit = test.ortho, np.float32(test.tolerance)
+    reach = None if test.band is None else (test.band * np.float32(GRAZING_REACH)).astype(np.float32)
     for start in range(0, len(inside), _CHUNK):
         idx = inside[start : start + _CHUNK]
         px = around(samples.pixel[idx])
         eye = samples.eye[idx].astype(np.float32)
         own0, own1 = samples.faces[idx, 0], samples.faces[idx, 1]
+        contour = test.contour_samples(samples, idx)
         # off a contour the line's own surfaces surround it: a pixel showing no surface at all
         # only says that the pixel lies past the object's outline, not what is in front
         solid = ~np.isin(samples.kind[idx], (SILHOUETTE, BORDER))
@@ -151,7 +165,10 @@ def classify_samples(
             stack, depth_count = triangle.at(q)
             for k in range(int(depth_count.max())):
                 tri = stack[:, k]  # -1 (no surface) picks the all-zero last plane
-                ahead = _in_front(np.take(planes, tri, axis=0), eye, ortho, limit)
+                within = limit
+                if reach is not None:
+                    within = np.where(contour, np.maximum(reach[tri], limit), limit)
+                ahead = _in_front(np.take(planes, tri, axis=0), eye, ortho, within)
                 ahead &= (tri != own0) & (tri != own1)
                 front += ahead
             front[solid & (depth_count == 0)] = np.iinfo(np.int32).max
