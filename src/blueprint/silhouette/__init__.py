@@ -20,7 +20,7 @@ import numpy as np
 
 from blueprint.scene.weld import weld
 
-from .contours import ContourSet, SmoothSurface, smooth_contours, smooth_surface
+from .contours import ContourSet, SmoothSurface, smooth_contours, smooth_surface, toward_eye
 from .deform import Animation, Pose
 from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges
 from .idlist import IdLists, build_id_lists, id_lists_from_topology
@@ -46,6 +46,7 @@ __all__ = [
     "silhouette_image",
     "smooth_contours",
     "smooth_surface",
+    "toward_eye",
     "weld",
 ]
 

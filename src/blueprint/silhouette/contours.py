@@ -25,7 +25,7 @@ from blueprint.columns import indexed_cross, row_norm
 from .edges import _projected, feature_vertices
 from .mesh import Adjacency
 
-__all__ = ["ContourSet", "SmoothSurface", "smooth_contours", "smooth_surface"]
+__all__ = ["ContourSet", "SmoothSurface", "smooth_contours", "smooth_surface", "toward_eye"]
 
 # Vertex normals this close (a cosine) to square with the view direction are seen edge-on.
 _EDGE_ON = 1e-7
@@ -97,11 +97,7 @@ def smooth_contours(
     A vertex where ``g`` is zero (within ``_EDGE_ON``) counts as turned away, so a face holds
     at most one segment, and a crossing at such a vertex lies on it.
     """
-    camera_to_model = np.linalg.inv(np.asarray(view, np.float64))
-    if projection[3, 3] == 1.0:
-        toward = np.broadcast_to(camera_to_model[:3, 2], adj.positions.shape)
-    else:
-        toward = camera_to_model[:3, 3] - adj.positions
+    toward = toward_eye(adj.positions, view, projection)
     facing = np.einsum("ij,ij->i", surface.normals, toward)
     # a vertex seen edge-on within rounding counts as turned away: a plane seen edge-on has no
     # contour across it, whichever way its vertices' normals round
@@ -126,6 +122,16 @@ def smooth_contours(
     model = np.stack(ends, axis=1)
     model, pixels, keep = _projected(model, view, projection, size)
     return ContourSet(model, pixels, faces[keep].astype(np.int64), np.stack(edges, axis=1)[keep])
+
+
+def toward_eye(positions: np.ndarray, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """(V, 3) float64: from each of ``positions`` (V, 3) towards the eye of the camera of
+    ``view`` and ``projection`` (OpenGL conventions; ``projection[3, 3] == 1`` orthographic:
+    the view direction reversed, one for all)."""
+    camera_to_model = np.linalg.inv(np.asarray(view, np.float64))
+    if projection[3, 3] == 1.0:
+        return np.broadcast_to(camera_to_model[:3, 2], positions.shape)
+    return camera_to_model[:3, 3] - positions
 
 
 def _edge_keys(adj: Adjacency) -> np.ndarray:

@@ -25,10 +25,12 @@ from blueprint.silhouette import (
     SILHOUETTE,
     Adjacency,
     EdgeSet,
+    SmoothSurface,
     build_adjacency,
     classify_edges,
     smooth_contours,
     smooth_surface,
+    toward_eye,
 )
 from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
 
@@ -547,23 +549,30 @@ def grazing_band(model: Model, view: np.ndarray, projection: np.ndarray, crease_
     band = np.zeros(len(adj.faces) + 1, np.float32)
     if len(adj.faces) == 0:
         return band
-    surface = SURFACES.get(model, dict)
-    if crease_angle not in surface:
-        surface[crease_angle] = smooth_surface(adj, crease_angle)
-    surface = surface[crease_angle]
-    camera_to_model = np.linalg.inv(np.asarray(view, np.float64))
-    if projection[3, 3] == 1.0:
-        toward = np.broadcast_to(camera_to_model[:3, 2], adj.positions.shape)
-    else:
-        toward = camera_to_model[:3, 3] - adj.positions
+    surface = _surface(model, adj, crease_angle)
+    toward = toward_eye(adj.positions, view, projection)
     facing = np.einsum("ij,ij->i", surface.normals, toward) / np.linalg.norm(toward, axis=1)
     grazing = (np.abs(facing) < np.sin(np.radians(GRAZING_DEGREES)))[adj.faces].any(axis=1)
-    all_faces = np.arange(len(adj.faces))
-    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
+    edge_on = _faces_edge_on(adj, view, projection)
     chosen = np.flatnonzero(grazing & surface.smooth & ~edge_on)
     corners = adj.positions[adj.faces[chosen]]
     band[chosen] = np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2).max(axis=1)
     return band
+
+
+def _surface(model: Model, adj: Adjacency, crease_angle: float) -> SmoothSurface:
+    """The smooth surface of ``model`` (its adjacency ``adj``) at ``crease_angle``, made once a
+    mesh and angle (``SURFACES``)."""
+    surface = SURFACES.get(model, dict)
+    if crease_angle not in surface:
+        surface[crease_angle] = smooth_surface(adj, crease_angle)
+    return surface[crease_angle]
+
+
+def _faces_edge_on(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """(F,) bool: the faces seen edge-on, within rounding of smooth contours' (``_edge_on``)."""
+    all_faces = np.arange(len(adj.faces))
+    return _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
 
 
 def _contour_segments(model, adj, edges, kind, view, projection, size, crease_angle):
@@ -571,14 +580,10 @@ def _contour_segments(model, adj, edges, kind, view, projection, size, crease_an
     faces that keep their mesh silhouettes, (E,) bool: the silhouette edges of ``edges`` (of
     ``kind`` as the drawing has them) that the contours replace, and the faces of the short
     contours left out that close on themselves."""
-    surface = SURFACES.get(model, dict)
-    if crease_angle not in surface:
-        surface[crease_angle] = smooth_surface(adj, crease_angle)
-    surface = surface[crease_angle]
+    surface = _surface(model, adj, crease_angle)
     # faces seen edge-on (a hole's wall along the view) have no contour to give: their
     # vertices' n . v rounds either way, so the mesh's outline edges stay there
-    all_faces = np.arange(len(adj.faces))
-    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
+    edge_on = _faces_edge_on(adj, view, projection)
     surface = replace(surface, smooth=surface.smooth & ~edge_on)
     contours = smooth_contours(adj, surface, view, projection, size)
     # where a contour runs only a few pixels before it meets a feature, the mesh's own
