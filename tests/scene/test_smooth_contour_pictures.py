@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 from capture_helpers import one_way
+from helpers import run_cli
+from PIL import Image
 from scan_helpers import ink, noisy_bust, noisy_sphere, specks
 from scipy import ndimage
 
@@ -141,3 +144,19 @@ def test_every_capture_draws_them(renderer, way):
     differ = np.abs(image.astype(int) - reference.astype(int)).max(axis=-1) > 24
     assert differ.mean() < 0.002, differ.sum()
     assert specks(image) <= 8
+
+
+def test_command_line_flag(tmp_path):
+    """``blueprint render --smooth-contours``: the noisy sphere's file drawn with its contour
+    lines, fewer specks than without."""
+    path = tmp_path / "scan.stl"
+    model = noisy_sphere(0.006)
+    trimesh.Trimesh(model.positions, model.faces, process=False).export(path)
+    found = {}
+    for flags in ((), ("--smooth-contours",)):
+        target = tmp_path / f"scan{len(flags)}.png"
+        done = run_cli("render", path, "-o", target, *flags)
+        assert done.returncode == 0, done.stderr
+        with Image.open(target) as picture:
+            found[bool(flags)] = specks(np.asarray(picture.convert("RGB")))
+    assert found[True] < found[False], found
