@@ -358,6 +358,31 @@ def _front(s: Smoke):
     return f"ink {fraction:.1%}"
 
 
+@case("--smooth-contours png")
+def _smooth_contours(s: Smoke):
+    # a scan-like ball: a UV sphere whose vertices the noise moves along their radius
+    lat, lon = np.meshgrid(
+        np.linspace(0.05, np.pi - 0.05, 60), np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    )
+    radius = 1 + 0.006 * np.random.default_rng(7).standard_normal(lat.shape)
+    points = (
+        np.stack([np.sin(lat) * np.cos(lon), np.cos(lat), np.sin(lat) * np.sin(lon)], -1) * radius[..., None]
+    )
+    i, j = np.meshgrid(np.arange(120), np.arange(59), indexing="ij")
+    a, b, c, d = points[i, j], points[(i + 1) % 120, j], points[(i + 1) % 120, j + 1], points[i, j + 1]
+    triangles = np.concatenate([np.stack([a, c, b], -2), np.stack([a, d, c], -2)]).reshape(-1, 3, 3)
+    record = np.dtype([("normal", "<f4", 3), ("triangle", "<f4", (3, 3)), ("attribute", "<u2")])
+    data = np.zeros(len(triangles), record)
+    data["triangle"] = triangles
+    ball = s.work / "ball.stl"
+    ball.write_bytes(b"\0" * 80 + len(data).to_bytes(4, "little") + data.tobytes())
+    _, plain = drawn(s.render("ball.png", model=ball), low=0.005)
+    fraction, image = drawn(s.render("ball-contours.png", "--smooth-contours", model=ball), low=0.005)
+    changed = differs(image, plain)
+    check(changed > 0.0005, f"the contour lines change {changed:.3%} of the ball's picture")
+    return f"ink {fraction:.1%}, {changed:.2%} of pixels changed from the mesh's outline"
+
+
 @case("--dimensions png")
 def _dimensions(s: Smoke):
     fraction, image = drawn(
