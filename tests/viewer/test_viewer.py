@@ -17,8 +17,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from helpers import ROOT
 from PIL import Image
+from scan_helpers import noisy_sphere
 
 import blueprint
 from blueprint.cli import STYLE_NAMES
@@ -414,3 +416,31 @@ def test_no_display_says_use_render_and_exits_2(display, tmp_path):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and "blueprint render" in lines[0], run.stderr
     assert run.stdout == ""
+
+
+def test_still_drawing_has_the_contour_lines(xdisplay, tmp_path, renderer):
+    """``--smooth-contours``: the drawing shown once the view rests is ``render``'s with them,
+    pixel for pixel (the moving frames leave them out)."""
+    sphere = noisy_sphere(0.006)
+    model_path = tmp_path / "scan.stl"
+    trimesh.Trimesh(sphere.positions, sphere.faces, process=False).export(model_path)
+    model = blueprint.load_model(model_path)
+    args = ["--size", str(SIZE[0]), str(SIZE[1]), "--style", "paper", "--smooth-contours"]
+    viewer = Session(xdisplay, tmp_path, str(model_path), *args)
+    try:
+        still = viewer.first
+        assert still["quality"] == "full"
+        state = ViewState.start(STYLE_NAMES, "paper", azimuth=still["azimuth"], elevation=still["elevation"])
+        state.base_azimuth, state.base_elevation = VIEWS["iso"]
+        camera = state.camera(model, SIZE[0] / SIZE[1])
+        options = dict(camera=camera, size=SIZE, style="paper", max_layers=5, renderer=renderer)
+        expected = blueprint.render(model, smooth_contours=True, **options)
+        assert not np.array_equal(expected, blueprint.render(model, **options))
+        hud = still["hud_height"]
+        np.testing.assert_array_equal(viewer.image(still), expected[hud:, :, :3])
+        viewer.key("Escape")
+        assert viewer.proc.wait(15) == 0
+    finally:
+        if viewer.proc.poll() is None:
+            viewer.proc.kill()
+            viewer.proc.wait()

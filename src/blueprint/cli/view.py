@@ -21,7 +21,8 @@ DEFAULT_SIZE = (800, 600)
 @click.argument("model", type=click.Path(path_type=Path))
 @drawing_options(
     *CAMERA_OPTIONS, "style", "grid", "max_layers", "min_fraction", "crease_angle", "line_width",
-    "supersample", size=DEFAULT_SIZE, max_layers=5, helps={"style": f"One of {', '.join(STYLE_NAMES)}."},
+    "supersample", "smooth_contours", size=DEFAULT_SIZE, max_layers=5,
+    helps={"style": f"One of {', '.join(STYLE_NAMES)}."},
 )  # fmt: skip
 @click.option(
     "--moving-fps",

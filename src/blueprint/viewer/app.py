@@ -48,6 +48,7 @@ def run_viewer(
         crease_angle=options.crease_angle,
         line_width=options.line_width,
         supersample=options.supersample,
+        smooth_contours=options.smooth_contours,
         interactive_scale=interactive_scale,
         moving_fps=moving_fps,
     )

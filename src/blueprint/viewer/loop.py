@@ -253,6 +253,7 @@ class Viewer:
             crease_angle=opts.crease_angle,
             line_width=opts.line_width,
             supersample=step.supersample,
+            smooth_contours=opts.smooth_contours and not moving,
             # shown from the GPU; a screenshot (not presented at once) reads its drawing back
             on_gpu=present,
         )

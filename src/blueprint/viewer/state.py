@@ -32,13 +32,15 @@ class Options:
     """Rendering options passed through to ``Renderer.render`` (see there), and how frames are
     drawn while the view moves: ``moving_fps``, the frame rate kept then (see ``pacing``), and
     ``interactive_scale``, 0 for the ladder of qualities, else the one quality of those frames:
-    that fraction of the window at supersample 1."""
+    that fraction of the window at supersample 1. ``smooth_contours`` draws the full drawing
+    once the view rests with them (a CPU pass and a capture a frame: not the moving ones)."""
 
     grid: float | None = None
     min_fraction: float = 0.0
     crease_angle: float = 30.0
     line_width: float = 1.0
     supersample: int = 2
+    smooth_contours: bool = False
     interactive_scale: float = 0.0
     moving_fps: float = MOVING_FPS
 
