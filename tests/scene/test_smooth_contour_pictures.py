@@ -125,6 +125,8 @@ def test_faces_without_a_smooth_surface_draw_as_before(renderer):
     model = examples.assemble(
         {"a": examples.box((0, 0, 0), (2, 1, 1)), "b": examples.box((1, 0.5, 0.5), (3, 2, 2))}
     )
+    camera = fit_camera(model, (256, 256), "iso")
+    assert contour_ink(renderer, model, camera, (256, 256)) is None
     before = np.asarray(blueprint.render(model, size=(256, 256)))
     after = np.asarray(blueprint.render(model, size=(256, 256), smooth_contours=True))
     assert np.array_equal(before, after)

@@ -26,7 +26,7 @@ def frame_contours(renderer: LayerRenderer, model: Model, camera: Camera | None,
     """(camera, contour lines) of a frame of ``keywords`` (``DrawOptions.frame_keywords``): the
     camera fitted as the frame would fit it where None, since its lines are found for it
     before the frame is drawn (``blueprint.vector.contour_ink``; None for a model kept as
-    instances, whose meshes' outlines are drawn as they are)."""
+    instances, whose meshes' outlines are drawn as they are, or without a smooth face)."""
     # the vector drawings' lines load with the frames that draw them
     from blueprint.vector.contour_ink import contour_ink
 

@@ -64,13 +64,15 @@ def contour_ink(
     """The smooth contours of ``model`` seen by ``camera`` at ``size`` (width, height) pixels,
     their levels found against its surfaces peeled up to ``max_layers`` (None: all), as a
     vector drawing finds them; None for a model kept as instances, whose meshes' outlines the
-    picture draws as they are."""
+    picture draws as they are, and where no face is smooth."""
     if model.instances is not None:
         return None
     view = np.asarray(camera.view_matrix(), np.float64)
     projection = np.asarray(camera.projection_matrix(), np.float64)
     with model.holding_corners():
         segments, contoured = smooth_contour_segments(model, view, projection, size, crease_angle)
+        if not contoured.any():
+            return None  # no face's outline to draw otherwise: the picture as it was
         if len(segments) == 0:
             none = np.zeros(0, np.int32)
             return ContourInk(np.zeros((0, 2)), np.zeros(1, np.int64), none, contoured, size)
