@@ -8,12 +8,14 @@ This is the "CPU-Preprocess" stage of the conventional object-space silhouette m
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
-from blueprint.columns import indexed_cross, row_norm
+from blueprint import parallel
+from blueprint.columns import column_cross, row_norm
 from blueprint.scene.weld import weld
-from blueprint.sorting import stable_argsort, unique_first
+from blueprint.sorting import sorted_with_order, unique_first
 
 __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 
@@ -22,6 +24,8 @@ __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 _DEGENERATE_REL_AREA = 1e-12
 # Levels of the winding search's breadth-first distances found one at a time, at most.
 _MAX_LEVELS = 4096
+# Faces whose half-edge keys and normals a thread makes at a time.
+_BLOCK = 1 << 15
 
 
 @dataclass(frozen=True)
@@ -76,36 +80,61 @@ def _orient_merged(
     num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """``_orient`` by merging trees of faces, with NumPy alone (scipy, which the search needs,
-    is slow to import): every round, each tree's root hangs under the lowest
-    root that a pair joins it to, and the trees are flattened by pointer jumping, each face
-    keeping its flip relative to its root; a few rounds on real meshes. None where a pair's
-    parity disagrees with the flips found: a surface that cannot be wound consistently, whose
-    leftover inconsistency the search places."""
-    a, b = pair_faces[:, 0].astype(np.int64), pair_faces[:, 1].astype(np.int64)
-    parity = pair_parity.astype(bool)
+    is slow to import): every round, each tree's root hangs under the lowest root that a pair
+    joins it to and the trees are flattened by pointer jumping; then the roots left are
+    numbered afresh and the pairs rewritten between them, so that a round costs what its roots
+    and pairs number, not what the faces do (a few rounds on real meshes, each with about half
+    the pairs of the one before). Each face's flip relative to its component's root is made
+    last, from the rounds' hangings in reverse. None where a pair within one tree disagrees
+    with the flips found: a surface that cannot be wound consistently, whose leftover
+    inconsistency the search places."""
+    # the pairs between roots, numbered among the roots: u and v, and q where their flips differ
+    u = np.asarray(pair_faces[:, 0], np.int64)
+    v = np.asarray(pair_faces[:, 1], np.int64)
+    q = np.asarray(pair_parity, bool)
     parent = np.arange(num_faces)
-    flip = np.zeros(num_faces, bool)  # relative to the parent: to the root between rounds
-    ea, eb, ep = a, b, parity
-    while True:
-        ra, rb = parent[ea], parent[eb]
-        live = ra != rb
-        ea, eb, ep, ra, rb = ea[live], eb[live], ep[live], ra[live], rb[live]
-        if len(ea) == 0:
-            break
-        between = flip[ea] ^ flip[eb] ^ ep  # the flip of one root relative to the other
-        low, high = np.minimum(ra, rb), np.maximum(ra, rb)
-        # each higher root's pair to the lowest root, the first such pair: the smallest key
-        # low * pairs + pair, found in one pass where sorting the pairs by (high, low) would
-        # order them all
-        pairs = len(ea)
-        best = np.full(num_faces, num_faces * pairs, np.int64)
-        np.minimum.at(best, high, low * pairs + np.arange(pairs))
-        first = best[best < num_faces * pairs] % pairs
-        parent[high[first]] = low[first]
-        flip[high[first]] = between[first]
-        parent = _to_roots(parent, flip)
-    if np.any(flip[a] ^ flip[b] ^ parity):
-        return None
+    flip = np.zeros(num_faces, bool)  # relative to the parent
+    face = None  # each root's face; None while every face is one
+    roots = num_faces
+    hung = []
+    while len(u):
+        low, high = np.minimum(u, v), np.maximum(u, v)
+        lowest = np.full(roots, roots, np.int64)
+        np.minimum.at(lowest, high, low)
+        # a pair from each higher root to its lowest, whose parity is the flip between them
+        chosen = np.empty(roots, np.int64)
+        hit = np.flatnonzero(low == lowest[high])
+        chosen[high[hit]] = hit
+        del low, high, hit
+        hooked = np.flatnonzero(lowest < roots)
+        up = np.arange(roots)
+        up[hooked] = lowest[hooked]
+        turn = np.zeros(roots, bool)
+        turn[hooked] = q[chosen[hooked]]
+        del lowest, chosen
+        up = _to_roots(up, turn)
+        q = q ^ turn[u] ^ turn[v]
+        kept = up == np.arange(roots)
+        number = np.cumsum(kept)
+        number -= 1
+        number = number[up]  # each root's number after the round, its tree's root's
+        u, v = number[u], number[v]
+        inside = u == v
+        if q[inside].any():
+            return None
+        outside = ~inside
+        u, v, q = u[outside], v[outside], q[outside]
+        hooked_face = hooked if face is None else face[hooked]
+        parent[hooked_face] = up[hooked] if face is None else face[up[hooked]]
+        flip[hooked_face] = turn[hooked]
+        hung.append(hooked_face)
+        face = np.flatnonzero(kept) if face is None else face[kept]
+        roots = len(face)
+    # a round's hung roots hang under roots of its end, which later rounds hung in turn
+    for hooked_face in reversed(hung):
+        above = parent[hooked_face]
+        flip[hooked_face] ^= flip[above]
+        parent[hooked_face] = parent[above]
     # roots only ever hang under lower ones: each component's root is its lowest face
     root = parent == np.arange(num_faces)
     return flip, (np.cumsum(root) - 1)[parent]
@@ -202,6 +231,56 @@ def _distances(reach, root: int) -> np.ndarray:
     return distance
 
 
+def _edge_keys(
+    faces: np.ndarray, num_vertices: int, key: np.ndarray, proper: np.ndarray, lo: int, hi: int
+) -> None:
+    """``key[3 * lo : 3 * hi]``: each half-edge of faces ``lo`` to ``hi`` keyed ``low * V +
+    high`` of its two vertices, and ``proper[lo:hi]`` False, their keys ``(V - 1) * V`` (no
+    edge's: its lower vertex is below V - 1), where a face repeats an index."""
+    rows = key.reshape(-1, 3)
+    for begin in range(lo, hi, _BLOCK):
+        block = faces[begin : min(begin + _BLOCK, hi)]
+        out = rows[begin : begin + len(block)]
+        for k in range(3):
+            a, b = block[:, k], block[:, (k + 1) % 3]
+            column = np.minimum(a, b)
+            column *= num_vertices
+            column += np.maximum(a, b)
+            out[:, k] = column
+            proper[begin : begin + len(block)] &= a != b
+        improper = ~proper[begin : begin + len(block)]
+        if improper.any():
+            out[improper] = (num_vertices - 1) * num_vertices
+
+
+def _unit_normals(positions: np.ndarray, faces: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: the unit normals of faces ``lo`` to ``hi``, zero where a face's doubled
+    area is below ``_DEGENERATE_REL_AREA`` of its longest edge squared: ``indexed_cross`` over
+    its ``row_norm``, a block at a time, the corners gathered once for both."""
+    columns = [positions[:, k] for k in range(3)]
+    for begin in range(lo, hi, _BLOCK):
+        block = faces[begin : min(begin + _BLOCK, hi)]
+        u, v, w = [], [], []
+        for column in columns:
+            corner = [column[block[:, k]] for k in range(3)]
+            u.append(corner[1] - corner[0])
+            v.append(corner[2] - corner[0])
+            w.append(corner[2] - corner[1])
+        cross = column_cross(u, v)
+        area2 = row_norm(cross)
+        # squared edge lengths summed x, then y, then z; the edge from corner 2 to 0 is -v
+        longest2 = None
+        for d in (u, w, v):
+            length2 = d[0] * d[0]
+            length2 += d[1] * d[1]
+            length2 += d[2] * d[2]
+            longest2 = length2 if longest2 is None else np.maximum(longest2, length2)
+        good = area2 > _DEGENERATE_REL_AREA * longest2
+        normals = out[begin : begin + len(block)]
+        normals[:] = 0.0
+        np.divide(cross, area2[:, None], out=normals, where=good[:, None])
+
+
 def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | None = None) -> Adjacency:
     """Weld a triangle soup, build its edge connectivity and make its winding consistent.
 
@@ -246,75 +325,52 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     num_faces, num_vertices = len(faces), max(len(positions), 1)
 
-    # Half-edge k of face f runs from corner k to corner k + 1.
-    start = faces.reshape(-1)
-    end = faces[:, [1, 2, 0]].reshape(-1)
-    # A face with a repeated index is a line or a point: it bounds nothing, so its edges
-    # would only add false borders and break the two-face count of real edges.
-    proper = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
-    if proper.all():
-        half_face = None  # half-edge h of face h // 3
-    else:
-        half_face = np.repeat(np.arange(num_faces, dtype=np.int64), 3)
-        proper = np.repeat(proper, 3)
-        start, end, half_face = start[proper], end[proper], half_face[proper]
+    # Half-edge h runs from corner h % 3 of face h // 3 to its next corner; one stable sort of
+    # their edges' keys orders them by edge, then face, and the keys of the half-edges of
+    # faces with a repeated index (lines or points: they bound nothing, and their edges would
+    # only add false borders and break the two-face count of real edges) sort after the rest.
+    key = np.empty(3 * num_faces, np.int64)
+    proper = np.ones(num_faces, bool)
+    parallel.run(partial(_edge_keys, faces, num_vertices, key, proper), num_faces)
+    halves = 3 * int(np.count_nonzero(proper))
     del proper
-
-    key = np.minimum(start, end)
-    key *= num_vertices
-    key += np.maximum(start, end)
-    # half-edges come in face order, so one stable sort by edge orders them by edge, then face
-    order = stable_argsort(key)
-    sorted_key = key[order]
+    sorted_key, order = sorted_with_order(key, overwrite=True)
     del key
-    new_edge = np.ones(len(sorted_key), bool)
-    new_edge[1:] = sorted_key[1:] != sorted_key[:-1]
-    keys = sorted_key[new_edge]
+    sorted_key, order = sorted_key[:halves], order[:halves]
+    new_edge = np.empty(halves + 1, bool)  # and one past the last, for the pairs below
+    new_edge[0] = new_edge[halves] = True
+    np.not_equal(sorted_key[1:], sorted_key[:-1], out=new_edge[1:halves])
+    keys = sorted_key[new_edge[:halves]]
     del sorted_key
     edges = np.empty((len(keys), 2), np.int64)
     np.floor_divide(keys, num_vertices, out=edges[:, 0])
-    np.remainder(keys, num_vertices, out=edges[:, 1])
+    np.multiply(edges[:, 0], num_vertices, out=edges[:, 1])
+    np.subtract(keys, edges[:, 1], out=edges[:, 1])
     del keys
-    edge_faces = np.empty((len(order), 2), np.int64)
-    np.subtract(np.cumsum(new_edge), 1, out=edge_faces[:, 0])
-    if half_face is None:
-        np.floor_divide(order, 3, out=edge_faces[:, 1])
-    else:
-        np.take(half_face, order, out=edge_faces[:, 1])
+    edge_faces = np.empty((halves, 2), np.int64)
+    np.cumsum(new_edge[:halves], out=edge_faces[:, 0])
+    edge_faces[:, 0] -= 1
+    np.floor_divide(order, 3, out=edge_faces[:, 1])
 
     # Manifold edges: exactly two incidences, adjacent after sorting by edge.
-    starts = np.flatnonzero(new_edge)
+    two = new_edge[:-2] & ~new_edge[1:-1]
+    two &= new_edge[2:]
     del new_edge
-    count = np.diff(np.r_[starts, len(order)])
-    manifold = order[np.repeat(count == 2, count)]
-    del starts, count, order
-    first, second = manifold[::2], manifold[1::2]
+    first, second = order[:-1][two], order[1:][two]
+    del two, order
+    start = faces.reshape(-1)
     same_direction = start[first] == start[second]
     pair_faces = np.stack([first, second], axis=1)
-    if half_face is None:
-        pair_faces //= 3
-    else:
-        pair_faces = half_face[pair_faces]
+    pair_faces //= 3
+    del first, second
     flipped, component = _orient(num_faces, pair_faces, same_direction)
-    faces = np.where(flipped[:, None], faces[:, [0, 2, 1]], faces)
-
-    cross = indexed_cross(positions, faces)
-    area2 = row_norm(cross)
-    # squared edge lengths summed coordinate by coordinate, x then y then z (NumPy's reductions
-    # over a short axis are slow), without the faces' (F, 3, 3) corners
-    length2 = [None, None, None]
-    for k in range(3):
-        column = positions[:, k]
-        corner = [column[faces[:, j]] for j in range(3)]
-        for e, (a, b) in enumerate(((0, 1), (1, 2), (2, 0))):
-            d = corner[b] - corner[a]
-            d *= d
-            length2[e] = d if length2[e] is None else length2[e] + d
-    longest2 = np.maximum(np.maximum(length2[0], length2[1]), length2[2])
-    del length2
-    good = area2 > _DEGENERATE_REL_AREA * longest2
-    normals = np.zeros_like(cross)
-    normals[good] = cross[good] / area2[good, None]
+    del pair_faces, same_direction
+    faces = faces.copy()  # the caller's array is not the result's
+    turned = np.flatnonzero(flipped)
+    faces[turned, 1:] = faces[turned, 2:0:-1]
+    del turned
+    normals = np.empty((num_faces, 3))
+    parallel.run(partial(_unit_normals, positions, faces, normals), num_faces)
     return Adjacency(
         positions=positions,
         faces=faces,
