@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.columns import column_max, column_min
 from blueprint.scene.camera import clip_to_pixels, transform
 from blueprint.scene.normals import noise_creases
 
@@ -208,7 +209,10 @@ def sharp_edges(adj, count, f0, f1, normal_ok, crease_angle: float) -> np.ndarra
     normals = adj.face_normals
     sharp = np.flatnonzero(count == 2)
     both_ok = normal_ok[f0[sharp]] & normal_ok[f1[sharp]]
-    cos_angle = np.einsum("ij,ij->i", normals[f0[sharp]], normals[f1[sharp]])
+    # NumPy takes rows faster than it indexes them
+    first, second = (np.take(normals, f[sharp], axis=0) for f in (f0, f1))
+    cos_angle = np.einsum("ij,ij->i", first, second)
+    del first, second
     limit = np.cos(np.radians(crease_angle))
     # runs are found among every edge that is not smooth, those beside a degenerate face too
     apart = ~(both_ok & (cos_angle >= limit))
@@ -226,10 +230,10 @@ def _size(adj) -> float:
     """The diagonal of the bounding box of the vertices the faces use (1 where it is 0)."""
     used = np.zeros(len(adj.positions), bool)
     used[adj.faces.reshape(-1)] = True
-    points = adj.positions[used]
+    points = adj.positions if used.all() else adj.positions[used]
     if len(points) == 0:
         return 1.0
-    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) or 1.0
+    return float(np.linalg.norm(column_max(points) - column_min(points))) or 1.0
 
 
 def _projected(model: np.ndarray, view, projection, size) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
