@@ -12,6 +12,7 @@ import pytest
 from blueprint import parallel, settings
 from blueprint.columns import row_norm
 from blueprint.silhouette import build_adjacency, weld
+from blueprint.silhouette import edges as edges_module
 from blueprint.silhouette import mesh as mesh_module
 from blueprint.silhouette.mesh import _orient_searched, connect
 
@@ -142,6 +143,7 @@ def blocks(request, monkeypatch):
     monkeypatch.setattr(settings, "THREADS", threads)
     if block is not None:
         monkeypatch.setattr(mesh_module, "_BLOCK", block)
+        monkeypatch.setattr(edges_module, "_DOT_ROWS", block)
         monkeypatch.setattr(parallel, "MIN_BLOCK", min_block)
 
 
@@ -224,3 +226,14 @@ def test_the_callers_faces_are_not_changed():
     adj = connect(positions, faces)
     np.testing.assert_array_equal(faces, held)
     assert adj.flipped.any() and not np.shares_memory(adj.faces, faces)
+
+
+def test_row_dots_are_einsums_of_the_rows_taken(blocks):
+    """The blocked dot products of rows are NumPy's einsum of the whole arrays, bit for bit."""
+    rng = np.random.default_rng(3)
+    a, b = rng.standard_normal((50, 3)), rng.standard_normal((70, 3))
+    at_a, at_b = rng.integers(0, 50, 101), rng.integers(0, 70, 101)
+    expected = np.einsum("ij,ij->i", a[at_a], b[at_b])
+    assert edges_module._row_dots(a, at_a, b, at_b).tobytes() == expected.tobytes()
+    own = np.einsum("ij,ij->i", a[:40], b[at_b[:40]])
+    assert edges_module._row_dots(a, None, b, at_b[:40]).tobytes() == own.tobytes()

@@ -22,7 +22,7 @@ import numpy as np
 
 from blueprint.columns import indexed_cross, row_norm
 
-from .edges import _projected, feature_vertices
+from .edges import _projected, _row_dots, feature_vertices
 from .mesh import Adjacency
 
 __all__ = ["ContourSet", "SmoothSurface", "smooth_contours", "smooth_surface"]
@@ -84,8 +84,7 @@ def smooth_surface(adj: Adjacency, crease_angle: float = 30.0) -> SmoothSurface:
     feature = feature_vertices(adj, crease_angle)
     smooth = ~(feature[adj.faces[:, 0]] | feature[adj.faces[:, 1]] | feature[adj.faces[:, 2]])
     for k in range(3):
-        # NumPy takes rows faster than it indexes them
-        smooth &= np.einsum("ij,ij->i", adj.face_normals, np.take(normals, adj.faces[:, k], axis=0)) > 0.0
+        smooth &= _row_dots(adj.face_normals, None, normals, adj.faces[:, k]) > 0.0
     return SmoothSurface(smooth, normals)
 
 
