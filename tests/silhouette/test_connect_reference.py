@@ -143,6 +143,7 @@ def blocks(request, monkeypatch):
     monkeypatch.setattr(settings, "THREADS", threads)
     if block is not None:
         monkeypatch.setattr(mesh_module, "_BLOCK", block)
+        monkeypatch.setattr(mesh_module, "_ROWS", block)
         monkeypatch.setattr(edges_module, "_DOT_ROWS", block)
         monkeypatch.setattr(parallel, "MIN_BLOCK", min_block)
 

@@ -15,7 +15,7 @@ import numpy as np
 from blueprint import parallel
 from blueprint.columns import column_cross, row_norm
 from blueprint.scene.weld import weld
-from blueprint.sorting import sorted_with_order, unique_first
+from blueprint.sorting import SortedKeys, unique_first
 
 __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 
@@ -26,6 +26,8 @@ _DEGENERATE_REL_AREA = 1e-12
 _MAX_LEVELS = 4096
 # Faces whose half-edge keys and normals a thread makes at a time.
 _BLOCK = 1 << 15
+# Sorted half-edges a thread reads at a time.
+_ROWS = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -73,7 +75,9 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     (``_orient_merged``); else a breadth-first search decides (``_orient_searched``).
     """
     merged = _orient_merged(num_faces, pair_faces, pair_parity)
-    return merged if merged is not None else _orient_searched(num_faces, pair_faces, pair_parity)
+    if merged is not None:
+        return merged
+    return _orient_searched(num_faces, np.asarray(pair_faces, np.int64), pair_parity)
 
 
 def _orient_merged(
@@ -88,34 +92,35 @@ def _orient_merged(
     last, from the rounds' hangings in reverse. None where a pair within one tree disagrees
     with the flips found: a surface that cannot be wound consistently, whose leftover
     inconsistency the search places."""
+    index = _index_type(max(num_faces, len(pair_faces)))
     # the pairs between roots, numbered among the roots: u and v, and q where their flips differ
-    u = np.asarray(pair_faces[:, 0], np.int64)
-    v = np.asarray(pair_faces[:, 1], np.int64)
+    u = pair_faces[:, 0].astype(index)
+    v = pair_faces[:, 1].astype(index)
     q = np.asarray(pair_parity, bool)
-    parent = np.arange(num_faces)
+    parent = np.arange(num_faces, dtype=index)
     flip = np.zeros(num_faces, bool)  # relative to the parent
     face = None  # each root's face; None while every face is one
     roots = num_faces
     hung = []
     while len(u):
         low, high = np.minimum(u, v), np.maximum(u, v)
-        lowest = np.full(roots, roots, np.int64)
+        lowest = np.full(roots, roots, index)
         np.minimum.at(lowest, high, low)
         # a pair from each higher root to its lowest, whose parity is the flip between them
-        chosen = np.empty(roots, np.int64)
+        chosen = np.empty(roots, index)
         hit = np.flatnonzero(low == lowest[high])
         chosen[high[hit]] = hit
         del low, high, hit
         hooked = np.flatnonzero(lowest < roots)
-        up = np.arange(roots)
+        up = np.arange(roots, dtype=index)
         up[hooked] = lowest[hooked]
         turn = np.zeros(roots, bool)
         turn[hooked] = q[chosen[hooked]]
         del lowest, chosen
         up = _to_roots(up, turn)
         q = q ^ turn[u] ^ turn[v]
-        kept = up == np.arange(roots)
-        number = np.cumsum(kept)
+        kept = up == np.arange(roots, dtype=index)
+        number = np.cumsum(kept, dtype=index)
         number -= 1
         number = number[up]  # each root's number after the round, its tree's root's
         u, v = number[u], number[v]
@@ -136,8 +141,13 @@ def _orient_merged(
         flip[hooked_face] ^= flip[above]
         parent[hooked_face] = parent[above]
     # roots only ever hang under lower ones: each component's root is its lowest face
-    root = parent == np.arange(num_faces)
+    root = parent == np.arange(num_faces, dtype=index)
     return flip, (np.cumsum(root) - 1)[parent]
+
+
+def _index_type(count: int) -> type:
+    """int32 for indices below ``count`` where they fit (half the memory to read), else int64."""
+    return np.int32 if count <= np.iinfo(np.int32).max else np.int64
 
 
 def _orient_searched(
@@ -253,6 +263,35 @@ def _edge_keys(
             out[improper] = (num_vertices - 1) * num_vertices
 
 
+def _key_changes(half: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[i + 1]``, for ``i`` from ``lo`` to ``hi``: sorted keys ``i + 1`` and ``i`` differ."""
+    for begin in range(lo, hi, _ROWS):
+        stop = min(begin + _ROWS, hi)
+        keys = half.keys(slice(begin, stop + 1))
+        np.not_equal(keys[1:], keys[:-1], out=out[begin + 1 : stop + 1])
+
+
+def _edge_ends(
+    half: SortedKeys, at: np.ndarray, num_vertices: int, out: np.ndarray, lo: int, hi: int
+) -> None:
+    """``out[lo:hi]``: the two vertices, lower first, of the keys ``low * V + high`` sorted at
+    positions ``at[lo:hi]``."""
+    for begin in range(lo, hi, _ROWS):
+        stop = min(begin + _ROWS, hi)
+        keys = half.keys(at[begin:stop])
+        ends = out[begin:stop]
+        np.floor_divide(keys, num_vertices, out=ends[:, 0])
+        np.multiply(ends[:, 0], num_vertices, out=ends[:, 1])
+        np.subtract(keys, ends[:, 1], out=ends[:, 1])
+
+
+def _incident_faces(half: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi, 1]``: the faces of the half-edges sorted at ``lo`` to ``hi``."""
+    for begin in range(lo, hi, _ROWS):
+        stop = min(begin + _ROWS, hi)
+        np.floor_divide(half.order(slice(begin, stop)), 3, out=out[begin:stop, 1])
+
+
 def _unit_normals(positions: np.ndarray, faces: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: the unit normals of faces ``lo`` to ``hi``, zero where a face's doubled
     area is below ``_DEGENERATE_REL_AREA`` of its longest edge squared: ``indexed_cross`` over
@@ -301,7 +340,8 @@ def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | 
     Adjacency
         The welded, connected and oriented mesh.
     """
-    return connect(*weld(positions, faces, weld_tol))
+    positions, faces = weld(positions, faces, weld_tol)
+    return _connected(positions, faces)  # the weld's faces are new: oriented in place
 
 
 def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
@@ -321,8 +361,12 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     Adjacency
         The connected and oriented mesh; its `positions` are the given ones, as float64.
     """
+    return _connected(positions, np.array(faces, dtype=np.int64).reshape(-1, 3))
+
+
+def _connected(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
+    """``connect`` of (F, 3) int64 ``faces`` that it may reorder in place (the result's)."""
     positions = np.asarray(positions, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     num_faces, num_vertices = len(faces), max(len(positions), 1)
 
     # Half-edge h runs from corner h % 3 of face h // 3 to its next corner; one stable sort of
@@ -334,38 +378,39 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     parallel.run(partial(_edge_keys, faces, num_vertices, key, proper), num_faces)
     halves = 3 * int(np.count_nonzero(proper))
     del proper
-    sorted_key, order = sorted_with_order(key, overwrite=True)
+    # read by position, a block at a time: no array of every sorted key or of the order
+    half = SortedKeys(key)
     del key
-    sorted_key, order = sorted_key[:halves], order[:halves]
     new_edge = np.empty(halves + 1, bool)  # and one past the last, for the pairs below
     new_edge[0] = new_edge[halves] = True
-    np.not_equal(sorted_key[1:], sorted_key[:-1], out=new_edge[1:halves])
-    keys = sorted_key[new_edge[:halves]]
-    del sorted_key
-    edges = np.empty((len(keys), 2), np.int64)
-    np.floor_divide(keys, num_vertices, out=edges[:, 0])
-    np.multiply(edges[:, 0], num_vertices, out=edges[:, 1])
-    np.subtract(keys, edges[:, 1], out=edges[:, 1])
-    del keys
+    parallel.run(partial(_key_changes, half, new_edge), max(halves - 1, 0))
+    at = np.flatnonzero(new_edge[:halves])
+    edges = np.empty((len(at), 2), np.int64)
+    parallel.run(partial(_edge_ends, half, at, num_vertices, edges), len(at))
+    del at
     edge_faces = np.empty((halves, 2), np.int64)
     np.cumsum(new_edge[:halves], out=edge_faces[:, 0])
     edge_faces[:, 0] -= 1
-    np.floor_divide(order, 3, out=edge_faces[:, 1])
+    parallel.run(partial(_incident_faces, half, edge_faces), halves)
 
     # Manifold edges: exactly two incidences, adjacent after sorting by edge.
     two = new_edge[:-2] & ~new_edge[1:-1]
     two &= new_edge[2:]
     del new_edge
-    first, second = order[:-1][two], order[1:][two]
-    del two, order
+    at = np.flatnonzero(two)
+    del two
+    first = half.order(at)
+    at += 1
+    second = half.order(at)
+    del at, half
     start = faces.reshape(-1)
     same_direction = start[first] == start[second]
-    pair_faces = np.stack([first, second], axis=1)
-    pair_faces //= 3
-    del first, second
+    pair_faces = np.empty((len(first), 2), _index_type(num_faces))
+    np.floor_divide(first, 3, out=pair_faces[:, 0])
+    np.floor_divide(second, 3, out=pair_faces[:, 1])
+    del first, second, start
     flipped, component = _orient(num_faces, pair_faces, same_direction)
     del pair_faces, same_direction
-    faces = faces.copy()  # the caller's array is not the result's
     turned = np.flatnonzero(flipped)
     faces[turned, 1:] = faces[turned, 2:0:-1]
     del turned
