@@ -16,6 +16,8 @@ from blueprint.silhouette import edges as edges_module
 from blueprint.silhouette import mesh as mesh_module
 from blueprint.silhouette.mesh import _orient_searched, connect
 
+FIELDS = ("positions", "faces", "flipped", "edges", "edge_faces", "component", "face_normals")
+
 
 def reference_connect(positions, faces):
     """The arrays of ``connect``, made the plain way."""
@@ -238,3 +240,30 @@ def test_row_dots_are_einsums_of_the_rows_taken(blocks):
     assert edges_module._row_dots(a, at_a, b, at_b).tobytes() == expected.tobytes()
     own = np.einsum("ij,ij->i", a[:40], b[at_b[:40]])
     assert edges_module._row_dots(a, None, b, at_b[:40]).tobytes() == own.tobytes()
+
+
+@pytest.mark.parametrize("parts", [1, 2], ids=["one-part", "two-parts-as-one"])
+def test_a_models_adjacency_is_that_of_its_float64_copies(parts):
+    """A one-part model is welded from its float32 positions and int32 faces as they are: the
+    same arrays as from float64 and int64 copies, with near and exact duplicate vertices,
+    -0.0 beside 0.0, an unused vertex and faces flipped. Two parts whose faces all name the
+    first are one part."""
+    from blueprint.scene.model import Model
+    from blueprint.vector.lines import _welded_adjacency
+
+    rng = np.random.default_rng(11)
+    positions, faces = torus(6, 7, rng)
+    positions = positions.astype(np.float32)
+    n = len(positions)
+    # an exact duplicate, a near one (within the weld's tolerance), a -0.0 copy, an unused one
+    zeros = np.array([[0.0, 2.0, 0.0], [-0.0, 2.0, -0.0]], np.float32)
+    extra = np.concatenate([positions[:2], positions[2:3] + np.float32(1e-6), zeros, [[9, 9, 9]]])
+    positions = np.concatenate([positions, extra.astype(np.float32)])
+    faces = flip_some(faces, rng, 0.4)
+    faces[:2, 0] = [n, n + 1]  # corners moved onto the duplicates of vertices 0 and 1
+    faces[2, 0] = n + 2
+    faces = np.concatenate([faces, [[n + 3, n + 4, 0]]]).astype(np.int32)
+    model = Model(positions, faces, np.zeros(len(faces), np.int32), tuple(f"p{k}" for k in range(parts)))
+    expected = build_adjacency(positions.astype(np.float64), faces.astype(np.int64))
+    assert_same(_welded_adjacency(model), {name: getattr(expected, name) for name in FIELDS})
+    assert len(expected.positions) == n + 2  # the duplicates and the zeros welded, one left
