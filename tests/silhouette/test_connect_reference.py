@@ -15,6 +15,7 @@ from blueprint.silhouette import build_adjacency, weld
 from blueprint.silhouette import edges as edges_module
 from blueprint.silhouette import mesh as mesh_module
 from blueprint.silhouette.mesh import _orient_searched, connect
+from blueprint.sorting import SortedKeys
 
 FIELDS = ("positions", "faces", "flipped", "edges", "edge_faces", "component", "face_normals")
 
@@ -212,12 +213,27 @@ def test_non_orientable_surface_takes_the_searched_winding(blocks):
     assert_same(connect(positions, faces), reference_connect(positions, faces))
 
 
-def test_a_mesh_over_many_blocks(blocks):
+class UnpackedKeys(SortedKeys):
+    """``SortedKeys`` as it holds keys too wide to pack with their positions: the keys and
+    their stable order."""
+
+    def __init__(self, key):
+        self.length = len(key)
+        self._packed = None
+        self._key, self._order = key, np.argsort(key, kind="stable")
+
+
+@pytest.mark.parametrize("packed", [True, False], ids=["packed-keys", "keys-and-order"])
+def test_a_mesh_over_many_blocks(blocks, monkeypatch, packed):
     """A torus of 20 000 faces, shuffled, with flips: the blocks' and rounds' bookkeeping at a
-    size where the merging takes several rounds."""
+    size where the merging takes several rounds; and with the sorted keys held as keys and
+    order, as those of a mesh too big to pack them are."""
+    if not packed:
+        monkeypatch.setattr(mesh_module, "SortedKeys", UnpackedKeys)
     rng = np.random.default_rng(5)
     positions, faces = torus(100, 100, rng)
     faces = flip_some(faces, rng, 0.5)
+    faces[::97, 2] = faces[::97, 1]  # faces with a repeated index, their keys past every edge's
     assert_same(connect(positions, faces), reference_connect(positions, faces))
 
 
