@@ -75,10 +75,13 @@ def smooth_surface(adj: Adjacency, crease_angle: float = 30.0) -> SmoothSurface:
     """The smooth faces and the vertex normals of a mesh (``SmoothSurface``)."""
     area_normals = indexed_cross(adj.positions, adj.faces)
     summed = np.zeros((len(adj.positions), 3))
+    corner_weight = np.empty((len(adj.faces), 3))  # one array for the three axes' weights
     for axis in range(3):
+        corner_weight[:] = area_normals[:, axis, None]
         summed[:, axis] = np.bincount(
-            adj.faces.reshape(-1), np.repeat(area_normals[:, axis], 3), minlength=len(adj.positions)
+            adj.faces.reshape(-1), corner_weight.reshape(-1), minlength=len(adj.positions)
         )
+    del corner_weight
     length = row_norm(summed)
     normals = summed / np.where(length > 0, length, 1.0)[:, None]
     feature = feature_vertices(adj, crease_angle)

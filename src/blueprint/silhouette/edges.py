@@ -180,9 +180,15 @@ def _first_two_faces(adj: Adjacency) -> tuple[np.ndarray, np.ndarray, np.ndarray
     edge, face = adj.edge_faces[:, 0], adj.edge_faces[:, 1]
     count = np.bincount(edge, minlength=len(adj.edges))
     # Incidences are sorted by edge then face, so each edge's first two faces sit at its start.
-    start = np.cumsum(count) - count
-    f0 = np.where(count >= 1, face[np.minimum(start, len(face) - 1)], -1)
-    f1 = np.where(count >= 2, face[np.minimum(start + 1, len(face) - 1)], -1)
+    at = np.cumsum(count)
+    at -= count
+    f0 = face[np.minimum(at, len(face) - 1, out=at)]
+    f0[count < 1] = -1
+    at = np.cumsum(count, out=at)
+    at -= count
+    at += 1
+    f1 = face[np.minimum(at, len(face) - 1, out=at)]
+    f1[count < 2] = -1
     return count, f0, f1
 
 

@@ -389,9 +389,10 @@ def _connected(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     parallel.run(partial(_edge_ends, half, at, num_vertices, edges), len(at))
     del at
     edge_faces = np.empty((halves, 2), np.int64)
+    # the threads write their blocks first: the new array's pages are touched side by side
+    parallel.run(partial(_incident_faces, half, edge_faces), halves)
     np.cumsum(new_edge[:halves], out=edge_faces[:, 0])
     edge_faces[:, 0] -= 1
-    parallel.run(partial(_incident_faces, half, edge_faces), halves)
 
     # Manifold edges: exactly two incidences, adjacent after sorting by edge.
     two = new_edge[:-2] & ~new_edge[1:-1]
