@@ -22,7 +22,7 @@ import numpy as np
 
 from blueprint.columns import indexed_cross, row_norm
 
-from .edges import _projected, feature_vertices
+from .edges import _projected, _row_dots, feature_vertices
 from .mesh import Adjacency
 
 __all__ = ["ContourSet", "SmoothSurface", "smooth_contours", "smooth_surface", "toward_eye"]
@@ -75,15 +75,19 @@ def smooth_surface(adj: Adjacency, crease_angle: float = 30.0) -> SmoothSurface:
     """The smooth faces and the vertex normals of a mesh (``SmoothSurface``)."""
     area_normals = indexed_cross(adj.positions, adj.faces)
     summed = np.zeros((len(adj.positions), 3))
+    corner_weight = np.empty((len(adj.faces), 3))  # one array for the three axes' weights
     for axis in range(3):
+        corner_weight[:] = area_normals[:, axis, None]
         summed[:, axis] = np.bincount(
-            adj.faces.reshape(-1), np.repeat(area_normals[:, axis], 3), minlength=len(adj.positions)
+            adj.faces.reshape(-1), corner_weight.reshape(-1), minlength=len(adj.positions)
         )
+    del corner_weight
     length = row_norm(summed)
     normals = summed / np.where(length > 0, length, 1.0)[:, None]
-    smooth = ~feature_vertices(adj, crease_angle)[adj.faces].any(axis=1)
+    feature = feature_vertices(adj, crease_angle)
+    smooth = ~(feature[adj.faces[:, 0]] | feature[adj.faces[:, 1]] | feature[adj.faces[:, 2]])
     for k in range(3):
-        smooth &= np.einsum("ij,ij->i", adj.face_normals, normals[adj.faces[:, k]]) > 0.0
+        smooth &= _row_dots(adj.face_normals, None, normals, adj.faces[:, k]) > 0.0
     return SmoothSurface(smooth, normals)
 
 

@@ -8,12 +8,14 @@ This is the "CPU-Preprocess" stage of the conventional object-space silhouette m
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
-from blueprint.columns import indexed_cross, row_norm
+from blueprint import parallel
+from blueprint.columns import column_cross, row_norm
 from blueprint.scene.weld import weld
-from blueprint.sorting import stable_argsort, unique_first
+from blueprint.sorting import SortedKeys, unique_first
 
 __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 
@@ -22,6 +24,10 @@ __all__ = ["Adjacency", "build_adjacency", "connect", "weld"]
 _DEGENERATE_REL_AREA = 1e-12
 # Levels of the winding search's breadth-first distances found one at a time, at most.
 _MAX_LEVELS = 4096
+# Faces whose half-edge keys and normals a thread makes at a time.
+_BLOCK = 1 << 15
+# Sorted half-edges a thread reads at a time.
+_ROWS = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -69,46 +75,79 @@ def _orient(num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray) -> 
     (``_orient_merged``); else a breadth-first search decides (``_orient_searched``).
     """
     merged = _orient_merged(num_faces, pair_faces, pair_parity)
-    return merged if merged is not None else _orient_searched(num_faces, pair_faces, pair_parity)
+    if merged is not None:
+        return merged
+    return _orient_searched(num_faces, np.asarray(pair_faces, np.int64), pair_parity)
 
 
 def _orient_merged(
     num_faces: int, pair_faces: np.ndarray, pair_parity: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """``_orient`` by merging trees of faces, with NumPy alone (scipy, which the search needs,
-    is slow to import): every round, each tree's root hangs under the lowest
-    root that a pair joins it to, and the trees are flattened by pointer jumping, each face
-    keeping its flip relative to its root; a few rounds on real meshes. None where a pair's
-    parity disagrees with the flips found: a surface that cannot be wound consistently, whose
-    leftover inconsistency the search places."""
-    a, b = pair_faces[:, 0].astype(np.int64), pair_faces[:, 1].astype(np.int64)
-    parity = pair_parity.astype(bool)
-    parent = np.arange(num_faces)
-    flip = np.zeros(num_faces, bool)  # relative to the parent: to the root between rounds
-    ea, eb, ep = a, b, parity
-    while True:
-        ra, rb = parent[ea], parent[eb]
-        live = ra != rb
-        ea, eb, ep, ra, rb = ea[live], eb[live], ep[live], ra[live], rb[live]
-        if len(ea) == 0:
-            break
-        between = flip[ea] ^ flip[eb] ^ ep  # the flip of one root relative to the other
-        low, high = np.minimum(ra, rb), np.maximum(ra, rb)
-        # each higher root's pair to the lowest root, the first such pair: the smallest key
-        # low * pairs + pair, found in one pass where sorting the pairs by (high, low) would
-        # order them all
-        pairs = len(ea)
-        best = np.full(num_faces, num_faces * pairs, np.int64)
-        np.minimum.at(best, high, low * pairs + np.arange(pairs))
-        first = best[best < num_faces * pairs] % pairs
-        parent[high[first]] = low[first]
-        flip[high[first]] = between[first]
-        parent = _to_roots(parent, flip)
-    if np.any(flip[a] ^ flip[b] ^ parity):
-        return None
+    is slow to import): every round, each tree's root hangs under the lowest root that a pair
+    joins it to and the trees are flattened by pointer jumping; then the roots left are
+    numbered afresh and the pairs rewritten between them, so that a round costs what its roots
+    and pairs number, not what the faces do (a few rounds on real meshes, each with about half
+    the pairs of the one before). Each face's flip relative to its component's root is made
+    last, from the rounds' hangings in reverse. None where a pair within one tree disagrees
+    with the flips found: a surface that cannot be wound consistently, whose leftover
+    inconsistency the search places."""
+    index = _index_type(max(num_faces, len(pair_faces)))
+    # the pairs between roots, numbered among the roots: u and v, and q where their flips differ
+    u = pair_faces[:, 0].astype(index)
+    v = pair_faces[:, 1].astype(index)
+    q = np.asarray(pair_parity, bool)
+    parent = np.arange(num_faces, dtype=index)
+    flip = np.zeros(num_faces, bool)  # relative to the parent
+    face = None  # each root's face; None while every face is one
+    roots = num_faces
+    hung = []
+    while len(u):
+        low, high = np.minimum(u, v), np.maximum(u, v)
+        lowest = np.full(roots, roots, index)
+        np.minimum.at(lowest, high, low)
+        # a pair from each higher root to its lowest, whose parity is the flip between them
+        chosen = np.empty(roots, index)
+        hit = np.flatnonzero(low == lowest[high])
+        chosen[high[hit]] = hit
+        del low, high, hit
+        hooked = np.flatnonzero(lowest < roots)
+        up = np.arange(roots, dtype=index)
+        up[hooked] = lowest[hooked]
+        turn = np.zeros(roots, bool)
+        turn[hooked] = q[chosen[hooked]]
+        del lowest, chosen
+        up = _to_roots(up, turn)
+        q = q ^ turn[u] ^ turn[v]
+        kept = up == np.arange(roots, dtype=index)
+        number = np.cumsum(kept, dtype=index)
+        number -= 1
+        number = number[up]  # each root's number after the round, its tree's root's
+        u, v = number[u], number[v]
+        inside = u == v
+        if q[inside].any():
+            return None
+        outside = ~inside
+        u, v, q = u[outside], v[outside], q[outside]
+        hooked_face = hooked if face is None else face[hooked]
+        parent[hooked_face] = up[hooked] if face is None else face[up[hooked]]
+        flip[hooked_face] = turn[hooked]
+        hung.append(hooked_face)
+        face = np.flatnonzero(kept) if face is None else face[kept]
+        roots = len(face)
+    # a round's hung roots hang under roots of its end, which later rounds hung in turn
+    for hooked_face in reversed(hung):
+        above = parent[hooked_face]
+        flip[hooked_face] ^= flip[above]
+        parent[hooked_face] = parent[above]
     # roots only ever hang under lower ones: each component's root is its lowest face
-    root = parent == np.arange(num_faces)
+    root = parent == np.arange(num_faces, dtype=index)
     return flip, (np.cumsum(root) - 1)[parent]
+
+
+def _index_type(count: int) -> type:
+    """int32 for indices below ``count`` where they fit (half the memory to read), else int64."""
+    return np.int32 if count <= np.iinfo(np.int32).max else np.int64
 
 
 def _orient_searched(
@@ -202,6 +241,85 @@ def _distances(reach, root: int) -> np.ndarray:
     return distance
 
 
+def _edge_keys(
+    faces: np.ndarray, num_vertices: int, key: np.ndarray, proper: np.ndarray, lo: int, hi: int
+) -> None:
+    """``key[3 * lo : 3 * hi]``: each half-edge of faces ``lo`` to ``hi`` keyed ``low * V +
+    high`` of its two vertices, and ``proper[lo:hi]`` False, their keys ``(V - 1) * V`` (no
+    edge's: its lower vertex is below V - 1), where a face repeats an index."""
+    rows = key.reshape(-1, 3)
+    for begin in range(lo, hi, _BLOCK):
+        block = faces[begin : min(begin + _BLOCK, hi)]
+        out = rows[begin : begin + len(block)]
+        for k in range(3):
+            a, b = block[:, k], block[:, (k + 1) % 3]
+            column = np.minimum(a, b)
+            column *= num_vertices
+            column += np.maximum(a, b)
+            out[:, k] = column
+            proper[begin : begin + len(block)] &= a != b
+        improper = ~proper[begin : begin + len(block)]
+        if improper.any():
+            out[improper] = (num_vertices - 1) * num_vertices
+
+
+def _key_changes(half: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[i + 1]``, for ``i`` from ``lo`` to ``hi``: sorted keys ``i + 1`` and ``i`` differ."""
+    for begin in range(lo, hi, _ROWS):
+        stop = min(begin + _ROWS, hi)
+        keys = half.keys(slice(begin, stop + 1))
+        np.not_equal(keys[1:], keys[:-1], out=out[begin + 1 : stop + 1])
+
+
+def _edge_ends(
+    half: SortedKeys, at: np.ndarray, num_vertices: int, out: np.ndarray, lo: int, hi: int
+) -> None:
+    """``out[lo:hi]``: the two vertices, lower first, of the keys ``low * V + high`` sorted at
+    positions ``at[lo:hi]``."""
+    for begin in range(lo, hi, _ROWS):
+        stop = min(begin + _ROWS, hi)
+        keys = half.keys(at[begin:stop])
+        ends = out[begin:stop]
+        np.floor_divide(keys, num_vertices, out=ends[:, 0])
+        np.multiply(ends[:, 0], num_vertices, out=ends[:, 1])
+        np.subtract(keys, ends[:, 1], out=ends[:, 1])
+
+
+def _incident_faces(half: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi, 1]``: the faces of the half-edges sorted at ``lo`` to ``hi``."""
+    for begin in range(lo, hi, _ROWS):
+        stop = min(begin + _ROWS, hi)
+        np.floor_divide(half.order(slice(begin, stop)), 3, out=out[begin:stop, 1])
+
+
+def _unit_normals(positions: np.ndarray, faces: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: the unit normals of faces ``lo`` to ``hi``, zero where a face's doubled
+    area is below ``_DEGENERATE_REL_AREA`` of its longest edge squared: ``indexed_cross`` over
+    its ``row_norm``, a block at a time, the corners gathered once for both."""
+    columns = [positions[:, k] for k in range(3)]
+    for begin in range(lo, hi, _BLOCK):
+        block = faces[begin : min(begin + _BLOCK, hi)]
+        u, v, w = [], [], []
+        for column in columns:
+            corner = [column[block[:, k]] for k in range(3)]
+            u.append(corner[1] - corner[0])
+            v.append(corner[2] - corner[0])
+            w.append(corner[2] - corner[1])
+        cross = column_cross(u, v)
+        area2 = row_norm(cross)
+        # squared edge lengths summed x, then y, then z; the edge from corner 2 to 0 is -v
+        longest2 = None
+        for d in (u, w, v):
+            length2 = d[0] * d[0]
+            length2 += d[1] * d[1]
+            length2 += d[2] * d[2]
+            longest2 = length2 if longest2 is None else np.maximum(longest2, length2)
+        good = area2 > _DEGENERATE_REL_AREA * longest2
+        normals = out[begin : begin + len(block)]
+        normals[:] = 0.0
+        np.divide(cross, area2[:, None], out=normals, where=good[:, None])
+
+
 def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | None = None) -> Adjacency:
     """Weld a triangle soup, build its edge connectivity and make its winding consistent.
 
@@ -222,7 +340,8 @@ def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | 
     Adjacency
         The welded, connected and oriented mesh.
     """
-    return connect(*weld(positions, faces, weld_tol))
+    positions, faces = weld(positions, faces, weld_tol)
+    return _connected(positions, faces)  # the weld's faces are new: oriented in place
 
 
 def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
@@ -242,79 +361,62 @@ def connect(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
     Adjacency
         The connected and oriented mesh; its `positions` are the given ones, as float64.
     """
+    return _connected(positions, np.array(faces, dtype=np.int64).reshape(-1, 3))
+
+
+def _connected(positions: np.ndarray, faces: np.ndarray) -> Adjacency:
+    """``connect`` of (F, 3) int64 ``faces`` that it may reorder in place (the result's)."""
     positions = np.asarray(positions, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     num_faces, num_vertices = len(faces), max(len(positions), 1)
 
-    # Half-edge k of face f runs from corner k to corner k + 1.
-    start = faces.reshape(-1)
-    end = faces[:, [1, 2, 0]].reshape(-1)
-    # A face with a repeated index is a line or a point: it bounds nothing, so its edges
-    # would only add false borders and break the two-face count of real edges.
-    proper = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 2] != faces[:, 0])
-    if proper.all():
-        half_face = None  # half-edge h of face h // 3
-    else:
-        half_face = np.repeat(np.arange(num_faces, dtype=np.int64), 3)
-        proper = np.repeat(proper, 3)
-        start, end, half_face = start[proper], end[proper], half_face[proper]
+    # Half-edge h runs from corner h % 3 of face h // 3 to its next corner; one stable sort of
+    # their edges' keys orders them by edge, then face, and the keys of the half-edges of
+    # faces with a repeated index (lines or points: they bound nothing, and their edges would
+    # only add false borders and break the two-face count of real edges) sort after the rest.
+    key = np.empty(3 * num_faces, np.int64)
+    proper = np.ones(num_faces, bool)
+    parallel.run(partial(_edge_keys, faces, num_vertices, key, proper), num_faces)
+    halves = 3 * int(np.count_nonzero(proper))
     del proper
-
-    key = np.minimum(start, end)
-    key *= num_vertices
-    key += np.maximum(start, end)
-    # half-edges come in face order, so one stable sort by edge orders them by edge, then face
-    order = stable_argsort(key)
-    sorted_key = key[order]
+    # read by position, a block at a time: no array of every sorted key or of the order
+    half = SortedKeys(key)
     del key
-    new_edge = np.ones(len(sorted_key), bool)
-    new_edge[1:] = sorted_key[1:] != sorted_key[:-1]
-    keys = sorted_key[new_edge]
-    del sorted_key
-    edges = np.empty((len(keys), 2), np.int64)
-    np.floor_divide(keys, num_vertices, out=edges[:, 0])
-    np.remainder(keys, num_vertices, out=edges[:, 1])
-    del keys
-    edge_faces = np.empty((len(order), 2), np.int64)
-    np.subtract(np.cumsum(new_edge), 1, out=edge_faces[:, 0])
-    if half_face is None:
-        np.floor_divide(order, 3, out=edge_faces[:, 1])
-    else:
-        np.take(half_face, order, out=edge_faces[:, 1])
+    new_edge = np.empty(halves + 1, bool)  # and one past the last, for the pairs below
+    new_edge[0] = new_edge[halves] = True
+    parallel.run(partial(_key_changes, half, new_edge), max(halves - 1, 0))
+    at = np.flatnonzero(new_edge[:halves])
+    edges = np.empty((len(at), 2), np.int64)
+    parallel.run(partial(_edge_ends, half, at, num_vertices, edges), len(at))
+    del at
+    edge_faces = np.empty((halves, 2), np.int64)
+    # the threads write their blocks first: the new array's pages are touched side by side
+    parallel.run(partial(_incident_faces, half, edge_faces), halves)
+    np.cumsum(new_edge[:halves], out=edge_faces[:, 0])
+    edge_faces[:, 0] -= 1
 
     # Manifold edges: exactly two incidences, adjacent after sorting by edge.
-    starts = np.flatnonzero(new_edge)
+    two = new_edge[:-2] & ~new_edge[1:-1]
+    two &= new_edge[2:]
     del new_edge
-    count = np.diff(np.r_[starts, len(order)])
-    manifold = order[np.repeat(count == 2, count)]
-    del starts, count, order
-    first, second = manifold[::2], manifold[1::2]
+    at = np.flatnonzero(two)
+    del two
+    first = half.order(at)
+    at += 1
+    second = half.order(at)
+    del at, half
+    start = faces.reshape(-1)
     same_direction = start[first] == start[second]
-    pair_faces = np.stack([first, second], axis=1)
-    if half_face is None:
-        pair_faces //= 3
-    else:
-        pair_faces = half_face[pair_faces]
+    pair_faces = np.empty((len(first), 2), _index_type(num_faces))
+    np.floor_divide(first, 3, out=pair_faces[:, 0])
+    np.floor_divide(second, 3, out=pair_faces[:, 1])
+    del first, second, start
     flipped, component = _orient(num_faces, pair_faces, same_direction)
-    faces = np.where(flipped[:, None], faces[:, [0, 2, 1]], faces)
-
-    cross = indexed_cross(positions, faces)
-    area2 = row_norm(cross)
-    # squared edge lengths summed coordinate by coordinate, x then y then z (NumPy's reductions
-    # over a short axis are slow), without the faces' (F, 3, 3) corners
-    length2 = [None, None, None]
-    for k in range(3):
-        column = positions[:, k]
-        corner = [column[faces[:, j]] for j in range(3)]
-        for e, (a, b) in enumerate(((0, 1), (1, 2), (2, 0))):
-            d = corner[b] - corner[a]
-            d *= d
-            length2[e] = d if length2[e] is None else length2[e] + d
-    longest2 = np.maximum(np.maximum(length2[0], length2[1]), length2[2])
-    del length2
-    good = area2 > _DEGENERATE_REL_AREA * longest2
-    normals = np.zeros_like(cross)
-    normals[good] = cross[good] / area2[good, None]
+    del pair_faces, same_direction
+    turned = np.flatnonzero(flipped)
+    faces[turned, 1:] = faces[turned, 2:0:-1]
+    del turned
+    normals = np.empty((num_faces, 3))
+    parallel.run(partial(_unit_normals, positions, faces, normals), num_faces)
     return Adjacency(
         positions=positions,
         faces=faces,

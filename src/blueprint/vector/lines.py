@@ -242,36 +242,38 @@ def edge_segments(model: Model, edges: np.ndarray) -> np.ndarray:
 
 
 def _welded_adjacency(model: Model) -> Adjacency:
+    part = model.face_part
+    if len(model.part_names) <= 1 or len(part) == 0 or np.all(part == part[0]):
+        # the weld reads float32 positions and narrow indices as they are: its vertices, and
+        # what they are welded into, are the same as from float64 copies
+        return build_adjacency(model.positions, model.faces)
     positions = model.positions.astype(np.float64)
     faces = model.faces.astype(np.int64)
-    part = model.face_part.astype(np.int64)
+    part = part.astype(np.int64)
     diagonal = _diagonal(positions)
     if len(faces):  # the used vertices' diagonal: the model's bounds are their extremes
         diagonal = float(np.linalg.norm(np.diff(model.bounds, axis=0))) or 1.0
-    if len(model.part_names) <= 1 or len(faces) == 0 or np.all(part == part[0]):
-        held = build_adjacency(positions, faces)
+    span = 4.0 * (float(column_ptp(positions).max()) + diagonal)
+    # one vertex per (vertex, part) in use, moved by its part's multiple of the span
+    corner_part = np.repeat(part, 3)
+    corner = faces.reshape(-1)
+    part_of = np.zeros(len(positions), np.int64)
+    part_of[corner] = corner_part
+    if np.array_equal(part_of[corner], corner_part):
+        # each vertex in one part: the vertex orders the keys alone, over a range that
+        # unique_first counts over instead of sorting
+        used, _, inverse = unique_first(corner)
+        unique = used * len(model.part_names) + part_of[used]
     else:
-        span = 4.0 * (float(column_ptp(positions).max()) + diagonal)
-        # one vertex per (vertex, part) in use, moved by its part's multiple of the span
-        corner_part = np.repeat(part, 3)
-        corner = faces.reshape(-1)
-        part_of = np.zeros(len(positions), np.int64)
-        part_of[corner] = corner_part
-        if np.array_equal(part_of[corner], corner_part):
-            # each vertex in one part: the vertex orders the keys alone, over a range that
-            # unique_first counts over instead of sorting
-            used, _, inverse = unique_first(corner)
-            unique = used * len(model.part_names) + part_of[used]
-        else:
-            unique, _, inverse = unique_first(corner * len(model.part_names) + corner_part)
-        moved = positions[unique // len(model.part_names)].copy()
-        moved[:, 0] += (unique % len(model.part_names)) * span
-        held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
-        vertex_part = np.zeros(len(held.positions), np.int64)
-        vertex_part[held.faces.reshape(-1)] = np.repeat(part, 3)
-        moved = held.positions.copy()
-        moved[:, 0] -= vertex_part * span
-        held = replace(held, positions=moved)
+        unique, _, inverse = unique_first(corner * len(model.part_names) + corner_part)
+    moved = positions[unique // len(model.part_names)].copy()
+    moved[:, 0] += (unique % len(model.part_names)) * span
+    held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
+    vertex_part = np.zeros(len(held.positions), np.int64)
+    vertex_part[held.faces.reshape(-1)] = np.repeat(part, 3)
+    moved = held.positions.copy()
+    moved[:, 0] -= vertex_part * span
+    held = replace(held, positions=moved)
     return held
 
 
