@@ -514,7 +514,8 @@ class Executor:
             st.mesh.bind_corners(prog, units.CORNERS)
         if contoured and st.contoured is not None:
             st.contoured.use(units.CONTOURED)
-            self.programs.set(prog, "u_contoured", units.CONTOURED)
+            layers = st.contours.layers
+            self.programs.update(prog, {"u_contoured": units.CONTOURED, "u_contour_layers": layers})
 
     def _bind_input(self, prog, key: str, tex, unit: int, size) -> None:
         put = self.programs.set

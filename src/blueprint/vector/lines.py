@@ -439,8 +439,7 @@ def _with_edge_on_outlines(adj: Adjacency, edges: EdgeSet, view, projection, siz
     start = np.cumsum(count) - count
     two = np.flatnonzero(count == 2)
     pair = np.stack([face[start[two]], face[start[two] + 1]], axis=1)
-    all_faces = np.arange(len(adj.faces))
-    edge_on = _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection)[:, 0]
+    edge_on = _faces_edge_on(adj, view, projection, _EDGE_ON)
     found = np.zeros(len(adj.edges), bool)
     found[edges.edges] = True
     chosen = _edge_on_outline_edges(edge_on, pair, found[two])
@@ -571,10 +570,36 @@ def _surface(model: Model, adj: Adjacency, crease_angle: float) -> SmoothSurface
     return surface[crease_angle]
 
 
-def _faces_edge_on(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
-    """(F,) bool: the faces seen edge-on, within rounding of smooth contours' (``_edge_on``)."""
-    all_faces = np.arange(len(adj.faces))
-    return _edge_on(adj, np.stack([all_faces, all_faces], axis=1), view, projection, _EDGE_ON_SMOOTH)[:, 0]
+def _faces_edge_on(
+    adj: Adjacency, view: np.ndarray, projection: np.ndarray, within: float = _EDGE_ON_SMOOTH
+) -> np.ndarray:
+    """(F,) bool: the faces seen edge-on, within ``within`` (a cosine) of a right angle, by
+    default within rounding of smooth contours' (as ``_edge_on`` finds them)."""
+    return _face_cosines(adj, view, projection) <= within
+
+
+# The |cos| of the last view's faces (``_face_cosines``): its outlines, contours and grazing
+# band each ask for them.
+_COSINES: list = [None, b"", None]
+
+
+def _face_cosines(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """(F,) float64: |cos| of the angle between each face's normal and the direction from its
+    first corner to the eye, as ``_edge_on`` takes it; kept for the last view asked."""
+    key = np.asarray(view, np.float64).tobytes() + np.asarray(projection, np.float64).tobytes()
+    held, held_key, cosines = _COSINES
+    if held is adj and held_key == key:
+        return cosines
+    camera_to_model = np.linalg.inv(view)
+    normal = adj.face_normals
+    if projection[3, 3] == 1.0:
+        toward = np.broadcast_to(camera_to_model[:3, 2], normal.shape)
+    else:
+        toward = camera_to_model[:3, 3] - np.take(adj.positions, adj.faces[:, 0], axis=0)
+    dot = np.einsum("ij,ij->i", normal, toward)
+    cosines = np.abs(dot) / np.maximum(np.linalg.norm(toward, axis=1), 1e-300)
+    _COSINES[:] = [adj, key, cosines]
+    return cosines
 
 
 def _contour_segments(model, adj, edges, kind, view, projection, size, crease_angle):

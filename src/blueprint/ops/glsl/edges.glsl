@@ -16,6 +16,8 @@
 // 1 for each face whose outline is drawn as a line of the smooth surface's contour instead
 // (vector/contour_ink.py), by face + 1 as the IDs hold it
 uniform isampler2D u_contoured;
+// the layers whose contours the lines draw: deeper ones keep the mesh's outline
+uniform int u_contour_layers;
 
 // Whether a covered sample's face leaves its outline to the contour lines
 bool contoured(int face1) {
@@ -63,7 +65,7 @@ float crease(vec3 a, vec3 b) {
     return 1.0 - smoothstep(u_normal_cos.y, u_normal_cos.x, dot(a, b));
 }
 
-float edge_value(ivec2 p) {
+float edge_value(ivec2 p, int layer) {
     ivec2 last = EDGE_LAST;
     float zc = EDGE_DEPTH(p, -1);
     float z[4];
@@ -85,7 +87,7 @@ float edge_value(ivec2 p) {
     if (zc >= 1.0) {
 #if SMOOTH_CONTOURS
         // beside surfaces whose outline the contour lines draw, the border is theirs
-        bool left = true;
+        bool left = layer < u_contour_layers;
         for (int i = 0; i < 4; ++i) {
             left = left && (!covered[i] || contoured(EDGE_IDS(clamp(p + OFFSETS[i], ivec2(0), last), i).x));
         }
@@ -116,7 +118,7 @@ float edge_value(ivec2 p) {
     // Inside a smooth surface whose outline the contour lines draw, its borders, jumps and the
     // normals' turns at its folds are that outline seen through the mesh's noise: only part
     // boundaries are left to draw.
-    bool within = contoured(own.x);
+    bool within = layer < u_contour_layers && contoured(own.x);
     for (int i = 0; i < 4; ++i) {
         within = within && (!covered[i] || contoured(ids[i].x));
     }
@@ -192,5 +194,5 @@ float edge_value(ivec2 p) {
 
 // edge_value in the ink of depth layer ``layer``
 float layer_edge_value(ivec2 p, int layer) {
-    return edge_value(p) * (layer > 0 ? u_hidden_ink : 1.0);
+    return edge_value(p, layer) * (layer > 0 ? u_hidden_ink : 1.0);
 }
