@@ -17,9 +17,10 @@ from scipy import ndimage
 
 import blueprint
 from blueprint import examples
-from blueprint.scene.camera import fit_camera
+from blueprint.scene.camera import clip_to_pixels, fit_camera, transform
 from blueprint.vector.contour_ink import contour_ink
 from blueprint.vector.linework import SILHOUETTE
+from blueprint.vector.occlusion.gpu import MAX_LAYERS
 
 SIZE = (1024, 1024)
 
@@ -162,3 +163,35 @@ def test_command_line_flag(tmp_path):
         with Image.open(target) as picture:
             found[bool(flags)] = specks(np.asarray(picture.convert("RGB")))
     assert found[True] < found[False], found
+
+
+def test_levels_stop_at_one_faces_pass(renderer):
+    """A smooth sphere behind four plates (eight surfaces), every layer drawn: the lines'
+    levels are found for the layers one pass of the faces k-buffer holds (``MAX_LAYERS``), so
+    the sphere's outline, at level 8, has no line, and its layer keeps the mesh's outline:
+    inked as without the option."""
+    sphere = noisy_sphere(0.0, subdivisions=3)
+    parts = {"sphere": (sphere.positions, sphere.faces)}
+    for k in range(4):
+        parts[f"plate{k}"] = examples.box((-2.0, -2.0, 1.5 + 0.3 * k), (2.0, 2.0, 1.6 + 0.3 * k))
+    model = examples.assemble(parts)
+    camera = fit_camera(model, (256, 256), "front")
+    found = contour_ink(renderer, model, camera, (256, 256), max_layers=None)
+    assert found.layers == MAX_LAYERS and len(found) == 0
+    options = dict(size=(256, 256), view="front", max_layers=None, style="paper")
+    plain = np.asarray(blueprint.render(model, **options))
+    lined = np.asarray(blueprint.render(model, smooth_contours=True, **options))
+    # the ink within 4 px of the sphere's outline (its equator, projected)
+    circle = np.stack(
+        [np.cos(np.linspace(0, 2 * np.pi, 400)), np.sin(np.linspace(0, 2 * np.pi, 400)), np.zeros(400)], 1
+    )
+    view, projection = np.asarray(camera.view_matrix()), np.asarray(camera.projection_matrix())
+    rim = np.zeros((256, 256), bool)
+    xy = np.floor(clip_to_pixels(transform(circle, projection @ view), (256, 256))).astype(int)
+    rim[xy[:, 1], xy[:, 0]] = True
+    near = ndimage.binary_dilation(rim, iterations=4)
+
+    def strength(image):
+        return np.abs(image[..., :3].astype(int) - image[0, 0, :3].astype(int)).sum(axis=-1)[near].sum()
+
+    assert strength(plain) > 0 and strength(lined) > 0.9 * strength(plain), (strength(lined), strength(plain))
