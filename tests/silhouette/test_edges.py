@@ -4,6 +4,7 @@ import itertools
 
 import numpy as np
 import pytest
+import trimesh
 
 from blueprint.silhouette import (
     BORDER,
@@ -232,3 +233,23 @@ def test_silhouette_image_draws_square_outline():
     assert not none.any()
     with pytest.raises(ValueError):
         silhouette_image(positions, [[0, 1, 2]], view, ortho(2, 2, 1, 10), 40, 40, kinds=(4,))
+
+
+def test_first_faces_from_the_first_two_equal_the_incidences():
+    """An edge's lowest-index chosen face, from its first two faces where it has at most two,
+    equals the search over every incidence: on a mesh with borders, degenerate faces and
+    non-manifold edges (three and four faces on one edge), for random choices of faces."""
+    from blueprint.silhouette.edges import _first_face, _first_face_of, _first_two_faces
+
+    rng = np.random.default_rng(5)
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    n = len(sphere.vertices)
+    fins = np.array([[0, 1, n], [1, 0, n + 1], [0, 1, n + 2]])
+    positions = np.vstack([sphere.vertices, rng.normal(size=(3, 3)) * 2])
+    faces = np.vstack([sphere.faces[:-7], fins, [[3, 3, 4]]])
+    adj = build_adjacency(positions, faces)
+    count, f0, f1 = _first_two_faces(adj)
+    assert (count > 2).any() and (count == 1).any()
+    for _ in range(20):
+        chosen = rng.random(len(adj.faces)) < 0.5
+        np.testing.assert_array_equal(_first_face_of(adj, chosen, count, f0, f1), _first_face(adj, chosen))

@@ -142,7 +142,8 @@ def classify_edges(
     front = _front_facing(adj, view, projection) & normal_ok
     count, f0, f1 = _first_two_faces(adj)
     # The lowest-index front and back face of every edge; "no face" stays at len(faces).
-    first_front, first_back = _first_face(adj, front), _first_face(adj, ~front & normal_ok)
+    first_front = _first_face_of(adj, front, count, f0, f1)
+    first_back = _first_face_of(adj, ~front & normal_ok, count, f0, f1)
     silhouette = (first_front < len(adj.faces)) & (first_back < len(adj.faces))
     border = count == 1
     crease = _creases(adj, count, f0, f1, normal_ok, silhouette, crease_angle)
@@ -190,6 +191,19 @@ def _first_two_faces(adj: Adjacency) -> tuple[np.ndarray, np.ndarray, np.ndarray
     f1 = face[np.minimum(at, len(face) - 1, out=at)]
     f1[count < 2] = -1
     return count, f0, f1
+
+
+def _first_face_of(adj: Adjacency, chosen: np.ndarray, count, f0, f1) -> np.ndarray:
+    """``_first_face`` from an edge's first two faces (``_first_two_faces``: ``count``, ``f0``,
+    ``f1``), which decide it for every edge of at most two faces; the incidences are read
+    only where some edge has more."""
+    none = len(adj.faces)
+    first = np.where((count >= 2) & chosen[f1], f1, none)
+    first = np.where((count >= 1) & chosen[f0], f0, first)
+    many = np.flatnonzero(count > 2)
+    if len(many):
+        first[many] = _first_face(adj, chosen)[many]
+    return first
 
 
 def _first_face(adj: Adjacency, chosen: np.ndarray) -> np.ndarray:
