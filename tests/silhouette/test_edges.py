@@ -6,12 +6,14 @@ import numpy as np
 import pytest
 import trimesh
 
+from blueprint.scene.camera import Camera
 from blueprint.silhouette import (
     BORDER,
     CREASE,
     SILHOUETTE,
     build_adjacency,
     classify_edges,
+    mesh_sharp_edges,
     silhouette_image,
 )
 
@@ -253,3 +255,20 @@ def test_first_faces_from_the_first_two_equal_the_incidences():
     for _ in range(20):
         chosen = rng.random(len(adj.faces)) < 0.5
         np.testing.assert_array_equal(_first_face_of(adj, chosen, count, f0, f1), _first_face(adj, chosen))
+
+
+def test_sharp_edges_kept_for_every_view_classify_alike():
+    """The sharp edges given (kept by a caller for every view, ``mesh_sharp_edges``) classify
+    a mesh's edges exactly as those found for the view."""
+    mesh = trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.4, sections=24)
+    adj = build_adjacency(mesh.vertices, mesh.faces)
+    sharp = mesh_sharp_edges(adj, 30.0)
+    assert sharp.any() and not sharp.all()
+    for view in ("iso", "front", "top"):
+        camera = Camera.fit(mesh.vertices, view, aspect=1.0)
+        v, p = camera.view_matrix(), camera.projection_matrix()
+        found = classify_edges(adj, v, p, 256, 256, 30.0)
+        given = classify_edges(adj, v, p, 256, 256, 30.0, sharp=sharp)
+        np.testing.assert_array_equal(found.edges, given.edges)
+        np.testing.assert_array_equal(found.kind, given.kind)
+        np.testing.assert_array_equal(found.faces, given.faces)

@@ -22,7 +22,7 @@ from blueprint.scene.weld import weld
 
 from .contours import ContourSet, SmoothSurface, smooth_contours, smooth_surface, toward_eye
 from .deform import Animation, Pose
-from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges
+from .edges import BORDER, CREASE, SILHOUETTE, EdgeSet, classify_edges, mesh_sharp_edges
 from .idlist import IdLists, build_id_lists, id_lists_from_topology
 from .mesh import Adjacency, build_adjacency
 from .raster import draw_segments
@@ -41,6 +41,7 @@ __all__ = [
     "build_adjacency",
     "build_id_lists",
     "classify_edges",
+    "mesh_sharp_edges",
     "draw_segments",
     "id_lists_from_topology",
     "silhouette_image",

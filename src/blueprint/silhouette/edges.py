@@ -103,6 +103,7 @@ def classify_edges(
     width: int,
     height: int,
     crease_angle: float = 30.0,
+    sharp: np.ndarray | None = None,
 ) -> EdgeSet:
     """Find the silhouette, border and crease edges of a mesh for one camera.
 
@@ -123,6 +124,9 @@ def classify_edges(
         Image size in pixels.
     crease_angle : float
         Dihedral threshold in degrees, in [0, 180].
+    sharp : (E,) bool, optional
+        ``sharp_edges`` of ``adj`` at ``crease_angle``, where the caller keeps them for every
+        view (they do not depend on it); found here otherwise.
 
     Returns
     -------
@@ -146,7 +150,9 @@ def classify_edges(
     first_back = _first_face_of(adj, ~front & normal_ok, count, f0, f1)
     silhouette = (first_front < len(adj.faces)) & (first_back < len(adj.faces))
     border = count == 1
-    crease = _creases(adj, count, f0, f1, normal_ok, silhouette, crease_angle)
+    if sharp is None:
+        sharp = sharp_edges(adj, count, f0, f1, normal_ok, crease_angle)
+    crease = sharp & ~silhouette
 
     kind = np.zeros(len(adj.edges), dtype=np.uint8)
     kind[crease] = CREASE
@@ -223,6 +229,14 @@ def _creases(adj, count, f0, f1, normal_ok, silhouette, crease_angle: float) -> 
     """(E,) bool: two-face edges, no silhouette, whose faces' normals differ by more than
     ``crease_angle`` degrees, runs of noise left out (``sharp_edges``)."""
     return sharp_edges(adj, count, f0, f1, normal_ok, crease_angle) & ~silhouette
+
+
+def mesh_sharp_edges(adj: Adjacency, crease_angle: float = 30.0) -> np.ndarray:
+    """(E,) bool: ``sharp_edges`` of ``adj``, which no view changes: what ``classify_edges``
+    takes as ``sharp`` from a caller that keeps them for every view."""
+    normals = adj.face_normals
+    normal_ok = (normals[:, 0] != 0) | (normals[:, 1] != 0) | (normals[:, 2] != 0)
+    return sharp_edges(adj, *_first_two_faces(adj), normal_ok, crease_angle)
 
 
 def sharp_edges(adj, count, f0, f1, normal_ok, crease_angle: float) -> np.ndarray:

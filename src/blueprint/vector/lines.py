@@ -28,6 +28,7 @@ from blueprint.silhouette import (
     SmoothSurface,
     build_adjacency,
     classify_edges,
+    mesh_sharp_edges,
     smooth_contours,
     smooth_surface,
     toward_eye,
@@ -99,6 +100,8 @@ _BLOCK_WORDS = 64
 ADJACENCY = ModelCache()
 # The smooth faces and vertex normals of each mesh, by crease angle (``smooth_surface``).
 SURFACES = ModelCache()
+# The sharp edges of each mesh, by crease angle (``_classified``).
+SHARP = ModelCache()
 INTERSECTIONS = ModelCache()
 
 
@@ -310,7 +313,7 @@ def feature_segments(
     adj = adjacency(model)
     width, height = size
     edges = _with_edge_on_outlines(
-        adj, classify_edges(adj, view, projection, width, height, crease_angle), view, projection, size
+        adj, _classified(model, adj, view, projection, size, crease_angle), view, projection, size
     )
     face_part = model.face_part.astype(np.int64)
     part = face_part[np.maximum(edges.faces[:, 0], 0)]
@@ -522,7 +525,7 @@ def smooth_contour_segments(
         return Segments.empty(), np.zeros(model.triangle_count, bool)
     width, height = size
     edges = _with_edge_on_outlines(
-        adj, classify_edges(adj, view, projection, width, height, crease_angle), view, projection, size
+        adj, _classified(model, adj, view, projection, size, crease_angle), view, projection, size
     )
     contours, exact, _, loops = _contour_segments(
         model, adj, edges, edges.kind, view, projection, size, crease_angle
@@ -559,6 +562,16 @@ def grazing_band(model: Model, view: np.ndarray, projection: np.ndarray, crease_
     corners = adj.positions[adj.faces[chosen]]
     band[chosen] = np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2).max(axis=1)
     return band
+
+
+def _classified(model: Model, adj: Adjacency, view, projection, size, crease_angle: float) -> EdgeSet:
+    """``classify_edges`` of ``model``'s adjacency ``adj`` for one view, its sharp edges, which
+    no view changes, found once a mesh and angle (``SHARP``)."""
+    held = SHARP.get(model, dict)
+    if crease_angle not in held:
+        held[crease_angle] = mesh_sharp_edges(adj, crease_angle)
+    width, height = size
+    return classify_edges(adj, view, projection, width, height, crease_angle, sharp=held[crease_angle])
 
 
 def _surface(model: Model, adj: Adjacency, crease_angle: float) -> SmoothSurface:
