@@ -59,8 +59,6 @@ def draw_contours(device, ink, targets: list, layers: int, widths: LineWidths) -
     """Draw ``ink``'s pieces of level below ``layers`` into ``targets`` (the edge maps, layer
     ``k`` in ``targets[k]``, all of one size: ``ink.size`` times a whole factor); the draw
     calls issued."""
-    if len(ink) == 0 or layers == 0:
-        return 0
     ctx = device.ctx
     width, height = targets[0].size
     scale = width / ink.size[0]
@@ -68,28 +66,30 @@ def draw_contours(device, ink, targets: list, layers: int, widths: LineWidths) -
     points = np.column_stack([ink.points[:, 0] * scale, height - ink.points[:, 1] * scale])
     prog = device.program(CONTOUR_FRAG, CONTOUR_VERT)
     device.uniforms.set(prog, "u_target", (float(width), float(height)))
+    # every level's quads in one buffer, each level drawn from its own range of it
+    levels = np.unique(ink.level[ink.level < layers]).tolist()
+    if not levels:
+        return 0
+    quads = [
+        segment_quads(points, ink.offsets, ink.level == level, widths.of(level)[0] + 1.0) for level in levels
+    ]
+    ends = np.cumsum([len(q) for q in quads]).tolist()
+    buffer = ctx.buffer(np.concatenate(quads).tobytes())
+    vao = ctx.vertex_array(prog, [(buffer, "2f 4f", "in_corner", "in_segment")])
     ctx.enable_only(ctx.BLEND)
     ctx.blend_func = ctx.ONE, ctx.ONE
     ctx.blend_equation = ctx.MAX
     draws = 0
     try:
-        for layer in np.unique(ink.level[ink.level < layers]).tolist():
-            half, share = widths.of(layer)
-            vertices = segment_quads(points, ink.offsets, ink.level == layer, half + 1.0)
-            if len(vertices) == 0:
-                continue
-            buffer = ctx.buffer(vertices.tobytes())
-            vao = ctx.vertex_array(prog, [(buffer, "2f 4f", "in_corner", "in_segment")])
-            try:
-                device.uniforms.update(prog, {"u_half": half, "u_ink": share})
-                fbo = device.pool.framebuffer((targets[layer],))
-                fbo.use()
-                vao.render()
-                draws += 1
-            finally:
-                vao.release()
-                buffer.release()
+        for level, end, held in zip(levels, ends, quads, strict=True):
+            half, share = widths.of(level)
+            device.uniforms.update(prog, {"u_half": half, "u_ink": share})
+            device.pool.framebuffer((targets[level],)).use()
+            vao.render(vertices=len(held), first=end - len(held))
+            draws += 1
     finally:
         ctx.blend_equation = ctx.FUNC_ADD
         ctx.disable(ctx.BLEND)
+        vao.release()
+        buffer.release()
     return draws
