@@ -4,10 +4,20 @@ zigzag (a contour's length against its length smoothed along the line)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import trimesh
 from scipy import ndimage
 
 import blueprint
+
+
+def stanford_bunny(shared_models) -> blueprint.Model:
+    """The stanford bunny of the shared models (``shared_models``: the fixture's folder); the
+    test skips where a user's fresh clone has no shared models beside it."""
+    path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is missing from the shared models")
+    return blueprint.load_model(path)
 
 
 def ink(image: np.ndarray) -> np.ndarray:

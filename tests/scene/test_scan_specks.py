@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scan_helpers import ink, noisy_bust, noisy_sphere, specks
+from scan_helpers import ink, noisy_bust, noisy_sphere, specks, stanford_bunny
 from scipy import ndimage
 
 import blueprint
@@ -15,18 +15,11 @@ from blueprint.scene.camera import Camera, clip_to_pixels, transform
 SIZE = (1024, 1024)
 
 
-def _bunny(shared_models):
-    path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
-    if not path.exists():
-        pytest.skip(f"{path} is missing from the shared models")
-    return blueprint.load_model(path)
-
-
 def test_stanford_bunny_specks(renderer, shared_models):
     """42 specks when a crease was every edge but a lone one past the crease angle; 24 since a
     run of crease edges of fewer than 8 edges and 5 % of the model, touching no border, is
     noise (llvmpipe). Most of those left are faint: hidden contours of the noise's folds."""
-    assert specks(np.asarray(blueprint.render(_bunny(shared_models), size=SIZE))) <= 24
+    assert specks(np.asarray(blueprint.render(stanford_bunny(shared_models), size=SIZE))) <= 24
 
 
 @pytest.mark.xfail(
@@ -35,7 +28,7 @@ def test_stanford_bunny_specks(renderer, shared_models):
     "of 15 is met with smooth_contours=True (test_smooth_contour_pictures), off by default for its cost",
 )
 def test_stanford_bunny_specks_target(renderer, shared_models):
-    assert specks(np.asarray(blueprint.render(_bunny(shared_models), size=SIZE))) <= 15
+    assert specks(np.asarray(blueprint.render(stanford_bunny(shared_models), size=SIZE))) <= 15
 
 
 @pytest.mark.parametrize(("name", "most"), [("noisy sphere", 34), ("noisy bust", 19)])

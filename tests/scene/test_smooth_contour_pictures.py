@@ -12,7 +12,7 @@ import trimesh
 from capture_helpers import one_way
 from helpers import run_cli
 from PIL import Image
-from scan_helpers import ink, noisy_bust, noisy_sphere, specks
+from scan_helpers import ink, noisy_bust, noisy_sphere, specks, stanford_bunny
 from scipy import ndimage
 
 import blueprint
@@ -25,17 +25,10 @@ from blueprint.vector.occlusion.gpu import MAX_LAYERS
 SIZE = (1024, 1024)
 
 
-def _bunny(shared_models):
-    path = shared_models / "common-3d-test-models" / "stanford-bunny.obj"
-    if not path.exists():
-        pytest.skip(f"{path} is missing from the shared models")
-    return blueprint.load_model(path)
-
-
 def test_stanford_bunny_specks(renderer, shared_models):
     """The issue's target of 15 on the bunny: 24 with the mesh's outline, 10 with the contour
     lines (llvmpipe)."""
-    model = _bunny(shared_models)
+    model = stanford_bunny(shared_models)
     assert specks(np.asarray(blueprint.render(model, size=SIZE, smooth_contours=True))) <= 12
 
 

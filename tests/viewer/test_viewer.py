@@ -143,6 +143,27 @@ class Session:
         picture = np.asarray(Image.open(self.dump / record["file"]))
         return picture[record["hud_height"] :]
 
+    def quit(self) -> None:
+        """Esc: the viewer exits with code 0."""
+        self.key("Escape")
+        assert self.proc.wait(15) == 0
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+
+
+def _rested_camera(model, record: dict):
+    """The camera of a frame drawn once the view rests, orbited from the iso view to its
+    azimuth and elevation (the paper style's frames, which the tests compare)."""
+    state = ViewState.start(STYLE_NAMES, "paper", azimuth=record["azimuth"], elevation=record["elevation"])
+    state.base_azimuth, state.base_elevation = VIEWS["iso"]
+    return state.camera(model, SIZE[0] / SIZE[1])
+
 
 def _paper_pixels(image: np.ndarray, paper) -> int:
     return int(np.count_nonzero((image != np.asarray(paper, np.uint8)).any(axis=-1)))
@@ -183,8 +204,7 @@ def test_keys_mouse_and_escape_under_xvfb(xdisplay, tmp_path, renderer):
     shutil.copy(GEARBOX, model_path)
     model = blueprint.load_model(model_path)
     size_args = ["--size", str(SIZE[0]), str(SIZE[1]), "--supersample", "1", "--max-layers", "1"]
-    viewer = Session(xdisplay, tmp_path, str(model_path), *size_args)
-    try:
+    with Session(xdisplay, tmp_path, str(model_path), *size_args) as viewer:
         first = viewer.first
         assert first["quality"] == "full" and first["style"] == "blueprint" and first["layers"] == 1
         assert "fps" in first["hud"][0] and "2,144 triangles" in first["hud"][0]
@@ -291,12 +311,7 @@ def test_keys_mouse_and_escape_under_xvfb(xdisplay, tmp_path, renderer):
         assert "moving" not in stopped["hud"][0]
 
         # Esc: exit code 0
-        viewer.key("Escape")
-        assert viewer.proc.wait(15) == 0
-    finally:
-        if viewer.proc.poll() is None:
-            viewer.proc.kill()
-            viewer.proc.wait()
+        viewer.quit()
 
 
 def test_moving_frames_walk_down_the_ladder_then_the_full_drawing_follows(xdisplay, tmp_path, renderer):
@@ -307,8 +322,7 @@ def test_moving_frames_walk_down_the_ladder_then_the_full_drawing_follows(xdispl
     shutil.copy(GEARBOX, model_path)
     model = blueprint.load_model(model_path)
     args = ["--size", str(SIZE[0]), str(SIZE[1]), "--moving-fps", "1000", "--style", "paper"]
-    viewer = Session(xdisplay, tmp_path, str(model_path), *args)
-    try:
+    with Session(xdisplay, tmp_path, str(model_path), *args) as viewer:
         assert viewer.first["quality"] == "full" and viewer.first["render_size"] == list(SIZE)
         viewer.key("t")
         spin = [viewer.wait_for(lambda r: r["turntable"]) for _ in range(8)]
@@ -339,9 +353,7 @@ def test_moving_frames_walk_down_the_ladder_then_the_full_drawing_follows(xdispl
         still = viewer.wait_for(lambda r: r["quality"] == "full")
         assert not still["turntable"] and still["render_size"] == list(SIZE) and still["supersample"] == 2
         assert "moving" not in still["hud"][0]
-        state = ViewState.start(STYLE_NAMES, "paper", azimuth=still["azimuth"], elevation=still["elevation"])
-        state.base_azimuth, state.base_elevation = VIEWS["iso"]
-        camera = state.camera(model, SIZE[0] / SIZE[1])
+        camera = _rested_camera(model, still)
         expected = blueprint.render(
             model, camera=camera, size=SIZE, style="paper", max_layers=5, renderer=renderer
         )
@@ -349,12 +361,7 @@ def test_moving_frames_walk_down_the_ladder_then_the_full_drawing_follows(xdispl
         np.testing.assert_array_equal(viewer.image(still), expected[hud:, :, :3])
         # the frame after the still one: none, nothing changed
         assert viewer.settle()["n"] == still["n"]
-        viewer.key("Escape")
-        assert viewer.proc.wait(15) == 0
-    finally:
-        if viewer.proc.poll() is None:
-            viewer.proc.kill()
-            viewer.proc.wait()
+        viewer.quit()
 
 
 PRESENT_BOTH_WAYS = """
@@ -426,21 +433,13 @@ def test_still_drawing_has_the_contour_lines(xdisplay, tmp_path, renderer):
     trimesh.Trimesh(sphere.positions, sphere.faces, process=False).export(model_path)
     model = blueprint.load_model(model_path)
     args = ["--size", str(SIZE[0]), str(SIZE[1]), "--style", "paper", "--smooth-contours"]
-    viewer = Session(xdisplay, tmp_path, str(model_path), *args)
-    try:
+    with Session(xdisplay, tmp_path, str(model_path), *args) as viewer:
         still = viewer.first
         assert still["quality"] == "full"
-        state = ViewState.start(STYLE_NAMES, "paper", azimuth=still["azimuth"], elevation=still["elevation"])
-        state.base_azimuth, state.base_elevation = VIEWS["iso"]
-        camera = state.camera(model, SIZE[0] / SIZE[1])
+        camera = _rested_camera(model, still)
         options = dict(camera=camera, size=SIZE, style="paper", max_layers=5, renderer=renderer)
         expected = blueprint.render(model, smooth_contours=True, **options)
         assert not np.array_equal(expected, blueprint.render(model, **options))
         hud = still["hud_height"]
         np.testing.assert_array_equal(viewer.image(still), expected[hud:, :, :3])
-        viewer.key("Escape")
-        assert viewer.proc.wait(15) == 0
-    finally:
-        if viewer.proc.poll() is None:
-            viewer.proc.kill()
-            viewer.proc.wait()
+        viewer.quit()
