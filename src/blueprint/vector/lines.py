@@ -322,7 +322,8 @@ def feature_segments(
     # an outline edge beside a face seen edge-on (a box's side in a plan view) is a silhouette
     # whichever side of zero that face's facing rounds to
     crease = np.flatnonzero(kind == CREASE)
-    kind[crease[_edge_on(adj, edges.faces[crease], view, projection).any(axis=1)]] = SILHOUETTE
+    edge_on = _faces_edge_on(adj, view, projection, _EDGE_ON)
+    kind[crease[edge_on[edges.faces[crease]].any(axis=1)]] = SILHOUETTE
     min_cos = np.cos(np.radians(SMOOTH_ANGLE))
     crease = np.flatnonzero(kind == CREASE)
     cos = np.einsum("ij,ij->i", normals[edges.faces[crease, 0]], normals[edges.faces[crease, 1]])
@@ -587,7 +588,7 @@ def _faces_edge_on(
     adj: Adjacency, view: np.ndarray, projection: np.ndarray, within: float = _EDGE_ON_SMOOTH
 ) -> np.ndarray:
     """(F,) bool: the faces seen edge-on, within ``within`` (a cosine) of a right angle, by
-    default within rounding of smooth contours' (as ``_edge_on`` finds them)."""
+    default within rounding of smooth contours'."""
     return _face_cosines(adj, view, projection) <= within
 
 
@@ -598,7 +599,7 @@ _COSINES: list = [None, b"", None]
 
 def _face_cosines(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
     """(F,) float64: |cos| of the angle between each face's normal and the direction from its
-    first corner to the eye, as ``_edge_on`` takes it; kept for the last view asked."""
+    first corner to the eye; kept for the last view asked."""
     key = np.asarray(view, np.float64).tobytes() + np.asarray(projection, np.float64).tobytes()
     held, held_key, cosines = _COSINES
     if held is adj and held_key == key:
@@ -694,21 +695,6 @@ def _short_runs(points: np.ndarray, pixels: np.ndarray, shortest: float) -> tupl
     alone = (np.bincount(ids.reshape(-1)) == 1)[ids].any(axis=1)
     open_run = np.bincount(run, alone, minlength=len(length)) > 0
     return length[run] < shortest, ~open_run[run]
-
-
-def _edge_on(
-    adj, faces: np.ndarray, view: np.ndarray, projection: np.ndarray, within: float = _EDGE_ON
-) -> np.ndarray:
-    """(N, 2) bool: which of the faces ``faces`` (N, 2) the camera sees edge-on, within
-    ``within`` (a cosine) of a right angle."""
-    camera_to_model = np.linalg.inv(view)
-    normal = adj.face_normals[faces]
-    if projection[3, 3] == 1.0:
-        toward = np.broadcast_to(camera_to_model[:3, 2], normal.shape)
-    else:
-        toward = camera_to_model[:3, 3] - adj.positions[adj.faces[faces, 0]]
-    cos = np.einsum("nki,nki->nk", normal, toward) / np.maximum(np.linalg.norm(toward, axis=2), 1e-300)
-    return np.abs(cos) <= within
 
 
 # -- intersections between parts ------------------------------------------------------------------
