@@ -169,7 +169,8 @@ def test_a_frame_is_chunked_to_the_gpus_free_memory(renderer, monkeypatch):
     model = dense_model()
     triangles = model.triangle_count
     pixels, layers = 96 * 96, 8
-    need = budget.frame_bytes(triangles, pixels, layers, renderer.capture_table.row("A-buffer").max_bytes)
+    row = renderer.capture_table.row("A-buffer")
+    need = budget.frame_bytes(triangles, pixels, layers, row.max_bytes, slim=row.slim)
     assert need["mesh"] == budget.MESH_BYTES * triangles
     third = -(-triangles // 3)
     free = need["gbuffers"] + need["lists"] + budget.MESH_BYTES * third
@@ -197,8 +198,10 @@ def test_a_frame_is_chunked_to_the_gpus_free_memory(renderer, monkeypatch):
     finally:
         vars(renderer.capturer).pop("mesh", None)  # stages.watch's timing of uploads
         renderer.forget(model)
-    # too little for the G-buffers and lists beside a chunk of the fewest faces: refused
-    monkeypatch.setenv(budget.GPU_MEMORY_ENV, str(free - budget.MESH_BYTES * third))
+    # too little for the G-buffers beside a chunk of the fewest faces, the lists given way:
+    # refused
+    least = need["gbuffers"] + budget.MESH_BYTES * budget.MIN_CHUNK_FACES
+    monkeypatch.setenv(budget.GPU_MEMORY_ENV, str(least - 1))
     with pytest.raises(InputError, match="the frame needs about .* of GPU memory"):
         blueprint.draw(dense_model(), **options)
     monkeypatch.setenv(budget.GPU_MEMORY_ENV, "lots")
@@ -227,7 +230,7 @@ def test_the_chunk_setting_takes_positive_face_counts(renderer):
 
 
 @needs_cli
-def test_the_cli_draws_in_chunks_or_refuses_in_one_line(tmp_path):
+def test_the_cli_draws_in_chunks_or_refuses_in_one_line(renderer, tmp_path):
     """``blueprint render`` under a ``BLUEPRINT_GPU_MEMORY`` that leaves room for a quarter of
     the mesh: the same PNG, drawn in four chunks, as it says; under one that leaves none for
     the G-buffers: one line, exit 2, nothing written."""
@@ -236,8 +239,10 @@ def test_the_cli_draws_in_chunks_or_refuses_in_one_line(tmp_path):
     trimesh.Trimesh(model.positions, model.faces, process=False).export(path)
     triangles = model.triangle_count
     pixels = 128 * 128
-    # the lists' cap (the A-buffer row's) is far above a 128² frame's on every device
-    need = budget.frame_bytes(triangles, pixels, 8, 1 << 30)
+    # the lists' cap (the A-buffer row's) is far above a 128² frame's on every device; the
+    # command opens the device this process has, with its table
+    row = renderer.capture_table.row("A-buffer")
+    need = budget.frame_bytes(triangles, pixels, 8, 1 << 30 if row else None, slim=bool(row and row.slim))
     free = need["gbuffers"] + need["lists"] + budget.MESH_BYTES * (triangles // 4)
 
     def render(out: str, gpu_memory: int | None) -> subprocess.CompletedProcess:

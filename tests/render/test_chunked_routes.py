@@ -45,14 +45,23 @@ def ball_and_bar() -> Model:
     )
 
 
-def room(renderer, model: Model, pixels: int, max_layers: int | None, mesh_faces: int, extra=None) -> int:
+def room(
+    renderer, model: Model, pixels: int, max_layers: int | None, mesh_faces: int, extra=None, lists=True
+) -> int:
     """Bytes of GPU memory that hold a frame's buffers (``budget.frame_bytes`` as the frame
-    sizes them, under the renderer's capture table) and ``mesh_faces`` faces of its mesh."""
+    sizes them, under the renderer's capture table; the A-buffer's lists left out unless
+    ``lists``) and ``mesh_faces`` faces of its mesh."""
     row = renderer.capture_table.row("A-buffer")
     need = budget.frame_bytes(
-        model.triangle_count, pixels, max_layers, row.max_bytes if row else None, extra=extra
+        model.triangle_count,
+        pixels,
+        max_layers,
+        row.max_bytes if row else None,
+        extra=extra,
+        slim=bool(row and row.slim),
     )
-    return sum(need.values()) - need["mesh"] + budget.MESH_BYTES * mesh_faces
+    held = sum(need.values()) - need["mesh"] - (0 if lists else need["lists"])
+    return held + budget.MESH_BYTES * mesh_faces
 
 
 def occlusion(model: Model, size, max_layers: int | None) -> dict[str, int]:
@@ -281,7 +290,9 @@ def test_a_pipelines_run_is_sized_by_its_g_buffers(renderer, tmp_path, uploads, 
     for name in dumps:
         assert np.array_equal(dumps[name], split_dumps[name]), name
     uploads.clear()
-    monkeypatch.setenv(budget.GPU_MEMORY_ENV, str(free - budget.MESH_BYTES * third(model)))
+    # too little for the G-buffers beside a chunk of the fewest faces, the lists given way
+    least = room(renderer, model, 4 * w * h + w * h, 3, budget.MIN_CHUNK_FACES, lists=False)
+    monkeypatch.setenv(budget.GPU_MEMORY_ENV, str(least - 1))
     with pytest.raises(InputError, match="the frame needs about .* of GPU memory"):
         run(ball_and_bar())
     assert uploads == []

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 from capture_helpers import one_way
 from instanced_scenes import flattened, mixed_scene
 
@@ -16,9 +17,11 @@ import blueprint
 from blueprint.examples import gearbox
 from blueprint.gpu.targets import FORMATS, INTERNAL_FORMATS
 from blueprint.render import abuffer, budget
+from blueprint.render import renderer as renderer_module
 from blueprint.render.abuffer import placed_fragments, projected_fragments
 from blueprint.render.gbuffer import gbuffer
 from blueprint.scene.camera import fit_camera
+from blueprint.scene.loader import model_from_object
 
 CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
 
@@ -163,3 +166,53 @@ def test_a_scene_kept_as_instances_starts_with_the_room_its_fragments_foretell(r
     drawn = (renderer.abuffer_room[size] - 1024) / 1.25
     assert drawn == pytest.approx(foretold, rel=0.02)
     assert not model.is_flat
+
+
+def nested_boxes(count: int = 40) -> blueprint.Model:
+    """Boxes one inside the next, each a part: 2 * ``count`` layers at the centre."""
+    boxes = [trimesh.creation.box(extents=(k, 0.8 * k, 0.6 * k)) for k in range(1, count + 1)]
+    return model_from_object(trimesh.Scene(boxes), name="nested boxes")
+
+
+def list_bytes(pool, size: tuple[int, int]) -> int:
+    """Bytes the pool holds for the A-buffer's lists at ``size``: each fragment's node, links
+    and, where slim, its depth and face (abuffer.ABufferSource._buffers), in images or buffers."""
+    parts = tuple(f"abuffer.{size[0]}x{size[1]}.{part}" for part in ("nodes", "links", "order", "slim"))
+    images = [key for name, key in frame_targets(pool, size).items() if name in parts]
+    return sum(map(target_bytes, images)) + sum(
+        n for name, n in frame_buffers(pool, size).items() if name in parts
+    )
+
+
+def test_a_deep_models_lists_take_no_more_than_the_memory_check_leaves(renderer, monkeypatch):
+    """Free GPU memory for the mesh, the G-buffers and a third of what the A-buffer holds for
+    every layer of 40 nested boxes (80 layers at the centre; the guard counts the lists as a
+    fragment a pixel a layer of the 8 a pass holds, short of that): the A-buffer of a renderer
+    that starts afresh holds no more than that third, and the frame, peeled instead, draws
+    what the A-buffer draws with room enough."""
+    if renderer.capture_table.row("A-buffer") is None:
+        pytest.skip("no A-buffer (OpenGL 4.3)")
+    size = (146, 106)
+    options = {"size": size, "supersample": 1, "max_layers": 0, **CAMERA}
+    asked = []
+
+    def spied(*args, **kwargs):
+        asked.append(budget.frame_bytes(*args, **kwargs))
+        return asked[-1]
+
+    monkeypatch.setattr(renderer_module, "frame_bytes", spied)
+    model = nested_boxes()
+    roomy = np.asarray(blueprint.draw(model, **options).image)
+    assert renderer.executor.last_run.groups[0].capture.way == "A-buffer"
+    need, listed = asked[-1], list_bytes(renderer.pool, size)
+    assert 0 < need["lists"] < listed
+    renderer.forget(model)
+    left = listed // 3
+    monkeypatch.setattr(budget, "free_gpu_memory", lambda device: sum(need.values()) - need["lists"] + left)
+    with blueprint.Renderer() as fresh:
+        monkeypatch.setattr(blueprint.api, "_renderer", fresh)
+        tight = np.asarray(blueprint.draw(nested_boxes(), **options).image)
+        assert fresh.capturer.list_room == left
+        assert fresh.executor.last_run.groups[0].capture.way == "peel"
+        assert list_bytes(fresh.pool, size) <= left
+    assert np.array_equal(tight, roomy)

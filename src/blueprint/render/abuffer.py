@@ -86,7 +86,11 @@ class ABufferSource:
 
     def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
         r = self.r = capturer.device
-        self.mesh, self.gb, self.max_bytes = mesh, gb, row.max_bytes
+        self.mesh, self.gb = mesh, gb
+        # the row's cap, or less where the frame's memory check left the lists less: a deep
+        # model's fragments past it are peeled instead of allocated
+        room = capturer.list_room
+        self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
         self.camera, self.model = camera, capturer.model_of(mesh)
         # the room of the frames before, by G-buffer size (``Capturer.abuffer_room``)
         self.rooms = capturer.abuffer_room
@@ -191,7 +195,8 @@ class ABufferSource:
         """Whether lists of ``room`` fragments at ``size``, and the compute rasteriser's
         buffers where it draws them, fit ``max_bytes`` (and the images' rows)."""
         rows = -(-room // AB_ROW)
-        held = room * self.node_bytes
+        # images hold whole rows
+        held = (rows * AB_ROW if self.images else room) * self.node_bytes
         if self._computes(size):
             held += self.raster.bytes(size, self.mesh.triangles)
         return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)

@@ -13,6 +13,7 @@ import numpy as np
 from blueprint import settings
 from blueprint.errors import InputError
 from blueprint.gpu.device import CURRENT_AVAILABLE_NVX, nvx_memory
+from blueprint.render.abuffer import NODE_BYTES, SLIM_BYTES
 from blueprint.render.kbuffer import KBUFFER_MAX
 from blueprint.render.mesh import INSTANCE, PLACEMENT
 from blueprint.scene.prepare import VERTEX
@@ -22,7 +23,6 @@ __all__ = [
     "GPU_MEMORY_ENV",
     "MESH_BYTES",
     "MIN_CHUNK_FACES",
-    "NODE_BYTES",
     "RECORD_BYTES",
     "check_frame_memory",
     "frame_bytes",
@@ -36,8 +36,6 @@ MESH_BYTES = 3 * VERTEX.itemsize + 3 * 4
 RECORD_BYTES = INSTANCE.itemsize + PLACEMENT.itemsize
 # a G-buffer's pixel: two depth textures, the rgba16f normal and the rg32i IDs
 GBUFFER_BYTES = 4 + 4 + 8 + 8
-# an A-buffer fragment as llvmpipe lists it whole (a GPU's slim ones take half)
-NODE_BYTES = 16
 # the fewest faces a chunk of a mesh drawn in chunks uploads: below it the draws' and uploads'
 # overhead would be all of a chunk's cost, and a frame is refused instead
 MIN_CHUNK_FACES = 1 << 12
@@ -81,16 +79,21 @@ def frame_bytes(
     list_bytes: int | None,
     instances: int = 0,
     extra: dict[str, int] | None = None,
+    slim: bool = False,
 ) -> dict[str, int]:
-    """The GPU memory a frame allocates at most, by kind: ``mesh`` (vertex and index buffers
-    of ``triangles`` not yet uploaded, and the records of their ``instances``: ``uploaded``),
-    ``gbuffers`` (a G-buffer of ``pixels`` supersampled
-    pixels a layer a pass holds: up to ``KBUFFER_MAX``) and ``lists`` (an A-buffer's fragments,
-    a node a pixel a layer, at most ``list_bytes``, its row's cap; None: no A-buffer); then the
-    kinds of ``extra``, what the frame's own passes allocate beside the capture (tables read by
-    face, targets a layer), none of which a mesh drawn in chunks makes smaller."""
+    """The GPU memory a frame allocates, by kind: ``mesh`` (vertex and index buffers of
+    ``triangles`` not yet uploaded, and the records of their ``instances``: ``uploaded``),
+    ``gbuffers`` (a G-buffer of ``pixels`` supersampled pixels a layer a pass holds: up to
+    ``KBUFFER_MAX``) and ``lists`` (an A-buffer's fragments, ``slim`` or not
+    (``abuffer.NODE_BYTES``), a fragment a pixel a layer, at most ``list_bytes``, its row's cap;
+    None: no A-buffer); then the kinds of ``extra``, what the frame's own passes allocate beside
+    the capture (tables read by face, targets a layer), none of which a mesh drawn in chunks
+    makes smaller. The lists are what a frame of that many layers takes: a deeper model's
+    A-buffer takes no more than ``check_frame_memory`` leaves it, and peels where that is
+    too little."""
     layers = KBUFFER_MAX if not max_layers else min(max_layers, KBUFFER_MAX)
-    lists = 0 if list_bytes is None else min(list_bytes, NODE_BYTES * pixels * layers)
+    node = NODE_BYTES + (SLIM_BYTES if slim else 0)
+    lists = 0 if list_bytes is None else min(list_bytes, node * pixels * layers)
     mesh = MESH_BYTES * triangles + RECORD_BYTES * instances
     need = {"mesh": mesh, "gbuffers": GBUFFER_BYTES * pixels * layers, "lists": lists}
     for kind, size in (extra or {}).items():
@@ -100,22 +103,36 @@ def frame_bytes(
     return need
 
 
-def check_frame_memory(device, name: str, need: dict[str, int], instances: int = 0) -> int | None:
-    """The faces a chunk of the mesh uploads where the frame's GPU memory ``need``
-    (``frame_bytes``, its mesh of ``instances`` instance records) is more than the device has
-    free (``free_gpu_memory``) but everything else it needs (G-buffers, lists, the extra kinds),
-    its instance records and ``MIN_CHUNK_FACES`` faces are not; None where it fits whole (or the
-    driver does not tell). Raise ``InputError`` naming ``name`` where even that would not fit."""
+def check_frame_memory(
+    device, name: str, need: dict[str, int], instances: int = 0
+) -> tuple[int | None, int | None]:
+    """(faces, lists) of a frame whose GPU memory is ``need`` (``frame_bytes``, its mesh of
+    ``instances`` instance records), against what the device has free (``free_gpu_memory``):
+    ``faces`` a chunk of the mesh uploads, None where the mesh fits whole; ``lists`` the bytes
+    its A-buffer's lists may take (None where the driver does not tell). Where the whole frame
+    fits, the lists take all that the rest leaves; where it does not, the mesh is drawn in
+    chunks that fit beside everything else; where not even a small chunk does
+    (``MIN_CHUNK_FACES``), the A-buffer gives way, its frame peeled instead (the lists are the
+    one kind a frame can do without). Raise ``InputError`` naming ``name`` where even that
+    would not fit."""
     free = free_gpu_memory(device)
+    if free is None:
+        return None, None
     total = sum(need.values())
-    if free is None or total <= free:
-        return None
-    left = free - (total - need["mesh"]) - RECORD_BYTES * instances
-    if left >= MESH_BYTES * MIN_CHUNK_FACES:
-        return left // MESH_BYTES
-    parts = ", ".join(f"{kind} {settings.human_size(n)}" for kind, n in need.items() if n)
+    if total <= free:
+        return None, free - (total - need["lists"])
+    records = RECORD_BYTES * instances
+    for lists in (need["lists"], 0):
+        rest = total - need["lists"] + lists
+        if rest <= free:
+            return None, free - rest + lists
+        left = free - (rest - need["mesh"]) - records
+        if left >= MESH_BYTES * MIN_CHUNK_FACES:
+            return left // MESH_BYTES, lists
+    least = {kind: n for kind, n in need.items() if kind != "lists"}
+    parts = ", ".join(f"{kind} {settings.human_size(n)}" for kind, n in least.items() if n)
     raise InputError(
-        f"{name}: the frame needs about {settings.human_size(total)} of GPU memory ({parts}), more than "
-        f"the {settings.human_size(free)} free on {device.info['renderer']} (try a smaller --size, "
+        f"{name}: the frame needs about {settings.human_size(sum(least.values()))} of GPU memory ({parts}), "
+        f"more than the {settings.human_size(free)} free on {device.info['renderer']} (try a smaller --size, "
         "--supersample or --max-layers)"
     )

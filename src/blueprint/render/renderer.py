@@ -114,6 +114,8 @@ class Capturer:
         # (model, faces a chunk) the last frame checked planned for its model
         self._planned: tuple[Model, int | None] | None = None
         self.abuffer_room: dict[tuple[int, int], int] = {}
+        # the bytes the last frame checked leaves its A-buffer's lists (``check_memory``)
+        self.list_room: int | None = None
         self.compute_raster = ComputeRaster(device)
 
     @property
@@ -202,12 +204,14 @@ class Capturer:
         yet, and ``extra``, what the frame's own passes allocate beside the capture, by kind.
         Where the mesh does not fit beside the frame's other buffers it is drawn in chunks that
         do (``mesh``); where those buffers and a small chunk would not fit either, raise
-        ``InputError``. Every route that uploads a model asks first (a picture, the layers read
-        back or left on the GPU for the vector drawings, the GPU silhouettes, a pipeline's
-        run). A frame like the last one checked, asking no more beside the capture, allocates
-        nothing new, so it is not asked again: asking the driver every frame costs a streamed
-        frame time it need not spend, and a caller that sized the frame with its own passes'
-        buffers keeps the chunks planned for them when the capture's route asks again."""
+        ``InputError``. The A-buffer's lists take no more than the rest leaves (``list_room``):
+        a model deeper than they hold is peeled. Every route that uploads a model asks first (a
+        picture, the layers read back or left on the GPU for the vector drawings, the GPU
+        silhouettes, a pipeline's run). A frame like the last one checked, asking no more beside
+        the capture, allocates nothing new, so it is not asked again: asking the driver every
+        frame costs a streamed frame time it need not spend, and a caller that sized the frame
+        with its own passes' buffers keeps the chunks planned for them when the capture's route
+        asks again."""
         extra = dict(extra or {})
         crease = None if crease_angle is None else float(crease_angle)
         asked = (model, pixels, max_layers, crease, extra)
@@ -230,8 +234,9 @@ class Capturer:
             abuffer.max_bytes if abuffer else None,
             instances=instances,
             extra=extra,
+            slim=bool(abuffer and abuffer.slim),
         )
-        faces = check_frame_memory(self.device, model.source or "the model", need, instances)
+        faces, self.list_room = check_frame_memory(self.device, model.source or "the model", need, instances)
         self._planned = (model, faces)
         self._checked = asked
 
