@@ -246,6 +246,33 @@ def test_weld_groups_rows_by_value_when_every_hash_collides(monkeypatch):
     np.testing.assert_array_equal(first[inverse], lowest[numbers.reshape(-1)])
 
 
+def test_weld_groups_rows_by_value_where_some_hashes_collide(monkeypatch):
+    """A hash of the first coordinate alone: rows that share it and differ in the others
+    collide, in runs among runs that do not; the groups are the true hash's."""
+    rng = np.random.default_rng(5)
+    points = rng.integers(0, 40, (3000, 3)).astype(np.float32)
+    points[rng.random(3000) < 0.3, 1:] = 0.0  # runs of one row repeated, beside collisions
+    expected_inverse, expected_first = weld._exact_groups(points)
+    monkeypatch.setattr(weld, "_BITS_HASH", np.array([0x9E3779B97F4A7C15, 0, 0], np.uint64))
+    inverse, first = weld._exact_groups(points)
+    np.testing.assert_array_equal(inverse, expected_inverse)
+    np.testing.assert_array_equal(first, expected_first)
+
+
+@pytest.mark.parametrize(
+    ("same", "at", "runs"),
+    [
+        ([1, 0, 1, 1, 0, 0, 1], [0, 3], [0, 1, 2, 3, 4]),
+        ([1, 0, 1, 1, 0, 0, 1], [6], [6, 7]),
+        ([1, 1, 1], [1], [0, 1, 2, 3]),
+        ([0, 1, 0, 1], [1, 3, 3], [1, 2, 3, 4]),
+    ],
+)
+def test_the_runs_holding_positions(same, at, runs):
+    found = weld._runs_holding(np.array(same, bool), np.array(at))
+    assert found.tolist() == runs
+
+
 class _Buffers:
     def __init__(self) -> None:
         self.data: list[bytes] = []

@@ -174,8 +174,9 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     0.0).
 
     Rows are sorted by a hash of their bits with their index in its low bits, one sort of
-    values: rows that share the rest of their hash are one row, or (never seen; possible) a
-    collision, whose rows alone are sorted by their values."""
+    values: rows that share the rest of their hash are one row, or a collision (the more rows,
+    the fewer bits the hash keeps: some hundred among 16 M corners), whose runs alone are
+    sorted by their values."""
     n = len(positions)
     if n == 0:
         return np.zeros(0, dtype), np.zeros(0, np.int64)
@@ -195,8 +196,7 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     if collided.any():
         # the rows of the runs with a collision, sorted by value (stably: each one's first
         # occurrence stays first)
-        run = np.cumsum(np.r_[True, ~same_hash])
-        sub = np.flatnonzero(np.isin(run, run[1:][collided]))
+        sub = _runs_holding(same_hash, np.flatnonzero(collided))
         picked = order[sub]
         order[sub] = picked[np.lexsort([positions[picked, k] for k in (2, 1, 0)])]
         # only the neighbours of the rows moved can change
@@ -221,6 +221,23 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     inverse = np.empty(n, dtype)
     parallel.run(partial(_scattered, inverse, order, group), n)
     return inverse, np.flatnonzero(seen)
+
+
+def _runs_holding(same: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The positions, ascending, of the runs that hold positions ``at`` (ascending), where a
+    run is positions ``i`` to ``j`` with ``same`` true from ``i`` to ``j - 1`` (``same[i]``:
+    positions ``i`` and ``i + 1`` share a hash): found from the breaks around each, not by
+    numbering every position's run."""
+    breaks = np.flatnonzero(~same)
+    k = np.searchsorted(breaks, at)
+    # a run ends at the first break at or after a position, else at the last position, and
+    # starts after the break before it, else at 0
+    last = np.append(breaks, len(same))[k]
+    first = np.insert(breaks + 1, 0, 0)[k]
+    first, last = np.unique(np.stack([first, last]), axis=1)
+    lengths = last - first + 1
+    starts = np.repeat(first - np.cumsum(lengths) + lengths, lengths)
+    return starts + np.arange(int(lengths.sum()))
 
 
 def _hashed(positions: np.ndarray, low: np.uint64, key: np.ndarray, lo: int, hi: int) -> None:
