@@ -61,8 +61,12 @@ def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
         (..., 4) float64 transformed points (clip coordinates through a projection).
     """
     points = np.asarray(points, np.float64)
-    homogeneous = np.concatenate([points, np.ones((*points.shape[:-1], 1))], axis=-1)
-    return homogeneous @ np.asarray(matrix, np.float64).T
+    matrix = np.asarray(matrix, np.float64)
+    # w = 1 added as the matrix's last column, not as a column of ones: no (..., 4) copy of
+    # the points, and a product of three terms, not four (the same sums)
+    out = points @ matrix[:, :3].T
+    out += matrix[:, 3]
+    return out
 
 
 def clip_to_pixels(
