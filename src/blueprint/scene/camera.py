@@ -99,12 +99,29 @@ def clip_to_pixels(
     if origin not in ("top", "bottom"):
         raise ValueError(f"origin must be 'top' or 'bottom', got {origin!r}")
     clip = np.asarray(clip, np.float64)
-    w = clip[..., 3:4]
-    ndc = clip[..., : 3 if depth else 2] / np.where(np.abs(w) > 0, w, 1.0)
+    w = clip[..., 3]
+    w = np.where(np.abs(w) > 0, w, 1.0)
     width, height = size
-    x = (ndc[..., 0] + 1.0) * 0.5 * width
-    y = ((1.0 - ndc[..., 1]) if origin == "top" else (ndc[..., 1] + 1.0)) * 0.5 * height
-    return np.stack([x, y, ndc[..., 2]] if depth else [x, y], axis=-1)
+    # each coordinate worked in place and written once (the sums of the formulas, in their
+    # order: (x / w + 1) * 0.5 * width), where temporaries of every point cost more
+    x, y = np.empty(w.shape), np.empty(w.shape)
+    np.divide(clip[..., 0], w, out=x)
+    x += 1.0
+    x *= 0.5
+    x *= width
+    np.divide(clip[..., 1], w, out=y)
+    if origin == "top":
+        np.subtract(1.0, y, out=y)
+    else:
+        y += 1.0
+    y *= 0.5
+    y *= height
+    out = np.empty((*clip.shape[:-1], 3 if depth else 2))
+    out[..., 0] = x
+    out[..., 1] = y
+    if depth:
+        np.divide(clip[..., 2], w, out=out[..., 2])
+    return out
 
 
 def to_pixels(
