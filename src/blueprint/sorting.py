@@ -163,10 +163,9 @@ def _by_buckets(
             break
     else:
         return None
-    order = np.argsort(bucket, kind="stable")  # a radix sort of bytes
+    # held through the buckets' sorts: int32 where it holds the positions, half as wide
+    order = _bucket_order(bucket, counts, np.int32 if n <= np.iinfo(np.int32).max else np.int64)
     del bucket
-    if n <= np.iinfo(np.int32).max:
-        order = order.astype(np.int32)  # held through the buckets' sorts: half as wide
     ends = np.cumsum(counts)
     ordered, positions = np.empty(n, np.int64) if keys else None, np.empty(n, np.int64)
 
@@ -187,6 +186,34 @@ def _by_buckets(
 
     parallel.run(sort_buckets, len(counts), min_block=1)
     return ordered, positions
+
+
+def _bucket_order(bucket: np.ndarray, counts: np.ndarray, dtype) -> np.ndarray:
+    """``np.argsort(bucket, kind="stable")`` as ``dtype``, of bytes whose ``counts`` (by value)
+    are known: each thread's block of them sorted (a radix sort of bytes) and counted, then
+    each block's run of each value written where the blocks before it leave off."""
+    blocks = parallel.cuts(len(bucket))
+
+    def local(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        at = np.argsort(bucket[lo:hi], kind="stable").astype(dtype)
+        at += lo
+        return at, np.bincount(bucket[lo:hi], minlength=len(counts))
+
+    found = parallel.run(local, len(bucket))
+    per_block = np.array([held for _, held in found], np.int64).reshape(len(blocks), len(counts))
+    # where block t's run of value b starts: after every smaller value's, and block t's
+    # predecessors' run of b
+    starts = np.cumsum(counts) - counts + np.cumsum(per_block, axis=0) - per_block
+    order = np.empty(len(bucket), dtype)
+
+    def place(t: int) -> None:
+        at, held = found[t]
+        taken = np.cumsum(held) - held
+        for b in np.flatnonzero(held).tolist():
+            order[starts[t, b] : starts[t, b] + held[b]] = at[taken[b] : taken[b] + held[b]]
+
+    parallel.each(place, list(range(len(blocks))))
+    return order
 
 
 def _bucket_of(key: np.ndarray, low: int, shift: int, out: np.ndarray, lo: int, hi: int) -> None:
