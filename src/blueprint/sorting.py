@@ -193,6 +193,8 @@ def _bucket_order(bucket: np.ndarray, counts: np.ndarray, dtype) -> np.ndarray:
     are known: each thread's block of them sorted (a radix sort of bytes) and counted, then
     each block's run of each value written where the blocks before it leave off."""
     blocks = parallel.cuts(len(bucket))
+    if len(blocks) == 1:
+        return np.argsort(bucket, kind="stable").astype(dtype)
 
     def local(lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
         at = np.argsort(bucket[lo:hi], kind="stable").astype(dtype)
