@@ -5,7 +5,7 @@ import pytest
 
 from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
-from blueprint.sorting import SortedKeys, sorted_with_order, stable_argsort, unique_first
+from blueprint.sorting import SortedKeys, _bucket_order, sorted_with_order, stable_argsort, unique_first
 
 
 @pytest.mark.parametrize(
@@ -95,3 +95,19 @@ def test_cross_products_equal_numpys(dtype):
     for got in (cross(u, v), face_cross(tri)):
         assert got.dtype == expected.dtype
         np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_bucket_order_is_numpys_stable_argsort(threads, monkeypatch):
+    """Each thread's block of bytes sorted and placed after the blocks before it: NumPy's
+    stable order, with every value in every block and values some blocks lack."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
+    rng = np.random.default_rng(9)
+    bucket = rng.integers(0, 6, 1000).astype(np.uint8)
+    bucket[400:700] = 3
+    per_block = np.array([np.bincount(bucket[lo:hi], minlength=8) for lo, hi in parallel.cuts(len(bucket))])
+    for dtype in (np.int32, np.int64):
+        order = _bucket_order(bucket, per_block, dtype)
+        assert order.dtype == dtype
+        np.testing.assert_array_equal(order, np.argsort(bucket, kind="stable"))

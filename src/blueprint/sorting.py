@@ -156,17 +156,16 @@ def _by_buckets(
     for power in range(fewest, _MAX_BUCKETS.bit_length()):
         shift = max(span - power, 0)
         bucket = np.empty(n, np.uint8)
-        parallel.run(partial(_bucket_of, key, low, shift, bucket), n)
-        counts = np.bincount(bucket, minlength=1 << power)
+        per_block = np.array(parallel.run(partial(_bucket_of, key, low, shift, 1 << power, bucket), n))
+        counts = per_block.sum(axis=0)
         bits = int(counts.max()).bit_length()
         if shift + bits <= 62:
             break
     else:
         return None
-    order = np.argsort(bucket, kind="stable")  # a radix sort of bytes
+    # held through the buckets' sorts: int32 where it holds the positions, half as wide
+    order = _bucket_order(bucket, per_block, np.int32 if n <= np.iinfo(np.int32).max else np.int64)
     del bucket
-    if n <= np.iinfo(np.int32).max:
-        order = order.astype(np.int32)  # held through the buckets' sorts: half as wide
     ends = np.cumsum(counts)
     ordered, positions = np.empty(n, np.int64) if keys else None, np.empty(n, np.int64)
 
@@ -189,12 +188,49 @@ def _by_buckets(
     return ordered, positions
 
 
-def _bucket_of(key: np.ndarray, low: int, shift: int, out: np.ndarray, lo: int, hi: int) -> None:
-    """``out[lo:hi]``: ``(key - low) >> shift`` of ``key[lo:hi]``, as bytes."""
-    block = key[lo:hi].astype(np.int64)
-    block -= low
-    block >>= shift
-    out[lo:hi] = block
+def _bucket_order(bucket: np.ndarray, per_block: np.ndarray, dtype) -> np.ndarray:
+    """``np.argsort(bucket, kind="stable")`` as ``dtype``, of bytes whose counts by value in
+    each block of ``parallel.cuts`` are ``per_block`` (blocks, values): each block sorted (a
+    radix sort of bytes), then each block's run of each value written where the blocks
+    before it leave off."""
+    blocks = parallel.cuts(len(bucket))
+    if len(blocks) == 1:
+        return np.argsort(bucket, kind="stable").astype(dtype)
+
+    def local(lo: int, hi: int) -> np.ndarray:
+        at = np.argsort(bucket[lo:hi], kind="stable").astype(dtype)
+        at += lo
+        return at
+
+    found = parallel.run(local, len(bucket))
+    counts = per_block.sum(axis=0)
+    # where block t's run of value b starts: after every smaller value's, and block t's
+    # predecessors' run of b
+    starts = np.cumsum(counts) - counts + np.cumsum(per_block, axis=0) - per_block
+    order = np.empty(len(bucket), dtype)
+
+    def place(t: int) -> None:
+        at, held = found[t], per_block[t]
+        taken = np.cumsum(held) - held
+        for b in np.flatnonzero(held).tolist():
+            order[starts[t, b] : starts[t, b] + held[b]] = at[taken[b] : taken[b] + held[b]]
+
+    parallel.each(place, list(range(len(blocks))))
+    return order
+
+
+def _bucket_of(
+    key: np.ndarray, low: int, shift: int, values: int, out: np.ndarray, lo: int, hi: int
+) -> np.ndarray:
+    """``out[lo:hi]``: ``(key - low) >> shift`` of ``key[lo:hi]``, as bytes, a piece at a
+    time; returns how many of each of ``values`` the block has."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        piece = key[start:stop].astype(np.int64)
+        piece -= low
+        piece >>= shift
+        out[start:stop] = piece
+    return np.bincount(out[lo:hi], minlength=values)
 
 
 def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

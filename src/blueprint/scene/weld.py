@@ -10,7 +10,7 @@ from functools import partial
 
 import numpy as np
 
-from blueprint import parallel
+from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min
 from blueprint.sorting import unique_first
 
@@ -72,9 +72,11 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     Points within ``tol`` of each other project within ``tol`` of each other on any unit
     vector, so the candidates are the neighbours in one sort along a direction that no axis
     or diagonal of a CAD model follows: one sort and one search, where probing a grid's 14
-    cells costs 14. Points spread evenly have a fraction of a neighbour each there; where many
-    share a projection (over ``_SWEEP_CANDIDATES`` a point: points laid out along that very
-    direction), the grid finds them (``_grid_pairs``).
+    cells costs 14. Points spread evenly have a fraction of a neighbour each there (a few on
+    millions of points); where many share a projection (over ``_SWEEP_CANDIDATES`` a point:
+    points laid out along that very direction), the grid finds them (``_grid_pairs``). The
+    candidates are checked in blocks side by side; the pairs come in the blocks' order, the
+    same whatever the threads.
     """
     n = len(points)
     projected = points @ _SWEEP_DIRECTION
@@ -82,7 +84,8 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     along = projected[order]
     # the dot products round: widen the window by their error so no pair within tol is lost
     window = tol * (1.0 + 1e-9) + 8.0 * np.finfo(np.float64).eps * float(np.abs(along).max())
-    count = np.searchsorted(along, along + window, side="right") - np.arange(1, n + 1)
+    count = np.empty(n, np.int64)
+    parallel.run(partial(_candidates, along, window, count), n)
     total = int(count.sum())
     if total > _SWEEP_CANDIDATES * n:
         return _grid_pairs(points, tol)
@@ -91,22 +94,41 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     ordered = np.take(points, order, axis=0)
     x = np.ascontiguousarray(ordered[:, 0])
     ends = np.cumsum(count)
-    cuts = np.r_[0, np.searchsorted(ends, np.arange(_SWEEP_BLOCK, total, _SWEEP_BLOCK)), n]
-    found_i, found_j = [], []
-    for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
-        block = count[lo:hi]
-        first = np.repeat(np.arange(lo, hi), block)
-        second = first + 1 + (np.arange(len(first)) - np.repeat(np.cumsum(block) - block, block))
-        # the squared difference in x is at most the squared distance, as computed: it rules
-        # most candidates out before their rows are read
-        dx = x[first] - x[second]
-        near = dx * dx <= tol * tol
-        first, second = first[near], second[near]
-        diff = np.take(ordered, first, axis=0) - np.take(ordered, second, axis=0)
-        keep = np.einsum("ij,ij->i", diff, diff) <= tol * tol
-        found_i.append(order[first[keep]])
-        found_j.append(order[second[keep]])
-    return np.concatenate(found_i), np.concatenate(found_j)
+    step = max(min(_SWEEP_BLOCK, -(-total // settings.THREADS)), 1)
+    cuts = np.r_[0, np.searchsorted(ends, np.arange(step, total, step)), n].tolist()
+    check = partial(_sweep_block, ordered, x, order, count, tol)
+    found = parallel.each(check, list(zip(cuts[:-1], cuts[1:], strict=True)))
+    return np.concatenate([i for i, _ in found]), np.concatenate([j for _, j in found])
+
+
+def _candidates(along: np.ndarray, window: float, count: np.ndarray, lo: int, hi: int) -> None:
+    """``count[lo:hi]``: the points after each in sweep order within ``window`` along it."""
+    reach = np.searchsorted(along, along[lo:hi] + window, side="right")
+    np.subtract(reach, np.arange(lo + 1, hi + 1), out=count[lo:hi])
+
+
+def _sweep_block(
+    ordered: np.ndarray,
+    x: np.ndarray,
+    order: np.ndarray,
+    count: np.ndarray,
+    tol: float,
+    block: tuple[int, int],
+) -> tuple[np.ndarray, np.ndarray]:
+    """The close pairs among the candidates of points ``block`` (start, stop) in sweep order
+    (``_close_pairs``), as indices of the points."""
+    lo, hi = block
+    counts = count[lo:hi]
+    first = np.repeat(np.arange(lo, hi), counts)
+    second = first + 1 + (np.arange(len(first)) - np.repeat(np.cumsum(counts) - counts, counts))
+    # the squared difference in x is at most the squared distance, as computed: it rules
+    # most candidates out before their rows are read
+    dx = x[first] - x[second]
+    near = dx * dx <= tol * tol
+    first, second = first[near], second[near]
+    diff = np.take(ordered, first, axis=0) - np.take(ordered, second, axis=0)
+    keep = np.einsum("ij,ij->i", diff, diff) <= tol * tol
+    return order[first[keep]], order[second[keep]]
 
 
 def _grid_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
