@@ -216,3 +216,20 @@ def test_a_deep_models_lists_take_no_more_than_the_memory_check_leaves(renderer,
         assert fresh.executor.last_run.groups[0].capture.way == "peel"
         assert list_bytes(fresh.pool, size) <= left
     assert np.array_equal(tight, roomy)
+    # room for the lists: the A-buffer; a frame after it, checked again (another layer
+    # count), sees the free memory less the lists it holds, as a GPU tells it, and takes them
+    # again rather than peel
+    with blueprint.Renderer() as fresh:
+        monkeypatch.setattr(blueprint.api, "_renderer", fresh)
+        free = sum(need.values()) - need["lists"] + listed
+        monkeypatch.setattr(budget, "free_gpu_memory", lambda device: free)
+        model = nested_boxes()
+        blueprint.draw(model, **options)
+        assert fresh.executor.last_run.groups[0].capture.way == "A-buffer"
+        held = list_bytes(fresh.pool, size)
+        free -= held
+        again = np.asarray(blueprint.draw(model, **{**options, "max_layers": 40}).image)
+        assert fresh.capturer.list_room < held
+        assert fresh.executor.last_run.groups[0].capture.way == "A-buffer"
+        assert list_bytes(fresh.pool, size) == held
+    assert np.array_equal(again, roomy)

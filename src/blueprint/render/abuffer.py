@@ -87,10 +87,6 @@ class ABufferSource:
     def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
         r = self.r = capturer.device
         self.mesh, self.gb = mesh, gb
-        # the row's cap, or less where the frame's memory check left the lists less: a deep
-        # model's fragments past it are peeled instead of allocated
-        room = capturer.list_room
-        self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
         self.camera, self.model = camera, capturer.model_of(mesh)
         # the room of the frames before, by G-buffer size (``Capturer.abuffer_room``)
         self.rooms = capturer.abuffer_room
@@ -103,6 +99,14 @@ class ABufferSource:
         # a mesh drawn in chunks is not on the GPU whole when the resolve would read its faces
         self.slim = row.slim and mesh.chunk_faces is None
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
+        # the row's cap, or less where the frame's memory check left the lists less (a deep
+        # model's fragments past it are peeled instead of allocated); the lists an earlier
+        # frame of this size left in the pool are taken again, not allocated, and the free
+        # memory the check saw was without them
+        room = capturer.list_room
+        if room is not None:
+            room += self._list_bytes(self.rooms.get(tuple(gb.size), 0))
+        self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
         # counter runs a lane at a time: the subgroup's fragments take their nodes with one
@@ -195,11 +199,14 @@ class ABufferSource:
         """Whether lists of ``room`` fragments at ``size``, and the compute rasteriser's
         buffers where it draws them, fit ``max_bytes`` (and the images' rows)."""
         rows = -(-room // AB_ROW)
-        # images hold whole rows
-        held = (rows * AB_ROW if self.images else room) * self.node_bytes
+        held = self._list_bytes(room)
         if self._computes(size):
             held += self.raster.bytes(size, self.mesh.triangles)
         return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
+
+    def _list_bytes(self, room: int) -> int:
+        """Bytes the lists of ``room`` fragments take: images hold whole rows."""
+        return (-(-room // AB_ROW) * AB_ROW if self.images else room) * self.node_bytes
 
     def _room(self, size: tuple[int, int]) -> int:
         held = self.rooms.get(tuple(size))
