@@ -105,6 +105,13 @@ def test_capabilities_the_pipeline_plans_by():
     for ids in (False, True):
         values = edges.uniforms(id_silhouettes=ids)
         assert edges.face_ids(values) == ids and edges.in_place(values) == (not ids)
+    # what a frame's contour lines take from the passes they are drawn beside: the dilation
+    # widens lines (erosion and blur have radii too, and widen none), the edges give hidden ink
+    dilate = OPS["dilate"]
+    assert dilate.widens(dilate.uniforms(radius=2.5, hidden_width=0.4)) == (2.5, 0.4)
+    assert edges.hidden_ink(edges.uniforms(hidden_ink=0.3)) == 0.3
+    assert [op.name for op in OPERATIONS.values() if op.widens is not None] == ["dilate"]
+    assert [op.name for op in OPERATIONS.values() if op.hidden_ink is not None] == ["edges"]
 
 
 # -- edge detectors ------------------------------------------------------------------------------

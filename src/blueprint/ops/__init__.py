@@ -63,6 +63,10 @@ class Op:
     capture must then track; ``in_place(uniforms)``: a per-layer pass reads its layer's depth,
     normal and IDs alone, so it may read them where a capture holds them (the pipeline's in-place
     forms of the op: a k-buffer's surfaces, an A-buffer's lists) instead of from the G-buffer.
+    What lines drawn into its result beside it (a frame's smooth contours) take from it:
+    ``widens(uniforms)``, (pixels added to a line's width, the share of the width hidden
+    layers' lines keep) of a pass that widens its input's lines; ``hidden_ink(uniforms)``, the
+    share of ink hidden layers' lines get from a pass that draws lines.
     """
 
     name: str
@@ -87,6 +91,8 @@ class Op:
     depth_first: bool = False
     face_ids: Callable[[dict], bool] | None = None
     in_place: Callable[[dict], bool] | None = None
+    widens: Callable[[dict], tuple[float, float]] | None = None
+    hidden_ink: Callable[[dict], float] | None = None
 
     def defines(self, uniforms: dict[str, float | bool]) -> dict[str, bool]:
         """Compile-time defines of checked uniform values (see ``switches``)."""
@@ -137,6 +143,7 @@ EDGES = Op(
     # contoured faces are looked up by face
     face_ids=lambda u: bool(u["u_id_silhouettes"]) or bool(u["u_smooth_contours"]),
     in_place=lambda u: not u["u_id_silhouettes"],
+    hidden_ink=lambda u: float(u["u_hidden_ink"]),
 )
 
 DILATE = Op(
@@ -161,6 +168,7 @@ DILATE = Op(
     support="source",
     reach=lambda u: math.ceil(u["u_radius"]),
     compute_form="array",
+    widens=lambda u: (float(u["u_radius"]), float(u["u_hidden_width"])),
 )
 
 OPS: dict[str, Op] = {op.name: op for op in (EDGES, DILATE)}

@@ -903,10 +903,10 @@ def _line_widths(pl: Plan, source: str) -> LineWidths:
     passes = pl.bound.passes
     p = passes[source]
     radius, hidden_width = 0.0, 1.0
-    if "u_radius" in p.uniforms:
-        radius, hidden_width = float(p.uniforms["u_radius"]), float(p.uniforms["u_hidden_width"])
+    if p.op.widens is not None:
+        radius, hidden_width = p.op.widens(p.uniforms)
         p = passes[pl.resolve(next(iter(p.inputs.values())))]
-    hidden_ink = float(p.uniforms.get("u_hidden_ink", 1.0))
+    hidden_ink = 1.0 if p.op.hidden_ink is None else p.op.hidden_ink(p.uniforms)
     return LineWidths(1.0 + radius, (1.0 + radius) * hidden_width, hidden_ink)
 
 
