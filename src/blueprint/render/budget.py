@@ -119,8 +119,6 @@ def check_frame_memory(
     if free is None:
         return None, None
     total = sum(need.values())
-    if total <= free:
-        return None, free - (total - need["lists"])
     records = RECORD_BYTES * instances
     for lists in (need["lists"], 0):
         rest = total - need["lists"] + lists
