@@ -21,6 +21,7 @@ __all__ = [
     "cross",
     "face_cross",
     "indexed_cross",
+    "ranges",
     "row_norm",
 ]
 
@@ -97,3 +98,10 @@ def _cross(a, b, dtype=None, out=None) -> np.ndarray:
         i, j = (k + 1) % 3, (k + 2) % 3
         np.subtract(a[i] * b[j], a[j] * b[i], out=out[:, k])
     return out
+
+
+def ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """The indices ``starts[k]`` to ``starts[k] + counts[k]`` of every ``k``, in order."""
+    total = int(counts.sum())
+    offsets = np.repeat(starts - (np.cumsum(counts) - counts), counts)
+    return offsets + np.arange(total)

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from blueprint.columns import face_cross, row_norm
+from blueprint.columns import face_cross, ranges, row_norm
 from blueprint.sorting import stable_argsort
 
 __all__ = ["Instances", "flatten", "instance_boxes", "worth_instancing"]
@@ -120,8 +120,8 @@ class Instances:
         used[mesh] = True
         renumber = np.cumsum(used) - 1
         vcounts, fcounts = self.mesh_vertices()[used], self.mesh_faces()[used]
-        vrows = _ranges(self.vertex_start[:-1][used], vcounts)
-        frows = _ranges(self.face_start[:-1][used], fcounts)
+        vrows = ranges(self.vertex_start[:-1][used], vcounts)
+        frows = ranges(self.face_start[:-1][used], fcounts)
         return Instances(
             np.ascontiguousarray(self.positions[vrows]),
             np.ascontiguousarray(self.faces[frows]),
@@ -131,13 +131,6 @@ class Instances:
             np.ascontiguousarray(self.transform[keep]),
             part_number[self.part[keep]].astype(np.int32),
         )
-
-
-def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """The indices ``starts[k]`` to ``starts[k] + counts[k]`` of every ``k``, in order."""
-    total = int(counts.sum())
-    offsets = np.repeat(starts - (np.cumsum(counts) - counts), counts)
-    return offsets + np.arange(total)
 
 
 def worth_instancing(drawn: int, unique: int) -> bool:

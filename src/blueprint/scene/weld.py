@@ -11,7 +11,7 @@ from functools import partial
 import numpy as np
 
 from blueprint import parallel, settings
-from blueprint.columns import column_max, column_min
+from blueprint.columns import column_max, column_min, ranges
 from blueprint.sorting import unique_first
 
 __all__ = [
@@ -257,9 +257,7 @@ def _runs_holding(same: np.ndarray, at: np.ndarray) -> np.ndarray:
     last = np.append(breaks, len(same))[k]
     first = np.insert(breaks + 1, 0, 0)[k]
     first, last = np.unique(np.stack([first, last]), axis=1)
-    lengths = last - first + 1
-    starts = np.repeat(first - np.cumsum(lengths) + lengths, lengths)
-    return starts + np.arange(int(lengths.sum()))
+    return ranges(first, last - first + 1)
 
 
 def _hashed(positions: np.ndarray, low: np.uint64, key: np.ndarray, lo: int, hi: int) -> None:
