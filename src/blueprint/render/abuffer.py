@@ -100,12 +100,14 @@ class ABufferSource:
         self.slim = row.slim and mesh.chunk_faces is None
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
         # the row's cap, or less where the frame's memory check left the lists less (a deep
-        # model's fragments past it are peeled instead of allocated); the lists an earlier
-        # frame of this size left in the pool are taken again, not allocated, and the free
-        # memory the check saw was without them
+        # model's fragments past it are peeled instead of allocated); the lists the pool held
+        # at this size as it checked are taken again, not allocated, and the free memory it
+        # saw was without them: what the pool held, not the room learned (a capture that ran
+        # out of room learns more than it allocated) nor lists allocated since
+        self.held = capturer.abuffer_held
         room = capturer.list_room
         if room is not None:
-            room += self._list_bytes(self.rooms.get(tuple(gb.size), 0))
+            room += capturer.list_held.get(tuple(gb.size), 0)
         self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
@@ -327,6 +329,9 @@ class ABufferSource:
             buf.bind_to_storage_buffer(binding)
         if self.slim:
             pool.buffer(f"{name}.slim", SLIM_BYTES * room).bind_to_storage_buffer(SLIM_BINDING)
+        # images are made at the room asked for, buffers kept while big enough (``TargetPool``)
+        at, nbytes = tuple(self.gb.size), self._list_bytes(room)
+        self.held[at] = nbytes if self.images else max(nbytes, self.held.get(at, 0))
         return held
 
     def _capture(self, gb, name: str) -> int | None:
