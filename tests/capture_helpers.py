@@ -157,6 +157,43 @@ def normal_tolerance(renderer) -> float:
     return 0.0 if "llvmpipe" in renderer.info["renderer"] else 1e-3
 
 
+def slim_normal_tolerance(renderer) -> float:
+    """How far a slim fragment's normal (``ABufferRow.slim``: the resolve's sum of the
+    corners' at the pixel centre) may lie from the rasteriser's: a half's last place (2^-11
+    for a unit vector's component); where the driver snaps corners (the H200) the
+    rasteriser's is taken at the snapped sample, up to 1/256 px away, which on a face seen
+    edge-on moves it by more (corners snapped in the vertex shader on llvmpipe: up to 8e-3 on
+    the gearbox)."""
+    return 1e-2 if renderer.snapped_depth else max(2.0**-11, normal_tolerance(renderer))
+
+
+def assert_same_layers(whole, split, renderer) -> None:
+    """The layers of a mesh uploaded whole and drawn in chunks: depths, faces and parts to the
+    bit, normals too, but where the capture table's A-buffer lists slim fragments, which a
+    mesh drawn in chunks does not (its faces are not all on the GPU when the resolve would
+    read them): there within ``slim_normal_tolerance``."""
+    for field in ("depth", "triangle", "part"):
+        assert np.array_equal(getattr(whole, field), getattr(split, field)), field
+    assert (whole.normal is None) == (split.normal is None)
+    if whole.normal is not None:
+        row = renderer.capture_table.row("A-buffer")
+        tolerance = slim_normal_tolerance(renderer) if row is not None and row.slim else 0.0
+        assert np.abs(whole.normal - split.normal).max(initial=0.0) <= tolerance
+
+
+@contextlib.contextmanager
+def whole_fragments(renderer):
+    """``renderer``'s own capture table, its A-buffer listing whole fragments (not slim):
+    those a mesh drawn in chunks lists."""
+    saved = renderer.capture_table
+    rows = tuple(replace(row, slim=False) if row.way == "A-buffer" else row for row in saved.rows)
+    renderer.capture_table = CaptureTable(rows, saved.exact_depth)
+    try:
+        yield
+    finally:
+        renderer.capture_table = saved
+
+
 def drawing_difference(use, style: str, supersample: int) -> np.ndarray:
     """(H, W): the largest channel difference between the gearbox drawn with ``use(True)`` and
     with ``use(False)`` (a capture switched on and off)."""

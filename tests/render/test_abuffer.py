@@ -21,6 +21,7 @@ from capture_helpers import (
     normal_tolerance,
     peel_both_ways,
     planes,
+    slim_normal_tolerance,
 )
 from helpers import SNAPPED_GEOMETRY
 
@@ -77,14 +78,7 @@ def abuffer(renderer, request):
 
 
 def _differ(fast, plain, renderer, slim: bool) -> np.ndarray:
-    tolerance = normal_tolerance(renderer)
-    if slim:
-        # a slim fragment's normal is the resolve's sum of the corners' at the pixel centre, not
-        # the rasteriser's: a half's last place apart (2^-11 for a unit vector's component); where
-        # the driver snaps corners (the H200) the rasteriser's is taken at the snapped sample, up
-        # to 1/256 px away, which on a face seen edge-on moves it by more (corners snapped in the
-        # vertex shader on llvmpipe: up to 8e-3 on the gearbox)
-        tolerance = 1e-2 if renderer.snapped_depth else max(2.0**-11, tolerance)
+    tolerance = slim_normal_tolerance(renderer) if slim else normal_tolerance(renderer)
     same = (
         (np.abs(fast.depth - plain.depth) <= DEPTH_STEP)
         & (fast.triangle == plain.triangle)
