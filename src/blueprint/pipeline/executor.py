@@ -69,8 +69,6 @@ from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
 BASE_UNIT = units.INPUTS
-ATTR_VERT = "blueprint.pipeline:glsl/attributes.vert"
-ATTR_FRAG = "blueprint.pipeline:glsl/attributes.frag"
 # the most layers an edges pass read from a capture's lists or surfaces draws at once
 # (Executor.edge_batch), the most render targets GL asks every driver for
 EDGE_BATCH = 8
