@@ -337,7 +337,9 @@ def test_pool_sliced_array_is_drawn_a_slice_at_a_time_and_read_whole(renderer, p
     bigger = pool.sliced("s", (w + 8, h), "rgba32ui", k)
     assert bigger is not array and bigger.slices[0].size == (w + 8, h)
     assert _released(fbo) and not array.slices
-    assert not any(pool._gl.glIsTexture(name) for name in names)
+    # a driver may give the released names to the bigger array's textures
+    reused = {t.glo for t in bigger.slices} | {bigger.glo}
+    assert not any(pool._gl.glIsTexture(name) for name in names if name not in reused)
 
 
 # -- sizes are checked before any rendering ---------------------------------------------------------

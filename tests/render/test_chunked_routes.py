@@ -317,23 +317,23 @@ def test_a_frame_checked_once_is_not_asked_again(renderer, monkeypatch):
 
 @needs_cli
 @pytest.mark.parametrize("command", ["svg", "layers", "silhouettes"])
-def test_the_commands_draw_in_chunks_or_refuse_in_one_line(tmp_path, command):
+def test_the_commands_draw_in_chunks_or_refuse_in_one_line(renderer, tmp_path, command):
     """``render x.svg``, ``layers`` and ``silhouettes`` under a ``BLUEPRINT_GPU_MEMORY`` that
-    leaves room for a quarter of the mesh: the same file as under the device's own memory;
-    under one that leaves none for the G-buffers: one line, exit 2, nothing written."""
+    leaves room for a quarter of the mesh (beside the frame's buffers as the device's capture
+    table sizes them): the same file as under the device's own memory; under one that leaves
+    none for the G-buffers: one line, exit 2, nothing written."""
     model = ball_and_bar()
     path = tmp_path / "ball.ply"
     trimesh.Trimesh(model.positions, model.faces, process=False).export(path)
     size, layers, triangles = 128, 4, model.triangle_count
     pixels = size * size
-    # the lists' cap (the A-buffer row's) is far above a 128² frame's on every device
     if command == "silhouettes":
         edges = 2 * -(-3 * triangles // 4096) * 4096 * 12 + 3 * triangles * 16
-        need = budget.frame_bytes(triangles, pixels, 1, 1 << 30, extra={"other": pixels * layers + edges})
+        sized, extra = 1, {"other": pixels * layers + edges}
     else:
-        extra = occlusion(model, (size, size), layers) if command == "svg" else None
-        need = budget.frame_bytes(triangles, pixels, layers, 1 << 30, extra=extra)
-    quarter = sum(need.values()) - need["mesh"] + budget.MESH_BYTES * (triangles // 4)
+        sized, extra = layers, occlusion(model, (size, size), layers) if command == "svg" else None
+    quarter = room(renderer, model, pixels, sized, triangles // 4, extra=extra)
+    gbuffers = budget.frame_bytes(triangles, pixels, sized, None)["gbuffers"]
     suffix = {"svg": "svg", "layers": "npz", "silhouettes": "png"}[command]
     arguments = {
         "svg": ["render", "--max-layers", str(layers)],
@@ -353,6 +353,6 @@ def test_the_commands_draw_in_chunks_or_refuse_in_one_line(tmp_path, command):
     assert whole.returncode == 0 and split.returncode == 0, (whole.stderr, split.stderr)
     assert "drawn in" not in whole.stdout and ", drawn in 4 chunks" in split.stdout
     assert (tmp_path / f"whole.{suffix}").read_bytes() == (tmp_path / f"split.{suffix}").read_bytes()
-    proc = run("refused", need["gbuffers"] // 2)
+    proc = run("refused", gbuffers // 2)
     one_error(proc, f"{path}: the frame needs about", "of GPU memory", "free on")
     assert not (tmp_path / f"refused.{suffix}").exists()

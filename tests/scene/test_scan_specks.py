@@ -31,11 +31,15 @@ def test_stanford_bunny_specks_target(renderer, shared_models):
     assert specks(np.asarray(blueprint.render(stanford_bunny(shared_models), size=SIZE))) <= 15
 
 
-@pytest.mark.parametrize(("name", "most"), [("noisy sphere", 34), ("noisy bust", 19)])
+# the noisy sphere's specks as measured: 34 on llvmpipe, 35 where the image passes run in
+# compute (the H100's), whose sums round apart from the fragment passes' in the last place
+SPHERE_SPECKS = 35
+
+
+@pytest.mark.parametrize(("name", "most"), [("noisy sphere", SPHERE_SPECKS), ("noisy bust", 19)])
 def test_generated_scan_specks(renderer, name, most):
-    """The generated scans' specks, as measured (llvmpipe): the sphere's 34 are all along its
-    outline (the depth jump's band broken by the noise), as before the crease runs; the bust
-    had 20."""
+    """The generated scans' specks, as measured: the sphere's are all along its outline (the
+    depth jump's band broken by the noise), as before the crease runs; the bust had 20."""
     model = noisy_sphere(0.006) if name == "noisy sphere" else noisy_bust()[0]
     assert specks(np.asarray(blueprint.render(model, size=SIZE))) <= most
 
@@ -52,7 +56,7 @@ def test_noisy_sphere_specks_lie_along_its_outline(renderer):
     inside = ndimage.distance_transform_edt(covered)  # pixels in from the outline
     labels, _ = ndimage.label(ink(image), np.ones((3, 3)))
     small = np.nonzero(np.bincount(labels.ravel())[1:] <= 12)[0] + 1
-    assert len(small) <= 34
+    assert len(small) <= SPHERE_SPECKS
     nearest = np.asarray(ndimage.minimum(inside, labels, small))
     deepest = np.asarray(ndimage.maximum(inside, labels, small))
     assert (nearest > 0).all(), "a speck outside the silhouette"
