@@ -67,10 +67,8 @@ def silhouette_image(
 
     Parameters
     ----------
-    positions : np.ndarray
-        (V, 3) float vertex positions.
-    faces : np.ndarray
-        (F, 3) integer vertex indices.
+    positions, faces : np.ndarray
+        The soup: (V, 3) float vertex positions, (F, 3) integer vertex indices.
     view, projection : np.ndarray
         (4, 4) float OpenGL model-to-eye and eye-to-clip matrices (column vectors).
     width, height : int

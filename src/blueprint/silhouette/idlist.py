@@ -84,10 +84,8 @@ def build_id_lists(positions: np.ndarray, faces: np.ndarray, tol: float | None =
 
     Parameters
     ----------
-    positions : np.ndarray
-        (V, 3) float vertex positions.
-    faces : np.ndarray
-        (F, 3) integer vertex indices.
+    positions, faces : np.ndarray
+        The soup: (V, 3) float vertex positions, (F, 3) integer vertex indices.
     tol : float, optional
         Weld distance, as :func:`blueprint.silhouette.weld` (default 1e-6 of the diagonal).
     """

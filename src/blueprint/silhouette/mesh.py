@@ -328,10 +328,8 @@ def build_adjacency(positions: np.ndarray, faces: np.ndarray, weld_tol: float | 
 
     Parameters
     ----------
-    positions : np.ndarray
-        (V, 3) float vertex positions.
-    faces : np.ndarray
-        (F, 3) integer vertex indices.
+    positions, faces : np.ndarray
+        The soup: (V, 3) float vertex positions, (F, 3) integer vertex indices.
     weld_tol : float, optional
         Passed to :func:`weld` as `tol`.
 
