@@ -186,6 +186,16 @@ def test_an_entry_point_takes_a_ready_value_and_overrides_of_it():
         _entry("m", line_width=2.0)
 
 
+def test_an_entry_point_binds_every_call_its_signature_takes():
+    """The usual call is bound by hand, any other by the signature, as it would be."""
+    model, options, normals = _entry(model="m", view="top", normals=False)
+    assert (model, options.view, normals) == ("m", "top", False)
+    with pytest.raises(TypeError, match="missing a required argument: 'model'"):
+        _entry(view="top")
+    with pytest.raises(TypeError, match="too many positional arguments"):
+        _entry("m", "n")
+
+
 def test_zero_layers_are_all_where_an_entry_point_says_so():
     @takes_options("max_layers", prepare=zero_layers_are_all)
     def entry(options):

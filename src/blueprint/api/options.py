@@ -485,18 +485,25 @@ def takes_options(
         given = inspect.Parameter("options", keyword, default=None, annotation="DrawOptions | None")
         public = inspect.signature(function).replace(parameters=[*params[:at], given, *option_params, *own])
 
+        keywords = frozenset(["options", *chosen, *(p.name for p in own)])
+
         @functools.wraps(function)
         def wrapper(*args, **kwargs):
-            bound = public.bind(*args, **kwargs)
-            base = bound.arguments.pop("options", None)
-            values = {n: bound.arguments.pop(n) for n in chosen if n in bound.arguments}
+            # the usual call (every positional given so, keywords the signature's) is bound by
+            # hand: the signature's bind costs a streamed frame hundreds of calls
+            if len(args) == at and keywords.issuperset(kwargs):
+                arguments, positional = kwargs, args
+            else:
+                arguments = public.bind(*args, **kwargs).arguments
+                positional = [arguments.pop(p.name, p.default) for p in params[:at]]
+            base = arguments.pop("options", None)
+            values = {n: arguments.pop(n) for n in chosen if n in arguments}
             if base is None:
                 values = {**{n: defaults[n] for n in defaults if n not in values}, **values}
             if prepare is not None:
                 values = prepare(values)
             options = DrawOptions(**values) if base is None else replace(base, **values)
-            positional = [bound.arguments.pop(p.name, p.default) for p in params[:at]]
-            return function(*positional, options, **bound.arguments)
+            return function(*positional, options, **arguments)
 
         wrapper.__signature__ = public
         return wrapper
