@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import subprocess
 from dataclasses import replace
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -352,7 +353,14 @@ def test_the_commands_draw_in_chunks_or_refuse_in_one_line(renderer, tmp_path, c
     whole, split = run("whole", None), run("split", quarter)
     assert whole.returncode == 0 and split.returncode == 0, (whole.stderr, split.stderr)
     assert "drawn in" not in whole.stdout and ", drawn in 4 chunks" in split.stdout
-    assert (tmp_path / f"whole.{suffix}").read_bytes() == (tmp_path / f"split.{suffix}").read_bytes()
+    whole_file, split_file = (tmp_path / f"{name}.{suffix}" for name in ("whole", "split"))
+    if command == "layers":
+        # the normals within a half's last place where the device's A-buffer lists slim
+        # fragments, which a mesh drawn in chunks does not
+        with np.load(whole_file) as ours, np.load(split_file) as theirs:
+            assert_same_layers(SimpleNamespace(**ours), SimpleNamespace(**theirs), renderer)
+    else:
+        assert whole_file.read_bytes() == split_file.read_bytes()
     proc = run("refused", gbuffers // 2)
     one_error(proc, f"{path}: the frame needs about", "of GPU memory", "free on")
     assert not (tmp_path / f"refused.{suffix}").exists()
