@@ -20,7 +20,7 @@ void main() {
     v_eye = eye.xyz;
     v_normal = mat3(u_view) * placed_normal();
     v_part = placed_part();
-    v_first_face = i_face;
+    v_first_face = first_face();
     vec4 clip = u_projection * eye;
 #if EXACT_DEPTH
     v_clip = clip.xyw;

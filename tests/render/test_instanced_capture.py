@@ -254,6 +254,30 @@ def test_only_a_flattened_model_skips_the_faces_table(renderer):
     assert not mesh_module._identity(placements([(np.zeros(3), np.zeros(3, np.uint32), moved)])[0])
 
 
+def test_a_flattened_models_draws_read_no_instance(way, renderer, monkeypatch):
+    """A flattened model's draws are each one instance of the identity: its geometry programs
+    read no instance attribute (instance.glsl's UNPLACED; a draw's first face is a uniform) and
+    give the layers of the same draws placed by the identity, to the bit; a model kept as
+    instances reads its instances."""
+    instanced = mixed_scene()
+    flat = flattened(instanced)
+    for model, unplaced in ((flat, True), (instanced, False)):
+        mesh = GpuMesh(renderer.ctx, model, 30.0)
+        try:
+            assert mesh.unplaced is unplaced and mesh.vertex_defines == {"UNPLACED": unplaced}
+        finally:
+            mesh.release()
+    layers = []
+    for unplaced in (True, False):
+        if not unplaced:
+            monkeypatch.setattr(GpuMesh, "vertex_defines", property(lambda mesh: {"UNPLACED": False}))
+        layers.append(blueprint.peel(flat, size=SIZE, renderer=renderer, max_layers=None, **CAMERA))
+        renderer.forget(flat)
+    assert layers[0].depth.shape[0] >= 3
+    for name in ("depth", "triangle", "part", "normal"):
+        assert np.array_equal(getattr(layers[0], name), getattr(layers[1], name)), name
+
+
 def test_normals_follow_the_transform_as_the_flattened_faces_turn():
     """The normals' transform is the cofactor matrix: a mirror turns normals as it turns the
     faces' winding, a scale by 2 keeps their length, a turn turns them."""

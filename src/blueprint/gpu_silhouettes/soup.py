@@ -85,6 +85,11 @@ class SoupMesh:
     def triangle_count(self) -> int:
         return self.faces
 
+    @property
+    def vertex_defines(self) -> dict:
+        """Its draws read their instance, the identity (instance.glsl; ``GpuMesh``'s)."""
+        return {"UNPLACED": False}
+
     def vao(self, program):
         """The soup drawn with `program` (the renderer's geometry pass): corner 3f + k is vertex
         3f + k, so ``gl_PrimitiveID`` is the face index. No normals: the pass's normal target

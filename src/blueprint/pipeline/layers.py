@@ -276,7 +276,9 @@ class LayerCapture:
             defines = {f"OUT_{n.upper()}": (g.extra.index(n) if n in g.extra else -1) for n in EXTRA}
             # the peel's depth rule (render.mesh.geometry_program), for attributes where its depths are
             exact = {"EXACT_DEPTH": self.capturer.table.exact_depth}
-            draw = self.programs.library(ATTR_FRAG, ATTR_VERT, {**defines, **exact, "CLEAR": 0})
+            draw = self.programs.library(
+                ATTR_FRAG, ATTR_VERT, {**defines, **exact, **st.mesh.vertex_defines, "CLEAR": 0}
+            )
             clear = self.programs.library(ATTR_FRAG, FULLSCREEN, {**defines, "CLEAR": 1})
             self.programs.set(draw, "u_view", camera.view_matrix().T.astype("f4").tobytes())
             self.programs.set(draw, "u_projection", camera.projection_matrix().T.astype("f4").tobytes())

@@ -117,7 +117,7 @@ class ABufferSource:
         # pixel's list from the last one without an atomic: the head is the pass's target
         self.fetch_head = self.images and r.framebuffer_fetch
         defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
-        self.geometry = geometry_program(capturer, ABUFFER_FRAG, defines, modern=True)
+        self.geometry = geometry_program(capturer, ABUFFER_FRAG, mesh, defines, modern=True)
         # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
         # the resolve runs over the tiles with fragments alone (``_resolve``)
         # a slim fragment's face is found in the mesh's faces table (GpuMesh.bind_faces)

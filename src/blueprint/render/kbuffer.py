@@ -73,7 +73,7 @@ class KBufferSource:
         self._deepest = 0
         if self.ids_only:
             defines = {"K": self.k, "FACE_IDS": True, "IDS_ONLY": True, "PEEL": False}
-            self.prog = geometry_program(capturer, KBUFFER_FRAG, defines)
+            self.prog = geometry_program(capturer, KBUFFER_FRAG, mesh, defines)
             peel_uniforms(self.prog, camera, depth_tolerance(camera, mesh.bounds))
             target_uniform(r, self.prog, gb.size)
             self.prog["u_back_bias"].value = BACK_BIAS
@@ -88,10 +88,12 @@ class KBufferSource:
         }
         modern = self.interlock
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
-        self.prog = geometry_program(capturer, KBUFFER_FRAG, {**defines, "PEEL": False}, modern=modern)
+        self.prog = geometry_program(capturer, KBUFFER_FRAG, mesh, {**defines, "PEEL": False}, modern=modern)
         self.behind = None
         if self.unpacks:  # (one pass finds every layer otherwise)
-            self.behind = geometry_program(capturer, KBUFFER_FRAG, {**defines, "PEEL": True}, modern=modern)
+            self.behind = geometry_program(
+                capturer, KBUFFER_FRAG, mesh, {**defines, "PEEL": True}, modern=modern
+            )
         for prog in (self.prog, self.behind) if self.behind is not None else (self.prog,):
             peel_uniforms(prog, camera, depth_tolerance(camera, mesh.bounds))
             target_uniform(r, prog, gb.size)

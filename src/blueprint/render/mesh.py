@@ -17,12 +17,12 @@ PLACEMENTS_BINDING = 10
 PIECE_FACES = 1 << 17
 
 
-def geometry_program(capturer, fragment: str, defines=None, modern: bool = False):
-    """A geometry pass's program (geometry.vert and ``fragment``) on ``capturer``'s device,
-    with its depth rule: fragment_depth.glsl's EXACT_DEPTH where its capture table's
-    ``exact_depth`` (then ``u_target``, the target's size, is the program's to set:
-    ``target_uniform``)."""
-    defines = {**(defines or {}), "EXACT_DEPTH": capturer.table.exact_depth}
+def geometry_program(capturer, fragment: str, mesh, defines=None, modern: bool = False):
+    """A geometry pass's program (geometry.vert and ``fragment``) on ``capturer``'s device for
+    drawing ``mesh`` (its ``vertex_defines``), with its depth rule: fragment_depth.glsl's
+    EXACT_DEPTH where its capture table's ``exact_depth`` (then ``u_target``, the target's
+    size, is the program's to set: ``target_uniform``)."""
+    defines = {**(defines or {}), **mesh.vertex_defines, "EXACT_DEPTH": capturer.table.exact_depth}
     return capturer.device.program(fragment, GEOMETRY_VERT, defines, modern=modern)
 
 
@@ -205,16 +205,17 @@ class GpuMesh:
         vertices, indices, index_base, index_count = joined(groups)
         self.vbo, self.ibo = ctx.buffer(vertices), ctx.buffer(indices)
         # (instance records, the draw's first index and index count, whether another piece of
-        # its group follows) a draw
+        # its group follows, its first instance's first face) a draw
         limit = PIECE_FACES if pieces else None
         self.groups = [
-            (ctx.buffer(piece_records), len(piece_records), int(first + at), int(count), wait)
+            (ctx.buffer(piece), len(piece), int(first + at), int(count), wait, int(piece["face"][0]))
             for (_, _, records), first, faces in zip(groups, index_base, index_count // 3, strict=True)
-            for piece_records, at, count, wait in _pieces(records, int(faces), limit)
+            for piece, at, count, wait in _pieces(records, int(faces), limit)
         ]
         table = placements(groups)
         # a flattened model's one placement, the identity from face 0: programs look up nothing
         self.one_placement = len(table) == 1 and _identity(table[0])
+        self.unplaced = all(_unplaced(records) for _, _, records in groups)
         self._placements = ctx.buffer(table)
         del groups, vertices, indices
         self._vaos: dict[int, _Draws] = {}
@@ -228,6 +229,13 @@ class GpuMesh:
         self.triangles = model.triangle_count
         self.instanced = model.instances is not None
         self.bounds = model.bounds  # (2, 3): its used vertices' corners
+
+    @property
+    def vertex_defines(self) -> dict:
+        """The defines of a program whose vertex stage draws these buffers (instance.glsl's
+        UNPLACED where each draw is one instance of the identity in part 0: no instance
+        attribute is read)."""
+        return {"UNPLACED": self.unplaced}
 
     @property
     def placement_defines(self) -> dict:
@@ -250,11 +258,11 @@ class GpuMesh:
             # passes no normal) are skipped over
             vertices = _layout(self.vbo, _VERTEX_FIELDS, program, "")
             arrays = []
-            for records, count, first, indices, wait in self.groups:
-                layout = [vertices, _layout(records, _INSTANCE_FIELDS, program, "/i")]
+            for records, count, first, indices, wait, face in self.groups:
+                layout = [vertices, *_instances_read(records, program)]
                 vao = self.ctx.vertex_array(program, layout, index_buffer=self.ibo, index_element_size=4)
-                arrays.append((vao, count, first, indices, wait))
-            draws = self._vaos[program.glo] = _Draws(arrays)
+                arrays.append((vao, count, first, indices, wait, face))
+            draws = self._vaos[program.glo] = _Draws(arrays, program)
         return draws
 
     def bind_corners(self, prog, unit: int) -> None:
@@ -279,6 +287,20 @@ class GpuMesh:
         for obj in (*held, self.vbo, self.ibo, self._placements, self._corners):
             if obj is not None:
                 obj.release()
+
+
+def _unplaced(records: np.ndarray) -> bool:
+    """Whether ``records`` (``INSTANCE``) are one instance, placing its vertices where they are,
+    unturned, in part 0."""
+    eye = np.eye(4, dtype=np.float32)[:3]
+    return bool(
+        len(records) == 1
+        and all(
+            (records[row] == eye[k]).all() and (records["n" + row] == eye[k, :3]).all()
+            for k, row in enumerate("xyz")
+        )
+        and (records["part"] == 0).all()
+    )
 
 
 def _identity(placement) -> bool:
@@ -317,6 +339,7 @@ class ChunkedMesh(GpuMesh):
         groups = draw_groups(model, crease_angle)
         vertices, indices, index_base, index_count = joined(groups)
         records = [records for _, _, records in groups]
+        self.unplaced = all(map(_unplaced, records))
         del groups
         limit = PIECE_FACES if pieces else None
         self.chunks = _chunks(
@@ -418,6 +441,13 @@ def instance_layout(buffer, program) -> tuple:
     return _layout(buffer, _INSTANCE_FIELDS, program, "/i")
 
 
+def _instances_read(buffer, program) -> list:
+    """``instance_layout``'s entry in a list, or none where ``program`` reads no instance
+    attribute (instance.glsl's UNPLACED)."""
+    entry = instance_layout(buffer, program)
+    return [entry] if len(entry) > 2 else []
+
+
 def _layout(buffer, fields, program, suffix: str) -> tuple:
     """A vertex array's entry for ``buffer`` of ``fields`` (format, name), those ``program``
     does not read skipped over."""
@@ -425,17 +455,26 @@ def _layout(buffer, fields, program, suffix: str) -> tuple:
     return (buffer, " ".join(f for f, _ in used) + suffix, *(name for _, name in used if name))
 
 
+def _first_face(program):
+    """The uniform of ``program``'s first face, where the draws set it (instance.glsl's
+    UNPLACED), else None."""
+    return program["u_first_face"] if "u_first_face" in program else None
+
+
 class _Draws:
     """A mesh's draw calls for one program: each draw's vertex array, (vertex array,
-    instances, first index, indices, wait), its indices at its instances, finished before the
-    next draw where ``wait`` (a piece of a group drawn in pieces)."""
+    instances, first index, indices, wait, first face), its indices at its instances, finished
+    before the next draw where ``wait`` (a piece of a group drawn in pieces)."""
 
-    def __init__(self, arrays: list) -> None:
+    def __init__(self, arrays: list, program) -> None:
         self.arrays = arrays
+        self.first_face = _first_face(program)
 
     def render(self) -> None:
-        for vao, count, first, indices, wait in self.arrays:
+        for vao, count, first, indices, wait, face in self.arrays:
             if indices:
+                if self.first_face is not None:
+                    self.first_face.value = face
                 vao.render(vertices=indices, first=first, instances=count)
                 if wait:
                     vao.ctx.finish()
@@ -450,7 +489,7 @@ class _ChunkDraws:
 
     def render(self) -> None:
         mesh, program = self.mesh, self.program
-        ctx = mesh.ctx
+        ctx, first_face = mesh.ctx, _first_face(program)
         for k, (vertices, indices, draws) in enumerate(mesh.chunks):
             vbo, ibo = ctx.buffer(vertices), ctx.buffer(indices)
             held = [vbo, ibo]
@@ -459,11 +498,13 @@ class _ChunkDraws:
                 placed = ctx.buffer(records)
                 vao = ctx.vertex_array(
                     program,
-                    [layout, _layout(placed, _INSTANCE_FIELDS, program, "/i")],
+                    [layout, *_instances_read(placed, program)],
                     index_buffer=ibo,
                     index_element_size=4,
                 )
                 held += [placed, vao]
+                if first_face is not None:
+                    first_face.value = int(records["face"][0])
                 vao.render(vertices=count, first=first, instances=len(records))
                 if wait:
                     ctx.finish()

@@ -32,7 +32,7 @@ def layers_left(capturer, mesh, camera: Camera, last_depth) -> int:
     fbo = r.pool.framebuffer((counts,))
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 0.0)
-    prog = geometry_program(capturer, REMAINING_FRAG)
+    prog = geometry_program(capturer, REMAINING_FRAG, mesh)
     peel_uniforms(prog, camera, depth_tolerance(camera, mesh.bounds))
     target_uniform(r, prog, size)
     last_depth.use(units.PEEL_DEPTH)

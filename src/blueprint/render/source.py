@@ -93,7 +93,7 @@ class PeelSource:
             "FACE_IDS": request.face_ids,
             "NORMALS": normals,
         }
-        prog = self.prog = geometry_program(capturer, PEEL_FRAG, defines)
+        prog = self.prog = geometry_program(capturer, PEEL_FRAG, mesh, defines)
         peel_uniforms(prog, camera, depth_tolerance(camera, mesh.bounds))
         target_uniform(r, prog, gb.size)
         if normals:  # only the normal's orientation needs it

@@ -5,7 +5,8 @@
 // its instance as attributes; with PLACEMENTS (a storage binding) a program that reads faces
 // by their ID (the compute rasteriser, the A-buffer's resolve) finds a face's instance in the
 // faces table instead (GpuMesh.bind_faces), placed by the same products; with ONE_PLACEMENT
-// (a flattened model) it looks up nothing.
+// (a flattened model) it looks up nothing, and with UNPLACED (a draw of one instance of the
+// identity) the vertex stage reads no instance.
 
 // point p placed by the transform's rows x, y, z
 vec3 place_point(vec4 x, vec4 y, vec4 z, vec3 p) {
@@ -95,6 +96,31 @@ int placement_part(int i) {
 in vec3 in_position;
 in vec3 in_normal;
 in int in_part;
+#ifndef UNPLACED
+#define UNPLACED 0
+#endif
+#if UNPLACED
+// each draw one instance of the identity in part 0 (a flattened model): its vertices are drawn
+// as they lie, its first face a uniform the draw sets (GpuMesh.vao), and no instance
+// attribute is read (llvmpipe shades vertices on the drawing thread, a fetch each)
+uniform int u_first_face;
+
+int first_face() {
+    return u_first_face;
+}
+
+vec3 placed_position() {
+    return in_position;
+}
+
+vec3 placed_normal() {
+    return in_normal;
+}
+
+int placed_part() {
+    return in_part;
+}
+#else
 in vec4 i_x;
 in vec4 i_y;
 in vec4 i_z;
@@ -103,6 +129,11 @@ in vec3 i_ny;
 in vec3 i_nz;
 in int i_part;
 in int i_face;
+
+// the first face ID of the vertex's instance
+int first_face() {
+    return i_face;
+}
 
 // the vertex in the scene's coordinates
 vec3 placed_position() {
@@ -118,4 +149,5 @@ vec3 placed_normal() {
 int placed_part() {
     return in_part + i_part;
 }
+#endif
 #endif

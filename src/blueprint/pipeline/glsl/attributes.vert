@@ -17,7 +17,7 @@ void main() {
     vec4 eye = u_view * vec4(v_model, 1.0);
     v_eye = eye.xyz;
     v_normal = placed_normal();
-    v_first_face = i_face;
+    v_first_face = first_face();
     gl_Position = u_projection * eye;
 #if EXACT_DEPTH
     v_clip = gl_Position.xyw;

@@ -20,7 +20,7 @@ void main() {
     // the view matrix is a rotation plus a translation, so its upper 3x3 maps normals
     v_normal = mat3(u_view) * placed_normal();
     v_part = placed_part();
-    v_first_face = i_face;
+    v_first_face = first_face();
     gl_Position = u_projection * eye;
 #if EXACT_DEPTH
     v_clip = gl_Position.xyw;
