@@ -33,7 +33,6 @@ from golden_helpers import (
     golden_path,
     pinned_frames,
     skip_unless_pinned,
-    within_tolerance,
     write_pinned_frames,
 )
 from PIL import Image
@@ -128,9 +127,17 @@ def test_depth_masking_stops_where_it_did(name, frames, renderer):
     assert frames[name].revealed == pytest.approx(revealed, abs=1e-6)
 
 
+# the pixels, of a picture's, that an option changes by more than a golden's pixel tolerance at
+# the least: a golden's tolerance admits what another renderer draws apart, which an option's
+# change on one renderer need not pass (highlighted parts revealed to 90 %, against all of
+# them: 78 such pixels on llvmpipe, 56 on the H200)
+CHANGED_FRACTION = 0.0005
+
+
 @pytest.mark.parametrize(("name", "without"), OPTION_CHANGES, ids=lambda n: n)
 def test_each_option_changes_the_picture(images, name, without):
-    assert not within_tolerance(images[name], images[without]), compare(images[name], images[without])[:2]
+    _, fraction, _ = compare(images[name], images[without])
+    assert fraction >= CHANGED_FRACTION, compare(images[name], images[without])[:2]
 
 
 def test_compare_exact_values():
