@@ -104,7 +104,9 @@ def test_picture_title_block_carries_its_fields(sheets):
     ink = np.abs(image - image[0, 0]).max(axis=-1) > 60
     for (x0, y0), (x1, y1) in cells:
         inside = ink[int(y0) + 3 : int(y1) - 2, int(x0) + 3 : int(x1) - 3]
-        assert inside.mean() > 0.01  # each field's value is written in its cell
+        # each field's value is written in its cell (the units' inks 1.3 % of it in DejaVu
+        # Sans, 0.9 % in Pillow's own font, where the system has none of SHEET_FONTS)
+        assert inside.mean() > 0.005
     # another title changes the title's cell, and nothing else
     changed = np.abs(first.image.astype(int) - second.image.astype(int)).max(axis=-1) > 0
     (x0, y0), (x1, y1) = cells[0]
