@@ -238,3 +238,26 @@ def test_pair_ends_given_the_nodes_order_pairs_as_without_it():
     np.testing.assert_array_equal(pair_ends(node, asked, np.cos(np.radians(30))), want)
     assert (want >= 0).sum() > 500
     np.testing.assert_array_equal(want[want[want >= 0]], np.flatnonzero(want >= 0))
+
+
+def test_face_cosines_are_kept_for_the_last_view_without_keeping_its_mesh():
+    """The faces' |cos| of one view are made once for the outlines, contours and grazing band
+    that ask, and let go with the adjacency they were made of: the cache holds it weakly."""
+    import gc
+    import weakref
+
+    from blueprint.silhouette import build_adjacency
+    from blueprint.vector import lines
+
+    positions, faces = box((-1, -1, -1), (1, 2, 3))
+    camera = Camera.fit(positions, "iso", aspect=1.0)
+    view, projection = camera.view_matrix(), camera.projection_matrix()
+    adj = build_adjacency(positions, faces)
+    first = lines._face_cosines(adj, view, projection)
+    assert lines._face_cosines(adj, view, projection) is first
+    turned = Camera.fit(positions, "top", aspect=1.0).view_matrix()
+    assert lines._face_cosines(adj, turned, projection) is not first
+    held = weakref.ref(adj)
+    del adj
+    gc.collect()
+    assert held() is None and lines._COSINES[0] is None

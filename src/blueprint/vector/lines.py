@@ -10,6 +10,7 @@ the faces they lie on so that occlusion can tell a line's own surface from the o
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -593,8 +594,14 @@ def _faces_edge_on(
 
 
 # The |cos| of the last view's faces (``_face_cosines``): its outlines, contours and grazing
-# band each ask for them.
+# band each ask for them. The adjacency is held weakly, and the entry let go with it: the
+# adjacency caches (``ADJACENCY``) decide how long a mesh's line work lives.
 _COSINES: list = [None, b"", None]
+
+
+def _forget_cosines(ref: weakref.ref) -> None:
+    if _COSINES[0] is ref:  # (not a later view's entry)
+        _COSINES[:] = [None, b"", None]
 
 
 def _face_cosines(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> np.ndarray:
@@ -602,7 +609,7 @@ def _face_cosines(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> n
     first corner to the eye; kept for the last view asked."""
     key = np.asarray(view, np.float64).tobytes() + np.asarray(projection, np.float64).tobytes()
     held, held_key, cosines = _COSINES
-    if held is adj and held_key == key:
+    if held is not None and held() is adj and held_key == key:
         return cosines
     camera_to_model = np.linalg.inv(view)
     normal = adj.face_normals
@@ -612,7 +619,7 @@ def _face_cosines(adj: Adjacency, view: np.ndarray, projection: np.ndarray) -> n
         toward = camera_to_model[:3, 3] - np.take(adj.positions, adj.faces[:, 0], axis=0)
     dot = np.einsum("ij,ij->i", normal, toward)
     cosines = np.abs(dot) / np.maximum(np.linalg.norm(toward, axis=1), 1e-300)
-    _COSINES[:] = [adj, key, cosines]
+    _COSINES[:] = [weakref.ref(adj, _forget_cosines), key, cosines]
     return cosines
 
 
