@@ -122,6 +122,27 @@ def test_a_missing_shader_file_is_one_line(tmp_path):
     no_output(out)
 
 
+def test_a_missing_module_says_the_install_is_broken(tmp_path):
+    """A module of the package left out (or a package it requires missing): one line naming
+    the module and saying the installation is incomplete, exit 2, no traceback."""
+    copy = tmp_path / "site"
+    shutil.copytree(PACKAGE, copy / "blueprint", ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "blueprint" / "export" / "writers.py").unlink()
+    out = tmp_path / "out"
+    out.mkdir()
+    args = ["render", str(examples.example_path()), "-o", str(out / "r.png"), "--size", "64", "48"]
+    proc = subprocess.run(
+        [sys.executable, "-m", "blueprint", *args],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**os.environ, "PYTHONPATH": str(copy)},
+        timeout=120,
+    )
+    one_error(proc, "no module named 'blueprint.export.writers'", "installation is incomplete")
+    no_output(out)
+
+
 def test_a_missing_core_preset_says_the_install_is_broken(tmp_path):
     """Without presets/blueprint.toml no picture can be drawn: the line names the file and says
     the installation is incomplete, rather than reading like a mistyped preset name."""

@@ -61,6 +61,15 @@ def run(command: click.Command, argv: list[str] | None, prog_name: str) -> None:
     except MemoryError:
         click.echo("blueprint: error: out of memory (try a smaller --size)", err=True)
         sys.exit(2)
+    except ModuleNotFoundError as exc:
+        # a module of the package, or a package it requires, is not there (the optional ones
+        # are asked for by name where they are used): a broken install, not a fault to trace
+        click.echo(
+            f"blueprint: error: no module named {exc.name!r}: the installation is incomplete "
+            "(reinstall blueprint-drawings)",
+            err=True,
+        )
+        sys.exit(2)
     except KeyboardInterrupt:
         click.echo("blueprint: interrupted", err=True)
         sys.exit(130)
