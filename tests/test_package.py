@@ -102,14 +102,16 @@ def test_console_script_is_declared(wheel):
     assert "blueprint = blueprint.cli:main" in wheel.read(entry_points).decode().splitlines()
 
 
-def test_a_missing_shader_file_is_one_line(tmp_path):
-    """A broken install (a shader left out of the wheel): exit 2 and the file named, no traceback."""
+def broken_install(tmp_path: Path, missing: str, command: str) -> tuple[subprocess.CompletedProcess, Path]:
+    """``blueprint COMMAND`` of the example model to a PNG, run from a copy of the package
+    without the file ``missing`` (relative to the package): the process and the output
+    folder."""
     copy = tmp_path / "site"
     shutil.copytree(PACKAGE, copy / "blueprint", ignore=shutil.ignore_patterns("__pycache__"))
-    (copy / "blueprint" / "gpu_silhouettes" / "glsl" / "idsil_lines.geom").unlink()
+    (copy / "blueprint" / missing).unlink()
     out = tmp_path / "out"
     out.mkdir()
-    args = ["silhouettes", str(examples.example_path()), "-o", str(out / "s.png"), "--size", "64", "48"]
+    args = [command, str(examples.example_path()), "-o", str(out / "r.png"), "--size", "64", "48"]
     proc = subprocess.run(
         [sys.executable, "-m", "blueprint", *args],
         capture_output=True,
@@ -118,6 +120,12 @@ def test_a_missing_shader_file_is_one_line(tmp_path):
         env={**os.environ, "PYTHONPATH": str(copy)},
         timeout=120,
     )
+    return proc, out
+
+
+def test_a_missing_shader_file_is_one_line(tmp_path):
+    """A broken install (a shader left out of the wheel): exit 2 and the file named, no traceback."""
+    proc, out = broken_install(tmp_path, "gpu_silhouettes/glsl/idsil_lines.geom", "silhouettes")
     one_error(proc, "shader file", "gpu_silhouettes/glsl/idsil_lines.geom", "not found")
     no_output(out)
 
@@ -125,20 +133,7 @@ def test_a_missing_shader_file_is_one_line(tmp_path):
 def test_a_missing_module_says_the_install_is_broken(tmp_path):
     """A module of the package left out (or a package it requires missing): one line naming
     the module and saying the installation is incomplete, exit 2, no traceback."""
-    copy = tmp_path / "site"
-    shutil.copytree(PACKAGE, copy / "blueprint", ignore=shutil.ignore_patterns("__pycache__"))
-    (copy / "blueprint" / "export" / "writers.py").unlink()
-    out = tmp_path / "out"
-    out.mkdir()
-    args = ["render", str(examples.example_path()), "-o", str(out / "r.png"), "--size", "64", "48"]
-    proc = subprocess.run(
-        [sys.executable, "-m", "blueprint", *args],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(copy)},
-        timeout=120,
-    )
+    proc, out = broken_install(tmp_path, "export/writers.py", "render")
     one_error(proc, "no module named 'blueprint.export.writers'", "installation is incomplete")
     no_output(out)
 
@@ -146,19 +141,6 @@ def test_a_missing_module_says_the_install_is_broken(tmp_path):
 def test_a_missing_core_preset_says_the_install_is_broken(tmp_path):
     """Without presets/blueprint.toml no picture can be drawn: the line names the file and says
     the installation is incomplete, rather than reading like a mistyped preset name."""
-    copy = tmp_path / "site"
-    shutil.copytree(PACKAGE, copy / "blueprint", ignore=shutil.ignore_patterns("__pycache__"))
-    (copy / "blueprint" / "pipeline" / "presets" / "blueprint.toml").unlink()
-    out = tmp_path / "out"
-    out.mkdir()
-    args = ["render", str(examples.example_path()), "-o", str(out / "r.png"), "--size", "64", "48"]
-    proc = subprocess.run(
-        [sys.executable, "-m", "blueprint", *args],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env={**os.environ, "PYTHONPATH": str(copy)},
-        timeout=120,
-    )
+    proc, out = broken_install(tmp_path, "pipeline/presets/blueprint.toml", "render")
     one_error(proc, "presets/blueprint.toml is missing", "installation is incomplete")
     no_output(out)
