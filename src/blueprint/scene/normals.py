@@ -250,7 +250,7 @@ def corner_normals(
     norm = np.empty(vertices)
     parallel.run(partial(_row_norms, summed, norm), vertices)
     shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
-    summed[shared] /= norm[shared, None]
+    parallel.run(partial(_divided_where, summed, norm, shared), vertices)
     del norm
     vertex_normals = summed.astype(np.float32)
     del summed  # before the corners' normals are made
@@ -296,6 +296,12 @@ def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
         block = slice(start, min(start + _ROWS, hi))
         length = row_norm(rows[block])
         np.divide(rows[block], np.where(length > 0, length, 1.0)[:, None], out=out[block])
+
+
+def _divided_where(rows: np.ndarray, by: np.ndarray, where: np.ndarray, lo: int, hi: int) -> None:
+    """``rows[lo:hi]`` (N, 3) over ``by[lo:hi]`` in place where ``where``: no gathered copies of
+    the rows chosen, as ``rows[where] /= ...`` makes."""
+    np.divide(rows[lo:hi], by[lo:hi, None], out=rows[lo:hi], where=where[lo:hi, None])
 
 
 def _row_norms(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
