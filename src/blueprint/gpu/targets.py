@@ -173,6 +173,21 @@ class TargetPool:
         self._textures[name] = (key, tex)
         return tex
 
+    def held_bytes(self) -> dict[str, int]:
+        """Bytes of every texture and buffer the pool holds, by name (depth textures four a
+        texel)."""
+        out = {name: nbytes for name, (nbytes, _) in self._buffers.items()}
+        for name, (key, _) in self._textures.items():
+            texels = 1
+            for side in key[0]:
+                texels *= side
+            if key[1] == "depth":
+                out[name] = 4 * texels
+            else:
+                components, dtype = FORMATS.get(key[1]) or INTERNAL_FORMATS[key[1]]
+                out[name] = components * int(dtype[1:]) * texels
+        return out
+
     def framebuffer(self, colors: tuple, depth=None):
         """A framebuffer over pool textures, cached while its attachments live."""
         key = (tuple(map(id, colors)), id(depth) if depth is not None else None)

@@ -51,6 +51,8 @@ ROW = 32768
 AB_ROW = 4096
 # the image units of the lists there (nodes, links, order; abuffer.glsl)
 LIST_UNITS = (5, 6, 7)
+# the pool's targets of a size's lists, after its name (``_buffers``): what a fragment's room takes
+LIST_PARTS = ("nodes", "links", "order", "slim")
 
 
 def list_defines(r) -> dict:
@@ -104,10 +106,10 @@ class ABufferSource:
         # at this size as it checked are taken again, not allocated, and the free memory it
         # saw was without them: what the pool held, not the room learned (a capture that ran
         # out of room learns more than it allocated) nor lists allocated since
-        self.held = capturer.abuffer_held
         room = capturer.list_room
         if room is not None:
-            room += capturer.list_held.get(tuple(gb.size), 0)
+            name = f"abuffer.{gb.size[0]}x{gb.size[1]}"
+            room += sum(capturer.pool_held.get(f"{name}.{part}", 0) for part in LIST_PARTS)
         self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
@@ -329,9 +331,6 @@ class ABufferSource:
             buf.bind_to_storage_buffer(binding)
         if self.slim:
             pool.buffer(f"{name}.slim", SLIM_BYTES * room).bind_to_storage_buffer(SLIM_BINDING)
-        # images are made at the room asked for, buffers kept while big enough (``TargetPool``)
-        at, nbytes = tuple(self.gb.size), self._list_bytes(room)
-        self.held[at] = nbytes if self.images else max(nbytes, self.held.get(at, 0))
         return held
 
     def _capture(self, gb, name: str) -> int | None:

@@ -114,12 +114,10 @@ class Capturer:
         # (model, faces a chunk) the last frame checked planned for its model
         self._planned: tuple[Model, int | None] | None = None
         self.abuffer_room: dict[tuple[int, int], int] = {}
-        # the bytes of A-buffer lists the pool holds, by G-buffer size (``ABufferSource``)
-        self.abuffer_held: dict[tuple[int, int], int] = {}
         # the bytes the last frame checked leaves its A-buffer's lists (``check_memory``), and
-        # the lists the pool held as it checked: the free memory it saw was without them
+        # what the pool held as it checked, by name: the free memory it saw was without them
         self.list_room: int | None = None
-        self.list_held: dict[tuple[int, int], int] = {}
+        self.pool_held: dict[str, int] = {}
         self.compute_raster = ComputeRaster(device)
 
     @property
@@ -241,7 +239,7 @@ class Capturer:
             slim=bool(abuffer and abuffer.slim),
         )
         faces, self.list_room = check_frame_memory(self.device, model.source or "the model", need, instances)
-        self.list_held = dict(self.abuffer_held)
+        self.pool_held = self.device.pool.held_bytes()
         self._planned = (model, faces)
         self._checked = asked
 
