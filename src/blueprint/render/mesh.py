@@ -215,7 +215,6 @@ class GpuMesh:
         table = placements(groups)
         # a flattened model's one placement, the identity from face 0: programs look up nothing
         self.one_placement = len(table) == 1 and _identity(table[0])
-        self.unplaced = all(_unplaced(records) for _, _, records in groups)
         self._placements = ctx.buffer(table)
         del groups, vertices, indices
         self._vaos: dict[int, _Draws] = {}
@@ -231,10 +230,15 @@ class GpuMesh:
         self.bounds = model.bounds  # (2, 3): its used vertices' corners
 
     @property
+    def unplaced(self) -> bool:
+        """Whether each draw is one instance of the identity in part 0: a flattened model's
+        (``draw_groups``)."""
+        return not self.instanced
+
+    @property
     def vertex_defines(self) -> dict:
         """The defines of a program whose vertex stage draws these buffers (instance.glsl's
-        UNPLACED where each draw is one instance of the identity in part 0: no instance
-        attribute is read)."""
+        UNPLACED where ``unplaced``: no instance attribute is read)."""
         return {"UNPLACED": self.unplaced}
 
     @property
@@ -289,20 +293,6 @@ class GpuMesh:
                 obj.release()
 
 
-def _unplaced(records: np.ndarray) -> bool:
-    """Whether ``records`` (``INSTANCE``) are one instance, placing its vertices where they are,
-    unturned, in part 0."""
-    eye = np.eye(4, dtype=np.float32)[:3]
-    return bool(
-        len(records) == 1
-        and all(
-            (records[row] == eye[k]).all() and (records["n" + row] == eye[k, :3]).all()
-            for k, row in enumerate("xyz")
-        )
-        and (records["part"] == 0).all()
-    )
-
-
 def _identity(placement) -> bool:
     """Whether a ``PLACEMENT`` places faces from 0 where they are, unturned, in part 0."""
     rows = np.stack([placement[k] for k in ("x", "y", "z")])
@@ -339,7 +329,6 @@ class ChunkedMesh(GpuMesh):
         groups = draw_groups(model, crease_angle)
         vertices, indices, index_base, index_count = joined(groups)
         records = [records for _, _, records in groups]
-        self.unplaced = all(map(_unplaced, records))
         del groups
         limit = PIECE_FACES if pieces else None
         self.chunks = _chunks(
