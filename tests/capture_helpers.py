@@ -38,12 +38,8 @@ def one_way(renderer, way: str, abuffer=None, peel=None):
         rows = (abuffer(default.row("A-buffer")), peel)
     else:
         rows = (peel,)
-    saved = renderer.capture_table
-    renderer.capture_table = CaptureTable(rows, default.exact_depth)
-    try:
+    with captured_by(renderer, CaptureTable(rows, default.exact_depth)):
         yield
-    finally:
-        renderer.capture_table = saved
 
 
 # -- models ------------------------------------------------------------------------------------
@@ -185,9 +181,17 @@ def assert_same_layers(whole, split, renderer) -> None:
 def whole_fragments(renderer):
     """``renderer``'s own capture table, its A-buffer listing whole fragments (not slim):
     those a mesh drawn in chunks lists."""
+    table = renderer.capture_table
+    rows = tuple(replace(row, slim=False) if row.way == "A-buffer" else row for row in table.rows)
+    with captured_by(renderer, CaptureTable(rows, table.exact_depth)):
+        yield
+
+
+@contextlib.contextmanager
+def captured_by(renderer, table: CaptureTable):
+    """``renderer`` capturing by ``table``, its own table again after."""
     saved = renderer.capture_table
-    rows = tuple(replace(row, slim=False) if row.way == "A-buffer" else row for row in saved.rows)
-    renderer.capture_table = CaptureTable(rows, saved.exact_depth)
+    renderer.capture_table = table
     try:
         yield
     finally:
