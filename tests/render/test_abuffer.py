@@ -419,6 +419,39 @@ def test_edges_from_the_lists_draw_the_same(renderer, abuffer, gpu_form, monkeyp
     np.testing.assert_array_equal(from_lists.image, unpacked.image)
 
 
+@pytest.mark.parametrize("form", ["gpu_form", "software_form"])
+def test_edges_from_the_lists_wait_for_the_capture_once(renderer, abuffer, monkeypatch, request, form):
+    """The first batch of layers read from the lists waits for every write of the capture (a
+    full barrier); each later batch only for the cursors the batch before it left (the image
+    barrier), in the compute form and a batch at a time alike: a full barrier a batch cost
+    a GPU's frame of many layers the time the house had cost (benchmarks/notes/h200-scale.md)."""
+    request.getfixturevalue(form)
+    model = examples.gearbox()
+    abuffer(True)
+    ctx = renderer.ctx
+    barriers: list = []
+    bind = ABufferSource.bind
+
+    def watched(self, prog, layer, step):
+        real = ctx.memory_barrier
+
+        def barrier(*bits):
+            barriers.append((layer, bits))
+            real(*bits)
+
+        monkeypatch.setattr(ctx, "memory_barrier", barrier)
+        try:
+            bind(self, prog, layer, step)
+        finally:
+            monkeypatch.setattr(ctx, "memory_barrier", real)
+
+    monkeypatch.setattr(ABufferSource, "bind", watched)
+    frame = renderer.render(model, size=(160, 120), max_layers=None, supersample=1)
+    assert frame.layers > 8 and len(barriers) >= 2 and barriers[0] == (0, ())
+    image = (ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT,)
+    assert all(layer > 0 and bits == image for layer, bits in barriers[1:])
+
+
 @pytest.mark.parametrize("options", [dict(shade=True), dict(id_silhouettes=True), dict(highlight=True)])
 def test_edges_from_the_lists_only_where_they_read_nothing_else(
     renderer, abuffer, gpu_form, monkeypatch, options

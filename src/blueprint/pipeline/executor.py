@@ -655,8 +655,9 @@ class Executor:
                 prog, {"u_first_layer": k * SLICES, "u_layers": min(SLICES, layers - k * SLICES)}
             )
             prog.run((size[0] + 7) // 8, (size[1] + 7) // 8)
-            self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
             st.draws += 1
+        # between batches the capture's bind orders the cursors; this orders the stacks
+        self.ctx.memory_barrier(self.ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
 
     def _bind_in_place(self, st: RunState, name: str, prog, layer: int) -> None:
         """The capture's layers bound for pass ``name``'s in-place form ``prog`` to read the

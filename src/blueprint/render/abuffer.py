@@ -257,8 +257,15 @@ class ABufferSource:
         ``layer`` on, no layer unpacked: each pixel's chain carried from one pass to the next
         (``step`` layers on) in a pair of cursor images, and each pixel's layer count."""
         self.r.uniforms.set(prog, "u_back_bias", self.back_bias)
-        *cursors, layer_count = self.lists(self.gb.size)
         batch = layer // step
+        if batch:
+            # a later batch reads what the batch before it left in the cursors; the lists are
+            # still bound and the capture's writes visible since the first batch's full barrier
+            ctx = self.r.ctx
+            ctx.memory_barrier(ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT)
+            *cursors, layer_count = self._list_images(self.gb.size)
+        else:
+            *cursors, layer_count = self.lists(self.gb.size)
         cursors[batch % 2].bind_to_image(2, read=True, write=False)
         cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
         layer_count.bind_to_image(4, read=True, write=False)
@@ -291,9 +298,13 @@ class ABufferSource:
         pass to leave where each pixel's chain goes on; the counts image holds each pixel's
         layers. The second cursor is the lists' heads, which nothing reads once the resolve has
         sorted them, and the next capture clears."""
-        name = f"abuffer.{size[0]}x{size[1]}"
         self.r.ctx.memory_barrier()
-        self._buffers(name)
+        self._buffers(f"abuffer.{size[0]}x{size[1]}")
+        return self._list_images(size)
+
+    def _list_images(self, size: tuple[int, int]) -> tuple:
+        """The two cursor images and the layer counts of ``lists``, as they are."""
+        name = f"abuffer.{size[0]}x{size[1]}"
         pool = self.r.pool
         return (
             pool.texture(f"{name}.cursor", size, "r32ui"),

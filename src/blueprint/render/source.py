@@ -37,11 +37,11 @@ class LayerSource(Protocol):
     ``reads``: where readers find the layers in place, unpacked into no G-buffer: None (each
     layer is drawn into the G-buffer), ``"surfaces"`` (a k-buffer's) or ``"lists"`` (an
     A-buffer's); there ``bind(prog, layer, step)`` binds the layers from ``layer`` on for a
-    reader's program (whose first layers of two passes lie ``step`` apart), which takes
-    ``defines`` (a k-buffer's ``surfaces`` are its targets, for readers that bind them their
-    own way: the vector drawings'). ``counts_kept``: the counts stay readable after the next
-    frame is issued (a stream reads them a frame late). ``way`` names it for reports
-    (``blueprint bench``).
+    reader's program (whose first layers of two passes lie ``step`` apart), with what the pass
+    before it wrote made visible, which takes ``defines`` (a k-buffer's ``surfaces`` are its
+    targets, for readers that bind them their own way: the vector drawings'). ``counts_kept``:
+    the counts stay readable after the next frame is issued (a stream reads them a frame late).
+    ``way`` names it for reports (``blueprint bench``).
     """
 
     way: str
