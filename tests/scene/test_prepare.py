@@ -15,6 +15,7 @@ import trimesh
 from blueprint import parallel, settings
 from blueprint.render.mesh import GpuMesh
 from blueprint.scene import environment, normals, prepare, up, weld
+from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.sorting import SortedKeys
 
@@ -259,6 +260,42 @@ def test_weld_groups_rows_by_value_where_some_hashes_collide(monkeypatch):
     np.testing.assert_array_equal(first, expected_first)
 
 
+@pytest.mark.parametrize("tol", [1e-9, 0.3, 2.0])
+def test_weld_groups_of_distinct_positions_skip_the_exact_pass_alike(tol):
+    """A soup's positions are distinct already (``Model.soup``): welded without the pass that
+    groups equal ones, the groups are the same, -0.0 and 0.0 (one position, two bit patterns)
+    and points within ``tol`` included."""
+    rng = np.random.default_rng(9)
+    points = rng.integers(-4, 5, (4000, 3)).astype(np.float32) * np.float32(0.25)
+    points = np.unique(points, axis=0)[rng.permutation(len(np.unique(points, axis=0)))]
+    zero = np.flatnonzero((points == 0).any(axis=1))[:40]
+    points = np.concatenate([points, -points[zero]])  # the same positions with -0.0 for 0.0
+    points = np.concatenate([points, points[:50] + np.float32(0.1)])  # close, not equal
+    expected_inverse, expected_first = weld.weld_groups(points, tol)
+    inverse, first = weld.weld_groups(points, tol, distinct=True)
+    np.testing.assert_array_equal(inverse, expected_inverse)
+    np.testing.assert_array_equal(first, expected_first)
+    assert len(expected_first) < len(points)
+
+
+def test_a_soup_is_welded_without_the_exact_pass(monkeypatch, tmp_path):
+    """The STL reader's positions are distinct: preparing its model welds them without
+    grouping equal ones again, to the same arrays."""
+    trimesh.creation.icosphere(subdivisions=2).export(tmp_path / "sphere.stl")
+    soup = load_model(tmp_path / "sphere.stl")
+    assert soup.soup
+    with monkeypatch.context() as m:  # welded as positions not known distinct are
+        m.setattr(normals, "weld_groups", lambda points, tol, distinct: weld.weld_groups(points, tol))
+        expected = prepare._prepare(soup, 30.0, None)
+    grouped = []
+    exact = weld._exact_groups
+    monkeypatch.setattr(weld, "_exact_groups", lambda *a, **k: grouped.append(1) or exact(*a, **k))
+    got = prepare._prepare(soup, 30.0, None)
+    assert grouped == []
+    for a, b in zip(got, expected, strict=True):
+        assert a.tobytes() == b.tobytes()
+
+
 @pytest.mark.parametrize(
     ("same", "at", "runs"),
     [
@@ -289,7 +326,7 @@ def test_a_model_of_the_same_content_skips_the_sorts(monkeypatch):
     held = prepare.topology(first)
     assert held["welded"].dtype == np.int32 and held[("sharp", 30.0)].dtype == bool
 
-    def refused(*args):
+    def refused(*args, **kwargs):
         raise AssertionError("sorted again")
 
     monkeypatch.setattr(normals, "_welded", refused)

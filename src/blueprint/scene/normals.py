@@ -36,8 +36,11 @@ def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) ->
     return _welded(positions, faces, rel_tol).astype(np.int64)
 
 
-def _welded(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> np.ndarray:
-    """``weld_ids`` as int32, which halves what the corners' ids take."""
+def _welded(
+    positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6, distinct: bool = False
+) -> np.ndarray:
+    """``weld_ids`` as int32, which halves what the corners' ids take; ``distinct``: the
+    positions are distinct already (``weld_groups``)."""
     positions, faces = check_mesh(positions, faces)
     if len(faces) == 0:
         return np.zeros((0, 3), np.int32)
@@ -46,7 +49,7 @@ def _welded(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) -> 
     points = positions if used.all() else positions[used]
     extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
     diag = float(np.linalg.norm(extent))
-    group, _ = weld_groups(positions, (diag or 1.0) * rel_tol)
+    group, _ = weld_groups(positions, (diag or 1.0) * rel_tol, distinct)
     welded = np.empty(faces.shape, np.int32)
     parallel.run(partial(_taken, group.astype(np.int32), faces, welded), len(faces))
     return welded
@@ -189,7 +192,11 @@ def noise_creases(crease: np.ndarray, anchored: np.ndarray, length: np.ndarray, 
 
 
 def corner_normals(
-    positions: np.ndarray, faces: np.ndarray, crease_angle: float = 30.0, topology: dict | None = None
+    positions: np.ndarray,
+    faces: np.ndarray,
+    crease_angle: float = 30.0,
+    topology: dict | None = None,
+    distinct: bool = False,
 ) -> np.ndarray:
     """Normal per triangle corner: the area-weighted mean of the normals of the faces around the
     corner's vertex that lie within ``crease_angle`` degrees of the corner's face; at a vertex
@@ -216,6 +223,9 @@ def corner_normals(
         Kept with the mesh (by ``scene.prepare``): the welded vertex ids (``"welded"``, (F, 3)
         int32) and the crease vertices (``("sharp", crease_angle)``, (V,) bool) are read from
         it where it holds them, and left in it where it does not: they take the sorts.
+    distinct : bool
+        The positions are distinct already (a soup's, ``Model.soup``): the weld looks for
+        close ones alone (``weld_groups``).
 
     Returns
     -------
@@ -228,7 +238,7 @@ def corner_normals(
     welded = topology.get("welded")
     if welded is None and smoothed:
         # welded before the faces' normals are made: the weld's temporaries never lie beside them
-        welded = topology["welded"] = _welded(positions, faces)
+        welded = topology["welded"] = _welded(positions, faces, distinct=distinct)
     area_normals = indexed_cross(np.asarray(positions), faces)
     unit = np.empty_like(area_normals)
     parallel.run(partial(_unit_rows, area_normals, unit), len(faces))

@@ -131,7 +131,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         del key
     else:
         known = {} if known is None else known
-        normals = corner_normals(model.positions, model.faces, crease_angle, known).reshape(-1, 3)
+        normals = corner_normals(model.positions, model.faces, crease_angle, known, model.soup).reshape(-1, 3)
         key = corner_vertex
         if parts > 1:
             key = corner_vertex.astype(np.int64) * parts

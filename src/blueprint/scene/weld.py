@@ -391,7 +391,7 @@ def default_tolerance(positions: np.ndarray) -> float:
     return _REL_TOL * float(np.linalg.norm(extent))
 
 
-def weld_groups(positions: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def weld_groups(positions: np.ndarray, tol: float, distinct: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The welded vertex of every vertex of ``weld``, and the first vertex of every welded one.
 
     Parameters
@@ -400,6 +400,10 @@ def weld_groups(positions: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarr
         Finite positions.
     tol : float
         Euclidean merge distance (non-negative).
+    distinct : bool
+        The positions are distinct already (a soup's, ``Model.soup``): the pass that groups
+        exact duplicates is skipped. The result is the same either way where ``tol`` > 0, for
+        the sweep pairs equal positions too; the pass only keeps its neighbourhoods small.
 
     Returns
     -------
@@ -410,7 +414,10 @@ def weld_groups(positions: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarr
     """
     # Exact duplicates first: triangle soups repeat every vertex several times, and collapsing
     # them keeps the sweep's and the grid's neighbourhoods nearly empty.
-    inverse, first = _exact_groups(positions)
+    if distinct and tol > 0:
+        inverse = first = np.arange(len(positions))
+    else:
+        inverse, first = _exact_groups(positions)
     if tol > 0 and len(first) > 1:
         i, j = _close_pairs(positions[first].astype(np.float64), tol)
         if len(i):
