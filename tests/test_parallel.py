@@ -90,6 +90,29 @@ def test_run_within_a_thread_of_the_pool_runs_its_blocks_in_that_thread(monkeypa
         assert len({b[0] for b in blocks}) == 1  # one thread ran both blocks
 
 
+@pytest.mark.parametrize("n", [0, 1, 99, 10_007])
+@pytest.mark.parametrize("threads", [1, 2, 5])
+def test_running_sums_maxima_and_found_positions_equal_numpys(n, threads, monkeypatch):
+    """Blocks side by side, each raised by the sums (or compared with the maximum) of those
+    before it: the same as one running sum or maximum, whatever the blocks."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    rng = np.random.default_rng(n + threads)
+    flags = rng.random(n) < 0.3
+    counts = rng.integers(0, 1000, n).astype(np.int64)
+    for values, dtype, start in ((flags, np.int32, 0), (flags, np.int32, -1), (counts, np.int64, 7)):
+        found = parallel.cumsum(values, dtype, start=start, min_block=10)
+        assert found.dtype == dtype
+        np.testing.assert_array_equal(found, start + np.cumsum(values, dtype=dtype))
+    np.testing.assert_array_equal(parallel.flatnonzero(flags, min_block=10), np.flatnonzero(flags))
+    for values in (counts, np.arange(n), np.sort(counts % 9), counts[::-1].copy()):
+        rises = np.ones(n, bool)
+        rises[1:] = values[1:] > np.maximum.accumulate(values)[:-1]
+        np.testing.assert_array_equal(parallel.rises(values, min_block=10), rises)
+    np.testing.assert_array_equal(
+        parallel.flatnonzero(flags, negated=True, min_block=10), np.flatnonzero(~flags)
+    )
+
+
 @pytest.mark.parametrize("dtype", [np.int64, np.uint64, np.int32, np.uint8])
 @pytest.mark.parametrize("threads", [1, 2, 5])
 def test_sort_equals_numpys(dtype, threads, monkeypatch):

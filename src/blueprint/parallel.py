@@ -18,7 +18,7 @@ import numpy as np
 
 from blueprint import settings
 
-__all__ = ["MIN_BLOCK", "begin", "cuts", "each", "run", "sort"]
+__all__ = ["MIN_BLOCK", "begin", "cumsum", "cuts", "each", "flatnonzero", "rises", "run", "sort"]
 
 T = TypeVar("T")
 U = TypeVar("U")
@@ -110,6 +110,62 @@ def each(work: Callable[[T], U], items: list[T]) -> list[U]:
     if settings.THREADS == 1 or len(items) < 2 or getattr(_worker, "busy", False):
         return [work(item) for item in items]
     return list(_executor().map(work, items))
+
+
+def cumsum(values: np.ndarray, dtype, start: int = 0, min_block: int | None = None) -> np.ndarray:
+    """``start + np.cumsum(values, dtype=dtype)`` of 1-D bool or integer ``values``: each
+    block's own running sums side by side, then each block raised by the sums of the blocks
+    before it (integers: the same as one running sum)."""
+    out = np.empty(len(values), dtype)
+    blocks = cuts(len(values), min_block)
+    run(lambda lo, hi: np.cumsum(values[lo:hi], dtype=dtype, out=out[lo:hi]), len(values), min_block)
+    ends = np.array([out[hi - 1] for _, hi in blocks if hi > 0], dtype)
+    raised = start + np.r_[0, np.cumsum(ends[:-1], dtype=dtype)].astype(dtype)
+
+    def add(lo: int, hi: int) -> None:
+        k = blocks.index((lo, hi))
+        if raised[k]:
+            out[lo:hi] += raised[k]
+
+    run(add, len(values), min_block)
+    return out
+
+
+def flatnonzero(values: np.ndarray, negated: bool = False, min_block: int | None = None) -> np.ndarray:
+    """``np.flatnonzero(values)`` of a 1-D array (of ``~values`` where ``negated``), each
+    block's found side by side."""
+
+    def found_in(lo: int, hi: int) -> np.ndarray:
+        block = values[lo:hi]
+        return np.flatnonzero(~block if negated else block) + lo
+
+    found = run(found_in, len(values), min_block)
+    return found[0] if len(found) == 1 else np.concatenate(found)
+
+
+def rises(values: np.ndarray, min_block: int | None = None) -> np.ndarray:
+    """(n,) bool of 1-D integer ``values``: each is greater than every one before it (the
+    first is): each block's running maximum side by side, then each block's values compared
+    with it and with the largest of the blocks before."""
+    out = np.empty(len(values), bool)
+    if len(values) == 0:
+        return out
+    blocks = cuts(len(values), min_block)
+    highest = run(lambda lo, hi: np.maximum.accumulate(values[lo:hi]), len(values), min_block)
+    before = [None] + list(np.maximum.accumulate([block[-1] for block in highest[:-1]]))
+
+    def compare(lo: int, hi: int) -> None:
+        k = blocks.index((lo, hi))
+        block, high = values[lo:hi], highest[k]
+        np.greater(block[1:], high[:-1], out=out[lo + 1 : hi])
+        if before[k] is None:
+            out[lo] = True
+        else:
+            out[lo] = block[0] > before[k]
+            out[lo + 1 : hi] &= block[1:] > before[k]
+
+    run(compare, len(values), min_block)
+    return out
 
 
 def sort(values: np.ndarray, min_block: int | None = None) -> None:

@@ -475,6 +475,37 @@ def test_crease_vertices_of_more_welded_vertices_than_an_int32_key_holds():
     assert 0 < wide[n : 2 * n].sum() < n  # some of the middle row on creases, not all
 
 
+@pytest.mark.parametrize("threads", [1, 3])
+def test_crease_vertices_are_the_ends_of_edges_not_of_two_faces(threads, monkeypatch):
+    """With no crease angle passed (180 degrees), the crease vertices are the ends of every
+    border and non-manifold edge, counted edge by edge here; edges in blocks of a few, so a
+    run of two keys may straddle two threads' blocks."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 8)
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    rng = np.random.default_rng(4)
+    faces = sphere.faces[rng.random(len(sphere.faces)) > 0.15]  # holes: borders
+    faces = np.concatenate([faces, faces[:6]])  # six faces twice: edges of three and four faces
+    positions = sphere.vertices
+    welded = normals.weld_ids(positions, faces)
+    unit = np.cross(
+        positions[faces[:, 1]] - positions[faces[:, 0]], positions[faces[:, 2]] - positions[faces[:, 0]]
+    )
+    unit /= np.linalg.norm(unit, axis=1)[:, None]
+    sharp = normals.crease_vertices(welded, unit, 180.0, positions, faces)
+    counts: dict = {}
+    for face in welded.tolist():
+        for k in range(3):
+            edge = tuple(sorted((face[k], face[(k + 1) % 3])))
+            counts[edge] = counts.get(edge, 0) + 1
+    expected = np.zeros(len(sharp), bool)
+    for edge, count in counts.items():
+        if count != 2:
+            expected[list(edge)] = True
+    assert 0 < expected.sum() < len(expected)
+    np.testing.assert_array_equal(sharp, expected)
+
+
 def test_content_digest_is_the_triangles():
     box = trimesh.creation.box()
     one = Model.from_arrays(box.vertices, box.faces)

@@ -84,13 +84,14 @@ def crease_vertices(
     # eight bytes an edge each)
     same = np.zeros(edges.length + 1, bool)
     parallel.run(partial(_same_keys, edges, same), edges.length - 1)
-    paired = same[1:-1] & ~same[:-2] & ~same[2:]
+    paired = np.empty(edges.length - 1, bool)
+    parallel.run(partial(_runs_of_two, same, paired), len(paired))
     # the pairs' crease test as a mask over the edges: their positions would take eight bytes
     # a pair
     sharp_edge = np.zeros(len(paired), bool)
     limit = np.cos(np.radians(crease_angle)) - 1e-9
     parallel.run(partial(_pair_sharp, unit, edges, paired, limit, sharp_edge), len(paired))
-    sharp_pair = np.flatnonzero(sharp_edge)
+    sharp_pair = parallel.flatnonzero(sharp_edge)
     del sharp_edge
     # the crease edges' lengths, from the first face of each
     corner = edges.order(sharp_pair)
@@ -100,12 +101,10 @@ def crease_vertices(
     length = np.linalg.norm(ends[1] - ends[0], axis=1)
     crease = edges.keys(sharp_pair)
     # every other edge is a border or a non-manifold edge
-    apart = np.ones(edges.length, bool)
-    apart[:-1][paired] = False
-    apart[1:][paired] = False
+    found = parallel.run(partial(_unpaired, paired), edges.length)
     del same, paired
-    open_edges = edges.keys(np.flatnonzero(apart))
-    del apart, edges
+    open_edges = edges.keys(np.concatenate(found))
+    del found, edges
     sharp = np.zeros(vertices, bool)
     sharp[open_edges // vertices] = True
     sharp[open_edges % vertices] = True
@@ -133,6 +132,24 @@ def _same_keys(edges: SortedKeys, out: np.ndarray, lo: int, hi: int) -> None:
         stop = min(start + _ROWS, hi)
         run = edges.keys(slice(start, stop + 1))
         np.equal(run[1:], run[:-1], out=out[start + 1 : stop + 1])
+
+
+def _runs_of_two(same: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[i]`` for ``i`` from lo to hi: sorted edges ``i`` and ``i + 1`` are a run of two
+    equal keys (``same[1 + i]``: keys ``i`` and ``i + 1`` are equal)."""
+    np.greater(same[lo + 1 : hi + 1], same[lo:hi], out=out[lo:hi])
+    out[lo:hi] &= ~same[lo + 2 : hi + 2]
+
+
+def _unpaired(paired: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """The sorted edges from lo to hi in no run of two (``paired[i]``: edges ``i`` and ``i + 1``
+    are one), ascending."""
+    alone = np.ones(hi - lo, bool)
+    ahead = min(hi, len(paired))
+    alone[: ahead - lo] &= ~paired[lo:ahead]
+    behind = max(lo, 1)
+    alone[behind - lo :] &= ~paired[behind - 1 : hi - 1]
+    return np.flatnonzero(alone) + lo
 
 
 def _pair_sharp(
@@ -268,12 +285,17 @@ def corner_normals(
     corners = result.reshape(-1, 3)
     parallel.run(partial(_taken, vertex_normals, vertex, corners), len(vertex))
     del vertex_normals
-    apart = np.flatnonzero(~shared[vertex])
+    apart = np.concatenate(parallel.run(partial(_unshared, shared, vertex), len(vertex)))
     corners[apart] = np.take(unit, apart // 3, axis=0)
     paired = apart[degree[vertex[apart]] <= _MAX_DEGREE]
     if len(paired):
         _pairwise(paired, vertex[paired], area_normals, unit, sharp, crease_angle, corners)
     return result
+
+
+def _unshared(shared: np.ndarray, vertex: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """The corners from lo to hi whose ``vertex`` is not ``shared``, ascending."""
+    return np.flatnonzero(~shared[vertex[lo:hi]]) + lo
 
 
 def _vertex_sums(

@@ -154,12 +154,8 @@ def _numbered_by_first_corner(corner_vertex: np.ndarray, vertices: int) -> bool:
     vertex) are numbered by first corner, as those of its corners apart would be."""
     if len(corner_vertex) == 0:
         return vertices == 0
-    seen = np.maximum.accumulate(corner_vertex)
-    new = np.empty(len(corner_vertex), bool)
-    new[0] = True
-    np.greater(corner_vertex[1:], seen[:-1], out=new[1:])
-    firsts = corner_vertex[new]
-    return len(firsts) == vertices and bool(np.array_equal(firsts, np.arange(vertices)))
+    firsts = parallel.flatnonzero(parallel.rises(corner_vertex))
+    return len(firsts) == vertices and bool(np.array_equal(corner_vertex[firsts], np.arange(vertices)))
 
 
 def _filled(
@@ -202,11 +198,7 @@ def _soup_vertices(
     else:
         # the welded ids are numbered by their first vertex, here their first corner: a corner
         # is its id's first where the id passes every id before it
-        new = np.empty(n, bool)
-        new[0] = True
-        np.greater(key[1:], np.maximum.accumulate(key)[:-1], out=new[1:])
-        first = np.flatnonzero(new)
-        del new
+        first = parallel.flatnonzero(parallel.rises(key))
         inverse = key
         if int(key.max(initial=-1)) + 1 != len(first):
             first = None  # ids of vertices no corner uses lie between: numbered anew

@@ -230,15 +230,14 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     new[0] = True
     new[1:] = differs
     del differs
+    group = parallel.cumsum(new, np.int32, start=-1)
     # within a row's run its indices rise: the run's first is the row's first occurrence
-    firsts = order[new]
-    seen = np.zeros(n, bool)
-    seen[firsts] = True
-    rank = np.cumsum(seen, dtype=np.int32)[firsts]
-    rank -= 1
-    group = np.cumsum(new, dtype=np.int32)
+    firsts = np.empty(int(group[-1]) + 1, np.int64)
+    parallel.run(partial(_firsts, order, new, group, firsts), n)
     del new
-    group -= 1
+    seen = np.zeros(n, bool)
+    parallel.run(partial(_marked, seen, firsts), len(firsts))
+    rank = parallel.cumsum(seen, np.int32, start=-1)[firsts]
     parallel.run(partial(_ranked, rank, group), n)
     inverse = np.empty(n, dtype)
     parallel.run(partial(_scattered, inverse, order, group), n)
@@ -250,7 +249,7 @@ def _runs_holding(same: np.ndarray, at: np.ndarray) -> np.ndarray:
     run is positions ``i`` to ``j`` with ``same`` true from ``i`` to ``j - 1`` (``same[i]``:
     positions ``i`` and ``i + 1`` share a hash): found from the breaks around each, not by
     numbering every position's run."""
-    breaks = np.flatnonzero(~same)
+    breaks = parallel.flatnonzero(same, negated=True)
     k = np.searchsorted(breaks, at)
     # a run ends at the first break at or after a position, else at the last position, and
     # starts after the break before it, else at 0
@@ -282,6 +281,18 @@ def _same_hash(key: np.ndarray, low: np.uint64, out: np.ndarray, lo: int, hi: in
     for start in range(lo, hi, _HASH_BLOCK):
         stop = min(start + _HASH_BLOCK, hi)
         np.less_equal(np.bitwise_xor(key[start + 1 : stop + 1], key[start:stop]), low, out=out[start:stop])
+
+
+def _firsts(order: np.ndarray, new: np.ndarray, group: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """The rows of ``order[lo:hi]`` that begin a group (``new``) into ``out``, at their
+    groups' numbers (``group``, from 0)."""
+    picked = order[lo:hi][new[lo:hi]]
+    at = int(group[lo - 1]) + 1 if lo else 0
+    out[at : at + len(picked)] = picked
+
+
+def _marked(seen: np.ndarray, at: np.ndarray, lo: int, hi: int) -> None:
+    seen[at[lo:hi]] = True
 
 
 def _unpacked(key: np.ndarray, low: np.uint64, lo: int, hi: int) -> None:
