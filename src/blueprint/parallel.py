@@ -18,7 +18,7 @@ import numpy as np
 
 from blueprint import settings
 
-__all__ = ["MIN_BLOCK", "begin", "cumsum", "cuts", "each", "flatnonzero", "rises", "run", "sort"]
+__all__ = ["MIN_BLOCK", "begin", "cumsum", "cuts", "each", "flatnonzero", "mark", "rises", "run", "sort"]
 
 T = TypeVar("T")
 U = TypeVar("U")
@@ -141,6 +141,16 @@ def flatnonzero(values: np.ndarray, negated: bool = False, min_block: int | None
 
     found = run(found_in, len(values), min_block)
     return found[0] if len(found) == 1 else np.concatenate(found)
+
+
+def mark(flags: np.ndarray, at: np.ndarray, min_block: int | None = None) -> None:
+    """``flags[at] = True``, a block of ``at`` a thread: only True is written, so the flags do
+    not depend on the blocks' order."""
+
+    def marked(lo: int, hi: int) -> None:
+        flags[at[lo:hi]] = True
+
+    run(marked, len(at), min_block)
 
 
 def rises(values: np.ndarray, min_block: int | None = None) -> np.ndarray:

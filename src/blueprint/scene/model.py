@@ -208,7 +208,7 @@ class Model:
             if len(self.faces):
                 # each used vertex once, not once a corner (some six times in a closed mesh)
                 mask = np.zeros(len(self.positions), bool)
-                mask[self.faces.reshape(-1)] = True
+                parallel.mark(mask, self.faces.reshape(-1))
                 if not mask.all():
                     used = self.positions[mask]
             self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
@@ -318,10 +318,20 @@ class Model:
         """(F,) bool: faces with zero area or a repeated vertex; they are never drawn."""
         if "degenerate" not in self._cache:
             cross = self.corner_cross()
-            area2 = np.einsum("ij,ij->i", cross, cross)
             scale = np.ptp(self.bounds, axis=0).max() if len(self.faces) else 1.0
-            f = self.faces
-            repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
             # |cross|^2 is a length^4: compare with a relative area of 1e-12
-            self._cache["degenerate"] = repeated | (area2 <= (scale * scale * 1e-12) ** 2)
+            least = (scale * scale * 1e-12) ** 2
+            degenerate = np.empty(len(self.faces), bool)
+            parallel.run(partial(_degenerate, self.faces, cross, least, degenerate), len(degenerate))
+            self._cache["degenerate"] = degenerate
         return self._cache["degenerate"]
+
+
+def _degenerate(
+    faces: np.ndarray, cross: np.ndarray, least: float, out: np.ndarray, lo: int, hi: int
+) -> None:
+    """``out[lo:hi]``: faces ``lo`` to ``hi`` repeat a vertex or have a squared ``cross``
+    product of at most ``least`` (``Model.degenerate_faces``)."""
+    f, c = faces[lo:hi], cross[lo:hi]
+    np.less_equal(np.einsum("ij,ij->i", c, c), least, out=out[lo:hi])
+    out[lo:hi] |= (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])

@@ -37,26 +37,32 @@ def weld_ids(positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6) ->
 
 
 def _welded(
-    positions: np.ndarray, faces: np.ndarray, rel_tol: float = 1e-6, distinct: bool = False
+    positions: np.ndarray,
+    faces: np.ndarray,
+    rel_tol: float = 1e-6,
+    distinct: bool = False,
+    diagonal: float | None = None,
 ) -> np.ndarray:
     """``weld_ids`` as int32, which halves what the corners' ids take; ``distinct``: the
-    positions are distinct already (``weld_groups``)."""
+    positions are distinct already (``weld_groups``); ``diagonal``: ``_diagonal``'s, where the
+    caller knows it."""
     positions, faces = check_mesh(positions, faces)
     if len(faces) == 0:
         return np.zeros((0, 3), np.int32)
-    used = np.zeros(len(positions), bool)
-    used[faces.reshape(-1)] = True
-    points = positions if used.all() else positions[used]
-    extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
-    diag = float(np.linalg.norm(extent))
-    group, _ = weld_groups(positions, (diag or 1.0) * rel_tol, distinct)
+    diagonal = _diagonal(positions, faces) if diagonal is None else diagonal
+    group, _ = weld_groups(positions, diagonal * rel_tol, distinct)
     welded = np.empty(faces.shape, np.int32)
     parallel.run(partial(_taken, group.astype(np.int32), faces, welded), len(faces))
     return welded
 
 
 def crease_vertices(
-    welded: np.ndarray, unit: np.ndarray, crease_angle: float, positions: np.ndarray, faces: np.ndarray
+    welded: np.ndarray,
+    unit: np.ndarray,
+    crease_angle: float,
+    positions: np.ndarray,
+    faces: np.ndarray,
+    diagonal: float | None = None,
 ) -> np.ndarray:
     """(V,) bool: the welded vertex lies on a crease (an edge whose two faces' normals differ,
     up to sign, by more than ``crease_angle`` degrees, unless it is in a run of noise,
@@ -73,6 +79,8 @@ def crease_vertices(
     positions : (P, 3) float
         The vertices ``faces`` index: the crease edges' lengths.
     faces : (F, 3) int
+    diagonal : float, optional
+        ``_diagonal`` of the positions the faces use, where the caller knows it.
     """
     vertices = int(welded.max(initial=-1)) + 1
     # edge k of a face joins its corners k and k + 1; its key is lo * vertices + hi
@@ -109,7 +117,8 @@ def crease_vertices(
     sharp[open_edges // vertices] = True
     sharp[open_edges % vertices] = True
     crease = np.stack([crease // vertices, crease % vertices], axis=1)
-    noise = noise_creases(crease, sharp, length, _diagonal(positions, faces))
+    diagonal = _diagonal(positions, faces) if diagonal is None else diagonal
+    noise = noise_creases(crease, sharp, length, diagonal)
     sharp[crease[~noise].ravel()] = True
     return sharp
 
@@ -172,8 +181,12 @@ def _diagonal(positions: np.ndarray, faces: np.ndarray) -> float:
     points = positions if used.all() else positions[used]
     if len(points) == 0:
         return 1.0
-    extent = column_max(points).astype(np.float64) - column_min(points).astype(np.float64)
-    return float(np.linalg.norm(extent)) or 1.0
+    return diagonal_of(np.array([column_min(points), column_max(points)], np.float64))
+
+
+def diagonal_of(bounds: np.ndarray) -> float:
+    """The diagonal of (2, 3) ``bounds`` (``Model.bounds``), 1 where it is 0."""
+    return float(np.linalg.norm(bounds[1] - bounds[0])) or 1.0
 
 
 def noise_creases(crease: np.ndarray, anchored: np.ndarray, length: np.ndarray, size: float) -> np.ndarray:
@@ -214,6 +227,7 @@ def corner_normals(
     crease_angle: float = 30.0,
     topology: dict | None = None,
     distinct: bool = False,
+    diagonal: float | None = None,
 ) -> np.ndarray:
     """Normal per triangle corner: the area-weighted mean of the normals of the faces around the
     corner's vertex that lie within ``crease_angle`` degrees of the corner's face; at a vertex
@@ -243,6 +257,10 @@ def corner_normals(
     distinct : bool
         The positions are distinct already (a soup's, ``Model.soup``): the weld looks for
         close ones alone (``weld_groups``).
+    diagonal : float, optional
+        Of the bounding box of the vertices the faces use (``diagonal_of`` of ``Model.bounds``),
+        where the caller knows it: the weld's tolerance and the size a run of noise is
+        measured against.
 
     Returns
     -------
@@ -255,7 +273,8 @@ def corner_normals(
     welded = topology.get("welded")
     if welded is None and smoothed:
         # welded before the faces' normals are made: the weld's temporaries never lie beside them
-        welded = topology["welded"] = _welded(positions, faces, distinct=distinct)
+        diagonal = _diagonal(positions, faces) if diagonal is None else diagonal
+        welded = topology["welded"] = _welded(positions, faces, distinct=distinct, diagonal=diagonal)
     area_normals = indexed_cross(np.asarray(positions), faces)
     unit = np.empty_like(area_normals)
     parallel.run(partial(_unit_rows, area_normals, unit), len(faces))
@@ -264,7 +283,7 @@ def corner_normals(
     sharp = topology.get(("sharp", float(crease_angle)))
     if sharp is None:
         sharp = topology[("sharp", float(crease_angle))] = crease_vertices(
-            welded, unit, crease_angle, positions, faces
+            welded, unit, crease_angle, positions, faces, diagonal
         )
     vertices = len(sharp)
     vertex = welded.reshape(-1)

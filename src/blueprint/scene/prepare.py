@@ -20,7 +20,7 @@ import numpy as np
 
 from blueprint import parallel, settings
 from blueprint.scene.model import Model
-from blueprint.scene.normals import corner_normals
+from blueprint.scene.normals import corner_normals, diagonal_of
 from blueprint.sorting import unique_first
 
 __all__ = ["VERTEX", "gpu_arrays", "topologies_kept", "topology"]
@@ -131,7 +131,10 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         del key
     else:
         known = {} if known is None else known
-        normals = corner_normals(model.positions, model.faces, crease_angle, known, model.soup).reshape(-1, 3)
+        # the loader's checks found the bounds: the weld and the crease runs measure by them
+        diagonal = diagonal_of(model.bounds)
+        normals = corner_normals(model.positions, model.faces, crease_angle, known, model.soup, diagonal)
+        normals = normals.reshape(-1, 3)
         key = corner_vertex
         if parts > 1:
             key = corner_vertex.astype(np.int64) * parts

@@ -236,8 +236,11 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     parallel.run(partial(_firsts, order, new, group, firsts), n)
     del new
     seen = np.zeros(n, bool)
-    parallel.run(partial(_marked, seen, firsts), len(firsts))
-    rank = parallel.cumsum(seen, np.int32, start=-1)[firsts]
+    parallel.mark(seen, firsts)
+    ranks = parallel.cumsum(seen, np.int32, start=-1)
+    rank = np.empty(len(firsts), np.int32)
+    parallel.run(partial(_gathered, ranks, firsts, rank), len(firsts))
+    del ranks
     parallel.run(partial(_ranked, rank, group), n)
     inverse = np.empty(n, dtype)
     parallel.run(partial(_scattered, inverse, order, group), n)
@@ -291,8 +294,8 @@ def _firsts(order: np.ndarray, new: np.ndarray, group: np.ndarray, out: np.ndarr
     out[at : at + len(picked)] = picked
 
 
-def _marked(seen: np.ndarray, at: np.ndarray, lo: int, hi: int) -> None:
-    seen[at[lo:hi]] = True
+def _gathered(values: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    np.take(values, at[lo:hi], out=out[lo:hi])
 
 
 def _unpacked(key: np.ndarray, low: np.uint64, lo: int, hi: int) -> None:
