@@ -363,12 +363,21 @@ def _coincidence_keys(model: Model, out: np.ndarray, lo: int, hi: int) -> None:
 def _bucketed_most(key: np.ndarray) -> int:
     """The most values of ``key`` (float64) in one bucket of a hash of their bits, about as
     many buckets as values: at least the most copies of one value, found without a sort."""
-    bits = (key + 0.0).view(np.uint64)  # -0.0 is 0.0, as np.unique counts them
-    if np.isnan(key).any():
-        return len(key)
     shift = np.uint64(64 - min(22, max(10, len(key).bit_length())))
-    buckets = (bits * np.uint64(0x9E3779B97F4A7C15)) >> shift
-    return int(np.bincount(buckets.astype(np.intp)).max())
+    buckets = np.empty(len(key), np.intp)
+    if any(parallel.run(functools.partial(_buckets, key, shift, buckets), len(key), min_block=_BLOCK)):
+        return len(key)  # a NaN
+    return int(np.bincount(buckets).max())
+
+
+def _buckets(key: np.ndarray, shift: np.uint64, out: np.ndarray, lo: int, hi: int) -> bool:
+    """``out[lo:hi]``: ``_bucketed_most``'s buckets of ``key[lo:hi]``; whether one is NaN."""
+    block = key[lo:hi]
+    if np.isnan(block).any():
+        return True
+    bits = (block + 0.0).view(np.uint64)  # -0.0 is 0.0, as np.unique counts them
+    out[lo:hi] = (bits * np.uint64(0x9E3779B97F4A7C15)) >> shift
+    return False
 
 
 def _archive_scene(path: Path, kind: str):

@@ -256,8 +256,9 @@ def _runs_holding(same: np.ndarray, at: np.ndarray) -> np.ndarray:
     k = np.searchsorted(breaks, at)
     # a run ends at the first break at or after a position, else at the last position, and
     # starts after the break before it, else at 0
-    last = np.append(breaks, len(same))[k]
-    first = np.insert(breaks + 1, 0, 0)[k]
+    ends = np.append(breaks, len(same))
+    last = ends[k]
+    first = np.where(k > 0, ends[k - 1] + 1, 0)
     first, last = np.unique(np.stack([first, last]), axis=1)
     return ranges(first, last - first + 1)
 

@@ -62,7 +62,7 @@ def _corners(positions: np.ndarray) -> Mesh:
     apart in its bits) every corner stays a vertex of its own."""
     # int32 where they fit, as the model keeps them
     dtype = np.int32 if len(positions) <= np.iinfo(np.int32).max else np.int64
-    if np.signbit(positions[positions == 0]).any():
+    if any(parallel.run(partial(_negative_zero, positions), len(positions))):
         return Mesh(positions, np.arange(len(positions), dtype=dtype).reshape(-1, 3))
     first, inverse = distinct_rows(positions, dtype)
     return Mesh(positions[first], inverse.reshape(-1, 3), soup=True)
@@ -115,3 +115,9 @@ def _ascii_stl(head: bytes) -> bool:
     if not head.lstrip().lower().startswith(b"solid"):
         return False
     return all(32 <= b < 127 or b in (9, 10, 13) for b in head)
+
+
+def _negative_zero(positions: np.ndarray, lo: int, hi: int) -> bool:
+    """Whether rows ``lo`` to ``hi`` of ``positions`` hold a -0.0."""
+    block = positions[lo:hi]
+    return bool(np.signbit(block[block == 0]).any())
