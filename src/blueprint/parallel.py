@@ -11,12 +11,14 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 import numpy as np
 
 from blueprint import settings
+
+if TYPE_CHECKING:
+    from concurrent.futures import ThreadPoolExecutor
 
 __all__ = ["MIN_BLOCK", "begin", "cumsum", "cuts", "each", "flatnonzero", "mark", "rises", "run", "sort"]
 
@@ -46,6 +48,9 @@ def _executor() -> ThreadPoolExecutor:
         if _pool is None or _pool[0] != os.getpid():
             if os.environ.get(ONE_ARENA_ENV) == "1":
                 _one_arena()
+            # loaded with the first pool: a drawing of a small model never makes one
+            from concurrent.futures import ThreadPoolExecutor
+
             _pool = (
                 os.getpid(),
                 ThreadPoolExecutor(settings.THREADS, "blueprint", initializer=_mark_worker),
