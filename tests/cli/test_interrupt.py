@@ -84,3 +84,23 @@ def test_a_drawing_not_interrupted_ends_as_before(tmp_path):
     assert (proc.returncode, proc.stdout) == (2, "")
     assert proc.stderr == f"blueprint: error: {missing}: no such file\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("args", [["--help"], ["render", "--help"], ["--version"]])
+def test_a_help_prints_without_a_child(args, monkeypatch, capsys):
+    """A help or the version has no phase to stop: it prints from the program's own process."""
+    from blueprint import cli
+    from blueprint.cli import supervise
+
+    def forked(*_):
+        raise AssertionError("a child was started")
+
+    monkeypatch.setattr(supervise, "supervised", forked)
+    monkeypatch.setattr("sys.argv", ["blueprint", *args])
+    # what main sets for its own process, left to this one as it was
+    monkeypatch.setenv("BLUEPRINT_ONE_ARENA", os.environ.get("BLUEPRINT_ONE_ARENA", "0"))
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", os.environ.get("OPENBLAS_NUM_THREADS", "1"))
+    with pytest.raises(SystemExit) as ended:
+        cli.main()
+    assert ended.value.code in (0, None)
+    assert "blueprint" in capsys.readouterr().out

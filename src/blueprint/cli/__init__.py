@@ -13,6 +13,7 @@ import functools
 import gc
 import importlib
 import os
+import sys
 
 import click
 
@@ -122,7 +123,9 @@ def main(argv: list[str] | None = None) -> None:
     # (blueprint.parallel): memory their blocks free is reused by the drawing after them
     os.environ.setdefault("BLUEPRINT_ONE_ARENA", "1")
     _light_exit()
-    if argv is None and hasattr(os, "fork") and os.environ.get(SUPERVISE_ENV, "1") != "0":
+    # a help or the version prints and ends: no child for Ctrl-C to stop
+    asks_help = {"-h", "--help", "--version"} & set(sys.argv[1:])
+    if argv is None and hasattr(os, "fork") and os.environ.get(SUPERVISE_ENV, "1") != "0" and not asks_help:
         # as the program (not called with arguments from Python): in a child that Ctrl-C can
         # stop in any phase (blueprint.cli.supervise)
         from blueprint.cli.supervise import supervised
