@@ -204,6 +204,22 @@ def test_near_plane_clipping():
     np.testing.assert_allclose(edges.segments2d, expected, atol=1e-9)
 
 
+def test_segments_in_front_of_the_near_plane_are_projected_without_a_copy():
+    """Where no segment reaches the near plane (most drawings), the endpoints given are the
+    endpoints kept, not copied; where one does, the others are kept as they were."""
+    from blueprint.silhouette.edges import _projected
+
+    proj = perspective(90.0, W / H, 1.0, 100.0)
+    segments = np.array([[[-1.0, -1, -5], [1, -1, -5]], [[0, 1, -3], [0, 2, -4]]])
+    model, pixels, keep = _projected(segments, np.eye(4), proj, (W, H))
+    assert model is segments and keep.tolist() == [0, 1] and pixels.shape == (2, 2, 2)
+    crossing = np.concatenate([segments, [[[0.0, -1, -5], [0, -1, 5]]]])
+    model, _, keep = _projected(crossing.copy(), np.eye(4), proj, (W, H))
+    assert keep.tolist() == [0, 1, 2]
+    np.testing.assert_array_equal(model[:2], segments)
+    np.testing.assert_allclose(model[2], [[0, -1, -5], [0, -1, -1]], atol=1e-12)
+
+
 @pytest.mark.parametrize(
     "kwargs",
     [

@@ -83,8 +83,11 @@ def _clip(clip: np.ndarray, model: np.ndarray, dist: np.ndarray) -> tuple[np.nda
 
     Clip coordinates are an affine function of model coordinates (the divide comes later),
     so the same parameter moves both endpoint arrays consistently. Returns the kept rows'
-    clip (M, 2, 4) and model (M, 2, 3) endpoints and the indices (M,) of the kept rows.
+    clip (M, 2, 4) and model (M, 2, 3) endpoints and the indices (M,) of the kept rows: the
+    arrays given where no endpoint lies outside (most drawings' every segment).
     """
+    if not (dist < 0.0).any():
+        return clip, model, np.arange(len(clip))
     keep = np.flatnonzero((dist >= 0.0).any(axis=1))
     clip, model, dist = clip[keep].copy(), model[keep].copy(), dist[keep]
     for end in (0, 1):
