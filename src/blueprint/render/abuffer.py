@@ -55,6 +55,11 @@ LIST_UNITS = (5, 6, 7)
 LIST_PARTS = ("nodes", "links", "order", "slim")
 
 
+def _lists_name(size: tuple[int, int]) -> str:
+    """The name the pool holds the lists and targets of a capture at ``size`` under."""
+    return f"abuffer.{size[0]}x{size[1]}"
+
+
 def list_defines(r) -> dict:
     """The defines of a program that reads or writes the lists on renderer ``r`` (abuffer.glsl):
     images on a software rasteriser, storage buffers elsewhere."""
@@ -108,7 +113,7 @@ class ABufferSource:
         # out of room learns more than it allocated) nor lists allocated since
         room = capturer.list_room
         if room is not None:
-            name = f"abuffer.{gb.size[0]}x{gb.size[1]}"
+            name = _lists_name(gb.size)
             room += sum(capturer.pool_held.get(f"{name}.{part}", 0) for part in LIST_PARTS)
         self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
@@ -275,7 +280,7 @@ class ABufferSource:
 
     def _draw(self, gb, layer: int) -> int | None:
         size = gb.size
-        name = f"abuffer.{size[0]}x{size[1]}"
+        name = _lists_name(size)
         calls = 0
         if layer == 0:
             calls = self._capture(gb, name)
@@ -299,12 +304,12 @@ class ABufferSource:
         layers. The second cursor is the lists' heads, which nothing reads once the resolve has
         sorted them, and the next capture clears."""
         self.r.ctx.memory_barrier()
-        self._buffers(f"abuffer.{size[0]}x{size[1]}")
+        self._buffers(_lists_name(size))
         return self._list_images(size)
 
     def _list_images(self, size: tuple[int, int]) -> tuple:
         """The two cursor images and the layer counts of ``lists``, as they are."""
-        name = f"abuffer.{size[0]}x{size[1]}"
+        name = _lists_name(size)
         pool = self.r.pool
         return (
             pool.texture(f"{name}.cursor", size, "r32ui"),
@@ -316,7 +321,7 @@ class ABufferSource:
         """The two float targets the layers' depths alternate in, at ``size``."""
         held = self._flat.get(size)
         if held is None:
-            name = f"abuffer.{size[0]}x{size[1]}"
+            name = _lists_name(size)
             held = self._flat[size] = tuple(
                 self.r.pool.texture(f"{name}.depth{i}", size, "r32f") for i in (0, 1)
             )
