@@ -123,16 +123,15 @@ def cumsum(values: np.ndarray, dtype, start: int = 0, min_block: int | None = No
     before it (integers: the same as one running sum)."""
     out = np.empty(len(values), dtype)
     blocks = cuts(len(values), min_block)
-    run(lambda lo, hi: np.cumsum(values[lo:hi], dtype=dtype, out=out[lo:hi]), len(values), min_block)
+    each(lambda block: np.cumsum(values[slice(*block)], dtype=dtype, out=out[slice(*block)]), blocks)
     ends = np.array([out[hi - 1] for _, hi in blocks if hi > 0], dtype)
     raised = start + np.r_[0, np.cumsum(ends[:-1], dtype=dtype)].astype(dtype)
 
-    def add(lo: int, hi: int) -> None:
-        k = blocks.index((lo, hi))
+    def add(k: int) -> None:
         if raised[k]:
-            out[lo:hi] += raised[k]
+            out[slice(*blocks[k])] += raised[k]
 
-    run(add, len(values), min_block)
+    each(add, range(len(blocks)))
     return out
 
 
@@ -166,11 +165,11 @@ def rises(values: np.ndarray, min_block: int | None = None) -> np.ndarray:
     if len(values) == 0:
         return out
     blocks = cuts(len(values), min_block)
-    highest = run(lambda lo, hi: np.maximum.accumulate(values[lo:hi]), len(values), min_block)
+    highest = each(lambda block: np.maximum.accumulate(values[slice(*block)]), blocks)
     before = [None] + list(np.maximum.accumulate([block[-1] for block in highest[:-1]]))
 
-    def compare(lo: int, hi: int) -> None:
-        k = blocks.index((lo, hi))
+    def compare(k: int) -> None:
+        lo, hi = blocks[k]
         block, high = values[lo:hi], highest[k]
         np.greater(block[1:], high[:-1], out=out[lo + 1 : hi])
         if before[k] is None:
@@ -179,7 +178,7 @@ def rises(values: np.ndarray, min_block: int | None = None) -> np.ndarray:
             out[lo] = block[0] > before[k]
             out[lo + 1 : hi] &= block[1:] > before[k]
 
-    run(compare, len(values), min_block)
+    each(compare, range(len(blocks)))
     return out
 
 
