@@ -17,6 +17,7 @@ from blueprint.compose.glyphs import Glyphs
 from blueprint.compose.linestyle import load_raster_style, load_vector_style
 from blueprint.compose.style import STYLES
 from blueprint.errors import InputError
+from blueprint.scene.model import Model
 
 LINES = ROOT / "examples" / "lines.toml"
 MARKS = ROOT / "examples" / "marks.toml"
@@ -194,6 +195,45 @@ def test_an_entry_point_binds_every_call_its_signature_takes():
         _entry(view="top")
     with pytest.raises(TypeError, match="too many positional arguments"):
         _entry("m", "n")
+
+
+def test_a_repeated_call_checks_its_options_once():
+    """A stream's frames ask for the same options: the value made for the last call is passed
+    again where every value given is the same and hashable, and no file is read."""
+    _, first, _ = _entry("m", size=(3, 4), view="top")
+    _, again, _ = _entry("m", size=(3, 4), view="top")
+    assert again is first
+    _, other, _ = _entry("m", size=(3, 4), view="front")
+    assert other is not first and other.view == "front"
+    size = [3, 4]  # a list may change between calls: made again
+    _, listed, _ = _entry("m", size=size)
+    size[0] = 5
+    _, changed, _ = _entry("m", size=size)
+    assert (listed.size, changed.size) == ((3, 4), (5, 4))
+
+
+def test_a_style_file_is_read_again_by_each_call(tmp_path):
+    @takes_options("style")
+    def entry(options):
+        return options
+
+    path = tmp_path / "lines.toml"
+    path.write_text("highlight_width = 2\n")
+    assert entry(style=str(path)).vector_style.highlight_width == 2
+    path.write_text("highlight_width = 3\n")
+    assert entry(style=str(path)).vector_style.highlight_width == 3
+
+
+def test_frame_keywords_are_each_models_own():
+    gearbox = examples.gearbox()
+    options = DrawOptions(highlight=gearbox.part_names[0])
+    first = options.frame_keywords(gearbox)
+    first["highlight"] = None  # the caller's copy
+    assert options.frame_keywords(gearbox)["highlight"][0]
+    two = Model(
+        np.eye(3), np.array([[0, 1, 2], [0, 2, 1]]), np.array([0, 1]), ("other", gearbox.part_names[0])
+    )
+    assert options.frame_keywords(two)["highlight"].tolist() == [False, True]
 
 
 def test_zero_layers_are_all_where_an_entry_point_says_so():

@@ -16,6 +16,7 @@ import inspect
 import math
 import os
 import sys
+import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
@@ -385,13 +386,17 @@ class DrawOptions:
 
     def frame_keywords(self, model: Model) -> dict:
         """``blueprint.pipeline.blueprint.render_blueprint``'s drawing options: the style
-        resolved and the highlighted and shaded parts of ``model`` as flags, (P,) bool."""
+        resolved and the highlighted and shaded parts of ``model`` as flags, (P,) bool; those
+        of the last model asked for are kept, for a stream's frames (not the model itself)."""
+        held = self.__dict__.get("_keywords")
+        if held is not None and held[0]() is model:
+            return dict(held[1])
         from blueprint.scene.parts import designated_parts
 
         def flags(spec):
             return None if spec is None else designated_parts(model, spec)
 
-        return dict(
+        keywords = dict(
             size=self.size,
             view=self.view,
             style=self.raster_style,
@@ -408,6 +413,8 @@ class DrawOptions:
             shade=flags(self.shade),
             shade_opacity=self.shade_opacity,
         )
+        object.__setattr__(self, "_keywords", (weakref.ref(model), keywords))
+        return dict(keywords)
 
     def fit_camera(self, model: Model, size: tuple[int, int] | None = None, margin: float = 0.05) -> Camera:
         """``camera``, or the camera of ``view``, ``azimuth``, ``elevation``, ``fov`` and
@@ -452,6 +459,42 @@ def options_but(*left_out: str) -> tuple[str, ...]:
     return tuple(name for name in option_fields() if name not in left_out)
 
 
+class _LastOptions:
+    """The ``DrawOptions`` a function's last call made, with what made it: a stream of frames
+    asks for the same options every frame, and checking them again costs each frame more than
+    its compositing. Only for values that are hashable, so taken to be unchanging, and that read
+    no file (a style or glyph file may have changed since)."""
+
+    __slots__ = ("key", "options")
+
+    def __init__(self) -> None:
+        self.key, self.options = None, None
+
+    @staticmethod
+    def _key(base, values: dict):
+        if values.get("glyphs") is not None:
+            return None
+        style = values.get("style")
+        named = isinstance(style, Style) or (isinstance(style, str) and style in STYLES)
+        if style is not None and not named:
+            return None
+        key = (id(base), base, *values.items())
+        try:
+            hash(key)
+        except TypeError:
+            return None
+        return key
+
+    def get(self, base, values: dict):
+        key = self.key
+        if key is None or len(key) != len(values) + 2 or key[0] != id(base) or key[1] is not base:
+            return None
+        return self.options if key == self._key(base, values) else None
+
+    def keep(self, base, values: dict, options) -> None:
+        self.key, self.options = self._key(base, values), options
+
+
 def takes_options(
     *names: str, prepare: Callable[[dict], dict] | None = None, **defaults
 ) -> Callable[[Callable], Callable]:
@@ -486,6 +529,7 @@ def takes_options(
         public = inspect.signature(function).replace(parameters=[*params[:at], given, *option_params, *own])
 
         keywords = frozenset(["options", *chosen, *(p.name for p in own)])
+        last = _LastOptions()
 
         @functools.wraps(function)
         def wrapper(*args, **kwargs):
@@ -502,7 +546,10 @@ def takes_options(
                 values = {**{n: defaults[n] for n in defaults if n not in values}, **values}
             if prepare is not None:
                 values = prepare(values)
-            options = DrawOptions(**values) if base is None else replace(base, **values)
+            options = last.get(base, values)
+            if options is None:
+                options = DrawOptions(**values) if base is None else replace(base, **values)
+                last.keep(base, values, options)
             return function(*positional, options, **arguments)
 
         wrapper.__signature__ = public
