@@ -216,7 +216,8 @@ class Device:
 
 def check_size(size: tuple[int, int], supersample: int, max_texture: int) -> tuple[int, int]:
     try:
-        w, h = (int(v) for v in size)
+        w, h = size
+        w, h = int(w), int(h)
     except (TypeError, ValueError):
         raise InputError(f"size must be two integers W H, got {size!r}") from None
     if w < 1 or h < 1:

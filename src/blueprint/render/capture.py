@@ -176,7 +176,7 @@ def layer_loop(
     query (``Capture.samples``).
     """
     samples = samples or (lambda layer, query: query.samples)
-    limits = [r.limit() for r in rules if r.limit() is not None]
+    limits = [limit for limit in (r.limit() for r in rules) if limit is not None]
     limit = min(limits) if limits else HARD_MAX_LAYERS
     every_layer = on_counted is not None or any(r.every_layer for r in rules)
     step = 1 if every_layer or eager else (limit if limits else CHUNK)

@@ -132,8 +132,17 @@ def depth_tolerance(camera: Camera, bounds: np.ndarray) -> float:
     float
         In the model's units, eye depth (along the view axis).
     """
-    # every pass of every frame asks: kept by the camera's value and the bounds' bytes
-    return _tolerance(camera, np.asarray(bounds, np.float64).tobytes())
+    # every pass of every frame asks: kept by the camera's value and the bounds' bytes, and
+    # the last answer by the very objects asked with (a mesh's bounds do not change)
+    last = _last_tolerance
+    if last[0] is camera and last[1] is bounds:
+        return last[2]
+    tolerance = _tolerance(camera, np.asarray(bounds, np.float64).tobytes())
+    last[:] = camera, bounds, tolerance
+    return tolerance
+
+
+_last_tolerance: list = [None, None, 0.0]
 
 
 @functools.lru_cache(maxsize=64)
