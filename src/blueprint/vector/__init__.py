@@ -6,19 +6,42 @@ the GPU: how many surfaces lie in front of it. Every line keeps its part, its ki
 model's edges it was drawn from (``Lines``, in the numbering of ``edge_numbers``).
 """
 
-from .drawing import (
-    FORMATS,
-    UNITS_MM,
-    Page,
-    VectorDrawing,
-    draw_vector,
-    draw_vector_sheet,
-    parse_scale,
-    save_drawing,
-)
-from .lines import edge_numbers, edge_segments
-from .linework import KINDS, Lines
-from .style import KindStyle, LineStyle, VectorStyle, load_vector_style, vector_style
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from blueprint.lazy import lazy_names
+
+# each name loads with its module on first use: a picture's smooth contours
+# (``vector.contour_ink``) need the lines and their occlusion, not the drawings and their files
+_EXPORTS = {
+    **dict.fromkeys(
+        ("FORMATS", "UNITS_MM", "Page", "VectorDrawing", "draw_vector", "draw_vector_sheet", "parse_scale",
+         "save_drawing"),
+        "blueprint.vector.drawing",
+    ),
+    **dict.fromkeys(("edge_numbers", "edge_segments"), "blueprint.vector.lines"),
+    **dict.fromkeys(("KINDS", "Lines"), "blueprint.vector.linework"),
+    **dict.fromkeys(
+        ("KindStyle", "LineStyle", "VectorStyle", "load_vector_style", "vector_style"),
+        "blueprint.vector.style",
+    ),
+}  # fmt: skip
+
+if TYPE_CHECKING:
+    from .drawing import (
+        FORMATS,
+        UNITS_MM,
+        Page,
+        VectorDrawing,
+        draw_vector,
+        draw_vector_sheet,
+        parse_scale,
+        save_drawing,
+    )
+    from .lines import edge_numbers, edge_segments
+    from .linework import KINDS, Lines
+    from .style import KindStyle, LineStyle, VectorStyle, load_vector_style, vector_style
 
 __all__ = [
     "FORMATS",
@@ -39,3 +62,5 @@ __all__ = [
     "save_drawing",
     "vector_style",
 ]
+
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS, globals())

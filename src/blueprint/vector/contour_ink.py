@@ -16,10 +16,7 @@ from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
-from .drawing import Occlusion, ViewFrame
 from .lines import join_polylines, smooth_contour_segments
-from .occlusion import draw_faces, face_planes, sample_polylines, split_by_level
-from .occlusion.gpu import MAX_LAYERS
 
 __all__ = ["ContourInk", "contour_ink"]
 
@@ -74,13 +71,18 @@ def contour_ink(
     face is smooth."""
     if model.instances is not None:
         return None
-    if max_layers is None or max_layers > MAX_LAYERS:
-        max_layers = MAX_LAYERS
     view = np.asarray(camera.view_matrix(), np.float64)
     projection = np.asarray(camera.projection_matrix(), np.float64)
     segments, contoured = smooth_contour_segments(model, view, projection, size, crease_angle)
     if not contoured.any():
         return None  # no face's outline to draw otherwise: the picture as it was
+    # the levels' machinery loads with the first picture that has smooth contours to draw
+    from .drawing import Occlusion, ViewFrame
+    from .occlusion import draw_faces, face_planes, sample_polylines, split_by_level
+    from .occlusion.gpu import MAX_LAYERS
+
+    if max_layers is None or max_layers > MAX_LAYERS:
+        max_layers = MAX_LAYERS
     if len(segments) == 0:
         none = np.zeros(0, np.int32)
         return ContourInk(np.zeros((0, 2)), np.zeros(1, np.int64), none, contoured, size, max_layers)
