@@ -160,6 +160,10 @@ PICTURE_HEAVY += [
 ]
 PICTURE_HEAVY += ["blueprint.scene.sheet", "blueprint.scene.dimension", "blueprint.compose.sheet"]
 PICTURE_HEAVY += ["blueprint.scene.instances", "blueprint.scene.instanced_parts"]
+PICTURE_HEAVY += ["blueprint.vector.drawing", "blueprint.vector.occlusion"]
+# a picture looks for smooth surfaces to outline by their contour lines (``vector.contour_ink``):
+# the lines' modules, not the drawings' nor the occlusion's where it finds none
+CONTOUR_CHECK = {"blueprint.vector", "blueprint.silhouette"}
 # what a vector drawing does without (benchmarks/vector.py, whole processes)
 VECTOR_HEAVY = ["scipy", "networkx", "trimesh", "PIL", "dask", "tomllib", "blueprint.pipeline.executor"]
 VECTOR_HEAVY += ["blueprint.ops", "blueprint.gpu_silhouettes", "blueprint.compose.glyphs.values"]
@@ -184,11 +188,13 @@ def test_a_binary_stl_picture_loads_only_what_it_draws_with(tmp_path):
     stl = tmp_path / "part.stl"
     trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.4, sections=24).export(stl)
     code = f"import blueprint\nblueprint.draw({str(stl)!r}, size=(64, 64)).save({str(tmp_path / 'p.png')!r})"
-    assert _loaded_after(code) == {"moderngl"}
+    assert _loaded_after(code) == {"moderngl", *CONTOUR_CHECK}
+    plain = code.replace("size=(64, 64)", "size=(64, 64), smooth_contours=False")
+    assert _loaded_after(plain) == {"moderngl"}
     argv = ["render", str(stl), "-o", str(tmp_path / "c.png"), "--size", "64", "64"]
     command = f"from blueprint.cli import main\nmain({argv!r})"
     # click's option parser imports difflib itself
-    assert _loaded_after(command) - {"difflib"} == {"moderngl", "click"}
+    assert _loaded_after(command) - {"difflib"} == {"moderngl", "click", *CONTOUR_CHECK}
     np.testing.assert_array_equal(
         np.asarray(Image.open(tmp_path / "c.png")), np.asarray(Image.open(tmp_path / "p.png"))
     )

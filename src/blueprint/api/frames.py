@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint.api.options import PLAN, DrawOptions, PartSpec, options_but, takes_options
-from blueprint.api.picture import blueprint_frame
+from blueprint.api.picture import blueprint_frame, smooth_contours_wanted
 from blueprint.api.renderer import Renderer
 from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
@@ -89,6 +89,7 @@ def render_frame(
         grid=None,
         highlight=_parts(model, options.highlight),
         shade=_parts(model, options.shade),
+        smooth_contours=smooth_contours_wanted(model, options),
     )
     section = _section_of(model, options)
     if options.view == PLAN and options.camera is None:

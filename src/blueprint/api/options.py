@@ -62,7 +62,8 @@ def _option(
     choices: tuple[str, ...] | None = None,
 ) -> Any:
     """A field of ``DrawOptions`` with what the command line makes of it: ``help``, the flag
-    (``--`` and the name, dashed), the click type ``kind`` (default: the default's type) and
+    (``--`` and the name, dashed), the click type ``kind`` (default: the default's type;
+    ``"switch"``: a flag and its ``--no-`` form, neither given leaving the default None) and
     ``metavar``, ``nargs`` and ``choices``; ``cli=False`` keeps it out of the command line."""
     assert group in GROUPS, group
     metadata = {"group": group, "help": help, "cli": cli, "kind": kind, "metavar": metavar}
@@ -122,12 +123,16 @@ class DrawOptions:
         Draw the boundaries between parts.
     id_silhouettes : bool
         Also draw triangle-ID silhouettes in every layer's edge map.
-    smooth_contours : bool
+    smooth_contours : bool, optional
         In pictures, draw the outline of smooth surfaces as lines along the contour of their
         interpolated normals (``blueprint.vector.contour_ink``), each in the layer of its
         occlusion level, instead of the edges of the mesh's own outline there: vector drawings
         always do. A scan's outline then runs smooth, without the specks of its noise's folds,
-        for a pass over the mesh on the CPU and one more capture a view.
+        for a pass over the mesh on the CPU and one more capture a view. None (the default):
+        a picture (``render``, ``draw``, ``blueprint render``) draws them where the mesh's
+        triangles are large enough on it for their edges to zigzag
+        (``blueprint.api.picture.smooth_contours_wanted``); a renderer's frames
+        (``Renderer.render``, streams) draw none.
     highlight : str, int, sequence, Model or (P,) bool, optional
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.
@@ -225,11 +230,13 @@ class DrawOptions:
     depth_threshold: float = _option(4.0, "style", "Pixel footprints.", cli=False)
     part_edges: bool = _option(True, "style", "Draw the boundaries between parts.", cli=False)
     id_silhouettes: bool = _option(False, "style", "Add triangle-ID silhouettes to every layer's edges.")
-    smooth_contours: bool = _option(
-        False,
+    smooth_contours: bool | None = _option(
+        None,
         "style",
         "Pictures: outline smooth surfaces by the contour of their interpolated normals, as vector "
-        "drawings do (scans: no zigzag, fewer specks; a CPU pass a view).",
+        "drawings do (scans: no zigzag, fewer specks; a CPU pass a view). Default: where the "
+        "mesh's triangles are large enough on the picture to zigzag.",
+        kind="switch",
     )
     # -- masking
     highlight: PartSpec | None = _option(

@@ -8,11 +8,28 @@ from blueprint.render.renderer import Frame, LayerRenderer
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
+# A picture outlines smooth surfaces by their contour lines where the mesh has at most this many
+# triangles a pixel of the picture: there its triangles' edges are long enough on it to draw the
+# outline as a zigzag, and the CPU pass that finds the lines costs less than the picture.
+SMOOTH_CONTOUR_DENSITY = 0.25
+
+
+def smooth_contours_wanted(model: Model, options: DrawOptions) -> bool:
+    """Whether a picture of ``model`` with ``options`` draws smooth contour lines: as
+    ``smooth_contours`` says, or where it is None, where ``model`` is one mesh (a model kept as
+    instances draws its meshes' own outlines) of at most ``SMOOTH_CONTOUR_DENSITY`` triangles
+    a pixel of the picture."""
+    if options.smooth_contours is not None:
+        return options.smooth_contours
+    w, h = options.size or (1024, 1024)
+    return model.instances is None and model.triangle_count <= SMOOTH_CONTOUR_DENSITY * w * h
+
 
 def blueprint_frame(renderer, model: Model, camera: Camera | None, options: DrawOptions, **extra) -> Frame:
     """The blueprint preset's frame of ``model`` from ``camera`` (None: fitted from the view)
     with ``options``, checked already (``blueprint.pipeline.blueprint.render_blueprint``, which
-    takes ``extra`` too), with the smooth contour lines ``smooth_contours`` asks for."""
+    takes ``extra`` too), with the smooth contour lines ``smooth_contours`` asks for (None, a
+    renderer's frame: none)."""
     # the pipeline is for pictures: vector drawings and depth layers start without it
     from blueprint.pipeline.blueprint import render_blueprint
 

@@ -115,6 +115,11 @@ def drawing_options(*names: str, helps: dict[str, str] | None = None, **defaults
         if isinstance(f.default, bool):
             made.append(click.option(flag(name), is_flag=True, default=default, help=meta["help"]))
             continue
+        if meta["kind"] == "switch":
+            # on, off, or the API's own choice where neither is given
+            on_off = f"{flag(name)}/--no-{flag(name)[2:]}"
+            made.append(click.option(on_off, default=default, help=meta["help"]))
+            continue
         kind = meta["kind"] or (str if f.default is None else type(f.default))
         if kind == "path":
             kind = click.Path(path_type=Path)
