@@ -9,9 +9,11 @@ from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
 # A picture outlines smooth surfaces by their contour lines where the mesh has at most this many
-# triangles a pixel of the picture: there its triangles' edges are long enough on it to draw the
-# outline as a zigzag, and the CPU pass that finds the lines costs less than the picture.
-SMOOTH_CONTOUR_DENSITY = 0.25
+# triangles a pixel of the picture: a fitted model covers about half of it, so there its
+# triangles are a pixel or more and their edges draw the outline as a zigzag; denser meshes'
+# triangles lie under a pixel, where the CPU pass that finds the lines would cost more than the
+# picture.
+SMOOTH_CONTOUR_DENSITY = 0.5
 
 
 def smooth_contours_wanted(model: Model, options: DrawOptions) -> bool:
