@@ -132,7 +132,7 @@ class DrawOptions:
         a picture (``render``, ``draw``, ``blueprint render``) draws them where the mesh's
         triangles are large enough on it for their edges to zigzag
         (``blueprint.api.picture.smooth_contours_wanted``); a renderer's frames
-        (``Renderer.render``, streams) draw none.
+        (``Renderer.render``, streams) and the viewer draw none.
     highlight : str, int, sequence, Model or (P,) bool, optional
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.

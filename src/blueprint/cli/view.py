@@ -22,7 +22,11 @@ DEFAULT_SIZE = (800, 600)
 @drawing_options(
     *CAMERA_OPTIONS, "style", "grid", "max_layers", "min_fraction", "crease_angle", "line_width",
     "supersample", "smooth_contours", size=DEFAULT_SIZE, max_layers=5,
-    helps={"style": f"One of {', '.join(STYLE_NAMES)}."},
+    helps={
+        "style": f"One of {', '.join(STYLE_NAMES)}.",
+        "smooth_contours": "The drawing shown once the view rests: outline smooth surfaces by the "
+        "contour of their interpolated normals (a CPU pass each time the view rests; off by default).",
+    },
 )  # fmt: skip
 @click.option(
     "--moving-fps",

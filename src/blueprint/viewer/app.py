@@ -7,7 +7,6 @@ import os
 from pathlib import Path
 
 from blueprint.api.options import DrawOptions
-from blueprint.api.picture import smooth_contours_wanted
 from blueprint.compose.style import STYLES
 from blueprint.viewer.loop import Viewer
 from blueprint.viewer.pacing import MOVING_FPS
@@ -43,18 +42,18 @@ def run_viewer(
     options = options or DrawOptions(size=(800, 600), max_layers=5)
     camera = (options.view, options.azimuth, options.elevation, options.fov, options.ortho)
     state = ViewState.start(styles, options.style, *camera, options.max_layers)
-    model = load_model(model_path, up=options.up, include=options.include, exclude=options.exclude)
     frames_options = Options(
         grid=options.grid,
         min_fraction=options.min_fraction,
         crease_angle=options.crease_angle,
         line_width=options.line_width,
         supersample=options.supersample,
-        # the full drawing once the view rests is a picture: the lines where a picture draws them
-        smooth_contours=smooth_contours_wanted(model, options),
+        # only where asked: the CPU pass a view would hold the window each time the view rests
+        smooth_contours=bool(options.smooth_contours),
         interactive_scale=interactive_scale,
         moving_fps=moving_fps,
     )
+    model = load_model(model_path, up=options.up, include=options.include, exclude=options.exclude)
     viewer = Viewer(
         model,
         Path(model_path),
