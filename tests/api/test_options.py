@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import sys
+import threading
 
 import numpy as np
 import pytest
@@ -210,6 +212,29 @@ def test_a_repeated_call_checks_its_options_once():
     size[0] = 5
     _, changed, _ = _entry("m", size=size)
     assert (listed.size, changed.size) == ((3, 4), (5, 4))
+
+
+def test_threads_each_get_the_options_they_asked_for():
+    """The last call's options are kept as one value: a thread never gets another's."""
+    wrong = []
+
+    def calls(view):
+        for _ in range(3000):
+            _, options, _ = _entry("m", size=(3, 4), view=view)
+            if options.view != view:
+                wrong.append(options.view)
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        threads = [threading.Thread(target=calls, args=(view,)) for view in ("top", "front", "iso")]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert not wrong
 
 
 def test_a_style_file_is_read_again_by_each_call(tmp_path):

@@ -470,12 +470,13 @@ class _LastOptions:
     """The ``DrawOptions`` a function's last call made, with what made it: a stream of frames
     asks for the same options every frame, and checking them again costs each frame more than
     its compositing. Only for values that are hashable, so taken to be unchanging, and that read
-    no file (a style or glyph file may have changed since)."""
+    no file (a style or glyph file may have changed since). The pair is one value, read and set
+    whole: threads of a batch call the same function."""
 
-    __slots__ = ("key", "options")
+    __slots__ = ("held",)
 
     def __init__(self) -> None:
-        self.key, self.options = None, None
+        self.held: tuple | None = None
 
     @staticmethod
     def _key(base, values: dict):
@@ -485,7 +486,7 @@ class _LastOptions:
         named = isinstance(style, Style) or (isinstance(style, str) and style in STYLES)
         if style is not None and not named:
             return None
-        key = (id(base), base, *values.items())
+        key = (base, *values.items())
         try:
             hash(key)
         except TypeError:
@@ -493,13 +494,14 @@ class _LastOptions:
         return key
 
     def get(self, base, values: dict):
-        key = self.key
-        if key is None or len(key) != len(values) + 2 or key[0] != id(base) or key[1] is not base:
+        held = self.held
+        if held is None or len(held[0]) != len(values) + 1 or held[0][0] is not base:
             return None
-        return self.options if key == self._key(base, values) else None
+        return held[1] if held[0] == self._key(base, values) else None
 
     def keep(self, base, values: dict, options) -> None:
-        self.key, self.options = self._key(base, values), options
+        key = self._key(base, values)
+        self.held = None if key is None else (key, options)
 
 
 def takes_options(

@@ -133,16 +133,17 @@ def depth_tolerance(camera: Camera, bounds: np.ndarray) -> float:
         In the model's units, eye depth (along the view axis).
     """
     # every pass of every frame asks: kept by the camera's value and the bounds' bytes, and
-    # the last answer by the very objects asked with (a mesh's bounds do not change)
-    last = _last_tolerance
+    # the last answer by the very objects asked with (a mesh's bounds do not change), read and
+    # set as one tuple (threads of a batch ask too)
+    last = _last_tolerance[0]
     if last[0] is camera and last[1] is bounds:
         return last[2]
     tolerance = _tolerance(camera, np.asarray(bounds, np.float64).tobytes())
-    last[:] = camera, bounds, tolerance
+    _last_tolerance[0] = (camera, bounds, tolerance)
     return tolerance
 
 
-_last_tolerance: list = [None, None, 0.0]
+_last_tolerance: list[tuple] = [(None, None, 0.0)]
 
 
 @functools.lru_cache(maxsize=64)
