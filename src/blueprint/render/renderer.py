@@ -154,8 +154,9 @@ class Capturer:
 
     # -- models --------------------------------------------------------------------------------
     def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh:
-        """``model`` on the GPU, uploaded once per crease angle (None: no normals)."""
-        key = (id(model), None if crease_angle is None else float(crease_angle))
+        """``model`` on the GPU, uploaded once per crease angle (None: no normals, for passes
+        that read none: a copy uploaded with normals serves them as well)."""
+        key = self._held_key(model, crease_angle)
         held = self._meshes.get(key)
         faces = self._chunk_of(model)
         if held is not None and held[0] is model and faces is not None:
@@ -172,6 +173,15 @@ class Capturer:
                 mesh = ChunkedMesh(self.device.ctx, model, crease_angle, faces, pieces=software)
             held = self._meshes[key] = (model, mesh)
         return held[1]
+
+    def _held_key(self, model: Model, crease_angle: float | None) -> tuple:
+        """The key of ``model``'s upload at ``crease_angle``; for None (no normals read), that
+        of a copy already uploaded with normals where there is one: its faces and corners are
+        the model's, in the model's order, so its depths and face IDs are the same."""
+        if crease_angle is not None:
+            return id(model), float(crease_angle)
+        with_normals = (k for k, (m, _) in self._meshes.items() if k[0] == id(model) and m is model)
+        return next(with_normals, (id(model), None))
 
     def chunks(self, model: Model) -> int:
         """The chunks ``model``'s mesh is drawn in (the most of its uploads), 0 where it was
@@ -225,7 +235,7 @@ class Capturer:
             and all(size <= last[4].get(kind, -1) for kind, size in extra.items())
         ):
             return
-        held = self._meshes.get((id(model), crease))
+        held = self._meshes.get(self._held_key(model, crease))
         whole = held is not None and held[0] is model and held[1].chunk_faces is None
         triangles, instances = (0, 0) if whole else uploaded(model)
         abuffer = self.table.row("A-buffer")
