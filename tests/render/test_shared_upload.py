@@ -28,3 +28,24 @@ def test_an_id_peel_after_a_picture_draws_with_its_upload(renderer):
     np.testing.assert_array_equal(alone.depth, after.depth)
     np.testing.assert_array_equal(alone.triangle, after.triangle)
     renderer.forget(model)
+
+
+def test_an_upload_remade_for_an_id_pass_keeps_to_its_own_crease(renderer):
+    """Where the copy with normals must be uploaded again (in smaller chunks), the pass without
+    normals uploads its own: a picture after it still draws with normals."""
+    model = examples.gearbox()
+    chunk = model.triangle_count // 3
+    renderer.forget(model)
+    try:
+        renderer.chunk_faces = chunk
+        expected = blueprint.render(model, size=SIZE, renderer=renderer)
+        renderer.forget(model)
+        renderer.chunk_faces = None
+        blueprint.render(model, size=SIZE, renderer=renderer)  # uploaded whole, with normals
+        renderer.chunk_faces = chunk
+        blueprint.peel(model, size=SIZE, normals=False, renderer=renderer)  # no longer fits whole
+        after = blueprint.render(model, size=SIZE, renderer=renderer)
+    finally:
+        renderer.chunk_faces = None
+        renderer.forget(model)
+    np.testing.assert_array_equal(after, expected)

@@ -156,14 +156,14 @@ class Capturer:
     def mesh(self, model: Model, crease_angle: float | None) -> GpuMesh:
         """``model`` on the GPU, uploaded once per crease angle (None: no normals, for passes
         that read none: a copy uploaded with normals serves them as well)."""
-        key = self._held_key(model, crease_angle)
-        held = self._meshes.get(key)
+        found = self._held_key(model, crease_angle)
+        held = self._meshes.get(found)
         faces = self._chunk_of(model)
         if held is not None and held[0] is model and faces is not None:
             uploaded_faces = held[1].chunk_faces
             # uploaded whole, or in chunks bigger than its frame now leaves room for
             if uploaded_faces is None or uploaded_faces > faces:
-                self._meshes.pop(key)[1].release()
+                self._meshes.pop(found)[1].release()
                 held = None
         if held is None or held[0] is not model:
             software = self.device.software
@@ -171,6 +171,8 @@ class Capturer:
                 mesh = GpuMesh(self.device.ctx, model, crease_angle, pieces=software)
             else:
                 mesh = ChunkedMesh(self.device.ctx, model, crease_angle, faces, pieces=software)
+            # kept under its own crease angle, whichever copy it stands in for
+            key = (id(model), None if crease_angle is None else float(crease_angle))
             held = self._meshes[key] = (model, mesh)
         return held[1]
 
