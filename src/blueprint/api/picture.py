@@ -17,13 +17,13 @@ SMOOTH_CONTOUR_DENSITY = 0.5
 
 
 def smooth_contours_wanted(model: Model, options: DrawOptions) -> bool:
-    """Whether a picture of ``model`` with ``options`` draws smooth contour lines: as
-    ``smooth_contours`` says, or where it is None, where ``model`` is one mesh (a model kept as
-    instances draws its meshes' own outlines) of at most ``SMOOTH_CONTOUR_DENSITY`` triangles
-    a pixel of the picture."""
+    """Whether a picture of ``model`` with ``options`` (its size given) draws smooth contour
+    lines: as ``smooth_contours`` says, or where it is None, where ``model`` is one mesh (a
+    model kept as instances draws its meshes' own outlines) of at most
+    ``SMOOTH_CONTOUR_DENSITY`` triangles a pixel of the picture."""
     if options.smooth_contours is not None:
         return options.smooth_contours
-    w, h = options.size or (1024, 1024)
+    w, h = options.size
     return model.instances is None and model.triangle_count <= SMOOTH_CONTOUR_DENSITY * w * h
 
 
