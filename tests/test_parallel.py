@@ -111,6 +111,11 @@ def test_running_sums_maxima_and_found_positions_equal_numpys(n, threads, monkey
     np.testing.assert_array_equal(
         parallel.flatnonzero(flags, negated=True, min_block=10), np.flatnonzero(~flags)
     )
+    at = rng.integers(0, max(n, 1), 3 * n)  # repeated places, as a mesh's corners repeat vertices
+    marked, expected = np.zeros(n, bool), np.zeros(n, bool)
+    parallel.mark(marked, at, min_block=10)
+    expected[at] = True
+    np.testing.assert_array_equal(marked, expected)
 
 
 @pytest.mark.parametrize("dtype", [np.int64, np.uint64, np.int32, np.uint8])
