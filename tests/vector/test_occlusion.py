@@ -2,6 +2,7 @@
 
 import math
 import xml.etree.ElementTree as ET
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -191,17 +192,22 @@ def test_layers_gathered_at_the_probed_pixels_give_the_same_drawing(renderer):
 
 
 @pytest.mark.parametrize("max_layers", [None, 3, 8])
-@pytest.mark.parametrize("kbuffer", [True, False], ids=["k-buffer", "a-pass-a-layer"])
-def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, kbuffer, max_layers):
+@pytest.mark.parametrize("way", ["k-buffer", "A-buffer", "peel"])
+def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, way, max_layers):
     """Up to eight layers come from one k-buffer pass where the driver has one, read as the
-    pass leaves them; the same faces as the layers peeled one at a time."""
+    pass leaves them, and every layer from an A-buffer's lists read at the pixels in place;
+    the same faces as the layers peeled one at a time."""
     import blueprint
     from blueprint import examples
 
     default = capture_table(renderer)
-    row = default.row("k-buffer")
-    if kbuffer and (row is None or row.interlock):
+    row = default.row(way)
+    if way == "k-buffer" and (row is None or row.interlock):
         pytest.skip("the faces-only k-buffer needs framebuffer fetch, which this driver lacks")
+    if way == "A-buffer":
+        if row is None:
+            pytest.skip("the A-buffer needs OpenGL 4.3")
+        row = replace(row, min_layers=1)
     model = examples.gearbox()
     camera = Camera.fit(model.positions, "front", aspect=4 / 3)
     size = (96, 72)
@@ -212,7 +218,7 @@ def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, kbuffer, max_
         model, camera=camera, size=size, renderer=renderer, normals=False, max_layers=max_layers
     )
     pixels = np.random.default_rng(1).choice(size[0] * size[1], 500, replace=False)
-    if kbuffer:
+    if way != "peel":
         renderer.capture_table = CaptureTable((row, default.row("peel")), default.exact_depth)
     try:
         faces = renderer.triangles_at(model, camera, pixels, size=size, max_layers=max_layers)

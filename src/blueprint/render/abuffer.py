@@ -28,6 +28,12 @@ ABUFFER_FRAG = "blueprint.render:glsl/abuffer.frag"
 CLEAR_COMP = "blueprint.render:glsl/abuffer_clear.comp"
 RESOLVE_COMP = "blueprint.render:glsl/abuffer_resolve.comp"
 UNPACK_COMP = "blueprint.render:glsl/abuffer_unpack.comp"
+FACES_COMP = "blueprint.render:glsl/abuffer_faces.comp"
+# the faces ``faces_at`` reads back a dispatch at most (bytes), the invocations of its groups
+# (abuffer_faces.comp) and its groups along x
+FACES_BYTES = 1 << 26
+FACES_GROUP = 64
+MAX_GROUPS = 65535
 # the histogram of layers a pixel has (abuffer.glsl)
 MOST_LAYERS = 256
 # bytes a fragment holds: its surface (16), its link in the pixel's list, its link in the
@@ -274,6 +280,38 @@ class ABufferSource:
         cursors[batch % 2].bind_to_image(2, read=True, write=False)
         cursors[(batch + 1) % 2].bind_to_image(3, read=False, write=True)
         layer_count.bind_to_image(4, read=True, write=False)
+
+    def faces_at(self, pixels: np.ndarray, layers: int) -> np.ndarray:
+        """(layers, N) int32: the face of layers 0 to ``layers`` - 1 at ``pixels`` (N flat
+        indices ``y * width + x``, OpenGL rows), -1 past a pixel's last layer: read from the
+        sorted lists in place, with nothing unpacked, a block of pixels a dispatch
+        (``FACES_BYTES`` of faces at most) and each block's faces read back once."""
+        size = self.gb.size
+        pixels = np.ascontiguousarray(pixels, np.uint32)
+        out = np.empty((layers, len(pixels)), np.int32)
+        if layers == 0 or len(pixels) == 0:
+            return out
+        ctx = self.r.ctx
+        prog = self.r.compute(FACES_COMP, self.defines)
+        cursor = self.lists(size)[0]
+        cursor.bind_to_image(1, read=True, write=False)
+        block = max(1, FACES_BYTES // (4 * layers))
+        for start in range(0, len(pixels), block):
+            chunk = pixels[start : start + block]
+            wanted = self.r.pool.buffer("abuffer.faces_at.pixels", chunk.nbytes)
+            wanted.write(chunk.tobytes())
+            wanted.bind_to_storage_buffer(5)
+            found = self.r.pool.buffer("abuffer.faces_at.faces", 4 * layers * len(chunk))
+            found.bind_to_storage_buffer(6)
+            prog["u_count"].value = len(chunk)
+            prog["u_layers"].value = layers
+            groups = -(-len(chunk) // FACES_GROUP)
+            columns = min(groups, MAX_GROUPS)
+            prog.run(columns, -(-groups // columns))
+            ctx.memory_barrier()
+            faces = np.frombuffer(found.read(4 * layers * len(chunk)), np.int32).reshape(layers, -1)
+            np.subtract(faces, 1, out=out[:, start : start + len(chunk)])
+        return out
 
     def release(self) -> None:
         """The lists are the pool's."""

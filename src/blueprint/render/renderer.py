@@ -326,7 +326,8 @@ class Capturer:
         """(L, N) int32: the face of every peeled layer at ``pixels`` (N flat indices
         ``y * width + x``, row 0 at the top), -1 where none. The layers are ``peel``'s without
         normals; only the pixels asked for leave the GPU's copy, so a vector drawing does not
-        pay for whole images."""
+        pay for whole images. Where an A-buffer captures the frame, the faces are read from its
+        lists at those pixels alone, every layer in one pass, none unpacked."""
         w, h = check_size(size, 1, self.device.max_texture)
         pixels = np.asarray(pixels, np.int64)
         if len(pixels) and (pixels.min() < 0 or pixels.max() >= w * h):
@@ -334,10 +335,12 @@ class Capturer:
         # the same pixels in OpenGL's rows, bottom up
         gl = (h - 1 - pixels // w) * w + pixels % w
         check_frame_args(max_layers, min_fraction, 30.0, 1.0)
-        capture, gb = self._faces(model, camera, (w, h), max_layers)
+        capture, gb = self._faces(model, camera, (w, h), max_layers, in_place=True)
         out = []
 
         def read(layer: int) -> None:
+            if capture.reads == "lists":  # read once the layers that count are known
+                return
             if capture.reads == "surfaces":  # one k-buffer pass, its surfaces read as they are
                 face = capture.source.faces(layer)[gl].astype(np.int64)
                 out.append(np.where(face != 0, face - 1, -1).astype(np.int32))
@@ -347,7 +350,9 @@ class Capturer:
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
 
         rules = standard_rules(max_layers, min_fraction)
-        layer_loop(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
+        _, counted = layer_loop(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
+        if capture.reads == "lists":
+            out = list(capture.source.faces_at(gl, counted))
         capture.release()
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
 
@@ -394,17 +399,19 @@ class Capturer:
             lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
         )
 
-    def _faces(self, model, camera, size, max_layers) -> tuple:
+    def _faces(self, model, camera, size, max_layers, in_place: bool = False) -> tuple:
         """(capture, G-buffer) of depths and faces alone, for readers of a k-buffer's surfaces
         where the capture table's k-buffer finds every layer in one pass (``reads``
-        "surfaces"), else peeled a pass a layer into the G-buffer."""
+        "surfaces"), with ``in_place`` of an A-buffer's lists where the table's A-buffer takes
+        the frame (``reads`` "lists"), else peeled a pass a layer into the G-buffer."""
         self.check_memory(model, size[0] * size[1], max_layers, None)
         ctx = self.device.ctx
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
         gb = gbuffer(self.device.pool, size, "idb", normals=False)
         mesh = self.mesh(model, None)
-        return Capture(self, mesh, camera, gb, layers=max_layers, tie_break=True, surfaces=True), gb
+        asked = {"layers": max_layers, "tie_break": True, "surfaces": True, "unpack": not in_place}
+        return Capture(self, mesh, camera, gb, **asked), gb
 
     def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read) -> None:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth

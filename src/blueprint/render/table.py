@@ -153,7 +153,9 @@ class ABufferRow:
     ``min_layers``: only frames of at least this many layers (those of every layer always);
     ``slim``: fragments of depth and face alone, the rest made by the sort for the fragments
     kept as layers; ``compute_from``: G-buffers of at least this many pixels have their
-    fragments listed by the rasteriser in compute (None: never).
+    fragments listed by the rasteriser in compute (None: never). Frames of depths and faces
+    alone it takes only for readers of its lists in place (``ABufferSource.faces_at``): it
+    would unpack every layer into a G-buffer of normals and parts.
     """
 
     max_bytes: int = DEFAULT_ABUFFER_BYTES
@@ -165,7 +167,9 @@ class ABufferRow:
 
     def accepts(self, request: Request) -> bool:
         layers = request.layers
-        return (layers is None or layers >= self.min_layers) and request.whole
+        # (a surface's part + 1 takes 16 bits, as in a whole frame)
+        in_place = request.surfaces and not request.unpack and not request.selected and request.parts < MOST_PARTS
+        return (layers is None or layers >= self.min_layers) and (request.whole or in_place)
 
 
 Row = PeelRow | KBufferRow | ABufferRow
