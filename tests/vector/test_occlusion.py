@@ -231,6 +231,31 @@ def test_triangles_at_pixels_are_the_peeled_layers_there(renderer, way, max_laye
         renderer.triangles_at(model, camera, [size[0] * size[1]], size=size)
 
 
+def test_faces_read_from_the_lists_in_blocks_are_read_whole(renderer, monkeypatch):
+    """The A-buffer's faces at many pixels come back a block of pixels a dispatch: split into
+    blocks of seven pixels, the same faces as read in one."""
+    from blueprint import examples
+    from blueprint.render import abuffer
+
+    default = capture_table(renderer)
+    row = default.row("A-buffer")
+    if row is None:
+        pytest.skip("the A-buffer needs OpenGL 4.3")
+    model = examples.gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    pixels = np.random.default_rng(2).choice(64 * 64, 300, replace=False)
+    saved = renderer.capture_table
+    renderer.capture_table = CaptureTable((replace(row, min_layers=1), default.row("peel")), default.exact_depth)
+    try:
+        whole = renderer.triangles_at(model, camera, pixels, size=(64, 64))
+        monkeypatch.setattr(abuffer, "FACES_BYTES", 4 * len(whole) * 7)
+        blocks = renderer.triangles_at(model, camera, pixels, size=(64, 64))
+    finally:
+        renderer.capture_table = saved
+    assert len(whole) >= 4 and (whole[3] >= 0).any()
+    assert np.array_equal(blocks, whole)
+
+
 def test_depth_masking_peels_only_until_the_parts_show(renderer):
     """reveal: the same layers as the raster's depth masking, and no line deeper than them."""
     from blueprint import examples

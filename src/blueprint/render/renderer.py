@@ -352,7 +352,9 @@ class Capturer:
         rules = standard_rules(max_layers, min_fraction)
         _, counted = layer_loop(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
         if capture.reads == "lists":
-            out = list(capture.source.faces_at(gl, counted))
+            faces = capture.source.faces_at(gl, counted)
+            capture.release()
+            return faces
         capture.release()
         return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
 
