@@ -245,7 +245,9 @@ def test_faces_read_from_the_lists_in_blocks_are_read_whole(renderer, monkeypatc
     camera = Camera.fit(model.positions, "iso", aspect=1.0)
     pixels = np.random.default_rng(2).choice(64 * 64, 300, replace=False)
     saved = renderer.capture_table
-    renderer.capture_table = CaptureTable((replace(row, min_layers=1), default.row("peel")), default.exact_depth)
+    renderer.capture_table = CaptureTable(
+        (replace(row, min_layers=1), default.row("peel")), default.exact_depth
+    )
     try:
         whole = renderer.triangles_at(model, camera, pixels, size=(64, 64))
         monkeypatch.setattr(abuffer, "FACES_BYTES", 4 * len(whole) * 7)

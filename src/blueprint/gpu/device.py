@@ -14,6 +14,21 @@ from blueprint.gpu.shaders import COMPUTE_VERSION, VERSION, build_compute, build
 from blueprint.gpu.targets import TargetPool
 from blueprint.gpu.uniforms import Uniforms
 
+# workgroups along a dispatch's x at most (every dimension holds 65535 at least)
+MAX_GROUPS = 65535
+
+
+def run_over(prog, count: int, group: int) -> None:
+    """Run compute ``prog`` (``group`` invocations a workgroup along x) over ``count``
+    invocations, its groups in rows of at most ``MAX_GROUPS``: invocation
+    ``gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x *
+    gl_WorkGroupSize.x``, those from ``count`` on returning at once."""
+    groups = -(-count // group)
+    if groups:
+        across = min(groups, MAX_GROUPS)
+        prog.run(across, -(-groups // across))
+
+
 INTERLOCK_PROBE = """#version 430 core
 #extension GL_ARB_fragment_shader_interlock : require
 layout(pixel_interlock_ordered) in;

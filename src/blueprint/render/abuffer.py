@@ -19,7 +19,7 @@ import functools
 
 import numpy as np
 
-from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory
+from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory, run_over
 from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms, depth_tolerance
 from blueprint.render.mesh import geometry_program, target_uniform
 from blueprint.scene.camera import Camera
@@ -29,11 +29,10 @@ CLEAR_COMP = "blueprint.render:glsl/abuffer_clear.comp"
 RESOLVE_COMP = "blueprint.render:glsl/abuffer_resolve.comp"
 UNPACK_COMP = "blueprint.render:glsl/abuffer_unpack.comp"
 FACES_COMP = "blueprint.render:glsl/abuffer_faces.comp"
-# the faces ``faces_at`` reads back a dispatch at most (bytes), the invocations of its groups
-# (abuffer_faces.comp) and its groups along x
+# the faces ``faces_at`` reads back a dispatch at most (bytes), and the invocations of its
+# workgroups (abuffer_faces.comp)
 FACES_BYTES = 1 << 26
 FACES_GROUP = 64
-MAX_GROUPS = 65535
 # the histogram of layers a pixel has (abuffer.glsl)
 MOST_LAYERS = 256
 # bytes a fragment holds: its surface (16), its link in the pixel's list, its link in the
@@ -299,15 +298,13 @@ class ABufferSource:
         for start in range(0, len(pixels), block):
             chunk = pixels[start : start + block]
             wanted = self.r.pool.buffer("abuffer.faces_at.pixels", chunk.nbytes)
-            wanted.write(chunk.tobytes())
+            wanted.write(chunk)
             wanted.bind_to_storage_buffer(5)
             found = self.r.pool.buffer("abuffer.faces_at.faces", 4 * layers * len(chunk))
             found.bind_to_storage_buffer(6)
             prog["u_count"].value = len(chunk)
             prog["u_layers"].value = layers
-            groups = -(-len(chunk) // FACES_GROUP)
-            columns = min(groups, MAX_GROUPS)
-            prog.run(columns, -(-groups // columns))
+            run_over(prog, len(chunk), FACES_GROUP)
             ctx.memory_barrier()
             faces = np.frombuffer(found.read(4 * layers * len(chunk)), np.int32).reshape(layers, -1)
             np.subtract(faces, 1, out=out[:, start : start + len(chunk)])

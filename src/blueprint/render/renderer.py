@@ -350,13 +350,15 @@ class Capturer:
             out.append(np.where(z < 1.0, face - 1, -1).astype(np.int32))
 
         rules = standard_rules(max_layers, min_fraction)
-        _, counted = layer_loop(capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples)
+        _, counted = layer_loop(
+            capture.draw, self.device.queries("peel"), rules, read, samples=capture.samples
+        )
         if capture.reads == "lists":
             faces = capture.source.faces_at(gl, counted)
-            capture.release()
-            return faces
+        else:
+            faces = np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
         capture.release()
-        return np.stack(out) if out else np.zeros((0, len(pixels)), np.int32)
+        return faces
 
     @current
     def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):

@@ -168,7 +168,9 @@ class ABufferRow:
     def accepts(self, request: Request) -> bool:
         layers = request.layers
         # (a surface's part + 1 takes 16 bits, as in a whole frame)
-        in_place = request.surfaces and not request.unpack and not request.selected and request.parts < MOST_PARTS
+        in_place = (
+            request.surfaces and not request.unpack and not request.selected and request.parts < MOST_PARTS
+        )
         return (layers is None or layers >= self.min_layers) and (request.whole or in_place)
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.gpu.device import run_over
 from blueprint.gpu.tables import table_fits, table_rows, table_texture
 
 __all__ = ["gpu_cut_pairs"]
@@ -15,7 +16,6 @@ __all__ = ["gpu_cut_pairs"]
 TRIANGLE_PAIRS_COMP = "blueprint.vector:glsl/triangle_pairs.comp"
 TRIANGLE_CUTS_COMP = "blueprint.vector:glsl/triangle_cuts.comp"
 _GROUP = 64
-_MAX_GROUPS = 65535
 # The narrow phase's thresholds are loosened by this fraction of the touch tolerance, plus
 # this fraction of the largest coordinate (rounding grows with it): the shader's doubles and
 # NumPy's differ by less than 1e-14 of the largest coordinate.
@@ -122,14 +122,12 @@ def _gathered(renderer, prog, count: int, binding: int, capacity: int):
     small: (items found, the buffer)."""
     ctx = renderer.ctx
     renderer.uniforms.set(prog, "u_count", count)
-    groups = -(-count // _GROUP)
-    gx = min(groups, _MAX_GROUPS)
     while True:
         out = ctx.buffer(reserve=8 + 8 * capacity)
         out.write(np.zeros(2, np.uint32).tobytes())
         out.bind_to_storage_buffer(binding)
         renderer.uniforms.set(prog, "u_capacity", capacity)
-        prog.run(gx, -(-groups // gx))
+        run_over(prog, count, _GROUP)
         ctx.memory_barrier()
         found = int(np.frombuffer(out.read(size=4), np.uint32)[0])
         if found <= capacity:

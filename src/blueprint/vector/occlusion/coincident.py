@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.columns import column_max, column_min, row_norm
+from blueprint.gpu.device import run_over
 from blueprint.gpu.tables import table_fits, table_texture
 from blueprint.sorting import stable_argsort
 
@@ -19,7 +20,6 @@ COINCIDENT_COMP = "blueprint.vector:glsl/coincident.comp"
 _GROUP = 64
 # coincident.comp's tables, in the order of ``_gpu_drop``'s inputs after its storage buffers
 _TABLES = ("u_steps", "u_units", "u_keys", "u_cells")
-_MAX_GROUPS = 65535
 # Directions (modulo a half turn) fall in up to BINS bins, each a degree wider than the angle
 # limit, so a sample's matches lie in its own bin and the two beside it: stretches of other
 # directions crowding a cell are never looked at.
@@ -281,9 +281,7 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
         for unit, (name, texture) in enumerate(zip(_TABLES, tables, strict=True)):
             texture.use(location=unit)
             put(prog, name, unit)
-        groups = -(-count // _GROUP)
-        gx = min(groups, _MAX_GROUPS)
-        prog.run(gx, -(-groups // gx))
+        run_over(prog, count, _GROUP)
         ctx.memory_barrier()
         return np.frombuffer(buffers[-1].read(), np.int32) != 0
     finally:

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint.gpu.device import run_over
 from blueprint.gpu.tables import table_fits, table_texture
 from blueprint.render.renderer import LayerRenderer
 from blueprint.render.stop import standard_rules
@@ -34,7 +35,6 @@ _COPY_UNITS = (14, 15)
 _GROUP = 64
 # Rows of pixels one invocation of deepest.comp looks at.
 _DEEPEST_ROWS = 64
-_MAX_GROUPS = 65535
 
 
 @dataclass(frozen=True)
@@ -301,9 +301,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     try:
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
-        groups = -(-len(inside) // _GROUP)
-        gx = min(groups, _MAX_GROUPS)
-        prog.run(gx, -(-groups // gx))
+        run_over(prog, len(inside), _GROUP)
         ctx.memory_barrier()
         result = np.frombuffer(buffers[2].read(), np.int32).reshape(-1, 4)
     finally:
