@@ -290,6 +290,25 @@ def _render_svg(s: Smoke):
     return f"{s.polylines['svg']} polylines in {paths} paths, a group for each of {len(parts)} parts"
 
 
+@case("render svg, every layer")
+def _render_svg_every_layer(s: Smoke):
+    # every layer's faces at the probed pixels, read from the A-buffer's lists where the
+    # driver has one (its shader is package data like the rest)
+    root, groups = svg_paths(s.render("iso-all.svg", "--max-layers", "0"))
+    levels = {
+        int(g.get("data-level")) for g in root.iter("{http://www.w3.org/2000/svg}g") if g.get("data-level")
+    }
+    check(max(levels) > 8, f"levels drawn: {sorted(levels)}")
+    parts = [n for n in GEARBOX_PARTS if groups.get(n, 0) > 0]
+    check(parts == list(GEARBOX_PARTS), f"part groups with lines: {parts}")
+    polylines = sum(subpaths(p) for p in root.iter("{http://www.w3.org/2000/svg}path"))
+    check(
+        polylines > s.polylines.get("svg", 50),
+        f"{polylines} polylines, the default's 8 layers {s.polylines.get('svg')}",
+    )
+    return f"{polylines} polylines over levels 0 to {max(levels)}"
+
+
 @case("render pdf")
 def _render_pdf(s: Smoke):
     import pikepdf
