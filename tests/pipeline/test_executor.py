@@ -369,6 +369,26 @@ def test_stream_gives_what_single_runs_give(ex, gearbox):
     np.testing.assert_array_equal(small.output, ex.run(spec, gearbox, cameras[0], size=(32, 24)).output)
 
 
+def test_frames_in_a_row_follow_their_options(renderer, ex, gearbox):
+    """A frame asking for the last frame's options again reuses what was made of them (the run
+    arguments, the plan); one asking for others, or the same values in a new dict, draws
+    what a first frame of them draws."""
+    camera = fit_camera(gearbox, SIZE)
+
+    def frame(**options):
+        return render_blueprint(renderer, gearbox, camera, size=SIZE, **options).image
+
+    thin, thick = frame(line_width=1.0), frame(line_width=3.0)
+    assert not np.array_equal(thin, thick)
+    np.testing.assert_array_equal(frame(line_width=1.0), thin)
+    spec = load_pipeline("blueprint")
+    variables = {"line_width": 1.0}
+    first = ex.run(spec, gearbox, camera, size=SIZE, variables=variables).output
+    variables["line_width"] = 3.0  # changed in place: not the plan of the frame before
+    second = ex.run(spec, gearbox, camera, size=SIZE, variables=variables).output
+    assert not np.array_equal(first, second)
+
+
 def test_a_run_read_later_holds_its_output_until_collected(tmp_path, ex, gearbox):
     spec = load_pipeline(str(write(tmp_path, "parts.toml", PARTS_PIPELINE)))
     shaft = np.array([n == "shaft" for n in gearbox.part_names])

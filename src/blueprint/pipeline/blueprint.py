@@ -4,6 +4,8 @@ silhouettes are passes, attributes and a stop rule of the preset, not code of th
 
 from __future__ import annotations
 
+import operator
+import weakref
 from collections.abc import Iterable, Iterator
 
 import numpy as np
@@ -44,10 +46,10 @@ def render_blueprint(
     to check (``blueprint.api.options.DrawOptions``), once. ``contours``: smooth contour lines
     of this camera at this size (``blueprint.vector.contour_ink``), drawn in place of the
     outline of the faces they stand for."""
-    style, arguments = _run_arguments(renderer, model, **options)
+    style, arguments = _last_arguments(renderer, model, options)
     if contours is not None:
-        arguments["contours"] = contours
-        arguments["variables"]["smooth_contours"] = True
+        variables = {**arguments["variables"], "smooth_contours": True}
+        arguments = {**arguments, "contours": contours, "variables": variables}
     result = renderer.executor.run(
         blueprint_preset(), model, camera, profile=profile, keep=on_gpu, **arguments
     )
@@ -62,6 +64,31 @@ def stream_blueprint(renderer, model: Model, cameras: Iterable[Camera], **option
     frames = ({"camera": camera} for camera in cameras)
     for result in renderer.executor.stream(blueprint_preset(), model, frames, **arguments):
         yield _frame(result, style)
+
+
+# (renderer, model, options, the style and arguments made of them) of the last frame asked for
+_LAST: list = [None]
+
+
+def _last_arguments(renderer, model: Model, options: dict) -> tuple[Style, dict]:
+    """``_run_arguments``, made once for frames asking for the same options (the same objects,
+    as ``DrawOptions.frame_keywords`` gives them: a stream's frames) of one model on one
+    renderer; never for parts given as arrays, which may change in place. The arguments are
+    shared: read, never written."""
+    last = _LAST[0]
+    if (
+        last is not None
+        and last[0]() is renderer
+        and last[1]() is model
+        and last[2].keys() == options.keys()
+        and all(map(operator.is_, last[2].values(), options.values()))
+    ):
+        return last[3]
+    made = _run_arguments(renderer, model, **options)
+    arrays = any(isinstance(value, np.ndarray) for value in options.values())
+    # weakly held: a dropped model's memory is not kept for a frame that may never come
+    _LAST[0] = None if arrays else (weakref.ref(renderer), weakref.ref(model), options, made)
+    return made
 
 
 def _run_arguments(

@@ -99,6 +99,8 @@ class Executor:
         # which groups of the frame uniforms (``_frame_uniforms``) each program declares
         self._declared: dict[object, tuple[bool, bool, bool, bool]] = {}
         self._rules: tuple = (None, ())  # (settings, rules): _standard_rules
+        # (pipeline, variables, dumps, plan) of the last ``plan`` asked for
+        self._last_plan: tuple | None = None
         # the sizes of each plan's scales at the last output size it ran at, all checked
         self._sizes: dict[int, tuple[Plan, Sizes]] = {}
         self._checked: tuple | None = None  # the last peel settings check_frame_args passed
@@ -127,11 +129,16 @@ class Executor:
 
     # -- plans ---------------------------------------------------------------------------------
     def plan(self, pipeline: PipelineSpec | Bound, variables=None, dumps=()) -> Plan:
+        # a stream asks for the last plan again: its variables compared, not bound and keyed
+        last = self._last_plan
+        if last is not None and last[0] is pipeline and last[1] == variables and last[2] == dumps:
+            return last[3]
         bound = pipeline.bind(variables) if isinstance(pipeline, PipelineSpec) else pipeline
         key = (id(bound), tuple(dumps))
         held = self._plans.get(key)
         if held is None or held.bound is not bound:
             held = self._plans[key] = plan(bound, tuple(dumps))
+        self._last_plan = (pipeline, None if variables is None else dict(variables), tuple(dumps), held)
         return held
 
     def _arrays(self, pl: Plan) -> ArrayPlan | None:

@@ -75,6 +75,47 @@ class Overflow(Exception):
     """A capture whose counts were read late found more fragments than it had room for."""
 
 
+class _Prepared:
+    """What an A-buffer capture of ``mesh`` by ``row`` (with ``tiles`` or not) needs whatever
+    the frame: its programs, their defines and constant uniforms, made once and kept with the
+    mesh (``GpuMesh.prepared``), since a stream's frames would otherwise look them up again
+    before their first draw, while the GPU waits."""
+
+    def __init__(self, capturer, row, mesh, tiles: bool) -> None:
+        r = capturer.device
+        self.model = capturer.model_of(mesh)
+        images = r.software
+        self.defines = list_defines(r)
+        # a mesh drawn in chunks is not on the GPU whole when the resolve would read its faces
+        self.slim = row.slim and mesh.chunk_faces is None
+        self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
+        capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
+        # where the lists live in images (a software rasteriser) an atomic on the fragment
+        # counter runs a lane at a time: the subgroup's fragments take their nodes with one
+        ballot = images and not self.slim and r.subgroup_ballot
+        # ...and where the driver orders a pixel's fragments (framebuffer fetch), each takes the
+        # pixel's list from the last one without an atomic: the head is the pass's target
+        self.fetch_head = images and r.framebuffer_fetch
+        defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
+        self.geometry = geometry_program(capturer, ABUFFER_FRAG, mesh, defines, modern=True)
+        # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
+        # the resolve runs over the tiles with fragments alone (``_resolve``)
+        # a slim fragment's face is found in the mesh's faces table (GpuMesh.bind_faces)
+        resolving = {**capture, **mesh.placement_defines} if self.slim else capture
+        self.resolve = r.compute(
+            RESOLVE_COMP, {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else resolving
+        )
+        self.clear = r.compute(CLEAR_COMP)
+        self.unpack = r.compute(
+            UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
+        )
+        for prog in (self.resolve, self.unpack):
+            r.uniforms.set(prog, "u_back_bias", BACK_BIAS)
+        # the compute rasteriser where the row lists fragments in compute (render.raster)
+        chunked = mesh.chunk_faces is not None
+        self.raster = capturer.compute_raster if row.compute_from is not None and not chunked else None
+
+
 class ABufferSource:
     """The A-buffer capture of one frame's layers into ``gb`` (see the module's docstring):
     ``draw`` at layer 0 captures and sorts every layer, then unpacks layer 0; at each later
@@ -99,18 +140,19 @@ class ABufferSource:
     def __init__(self, capturer, row, mesh, camera: Camera, gb: GBuffer, request) -> None:
         r = self.r = capturer.device
         self.mesh, self.gb = mesh, gb
-        self.camera, self.model = camera, capturer.model_of(mesh)
+        self.camera = camera
         # the room of the frames before, by G-buffer size (``Capturer.abuffer_room``)
         self.rooms = capturer.abuffer_room
         self.back_bias, self.unpacks, self.slot = BACK_BIAS, request.unpack, request.slot
         self.reads = None if self.unpacks else "lists"
-        uniforms = abuffer_uniforms(camera, depth_tolerance(camera, mesh.bounds))
         tiles, defer = request.tiles, request.defer
         self.images = r.software
-        self.defines = list_defines(r)
-        # a mesh drawn in chunks is not on the GPU whole when the resolve would read its faces
-        self.slim = row.slim and mesh.chunk_faces is None
-        self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
+        p = mesh.prepared.get((ABufferSource, row, tiles))
+        if p is None:
+            p = mesh.prepared[(ABufferSource, row, tiles)] = _Prepared(capturer, row, mesh, tiles)
+        self.model, self.defines, self.slim, self.node_bytes = p.model, p.defines, p.slim, p.node_bytes
+        self.capture_defines, self.fetch_head, self.raster = p.capture_defines, p.fetch_head, p.raster
+        self.geometry, self.resolve, self.clear, self.unpack = p.geometry, p.resolve, p.clear, p.unpack
         # the row's cap, or less where the frame's memory check left the lists less (a deep
         # model's fragments past it are peeled instead of allocated); the lists the pool held
         # at this size as it checked are taken again, not allocated, and the free memory it
@@ -121,22 +163,7 @@ class ABufferSource:
             name = _lists_name(gb.size)
             room += sum(capturer.pool_held.get(f"{name}.{part}", 0) for part in LIST_PARTS)
         self.max_bytes = row.max_bytes if room is None else min(row.max_bytes, room)
-        capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
-        # where the lists live in images (a software rasteriser) an atomic on the fragment
-        # counter runs a lane at a time: the subgroup's fragments take their nodes with one
-        ballot = self.images and not self.slim and r.subgroup_ballot
-        # ...and where the driver orders a pixel's fragments (framebuffer fetch), each takes the
-        # pixel's list from the last one without an atomic: the head is the pass's target
-        self.fetch_head = self.images and r.framebuffer_fetch
-        defines = {**capture, "BALLOT": ballot, "FETCH_HEAD": self.fetch_head}
-        self.geometry = geometry_program(capturer, ABUFFER_FRAG, mesh, defines, modern=True)
-        # with tiles the counts come from each pixel's layers read back (``_count_pixels``), and
-        # the resolve runs over the tiles with fragments alone (``_resolve``)
-        # a slim fragment's face is found in the mesh's faces table (GpuMesh.bind_faces)
-        resolving = {**capture, **mesh.placement_defines} if self.slim else capture
-        self.resolve = r.compute(
-            RESOLVE_COMP, {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else resolving
-        )
+        uniforms = abuffer_uniforms(camera, depth_tolerance(camera, mesh.bounds))
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera_names = ("u_view", "u_projection", "u_ortho")
         for prog, names in (
@@ -145,18 +172,9 @@ class ABufferSource:
         ):
             for name in names:
                 put(prog, name, uniforms[name])
-        self.clear = r.compute(CLEAR_COMP)
-        self.unpack = r.compute(
-            UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
-        )
-        for prog in (self.resolve, self.unpack):
-            put(prog, "u_back_bias", self.back_bias)
         self.uniforms = uniforms
-        # the compute rasteriser where the row lists fragments in compute (render.raster), and
-        # (its bins' room, the size) of the capture in hand where it drew it
-        chunked = mesh.chunk_faces is not None
-        self.raster = capturer.compute_raster if row.compute_from is not None and not chunked else None
         self.compute_from = row.compute_from
+        # (its bins' room, the size) of the capture in hand where the compute rasteriser drew it
         self._binned: tuple[int, tuple[int, int]] | None = None
         self._layer_pixels: list[int] = []
         self._flat: dict[tuple, tuple] = {}  # (names carry the size: the pool keeps them)

@@ -224,6 +224,8 @@ class GpuMesh:
         """What passes read of the model drawn, whole or in chunks."""
         self._corners = None
         self._model = model
+        # what each capture source prepares once for the mesh drawn (its programs), by its key
+        self.prepared: dict[tuple, object] = {}
         self.part_count = len(model.part_names)
         self.triangles = model.triangle_count
         self.instanced = model.instances is not None
