@@ -297,17 +297,28 @@ def test_a_soup_is_welded_without_the_exact_pass(monkeypatch, tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("same", "at", "runs"),
+    ("same", "at", "runs", "numbers"),
     [
-        ([1, 0, 1, 1, 0, 0, 1], [0, 3], [0, 1, 2, 3, 4]),
-        ([1, 0, 1, 1, 0, 0, 1], [6], [6, 7]),
-        ([1, 1, 1], [1], [0, 1, 2, 3]),
-        ([0, 1, 0, 1], [1, 3, 3], [1, 2, 3, 4]),
+        ([1, 0, 1, 1, 0, 0, 1], [0, 3], [0, 1, 2, 3, 4], [0, 0, 1, 1, 1]),
+        ([1, 0, 1, 1, 0, 0, 1], [6], [6, 7], [0, 0]),
+        ([1, 1, 1], [1], [0, 1, 2, 3], [0, 0, 0, 0]),
+        ([0, 1, 0, 1], [1, 3, 3], [1, 2, 3, 4], [0, 0, 1, 1]),
     ],
 )
-def test_the_runs_holding_positions(same, at, runs):
-    found = weld._runs_holding(np.array(same, bool), np.array(at))
-    assert found.tolist() == runs
+def test_the_runs_holding_positions(same, at, runs, numbers):
+    found, run = weld._runs_holding(np.array(same, bool), np.array(at))
+    assert found.tolist() == runs and run.tolist() == numbers
+
+
+def test_weld_groups_equal_rows_as_one_where_runs_of_collisions_lie_apart():
+    """Whole numbers as float64 (their low bits zero) collide in many runs of the hash, with
+    runs between them that do not: each equal row in one group, as ``np.unique`` finds them
+    (sorted together across the runs, a value's rows straddled a run between and split)."""
+    rng = np.random.default_rng(0)
+    points = rng.integers(-15, 15, (50_000, 3)).astype(np.float64)
+    inverse, first = weld._exact_groups(points)
+    assert len(first) == len(np.unique(points, axis=0))
+    np.testing.assert_array_equal(points[first][inverse], points)
 
 
 class _Buffers:

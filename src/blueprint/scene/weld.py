@@ -218,9 +218,10 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     if collided.any():
         # the rows of the runs with a collision, sorted by value (stably: each one's first
         # occurrence stays first)
-        sub = _runs_holding(same_hash, np.flatnonzero(collided))
+        sub, run = _runs_holding(same_hash, np.flatnonzero(collided))
         picked = order[sub]
-        order[sub] = picked[np.lexsort([positions[picked, k] for k in (2, 1, 0)])]
+        # each run sorted apart: sorted together, a value's rows could straddle a run between
+        order[sub] = picked[np.lexsort([*(positions[picked, k] for k in (2, 1, 0)), run])]
         # only the neighbours of the rows moved can change
         moved = np.union1d(sub[sub > 0] - 1, sub[sub < n - 1])
         one, other = (np.take(positions, order[moved + k], axis=0) for k in (0, 1))
@@ -247,11 +248,11 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     return inverse, np.flatnonzero(seen)
 
 
-def _runs_holding(same: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """The positions, ascending, of the runs that hold positions ``at`` (ascending), where a
-    run is positions ``i`` to ``j`` with ``same`` true from ``i`` to ``j - 1`` (``same[i]``:
-    positions ``i`` and ``i + 1`` share a hash): found from the breaks around each, not by
-    numbering every position's run."""
+def _runs_holding(same: np.ndarray, at: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The positions, ascending, of the runs that hold positions ``at`` (ascending), and the
+    number of each one's run among them, where a run is positions ``i`` to ``j`` with ``same``
+    true from ``i`` to ``j - 1`` (``same[i]``: positions ``i`` and ``i + 1`` share a hash):
+    found from the breaks around each, not by numbering every position's run."""
     breaks = parallel.flatnonzero(same, negated=True)
     k = np.searchsorted(breaks, at)
     # a run ends at the first break at or after a position, else at the last position, and
@@ -260,7 +261,8 @@ def _runs_holding(same: np.ndarray, at: np.ndarray) -> np.ndarray:
     last = ends[k]
     first = np.where(k > 0, ends[k - 1] + 1, 0)
     first, last = np.unique(np.stack([first, last]), axis=1)
-    return ranges(first, last - first + 1)
+    counts = last - first + 1
+    return ranges(first, counts), np.repeat(np.arange(len(counts)), counts)
 
 
 def _hashed(positions: np.ndarray, low: np.uint64, key: np.ndarray, lo: int, hi: int) -> None:
