@@ -70,12 +70,20 @@ def pair_ends(
     straight = -np.einsum("ij,ij->i", direction(ha), direction(hb))
     ok = straight >= min_cos
     rank = np.argsort(-straight[ok], kind="stable")
-    used = bytearray(len(node))
-    for x, y in zip(ha[ok][rank].tolist(), hb[ok][rank].tolist(), strict=True):
-        if used[x] or used[y]:
-            continue
-        used[x] = used[y] = 1
-        partner[x], partner[y] = y, x
+    x, y = ha[ok][rank], hb[ok][rank]
+    # the straightest pairs first: a pair is taken where it is the first left at both its
+    # half-ends, the pairs at those half-ends dropped, round after round (the pairs a walk
+    # through them in order takes)
+    first = np.empty(len(node), np.int64)
+    while len(x):
+        at = np.arange(len(x))
+        first[x] = first[y] = len(x)
+        np.minimum.at(first, x, at)
+        np.minimum.at(first, y, at)
+        taken = (first[x] == at) & (first[y] == at)
+        partner[x[taken]], partner[y[taken]] = y[taken], x[taken]
+        free = (partner[x] < 0) & (partner[y] < 0)
+        x, y = x[free], y[free]
     return partner
 
 
@@ -95,7 +103,7 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     # pieces paired at neither end are chains of their own, found without walking
     alone = (partner[0::2] < 0) & (partner[1::2] < 0)
     # entering a piece through half-end h, the walk leaves it through h ^ 1 for that one's partner
-    onward = partner[np.arange(len(partner)) ^ 1].tolist()
+    onward = partner.reshape(-1, 2)[:, ::-1].reshape(-1).tolist()
     walked: list[int] = []  # (piece << 1) | reversed: entered through its end 1, walked backwards
     lengths: list[int] = []
     append = walked.append
@@ -111,11 +119,14 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
             h = onward[h]
         other_end[last ^ 1] = 1
         lengths.append(len(walked) - first)
+    opened = np.array(walked, np.int64)
     # what is left lies on closed loops, each walked from its lowest piece's start
-    on_chain = np.zeros(len(alone), bool)
-    on_chain[np.array(walked, np.int64) >> 1] = True
+    off = alone.copy()
+    off[opened >> 1] = True
+    walked = []
+    append = walked.append
     visited = bytearray(len(alone))
-    for piece in np.flatnonzero(~alone & ~on_chain).tolist():
+    for piece in np.flatnonzero(~off).tolist():
         if visited[piece]:
             continue
         first = len(walked)
@@ -127,7 +138,7 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
             if h == start:
                 break
         lengths.append(len(walked) - first)
-    flat = np.array(walked, np.int64)
+    flat = np.concatenate([opened, np.array(walked, np.int64)])
     single = np.flatnonzero(alone)
     return (
         np.concatenate([single, flat >> 1]),

@@ -35,7 +35,7 @@ from blueprint.scene.model import Model
 from blueprint.silhouette import Adjacency, build_adjacency, smooth_surface
 from blueprint.silhouette.contours import _EDGE_ON as _VERTEX_EDGE_ON
 from blueprint.silhouette.contours import _edge_keys
-from blueprint.silhouette.edges import _first_two_faces, _projected, sharp_edges
+from blueprint.silhouette.edges import _MIN_W, _clip, _first_two_faces, _projected, sharp_edges
 from blueprint.sorting import stable_argsort
 
 from .cache import ModelCache
@@ -339,7 +339,12 @@ def _block_features(ml: _MeshLines, block, q, sign, at_angle: tuple, tests: _Tes
     kind = np.where(is_sil, SILHOUETTE, static[e]).astype(np.uint8)
     sides = np.stack([ml.f0[e], np.where(kind == BORDER, -1, ml.f1[e])], axis=1)
     sides[is_sil] = np.stack([first_front[b[is_sil], e[is_sil]], first_back[b[is_sil], e[is_sil]]], axis=1)
-    points = _placed(adj.positions[adj.edges[e]], inst.transform[block[b]])
+    # every vertex placed once an instance (the same products as a line's ends placed one by
+    # one): the edges' ends and the contours' vertices are gathered from them
+    placed = _placed(
+        np.broadcast_to(adj.positions, (len(block), *adj.positions.shape)), inst.transform[block]
+    )
+    points = placed[b[:, None], adj.edges[e]]
     edge_on = cos <= tests.edge_on_cos
     nb, ne, new_points = _outline_edges(ml, edge_on, (b, e, points), inst.transform[block], tests)
     b, e = np.r_[b, nb], np.r_[e, ne]
@@ -381,7 +386,7 @@ def _block_features(ml: _MeshLines, block, q, sign, at_angle: tuple, tests: _Tes
     found.contour_edges.append(np.stack(edges, axis=1))
     found.contour_points.append(_placed(np.stack(ends, axis=1), inst.transform[which]))
     found.contour_vertices.append(vertices)
-    found.contour_vertex_points.append(_placed(adj.positions[vertices], inst.transform[which]))
+    found.contour_vertex_points.append(placed[cb[:, None, None], vertices])
 
 
 def _outline_edges(ml: _MeshLines, edge_on: np.ndarray, lines: tuple, transforms: np.ndarray, tests: _Tests):
@@ -401,7 +406,7 @@ def _outline_edges(ml: _MeshLines, edge_on: np.ndarray, lines: tuple, transforms
     # found as the flat path finds them: where the near plane leaves a piece of them
     b, e, points = lines
     beside = column[e] >= 0
-    kept = _projected(points[beside], tests.view, tests.projection, tests.size)[2]
+    kept = _near_clipped(points[beside], tests.view, tests.projection)[1]
     found = np.zeros((len(edge_on), len(two)), bool)
     found[b[beside][kept], column[e[beside][kept]]] = True
     rows, k = np.nonzero(tests.outlines(edge_on, pair, found))
@@ -415,58 +420,69 @@ def _joined(items: list, shape: tuple, dtype) -> np.ndarray:
     return np.concatenate(items) if items else np.zeros((0, *shape), dtype)
 
 
+def _near_clipped(points: np.ndarray, view, projection) -> tuple[np.ndarray, np.ndarray]:
+    """``edges._projected`` of segments (N, 2, 3) without their pixels, which the caller
+    makes later or not at all: the kept model endpoints (M, 2, 3) and the kept rows (M,)."""
+    clip = transform(points, projection @ view)
+    clip, points, keep = _clip(clip, points, clip[..., 2] + clip[..., 3])
+    _, points, kept = _clip(clip, points, clip[..., 3] - _MIN_W)
+    return points, keep[kept]
+
+
 def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_face, view, projection, size):
     which = _joined(found.edge_inst, (), np.int64)
     edge = first_edge[which] + _joined(found.edge, (), np.int64)
     order = stable_argsort(edge)
-    which, edge = which[order], edge[order]
-    sides = _joined(found.edge_sides, (2,), np.int64)[order]
-    faces = np.where(sides >= 0, first_face[which][:, None] + sides, -1)
-    kind = _joined(found.edge_kind, (), np.uint8)[order]
-    silhouette = kind == SILHOUETTE
-    # an outline edge beside a face seen edge-on is a silhouette whichever way it rounds
-    edge_on = _joined(found.edge_on, (2,), bool)[order].any(axis=1)
-    kind[(kind == CREASE) & edge_on] = SILHOUETTE
-    kind[(kind == CREASE) & _joined(found.smooth_crease, (), bool)[order]] = SMOOTH
     points = _joined(found.edge_points, (2, 3), np.float64)[order]
     # the edge-on outlines are wholly in front of the eye and kept whole, as the flat path keeps
     # them; the other lines are clipped to the near plane
     outline = _joined(found.outline, (), bool)[order]
-    clipped, _, kept = _projected(points[~outline], view, projection, size)
-    kept = np.flatnonzero(~outline)[kept]
-    points[kept] = clipped
+    inside = np.flatnonzero(~outline)
+    clipped, kept = _near_clipped(points[inside] if len(inside) < len(points) else points, view, projection)
+    kept = inside[kept]
     keep = outline.copy()
     keep[kept] = True
     keep = np.flatnonzero(keep)
-    points = points[keep]
+    if clipped is not points:  # (the same array where nothing was clipped)
+        points[kept] = clipped
+        points = points[keep]
+    # every other row of the kept edges gathered once, in their order
+    rows = order[keep]
+    which = which[rows]
+    sides = _joined(found.edge_sides, (2,), np.int64)[rows]
+    kind = _joined(found.edge_kind, (), np.uint8)[rows]
+    silhouette = kind == SILHOUETTE
+    # an outline edge beside a face seen edge-on is a silhouette whichever way it rounds
+    edge_on = _joined(found.edge_on, (2,), bool)[rows].any(axis=1)
+    kind[(kind == CREASE) & edge_on] = SILHOUETTE
+    kind[(kind == CREASE) & _joined(found.smooth_crease, (), bool)[rows]] = SMOOTH
     out = {
         "points": points,
-        "faces": faces[keep],
-        "part": inst.part[which[keep]].astype(np.int32),
-        "kind": kind[keep],
-        "edge": edge[keep],
-        "silhouette": silhouette[keep],
-        "vertices": first_vertex[which[keep]][:, None]
-        + _joined(found.edge_vertices, (2,), np.int64)[order][keep],
-        "exact": _joined(found.side_exact, (2,), bool)[order][keep],
+        "faces": np.where(sides >= 0, first_face[which][:, None] + sides, -1),
+        "part": inst.part[which].astype(np.int32),
+        "kind": kind,
+        "edge": edge[rows],
+        "silhouette": silhouette,
+        "vertices": first_vertex[which][:, None] + _joined(found.edge_vertices, (2,), np.int64)[rows],
+        "exact": _joined(found.side_exact, (2,), bool)[rows],
     }
     which = _joined(found.contour_inst, (), np.int64)
     face = first_face[which] + _joined(found.contour_face, (), np.int64)
     order = stable_argsort(face)
-    which, face = which[order], face[order]
     points, pixels, keep = _projected(
         _joined(found.contour_points, (2, 3), np.float64)[order], view, projection, size
     )
-    which = which[keep]
+    rows = order[keep]
+    which = which[rows]
     out.update(
         contour_points=points,
         contour_pixels=pixels,
-        contour_face=face[keep],
+        contour_face=face[rows],
         contour_part=inst.part[which].astype(np.int32),
-        contour_edges=first_edge[which][:, None] + _joined(found.contour_edges, (2,), np.int64)[order][keep],
+        contour_edges=first_edge[which][:, None] + _joined(found.contour_edges, (2,), np.int64)[rows],
         contour_vertices=first_vertex[which][:, None, None]
-        + _joined(found.contour_vertices, (2, 2), np.int64)[order][keep],
-        contour_vertex_points=_joined(found.contour_vertex_points, (2, 2, 3), np.float64)[order][keep],
+        + _joined(found.contour_vertices, (2, 2), np.int64)[rows],
+        contour_vertex_points=_joined(found.contour_vertex_points, (2, 2, 3), np.float64)[rows],
     )
     return out
 

@@ -1260,21 +1260,15 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     chosen = np.zeros(len(proper), bool)
     chosen[first] = True  # marked, not sorted: the kept segments stay in their order
     keep = proper[chosen]
-    seg_points = segments.points[keep]
-    seg_faces = segments.faces[keep]
-    seg_kind = segments.kind[keep]
-    seg_edge = segments.edge[keep]
-    seg_edge_end = segments.end_edges()[keep]
     seg_part = segments.part[keep].astype(np.int64)
     pid = pid[keep]
-    n = len(keep)
     # nodes: a point within one part, numbered by point then part; the sort's order is the one
     # ``pair_ends`` walks the nodes in
     ordered, by_node = sorted_with_order(pid.reshape(-1) * (int(seg_part.max()) + 1) + np.repeat(seg_part, 2))
     node = _ranks(ordered, by_node)
     # half-end h = 2 s + e is segment s's end e (0: start, 1: end); a segment leaves its end
     # as its start leaves backwards
-    ahead = seg_points[:, 1] - seg_points[:, 0]
+    ahead = (segments.points[:, 1] - segments.points[:, 0])[keep]
     ahead /= np.maximum(row_norm(ahead), 1e-300)[:, None]
 
     def leaving(h: np.ndarray) -> np.ndarray:
@@ -1283,6 +1277,8 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
 
     partner = pair_ends(node, leaving, np.cos(np.radians(turn)), by_node)
     seg, rev, lengths = chain_order(partner)
+    # the segments' rows in the input, gathered once for the output
+    source = keep[seg]
     # points of chain c: the first segment's start, then every segment's end
     chain_start = np.cumsum(lengths) - lengths
     out_len = lengths + 1
@@ -1293,20 +1289,23 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     out_edge = np.full(offsets[-1], -1, np.int64)
     chain_of = np.repeat(np.arange(len(lengths)), lengths)
     slot = offsets[chain_of] + (np.arange(len(seg)) - chain_start[chain_of])
-    flat_points = seg_points.reshape(-1, 3)
+    flat_points = segments.points.reshape(-1, 3)
     # a segment walked backwards starts at its second point
-    out_points[slot] = flat_points[2 * seg + rev]
-    out_faces[slot] = seg_faces[seg]
-    out_kind[slot] = seg_kind[seg]
+    out_points[slot] = flat_points[2 * source + rev]
+    out_faces[slot] = segments.faces[source]
+    out_kind[slot] = segments.kind[source]
     # a segment walked backwards starts on its second point's edge
-    out_edge[slot] = np.where(rev, seg_edge_end[seg], seg_edge[seg])
-    last = seg[chain_start + lengths - 1]
-    out_points[offsets[1:] - 1] = flat_points[2 * last + 1 - rev[chain_start + lengths - 1]]
+    edge = segments.edge[source]
+    if segments.edge_end is not None:
+        edge = np.where(rev, segments.edge_end[source], edge)
+    out_edge[slot] = edge
+    last = chain_start + lengths - 1
+    out_points[offsets[1:] - 1] = flat_points[2 * source[last] + 1 - rev[last]]
     return Polylines(
         out_points,
         offsets.astype(np.int64),
         out_faces,
-        seg_part[seg[chain_start]].astype(np.int32),
+        segments.part[source[chain_start]].astype(np.int32),
         out_kind,
         out_edge,
     )
