@@ -268,14 +268,15 @@ def drop_phantoms(
     to_eye = np.broadcast_to(np.array([0.0, 0.0, 1.0]), point.shape) if ortho else -point
     n_a = plane_a[:, :3] * np.where(np.einsum("ij,ij->i", plane_a[:, :3], to_eye) < 0, -1.0, 1.0)[:, None]
     n_b = plane_b[:, :3] * np.where(np.einsum("ij,ij->i", plane_b[:, :3], to_eye) < 0, -1.0, 1.0)[:, None]
-    flat = np.einsum("ij,ij->i", n_a, n_b) > np.cos(np.radians(0.5 * crease_angle))
-    # both side surfaces pass through the line's point (not in front of it, not behind it)
+    flat = np.flatnonzero(np.einsum("ij,ij->i", n_a, n_b) > np.cos(np.radians(0.5 * crease_angle)))
+    # both side surfaces pass through the line's point (not in front of it, not behind it),
+    # asked of the flat ones alone
+    rows, point, plane_a, plane_b = rows[flat], point[flat], plane_a[flat], plane_b[flat]
     scale = 1.0 if ortho else row_norm(point)
 
     def through(plane):
         gap = np.einsum("ij,ij->i", plane[:, :3], point) - plane[:, 3]
         return np.abs(gap) <= 2.0 * test.footprint * scale
 
-    phantom = flat & through(plane_a) & through(plane_b)
-    level[rows[phantom]] = -1
+    level[rows[through(plane_a) & through(plane_b)]] = -1
     return level
