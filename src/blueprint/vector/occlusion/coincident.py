@@ -76,8 +76,11 @@ def _bins(angle: float) -> int:
 
 def _direction_bin(unit: np.ndarray, bins: int) -> np.ndarray:
     """(N,) int64 bin of each (N, 2) direction's angle modulo a half turn."""
-    turn = np.degrees(np.arctan2(unit[:, 1], unit[:, 0])) % 180.0
-    return np.minimum((turn * (bins / 180.0)).astype(np.int64), bins - 1)
+    turn = np.arctan2(unit[:, 1], unit[:, 0])
+    np.degrees(turn, out=turn)
+    np.remainder(turn, 180.0, out=turn)
+    np.multiply(turn, bins / 180.0, out=turn)
+    return np.minimum(turn.astype(np.int64), bins - 1)
 
 
 @dataclass(frozen=True)
@@ -89,13 +92,14 @@ class _Search:
     the stretches that cover others (``source``) sorted by their cell of a dense grid of
     1-pixel cells (``span`` cells across, one cell of margin all round), then by their
     direction's bin (of ``bins``), then by rank (``src_key``, cell, bin and rank in one number);
-    the live samples' cells (``key``), ranks, and the first (``first_bin``) and count
-    (``bin_count``) of the bins they look in: their own and the two beside it, every bin for a
-    sample without a direction."""
+    the live samples' pixels and directions (``looks``, the compute pass's rows), cells
+    (``key``), ranks, and the first (``first_bin``) and count (``bin_count``) of the bins they
+    look in: their own and the two beside it, every bin for a sample without a direction."""
 
     stretch: np.ndarray
     units: np.ndarray
     direction: np.ndarray
+    looks: np.ndarray
     line: np.ndarray
     rank: np.ndarray
     ranks: int
@@ -139,12 +143,13 @@ class _Search:
         stretch = np.empty((len(line), 4), np.float32)
         stretch[:, :2] = pixel
         stretch[:, 2:] = forward
-        units = np.empty((len(line), 4), np.float32)
-        units[:, :2] = forward / np.where(length > 0, length, 1.0)[:, None]
-        units[:, 2] = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0)
-        units[:, 3] = 0.0
+        units = np.zeros((len(line), 4), np.float32)
+        moves = length > 0
+        # divided in double precision, rounded once as written
+        np.divide(forward, np.where(moves, length, 1.0)[:, None], out=units[:, :2])
+        np.divide(1.0, length**2, out=units[:, 2], where=moves)
         # a stretch that is hidden deeper or left out covers nothing
-        covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
+        covers = has_next & moves & (level >= 0) & (np.r_[level[1:], -1] >= 0)
         rank = _run_ranks(level, line, length)
         # the direction of each sample's own line there (its last sample looks back)
         direction = np.ascontiguousarray(units[:, :2])
@@ -157,8 +162,17 @@ class _Search:
         live_pixel = pixel[live]
         origin = np.floor(column_min(live_pixel)).astype(np.int64) - 1
         span = np.floor(column_max(live_pixel)).astype(np.int64) - origin + 2
-        c = np.floor(live_pixel).astype(np.int64) - origin
-        live_cell = np.clip(c[:, 1], 0, span[1] - 1) * span[0] + np.clip(c[:, 0], 0, span[0] - 1)
+        # the margin keeps every live sample's cell inside the grid; columns and rows as whole
+        # numbers in double precision, combined exactly
+        x, y = np.floor(live_pixel[:, 0]), np.floor(live_pixel[:, 1])
+        y -= origin[1]
+        y *= span[0]
+        y += x
+        y -= origin[0]
+        live_cell = y.astype(np.int64)
+        looks = np.empty((len(live), 4), np.float32)
+        looks[:, :2] = live_pixel
+        looks[:, 2:] = mine
         covering = covers[live]
         source = live[covering]
         src_cell = live_cell[covering]
@@ -172,11 +186,15 @@ class _Search:
         cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
         aimless = (mine[:, 0] == 0) & (mine[:, 1] == 0)
         side = 1 if bins > 1 else 0
-        first_bin = np.where(aimless, 0, (live_bin - side) % bins)
+        first_bin = live_bin - side
+        wraps = first_bin < 0
+        first_bin[wraps] %= bins
+        first_bin[aimless] = 0
         return cls(
             stretch,
             units,
             direction,
+            looks,
             line,
             rank,
             ranks,
@@ -273,11 +291,8 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     (``dist2`` the distance squared): the search's arrays laid out as the shader's inputs, two
     storage buffers, then its tables (``_TABLES``)."""
     s, live, source = search, search.live, search.source
-    looks = np.empty((len(live), 4), np.float32)
-    looks[:, :2] = s.pixel32[live]
-    looks[:, 2:] = s.direction[live]
     singles = [
-        looks,
+        s.looks,
         _columns(np.int32, s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count),
         _table_rows(s.stretch, source),
         _table_rows(s.units, source),
