@@ -281,11 +281,12 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     flags |= checked[rows].view(np.uint8) << 1
     flags |= test.contour_samples(samples, inside).view(np.uint8) << 2
     packed[:, 3] = flags
-    # pixels floored here in double precision, as the CPU reference has them; those to the
-    # sides of samples not checked are not read
-    packed[:, 4:6] = np.floor(pixel - 0.5)
-    packed[:, 6:8] = np.floor(pixel + step)
-    packed[:, 8:10] = np.floor(pixel - step)
+    # pixels floored here in double precision, as the CPU reference has them, in one scratch
+    # array; those to the sides of samples not checked are not read
+    floored = np.subtract(pixel, 0.5)
+    packed[:, 4:6] = np.floor(floored, out=floored)
+    packed[:, 6:8] = np.floor(np.add(pixel, step, out=floored), out=floored)
+    packed[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
     packed[:, 10:] = samples.faces[rows]
 
     ctx = renderer.ctx
