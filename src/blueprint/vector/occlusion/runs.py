@@ -147,6 +147,34 @@ def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float, along: np
     return np.where(np.repeat(sliver, end - start), -1, level).astype(level.dtype)
 
 
+def _piece_points(runs: int, at: np.ndarray, owner: np.ndarray, before, mid_before, after, mid_after):
+    """The points of the pieces that ``split_by_level`` cuts, of ``runs`` runs: the samples'
+    points ``at`` of runs ``owner`` (in order), a midpoint ``mid_before`` before runs ``before``
+    and ``mid_after`` after runs ``after``. Returns (N, 2) points, (P + 1,) offsets and the
+    runs that make pieces (those of two points or more), each run's points in order: the
+    midpoint before it, its samples', the midpoint after it, each written where it goes."""
+    in_run = np.bincount(owner, minlength=runs)
+    has_before = np.zeros(runs, np.int64)
+    has_before[before] = 1
+    per_run = has_before + in_run
+    per_run[after] += 1
+    good = per_run >= 2
+    pieces = np.flatnonzero(good)
+    offsets = np.r_[0, np.cumsum(per_run[pieces])].astype(np.int64)
+    first_point = np.zeros(runs, np.int64)
+    first_point[pieces] = offsets[:-1]
+    first_point += has_before
+    pts = np.empty((offsets[-1], 2))
+    rank = np.arange(len(owner)) - (np.cumsum(in_run) - in_run)[owner]
+    taken = good[owner]
+    pts[first_point[owner[taken]] + rank[taken]] = at[taken]
+    taken = good[before]
+    pts[first_point[before[taken]] - 1] = mid_before[taken]
+    taken = good[after]
+    pts[first_point[after[taken]] + in_run[after[taken]]] = mid_after[taken]
+    return pts, offsets, pieces
+
+
 def split_by_level(
     samples: Samples,
     level: np.ndarray,
@@ -215,19 +243,9 @@ def split_by_level(
     mid_after = np.where(
         at_vertex, pixel[run_end[after]], 0.5 * (pixel[run_end[after] - 1] + pixel[run_end[after]])
     )
-    # order all points by (run, position): midpoints before go first, after go last
-    pts = np.concatenate([pixel[chosen], mid_before, mid_after])
-    owner = np.concatenate([run[chosen], before, after])
-    pos = np.concatenate([chosen.astype(np.float64), run_start[before] - 0.5, run_end[after] - 0.5])
-    order = np.lexsort((pos, owner))
-    pts, owner = pts[order], owner[order]
-    # a piece needs two points
-    per_run = np.bincount(owner, minlength=len(run_start))
-    good = per_run >= 2
-    point_keep = good[owner]
-    pts, owner = pts[point_keep], owner[point_keep]
-    pieces = np.flatnonzero(good)
-    offsets = np.r_[0, np.cumsum(per_run[pieces])].astype(np.int64)
+    pts, offsets, pieces = _piece_points(
+        len(run_start), pixel[chosen], run[chosen], before, mid_before, after, mid_after
+    )
     # each piece's edges: those of its samples, in order, each run of one edge once
     piece_of_run = np.full(len(run_start), -1, np.int64)
     piece_of_run[pieces] = np.arange(len(pieces))
