@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min, row_norm
 from blueprint.gpu.device import run_over
 from blueprint.gpu.tables import table_fits, table_of, table_rows, table_texture
@@ -136,43 +137,16 @@ class _Search:
         pixel, line = samples.pixel, samples.line
         # every sample stands for the stretch to the next sample of its line
         has_next = np.r_[line[1:] == line[:-1], False]
-        forward = np.empty_like(pixel)
-        np.subtract(pixel[1:], pixel[:-1], out=forward[:-1])
-        forward[~has_next] = 0.0
-        length = row_norm(forward)
-        stretch = np.empty((len(line), 4), np.float32)
-        stretch[:, :2] = pixel
-        stretch[:, 2:] = forward
-        units = np.zeros((len(line), 4), np.float32)
-        moves = length > 0
-        # divided in double precision, rounded once as written
-        np.divide(forward, np.where(moves, length, 1.0)[:, None], out=units[:, :2])
-        np.divide(1.0, length**2, out=units[:, 2], where=moves)
+        length, stretch, units = _stretches(pixel, has_next)
         # a stretch that is hidden deeper or left out covers nothing
-        covers = has_next & moves & (level >= 0) & (np.r_[level[1:], -1] >= 0)
+        covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
         rank = _run_ranks(level, line, length)
         # the direction of each sample's own line there (its last sample looks back)
         direction = np.ascontiguousarray(units[:, :2])
         back = np.flatnonzero(~has_next[1:]) + 1
         direction[back] = direction[back - 1]
-        # the stretches that cover are live samples: their cells and bins are read off the
-        # live samples' (a covering stretch's direction is its sample's)
-        mine = direction[live]
-        live_bin = _direction_bin(mine, bins)
-        live_pixel = pixel[live]
-        origin = np.floor(column_min(live_pixel)).astype(np.int64) - 1
-        span = np.floor(column_max(live_pixel)).astype(np.int64) - origin + 2
-        # the margin keeps every live sample's cell inside the grid; columns and rows as whole
-        # numbers in double precision, combined exactly
-        x, y = np.floor(live_pixel[:, 0]), np.floor(live_pixel[:, 1])
-        y -= origin[1]
-        y *= span[0]
-        y += x
-        y -= origin[0]
-        live_cell = y.astype(np.int64)
-        looks = np.empty((len(live), 4), np.float32)
-        looks[:, :2] = live_pixel
-        looks[:, 2:] = mine
+        looks, live_bin, live_cell, first_bin, span = _live_rows(pixel, direction, live, bins)
+        # a covering stretch is a live sample's: its cell and bin (of its direction) are its own
         covering = covers[live]
         source = live[covering]
         src_cell = live_cell[covering]
@@ -184,12 +158,8 @@ class _Search:
         src_key = (src_cell * bins + live_bin[covering]) * ranks + rank[source]
         src_key, order = sorted_with_order(src_key, overwrite=True)
         cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
-        aimless = (mine[:, 0] == 0) & (mine[:, 1] == 0)
+        aimless = (looks[:, 2] == 0) & (looks[:, 3] == 0)
         side = 1 if bins > 1 else 0
-        first_bin = live_bin - side
-        wraps = first_bin < 0
-        first_bin[wraps] %= bins
-        first_bin[aimless] = 0
         return cls(
             stretch,
             units,
@@ -210,6 +180,79 @@ class _Search:
             first_bin,
             np.where(aimless, bins, 1 + 2 * side),
         )
+
+
+def _stretches(pixel: np.ndarray, has_next: np.ndarray):
+    """(S,) float64 length of every sample's stretch to the next sample of its line (0 where
+    none), and ``_Search``'s ``stretch`` and ``units`` rows, a block of samples a thread."""
+    n = len(pixel)
+    length = np.empty(n)
+    stretch = np.empty((n, 4), np.float32)
+    units = np.zeros((n, 4), np.float32)
+
+    def block(lo: int, hi: int) -> None:
+        forward = np.zeros((hi - lo, 2))
+        ahead = min(hi, n - 1)
+        np.subtract(pixel[lo + 1 : ahead + 1], pixel[lo:ahead], out=forward[: ahead - lo])
+        forward[~has_next[lo:hi]] = 0.0
+        step = length[lo:hi]
+        step[:] = row_norm(forward)
+        stretch[lo:hi, :2] = pixel[lo:hi]
+        stretch[lo:hi, 2:] = forward
+        moves = step > 0
+        # divided in double precision, rounded once as written
+        np.divide(forward, np.where(moves, step, 1.0)[:, None], out=units[lo:hi, :2])
+        np.divide(1.0, step**2, out=units[lo:hi, 2], where=moves)
+
+    parallel.run(block, n)
+    return length, stretch, units
+
+
+def _live_rows(pixel: np.ndarray, direction: np.ndarray, live: np.ndarray, bins: int):
+    """``_Search``'s rows of the live samples: ``looks``, their directions' bins, their cells
+    in a grid of one cell of margin all round their pixels, and the first bins they look in;
+    and the grid's ``span``. A block of live samples a thread, twice: the grid's corners come
+    from every block's pixels."""
+    count = len(live)
+    looks = np.empty((count, 4), np.float32)
+    live_pixel = np.empty((count, 2))
+    live_bin = np.empty(count, np.int64)
+
+    def gather(lo: int, hi: int):
+        rows = live[lo:hi]
+        mine = direction[rows]
+        live_bin[lo:hi] = _direction_bin(mine, bins)
+        looks[lo:hi, 2:] = mine
+        at = live_pixel[lo:hi]
+        np.take(pixel, rows, axis=0, out=at)
+        looks[lo:hi, :2] = at
+        return column_min(at), column_max(at)
+
+    corners = parallel.run(gather, count)
+    origin = np.floor(np.min([low for low, _ in corners], axis=0)).astype(np.int64) - 1
+    span = np.floor(np.max([high for _, high in corners], axis=0)).astype(np.int64) - origin + 2
+    live_cell = np.empty(count, np.int64)
+    first_bin = np.empty(count, np.int64)
+    side = 1 if bins > 1 else 0
+
+    def place(lo: int, hi: int) -> None:
+        # the margin keeps every live sample's cell inside the grid; columns and rows as whole
+        # numbers in double precision, combined exactly
+        x, y = np.floor(live_pixel[lo:hi, 0]), np.floor(live_pixel[lo:hi, 1])
+        y -= origin[1]
+        y *= span[0]
+        y += x
+        y -= origin[0]
+        live_cell[lo:hi] = y
+        first = first_bin[lo:hi]
+        np.subtract(live_bin[lo:hi], side, out=first)
+        wraps = first < 0
+        first[wraps] %= bins
+        mine = looks[lo:hi, 2:]
+        first[(mine[:, 0] == 0) & (mine[:, 1] == 0)] = 0
+
+    parallel.run(place, count)
+    return looks, live_bin, live_cell, first_bin, span
 
 
 def _run_ranks(level: np.ndarray, line: np.ndarray, step: np.ndarray) -> np.ndarray:
@@ -331,9 +374,14 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
 
 
 def _table_rows(array: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """Rows ``rows`` of a 2-D ``array`` gathered straight into a table's rows (``table_of``)."""
+    """Rows ``rows`` of a 2-D ``array`` gathered straight into a table's rows (``table_of``), a
+    block of rows a thread."""
     table = np.empty((table_rows(len(rows)), array.shape[1]), array.dtype)
-    np.take(array, rows, axis=0, out=table[: len(rows)])
+
+    def gather(lo: int, hi: int) -> None:
+        np.take(array, rows[lo:hi], axis=0, out=table[lo:hi])
+
+    parallel.run(gather, len(rows))
     table[len(rows) :] = 0
     return table
 

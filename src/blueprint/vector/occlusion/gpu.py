@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.gpu.device import run_over
 from blueprint.gpu.tables import table_fits, table_of, table_texture
 from blueprint.render.renderer import LayerRenderer
@@ -270,24 +271,32 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     if layers == 0:
         level[inside] = 0
         return level, sides, checked
-    # every sample inside the view (a drawing at scale): its columns read whole, not gathered
-    rows = slice(None) if len(inside) == count else inside
-    pixel, step = samples.pixel[rows], offset * across[rows]
+    whole = len(inside) == count
+    contour = test.contour_samples(samples, inside)
     # occlusion.comp's Sample: eye (float), flags, the 2 x 2 pixels' first, the pixels to either
-    # side of the line, own faces (int), written in place as its int32 words
+    # side of the line, own faces (int), written in place as its int32 words, a block of rows
+    # a thread
     packed = np.empty((len(inside), 12), np.int32)
-    packed.view(np.float32)[:, :3] = samples.eye[rows]
-    flags = np.logical_not(_CONTOUR_KINDS[samples.kind[rows]]).view(np.uint8)
-    flags |= checked[rows].view(np.uint8) << 1
-    flags |= test.contour_samples(samples, inside).view(np.uint8) << 2
-    packed[:, 3] = flags
-    # pixels floored here in double precision, as the CPU reference has them, in one scratch
-    # array; those to the sides of samples not checked are not read
-    floored = np.subtract(pixel, 0.5)
-    packed[:, 4:6] = np.floor(floored, out=floored)
-    packed[:, 6:8] = np.floor(np.add(pixel, step, out=floored), out=floored)
-    packed[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
-    packed[:, 10:] = samples.faces[rows]
+
+    def pack(lo: int, hi: int) -> None:
+        # every sample inside the view (a drawing at scale): its columns read whole, not gathered
+        rows = slice(lo, hi) if whole else inside[lo:hi]
+        out = packed[lo:hi]
+        out.view(np.float32)[:, :3] = samples.eye[rows]
+        flags = np.logical_not(_CONTOUR_KINDS[samples.kind[rows]]).view(np.uint8)
+        flags |= checked[rows].view(np.uint8) << 1
+        flags |= contour[lo:hi].view(np.uint8) << 2
+        out[:, 3] = flags
+        # pixels floored here in double precision, as the CPU reference has them, in one
+        # scratch array; those to the sides of samples not checked are not read
+        pixel, step = samples.pixel[rows], offset * across[rows]
+        floored = np.subtract(pixel, 0.5)
+        out[:, 4:6] = np.floor(floored, out=floored)
+        out[:, 6:8] = np.floor(np.add(pixel, step, out=floored), out=floored)
+        out[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
+        out[:, 10:] = samples.faces[rows]
+
+    parallel.run(pack, len(inside))
 
     ctx = renderer.ctx
     prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": test.band is not None})
@@ -307,7 +316,6 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         band_texture.use(location=MAX_LAYERS + 1)
         put(prog, "u_reach", MAX_LAYERS + 1)
     buffers = {0: ctx.buffer(packed), 2: ctx.buffer(reserve=16 * len(inside))}
-    del packed
     try:
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
@@ -320,6 +328,6 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         plane_texture.release()
         if band_texture is not None:
             band_texture.release()
-    level[rows] = result[:, 0]
-    sides[rows] = result[:, 1:3]
+    level[slice(None) if whole else inside] = result[:, 0]
+    sides[slice(None) if whole else inside] = result[:, 1:3]
     return level, sides, checked
