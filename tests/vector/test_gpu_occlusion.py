@@ -341,3 +341,20 @@ def test_grazing_band_equal_on_the_cpu_and_the_gpu(renderer, source, through):
     changed = before != cpu
     assert changed.sum() > 100 and not changed[~contour].any()
     assert (cpu[changed] < before[changed]).all()
+
+
+def test_the_occlusion_split_over_threads_draws_what_one_thread_does(renderer, monkeypatch):
+    """The samples packed for the pass, the coincident search's rows and the crease check's
+    phantoms worked a block of rows a thread: the same pieces, point for point, as in one."""
+    from blueprint import parallel, settings
+
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", azimuth=20, aspect=1.0)
+    monkeypatch.setattr(settings, "THREADS", 1)
+    one = draw_vector(model, camera, SIZE, renderer=renderer).lines
+    monkeypatch.setattr(settings, "THREADS", 3)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 64)
+    split = draw_vector(model, camera, SIZE, renderer=renderer).lines
+    assert len(one.offsets) > 100
+    for name in ("points", "offsets", "level", "kind", "part", "edges"):
+        np.testing.assert_array_equal(getattr(split, name), getattr(one, name))

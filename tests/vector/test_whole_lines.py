@@ -163,16 +163,17 @@ def _smooth_by_samples(level, line, pixel, min_run):
         start, end, length = _run_lengths(level, line, along)
         if len(start) < 2:
             return level
-        target = _merged_levels(length, line[start], level[start], min_run)
-        if target is None:
+        merged = _merged_levels(length, line[start], level[start], min_run, np.arange(len(start)))
+        if merged is None:
             return level
-        level = np.repeat(target, end - start).astype(level.dtype)
+        level = np.repeat(merged[0], end - start).astype(level.dtype)
 
 
 def test_smoothing_over_runs_equals_smoothing_over_samples():
-    """``_smooth`` merges runs round by round on the runs themselves; every sample's level
-    equals that of the rounds over all samples, on noisy levels of many lines of uneven steps
-    (plateaus of equal lengths, levels -1 among them)."""
+    """``_smooth`` merges runs round by round on the runs themselves, the lines without short
+    runs left out of the rounds; every sample's level equals that of the rounds over all
+    samples, on noisy levels of many lines of uneven steps (plateaus of equal lengths, levels
+    -1 among them)."""
     rng = np.random.default_rng(9)
     line = np.repeat(np.arange(300), rng.integers(1, 60, 300))
     step = rng.choice([0.5, 1.0, 1.0, 1.7], (len(line), 2))

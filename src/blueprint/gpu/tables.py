@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["TABLE_WIDTH", "table_fits", "table_rows", "table_texture"]
+__all__ = ["TABLE_WIDTH", "table_fits", "table_of", "table_rows", "table_texture"]
 
 # Rows a texture row (table.glsl's TABLE_WIDTH): a power of two, so that a shader finds the
 # texel with a mask and a shift.
@@ -47,3 +47,13 @@ def table_texture(ctx, data: np.ndarray):
     texture = ctx.texture((TABLE_WIDTH, rows), columns, texels, dtype=dtype)
     texture.filter = (ctx.NEAREST, ctx.NEAREST)  # an integer texture filtered linearly reads as 0
     return texture
+
+
+def table_of(data: np.ndarray, dtype) -> np.ndarray:
+    """An (N,) or (N, C) array as ``dtype`` in an array of ``table_rows(N)`` rows, those past N
+    zero: what ``table_texture`` takes as it is, so that a table cast from another type is
+    written once, not cast and then copied into its texture's rows."""
+    table = np.empty((table_rows(len(data)), *data.shape[1:]), dtype)
+    table[: len(data)] = data
+    table[len(data) :] = 0
+    return table

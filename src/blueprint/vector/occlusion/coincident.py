@@ -7,10 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min, row_norm
 from blueprint.gpu.device import run_over
-from blueprint.gpu.tables import table_fits, table_texture
-from blueprint.sorting import stable_argsort
+from blueprint.gpu.tables import table_fits, table_of, table_rows, table_texture
+from blueprint.sorting import sorted_with_order
 
 from .samples import Samples
 
@@ -76,33 +77,36 @@ def _bins(angle: float) -> int:
 
 def _direction_bin(unit: np.ndarray, bins: int) -> np.ndarray:
     """(N,) int64 bin of each (N, 2) direction's angle modulo a half turn."""
-    turn = np.degrees(np.arctan2(unit[:, 1], unit[:, 0])) % 180.0
-    return np.minimum((turn * (bins / 180.0)).astype(np.int64), bins - 1)
+    turn = np.arctan2(unit[:, 1], unit[:, 0])
+    np.degrees(turn, out=turn)
+    np.remainder(turn, 180.0, out=turn)
+    np.multiply(turn, bins / 180.0, out=turn)
+    return np.minimum(turn.astype(np.int64), bins - 1)
 
 
 @dataclass(frozen=True)
 class _Search:
     """What the search for coincident stretches reads: every sample's stretch to the next
-    sample of its line (``forward``, its ``unit`` direction and ``inv_length2``, float32 as the
-    compute pass has them), the samples' own directions, and the stretches that cover others
-    (``source``) sorted by their cell of a dense grid of 1-pixel cells (``span`` cells across,
-    one cell of margin all round), then by their direction's bin (of ``bins``), then by rank
-    (level, then line: ``src_key``, cell, bin and rank in one number); the live samples' cells
+    sample of its line (``stretch``: its start ``pixel32`` and step ``forward32``; ``units``:
+    its ``unit32`` direction and ``inv_length2``; float32 as the compute pass has them, laid
+    out as its tables' rows), the samples' own directions and ranks (level, then line), and
+    the stretches that cover others (``source``) sorted by their cell of a dense grid of
+    1-pixel cells (``span`` cells across, one cell of margin all round), then by their
+    direction's bin (of ``bins``), then by rank (``src_key``, cell, bin and rank in one number);
+    the live samples' pixels and directions (``looks``, the compute pass's rows), cells
     (``key``), ranks, and the first (``first_bin``) and count (``bin_count``) of the bins they
     look in: their own and the two beside it, every bin for a sample without a direction."""
 
-    pixel32: np.ndarray
+    stretch: np.ndarray
+    units: np.ndarray
     direction: np.ndarray
-    unit32: np.ndarray
-    forward32: np.ndarray
-    inv_length2: np.ndarray
+    looks: np.ndarray
     line: np.ndarray
     rank: np.ndarray
     ranks: int
     bins: int
     source: np.ndarray
     src_key: np.ndarray
-    src_bin: np.ndarray
     cell_start: np.ndarray
     cell_count: np.ndarray
     span: np.ndarray
@@ -112,65 +116,143 @@ class _Search:
     first_bin: np.ndarray
     bin_count: np.ndarray
 
+    @property
+    def pixel32(self) -> np.ndarray:
+        return self.stretch[:, :2]
+
+    @property
+    def forward32(self) -> np.ndarray:
+        return self.stretch[:, 2:]
+
+    @property
+    def unit32(self) -> np.ndarray:
+        return self.units[:, :2]
+
+    @property
+    def inv_length2(self) -> np.ndarray:
+        return self.units[:, 2]
+
     @classmethod
     def of(cls, samples: Samples, level: np.ndarray, live: np.ndarray, bins: int = 1) -> _Search:
         pixel, line = samples.pixel, samples.line
         # every sample stands for the stretch to the next sample of its line
         has_next = np.r_[line[1:] == line[:-1], False]
-        forward = np.zeros_like(pixel)
-        forward[:-1] = np.where(has_next[:-1, None], np.diff(pixel, axis=0), 0.0)
-        length = row_norm(forward)
-        unit = forward / np.where(length > 0, length, 1.0)[:, None]
+        length, stretch, units = _stretches(pixel, has_next)
         # a stretch that is hidden deeper or left out covers nothing
         covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
         rank = _run_ranks(level, line, length)
         # the direction of each sample's own line there (its last sample looks back)
-        direction = np.where(has_next[:, None], unit, np.r_[unit[:1], unit[:-1]]).astype(np.float32)
-        unit32 = unit.astype(np.float32)
-        inv_length2 = np.divide(1.0, length**2, out=np.zeros_like(length), where=length > 0)
-        origin = np.floor(column_min(pixel[live])).astype(np.int64) - 1
-        span = np.floor(column_max(pixel[live])).astype(np.int64) - origin + 2
-        source = np.flatnonzero(covers)
-
-        def cell_of(rows):
-            c = np.floor(pixel[rows]).astype(np.int64) - origin
-            return np.clip(c[:, 1], 0, span[1] - 1) * span[0] + np.clip(c[:, 0], 0, span[0] - 1)
+        direction = np.ascontiguousarray(units[:, :2])
+        back = np.flatnonzero(~has_next[1:]) + 1
+        direction[back] = direction[back - 1]
+        looks, live_bin, live_cell, first_bin, span = _live_rows(pixel, direction, live, bins)
+        # a covering stretch is a live sample's: its cell and bin (of its direction) are its own
+        covering = covers[live]
+        source = live[covering]
+        src_cell = live_cell[covering]
 
         # stretches by cell, bin and rank: a sample's candidates in a cell and bin are the run
         # of stretches ranked below its own at the run's start, found by one search, so pairs
         # that the rank rules out are never made
-        src_cell = cell_of(source)
-        src_bin = _direction_bin(unit32[source], bins)
         ranks = int(rank.max()) + 1  # ranks run 0 to R - 1 over the R runs: the keys fit
-        src_key = (src_cell * bins + src_bin) * ranks + rank[source]
-        order = stable_argsort(src_key)  # the order within a run of one key does not matter
+        src_key = (src_cell * bins + live_bin[covering]) * ranks + rank[source]
+        src_key, order = sorted_with_order(src_key, overwrite=True)
         cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
-        mine = direction[live]
-        aimless = (mine[:, 0] == 0) & (mine[:, 1] == 0)
+        aimless = (looks[:, 2] == 0) & (looks[:, 3] == 0)
         side = 1 if bins > 1 else 0
-        first_bin = np.where(aimless, 0, (_direction_bin(mine, bins) - side) % bins)
         return cls(
-            pixel.astype(np.float32),
+            stretch,
+            units,
             direction,
-            unit32,
-            forward.astype(np.float32),
-            inv_length2.astype(np.float32),
+            looks,
             line,
             rank,
             ranks,
             bins,
             source[order],
-            src_key[order],
-            src_bin[order],
+            src_key,
             np.cumsum(cell_count) - cell_count,
             cell_count,
             span,
             live,
-            cell_of(live),
+            live_cell,
             rank[live],
             first_bin,
             np.where(aimless, bins, 1 + 2 * side),
         )
+
+
+def _stretches(pixel: np.ndarray, has_next: np.ndarray):
+    """(S,) float64 length of every sample's stretch to the next sample of its line (0 where
+    none), and ``_Search``'s ``stretch`` and ``units`` rows, a block of samples a thread."""
+    n = len(pixel)
+    length = np.empty(n)
+    stretch = np.empty((n, 4), np.float32)
+    units = np.zeros((n, 4), np.float32)
+
+    def block(lo: int, hi: int) -> None:
+        forward = np.zeros((hi - lo, 2))
+        ahead = min(hi, n - 1)
+        np.subtract(pixel[lo + 1 : ahead + 1], pixel[lo:ahead], out=forward[: ahead - lo])
+        forward[~has_next[lo:hi]] = 0.0
+        step = length[lo:hi]
+        step[:] = row_norm(forward)
+        stretch[lo:hi, :2] = pixel[lo:hi]
+        stretch[lo:hi, 2:] = forward
+        moves = step > 0
+        # divided in double precision, rounded once as written
+        np.divide(forward, np.where(moves, step, 1.0)[:, None], out=units[lo:hi, :2])
+        np.divide(1.0, step**2, out=units[lo:hi, 2], where=moves)
+
+    parallel.run(block, n)
+    return length, stretch, units
+
+
+def _live_rows(pixel: np.ndarray, direction: np.ndarray, live: np.ndarray, bins: int):
+    """``_Search``'s rows of the live samples: ``looks``, their directions' bins, their cells
+    in a grid of one cell of margin all round their pixels, and the first bins they look in;
+    and the grid's ``span``. A block of live samples a thread, twice: the grid's corners come
+    from every block's pixels."""
+    count = len(live)
+    looks = np.empty((count, 4), np.float32)
+    live_pixel = np.empty((count, 2))
+    live_bin = np.empty(count, np.int64)
+
+    def gather(lo: int, hi: int):
+        rows = live[lo:hi]
+        mine = direction[rows]
+        live_bin[lo:hi] = _direction_bin(mine, bins)
+        looks[lo:hi, 2:] = mine
+        at = live_pixel[lo:hi]
+        np.take(pixel, rows, axis=0, out=at)
+        looks[lo:hi, :2] = at
+        return column_min(at), column_max(at)
+
+    corners = parallel.run(gather, count)
+    origin = np.floor(np.min([low for low, _ in corners], axis=0)).astype(np.int64) - 1
+    span = np.floor(np.max([high for _, high in corners], axis=0)).astype(np.int64) - origin + 2
+    live_cell = np.empty(count, np.int64)
+    first_bin = np.empty(count, np.int64)
+    side = 1 if bins > 1 else 0
+
+    def place(lo: int, hi: int) -> None:
+        # the margin keeps every live sample's cell inside the grid; columns and rows as whole
+        # numbers in double precision, combined exactly
+        x, y = np.floor(live_pixel[lo:hi, 0]), np.floor(live_pixel[lo:hi, 1])
+        y -= origin[1]
+        y *= span[0]
+        y += x
+        y -= origin[0]
+        live_cell[lo:hi] = y
+        first = first_bin[lo:hi]
+        np.subtract(live_bin[lo:hi], side, out=first)
+        wraps = first < 0
+        first[wraps] %= bins
+        mine = looks[lo:hi, 2:]
+        first[(mine[:, 0] == 0) & (mine[:, 1] == 0)] = 0
+
+    parallel.run(place, count)
+    return looks, live_bin, live_cell, first_bin, span
 
 
 def _run_ranks(level: np.ndarray, line: np.ndarray, step: np.ndarray) -> np.ndarray:
@@ -253,12 +335,12 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     storage buffers, then its tables (``_TABLES``)."""
     s, live, source = search, search.live, search.source
     singles = [
-        _columns(np.float32, s.pixel32[live], s.direction[live]),
+        s.looks,
         _columns(np.int32, s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count),
-        _columns(np.float32, s.pixel32[source], s.forward32[source]),
-        _columns(np.float32, s.unit32[source], s.inv_length2[source], np.float32(0.0)),
-        _columns(np.int32, s.src_bin * s.ranks + s.rank[source], s.line[source]),
-        _columns(np.int32, s.cell_start, s.cell_count),
+        _table_rows(s.stretch, source),
+        _table_rows(s.units, source),
+        table_of(_columns(np.int32, s.src_key % (s.bins * s.ranks), s.line[source]), np.int32),
+        table_of(_columns(np.int32, s.cell_start, s.cell_count), np.int32),
     ]
     count = len(live)
     renderer.make_current()
@@ -289,6 +371,19 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
             buffer.release()
         for texture in tables:
             texture.release()
+
+
+def _table_rows(array: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Rows ``rows`` of a 2-D ``array`` gathered straight into a table's rows (``table_of``), a
+    block of rows a thread."""
+    table = np.empty((table_rows(len(rows)), array.shape[1]), array.dtype)
+
+    def gather(lo: int, hi: int) -> None:
+        np.take(array, rows[lo:hi], axis=0, out=table[lo:hi])
+
+    parallel.run(gather, len(rows))
+    table[len(rows) :] = 0
+    return table
 
 
 def _columns(dtype, *columns) -> np.ndarray:

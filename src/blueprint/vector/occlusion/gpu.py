@@ -10,8 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.gpu.device import run_over
-from blueprint.gpu.tables import table_fits, table_texture
+from blueprint.gpu.tables import table_fits, table_of, table_texture
 from blueprint.render.renderer import LayerRenderer
 from blueprint.render.stop import standard_rules
 from blueprint.scene.camera import Camera
@@ -19,7 +20,7 @@ from blueprint.scene.model import Model
 
 from ..lines import BORDER, CREASE, GRAZING_REACH, SILHOUETTE, SMOOTH
 from .levels import DepthTest
-from .pixels import PixelLayers, across_line, around
+from .pixels import PixelLayers
 from .samples import Samples
 
 __all__ = ["FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels", "stack_levels"]
@@ -35,6 +36,10 @@ _COPY_UNITS = (14, 15)
 _GROUP = 64
 # Rows of pixels one invocation of deepest.comp looks at.
 _DEEPEST_ROWS = 64
+# Kinds of line by their ``lines`` code: mesh edges (whose sides the crease check looks at), and
+# contours (where a pixel showing no surface takes part in the minimum).
+_EDGE_KINDS = np.isin(np.arange(256), (SILHOUETTE, BORDER, CREASE, SMOOTH))
+_CONTOUR_KINDS = np.isin(np.arange(256), (SILHOUETTE, BORDER))
 
 
 @dataclass(frozen=True)
@@ -42,7 +47,7 @@ class GpuLevels:
     """What the compute pass gives back.
 
     level : (S,) int32, layers in front of each sample (-1 outside the view)
-    sides : (S, 2) int64, the face seen at the line's depth a pixel to either side of a mesh
+    sides : (S, 2) int32, the face seen at the line's depth a pixel to either side of a mesh
         edge's sample (-1 where none, or not asked: ``checked`` False)
     checked : (S,) bool, samples of mesh edges with a direction on screen
     layers : int, layers the peel's stop rules let count
@@ -211,7 +216,7 @@ def stack_levels(
     """
     renderer.make_current()
     height, width = peeled.height, peeled.width
-    stacks, count = peeled.stacks, peeled.count.astype(np.int64)
+    stacks, count = peeled.stacks, peeled.count
     faces = stacks[np.arange(stacks.shape[1]) < count[:, None]]
     if (
         renderer.ctx.version_code < 430
@@ -219,17 +224,20 @@ def stack_levels(
         or max(width, height) > renderer.max_texture
     ):
         return None
-    # a pixel's surfaces run from the front: its row of the table and their count
+    # a pixel's surfaces run from the front: its row of the table and their count, written at
+    # the pixel's place in OpenGL's rows (bottom up)
     where = np.zeros((height * width, 2), np.int32)
-    rows = np.arange(height * width) if peeled.pixels is None else peeled.pixels
-    where[rows, 0] = np.cumsum(count) - count
-    where[rows, 1] = count
+    pixels = np.arange(height * width) if peeled.pixels is None else peeled.pixels
+    y, x = np.divmod(pixels, width)
+    texel = (height - 1 - y) * width + x
+    where[texel, 0] = np.cumsum(count) - count
+    where[texel, 1] = count
     ctx = renderer.ctx
     # a face -1 inside a stack (none there) reads the all-zero last plane, as on the CPU
-    face_table = table_texture(ctx, np.where(faces < 0, len(planes) - 1, faces).astype(np.int32))
-    where_texture = ctx.texture(
-        (width, height), 2, where.reshape(height, width, 2)[::-1].tobytes(), dtype="i4"
-    )
+    table = table_of(faces, np.int32)
+    np.putmask(table, table < 0, len(planes) - 1)
+    face_table = table_texture(ctx, table)
+    where_texture = ctx.texture((width, height), 2, where, dtype="i4")
     where_texture.filter = (ctx.NEAREST, ctx.NEAREST)
 
     def bind(prog) -> None:
@@ -254,31 +262,41 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     faces bound by ``bind(program)``, for ``layers`` layers."""
     count = len(samples.line)
     level = np.full(count, -1, np.int32)
-    sides = np.full((count, 2), -1, np.int64)
-    checked = np.zeros(count, bool)
+    sides = np.full((count, 2), -1, np.int32)
+    good, across = samples.across
+    checked = _EDGE_KINDS[samples.kind] & samples.inside & good
     inside = np.flatnonzero(samples.inside)
-    edge_rows, across = across_line(
-        samples, np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE, SMOOTH)) & samples.inside)
-    )
-    checked[edge_rows] = True
     if len(inside) == 0:
         return level, sides, checked
     if layers == 0:
         level[inside] = 0
         return level, sides, checked
-    flags = (~np.isin(samples.kind, (SILHOUETTE, BORDER))).astype(np.int32) | (checked.astype(np.int32) << 1)
-    flags[inside] |= test.contour_samples(samples, inside).astype(np.int32) << 2
-    packed = np.zeros(
-        len(inside), [("eye", "<f4", 3), ("flags", "<i4"), ("pixel", "<i4", 4), ("own", "<i4", 4)]
-    )
-    packed["eye"] = samples.eye[inside]
-    packed["flags"] = flags[inside]
-    # pixels floored here in double precision, as the CPU reference has them
-    packed["pixel"][:, :2] = around(samples.pixel[inside])
-    at = np.flatnonzero(checked[inside])
-    packed["pixel"][at, 2:] = np.floor(samples.pixel[edge_rows] + offset * across)
-    packed["own"][at, :2] = np.floor(samples.pixel[edge_rows] - offset * across)
-    packed["own"][:, 2:] = samples.faces[inside]
+    whole = len(inside) == count
+    contour = test.contour_samples(samples, inside)
+    # occlusion.comp's Sample: eye (float), flags, the 2 x 2 pixels' first, the pixels to either
+    # side of the line, own faces (int), written in place as its int32 words, a block of rows
+    # a thread
+    packed = np.empty((len(inside), 12), np.int32)
+
+    def pack(lo: int, hi: int) -> None:
+        # every sample inside the view (a drawing at scale): its columns read whole, not gathered
+        rows = slice(lo, hi) if whole else inside[lo:hi]
+        out = packed[lo:hi]
+        out.view(np.float32)[:, :3] = samples.eye[rows]
+        flags = np.logical_not(_CONTOUR_KINDS[samples.kind[rows]]).view(np.uint8)
+        flags |= checked[rows].view(np.uint8) << 1
+        flags |= contour[lo:hi].view(np.uint8) << 2
+        out[:, 3] = flags
+        # pixels floored here in double precision, as the CPU reference has them, in one
+        # scratch array; those to the sides of samples not checked are not read
+        pixel, step = samples.pixel[rows], offset * across[rows]
+        floored = np.subtract(pixel, 0.5)
+        out[:, 4:6] = np.floor(floored, out=floored)
+        out[:, 6:8] = np.floor(np.add(pixel, step, out=floored), out=floored)
+        out[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
+        out[:, 10:] = samples.faces[rows]
+
+    parallel.run(pack, len(inside))
 
     ctx = renderer.ctx
     prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": test.band is not None})
@@ -289,7 +307,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     put(prog, "u_ortho", bool(test.ortho))
     put(prog, "u_tolerance", float(np.float32(test.tolerance)))
     put(prog, "u_footprint", float(test.footprint))
-    plane_texture = table_texture(ctx, planes.astype(np.float32))
+    plane_texture = table_texture(ctx, table_of(planes, np.float32))
     plane_texture.use(location=MAX_LAYERS)
     put(prog, "u_planes", MAX_LAYERS)
     band_texture = None
@@ -297,7 +315,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         band_texture = table_texture(ctx, (test.band * np.float32(GRAZING_REACH)).astype(np.float32))
         band_texture.use(location=MAX_LAYERS + 1)
         put(prog, "u_reach", MAX_LAYERS + 1)
-    buffers = {0: ctx.buffer(packed.tobytes()), 2: ctx.buffer(reserve=16 * len(inside))}
+    buffers = {0: ctx.buffer(packed), 2: ctx.buffer(reserve=16 * len(inside))}
     try:
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
@@ -310,6 +328,6 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         plane_texture.release()
         if band_texture is not None:
             band_texture.release()
-    level[inside] = result[:, 0]
-    sides[inside] = result[:, 1:3]
+    level[slice(None) if whole else inside] = result[:, 0]
+    sides[slice(None) if whole else inside] = result[:, 1:3]
     return level, sides, checked

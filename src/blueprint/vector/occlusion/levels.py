@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import row_norm
 from blueprint.scene.model import Model
 
@@ -254,7 +255,23 @@ def drop_phantoms(
     """The second half of :func:`verify_creases`, given the faces ``tri_a`` and ``tri_b`` seen
     at the line's depth to either side of the samples ``rows`` (-1 where none): their levels
     set to -1 where both are one flat surface of the line's own part through the line's point."""
-    level, ortho = level.copy(), test.ortho
+    level = level.copy()
+    cos_limit = np.cos(np.radians(0.5 * crease_angle))
+
+    def drop(lo: int, hi: int) -> None:
+        b = slice(lo, hi)
+        found = _phantoms(samples, rows[b], tri_a[b], tri_b[b], planes, face_part, test, cos_limit)
+        level[found] = -1
+
+    # a block of samples a thread, each writing its own samples' levels
+    parallel.run(drop, len(rows))
+    return level
+
+
+def _phantoms(samples, rows, tri_a, tri_b, planes, face_part, test: DepthTest, cos_limit) -> np.ndarray:
+    """Those of the samples ``rows`` that ``drop_phantoms`` leaves out (``cos_limit`` the cosine
+    of half the crease angle)."""
+    ortho = test.ortho
     # only samples with a face of the line's part to either side can be phantoms: another
     # part's face covering both sides (a panel a fraction of a pixel in front of a slot's edge)
     # hides the line, it does not continue its surface
@@ -268,14 +285,14 @@ def drop_phantoms(
     to_eye = np.broadcast_to(np.array([0.0, 0.0, 1.0]), point.shape) if ortho else -point
     n_a = plane_a[:, :3] * np.where(np.einsum("ij,ij->i", plane_a[:, :3], to_eye) < 0, -1.0, 1.0)[:, None]
     n_b = plane_b[:, :3] * np.where(np.einsum("ij,ij->i", plane_b[:, :3], to_eye) < 0, -1.0, 1.0)[:, None]
-    flat = np.einsum("ij,ij->i", n_a, n_b) > np.cos(np.radians(0.5 * crease_angle))
-    # both side surfaces pass through the line's point (not in front of it, not behind it)
+    flat = np.flatnonzero(np.einsum("ij,ij->i", n_a, n_b) > cos_limit)
+    # both side surfaces pass through the line's point (not in front of it, not behind it),
+    # asked of the flat ones alone
+    rows, point, plane_a, plane_b = rows[flat], point[flat], plane_a[flat], plane_b[flat]
     scale = 1.0 if ortho else row_norm(point)
 
     def through(plane):
         gap = np.einsum("ij,ij->i", plane[:, :3], point) - plane[:, 3]
         return np.abs(gap) <= 2.0 * test.footprint * scale
 
-    phantom = flat & through(plane_a) & through(plane_b)
-    level[rows[phantom]] = -1
-    return level
+    return rows[through(plane_a) & through(plane_b)]

@@ -72,12 +72,16 @@ def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -
     probed = np.zeros(height * width, bool)
     inside = np.flatnonzero(samples.inside)
     px = around(samples.pixel[inside])
-    for step in NEIGHBOURS:
-        probed[flat_index(px + step, height, width)] = True
-    rows = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
-    rows, across = across_line(samples, rows)
-    for side in (1.0, -1.0):
-        spot = np.floor(samples.pixel[rows] + side * offset * across).astype(np.int64)
+    # the 2 x 2 pixels' columns and rows clamped once each, as ``flat_index`` clamps them
+    columns = [np.clip(px[:, 0] + dx, 0, width - 1) for dx in (0, 1)]
+    rows = [np.clip(px[:, 1] + dy, 0, height - 1) * width for dy in (0, 1)]
+    for dx, dy in NEIGHBOURS.tolist():
+        probed[rows[dy] + columns[dx]] = True
+    edges = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
+    edges, across = across_line(samples, edges)
+    pixel, step = samples.pixel[edges], offset * across
+    for side in (np.add, np.subtract):
+        spot = np.floor(side(pixel, step, out=across), out=across).astype(np.int64)
         probed[flat_index(spot, height, width)] = True
     return np.flatnonzero(probed)
 

@@ -60,34 +60,67 @@ def _smooth(
         return level.copy()
     along = _along(line, pixel) if along is None else along
     start, end, lo, hi = _runs(level, line, along)
-    length = hi - lo
     run_line, run_level = line[start], level[start]
-    while len(start) >= 2:
-        target = _merged_levels(length, run_line, run_level, min_run)
-        if target is None:
+    smoothed = np.empty(n, level.dtype)
+    # a line without short runs changes no more and leaves the rounds; the runs of such lines
+    # before each run still count in its place among all runs, which breaks ties
+    before = np.zeros(len(start), np.int64)
+    runs = len(start)
+    while runs >= 2:
+        merged = _merged_levels(hi - lo, run_line, run_level, min_run, before + np.arange(len(start)))
+        if merged is None:
             break
-        target = target.astype(level.dtype)
+        target, short = merged
+        stays = _with_any(short, run_line)
+        done = ~stays
+        _fill(smoothed, start[done], end[done], run_level[done])
+        before = (before + np.cumsum(done) - done)[stays]
+        start, end, lo, hi = start[stays], end[stays], lo[stays], hi[stays]
+        run_line, target = run_line[stays], target[stays].astype(level.dtype)
         # a joined run begins where its first run began and ends where its last one ended
         first = np.r_[True, (run_line[1:] != run_line[:-1]) | (target[1:] != target[:-1])]
         last = np.r_[first[1:], True]
-        start, lo, run_line, run_level = start[first], lo[first], run_line[first], target[first]
+        runs -= len(first) - np.count_nonzero(first)
+        start, lo, before = start[first], lo[first], before[first]
+        run_line, run_level = run_line[first], target[first]
         end, hi = end[last], hi[last]
-        length = hi - lo
-    return np.repeat(run_level, end - start).astype(level.dtype)
+    _fill(smoothed, start, end, run_level)
+    return smoothed
 
 
-def _merged_levels(length: np.ndarray, run_line: np.ndarray, run_level: np.ndarray, min_run: float):
-    """One round of ``_smooth`` over runs in order (their ``length`` in pixels, polyline and
-    level): each run under ``min_run`` pixels beside another of its line, and shorter than
-    its short neighbours, takes the level of its longer neighbour (of both, where they agree);
-    the runs' levels after the round, or None where no run is short."""
+def _with_any(flag: np.ndarray, run_line: np.ndarray) -> np.ndarray:
+    """(R,) bool: whether any run of each run's polyline has ``flag`` (runs in line order)."""
+    if len(flag) == 0:
+        return flag
+    first = np.flatnonzero(np.r_[True, run_line[1:] != run_line[:-1]])
+    return np.repeat(np.logical_or.reduceat(flag, first), np.diff(np.r_[first, len(flag)]))
+
+
+def _fill(out: np.ndarray, start: np.ndarray, end: np.ndarray, value: np.ndarray) -> None:
+    """``out[start[i]:end[i]] = value[i]`` for every i (ranges apart, in order)."""
+    count = end - start
+    total = int(count.sum())
+    if total == 0:
+        return
+    at = np.arange(total) + np.repeat(start - (np.cumsum(count) - count), count)
+    out[at] = np.repeat(value, count)
+
+
+def _merged_levels(
+    length: np.ndarray, run_line: np.ndarray, run_level: np.ndarray, min_run: float, index: np.ndarray
+):
+    """One round of ``_smooth`` over runs in order (their ``length`` in pixels, polyline,
+    level and place among all runs): each run under ``min_run`` pixels beside another of its
+    line, and shorter than its short neighbours, takes the level of its longer neighbour (of
+    both, where they agree); the runs' levels after the round and which runs were short, or
+    None where no run is short."""
     has_prev = np.r_[False, run_line[1:] == run_line[:-1]] & (np.r_[-1, run_level[:-1]] >= 0)
     has_next = np.r_[run_line[:-1] == run_line[1:], False] & (np.r_[run_level[1:], -1] >= 0)
     short = (length < min_run) & (run_level >= 0) & (has_prev | has_next)
     if not short.any():
         return None
     # ties between equal lengths broken by a hash of the run, so plateaus merge in few rounds
-    key = length + 1e-6 * ((np.arange(len(length)) * 2654435761) % 1000) / 1000
+    key = length + 1e-6 * ((index * 2654435761) % 1000) / 1000
     prev_key = np.where(has_prev, np.r_[np.inf, key[:-1]], np.inf)
     next_key = np.where(has_next, np.r_[key[1:], np.inf], np.inf)
     merge = short & (key < np.where(np.r_[False, short[:-1]], prev_key, np.inf))
@@ -97,7 +130,7 @@ def _merged_levels(length: np.ndarray, run_line: np.ndarray, run_level: np.ndarr
     prev_level = np.r_[-1, run_level[:-1]]
     next_level = np.r_[run_level[1:], -1]
     take_prev = np.where(has_prev & has_next & (prev_level == next_level), True, prev_len >= next_len)
-    return np.where(merge, np.where(take_prev, prev_level, next_level), run_level)
+    return np.where(merge, np.where(take_prev, prev_level, next_level), run_level), short
 
 
 def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float, along: np.ndarray) -> np.ndarray:
@@ -112,6 +145,34 @@ def _drop_slivers(level: np.ndarray, samples: Samples, min_run: float, along: np
     after = np.r_[(run_line[:-1] == run_line[1:]) & left_out[1:], False]
     sliver = (run_level >= 0) & (length < min_run) & (before | after)
     return np.where(np.repeat(sliver, end - start), -1, level).astype(level.dtype)
+
+
+def _piece_points(runs: int, at: np.ndarray, owner: np.ndarray, before, mid_before, after, mid_after):
+    """The points of the pieces that ``split_by_level`` cuts, of ``runs`` runs: the samples'
+    points ``at`` of runs ``owner`` (in order), a midpoint ``mid_before`` before runs ``before``
+    and ``mid_after`` after runs ``after``. Returns (N, 2) points, (P + 1,) offsets and the
+    runs that make pieces (those of two points or more), each run's points in order: the
+    midpoint before it, its samples', the midpoint after it, each written where it goes."""
+    in_run = np.bincount(owner, minlength=runs)
+    has_before = np.zeros(runs, np.int64)
+    has_before[before] = 1
+    per_run = has_before + in_run
+    per_run[after] += 1
+    good = per_run >= 2
+    pieces = np.flatnonzero(good)
+    offsets = np.r_[0, np.cumsum(per_run[pieces])].astype(np.int64)
+    first_point = np.zeros(runs, np.int64)
+    first_point[pieces] = offsets[:-1]
+    first_point += has_before
+    pts = np.empty((offsets[-1], 2))
+    rank = np.arange(len(owner)) - (np.cumsum(in_run) - in_run)[owner]
+    taken = good[owner]
+    pts[first_point[owner[taken]] + rank[taken]] = at[taken]
+    taken = good[before]
+    pts[first_point[before[taken]] - 1] = mid_before[taken]
+    taken = good[after]
+    pts[first_point[after[taken]] + in_run[after[taken]]] = mid_after[taken]
+    return pts, offsets, pieces
 
 
 def split_by_level(
@@ -182,19 +243,9 @@ def split_by_level(
     mid_after = np.where(
         at_vertex, pixel[run_end[after]], 0.5 * (pixel[run_end[after] - 1] + pixel[run_end[after]])
     )
-    # order all points by (run, position): midpoints before go first, after go last
-    pts = np.concatenate([pixel[chosen], mid_before, mid_after])
-    owner = np.concatenate([run[chosen], before, after])
-    pos = np.concatenate([chosen.astype(np.float64), run_start[before] - 0.5, run_end[after] - 0.5])
-    order = np.lexsort((pos, owner))
-    pts, owner = pts[order], owner[order]
-    # a piece needs two points
-    per_run = np.bincount(owner, minlength=len(run_start))
-    good = per_run >= 2
-    point_keep = good[owner]
-    pts, owner = pts[point_keep], owner[point_keep]
-    pieces = np.flatnonzero(good)
-    offsets = np.r_[0, np.cumsum(per_run[pieces])].astype(np.int64)
+    pts, offsets, pieces = _piece_points(
+        len(run_start), pixel[chosen], run[chosen], before, mid_before, after, mid_after
+    )
     # each piece's edges: those of its samples, in order, each run of one edge once
     piece_of_run = np.full(len(run_start), -1, np.int64)
     piece_of_run[pieces] = np.arange(len(pieces))

@@ -44,14 +44,20 @@ class Samples:
         neighbouring samples on the same line), and (S, 2) float64 the unit vector across it
         (0 where none); found once for the several tests that look to either side."""
         line, pixel = self.line, self.pixel
-        ahead, behind = pixel.copy(), pixel.copy()
-        same = (line[1:] == line[:-1])[:, None]
-        np.copyto(ahead[:-1], pixel[1:], where=same)
-        np.copyto(behind[1:], pixel[:-1], where=same)
-        tangent = np.subtract(ahead, behind, out=ahead)
+        # from the sample before to the sample after, then at the ends of the lines (few) from
+        # or to the sample itself where the line has none there
+        tangent = np.empty_like(pixel)
+        np.subtract(pixel[2:], pixel[:-2], out=tangent[1:-1])
+        same = line[1:] == line[:-1]
+        last = np.flatnonzero(~same)
+        ends = np.unique(np.r_[0, last, last + 1, len(line) - 1])
+        ends = ends[(ends >= 0) & (ends < len(line))]
+        ahead = np.where(np.r_[same, False][ends], ends + 1, ends)
+        behind = np.where(np.r_[False, same][ends], ends - 1, ends)
+        tangent[ends] = pixel[ahead] - pixel[behind]
         length = row_norm(tangent)
         good = length > 0
-        unit = np.divide(tangent, length[:, None], out=behind, where=good[:, None])
+        unit = np.divide(tangent, length[:, None], out=tangent, where=good[:, None])
         unit[~good] = 0.0
         across = np.empty_like(pixel)
         np.negative(unit[:, 1], out=across[:, 0])
@@ -101,19 +107,26 @@ def sample_polylines(
     # point, a polyline's last point as one sample of its own after them
     per_point = np.ones(len(points), np.int64)
     per_point[starts] = count
-    at = np.repeat(np.arange(len(points)), per_point)
-    k = np.arange(len(at)) - np.repeat(np.cumsum(per_point) - per_point, per_point)
+    # every point's values repeated for its samples, not gathered sample by sample
+    total = np.cumsum(per_point)
+    k = np.arange(total[-1]) - np.repeat(total - per_point, per_point)
     t = k / np.repeat(per_point, per_point)
-    ahead = np.minimum(at + 1, len(points) - 1)
-    model = points[at] + t[:, None] * (points[ahead] - points[at])
-    last_rows = np.cumsum(per_point)[offsets[1:] - 1] - 1
-    model[last_rows] = points[offsets[1:] - 1]
+    # the step to the next point (none after the very last)
+    step = np.empty_like(points)
+    np.subtract(points[1:], points[:-1], out=step[:-1])
+    np.subtract(points[-1:], points[-1:], out=step[-1:])
+    model = np.repeat(points, per_point, axis=0)
+    model += t[:, None] * np.repeat(step, per_point, axis=0)
+    last = offsets[1:] - 1
+    model[total[last] - 1] = points[last]
     # a last point has the attributes of the segment before it
-    source = at.copy()
-    source[last_rows] -= 1
-    faces, kind, edge = lines.faces[source], lines.kind[source], lines.edge[source]
+    source = np.arange(len(points))
+    source[last] -= 1
+    faces = np.repeat(lines.faces[source], per_point, axis=0)
+    kind = np.repeat(lines.kind[source], per_point)
+    edge = np.repeat(lines.edge[source], per_point)
     vertex = k == 0
-    line = line_of_point[at]
+    line = np.repeat(line_of_point, per_point)
     eye = transform(model, view)
     clip = eye @ projection.T
     inside = (
