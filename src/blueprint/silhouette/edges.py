@@ -294,8 +294,15 @@ def _size(adj) -> float:
 def _projected(model: np.ndarray, view, projection, size) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Segments (N, 2, 3) clipped to the near plane (and to w > 0) and projected: the kept
     model endpoints (M, 2, 3), their pixels (M, 2, 2) and the indices (M,) of the kept rows."""
+    clip, model, kept = near_clipped(model, view, projection)
+    return model, clip_to_pixels(clip, size), kept
+
+
+def near_clipped(model: np.ndarray, view, projection) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_projected`` without the pixels, for callers that make them later or not at all: the
+    kept segments' clip coordinates (M, 2, 4), model endpoints (M, 2, 3) and rows (M,)."""
     clip = transform(model, projection @ view)
     # Near plane of an OpenGL frustum: z_clip >= -w_clip; then keep the divide safe.
     clip, model, keep = _clip(clip, model, clip[..., 2] + clip[..., 3])
     clip, model, kept = _clip(clip, model, clip[..., 3] - _MIN_W)
-    return model, clip_to_pixels(clip, size), keep[kept]
+    return clip, model, keep[kept]

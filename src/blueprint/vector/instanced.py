@@ -35,7 +35,7 @@ from blueprint.scene.model import Model
 from blueprint.silhouette import Adjacency, build_adjacency, smooth_surface
 from blueprint.silhouette.contours import _EDGE_ON as _VERTEX_EDGE_ON
 from blueprint.silhouette.contours import _edge_keys
-from blueprint.silhouette.edges import _MIN_W, _clip, _first_two_faces, _projected, sharp_edges
+from blueprint.silhouette.edges import _first_two_faces, _projected, near_clipped, sharp_edges
 from blueprint.sorting import stable_argsort
 
 from .cache import ModelCache
@@ -406,7 +406,7 @@ def _outline_edges(ml: _MeshLines, edge_on: np.ndarray, lines: tuple, transforms
     # found as the flat path finds them: where the near plane leaves a piece of them
     b, e, points = lines
     beside = column[e] >= 0
-    kept = _near_clipped(points[beside], tests.view, tests.projection)[1]
+    kept = near_clipped(points[beside], tests.view, tests.projection)[2]
     found = np.zeros((len(edge_on), len(two)), bool)
     found[b[beside][kept], column[e[beside][kept]]] = True
     rows, k = np.nonzero(tests.outlines(edge_on, pair, found))
@@ -420,15 +420,6 @@ def _joined(items: list, shape: tuple, dtype) -> np.ndarray:
     return np.concatenate(items) if items else np.zeros((0, *shape), dtype)
 
 
-def _near_clipped(points: np.ndarray, view, projection) -> tuple[np.ndarray, np.ndarray]:
-    """``edges._projected`` of segments (N, 2, 3) without their pixels, which the caller
-    makes later or not at all: the kept model endpoints (M, 2, 3) and the kept rows (M,)."""
-    clip = transform(points, projection @ view)
-    clip, points, keep = _clip(clip, points, clip[..., 2] + clip[..., 3])
-    _, points, kept = _clip(clip, points, clip[..., 3] - _MIN_W)
-    return points, keep[kept]
-
-
 def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_face, view, projection, size):
     which = _joined(found.edge_inst, (), np.int64)
     edge = first_edge[which] + _joined(found.edge, (), np.int64)
@@ -438,7 +429,7 @@ def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_f
     # them; the other lines are clipped to the near plane
     outline = _joined(found.outline, (), bool)[order]
     inside = np.flatnonzero(~outline)
-    clipped, kept = _near_clipped(points[inside] if len(inside) < len(points) else points, view, projection)
+    _, clipped, kept = near_clipped(points[inside] if len(inside) < len(points) else points, view, projection)
     kept = inside[kept]
     keep = outline.copy()
     keep[kept] = True
