@@ -588,10 +588,12 @@ def projected_fragments(
     Faces off the picture count too: more than are drawn, never fewer."""
     rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
     turn, shift = rows[:, :3].T.astype(np.float32), rows[:, 3].astype(np.float32)
+    # each vertex projected once, not once a corner: (V, 3) clip x, y and w
+    clip = positions.astype(np.float32, copy=False) @ turn + shift
     total = 0.0
     for start in range(0, len(faces), AREA_BLOCK):
         block = faces[start : start + AREA_BLOCK]
-        area = _twice_area([positions[block[:, k]] @ turn + shift for k in range(3)])
+        area = _twice_area([clip[block[:, k]] for k in range(3)])
         if area is None:
             return None
         total += area
