@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, TypeVar
 import numpy as np
 
 from blueprint import settings
+from blueprint.allocator import one_arena
 
 if TYPE_CHECKING:
     from concurrent.futures import ThreadPoolExecutor
@@ -29,8 +30,6 @@ U = TypeVar("U")
 # more than the work.
 MIN_BLOCK = 1 << 16
 
-# mallopt's parameter for the most arenas glibc's allocator makes
-_M_ARENA_MAX = -8
 # set by the command line (blueprint.cli.main): its process may serve every thread from one
 # arena; a program that calls the library keeps its allocator as it set it
 ONE_ARENA_ENV = "BLUEPRINT_ONE_ARENA"
@@ -47,7 +46,7 @@ def _executor() -> ThreadPoolExecutor:
     with _lock:
         if _pool is None or _pool[0] != os.getpid():
             if os.environ.get(ONE_ARENA_ENV) == "1":
-                _one_arena()
+                one_arena()
             # loaded with the first pool: a drawing of a small model never makes one
             from concurrent.futures import ThreadPoolExecutor
 
@@ -56,18 +55,6 @@ def _executor() -> ThreadPoolExecutor:
                 ThreadPoolExecutor(settings.THREADS, "blueprint", initializer=_mark_worker),
             )
         return _pool[1]
-
-
-def _one_arena() -> None:
-    """Have glibc's allocator serve every thread from one arena: by default each thread that
-    allocates gets an arena of its own, whose freed blocks the others never reuse, so the
-    memory a pool's thread frees stays with the process through the drawing after it."""
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6").mallopt(_M_ARENA_MAX, 1)
-    except (OSError, AttributeError):
-        pass  # not glibc: its allocator's own ways
 
 
 def _mark_worker() -> None:

@@ -18,6 +18,7 @@ import sys
 import click
 
 from blueprint import __version__
+from blueprint.allocator import keep_freed
 from blueprint.cli.shell import run, setup_logging
 
 # 0: the command runs in the program's own process (for profilers), not in a child
@@ -122,6 +123,8 @@ def main(argv: list[str] | None = None) -> None:
     # the command's process serves the preparation's threads from one allocator arena
     # (blueprint.parallel): memory their blocks free is reused by the drawing after them
     os.environ.setdefault("BLUEPRINT_ONE_ARENA", "1")
+    # ...and keeps the memory it frees for what it allocates next (inherited by the child below)
+    keep_freed()
     _light_exit()
     # a help or the version prints and ends: no child for Ctrl-C to stop
     asks_help = {"-h", "--help", "--version"} & set(sys.argv[1:])
