@@ -46,6 +46,7 @@ LAYERS = (
         "leaves",
         (
             "blueprint.errors",
+            "blueprint.allocator",
             "blueprint.color",
             "blueprint.settings",
             "blueprint.blas",
