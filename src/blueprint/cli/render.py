@@ -50,7 +50,7 @@ RENDER_OPTIONS = (
 )
 def render(model, output, highlight_model, **values):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
-    from blueprint.api import default_renderer, open_default_renderer, render_frame, stages
+    from blueprint.api import default_renderer, render_frame, stages
     from blueprint.api.options import DrawOptions
     from blueprint.scene.loader import load_model
     from blueprint.scene.prepare import topologies_kept
@@ -64,8 +64,6 @@ def render(model, output, highlight_model, **values):
     # BLUEPRINT_STAGES: the stages timed, the frame's synchronised (blueprint.api.stages)
     timing = stages.enabled()
     options = DrawOptions(**chosen, **({"profile": True} if timing else {}))
-    # the GPU's driver starts while the model is read
-    open_default_renderer()
     if write.kind is Kind.DRAWING:
         from blueprint.api.files import render_vector_file
 
