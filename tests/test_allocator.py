@@ -55,6 +55,10 @@ def test_without_glibc_nothing_is_set(monkeypatch):
     monkeypatch.setattr(ctypes, "CDLL", missing)
     allocator.keep_freed()
     allocator.one_arena()
+    # a C library without glibc's mallopt
+    monkeypatch.setattr(ctypes, "CDLL", lambda name: object())
+    allocator.keep_freed()
+    allocator.one_arena()
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")

@@ -30,11 +30,11 @@ def _mallopt(settings: tuple[tuple[int, int], ...]) -> None:
     try:
         import ctypes
 
-        libc = ctypes.CDLL("libc.so.6")
-    except OSError:
+        mallopt = ctypes.CDLL("libc.so.6").mallopt
+    except (OSError, AttributeError):
         return  # not glibc: its allocator's own ways
     for param, value in settings:
-        libc.mallopt(param, value)
+        mallopt(param, value)
 
 
 def keep_freed() -> None:

@@ -589,7 +589,7 @@ def projected_fragments(
     rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
     turn, shift = rows[:, :3].T.astype(np.float32), rows[:, 3].astype(np.float32)
     # each vertex projected once, not once a corner: (V, 3) clip x, y and w
-    clip = positions.astype(np.float32, copy=False) @ turn + shift
+    clip = positions @ turn + shift
     total = 0.0
     for start in range(0, len(faces), AREA_BLOCK):
         block = faces[start : start + AREA_BLOCK]
