@@ -11,6 +11,7 @@ later preparation would read them, and they would stay in memory through its dra
 
 from __future__ import annotations
 
+import weakref
 from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -23,7 +24,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, diagonal_of
 from blueprint.sorting import unique_first
 
-__all__ = ["VERTEX", "gpu_arrays", "topologies_kept", "topology"]
+__all__ = ["VERTEX", "feature_faces", "gpu_arrays", "topologies_kept", "topology"]
 
 # One vertex of the vertex buffer: position, normal (zero without a crease angle), part.
 VERTEX = np.dtype([("p", "f4", 3), ("n", "f4", 3), ("part", "i4")])
@@ -38,6 +39,8 @@ _TABLE_PER_KEY = 4
 _SHIFT = 1 << 16
 
 _topologies: OrderedDict[bytes, dict] = OrderedDict()
+# each prepared model's feature faces by crease angle, while it lives (``feature_faces``)
+_features: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 # whether preparations keep the topologies they find, and read those kept (``topologies_kept``)
 _keeping = [True]
 
@@ -92,11 +95,38 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
-    if crease_angle is None or not _keeping[-1]:
+    if crease_angle is None:
         return _prepare(model, crease_angle, None)
-    arrays = _prepare(model, crease_angle, topology(model))
-    _bound()
+    known = topology(model) if _keeping[-1] else {}
+    arrays = _prepare(model, crease_angle, known)
+    _keep_features(model, crease_angle, known)
+    if _keeping[-1]:
+        _bound()
     return arrays
+
+
+def feature_faces(model: Model, crease_angle: float) -> np.ndarray | None:
+    """(F,) bool: the faces of ``model`` with a vertex on a crease (at ``crease_angle``), a
+    border or a non-manifold edge, as its preparation (``gpu_arrays``) found them while the
+    model lives; None where it was not prepared at that angle. The rest are the smooth faces
+    whose contours the GPU draws (``vector.contour_gpu``)."""
+    return _features.get(model, {}).get(float(crease_angle))
+
+
+def _keep_features(model: Model, crease_angle: float, known: dict) -> None:
+    """Keep ``feature_faces`` of ``model`` from the topology its preparation found."""
+    welded, sharp = known.get("welded"), known.get(("sharp", float(crease_angle)))
+    if welded is None or sharp is None:
+        return  # flat normals: no face is smooth
+    feature = np.empty(len(welded), bool)
+    parallel.run(partial(_any_sharp, welded, sharp, feature), len(welded))
+    _features.setdefault(model, {})[float(crease_angle)] = feature
+
+
+def _any_sharp(welded: np.ndarray, sharp: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    corners = np.take(sharp, welded[lo:hi])
+    np.logical_or(corners[:, 0], corners[:, 1], out=out[lo:hi])
+    out[lo:hi] |= corners[:, 2]
 
 
 def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tuple[np.ndarray, np.ndarray]:
