@@ -11,8 +11,8 @@ from blueprint.scene.model import Model
 # A picture outlines smooth surfaces by their contour lines where the mesh has at most this many
 # triangles a pixel of the picture: a fitted model covers about half of it, so there its
 # triangles are a pixel or more and their edges draw the outline as a zigzag; denser meshes'
-# triangles lie under a pixel, where the CPU pass that finds the lines would cost more than the
-# picture.
+# triangles lie under a pixel, where the lines (found on the GPU, ``vector.contour_gpu``) still
+# cost a second capture of the faces for their levels.
 SMOOTH_CONTOUR_DENSITY = 0.5
 
 
@@ -45,7 +45,8 @@ def frame_contours(renderer: LayerRenderer, model: Model, camera: Camera | None,
     """(camera, contour lines) of a frame of ``keywords`` (``DrawOptions.frame_keywords``): the
     camera fitted as the frame would fit it where None, since its lines are found for it
     before the frame is drawn (``blueprint.vector.contour_ink``; None for a model kept as
-    instances, whose meshes' outlines are drawn as they are, or without a smooth face)."""
+    instances, whose meshes' outlines are drawn as they are, without a smooth face, or dense
+    where the renderer cannot find them on the GPU)."""
     # the vector drawings' lines load with the frames that draw them
     from blueprint.vector.contour_ink import contour_ink
 

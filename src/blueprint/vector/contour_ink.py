@@ -18,7 +18,13 @@ from blueprint.scene.model import Model
 
 from .lines import join_polylines, smooth_contour_segments
 
-__all__ = ["ContourInk", "contour_ink"]
+__all__ = ["DENSE", "ContourInk", "contour_ink"]
+
+# A mesh of more triangles than this a pixel of the view has its contours found on the GPU
+# (``contour_gpu``): there the CPU's adjacency and edges cost more than the picture, and a
+# fitted model's triangles are some two pixels across or less, so the bridges to the mesh's
+# silhouettes, which only the CPU's lines draw, would span no more.
+DENSE = 0.25
 
 
 @dataclass(frozen=True)
@@ -68,21 +74,33 @@ def contour_ink(
     vector drawing finds them, but of no more layers than one pass of the faces k-buffer finds
     (``MAX_LAYERS``: a layer a pass past them would peel the model again and again); None for a
     model kept as instances, whose meshes' outlines the picture draws as they are, and where no
-    face is smooth."""
+    face is smooth. A mesh of more than ``DENSE`` triangles a pixel has them found on the GPU
+    (``contour_gpu``), or where the renderer cannot (no compute passes, a mesh drawn in chunks),
+    not at all (None): on the CPU they would cost more than the picture, and a mesh too large
+    for the GPU's memory many times that."""
     if model.instances is not None:
         return None
     view = np.asarray(camera.view_matrix(), np.float64)
     projection = np.asarray(camera.projection_matrix(), np.float64)
+    if model.triangle_count > DENSE * size[0] * size[1]:
+        from .contour_gpu import gpu_contours
+
+        max_layers = _capped(max_layers)
+        found = gpu_contours(renderer, model, view, projection, size, crease_angle, max_layers)
+        if found is None:
+            return None
+        try:
+            return _dense_ink(renderer, model, camera, size, max_layers, found)
+        finally:
+            found.tables.release()
     segments, contoured = smooth_contour_segments(model, view, projection, size, crease_angle)
     if not contoured.any():
         return None  # no face's outline to draw otherwise: the picture as it was
-    # the levels' machinery loads with the first picture that has smooth contours to draw
     from .drawing import Occlusion, ViewFrame
-    from .occlusion import draw_faces, face_planes, sample_polylines, split_by_level
-    from .occlusion.gpu import MAX_LAYERS
+    from .occlusion import draw_faces, face_planes, sample_polylines
 
-    if max_layers is None or max_layers > MAX_LAYERS:
-        max_layers = MAX_LAYERS
+    max_layers = _capped(max_layers)
+
     if len(segments) == 0:
         none = np.zeros(0, np.int32)
         return ContourInk(np.zeros((0, 2)), np.zeros(1, np.int64), none, contoured, size, max_layers)
@@ -95,6 +113,49 @@ def contour_ink(
     frame = ViewFrame(camera, tuple(size), view, projection, max_layers)
     occlusion = Occlusion(renderer, model, frame, samples, planes, crease_angle, None, drawn)
     levels, count = occlusion.levels(time.perf_counter(), {})
+    return _ink(renderer, samples, levels, count, lines, contoured, size)
+
+
+def _capped(max_layers: int | None) -> int:
+    """``max_layers`` (None: all) capped at the faces k-buffer's one pass (``MAX_LAYERS``)."""
+    # the levels' machinery loads with the first picture that has smooth contours to draw
+    from .occlusion.gpu import MAX_LAYERS
+
+    return MAX_LAYERS if max_layers is None or max_layers > MAX_LAYERS else max_layers
+
+
+def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, found) -> ContourInk | None:
+    """``contour_ink`` of the contours ``found`` on the GPU (``contour_gpu.GpuContours``), their
+    levels from the faces k-buffer and the tables the contour pass made (no mesh edge among
+    them: none is a phantom of a flat surface)."""
+    from blueprint.render.gbuffer import depth_tolerance
+
+    from .occlusion import DepthTest, draw_faces, gpu_levels, sample_polylines
+
+    contoured = found.contoured
+    if not contoured.any():
+        return None
+    lines = found.lines
+    if len(lines) == 0:
+        none = np.zeros(0, np.int32)
+        return ContourInk(np.zeros((0, 2)), np.zeros(1, np.int64), none, contoured, size, max_layers)
+    view = np.asarray(camera.view_matrix(), np.float64)
+    projection = np.asarray(camera.projection_matrix(), np.float64)
+    drawn = draw_faces(renderer, model, camera, size, max_layers)
+    samples = sample_polylines(lines, view, projection, size)
+    test = DepthTest(camera.ortho, camera.pixel_angle(size[1]), depth_tolerance(camera, model.bounds))
+    on_gpu = gpu_levels(
+        renderer, model, camera, samples, found.tables, size, max_layers=max_layers, test=test, drawn=drawn
+    )
+    if on_gpu is None:
+        return None
+    return _ink(renderer, samples, on_gpu.level, on_gpu.layers, lines, contoured, size)
+
+
+def _ink(renderer, samples, levels, count: int, lines, contoured, size) -> ContourInk:
+    """The ``ContourInk`` of sampled ``lines`` at their ``levels`` (``count`` layers counted)."""
+    from .occlusion import split_by_level
+
     pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), renderer=renderer)
     level = pieces.level.astype(np.int32)
     return ContourInk(pieces.points, pieces.offsets, level, contoured, tuple(size), max(count, 1))

@@ -19,11 +19,11 @@ from blueprint.scene.camera import Camera
 from blueprint.scene.model import Model
 
 from ..lines import BORDER, CREASE, GRAZING_REACH, SILHOUETTE, SMOOTH
-from .levels import DepthTest
+from .levels import DepthTest, contour_rows
 from .pixels import PixelLayers
 from .samples import Samples
 
-__all__ = ["FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels", "stack_levels"]
+__all__ = ["FaceTables", "FacesDrawn", "GpuLevels", "draw_faces", "gpu_levels", "stack_levels"]
 
 OCCLUSION_COMP = "blueprint.vector:glsl/occlusion.comp"
 LAYER_COUNTS_COMP = "blueprint.vector:glsl/layer_counts.comp"
@@ -61,6 +61,27 @@ class GpuLevels:
     checked: np.ndarray
     layers: int
     peel_seconds: float
+
+
+@dataclass(frozen=True)
+class FaceTables:
+    """The faces' planes and grazing band as occlusion.comp reads them, made on the GPU
+    (``contour_gpu.gpu_contours``) in place of ``levels.face_planes`` and
+    ``lines.grazing_band`` uploaded: ``planes`` an rgba32f table (gpu/tables.py) of eye-space
+    planes n, c, ``reach`` an r32f one of the band's reach (its size times ``GRAZING_REACH``,
+    0 off the band), each of ``rows`` rows and zero past the last face (no face). Samples of
+    smooth contours take the band's rule with them (``DepthTest.band``'s)."""
+
+    planes: object
+    reach: object
+    rows: int
+
+    def __len__(self) -> int:
+        return self.rows
+
+    def release(self) -> None:
+        self.planes.release()
+        self.reach.release()
 
 
 @dataclass(frozen=True)
@@ -151,7 +172,7 @@ def gpu_levels(
     model: Model,
     camera: Camera,
     samples: Samples,
-    planes: np.ndarray,
+    planes: np.ndarray | FaceTables,
     size: tuple[int, int],
     *,
     max_layers: int | None,
@@ -166,9 +187,10 @@ def gpu_levels(
     ``stack_levels``, or ``classify_samples`` without compute passes).
 
     Parameters as ``levels.classify_samples`` and ``levels.verify_creases`` (``test`` the depth
-    test of both); ``planes`` from ``levels.face_planes``; ``size`` (width, height) in pixels;
-    ``drawn`` the faces k-buffer of this model, camera, size and ``max_layers`` from
-    ``draw_faces``, else drawn here.
+    test of both); ``planes`` from ``levels.face_planes``, or its tables made on the GPU
+    (``FaceTables``: then every smooth contour's sample takes the grazing band's rule);
+    ``size`` (width, height) in pixels; ``drawn`` the faces k-buffer of this model, camera,
+    size and ``max_layers`` from ``draw_faces``, else drawn here.
     """
     if not table_fits(len(planes), renderer.max_texture):
         return None
@@ -272,7 +294,9 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
         level[inside] = 0
         return level, sides, checked
     whole = len(inside) == count
-    contour = test.contour_samples(samples, inside)
+    made = isinstance(planes, FaceTables)
+    banded = made or test.band is not None
+    contour = contour_rows(samples, inside) if banded else np.zeros(len(inside), bool)
     # occlusion.comp's Sample: eye (float), flags, the 2 x 2 pixels' first, the pixels to either
     # side of the line, own faces (int), written in place as its int32 words, a block of rows
     # a thread
@@ -299,7 +323,7 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     parallel.run(pack, len(inside))
 
     ctx = renderer.ctx
-    prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": test.band is not None})
+    prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": banded})
     bind(prog)
     put = renderer.uniforms.set
     put(prog, "u_count", len(inside))
@@ -307,12 +331,16 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     put(prog, "u_ortho", bool(test.ortho))
     put(prog, "u_tolerance", float(np.float32(test.tolerance)))
     put(prog, "u_footprint", float(test.footprint))
-    plane_texture = table_texture(ctx, table_of(planes, np.float32))
+    if made:
+        plane_texture, band_texture = planes.planes, planes.reach
+    else:
+        plane_texture = table_texture(ctx, table_of(planes, np.float32))
+        band_texture = None
+        if test.band is not None:
+            band_texture = table_texture(ctx, (test.band * np.float32(GRAZING_REACH)).astype(np.float32))
     plane_texture.use(location=MAX_LAYERS)
     put(prog, "u_planes", MAX_LAYERS)
-    band_texture = None
-    if test.band is not None:
-        band_texture = table_texture(ctx, (test.band * np.float32(GRAZING_REACH)).astype(np.float32))
+    if band_texture is not None:
         band_texture.use(location=MAX_LAYERS + 1)
         put(prog, "u_reach", MAX_LAYERS + 1)
     buffers = {0: ctx.buffer(packed), 2: ctx.buffer(reserve=16 * len(inside))}
@@ -325,9 +353,10 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     finally:
         for buffer in buffers.values():
             buffer.release()
-        plane_texture.release()
-        if band_texture is not None:
-            band_texture.release()
+        if not made:  # (the caller's tables are the caller's to release)
+            plane_texture.release()
+            if band_texture is not None:
+                band_texture.release()
     level[slice(None) if whole else inside] = result[:, 0]
     sides[slice(None) if whole else inside] = result[:, 1:3]
     return level, sides, checked

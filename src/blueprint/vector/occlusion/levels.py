@@ -38,7 +38,7 @@ from ..lines import BORDER, CREASE, GRAZING_REACH, SILHOUETTE, SMOOTH
 from .pixels import NEIGHBOURS, PixelLayers, across_line, around, flat_index
 from .samples import Samples
 
-__all__ = ["DepthTest", "classify_samples", "drop_phantoms", "face_planes", "verify_creases"]
+__all__ = ["DepthTest", "classify_samples", "contour_rows", "drop_phantoms", "face_planes", "verify_creases"]
 
 # Model-space face normals and corners, per mesh (see ``face_planes``).
 PLANES = ModelCache()
@@ -72,7 +72,7 @@ class DepthTest:
         band): those of smooth contours, silhouettes inside one face."""
         if self.band is None:
             return np.zeros(len(rows), bool)
-        return (samples.kind[rows] == SILHOUETTE) & (samples.faces[rows, 1] < 0)
+        return contour_rows(samples, rows)
 
     def side_limit(self, eye: np.ndarray) -> np.ndarray:
         """(N,) float32: a pixel's footprint in eye depth at eye points (N, 3), the depth within
@@ -82,6 +82,12 @@ class DepthTest:
         if self.ortho:
             return np.full(len(eye), self.footprint, np.float32)
         return (self.footprint * -eye[:, 2]).astype(np.float32)
+
+
+def contour_rows(samples: Samples, rows: np.ndarray) -> np.ndarray:
+    """(N,) bool: which of the samples ``rows`` lie on smooth contours, silhouettes inside one
+    face."""
+    return (samples.kind[rows] == SILHOUETTE) & (samples.faces[rows, 1] < 0)
 
 
 def face_planes(model: Model, view: np.ndarray) -> np.ndarray:
