@@ -180,3 +180,36 @@ def test_where_the_gpu_cannot(renderer, monkeypatch):
         blueprint.render(model, smooth_contours=True, **options),
         blueprint.render(model, smooth_contours=False, **options),
     )
+
+
+def test_the_same_lines_every_time_and_from_the_faces_near_them(renderer, monkeypatch):
+    """The bust's contour lines twice, bit for bit (the pass appends its segments in whatever
+    order its invocations run); and on a software rasteriser, whose faces k-buffer draws only
+    the faces near the lines' samples (a fraction of them), the same lines and levels as from
+    every face."""
+    from blueprint.vector import contour_gpu
+
+    model = noisy_bust()[0]
+    camera = fit_camera(model, SIZE, "front")
+    monkeypatch.setattr(ink_module, "DENSE", 0.0)
+    found = [contour_ink(renderer, model, camera, SIZE) for _ in range(2)]
+    kept = []
+    near = contour_gpu.near_faces
+
+    def counted(*args):
+        subset = near(*args)
+        kept.append(None if subset is None else sum(group[3] for group in subset[0].groups) // 3)
+        return subset
+
+    monkeypatch.setattr(contour_gpu, "near_faces", counted)
+    found.append(contour_ink(renderer, model, camera, SIZE))
+    monkeypatch.setattr(contour_gpu, "near_faces", lambda *args: None)
+    found.append(contour_ink(renderer, model, camera, SIZE))
+    assert len(found[0]) >= 5 and len(set(found[0].level.tolist())) > 1
+    for other in found[1:]:
+        for field in ("points", "offsets", "level", "contoured"):
+            assert np.array_equal(getattr(found[0], field), getattr(other, field)), field
+    if renderer.device.software:
+        assert 0 < kept[0] < 0.5 * model.triangle_count, kept
+    else:
+        assert kept == [None]

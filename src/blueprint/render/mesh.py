@@ -295,6 +295,40 @@ class GpuMesh:
                 obj.release()
 
 
+class FaceSubset(GpuMesh):
+    """Some faces of a flattened model's ``GpuMesh`` (``mesh``), from an index buffer of their
+    own (``ibo``, ``faces`` faces of ``mesh``'s vertices, the caller's to release), drawn as
+    the whole mesh draws them (in pieces on a software rasteriser): a pass that draws only the
+    faces that can reach some pixels (the contour lines' levels, ``vector.contour_gpu``). Face
+    ID ``i`` of its passes is its ``i``-th face. Passes choose their capture as for the whole
+    mesh (``triangles``); its bounds are the whole mesh's, and so its depth tolerance."""
+
+    def __init__(self, mesh: GpuMesh, ibo, faces: int, pieces: bool = False) -> None:
+        self.ctx = mesh.ctx
+        self.vbo, self.ibo = mesh.vbo, ibo
+        records = instance_records(np.eye(4)[None], np.zeros(1), np.zeros(1))
+        limit = PIECE_FACES if pieces else None
+        self.groups = [
+            (self.ctx.buffer(piece), len(piece), int(at), int(count), wait, int(piece["face"][0]))
+            for piece, at, count, wait in _pieces(records, faces, limit)
+        ]
+        self.one_placement = True
+        self._placements = mesh._placements
+        self._vaos = {}
+        self._corners = None
+        self._model = mesh._model
+        self.prepared = {}
+        self.part_count = mesh.part_count
+        self.triangles = mesh.triangles
+        self.instanced = False
+        self.bounds = mesh.bounds
+
+    def release(self) -> None:
+        held = [draw[0] for draws in self._vaos.values() for draw in draws.arrays]
+        for obj in (*held, *(records for records, *_ in self.groups)):
+            obj.release()
+
+
 def _identity(placement) -> bool:
     """Whether a ``PLACEMENT`` places faces from 0 where they are, unturned, in part 0."""
     rows = np.stack([placement[k] for k in ("x", "y", "z")])

@@ -361,15 +361,24 @@ class Capturer:
         return faces
 
     @current
-    def face_kbuffer(self, model: Model, camera: Camera, *, size: tuple[int, int], max_layers: int | None):
+    def face_kbuffer(
+        self,
+        model: Model,
+        camera: Camera,
+        *,
+        size: tuple[int, int],
+        max_layers: int | None,
+        mesh: GpuMesh | None = None,
+    ):
         """The ``max_layers`` nearest surfaces of every pixel left on the GPU, for passes that
         read them there (vector occlusion): a list of ``rg32ui`` textures, surface ``k`` in the
         ``k``-th, (window depth bits, face + 1), a pixel's surfaces running up to the first
         with face 0, OpenGL rows (bottom up), from one k-buffer pass where the capture table's
         k-buffer takes such a frame; else None (``each_face_layer`` peels them a pass a layer,
-        ``triangles_at`` serves either way)."""
+        ``triangles_at`` serves either way). ``mesh``: draw these faces of the model alone (a
+        ``FaceSubset``: its face IDs are the subset's)."""
         w, h = check_size(size, 1, self.device.max_texture)
-        capture, _ = self._faces(model, camera, (w, h), max_layers)
+        capture, _ = self._faces(model, camera, (w, h), max_layers, mesh=mesh)
         if capture.reads != "surfaces":
             capture.release()
             return None
@@ -403,7 +412,7 @@ class Capturer:
             lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
         )
 
-    def _faces(self, model, camera, size, max_layers, in_place: bool = False) -> tuple:
+    def _faces(self, model, camera, size, max_layers, in_place: bool = False, mesh=None) -> tuple:
         """(capture, G-buffer) of depths and faces alone, for readers of a k-buffer's surfaces
         where the capture table's k-buffer finds every layer in one pass (``reads``
         "surfaces"), with ``in_place`` of an A-buffer's lists where the table's A-buffer takes
@@ -413,7 +422,7 @@ class Capturer:
         ctx.enable_only(ctx.NOTHING)
         ctx.depth_func = "<"
         gb = gbuffer(self.device.pool, size, "idb", normals=False)
-        mesh = self.mesh(model, None)
+        mesh = self.mesh(model, None) if mesh is None else mesh
         asked = {"layers": max_layers, "tie_break": True, "surfaces": True, "unpack": not in_place}
         return Capture(self, mesh, camera, gb, **asked), gb
 

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.gpu.device import run_over
-from blueprint.gpu.tables import TABLE_WIDTH, table_fits, table_rows
+from blueprint.gpu.tables import TABLE_WIDTH, table_fits, table_of, table_rows, table_texture
+from blueprint.render.mesh import FaceSubset, GpuMesh
 from blueprint.render.renderer import LayerRenderer
 from blueprint.scene.model import Model
 from blueprint.scene.prepare import feature_faces
@@ -25,9 +26,10 @@ from .chain import chain_order
 from .lines import _EDGE_ON_SMOOTH, _MIN_CONTOUR_PX, GRAZING_DEGREES, GRAZING_REACH, SILHOUETTE, Polylines
 from .occlusion.gpu import FaceTables
 
-__all__ = ["GpuContours", "gpu_contours"]
+__all__ = ["GpuContours", "gpu_contours", "near_faces"]
 
 CONTOURS_COMP = "blueprint.vector:glsl/contours.comp"
+CULL_COMP = "blueprint.vector:glsl/contour_cull.comp"
 # A vertex seen within this |cos| of edge-on counts as turned away (silhouette/contours.py's).
 _VERTEX_EDGE_ON = 1e-7
 _GROUP = 64
@@ -41,13 +43,76 @@ class GpuContours:
         at least ``lines._MIN_CONTOUR_PX`` pixels, chained end to end
     contoured : (F,) bool, the faces whose outline they draw: smooth, not seen edge-on, not on
         a shorter run unless it closes on itself
-    tables : FaceTables, the faces' planes and grazing band on the GPU, for ``gpu_levels``;
-        the caller releases them
+    tables : FaceTables, the faces' planes and grazing band on the GPU, for ``gpu_levels``
+    mesh : GpuMesh, the model as drawn
+    bounds : Buffer, each face's tiles on screen (contours.comp), for ``near_faces``
+    tile : int, pixels a side of those tiles
+
+    The caller releases what it holds on the GPU (``release``).
     """
 
     lines: Polylines
     contoured: np.ndarray
     tables: FaceTables
+    mesh: GpuMesh
+    bounds: object
+    tile: int
+
+    def release(self) -> None:
+        self.tables.release()
+        self.bounds.release()
+
+
+def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, size) -> tuple | None:
+    """(``FaceSubset``, r32i table of the face each of its faces is) of the faces whose box on
+    screen meets a tile holding one of ``pixels`` ((N, 2), x right, y down, at ``size``) or a
+    pixel within two of it: all that the occlusion pass reads around a contour's samples can
+    show. For a software rasteriser, whose faces k-buffer costs by its triangles; None
+    elsewhere. The caller releases both."""
+    if not renderer.device.software:
+        return None
+    ctx, mesh, faces, tile = renderer.ctx, found.mesh, len(found.contoured), found.tile
+    shape = (-(-size[1] // tile), -(-size[0] // tile))
+    mask = np.zeros(shape, np.uint8)
+    for dx in (-2.0, 2.0):
+        for dy in (-2.0, 2.0):
+            x = np.clip(np.floor((pixels[:, 0] + dx) / tile).astype(np.int64), 0, shape[1] - 1)
+            y = np.clip(np.floor((pixels[:, 1] + dy) / tile).astype(np.int64), 0, shape[0] - 1)
+            mask[y, x] = 1
+    words = -(-faces // 32)
+    texture = ctx.texture(shape[::-1], 1, mask, dtype="u1", alignment=1)
+    kept_bits = ctx.buffer(reserve=4 * words)
+    try:
+        prog = renderer.compute(CULL_COMP, {"STAGE": 0})
+        texture.use(location=0)
+        renderer.uniforms.set(prog, "u_mask", 0)
+        renderer.uniforms.set(prog, "u_faces", faces)
+        found.bounds.bind_to_storage_buffer(11)
+        kept_bits.bind_to_storage_buffer(12)
+        run_over(prog, faces, _GROUP)
+        ctx.memory_barrier()
+        bits = np.frombuffer(kept_bits.read(), np.uint8)
+    finally:
+        kept_bits.release()
+        texture.release()
+    kept = np.flatnonzero(np.unpackbits(bits, count=faces, bitorder="little")).astype(np.int32)
+    count = len(kept)
+    ibo = ctx.buffer(reserve=max(12 * count, 12))
+    listed = ctx.buffer(kept if count else np.zeros(1, np.int32))
+    try:
+        prog = renderer.compute(CULL_COMP, {"STAGE": 1})
+        renderer.uniforms.set(prog, "u_count", count)
+        mesh.ibo.bind_to_storage_buffer(6)
+        listed.bind_to_storage_buffer(12)
+        ibo.bind_to_storage_buffer(13)
+        run_over(prog, count, _GROUP)
+        ctx.memory_barrier(ctx.ELEMENT_ARRAY_BARRIER_BIT)
+    except BaseException:
+        ibo.release()
+        raise
+    finally:
+        listed.release()
+    return FaceSubset(mesh, ibo, count, pieces=True), table_texture(ctx, table_of(kept, np.int32))
 
 
 def gpu_contours(
@@ -71,9 +136,10 @@ def gpu_contours(
     if faces == 0 or not table_fits(rows, renderer.max_texture):
         return None
     renderer.make_current()
-    # the tables beside the frame's own buffers, and the mesh in chunks where it does not fit
+    # a face's plane, reach and box (24 bytes) and room for segments (48 bytes for 16 faces)
+    # beside the frame's own buffers, and the mesh in chunks where it does not fit
     renderer.capturer.check_memory(
-        model, size[0] * size[1], max_layers, crease_angle, {"contours": 20 * rows}
+        model, size[0] * size[1], max_layers, crease_angle, {"contours": 28 * rows}
     )
     mesh = renderer.mesh(model, crease_angle)
     feature = feature_faces(model, crease_angle)
@@ -94,6 +160,11 @@ def gpu_contours(
     put(prog, "u_vertex_edge_on", _VERTEX_EDGE_ON)
     put(prog, "u_grazing", float(np.sin(np.radians(GRAZING_DEGREES))))
     put(prog, "u_band_reach", GRAZING_REACH)
+    put(prog, "u_projection", tuple(np.asarray(projection, np.float32).T.reshape(-1).tolist()))
+    put(prog, "u_size", (float(size[0]), float(size[1])))
+    # tiles of the faces' boxes: at most 256 a side
+    tile = max(4, -(-max(size) // 256))
+    put(prog, "u_tile", float(tile))
     words = -(-faces // 32)
     smooth = np.zeros(words * 4, np.uint8)
     packed = np.packbits(np.logical_not(feature), bitorder="little")
@@ -104,6 +175,7 @@ def gpu_contours(
         table.filter = (ctx.NEAREST, ctx.NEAREST)
     tables = FaceTables(planes, reach, faces + 1)
     buffers = {7: ctx.buffer(smooth), 8: ctx.buffer(reserve=words * 4), 9: ctx.buffer(reserve=4)}
+    bounds = ctx.buffer(reserve=4 * faces)
     # contours of a smooth surface run some square root of its faces; a noisy one's small loops
     # add more: the pass runs again where they outgrow the room
     capacity = max(1 << 12, faces // 16)
@@ -116,6 +188,7 @@ def gpu_contours(
             buffers[9].write(np.zeros(1, np.uint32))
             for binding, buffer in buffers.items():
                 buffer.bind_to_storage_buffer(binding)
+            bounds.bind_to_storage_buffer(11)
             put(prog, "u_capacity", capacity)
             run_over(prog, rows, _GROUP)
             ctx.memory_barrier()
@@ -130,13 +203,14 @@ def gpu_contours(
         bits = np.frombuffer(buffers[8].read(), np.uint8)
     except BaseException:
         tables.release()
+        bounds.release()
         raise
     finally:
         for buffer in buffers.values():
             buffer.release()
     contoured = np.unpackbits(bits, count=faces, bitorder="little").view(bool)
     lines = _runs(model, found, contoured, view, projection, size)
-    return GpuContours(lines, contoured, tables)
+    return GpuContours(lines, contoured, tables, mesh, bounds, tile)
 
 
 def _runs(model: Model, found: np.ndarray, contoured: np.ndarray, view, projection, size) -> Polylines:
@@ -151,6 +225,10 @@ def _runs(model: Model, found: np.ndarray, contoured: np.ndarray, view, projecti
             np.zeros((0, 3)), np.zeros(1, np.int64), np.zeros((0, 2), np.int64), none, none, none
         )
     face = np.ascontiguousarray(found[:, 0, 3]).view(np.int32).astype(np.int64)
+    # the pass appends them in whatever order its invocations ran: by face, a face holding one,
+    # the same picture every time
+    order = np.argsort(face)
+    face, found = face[order], found[order]
     edges = np.ascontiguousarray(found[:, 2]).view(np.uint32).astype(np.int64)
     points, pixels, kept = _projected(found[:, :2, :3].astype(np.float64), view, projection, size)
     face, edges = face[kept], edges[kept]

@@ -8,7 +8,7 @@ surface runs on through them (Hertzmann and Zorin, "Illustrating smooth surfaces
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -92,7 +92,7 @@ def contour_ink(
         try:
             return _dense_ink(renderer, model, camera, size, max_layers, found)
         finally:
-            found.tables.release()
+            found.release()
     segments, contoured = smooth_contour_segments(model, view, projection, size, crease_angle)
     if not contoured.any():
         return None  # no face's outline to draw otherwise: the picture as it was
@@ -130,6 +130,7 @@ def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, fo
     them: none is a phantom of a flat surface)."""
     from blueprint.render.gbuffer import depth_tolerance
 
+    from .contour_gpu import near_faces
     from .occlusion import DepthTest, draw_faces, gpu_levels, sample_polylines
 
     contoured = found.contoured
@@ -141,12 +142,23 @@ def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, fo
         return ContourInk(np.zeros((0, 2)), np.zeros(1, np.int64), none, contoured, size, max_layers)
     view = np.asarray(camera.view_matrix(), np.float64)
     projection = np.asarray(camera.projection_matrix(), np.float64)
-    drawn = draw_faces(renderer, model, camera, size, max_layers)
     samples = sample_polylines(lines, view, projection, size)
-    test = DepthTest(camera.ortho, camera.pixel_angle(size[1]), depth_tolerance(camera, model.bounds))
-    on_gpu = gpu_levels(
-        renderer, model, camera, samples, found.tables, size, max_layers=max_layers, test=test, drawn=drawn
-    )
+    # a software rasteriser's faces k-buffer draws the faces near the samples alone
+    near = near_faces(renderer, found, samples.pixel[samples.inside], size)
+    tables = found.tables
+    try:
+        drawn = draw_faces(renderer, model, camera, size, max_layers, None if near is None else near[0])
+        if near is not None and drawn.surfaces is not None:
+            tables = replace(tables, remap=near[1])
+        test = DepthTest(camera.ortho, camera.pixel_angle(size[1]), depth_tolerance(camera, model.bounds))
+        on_gpu = gpu_levels(
+            renderer, model, camera, samples, tables, size, max_layers=max_layers, test=test, drawn=drawn
+        )
+    finally:
+        if near is not None:
+            near[0].ibo.release()
+            near[0].release()
+            near[1].release()
     if on_gpu is None:
         return None
     return _ink(renderer, samples, on_gpu.level, on_gpu.layers, lines, contoured, size)

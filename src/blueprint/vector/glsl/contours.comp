@@ -26,6 +26,10 @@ layout(std430, binding = 9) buffer Count { uint segment_count; };
 // then the vertices of the edges they lie on (the lower first): the ends the segments of the
 // face across each edge share
 layout(std430, binding = 10) writeonly buffer Segments { vec4 segments[]; };
+// each face's box on screen in tiles of u_tile pixels, x0 | y0 << 8 | x1 << 16 | y1 << 24 (y down,
+// a pixel's margin; first past last where it lies off the screen; every tile where a corner lies
+// behind the eye): which faces can cover the pixels the occlusion pass reads (contour_cull.comp)
+layout(std430, binding = 11) writeonly buffer Bounds { uint bounds[]; };
 layout(rgba32f, binding = 0) writeonly uniform image2D u_planes;
 layout(r32f, binding = 1) writeonly uniform image2D u_reach;
 
@@ -39,8 +43,34 @@ uniform float u_edge_on;      // a face seen within this |cos| of edge-on
 uniform float u_vertex_edge_on;
 uniform float u_grazing;      // sine of the grazing band's angle
 uniform float u_band_reach;   // sizes of its own a face of the band reaches (GRAZING_REACH)
+uniform mat4 u_projection;    // eye to clip
+uniform vec2 u_size;          // the picture's pixels
+uniform float u_tile;         // pixels a tile of the bounds
 
 shared uint s_contoured[2];
+
+// the face's tiles on screen (Bounds)
+uint tile_bounds(vec3 p[3]) {
+    vec2 lo = vec2(1e30);
+    vec2 hi = vec2(-1e30);
+    for (int k = 0; k < 3; ++k) {
+        vec4 clip = u_projection * (u_view * vec4(p[k], 1.0));
+        if (clip.w <= 0.0) {
+            return 0xffffffffu;
+        }
+        vec2 pixel = vec2(0.5 + 0.5 * clip.x / clip.w, 0.5 - 0.5 * clip.y / clip.w) * u_size;
+        lo = min(lo, pixel);
+        hi = max(hi, pixel);
+    }
+    lo -= 1.0;
+    hi += 1.0;
+    if (any(greaterThan(lo, u_size)) || any(lessThan(hi, vec2(0.0)))) {
+        return 1u;  // x0 = 1 past x1 = 0: no tile
+    }
+    uvec2 first = uvec2(clamp(floor(max(lo, vec2(0.0)) / u_tile), 0.0, 255.0));
+    uvec2 last = uvec2(clamp(floor(min(hi, u_size) / u_tile), 0.0, 255.0));
+    return first.x | first.y << 8 | last.x << 16 | last.y << 24;
+}
 
 vec3 position(uint v) { return vec3(vertices[7u * v], vertices[7u * v + 1u], vertices[7u * v + 2u]); }
 vec3 normal(uint v) { return vec3(vertices[7u * v + 3u], vertices[7u * v + 4u], vertices[7u * v + 5u]); }
@@ -59,6 +89,7 @@ void main() {
         uint v[3] = uint[3](indices[3 * f], indices[3 * f + 1], indices[3 * f + 2]);
         vec3 p[3] = vec3[3](position(v[0]), position(v[1]), position(v[2]));
         vec3 n[3] = vec3[3](normal(v[0]), normal(v[1]), normal(v[2]));
+        bounds[f] = tile_bounds(p);
         vec3 cross_ = cross(p[1] - p[0], p[2] - p[0]);
         float area2 = length(cross_);
         if (area2 > 0.0) {

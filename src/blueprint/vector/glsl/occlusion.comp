@@ -9,7 +9,8 @@
 // For samples of mesh edges the surface seen at the line's depth a pixel to either side
 // (surface number "how many there are in front" there) is written too, for the crease check.
 // With LAYERED the faces come a layer a texture as peeled a pass a layer (copy_faces.comp:
-// r32i, face + 1, 0 where none). With STACKS they come as read back at the pixels probed
+// r32i, face + 1, 0 where none). With REMAP the faces k-buffer drew some faces alone, numbered
+// from 0 (u_remap names each). With STACKS they come as read back at the pixels probed
 // (levels.PixelLayers), any number of layers: u_where holds a pixel's first row of the u_faces
 // table and its surface count.
 #include "table.glsl"
@@ -77,6 +78,17 @@ uniform float u_footprint;  // a pixel's size at unit distance (perspective) or 
 uniform sampler2D u_reach;
 #endif
 
+#ifndef REMAP
+#define REMAP 0
+#endif
+#if REMAP
+// the faces k-buffer drew some faces alone (contour_cull.comp): its face i is face u_remap[i]
+uniform isampler2D u_remap;
+#define REMAPPED(t) ((t) < 0 ? (t) : TABLE_ROW(u_remap, (t)).r)
+#else
+#define REMAPPED(t) (t)
+#endif
+
 const int BIG = 0x7fffffff;
 
 // more than ``limit`` (eye depth) in front
@@ -138,7 +150,7 @@ int seen_face(int seen[K], int index) {
 // llvmpipe runs every case of a switch on a lane's value)
 #define SURFACE(S, I)                                                               \
     if (count < u_layers) {                                                         \
-        int tri = FACE1(S, q) - 1;                                                  \
+        int tri = REMAPPED(FACE1(S, q) - 1);                                        \
         seen[I] = tri;                                                              \
         if (tri < 0) return ivec2(front, count);                                    \
         ++count;                                                                    \

@@ -70,11 +70,14 @@ class FaceTables:
     ``lines.grazing_band`` uploaded: ``planes`` an rgba32f table (gpu/tables.py) of eye-space
     planes n, c, ``reach`` an r32f one of the band's reach (its size times ``GRAZING_REACH``,
     0 off the band), each of ``rows`` rows and zero past the last face (no face). Samples of
-    smooth contours take the band's rule with them (``DepthTest.band``'s)."""
+    smooth contours take the band's rule with them (``DepthTest.band``'s). ``remap``: where
+    the faces k-buffer drew some faces alone (a ``FaceSubset``), an r32i table of the face
+    each of its IDs stands for."""
 
     planes: object
     reach: object
     rows: int
+    remap: object | None = None
 
     def __len__(self) -> int:
         return self.rows
@@ -97,16 +100,17 @@ class FacesDrawn:
 
 
 def draw_faces(
-    renderer: LayerRenderer, model: Model, camera: Camera, size, max_layers: int | None
+    renderer: LayerRenderer, model: Model, camera: Camera, size, max_layers: int | None, mesh=None
 ) -> FacesDrawn:
     """Set the faces k-buffer of ``gpu_levels`` drawing now and go on: flushed to the driver,
     a software rasteriser's threads draw it while the CPU finds the lines, where otherwise
     the layer count would wait for all of it. Pass it to ``gpu_levels`` as ``drawn``, with the
     same model, camera, size and ``max_layers``, before anything else draws into the
-    renderer's targets."""
+    renderer's targets. ``mesh``: some of the model's faces alone (``render.mesh.FaceSubset``,
+    with ``FaceTables.remap`` naming them)."""
     clock = time.perf_counter()
     renderer.make_current()
-    surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers)
+    surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers, mesh=mesh)
     if surfaces is not None:
         renderer.flush()
     return FacesDrawn(surfaces, time.perf_counter() - clock)
@@ -323,7 +327,8 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     parallel.run(pack, len(inside))
 
     ctx = renderer.ctx
-    prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": banded})
+    remap = planes.remap if made else None
+    prog = renderer.compute(OCCLUSION_COMP, {**defines, "BAND": banded, "REMAP": remap is not None})
     bind(prog)
     put = renderer.uniforms.set
     put(prog, "u_count", len(inside))
@@ -343,6 +348,9 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     if band_texture is not None:
         band_texture.use(location=MAX_LAYERS + 1)
         put(prog, "u_reach", MAX_LAYERS + 1)
+    if remap is not None:
+        remap.use(location=MAX_LAYERS + 2)
+        put(prog, "u_remap", MAX_LAYERS + 2)
     buffers = {0: ctx.buffer(packed), 2: ctx.buffer(reserve=16 * len(inside))}
     try:
         for binding, buffer in buffers.items():
