@@ -213,3 +213,8 @@ def test_the_same_lines_every_time_and_from_the_faces_near_them(renderer, monkey
         assert 0 < kept[0] < 0.5 * model.triangle_count, kept
     else:
         assert kept == [None]
+    # and the picture with them is the one with the levels from every face
+    options = dict(size=SIZE, view="front", smooth_contours=True, style="paper")
+    every = np.asarray(blueprint.render(model, **options))
+    monkeypatch.setattr(contour_gpu, "near_faces", near)
+    assert np.array_equal(np.asarray(blueprint.render(model, **options)), every)

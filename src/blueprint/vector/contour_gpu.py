@@ -2,10 +2,10 @@
 mesh as it is drawn (its prepared vertex normals, the smooth faces its preparation found,
 ``scene.prepare.feature_faces``) gives the contour segments, the faces whose outline they
 draw and the occlusion pass's tables of face planes and grazing band, with no adjacency, edge
-classification or plane table made on the CPU. On a mesh of more triangles than pixels those
-cost seconds, and a triangle lies under a pixel: the bridges from a contour's end to the
-mesh's silhouette that the vector drawing draws (``lines.smooth_contour_segments``) span less
-than a pixel there, and are left out."""
+classification or plane table made on the CPU. On a dense mesh (``contour_ink.DENSE``) those
+cost seconds, and its triangles are some two pixels across or less: the bridges from a
+contour's end to the mesh's silhouette that the vector drawing draws
+(``lines.smooth_contour_segments``) would span no more, and are left out."""
 
 from __future__ import annotations
 

@@ -161,7 +161,11 @@ def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, fo
             near[1].release()
     if on_gpu is None:
         return None
-    return _ink(renderer, samples, on_gpu.level, on_gpu.layers, lines, contoured, size)
+    # the faces near the samples hold every surface at them, not the whole picture's deepest:
+    # the lines stand for the contoured faces' outline in every layer up to the cap (there are
+    # no deeper surfaces at the samples, nor lines there)
+    layers = max_layers if tables.remap is not None else on_gpu.layers
+    return _ink(renderer, samples, on_gpu.level, layers, lines, contoured, size)
 
 
 def _ink(renderer, samples, levels, count: int, lines, contoured, size) -> ContourInk:
