@@ -219,3 +219,26 @@ def test_levels_stop_at_one_faces_pass(renderer):
         return np.abs(image[..., :3].astype(int) - image[0, 0, :3].astype(int)).sum(axis=-1)[near].sum()
 
     assert strength(plain) > 0 and strength(lined) > 0.9 * strength(plain), (strength(lined), strength(plain))
+
+
+def test_both_forms_of_the_edges_draw_them(renderer, monkeypatch):
+    """The edge maps as fragment passes' targets, and as the compute form's arrays (a GPU's, where
+    each level's lines are drawn into a map of their own and merged into its slice): the same
+    picture of the sphere half behind a plate with its contour lines, within the two forms'
+    own rounding, and the lines change it in both."""
+    if renderer.ctx.version_code < 430:
+        pytest.skip("the compute form needs OpenGL 4.3")
+    sphere = noisy_sphere(0.0)
+    plate = examples.box((-1.2, -1.2, 1.3), (0.0, 1.2, 1.35))
+    model = examples.assemble({"sphere": (sphere.positions, sphere.faces), "plate": plate})
+    pictures = {}
+    for compute in (False, True):
+        monkeypatch.setattr(renderer, "use_compute", compute)
+        for lines in (False, True):
+            options = dict(size=(512, 512), view="front", smooth_contours=lines, renderer=renderer)
+            pictures[compute, lines] = np.asarray(blueprint.render(model, **options)).astype(int)
+    apart = np.abs(pictures[False, True] - pictures[True, True]).max(axis=-1)
+    assert apart.max() <= 24, apart.max()
+    for compute in (False, True):
+        changed = np.abs(pictures[compute, True] - pictures[compute, False]).max(axis=-1) > 24
+        assert changed.sum() > 200, (compute, changed.sum())

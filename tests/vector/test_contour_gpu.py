@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from capture_helpers import one_way
 from scan_helpers import noisy_bust, noisy_sphere
 from scipy.spatial import cKDTree
 
@@ -182,39 +183,38 @@ def test_where_the_gpu_cannot(renderer, monkeypatch):
     )
 
 
-def test_the_same_lines_every_time_and_from_the_faces_near_them(renderer, monkeypatch):
+@pytest.mark.parametrize("way", ["k-buffer", "peel"])
+def test_the_same_lines_every_time_and_from_the_faces_near_them(renderer, monkeypatch, way):
     """The bust's contour lines twice, bit for bit (the pass appends its segments in whatever
-    order its invocations run); and on a software rasteriser, whose faces k-buffer draws only
-    the faces near the lines' samples (a fraction of them), the same lines and levels as from
-    every face."""
+    order its invocations run); and from the faces near the lines' samples alone (a fraction of
+    them: what the faces k-buffer, or the peel in its place, draws for their levels) the same
+    lines, levels and picture as from every face, by either way of capturing them."""
     from blueprint.vector import contour_gpu
 
     model = noisy_bust()[0]
     camera = fit_camera(model, SIZE, "front")
     monkeypatch.setattr(ink_module, "DENSE", 0.0)
-    found = [contour_ink(renderer, model, camera, SIZE) for _ in range(2)]
-    kept = []
-    near = contour_gpu.near_faces
+    with one_way(renderer, way):
+        found = [contour_ink(renderer, model, camera, SIZE) for _ in range(2)]
+        kept = []
+        near = contour_gpu.near_faces
 
-    def counted(*args):
-        subset = near(*args)
-        kept.append(None if subset is None else sum(group[3] for group in subset[0].groups) // 3)
-        return subset
+        def counted(*args):
+            subset = near(*args)
+            kept.append(None if subset is None else sum(group[3] for group in subset[0].groups) // 3)
+            return subset
 
-    monkeypatch.setattr(contour_gpu, "near_faces", counted)
-    found.append(contour_ink(renderer, model, camera, SIZE))
-    monkeypatch.setattr(contour_gpu, "near_faces", lambda *args: None)
-    found.append(contour_ink(renderer, model, camera, SIZE))
+        monkeypatch.setattr(contour_gpu, "near_faces", counted)
+        found.append(contour_ink(renderer, model, camera, SIZE))
+        monkeypatch.setattr(contour_gpu, "near_faces", lambda *args: None)
+        found.append(contour_ink(renderer, model, camera, SIZE))
+        # and the picture with them is the one with the levels from every face
+        options = dict(size=SIZE, view="front", smooth_contours=True, style="paper")
+        every = np.asarray(blueprint.render(model, **options))
+        monkeypatch.setattr(contour_gpu, "near_faces", near)
+        assert np.array_equal(np.asarray(blueprint.render(model, **options)), every)
     assert len(found[0]) >= 5 and len(set(found[0].level.tolist())) > 1
     for other in found[1:]:
         for field in ("points", "offsets", "level", "contoured"):
             assert np.array_equal(getattr(found[0], field), getattr(other, field)), field
-    if renderer.device.software:
-        assert 0 < kept[0] < 0.5 * model.triangle_count, kept
-    else:
-        assert kept == [None]
-    # and the picture with them is the one with the levels from every face
-    options = dict(size=SIZE, view="front", smooth_contours=True, style="paper")
-    every = np.asarray(blueprint.render(model, **options))
-    monkeypatch.setattr(contour_gpu, "near_faces", near)
-    assert np.array_equal(np.asarray(blueprint.render(model, **options)), every)
+    assert 0 < kept[0] < 0.5 * model.triangle_count, kept

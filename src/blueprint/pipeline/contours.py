@@ -11,6 +11,7 @@ import numpy as np
 
 CONTOUR_VERT = "blueprint.pipeline:glsl/contour_lines.vert"
 CONTOUR_FRAG = "blueprint.pipeline:glsl/contour_lines.frag"
+CONTOUR_MERGE = "blueprint.pipeline:glsl/contour_merge.comp"
 
 __all__ = ["LineWidths", "draw_contours", "segment_quads"]
 
@@ -55,12 +56,14 @@ def segment_quads(points: np.ndarray, offsets: np.ndarray, keep: np.ndarray, rea
     return out.reshape(-1, 6)
 
 
-def draw_contours(device, ink, targets: list, layers: int, widths: LineWidths) -> int:
+def draw_contours(device, ink, targets: list, layers: int, widths: LineWidths, slices: int = 0) -> int:
     """Draw ``ink``'s pieces of level below ``layers`` into ``targets`` (the edge maps, layer
-    ``k`` in ``targets[k]``, all of one size: ``ink.size`` times a whole factor); the draw
-    calls issued."""
+    ``k`` in ``targets[k]``, all of one size: ``ink.size`` times a whole factor; or with
+    ``slices``, the compute form's arrays of that many maps each, layer ``k`` in slice
+    ``k % slices`` of ``targets[k // slices]``: each level drawn into a map of its own, then
+    merged into its slice, CONTOUR_MERGE); the draw calls and dispatches issued."""
     ctx = device.ctx
-    width, height = targets[0].size
+    width, height = targets[0].size[:2]
     scale = width / ink.size[0]
     # target pixels: x right, y up
     points = np.column_stack([ink.points[:, 0] * scale, height - ink.points[:, 1] * scale])
@@ -80,13 +83,27 @@ def draw_contours(device, ink, targets: list, layers: int, widths: LineWidths) -
     ctx.blend_func = ctx.ONE, ctx.ONE
     ctx.blend_equation = ctx.MAX
     draws = 0
+    merge = lines = None
+    if slices:
+        merge = device.compute(CONTOUR_MERGE)
+        lines = device.pool.texture("pipeline.contours.lines", (width, height), "r8")
     try:
         for level, end, held in zip(levels, ends, quads, strict=True):
             half, share = widths.of(level)
             device.uniforms.update(prog, {"u_half": half, "u_ink": share})
-            device.pool.framebuffer((targets[level],)).use()
+            target = device.pool.framebuffer((targets[level] if merge is None else lines,))
+            target.use()
+            if merge is not None:
+                target.clear()
             vao.render(vertices=len(held), first=end - len(held))
             draws += 1
+            if merge is not None:
+                lines.use(0)
+                device.uniforms.update(merge, {"u_lines": 0, "u_slice": level % slices})
+                targets[level // slices].bind_to_image(0, read=True, write=True)
+                merge.run(-(-width // 8), -(-height // 8))
+                ctx.memory_barrier(ctx.SHADER_IMAGE_ACCESS_BARRIER_BIT | ctx.TEXTURE_FETCH_BARRIER_BIT)
+                draws += 1
     finally:
         ctx.blend_equation = ctx.FUNC_ADD
         ctx.disable(ctx.BLEND)

@@ -254,8 +254,7 @@ class Executor:
             size_of=sizes,
             frame=self._frame,
             slot=req.slot,
-            # contour lines are drawn into maps of their own, not into slices of the arrays
-            arrays=self._arrays(pl) if self.r.use_compute and req.contours is None else None,
+            arrays=self._arrays(pl) if self.r.use_compute else None,
             max_layers=max_layers,
             min_fraction=min_fraction,
         )
@@ -710,7 +709,8 @@ class Executor:
             if source not in st.stacks:
                 continue
             widths = _line_widths(pl, source)
-            st.draws += draw_contours(self.r, st.contours, st.stacks[source], layers, widths)
+            slices = SLICES if st.arrays is not None and source in st.arrays.arrays else 0
+            st.draws += draw_contours(self.r, st.contours, st.stacks[source], layers, widths, slices)
 
     def composed(self, st: RunState, capped: bool) -> tuple[str, str] | None:
         """(edges pass, composite pass) where the one pass reading the layers from a k-buffer's

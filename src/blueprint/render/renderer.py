@@ -395,11 +395,13 @@ class Capturer:
         size: tuple[int, int],
         max_layers: int | None = None,
         min_fraction: float = 0.0,
+        mesh: GpuMesh | None = None,
     ) -> None:
         """Peel a pass a layer, as ``triangles_at`` does there, and hand every layer that counts
         to ``visit(ids, depth, layer)`` while it is on the GPU: ``ids`` the ``r32i`` target of
         face + 1, ``depth`` the layer's window depth (1.0 where it has no surface), OpenGL rows.
-        Nothing is read back."""
+        Nothing is read back. ``mesh``: peel these faces of the model alone (a ``FaceSubset``:
+        its face IDs are the subset's)."""
         w, h = check_size(size, 1, self.device.max_texture)
         self._peeled(
             model,
@@ -410,6 +412,7 @@ class Capturer:
             30.0,
             False,
             lambda gb, layer: visit(gb.ids, gb.layer_depth(layer), layer),
+            mesh,
         )
 
     def _faces(self, model, camera, size, max_layers, in_place: bool = False, mesh=None) -> tuple:
@@ -426,7 +429,9 @@ class Capturer:
         asked = {"layers": max_layers, "tie_break": True, "surfaces": True, "unpack": not in_place}
         return Capture(self, mesh, camera, gb, **asked), gb
 
-    def _peeled(self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read) -> None:
+    def _peeled(
+        self, model, camera, size, max_layers, min_fraction, crease_angle, normals, read, faces=None
+    ) -> None:
         """Peel layer after layer; after each one that counts, ``read(gbuffer, layer)`` (depth
         of layer ``i`` in ``depth[i % 2]``; ID target face + 1, with normals part + 1 too)."""
         check_frame_args(max_layers, min_fraction, crease_angle, 1.0)
@@ -439,7 +444,7 @@ class Capturer:
             gb = gbuffer(device.pool, size)
             capture = Capture(self, mesh, camera, gb, layers=max_layers)
         else:
-            mesh = self.mesh(model, None)
+            mesh = self.mesh(model, None) if faces is None else faces
             gb = gbuffer(device.pool, size, "idb", normals=False)
             capture = Capture(self, mesh, camera, gb, tie_break=True)
         rules = standard_rules(max_layers, min_fraction)

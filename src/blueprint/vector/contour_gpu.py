@@ -33,6 +33,8 @@ CULL_COMP = "blueprint.vector:glsl/contour_cull.comp"
 # A vertex seen within this |cos| of edge-on counts as turned away (silhouette/contours.py's).
 _VERTEX_EDGE_ON = 1e-7
 _GROUP = 64
+# The faces near the lines are drawn alone where they are at most this share of the mesh.
+_MOST_KEPT = 0.75
 
 
 @dataclass(frozen=True)
@@ -67,10 +69,8 @@ def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, 
     """(``FaceSubset``, r32i table of the face each of its faces is) of the faces whose box on
     screen meets a tile holding one of ``pixels`` ((N, 2), x right, y down, at ``size``) or a
     pixel within two of it: all that the occlusion pass reads around a contour's samples can
-    show. For a software rasteriser, whose faces k-buffer costs by its triangles; None
-    elsewhere. The caller releases both."""
-    if not renderer.device.software:
-        return None
+    show (the faces k-buffer, or the peel in its place, costs by its triangles); None where
+    that would keep more than ``_MOST_KEPT`` of the faces. The caller releases both."""
     ctx, mesh, faces, tile = renderer.ctx, found.mesh, len(found.contoured), found.tile
     shape = (-(-size[1] // tile), -(-size[0] // tile))
     mask = np.zeros(shape, np.uint8)
@@ -97,6 +97,8 @@ def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, 
         texture.release()
     kept = np.flatnonzero(np.unpackbits(bits, count=faces, bitorder="little")).astype(np.int32)
     count = len(kept)
+    if count > _MOST_KEPT * faces:
+        return None  # lines all over the picture: the whole mesh draws as fast
     ibo = ctx.buffer(reserve=max(12 * count, 12))
     listed = ctx.buffer(kept if count else np.zeros(1, np.int32))
     try:
@@ -112,7 +114,8 @@ def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, 
         raise
     finally:
         listed.release()
-    return FaceSubset(mesh, ibo, count, pieces=True), table_texture(ctx, table_of(kept, np.int32))
+    subset = FaceSubset(mesh, ibo, count, pieces=renderer.device.software)
+    return subset, table_texture(ctx, table_of(kept, np.int32))
 
 
 def gpu_contours(

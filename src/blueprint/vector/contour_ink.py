@@ -143,12 +143,12 @@ def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, fo
     view = np.asarray(camera.view_matrix(), np.float64)
     projection = np.asarray(camera.projection_matrix(), np.float64)
     samples = sample_polylines(lines, view, projection, size)
-    # a software rasteriser's faces k-buffer draws the faces near the samples alone
+    # the faces k-buffer (or the peel in its place) draws the faces near the samples alone
     near = near_faces(renderer, found, samples.pixel[samples.inside], size)
     tables = found.tables
     try:
         drawn = draw_faces(renderer, model, camera, size, max_layers, None if near is None else near[0])
-        if near is not None and drawn.surfaces is not None:
+        if near is not None:
             tables = replace(tables, remap=near[1])
         test = DepthTest(camera.ortho, camera.pixel_angle(size[1]), depth_tolerance(camera, model.bounds))
         on_gpu = gpu_levels(

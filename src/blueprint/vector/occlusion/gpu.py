@@ -93,10 +93,13 @@ class FacesDrawn:
 
     surfaces : the renderer's ``face_kbuffer`` targets, or None where it draws none
     seconds : float, spent setting it drawing
+    mesh : the faces drawn where some alone (``render.mesh.FaceSubset``), which the peel that
+        stands in for a k-buffer draws as well; None: every face of the model
     """
 
     surfaces: list | None
     seconds: float
+    mesh: object = None
 
 
 def draw_faces(
@@ -113,7 +116,7 @@ def draw_faces(
     surfaces = renderer.face_kbuffer(model, camera, size=size, max_layers=max_layers, mesh=mesh)
     if surfaces is not None:
         renderer.flush()
-    return FacesDrawn(surfaces, time.perf_counter() - clock)
+    return FacesDrawn(surfaces, time.perf_counter() - clock, mesh)
 
 
 def _bind_surfaces(renderer: LayerRenderer, prog, surfaces) -> None:
@@ -146,9 +149,10 @@ def _layer_count(renderer: LayerRenderer, surfaces, size, min_fraction: float) -
     return min(rule.count(read.tolist()) for rule in standard_rules(None, min_fraction))
 
 
-def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min_fraction) -> list:
-    """Peel a pass a layer and copy every layer's faces into a texture of its own on the GPU
-    (copy_faces.comp), for renderers without the faces k-buffer."""
+def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min_fraction, mesh=None) -> list:
+    """Peel a pass a layer (``mesh``'s faces alone where given) and copy every layer's faces
+    into a texture of its own on the GPU (copy_faces.comp), for renderers without the faces
+    k-buffer."""
     ctx, pool = renderer.ctx, renderer.pool
     prog = renderer.compute(COPY_FACES_COMP)
     copies: list = []
@@ -166,7 +170,7 @@ def _copied_layers(renderer: LayerRenderer, model, camera, size, max_layers, min
         copies.append(target)
 
     renderer.each_face_layer(
-        model, camera, visit, size=size, max_layers=max_layers, min_fraction=min_fraction
+        model, camera, visit, size=size, max_layers=max_layers, min_fraction=min_fraction, mesh=mesh
     )
     return copies
 
@@ -209,7 +213,7 @@ def gpu_levels(
         return None
     else:
         # the peel's stop rules decided which layers count: those it handed over
-        surfaces = _copied_layers(renderer, model, camera, size, max_layers, min_fraction)
+        surfaces = _copied_layers(renderer, model, camera, size, max_layers, min_fraction, drawn.mesh)
         layers = len(surfaces)
     peel_seconds = time.perf_counter() - clock + drawn.seconds
 
