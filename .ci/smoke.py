@@ -399,16 +399,18 @@ def _smooth_contours(s: Smoke):
     fraction, image = drawn(s.render("ball-contours.png", "--smooth-contours", model=ball), low=0.005)
     changed = differs(image, plain)
     check(changed > 0.0005, f"the contour lines change {changed:.3%} of the ball's picture")
-    # its triangles are large on the picture: drawn with the lines unasked
+    # a picture of one mesh: drawn with the lines unasked
     _, default = drawn(s.render("ball-default.png", model=ball), low=0.005)
     check(differs(default, image) == 0.0, "the ball's default picture is not the one with its contour lines")
     # at 96 x 96 its triangles lie under a pixel: the lines are found on the GPU (their shaders
-    # are package data like the rest)
+    # are package data like the rest), by default too
     small = ("96", "96")
     _, dense_plain = drawn(s.render("ball-96.png", "--no-smooth-contours", model=ball, size=small), small)
     _, dense = drawn(s.render("ball-96-contours.png", "--smooth-contours", model=ball, size=small), small)
     dense_changed = differs(dense, dense_plain)
     check(dense_changed > 0.0005, f"the GPU's contour lines change {dense_changed:.3%} of the small picture")
+    _, dense_default = drawn(s.render("ball-96-default.png", model=ball, size=small), small)
+    check(differs(dense_default, dense) == 0.0, "the small ball's default picture lacks its lines")
     return (
         f"ink {fraction:.1%}, {changed:.2%} of pixels changed from the mesh's outline, the default alike;"
         f" at 96 x 96 (found on the GPU) {dense_changed:.2%}"

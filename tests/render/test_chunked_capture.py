@@ -176,7 +176,9 @@ def test_a_frame_is_chunked_to_the_gpus_free_memory(renderer, monkeypatch):
     assert need["mesh"] == budget.MESH_BYTES * triangles
     third = -(-triangles // 3)
     free = need["gbuffers"] + need["lists"] + budget.MESH_BYTES * third
-    options = {"size": (96, 96), "supersample": 1, "max_layers": layers, **CAMERA}
+    # the mesh's outline: its smooth contour lines need it whole (a mesh drawn in chunks keeps
+    # its outline, test_contour_gpu)
+    options = {"size": (96, 96), "supersample": 1, "max_layers": layers, "smooth_contours": False, **CAMERA}
     whole = np.asarray(blueprint.draw(model, **options).image)
     assert renderer.capturer.chunks(model) == 0
     renderer.forget(model)
@@ -251,7 +253,8 @@ def test_the_cli_draws_in_chunks_or_refuses_in_one_line(renderer, tmp_path):
         env = {k: v for k, v in os.environ.items() if k != budget.GPU_MEMORY_ENV}
         if gpu_memory is not None:
             env[budget.GPU_MEMORY_ENV] = str(gpu_memory)
-        options = ["--size", "128", "128", "--supersample", "1", "--max-layers", "8"]
+        # (the mesh's outline: a mesh drawn in chunks keeps it where its lines would be)
+        options = ["--size", "128", "128", "--supersample", "1", "--max-layers", "8", "--no-smooth-contours"]
         command = [str(BLUEPRINT), "render", str(path), "-o", str(tmp_path / out), *options]
         return subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
 

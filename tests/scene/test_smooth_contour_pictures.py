@@ -1,9 +1,9 @@
 """Smooth contours in pictures (issue 39, point 2): ``smooth_contours=True`` (and by default a
-picture whose mesh's triangles are large on it) draws the outline of smooth surfaces as lines
-along the contour of their interpolated normals, each into the edge map of its occlusion level
-(``vector.contour_ink``, ``pipeline.contours``), and the edges pass leaves those faces' borders
-and jumps out. Checked against the vector drawing's contours, which the exact hidden-line tests
-hold, and by the issue's speck measure at 1024 x 1024."""
+picture of one mesh) draws the outline of smooth surfaces as lines along the contour of their
+interpolated normals, each into the edge map of its occlusion level (``vector.contour_ink``,
+``pipeline.contours``), and the edges pass leaves those faces' borders and jumps out. Checked
+against the vector drawing's contours, which the exact hidden-line tests hold, and by the
+issue's speck measure at 1024 x 1024."""
 
 from __future__ import annotations
 
@@ -20,9 +20,9 @@ from scipy import ndimage
 import blueprint
 from blueprint import examples
 from blueprint.api.options import DrawOptions
-from blueprint.api.picture import SMOOTH_CONTOUR_DENSITY, smooth_contours_wanted
+from blueprint.api.picture import smooth_contours_wanted
 from blueprint.scene.camera import clip_to_pixels, fit_camera, transform
-from blueprint.vector.contour_ink import contour_ink
+from blueprint.vector.contour_ink import DENSE, contour_ink
 from blueprint.vector.linework import SILHOUETTE
 from blueprint.vector.occlusion.gpu import MAX_LAYERS
 
@@ -164,25 +164,24 @@ def test_command_line_flag(tmp_path):
     assert specks(found[()]) < specks(found[("--no-smooth-contours",)])
 
 
-def test_pictures_draw_them_where_triangles_are_large_on_the_picture(renderer):
-    """By default a picture draws the contour lines where its mesh has at most
-    ``SMOOTH_CONTOUR_DENSITY`` triangles a pixel: below it the mesh's triangle edges are long
-    enough on the picture to zigzag, above it they are not and the CPU pass would cost more
-    than the picture. A renderer's frames (streams, the bench) draw none unless asked."""
+def test_pictures_of_one_mesh_draw_them_by_default(renderer):
+    """By default a picture of one mesh draws the contour lines, its triangles large on it
+    (found on the CPU) or under a pixel (on the GPU, ``contour_ink.DENSE``); a model kept as
+    instances, and a renderer's frames (streams, the bench), draw none unless asked."""
     model = noisy_sphere(0.006)
-    side = int(np.ceil(np.sqrt(model.triangle_count / SMOOTH_CONTOUR_DENSITY)))
-    large, small = (side, side), (side // 2, side // 2)
-    assert smooth_contours_wanted(model, DrawOptions(size=large))
-    assert not smooth_contours_wanted(model, DrawOptions(size=small))
-    assert not smooth_contours_wanted(model, DrawOptions(size=large, smooth_contours=False))
-    assert smooth_contours_wanted(model, DrawOptions(size=small, smooth_contours=True))
+    side = int(np.ceil(np.sqrt(model.triangle_count / DENSE)))
+    large, small = (2 * side, 2 * side), (side // 2, side // 2)
+    for size in (large, small):
+        assert smooth_contours_wanted(model, DrawOptions(size=size))
+        assert not smooth_contours_wanted(model, DrawOptions(size=size, smooth_contours=False))
+        options = dict(size=size, style="paper", renderer=renderer)
+        drawn = blueprint.render(model, **options)
+        assert np.array_equal(drawn, blueprint.render(model, smooth_contours=True, **options))
+        assert not np.array_equal(drawn, blueprint.render(model, smooth_contours=False, **options))
     instanced = smooth_scene()  # kept as instances: their meshes' own outlines
     assert instanced.instances is not None
     assert not smooth_contours_wanted(instanced, DrawOptions(size=(4096, 4096)))
     options = dict(size=small, style="paper", renderer=renderer)
-    assert np.array_equal(
-        blueprint.render(model, **options), blueprint.render(model, smooth_contours=False, **options)
-    )
     camera = fit_camera(model, small)
     frame = renderer.render(model, camera, size=small, style="paper")
     unasked = blueprint.render(model, camera=camera, smooth_contours=False, **options)

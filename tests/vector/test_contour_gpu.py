@@ -15,6 +15,7 @@ from scipy.spatial import cKDTree
 import blueprint
 from blueprint import examples
 from blueprint.gpu.tables import TABLE_WIDTH
+from blueprint.render import budget
 from blueprint.scene.camera import clip_to_pixels, fit_camera, transform
 from blueprint.scene.prepare import feature_faces
 from blueprint.silhouette.edges import feature_vertices
@@ -173,6 +174,15 @@ def test_where_the_gpu_cannot(renderer, monkeypatch):
 
     instanced = smooth_scene()
     assert gpu_contours(renderer, instanced, view, projection, (64, 64), 30.0, 8) is None
+    # memory for a third of the mesh beside the frame: it would be drawn in chunks; the frame's
+    # own plan is left to the frame (``fits_whole`` plans nothing)
+    renderer.forget(model)
+    need = budget.frame_bytes(model.triangle_count, 64 * 64, 8, None)
+    monkeypatch.setenv(budget.GPU_MEMORY_ENV, str(sum(need.values()) - 2 * need["mesh"] // 3))
+    checked = renderer.capturer._checked
+    assert gpu_contours(renderer, model, view, projection, (64, 64), 30.0, 8) is None
+    assert renderer.capturer._checked is checked
+    monkeypatch.delenv(budget.GPU_MEMORY_ENV)
     monkeypatch.setattr(renderer.capturer, "chunk_faces", 1024)
     assert gpu_contours(renderer, model, view, projection, (64, 64), 30.0, 8) is None
     assert contour_ink(renderer, model, camera, (64, 64)) is None

@@ -128,11 +128,11 @@ class DrawOptions:
         interpolated normals (``blueprint.vector.contour_ink``), each in the layer of its
         occlusion level, instead of the edges of the mesh's own outline there: vector drawings
         always do. A scan's outline then runs smooth, without the specks of its noise's folds,
-        for a pass over the mesh on the CPU and one more capture a view. None (the default):
-        a picture (``render``, ``draw``, ``blueprint render``) draws them where the mesh's
-        triangles are large enough on it for their edges to zigzag
-        (``blueprint.api.picture.smooth_contours_wanted``); a renderer's frames
-        (``Renderer.render``, streams) and the viewer draw none.
+        for a pass over the mesh (on the GPU for a dense mesh, where the renderer can; else
+        the mesh's outline stays there) and one more capture of the faces near the lines a
+        view. None (the default): a picture (``render``, ``draw``, ``blueprint render``) of
+        one mesh draws them (``blueprint.api.picture.smooth_contours_wanted``); a renderer's
+        frames (``Renderer.render``, streams) and the viewer draw none.
     highlight : str, int, sequence, Model or (P,) bool, optional
         Parts to outline in the highlight ink: name globs (``"Piston*"``) and indices, or a
         second model lying on the parts to designate.
@@ -234,8 +234,8 @@ class DrawOptions:
         None,
         "style",
         "Pictures: outline smooth surfaces by the contour of their interpolated normals, as vector "
-        "drawings do (scans: no zigzag, fewer specks; a CPU pass a view). Default: where the "
-        "mesh's triangles are large enough on the picture to zigzag.",
+        "drawings do (scans: no zigzag, fewer specks; a pass over the mesh a view, on the GPU for "
+        "dense meshes). Default: pictures of one mesh.",
         kind="switch",
     )
     # -- masking

@@ -8,23 +8,15 @@ from blueprint.render.renderer import Frame, LayerRenderer
 from blueprint.scene.camera import Camera, fit_camera
 from blueprint.scene.model import Model
 
-# A picture outlines smooth surfaces by their contour lines where the mesh has at most this many
-# triangles a pixel of the picture: a fitted model covers about half of it, so there its
-# triangles are a pixel or more and their edges draw the outline as a zigzag; denser meshes'
-# triangles lie under a pixel, where the lines (found on the GPU, ``vector.contour_gpu``) still
-# cost a second capture of the faces for their levels.
-SMOOTH_CONTOUR_DENSITY = 0.5
-
 
 def smooth_contours_wanted(model: Model, options: DrawOptions) -> bool:
-    """Whether a picture of ``model`` with ``options`` (its size given) draws smooth contour
-    lines: as ``smooth_contours`` says, or where it is None, where ``model`` is one mesh (a
-    model kept as instances draws its meshes' own outlines) of at most
-    ``SMOOTH_CONTOUR_DENSITY`` triangles a pixel of the picture."""
+    """Whether a picture of ``model`` with ``options`` draws smooth contour lines: as
+    ``smooth_contours`` says, or where it is None, where ``model`` is one mesh (a model kept as
+    instances draws its meshes' own outlines). A dense mesh's lines are found on the GPU, or
+    where the renderer cannot, not at all (``blueprint.vector.contour_ink``)."""
     if options.smooth_contours is not None:
         return options.smooth_contours
-    w, h = options.size
-    return model.instances is None and model.triangle_count <= SMOOTH_CONTOUR_DENSITY * w * h
+    return model.instances is None
 
 
 def blueprint_frame(renderer, model: Model, camera: Camera | None, options: DrawOptions, **extra) -> Frame:

@@ -25,7 +25,8 @@ DEFAULT_SIZE = (800, 600)
     helps={
         "style": f"One of {', '.join(STYLE_NAMES)}.",
         "smooth_contours": "The drawing shown once the view rests: outline smooth surfaces by the "
-        "contour of their interpolated normals (a CPU pass each time the view rests; off by default).",
+        "contour of their interpolated normals (a pass over the mesh each time the view rests; "
+        "off by default).",
     },
 )  # fmt: skip
 @click.option(

@@ -237,6 +237,32 @@ class Capturer:
             and all(size <= last[4].get(kind, -1) for kind, size in extra.items())
         ):
             return
+        faces, self.list_room = self._sized(model, pixels, max_layers, crease, extra)
+        self.pool_held = self.device.pool.held_bytes()
+        self._planned = (model, faces)
+        self._checked = asked
+
+    def fits_whole(
+        self,
+        model: Model,
+        pixels: int,
+        max_layers: int | None,
+        crease_angle: float | None,
+        extra: dict[str, int] | None = None,
+    ) -> bool:
+        """Whether a frame sized as ``check_memory`` sizes it holds ``model``'s mesh uploaded
+        whole beside it, planning nothing: for a pass that runs before the frame and wants the
+        mesh whole (the smooth contours found on the GPU), leaving the frame's own plan to
+        the frame."""
+        crease = None if crease_angle is None else float(crease_angle)
+        try:
+            faces, _ = self._sized(model, pixels, max_layers, crease, dict(extra or {}))
+        except InputError:
+            return False  # (the frame says why, in its own words)
+        return faces is None
+
+    def _sized(self, model: Model, pixels: int, max_layers: int | None, crease, extra: dict) -> tuple:
+        """(the faces a chunk holds, None: the mesh whole; the lists' room) of ``check_memory``."""
         held = self._meshes.get(self._held_key(model, crease))
         whole = held is not None and held[0] is model and held[1].chunk_faces is None
         triangles, instances = (0, 0) if whole else uploaded(model)
@@ -250,10 +276,7 @@ class Capturer:
             extra=extra,
             slim=bool(abuffer and abuffer.slim),
         )
-        faces, self.list_room = check_frame_memory(self.device, model.source or "the model", need, instances)
-        self.pool_held = self.device.pool.held_bytes()
-        self._planned = (model, faces)
-        self._checked = asked
+        return check_frame_memory(self.device, model.source or "the model", need, instances)
 
     @current
     def forget(self, model: Model) -> None:

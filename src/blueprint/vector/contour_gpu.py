@@ -140,10 +140,11 @@ def gpu_contours(
         return None
     renderer.make_current()
     # a face's plane, reach and box (24 bytes) and room for segments (48 bytes for 16 faces)
-    # beside the frame's own buffers, and the mesh in chunks where it does not fit
-    renderer.capturer.check_memory(
+    # beside a frame of the view: a mesh that would be drawn in chunks keeps its outline
+    if not renderer.capturer.fits_whole(
         model, size[0] * size[1], max_layers, crease_angle, {"contours": 28 * rows}
-    )
+    ):
+        return None
     mesh = renderer.mesh(model, crease_angle)
     feature = feature_faces(model, crease_angle)
     if mesh.chunk_faces is not None or not mesh.one_placement or feature is None:
