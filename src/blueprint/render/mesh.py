@@ -315,13 +315,7 @@ class FaceSubset(GpuMesh):
         self.one_placement = True
         self._placements = mesh._placements
         self._vaos = {}
-        self._corners = None
-        self._model = mesh._model
-        self.prepared = {}
-        self.part_count = mesh.part_count
-        self.triangles = mesh.triangles
-        self.instanced = False
-        self.bounds = mesh.bounds
+        self._of_model(mesh._model)
 
     def release(self) -> None:
         held = [draw[0] for draws in self._vaos.values() for draw in draws.arrays]

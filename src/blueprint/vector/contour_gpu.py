@@ -99,23 +99,23 @@ def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, 
     count = len(kept)
     if count > _MOST_KEPT * faces:
         return None  # lines all over the picture: the whole mesh draws as fast
+    # the kept faces as the occlusion pass's table, which the gather reads too
+    remap = table_texture(ctx, table_of(kept, np.int32))
     ibo = ctx.buffer(reserve=max(12 * count, 12))
-    listed = ctx.buffer(kept if count else np.zeros(1, np.int32))
     try:
         prog = renderer.compute(CULL_COMP, {"STAGE": 1})
+        remap.use(location=0)
+        renderer.uniforms.set(prog, "u_kept", 0)
         renderer.uniforms.set(prog, "u_count", count)
         mesh.ibo.bind_to_storage_buffer(6)
-        listed.bind_to_storage_buffer(12)
         ibo.bind_to_storage_buffer(13)
         run_over(prog, count, _GROUP)
         ctx.memory_barrier(ctx.ELEMENT_ARRAY_BARRIER_BIT)
     except BaseException:
         ibo.release()
+        remap.release()
         raise
-    finally:
-        listed.release()
-    subset = FaceSubset(mesh, ibo, count, pieces=renderer.device.software)
-    return subset, table_texture(ctx, table_of(kept, np.int32))
+    return FaceSubset(mesh, ibo, count, pieces=renderer.device.software), remap
 
 
 def gpu_contours(
@@ -184,7 +184,8 @@ def gpu_contours(
     # add more: the pass runs again where they outgrow the room
     capacity = max(1 << 12, faces // 16)
     try:
-        mesh.bind_faces(5, 6)
+        mesh.vbo.bind_to_storage_buffer(5)
+        mesh.ibo.bind_to_storage_buffer(6)
         planes.bind_to_image(0, read=False, write=True)
         reach.bind_to_image(1, read=False, write=True)
         while True:

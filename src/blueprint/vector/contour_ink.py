@@ -90,7 +90,7 @@ def contour_ink(
         if found is None:
             return None
         try:
-            return _dense_ink(renderer, model, camera, size, max_layers, found)
+            return _dense_ink(renderer, model, camera, (view, projection), size, max_layers, found)
         finally:
             found.release()
     segments, contoured = smooth_contour_segments(model, view, projection, size, crease_angle)
@@ -124,10 +124,13 @@ def _capped(max_layers: int | None) -> int:
     return MAX_LAYERS if max_layers is None or max_layers > MAX_LAYERS else max_layers
 
 
-def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, found) -> ContourInk | None:
-    """``contour_ink`` of the contours ``found`` on the GPU (``contour_gpu.GpuContours``), their
-    levels from the faces k-buffer and the tables the contour pass made (no mesh edge among
-    them: none is a phantom of a flat surface)."""
+def _dense_ink(
+    renderer, model: Model, camera: Camera, matrices, size, max_layers: int, found
+) -> ContourInk | None:
+    """``contour_ink`` of the contours ``found`` on the GPU (``contour_gpu.GpuContours``) for
+    ``camera`` and its (view, projection) ``matrices``, their levels from the faces k-buffer
+    and the tables the contour pass made (no mesh edge among them: none is a phantom of a flat
+    surface)."""
     from blueprint.render.gbuffer import depth_tolerance
 
     from .contour_gpu import near_faces
@@ -140,9 +143,7 @@ def _dense_ink(renderer, model: Model, camera: Camera, size, max_layers: int, fo
     if len(lines) == 0:
         none = np.zeros(0, np.int32)
         return ContourInk(np.zeros((0, 2)), np.zeros(1, np.int64), none, contoured, size, max_layers)
-    view = np.asarray(camera.view_matrix(), np.float64)
-    projection = np.asarray(camera.projection_matrix(), np.float64)
-    samples = sample_polylines(lines, view, projection, size)
+    samples = sample_polylines(lines, *matrices, size)
     # the faces k-buffer (or the peel in its place) draws the faces near the samples alone
     near = near_faces(renderer, found, samples.pixel[samples.inside], size)
     tables = found.tables

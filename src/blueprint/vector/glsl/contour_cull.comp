@@ -55,9 +55,11 @@ void main() {
     }
 }
 #else
+#include "table.glsl"
+
 layout(std430, binding = 6) readonly buffer Indices { uint indices[]; };
-layout(std430, binding = 12) readonly buffer Kept { uint kept[]; };  // the kept faces, ascending
 layout(std430, binding = 13) writeonly buffer Subset { uint subset[]; };
+uniform isampler2D u_kept;  // a table (gpu/tables.py) of the kept faces, ascending
 uniform int u_count;
 
 void main() {
@@ -65,7 +67,7 @@ void main() {
     if (i >= u_count) {
         return;
     }
-    uint f = kept[i];
+    uint f = uint(TABLE_ROW(u_kept, i).r);
     subset[3 * i] = indices[3u * f];
     subset[3 * i + 1] = indices[3u * f + 1u];
     subset[3 * i + 2] = indices[3u * f + 2u];
