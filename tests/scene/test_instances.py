@@ -15,6 +15,7 @@ from instanced_scenes import (
     l_prism,
     placed,
     trimesh_scene,
+    turn,
     turned_scene,
 )
 
@@ -90,6 +91,26 @@ def test_bounds_are_of_the_used_vertices_placed():
     model = loader.model_from_object(scene, name="scene")
     assert model.instances is not None
     assert np.array_equal(model.bounds, [[0, 0, 0], [4, 1, 0]])
+
+
+def test_instances_turned_alike_have_their_flattened_bounds():
+    """Each instance's bounds equal its flattened vertices' to the bit, where instances share
+    a turn (found once for them all) and where each has its own, with shifts whose float32
+    rounding would show any other order of operations."""
+    rng = np.random.default_rng(3)
+    shared, own = turn(1, 30) @ turn(0, 17), [turn(2, float(d)) * 1.3 for d in rng.uniform(0, 360, 6)]
+    turns = [shared] * 12 + own + [np.eye(3)] * 5
+    instances = [
+        (("l", "wedge")[k % 2], placed(linear, rng.normal(size=3) * 10.0 ** rng.integers(0, 6)))
+        for k, linear in enumerate(turns)
+    ]
+    model = loader.model_from_object(trimesh_scene(instances), name="scene")
+    assert model.instances is not None and len(model.instances.mesh) == len(instances)
+    boxes = model.instance_boxes()
+    flat = flattened(loader.model_from_object(trimesh_scene(instances), name="scene"))
+    for part in range(len(instances)):
+        placed_vertices = flat.positions[flat.faces[flat.face_part == part]].reshape(-1, 3)
+        assert np.array_equal(boxes[part], [placed_vertices.min(axis=0), placed_vertices.max(axis=0)])
 
 
 def test_parts_chosen_by_name_keep_the_instances(never_flattened, monkeypatch):

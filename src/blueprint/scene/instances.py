@@ -188,16 +188,25 @@ def instance_boxes(inst: Instances) -> np.ndarray:
     vertices placed as ``flatten`` places them (float32 values): exactly the bounds of its
     flattened vertices, without flattening the scene."""
     boxes = np.empty((len(inst.mesh), 2, 3))
+    # instances of one mesh turned alike (a pattern of copies) share their turned vertices'
+    # bounds: adding the shift and rounding to float32 keep the order, so the bounds are the
+    # turned bounds shifted and rounded, the same values as every vertex placed
+    key = np.concatenate([inst.mesh[:, None], inst.transform[:, :3, :3].reshape(-1, 9)], axis=1)
+    _, first, alike = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    turned = np.empty((len(first), 2, 3))
+    unturned = np.zeros((len(first), 4, 4))
+    unturned[:, :3, :3] = inst.transform[first, :3, :3]
     with np.errstate(all="ignore"):
-        for m, members in inst.by_mesh():
+        for m, members in inst.by_mesh(np.isin(np.arange(len(inst.mesh)), first)):
             vertices, mesh_faces = inst.mesh_arrays(m)
             used = np.zeros(len(vertices), bool)
             used[mesh_faces.reshape(-1)] = True
             points = vertices if used.all() else vertices[used]
-            for block in _blocks(members, len(points)):
-                placed = _moved(points, inst.transform[block]).astype(np.float32)
-                boxes[block, 0] = placed.min(axis=1)
-                boxes[block, 1] = placed.max(axis=1)
+            for block in _blocks(alike[members], len(points)):
+                placed = _moved(points, unturned[block])
+                turned[block, 0] = placed.min(axis=1)
+                turned[block, 1] = placed.max(axis=1)
+        boxes[:] = (turned[alike.ravel()] + inst.transform[:, None, :3, 3]).astype(np.float32)
     return boxes
 
 
