@@ -3,6 +3,7 @@ sections draw each view with."""
 
 from __future__ import annotations
 
+from blueprint.api import stages
 from blueprint.api.options import DrawOptions
 from blueprint.render.renderer import Frame, LayerRenderer
 from blueprint.scene.camera import Camera, fit_camera
@@ -29,7 +30,8 @@ def blueprint_frame(renderer, model: Model, camera: Camera | None, options: Draw
 
     keywords = options.frame_keywords(model)
     if options.smooth_contours:
-        camera, keywords["contours"] = frame_contours(renderer, model, camera, keywords)
+        with stages.timed("contours"):
+            camera, keywords["contours"] = frame_contours(renderer, model, camera, keywords)
     return render_blueprint(renderer, model, camera, profile=options.profile, **keywords, **extra)
 
 

@@ -45,9 +45,12 @@ def _of_capturer(method, name: str | None = None):
     """``method`` of ``Capturer`` as the renderer's own (called ``name`` where the renderer
     names it otherwise), its signature and docstring kept."""
 
+    # looked up on the capturer at each call: what replaced it there (``stages.watch``) runs
+    name_there = method.__name__
+
     @functools.wraps(method)
     def delegate(renderer, *args, **kwargs):
-        return method(renderer.capturer, *args, **kwargs)
+        return getattr(renderer.capturer, name_there)(*args, **kwargs)
 
     if name is not None:
         delegate.__name__ = name

@@ -3,10 +3,12 @@
 line on stderr: ``{"stages": {name: seconds}, "gpu_memory": {...} or null}``.
 
 A picture's stages: ``read`` (the model file to a ``Model``), ``prepare_upload`` (the mesh
-made ready for the GPU and uploaded: normals, welding, buffers), ``capture_edges`` (the peel
-or capture of layers and their edges), ``compose``, ``read_back`` and ``write``, the GPU ones
-synchronised after each (``DrawOptions.profile``). A vector drawing's are those its workflow
-measures (``read``, ``lines``, ``peel``, ``occlusion``, ``simplify``, ``write``). Nothing is
+made ready for the GPU and uploaded: normals, welding, buffers), ``contours`` (its smooth
+contour lines found, with their levels), ``capture_edges`` (the peel or capture of layers and
+their edges), ``compose``, ``read_back`` and ``write``, the GPU ones synchronised after each
+(``DrawOptions.profile``). A vector drawing's are those its workflow measures (``read``,
+``lines``, ``peel``, ``occlusion``, ``simplify``, ``write``). A stage timed within another
+(the mesh prepared as the contour lines are found) counts to itself alone. Nothing is
 timed or synchronised without the variable.
 
 The same boundaries mark the phases a progress display shows (``listen``): each stage's start
@@ -42,6 +44,10 @@ ENV = "BLUEPRINT_STAGES"
 
 _SECONDS: dict[str, float] = {}
 _LISTENERS: list[Callable[[str], None]] = []
+# the stages open now, innermost last: (name, seconds of the stages timed within it)
+_OPEN: list[list] = []
+# seconds of each stage timed within no other
+_OUTERMOST: dict[str, float] = {}
 
 
 def enabled() -> bool:
@@ -84,13 +90,23 @@ def progress(name: str, detail: str) -> None:
 
 @contextmanager
 def timed(name: str) -> Iterator[None]:
-    """Count the block's wall time to the stage ``name``, its start told (``begin``)."""
+    """Count the block's wall time to the stage ``name``, its start told (``begin``), less
+    that of the stages timed within it; where it is within another stage, that stage's start
+    is told again as it ends."""
     begin(name)
     start = time.perf_counter()
+    _OPEN.append([name, 0.0])
     try:
         yield
     finally:
-        add(name, time.perf_counter() - start)
+        inner = _OPEN.pop()[1]
+        seconds = time.perf_counter() - start
+        add(name, seconds - inner)
+        if _OPEN:
+            _OPEN[-1][1] += seconds
+            begin(_OPEN[-1][0])
+        else:
+            _OUTERMOST[name] = _OUTERMOST.get(name, 0.0) + seconds
 
 
 def watch(renderer) -> None:
@@ -105,7 +121,8 @@ def watch(renderer) -> None:
     def timed_mesh(*args, **kwargs):
         with timed("prepare_upload"):
             held = mesh(*args, **kwargs)
-        begin("capture_edges")
+        if not _OPEN:
+            begin("capture_edges")
         if held.chunk_faces is not None:
             held.on_chunk = _chunk_drawn
         return held
@@ -121,8 +138,9 @@ def _chunk_drawn(done: int, total: int) -> None:
 
 def add_frame(stages_ms: dict[str, float]) -> None:
     """Count a profiled frame's stages (``Frame.stages``, ms): its capture and edges less the
-    mesh preparation timed within them (``watch``), its composition, its read-back."""
-    capture = stages_ms.get("peel_edges", 0.0) / 1e3 - _SECONDS.get("prepare_upload", 0.0)
+    mesh preparation timed within them (``watch``; within no other stage), its composition,
+    its read-back."""
+    capture = stages_ms.get("peel_edges", 0.0) / 1e3 - _OUTERMOST.get("prepare_upload", 0.0)
     add("prepare_upload", stages_ms.get("upload", 0.0) / 1e3)  # the pipeline's images, if any
     add("capture_edges", max(capture, 0.0))
     add("compose", stages_ms.get("compose", 0.0) / 1e3)

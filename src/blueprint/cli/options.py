@@ -46,6 +46,7 @@ def progress_bar(label: str):
 PHASES = {
     "read": "reading the model",
     "prepare_upload": "preparing and uploading the mesh",
+    "contours": "finding the contour lines",
     "capture_edges": "drawing",
     "lines": "finding the lines",
     "write": "writing",
