@@ -93,6 +93,42 @@ def test_bounds_are_of_the_used_vertices_placed():
     assert np.array_equal(model.bounds, [[0, 0, 0], [4, 1, 0]])
 
 
+@pytest.mark.parametrize("turned", [False, True])
+def test_cameras_of_many_instances_read_the_instances_at_their_edges(turned, monkeypatch):
+    """A camera fitted to a pattern of instances is its flattened twin's to the bit, every
+    view, perspective and orthographic, while the fit places the vertices of the instances
+    that may hold an extreme point alone: those at the pattern's edges, not all of them (the
+    copies stand at different heights: copies tied for the lowest all hold it). Each copy
+    turned its own way, the same cameras."""
+    rng = np.random.default_rng(5)
+    grid = [
+        (
+            "l" if k % 3 else "wedge",
+            placed(
+                turn(int(rng.integers(3)), float(rng.uniform(0, 360))) if turned else None,
+                (3 * (k % 12), 0.37 * (k % 5), 3 * (k // 12)),
+            ),
+        )
+        for k in range(144)
+    ]
+    model = loader.model_from_object(trimesh_scene(grid), name="scene")
+    assert model.instances is not None
+    read = []
+    placed_points = model_module.Model.placed_points
+
+    def counted(self, keep):
+        read.append(int(keep.sum()))
+        return placed_points(self, keep)
+
+    monkeypatch.setattr(model_module.Model, "placed_points", counted)
+    views = [(v, o, az) for v in ("iso", "front", "top") for o in (0, 1) for az in (None, 20.0)]
+    cameras = [fit_camera(model, (320, 200), v, ortho=o, azimuth=az) for v, o, az in views]
+    flat = flattened(loader.model_from_object(trimesh_scene(grid), name="scene"))
+    assert cameras == [fit_camera(flat, (320, 200), v, ortho=o, azimuth=az) for v, o, az in views]
+    fits = len(views) + sum(o == 0 for _, o, _ in views)
+    assert sum(read) < 0.25 * fits * len(grid)
+
+
 def test_instances_turned_alike_have_their_flattened_bounds():
     """Each instance's bounds equal its flattened vertices' to the bit, where instances share
     a turn (found once for them all) and where each has its own, with shifts whose float32

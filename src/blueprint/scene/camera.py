@@ -10,7 +10,7 @@ lighting in eye space).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from typing import TypeVar
 
@@ -232,7 +232,8 @@ class Camera:
         up: str = "y",
     ) -> Camera:
         """Aim at ``points`` (N, 3) from a named view and move back until all of them fit
-        (or a function giving an iterator of (N, 3) blocks of them, read a few times over).
+        (or ``BoxedPoints``, points in groups of known boxes: the same camera, read from the
+        groups that may hold the extreme points alone).
 
         ``azimuth`` / ``elevation`` (degrees) override the named view's angles. ``margin`` is
         the fraction of the image kept free at each side.
@@ -263,15 +264,31 @@ class Camera:
         cam_x /= np.linalg.norm(cam_x)
         cam_y = np.cross(cam_z, cam_x)
 
-        each = _each_block(points)
-        lo = np.min(each(column_min), axis=0)
-        hi = np.max(each(column_max), axis=0)
+        if isinstance(points, BoxedPoints):
+            lo, hi = points.boxes[:, 0].min(axis=0), points.boxes[:, 1].max(axis=0)
+
+            def most(exact, bound, scale):
+                return _most_of_groups(points, exact, bound, scale)
+
+        else:
+            each = _each_block(points)
+            lo = np.min(each(column_min), axis=0)
+            hi = np.max(each(column_max), axis=0)
+
+            def most(exact, bound, scale):
+                return np.max(each(exact), axis=0)
+
         center = (lo + hi) / 2
         extent = float(np.linalg.norm(hi - lo)) or 1.0
         basis = np.stack([cam_x, cam_y, cam_z], axis=1)
-        # the points in the camera's axes, a block at a time: lowest and highest of each
-        ends = np.array(each(lambda b: _ends((b - center) @ basis)))
-        low, high = ends[:, 0].min(axis=0), ends[:, 1].max(axis=0)
+
+        # the points in the camera's axes: the lowest (negated) and highest of each
+        ends = most(
+            lambda b: _signed_ends((b - center) @ basis),
+            lambda corners: _signed_ends_of_boxes((corners - center) @ basis),
+            extent,
+        )
+        low, high = -ends[:3], ends[3:]
         # re-centre on the projected extents so the drawing sits in the middle of the image
         middle = (high[:2] + low[:2]) / 2
         origin, center = center, center + cam_x * middle[0] + cam_y * middle[1]
@@ -285,7 +302,15 @@ class Camera:
         else:
             tan_y = math.tan(math.radians(fov) / 2) * fill
             tan_x = tan_y * aspect
-            distance = max(each(lambda b: _farthest(b, origin, middle, basis, tan_x, tan_y)))
+            distance = float(
+                most(
+                    lambda b: _reach(b, origin, middle, basis, tan_x, tan_y).max(keepdims=True),
+                    lambda corners: _reach(corners, origin, middle, basis, tan_x, tan_y).max(
+                        axis=1, keepdims=True
+                    ),
+                    extent * (2 + 2 / tan_x + 2 / tan_y),
+                )[0]
+            )
             distance = max(distance, z_high + extent * 1e-3)
             height = 1.0
         pad = extent * 0.02
@@ -308,18 +333,28 @@ class Camera:
 
 T = TypeVar("T")
 
+
+@dataclass(frozen=True)
+class BoxedPoints:
+    """Points in groups whose boxes are known, for ``Camera.fit``: ``boxes`` (N, 2, 3)
+    float64, the lowest and highest corner of each group's points (their own values), and
+    ``blocks(keep)`` an iterator of (M, 3) float64 blocks of the points of the groups ``keep``
+    ((N,) bool flags). The fit reads the groups that may hold an extreme point alone: of a
+    pattern of many instances, those at its edges."""
+
+    boxes: np.ndarray
+    blocks: Callable[[np.ndarray], Iterable[np.ndarray]]
+
+
 # Points read at a time by ``Camera.fit``: a float64 copy of all at once would take 24 bytes a
 # point more than the model holds.
 _FIT_BLOCK = 1 << 16
 
 
 def _each_block(points) -> Callable[[Callable[[np.ndarray], T]], list[T]]:
-    """``each(work)``: ``work`` of every block of the points ``Camera.fit`` reads, in order.
-    Of an array, float64 copies of ``_FIT_BLOCK`` rows (each row's products the same as the
-    whole array's), the blocks side by side (``blueprint.parallel``); of a function giving an
-    iterator of blocks, its blocks."""
-    if callable(points):
-        return lambda work: [work(block) for block in points()]
+    """``each(work)``: ``work`` of every block of the points ``Camera.fit`` reads, in order:
+    float64 copies of ``_FIT_BLOCK`` rows (each row's products the same as the whole array's),
+    the blocks side by side (``blueprint.parallel``)."""
     pts = np.asarray(points).reshape(-1, 3)
     count = max(-(-len(pts) // _FIT_BLOCK), 1)
 
@@ -333,17 +368,44 @@ def _each_block(points) -> Callable[[Callable[[np.ndarray], T]], list[T]]:
     return each
 
 
-def _ends(values: np.ndarray) -> np.ndarray:
-    """(2, 3): the lowest and highest of each column of (N, 3) ``values``."""
-    return np.array([column_min(values), column_max(values)])
+def _signed_ends(values: np.ndarray) -> np.ndarray:
+    """(6,): the lowest of each column of (N, 3) ``values`` negated, then the highest."""
+    return np.concatenate([-column_min(values), column_max(values)])
 
 
-def _farthest(points, origin, middle, basis, tan_x: float, tan_y: float) -> float:
+def _signed_ends_of_boxes(values: np.ndarray) -> np.ndarray:
+    """(N, 6): ``_signed_ends`` of each of (N, 8, 3) ``values`` (boxes' corners)."""
+    return np.concatenate([-values.min(axis=1), values.max(axis=1)], axis=1)
+
+
+def _reach(points, origin, middle, basis, tan_x: float, tan_y: float) -> np.ndarray:
     """How far back along the view from the re-centred centre (``middle`` across the view
-    from ``origin``) the perspective view holds every point of the block."""
+    from ``origin``) the perspective view holds each of ``points`` (..., 3)."""
     rel = (points - origin) @ basis
-    x, y = rel[:, 0] - middle[0], rel[:, 1] - middle[1]
-    return float(np.max(rel[:, 2] + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)))
+    x, y = rel[..., 0] - middle[0], rel[..., 1] - middle[1]
+    return rel[..., 2] + np.maximum(np.abs(x) / tan_x, np.abs(y) / tan_y)
+
+
+# the eight corners of a box as (lowest or highest) picks of each axis
+_CORNER_PICKS = np.array([[(k >> axis) & 1 for axis in range(3)] for k in range(8)])
+
+
+def _most_of_groups(points: BoxedPoints, exact, bound, scale: float) -> np.ndarray:
+    """(K,): the most of each of K values over every point of ``points``, each block's by
+    ``exact`` (the values as ``Camera.fit`` reads any points), read from the groups alone
+    whose box might hold more than the most found so far: ``bound`` gives (N, K) each group's
+    most at its box's corners (the values are convex in the point: a box's most is at a
+    corner), widened by far more than the values' rounding (``scale``: the size of the terms
+    they sum)."""
+    corners = np.stack([points.boxes[:, _CORNER_PICKS[:, axis], axis] for axis in range(3)], axis=-1)
+    upper = bound(corners)
+    upper = upper + 1e-9 * (np.abs(upper) + scale)
+    first = np.zeros(len(upper), bool)
+    first[upper.argmax(axis=0)] = True
+    best = np.max([exact(block) for block in points.blocks(first) if len(block)], axis=0)
+    chosen = (upper >= best).any(axis=1) & ~first
+    found = [exact(block) for block in points.blocks(chosen) if len(block)] if chosen.any() else []
+    return np.max([best, *found], axis=0)
 
 
 def fit_camera(
@@ -366,7 +428,8 @@ def fit_camera(
     if isinstance(model, Model):
         # a flat model's positions are read a block at a time, never all in float64 at once
         flat = model.instances is None or model.is_flat
-        points, up = (model.positions if flat else model.point_blocks), up or model.up
+        points = model.positions if flat else BoxedPoints(model.instance_boxes(), model.placed_points)
+        up = up or model.up
     else:
         points, up = model, up or "y"
     width, height = size

@@ -173,14 +173,23 @@ def flatten(inst: Instances) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return positions, faces, face_part
 
 
-def placed_blocks(inst: Instances):
-    """Every instance's vertices placed as ``flatten`` places them (float32), in blocks of
-    (B, V, 3) of one mesh's instances."""
-    for m, members in inst.by_mesh():
-        vertices, _ = inst.mesh_arrays(m)
-        for block in _blocks(members, len(vertices)):
+def placed_blocks(inst: Instances, keep: np.ndarray | None = None):
+    """The used vertices of every instance (of the instances ``keep``, (N,) bool flags, where
+    given) placed as ``flatten`` places them (float32), in blocks of (B, V, 3) of one mesh's
+    instances."""
+    for m, members in inst.by_mesh(keep):
+        points = _used_vertices(inst, m)
+        for block in _blocks(members, len(points)):
             with np.errstate(all="ignore"):
-                yield _moved(vertices, inst.transform[block]).astype(np.float32)
+                yield _moved(points, inst.transform[block]).astype(np.float32)
+
+
+def _used_vertices(inst: Instances, mesh: int) -> np.ndarray:
+    """The vertices of ``mesh`` that a face uses, in order: those the flattened model keeps."""
+    vertices, mesh_faces = inst.mesh_arrays(mesh)
+    used = np.zeros(len(vertices), bool)
+    used[mesh_faces.reshape(-1)] = True
+    return vertices if used.all() else vertices[used]
 
 
 def instance_boxes(inst: Instances) -> np.ndarray:
@@ -198,10 +207,7 @@ def instance_boxes(inst: Instances) -> np.ndarray:
     unturned[:, :3, :3] = inst.transform[first, :3, :3]
     with np.errstate(all="ignore"):
         for m, members in inst.by_mesh(np.isin(np.arange(len(inst.mesh)), first)):
-            vertices, mesh_faces = inst.mesh_arrays(m)
-            used = np.zeros(len(vertices), bool)
-            used[mesh_faces.reshape(-1)] = True
-            points = vertices if used.all() else vertices[used]
+            points = _used_vertices(inst, m)
             for block in _blocks(alike[members], len(points)):
                 placed = _moved(points, unturned[block])
                 turned[block, 0] = placed.min(axis=1)

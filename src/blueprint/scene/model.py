@@ -223,14 +223,13 @@ class Model:
             self._cache["instance_boxes"] = instance_boxes(self.instances)
         return self._cache["instance_boxes"]
 
-    def point_blocks(self):
-        """An iterator of (N, 3) float64 blocks of every vertex (the flattened positions), a
-        model kept as instances placing its meshes a block of instances at a time."""
-        if self.instances is None or self.is_flat:
-            return iter((self.positions.astype(np.float64),))
+    def placed_points(self, keep: np.ndarray | None = None):
+        """An iterator of (N, 3) float64 blocks of the placed vertices of a model kept as
+        instances (of the instances ``keep``, (N,) bool flags, where given): the flattened
+        model's positions, a block of instances at a time."""
         from blueprint.scene.instances import placed_blocks
 
-        return (block.reshape(-1, 3).astype(np.float64) for block in placed_blocks(self.instances))
+        return (block.reshape(-1, 3).astype(np.float64) for block in placed_blocks(self.instances, keep))
 
     def content_digest(self) -> bytes:
         """A cryptographic digest of the triangles (positions, faces, parts and the part count;
