@@ -10,9 +10,11 @@ from dataclasses import replace
 import pytest
 
 import blueprint
-from blueprint import examples
+from blueprint import examples, settings
 from blueprint.errors import InputError
+from blueprint.render.abuffer import gpu_memory_bytes
 from blueprint.render.table import (
+    DEFAULT_ABUFFER_BYTES,
     KBUFFER_MAX,
     ABufferRow,
     CaptureTable,
@@ -44,6 +46,25 @@ def test_a_devices_table_follows_its_capabilities(renderer):
     assert bool(whole) == (renderer.software and kbuffer is not None and listed is not None)
     if whole:
         assert table.rows[0] is whole[0]
+
+
+def test_the_lists_may_take_a_quarter_of_the_devices_memory(renderer, monkeypatch):
+    """The A-buffer's lists at most: a quarter of the GPU's memory where the driver tells it;
+    on a software rasteriser, whose memory is the host's, the run's memory budget (a quarter
+    of the memory available, or ``BLUEPRINT_MEMORY_LIMIT``), not a GiB whatever the host has:
+    a big frame there is listed rather than peeled a geometry pass a layer."""
+    if renderer.capturer.table.row("A-buffer") is None:
+        pytest.skip("this renderer has no A-buffer (OpenGL below 4.3)")
+    total = gpu_memory_bytes(renderer.device)
+    for limit in ("3G", "300M"):
+        monkeypatch.setenv(settings.MEMORY_ENV, limit)
+        listed = capture_table(renderer.device).row("A-buffer")
+        if total:
+            assert listed.max_bytes == total // 4
+        elif renderer.software:
+            assert listed.max_bytes == settings.parse_size(limit) == settings.memory_budget()
+        else:
+            assert listed.max_bytes == DEFAULT_ABUFFER_BYTES
 
 
 def _ways(table, **request) -> list[str]:

@@ -16,10 +16,11 @@ from blueprint.errors import InputError
 from blueprint.render.abuffer import ABufferSource, gpu_memory_bytes
 from blueprint.render.kbuffer import KBUFFER_MAX, KBUFFER_MAX_BYTES, KBufferSource, kbuffer_layers
 from blueprint.render.source import PeelSource
+from blueprint.settings import memory_budget
 
 # Part IDs the k-buffer's and the A-buffer's surfaces hold (16 bits, one value kept for none).
 MOST_PARTS = 0xFFFF
-# A-buffer lists of a frame at most where the driver does not tell the GPU's memory.
+# A-buffer lists of a frame at most on a GPU whose driver does not tell its memory.
 DEFAULT_ABUFFER_BYTES = 1 << 30
 
 
@@ -231,7 +232,7 @@ def capture_table(device, way: str | None = None, max_bytes: int | None = None) 
     """``device``'s capture table (``gpu.Device``: its capabilities), from the thresholds
     measured on its kind; with ``way``, every frame captured that way where it can be, whatever
     the thresholds, the peel taking the rest. ``max_bytes``: the A-buffer's lists at most (its
-    default: a quarter of the GPU's memory where the driver tells it, else 1 GiB)."""
+    default: ``device_max_bytes``)."""
     software = device.software
     # the k-buffer through framebuffer fetch (Mesa's drivers, llvmpipe among them) with a
     # target a layer, else fragment shader interlock on images (NVIDIA's), each from the
@@ -281,6 +282,10 @@ def capture_table(device, way: str | None = None, max_bytes: int | None = None) 
 
 
 def device_max_bytes(device) -> int:
-    """A quarter of the GPU's memory where the driver tells it, else ``DEFAULT_ABUFFER_BYTES``."""
+    """A quarter of the GPU's memory where the driver tells it; on a software rasteriser, whose
+    memory is the host's, the run's memory budget (``settings.memory_budget``: a quarter of the
+    memory available); else ``DEFAULT_ABUFFER_BYTES``."""
     total = gpu_memory_bytes(device)
-    return total // 4 if total else DEFAULT_ABUFFER_BYTES
+    if total:
+        return total // 4
+    return memory_budget() if device.software else DEFAULT_ABUFFER_BYTES
