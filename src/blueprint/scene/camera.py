@@ -264,20 +264,7 @@ class Camera:
         cam_x /= np.linalg.norm(cam_x)
         cam_y = np.cross(cam_z, cam_x)
 
-        if isinstance(points, BoxedPoints):
-            lo, hi = points.boxes[:, 0].min(axis=0), points.boxes[:, 1].max(axis=0)
-
-            def most(exact, bound, scale):
-                return _most_of_groups(points, exact, bound, scale)
-
-        else:
-            each = _each_block(points)
-            lo = np.min(each(column_min), axis=0)
-            hi = np.max(each(column_max), axis=0)
-
-            def most(exact, bound, scale):
-                return np.max(each(exact), axis=0)
-
+        lo, hi, most = _reader(points)
         center = (lo + hi) / 2
         extent = float(np.linalg.norm(hi - lo)) or 1.0
         basis = np.stack([cam_x, cam_y, cam_z], axis=1)
@@ -349,6 +336,26 @@ class BoxedPoints:
 # Points read at a time by ``Camera.fit``: a float64 copy of all at once would take 24 bytes a
 # point more than the model holds.
 _FIT_BLOCK = 1 << 16
+
+
+def _reader(points) -> tuple[np.ndarray, np.ndarray, Callable]:
+    """(lowest corner, highest corner, ``most``) of the points ``Camera.fit`` reads (an array or
+    ``BoxedPoints``): ``most(exact, bound, scale)`` is the most of each of the values
+    ``exact(block)`` gives a block ((K,): the most over its points) over every point, read from
+    every block, or of ``BoxedPoints`` from the groups whose box may hold it alone
+    (``_most_of_groups``)."""
+    if isinstance(points, BoxedPoints):
+
+        def most_of_groups(exact, bound, scale):
+            return _most_of_groups(points, exact, bound, scale)
+
+        return points.boxes[:, 0].min(axis=0), points.boxes[:, 1].max(axis=0), most_of_groups
+    each = _each_block(points)
+
+    def most(exact, bound, scale):
+        return np.max(each(exact), axis=0)
+
+    return np.min(each(column_min), axis=0), np.max(each(column_max), axis=0), most
 
 
 def _each_block(points) -> Callable[[Callable[[np.ndarray], T]], list[T]]:
