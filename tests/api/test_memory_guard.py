@@ -96,8 +96,9 @@ def _box_field(path: Path) -> Path:
 def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     """A GLB of 10^5 instances of a box is drawn under a memory budget that refuses the same
     triangles flattened into one mesh (its unique triangles and instance records weigh far
-    less than 1.2 M drawn ones). (Its vector drawing keeps the instances too: the tests of
-    ``vector.instanced`` hold that it never flattens them.)"""
+    less than 1.2 M drawn ones). Its vector drawing, whose lines are placed instance by instance,
+    is weighed by its drawn triangles and refused in one line. (It keeps the instances too: the
+    tests of ``vector.instanced`` hold that it never flattens them.)"""
     hostile = hostile_corpus()
     corners, faces = hostile.box_arrays()
     moves = _box_moves()
@@ -127,6 +128,16 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"{drawn} triangles" in proc.stdout
     assert (tmp_path / "kept.png").stat().st_size > 0
+    # a vector drawing places, samples and occludes every instance's lines: weighed by its
+    # drawn triangles, as the flat model is, and refused before any line is found
+    proc = render(kept, "kept.svg")
+    one_error(
+        proc,
+        f"{kept} as a vector drawing: {drawn} triangles to draw need about "
+        f"{settings.human_size(drawn * settings.TRIANGLE_BYTES)} of memory at 896 bytes a triangle, more "
+        "than the memory budget of 512 MiB",
+    )
+    assert not (tmp_path / "kept.svg").exists()
 
 
 @needs_cli

@@ -32,6 +32,7 @@ from blueprint.render.gbuffer import depth_tolerance
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.dimension import UNITS_MM
+from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
@@ -424,6 +425,7 @@ def draw_lines(
     layers: Layers | None = None,
 ) -> VectorDrawing:
     """``draw_vector`` with its options as one value, checked already."""
+    _check_placed_lines(model)
     seconds: dict[str, float] = {}
     shaded_parts = None if options.shade is None else designated_parts(model, options.shade)
     glyphs = options.glyphs
@@ -520,6 +522,15 @@ class ViewFrame:
     @property
     def ortho(self) -> bool:
         return bool(np.isclose(self.projection[3, 3], 1.0))
+
+
+def _check_placed_lines(model: Model) -> None:
+    """Refuse in one line a model kept as instances whose drawn triangles pass the memory
+    budget (``headers.check_triangle_count``): its lines are found once a mesh, but placed,
+    sampled and occluded an instance at a time, so a vector drawing's memory follows the drawn
+    triangles, as a flat model's does, where a picture's follows its unique ones."""
+    if model.instances is not None and not model.is_flat:
+        check_triangle_count(f"{model.source or 'the model'} as a vector drawing", model.triangle_count)
 
 
 def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen) -> ViewFrame:
