@@ -17,6 +17,7 @@ import blueprint
 from blueprint import examples
 from blueprint.bench import time_frames
 from blueprint.render import raster
+from blueprint.render.abuffer import ABufferSource
 from blueprint.render.gbuffer import abuffer_uniforms, depth_tolerance
 from blueprint.render.raster import REACH, ComputeRaster
 from blueprint.render.table import CaptureTable, capture_table
@@ -158,6 +159,35 @@ def test_frames_below_its_size_stay_with_the_graphics_pipeline(renderer, capture
     capture.start(64 * 64)
     blueprint.peel(model, renderer=renderer, size=(64, 64))
     assert listed == [(64, 64)]
+
+
+def test_lists_that_fit_without_its_buffers_are_drawn_by_the_graphics_pipeline(
+    renderer, capture, monkeypatch
+):
+    """Where the lists fit ``max_bytes`` but the rasteriser's buffers (some 150 bytes a
+    triangle: a hundred million triangles' take more than their lists) would not fit beside
+    them, the graphics pipeline lists the frame: the A-buffer's layers, not the peel's passes."""
+    model = nested_boxes()
+    options = dict(size=(64, 64), max_layers=None, supersample=1, style="blueprint", frames=2, warmup=1)
+    camera = fit_camera(model, (64, 64))
+    held = []
+    list_bytes = ABufferSource._list_bytes
+    monkeypatch.setattr(
+        ABufferSource, "_list_bytes", lambda self, room: held.append(list_bytes(self, room)) or held[-1]
+    )
+    capture(True)
+    assert time_frames(renderer, model, camera, **options)["capture"] == "A-buffer, compute rasteriser"
+    lists, buffers = held[-1], renderer.compute_raster.bytes((64, 64), model.triangle_count)
+    table = renderer.capture_table
+    for max_bytes, way in (
+        (lists + buffers, "A-buffer, compute rasteriser"),
+        (lists + buffers - 1, "A-buffer"),
+        (lists, "A-buffer"),
+        (lists - 1, "peel"),
+    ):
+        listed = replace(table.row("A-buffer"), max_bytes=max_bytes)
+        renderer.capture_table = CaptureTable((listed, table.row("peel")), table.exact_depth)
+        assert time_frames(renderer, model, camera, **options)["capture"] == way, (max_bytes, lists, buffers)
 
 
 def test_bench_names_the_way_the_layers_were_found(renderer, capture):

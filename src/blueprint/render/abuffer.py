@@ -228,13 +228,11 @@ class ABufferSource:
         return self._holds(self._room(size), size)
 
     def _holds(self, room: int, size: tuple[int, int]) -> bool:
-        """Whether lists of ``room`` fragments at ``size``, and the compute rasteriser's
-        buffers where it draws them, fit ``max_bytes`` (and the images' rows)."""
+        """Whether lists of ``room`` fragments at ``size`` fit ``max_bytes`` (and the images'
+        rows): the compute rasteriser's buffers are counted where it draws them
+        (``_computes``)."""
         rows = -(-room // AB_ROW)
-        held = self._list_bytes(room)
-        if self._computes(size):
-            held += self.raster.bytes(size, self.mesh.triangles)
-        return held <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
+        return self._list_bytes(room) <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
 
     def _list_bytes(self, room: int) -> int:
         """Bytes the lists of ``room`` fragments take: images hold whole rows."""
@@ -484,8 +482,13 @@ class ABufferSource:
 
     def _computes(self, size: tuple[int, int]) -> bool:
         """Whether the compute rasteriser lists a frame of ``size`` (render.raster: where it
-        sees the view too)."""
-        return self.raster is not None and size[0] * size[1] >= self.compute_from
+        sees the view too): from ``compute_from`` pixels, where its buffers (some 150 bytes a
+        triangle) fit ``max_bytes`` beside the lists of the room kept for the size; else the
+        graphics pipeline lists it, rather than the frame be peeled a pass a layer."""
+        if self.raster is None or size[0] * size[1] < self.compute_from:
+            return False
+        needs = self._list_bytes(self._room(size)) + self.raster.bytes(size, self.mesh.triangles)
+        return needs <= self.max_bytes
 
     def fragments(self, gb, head) -> None:
         """Every fragment of the mesh into its pixel's list (``head``: the lists' first nodes):
