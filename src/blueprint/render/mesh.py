@@ -297,7 +297,7 @@ class GpuMesh:
 
 class FaceSubset(GpuMesh):
     """Some faces of a flattened model's ``GpuMesh`` (``mesh``), from an index buffer of their
-    own (``ibo``, ``faces`` faces of ``mesh``'s vertices, the caller's to release), drawn as
+    own (``ibo``, ``faces`` faces of ``mesh``'s vertices, released with the subset), drawn as
     the whole mesh draws them (in pieces on a software rasteriser): a pass that draws only the
     faces that can reach some pixels (the contour lines' levels, ``vector.contour_gpu``). Face
     ID ``i`` of its passes is its ``i``-th face. Passes choose their capture as for the whole
@@ -319,7 +319,7 @@ class FaceSubset(GpuMesh):
 
     def release(self) -> None:
         held = [draw[0] for draws in self._vaos.values() for draw in draws.arrays]
-        for obj in (*held, *(records for records, *_ in self.groups)):
+        for obj in (*held, *(records for records, *_ in self.groups), self.ibo):
             obj.release()
 
 

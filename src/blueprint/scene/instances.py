@@ -205,8 +205,10 @@ def instance_boxes(inst: Instances) -> np.ndarray:
     turned = np.empty((len(first), 2, 3))
     unturned = np.zeros((len(first), 4, 4))
     unturned[:, :3, :3] = inst.transform[first, :3, :3]
+    leading = np.zeros(len(inst.mesh), bool)
+    leading[first] = True
     with np.errstate(all="ignore"):
-        for m, members in inst.by_mesh(np.isin(np.arange(len(inst.mesh)), first)):
+        for m, members in inst.by_mesh(leading):
             points = _used_vertices(inst, m)
             for block in _blocks(alike[members], len(points)):
                 placed = _moved(points, unturned[block])

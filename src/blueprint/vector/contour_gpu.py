@@ -83,13 +83,7 @@ def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, 
     texture = ctx.texture(shape[::-1], 1, mask, dtype="u1", alignment=1)
     kept_bits = ctx.buffer(reserve=4 * words)
     try:
-        prog = renderer.compute(CULL_COMP, {"STAGE": 0})
-        texture.use(location=0)
-        renderer.uniforms.set(prog, "u_mask", 0)
-        renderer.uniforms.set(prog, "u_faces", faces)
-        found.bounds.bind_to_storage_buffer(11)
-        kept_bits.bind_to_storage_buffer(12)
-        run_over(prog, faces, _GROUP)
+        _cull(renderer, 0, ("u_mask", texture), ("u_faces", faces), {11: found.bounds, 12: kept_bits})
         ctx.memory_barrier()
         bits = np.frombuffer(kept_bits.read(), np.uint8)
     finally:
@@ -103,19 +97,25 @@ def near_faces(renderer: LayerRenderer, found: GpuContours, pixels: np.ndarray, 
     remap = table_texture(ctx, table_of(kept, np.int32))
     ibo = ctx.buffer(reserve=max(12 * count, 12))
     try:
-        prog = renderer.compute(CULL_COMP, {"STAGE": 1})
-        remap.use(location=0)
-        renderer.uniforms.set(prog, "u_kept", 0)
-        renderer.uniforms.set(prog, "u_count", count)
-        mesh.ibo.bind_to_storage_buffer(6)
-        ibo.bind_to_storage_buffer(13)
-        run_over(prog, count, _GROUP)
+        _cull(renderer, 1, ("u_kept", remap), ("u_count", count), {6: mesh.ibo, 13: ibo})
         ctx.memory_barrier(ctx.ELEMENT_ARRAY_BARRIER_BIT)
     except BaseException:
         ibo.release()
         remap.release()
         raise
     return FaceSubset(mesh, ibo, count, pieces=renderer.device.software), remap
+
+
+def _cull(renderer: LayerRenderer, stage: int, table: tuple, count: tuple, buffers: dict) -> None:
+    """One dispatch of contour_cull.comp's ``stage``: its ``table`` (uniform, texture) on unit
+    0, its ``count`` (uniform, value) of invocations, its storage ``buffers`` by binding."""
+    prog = renderer.compute(CULL_COMP, {"STAGE": stage})
+    table[1].use(location=0)
+    renderer.uniforms.set(prog, table[0], 0)
+    renderer.uniforms.set(prog, *count)
+    for binding, buffer in buffers.items():
+        buffer.bind_to_storage_buffer(binding)
+    run_over(prog, count[1], _GROUP)
 
 
 def gpu_contours(

@@ -157,9 +157,8 @@ def _dense_ink(
         )
     finally:
         if near is not None:
-            near[0].ibo.release()
-            near[0].release()
-            near[1].release()
+            for held in near:
+                held.release()
     if on_gpu is None:
         return None
     # the faces near the samples hold every surface at them, not the whole picture's deepest:
