@@ -13,7 +13,7 @@ import trimesh
 
 import blueprint
 from blueprint import examples
-from blueprint.render.table import CaptureTable, PeelRow, capture_table
+from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
 
 
 # -- one way of capturing ----------------------------------------------------------------------
@@ -40,6 +40,32 @@ def one_way(renderer, way: str, abuffer=None, peel=None):
         rows = (peel,)
     with captured_by(renderer, CaptureTable(rows, default.exact_depth)):
         yield
+
+
+# every way of capturing, the A-buffer's with slim fragments and the compute rasteriser or not
+WAYS = ["peel", "k-buffer", "a-buffer", "a-buffer-slim", "a-buffer-compute", "a-buffer-compute-slim"]
+# the A-buffer's ways that read faces by their ID through the faces table (GpuMesh.bind_faces):
+# (slim fragments, the compute rasteriser lists them)
+FACES_TABLE = {
+    "a-buffer-slim": (True, False),
+    "a-buffer-compute": (False, True),
+    "a-buffer-compute-slim": (True, True),
+}
+# one step of the 24-bit depth buffer: the peel reads its depths back from one, the A-buffer
+# keeps them whole (abuffer_resolve.comp)
+DEPTH_STEP = 1.0 / (1 << 24) * 1.01
+
+
+def abuffer_row(way: str) -> ABufferRow:
+    """The A-buffer row of ``way`` (an ``a-buffer`` entry of ``WAYS``), on every frame."""
+    slim, compute = FACES_TABLE.get(way, (False, False))
+    return ABufferRow(1 << 30, min_layers=1, slim=slim, compute_from=0 if compute else None)
+
+
+def captured_way(renderer, way: str):
+    """``one_way`` of an entry of ``WAYS``."""
+    base = "a-buffer" if way.startswith("a-buffer") else way
+    return one_way(renderer, base, abuffer=lambda _: abuffer_row(way))
 
 
 # -- models ------------------------------------------------------------------------------------

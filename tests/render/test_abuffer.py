@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from capture_helpers import (
     CASES,
+    DEPTH_STEP,
     assert_front_to_back,
     drawing_difference,
     nested_round,
@@ -46,10 +47,6 @@ from blueprint.render.table import (
     choose,
 )
 from blueprint.scene.camera import fit_camera
-
-# one step of the 24-bit depth buffer: the peel reads its depths back from one, the A-buffer
-# keeps them whole (abuffer_resolve.comp)
-DEPTH_STEP = 1.0 / (1 << 24) * 1.01
 
 
 @pytest.fixture(params=[False, True], ids=["whole", "slim"])
@@ -248,7 +245,7 @@ def test_used_only_where_it_pays(renderer, abuffer):
 
     def listed(layers, min_layers: int = 1, **options) -> bool:
         rows = (replace(table.row("A-buffer"), min_layers=min_layers), table.row("peel"))
-        request = Request((64, 64), mesh.triangles, mesh.part_count, layers, **options)
+        request = Request((64, 64), mesh.triangles, layers, **options)
         return choose(replace(table, rows=rows), request)[0].way == "A-buffer"
 
     assert listed(1)
@@ -274,7 +271,7 @@ def test_after_a_kbuffer_pass_that_holds_every_layer(renderer, abuffer):
     kbuffer = KBufferRow(min_density=0.0)
 
     def first(table, layers, surfaces):
-        request = Request((64, 64), mesh.triangles, mesh.part_count, layers, surfaces=surfaces)
+        request = Request((64, 64), mesh.triangles, layers, surfaces=surfaces)
         return choose(table, request)[0], request
 
     for after in (True, False):

@@ -68,7 +68,7 @@ def test_the_lists_may_take_a_quarter_of_the_devices_memory(renderer, monkeypatc
 
 
 def _ways(table, **request) -> list[str]:
-    defaults = dict(size=(64, 64), triangles=10_000, parts=3)
+    defaults = dict(size=(64, 64), triangles=10_000)
     return [row.way for row in choose(table, Request(**{**defaults, **request}))]
 
 
@@ -97,11 +97,11 @@ def test_the_chooser_answers_in_the_tables_order_the_peel_last():
 
 def test_the_peel_culls_from_its_thresholds():
     row = PeelRow(culled_from=(100, 64 * 64))
-    assert row.culled(Request((64, 64), 100, 1), exact_depth=False)
-    assert not row.culled(Request((64, 63), 100, 1), exact_depth=False)
-    assert not row.culled(Request((64, 64), 99, 1), exact_depth=False)
-    assert not row.culled(Request((64, 64), 100, 1), exact_depth=True)
-    assert not PeelRow().culled(Request((4096, 4096), 10**7, 1), exact_depth=False)
+    assert row.culled(Request((64, 64), 100), exact_depth=False)
+    assert not row.culled(Request((64, 63), 100), exact_depth=False)
+    assert not row.culled(Request((64, 64), 99), exact_depth=False)
+    assert not row.culled(Request((64, 64), 100), exact_depth=True)
+    assert not PeelRow().culled(Request((4096, 4096), 10**7), exact_depth=False)
 
 
 def test_a_table_ends_with_the_peel():

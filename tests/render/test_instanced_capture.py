@@ -10,7 +10,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from capture_helpers import one_way
+from capture_helpers import FACES_TABLE, WAYS, abuffer_row, captured_way
 from instanced_scenes import (
     copies,
     exact_scene,
@@ -29,32 +29,17 @@ from blueprint.render import mesh as mesh_module
 from blueprint.render import renderer as renderer_module
 from blueprint.render.mesh import GpuMesh, draw_groups, instance_records, placements
 from blueprint.render.raster import ComputeRaster
-from blueprint.render.table import ABufferRow, CaptureTable, PeelRow, capture_table
+from blueprint.render.table import CaptureTable, PeelRow, capture_table
 from blueprint.scene.loader import model_from_object
 
 SIZE = (96, 80)
 CAMERA = {"view": "iso", "azimuth": 35.0, "elevation": 25.0}
-WAYS = ["peel", "k-buffer", "a-buffer", "a-buffer-slim", "a-buffer-compute", "a-buffer-compute-slim"]
-# the A-buffer's ways that read faces by their ID through the faces table (GpuMesh.bind_faces):
-# (slim fragments, the compute rasteriser lists them)
-FACES_TABLE = {
-    "a-buffer-slim": (True, False),
-    "a-buffer-compute": (False, True),
-    "a-buffer-compute-slim": (True, True),
-}
-
-
-def abuffer_row(way: str) -> ABufferRow:
-    """The A-buffer row of ``way`` (an ``a-buffer`` entry of ``WAYS``), on every frame."""
-    slim, compute = FACES_TABLE.get(way, (False, False))
-    return ABufferRow(1 << 30, min_layers=1, slim=slim, compute_from=0 if compute else None)
 
 
 @pytest.fixture(params=WAYS)
 def way(request, renderer):
     """The renderer capturing every frame one way (a capture table of that way alone)."""
-    way = "a-buffer" if request.param.startswith("a-buffer") else request.param
-    with one_way(renderer, way, abuffer=lambda _: abuffer_row(request.param)):
+    with captured_way(renderer, request.param):
         yield request.param
 
 

@@ -85,7 +85,7 @@ class _Prepared:
         r = capturer.device
         self.model = capturer.model_of(mesh)
         images = r.software
-        self.defines = list_defines(r)
+        self.defines = {**list_defines(r), **mesh.surface_defines}
         # a mesh drawn in chunks is not on the GPU whole when the resolve would read its faces
         self.slim = row.slim and mesh.chunk_faces is None
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)

@@ -50,7 +50,6 @@ class Capture:
         request = Request(
             tuple(gb.size),
             mesh.triangles,
-            mesh.part_count,
             normals=normals,
             selected=selected is not None,
             **asked,

@@ -80,11 +80,13 @@ class KBufferSource:
             name, size = f"kbuffer.faces.{gb.size[0]}x{gb.size[1]}", gb.size
             self.surfaces = tuple(r.pool.texture(f"{name}.{i}", size, "rg32ui") for i in range(self.k))
             return
+        surface = mesh.surface_defines
         defines = {
             "K": self.k,
             "FACE_IDS": request.face_ids,
             "INTERLOCK": self.interlock,
             "COUNT": not self.unpacks,
+            **surface,
         }
         modern = self.interlock
         # the first pass's program, and the one of the passes behind it (kbuffer.frag's PEEL)
@@ -102,14 +104,13 @@ class KBufferSource:
                 prog["u_back_bias"].value = BACK_BIAS
         # the pass that unpacks a layer into the G-buffer, where layers are unpacked at all
         if self.unpacks:
-            self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG)
+            self.unpack, self.unpack_vao = r.fullscreen(UNPACK_FRAG, surface)
             self.unpack["u_surfaces"].value = units.KBUFFER
             self.unpack["u_back_bias"].value = BACK_BIAS
         self._held = self._surfaces(gb.size)
         self.surfaces = self._held[0]
-        if self._held[4] is not None:
-            # readers fetch every layer from one array sampler (edges_surfaces.frag)
-            self.defines = {"SURFACE_ARRAY": True}
+        # readers fetch every layer from one array sampler where there is one (edges_surfaces.frag)
+        self.defines = {**surface, "SURFACE_ARRAY": self._held[4] is not None}
 
     @classmethod
     def open(cls, capturer, row, mesh, camera: Camera, gb: GBuffer, request, selected=None) -> KBufferSource:

@@ -15,6 +15,10 @@ PLACEMENTS_BINDING = 10
 # draw call until it has rasterised them, so a big group is drawn a run of faces at a time, each
 # finished before the next is given (flushed only, they would all be held at once again)
 PIECE_FACES = 1 << 17
+# Parts a k-buffer's or A-buffer's surface holds beside a normal of three halves (16 bits, one
+# value kept for none); a mesh of more packs its surfaces' normals in 32 bits (kbuffer.glsl's
+# WIDE_PARTS) and its parts whole.
+NARROW_PARTS = 0xFFFF
 
 
 def geometry_program(capturer, fragment: str, mesh, defines=None, modern: bool = False):
@@ -242,6 +246,12 @@ class GpuMesh:
         """The defines of a program whose vertex stage draws these buffers (instance.glsl's
         UNPLACED where ``unplaced``: no instance attribute is read)."""
         return {"UNPLACED": self.unplaced}
+
+    @property
+    def surface_defines(self) -> dict:
+        """The defines of a program that packs or reads surfaces of this mesh (kbuffer.glsl's
+        WIDE_PARTS where its parts pass ``NARROW_PARTS``)."""
+        return {"WIDE_PARTS": self.part_count >= NARROW_PARTS}
 
     @property
     def placement_defines(self) -> dict:

@@ -18,8 +18,6 @@ from blueprint.render.kbuffer import KBUFFER_MAX, KBUFFER_MAX_BYTES, KBufferSour
 from blueprint.render.source import PeelSource
 from blueprint.settings import memory_budget
 
-# Part IDs the k-buffer's and the A-buffer's surfaces hold (16 bits, one value kept for none).
-MOST_PARTS = 0xFFFF
 # A-buffer lists of a frame at most on a GPU whose driver does not tell its memory.
 DEFAULT_ABUFFER_BYTES = 1 << 30
 
@@ -29,7 +27,7 @@ DEFAULT_ABUFFER_BYTES = 1 << 30
 class Request:
     """What a frame asks of its capture.
 
-    ``size`` the G-buffer's (width, height); ``triangles`` and ``parts`` the mesh's; ``layers``
+    ``size`` the G-buffer's (width, height); ``triangles`` the mesh's; ``layers``
     the most layers the frame draws (None: every layer); ``normals`` false for a G-buffer of
     depth and face IDs alone; ``selected`` for the front surface of chosen parts alone;
     ``surfaces`` where the frame's readers read a k-buffer's surfaces in place when one pass
@@ -38,7 +36,6 @@ class Request:
 
     size: tuple[int, int]
     triangles: int
-    parts: int
     layers: int | None = 1
     normals: bool = True
     selected: bool = False
@@ -60,7 +57,7 @@ class Request:
     @property
     def whole(self) -> bool:
         """A whole G-buffer (normals and parts) of every part: what the sorting ways capture."""
-        return self.normals and not self.selected and self.parts < MOST_PARTS
+        return self.normals and not self.selected
 
 
 # A device's rows and table stay frozen, being shared by every frame it draws; one object a
@@ -168,10 +165,7 @@ class ABufferRow:
 
     def accepts(self, request: Request) -> bool:
         layers = request.layers
-        # (a surface's part + 1 takes 16 bits, as in a whole frame)
-        in_place = (
-            request.surfaces and not request.unpack and not request.selected and request.parts < MOST_PARTS
-        )
+        in_place = request.surfaces and not request.unpack and not request.selected
         return (layers is None or layers >= self.min_layers) and (request.whole or in_place)
 
 

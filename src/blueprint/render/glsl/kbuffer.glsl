@@ -1,11 +1,16 @@
 // One surface of the k-buffer in a uvec4: (window depth bits, with bit 31 set for a back face;
 // the normal's x and y as halves; its z as a half in the low 16 bits and part + 1 in the high
-// 16; face + 1). All zero where there is none: part + 1 is never 0. With IDS_ONLY a uvec2 of
-// the depth bits and face + 1 (never 0 then: faces are always tracked).
+// 16; face + 1). All zero where there is none: part + 1 is never 0. With WIDE_PARTS (a mesh of
+// 0xFFFF parts or more) the normal is two 16-bit octahedral coordinates and part + 1 takes the
+// third word whole. With IDS_ONLY a uvec2 of the depth bits and face + 1 (never 0 then: faces
+// are always tracked).
 const uint KB_BACK = 0x80000000u;
 
 #ifndef IDS_ONLY
 #define IDS_ONLY 0
+#endif
+#ifndef WIDE_PARTS
+#define WIDE_PARTS 0
 #endif
 
 #if IDS_ONLY
@@ -34,6 +39,43 @@ uint kb_half(float v) {
     return sign | (uint(min(exponent, 30)) << 10) | ((bits >> 13) & 0x3ffu);
 }
 
+#if WIDE_PARTS
+// A unit vector on the octahedron |x| + |y| + |z| = 1, its lower half folded over the upper,
+// as two signed 16-bit coordinates: within 1e-4 of the vector, where the halves' x and y
+// are within 5e-4 (kb_half), in the bits the part needs.
+int kb_snorm(float v) {
+    return int(round(clamp(v, -1.0, 1.0) * 32767.0));
+}
+
+vec2 kb_sign(vec2 v) {
+    return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0);
+}
+
+uint kb_octahedral(vec3 n) {
+    vec2 e = n.xy / max(abs(n.x) + abs(n.y) + abs(n.z), 1e-30);
+    if (n.z < 0.0) {
+        e = (1.0 - abs(e.yx)) * kb_sign(e);
+    }
+    return uint(kb_snorm(e.x) & 0xffff) | (uint(kb_snorm(e.y)) << 16);
+}
+
+vec3 kb_unoctahedral(uint bits) {
+    vec2 e = vec2(float(int(bits << 16) >> 16), float(int(bits) >> 16)) / 32767.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (n.z < 0.0) {
+        n.xy = (1.0 - abs(n.yx)) * kb_sign(n.xy);
+    }
+    return normalize(n);
+}
+
+uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
+    return uvec4(floatBitsToUint(z) | (back ? KB_BACK : 0u), kb_octahedral(n), uint(part + 1), uint(face + 1));
+}
+
+bool kb_empty(uvec4 s) {
+    return s.z == 0u;
+}
+#else
 uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
     return uvec4(
         floatBitsToUint(z) | (back ? KB_BACK : 0u),
@@ -45,6 +87,7 @@ uvec4 kb_pack(float z, bool back, vec3 n, int face, int part) {
 bool kb_empty(uvec4 s) {
     return s.z < 0x10000u;
 }
+#endif
 #endif
 
 float kb_raw(KB_T s) {
@@ -64,6 +107,15 @@ float kb_unhalf(uint h) {
     return uintBitsToFloat(((h & 0x8000u) << 16) | magnitude);
 }
 
+#if WIDE_PARTS
+vec3 kb_normal(uvec4 s) {
+    return kb_unoctahedral(s.y);
+}
+
+ivec2 kb_ids(uvec4 s) {
+    return ivec2(int(s.w), int(s.z));
+}
+#else
 vec3 kb_normal(uvec4 s) {
     return vec3(kb_unhalf(s.y & 0xffffu), kb_unhalf(s.y >> 16), kb_unhalf(s.z & 0xffffu));
 }
@@ -71,6 +123,7 @@ vec3 kb_normal(uvec4 s) {
 ivec2 kb_ids(uvec4 s) {
     return ivec2(int(s.w), int(s.z >> 16));
 }
+#endif
 
 #ifdef K
 // Where a fragment ``c`` (biased depth ``cb``, eye depth of its raw depth ``ze``) goes among a
