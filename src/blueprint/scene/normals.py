@@ -406,34 +406,29 @@ def _pairwise(
     sorted_vertex = vertex[order]
     starts = np.flatnonzero(np.r_[True, sorted_vertex[1:] != sorted_vertex[:-1]])
     degree = np.diff(np.r_[starts, len(order)])
-    group_start = np.repeat(starts, degree)
-    group_size = np.repeat(degree, degree)
-
-    # every ordered pair (corner a, corner b) around the same vertex, a block of corners at a
-    # time: a vertex of degree d makes d pairs a corner, so all at once would hold up to
-    # _MAX_DEGREE times the corners
-    ends = np.cumsum(group_size)
-    pairs = int(ends[-1])
-    cuts = np.r_[0, np.searchsorted(ends, np.arange(_PAIR_BLOCK, pairs, _PAIR_BLOCK)), len(order)]
     cos_crease = np.cos(np.radians(crease_angle)) - 1e-9
-    corner_unit = np.take(unit, corner_face, axis=0)  # NumPy takes rows faster than it indexes them
-    corner_sharp = sharp[sorted_vertex]
-    area = [np.ascontiguousarray(area_normals[:, axis]) for axis in range(3)]
-    summed = np.zeros((len(order), 3))
-    for lo, hi in zip(cuts[:-1].tolist(), cuts[1:].tolist(), strict=True):
-        if lo == hi:
-            continue
-        counts = group_size[lo:hi]
-        a_idx = np.repeat(np.arange(lo, hi), counts)
-        b_idx = np.arange(len(a_idx)) - np.repeat(np.cumsum(counts) - counts, counts)
-        b_idx += group_start[a_idx]
-        cos = np.einsum("ij,ij->i", np.take(corner_unit, a_idx, axis=0), np.take(corner_unit, b_idx, axis=0))
-        keep = (np.abs(cos) >= cos_crease) | ~corner_sharp[a_idx]
-        face_b = corner_face[b_idx[keep]]
-        sign = np.sign(cos[keep])
-        target = a_idx[keep] - lo
-        for axis in range(3):
-            summed[lo:hi, axis] += np.bincount(target, area[axis][face_b] * sign, minlength=hi - lo)
-    norm = np.linalg.norm(summed, axis=1)
-    ok = norm > 0
-    out[corners[order[ok]]] = (summed[ok] / norm[ok, None]).astype(np.float32)
+    # the vertices of one degree d together: each a d x d table of its faces' cosines and the
+    # sum of its faces' area normals by each row, a block of vertices at a time (their pairs
+    # all at once would take up to _MAX_DEGREE times the corners); each corner is written by
+    # one block
+    work = []
+    for d in np.unique(degree).tolist():
+        first = starts[degree == d]
+        step = max(1, _PAIR_BLOCK // (d * d))
+        work += [(d, first[at : at + step]) for at in range(0, len(first), step)]
+
+    def blocks(lo: int, hi: int) -> None:
+        for d, first in work[lo:hi]:
+            at = first[:, None] + np.arange(d)  # (n, d): the vertices' corners, in corner order
+            face = corner_face[at]
+            u = np.take(unit, face, axis=0)  # (n, d, 3)
+            cos = u[:, :, None, 0] * u[:, None, :, 0] + u[:, :, None, 1] * u[:, None, :, 1]
+            cos += u[:, :, None, 2] * u[:, None, :, 2]
+            weight = np.sign(cos)
+            weight[(np.abs(cos) < cos_crease) & sharp[sorted_vertex[first]][:, None, None]] = 0.0
+            summed = np.matmul(weight, np.take(area_normals, face, axis=0)).reshape(-1, 3)
+            norm = row_norm(summed)
+            ok = norm > 0
+            out[corners[order[at.reshape(-1)[ok]]]] = (summed[ok] / norm[ok, None]).astype(np.float32)
+
+    parallel.run(blocks, len(work), min_block=1)
