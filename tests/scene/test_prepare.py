@@ -200,6 +200,34 @@ def test_gpu_arrays_equal_unique_rows(shape, crease, threads, monkeypatch):
     np.testing.assert_array_equal(indices, expected_indices)
 
 
+@pytest.mark.parametrize("threads", [1, 3])
+def test_split_vertices_number_the_pairs_of_vertex_and_normal(threads, monkeypatch):
+    """``_split_vertices`` against the distinct (key, quantized normal) pairs in order, each
+    with its last corner: keys of a few corners (compared pairwise) and of more than
+    ``_TABLE_DEGREE`` (sorted), normals drawn from a few, some keys of one normal alone."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    rng = np.random.default_rng(5)
+    sizes = []  # the most corners of a key, each trial
+    for _ in range(24):
+        n = int(rng.integers(1, 4000))
+        keys = max(1, n // int(rng.choice([2, 5, 40, 150])))
+        key = rng.integers(0, keys, n) * 7 + 3
+        palette = rng.normal(size=(int(rng.integers(1, 5)), 3)).astype(np.float32)
+        unit = palette / np.linalg.norm(palette, axis=1, keepdims=True)
+        corner_normals = unit[rng.integers(0, len(unit), n)]
+        chosen, inverse = prepare._split_vertices(key, corner_normals)
+        quantized = prepare._normal_key(corner_normals)
+        pairs = sorted(set(zip(key.tolist(), quantized.tolist(), strict=True)))
+        number = {pair: k for k, pair in enumerate(pairs)}
+        expected = np.array([number[pair] for pair in zip(key.tolist(), quantized.tolist(), strict=True)])
+        last = np.zeros(len(pairs), np.int64)
+        np.maximum.at(last, expected, np.arange(n))
+        np.testing.assert_array_equal(inverse, expected)
+        np.testing.assert_array_equal(chosen, last)
+        sizes.append(int(np.bincount(key).max()))
+    assert min(sizes) <= prepare._TABLE_DEGREE < max(sizes)
+
+
 @pytest.mark.parametrize("parts", [1, 2])
 def test_a_smooth_soup_draws_its_corners_from_its_welded_vertices(parts):
     """A sphere's soup: one vertex a point and part, whose corners all draw alike (each the

@@ -22,7 +22,7 @@ import numpy as np
 from blueprint import parallel, settings
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, diagonal_of
-from blueprint.sorting import unique_first
+from blueprint.sorting import stable_argsort, unique_first
 
 __all__ = ["VERTEX", "feature_faces", "gpu_arrays", "topologies_kept", "topology"]
 
@@ -35,6 +35,10 @@ _KEPT_BYTES = settings.MEMORY_BUDGET // 32
 _BLOCK = 1 << 16
 # Keys numbered by a table over their range, not a sort, up to this many times their number.
 _TABLE_PER_KEY = 4
+# A key's corners compared pairwise up to this many (``_pairs_by_normal``), and pairs of them
+# compared at a time.
+_TABLE_DEGREE = 64
+_PAIR_BLOCK = 1 << 18
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
@@ -140,19 +144,9 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
             soup=False,
         )
         corner_vertex = model.faces.reshape(-1)
-    parts = len(model.part_names)
     normals = None
     if crease_angle is None:
-        # where each vertex lies in one part, the vertex orders the keys alone, over a range
-        # that unique_first counts over instead of sorting
-        key = corner_vertex
-        if parts > 1:
-            corner_part = np.repeat(model.face_part, 3)
-            vertex_part = np.zeros(len(model.positions), np.int32)
-            vertex_part[corner_vertex] = corner_part
-            if not np.array_equal(vertex_part[corner_vertex], corner_part):
-                key = corner_vertex.astype(np.int64) * parts + corner_part
-            del corner_part, vertex_part
+        key = _vertex_part_keys(model, corner_vertex)
         if soup or np.all(key[1:] > key[:-1]):
             chosen, inverse = None, np.arange(len(key), dtype=np.uint32)  # a triangle soup
         else:
@@ -165,10 +159,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
         diagonal = diagonal_of(model.bounds)
         normals = corner_normals(model.positions, model.faces, crease_angle, known, model.soup, diagonal)
         normals = normals.reshape(-1, 3)
-        key = corner_vertex
-        if parts > 1:
-            key = corner_vertex.astype(np.int64) * parts
-            key += np.repeat(model.face_part, 3)
+        key = _vertex_part_keys(model, corner_vertex)
         if soup or np.all(key[1:] > key[:-1]):
             # every corner a vertex of its own (a triangle soup): merged where they are the same
             chosen, inverse = _soup_vertices(model, normals, known.get("welded"))
@@ -179,6 +170,22 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
     vertices = np.zeros(count, VERTEX)
     parallel.run(partial(_filled, model, corner_vertex, chosen, normals, vertices), count)
     return vertices, inverse
+
+
+def _vertex_part_keys(model: Model, corner_vertex: np.ndarray) -> np.ndarray:
+    """(3F,) int: each corner's vertex and part as one key, in (vertex, part) order. Where each
+    vertex lies in one part (a vertex shared between parts is split), the vertex orders the
+    keys alone, over a range that ``unique_first`` and ``_dense`` count over instead of
+    sorting."""
+    parts = len(model.part_names)
+    if parts < 2:
+        return corner_vertex
+    corner_part = np.repeat(model.face_part, 3)
+    vertex_part = np.zeros(len(model.positions), np.int32)
+    vertex_part[corner_vertex] = corner_part
+    if np.array_equal(vertex_part[corner_vertex], corner_part):
+        return corner_vertex
+    return corner_vertex.astype(np.int64) * parts + corner_part
 
 
 def _numbered_by_first_corner(corner_vertex: np.ndarray, vertices: int) -> bool:
@@ -296,31 +303,77 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     mixed = np.zeros(keys, bool)
     mixed[key[differs]] = True
     del differs
+    # the corners of the other keys, each key's together in corner order; their pairs found
+    # among each key's corners (``_pairs_by_normal``)
     inside = np.flatnonzero(mixed[key])
-    second = _normal_key(normals[inside])
-    sub = np.lexsort((second, key[inside]))  # stable: each pair's corners keep their order
-    inside, second = inside[sub], second[sub]
+    inside = inside[stable_argsort(key[inside])]
     inside_key = key[inside]
-    new_key = np.ones(len(inside), bool)
-    np.not_equal(inside_key[1:], inside_key[:-1], out=new_key[1:])
-    new = new_key.copy()
-    new[1:] |= second[1:] != second[:-1]
-    del second
+    rank, ends, distinct, firsts = _pairs_by_normal(inside, inside_key, _normal_key(normals[inside]))
     # pairs a key: one, or its distinct normals
     count = np.ones(keys, np.int64)
     count[mixed] = 0
-    np.add.at(count, inside_key[new], 1)
+    count[inside_key[firsts]] = distinct
     offset = np.cumsum(count) - count
     inverse = np.empty(n, np.uint32)
     parallel.run(partial(_gathered, offset, key, inverse), n)
-    pair = np.cumsum(new) - 1
-    pair -= np.maximum.accumulate(np.where(new_key, pair, 0))
-    inverse[inside] = offset[inside_key] + pair
+    at = offset[inside_key] + rank
+    inverse[inside] = at
     chosen = last[np.repeat(np.arange(keys), count)]
-    # the last corner of each run of one pair
-    ends = np.flatnonzero(np.r_[new[1:], True]) if len(inside) else np.zeros(0, np.int64)
-    chosen[offset[inside_key[ends]] + pair[ends]] = inside[ends]
+    chosen[at] = ends
     return chosen, inverse
+
+
+def _pairs_by_normal(
+    corners: np.ndarray, key: np.ndarray, normal: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The pairs of ``corners`` (each key's together, in corner order) by their ``key`` and
+    ``normal`` key (``_normal_key``): each corner's pair among its key's, numbered by normal;
+    the last corner of each corner's pair; and each key's count of pairs and its first place.
+
+    A key of d corners compares them d x d (its corners of equal normals, and the normals
+    before each), those of one d together, a block at a time: no sort of the corners by
+    normal. Keys of more corners than ``_TABLE_DEGREE`` are sorted by normal instead."""
+    n = len(corners)
+    firsts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if n else np.zeros(0, np.int64)
+    size = np.diff(np.r_[firsts, n])
+    rank = np.empty(n, np.int64)
+    ends = np.empty(n, np.int64)
+    distinct = np.empty(len(firsts), np.int64)
+    work = []
+    for d in np.unique(size[size <= _TABLE_DEGREE]).tolist():
+        chosen = np.flatnonzero(size == d)
+        step = max(1, _PAIR_BLOCK // (d * d))
+        work += [(d, chosen[at : at + step]) for at in range(0, len(chosen), step)]
+
+    def tables(lo: int, hi: int) -> None:
+        for d, chosen in work[lo:hi]:
+            at = firsts[chosen][:, None] + np.arange(d)
+            value = normal[at]
+            same = value[:, :, None] == value[:, None, :]
+            # the first corner of each normal, and the normals less than each corner's
+            first = ~(same & np.tri(d, d, -1, bool)).any(axis=2)
+            rank[at] = ((value[:, None, :] < value[:, :, None]) & first[:, None, :]).sum(axis=2)
+            last = d - 1 - np.argmax(same[:, :, ::-1], axis=2)
+            ends[at] = np.take_along_axis(corners[at], last, axis=1)
+            distinct[chosen] = first.sum(axis=1)
+
+    parallel.run(tables, len(work), min_block=1)
+    big = np.flatnonzero(size > _TABLE_DEGREE)
+    if len(big):
+        sizes = size[big]
+        at = np.arange(int(sizes.sum())) + np.repeat(firsts[big] - (np.cumsum(sizes) - sizes), sizes)
+        group = np.repeat(np.arange(len(big)), sizes)
+        order = np.lexsort((normal[at], group))  # stable: each pair's corners keep their order
+        at, group = at[order], group[order]
+        value = normal[at]
+        new_group = np.r_[True, group[1:] != group[:-1]]
+        new = new_group | np.r_[True, value[1:] != value[:-1]]
+        pair = np.cumsum(new) - 1
+        rank[at] = pair - np.maximum.accumulate(np.where(new_group, pair, 0))
+        run_end = np.flatnonzero(np.r_[new[1:], True])
+        ends[at] = corners[at[run_end]][pair]
+        distinct[big] = np.add.reduceat(new.astype(np.int64), np.flatnonzero(new_group))
+    return rank, ends, distinct, firsts
 
 
 def _dense(key: np.ndarray) -> np.ndarray:
