@@ -308,7 +308,7 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     inside = np.flatnonzero(mixed[key])
     inside = inside[stable_argsort(key[inside])]
     inside_key = key[inside]
-    rank, ends, distinct, firsts = _pairs_by_normal(inside, inside_key, _normal_key(normals[inside]))
+    rank, ends, distinct, firsts = _pairs_by_normal(inside, inside_key, _normal_key(normals, inside))
     # pairs a key: one, or its distinct normals
     count = np.ones(keys, np.int64)
     count[mixed] = 0
@@ -414,13 +414,22 @@ def _gathered(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: i
         out[start:stop] = table[at[start:stop]]
 
 
-def _normal_key(normals: np.ndarray) -> np.ndarray:
-    """(N,) int64: the unit normals (N, 3) float32 quantized to 16 bits a component (as
-    ``np.round(normals * 32767)``), packed in their order: the keys sort as the rows do."""
-    key = np.zeros(len(normals), np.int64)
-    for axis in range(3):
-        quantized = np.round(normals[:, axis] * 32767).astype(np.int64)
-        quantized += _SHIFT
-        quantized <<= 17 * (2 - axis)
-        key |= quantized
+def _normal_key(normals: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+    """(N,) int64: the unit normals (N, 3) float32 (their ``rows`` where given) quantized to 16
+    bits a component (as ``np.round(normals * 32767)``), packed in their order: the keys sort
+    as the rows do. A block of rows at a time, side by side."""
+    n = len(normals) if rows is None else len(rows)
+    key = np.zeros(n, np.int64)
+
+    def packed(lo: int, hi: int) -> None:
+        for start in range(lo, hi, _BLOCK):
+            stop = min(start + _BLOCK, hi)
+            block = normals[start:stop] if rows is None else np.take(normals, rows[start:stop], axis=0)
+            for axis in range(3):
+                quantized = np.round(block[:, axis] * 32767).astype(np.int64)
+                quantized += _SHIFT
+                quantized <<= 17 * (2 - axis)
+                key[start:stop] |= quantized
+
+    parallel.run(packed, n)
     return key
