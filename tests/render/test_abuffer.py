@@ -184,6 +184,35 @@ def test_projected_fragments_are_the_faces_areas_in_pixels():
     assert projected_fragments(square, faces[::-1, ::-1], camera, (64, 48)) == pytest.approx(64 * 48 / 16)
     away = blueprint.Camera(eye=(0, 0, -1), target=(0, 0, -2), up=(0, 1, 0), near=0.1, far=9)
     assert projected_fragments(square, faces, away, (64, 48)) is None
+    # a copy wholly off the picture draws nothing; one across its edge counts whole
+    for shift, copies in ((10.0, 1), (0.5, 2)):
+        both = np.r_[square, square + [shift, 0, 0]]
+        twice = np.r_[faces, faces + 4]
+        assert projected_fragments(both, twice, camera, (64, 48)) == pytest.approx(copies * 64 * 48 / 16)
+
+
+def test_a_deep_first_frame_is_drawn_once(renderer, abuffer, monkeypatch):
+    """Lists of a size not drawn before, for a frame of more than ``FIRST_ROOM`` fragments a
+    pixel, take the room its faces foretell: one geometry pass, not a second one with the
+    room the first found too small."""
+    if not renderer.software:
+        pytest.skip("the lists live in the host's memory on a software rasteriser alone")
+    abuffer(True)
+    model = planes(list(range(3 * FIRST_ROOM)))
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    size = (48, 48)
+    renderer.abuffer_room.pop(size, None)
+    passes = []
+    fragments = ABufferSource.fragments
+
+    def counted(self, *args):
+        passes.append(1)
+        return fragments(self, *args)
+
+    monkeypatch.setattr(ABufferSource, "fragments", counted)
+    layers = renderer.peel(model, camera, size=size, max_layers=None)
+    assert len(layers.depth) == 3 * FIRST_ROOM
+    assert len(passes) == 1
 
 
 def test_first_lists_are_sized_by_the_projected_fragments(renderer, abuffer, monkeypatch):

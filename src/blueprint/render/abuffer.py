@@ -247,7 +247,9 @@ class ABufferSource:
         where the lists live in the host's memory (a software rasteriser's images), the
         fragments the faces' areas on the picture foretell, with a counted room's spare, up to
         ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers; of a model kept
-        as instances, each instance's faces placed a block at a time, never flattened."""
+        as instances, each instance's faces placed a block at a time, never flattened. A deeper
+        model gets the room foretold, as much as the lists may hold: a first pass with less
+        would be drawn again."""
         room = self._room(size)
         if tuple(size) in self.rooms or not self.images or self.model is None:
             return room
@@ -256,7 +258,16 @@ class ABufferSource:
             foretold = projected_fragments(model.positions, model.faces, self.camera, size)
         else:
             foretold = placed_fragments(model.instances, self.camera, size)
-        return room if foretold is None else min(room, spare_room(foretold))
+        if foretold is None:
+            return room
+        wanted = spare_room(foretold)
+        return wanted if wanted <= room else max(room, min(wanted, self._most_room()))
+
+    def _most_room(self) -> int:
+        """The most fragments lists may hold within ``max_bytes`` (and the images' rows)."""
+        if not self.images:
+            return self.max_bytes // self.node_bytes
+        return min(self.max_bytes // (AB_ROW * self.node_bytes), self.r.max_texture) * AB_ROW
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
         """Layer ``layer`` into the G-buffer: its depth into ``flat[layer % 2]``, two float
@@ -588,7 +599,8 @@ def projected_fragments(
     into a target of ``size`` through ``camera``: the sum of their areas in pixels, front and
     back faces alike (a pixel's centre lies in as many faces as cross it), a block of faces at
     a time; None where a corner lies on or behind the eye's plane, whose area is unbounded.
-    Faces off the picture count too: more than are drawn, never fewer."""
+    Faces wholly off the picture are left out; those across its edge count whole: more than
+    are drawn, never fewer."""
     rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
     turn, shift = rows[:, :3].T.astype(np.float32), rows[:, 3].astype(np.float32)
     # each vertex projected once, not once a corner: (V, 3) clip x, y and w
@@ -643,7 +655,12 @@ def _twice_area(clips: list[np.ndarray]) -> float | None:
     if not all((clip[:, 2] > 0).all() for clip in clips):
         return None
     (x0, y0), (x1, y1), (x2, y2) = ((clip[:, 0] / clip[:, 2], clip[:, 1] / clip[:, 2]) for clip in clips)
-    return float(np.abs((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)).sum(dtype=np.float64))
+    # faces wholly beyond one side of the picture draw nothing
+    shown = np.ones(len(x0), bool)
+    for a, b, c in ((x0, x1, x2), (y0, y1, y2)):
+        shown &= (np.minimum(np.minimum(a, b), c) <= 1) & (np.maximum(np.maximum(a, b), c) >= -1)
+    twice = np.abs((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0))
+    return float(twice[shown].sum(dtype=np.float64))
 
 
 def _pixels(twice_area: float, size: tuple[int, int]) -> float:
