@@ -248,8 +248,8 @@ class ABufferSource:
         fragments the faces' areas on the picture foretell, with a counted room's spare, up to
         ``FIRST_ROOM`` a pixel: a closed scan draws some two a pixel it covers; of a model kept
         as instances, each instance's faces placed a block at a time, never flattened. A deeper
-        model gets the room foretold, as much as the lists may hold: a first pass with less
-        would be drawn again."""
+        model gets the room foretold where the lists may hold it: a first pass with less would
+        be drawn again (one foretold past them starts small, as lists that may be peeled)."""
         room = self._room(size)
         if tuple(size) in self.rooms or not self.images or self.model is None:
             return room
@@ -261,7 +261,7 @@ class ABufferSource:
         if foretold is None:
             return room
         wanted = spare_room(foretold)
-        return wanted if wanted <= room else max(room, min(wanted, self._most_room()))
+        return wanted if wanted <= max(room, self._most_room()) else room
 
     def _most_room(self) -> int:
         """The most fragments lists may hold within ``max_bytes`` (and the images' rows)."""
