@@ -209,9 +209,14 @@ def noise_creases(crease: np.ndarray, anchored: np.ndarray, length: np.ndarray, 
     """
     if len(crease) == 0:
         return np.zeros(0, bool)
-    # runs over the crease edges' own vertices only: the rest of the mesh takes no part
-    used, local = np.unique(crease, return_inverse=True)
-    local = local.reshape(-1, 2)
+    # runs over the crease edges' own vertices only: the rest of the mesh takes no part; the
+    # vertices numbered in order by a table over their ids (``np.unique``'s numbers, unsorted)
+    present = np.zeros(len(anchored), bool)
+    present[crease] = True
+    used = np.flatnonzero(present)
+    rank = np.cumsum(present, dtype=np.int64) - 1
+    local = rank[crease]
+    del present, rank
     run = connected_components_of(np.arange(len(used)), local[:, 0], local[:, 1])[local[:, 0]]
     edges = np.bincount(run)
     total = np.bincount(run, np.asarray(length, np.float64))
