@@ -286,8 +286,8 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     ``vertex_part`` (3F,) int orders the vertex and the part; the normals' three 16-bit
     components (``_normal_key``) order the rest. No sort of every corner: a vertex whose
     corners' normals are one, bit for bit (every vertex off a crease), is one pair, its last
-    corner found by a table; only the corners of the other vertices are sorted, by both
-    keys."""
+    corner found by a table; the corners of the other vertices are grouped by key (one sort
+    of one key) and told apart by normal within each (``_pairs_by_normal``)."""
     n = len(vertex_part)
     key = _dense(vertex_part)
     keys = int(key.max(initial=-1)) + 1
