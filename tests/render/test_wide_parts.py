@@ -1,8 +1,9 @@
 """Meshes of more parts than a surface's 16 bits hold (``render.mesh.NARROW_PARTS``): the
 k-buffer and the A-buffer pack their surfaces' normals in 32 bits instead and keep the parts
 whole (kbuffer.glsl's WIDE_PARTS), where they used to hand such a frame to the peel, a
-geometry pass a layer. Every way gives the peel's layers: its part channel is written from
-the vertices, never packed."""
+geometry pass a layer. Every way captures such a frame itself, each pixel's part and normal
+are its face's, and the graphics pipeline's ways give the peel's layers (whose part channel is
+written from the vertices, never packed)."""
 
 from __future__ import annotations
 
@@ -38,7 +39,7 @@ def tetrahedra(side: int = SIDE, sheets: int = SHEETS, seed: int = 7) -> Model:
     transform[:, :3, :3] = q
     transform[:, :3, 3] = np.c_[k % side, (k // side) % side, -3.0 * (k // (side * side))] * 2.0
     transform[:, 3, 3] = 1.0
-    # the last sheet first: the parts past 16 bits lie in front
+    # numbered from the back: the parts past 16 bits lie in the front sheet
     part = (n - 1 - k).astype(np.int32)
     instances = Instances(
         corners, faces, np.array([0, 4]), np.array([0, 4]), np.zeros(n, np.int32), transform, part
