@@ -1,10 +1,11 @@
-"""The fast sorts, column reductions and cross products give NumPy's own answers."""
+"""The fast sorts, column reductions and cross products give NumPy's own answers; blocks of
+groups by size hold each group once."""
 
 import numpy as np
 import pytest
 
 from blueprint import parallel, settings
-from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
+from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm, square_blocks
 from blueprint.sorting import SortedKeys, _bucket_order, sorted_with_order, stable_argsort, unique_first
 
 
@@ -85,6 +86,19 @@ def test_row_norm_equals_numpys(dtype, columns):
     got, expected = row_norm(values), np.linalg.norm(values, axis=1)
     assert got.dtype == expected.dtype
     np.testing.assert_array_equal(got, expected)
+
+
+def test_square_blocks_hold_each_group_once_by_size():
+    """Every group of a size up to ``most`` in exactly one block of groups of its size, a
+    block of at most ``cells`` d x d cells (one group where a group alone passes that)."""
+    sizes = np.random.default_rng(3).integers(1, 40, 5000)
+    work = square_blocks(sizes, 1000, most=30)
+    held = np.concatenate([chosen for _, chosen in work])
+    assert np.array_equal(np.sort(held), np.flatnonzero(sizes <= 30))
+    for d, chosen in work:
+        assert (sizes[chosen] == d).all()
+        assert len(chosen) * d * d <= 1000 or len(chosen) == 1
+    assert [d for d, _ in square_blocks(np.array([70, 2]), 1000)] == [2, 70]
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])

@@ -23,6 +23,7 @@ __all__ = [
     "indexed_cross",
     "ranges",
     "row_norm",
+    "square_blocks",
 ]
 
 # Faces whose cross products ``indexed_cross`` makes at a time.
@@ -98,6 +99,18 @@ def _cross(a, b, dtype=None, out=None) -> np.ndarray:
         i, j = (k + 1) % 3, (k + 2) % 3
         np.subtract(a[i] * b[j], a[j] * b[i], out=out[:, k])
     return out
+
+
+def square_blocks(sizes: np.ndarray, cells: int, most: int | None = None) -> list[tuple[int, np.ndarray]]:
+    """The groups of ``sizes`` (N,) int (of sizes up to ``most`` where given), those of one size
+    d together in blocks of about ``cells`` d x d cells: (d, the groups' indices) a block, for
+    work that compares a group's members pairwise as one table."""
+    work = []
+    for d in np.unique(sizes if most is None else sizes[sizes <= most]).tolist():
+        chosen = np.flatnonzero(sizes == d)
+        step = max(1, cells // (d * d))
+        work += [(d, chosen[at : at + step]) for at in range(0, len(chosen), step)]
+    return work
 
 
 def ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:

@@ -225,14 +225,7 @@ class ABufferSource:
 
     def fits(self, size: tuple[int, int]) -> bool:
         """Whether a frame of ``size`` with the fragments of the last one there would fit."""
-        return self._holds(self._room(size), size)
-
-    def _holds(self, room: int, size: tuple[int, int]) -> bool:
-        """Whether lists of ``room`` fragments at ``size`` fit ``max_bytes`` (and the images'
-        rows): the compute rasteriser's buffers are counted where it draws them
-        (``_computes``)."""
-        rows = -(-room // AB_ROW)
-        return self._list_bytes(room) <= self.max_bytes and (not self.images or rows <= self.r.max_texture)
+        return self._room(size) <= self._most_room()
 
     def _list_bytes(self, room: int) -> int:
         """Bytes the lists of ``room`` fragments take: images hold whole rows."""
@@ -264,7 +257,9 @@ class ABufferSource:
         return wanted if wanted <= max(room, self._most_room()) else room
 
     def _most_room(self) -> int:
-        """The most fragments lists may hold within ``max_bytes`` (and the images' rows)."""
+        """The most fragments lists may hold within ``max_bytes`` (and the images' rows, of
+        ``AB_ROW`` entries each); the compute rasteriser's buffers are counted where it draws
+        them (``_computes``)."""
         if not self.images:
             return self.max_bytes // self.node_bytes
         return min(self.max_bytes // (AB_ROW * self.node_bytes), self.r.max_texture) * AB_ROW
@@ -424,7 +419,7 @@ class ABufferSource:
         calls = 0
         room = self._first_room(size)
         while True:
-            if not self._holds(room, size):
+            if room > self._most_room():
                 return None
             totals, depths = self._buffers(name, room)
             head.bind_to_image(0, read=True, write=True)

@@ -7,7 +7,7 @@ from functools import partial
 import numpy as np
 
 from blueprint import parallel
-from blueprint.columns import column_max, column_min, indexed_cross, row_norm
+from blueprint.columns import column_max, column_min, indexed_cross, row_norm, square_blocks
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import SortedKeys, stable_argsort
 
@@ -416,14 +416,11 @@ def _pairwise(
     # sum of its faces' area normals by each row, a block of vertices at a time (their pairs
     # all at once would take up to _MAX_DEGREE times the corners); each corner is written by
     # one block
-    work = []
-    for d in np.unique(degree).tolist():
-        first = starts[degree == d]
-        step = max(1, _PAIR_BLOCK // (d * d))
-        work += [(d, first[at : at + step]) for at in range(0, len(first), step)]
+    work = square_blocks(degree, _PAIR_BLOCK)
 
     def blocks(lo: int, hi: int) -> None:
-        for d, first in work[lo:hi]:
+        for d, chosen in work[lo:hi]:
+            first = starts[chosen]
             at = first[:, None] + np.arange(d)  # (n, d): the vertices' corners, in corner order
             face = corner_face[at]
             u = np.take(unit, face, axis=0)  # (n, d, 3)

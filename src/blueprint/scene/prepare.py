@@ -20,6 +20,7 @@ from functools import partial
 import numpy as np
 
 from blueprint import parallel, settings
+from blueprint.columns import ranges, square_blocks
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, diagonal_of
 from blueprint.sorting import stable_argsort, unique_first
@@ -339,11 +340,7 @@ def _pairs_by_normal(
     rank = np.empty(n, np.int64)
     ends = np.empty(n, np.int64)
     distinct = np.empty(len(firsts), np.int64)
-    work = []
-    for d in np.unique(size[size <= _TABLE_DEGREE]).tolist():
-        chosen = np.flatnonzero(size == d)
-        step = max(1, _PAIR_BLOCK // (d * d))
-        work += [(d, chosen[at : at + step]) for at in range(0, len(chosen), step)]
+    work = square_blocks(size, _PAIR_BLOCK, _TABLE_DEGREE)
 
     def tables(lo: int, hi: int) -> None:
         for d, chosen in work[lo:hi]:
@@ -360,9 +357,8 @@ def _pairs_by_normal(
     parallel.run(tables, len(work), min_block=1)
     big = np.flatnonzero(size > _TABLE_DEGREE)
     if len(big):
-        sizes = size[big]
-        at = np.arange(int(sizes.sum())) + np.repeat(firsts[big] - (np.cumsum(sizes) - sizes), sizes)
-        group = np.repeat(np.arange(len(big)), sizes)
+        at = ranges(firsts[big], size[big])
+        group = np.repeat(np.arange(len(big)), size[big])
         order = np.lexsort((normal[at], group))  # stable: each pair's corners keep their order
         at, group = at[order], group[order]
         value = normal[at]
