@@ -1052,7 +1052,7 @@ def test_instances_beyond_the_memory_budget_are_refused_before_any_is_made(tmp_p
 def test_joined_instances_are_each_mesh_placed_by_its_transform(monkeypatch):
     """``_joined`` places the instances of a mesh a block at a time; the same arrays, to the
     bit, as placing them one by one in order."""
-    from blueprint.scene.formats import Instance
+    from blueprint.scene.formats import Instance, placed_of
 
     rng = np.random.default_rng(7)
     meshes = [(rng.normal(size=(n, 3)), rng.integers(0, n, size=(m, 3))) for n, m in ((4, 2), (9, 7), (3, 1))]
@@ -1074,7 +1074,7 @@ def test_joined_instances_are_each_mesh_placed_by_its_transform(monkeypatch):
         one_by_one.append((placed, i.faces + offset))
         offset += len(i.vertices)
     monkeypatch.setattr(loader, "_PLACED_ROWS", 20)  # blocks of two instances of the largest mesh
-    positions, faces, parts, names = loader._joined(instances, None, "scene")
+    positions, faces, parts, names = loader._joined(placed_of(instances, "scene"), None, "scene")
     assert np.array_equal(positions, np.concatenate([p for p, _ in one_by_one]))
     assert np.array_equal(faces, np.concatenate([f for _, f in one_by_one]))
     assert parts.tolist() == [k for k, i in enumerate(drawn) for _ in range(len(i.faces))]

@@ -5,7 +5,16 @@ import numpy as np
 import pytest
 
 from blueprint import parallel, settings
-from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm, square_blocks
+from blueprint.columns import (
+    column_max,
+    column_min,
+    column_ptp,
+    cross,
+    face_cross,
+    row_norm,
+    runs,
+    square_blocks,
+)
 from blueprint.sorting import SortedKeys, _bucket_order, sorted_with_order, stable_argsort, unique_first
 
 
@@ -86,6 +95,22 @@ def test_row_norm_equals_numpys(dtype, columns):
     got, expected = row_norm(values), np.linalg.norm(values, axis=1)
     assert got.dtype == expected.dtype
     np.testing.assert_array_equal(got, expected)
+
+
+def test_runs_hold_each_item_once_in_order_within_the_rows():
+    """Consecutive items in runs whose rows before their last item come to less than
+    ``most``: an item of more rows ends its run."""
+    counts = np.random.default_rng(4).integers(1, 30, 500)
+    counts[[7, 8, 200]] = 400
+    blocks = runs(counts, 100)
+    assert blocks[0][0] == 0 and blocks[-1][1] == len(counts)
+    assert all(a[1] == b[0] for a, b in zip(blocks[:-1], blocks[1:], strict=True))
+    for lo, hi in blocks:
+        assert hi > lo and counts[lo : hi - 1].sum() < 100
+        assert hi == len(counts) or counts[lo:hi].sum() >= 100
+    ends = [hi for _, hi in blocks]
+    assert 8 in ends and 9 in ends and 201 in ends and (8, 9) in blocks
+    assert runs(np.zeros(0, np.int64), 10) == []
 
 
 def test_square_blocks_hold_each_group_once_by_size():

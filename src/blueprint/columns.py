@@ -113,6 +113,19 @@ def square_blocks(sizes: np.ndarray, cells: int, most: int | None = None) -> lis
     return work
 
 
+def runs(counts: np.ndarray, most: int) -> list[tuple[int, int]]:
+    """Consecutive items of ``counts`` (N,) int (rows each, at least one) in runs of about
+    ``most`` rows: (first, past the last) a run, in order; a run holds at least one item, and
+    what it holds before its last item comes to less than ``most``."""
+    first = np.cumsum(counts) - counts
+    out, k = [], 0
+    while k < len(counts):
+        end = max(k + 1, int(np.searchsorted(first, first[k] + most)))
+        out.append((k, end))
+        k = end
+    return out
+
+
 def ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """The indices ``starts[k]`` to ``starts[k] + counts[k]`` of every ``k``, in order."""
     total = int(counts.sum())

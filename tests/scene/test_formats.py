@@ -22,7 +22,7 @@ from blueprint import parallel, settings
 from blueprint.api.batch import MODEL_SUFFIXES
 from blueprint.errors import InputError
 from blueprint.scene import loader
-from blueprint.scene.formats import FORMATS, Format, Formats, Instance
+from blueprint.scene.formats import FORMATS, Format, Formats, Instance, placed_of
 from blueprint.scene.formats.off import off_arrays
 from blueprint.scene.formats.ply import ply_arrays
 from blueprint.scene.formats.stl import read_stl
@@ -417,7 +417,7 @@ def test_meshes_placed_once_each_are_placed_as_one_by_one(monkeypatch):
         expected.append((placed, m.faces + offset))
         offset += len(m.vertices)
     monkeypatch.setattr(loader, "_PLACED_ROWS", 16)  # blocks of three to five meshes
-    positions, faces, parts, names = loader._joined(meshes, None, "scene")
+    positions, faces, parts, names = loader._joined(placed_of(meshes, "scene"), None, "scene")
     np.testing.assert_array_equal(positions, np.concatenate([p for p, _ in expected]))
     np.testing.assert_array_equal(faces, np.concatenate([f for _, f in expected]))
     assert parts.tolist() == [k for k, m in enumerate(meshes) for _ in range(len(m.faces))]

@@ -195,9 +195,10 @@ def test_many_nodes_placed_in_bulk_read_as_trimesh_reads_them(tmp_path):
         placed += [world[index] if len(mesh["primitives"]) == 1 else world[index] @ np.eye(4)] * len(
             mesh["primitives"]
         )
-    instances = read_glb(path.read_bytes())
-    for instance, transform in zip(instances, placed, strict=True):
-        np.testing.assert_array_equal(instance.transform, transform)
+    read = read_glb(path.read_bytes())
+    assert read.moved.all()
+    for transform, expected in zip(read.transform, placed, strict=True):
+        np.testing.assert_array_equal(transform, expected)
 
 
 def quaternion_matrix(q) -> np.ndarray:
@@ -308,6 +309,49 @@ def test_a_mesh_of_several_primitives_names_its_parts_after_the_mesh(tmp_path):
     path = glb.write(tmp_path / "primitives.glb")
     assert_same(path, names=False)
     assert ours(path)[3] == ["body", "body_1", "body[2]", "body_1[2]"]
+
+
+def test_many_meshes_read_in_blocks_as_trimesh_reads_them(tmp_path, monkeypatch):
+    """The accessors are read a block of them at a time, by one gather each: blocks of a few
+    rows over 60 meshes of one to three primitives (byte, short and int indices, none, spread
+    out rows), placed once, twice or four times, flattened and kept as instances, give
+    trimesh's arrays."""
+    from blueprint.scene.formats import gltf
+
+    rng = np.random.default_rng(11)
+    glb = Glb(scene=0)
+    meshes = []
+    for k in range(60):
+        primitives = []
+        for _ in range(k % 3 + 1):
+            count = int(rng.integers(3, 9))
+            vertices = rng.normal(size=(count, 3)).astype(np.float32)
+            faces = rng.integers(0, count, size=3 * int(rng.integers(1, 5)))
+            kind = (5121, 5123, 5125, None)[int(rng.integers(0, 4))]
+            if kind is None:  # its vertices three by three
+                vertices = vertices[: count - count % 3]
+                primitive = glb.primitive(vertices, None)
+            else:
+                primitive = glb.primitive(vertices, faces, kind)
+            if k % 5 == 0:
+                primitive["attributes"]["POSITION"] = glb.accessor(vertices, 5126, "VEC3", 20)
+            primitives.append(primitive)
+        meshes.append({"name": f"m{k % 40}", "primitives": primitives})
+    glb.doc["meshes"] = meshes
+    monkeypatch.setattr(gltf, "_BLOCK_ROWS", 7)
+    # 90 nodes: 30 meshes placed twice, 30 once, flattened
+    for count in (90, 240):
+        nodes = [{"name": f"n{k}", "mesh": k % 60, "translation": [float(k), 0.0, 0.0]} for k in range(count)]
+        glb.doc["nodes"] = nodes
+        glb.doc["scenes"] = [{"nodes": list(range(count))}]
+        path = glb.write(tmp_path / f"blocks-{count}.glb")
+        assert_same(path)
+    # 240: each mesh four times, kept as instances
+    kept = loader._joined(read_glb(path.read_bytes()), path.stem, str(path), instanced=True)[0]
+    scene = loader._load_scene(path, "glb")
+    theirs_kept = loader._flatten(scene, path.stem, str(path), instanced=True)[0]
+    for field in ("positions", "faces", "vertex_start", "face_start", "mesh", "transform", "part"):
+        np.testing.assert_array_equal(getattr(kept, field), getattr(theirs_kept, field))
 
 
 @pytest.mark.parametrize("name", [GEARBOX.name, *SHARED])

@@ -14,10 +14,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint import parallel, settings
-from blueprint.columns import column_cross
+from blueprint.columns import column_cross, ranges, runs
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.environment import PartGlobs, choose_parts
-from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh
+from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh, Placed, placed_of
 from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.model import Model
 from blueprint.scene.units import object_unit
@@ -91,7 +91,7 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
         parts = np.zeros(len(found.faces), np.int32)
         joined = (found.positions, found.faces, parts, [path.stem])
         return _loaded(joined, name, up, fmt, include, exclude, soup=found.soup)
-    if isinstance(found, list):
+    if isinstance(found, Placed):
         joined = _joined(found, path.stem, name, instanced=fmt.up != "guess")
         return _loaded(joined, name, up, fmt, include, exclude)
     fmt.check_header(path, info.st_size)
@@ -510,121 +510,68 @@ def _flatten(scene, stem: str | None, label: str = "the scene", instanced: bool 
         mesh = scene.geometry.get(geometry)
         arrays = (mesh.vertices, mesh.faces) if isinstance(mesh, trimesh.Trimesh) else (None, None)
         instances.append(Instance(str(node), str(geometry), *arrays, world[node]))
-    return _joined(instances, stem, label, instanced)
+    return _joined(placed_of(instances, label), stem, label, instanced)
 
 
-def _joined(instances: list[Instance], stem: str | None, label: str, instanced: bool = False):
-    """Concatenate mesh instances, or where ``instanced`` and the scene draws its meshes
-    several times over (``instances.worth_instancing``) keep them as instances: then
-    (``Instances``, None, None, names). A scene of one instance names its part ``stem`` (a
-    file's), or after its node where ``stem`` is None. More than ``INSTANCE_LIMIT`` instances
-    or more triangles than the memory budget holds (``headers.check_triangle_count``, by their
-    unique triangles where they are kept as instances) are refused naming ``label``, before any
-    is placed.
+def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = False):
+    """Join a scene's instances (``Placed``) into one mesh, or where ``instanced`` and the
+    scene draws its meshes several times over (``instances.worth_instancing``) keep them as
+    instances: then (``Instances``, None, None, names). A scene of one instance names its part
+    ``stem`` (a file's), or after its node where ``stem`` is None. More than
+    ``INSTANCE_LIMIT`` instances or more triangles than the memory budget holds
+    (``headers.check_triangle_count``, by their unique triangles where they are kept as
+    instances) are refused naming ``label``, before any is placed.
 
     The instances of one mesh are placed together, a block of them at a time (one matrix
     product a block), into arrays made once at their joined size: 10^5 instances of a box
     cost their triangles, not 10^5 arrays of each kind. Meshes placed once each (10^5 small
-    distinct parts) are placed a block of those of one vertex count at a time."""
-    if len(instances) > settings.INSTANCE_LIMIT:
-        raise InputError(
-            f"{label}: {len(instances)} mesh instances, over the limit of {settings.INSTANCE_LIMIT}"
-        )
-    drawn = [i for i in instances if i.faces is not None and len(i.faces) > 0]
-    face_counts = np.array([len(i.faces) for i in drawn], np.int64)
-    by_mesh: dict[tuple[int, int], list[int]] = {}
-    for k, instance in enumerate(drawn):
-        by_mesh.setdefault((id(instance.vertices), id(instance.faces)), []).append(k)
-    unique = sum(len(drawn[members[0]].faces) for members in by_mesh.values())
+    distinct parts) are placed a block of those of one vertex count at a time, and every
+    instance's faces by one gather a block of instances."""
+    if len(placed) > settings.INSTANCE_LIMIT:
+        limit = settings.INSTANCE_LIMIT
+        raise InputError(f"{label}: {len(placed)} mesh instances, over the limit of {limit}")
+    mesh_faces = np.diff(placed.face_start)
+    drawn = np.flatnonzero(mesh_faces[placed.mesh] > 0)
+    used, first_use = np.unique(placed.mesh[drawn], return_index=True)
+    used = used[np.argsort(first_use, kind="stable")]  # in order of first use
+    total, unique = int(mesh_faces[placed.mesh[drawn]].sum()), int(mesh_faces[used].sum())
     if instanced:
-        check_triangle_count(label, int(face_counts.sum()), len(drawn), unique)
+        check_triangle_count(label, total, len(drawn), unique)
     else:
-        check_triangle_count(label, int(face_counts.sum()))
-    if not drawn:
+        check_triangle_count(label, total)
+    if not len(drawn):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
-    single = len(instances) == 1 and stem is not None
+    single = len(placed) == 1 and stem is not None
     taken: set[str] = set()
     counts: dict[str, int] = {}
-    names = [stem if single else _part_name(i.node, i.geometry, taken, counts) for i in drawn]
+    node, geometry = placed.node, placed.geometry
+    names = [stem if single else _part_name(node[k], geometry[k], taken, counts) for k in drawn.tolist()]
     from blueprint.scene.instances import worth_instancing
 
-    if instanced and worth_instancing(int(face_counts.sum()), unique):
-        return _kept_instances(drawn, list(by_mesh.values()), label), None, None, names
-    vertex_counts = np.array([len(i.vertices) for i in drawn], np.int64)
-    vertex_start = np.cumsum(vertex_counts) - vertex_counts
-    face_start = np.cumsum(face_counts) - face_counts
-    positions = np.empty((int(vertex_counts.sum()), 3))
-    faces = np.empty((int(face_counts.sum()), 3), np.int64)
-    # the meshes placed once (many small distinct parts), by their vertex count
-    apart: dict[int, list[tuple[int, np.ndarray, np.ndarray]]] = {}
-    # NaN and infinite vertices are refused with their count once joined, not warned about here
-    with np.errstate(all="ignore"):
-        for members in by_mesh.values():
-            mesh = drawn[members[0]]
-            vertices, mesh_faces = _mesh_arrays(mesh, label)
-            if len(members) == 1:
-                apart.setdefault(len(vertices), []).append((members[0], vertices, mesh_faces))
-                continue
-            step = max(1, _PLACED_ROWS // max(len(vertices), len(mesh_faces)))
-            for first in range(0, len(members), step):
-                block = np.array(members[first : first + step])
-                _place(
-                    vertices,
-                    mesh_faces,
-                    [drawn[k].transform for k in block],
-                    block,
-                    vertex_start,
-                    face_start,
-                    positions,
-                    faces,
-                )
-        for count, meshes in apart.items():
-            for first in range(0, len(meshes), max(1, _PLACED_ROWS // max(count, 1))):
-                block = meshes[first : first + max(1, _PLACED_ROWS // max(count, 1))]
-                _place_apart(
-                    block,
-                    [drawn[k].transform for k, _, _ in block],
-                    vertex_start,
-                    face_start,
-                    positions,
-                    faces,
-                )
-    parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_counts)
-    return positions, faces, parts, names
+    if instanced and worth_instancing(total, unique):
+        return _kept_instances(placed, drawn, used, label), None, None, names
+    return (*_flattened(placed, drawn), names)
 
 
-def _mesh_arrays(mesh: Instance, label: str) -> tuple[np.ndarray, np.ndarray]:
-    """An instance's mesh: (V, 3) float64 vertices and (F, 3) int64 faces."""
-    vertices = np.asarray(mesh.vertices, dtype=np.float64)
-    if vertices.ndim != 2 or vertices.shape[1] != 3:
-        # a loader's reading of a broken file (trimesh's OBJ reader cuts rows short)
-        raise InputError(f"{label}: the vertices of mesh {mesh.geometry!r} are not x, y, z")
-    return vertices, np.asarray(mesh.faces, dtype=np.int64)
-
-
-def _kept_instances(drawn: list[Instance], by_mesh: list[list[int]], label: str) -> Instances:
-    """The instances ``drawn`` as unique meshes (``by_mesh``: the instances of each, in order
-    of first use) placed by their transforms, a part each."""
+def _kept_instances(placed: Placed, drawn: np.ndarray, used: np.ndarray, label: str) -> Instances:
+    """The instances ``drawn`` of ``placed`` as the meshes ``used`` (in order of first use)
+    placed by their transforms, a part each."""
     from blueprint.scene.instances import Instances
 
-    vertices, faces = [], []
-    mesh = np.empty(len(drawn), np.int32)
-    for m, users in enumerate(by_mesh):
-        mesh_vertices, mesh_faces = _mesh_arrays(drawn[users[0]], label)
-        if mesh_faces.min() < 0 or mesh_faces.max() >= len(mesh_vertices):
-            raise InputError(f"{label}: faces refer to vertices that do not exist")
-        vertices.append(mesh_vertices)
-        faces.append(mesh_faces.astype(np.int32))
-        mesh[users] = m
-    identity = np.eye(4)
-    transform = np.array([identity if i.transform is None else i.transform for i in drawn], np.float64)
+    vertex_count = np.diff(placed.vertex_start)[used]
+    face_count = np.diff(placed.face_start)[used]
+    faces = placed.faces[ranges(placed.face_start[used], face_count)]
+    if faces.min() < 0 or (faces.max(axis=1) >= np.repeat(vertex_count, face_count)).any():
+        raise InputError(f"{label}: faces refer to vertices that do not exist")
+    number = np.empty(len(placed.vertex_start) - 1, np.int32)
+    number[used] = np.arange(len(used), dtype=np.int32)
     return Instances(
-        np.concatenate(vertices),
-        np.concatenate(faces),
-        np.r_[0, np.cumsum([len(v) for v in vertices])].astype(np.int64),
-        np.r_[0, np.cumsum([len(f) for f in faces])].astype(np.int64),
-        mesh,
-        transform,
+        placed.vertices[ranges(placed.vertex_start[used], vertex_count)].astype(np.float64),
+        faces.astype(np.int32),
+        np.r_[0, np.cumsum(vertex_count)],
+        np.r_[0, np.cumsum(face_count)],
+        number[placed.mesh[drawn]],
+        placed.transform[drawn],
         np.arange(len(drawn), dtype=np.int32),
     )
 
@@ -633,40 +580,71 @@ def _kept_instances(drawn: list[Instance], by_mesh: list[list[int]], label: str)
 _PLACED_ROWS = 1 << 18
 
 
-def _place(vertices, mesh_faces, transforms, block, vertex_start, face_start, positions, faces) -> None:
-    """Place one mesh at the instances ``block`` (their numbers among the joined instances) by
-    their ``transforms`` (None: as it is) into the joined ``positions`` and ``faces``."""
-    rows = vertex_start[block][:, None] + np.arange(len(vertices))
-    moved = np.array([t is not None for t in transforms])
-    if moved.any():
-        stack = np.array([t for t in transforms if t is not None])
-        positions[rows[moved]] = (
-            np.matmul(vertices[None], stack[:, :3, :3].transpose(0, 2, 1)) + stack[:, None, :3, 3]
-        )
-    positions[rows[~moved]] = vertices
-    face_rows = face_start[block][:, None] + np.arange(len(mesh_faces))
-    faces[face_rows] = mesh_faces[None] + vertex_start[block][:, None, None]
+def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(V, 3) float64 positions, (F, 3) int64 faces and (F,) int32 parts of the instances
+    ``drawn`` of ``placed``, a part each, joined in their order."""
+    mesh = placed.mesh[drawn]
+    vertex_count = np.diff(placed.vertex_start)[mesh]
+    face_count = np.diff(placed.face_start)[mesh]
+    vertex_start = np.cumsum(vertex_count) - vertex_count
+    face_start = np.cumsum(face_count) - face_count
+    positions = np.empty((int(vertex_count.sum()), 3))
+    faces = np.empty((int(face_count.sum()), 3), np.int64)
+    uses = np.bincount(mesh, minlength=len(placed.vertex_start) - 1)[mesh]
+    # NaN and infinite vertices are refused with their count once joined, not warned about here
+    with np.errstate(all="ignore"):
+        # the meshes drawn several times, a block of one mesh's instances at a time
+        shared = np.flatnonzero(uses > 1)
+        shared = shared[np.argsort(mesh[shared], kind="stable")]
+        for lo, hi in _equal_runs(mesh[shared]):
+            members = shared[lo:hi]
+            m = mesh[members[0]]
+            vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]].astype(np.float64)
+            step = max(1, _PLACED_ROWS // max(len(vertices), int(face_count[members[0]])))
+            for first in range(0, len(members), step):
+                block = members[first : first + step]
+                rows = vertex_start[block][:, None] + np.arange(len(vertices))
+                _place(vertices[None], placed, drawn[block], rows, positions)
+        # the meshes placed once (many small distinct parts), by their vertex count
+        alone = np.flatnonzero(uses == 1)
+        alone = alone[np.argsort(vertex_count[alone], kind="stable")]
+        for lo, hi in _equal_runs(vertex_count[alone]):
+            count = int(vertex_count[alone[lo]])
+            step = max(1, _PLACED_ROWS // max(count, 1))
+            for first in range(lo, hi, step):
+                block = alone[first : min(first + step, hi)]
+                at = np.arange(count)
+                stacked = placed.vertices[placed.vertex_start[mesh[block]][:, None] + at].astype(np.float64)
+                _place(stacked, placed, drawn[block], vertex_start[block][:, None] + at, positions)
+    # every instance's faces, numbering the joined vertices
+    for lo, hi in runs(face_count, _PLACED_ROWS):
+        rows = ranges(placed.face_start[mesh[lo:hi]], face_count[lo:hi])
+        at = slice(face_start[lo], face_start[lo] + len(rows))
+        faces[at] = placed.faces[rows] + np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
+    parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_count)
+    return positions, faces, parts
 
 
-def _place_apart(meshes, transforms, vertex_start, face_start, positions, faces) -> None:
-    """Place meshes of one vertex count, each at its one instance: ``meshes`` (instance number,
-    vertices, faces), by their ``transforms`` (None: as they are), into the joined
-    ``positions`` and ``faces``. One matrix product for them all, which multiplies each mesh
-    as ``_place`` would alone (a product of each one's vertices and its transform)."""
-    block = np.array([k for k, _, _ in meshes])
-    stacked = np.stack([vertices for _, vertices, _ in meshes])
-    rows = vertex_start[block][:, None] + np.arange(stacked.shape[1])
-    moved = np.array([t is not None for t in transforms])
+def _equal_runs(values: np.ndarray) -> list[tuple[int, int]]:
+    """(first, past the last) of each run of equal ``values``, in order."""
+    if not len(values):
+        return []
+    bounds = np.flatnonzero(np.r_[True, values[1:] != values[:-1], True]).tolist()
+    return list(zip(bounds[:-1], bounds[1:], strict=True))
+
+
+def _place(vertices: np.ndarray, placed: Placed, instances: np.ndarray, rows: np.ndarray, positions) -> None:
+    """Place ``vertices`` ((1, V, 3) of one mesh, or (B, V, 3) of one mesh an instance) at the
+    ``instances`` (B,) of ``placed`` into the joined ``positions`` at their ``rows`` (B, V):
+    each mesh's vertices times its instance's transform, one matrix product for them all."""
+    moved = placed.moved[instances]
     if moved.any():
-        stack = np.array([t for t in transforms if t is not None])
-        positions[rows[moved]] = (
-            np.matmul(stacked[moved], stack[:, :3, :3].transpose(0, 2, 1)) + stack[:, None, :3, 3]
-        )
-    positions[rows[~moved]] = stacked[~moved]
-    counts = np.array([len(f) for _, _, f in meshes])
-    face_rows = np.repeat(face_start[block] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
-    offsets = np.repeat(vertex_start[block], counts)[:, None]
-    faces[face_rows] = np.concatenate([f for _, _, f in meshes]) + offsets
+        stack = placed.transform[instances[moved]]
+        chosen = vertices if len(vertices) == 1 else vertices[moved]
+        turned = np.matmul(chosen, stack[:, :3, :3].transpose(0, 2, 1))
+        positions[rows[moved]] = turned + stack[:, None, :3, 3]
+    if not moved.all():
+        positions[rows[~moved]] = vertices if len(vertices) == 1 else vertices[~moved]
 
 
 def _world_transforms(graph) -> dict:

@@ -13,9 +13,18 @@ first member's format giving the model its up axis and unit.
 
 from __future__ import annotations
 
-from blueprint.scene.formats.base import Converted, Format, Formats, Instance, Mesh, deferred
+from blueprint.scene.formats.base import (
+    Converted,
+    Format,
+    Formats,
+    Instance,
+    Mesh,
+    Placed,
+    deferred,
+    placed_of,
+)
 
-__all__ = ["FORMATS", "Converted", "Format", "Formats", "Instance", "Mesh", "deferred"]
+__all__ = ["FORMATS", "Converted", "Format", "Formats", "Instance", "Mesh", "Placed", "deferred", "placed_of"]
 
 _GLTF_METRES = "glTF is in metres by its specification"
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 
-__all__ = ["Converted", "Format", "Formats", "Instance", "Mesh", "deferred"]
+__all__ = ["Converted", "Format", "Formats", "Instance", "Mesh", "Placed", "deferred", "placed_of"]
 
 
 # The reader's records are plain classes with slots: built at every import of the registry and
@@ -56,6 +56,86 @@ class Instance:
         self.transform = transform
 
 
+class Placed:
+    """A scene read as columns: its meshes one after another, each once, and every instance
+    of them in the scene's order. A reader of a scene of 10^5 parts makes these arrays, not
+    10^5 records of arrays.
+
+    vertices : (V, 3) float32 or float64, every mesh's vertices, mesh after mesh
+    faces : (F, 3) int64, every mesh's faces, each numbering its own mesh's vertices from 0
+    vertex_start, face_start : (M + 1,) int64, where mesh ``m``'s vertices and faces start
+        (the last entry: their count); a mesh of no faces is not drawn
+    mesh : (N,) int64, the mesh each instance draws
+    transform : (N, 4, 4) float64, each instance's transform from its mesh to the scene
+    moved : (N,) bool, False where the instance is its mesh as it is (no transform: the
+        identity in ``transform``)
+    node, geometry : lists of N names, each instance's node (None: a frame with no name of
+        its own, named after its mesh) and mesh
+    """
+
+    __slots__ = (
+        "vertices",
+        "faces",
+        "vertex_start",
+        "face_start",
+        "mesh",
+        "transform",
+        "moved",
+        "node",
+        "geometry",
+    )
+
+    def __init__(self, vertices, faces, vertex_start, face_start, mesh, transform, moved, node, geometry):
+        self.vertices, self.faces = vertices, faces
+        self.vertex_start, self.face_start = vertex_start, face_start
+        self.mesh, self.transform, self.moved = mesh, transform, moved
+        self.node, self.geometry = node, geometry
+
+    def __len__(self) -> int:
+        return len(self.mesh)
+
+
+def placed_of(instances: list[Instance], label: str) -> Placed:
+    """``instances`` as columns (``Placed``): the instances that share their vertex and face
+    arrays share one mesh, kept once in the order of first use; an instance of no triangles
+    (not a triangle mesh, or an empty one) draws a mesh of none. Vertices that are not rows
+    of x, y and z (trimesh's OBJ reader cuts rows short on a broken file) are refused naming
+    ``label`` and the mesh."""
+    seen: dict[tuple[int, int] | None, int] = {}
+    vertices, faces = [], []
+    mesh = np.empty(len(instances), np.int64)
+    for k, instance in enumerate(instances):
+        drawn = instance.faces is not None and len(instance.faces) > 0
+        key = (id(instance.vertices), id(instance.faces)) if drawn else None
+        if key not in seen:
+            seen[key] = len(vertices)
+            if drawn:
+                rows = np.asarray(instance.vertices, dtype=np.float64)
+                if rows.ndim != 2 or rows.shape[1] != 3:
+                    raise InputError(f"{label}: the vertices of mesh {instance.geometry!r} are not x, y, z")
+                vertices.append(rows)
+                faces.append(np.asarray(instance.faces, dtype=np.int64).reshape(-1, 3))
+            else:
+                vertices.append(np.zeros((0, 3)))
+                faces.append(np.zeros((0, 3), np.int64))
+        mesh[k] = seen[key]
+    moved = np.array([i.transform is not None for i in instances], bool)
+    transform = np.broadcast_to(np.eye(4), (len(instances), 4, 4)).copy()
+    if moved.any():
+        transform[moved] = np.array([i.transform for i in instances if i.transform is not None], np.float64)
+    return Placed(
+        np.concatenate(vertices) if vertices else np.zeros((0, 3)),
+        np.concatenate(faces) if faces else np.zeros((0, 3), np.int64),
+        np.r_[0, np.cumsum([len(v) for v in vertices], dtype=np.int64)],
+        np.r_[0, np.cumsum([len(f) for f in faces], dtype=np.int64)],
+        mesh,
+        transform,
+        moved,
+        [i.node for i in instances],
+        [i.geometry for i in instances],
+    )
+
+
 class Converted:
     """A file turned into the bytes ``data`` of another format ``ext`` (STEP meshed into GLB),
     which that format's reader reads; ``failure`` is the message where trimesh cannot."""
@@ -66,9 +146,9 @@ class Converted:
         self.data, self.ext, self.failure = data, ext, failure
 
 
-#: What a reader gives back: one mesh, a scene's mesh instances in order, the file converted
-#: to another format, or None where trimesh reads the file.
-Read = Mesh | list[Instance] | Converted | None
+#: What a reader gives back: one mesh, a scene's meshes and their instances, the file
+#: converted to another format, or None where trimesh reads the file.
+Read = Mesh | Placed | Converted | None
 
 
 class _Deferred:
@@ -132,10 +212,10 @@ class Format:
         ``size`` bytes can hold, or a graph that is hostile; run before trimesh reads a file
         (``data``: its bytes where they are in memory, a member of an archive).
     read : callable, optional
-        ``read(path, size) -> Mesh | list[Instance] | Converted | None``: the fast reader of a
+        ``read(path, size) -> Mesh | Placed | Converted | None``: the fast reader of a
         file of ``size`` bytes; None leaves the file to trimesh.
     read_data : callable, optional
-        ``read_data(path, data) -> Mesh | list[Instance] | None``: the same of the bytes
+        ``read_data(path, data) -> Mesh | Placed | None``: the same of the bytes
         ``data`` in memory (a file another format's reader converted to this one).
     trimesh : bool
         Whether trimesh reads what ``read`` leaves (and the members of archives of the format).

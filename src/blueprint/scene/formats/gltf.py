@@ -28,17 +28,20 @@ from pathlib import Path
 import numpy as np
 
 from blueprint import settings
-from blueprint.scene.formats.base import Instance
+from blueprint.columns import ranges, runs
+from blueprint.scene.formats.base import Placed
 from blueprint.scene.headers import all_of, check_gltf_document, check_gltf_graph, gltf_document
 from blueprint.settings import read_file
 
-__all__ = ["Instance", "check_glb", "check_gltf", "read", "read_data", "read_glb"]
+__all__ = ["Placed", "check_glb", "check_gltf", "read", "read_data", "read_glb"]
 
 _GLB, _JSON, _BIN = 0x46546C67, 0x4E4F534A, 0x004E4942
 _TRIANGLES = 4
 _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 _INDEX_TYPES = (5121, 5123, 5125)
+# rows of accessors read by one gather (``_Accessors.rows``): its indices take 8 bytes a number
+_BLOCK_ROWS = 1 << 16
 # trimesh's name of the root frame, which a node of the same name is renamed around
 _BASE_FRAME = "world"
 # trimesh.transformations' threshold of a zero quaternion
@@ -49,41 +52,52 @@ class _Leave(Exception):
     """The file is not the common case: trimesh reads it."""
 
 
-def read_glb(data: bytes, doc: dict | None = None) -> list[Instance] | None:
-    """The mesh instances of a GLB file's scene in trimesh's order, or None to leave the file
-    to trimesh (see the module's docstring). ``doc``: its JSON document, where it has been
-    parsed already."""
+def read_glb(data: bytes, doc: dict | None = None) -> Placed | None:
+    """The meshes of a GLB file's scene and their instances in trimesh's order, or None to
+    leave the file to trimesh (see the module's docstring). ``doc``: its JSON document, where
+    it has been parsed already."""
     try:
         return _read(data, doc)
     except _Leave:
         return None
 
 
-def _read(data: bytes, doc: dict | None) -> list[Instance]:
+def _read(data: bytes, doc: dict | None) -> Placed:
     doc, binary = _chunks(data, doc)
-    access = _Accessors(doc, binary)
-    geometries = _meshes(doc, access)
+    meshes = _meshes(doc, _Accessors(doc, binary))
     nodes = _list(doc.get("nodes", []))
     names = _node_names(nodes)
     roots = _scene_roots(doc, len(nodes))
     visited, parents = _walk(doc, nodes, roots, _children(nodes, roots))
     world = _world(nodes, visited, parents)
-    instances = []
-    for k, index in enumerate(visited):
-        node = nodes[index]
-        if "mesh" not in node:
-            continue
-        mesh = node["mesh"]
-        if not _is_index(mesh, len(geometries)):
-            raise _Leave
-        primitives = geometries[mesh]
-        if len(primitives) == 1:
-            instances.append(Instance(names[index], *primitives[0], world[k]))
-            continue
-        # trimesh hangs the primitives under the node, each by an identity edge
-        below = world[k] @ np.eye(4)
-        instances += [Instance(None, *primitive, below) for primitive in primitives]
-    return instances
+    # the visited nodes that place a mesh, and each one's primitives: an instance each
+    have = [k for k, index in enumerate(visited) if "mesh" in nodes[index]]
+    mesh = _whole([nodes[visited[k]]["mesh"] for k in have])
+    first = meshes.first
+    if len(mesh) and mesh.max() >= len(first) - 1:
+        raise _Leave
+    owner = np.array(have, np.int64)
+    several = first[mesh + 1] - first[mesh]
+    row = np.repeat(np.arange(len(have)), several)
+    transform = world[owner[row]]
+    # trimesh hangs the primitives of a mesh of several under the node, each by an identity edge
+    below = several[row] > 1
+    transform[below] = transform[below] @ np.eye(4)
+    primitive = ranges(first[mesh], several)
+    node = [names[visited[k]] for k in owner[row].tolist()]
+    for k in np.flatnonzero(below).tolist():
+        node[k] = None
+    return Placed(
+        meshes.vertices,
+        meshes.faces,
+        meshes.vertex_start,
+        meshes.face_start,
+        primitive,
+        transform,
+        np.ones(len(primitive), bool),
+        node,
+        [meshes.names[p] for p in primitive.tolist()],
+    )
 
 
 def _walk(doc: dict, nodes: list, roots: list[int], children: list[list[int]]) -> tuple[list[int], list[int]]:
@@ -131,7 +145,7 @@ def _world(nodes: list, visited: list[int], parents: list[int]) -> np.ndarray:
     return world
 
 
-def _chunks(data: bytes, doc: dict | None = None) -> tuple[dict, bytes | None]:
+def _chunks(data: bytes, doc: dict | None = None) -> tuple[dict, memoryview | None]:
     """The JSON document (``doc`` where parsed already) and the BIN chunk of a GLB file laid
     out as the format asks."""
     if len(data) < 20:
@@ -146,7 +160,8 @@ def _chunks(data: bytes, doc: dict | None = None) -> tuple[dict, bytes | None]:
             raise _Leave from None
     if not isinstance(doc, dict):
         raise _Leave
-    rest = data[20 + json_length :]
+    # views, not copies: the binary chunk is most of the file
+    rest = memoryview(data)[20 + json_length :]
     binary = None
     if rest:
         if len(rest) < 8:
@@ -163,99 +178,159 @@ def _chunks(data: bytes, doc: dict | None = None) -> tuple[dict, bytes | None]:
 
 class _Accessors:
     """Every accessor of the document checked against the bytes it reads (as trimesh reads
-    them all, a broken one anywhere fails its load), the ones used read on demand."""
+    them all, a broken one anywhere fails its load), as columns: where each one's rows start in
+    the binary chunk and how far apart they lie, in bytes, how many it has, its component type
+    and its type."""
 
-    def __init__(self, doc: dict, binary: bytes | None) -> None:
-        buffers = [] if binary is None else [binary]
-        self.views = []
-        for view in _list(doc.get("bufferViews")):
-            if not isinstance(view, dict) or "extensions" in view:
-                raise _Leave
-            buffer, start, size = view.get("buffer"), view.get("byteOffset", 0), view.get("byteLength")
-            if not _is_index(buffer, len(buffers)) or not _count(start) or not _count(size):
-                raise _Leave
-            if start + size > len(buffers[buffer]):
-                raise _Leave
-            stride = view.get("byteStride")
-            if stride is not None and (not _count(stride) or stride == 0):
-                raise _Leave
-            self.views.append((memoryview(buffers[buffer])[start : start + size], stride))
-        self.accessors = _list(doc.get("accessors"))
-        for accessor in self.accessors:
-            self._check(accessor)
-
-    def _check(self, accessor) -> None:
-        if not isinstance(accessor, dict) or "sparse" in accessor:
+    def __init__(self, doc: dict, binary: memoryview | None) -> None:
+        self.binary = memoryview(b"") if binary is None else binary
+        views = _list(doc.get("bufferViews"))
+        if not all_of(views, dict) or any("extensions" in view for view in views):
             raise _Leave
-        count, start = accessor.get("count"), accessor.get("byteOffset", 0)
-        kind, shape = accessor.get("componentType"), accessor.get("type")
-        if not _count(count) or count == 0 or not _count(start) or kind not in _DTYPES or shape not in _WIDTH:
+        if views and (binary is None or set(_whole([view.get("buffer") for view in views]).tolist()) != {0}):
             raise _Leave
-        if not _is_index(accessor.get("bufferView"), len(self.views)):
+        size = len(self.binary)
+        view_start = _whole([view.get("byteOffset", 0) for view in views])
+        view_length = _whole([view.get("byteLength") for view in views])
+        strides = [view.get("byteStride") for view in views]
+        strided = [k for k, stride in enumerate(strides) if stride is not None]
+        view_stride = np.zeros(len(views), np.int64)
+        view_stride[strided] = _whole([strides[k] for k in strided])
+        if len(views) and ((view_start > size).any() or (view_length > size - view_start).any()):
             raise _Leave
-        view, stride = self.views[accessor["bufferView"]]
-        row = np.dtype(_DTYPES[kind]).itemsize * _WIDTH[shape]
-        if stride is not None and stride < row:
+        if (view_stride[strided] == 0).any():
+            raise _Leave
+        accessors = _list(doc.get("accessors"))
+        if not all_of(accessors, dict) or [a for a in accessors if "sparse" in a]:
+            raise _Leave
+        self.count = _whole([accessor.get("count") for accessor in accessors])
+        offset = _whole([accessor.get("byteOffset", 0) for accessor in accessors])
+        kind = [accessor.get("componentType") for accessor in accessors]
+        shape = [accessor.get("type") for accessor in accessors]
+        if not all_of(kind, int) or not set(kind) <= set(_DTYPES):
+            raise _Leave
+        if not all_of(shape, str) or not set(shape) <= set(_WIDTH):
+            raise _Leave
+        view = _whole([accessor.get("bufferView") for accessor in accessors])
+        if len(view) and view.max() >= len(views):
+            raise _Leave
+        if (self.count == 0).any():
+            raise _Leave
+        # the component types and the numbers a row: no two types a row reads as a drawing's
+        # share a width (VEC3, SCALAR)
+        self.kind = np.array(kind, np.int64)
+        self.width = np.array([_WIDTH[t] for t in shape], np.int64)
+        row = self.width * np.select([self.kind <= 5121, self.kind <= 5123], [1, 2], 4)
+        stride = view_stride[view]
+        if (stride[stride > 0] < row[stride > 0]).any():
             raise _Leave  # rows that overlap: spread out, they would take more than the file
-        end = start + (count * row if stride is None else (count - 1) * stride + row)
-        if end > len(view):
+        stride = np.where(stride > 0, stride, row)
+        # the rows end within the view, told by division: the counts may be any JSON number
+        room = view_length[view] - offset - row
+        if (room < 0).any() or (self.count - 1 > room // stride).any():
             raise _Leave
+        self.start = view_start[view] + offset
+        self.stride = stride
 
-    def read(self, index, kind: tuple[int, ...], shape: str) -> np.ndarray:
-        """Accessor ``index`` as a (count, width) array, its component type one of ``kind``
-        and its type ``shape`` (else trimesh reads the file)."""
-        if not _is_index(index, len(self.accessors)):
+    def rows(self, chosen: np.ndarray, dtype: str, width: int) -> np.ndarray:
+        """The rows of the accessors ``chosen``, all of component type ``dtype`` and ``width``
+        numbers a row, one accessor after another: (rows, width). Read in blocks of accessors
+        by one gather each, of the components as an array of their type: glTF aligns each
+        accessor and its stride to its components (a file that does not is left to
+        trimesh)."""
+        item = np.dtype(dtype).itemsize
+        start, stride, count = self.start[chosen], self.stride[chosen], self.count[chosen]
+        if (start % item).any() or (stride % item).any():
             raise _Leave
-        accessor = self.accessors[index]
-        if accessor["componentType"] not in kind or accessor["type"] != shape:
-            raise _Leave
-        view, stride = self.views[accessor["bufferView"]]
-        dtype, width, count = np.dtype(_DTYPES[accessor["componentType"]]), _WIDTH[shape], accessor["count"]
-        start = accessor.get("byteOffset", 0)
-        if stride is None:
-            return np.frombuffer(view, dtype, count * width, start).reshape(count, width)
-        rows = np.lib.stride_tricks.as_strided(
-            np.frombuffer(view, np.uint8, (count - 1) * stride + dtype.itemsize * width, start),
-            (count, dtype.itemsize * width),
-            (stride, 1),
-        )
-        return np.ascontiguousarray(rows).view(dtype)
+        start, stride = start // item, stride // item
+        typed = np.frombuffer(self.binary, dtype, len(self.binary) // item)
+        out = np.empty((int(count.sum()), width), dtype)
+        first = np.cumsum(count) - count
+        for lo, hi in runs(count, _BLOCK_ROWS):
+            rows = ranges(np.zeros(hi - lo, np.int64), count[lo:hi])
+            at = np.repeat(start[lo:hi], count[lo:hi]) + rows * np.repeat(stride[lo:hi], count[lo:hi])
+            out[first[lo] : first[lo] + len(rows)] = typed[at[:, None] + np.arange(width)]
+        return out
 
 
-def _meshes(doc: dict, access: _Accessors) -> list[list[tuple[str, np.ndarray, np.ndarray]]]:
-    """Each mesh's primitives as (name, vertices, faces), named as trimesh names them: the
-    mesh's name, made unique across every primitive of the file."""
+class _Meshes:
+    """The document's meshes' primitives as columns: ``vertices`` and ``faces`` of each
+    primitive one after another, where each one's start (``vertex_start``, ``face_start``,
+    M + 1), each one's name (``names``) and where each mesh's primitives start (``first``)."""
+
+    __slots__ = ("vertices", "faces", "vertex_start", "face_start", "names", "first")
+
+
+def _meshes(doc: dict, access: _Accessors) -> _Meshes:
+    """Each mesh's primitives (``_Meshes``), named as trimesh names them: the mesh's name,
+    made unique across every primitive of the file."""
+    meshes = _list(doc.get("meshes", []))
+    if not all_of(meshes, dict):
+        raise _Leave
+    lists = [mesh.get("primitives") for mesh in meshes]
+    if not all_of(lists, list) or not all(lists):
+        raise _Leave
+    named = [mesh.get("name", "GLTF") for mesh in meshes]
+    if not all_of(named, str):
+        raise _Leave
+    primitives = [p for primitives in lists for p in primitives]
+    if not all_of(primitives, dict) or [p for p in primitives if "extensions" in p]:
+        raise _Leave
+    if {p.get("mode", _TRIANGLES) for p in primitives} - {_TRIANGLES}:
+        raise _Leave
+    attributes = [p.get("attributes") for p in primitives]
+    if not all_of(attributes, dict):
+        raise _Leave
+    position = _accessor_indices([a.get("POSITION") for a in attributes], len(access.count))
+    indexed = [k for k, p in enumerate(primitives) if "indices" in p]
+    index = _accessor_indices([primitives[k]["indices"] for k in indexed], len(access.count))
+    if (access.kind[position] != 5126).any() or (access.width[position] != 3).any():
+        raise _Leave
+    if not np.isin(access.kind[index], _INDEX_TYPES).all() or (access.width[index] != 1).any():
+        raise _Leave
+    corners = access.count[position].copy()
+    corners[indexed] = access.count[index]
+    if (corners % 3).any():
+        raise _Leave
+    found = _Meshes()
+    found.vertices = access.rows(position, "<f4", 3)
+    found.vertex_start = np.r_[0, np.cumsum(access.count[position])]
+    found.face_start = np.r_[0, np.cumsum(corners // 3)]
+    flat = np.empty(int(corners.sum()), np.int64)
+    corner_start = 3 * found.face_start[:-1]
+    # a primitive without indices draws its vertices in order
+    plain = np.ones(len(primitives), bool)
+    plain[indexed] = False
+    plain = np.flatnonzero(plain)
+    flat[ranges(corner_start[plain], corners[plain])] = ranges(np.zeros(len(plain), np.int64), corners[plain])
+    kinds = access.kind[index]
+    for kind in _INDEX_TYPES:
+        chosen = np.flatnonzero(kinds == kind)
+        if len(chosen) == len(primitives):
+            flat[:] = access.rows(index, _DTYPES[kind], 1).reshape(-1)  # the common file
+        elif len(chosen):
+            at = np.asarray(indexed, np.int64)[chosen]
+            values = access.rows(index[chosen], _DTYPES[kind], 1).reshape(-1)
+            flat[ranges(corner_start[at], corners[at])] = values
+    found.faces = flat.reshape(-1, 3)
     taken: dict[str, None] = {}
     counts: dict = {}
-    meshes = []
-    for mesh in _list(doc.get("meshes", [])):
-        if not isinstance(mesh, dict):
-            raise _Leave
-        primitives = _list(mesh.get("primitives"))
-        name = mesh.get("name", "GLTF")
-        if not primitives or not isinstance(name, str):
-            raise _Leave
-        found = []
-        for primitive in primitives:
-            if not isinstance(primitive, dict) or "extensions" in primitive:
-                raise _Leave
-            if primitive.get("mode", _TRIANGLES) != _TRIANGLES:
-                raise _Leave
-            attributes = primitive.get("attributes")
-            if not isinstance(attributes, dict):
-                raise _Leave
-            vertices = access.read(attributes.get("POSITION"), (5126,), "VEC3")
-            if "indices" in primitive:
-                flat = access.read(primitive["indices"], _INDEX_TYPES, "SCALAR").reshape(-1)
-            else:
-                flat = np.arange(len(vertices), dtype=np.int64)
-            if len(flat) % 3:
-                raise _Leave
+    found.names = []
+    for name, primitives_of in zip(named, lists, strict=True):
+        for _ in primitives_of:
             unique = _unique_name(name, taken, counts)
             taken[unique] = None
-            found.append((unique, vertices, flat.reshape(-1, 3)))
-        meshes.append(found)
-    return meshes
+            found.names.append(unique)
+    found.first = np.r_[0, np.cumsum([len(p) for p in lists], dtype=np.int64)]
+    return found
+
+
+def _accessor_indices(values: list, count: int) -> np.ndarray:
+    """``values`` as int64 indices of accessors, each one of the ``count`` there are."""
+    indices = _whole(values)
+    if len(indices) and indices.max() >= count:
+        raise _Leave
+    return indices
 
 
 def _node_names(nodes: list) -> list[str]:
@@ -463,6 +538,19 @@ def _count(value) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= 0
 
 
+def _whole(values: list) -> np.ndarray:
+    """``values`` as int64, each a whole number of JSON (no bool) that an int64 holds."""
+    if not all_of(values, int):
+        raise _Leave
+    try:
+        whole = np.array(values, np.int64)
+    except OverflowError:
+        raise _Leave from None
+    if len(whole) and whole.min() < 0:
+        raise _Leave
+    return whole
+
+
 def _is_index(value, length: int) -> bool:
     return _count(value) and value < length
 
@@ -479,13 +567,13 @@ def _numbers(value, count: int) -> np.ndarray:
     return np.array(value, dtype=np.float64)
 
 
-def read(path: Path, size: int) -> list[Instance] | None:
-    """The mesh instances of a GLB file (``read_data``); None where trimesh reads it."""
+def read(path: Path, size: int) -> Placed | None:
+    """The meshes and instances of a GLB file (``read_data``); None where trimesh reads it."""
     return read_data(path, read_file(path, settings.MODEL_FILE_LIMIT, "a model file"))
 
 
-def read_data(path: Path, data: bytes) -> list[Instance] | None:
-    """The mesh instances of the GLB bytes ``data`` (``read_glb``) of the file ``path``, its
+def read_data(path: Path, data: bytes) -> Placed | None:
+    """The meshes and instances of the GLB bytes ``data`` (``read_glb``) of the file ``path``, its
     document and node graph checked first (``check_gltf_document``); None where trimesh
     reads them."""
     doc = gltf_document(path, "glb", len(data), data)
