@@ -32,6 +32,7 @@ from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.pipeline.layers import LayerCapture
 from blueprint.render.abuffer import (
     FIRST_ROOM,
+    MOST_LAYERS,
     NODE_BYTES,
     ABufferSource,
     projected_fragments,
@@ -130,6 +131,30 @@ def test_lists_too_long_to_sort_in_registers(renderer, abuffer):
     fast, plain = peel_both_ways(renderer, abuffer, model, camera=camera, size=(24, 24), max_layers=None)
     assert len(plain.depth) == 60
     assert not _differ(fast, plain, renderer, abuffer.slim).any()
+
+
+def test_lists_of_hundreds_are_merged_in_runs(renderer, abuffer):
+    """400 squares one behind the other: each list is sorted SORTED fragments at a time into
+    nine runs, and the runs merged (walked once a layer, a list this long ran past llvmpipe's
+    65 535 turns of a loop and lost every layer). The first ``MOST_LAYERS`` layers are the
+    nearest squares, in order, at every pixel."""
+    order = [int(v) for v in np.random.default_rng(5).permutation(400)]
+    model = planes(order)
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    abuffer(True)
+    layers = renderer.peel(model, camera, size=(8, 8), max_layers=None)
+    assert len(layers.depth) == MOST_LAYERS
+    inside = layers.depth[0] < 1.0
+    assert inside.sum() > 32
+    for k in range(MOST_LAYERS):
+        assert set(np.unique(layers.triangle[k][inside])) <= {2 * order.index(k), 2 * order.index(k) + 1}
+    assert (np.diff(layers.depth[:, inside], axis=0) > 0).all()
+    # the dispatches over every group and over the listed tiles give the same layers
+    mesh = renderer.mesh(model, 30.0)
+    plain, _ = _tiled_layers(renderer, mesh, camera, (8, 8), False)
+    tiled, _ = _tiled_layers(renderer, mesh, camera, (8, 8), True)
+    assert len(plain) == MOST_LAYERS
+    _assert_same_layers(tiled, plain)
 
 
 def test_too_little_room_is_drawn_again(renderer, abuffer):

@@ -43,6 +43,11 @@ SLIM_BYTES = 8
 # storage bindings of the slim fragments and of the mesh the resolve reads (abuffer.glsl,
 # abuffer_resolve.comp)
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
+# storage binding of the long lists' pixels, which the resolve's second dispatch sorts
+LONG_BINDING = 11
+# fragments a list the resolve sorts in registers (abuffer_resolve.comp); a longer one's pixel is
+# listed for the second dispatch, so a room of n fragments lists at most n / SORTED pixels
+SORTED = 48
 # room for this many fragments a pixel before a first frame has counted them
 FIRST_ROOM = 4
 # faces whose areas on the picture ``projected_fragments`` sums at a time
@@ -102,14 +107,16 @@ class _Prepared:
         # the resolve runs over the tiles with fragments alone (``_resolve``)
         # a slim fragment's face is found in the mesh's faces table (GpuMesh.bind_faces)
         resolving = {**capture, **mesh.placement_defines} if self.slim else capture
-        self.resolve = r.compute(
-            RESOLVE_COMP, {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW} if tiles else resolving
-        )
+        resolving = {**resolving, "LONG_BINDING": LONG_BINDING, "SORTED": SORTED}
+        if tiles:
+            resolving = {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW}
+        # the lists too long to sort in registers, in a dispatch of their own over their pixels
+        self.resolve, self.resolve_long = (r.compute(RESOLVE_COMP, {**resolving, "LONG": k}) for k in (0, 1))
         self.clear = r.compute(CLEAR_COMP)
         self.unpack = r.compute(
             UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
         )
-        for prog in (self.resolve, self.unpack):
+        for prog in (self.resolve, self.resolve_long, self.unpack):
             r.uniforms.set(prog, "u_back_bias", BACK_BIAS)
         # the compute rasteriser where the row lists fragments in compute (render.raster)
         chunked = mesh.chunk_faces is not None
@@ -153,6 +160,7 @@ class ABufferSource:
         self.model, self.defines, self.slim, self.node_bytes = p.model, p.defines, p.slim, p.node_bytes
         self.capture_defines, self.fetch_head, self.raster = p.capture_defines, p.fetch_head, p.raster
         self.geometry, self.resolve, self.clear, self.unpack = p.geometry, p.resolve, p.clear, p.unpack
+        self.resolve_long = p.resolve_long
         # the row's cap, or less where the frame's memory check left the lists less (a deep
         # model's fragments past it are peeled instead of allocated); the lists the pool held
         # at this size as it checked are taken again, not allocated, and the free memory it
@@ -166,9 +174,11 @@ class ABufferSource:
         uniforms = abuffer_uniforms(camera, depth_tolerance(camera, mesh.bounds))
         put = r.uniforms.set  # a stream's frames change only the camera's
         camera_names = ("u_view", "u_projection", "u_ortho")
+        resolving = ("u_depth_range", "u_peel_eps", *(camera_names if self.slim else ()))
         for prog, names in (
             (self.geometry, camera_names),
-            (self.resolve, ("u_depth_range", "u_peel_eps", *(camera_names if self.slim else ()))),
+            (self.resolve, resolving),
+            (self.resolve_long, resolving),
         ):
             for name in names:
                 put(prog, name, uniforms[name])
@@ -437,7 +447,8 @@ class ABufferSource:
             if self.slim:
                 self.mesh.bind_faces(VERTICES_BINDING, INDICES_BINDING)
                 target_uniform(self.r, self.resolve, size)
-            self._resolve(name, head, (cursor, layer_count), groups)
+                target_uniform(self.r, self.resolve_long, size)
+            self._resolve(name, head, (cursor, layer_count), groups, room)
             ctx.memory_barrier()
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
@@ -454,10 +465,21 @@ class ABufferSource:
                 return calls
             room = self._room(size)
 
-    def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int]) -> None:
-        """The resolve's dispatch: over every group, or with tiles over the tiles that hold a
-        fragment, found from the lists' heads read back, the ``cleared`` images (cursors and
-        counts) zeroed everywhere first."""
+    def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int], room: int) -> None:
+        """The resolve's dispatches over lists of ``room`` fragments: over every group, or with
+        tiles over the tiles that hold a fragment, found from the lists' heads read back, the
+        ``cleared`` images (cursors and counts) zeroed everywhere first; then over the pixels of
+        the lists too long to sort in registers, which the first lists, as many groups as it
+        counts (an indirect dispatch: none, and no wait for the count, where no list is
+        long)."""
+        long = self.r.pool.buffer(f"{name}.long", 4 * (3 + room // SORTED + 1))
+        long.write(np.array([0, 1, 1], np.uint32))
+        long.bind_to_storage_buffer(LONG_BINDING)
+        self._resolve_short(name, head, cleared, groups)
+        self.r.ctx.memory_barrier(self.r.ctx.SHADER_STORAGE_BARRIER_BIT | self.r.ctx.COMMAND_BARRIER_BIT)
+        self.resolve_long.run_indirect(long)
+
+    def _resolve_short(self, name: str, head, cleared: tuple, groups: tuple[int, int]) -> None:
         if not self.tiles:
             self.resolve.run(*groups)
             return

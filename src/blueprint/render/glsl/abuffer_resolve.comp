@@ -7,8 +7,18 @@
 // chained through AB_ORDER from u_cursor (node + 1; 0 ends the chain). With SLIM (abuffer.frag)
 // the fragments hold depth and face alone, and each one kept as a layer gets its whole node
 // here: the normal and part of its face at the pixel centre, as the geometry pass would have made.
+// A list too long to sort in registers is left to a second dispatch (LONG) over those pixels
+// alone: sorted SORTED fragments at a time into runs chained through AB_ORDER, each run merged
+// into the runs before it. A fragment costs some comparisons a run, where walking the list
+// once a layer cost one a layer, and a list of 255 layers ran past llvmpipe's 65 535 turns of
+// a loop, losing every layer; in a dispatch of its own, this code costs the short lists'
+// nothing (a software rasteriser runs a branch no lane takes).
 #extension GL_ARB_shading_language_packing : require
+#if LONG
+layout(local_size_x = 64) in;
+#else
 layout(local_size_x = 8, local_size_y = 8) in;
+#endif
 #include "depth.glsl"
 #include "kbuffer.glsl"
 #include "abuffer.glsl"
@@ -16,14 +26,17 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "instance.glsl"
 #endif
 
-// lists up to this long are sorted in registers; longer ones are walked once a layer, which
-// costs most where lists run long
-#define SORTED 48
+// lists up to SORTED fragments long (abuffer.py's) are sorted in registers
 
 layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 // each pixel's layers: whether a layer covers a pixel, for passes that walk only some chains
 layout(binding = 2, r32ui) writeonly uniform uimage2D u_layer_count;
+// the pixels of the long lists (x | y << 16), and the groups of the dispatch over them
+layout(std430, binding = LONG_BINDING) coherent buffer Long {
+    uint long_groups[3];
+    uint long_pixels[];
+};
 uniform float u_back_bias;
 uniform float u_peel_eps;
 
@@ -99,7 +112,49 @@ float next_after(uvec4 s) {
     return eye_depth(kb_depth(s, u_back_bias)) + u_peel_eps;
 }
 
-// the pixel's layers, chained from its cursor; how many
+// the sorted chains from nodes a and b (+ 1; a may be 0: none) merged into one through
+// AB_ORDER, in (depth, face) order; its first node + 1
+uint merged(uint a, uint b) {
+    if (a == 0u) {
+        return b;
+    }
+    uvec4 sa = fragment(a - 1u);
+    uvec4 sb = fragment(b - 1u);
+    uint ka = held_depth(sa);
+    uint kb = held_depth(sb);
+    uint head = 0u;
+    uint tail = 0u;
+    while (a != 0u && b != 0u) {
+        uint taken;
+        // each chain's next read before the last one taken is linked to this one
+        if (before(ka, sa.w, kb, sb.w)) {
+            taken = a;
+            a = AB_ORDER(a - 1u);
+            if (a != 0u) {
+                sa = fragment(a - 1u);
+                ka = held_depth(sa);
+            }
+        } else {
+            taken = b;
+            b = AB_ORDER(b - 1u);
+            if (b != 0u) {
+                sb = fragment(b - 1u);
+                kb = held_depth(sb);
+            }
+        }
+        if (tail == 0u) {
+            head = taken;
+        } else {
+            AB_SET_ORDER(tail - 1u, taken);
+        }
+        tail = taken;
+    }
+    AB_SET_ORDER(tail - 1u, a != 0u ? a : b);
+    return head;
+}
+
+// the pixel's layers, chained from its cursor; how many (a long list's: 0, and its pixel
+// listed for the second dispatch)
 uint chain(ivec2 p) {
     // The short list sorted by insertion of one word an entry, its held depth above its place
     // in the list (SORTED <= 256): what an insertion moves is that word alone, where llvmpipe
@@ -118,86 +173,94 @@ uint chain(ivec2 p) {
 #define FACE_AT(j) fragment(node[j] - 1u).w
 #define BITS_AT(j) fragment(node[j] - 1u).x
 #endif
-    uint n = 0u;
     uint at = imageLoad(u_head, p).x;
-    uint head = at;
-    while (at != 0u && n < SORTED) {
-        uvec4 s = fragment(at - 1u);
-        node[n] = at;
-#if AB_IMAGES
-        face[n] = s.w;
-        bits[n] = s.x;
+    uint n;
+#if LONG
+    uint sorted_chain = 0u;  // the runs merged so far
+    do {
 #endif
-        uint k = held_depth(s);
-        uint i = n;
-        while (i > 0u) {
-            uint other = sorted[i - 1u];
-            // (depth, face) order, as before(): a face looked up on equal depths alone
-            if ((other >> 8) < k || ((other >> 8) == k && FACE_AT(other & 0xffu) <= s.w)) {
-                break;
+        n = 0u;
+        while (at != 0u && n < SORTED) {
+            uvec4 s = fragment(at - 1u);
+            node[n] = at;
+#if AB_IMAGES
+            face[n] = s.w;
+            bits[n] = s.x;
+#endif
+            uint k = held_depth(s);
+            uint i = n;
+            while (i > 0u) {
+                uint other = sorted[i - 1u];
+                // (depth, face) order, as before(): a face looked up on equal depths alone
+                if ((other >> 8) < k || ((other >> 8) == k && FACE_AT(other & 0xffu) <= s.w)) {
+                    break;
+                }
+                sorted[i] = other;
+                --i;
             }
-            sorted[i] = other;
-            --i;
+            sorted[i] = (k << 8) | n;
+            ++n;
+            at = AB_LINK(at - 1u);
         }
-        sorted[i] = (k << 8) | n;
-        ++n;
-        at = AB_LINK(at - 1u);
-    }
+#if LONG
+        // a run: chained in order, merged into the runs before it
+        for (uint i = 0u; i + 1u < n; ++i) {
+            AB_SET_ORDER(node[sorted[i] & 0xffu] - 1u, node[sorted[i + 1u] & 0xffu]);
+        }
+        AB_SET_ORDER(node[sorted[n - 1u] & 0xffu] - 1u, 0u);
+        sorted_chain = merged(sorted_chain, node[sorted[0] & 0xffu]);
+    } while (at != 0u);
+#else
+        if (at != 0u) {
+            // a long list: left to the second dispatch
+            uint k = atomicAdd(long_lists, 1u);
+            long_pixels[k] = uint(p.x) | (uint(p.y) << 16);
+            if (k % 64u == 0u) {
+                atomicAdd(long_groups[0], 1u);
+            }
+            return 0u;
+        }
+#endif
     uint layers = 0u;
     uint first = 0u;
     uint last = 0u;
-    if (at == 0u) {
-        float behind = -1.0 / 0.0;
-        for (uint i = 0u; i < n; ++i) {
-            uint j = sorted[i] & 0xffu;
-            uvec4 s = uvec4(BITS_AT(j), 0u, 0u, 0u);
-            if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
-                continue;
-            }
-            keep(p, node[j] - 1u);
+    float behind = -1.0 / 0.0;
+#if LONG
+    // each layer the merged chain's next fragment lying behind the last
+    for (uint a = sorted_chain; a != 0u;) {
+        uvec4 s = fragment(a - 1u);
+        uint next = AB_ORDER(a - 1u);
+        if (layers == 0u || eye_depth(kb_raw(s)) > behind) {
+            keep(p, a - 1u);
             if (last == 0u) {
-                first = node[j];
+                first = a;
             } else {
-                AB_SET_ORDER(last - 1u, node[j]);
+                AB_SET_ORDER(last - 1u, a);
             }
-            last = node[j];
+            last = a;
             behind = next_after(s);
             ++layers;
         }
-    } else {
-        // a long list: each layer is the least (depth, face) of the fragments behind the last
-        atomicAdd(long_lists, 1u);
-        float behind = -1.0 / 0.0;
-        while (true) {
-            uint best = 0u;
-            uint best_key = 0xffffffffu;
-            uint best_face = 0xffffffffu;
-            for (uint a = head; a != 0u; a = AB_LINK(a - 1u)) {
-                uvec4 s = fragment(a - 1u);
-                if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
-                    continue;
-                }
-                uint k = held_depth(s);
-                if (best == 0u || before(k, s.w, best_key, best_face)) {
-                    best = a;
-                    best_key = k;
-                    best_face = s.w;
-                }
-            }
-            if (best == 0u) {
-                break;
-            }
-            if (last == 0u) {
-                first = best;
-            } else {
-                AB_SET_ORDER(last - 1u, best);
-            }
-            last = best;
-            keep(p, best - 1u);
-            behind = next_after(fragment(best - 1u));
-            ++layers;
-        }
+        a = next;
     }
+#else
+    for (uint i = 0u; i < n; ++i) {
+        uint j = sorted[i] & 0xffu;
+        uvec4 s = uvec4(BITS_AT(j), 0u, 0u, 0u);
+        if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
+            continue;
+        }
+        keep(p, node[j] - 1u);
+        if (last == 0u) {
+            first = node[j];
+        } else {
+            AB_SET_ORDER(last - 1u, node[j]);
+        }
+        last = node[j];
+        behind = next_after(s);
+        ++layers;
+    }
+#endif
     if (last != 0u) {
         AB_SET_ORDER(last - 1u, 0u);
     }
@@ -205,7 +268,21 @@ uint chain(ivec2 p) {
     return layers;
 }
 
-#if COUNTED_AFTER
+#if LONG
+// the long lists' pixels, one an invocation
+void main() {
+    uint k = gl_GlobalInvocationID.x;
+    if (k < long_lists) {
+        uint at = long_pixels[k];
+        ivec2 p = ivec2(int(at & 0xffffu), int(at >> 16));
+        uint layers = chain(p);
+        imageStore(u_layer_count, p, uvec4(layers));
+#if !COUNTED_AFTER
+        atomicAdd(pixels_with[min(layers, uint(MOST_LAYERS))], 1u);
+#endif
+    }
+}
+#elif COUNTED_AFTER
 // The counts are left to the caller, which reads u_layer_count back (a software rasteriser,
 // where that costs a copy): the group's histogram, its barriers and shared atomics, cost much
 // of the resolve there. There the groups run only over the tiles listed as holding a
