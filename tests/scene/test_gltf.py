@@ -396,6 +396,10 @@ def _left(glb: Glb, change: str) -> None:
         del doc["accessors"][0]["bufferView"]
     elif change in ("lines", "strips", "points"):
         primitive["mode"] = {"lines": 1, "strips": 5, "points": 0}[change]
+    elif change == "a mode that is a list":  # unhashable: the reader compares, never hashes
+        primitive["mode"] = [4]
+    elif change == "a component type that is a list":
+        glb.doc["accessors"][0]["componentType"] = [5126]
     elif change == "quantised positions":
         doc["accessors"][0]["componentType"] = 5123
     elif change == "float indices":
@@ -424,6 +428,8 @@ LEFT = [
     "lines",
     "strips",
     "points",
+    "a mode that is a list",
+    "a component type that is a list",
     "quantised positions",
     "float indices",
     "indices not in threes",

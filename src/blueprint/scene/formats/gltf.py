@@ -276,7 +276,7 @@ def _meshes(doc: dict, access: _Accessors) -> _Meshes:
     primitives = [p for primitives in lists for p in primitives]
     if not all_of(primitives, dict) or [p for p in primitives if "extensions" in p]:
         raise _Leave
-    if {p.get("mode", _TRIANGLES) for p in primitives} - {_TRIANGLES}:
+    if [p for p in primitives if p.get("mode", _TRIANGLES) != _TRIANGLES]:
         raise _Leave
     attributes = [p.get("attributes") for p in primitives]
     if not all_of(attributes, dict):
