@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from blueprint import parallel
+from blueprint.sorting import grouped
 
 __all__ = [
     "column_cross",
@@ -105,9 +106,10 @@ def square_blocks(sizes: np.ndarray, cells: int, most: int | None = None) -> lis
     """The groups of ``sizes`` (N,) int (of sizes up to ``most`` where given), those of one size
     d together in blocks of about ``cells`` d x d cells: (d, the groups' indices) a block, for
     work that compares a group's members pairwise as one table."""
+    kept = np.arange(len(sizes)) if most is None else np.flatnonzero(sizes <= most)
     work = []
-    for d in np.unique(sizes if most is None else sizes[sizes <= most]).tolist():
-        chosen = np.flatnonzero(sizes == d)
+    for d, which in grouped(sizes[kept]):
+        chosen = kept[which]
         step = max(1, cells // (d * d))
         work += [(d, chosen[at : at + step]) for at in range(0, len(chosen), step)]
     return work

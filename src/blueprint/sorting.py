@@ -17,7 +17,7 @@ import numpy as np
 
 from blueprint import parallel, settings
 
-__all__ = ["SortedKeys", "sorted_with_order", "stable_argsort", "unique_first"]
+__all__ = ["SortedKeys", "grouped", "sorted_with_order", "stable_argsort", "unique_first"]
 
 # Indices packed into keys at a time (``sorted_with_order``).
 _BLOCK = 1 << 20
@@ -255,3 +255,14 @@ def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     inverse = np.empty(len(key), np.int64)
     inverse[order] = np.cumsum(new) - 1
     return ordered[new], order[new], inverse
+
+
+def grouped(values: np.ndarray) -> list[tuple[int, np.ndarray]]:
+    """(value, the indices holding it, ascending) for every distinct value of ``values`` (N,)
+    int, by value."""
+    if len(values) == 0:
+        return []
+    order = stable_argsort(values)
+    ordered = values[order]
+    cuts = np.flatnonzero(np.r_[True, ordered[1:] != ordered[:-1], True]).tolist()
+    return [(int(ordered[lo]), order[lo:hi]) for lo, hi in zip(cuts[:-1], cuts[1:], strict=True)]

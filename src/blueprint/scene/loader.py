@@ -23,6 +23,7 @@ from blueprint.scene.model import Model
 from blueprint.scene.units import object_unit
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
+from blueprint.sorting import grouped
 
 if TYPE_CHECKING:
     from blueprint.scene.instances import Instances
@@ -595,10 +596,8 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
     with np.errstate(all="ignore"):
         # the meshes drawn several times, a block of one mesh's instances at a time
         shared = np.flatnonzero(uses > 1)
-        shared = shared[np.argsort(mesh[shared], kind="stable")]
-        for lo, hi in _equal_runs(mesh[shared]):
-            members = shared[lo:hi]
-            m = mesh[members[0]]
+        for m, which in grouped(mesh[shared]):
+            members = shared[which]
             vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]].astype(np.float64)
             step = max(1, _PLACED_ROWS // max(len(vertices), int(face_count[members[0]])))
             for first in range(0, len(members), step):
@@ -607,12 +606,11 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
                 _place(vertices[None], placed, drawn[block], rows, positions)
         # the meshes placed once (many small distinct parts), by their vertex count
         alone = np.flatnonzero(uses == 1)
-        alone = alone[np.argsort(vertex_count[alone], kind="stable")]
-        for lo, hi in _equal_runs(vertex_count[alone]):
-            count = int(vertex_count[alone[lo]])
+        for count, which in grouped(vertex_count[alone]):
+            members = alone[which]
             step = max(1, _PLACED_ROWS // max(count, 1))
-            for first in range(lo, hi, step):
-                block = alone[first : min(first + step, hi)]
+            for first in range(0, len(members), step):
+                block = members[first : first + step]
                 at = np.arange(count)
                 stacked = placed.vertices[placed.vertex_start[mesh[block]][:, None] + at].astype(np.float64)
                 _place(stacked, placed, drawn[block], vertex_start[block][:, None] + at, positions)
@@ -623,14 +621,6 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
         faces[at] = placed.faces[rows] + np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
     parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_count)
     return positions, faces, parts
-
-
-def _equal_runs(values: np.ndarray) -> list[tuple[int, int]]:
-    """(first, past the last) of each run of equal ``values``, in order."""
-    if not len(values):
-        return []
-    bounds = np.flatnonzero(np.r_[True, values[1:] != values[:-1], True]).tolist()
-    return list(zip(bounds[:-1], bounds[1:], strict=True))
 
 
 def _place(vertices: np.ndarray, placed: Placed, instances: np.ndarray, rows: np.ndarray, positions) -> None:

@@ -36,7 +36,7 @@ from blueprint.silhouette import Adjacency, build_adjacency, smooth_surface
 from blueprint.silhouette.contours import _EDGE_ON as _VERTEX_EDGE_ON
 from blueprint.silhouette.contours import _edge_keys
 from blueprint.silhouette.edges import _first_two_faces, _projected, near_clipped, sharp_edges
-from blueprint.sorting import stable_argsort
+from blueprint.sorting import grouped, stable_argsort
 
 from .cache import ModelCache
 from .linework import BORDER, CREASE, SILHOUETTE, SMOOTH
@@ -576,15 +576,6 @@ def instanced_face_planes(model: Model, view: np.ndarray) -> np.ndarray:
 # -- intersections ----------------------------------------------------------------------------------
 
 
-def _grouped(values: np.ndarray):
-    """(value, the indices holding it) for every value of ``values`` (N,) int."""
-    order = stable_argsort(values)
-    sorted_values = values[order]
-    cuts = np.flatnonzero(np.r_[True, sorted_values[1:] != sorted_values[:-1], True])
-    for start, stop in zip(cuts[:-1], cuts[1:], strict=True):
-        yield int(sorted_values[start]), order[start:stop]
-
-
 def _near_box(corners: np.ndarray, transforms: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """(R, F) bool: the triangles (F, 3, 3) of a mesh whose box, placed by each of ``transforms``
     (R, 4, 4), may meet the box ``lo``, ``hi`` (R, 3): the box moved into the mesh's frame
@@ -640,7 +631,7 @@ def _intersections(model: Model, eps: float, phases, renderer):
     other = np.r_[rj, ri]
     pair_part = np.r_[2 * np.arange(len(ri)), 2 * np.arange(len(ri)) + 1]
     tri, part, local = [], [], []
-    for m, sides in _grouped(inst.mesh[me]):
+    for m, sides in grouped(inst.mesh[me]):
         vertices, faces = inst.mesh_arrays(m)
         corners = vertices[faces]
         near = _near_box(corners, inst.transform[me[sides]], lo[other[sides]], hi[other[sides]])

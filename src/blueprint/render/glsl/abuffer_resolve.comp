@@ -112,6 +112,26 @@ float next_after(uvec4 s) {
     return eye_depth(kb_depth(s, u_back_bias)) + u_peel_eps;
 }
 
+// fragment s at node a (+ 1), the next in (depth, face) order, made the pixel's next layer where
+// it lies behind the last one: the layers so far chained from first to last (nodes + 1), how
+// many, and the eye depth the next must lie behind
+void add_layer(
+    ivec2 p, uint a, uvec4 s, inout uint first, inout uint last, inout uint layers, inout float behind
+) {
+    if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
+        return;
+    }
+    keep(p, a - 1u);
+    if (last == 0u) {
+        first = a;
+    } else {
+        AB_SET_ORDER(last - 1u, a);
+    }
+    last = a;
+    behind = next_after(s);
+    ++layers;
+}
+
 // the sorted chains from nodes a and b (+ 1; a may be 0: none) merged into one through
 // AB_ORDER, in (depth, face) order; its first node + 1
 uint merged(uint a, uint b) {
@@ -228,37 +248,15 @@ uint chain(ivec2 p) {
 #if LONG
     // each layer the merged chain's next fragment lying behind the last
     for (uint a = sorted_chain; a != 0u;) {
-        uvec4 s = fragment(a - 1u);
         uint next = AB_ORDER(a - 1u);
-        if (layers == 0u || eye_depth(kb_raw(s)) > behind) {
-            keep(p, a - 1u);
-            if (last == 0u) {
-                first = a;
-            } else {
-                AB_SET_ORDER(last - 1u, a);
-            }
-            last = a;
-            behind = next_after(s);
-            ++layers;
-        }
+        add_layer(p, a, fragment(a - 1u), first, last, layers, behind);
         a = next;
     }
 #else
     for (uint i = 0u; i < n; ++i) {
         uint j = sorted[i] & 0xffu;
-        uvec4 s = uvec4(BITS_AT(j), 0u, 0u, 0u);
-        if (layers > 0u && eye_depth(kb_raw(s)) <= behind) {
-            continue;
-        }
-        keep(p, node[j] - 1u);
-        if (last == 0u) {
-            first = node[j];
-        } else {
-            AB_SET_ORDER(last - 1u, node[j]);
-        }
-        last = node[j];
-        behind = next_after(s);
-        ++layers;
+        // the depth bits are all a layer's test reads
+        add_layer(p, node[j], uvec4(BITS_AT(j), 0u, 0u, 0u), first, last, layers, behind);
     }
 #endif
     if (last != 0u) {
