@@ -102,11 +102,7 @@ def crease_vertices(
     sharp_pair = parallel.flatnonzero(sharp_edge)
     del sharp_edge
     # the crease edges' lengths, from the first face of each
-    corner = edges.order(sharp_pair)
-    face, k = corner // 3, corner % 3
-    # the ends alone in float64, not every position
-    ends = np.asarray(positions)[np.stack([faces[face, k], faces[face, (k + 1) % 3]])].astype(np.float64)
-    length = np.linalg.norm(ends[1] - ends[0], axis=1)
+    length = _edge_lengths(positions, faces, edges.order(sharp_pair))
     crease = edges.keys(sharp_pair)
     # every other edge is a border or a non-manifold edge
     found = parallel.run(partial(_unpaired, paired), edges.length)
@@ -121,6 +117,25 @@ def crease_vertices(
     noise = noise_creases(crease, sharp, length, diagonal)
     sharp[crease[~noise].ravel()] = True
     return sharp
+
+
+def _edge_lengths(positions: np.ndarray, faces: np.ndarray, corner: np.ndarray) -> np.ndarray:
+    """(E,) float64: the lengths of the edges from each ``corner`` (of the faces, three a face)
+    to the next corner of its face, a block at a time: their ends alone in float64."""
+    corner_vertex = np.asarray(faces).reshape(-1)
+    positions = np.asarray(positions)
+    length = np.empty(len(corner))
+
+    def measured(lo: int, hi: int) -> None:
+        for start in range(lo, hi, _ROWS):
+            at = corner[start : min(start + _ROWS, hi)]
+            after = at - at % 3 + (at % 3 + 1) % 3
+            ends = np.take(positions, corner_vertex[after], axis=0).astype(np.float64)
+            ends -= np.take(positions, corner_vertex[at], axis=0)
+            length[start : start + len(at)] = row_norm(ends)
+
+    parallel.run(measured, len(corner))
+    return length
 
 
 def _edge_keys(welded: np.ndarray, vertices: int, out: np.ndarray, lo: int, hi: int) -> None:
@@ -309,17 +324,22 @@ def corner_normals(
     corners = result.reshape(-1, 3)
     parallel.run(partial(_taken, vertex_normals, vertex, corners), len(vertex))
     del vertex_normals
-    apart = np.concatenate(parallel.run(partial(_unshared, shared, vertex), len(vertex)))
-    corners[apart] = np.take(unit, apart // 3, axis=0)
-    paired = apart[degree[vertex[apart]] <= _MAX_DEGREE]
+    # the corners of the other vertices: their faces' own normals where the vertex has too
+    # many, else from their pairs
+    deep = ~shared & (degree > _MAX_DEGREE)
+    if deep.any():
+        flat = np.concatenate(parallel.run(partial(_corners_of, deep, vertex), len(vertex)))
+        corners[flat] = np.take(unit, flat // 3, axis=0)
+        del flat
+    paired = np.concatenate(parallel.run(partial(_corners_of, ~shared & ~deep, vertex), len(vertex)))
     if len(paired):
         _pairwise(paired, vertex[paired], area_normals, unit, sharp, crease_angle, corners)
     return result
 
 
-def _unshared(shared: np.ndarray, vertex: np.ndarray, lo: int, hi: int) -> np.ndarray:
-    """The corners from lo to hi whose ``vertex`` is not ``shared``, ascending."""
-    return np.flatnonzero(~shared[vertex[lo:hi]]) + lo
+def _corners_of(chosen: np.ndarray, vertex: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """The corners from lo to hi whose ``vertex`` is ``chosen``, ascending."""
+    return np.flatnonzero(chosen[vertex[lo:hi]]) + lo
 
 
 def _vertex_sums(
@@ -405,17 +425,17 @@ def _pairwise(
     """The normals of ``corners`` (all the corners of their vertices, ``vertex``) from every
     ordered pair of corners around a vertex: the other corner's face counts where it lies
     within the crease angle of this corner's face, or the vertex is on no crease, with the
-    sign of their cosine. Written into ``out`` (3F, 3) float32 where they are not zero."""
+    sign of their cosine; where that sum is zero, the corner's own face's. Written into ``out``
+    (3F, 3) float32."""
     order = stable_argsort(vertex)
     corner_face = corners[order] // 3
     sorted_vertex = vertex[order]
     starts = np.flatnonzero(np.r_[True, sorted_vertex[1:] != sorted_vertex[:-1]])
     degree = np.diff(np.r_[starts, len(order)])
     cos_crease = np.cos(np.radians(crease_angle)) - 1e-9
-    # the vertices of one degree d together: each a d x d table of its faces' cosines and the
-    # sum of its faces' area normals by each row, a block of vertices at a time (their pairs
-    # all at once would take up to _MAX_DEGREE times the corners); each corner is written by
-    # one block
+    # the vertices of one degree d together: each its faces' d x d cosines and the sum of its
+    # faces' area normals by each corner's, a block of vertices at a time (their pairs all at
+    # once would take up to _MAX_DEGREE times the corners); each corner is written by one block
     work = square_blocks(degree, _PAIR_BLOCK)
 
     def blocks(lo: int, hi: int) -> None:
@@ -423,14 +443,24 @@ def _pairwise(
             first = starts[chosen]
             at = first[:, None] + np.arange(d)  # (n, d): the vertices' corners, in corner order
             face = corner_face[at]
-            u = np.take(unit, face, axis=0)  # (n, d, 3)
-            cos = u[:, :, None, 0] * u[:, None, :, 0] + u[:, :, None, 1] * u[:, None, :, 1]
-            cos += u[:, :, None, 2] * u[:, None, :, 2]
-            weight = np.sign(cos)
-            weight[(np.abs(cos) < cos_crease) & sharp[sorted_vertex[first]][:, None, None]] = 0.0
-            summed = np.matmul(weight, np.take(area_normals, face, axis=0)).reshape(-1, 3)
+            # (d, 3, n): each corner's normals as rows, so that a corner's cosines and sum are
+            # operations over whole rows; a (n, d, d) table, reduced along its short rows, costs
+            # NumPy half as much again. The weights are -1, 0 or 1: each sum is exact but for
+            # the order of its additions, the faces' corner order
+            u, area = (np.take(v, face.T, axis=0).transpose(0, 2, 1).copy() for v in (unit, area_normals))
+            on_crease = sharp[sorted_vertex[first]]
+            summed = np.empty((d, 3, len(first)))
+            for i in range(d):
+                cos = u[i, 0] * u[:, 0] + u[i, 1] * u[:, 1]
+                cos += u[i, 2] * u[:, 2]
+                weight = np.sign(cos)
+                weight[(np.abs(cos) < cos_crease) & on_crease] = 0.0
+                np.sum(weight[:, None, :] * area, axis=0, out=summed[i])
+            summed = summed.transpose(2, 0, 1).reshape(-1, 3)
             norm = row_norm(summed)
             ok = norm > 0
-            out[corners[order[at.reshape(-1)[ok]]]] = (summed[ok] / norm[ok, None]).astype(np.float32)
+            summed /= np.where(ok, norm, 1.0)[:, None]
+            own = np.take(unit, face.reshape(-1), axis=0)  # each corner's own face's
+            out[corners[order[at.reshape(-1)]]] = np.where(ok[:, None], summed, own).astype(np.float32)
 
     parallel.run(blocks, len(work), min_block=1)
