@@ -509,6 +509,20 @@ def test_a_mesh_that_does_not_exist_is_refused(tmp_path):
     assert str(caught.value) == f"{path}: nodes[1].mesh refers to mesh 9, which does not exist"
 
 
+@pytest.mark.parametrize("index", [3, 5, 2**31 - 2, 2**32 - 1])
+def test_an_index_past_its_own_mesh_is_refused(tmp_path, index):
+    """An index past its mesh's vertices would name those of the mesh placed next to it, or,
+    joined into 32-bit faces, wrap into range: the file is refused, not drawn wrong."""
+    glb = Glb(scene=0, scenes=[{"nodes": [0, 1]}])
+    past = glb.primitive(faces=(0, 1, index))
+    glb.doc["meshes"] = [{"primitives": [glb.primitive()]}, {"primitives": [past]}]
+    glb.doc["nodes"] = [{"mesh": 0}, {"mesh": 1, "translation": [2, 0, 0]}]
+    path = glb.write(tmp_path / "past.glb")
+    with pytest.raises(InputError) as caught:
+        loader.load_model(path)
+    assert str(caught.value) == f"{path}: faces refer to vertices that do not exist"
+
+
 def test_a_million_deep_node_chain_is_refused(tmp_path):
     glb = _simple()
     depth = 10**6

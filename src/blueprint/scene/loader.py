@@ -582,15 +582,17 @@ _PLACED_ROWS = 1 << 18
 
 
 def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(V, 3) float64 positions, (F, 3) int64 faces and (F,) int32 parts of the instances
-    ``drawn`` of ``placed``, a part each, joined in their order."""
+    """(V, 3) float64 positions, (F, 3) faces (int32, as the model holds them, where the
+    vertices fit, else int64) and (F,) int32 parts of the instances ``drawn`` of ``placed``, a
+    part each, joined in their order."""
     mesh = placed.mesh[drawn]
     vertex_count = np.diff(placed.vertex_start)[mesh]
     face_count = np.diff(placed.face_start)[mesh]
     vertex_start = np.cumsum(vertex_count) - vertex_count
     face_start = np.cumsum(face_count) - face_count
     positions = np.empty((int(vertex_count.sum()), 3))
-    faces = np.empty((int(face_count.sum()), 3), np.int64)
+    index = np.int32 if len(positions) <= np.iinfo(np.int32).max else np.int64
+    faces = np.empty((int(face_count.sum()), 3), index)
     uses = np.bincount(mesh, minlength=len(placed.vertex_start) - 1)[mesh]
     # NaN and infinite vertices are refused with their count once joined, not warned about here
     with np.errstate(all="ignore"):
@@ -618,7 +620,14 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
     for lo, hi in runs(face_count, _PLACED_ROWS):
         rows = ranges(placed.face_start[mesh[lo:hi]], face_count[lo:hi])
         at = slice(face_start[lo], face_start[lo] + len(rows))
-        faces[at] = placed.faces[rows] + np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
+        local = placed.faces[rows]
+        # an index past its own mesh's vertices would name another part's (or, wrapped into
+        # int32, any vertex): -1, which the model's checks refuse
+        outside = local >= np.repeat(vertex_count[lo:hi], face_count[lo:hi])[:, None]
+        outside |= local < 0
+        local += np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
+        local[outside] = -1
+        faces[at] = local
     parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_count)
     return positions, faces, parts
 
