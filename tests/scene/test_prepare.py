@@ -118,8 +118,20 @@ def reference_normals(positions: np.ndarray, faces: np.ndarray, crease_angle: fl
     return out
 
 
+# The corners around vertices of one degree are compared as one table where they are few, and
+# a corner at a time where they are many: either way for every test of the answers.
+FORMS = {"by table": 1 << 60, "by rows": 0}
+
+
+@pytest.fixture(params=sorted(FORMS))
+def form(request, monkeypatch):
+    monkeypatch.setattr(normals, "_ROWS_FROM", FORMS[request.param])
+    monkeypatch.setattr(prepare, "_ROWS_FROM", FORMS[request.param])
+    return request.param
+
+
 @pytest.mark.parametrize("crease", [15.0, 30.0, 60.0])
-def test_corner_normals_equal_a_loop_over_every_corner(crease):
+def test_corner_normals_equal_a_loop_over_every_corner(crease, form):
     positions, faces, _ = mixed_mesh()
     np.testing.assert_allclose(
         normals.corner_normals(positions, faces, crease),
@@ -173,7 +185,7 @@ def reference_arrays(model: Model, crease: float) -> tuple[np.ndarray, np.ndarra
 @pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("crease", [15.0, 30.0])
 @pytest.mark.parametrize("shape", ["mixed", "indexed-box", "soup"])
-def test_gpu_arrays_equal_unique_rows(shape, crease, threads, monkeypatch):
+def test_gpu_arrays_equal_unique_rows(shape, crease, threads, form, monkeypatch):
     # blocks of a few rows, so that these small meshes are split over the threads
     monkeypatch.setattr(settings, "THREADS", threads)
     monkeypatch.setattr(parallel, "MIN_BLOCK", 8)
@@ -201,7 +213,7 @@ def test_gpu_arrays_equal_unique_rows(shape, crease, threads, monkeypatch):
 
 
 @pytest.mark.parametrize("threads", [1, 3])
-def test_split_vertices_number_the_pairs_of_vertex_and_normal(threads, monkeypatch):
+def test_split_vertices_number_the_pairs_of_vertex_and_normal(threads, form, monkeypatch):
     """``_split_vertices`` against the distinct (key, quantized normal) pairs in order, each
     with its last corner: keys of a few corners (compared pairwise) and of more than
     ``_TABLE_DEGREE`` (sorted), normals drawn from a few, some keys of one normal alone."""

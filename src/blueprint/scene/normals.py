@@ -21,6 +21,9 @@ _CONE = 44.0
 _ROWS = 1 << 16
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
+# Corners of a block (vertices times their degree) from which their sums are made a corner at
+# a time (``_sums_by_rows``), not as one table: each step is a few calls.
+_ROWS_FROM = 1024
 # A run of crease edges touching no border is a scan's noise while it has fewer edges than this
 # and is shorter than ``_RUN_REL`` of the model's diagonal (``noise_creases``): the creases of
 # made things run on, and where they are short the mesh is coarse, so they have few edges yet
@@ -366,6 +369,39 @@ def _vertex_sums(
             summed[:, axis] = total
 
 
+def _sums_by_table(
+    face: np.ndarray, unit: np.ndarray, area: np.ndarray, on_crease: np.ndarray, cos_crease: float
+) -> np.ndarray:
+    """(n * d, 3): for the corners (n, d) of n vertices of degree d on ``face``, the sum of the
+    ``area`` normals of the faces around each corner's vertex that count for it (``_pairwise``),
+    as a (n, d, d) table of the weights and one product: few calls, for few vertices."""
+    u = np.take(unit, face, axis=0)  # (n, d, 3)
+    cos = u[:, :, None, 0] * u[:, None, :, 0] + u[:, :, None, 1] * u[:, None, :, 1]
+    cos += u[:, :, None, 2] * u[:, None, :, 2]
+    weight = np.sign(cos)
+    weight[(np.abs(cos) < cos_crease) & on_crease[:, None, None]] = 0.0
+    return np.matmul(weight, np.take(area, face, axis=0)).reshape(-1, 3)
+
+
+def _sums_by_rows(
+    face: np.ndarray, unit: np.ndarray, area: np.ndarray, on_crease: np.ndarray, cos_crease: float
+) -> np.ndarray:
+    """``_sums_by_table``'s sums, the same to the bit, from each corner's normals as rows (d, 3,
+    n), a corner at a time: over many vertices the table's reductions along its short rows
+    cost NumPy half as much again. The weights are -1, 0 or 1, so each sum is exact but for the
+    order of its additions, the faces' corner order, as the product's."""
+    u, area = (np.take(v, face.T, axis=0).transpose(0, 2, 1).copy() for v in (unit, area))
+    d = len(u)
+    summed = np.empty((d, 3, face.shape[0]))
+    for i in range(d):
+        cos = u[i, 0] * u[:, 0] + u[i, 1] * u[:, 1]
+        cos += u[i, 2] * u[:, 2]
+        weight = np.sign(cos)
+        weight[(np.abs(cos) < cos_crease) & on_crease] = 0.0
+        np.sum(weight[:, None, :] * area, axis=0, out=summed[i])
+    return summed.transpose(2, 0, 1).reshape(-1, 3)
+
+
 def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: ``rows[lo:hi]`` (N, 3) over their lengths (zero rows stay zero)."""
     for start in range(lo, hi, _ROWS):
@@ -443,20 +479,8 @@ def _pairwise(
             first = starts[chosen]
             at = first[:, None] + np.arange(d)  # (n, d): the vertices' corners, in corner order
             face = corner_face[at]
-            # (d, 3, n): each corner's normals as rows, so that a corner's cosines and sum are
-            # operations over whole rows; a (n, d, d) table, reduced along its short rows, costs
-            # NumPy half as much again. The weights are -1, 0 or 1: each sum is exact but for
-            # the order of its additions, the faces' corner order
-            u, area = (np.take(v, face.T, axis=0).transpose(0, 2, 1).copy() for v in (unit, area_normals))
-            on_crease = sharp[sorted_vertex[first]]
-            summed = np.empty((d, 3, len(first)))
-            for i in range(d):
-                cos = u[i, 0] * u[:, 0] + u[i, 1] * u[:, 1]
-                cos += u[i, 2] * u[:, 2]
-                weight = np.sign(cos)
-                weight[(np.abs(cos) < cos_crease) & on_crease] = 0.0
-                np.sum(weight[:, None, :] * area, axis=0, out=summed[i])
-            summed = summed.transpose(2, 0, 1).reshape(-1, 3)
+            summing = _sums_by_rows if len(first) * d >= _ROWS_FROM else _sums_by_table
+            summed = summing(face, unit, area_normals, sharp[sorted_vertex[first]], cos_crease)
             norm = row_norm(summed)
             ok = norm > 0
             summed /= np.where(ok, norm, 1.0)[:, None]

@@ -40,6 +40,9 @@ _TABLE_PER_KEY = 4
 # compared at a time.
 _TABLE_DEGREE = 64
 _PAIR_BLOCK = 1 << 18
+# Corners of a block (keys times their corners) from which they are compared a corner at a
+# time (``_compared_by_rows``), not as one table: each step is a few calls.
+_ROWS_FROM = 1024
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
@@ -345,23 +348,11 @@ def _pairs_by_normal(
     def tables(lo: int, hi: int) -> None:
         for d, chosen in work[lo:hi]:
             at = firsts[chosen][:, None] + np.arange(d)
-            # (d, n): each corner's normals as a row, compared with the others' a row at a time;
-            # a (n, d, d) table reduced along its short rows costs NumPy some three times as
-            # much. Each corner's normal is its key's first of that normal or not; the last
-            # corner of it; the normals less than it
-            value = np.ascontiguousarray(normal[at].T)
-            first = np.empty((d, len(chosen)), bool)
-            last = np.empty((d, len(chosen)), np.int64)
-            for i in range(d):
-                same = value == value[i]
-                first[i] = ~same[:i].any(axis=0)
-                last[i] = d - 1 - np.argmax(same[::-1], axis=0)
-            less = np.empty((d, len(chosen)), np.int64)
-            for i in range(d):
-                np.sum((value < value[i]) & first, axis=0, out=less[i])
-            rank[at] = less.T
-            ends[at] = np.take_along_axis(corners[at], last.T, axis=1)
-            distinct[chosen] = first.sum(axis=0)
+            comparing = _compared_by_rows if len(chosen) * d >= _ROWS_FROM else _compared_by_table
+            first, last, less = comparing(normal[at])
+            rank[at] = less
+            ends[at] = np.take_along_axis(corners[at], last, axis=1)
+            distinct[chosen] = first.sum(axis=1)
 
     parallel.run(tables, len(work), min_block=1)
     big = np.flatnonzero(size > _TABLE_DEGREE)
@@ -379,6 +370,36 @@ def _pairs_by_normal(
         ends[at] = corners[at[run_end]][pair]
         distinct[big] = np.add.reduceat(new.astype(np.int64), np.flatnonzero(new_group))
     return rank, ends, distinct, firsts
+
+
+def _compared_by_table(value: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Of the normal keys ``value`` (n, d) of n keys' d corners each, (n, d) each: whether a
+    corner's normal is its key's first of that normal; the last corner of it; how many of the
+    key's normals are less than it. As one (n, d, d) table: few calls, for few keys."""
+    d = value.shape[1]
+    same = value[:, :, None] == value[:, None, :]
+    first = ~(same & np.tri(d, d, -1, bool)).any(axis=2)
+    less = ((value[:, None, :] < value[:, :, None]) & first[:, None, :]).sum(axis=2)
+    last = d - 1 - np.argmax(same[:, :, ::-1], axis=2)
+    return first, last, less
+
+
+def _compared_by_rows(value: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``_compared_by_table``'s answers from each corner's normals as a row (d, n), compared with
+    the others' a corner at a time: over many keys the table's reductions along its short rows
+    cost NumPy some three times as much."""
+    d, n = value.shape[1], value.shape[0]
+    value = np.ascontiguousarray(value.T)
+    first = np.empty((d, n), bool)
+    last = np.empty((d, n), np.int64)
+    for i in range(d):
+        same = value == value[i]
+        first[i] = ~same[:i].any(axis=0)
+        last[i] = d - 1 - np.argmax(same[::-1], axis=0)
+    less = np.empty((d, n), np.int64)
+    for i in range(d):
+        np.sum((value < value[i]) & first, axis=0, out=less[i])
+    return first.T, last.T, less.T
 
 
 def _dense(key: np.ndarray) -> np.ndarray:
