@@ -186,7 +186,10 @@ def connected_components_of(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> 
                 break
             label = jumped
         if np.array_equal(label, before):
-            return np.unique(label, return_inverse=True)[1].reshape(-1)
+            # the roots numbered in order by a table over the vertices, not a sort
+            root = np.zeros(len(label), bool)
+            root[label] = True
+            return (np.cumsum(root, dtype=np.int64) - 1)[label]
 
 
 def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np.ndarray]:
