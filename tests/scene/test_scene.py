@@ -533,6 +533,37 @@ def test_degenerate_faces_do_not_depend_on_units(scale):
     assert not m.degenerate_faces().any()
 
 
+@pytest.mark.parametrize("threads", [1, 3])
+def test_one_pass_over_the_faces_measures_what_the_checks_read(threads, monkeypatch):
+    """``measure_faces`` (blocks of faces over the threads) against each measure made apart: the
+    degenerate faces, each face's lowest and highest corner, and coincidence keys that copies
+    of a triangle share (whatever corner they start at) and no other face does."""
+    from blueprint import settings
+    from blueprint.scene import model as model_module
+
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(model_module, "_FACES", 7)
+    rng = np.random.default_rng(3)
+    positions = rng.normal(size=(60, 3)).astype(np.float32)
+    faces = rng.integers(0, 60, (50, 3))
+    faces[:4] = faces[4]  # copies of one triangle, one turned to start at another corner
+    faces[3] = np.roll(faces[4], 1)
+    faces[10, 2] = faces[10, 0]  # a repeated vertex
+    m = Model.from_arrays(positions, faces)
+    keys = m.measure_faces(keys=True, extremes=True)
+    corners = positions[faces].astype(np.float64)
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
+    np.testing.assert_array_equal(m.degenerate_faces(), repeated | ((cross * cross).sum(axis=1) == 0))
+    low, high = m.face_extremes()
+    np.testing.assert_array_equal(low, positions[faces].min(axis=1))
+    np.testing.assert_array_equal(high, positions[faces].max(axis=1))
+    np.testing.assert_allclose(keys[:5], keys[4], rtol=1e-12)
+    assert len(np.unique(keys[5:])) == 45 and not np.isin(keys[5:], keys[:5]).any()
+    # the extremes are given once, then made anew where asked again
+    np.testing.assert_array_equal(m.face_extremes()[0], low)
+
+
 # -- styles ---------------------------------------------------------------------------------------
 
 

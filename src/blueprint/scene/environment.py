@@ -39,11 +39,9 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Iterable
-from functools import partial
 
 import numpy as np
 
-from blueprint import parallel
 from blueprint.columns import face_cross
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
@@ -71,8 +69,6 @@ _TRIES = 4
 _ROUNDS = 4
 # Names a warning lists before it counts the rest.
 _NAMED = 10
-# Faces whose extremes are found at a time (``_face_extremes``).
-_BLOCK = 1 << 16
 
 PartGlobs = str | Iterable[str | int] | None
 
@@ -82,11 +78,7 @@ def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     part has any, and (P + 1,) where each part's faces start among the faces ordered by part
     (``_part_faces``): per part, a pass over every face would take minutes for 10^5 instances."""
     count = len(model.part_names)
-    # every face's low and high corner, in the positions' own type (the extremes of float32
-    # values are the float32 values of the float64 extremes)
-    tri_lo = np.empty((len(model.faces), 3), model.positions.dtype)
-    tri_hi = np.empty_like(tri_lo)
-    parallel.run(partial(_face_extremes, model.positions, model.faces, tri_lo, tri_hi), len(model.faces))
+    tri_lo, tri_hi = model.face_extremes()
     order = _faces_by_part(model)
     part = model.face_part
     if order is not None:
@@ -99,22 +91,6 @@ def _bounds_by_part(model: Model) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         lo[has] = np.minimum.reduceat(tri_lo, starts[:-1][has], axis=0)
         hi[has] = np.maximum.reduceat(tri_hi, starts[:-1][has], axis=0)
     return lo, hi, has, starts
-
-
-def _face_extremes(
-    positions: np.ndarray, faces: np.ndarray, lo: np.ndarray, hi: np.ndarray, first: int, last: int
-) -> None:
-    """``lo[first:last]`` and ``hi[first:last]``: the lowest and highest corner of faces
-    ``first`` to ``last``, a block of faces and a coordinate at a time: each block's corners
-    indexed once, its coordinates gathered while they are at hand."""
-    columns = [positions[:, k] for k in range(3)]
-    for start in range(first, last, _BLOCK):
-        stop = min(start + _BLOCK, last)
-        corner = [faces[start:stop, j].astype(np.intp) for j in range(3)]
-        for k, column in enumerate(columns):
-            a, b, c = (column[at] for at in corner)
-            np.minimum(np.minimum(a, b), c, out=lo[start:stop, k])
-            np.maximum(np.maximum(a, b), c, out=hi[start:stop, k])
 
 
 def _faces_by_part(model: Model) -> np.ndarray | None:

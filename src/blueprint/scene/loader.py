@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint import parallel, settings
-from blueprint.columns import column_cross, ranges, runs
+from blueprint.columns import ranges, runs
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh, Placed, placed_of
@@ -264,18 +264,21 @@ def _checked(
         *unit,
         soup=soup,
     )
-    # the checks read the faces' corners a block at a time or a coordinate at a time: all of
-    # them at once in float64 would take 72 bytes a face
+    # one pass over the faces' corners for every check that reads them: the environment's
+    # (only where it is looked for) reads their extremes
+    copies = len(model.faces) > settings.COINCIDENT_LIMIT
+    keys = model.measure_faces(keys=copies, extremes=include is None and len(model.part_names) > 1)
     degenerate = model.degenerate_faces()
     if degenerate.all():
         raise InputError(f"{name}: all {len(faces)} faces are degenerate (zero area)")
-    _check_coincident(model, name)
+    if copies:
+        _check_coincident(keys, name)
     if degenerate.any():
         log.warning("%s: dropped %d degenerate faces", name, int(degenerate.sum()))
     return choose_parts(model, include, exclude)
 
 
-# Faces whose corners the coincidence check reads at a time.
+# Keys the coincidence check hashes at a time.
 _BLOCK = 1 << 16
 
 
@@ -321,15 +324,12 @@ def _checked_instances(
     return choose_instanced_parts(model, include, exclude)
 
 
-def _check_coincident(model: Model, name: str) -> None:
+def _check_coincident(key: np.ndarray, name: str) -> None:
     """Refuse more than ``COINCIDENT_LIMIT`` copies of one triangle: each copy is a layer of
     its own to the peel, every layer draws them all, so 10^6 copies would take hours to draw
-    and show one triangle. Copies are found by centroid and area, hashed to one number."""
+    and show one triangle. Copies share their faces' coincidence ``key``
+    (``Model.measure_faces``)."""
     limit = settings.COINCIDENT_LIMIT
-    if len(model.faces) <= limit:
-        return
-    key = np.empty(len(model.faces))
-    parallel.run(functools.partial(_coincidence_keys, model, key), len(key), min_block=_BLOCK)
     if _bucketed_most(key) <= limit:
         return
     _, counts = np.unique(key, return_counts=True)
@@ -339,26 +339,6 @@ def _check_coincident(model: Model, name: str) -> None:
             f"{name}: {most} faces lie on one another (one triangle over and over), more than the "
             f"{limit} layers a drawing can peel"
         )
-
-
-def _coincidence_keys(model: Model, out: np.ndarray, lo: int, hi: int) -> None:
-    """``out[lo:hi]``: the key ``_check_coincident`` finds copies of a face by, of faces ``lo``
-    to ``hi``, a block of faces and a coordinate at a time: the sums and differences of
-    (F, 3, 3) corners would take 72 bytes a face."""
-    weights = np.array([1.0, np.pi, np.e])
-    columns = [model.positions[:, k] for k in range(3)]
-    for start in range(lo, hi, _BLOCK):
-        block = model.faces[start : min(start + _BLOCK, hi)]
-        centre, u, v = np.empty((len(block), 3)), [], []
-        for k, column in enumerate(columns):
-            a, b, c = (column[block[:, j]].astype(np.float64) for j in range(3))
-            np.add(a + b, c, out=centre[:, k])
-            u.append(b - a)
-            v.append(c - a)
-        cross = column_cross(u, v)
-        out[start : start + len(block)] = centre @ weights + np.sqrt(
-            np.einsum("ij,ij->i", cross, cross)
-        ) * np.sqrt(2)
 
 
 def _bucketed_most(key: np.ndarray) -> int:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint import parallel
-from blueprint.columns import column_max, column_min, face_cross, indexed_cross
+from blueprint.columns import column_cross, column_max, column_min, face_cross, indexed_cross
 from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.units import UNITS_MM
 
@@ -316,21 +316,80 @@ class Model:
     def degenerate_faces(self) -> np.ndarray:
         """(F,) bool: faces with zero area or a repeated vertex; they are never drawn."""
         if "degenerate" not in self._cache:
-            cross = self.corner_cross()
-            scale = np.ptp(self.bounds, axis=0).max() if len(self.faces) else 1.0
-            # |cross|^2 is a length^4: compare with a relative area of 1e-12
-            least = (scale * scale * 1e-12) ** 2
-            degenerate = np.empty(len(self.faces), bool)
-            parallel.run(partial(_degenerate, self.faces, cross, least, degenerate), len(degenerate))
-            self._cache["degenerate"] = degenerate
+            self.measure_faces()
         return self._cache["degenerate"]
 
+    def face_extremes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(F, 3) each: every face's lowest and highest corner, in the positions' own type (the
+        extremes of float32 values are the float32 values of the float64 extremes); those
+        ``measure_faces`` kept, given once and let go."""
+        if "extremes" not in self._cache:
+            self.measure_faces(extremes=True)
+        return self._cache.pop("extremes")
 
-def _degenerate(
-    faces: np.ndarray, cross: np.ndarray, least: float, out: np.ndarray, lo: int, hi: int
+    def measure_faces(self, keys: bool = False, extremes: bool = False) -> np.ndarray | None:
+        """One pass over every face's corners, a block of faces and a coordinate at a time (all
+        of them at once in float64 would take 72 bytes a face), for the checks that read them
+        all: ``degenerate_faces`` (kept), and where asked ``face_extremes`` (kept until read) and
+        each face's coincidence key (returned, None where not asked): its corners' sum and area
+        hashed to one number, so that copies of one triangle share it."""
+        count = len(self.faces)
+        degenerate = np.empty(count, bool)
+        key = np.empty(count) if keys else None
+        lows = np.empty((count, 3), self.positions.dtype) if extremes else None
+        highs = np.empty_like(lows) if extremes else None
+        scale = np.ptp(self.bounds, axis=0).max() if count else 1.0
+        # |cross|^2 is a length^4: compare with a relative area of 1e-12
+        least = (scale * scale * 1e-12) ** 2
+        measured = partial(_measured, self.positions, self.faces, least, degenerate, key, lows, highs)
+        parallel.run(measured, count, min_block=_FACES)
+        self._cache["degenerate"] = degenerate
+        if extremes:
+            self._cache["extremes"] = (lows, highs)
+        return key
+
+
+# Faces whose corners ``Model.measure_faces`` reads at a time.
+_FACES = 1 << 16
+# The weights of a face's corners' sum in its coincidence key (``Model.measure_faces``).
+_COINCIDENCE = np.array([1.0, np.pi, np.e])
+
+
+def _measured(
+    positions: np.ndarray,
+    faces: np.ndarray,
+    least: float,
+    degenerate: np.ndarray,
+    key: np.ndarray | None,
+    lows: np.ndarray | None,
+    highs: np.ndarray | None,
+    first: int,
+    last: int,
 ) -> None:
-    """``out[lo:hi]``: faces ``lo`` to ``hi`` repeat a vertex or have a squared ``cross``
-    product of at most ``least`` (``Model.degenerate_faces``)."""
-    f, c = faces[lo:hi], cross[lo:hi]
-    np.less_equal(np.einsum("ij,ij->i", c, c), least, out=out[lo:hi])
-    out[lo:hi] |= (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
+    """``Model.measure_faces`` of faces ``first`` to ``last``: repeating a vertex, or a squared
+    cross product of at most ``least``, into ``degenerate``; the coincidence ``key`` and the
+    extremes (``lows``, ``highs``) where not None."""
+    columns = [positions[:, k] for k in range(3)]
+    for start in range(first, last, _FACES):
+        stop = min(start + _FACES, last)
+        block = faces[start:stop]
+        corner = [block[:, j].astype(np.intp) for j in range(3)]
+        centre = np.empty((stop - start, 3)) if key is not None else None
+        u, v = [], []
+        for k, column in enumerate(columns):
+            a, b, c = (column[at] for at in corner)
+            if lows is not None:
+                np.minimum(np.minimum(a, b), c, out=lows[start:stop, k])
+                np.maximum(np.maximum(a, b), c, out=highs[start:stop, k])
+            a, b, c = (x.astype(np.float64) for x in (a, b, c))
+            u.append(b - a)
+            v.append(c - a)
+            if centre is not None:
+                np.add(a + b, c, out=centre[:, k])
+        cross = column_cross(u, v)
+        square = np.einsum("ij,ij->i", cross, cross)
+        np.less_equal(square, least, out=degenerate[start:stop])
+        degenerate[start:stop] |= (block[:, 0] == block[:, 1]) | (block[:, 1] == block[:, 2])
+        degenerate[start:stop] |= block[:, 0] == block[:, 2]
+        if key is not None:
+            key[start:stop] = centre @ _COINCIDENCE + np.sqrt(square) * np.sqrt(2)
