@@ -157,6 +157,22 @@ def test_lists_of_hundreds_are_merged_in_runs(renderer, abuffer):
     _assert_same_layers(tiled, plain)
 
 
+def test_a_list_longer_than_a_software_sort_takes_is_peeled(renderer, abuffer):
+    """2 000 squares one behind the other: a software rasteriser ends an invocation's loops after
+    65 535 turns, which sorting lists this long would pass (every layer was lost): there the
+    frame is peeled instead. Either way the layers are the nearest squares, in order."""
+    order = [int(v) for v in np.random.default_rng(7).permutation(2000)]
+    model = planes(order)
+    camera = blueprint.Camera.fit(model.positions, "front", aspect=1.0, ortho=True)
+    abuffer(True)
+    layers = renderer.peel(model, camera, size=(8, 8), max_layers=6)
+    assert len(layers.depth) == 6
+    inside = layers.depth[0] < 1.0
+    assert inside.sum() > 32
+    for k in range(6):
+        assert set(np.unique(layers.triangle[k][inside])) <= {2 * order.index(k), 2 * order.index(k) + 1}
+
+
 def test_too_little_room_is_drawn_again(renderer, abuffer):
     model = nested_round()
     abuffer(True)

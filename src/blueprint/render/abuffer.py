@@ -45,6 +45,10 @@ SLIM_BYTES = 8
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 # storage binding of the long lists' pixels, which the resolve's second dispatch sorts
 LONG_BINDING = 11
+# fragments a long list's sort takes on a software rasteriser at most: past some 1 500 its loops
+# would run past the 65 535 turns an invocation's loops have there (abuffer_resolve.comp), and the
+# frame is peeled instead
+LONG_MOST = 960
 # fragments a list the resolve sorts in registers (abuffer_resolve.comp); a longer one's pixel is
 # listed for the second dispatch, so a room of n fragments lists at most n / SORTED pixels
 SORTED = 48
@@ -111,7 +115,9 @@ class _Prepared:
         if tiles:
             resolving = {**resolving, "COUNTED_AFTER": 1, "TILES": TILE, "ROW": ROW}
         # the lists too long to sort in registers, in a dispatch of their own over their pixels
-        self.resolve, self.resolve_long = (r.compute(RESOLVE_COMP, {**resolving, "LONG": k}) for k in (0, 1))
+        self.resolve = r.compute(RESOLVE_COMP, {**resolving, "LONG": 0})
+        longest = {"LONG_MOST": LONG_MOST} if r.software else {}
+        self.resolve_long = r.compute(RESOLVE_COMP, {**resolving, "LONG": 1, **longest})
         self.clear = r.compute(CLEAR_COMP)
         self.unpack = r.compute(
             UNPACK_COMP, {**self.defines, "TILES": TILE, "ROW": ROW} if tiles else self.defines
@@ -192,6 +198,8 @@ class ABufferSource:
         self.tiles, self.defer = tiles, defer and not tiles
         # (counts buffer, room) of a capture whose counts are not read yet
         self._unread: tuple | None = None
+        self._long = None  # the buffer of the last capture's long lists (``_resolve``)
+        self._long_lists = 0  # and how many it had
         # (rows, columns) of tiles, row 0 at the bottom: the layers of each, once layer 0 is drawn
         self.tile_layers: np.ndarray | None = None
         self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
@@ -462,8 +470,15 @@ class ABufferSource:
                 self._unread = (seen.read, nbytes, room, size, name)
                 return calls
             if self._count(seen.read, nbytes, room, size, name):
-                return calls
+                return None if self._too_long() else calls
             room = self._room(size)
+
+    def _too_long(self) -> bool:
+        """Whether the capture just counted had a list too long for a software rasteriser's sort
+        (``LONG_MOST``), where it had long lists."""
+        if not self.r.software or not self._long_lists:
+            return False
+        return bool(np.frombuffer(self._long.read(size=4, offset=12), np.uint32)[0])
 
     def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int], room: int) -> None:
         """The resolve's dispatches over lists of ``room`` fragments: over every group, or with
@@ -472,8 +487,8 @@ class ABufferSource:
         the lists too long to sort in registers, which the first lists, as many groups as it
         counts (an indirect dispatch: none, and no wait for the count, where no list is
         long)."""
-        long = self.r.pool.buffer(f"{name}.long", 4 * (3 + room // SORTED + 1))
-        long.write(np.array([0, 1, 1], np.uint32))
+        long = self._long = self.r.pool.buffer(f"{name}.long", 4 * (4 + room // SORTED + 1))
+        long.write(np.array([0, 1, 1, 0], np.uint32))
         long.bind_to_storage_buffer(LONG_BINDING)
         self._resolve_short(name, head, cleared, groups)
         self.r.ctx.memory_barrier(self.r.ctx.SHADER_STORAGE_BARRIER_BIT | self.r.ctx.COMMAND_BARRIER_BIT)
@@ -539,7 +554,7 @@ class ABufferSource:
         self._unread = None
         size = tuple(size)
         counts = np.frombuffer(read(size=nbytes), np.uint32).astype(np.int64)
-        drawn = int(counts[0])
+        drawn, self._long_lists = int(counts[0]), int(counts[2])
         if drawn > room or size not in self.rooms:
             self.rooms[size] = spare_room(drawn)
         # the compute rasteriser's bins (render.raster) take the same turn where they were short

@@ -32,9 +32,11 @@ layout(binding = 0, r32ui) readonly uniform uimage2D u_head;
 layout(binding = 1, r32ui) writeonly uniform uimage2D u_cursor;
 // each pixel's layers: whether a layer covers a pixel, for passes that walk only some chains
 layout(binding = 2, r32ui) writeonly uniform uimage2D u_layer_count;
-// the pixels of the long lists (x | y << 16), and the groups of the dispatch over them
+// the groups of the dispatch over the long lists' pixels, the lists too long for it (LONG_MOST)
+// and the pixels (x | y << 16)
 layout(std430, binding = LONG_BINDING) coherent buffer Long {
     uint long_groups[3];
+    uint too_long;
     uint long_pixels[];
 };
 uniform float u_back_bias;
@@ -273,6 +275,19 @@ void main() {
     if (k < long_lists) {
         uint at = long_pixels[k];
         ivec2 p = ivec2(int(at & 0xffffu), int(at >> 16));
+#ifdef LONG_MOST
+        // a software rasteriser ends an invocation's loops after 65 535 turns in all, which a
+        // sort of more than LONG_MOST fragments could pass, losing the pixel's layers: such a
+        // list is counted instead, and the caller peels the frame
+        uint n = 0u;
+        for (uint a = imageLoad(u_head, p).x; a != 0u && n <= uint(LONG_MOST); a = AB_LINK(a - 1u)) {
+            ++n;
+        }
+        if (n > uint(LONG_MOST)) {
+            atomicAdd(too_long, 1u);
+            return;
+        }
+#endif
         uint layers = chain(p);
         imageStore(u_layer_count, p, uvec4(layers));
 #if !COUNTED_AFTER
