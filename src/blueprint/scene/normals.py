@@ -329,12 +329,12 @@ def corner_normals(
     del vertex_normals
     # the corners of the other vertices: their faces' own normals where the vertex has too
     # many, else from their pairs
-    deep = ~shared & (degree > _MAX_DEGREE)
-    if deep.any():
-        flat = np.concatenate(parallel.run(partial(_corners_of, deep, vertex), len(vertex)))
+    crowded = ~shared & (degree > _MAX_DEGREE)
+    if crowded.any():
+        flat = np.concatenate(parallel.run(partial(_corners_of, crowded, vertex), len(vertex)))
         corners[flat] = np.take(unit, flat // 3, axis=0)
         del flat
-    paired = np.concatenate(parallel.run(partial(_corners_of, ~shared & ~deep, vertex), len(vertex)))
+    paired = np.concatenate(parallel.run(partial(_corners_of, ~shared & ~crowded, vertex), len(vertex)))
     if len(paired):
         _pairwise(paired, vertex[paired], area_normals, unit, sharp, crease_angle, corners)
     return result
@@ -386,10 +386,10 @@ def _sums_by_table(
 def _sums_by_rows(
     face: np.ndarray, unit: np.ndarray, area: np.ndarray, on_crease: np.ndarray, cos_crease: float
 ) -> np.ndarray:
-    """``_sums_by_table``'s sums, the same to the bit, from each corner's normals as rows (d, 3,
-    n), a corner at a time: over many vertices the table's reductions along its short rows
-    cost NumPy half as much again. The weights are -1, 0 or 1, so each sum is exact but for the
-    order of its additions, the faces' corner order, as the product's."""
+    """``_sums_by_table``'s sums from each corner's normals as rows (d, 3, n), a corner at a
+    time: over many vertices the table's reductions along its short rows cost NumPy half as
+    much again. The weights are -1, 0 or 1, so each sum is exact but for the order of its
+    additions, here the faces' corner order."""
     u, area = (np.take(v, face.T, axis=0).transpose(0, 2, 1).copy() for v in (unit, area))
     d = len(u)
     summed = np.empty((d, 3, face.shape[0]))
