@@ -193,6 +193,37 @@ def test_where_the_gpu_cannot(renderer, monkeypatch):
     )
 
 
+def test_no_pass_where_no_face_is_smooth(renderer, monkeypatch):
+    """Boxes (a building's elements, a plant's): every vertex is on a crease, so no face is
+    smooth and none has a contour; no pass over the faces runs, and the dense picture is the
+    one drawn without contours."""
+    from blueprint.vector import contour_gpu
+
+    positions, faces, parts = [], [], []
+    for k in range(300):
+        v, f = examples.box(
+            (k % 10, (k // 10) % 10, k // 100), (k % 10 + 0.6, (k // 10) % 10 + 0.5, k // 100 + 0.4)
+        )
+        faces.append(f + 8 * k)
+        positions.append(v)
+        parts.append(np.full(12, k))
+    model = blueprint.Model.from_arrays(np.vstack(positions), np.vstack(faces), np.concatenate(parts))
+    size = (48, 48)
+    assert model.triangle_count > ink_module.DENSE * size[0] * size[1]
+    passes = []
+    monkeypatch.setattr(contour_gpu, "run_over", lambda *args: passes.append(args))
+    renderer.mesh(model, 30.0)
+    assert feature_faces(model, 30.0).all()
+    camera, view, projection, found = _found(renderer, model, size=size)
+    assert found is None and not passes
+    assert contour_ink(renderer, model, camera, size) is None
+    options = dict(size=size, style="paper")
+    assert np.array_equal(
+        blueprint.render(model, smooth_contours=True, **options),
+        blueprint.render(model, smooth_contours=False, **options),
+    )
+
+
 @pytest.mark.parametrize("way", ["k-buffer", "peel"])
 def test_the_same_lines_every_time_and_from_the_faces_near_them(renderer, monkeypatch, way):
     """The bust's contour lines twice, bit for bit (the pass appends its segments in whatever

@@ -131,7 +131,7 @@ def gpu_contours(
     OpenGL conventions) at ``size`` (width, height) pixels, found on the GPU; None where they
     cannot be: a renderer without compute passes, a model kept as instances or drawn in chunks
     (beside a frame of ``max_layers`` at ``size``), normals not smoothed at ``crease_angle``, or
-    tables larger than a texture."""
+    tables larger than a texture; None too where no face is smooth."""
     if model.instances is not None or renderer.ctx.version_code < 430 or crease_angle <= 0:
         return None
     faces = model.triangle_count
@@ -147,7 +147,8 @@ def gpu_contours(
         return None
     mesh = renderer.mesh(model, crease_angle)
     feature = feature_faces(model, crease_angle)
-    if mesh.chunk_faces is not None or not mesh.one_placement or feature is None:
+    # a model of no smooth face (every vertex of a building's boxes on a crease) has no contour
+    if mesh.chunk_faces is not None or not mesh.one_placement or feature is None or feature.all():
         return None
     ctx = renderer.ctx
     camera_to_model = np.linalg.inv(np.asarray(view, np.float64))
