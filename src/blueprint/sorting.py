@@ -34,6 +34,10 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
     if n == 0:
         return np.zeros(0, np.int64)
     low, high = int(key.min()), int(key.max())
+    if high - low < 1 << 16:
+        # keys of 16 bits or fewer: NumPy's stable argsort of them is a radix sort, linear
+        narrow = np.uint8 if high - low < 1 << 8 else np.uint16
+        return np.argsort((key - low).astype(narrow), kind="stable")
     bits = n.bit_length()
     if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
         packed = key.astype(np.int64)
