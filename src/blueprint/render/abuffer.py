@@ -45,9 +45,9 @@ SLIM_BYTES = 8
 SLIM_BINDING, VERTICES_BINDING, INDICES_BINDING = 7, 8, 9
 # storage binding of the long lists' pixels, which the resolve's second dispatch sorts
 LONG_BINDING = 11
-# fragments a long list's sort takes on a software rasteriser at most: past some 1 500 its loops
-# would run past the 65 535 turns an invocation's loops have there (abuffer_resolve.comp), and the
-# frame is peeled instead
+# fragments a long list's sort takes on a software rasteriser at most: past some 1 800 (fewer in
+# the worst order) its loops would run past the 65 535 turns an invocation's loops have there
+# (abuffer_resolve.comp), and the frame is peeled instead
 LONG_MOST = 960
 # fragments a list the resolve sorts in registers (abuffer_resolve.comp); a longer one's pixel is
 # listed for the second dispatch, so a room of n fragments lists at most n / SORTED pixels
@@ -478,7 +478,8 @@ class ABufferSource:
         (``LONG_MOST``), where it had long lists."""
         if not self.r.software or not self._long_lists:
             return False
-        return bool(np.frombuffer(self._long.read(size=4, offset=12), np.uint32)[0])
+        # the word after the long lists' dispatch, three group counts (abuffer_resolve.comp's Long)
+        return bool(np.frombuffer(self._long.read(size=4, offset=4 * 3), np.uint32)[0])
 
     def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int], room: int) -> None:
         """The resolve's dispatches over lists of ``room`` fragments: over every group, or with
