@@ -288,3 +288,19 @@ def test_sharp_edges_kept_for_every_view_classify_alike():
         np.testing.assert_array_equal(found.edges, given.edges)
         np.testing.assert_array_equal(found.kind, given.kind)
         np.testing.assert_array_equal(found.faces, given.faces)
+
+
+def test_sharp_edges_kept_give_the_same_smooth_surface():
+    """The smooth surface (its feature vertices) from the sharp edges a caller keeps, as from
+    those it finds itself; and from other sharp edges, other features: the ones given are read."""
+    from blueprint.silhouette.contours import smooth_surface
+    from blueprint.silhouette.edges import feature_vertices
+
+    mesh = trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.4, sections=24)
+    adj = build_adjacency(mesh.vertices, mesh.faces)
+    sharp = mesh_sharp_edges(adj, 30.0)
+    np.testing.assert_array_equal(feature_vertices(adj, 30.0, sharp), feature_vertices(adj, 30.0))
+    found, given = smooth_surface(adj, 30.0), smooth_surface(adj, 30.0, sharp)
+    np.testing.assert_array_equal(found.smooth, given.smooth)
+    np.testing.assert_array_equal(found.normals, given.normals)
+    assert feature_vertices(adj, 30.0, np.zeros_like(sharp)).sum() < feature_vertices(adj, 30.0).sum()

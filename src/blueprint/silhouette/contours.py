@@ -71,8 +71,11 @@ class ContourSet:
     edges: np.ndarray
 
 
-def smooth_surface(adj: Adjacency, crease_angle: float = 30.0) -> SmoothSurface:
-    """The smooth faces and the vertex normals of a mesh (``SmoothSurface``)."""
+def smooth_surface(
+    adj: Adjacency, crease_angle: float = 30.0, sharp: np.ndarray | None = None
+) -> SmoothSurface:
+    """The smooth faces and the vertex normals of a mesh (``SmoothSurface``); ``sharp``: its
+    sharp edges at ``crease_angle`` (``edges.mesh_sharp_edges``) where the caller has them."""
     area_normals = indexed_cross(adj.positions, adj.faces)
     summed = np.zeros((len(adj.positions), 3))
     corner_weight = np.empty((len(adj.faces), 3))  # one array for the three axes' weights
@@ -84,7 +87,7 @@ def smooth_surface(adj: Adjacency, crease_angle: float = 30.0) -> SmoothSurface:
     del corner_weight
     length = row_norm(summed)
     normals = summed / np.where(length > 0, length, 1.0)[:, None]
-    feature = feature_vertices(adj, crease_angle)
+    feature = feature_vertices(adj, crease_angle, sharp)
     smooth = ~(feature[adj.faces[:, 0]] | feature[adj.faces[:, 1]] | feature[adj.faces[:, 2]])
     for k in range(3):
         smooth &= _row_dots(adj.face_normals, None, normals, adj.faces[:, k]) > 0.0

@@ -172,13 +172,18 @@ def classify_edges(
     )
 
 
-def feature_vertices(adj: Adjacency, crease_angle: float = 30.0) -> np.ndarray:
-    """(V,) bool: the vertices on a crease (``sharp_edges``, silhouette or not), a border, a
-    non-manifold edge or a degenerate face: where the surface is not smooth."""
+def feature_vertices(
+    adj: Adjacency, crease_angle: float = 30.0, sharp: np.ndarray | None = None
+) -> np.ndarray:
+    """(V,) bool: the vertices on a crease (``sharp_edges``, silhouette or not: ``sharp`` where
+    the caller has them, ``mesh_sharp_edges``), a border, a non-manifold edge or a degenerate
+    face: where the surface is not smooth."""
     normals = adj.face_normals
     normal_ok = (normals[:, 0] != 0) | (normals[:, 1] != 0) | (normals[:, 2] != 0)
     count, f0, f1 = _first_two_faces(adj)
-    apart = sharp_edges(adj, count, f0, f1, normal_ok, crease_angle) | (count != 2)
+    if sharp is None:
+        sharp = sharp_edges(adj, count, f0, f1, normal_ok, crease_angle)
+    apart = sharp | (count != 2)
     feature = np.zeros(len(adj.positions), bool)
     feature[adj.edges[apart].reshape(-1)] = True
     feature[adj.faces[~normal_ok].reshape(-1)] = True

@@ -102,7 +102,7 @@ class _MeshLines:
             normals = adj.face_normals
             cos = np.einsum("ij,ij->i", normals[self.f0], normals[np.maximum(self.f1, 0)])
             smooth_crease = (self.f1 >= 0) & (cos >= np.cos(np.radians(smooth_angle)))
-            surface = smooth_surface(adj, crease_angle)
+            surface = smooth_surface(adj, crease_angle, sharp)
             vertex_planes = np.c_[surface.normals, -np.einsum("ij,ij->i", surface.normals, adj.positions)]
             self.by_angle[crease_angle] = (static, smooth_crease, surface, vertex_planes)
         return self.by_angle[crease_angle]

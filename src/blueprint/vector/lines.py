@@ -567,13 +567,19 @@ def grazing_band(model: Model, view: np.ndarray, projection: np.ndarray, crease_
 
 
 def _classified(model: Model, adj: Adjacency, view, projection, size, crease_angle: float) -> EdgeSet:
-    """``classify_edges`` of ``model``'s adjacency ``adj`` for one view, its sharp edges, which
-    no view changes, found once a mesh and angle (``SHARP``)."""
+    """``classify_edges`` of ``model``'s adjacency ``adj`` for one view."""
+    width, height = size
+    sharp = _sharp(model, adj, crease_angle)
+    return classify_edges(adj, view, projection, width, height, crease_angle, sharp=sharp)
+
+
+def _sharp(model: Model, adj: Adjacency, crease_angle: float) -> np.ndarray:
+    """The sharp edges of ``model``'s adjacency ``adj``, which no view changes, found once a
+    mesh and angle (``SHARP``): the edges' classes and the smooth surface read them."""
     held = SHARP.get(model, dict)
     if crease_angle not in held:
         held[crease_angle] = mesh_sharp_edges(adj, crease_angle)
-    width, height = size
-    return classify_edges(adj, view, projection, width, height, crease_angle, sharp=held[crease_angle])
+    return held[crease_angle]
 
 
 def _surface(model: Model, adj: Adjacency, crease_angle: float) -> SmoothSurface:
@@ -581,7 +587,7 @@ def _surface(model: Model, adj: Adjacency, crease_angle: float) -> SmoothSurface
     mesh and angle (``SURFACES``)."""
     surface = SURFACES.get(model, dict)
     if crease_angle not in surface:
-        surface[crease_angle] = smooth_surface(adj, crease_angle)
+        surface[crease_angle] = smooth_surface(adj, crease_angle, _sharp(model, adj, crease_angle))
     return surface[crease_angle]
 
 
