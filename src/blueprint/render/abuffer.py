@@ -198,8 +198,8 @@ class ABufferSource:
         self.tiles, self.defer = tiles, defer and not tiles
         # (counts buffer, room) of a capture whose counts are not read yet
         self._unread: tuple | None = None
-        self._long = None  # the buffer of the last capture's long lists (``_resolve``)
-        self._long_lists = 0  # and how many it had
+        # the last capture counted had a list too long for a software rasteriser's sort
+        self._too_long = False
         # (rows, columns) of tiles, row 0 at the bottom: the layers of each, once layer 0 is drawn
         self.tile_layers: np.ndarray | None = None
         self._deepest_first: np.ndarray | None = None  # the tiles' layers, most first
@@ -456,44 +456,43 @@ class ABufferSource:
                 self.mesh.bind_faces(VERTICES_BINDING, INDICES_BINDING)
                 target_uniform(self.r, self.resolve, size)
                 target_uniform(self.r, self.resolve_long, size)
-            self._resolve(name, head, (cursor, layer_count), groups, room)
+            long_lists = self._resolve(name, head, (cursor, layer_count), groups, room)
             ctx.memory_barrier()
             calls += 3
             # the counts are copied out before they are read: a buffer the CPU reads may be
             # moved where the GPU's atomics on it are slow
             nbytes = totals.size + (0 if self.tiles else depths.size)
-            seen = pool.buffer(f"{name}.seen{self.slot}", nbytes)
+            # on a software rasteriser the lists too long for its sort (``LONG_MOST``) too: the
+            # word after the three group counts of the long lists' dispatch (abuffer_resolve.comp)
+            long = 4 if self.r.software else 0
+            seen = pool.buffer(f"{name}.seen{self.slot}", nbytes + long)
             ctx.copy_buffer(seen, totals, totals.size)
             if not self.tiles:
                 ctx.copy_buffer(seen, depths, depths.size, write_offset=totals.size)
+            if long:
+                ctx.copy_buffer(seen, long_lists, long, read_offset=4 * 3, write_offset=nbytes)
+            nbytes += long
             if self.defer:
                 self._unread = (seen.read, nbytes, room, size, name)
                 return calls
             if self._count(seen.read, nbytes, room, size, name):
-                return None if self._too_long() else calls
+                return None if self._too_long else calls
             room = self._room(size)
 
-    def _too_long(self) -> bool:
-        """Whether the capture just counted had a list too long for a software rasteriser's sort
-        (``LONG_MOST``), where it had long lists."""
-        if not self.r.software or not self._long_lists:
-            return False
-        # the word after the long lists' dispatch, three group counts (abuffer_resolve.comp's Long)
-        return bool(np.frombuffer(self._long.read(size=4, offset=4 * 3), np.uint32)[0])
-
-    def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int], room: int) -> None:
+    def _resolve(self, name: str, head, cleared: tuple, groups: tuple[int, int], room: int):
         """The resolve's dispatches over lists of ``room`` fragments: over every group, or with
         tiles over the tiles that hold a fragment, found from the lists' heads read back, the
         ``cleared`` images (cursors and counts) zeroed everywhere first; then over the pixels of
         the lists too long to sort in registers, which the first lists, as many groups as it
         counts (an indirect dispatch: none, and no wait for the count, where no list is
-        long)."""
-        long = self._long = self.r.pool.buffer(f"{name}.long", 4 * (4 + room // SORTED + 1))
+        long). Returns the long lists' buffer (abuffer_resolve.comp's Long)."""
+        long = self.r.pool.buffer(f"{name}.long", 4 * (4 + room // SORTED + 1))
         long.write(np.array([0, 1, 1, 0], np.uint32))
         long.bind_to_storage_buffer(LONG_BINDING)
         self._resolve_short(name, head, cleared, groups)
         self.r.ctx.memory_barrier(self.r.ctx.SHADER_STORAGE_BARRIER_BIT | self.r.ctx.COMMAND_BARRIER_BIT)
         self.resolve_long.run_indirect(long)
+        return long
 
     def _resolve_short(self, name: str, head, cleared: tuple, groups: tuple[int, int]) -> None:
         if not self.tiles:
@@ -555,7 +554,8 @@ class ABufferSource:
         self._unread = None
         size = tuple(size)
         counts = np.frombuffer(read(size=nbytes), np.uint32).astype(np.int64)
-        drawn, self._long_lists = int(counts[0]), int(counts[2])
+        drawn = int(counts[0])
+        self._too_long = self.r.software and bool(counts[-1])
         if drawn > room or size not in self.rooms:
             self.rooms[size] = spare_room(drawn)
         # the compute rasteriser's bins (render.raster) take the same turn where they were short
