@@ -522,6 +522,7 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
         check_triangle_count(label, total)
     if not len(drawn):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
+    _check_own_vertices(placed, used, label)
     single = len(placed) == 1 and stem is not None
     taken: set[str] = set()
     counts: dict[str, int] = {}
@@ -530,11 +531,26 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
     from blueprint.scene.instances import worth_instancing
 
     if instanced and worth_instancing(total, unique):
-        return _kept_instances(placed, drawn, used, label), None, None, names
+        return _kept_instances(placed, drawn, used), None, None, names
     return (*_flattened(placed, drawn), names)
 
 
-def _kept_instances(placed: Placed, drawn: np.ndarray, used: np.ndarray, label: str) -> Instances:
+def _check_own_vertices(placed: Placed, meshes: np.ndarray, label: str) -> None:
+    """Refuse a face of ``meshes`` of ``placed`` that indexes past its own mesh's vertices, which
+    joined or placed would name another mesh's (or, in 32 bits, wrap into range), naming
+    ``label``; a block of meshes at a time."""
+    vertex_count = np.diff(placed.vertex_start)[meshes]
+    face_count = np.diff(placed.face_start)[meshes]
+    for lo, hi in runs(face_count, _PLACED_ROWS):
+        local = placed.faces[ranges(placed.face_start[meshes[lo:hi]], face_count[lo:hi])]
+        # a column at a time: NumPy reduces short rows slowly
+        low = np.minimum(np.minimum(local[:, 0], local[:, 1]), local[:, 2])
+        high = np.maximum(np.maximum(local[:, 0], local[:, 1]), local[:, 2])
+        if low.min() < 0 or (high >= np.repeat(vertex_count[lo:hi], face_count[lo:hi])).any():
+            raise InputError(f"{label}: faces refer to vertices that do not exist")
+
+
+def _kept_instances(placed: Placed, drawn: np.ndarray, used: np.ndarray) -> Instances:
     """The instances ``drawn`` of ``placed`` as the meshes ``used`` (in order of first use)
     placed by their transforms, a part each."""
     from blueprint.scene.instances import Instances
@@ -542,8 +558,6 @@ def _kept_instances(placed: Placed, drawn: np.ndarray, used: np.ndarray, label: 
     vertex_count = np.diff(placed.vertex_start)[used]
     face_count = np.diff(placed.face_start)[used]
     faces = placed.faces[ranges(placed.face_start[used], face_count)]
-    if faces.min() < 0 or (faces.max(axis=1) >= np.repeat(vertex_count, face_count)).any():
-        raise InputError(f"{label}: faces refer to vertices that do not exist")
     number = np.empty(len(placed.vertex_start) - 1, np.int32)
     number[used] = np.arange(len(used), dtype=np.int32)
     return Instances(
@@ -600,14 +614,7 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
     for lo, hi in runs(face_count, _PLACED_ROWS):
         rows = ranges(placed.face_start[mesh[lo:hi]], face_count[lo:hi])
         at = slice(face_start[lo], face_start[lo] + len(rows))
-        local = placed.faces[rows]
-        # an index past its own mesh's vertices would name another part's (or, wrapped into
-        # int32, any vertex): -1, which the model's checks refuse
-        outside = local >= np.repeat(vertex_count[lo:hi], face_count[lo:hi])[:, None]
-        outside |= local < 0
-        local += np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
-        local[outside] = -1
-        faces[at] = local
+        faces[at] = placed.faces[rows] + np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
     parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_count)
     return positions, faces, parts
 
