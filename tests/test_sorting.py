@@ -15,7 +15,14 @@ from blueprint.columns import (
     runs,
     square_blocks,
 )
-from blueprint.sorting import SortedKeys, _bucket_order, sorted_with_order, stable_argsort, unique_first
+from blueprint.sorting import (
+    SortedKeys,
+    _bucket_order,
+    dense_ranks,
+    sorted_with_order,
+    stable_argsort,
+    unique_first,
+)
 
 
 @pytest.mark.parametrize(
@@ -150,3 +157,14 @@ def test_bucket_order_is_numpys_stable_argsort(threads, monkeypatch):
         order = _bucket_order(bucket, per_block, dtype)
         assert order.dtype == dtype
         np.testing.assert_array_equal(order, np.argsort(bucket, kind="stable"))
+
+
+@pytest.mark.parametrize("dtype", [np.int32, np.int64])
+def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype):
+    rng = np.random.default_rng(6)
+    key = (rng.integers(0, 50, 200) * 3 - 20).astype(dtype)
+    dense = dense_ranks(key)
+    assert dense.dtype == np.int32
+    np.testing.assert_array_equal(dense, np.unique(key, return_inverse=True)[1].reshape(-1))
+    sparse = key.astype(np.int64) * 1000  # a span beyond the table: numbered by a sort
+    np.testing.assert_array_equal(dense_ranks(sparse), np.unique(sparse, return_inverse=True)[1].reshape(-1))

@@ -17,7 +17,7 @@ import numpy as np
 
 from blueprint import parallel, settings
 
-__all__ = ["SortedKeys", "grouped", "sorted_with_order", "stable_argsort", "unique_first"]
+__all__ = ["SortedKeys", "dense_ranks", "grouped", "sorted_with_order", "stable_argsort", "unique_first"]
 
 # Indices packed into keys at a time (``sorted_with_order``).
 _BLOCK = 1 << 20
@@ -259,6 +259,25 @@ def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     inverse = np.empty(len(key), np.int64)
     inverse[order] = np.cumsum(new) - 1
     return ordered[new], order[new], inverse
+
+
+def dense_ranks(key: np.ndarray) -> np.ndarray:
+    """(N,) int32 where a table over the keys' range numbers them, else int64: each of the
+    integer ``key`` (N,) numbered among the distinct ones, in order (``unique_first``'s inverse,
+    without the first occurrences)."""
+    if len(key) == 0:
+        return np.zeros(0, np.int32)
+    low = int(key.min())
+    span = int(key.max()) - low + 1
+    if span > _TABLE_PER_KEY * len(key):
+        return unique_first(key)[2]
+    # ranks below the span, which four corners a key bound: int32 for any mesh it can index
+    at = key - low
+    present = np.zeros(span, bool)
+    present[at] = True
+    rank = np.cumsum(present, dtype=np.int32 if span <= np.iinfo(np.int32).max else np.int64)
+    rank -= 1
+    return rank[at]
 
 
 def grouped(values: np.ndarray) -> list[tuple[int, np.ndarray]]:

@@ -710,19 +710,6 @@ def test_sharp_edges_a_block_at_a_time_equal_the_cosines_compared(threads, monke
     assert 0 < sharp.sum() < len(pair)
 
 
-@pytest.mark.parametrize("dtype", [np.int32, np.int64])
-def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype):
-    rng = np.random.default_rng(6)
-    key = (rng.integers(0, 50, 200) * 3 - 20).astype(dtype)
-    dense = prepare._dense(key)
-    assert dense.dtype == np.int32
-    np.testing.assert_array_equal(dense, np.unique(key, return_inverse=True)[1].reshape(-1))
-    sparse = key.astype(np.int64) * 1000  # a span beyond the table: numbered by a sort
-    np.testing.assert_array_equal(
-        prepare._dense(sparse), np.unique(sparse, return_inverse=True)[1].reshape(-1)
-    )
-
-
 @pytest.mark.parametrize("threads", [1, 2])
 def test_gathered_a_block_at_a_time_equals_one_take(threads, monkeypatch):
     monkeypatch.setattr(settings, "THREADS", threads)

@@ -23,7 +23,7 @@ from blueprint import parallel, settings
 from blueprint.columns import ranges, square_blocks
 from blueprint.scene.model import Model
 from blueprint.scene.normals import corner_normals, diagonal_of
-from blueprint.sorting import stable_argsort, unique_first
+from blueprint.sorting import dense_ranks, stable_argsort, unique_first
 
 __all__ = ["VERTEX", "feature_faces", "gpu_arrays", "topologies_kept", "topology"]
 
@@ -34,8 +34,6 @@ _KEPT = 4
 _KEPT_BYTES = settings.MEMORY_BUDGET // 32
 # Vertices whose fields are gathered at a time.
 _BLOCK = 1 << 16
-# Keys numbered by a table over their range, not a sort, up to this many times their number.
-_TABLE_PER_KEY = 4
 # A key's corners compared pairwise up to this many (``_pairs_by_normal``), and pairs of them
 # compared at a time.
 _TABLE_DEGREE = 64
@@ -179,7 +177,7 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
 def _vertex_part_keys(model: Model, corner_vertex: np.ndarray) -> np.ndarray:
     """(3F,) int: each corner's vertex and part as one key, in (vertex, part) order. Where each
     vertex lies in one part (a vertex shared between parts is split), the vertex orders the
-    keys alone, over a range that ``unique_first`` and ``_dense`` count over instead of
+    keys alone, over a range that ``unique_first`` and ``dense_ranks`` count over instead of
     sorting."""
     parts = len(model.part_names)
     if parts < 2:
@@ -293,7 +291,7 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     corner found by a table; the corners of the other vertices are grouped by key (one sort
     of one key) and told apart by normal within each (``_pairs_by_normal``)."""
     n = len(vertex_part)
-    key = _dense(vertex_part)
+    key = dense_ranks(vertex_part)
     keys = int(key.max(initial=-1)) + 1
     # the last corner of each key, and where a corner's normal differs from it, the key's
     # corners are sorted by normal
@@ -400,24 +398,6 @@ def _compared_by_rows(value: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     for i in range(d):
         np.sum((value < value[i]) & first, axis=0, out=less[i])
     return first.T, last.T, less.T
-
-
-def _dense(key: np.ndarray) -> np.ndarray:
-    """(N,) int32 where a table over the keys' range numbers them, else int64: each of the
-    integer ``key`` (N,) numbered among the distinct ones, in order."""
-    if len(key) == 0:
-        return np.zeros(0, np.int32)
-    low = int(key.min())
-    span = int(key.max()) - low + 1
-    if span > _TABLE_PER_KEY * len(key):
-        return unique_first(key)[2]
-    # ranks below the span, which four corners a key bound: int32 for any mesh it can index
-    at = key - low
-    present = np.zeros(span, bool)
-    present[at] = True
-    rank = np.cumsum(present, dtype=np.int32 if span <= np.iinfo(np.int32).max else np.int64)
-    rank -= 1
-    return rank[at]
 
 
 def _differs_from(

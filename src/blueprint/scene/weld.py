@@ -12,7 +12,7 @@ import numpy as np
 
 from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, ranges
-from blueprint.sorting import unique_first
+from blueprint.sorting import dense_ranks, unique_first
 
 __all__ = [
     "check_mesh",
@@ -186,10 +186,7 @@ def connected_components_of(label: np.ndarray, i: np.ndarray, j: np.ndarray) -> 
                 break
             label = jumped
         if np.array_equal(label, before):
-            # the roots numbered in order by a table over the vertices, not a sort
-            root = np.zeros(len(label), bool)
-            root[label] = True
-            return (np.cumsum(root, dtype=np.int64) - 1)[label]
+            return dense_ranks(label).astype(np.int64, copy=False)
 
 
 def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np.ndarray]:
