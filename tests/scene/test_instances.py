@@ -200,6 +200,14 @@ def test_flattened_twin_finds_the_same_environment():
     assert np.array_equal(environment_parts(flattened(whole)), environment_parts(stand_in(whole)))
 
 
+def test_the_environment_of_a_kept_model_is_found_without_flattening_it(never_flattened):
+    """``environment_parts`` of a model kept as instances (what ``blueprint info`` lists) tests
+    its stand-in: the sky found, the model never flattened."""
+    whole = loader.model_from_object(skybox_scene(), name="sky scene", include=["*"])
+    assert whole.instances is not None
+    assert list(np.flatnonzero(environment_parts(whole))) == [whole.part_names.index("sky")]
+
+
 def test_copies_in_one_place_are_refused_in_one_line():
     """300 instances of a mesh at one transform are 300 copies of each triangle: refused as
     the flattened copies are, before anything is drawn."""

@@ -76,7 +76,7 @@ def choose_instanced_parts(model: Model, include=None, exclude=None) -> Model:
     InputError
         A pattern matches no part, or nothing is left to draw; the message names the file.
     """
-    keep = environment.parts_to_draw(model, include, exclude, shape=stand_in(model))
+    keep = environment.parts_to_draw(model, include, exclude)
     if keep.all():
         return model
     number = np.cumsum(keep) - 1
