@@ -747,9 +747,9 @@ def graph_cases() -> list[Case]:
         ),
         Case(
             "graph",
-            "GLB 3 x 2^20 instances by sharing",
+            "GLB 2^23 instances by sharing",
             ["info", "m.glb"],
-            _files(**{"m.glb": glb([{"children": [i + 1, i + 1]} for i in range(20)] + [{"mesh": 0}], [0])}),
+            _files(**{"m.glb": glb([{"children": [i + 1, i + 1]} for i in range(23)] + [{"mesh": 0}], [0])}),
             ("m.glb",),
         ),
         Case(

@@ -601,7 +601,11 @@ def test_instance_and_triangle_limits_of_a_graph(tmp_path, monkeypatch):
     monkeypatch.setattr(settings, "INSTANCE_LIMIT", 3)
     with pytest.raises(InputError) as caught:
         loader.load_model(path)
-    assert str(caught.value) == f"{path}: its scene holds more than 3 mesh instances (the limit)"
+    budget = settings.human_size(settings.MEMORY_BUDGET)
+    assert str(caught.value) == (
+        f"{path}: its scene holds more than 3 mesh instances, the most the memory budget of {budget} "
+        f"holds at {settings.INSTANCE_BYTES} bytes an instance (BLUEPRINT_MEMORY_LIMIT sets the budget)"
+    )
 
 
 def test_many_instances_of_one_mesh_still_load(tmp_path):

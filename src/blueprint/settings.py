@@ -30,6 +30,7 @@ __all__ = [
     "MEMORY_BUDGET",
     "MEMORY_ENV",
     "MODEL_FILE_LIMIT",
+    "PART_BYTES",
     "SETTINGS_FILE_LIMIT",
     "THREADS",
     "THREADS_ENV",
@@ -150,15 +151,22 @@ IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
 # triangle of the vector drawing, the larger, of benchmarks/scale.py's scans with a third more
 # as a margin (benchmarks/notes/memory-guard.md). From it, the peak a model's header counts
 # foretell (scene.headers.peak_estimate) and the triangles a model may have, all instances
-# together (refused before they are made); and mesh instances a scene may place (each is a
-# part, with a name).
+# together (refused before they are made).
 TRIANGLE_BYTES = 896
 # ...and an instance of a scene kept as instances (scene.instances): the peak's growth an
 # instance of a GLB of 10^5 instances of a box drawn to a PNG, with a third more as a margin
 # (benchmarks/notes/instances.md); its unique triangles count at TRIANGLE_BYTES.
 INSTANCE_BYTES = 3072
+# ...and an instance of a scene flattened into one mesh, each a part with a name and, in a
+# scene of distinct parts (a building's elements), a mesh of its own as the file holds it: the
+# peak's growth a part of a GLB of 3 x 10^5 distinct one-triangle meshes, with a third more
+# (benchmarks/notes/memory-guard.md).
+PART_BYTES = 4864
 TRIANGLE_LIMIT = MEMORY_BUDGET // TRIANGLE_BYTES
-INSTANCE_LIMIT = 200_000
+# the mesh instances a scene may place, kept or flattened: those the budget holds at the least
+# an instance takes, counted as a node graph is walked so that a graph that places a mesh
+# millions of times over is refused before they are counted out
+INSTANCE_LIMIT = MEMORY_BUDGET // INSTANCE_BYTES
 # Frames of a video (an hour at 30 frames a second would be 108 000), glyphs of a glyph file (each
 # is projected and stroked on the CPU), and the largest coordinate of a model or a glyph: beyond
 # it, view and projection matrices overflow the GPU's 32-bit floats.

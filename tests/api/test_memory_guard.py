@@ -71,7 +71,89 @@ def test_the_estimate_is_the_triangles_at_the_measured_bytes():
     kept = 12 * settings.TRIANGLE_BYTES + 100_000 * settings.INSTANCE_BYTES
     assert peak_estimate(1_200_000, 12, 100_000) == kept
     assert peak_estimate(24, 12, 2) == 12 * settings.TRIANGLE_BYTES + 2 * settings.INSTANCE_BYTES
-    assert peak_estimate(23, 12, 2) == 23 * settings.TRIANGLE_BYTES
+    assert peak_estimate(23, 12, 2) == 23 * settings.TRIANGLE_BYTES + 2 * settings.PART_BYTES
+    # a scene of distinct parts, flattened: each part weighs beside its triangles
+    assert peak_estimate(300, 300, 100) == 300 * settings.TRIANGLE_BYTES + 100 * settings.PART_BYTES
+
+
+def _distinct_parts(path: Path, count: int) -> Path:
+    """A GLB of ``count`` distinct one-triangle meshes, each placed once by a node of its own
+    (a building's elements, in small)."""
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    positions = (corners[None] * (1.0 + np.arange(count))[:, None, None]).astype(np.float32)
+    indices = np.arange(3, dtype="<u4")
+    accessors, meshes = [], []
+    for k in range(count):
+        accessors.append(
+            {"bufferView": 0, "byteOffset": 36 * k, "componentType": 5126, "count": 3, "type": "VEC3"}
+            | {"min": positions[k].min(0).tolist(), "max": positions[k].max(0).tolist()}
+        )
+        meshes.append({"primitives": [{"attributes": {"POSITION": k}, "indices": count}]})
+    accessors.append({"bufferView": 1, "componentType": 5125, "count": 3, "type": "SCALAR"})
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": list(range(count))}],
+        "nodes": [{"mesh": k} for k in range(count)],
+        "meshes": meshes,
+        "buffers": [{"byteLength": positions.nbytes + indices.nbytes}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": positions.nbytes},
+            {"buffer": 0, "byteOffset": positions.nbytes, "byteLength": indices.nbytes},
+        ],
+        "accessors": accessors,
+    }
+    path.write_bytes(hostile_corpus().glb_of(doc, positions.tobytes() + indices.tobytes()))
+    return path
+
+
+def test_a_scene_of_distinct_parts_weighs_each_part(tmp_path, monkeypatch):
+    """A scene of many small distinct parts is flattened into one mesh, each part with its
+    name and its mesh as the file holds it: the estimate weighs the parts beside their
+    triangles, refused over the budget in one line before the meshes are read, drawn within."""
+    path = _distinct_parts(tmp_path / "parts.glb", 200)
+    estimate = 200 * settings.TRIANGLE_BYTES + 200 * settings.PART_BYTES
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate - 1)
+    with pytest.raises(InputError) as caught:
+        load_model(path)
+    assert str(caught.value) == (
+        f"{path}: 200 triangles to draw (200 mesh instances) need about {settings.human_size(estimate)} "
+        f"of memory at 896 bytes a triangle and {settings.PART_BYTES} an instance, more than the memory "
+        f"budget of {settings.human_size(estimate - 1)} (BLUEPRINT_MEMORY_LIMIT sets the budget)"
+    )
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate)
+    model = load_model(path)
+    assert model.instances is None and len(model.part_names) == 200 and model.triangle_count == 200
+
+
+@needs_cli
+def test_the_instances_a_scene_may_place_follow_the_memory_budget(tmp_path):
+    """The mesh instances a scene may place are as many as the memory budget holds at the
+    least an instance takes: a scene placing a box 4 096 times is refused in one line under a
+    budget that holds one instance fewer, and read under one that holds them, as
+    ``BLUEPRINT_MEMORY_LIMIT`` sets it."""
+    path = tmp_path / "rows.glb"
+    count = 4096
+    corners, faces = hostile_corpus().box_arrays()
+    nodes = [{"mesh": 0, "translation": [2.0 * (k % 64), 3.0 * (k // 64), 0.0]} for k in range(count)]
+    path.write_bytes(hostile_corpus().glb(nodes, list(range(count)), corners, faces=faces))
+
+    def info(budget: int) -> subprocess.CompletedProcess:
+        env = {**os.environ, "BLUEPRINT_MEMORY_LIMIT": str(budget)}
+        return subprocess.run(
+            [str(BLUEPRINT), "info", str(path)], capture_output=True, text=True, env=env, timeout=120
+        )
+
+    short = (count - 1) * settings.INSTANCE_BYTES
+    one_error(
+        info(short),
+        f"{path}: its scene holds more than {count - 1} mesh instances, the most the memory budget of "
+        f"{settings.human_size(short)} holds at {settings.INSTANCE_BYTES} bytes an instance "
+        "(BLUEPRINT_MEMORY_LIMIT sets the budget)",
+    )
+    proc = info(count * settings.INSTANCE_BYTES + 12 * settings.TRIANGLE_BYTES)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith(f"{path}: {12 * count} triangles, {count} parts"), proc.stdout
 
 
 COPIES = 100_000
@@ -121,8 +203,8 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     one_error(
         proc,
         f"{flat}: {drawn} triangles to draw (1 mesh instances) need about "
-        f"{settings.human_size(drawn * settings.TRIANGLE_BYTES)} of memory at 896 bytes a triangle, more "
-        "than the memory budget of 512 MiB",
+        f"{settings.human_size(drawn * settings.TRIANGLE_BYTES + settings.PART_BYTES)} of memory at 896 "
+        f"bytes a triangle and {settings.PART_BYTES} an instance, more than the memory budget of 512 MiB",
     )
     proc = render(kept, "kept.png")
     assert proc.returncode == 0, proc.stderr

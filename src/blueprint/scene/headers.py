@@ -391,7 +391,7 @@ def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
                     meshes[mesh] = held
                 instances[node] = count + sum(instances[c] for c in kids)
                 triangles[node] = held + sum(triangles[c] for c in kids)
-                _limit(path, instances[node], settings.INSTANCE_LIMIT, "mesh instances")
+                check_instance_count(path, instances[node])
                 continue
             if child in on_path:
                 chain = [n for n, _ in stack[on_path[child] :]] + [child]
@@ -404,7 +404,7 @@ def walk_graph(path: Path, roots: list, children, own, what: str) -> None:
             on_path[child] = len(stack)
             stack.append((child, iter(children(child))))
     placed = sum(instances[r] for r in roots)
-    _limit(path, placed, settings.INSTANCE_LIMIT, "mesh instances")
+    check_instance_count(path, placed)
     check_triangle_count(path, sum(triangles[r] for r in roots), placed, sum(meshes.values()))
 
 
@@ -420,13 +420,14 @@ def _kept(triangles: int, unique: int | None) -> bool:
 
 def peak_estimate(triangles: int, unique: int | None = None, instances: int = 0) -> int:
     """Bytes a drawing of ``triangles`` triangles (all instances together) is expected to take
-    at its peak over what the process holds before it: ``settings.TRIANGLE_BYTES`` a triangle;
-    where they are ``instances`` mesh instances of ``unique`` triangles that the loader keeps
-    as instances (``instances.worth_instancing``), its unique triangles' and
-    ``settings.INSTANCE_BYTES`` an instance."""
+    at its peak over what the process holds before it: ``settings.TRIANGLE_BYTES`` a triangle
+    and ``settings.PART_BYTES`` each of its ``instances`` mesh instances; where they are
+    instances of ``unique`` triangles that the loader keeps as instances
+    (``instances.worth_instancing``), its unique triangles' and ``settings.INSTANCE_BYTES``
+    an instance."""
     if _kept(triangles, unique):
         return int(unique) * settings.TRIANGLE_BYTES + int(instances) * settings.INSTANCE_BYTES
-    return int(triangles) * settings.TRIANGLE_BYTES
+    return int(triangles) * settings.TRIANGLE_BYTES + int(instances) * settings.PART_BYTES
 
 
 def check_triangle_count(name, count: int, instances: int | None = None, unique: int | None = None) -> None:
@@ -439,8 +440,10 @@ def check_triangle_count(name, count: int, instances: int | None = None, unique:
     estimate = peak_estimate(count, unique if kept else None, instances or 0)
     if estimate <= settings.MEMORY_BUDGET:
         return
-    placed = "" if instances is None else f" ({instances} mesh instances)"
-    rate = f"{settings.TRIANGLE_BYTES} bytes a triangle"
+    placed, rate = "", f"{settings.TRIANGLE_BYTES} bytes a triangle"
+    if instances is not None:
+        placed = f" ({instances} mesh instances)"
+        rate = f"{settings.TRIANGLE_BYTES} bytes a triangle and {settings.PART_BYTES} an instance"
     if kept:
         placed = f" ({instances} mesh instances of {unique} unique triangles)"
         rate = f"{settings.TRIANGLE_BYTES} bytes a unique triangle and {settings.INSTANCE_BYTES} an instance"
@@ -451,9 +454,16 @@ def check_triangle_count(name, count: int, instances: int | None = None, unique:
     )
 
 
-def _limit(path: Path, count: int, limit: int, what: str) -> None:
+def check_instance_count(name, count: int) -> None:
+    """Raise ``InputError`` naming ``name`` where a scene places more than
+    ``settings.INSTANCE_LIMIT`` mesh instances, the most the memory budget holds."""
+    limit = settings.INSTANCE_LIMIT
     if count > limit:
-        raise InputError(f"{path}: its scene holds more than {limit} {what} (the limit)")
+        raise InputError(
+            f"{name}: its scene holds more than {limit} mesh instances, the most the memory budget of "
+            f"{human_size(settings.MEMORY_BUDGET)} holds at {settings.INSTANCE_BYTES} bytes an instance "
+            f"({settings.MEMORY_ENV} sets the budget)"
+        )
 
 
 def _node(path: Path, nodes: list, index, parent) -> dict:

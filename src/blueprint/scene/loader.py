@@ -18,7 +18,7 @@ from blueprint.columns import ranges, runs
 from blueprint.errors import InputError, out_of_memory
 from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh, Placed, placed_of
-from blueprint.scene.headers import check_triangle_count
+from blueprint.scene.headers import check_instance_count, check_triangle_count
 from blueprint.scene.model import Model
 from blueprint.scene.units import object_unit
 from blueprint.scene.up import up_of
@@ -508,9 +508,7 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
     cost their triangles, not 10^5 arrays of each kind. Meshes placed once each (10^5 small
     distinct parts) are placed a block of those of one vertex count at a time, and every
     instance's faces by one gather a block of instances."""
-    if len(placed) > settings.INSTANCE_LIMIT:
-        limit = settings.INSTANCE_LIMIT
-        raise InputError(f"{label}: {len(placed)} mesh instances, over the limit of {limit}")
+    check_instance_count(label, len(placed))
     mesh_faces = np.diff(placed.face_start)
     drawn = np.flatnonzero(mesh_faces[placed.mesh] > 0)
     used, first_use = np.unique(placed.mesh[drawn], return_index=True)
@@ -519,7 +517,7 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
     if instanced:
         check_triangle_count(label, total, len(drawn), unique)
     else:
-        check_triangle_count(label, total)
+        check_triangle_count(label, total, len(drawn))
     if not len(drawn):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     _check_own_vertices(placed, used, label)
