@@ -25,7 +25,7 @@ from blueprint.scene import loader
 from blueprint.scene import model as model_module
 from blueprint.scene.camera import fit_camera, sheet_cameras
 from blueprint.scene.environment import choose_parts, environment_parts
-from blueprint.scene.instanced_parts import choose_instanced_parts, stand_in
+from blueprint.scene.instanced_parts import choose_instanced_parts, environment_of, stand_in
 
 
 @pytest.fixture
@@ -197,15 +197,18 @@ def test_environment_left_out_without_flattening(never_flattened, caplog):
 def test_flattened_twin_finds_the_same_environment():
     scene = skybox_scene()
     whole = loader.model_from_object(scene, name="sky scene", include=["*"])
-    assert np.array_equal(environment_parts(flattened(whole)), environment_parts(stand_in(whole)))
+    flat = flattened(whole)
+    assert np.array_equal(environment_parts(flat), environment_parts(stand_in(whole)))
+    # ``environment_of`` a flat model is the model's own
+    assert np.array_equal(environment_of(flat), environment_parts(flat))
 
 
 def test_the_environment_of_a_kept_model_is_found_without_flattening_it(never_flattened):
-    """``environment_parts`` of a model kept as instances (what ``blueprint info`` lists) tests
-    its stand-in: the sky found, the model never flattened."""
+    """``environment_of`` a model kept as instances (what ``blueprint info`` lists) tests its
+    stand-in: the sky found, the model never flattened."""
     whole = loader.model_from_object(skybox_scene(), name="sky scene", include=["*"])
     assert whole.instances is not None
-    assert list(np.flatnonzero(environment_parts(whole))) == [whole.part_names.index("sky")]
+    assert list(np.flatnonzero(environment_of(whole))) == [whole.part_names.index("sky")]
 
 
 def test_copies_in_one_place_are_refused_in_one_line():

@@ -43,13 +43,13 @@ def info(model, as_json):
                 kind = "GPU" if device["gpu"] else "software"
                 click.echo(f"EGL device {device['index']}: {device['renderer']} ({kind})")
         return
-    from blueprint.scene.environment import environment_parts
+    from blueprint.scene.instanced_parts import environment_of
     from blueprint.scene.loader import load_model
     from blueprint.scene.units import ASSUMED_UNIT, UNITS_MM
 
     # every part, environment meshes marked: the names to give --include and --exclude
     loaded = load_model(model, include="*")
-    environment = environment_parts(loaded)
+    environment = environment_of(loaded)
     counts = loaded.part_triangle_counts()
     lo, hi = loaded.bounds
     unit = loaded.unit or ASSUMED_UNIT

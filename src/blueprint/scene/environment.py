@@ -145,16 +145,11 @@ def _facing_fractions(
 def environment_parts(model: Model) -> np.ndarray:
     """(P,) bool: the parts that enclose the rest of the model (inward-facing boxes, spheres,
     domes, in one part or as a group of panels or segments) or lie under it as a ground far
-    wider than the rest (in one part or in tiles); the rules are the module's. A model kept as
-    instances is tested on its stand-in (``instanced_parts.stand_in``), never flattened."""
+    wider than the rest (in one part or in tiles); the rules are the module's."""
     count = len(model.part_names)
     found = np.zeros(count, bool)
     if count < 2:
         return found
-    if model.instances is not None:
-        from blueprint.scene.instanced_parts import stand_in
-
-        model = stand_in(model)
     bounds = _bounds_by_part(model)
     for _ in range(_ROUNDS):
         before = int(found.sum())
@@ -291,9 +286,12 @@ def choose_parts(model: Model, include: PartGlobs = None, exclude: PartGlobs = N
     return model if keep.all() else subset(model, keep)
 
 
-def parts_to_draw(model: Model, include: PartGlobs = None, exclude: PartGlobs = None) -> np.ndarray:
-    """(P,) bool: the parts of ``model`` that ``choose_parts`` keeps, and the warning that
-    names the environment left out.
+def parts_to_draw(
+    model: Model, include: PartGlobs = None, exclude: PartGlobs = None, shape: Model | None = None
+) -> np.ndarray:
+    """(P,) bool: the parts of ``model`` that ``choose_parts`` keeps, the environment found in
+    ``shape`` (the model itself where None; a stand-in with its parts, for a model kept as
+    instances), and the warning that names what was left out.
 
     Raises
     ------
@@ -304,7 +302,7 @@ def parts_to_draw(model: Model, include: PartGlobs = None, exclude: PartGlobs = 
     keep = _matching(model, include, "--include", True)
     keep &= ~_matching(model, exclude, "--exclude", False)
     if include is None:
-        environment = environment_parts(model) & keep
+        environment = environment_parts(model if shape is None else shape) & keep
         if environment.any() and environment.sum() < keep.sum():
             which = np.flatnonzero(environment)
             names = ", ".join(model.part_names[i] for i in which[:_NAMED])

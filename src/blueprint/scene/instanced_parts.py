@@ -67,6 +67,12 @@ def stand_in(model: Model) -> Model:
     )
 
 
+def environment_of(model: Model) -> np.ndarray:
+    """``environment.environment_parts`` of ``model``, of its stand-in where it is kept as
+    instances: never flattened (``blueprint info`` lists a scene of 10^6 instances)."""
+    return environment.environment_parts(model if model.instances is None else stand_in(model))
+
+
 def choose_instanced_parts(model: Model, include=None, exclude=None) -> Model:
     """``environment.choose_parts`` of a model kept as instances, which it keeps so: the
     instances of the parts chosen, their parts renumbered in order.
@@ -76,7 +82,7 @@ def choose_instanced_parts(model: Model, include=None, exclude=None) -> Model:
     InputError
         A pattern matches no part, or nothing is left to draw; the message names the file.
     """
-    keep = environment.parts_to_draw(model, include, exclude)
+    keep = environment.parts_to_draw(model, include, exclude, shape=stand_in(model))
     if keep.all():
         return model
     number = np.cumsum(keep) - 1
