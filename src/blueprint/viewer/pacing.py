@@ -134,7 +134,9 @@ def choose_step(current: int, costs: Sequence[float | None], budget_ms: float) -
     -------
     int
         The current step while it keeps within the budget and no richer one measured within
-        ``UP_SHARE`` of it; once it is slower, the next cheaper step not measured slower; the
+        ``UP_SHARE`` of it; once it is slower, the next cheaper step measured within the budget,
+        or not measured lately and within it at half the cost a step down (a big model's first
+        moving frame, seconds over, goes down the ladder at once, not a slow frame a step); the
         richest step above it that measured within ``UP_SHARE`` of the budget (one step not
         measured lately is tried where the current takes less than ``PROBE_SHARE`` of it).
     """
@@ -144,7 +146,8 @@ def choose_step(current: int, costs: Sequence[float | None], budget_ms: float) -
         return current
     if cost > budget_ms:
         for step in range(current + 1, last + 1):
-            if costs[step] is None or costs[step] <= budget_ms:
+            known = costs[step]
+            if (known if known is not None else cost / 2 ** (step - current)) <= budget_ms:
                 return step
         return last
     chosen = current
