@@ -101,9 +101,8 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     Returns
     -------
     vertices : (N,) ``VERTEX``
-        Ordered by model vertex (numbered in the order the faces first use them where the
-        model's numbering is scattered, ``_scattered``), then part, then normal; a soup's by
-        welded vertex and part, then the corners kept apart.
+        Ordered by model vertex in the order the faces first use them (``_by_first_use``), then
+        part, then normal; a soup's by welded vertex and part, then the corners kept apart.
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
