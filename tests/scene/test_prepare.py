@@ -161,22 +161,9 @@ def test_smoothing_without_pairs_needs_every_pair_positive():
         assert (around @ around.T > 0).all(), v
 
 
-def by_first_use(model: Model) -> Model:
-    """``model`` with the vertices its faces use numbered in the order of their first corner
-    (by ``np.unique``'s first indices), as its preparation numbers them."""
-    used, first = np.unique(model.faces.reshape(-1), return_index=True)
-    order = used[np.argsort(first)]
-    number = np.zeros(len(model.positions), np.int64)
-    number[order] = np.arange(len(order))
-    return Model.from_arrays(model.positions[order], number[model.faces], model.face_part, model.part_names)
-
-
 def reference_arrays(model: Model, crease: float) -> tuple[np.ndarray, np.ndarray]:
-    """``gpu_arrays`` by ``np.unique`` of (vertex, part, quantized normal) rows, of the model
-    numbered by first use where the preparation finds its numbering scattered, the last corner
-    of each row giving its normal."""
-    if prepare._scattered(model.faces.reshape(-1)):
-        model = by_first_use(model)
+    """``gpu_arrays`` by ``np.unique`` of (vertex, part, quantized normal) rows, the last corner of
+    each row giving its normal."""
     corner_normals = normals.corner_normals(model.positions, model.faces, crease).reshape(-1, 3)
     rows = np.column_stack(
         [
@@ -197,23 +184,13 @@ def reference_arrays(model: Model, crease: float) -> tuple[np.ndarray, np.ndarra
 
 @pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("crease", [15.0, 30.0])
-@pytest.mark.parametrize("shape", ["mixed", "shuffled", "indexed-box", "soup"])
+@pytest.mark.parametrize("shape", ["mixed", "indexed-box", "soup"])
 def test_gpu_arrays_equal_unique_rows(shape, crease, threads, form, monkeypatch):
     # blocks of a few rows, so that these small meshes are split over the threads
     monkeypatch.setattr(settings, "THREADS", threads)
     monkeypatch.setattr(parallel, "MIN_BLOCK", 8)
     positions, faces, face_part = mixed_mesh()
-    if shape == "shuffled":
-        # the vertices numbered at random, some no face uses among them (as a file may have
-        # them), scattered for this small mesh: numbered by first use
-        monkeypatch.setattr(prepare, "_NEAR_ROWS", 8)
-        rng = np.random.default_rng(11)
-        spare = rng.normal(size=(9, 3))
-        number = rng.permutation(len(positions) + len(spare))
-        shuffled = np.empty((len(number), 3))
-        shuffled[number] = np.r_[positions, spare]
-        positions, faces = shuffled, number[faces]
-    elif shape == "indexed-box":
+    if shape == "indexed-box":
         # an indexed box whose parts share vertices: corners split by part and by crease
         box = trimesh.creation.box()
         positions, faces, face_part = box.vertices, box.faces, np.arange(12) % 3
@@ -224,7 +201,6 @@ def test_gpu_arrays_equal_unique_rows(shape, crease, threads, form, monkeypatch)
             None,
         )
     model = Model.from_arrays(positions, faces, face_part)
-    assert prepare._scattered(model.faces.reshape(-1)) == (shape == "shuffled")
     vertices, indices = prepare._prepare(model, crease, None)
     expected_vertices, expected_indices = reference_arrays(model, crease)
     if shape == "soup":
@@ -234,28 +210,6 @@ def test_gpu_arrays_equal_unique_rows(shape, crease, threads, form, monkeypatch)
         return
     assert vertices.tobytes() == expected_vertices.tobytes()
     np.testing.assert_array_equal(indices, expected_indices)
-
-
-def test_a_numbering_is_scattered_where_neighbouring_corners_lie_far_apart():
-    """A grid numbered row by row, or by its faces, uses its vertices a stretch at a time; the
-    same grid numbered at random, or a level at a time (every other vertex of every other row
-    first, as subdivisions number a scan's vertices), jumps across the array corner to corner."""
-    side = 800
-    row = np.arange(side - 1)
-    lower = (row[:, None] * side + row[None, :]).reshape(-1)
-    quads = np.c_[lower, lower + 1, lower + side + 1, lower + side]
-    faces = np.c_[quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]].reshape(-1, 3)
-    assert len(faces) * 3 > 2 * prepare._NEAR_ROWS
-    assert not prepare._scattered(faces.reshape(-1))
-    shuffled = np.random.default_rng(2).permutation(side * side)[faces]
-    assert prepare._scattered(shuffled.reshape(-1))
-    # every other vertex of every other row first, then the rest, a quarter at a time
-    y, x = np.divmod(np.arange(side * side), side)
-    levels = np.empty(side * side, np.int64)
-    levels[np.lexsort((x, y, 2 * (y % 2) + x % 2))] = np.arange(side * side)
-    assert prepare._scattered(levels[faces].reshape(-1))
-    # too few corners to tell: never scattered
-    assert not prepare._scattered(shuffled.reshape(-1)[: 2 * prepare._NEAR_ROWS - 1])
 
 
 @pytest.mark.parametrize("threads", [1, 3])

@@ -41,11 +41,6 @@ _PAIR_BLOCK = 1 << 18
 # Corners of a block (keys times their corners) from which they are compared a corner at a
 # time (``_compared_by_rows``), not as one table: each step is a few calls.
 _ROWS_FROM = 1024
-# Vertices a corner's may lie from the one before it, at the median, for the faces to use them a
-# stretch of the array at a time (about a megabyte of a vertex's rows), and the corners sampled
-# to tell: further, the preparation numbers them by first use (``_scattered``).
-_NEAR_ROWS = 1 << 16
-_SAMPLED_CORNERS = 1 << 16
 # Quantized normal components lie in [-32767, 32767]: shifted by this, they take 17 bits each.
 _SHIFT = 1 << 16
 
@@ -101,8 +96,8 @@ def gpu_arrays(model: Model, crease_angle: float | None) -> tuple[np.ndarray, np
     Returns
     -------
     vertices : (N,) ``VERTEX``
-        Ordered by model vertex in the order the faces first use them (``_by_first_use``), then
-        part, then normal; a soup's by welded vertex and part, then the corners kept apart.
+        Ordered by model vertex, then part, then normal; a soup's by welded vertex and part,
+        then the corners kept apart.
     indices : (3F,) uint32
         Face ``i``'s corners at ``3 i`` to ``3 i + 2``.
     """
@@ -150,9 +145,6 @@ def _prepare(model: Model, crease_angle: float | None, known: dict | None) -> tu
             faces=np.arange(len(corner_vertex), dtype=np.int32).reshape(-1, 3),
             soup=False,
         )
-        corner_vertex = model.faces.reshape(-1)
-    elif not soup and _scattered(corner_vertex):
-        model = _by_first_use(model, corner_vertex)
         corner_vertex = model.faces.reshape(-1)
     normals = None
     if crease_angle is None:
@@ -206,35 +198,6 @@ def _numbered_by_first_corner(corner_vertex: np.ndarray, vertices: int) -> bool:
         return vertices == 0
     firsts = parallel.flatnonzero(parallel.rises(corner_vertex))
     return len(firsts) == vertices and bool(np.array_equal(corner_vertex[firsts], np.arange(vertices)))
-
-
-def _scattered(corner_vertex: np.ndarray) -> bool:
-    """Whether a corner's vertex lies, at the median of an even sample of the corners, more
-    than ``_NEAR_ROWS`` rows from the one before it: the faces then use their vertices all over
-    the array (a scanner's numbering), not a stretch at a time (a CAD part's, a mesh numbered
-    by its faces), and numbering them by first use (``_by_first_use``) pays for itself."""
-    if len(corner_vertex) < 2 * _NEAR_ROWS:
-        return False  # its vertices' rows fit the caches whatever their order
-    at = np.linspace(1, len(corner_vertex) - 1, _SAMPLED_CORNERS).astype(np.int64)
-    jumps = np.abs(corner_vertex[at].astype(np.int64) - corner_vertex[at - 1])
-    return float(np.median(jumps)) > _NEAR_ROWS
-
-
-def _by_first_use(model: Model, corner_vertex: np.ndarray) -> Model:
-    """``model`` with the vertices its faces use numbered in the order the faces first use
-    them: every pass over the corners then reads and writes its vertices' rows about in order,
-    where a file's numbering (a scanner's PLY) scatters them over the whole array. The same
-    faces and positions, so the same drawing; vertices no face uses are left out."""
-    n = len(corner_vertex)
-    index = np.int32 if n < 2**31 else np.int64
-    corners = np.arange(n, dtype=index)
-    first = np.full(len(model.positions), n, index)
-    np.minimum.at(first, corner_vertex, corners)
-    used = corner_vertex[np.take(first, corner_vertex) == corners]
-    number = np.zeros(len(model.positions), model.faces.dtype)
-    number[used] = np.arange(len(used))
-    positions = np.take(model.positions, used, axis=0)
-    return model.replaced(positions=positions, faces=np.take(number, model.faces))
 
 
 def _filled(
