@@ -245,12 +245,9 @@ def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         low = int(key.min())
         span = int(key.max()) - low + 1
         if span <= _TABLE_PER_KEY * n:
-            at = (key - low).astype(np.int64)
-            present = np.zeros(span, bool)
-            present[at] = True
+            at, present, rank = _table(key, low, span, np.int64)
             first = np.full(span, n, np.int64)
             np.minimum.at(first, at, np.arange(n))
-            rank = np.cumsum(present) - 1
             return (np.flatnonzero(present) + low).astype(key.dtype), first[present], rank[at]
     order = stable_argsort(key)
     ordered = key[order]
@@ -271,13 +268,21 @@ def dense_ranks(key: np.ndarray) -> np.ndarray:
     span = int(key.max()) - low + 1
     if span > _TABLE_PER_KEY * len(key):
         return unique_first(key)[2]
-    # ranks below the span, which four corners a key bound: int32 for any mesh it can index
+    # ranks below the span, at most _TABLE_PER_KEY times the keys: int32 for any mesh it indexes
+    at, _, rank = _table(key, low, span, np.int32 if span <= np.iinfo(np.int32).max else np.int64)
+    return rank[at]
+
+
+def _table(key: np.ndarray, low: int, span: int, dtype) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The table over the range of ``key`` (``span`` values from ``low``) that ``unique_first``
+    and ``dense_ranks`` number keys by: each key's place in it, whether each value is present,
+    and each value's rank among those present (``dtype``)."""
     at = key - low
     present = np.zeros(span, bool)
     present[at] = True
-    rank = np.cumsum(present, dtype=np.int32 if span <= np.iinfo(np.int32).max else np.int64)
+    rank = np.cumsum(present, dtype=dtype)
     rank -= 1
-    return rank[at]
+    return at, present, rank
 
 
 def grouped(values: np.ndarray) -> list[tuple[int, np.ndarray]]:
