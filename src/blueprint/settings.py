@@ -31,11 +31,11 @@ __all__ = [
     "MEMORY_ENV",
     "MODEL_FILE_LIMIT",
     "PART_BYTES",
+    "PICTURE_TRIANGLE_BYTES",
     "SETTINGS_FILE_LIMIT",
     "THREADS",
     "THREADS_ENV",
     "TRIANGLE_BYTES",
-    "TRIANGLE_LIMIT",
     "Entry",
     "available_memory",
     "check_file",
@@ -153,6 +153,9 @@ IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
 # foretell (scene.headers.peak_estimate) and the triangles a model may have, all instances
 # together (refused before they are made).
 TRIANGLE_BYTES = 896
+# ...and where the model is drawn only as pictures (scene.headers.pictures_only: no lines'
+# adjacency), the growth a triangle of the PNG of a soup, the larger, with the same margin.
+PICTURE_TRIANGLE_BYTES = 512
 # ...and an instance of a scene kept as instances (scene.instances): the peak's growth an
 # instance of a GLB of 10^5 instances of a box drawn to a PNG, with a third more as a margin
 # (benchmarks/notes/instances.md); its unique triangles count at TRIANGLE_BYTES.
@@ -162,7 +165,6 @@ INSTANCE_BYTES = 3072
 # peak's growth a part of a GLB of 3 x 10^5 distinct one-triangle meshes, with a third more
 # (benchmarks/notes/memory-guard.md).
 PART_BYTES = 4864
-TRIANGLE_LIMIT = MEMORY_BUDGET // TRIANGLE_BYTES
 # the mesh instances a scene may place, kept or flattened: those the budget holds at the least
 # an instance takes, counted as a node graph is walked so that a graph that places a mesh
 # millions of times over is refused before they are counted out

@@ -9,13 +9,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 from helpers import BLUEPRINT, hostile_corpus, needs_cli, one_error
 
 from blueprint import settings
+from blueprint.api.frames import render_frame
 from blueprint.errors import InputError
-from blueprint.examples import assemble, box
+from blueprint.examples import assemble, box, prism
 from blueprint.render import budget
-from blueprint.scene.headers import peak_estimate
+from blueprint.scene.headers import peak_estimate, pictures_only
 from blueprint.scene.loader import load_model
 
 FACES = 400_000
@@ -32,24 +34,29 @@ def _ply_of_garbage(path, faces: int) -> None:
 
 
 @needs_cli
-def test_a_model_over_the_budget_is_refused_from_its_header(tmp_path):
+@pytest.mark.parametrize(
+    ("suffix", "each"), [(".png", settings.PICTURE_TRIANGLE_BYTES), (".svg", settings.TRIANGLE_BYTES)]
+)
+def test_a_model_over_the_budget_is_refused_from_its_header(tmp_path, suffix, each):
+    """Refused at the header's count, at a picture's bytes a triangle for a PNG and at a
+    vector drawing's for an SVG."""
     model, out = tmp_path / "big.ply", tmp_path / "out"
     out.mkdir()
     _ply_of_garbage(model, FACES)
     budget_bytes = 64 << 20  # holds the file (a quarter of it is the file limit), not its triangles
     start = time.monotonic()
     proc = subprocess.run(
-        [str(BLUEPRINT), "render", str(model), "-o", str(out / "big.png")],
+        [str(BLUEPRINT), "render", str(model), "-o", str(out / f"big{suffix}")],
         capture_output=True,
         text=True,
         env={**os.environ, "BLUEPRINT_MEMORY_LIMIT": str(budget_bytes)},
     )
     took = time.monotonic() - start
-    estimate = FACES * settings.TRIANGLE_BYTES
+    estimate = FACES * each
     one_error(
         proc,
         f"{model}: {FACES} triangles to draw need about {estimate / 2**20:.3g} MiB of memory at "
-        f"{settings.TRIANGLE_BYTES} bytes a triangle, more than the memory budget of 64 MiB",
+        f"{each} bytes a triangle, more than the memory budget of 64 MiB",
     )
     assert list(out.iterdir()) == []
     assert took < 10, took  # refused at its header: no GL context, no drawing
@@ -65,6 +72,16 @@ def test_a_model_over_the_budget_is_refused_from_its_header(tmp_path):
 
 def test_the_estimate_is_the_triangles_at_the_measured_bytes():
     assert peak_estimate(0) == 0
+    assert peak_estimate(5_242_880) == 5_242_880 * settings.TRIANGLE_BYTES
+    # a model drawn only as pictures holds no lines' adjacency: its triangles weigh less
+    assert settings.PICTURE_TRIANGLE_BYTES < settings.TRIANGLE_BYTES
+    with pictures_only():
+        assert peak_estimate(5_242_880) == 5_242_880 * settings.PICTURE_TRIANGLE_BYTES
+        assert peak_estimate(1_200_000, 12, 100_000) == (
+            12 * settings.PICTURE_TRIANGLE_BYTES + 100_000 * settings.INSTANCE_BYTES
+        )
+        parts = 300 * settings.PICTURE_TRIANGLE_BYTES + 100 * settings.PART_BYTES
+        assert peak_estimate(300, 300, 100) == parts
     assert peak_estimate(5_242_880) == 5_242_880 * settings.TRIANGLE_BYTES
     # a scene kept as instances (drawn at least twice its unique triangles): its unique
     # triangles and its instances; one drawn less than twice over is flattened
@@ -124,6 +141,58 @@ def test_a_scene_of_distinct_parts_weighs_each_part(tmp_path, monkeypatch):
     monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate)
     model = load_model(path)
     assert model.instances is None and len(model.part_names) == 200 and model.triangle_count == 200
+
+
+def _prism_stl(path: Path) -> int:
+    """A binary STL of a prism of 20 000 sides at ``path``; its triangles."""
+    vertices, faces = prism(1.0, 1.0, 20_000)
+    trimesh.Trimesh(vertices, faces, process=False).export(path)
+    return len(faces)
+
+
+@needs_cli
+def test_a_model_drawn_only_as_pictures_is_weighed_as_a_picture(tmp_path):
+    """Under a budget that holds a model's picture (``PICTURE_TRIANGLE_BYTES`` a triangle) but
+    not its vector drawing (``TRIANGLE_BYTES``), its PNG and its layers are drawn and its SVG is
+    refused in one line, exit 2, no file."""
+    path = tmp_path / "prism.stl"
+    faces = _prism_stl(path)
+    budget_bytes = faces * (settings.PICTURE_TRIANGLE_BYTES + settings.TRIANGLE_BYTES) // 2
+    env = {**os.environ, "BLUEPRINT_MEMORY_LIMIT": str(budget_bytes)}
+
+    def run(command: str, out: str, *options: str) -> subprocess.CompletedProcess:
+        argv = [str(BLUEPRINT), command, str(path), "-o", str(tmp_path / out), "--size", "64", "64", *options]
+        return subprocess.run(argv, capture_output=True, text=True, env=env, timeout=300)
+
+    proc = run("render", "prism.png", "--max-layers", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "prism.png").stat().st_size > 0
+    proc = run("layers", "prism.npz", "--max-layers", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "prism.npz").stat().st_size > 0
+    proc = run("render", "prism.svg")
+    estimate = settings.human_size(faces * settings.TRIANGLE_BYTES)
+    one_error(
+        proc,
+        f"{path}: {faces} triangles to draw need about {estimate} of memory at {settings.TRIANGLE_BYTES} "
+        f"bytes a triangle, more than the memory budget of {settings.human_size(budget_bytes)}",
+    )
+    assert not (tmp_path / "prism.svg").exists()
+
+
+def test_the_picture_api_weighs_a_model_file_as_a_picture(tmp_path, monkeypatch, renderer):
+    """``render_frame`` of a model file loads it as a picture's; ``load_model``, whose model
+    may become a vector drawing, as a vector drawing's."""
+    path = tmp_path / "prism.stl"
+    faces = _prism_stl(path)
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", faces * settings.TRIANGLE_BYTES - 1)
+    frame = render_frame(path, renderer=renderer, size=(32, 32), max_layers=1)
+    assert frame.image.shape == (32, 32, 4) and frame.layers == 1
+    with pytest.raises(InputError, match=f"at {settings.TRIANGLE_BYTES} bytes a triangle"):
+        load_model(path)
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", faces * settings.PICTURE_TRIANGLE_BYTES - 1)
+    with pytest.raises(InputError, match=f"at {settings.PICTURE_TRIANGLE_BYTES} bytes a triangle"):
+        render_frame(path, renderer=renderer, size=(32, 32), max_layers=1)
 
 
 @needs_cli
@@ -200,10 +269,12 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
         return subprocess.run(command, capture_output=True, text=True, env=env, timeout=300)
 
     proc = render(flat, "flat.png")
+    picture = drawn * settings.PICTURE_TRIANGLE_BYTES + settings.PART_BYTES
+    assert picture > budget_bytes
     one_error(
         proc,
         f"{flat}: {drawn} triangles to draw (1 mesh instances) need about "
-        f"{settings.human_size(drawn * settings.TRIANGLE_BYTES + settings.PART_BYTES)} of memory at 896 "
+        f"{settings.human_size(picture)} of memory at {settings.PICTURE_TRIANGLE_BYTES} "
         f"bytes a triangle and {settings.PART_BYTES} an instance, more than the memory budget of 512 MiB",
     )
     proc = render(kept, "kept.png")

@@ -4,6 +4,7 @@ where the host has several GPUs), with a manifest and outputs that a rerun does 
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import json
 import os
@@ -17,6 +18,7 @@ from blueprint.api.renderer import Renderer
 from blueprint.errors import BlueprintError, InputError, printable
 from blueprint.export.files import atomic_write
 from blueprint.scene.formats import FORMATS
+from blueprint.scene.headers import pictures_only
 
 __all__ = ["MANIFEST", "MODEL_SUFFIXES", "batch", "choose_devices", "collect_inputs", "outputs_for"]
 
@@ -157,7 +159,9 @@ def draw_input(path: str, outputs: list[str], views: list[str], options: dict) -
         renderer = _renderer()
         record["device"] = _worker["device"]
         record["renderer"] = renderer.info["renderer"]
-        model = to_model(path)
+        # weighed as a picture's where no output is a vector drawing
+        with pictures_only() if all(Path(p).suffix == ".png" for p in outputs) else contextlib.nullcontext():
+            model = to_model(path)
         made = os.stat(path).st_mtime
         per_view = len(outputs) // len(views)
         for k, view in enumerate(views):

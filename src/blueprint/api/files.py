@@ -85,7 +85,7 @@ def run_pipeline(
     model = None
     if input is not None:
         if plan.needs_model:
-            model = as_model(input, options)
+            model = as_model(input, options, pictures=True)
         else:
             free = [n for n in plan.images if spec.bind(variables).images[n].file is None]
             if not free:
@@ -171,7 +171,7 @@ def turntable(
     plan = ex.plan(spec, variables)
     if not plan.needs_model:
         raise InputError(f"{spec.source}: a turntable needs a pipeline that renders the model's attributes")
-    model = as_model(model, options)
+    model = as_model(model, options, pictures=True)
     size = check_size(options.size, 1, renderer.max_texture)
     turn = dict(elevation=options.elevation, azimuth=options.azimuth, fov=options.fov, ortho=options.ortho)
     cameras = orbit(model, frames, size, **turn)

@@ -5,6 +5,7 @@ Each takes its options as ``DrawOptions`` (``blueprint.api.options``): a ready v
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 from dataclasses import replace
@@ -19,6 +20,7 @@ from blueprint.errors import InputError
 from blueprint.gpu.device import check_size
 from blueprint.render.renderer import Frame, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, sheet_cameras
+from blueprint.scene.headers import pictures_only
 from blueprint.scene.loader import load_model
 from blueprint.scene.model import Model
 from blueprint.scene.units import UNITS_MM, drawing_unit, warn_if_assumed
@@ -46,12 +48,14 @@ def shared(renderer: Renderer | None) -> Renderer:
     return default_renderer()
 
 
-def as_model(model: Model | str | os.PathLike, options: DrawOptions) -> Model:
+def as_model(model: Model | str | os.PathLike, options: DrawOptions, *, pictures: bool = False) -> Model:
     """``model``, or the model file it names loaded with ``options``' ``up``, ``include`` and
-    ``exclude``."""
+    ``exclude``; weighed by the memory guard as a model drawn only as ``pictures`` where so
+    (``headers.pictures_only``), else as one a vector drawing may be made of."""
     if isinstance(model, Model):
         return model
-    return load_model(model, up=options.up, include=options.include, exclude=options.exclude)
+    with pictures_only() if pictures else contextlib.nullcontext():
+        return load_model(model, up=options.up, include=options.include, exclude=options.exclude)
 
 
 @takes_options(*FRAME_OPTIONS)
@@ -79,7 +83,7 @@ def render_frame(
         The (H, W, 4) uint8 image, the layers drawn, the camera and the timings.
     """
     options.raster_style  # noqa: B018 - a line style file a picture cannot take fails before the model loads
-    model = as_model(model, options)
+    model = as_model(model, options, pictures=True)
     renderer = shared(renderer)
     check_size(options.size, options.supersample, renderer.max_texture)
     # the parts and the style resolved once, for every view and cut of this model
@@ -367,7 +371,7 @@ def peel(
         depth (L, H, W) float32, triangle and part (L, H, W) int32, normal (L, H, W, 3) float32
         or None, and the view and projection matrices (4, 4) float64.
     """
-    model = as_model(model, options)
+    model = as_model(model, options, pictures=True)
     renderer = shared(renderer)
     size = check_size(options.size, 1, renderer.max_texture)
     return renderer.peel(

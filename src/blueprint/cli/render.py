@@ -52,6 +52,7 @@ def render(model, output, highlight_model, **values):
     """Draw the blueprint of MODEL into a picture (PNG), or as vector lines into SVG, PDF or DXF."""
     from blueprint.api import default_renderer, render_frame, stages
     from blueprint.api.options import DrawOptions
+    from blueprint.scene.headers import pictures_only
     from blueprint.scene.loader import load_model
     from blueprint.scene.prepare import topologies_kept
 
@@ -75,7 +76,7 @@ def render(model, output, highlight_model, **values):
     if options.scale or options.sheet:
         raise InputError(f"--scale and --sheet are for vector drawings ({_suffixes(Kind.DRAWING)})")
     options.raster_style  # noqa: B018 - a line style file a picture cannot take fails before the model loads
-    with phase_bar(), topologies_kept(False):
+    with phase_bar(), topologies_kept(False), pictures_only():
         with stages.timed("read"):
             loaded = load_model(model, up=options.up, include=options.include, exclude=options.exclude)
         if timing or stages.listening():
@@ -138,11 +139,12 @@ def layers(model, output, **values):
     from blueprint.api import default_renderer, peel, stages
     from blueprint.api.frames import as_model
     from blueprint.api.options import DrawOptions
+    from blueprint.scene.headers import pictures_only
 
     output, write = output_writer(output, Kind.LAYERS)
     # checked before the model loads; the model kept to tell the chunks its mesh was drawn in
     options = DrawOptions(**drawing_values(values))
-    with phase_bar():
+    with phase_bar(), pictures_only():
         if stages.listening():
             stages.begin("read")
             stages.watch(default_renderer())

@@ -8,6 +8,7 @@ GLB and glTF files, and the walk of a graph, shared with 3MF, live here."""
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import io
 from pathlib import Path
 
@@ -418,16 +419,42 @@ def _kept(triangles: int, unique: int | None) -> bool:
     return worth_instancing(triangles, unique)
 
 
+# The bytes a triangle is weighed at where set (``pictures_only``); else the vector drawing's,
+# the most any drawing of a loaded model may take.
+_TRIANGLE_BYTES: contextvars.ContextVar[int | None] = contextvars.ContextVar("triangle_bytes", default=None)
+
+
+@contextlib.contextmanager
+def pictures_only():
+    """Within, models are loaded to be drawn as pictures alone (PNG, layers, pipelines), never
+    as vector lines: their triangles are weighed at ``settings.PICTURE_TRIANGLE_BYTES``, not
+    the vector drawing's ``settings.TRIANGLE_BYTES``, so a picture the memory budget holds is
+    not refused for the lines it will not find."""
+    token = _TRIANGLE_BYTES.set(settings.PICTURE_TRIANGLE_BYTES)
+    try:
+        yield
+    finally:
+        _TRIANGLE_BYTES.reset(token)
+
+
+def triangle_bytes() -> int:
+    """The bytes a drawn triangle is weighed at here: a picture's within ``pictures_only``,
+    else a vector drawing's."""
+    chosen = _TRIANGLE_BYTES.get()
+    return settings.TRIANGLE_BYTES if chosen is None else chosen
+
+
 def peak_estimate(triangles: int, unique: int | None = None, instances: int = 0) -> int:
     """Bytes a drawing of ``triangles`` triangles (all instances together) is expected to take
-    at its peak over what the process holds before it: ``settings.TRIANGLE_BYTES`` a triangle
+    at its peak over what the process holds before it: ``triangle_bytes()`` a triangle
     and ``settings.PART_BYTES`` each of its ``instances`` mesh instances; where they are
     instances of ``unique`` triangles that the loader keeps as instances
     (``instances.worth_instancing``), its unique triangles' and ``settings.INSTANCE_BYTES``
     an instance."""
+    rate = triangle_bytes()
     if _kept(triangles, unique):
-        return int(unique) * settings.TRIANGLE_BYTES + int(instances) * settings.INSTANCE_BYTES
-    return int(triangles) * settings.TRIANGLE_BYTES + int(instances) * settings.PART_BYTES
+        return int(unique) * rate + int(instances) * settings.INSTANCE_BYTES
+    return int(triangles) * rate + int(instances) * settings.PART_BYTES
 
 
 def check_triangle_count(name, count: int, instances: int | None = None, unique: int | None = None) -> None:
@@ -440,13 +467,14 @@ def check_triangle_count(name, count: int, instances: int | None = None, unique:
     estimate = peak_estimate(count, unique if kept else None, instances or 0)
     if estimate <= settings.MEMORY_BUDGET:
         return
-    placed, rate = "", f"{settings.TRIANGLE_BYTES} bytes a triangle"
+    each = triangle_bytes()
+    placed, rate = "", f"{each} bytes a triangle"
     if instances is not None:
         placed = f" ({instances} mesh instances)"
-        rate = f"{settings.TRIANGLE_BYTES} bytes a triangle and {settings.PART_BYTES} an instance"
+        rate = f"{each} bytes a triangle and {settings.PART_BYTES} an instance"
     if kept:
         placed = f" ({instances} mesh instances of {unique} unique triangles)"
-        rate = f"{settings.TRIANGLE_BYTES} bytes a unique triangle and {settings.INSTANCE_BYTES} an instance"
+        rate = f"{each} bytes a unique triangle and {settings.INSTANCE_BYTES} an instance"
     raise InputError(
         f"{name}: {count} triangles to draw{placed} need about {human_size(estimate)} of memory at "
         f"{rate}, more than the memory budget of "

@@ -35,7 +35,8 @@ _RECORDS = 1 << 16
 
 def read_stl(path: Path, size: int) -> Mesh | None:
     """The triangles of an STL file, or None for trimesh (see the module's docstring). A
-    binary file shorter than its count says is refused, as is a count over ``TRIANGLE_LIMIT``."""
+    binary file shorter than its count says is refused, as is a count whose drawing the memory
+    budget does not hold (``headers.check_triangle_count``)."""
     with open_file(path, settings.MODEL_FILE_LIMIT, "a model file") as fh:
         head = fh.read(84)
         count = int.from_bytes(head[80:84], "little") if len(head) == 84 else -1
