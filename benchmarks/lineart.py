@@ -179,6 +179,17 @@ def blender_version(blender: str) -> str:
     return out.splitlines()[0].strip()
 
 
+def process_environment(pycache: Path, source: Path | None = None, **extra: str) -> dict[str, str]:
+    """This environment as an installed package runs in: bytecode kept in ``pycache`` (an
+    environment without bytecode compiles every module of the package at every start);
+    ``source``: a source tree of the package put first on the path."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")}
+    env["PYTHONPYCACHEPREFIX"] = str(pycache)
+    if source is not None:
+        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(source), env.get("PYTHONPATH")) if p)
+    return {**env, **extra}
+
+
 def run_process(command: list[str], env=None) -> tuple[subprocess.CompletedProcess, float, float]:
     """Run a command: its result, wall seconds and CPU seconds (user and system, every thread)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)

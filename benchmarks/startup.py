@@ -32,6 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from lineart import process_environment  # noqa: E402  (a script beside this one)
+
 # One drawing's process, timed from inside: prints a JSON object of milliseconds per phase.
 _PHASES = """
 import json, sys, time
@@ -99,14 +102,6 @@ def _small_stl(path: Path) -> Path:
     return path
 
 
-def _environment(pycache: Path | None, **extra: str) -> dict[str, str]:
-    """This environment with bytecode cached in ``pycache`` (None: as this environment has it)."""
-    if pycache is None:
-        return {**os.environ, **extra}
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")}
-    return {**env, "PYTHONPYCACHEPREFIX": str(pycache), **extra}
-
-
 def _wall(args: list[str], runs: int, env: dict[str, str]) -> dict:
     subprocess.run(args, check=True, capture_output=True, timeout=300, env=env)  # warm-up
     times = []
@@ -142,15 +137,15 @@ def main() -> None:
         out = folder / "out.png"
         py = sys.executable
         w, h = map(str, args.size)
-        env = _environment(folder / "pycache")
+        env = process_environment(folder / "pycache")
         api = f"import blueprint; blueprint.draw({str(stl)!r}, size=({w}, {h})).save({str(out)!r})"
         phases = [py, "-c", _PHASES, str(stl), str(out), w, h]
         info = subprocess.run(
             [py, "-m", "blueprint", "info", "--json"], check=True, capture_output=True, text=True, env=env
         ).stdout
         # the interpreter's and site-packages' bytecode as installed, none written for the package
-        source_only = _environment(None, PYTHONDONTWRITEBYTECODE="1")
-        cold = _environment(folder / "pycache", MESA_SHADER_CACHE_DIR=str(folder / "mesa-cold"))
+        source_only = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+        cold = process_environment(folder / "pycache", MESA_SHADER_CACHE_DIR=str(folder / "mesa-cold"))
         record = {
             "renderer": json.loads(info)["renderer"],
             "cpus": os.cpu_count(),

@@ -50,7 +50,7 @@ from blueprint.vector.lines import ADJACENCY, INTERSECTIONS
 from blueprint.vector.occlusion.levels import PLANES
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from lineart import LineArt, find_model, run_process  # noqa: E402  (a script beside this one)
+from lineart import LineArt, find_model, process_environment, run_process  # noqa: E402  (a script beside this one)
 
 
 def timed(*args, **kwargs) -> tuple[dict, float]:
@@ -67,16 +67,6 @@ MODELS = {
     "common-3d-test-models/stanford-bunny.obj": 1.25,
     "glTF-Sample-Models/2CylinderEngine.glb": 3.92,
 }
-
-
-def process_environment(pycache: Path, source: Path | None = None, **extra: str) -> dict[str, str]:
-    """This environment as an installed package runs in: bytecode kept in ``pycache``;
-    ``source``: a source tree of the package put first on the path."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")}
-    env["PYTHONPYCACHEPREFIX"] = str(pycache)
-    if source is not None:
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(source), env.get("PYTHONPATH")) if p)
-    return {**env, **extra}
 
 
 def our_process(path: Path, output: Path, size, max_layers: int, env: dict[str, str]) -> tuple[float, float]:
