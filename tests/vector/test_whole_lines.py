@@ -249,3 +249,40 @@ def test_chains_walked_equal_a_walk_piece_by_piece(seed):
     assert (lengths == 1).sum() > 10 and lengths.max() > 5
     assert ((partner[first] >= 0) & (lengths > 1)).sum() > 5  # loops of several pieces
     assert (partner[first] == first ^ 1).any()  # a piece closed on itself
+
+
+def _chains_of(sizes, loops, seed):
+    """``partner`` of pieces strung into open chains of ``sizes`` pieces and loops of ``loops``
+    pieces, the pieces numbered at random and each walked either way round."""
+    rng = np.random.default_rng(seed)
+    count = int(sum(sizes) + sum(loops))
+    number = rng.permutation(count)
+    flip = rng.integers(0, 2, count)
+    partner = np.full(2 * count, -1, np.int64)
+    at = 0
+    for size, closed in [(k, False) for k in sizes] + [(k, True) for k in loops]:
+        pieces = number[at : at + size]
+        start, end = 2 * pieces + flip[at : at + size], 2 * pieces + 1 - flip[at : at + size]
+        ahead = np.arange(size - 1) if not closed else np.arange(size)
+        nxt = (ahead + 1) % size
+        partner[end[ahead]], partner[start[nxt]] = start[nxt], end[ahead]
+        at += size
+    return partner
+
+
+@pytest.mark.parametrize("few", [0, 64, 10**9])
+def test_long_chains_and_many_loops_walk_as_piece_by_piece(monkeypatch, few):
+    """Chains longer than the walk's rounds take (the last few walked a step at a time), a
+    thousand loops, lone pieces and pieces closed on themselves: the same walk with every walk
+    taken in rounds (``_FEW`` 0), the default, and every walk a step at a time."""
+    from blueprint.vector import chain
+
+    monkeypatch.setattr(chain, "_FEW", few)
+    rng = np.random.default_rng(7)
+    sizes = [5000, *rng.integers(2, 300, 200).tolist()]
+    loops = [1, 1, 2, *rng.integers(3, 60, 1000).tolist(), 4000]
+    partner = np.r_[_chains_of(sizes, loops, 3), np.full(100, -1)]  # and 50 lone pieces
+    got, want = chain.chain_order(partner), _walk_piece_by_piece(partner)
+    for a, b in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert want[2].max() == 5000 and (want[2] == 1).sum() >= 50 + 2

@@ -87,6 +87,11 @@ def pair_ends(
     return partner
 
 
+# Walkers left when the rest of their walks is taken a step at a time in Python: a round of
+# array operations costs microseconds however few walk on, a step in Python a fraction of one.
+_FEW = 64
+
+
 def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Walk the pieces into chains: pieces paired at neither end first, then open chains from
     their free ends, then closed loops.
@@ -103,48 +108,75 @@ def chain_order(partner: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
     # pieces paired at neither end are chains of their own, found without walking
     alone = (partner[0::2] < 0) & (partner[1::2] < 0)
     # entering a piece through half-end h, the walk leaves it through h ^ 1 for that one's partner
-    onward = partner.reshape(-1, 2)[:, ::-1].reshape(-1).tolist()
-    walked: list[int] = []  # (piece << 1) | reversed: entered through its end 1, walked backwards
-    lengths: list[int] = []
-    append = walked.append
-    # an open chain from the lower of its two free half-ends, to the other one
-    other_end = bytearray(len(partner))
-    for h in np.flatnonzero((partner < 0) & ~np.repeat(alone, 2)).tolist():
-        if other_end[h]:
-            continue
-        first = len(walked)
-        while h >= 0:
-            append(h)
-            last = h
-            h = onward[h]
-        other_end[last ^ 1] = 1
-        lengths.append(len(walked) - first)
-    opened = np.array(walked, np.int64)
-    # what is left lies on closed loops, each walked from its lowest piece's start
+    onward = partner.reshape(-1, 2)[:, ::-1].reshape(-1)
+    # an open chain from the lower of its two free half-ends to the other: walked from both,
+    # the walk kept where it ends at the higher one
+    free = np.flatnonzero((partner < 0) & ~np.repeat(alone, 2))
+    walked, lengths = _walks(free, onward, closed=False)
+    kept = free < (walked[np.cumsum(lengths) - 1] ^ 1)
+    opened, open_lengths = walked[np.repeat(kept, lengths)], lengths[kept]
+    # what is left lies on closed loops, each walked from its lowest piece's start: the least
+    # half-end of its loop, and less than the least of the loop walked the other way
     off = alone.copy()
     off[opened >> 1] = True
-    walked = []
-    append = walked.append
-    visited = bytearray(len(alone))
-    for piece in np.flatnonzero(~off).tolist():
-        if visited[piece]:
-            continue
-        first = len(walked)
-        start = h = piece << 1
-        while True:
-            append(h)
-            visited[h >> 1] = 1
-            h = onward[h]
-            if h == start:
-                break
-        lengths.append(len(walked) - first)
-    flat = np.concatenate([opened, np.array(walked, np.int64)])
+    starts = _loop_starts(onward, np.flatnonzero(np.repeat(~off, 2)))
+    loops, loop_lengths = _walks(starts, onward, closed=True)
+    flat = np.concatenate([opened, loops])
     single = np.flatnonzero(alone)
     return (
         np.concatenate([single, flat >> 1]),
         np.concatenate([np.zeros(len(single), bool), (flat & 1).astype(bool)]),
-        np.concatenate([np.ones(len(single), np.int64), np.array(lengths, np.int64)]),
+        np.concatenate([np.ones(len(single), np.int64), open_lengths, loop_lengths]),
     )
+
+
+def _loop_starts(onward: np.ndarray, looped: np.ndarray) -> np.ndarray:
+    """The least half-end of each loop of ``looped`` (ascending half-ends that lie on loops of
+    ``onward``, both ways round) that is less than the least of its loop walked the other way,
+    ascending. Each one's least by doubling: after k rounds, every half-end holds the least of
+    the next 2^k on its loop; once a round changes nothing, the least of the whole loop."""
+    number = np.empty(len(onward), np.int64)
+    number[looped] = np.arange(len(looped))  # ascending: numbers order as half-ends do
+    least, ahead = np.arange(len(looped)), number[onward[looped]]
+    while True:
+        lower = np.minimum(least, least[ahead])
+        if np.array_equal(lower, least):
+            break
+        least, ahead = lower, ahead[ahead]
+    own = least == np.arange(len(looped))
+    return looped[own & (least < least[number[looped ^ 1]])]
+
+
+def _walks(starts: np.ndarray, onward: np.ndarray, closed: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The half-ends walked from each of ``starts`` along ``onward`` to where it gives -1, or
+    with ``closed`` back to the start: (half-ends, walk after walk in the order of ``starts``;
+    each walk's length). Every walk takes a step a round, as arrays, until few are left."""
+    lengths = np.zeros(len(starts), np.int64)
+    rounds = []
+    active, at = np.arange(len(starts)), starts
+    while len(active) > _FEW:
+        rounds.append((active, at))
+        lengths[active] += 1
+        at = onward[at]
+        on = at != starts[active] if closed else at >= 0
+        active, at = active[on], at[on]
+    tails = []
+    step = onward.item
+    for walker, h in zip(active.tolist(), at.tolist(), strict=True):
+        first, tail = int(starts[walker]), []
+        while h >= 0 and not (closed and h == first and tail):
+            tail.append(h)
+            h = step(h)
+        lengths[walker] += len(tail)
+        tails.append((walker, tail))
+    offsets = np.cumsum(lengths) - lengths
+    out = np.empty(int(lengths.sum()), np.int64)
+    for r, (ids, at) in enumerate(rounds):
+        out[offsets[ids] + r] = at
+    for walker, tail in tails:
+        end = offsets[walker] + lengths[walker]
+        out[end - len(tail) : end] = tail
+    return out, lengths
 
 
 def chain_pieces(
