@@ -153,8 +153,8 @@ def _prism_stl(path: Path) -> int:
 @needs_cli
 def test_a_model_drawn_only_as_pictures_is_weighed_as_a_picture(tmp_path):
     """Under a budget that holds a model's picture (``PICTURE_TRIANGLE_BYTES`` a triangle) but
-    not its vector drawing (``TRIANGLE_BYTES``), its PNG and its layers are drawn and its SVG is
-    refused in one line, exit 2, no file."""
+    not its vector drawing (``TRIANGLE_BYTES``), its PNG and its layers are drawn, ``info`` lists
+    it, and its SVG is refused in one line, exit 2, no file."""
     path = tmp_path / "prism.stl"
     faces = _prism_stl(path)
     budget_bytes = faces * (settings.PICTURE_TRIANGLE_BYTES + settings.TRIANGLE_BYTES) // 2
@@ -170,6 +170,10 @@ def test_a_model_drawn_only_as_pictures_is_weighed_as_a_picture(tmp_path):
     proc = run("layers", "prism.npz", "--max-layers", "2")
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "prism.npz").stat().st_size > 0
+    listed = [str(BLUEPRINT), "info", str(path)]
+    proc = subprocess.run(listed, capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith(f"{path}: {faces} triangles"), proc.stdout
     proc = run("render", "prism.svg")
     estimate = settings.human_size(faces * settings.TRIANGLE_BYTES)
     one_error(

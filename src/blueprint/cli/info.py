@@ -43,12 +43,15 @@ def info(model, as_json):
                 kind = "GPU" if device["gpu"] else "software"
                 click.echo(f"EGL device {device['index']}: {device['renderer']} ({kind})")
         return
+    from blueprint.scene.headers import pictures_only
     from blueprint.scene.instanced_parts import environment_of
     from blueprint.scene.loader import load_model
     from blueprint.scene.units import ASSUMED_UNIT, UNITS_MM
 
-    # every part, environment meshes marked: the names to give --include and --exclude
-    loaded = load_model(model, include="*")
+    # every part, environment meshes marked: the names to give --include and --exclude; read,
+    # not drawn, so weighed no more than a picture
+    with pictures_only():
+        loaded = load_model(model, include="*")
     environment = environment_of(loaded)
     counts = loaded.part_triangle_counts()
     lo, hi = loaded.bounds

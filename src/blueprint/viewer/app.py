@@ -8,6 +8,7 @@ from pathlib import Path
 
 from blueprint.api.options import DrawOptions
 from blueprint.compose.style import STYLES
+from blueprint.scene.headers import pictures_only
 from blueprint.viewer.loop import Viewer
 from blueprint.viewer.pacing import MOVING_FPS
 from blueprint.viewer.snapshots import DUMP_ENV
@@ -53,7 +54,9 @@ def run_viewer(
         interactive_scale=interactive_scale,
         moving_fps=moving_fps,
     )
-    model = load_model(model_path, up=options.up, include=options.include, exclude=options.exclude)
+    # the viewer draws pictures alone: weighed as one (its coarse meshes are a fraction of it)
+    with pictures_only():
+        model = load_model(model_path, up=options.up, include=options.include, exclude=options.exclude)
     viewer = Viewer(
         model,
         Path(model_path),
