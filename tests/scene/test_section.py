@@ -130,6 +130,37 @@ def test_kept_parts_stay_whole(two_parts):
         top_cut(model, 25.0, keep)  # above the block, only the post is there, and it is kept
 
 
+def test_a_plane_through_a_few_parts_of_many_slices_those_alone(monkeypatch):
+    """200 unit cubes in a row along x, a plane at x = 10.5 (its normal +x): the 10 cubes behind
+    it pass through whole, the 189 in front are dropped, and the one it runs through alone is
+    sliced and capped (a 1 x 1 cap at the plane), its faces in part order."""
+    from blueprint.examples import assemble, box
+    from blueprint.scene import section
+
+    model = assemble({f"cube{k:03d}": box((k, 0, 0), (k + 0.75, 1, 1)) for k in range(200)}, up="z")
+    sliced = []
+    made = section._part_mesh
+
+    def counted(vertices, faces):
+        sliced.append(len(faces))
+        return made(vertices, faces)
+
+    monkeypatch.setattr(section, "_part_mesh", counted)
+    plane = parse_section("x=10.5").facing((100.0, 0.5, 0.5), (0.0, 0.5, 0.5))
+    cut = cut_model(model, plane)
+    assert sliced == [12]
+    parts = np.unique(cut.model.face_part)
+    assert parts.tolist() == list(range(11))
+    assert (np.diff(cut.model.face_part) >= 0).all()
+    for k in range(10):
+        assert (cut.model.face_part == k).sum() == 12
+    assert cut.cap_parts().tolist() == [10]
+    assert cut.cap_area() == pytest.approx(1.0)
+    assert cut.model.bounds[1, 0] == pytest.approx(10.5)
+    # the vertices the whole cubes use, and no others
+    assert len(cut.model.positions) == len(np.unique(cut.model.faces))
+
+
 # -- raster --------------------------------------------------------------------------------------
 
 

@@ -155,74 +155,133 @@ def cut_model(model: Model, plane: SectionPlane, keep: np.ndarray | None = None)
     """Cut every part of ``model`` by ``plane``, removing the side its normal points at, and
     cap each cut part; parts flagged in ``keep`` ((P,) bool) stay whole.
 
+    Parts wholly behind the plane, or kept, pass through as arrays; parts wholly in front are
+    dropped; only the parts the plane runs through are sliced and capped one at a time, each
+    as a mesh of its own vertices (so that a plane through a few parts of an assembly of
+    thousands costs those few).
+
     Raises
     ------
     InputError
         The plane cuts none of the parts (it misses the model, or cuts only parts kept whole).
     """
-    import trimesh
-
-    keep = np.zeros(len(model.part_names), bool) if keep is None else np.asarray(keep, bool)
+    count = len(model.part_names)
+    keep = np.zeros(count, bool) if keep is None else np.asarray(keep, bool)
     extent = float(np.ptp(model.bounds, axis=0).max()) or 1.0
     eps = 1e-6 * extent
     good = ~model.degenerate_faces()
-    positions, faces, parts, caps = [], [], [], []
-    offset = 0
-    for part in range(len(model.part_names)):
-        chosen = good & (model.face_part == part)
-        if not chosen.any():
-            continue
-        vertices = model.positions.astype(np.float64)
-        mesh = trimesh.Trimesh(vertices, model.faces[chosen], process=True)
-        mesh.remove_unreferenced_vertices()
-        if not keep[part]:
-            mesh = _slice(mesh, plane, model.part_names[part])
-        if mesh is None or len(mesh.faces) == 0:
+    faces, part = model.faces[good], model.face_part[good]
+    vertices = model.positions.astype(np.float64)
+    height = (vertices - plane.point) @ plane.normal
+    lowest, highest = _part_extremes(height[faces], part, count)
+    whole = keep | (highest <= 0)  # parts without faces come out with neither
+    sliced = ~whole & (lowest < 0) & (highest > 0)
+    # the parts drawn as they are, a face a row in model order, on their own vertices
+    flat = whole[part]
+    used, at = _own_vertices(faces[flat], len(vertices))
+    pieces = [(vertices[used], at, part[flat])]
+    caps = [_cap_faces(vertices[used], at, height[used], plane, eps) & ~keep[part[flat]]]
+    offset = len(used)
+    # the faces of the parts the plane runs through, a run a part
+    chosen = sliced[part]
+    order = np.argsort(part[chosen], kind="stable")
+    through, through_part = faces[chosen][order], part[chosen][order]
+    bounds = np.flatnonzero(np.diff(through_part, prepend=-1, append=-1)).tolist()
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        index = int(through_part[lo])
+        mesh = _slice(_part_mesh(vertices, through[lo:hi]), plane, model.part_names[index])
+        if len(mesh.faces) == 0:
             continue
         v = np.asarray(mesh.vertices, np.float64)
         f = np.asarray(mesh.faces, np.int64)
-        cap = np.zeros(len(f), bool)
-        if not keep[part]:
-            height = (v - plane.point) @ plane.normal
-            normals = np.asarray(mesh.face_normals, np.float64)
-            # a cap lies in the plane and faces the side removed, that is, the camera
-            cap = (np.abs(height[f]) <= eps).all(axis=1) & (normals @ plane.normal > 0.99)
-        positions.append(v)
-        faces.append(f + offset)
-        parts.append(np.full(len(f), part, np.int32))
-        caps.append(cap)
+        pieces.append((v, f + offset, np.full(len(f), index, np.int32)))
+        caps.append(_cap_faces(v, f, (v - plane.point) @ plane.normal, plane, eps))
         offset += len(v)
-    cap = np.concatenate(caps) if caps else np.zeros(0, bool)
+    cap = np.concatenate(caps)
     if not cap.any():
         low, high = model.bounds
         raise InputError(
             f"section {plane.text} misses the model (or cuts only parts kept whole): the model lies "
             f"within x {low[0]:g} to {high[0]:g}, y {low[1]:g} to {high[1]:g}, z {low[2]:g} to {high[2]:g}"
         )
+    # the parts in model order, each one's faces in theirs
+    face_part = np.concatenate([p for _, _, p in pieces]).astype(np.int32)
+    order = np.argsort(face_part, kind="stable")
     cut = Model(
-        np.ascontiguousarray(np.concatenate(positions), np.float32),
-        np.ascontiguousarray(np.concatenate(faces), np.int32),
-        np.concatenate(parts),
+        np.ascontiguousarray(np.concatenate([v for v, _, _ in pieces]), np.float32),
+        np.ascontiguousarray(np.concatenate([f for _, f, _ in pieces])[order], np.int32),
+        face_part[order],
         model.part_names,
         model.up,
         model.source,
         unit=model.unit,
         unit_reason=model.unit_reason,
     )
-    return Cut(cut, cap, plane, keep)
+    return Cut(cut, cap[order], plane, keep)
+
+
+def _part_extremes(corner: np.ndarray, part: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """(count,) each: the least and the greatest of each part's faces' ``corner`` values ((F, 3)),
+    +inf and -inf for a part without faces."""
+    lowest, highest = np.full(count, np.inf), np.full(count, -np.inf)
+    if len(part) == 0:
+        return lowest, highest
+    low, high = corner.min(axis=1), corner.max(axis=1)
+    if (part[1:] >= part[:-1]).all():
+        # faces in runs of a part, as loaders make them: one reduction a run
+        starts = np.flatnonzero(np.r_[True, part[1:] != part[:-1]])
+        lowest[part[starts]] = np.minimum.reduceat(low, starts)
+        highest[part[starts]] = np.maximum.reduceat(high, starts)
+    else:
+        np.minimum.at(lowest, part, low)
+        np.maximum.at(highest, part, high)
+    return lowest, highest
+
+
+def _own_vertices(faces: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """(the vertices of ``count`` that ``faces`` use, ascending; the faces renumbered over
+    them), found by marks, not a sort."""
+    mark = np.zeros(count, bool)
+    mark[faces.reshape(-1)] = True
+    number = np.cumsum(mark) - 1
+    return np.flatnonzero(mark), number[faces]
+
+
+def _part_mesh(vertices: np.ndarray, faces: np.ndarray):
+    """A part's faces as a trimesh of its own vertices, merged where they coincide (found by a
+    sort of the part's corners: a mark over every vertex of the model would cost each part
+    the model's size)."""
+    import trimesh
+
+    used, at = np.unique(faces, return_inverse=True)
+    mesh = trimesh.Trimesh(vertices[used], at.reshape(-1, 3), process=True)
+    mesh.remove_unreferenced_vertices()
+    return mesh
+
+
+# The shortest cross product of a face's edges that gives it a direction, as trimesh's face
+# normals have it (shorter: a sliver of the slicing, no cap)
+_NO_NORMAL = 1e-13
+
+
+def _cap_faces(vertices: np.ndarray, faces: np.ndarray, height: np.ndarray, plane, eps: float) -> np.ndarray:
+    """(F,) bool: faces that lie in the plane (every corner within ``eps``, ``height`` a
+    vertex's) and face the side removed, that is, the camera: a cut's cap."""
+    if len(faces) == 0:
+        return np.zeros(0, bool)
+    corner = vertices[faces]
+    normal = np.cross(corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0])
+    length = np.linalg.norm(normal, axis=1)
+    facing = (normal @ plane.normal > 0.99 * length) & (length > _NO_NORMAL)
+    return (np.abs(height[faces]) <= eps).all(axis=1) & facing
 
 
 def _slice(mesh, plane: SectionPlane, name: str):
-    """The part behind the plane, capped; uncapped, with a warning, where the part is not a
-    closed surface (its cut then has no inside to fill)."""
+    """The part behind the plane, which runs through it, capped; uncapped, with a warning,
+    where the part is not a closed surface (its cut then has no inside to fill)."""
     import trimesh
 
     origin, inward = plane.point, -plane.normal
-    height = (np.asarray(mesh.vertices) - origin) @ plane.normal
-    if (height <= 0).all():
-        return mesh
-    if (height >= 0).all():
-        return None
     if mesh.is_watertight:
         try:
             return trimesh.intersections.slice_mesh_plane(mesh, inward, origin, cap=True)
