@@ -105,16 +105,22 @@ def hatch_overlay(
     # pixel centres in output pixels
     y, x = np.mgrid[0 : h * s, 0 : w * s].astype(np.float64)
     x, y = (x + 0.5) / s, (y + 0.5) / s
+    # each cut pixel's pattern: the lines drawn a pattern at a time, not a part at a time (a
+    # section through an assembly cuts hundreds of parts, and each pass reads every pixel)
+    pattern_of = np.full(int(parts.max()) + 1 if len(parts) else 0, -1, np.int64)
+    pattern_of[parts] = [patterns[part] for part in parts.tolist()]
+    pattern_image = np.full(triangles.shape, -1, np.int64)
+    pattern_image[on_cap] = pattern_of[part_image[on_cap]]
     lines = np.zeros(triangles.shape, bool)
-    for part in parts.tolist():
-        angle, factor = HATCH_PATTERNS[patterns[part]]
+    for pattern in sorted(set(patterns.values())):
+        angle, factor = HATCH_PATTERNS[pattern]
         a = math.radians(angle)
         step = spacing * factor
         # distance along the normal of lines at ``angle`` (y grows downwards: a picture's 45°)
         d = x * math.sin(a) + y * math.cos(a)
         phase = np.mod(d, step)
         near = np.minimum(phase, step - phase) <= 0.5 * line_width
-        lines |= near & (part_image == part)
+        lines |= near & (pattern_image == pattern)
 
     boundary = np.zeros(triangles.shape, bool)
     for axis in (0, 1):
