@@ -11,6 +11,7 @@ from blueprint import InputError, load_model
 from blueprint.api import designated_parts, render_frame
 from blueprint.examples import assemble, box, gearbox
 from blueprint.scene.camera import fit_camera
+from blueprint.scene.model import Model
 from blueprint.scene.parts import select_parts, select_parts_like
 
 SIZE = (80, 80)
@@ -167,3 +168,16 @@ def test_shaded_part_hides_what_is_behind_it_and_keeps_edges_in_front(renderer):
     assert np.abs(opaque[row, plate_col - 1 : plate_col + 2, :3] - centre).max() <= 3, "outline hidden"
     assert ink(opaque, box_col) < ink(plain, box_col) + 40 < 200, "the box's outline stays on top"
     assert ink(glass, plate_col) < ink(opaque, plate_col) - 10, "translucent shading shows it"
+
+
+def test_parts_like_another_model_are_those_most_of_whose_vertices_it_holds():
+    """100 cubes; a second model holding three cubes whole, five of another's eight corners
+    and four of a fifth's: those three and the one with five are chosen, the one with half not."""
+    model = assemble({f"cube{k}": box((2 * k, 0, 0), (2 * k + 1, 1, 1)) for k in range(100)})
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], np.float64)
+    held = [corners + (2 * k, 0, 0) for k in (7, 40, 99)]
+    held += [corners[:5] + (2 * 12, 0, 0), corners[:4] + (2 * 60, 0, 0)]
+    points = np.concatenate(held)
+    other = Model.from_arrays(points, np.arange(len(points) - len(points) % 3).reshape(-1, 3))
+    chosen = select_parts_like(model, other)
+    assert np.flatnonzero(chosen).tolist() == [7, 12, 40, 99]

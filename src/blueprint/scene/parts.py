@@ -58,13 +58,17 @@ def select_parts_like(model: Model, other: Model, tolerance: float | None = None
     diag = float(np.linalg.norm(np.ptp(model.bounds, axis=0))) or 1.0
     tolerance = diag * 1e-4 if tolerance is None else tolerance
     tree = cKDTree(other.positions.astype(np.float64))
-    selected = np.zeros(len(model.part_names), bool)
-    for index in range(len(model.part_names)):
-        used = np.unique(model.faces[model.face_part == index])
-        if len(used) == 0:
-            continue
-        distance, _ = tree.query(model.positions[used].astype(np.float64), distance_upper_bound=tolerance)
-        selected[index] = np.mean(np.isfinite(distance)) > 0.5
+    # each part's vertices once (a vertex two parts use counts for both), all looked up at once
+    vertices = len(model.positions)
+    pairs = np.unique(np.repeat(model.face_part.astype(np.int64), 3) * vertices + model.faces.reshape(-1))
+    part, vertex = np.divmod(pairs, vertices)
+    used = np.unique(vertex)
+    distance, _ = tree.query(model.positions[used].astype(np.float64), distance_upper_bound=tolerance)
+    near = np.zeros(vertices, bool)
+    near[used] = np.isfinite(distance)
+    count = len(model.part_names)
+    # most of a part's vertices near: more than half of them
+    selected = np.bincount(part, near[vertex], count) > 0.5 * np.bincount(part, minlength=count)
     if not selected.any():
         raise InputError(f"{other.source}: lies on no part of {model.source or 'the model'}")
     return selected
