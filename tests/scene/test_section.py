@@ -369,3 +369,18 @@ def test_a_part_kept_whole_does_not_clip_the_hatching_of_the_parts_cut(renderer)
     assert changed[ring].mean() > 0.6 / spacing
     # and the washer itself, above the plane, is not hatched
     assert changed[r < 7.0].mean() == 0.0
+
+
+def test_vector_hatch_patterns_differ_between_regions_that_touch():
+    """Each part takes the first pattern no earlier part within half a pixel has: squares in a
+    row alternate, a square touching two of them takes a third, a square apart the first, and
+    regions 0.5 px apart or more do not count as touching."""
+    from blueprint.vector.section import _patterns
+
+    row = {k: sg.box(10 * k, 0, 10 * k + 10, 10) for k in range(5)}
+    above = {5: sg.box(5, 10, 15, 20)}  # on squares 0 and 1
+    apart = {6: sg.box(100, 100, 110, 110), 7: sg.box(110.5, 100, 120, 110), 8: sg.box(120.4, 100, 130, 110)}
+    patterns = _patterns({**row, **above, **apart})
+    assert [patterns[k] for k in range(5)] == [0, 1, 0, 1, 0]
+    assert patterns[5] == 2
+    assert (patterns[6], patterns[7], patterns[8]) == (0, 0, 1)

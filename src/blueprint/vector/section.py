@@ -79,6 +79,28 @@ def _segments(geometry) -> list[np.ndarray]:
     return out
 
 
+def _patterns(polygons: dict[int, object]) -> dict[int, int]:
+    """Each part's pattern (an index into ``HATCH_PATTERNS``), by part: the first not taken by
+    a part before it whose region lies less than half a pixel from its own. The parts near
+    each found through a tree of their regions, not by every pair (a section through an
+    assembly cuts hundreds of parts)."""
+    import shapely
+
+    parts = sorted(polygons)
+    regions = [polygons[part] for part in parts]
+    near: list[list[int]] = [[] for _ in parts]
+    if regions:
+        a, b = shapely.STRtree(regions).query(regions, predicate="dwithin", distance=0.5)
+        close = (b < a) & (shapely.distance(np.take(regions, a), np.take(regions, b)) < 0.5)
+        for i, j in zip(a[close].tolist(), b[close].tolist(), strict=True):
+            near[i].append(j)
+    chosen: list[int] = []
+    for i in range(len(parts)):
+        used = {chosen[j] for j in near[i]}
+        chosen.append(next((k for k in range(len(HATCH_PATTERNS)) if k not in used), 0))
+    return dict(zip(parts, chosen, strict=True))
+
+
 def section_lines(
     cut: Cut, view: np.ndarray, projection: np.ndarray, size: tuple[int, int], spacing: float
 ) -> SectionLines:
@@ -91,18 +113,18 @@ def section_lines(
     model = cut.model
     projected = to_pixels(model.positions.astype(np.float64), view, projection, size)
     polygons = {}
-    for part in cut.cap_parts().tolist():
-        faces = model.faces[cut.cap & (model.face_part == part)]
-        triangles = shapely.polygons(projected[faces])
+    # the cut faces a run a part, in part order
+    capped = np.flatnonzero(cut.cap)
+    capped = capped[np.argsort(model.face_part[capped], kind="stable")]
+    cap_part = model.face_part[capped]
+    bounds = np.flatnonzero(np.diff(cap_part, prepend=-1, append=-1)).tolist()
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        triangles = shapely.polygons(projected[model.faces[capped[lo:hi]]])
         # tiny growth then shrink welds triangles that meet along shared edges despite rounding
         region = shapely.union_all(shapely.buffer(triangles, 1e-6)).buffer(-1e-6)
         if not region.is_empty and region.area > 0:
-            polygons[part] = region
-
-    patterns: dict[int, int] = {}
-    for part in sorted(polygons):
-        used = {patterns[q] for q in patterns if polygons[q].distance(polygons[part]) < 0.5}
-        patterns[part] = next((k for k in range(len(HATCH_PATTERNS)) if k not in used), 0)
+            polygons[int(cap_part[lo])] = region
+    patterns = _patterns(polygons)
 
     hatch, hatch_part, outline = [], [], []
     for part, region in polygons.items():
