@@ -238,3 +238,17 @@ def test_coarse_mesh_keeps_shape_and_parts_with_about_the_triangles_asked_for():
     assert areas.sum() == pytest.approx(4 * np.pi, rel=0.01)
     # a model within the count is its own coarse mesh
     assert coarse_model(model, model.triangle_count) is model
+
+
+def test_heads_up_line_counts_a_picked_part_of_a_scene_kept_as_instances_unflattened():
+    """The picked part's triangles come from the instances: the scene is not flattened for them."""
+    from instanced_scenes import mixed_scene
+
+    model = mixed_scene()
+    state = ViewState.start(STYLE_NAMES, max_layers=5)
+    state.part = 2
+    lines = hud_lines(state, model, {"ms": 50.0, "layers": 2}, "llvmpipe", "")
+    assert not model.is_flat
+    counts = model.part_triangle_counts()
+    assert lines[1].startswith(f"part 2: {model.part_names[2]} ({counts[2]:,} triangles)")
+    assert counts.sum() == model.triangle_count and not counts.flags.writeable

@@ -278,12 +278,18 @@ class Model:
         return i.part[np.searchsorted(i.first_face(), faces, side="right") - 1]
 
     def part_triangle_counts(self) -> np.ndarray:
-        """(P,) int64: triangles per part."""
-        if self.instances is not None:
-            i = self.instances
-            counts = np.bincount(i.part, weights=i.instance_faces(), minlength=len(self.part_names))
-            return counts.astype(np.int64)
-        return np.bincount(self.face_part, minlength=len(self.part_names))
+        """(P,) int64: triangles per part, counted once (read-only: the viewer's heads-up line
+        asks each frame a part is picked)."""
+        if "part_counts" not in self._cache:
+            if self.instances is not None:
+                i = self.instances
+                counts = np.bincount(i.part, weights=i.instance_faces(), minlength=len(self.part_names))
+            else:
+                counts = np.bincount(self.face_part, minlength=len(self.part_names))
+            counts = counts.astype(np.int64)
+            counts.setflags(write=False)
+            self._cache["part_counts"] = counts
+        return self._cache["part_counts"]
 
     def corners(self) -> np.ndarray:
         """(F, 3, 3) float64: every face's corners, made anew unless ``holding_corners``."""

@@ -34,7 +34,8 @@ def hud_lines(state: ViewState, model: Model, last: dict, renderer_name: str, st
     ]
     extra = []
     if state.part is not None:
-        count = int(np.count_nonzero(model.face_part == state.part))
+        # of a model kept as instances from its instances, never its flattened arrays
+        count = int(model.part_triangle_counts()[state.part])
         line = f"part {state.part}: {model.part_names[state.part]} ({count:,} triangles)"
         revealed = last.get("revealed")
         if state.mask and revealed is not None:
