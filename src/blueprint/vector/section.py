@@ -90,7 +90,11 @@ def _patterns(polygons: dict[int, object]) -> dict[int, int]:
     regions = [polygons[part] for part in parts]
     near: list[list[int]] = [[] for _ in parts]
     if regions:
-        a, b = shapely.STRtree(regions).query(regions, predicate="dwithin", distance=0.5)
+        # candidates: the regions whose boxes meet each one's box grown by half a pixel (no
+        # "dwithin" predicate: it needs GEOS 3.10, which a Shapely 2 may lack)
+        x0, y0, x1, y1 = shapely.bounds(regions).T
+        grown = shapely.box(x0 - 0.5, y0 - 0.5, x1 + 0.5, y1 + 0.5)
+        a, b = shapely.STRtree(regions).query(grown)
         close = (b < a) & (shapely.distance(np.take(regions, a), np.take(regions, b)) < 0.5)
         for i, j in zip(a[close].tolist(), b[close].tolist(), strict=True):
             near[i].append(j)
