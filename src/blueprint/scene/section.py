@@ -20,6 +20,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
+from blueprint.sorting import grouped
 
 __all__ = ["Cut", "SectionPlane", "cut_model", "parse_section"]
 
@@ -182,14 +183,10 @@ def cut_model(model: Model, plane: SectionPlane, keep: np.ndarray | None = None)
     pieces = [(vertices[used], at, part[flat])]
     caps = [_cap_faces(vertices[used], at, height[used], plane, eps) & ~keep[part[flat]]]
     offset = len(used)
-    # the faces of the parts the plane runs through, a run a part
-    chosen = sliced[part]
-    order = np.argsort(part[chosen], kind="stable")
-    through, through_part = faces[chosen][order], part[chosen][order]
-    bounds = np.flatnonzero(np.diff(through_part, prepend=-1, append=-1)).tolist()
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        index = int(through_part[lo])
-        mesh = _slice(_part_mesh(vertices, through[lo:hi]), plane, model.part_names[index])
+    # the faces of the parts the plane runs through, a part at a time
+    through = np.flatnonzero(sliced[part])
+    for index, which in grouped(part[through]):
+        mesh = _slice(_part_mesh(vertices, faces[through[which]]), plane, model.part_names[index])
         if len(mesh.faces) == 0:
             continue
         v = np.asarray(mesh.vertices, np.float64)

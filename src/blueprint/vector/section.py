@@ -17,6 +17,7 @@ import numpy as np
 from blueprint.compose.hatch import HATCH_PATTERNS
 from blueprint.scene.camera import to_pixels
 from blueprint.scene.section import Cut
+from blueprint.sorting import grouped
 
 __all__ = ["SECTION_HATCH_WIDTH", "SECTION_OUTLINE_WIDTH", "SectionLines", "section_lines"]
 
@@ -117,17 +118,14 @@ def section_lines(
     model = cut.model
     projected = to_pixels(model.positions.astype(np.float64), view, projection, size)
     polygons = {}
-    # the cut faces a run a part, in part order
+    # the cut faces a part at a time, in part order
     capped = np.flatnonzero(cut.cap)
-    capped = capped[np.argsort(model.face_part[capped], kind="stable")]
-    cap_part = model.face_part[capped]
-    bounds = np.flatnonzero(np.diff(cap_part, prepend=-1, append=-1)).tolist()
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        triangles = shapely.polygons(projected[model.faces[capped[lo:hi]]])
+    for part, which in grouped(model.face_part[capped]):
+        triangles = shapely.polygons(projected[model.faces[capped[which]]])
         # tiny growth then shrink welds triangles that meet along shared edges despite rounding
         region = shapely.union_all(shapely.buffer(triangles, 1e-6)).buffer(-1e-6)
         if not region.is_empty and region.area > 0:
-            polygons[int(cap_part[lo])] = region
+            polygons[part] = region
     patterns = _patterns(polygons)
 
     hatch, hatch_part, outline = [], [], []
