@@ -205,3 +205,51 @@ def test_bench_names_the_way_the_layers_were_found(renderer, capture):
     ):
         capture(compute)
         assert time_frames(renderer, model, camera, **options)["capture"] == way
+
+
+def test_faces_drawn_a_chunk_at_a_time(renderer, capture, monkeypatch):
+    """The faces are set up, binned and rasterised a chunk at a time (a chunk's set-up fills a
+    storage binding at most), each chunk appending to the lists the ones before it left: with
+    chunks of a thousand faces the layers are those of one chunk, and the bins' room is that of
+    the chunk with the most triangle-tile pairs."""
+    model = examples.gearbox()
+    options = dict(size=(400, 300))
+    capture(True)
+    rooms = renderer.compute_raster.rooms
+    rooms.clear()
+    whole = blueprint.peel(model, renderer=renderer, **options)
+    (size, whole_room), *_ = rooms.items()
+    monkeypatch.setattr(renderer.compute_raster, "chunk", 1000)
+    rooms.clear()
+    chunked = blueprint.peel(model, renderer=renderer, **options)
+    assert model.triangle_count > 2 * 1000
+    assert len(whole.depth) >= 2
+    assert np.array_equal(chunked.depth, whole.depth)
+    assert np.array_equal(chunked.triangle, whole.triangle)
+    assert np.array_equal(chunked.part, whole.part)
+    # (a room is the pairs listed and a quarter more, and 1 024)
+    assert 1024 < rooms[size] < 0.75 * whole_room
+    # bins short for the first chunks (the last has 144 faces): drawn again with room for them
+    rooms[size] = 8
+    again = blueprint.peel(model, renderer=renderer, **options)
+    assert np.array_equal(again.depth, whole.depth)
+    assert np.array_equal(again.triangle, whole.triangle)
+
+
+def test_a_chunk_fills_a_storage_binding_at_most(renderer):
+    """A chunk's set-up (the largest of its buffers, ``SETUP_BYTES`` a face) fits the driver's
+    storage binding limit, never past 2 GiB; bins past it send the frame to the graphics
+    pipeline."""
+    computing = renderer.compute_raster
+    limit = int(renderer.ctx.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
+    assert computing.binding == min(limit, raster.MOST_BINDING)
+    assert raster.SETUP_BYTES * computing.chunk <= computing.binding < 1 << 31
+    assert raster.SETUP_BYTES * (computing.chunk + 1) > computing.binding
+    size = (64, 64)
+    assert computing.bytes(size, 10 * computing.chunk) == computing.bytes(size, computing.chunk)
+    assert computing.holds(size, 10 * computing.chunk)
+    computing.rooms[size] = computing.binding // raster.BIN_BYTES + 1
+    try:
+        assert not computing.holds(size, 1)
+    finally:
+        del computing.rooms[size]

@@ -526,11 +526,15 @@ class ABufferSource:
     def _computes(self, size: tuple[int, int]) -> bool:
         """Whether the compute rasteriser lists a frame of ``size`` (render.raster: where it
         sees the view too): from ``compute_from`` pixels, where its buffers (some 150 bytes a
-        triangle) fit ``max_bytes`` beside the lists of the room kept for the size; else the
-        graphics pipeline lists it, rather than the frame be peeled a pass a layer."""
+        triangle of a chunk, and its bins) fit ``max_bytes`` beside the lists of the room kept
+        for the size and its bins fit a storage binding; else the graphics pipeline lists it,
+        rather than the frame be peeled a pass a layer."""
+        triangles = self.mesh.triangles
         if self.raster is None or size[0] * size[1] < self.compute_from:
             return False
-        needs = self._list_bytes(self._room(size)) + self.raster.bytes(size, self.mesh.triangles)
+        if not self.raster.holds(size, triangles):
+            return False
+        needs = self._list_bytes(self._room(size)) + self.raster.bytes(size, triangles)
         return needs <= self.max_bytes
 
     def fragments(self, gb, head) -> None:

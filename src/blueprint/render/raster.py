@@ -7,7 +7,9 @@ geometry pass is bound by what its fragments write from those few
 (``benchmarks/compute_capture.py``). Coverage follows the rasteriser's rules (corners
 snapped to 1/256 pixel, pixel centres, the top-left rule, exact edge tests) and a fragment's
 depth is the plane through the projected corners at the pixel centre: the true plane's, as
-``fragment_depth.glsl`` takes it where the driver snaps depths. There is no clipping: a view is
+``fragment_depth.glsl`` takes it where the driver snaps depths. The faces are drawn a chunk at a
+time, the set-up and bins sized for one (``chunk``): a storage buffer holds no more than the
+driver's limit, and offsets of 2 GiB and more are not relied on. There is no clipping: a view is
 drawn this way only where the model's bounds lie wholly in front of the eye and project within
 a range whose edge tests stay exact (``sees``); depths outside [0, 1] are dropped per fragment,
 as the near and far planes would clip them.
@@ -29,20 +31,33 @@ ACROSS = 32768
 VERTICES, INDICES, SETUP, COUNT, START, BINS, EDGES = 5, 6, 11, 12, 13, 14, 15
 # bytes a triangle's set-up and edge equations take, and a bin entry
 SETUP_BYTES, EDGE_BYTES, BIN_BYTES = 80, 72, 4
+# bytes a storage buffer is bound with at most, whatever the driver allows: byte offsets past it
+# would not fit a signed 32-bit integer, which a driver's address arithmetic may use
+MOST_BINDING = (1 << 31) - 1
 # window positions (pixels) within which snapped corners' edge equations stay exact in double
 # precision (products of two coordinates in 1/256 pixel below 2^53)
 REACH = 1 << 17
 
 
+def binding_bytes(ctx) -> int:
+    """Bytes one storage buffer binding of ``ctx`` may hold: the driver's
+    ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``, at most ``MOST_BINDING``."""
+    limit = int(ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE") or 0)
+    return min(limit, MOST_BINDING) if limit > 0 else MOST_BINDING
+
+
 class ComputeRaster:
     """The four dispatches of abuffer_raster.comp for one renderer ``r``: set-up (each
     triangle's snapped corners, edge equations and the tiles it reaches, counted), a scan of the
-    counts, binning, and a workgroup a tile listing its pixels' fragments. The bins' room grows
-    from what a frame of each size listed (``pairs``), as the lists' room does."""
+    counts, binning, and a workgroup a tile listing its pixels' fragments, over ``chunk`` faces
+    at a time (the set-up of a chunk fills a storage binding at most). The bins' room grows from
+    what a frame of each size listed (``pairs``: the most of any chunk), as the lists' room does."""
 
     def __init__(self, r) -> None:
         self.r = r
         self.rooms: dict[tuple[int, int], int] = {}
+        self.binding = binding_bytes(r.ctx)
+        self.chunk = max(1, self.binding // SETUP_BYTES)
 
     def stages(self, defines: dict, mesh) -> list:
         defines = {**defines, **mesh.placement_defines}
@@ -66,8 +81,12 @@ class ComputeRaster:
         return bool(np.abs(window).max() < REACH)
 
     def room(self, size: tuple[int, int], triangles: int) -> int:
-        """Bin entries a frame of ``size`` starts with."""
-        return self.rooms.get(size, max(4 * triangles, 1 << 16))
+        """Bin entries a frame of ``size`` starts with (a chunk's)."""
+        return self.rooms.get(size, max(4 * min(triangles, self.chunk), 1 << 16))
+
+    def holds(self, size: tuple[int, int], triangles: int) -> bool:
+        """Whether the bins of a frame of ``size`` fit a storage binding."""
+        return BIN_BYTES * self.room(size, triangles) <= self.binding
 
     def pairs(self, size: tuple[int, int], listed: int, room: int) -> bool:
         """Note ``listed`` triangle-tile pairs of a frame of ``size`` that had ``room``: whether
@@ -77,10 +96,10 @@ class ComputeRaster:
         return listed <= room
 
     def bytes(self, size: tuple[int, int], triangles: int) -> int:
-        """Memory its buffers take for a frame of ``size``."""
+        """Memory its buffers take for a frame of ``size``: a chunk's set-up and bins."""
         tiles = -(-size[0] // TILE) * -(-size[1] // TILE)
-        per_triangle = SETUP_BYTES + EDGE_BYTES
-        return per_triangle * triangles + 8 * (tiles + 1) + BIN_BYTES * self.room(size, triangles)
+        set_up = (SETUP_BYTES + EDGE_BYTES) * min(triangles, self.chunk)
+        return set_up + 8 * (tiles + 1) + BIN_BYTES * self.room(size, triangles)
 
     def fragments(self, ab, size: tuple[int, int], uniforms: dict) -> int:
         """Every fragment of ``ab``'s mesh listed into its lists (bound, and emptied) at
@@ -88,24 +107,23 @@ class ComputeRaster:
         r, pool, mesh = self.r, self.r.pool, ab.mesh
         w, h = size
         triangles = mesh.triangles
+        chunk = min(triangles, self.chunk)
         columns, rows = -(-w // TILE), -(-h // TILE)
         tiles = columns * rows
         room = self.room(size, triangles)
         count = pool.buffer("raster.count", 4 * tiles)
-        count.clear()
         mesh.bind_faces(VERTICES, INDICES)
         for binding, name, nbytes in (
-            (SETUP, "setup", SETUP_BYTES * triangles),
+            (SETUP, "setup", SETUP_BYTES * chunk),
             (START, "start", 4 * (tiles + 1)),
             (BINS, "bins", BIN_BYTES * room),
-            (EDGES, "edges", EDGE_BYTES * triangles),
+            (EDGES, "edges", EDGE_BYTES * chunk),
         ):
             pool.buffer(f"raster.{name}", nbytes).bind_to_storage_buffer(binding)
         count.bind_to_storage_buffer(COUNT)
         put = r.uniforms.set
         values = {
             "u_size": (w, h),
-            "u_triangles": triangles,
             "u_tile_columns": columns,
             "u_tiles": tiles,
             "u_bin_room": room,
@@ -116,15 +134,23 @@ class ComputeRaster:
             for name, value in values.items():
                 if name in prog:
                     put(prog, name, value)
-        groups = -(-triangles * ROWS // 64)
-        across = min(groups, ACROSS)
-        down = -(-groups // across)
         ctx = r.ctx
-        stages[0].run(across, down)
-        ctx.memory_barrier()
-        stages[1].run(1)
-        ctx.memory_barrier()
-        stages[2].run(across, down)
-        ctx.memory_barrier()
-        stages[3].run(columns, rows)
+        for first in range(0, triangles, chunk):
+            these = min(chunk, triangles - first)
+            for prog in stages:
+                for name, value in (("u_first", first), ("u_triangles", these)):
+                    if name in prog:
+                        put(prog, name, value)
+            groups = -(-these * ROWS // 64)
+            across = min(groups, ACROSS)
+            down = -(-groups // across)
+            count.clear()
+            stages[0].run(across, down)
+            ctx.memory_barrier()
+            stages[1].run(1)
+            ctx.memory_barrier()
+            stages[2].run(across, down)
+            ctx.memory_barrier()
+            stages[3].run(columns, rows)
+            ctx.memory_barrier()
         return room

@@ -11,6 +11,7 @@ void main() {
         drawn = 0u;
         capacity = u_capacity;
         long_lists = 0u;
+        pairs = 0u;
         for (int i = 0; i <= MOST_LAYERS; ++i) {
             pixels_with[i] = 0u;
         }

@@ -2,7 +2,9 @@
 // pixels, and each tile's pixels tested against its triangles by one workgroup, every covered
 // pixel centre's fragment appended to the pixel's list as the fragment shader appends it.
 // STAGE 0 sets each triangle up and counts the tiles it touches, 1 turns the counts into
-// where each tile's triangles start, 2 lists the triangles of each tile, 3 rasterises.
+// where each tile's triangles start, 2 lists the triangles of each tile, 3 rasterises. The
+// four run over a chunk of the mesh's faces at a time (from u_first, u_triangles of them),
+// each appending to the lists the chunks before it left: the set-up and bins hold one chunk.
 // A triangle's edges are kept as equations exact in double precision (corners are integers
 // below 2^21, so every term is an integer below 2^53), the top-left rule folded in: a tile is
 // binned only where some pixel centre of it lies inside all three edges' half-planes (thin
@@ -25,8 +27,8 @@ layout(local_size_x = 64) in;
 #endif
 
 // the mesh's interleaved vertices (position, normal, part as int bits) and faces, in their
-// meshes' own coordinates: triangle t is face ID t, placed by its instance (instance.glsl's
-// faces table)
+// meshes' own coordinates: triangle t of the chunk is face ID u_first + t, placed by its
+// instance (instance.glsl's faces table)
 layout(std430, binding = 5) readonly buffer Vertices { float vertices[]; };
 layout(std430, binding = 6) readonly buffer Indices { uint indices[]; };
 // a triangle's setup, five ivec4: snapped corners (x0, y0, x1, y1), (x2, y2, z0, z1), (z2,
@@ -47,6 +49,7 @@ uniform mat4 u_view;
 uniform mat4 u_projection;
 uniform bool u_ortho;
 uniform ivec2 u_size;
+uniform int u_first;
 uniform int u_triangles;
 uniform int u_tile_columns;
 uniform int u_tiles;
@@ -142,8 +145,8 @@ void main() {
     vec2 exact[3];
     float z[3], inv_w[3];
     bool behind = false;
-    int placed = placement_of(t);
-    uint face = placed_face(placed, t);
+    int placed = placement_of(u_first + t);
+    uint face = placed_face(placed, u_first + t);
     for (int k = 0; k < 3; ++k) {
         vec4 clip = u_projection * (u_view * vec4(placed_point(placed, position(indices[3u * face + uint(k)])), 1.0));
         behind = behind || clip.w <= 0.0;
@@ -230,8 +233,9 @@ void main() {
     }
     if (i == GROUP - 1u) {
         tile_start[u_tiles] = sums[i];
-        // more than the bins hold: the capture sees it and draws again with room for them
-        pairs = sums[i];
+        // more than the bins hold: the capture sees it (the most of any chunk) and draws again
+        // with room for them
+        atomicMax(pairs, sums[i]);
     }
 }
 #elif STAGE == 2
@@ -263,13 +267,13 @@ void main() {
 #else
 // triangles a batch: shared memory holds their set-up (32K at most on some drivers)
 #define BATCH 128
-// each held triangle's corners' depths, its corners as projected (unsnapped), its face,
-// facing, and edge equations moved to the tile: E at its first pixel centre and E's steps a
+// each held triangle's corners' depths, its corners as projected (unsnapped), its place in the
+// chunk, facing, and edge equations moved to the tile: E at its first pixel centre and E's steps a
 // pixel along x and y
 shared vec3 held_z[BATCH];
 shared vec4 held_p01[BATCH];
 shared vec2 held_p2[BATCH];
-shared int held_face[BATCH];
+shared int held_t[BATCH];
 #if !SLIM
 shared int held_placement[BATCH];
 #endif
@@ -315,7 +319,8 @@ void main() {
     // (bins past the room were never listed)
     uint begin = min(tile_start[tile], uint(u_bin_room)), end = min(tile_start[tile + 1u], uint(u_bin_room));
     mat3 turn = mat3(u_view);
-    uint head = 0u;
+    // (the chunks before this one left their fragments' lists)
+    uint head = inside ? imageLoad(u_head, pixel).x : 0u;
     for (uint batch = begin; batch < end; batch += uint(BATCH)) {
         uint count = min(uint(BATCH), end - batch);
         barrier();
@@ -325,9 +330,9 @@ void main() {
             held_z[lane] = vec3(intBitsToFloat(s1.z), intBitsToFloat(s1.w), intBitsToFloat(s2.x));
             held_p01[lane] = intBitsToFloat(setup[5 * t + 4]);
             held_p2[lane] = intBitsToFloat(setup[5 * t + 3].zw);
-            held_face[lane] = t;
+            held_t[lane] = t;
 #if !SLIM
-            held_placement[lane] = placement_of(t);
+            held_placement[lane] = placement_of(u_first + t);
 #endif
             dvec3 a = dvec3(edge_eq[9 * t], edge_eq[9 * t + 3], edge_eq[9 * t + 6]);
             dvec3 b = dvec3(edge_eq[9 * t + 1], edge_eq[9 * t + 4], edge_eq[9 * t + 7]);
@@ -396,14 +401,14 @@ void main() {
                 bool front = held_front[k];
 #if SLIM
                 if (node < capacity) {
-                    slim[node] = uvec2(floatBitsToUint(z) | (front ? 0u : KB_BACK), uint(held_face[k] + 1));
+                    slim[node] = uvec2(floatBitsToUint(z) | (front ? 0u : KB_BACK), uint(u_first + held_t[k] + 1));
                     AB_SET_LINK(node, head);
                     head = node + 1u;
                 }
 #else
                 if (node < capacity) {
-                    ivec4 s2 = setup[5 * held_face[k] + 2];
-                    int face = held_face[k], placed = held_placement[k];
+                    ivec4 s2 = setup[5 * held_t[k] + 2];
+                    int face = u_first + held_t[k], placed = held_placement[k];
                     vec3 v = w * vec3(intBitsToFloat(s2.y), intBitsToFloat(s2.z), intBitsToFloat(s2.w));
                     v /= v.x + v.y + v.z;
                     uint f = placed_face(placed, face);
