@@ -75,6 +75,18 @@ def current(method):
     return wrapper
 
 
+# bytes a storage buffer is bound with at most, whatever the driver allows: byte offsets past it
+# would not fit a signed 32-bit integer, which a driver's address arithmetic may use
+MOST_BINDING = (1 << 31) - 1
+
+
+def storage_bytes(ctx) -> int:
+    """Bytes one storage buffer binding of ``ctx`` holds at most: the driver's
+    ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE`` (none below OpenGL 4.3), never past ``MOST_BINDING``."""
+    limit = int(ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE") or 0)
+    return min(limit, MOST_BINDING) if limit > 0 else 0
+
+
 class Device:
     """Owns one OpenGL context (headless unless ``ctx`` is a window's), its targets, queries
     and programs. Use as a context manager or call ``release()``.
@@ -87,6 +99,7 @@ class Device:
     ``subgroup_ballot``: a shader may count and rank the invocations of its subgroup, helper
     invocations told apart (GL_ARB_shader_ballot, 64-bit integers for its masks,
     GL_ARB_ES3_1_compatibility for gl_HelperInvocation).
+    ``storage_bytes``: the most bytes one storage buffer binding holds (``storage_bytes``).
     ``snapped_depth``: a fragment's depth comes from the plane through its triangle's corners
     as snapped to the sub-pixel grid, not as projected (measured by ``depth_snap_px``), so
     coincident triangles with different corners differ in depth by up to the slope times the
@@ -114,6 +127,7 @@ class Device:
             self.ctx.version_code >= 420 or "GL_ARB_shading_language_packing" in ext
         )
         self.max_draw_buffers = int(self.ctx.info["GL_MAX_DRAW_BUFFERS"])
+        self.storage_bytes = storage_bytes(self.ctx)
         self.fragment_interlock = (
             self.ctx.version_code >= 430
             and "GL_ARB_fragment_shader_interlock" in ext

@@ -35,9 +35,10 @@ FACES_BYTES = 1 << 26
 FACES_GROUP = 64
 # the histogram of layers a pixel has (abuffer.glsl)
 MOST_LAYERS = 256
-# bytes a fragment holds: its surface (16), its link in the pixel's list, its link in the
-# pixel's layers
-NODE_BYTES = 24
+# bytes a fragment's surface takes, and all it holds: its surface, its link in the pixel's list,
+# its link in the pixel's layers
+SURFACE_BYTES = 16
+NODE_BYTES = SURFACE_BYTES + 8
 # ...and its depth and face as the geometry pass writes them where the nodes are slim
 SLIM_BYTES = 8
 # storage bindings of the slim fragments and of the mesh the resolve reads (abuffer.glsl,
@@ -275,11 +276,12 @@ class ABufferSource:
         return wanted if wanted <= max(room, self._most_room()) else room
 
     def _most_room(self) -> int:
-        """The most fragments lists may hold within ``max_bytes`` (and the images' rows, of
-        ``AB_ROW`` entries each); the compute rasteriser's buffers are counted where it draws
+        """The most fragments lists may hold within ``max_bytes`` and, in storage buffers, what
+        a binding holds of their nodes (``Device.storage_bytes``), or in images, their rows of
+        ``AB_ROW`` entries each; the compute rasteriser's buffers are counted where it draws
         them (``_computes``)."""
         if not self.images:
-            return self.max_bytes // self.node_bytes
+            return min(self.max_bytes // self.node_bytes, self.r.storage_bytes // SURFACE_BYTES)
         return min(self.max_bytes // (AB_ROW * self.node_bytes), self.r.max_texture) * AB_ROW
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
@@ -415,7 +417,7 @@ class ABufferSource:
             for unit, (part, fmt) in zip(LIST_UNITS, parts, strict=True):
                 pool.texture(f"{name}.{part}", size, fmt).bind_to_image(unit, read=True, write=True)
         else:
-            for binding, (part, nbytes) in enumerate((("nodes", 16), ("links", 4), ("order", 4))):
+            for binding, (part, nbytes) in enumerate((("nodes", SURFACE_BYTES), ("links", 4), ("order", 4))):
                 pool.buffer(f"{name}.{part}", nbytes * room).bind_to_storage_buffer(binding)
         held = pool.buffer(f"{name}.totals", 16), pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1))
         for binding, buf in enumerate(held, 3):

@@ -8,8 +8,8 @@ geometry pass is bound by what its fragments write from those few
 snapped to 1/256 pixel, pixel centres, the top-left rule, exact edge tests) and a fragment's
 depth is the plane through the projected corners at the pixel centre: the true plane's, as
 ``fragment_depth.glsl`` takes it where the driver snaps depths. The faces are drawn a chunk at a
-time, the set-up and bins sized for one (``chunk``): a storage buffer holds no more than the
-driver's limit, and offsets of 2 GiB and more are not relied on. There is no clipping: a view is
+time, the set-up and bins sized for one (``chunk``): a storage buffer holds no more than a
+binding does (``Device.storage_bytes``). There is no clipping: a view is
 drawn this way only where the model's bounds lie wholly in front of the eye and project within
 a range whose edge tests stay exact (``sees``); depths outside [0, 1] are dropped per fragment,
 as the near and far planes would clip them.
@@ -31,19 +31,9 @@ ACROSS = 32768
 VERTICES, INDICES, SETUP, COUNT, START, BINS, EDGES = 5, 6, 11, 12, 13, 14, 15
 # bytes a triangle's set-up and edge equations take, and a bin entry
 SETUP_BYTES, EDGE_BYTES, BIN_BYTES = 80, 72, 4
-# bytes a storage buffer is bound with at most, whatever the driver allows: byte offsets past it
-# would not fit a signed 32-bit integer, which a driver's address arithmetic may use
-MOST_BINDING = (1 << 31) - 1
 # window positions (pixels) within which snapped corners' edge equations stay exact in double
 # precision (products of two coordinates in 1/256 pixel below 2^53)
 REACH = 1 << 17
-
-
-def binding_bytes(ctx) -> int:
-    """Bytes one storage buffer binding of ``ctx`` may hold: the driver's
-    ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``, at most ``MOST_BINDING``."""
-    limit = int(ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE") or 0)
-    return min(limit, MOST_BINDING) if limit > 0 else MOST_BINDING
 
 
 class ComputeRaster:
@@ -56,7 +46,7 @@ class ComputeRaster:
     def __init__(self, r) -> None:
         self.r = r
         self.rooms: dict[tuple[int, int], int] = {}
-        self.binding = binding_bytes(r.ctx)
+        self.binding = r.storage_bytes
         self.chunk = max(1, self.binding // SETUP_BYTES)
 
     def stages(self, defines: dict, mesh) -> list:
