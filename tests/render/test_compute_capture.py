@@ -237,14 +237,16 @@ def test_faces_drawn_a_chunk_at_a_time(renderer, capture, monkeypatch):
 
 
 def test_a_chunk_fills_a_storage_binding_at_most(renderer):
-    """A chunk's set-up (the largest of its buffers, ``SETUP_BYTES`` a face) fits the driver's
-    storage binding limit, never past 2 GiB; bins past it send the frame to the graphics
-    pipeline."""
+    """A chunk's set-up (the largest of its buffers, ``SETUP_BYTES`` a face) takes
+    ``CHUNK_BYTES`` at most, and fits the driver's storage binding limit, never 2 GiB; bins past
+    a binding send the frame to the graphics pipeline."""
     computing = renderer.compute_raster
     limit = int(renderer.ctx.info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"])
     assert computing.binding == renderer.device.storage_bytes == min(limit, (1 << 31) - 1)
-    assert raster.SETUP_BYTES * computing.chunk <= computing.binding < 1 << 31
-    assert raster.SETUP_BYTES * (computing.chunk + 1) > computing.binding
+    most = min(computing.binding, raster.CHUNK_BYTES)
+    assert raster.SETUP_BYTES * computing.chunk <= most
+    assert raster.SETUP_BYTES * (computing.chunk + 1) > most
+    assert computing.binding < 1 << 31
     size = (64, 64)
     assert computing.bytes(size, 10 * computing.chunk) == computing.bytes(size, computing.chunk)
     assert computing.holds(size, 10 * computing.chunk)

@@ -8,8 +8,8 @@ geometry pass is bound by what its fragments write from those few
 snapped to 1/256 pixel, pixel centres, the top-left rule, exact edge tests) and a fragment's
 depth is the plane through the projected corners at the pixel centre: the true plane's, as
 ``fragment_depth.glsl`` takes it where the driver snaps depths. The faces are drawn a chunk at a
-time, the set-up and bins sized for one (``chunk``): a storage buffer holds no more than a
-binding does (``Device.storage_bytes``). There is no clipping: a view is
+time, the set-up and bins sized for one (``chunk``: ``CHUNK_BYTES`` of set-up, or what a
+binding holds where that is less, ``Device.storage_bytes``). There is no clipping: a view is
 drawn this way only where the model's bounds lie wholly in front of the eye and project within
 a range whose edge tests stay exact (``sees``); depths outside [0, 1] are dropped per fragment,
 as the near and far planes would clip them.
@@ -31,6 +31,10 @@ ACROSS = 32768
 VERTICES, INDICES, SETUP, COUNT, START, BINS, EDGES = 5, 6, 11, 12, 13, 14, 15
 # bytes a triangle's set-up and edge equations take, and a bin entry
 SETUP_BYTES, EDGE_BYTES, BIN_BYTES = 80, 72, 4
+# bytes of set-up a chunk of faces takes at most (where a binding holds more): a GPU maps the
+# memory of new buffers as they are first written, at some 20 GB a second (the H100), which a
+# single drawing pays where a chunk's buffers are gigabytes
+CHUNK_BYTES = 1 << 28
 # window positions (pixels) within which snapped corners' edge equations stay exact in double
 # precision (products of two coordinates in 1/256 pixel below 2^53)
 REACH = 1 << 17
@@ -47,7 +51,7 @@ class ComputeRaster:
         self.r = r
         self.rooms: dict[tuple[int, int], int] = {}
         self.binding = r.storage_bytes
-        self.chunk = max(1, self.binding // SETUP_BYTES)
+        self.chunk = max(1, min(self.binding, CHUNK_BYTES) // SETUP_BYTES)
 
     def stages(self, defines: dict, mesh) -> list:
         defines = {**defines, **mesh.placement_defines}
