@@ -19,6 +19,7 @@ from blueprint.sorting import (
     SortedKeys,
     _bucket_order,
     dense_ranks,
+    renumbered,
     sorted_with_order,
     stable_argsort,
     unique_first,
@@ -168,3 +169,16 @@ def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype):
     np.testing.assert_array_equal(dense, np.unique(key, return_inverse=True)[1].reshape(-1))
     sparse = key.astype(np.int64) * 1000  # a span beyond the table: numbered by a sort
     np.testing.assert_array_equal(dense_ranks(sparse), np.unique(sparse, return_inverse=True)[1].reshape(-1))
+
+
+@pytest.mark.parametrize("spread", [1, 1000], ids=["table", "sort"])
+@pytest.mark.parametrize("count", [0, 1, 300])
+def test_renumbered_keys_are_numpys_unique_and_inverse(spread, count):
+    """Over a range a table holds (a part's own vertices) and past it (numbered by a sort)."""
+    key = (np.random.default_rng(7).integers(0, 80, count) * spread - 40).astype(np.int32)
+    distinct, inverse = renumbered(key)
+    expected, expected_inverse = np.unique(key, return_inverse=True)
+    assert distinct.dtype == key.dtype
+    np.testing.assert_array_equal(distinct, expected)
+    np.testing.assert_array_equal(inverse, expected_inverse.reshape(-1))
+    np.testing.assert_array_equal(distinct[inverse], key)

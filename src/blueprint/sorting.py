@@ -249,6 +249,26 @@ def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             first = np.full(span, n, np.int64)
             np.minimum.at(first, at, np.arange(n))
             return (np.flatnonzero(present) + low).astype(key.dtype), first[present], rank[at]
+    return _sorted_unique(key)
+
+
+def renumbered(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(key, return_inverse=True)`` of a 1-D integer array: the distinct keys and each
+    entry's number among them, as ``unique_first`` finds them but without the first
+    occurrences (a vertex list's own vertices, its corners numbered over them)."""
+    n = len(key)
+    if n:
+        low = int(key.min())
+        span = int(key.max()) - low + 1
+        if span <= _TABLE_PER_KEY * n:
+            at, present, rank = _table(key, low, span, np.int64)
+            return (np.flatnonzero(present) + low).astype(key.dtype), rank[at]
+    distinct, _, inverse = _sorted_unique(key)
+    return distinct, inverse
+
+
+def _sorted_unique(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``unique_first`` by one stable sort of the keys."""
     order = stable_argsort(key)
     ordered = key[order]
     new = np.ones(len(key), bool)

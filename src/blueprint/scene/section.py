@@ -20,7 +20,7 @@ import numpy as np
 
 from blueprint.errors import InputError
 from blueprint.scene.model import Model
-from blueprint.sorting import grouped
+from blueprint.sorting import grouped, renumbered
 
 __all__ = ["Cut", "SectionPlane", "cut_model", "parse_section"]
 
@@ -179,7 +179,8 @@ def cut_model(model: Model, plane: SectionPlane, keep: np.ndarray | None = None)
     sliced = ~whole & (lowest < 0) & (highest > 0)
     # the parts drawn as they are, a face a row in model order, on their own vertices
     flat = whole[part]
-    used, at = _own_vertices(faces[flat], len(vertices))
+    used, at = renumbered(faces[flat].reshape(-1))
+    at = at.reshape(-1, 3)
     pieces = [(vertices[used], at, part[flat])]
     caps = [_cap_faces(vertices[used], at, height[used], plane, eps) & ~keep[part[flat]]]
     offset = len(used)
@@ -235,22 +236,13 @@ def _part_extremes(corner: np.ndarray, part: np.ndarray, count: int) -> tuple[np
     return lowest, highest
 
 
-def _own_vertices(faces: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """(the vertices of ``count`` that ``faces`` use, ascending; the faces renumbered over
-    them), found by marks, not a sort."""
-    mark = np.zeros(count, bool)
-    mark[faces.reshape(-1)] = True
-    number = np.cumsum(mark) - 1
-    return np.flatnonzero(mark), number[faces]
-
-
 def _part_mesh(vertices: np.ndarray, faces: np.ndarray):
-    """A part's faces as a trimesh of its own vertices, merged where they coincide (found by a
-    sort of the part's corners: a mark over every vertex of the model would cost each part
-    the model's size)."""
+    """A part's faces as a trimesh of its own vertices (``renumbered``: a table over the range
+    of the vertices they use, or a sort of its corners, never a pass over every vertex of the
+    model), merged where they coincide."""
     import trimesh
 
-    used, at = np.unique(faces, return_inverse=True)
+    used, at = renumbered(faces.reshape(-1))
     mesh = trimesh.Trimesh(vertices[used], at.reshape(-1, 3), process=True)
     mesh.remove_unreferenced_vertices()
     return mesh

@@ -34,7 +34,7 @@ from blueprint.silhouette import (
     smooth_surface,
     toward_eye,
 )
-from blueprint.sorting import sorted_with_order, stable_argsort, unique_first
+from blueprint.sorting import renumbered, sorted_with_order, stable_argsort, unique_first
 
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
@@ -265,11 +265,11 @@ def _welded_adjacency(model: Model) -> Adjacency:
     part_of[corner] = corner_part
     if np.array_equal(part_of[corner], corner_part):
         # each vertex in one part: the vertex orders the keys alone, over a range that
-        # unique_first counts over instead of sorting
-        used, _, inverse = unique_first(corner)
+        # renumbered counts over instead of sorting
+        used, inverse = renumbered(corner)
         unique = used * len(model.part_names) + part_of[used]
     else:
-        unique, _, inverse = unique_first(corner * len(model.part_names) + corner_part)
+        unique, inverse = renumbered(corner * len(model.part_names) + corner_part)
     moved = positions[unique // len(model.part_names)].copy()
     moved[:, 0] += (unique % len(model.part_names)) * span
     held = build_adjacency(moved, inverse.reshape(-1, 3), weld_tol=1e-6 * diagonal)
