@@ -56,9 +56,8 @@ class Timed:
             try:
                 room = fragments(raster, *args, **kwargs)
             finally:
-                timed.listings.append({"room": None, "dispatches_ms": timed.dispatches})
-                timed.dispatches = None
-            timed.listings[-1]["room"] = room
+                dispatches, timed.dispatches = timed.dispatches, None
+            timed.listings.append({"room": room, "dispatches_ms": dispatches})
             return room
 
         moderngl.ComputeShader.run = timed_run

@@ -531,9 +531,9 @@ class ABufferSource:
         triangle of a chunk, and its bins) fit ``max_bytes`` beside the lists of the room kept
         for the size and its bins fit a storage binding; else the graphics pipeline lists it,
         rather than the frame be peeled a pass a layer."""
-        triangles = self.mesh.triangles
         if self.raster is None or size[0] * size[1] < self.compute_from:
             return False
+        triangles = self.mesh.triangles
         if not self.raster.holds(size, triangles):
             return False
         needs = self._list_bytes(self._room(size)) + self.raster.bytes(size, triangles)

@@ -115,29 +115,33 @@ class ComputeRaster:
         ):
             pool.buffer(f"raster.{name}", nbytes).bind_to_storage_buffer(binding)
         count.bind_to_storage_buffer(COUNT)
-        put = r.uniforms.set
-        values = {
-            "u_size": (w, h),
-            "u_tile_columns": columns,
-            "u_tiles": tiles,
-            "u_bin_room": room,
-            **{k: uniforms[k] for k in ("u_view", "u_projection", "u_ortho")},
-        }
         stages = self.stages(ab.capture_defines, mesh)
-        for prog in stages:
-            for name, value in values.items():
-                if name in prog:
-                    put(prog, name, value)
+
+        def put(values: dict) -> None:
+            for prog in stages:
+                for name, value in values.items():
+                    if name in prog:
+                        r.uniforms.set(prog, name, value)
+
+        put(
+            {
+                "u_size": (w, h),
+                "u_tile_columns": columns,
+                "u_tiles": tiles,
+                "u_bin_room": room,
+                **{k: uniforms[k] for k in ("u_view", "u_projection", "u_ortho")},
+            }
+        )
         ctx = r.ctx
         for first in range(0, triangles, chunk):
             these = min(chunk, triangles - first)
-            for prog in stages:
-                for name, value in (("u_first", first), ("u_triangles", these)):
-                    if name in prog:
-                        put(prog, name, value)
+            put({"u_first": first, "u_triangles": these})
             groups = -(-these * ROWS // 64)
             across = min(groups, ACROSS)
             down = -(-groups // across)
+            if first:
+                # the chunk before still reads the set-up and bins this one writes
+                ctx.memory_barrier()
             count.clear()
             stages[0].run(across, down)
             ctx.memory_barrier()
@@ -146,5 +150,4 @@ class ComputeRaster:
             stages[2].run(across, down)
             ctx.memory_barrier()
             stages[3].run(columns, rows)
-            ctx.memory_barrier()
         return room
