@@ -241,3 +241,28 @@ def test_both_forms_of_the_edges_draw_them(renderer, monkeypatch):
     for compute in (False, True):
         changed = np.abs(pictures[compute, True] - pictures[compute, False]).max(axis=-1) > 24
         assert changed.sum() > 200, (compute, changed.sum())
+
+
+def test_every_face_contoured_reads_no_table(renderer, monkeypatch):
+    """Where the contour lines stand for the outline of every face (a scan: all smooth), the
+    edges read no table of contoured faces: the same picture, to the bit, as with the table
+    read for each sample, by the fragment passes and (OpenGL 4.3) the compute form; and a
+    mesh with faces of its own outline still reads it."""
+    from blueprint.pipeline import executor
+
+    every_face = executor.every_face
+    sphere = noisy_sphere(0.006)
+    options = dict(size=(256, 256), view="iso", smooth_contours=True, renderer=renderer)
+    for compute in (False, True) if renderer.ctx.version_code >= 430 else (False,):
+        monkeypatch.setattr(renderer, "use_compute", compute)
+        pictures = []
+        for table in (False, True):
+            monkeypatch.setattr(executor, "every_face", (lambda contoured: False) if table else every_face)
+            pictures.append(np.asarray(blueprint.render(sphere, **options)))
+            assert (renderer.executor.last_run.contoured is None) == (not table)
+        assert np.array_equal(*pictures), compute
+    monkeypatch.undo()
+    plate = examples.box((-1.2, -1.2, 1.3), (0.0, 1.2, 1.35))
+    both = examples.assemble({"sphere": (sphere.positions, sphere.faces), "plate": plate})
+    blueprint.render(both, **options)
+    assert renderer.executor.last_run.contoured is not None

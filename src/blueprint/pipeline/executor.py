@@ -263,7 +263,9 @@ class Executor:
         }
         if req.contours is not None:
             st.contours = req.contours
-            st.contoured = self._contoured_table(req.contours.contoured)
+            contoured = req.contours.contoured
+            # where every face is contoured the edges read no table (EVERY_FACE_CONTOURED)
+            st.contoured = None if every_face(contoured) else self._contoured_table(contoured)
         return st
 
     def _contoured_table(self, contoured: np.ndarray):
@@ -490,7 +492,7 @@ class Executor:
                 any(has(prog, name) for name in _CAMERA_SCALARS),
                 any(has(prog, name) for name in _CAMERA_MATRICES),
                 has(prog, "u_corners"),
-                has(prog, "u_contoured"),
+                has(prog, "u_contour_layers"),
             )
         frame, scalars, matrices, corners, contoured = declared
         put = self.programs.update
@@ -516,10 +518,11 @@ class Executor:
             put(prog, _camera_matrices(st.camera))
         if corners and st.mesh is not None:
             st.mesh.bind_corners(prog, units.CORNERS)
-        if contoured and st.contoured is not None:
-            st.contoured.use(units.CONTOURED)
-            layers = st.contours.layers
-            self.programs.update(prog, {"u_contoured": units.CONTOURED, "u_contour_layers": layers})
+        if contoured and st.contours is not None:
+            self.programs.set(prog, "u_contour_layers", st.contours.layers)
+            if st.contoured is not None:
+                st.contoured.use(units.CONTOURED)
+                self.programs.set(prog, "u_contoured", units.CONTOURED)
 
     def _bind_input(self, prog, key: str, tex, unit: int, size) -> None:
         put = self.programs.set
@@ -560,10 +563,10 @@ class Executor:
         elif in_place:
             capture = st.groups[0].capture
             shader = IN_PLACE[p.op.name].fragment[capture.reads]
-            defines = {**_defines(p), **capture.defines, "BATCH": self.edge_batch, "COMPOSE": composed}
+            defines = {**_defines(p, st), **capture.defines, "BATCH": self.edge_batch, "COMPOSE": composed}
             prog = self.programs.library(shader, vertex, defines, modern=True)
         else:
-            prog = self.programs.library(p.op.shader, vertex, _defines(p))
+            prog = self.programs.library(p.op.shader, vertex, _defines(p, st))
         self._frame_uniforms(st, prog, size, layer)
         self.programs.update(prog, p.uniforms)
         if in_place:
@@ -631,7 +634,7 @@ class Executor:
         return st.reach[name]
 
     def _run_slice(self, st: RunState, name: str, p, layer: int) -> None:
-        prog = self.programs.compute(p.op.compute, _defines(p))
+        prog = self.programs.compute(p.op.compute, _defines(p, st))
         array = st.stacks[name][layer // SLICES]
         size = tuple(array.size[:2])
         self._frame_uniforms(st, prog, size, layer)
@@ -650,7 +653,7 @@ class Executor:
         ``SLICES`` layers, each pixel's chain carried from one to the next."""
         p = st.pl.bound.passes[name]
         shader = IN_PLACE[p.op.name].compute[capture.reads]
-        prog = self.programs.compute(shader, {**_defines(p), **capture.defines})
+        prog = self.programs.compute(shader, {**_defines(p, st), **capture.defines})
         size = st.groups[0].size
         self._frame_uniforms(st, prog, size, 0)
         self.programs.update(prog, p.uniforms)
@@ -897,8 +900,21 @@ def _camera_matrices(camera: Camera) -> dict:
     }
 
 
-def _defines(p) -> dict:
-    return p.op.defines(p.uniforms) if p.op.switches else {}
+def every_face(contoured: np.ndarray) -> bool:
+    """Whether the contour lines draw the outline of every face (``contoured`` (F,) bool): a
+    scan's, whose faces are all smooth."""
+    return bool(contoured.all())
+
+
+def _defines(p, st: RunState) -> dict:
+    """The defines of pass ``p``'s program in run ``st``: its switches', and where it leaves
+    the contoured faces' outline to the contour lines and every face of the run is one, that."""
+    if not p.op.switches:
+        return {}
+    defines = p.op.defines(p.uniforms)
+    if defines.get("SMOOTH_CONTOURS") and st.contours is not None and st.contoured is None:
+        defines = {**defines, "EVERY_FACE_CONTOURED": True}
+    return defines
 
 
 def _line_widths(pl: Plan, source: str) -> LineWidths:

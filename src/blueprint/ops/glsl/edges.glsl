@@ -12,16 +12,27 @@
 #define SMOOTH_CONTOURS 0
 #endif
 #if SMOOTH_CONTOURS
+#ifndef EVERY_FACE_CONTOURED
+#define EVERY_FACE_CONTOURED 0
+#endif
+#if !EVERY_FACE_CONTOURED
 #include "table.glsl"
 // 1 for each face whose outline is drawn as a line of the smooth surface's contour instead
-// (vector/contour_ink.py), by face + 1 as the IDs hold it
+// (vector/contour_ink.py), by face + 1 as the IDs hold it; with EVERY_FACE_CONTOURED (a
+// scan: every face smooth) no table is read, which saves a software rasteriser five reads a
+// pixel and layer
 uniform isampler2D u_contoured;
+#endif
 // the layers whose contours the lines draw: deeper ones keep the mesh's outline
 uniform int u_contour_layers;
 
 // Whether a covered sample's face leaves its outline to the contour lines
 bool contoured(int face1) {
+#if EVERY_FACE_CONTOURED
+    return true;
+#else
     return TABLE_ROW(u_contoured, face1).r != 0;
+#endif
 }
 #endif
 
