@@ -7,7 +7,9 @@ import textwrap
 
 import numpy as np
 import pytest
+from scan_helpers import noisy_sphere
 
+import blueprint
 from blueprint import examples
 from blueprint.pipeline import load_pipeline, render_blueprint
 from blueprint.pipeline.tiles import TILE, Tiles, covered_tiles, rectangles, widen
@@ -145,3 +147,33 @@ def test_passes_that_spread_are_drawn_whole(renderer, tiled, tmp_path):
         outputs[on] = ex.run(spec, model, size=(96, 72)).output
         assert (set(drawn) == {1}) if on else not drawn
     np.testing.assert_array_equal(outputs[True], outputs[False])
+
+
+def test_contour_lines_composed_over_the_tiles(renderer, tiled, monkeypatch):
+    """A picture with smooth contour lines composes its maps over the covered tiles too: the
+    lines lie on the faces drawn, within the tile the composite's tiles are widened by, so
+    the picture is the full-screen composite's to the pixel (a sphere cut by the frame's
+    edge, another behind a plate, their lines at levels 0 and 1)."""
+    sphere = noisy_sphere(0.006)
+    moved = sphere.positions + (1.6, 0.4, 0.0)
+    plate = examples.box((-1.2, -1.2, 1.3), (0.0, 1.2, 1.35))
+    model = examples.assemble(
+        {"sphere": (sphere.positions, sphere.faces), "edge": (moved, sphere.faces), "plate": plate}
+    )
+    composed = []
+    original = Tiles.draw_layers
+
+    def counted(self, prog, first, count, reach):
+        composed.append(count)
+        return original(self, prog, first, count, reach)
+
+    monkeypatch.setattr(Tiles, "draw_layers", counted)
+    images = {}
+    for on in (True, False):
+        tiled(on)
+        composed.clear()
+        options = dict(size=(200, 150), view="front", smooth_contours=True, renderer=renderer)
+        images[on] = np.asarray(blueprint.render(model, **options))
+        assert renderer.executor.last_run.contours is not None
+        assert bool(composed) == on
+    np.testing.assert_array_equal(images[True], images[False])

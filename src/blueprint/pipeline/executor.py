@@ -769,8 +769,9 @@ class Executor:
             compose = self.compositor.compute
         else:
             compose = self.compositor.fragment
-            # tiles where a layer lies: a contour line may stray a pixel past the tiles' reach
-            tiled = self.tiles.layers and shading is None and st.contours is None
+            # tiles where a layer lies, widened by a tile past the reach: the contour lines lie
+            # on the faces drawn, their widths within that
+            tiled = self.tiles.layers and shading is None
             reach = self.reach(st, source) if tiled else None
             if reach is not None and tuple(st.stacks[source][0].size) == self.tiles.size:
                 compose = functools.partial(
