@@ -34,6 +34,27 @@ def test_close_pairs_are_all_pairs_within_tolerance(seed, block, monkeypatch):
         assert len(as_set(found)) == len(found[0])  # each pair once
 
 
+@pytest.mark.parametrize("stepped", [True, False])
+def test_pairs_at_the_tolerance_along_the_sweep(stepped, monkeypatch):
+    """Points a tolerance apart along the sweep's direction, where a step of the integer sweep
+    (``_sweep_order``) or the window's own end falls between them, far from the origin: every
+    pair brute force finds within the tolerance, by the projections in steps and by the
+    projections themselves (steps too fine to fit)."""
+    if not stepped:
+        monkeypatch.setattr(weld, "_SWEEP_STEPS", 2.0**60)
+    rng = np.random.default_rng(5)
+    tol = 0.01
+    k = np.arange(150)
+    points = 1e3 + (k * tol)[:, None] * weld._SWEEP_DIRECTION
+    points = np.concatenate([points, points[::3] + rng.normal(0, tol / 3, (50, 3))])
+    order = weld._sweep_order(points @ weld._SWEEP_DIRECTION, tol)[0]
+    assert (order.dtype == np.int64) and (len(order) == len(points))
+    for scale in (1.0, 1.0 - 1e-12, 1.0 + 1e-12):
+        found = weld._close_pairs(points, tol * scale)
+        assert as_set(found) == brute_pairs(points, tol * scale)
+        assert len(as_set(found)) == len(found[0])
+
+
 def test_points_along_the_sweep_are_found_by_the_grid():
     """Points that share their projection on the sweep's direction (laid across it) are too
     many candidates for the sweep; the grid's answer is the same set."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, ranges
-from blueprint.sorting import dense_ranks, unique_first
+from blueprint.sorting import dense_ranks, sorted_with_order, unique_first
 
 __all__ = [
     "check_mesh",
@@ -34,6 +34,9 @@ _FORWARD_OFFSETS = np.array(
 # may give on average before the grid takes over.
 _SWEEP_DIRECTION = np.array([1.0, np.sqrt(2.0), np.sqrt(3.0)]) / np.sqrt(6.0)
 _SWEEP_CANDIDATES = 16
+# Integer steps a sweep window holds (``_sweep_order``): a step or two past the window is read,
+# some tenth more candidates.
+_SWEEP_STEPS = 16
 # Candidates of the sweep checked at a time.
 _SWEEP_BLOCK = 1 << 22
 # Rows hashed, and rows compared, at a time by a thread.
@@ -80,10 +83,9 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     """
     n = len(points)
     projected = points @ _SWEEP_DIRECTION
-    order = np.argsort(projected)
-    along = projected[order]
     # the dot products round: widen the window by their error so no pair within tol is lost
-    window = tol * (1.0 + 1e-9) + 8.0 * np.finfo(np.float64).eps * float(np.abs(along).max())
+    window = tol * (1.0 + 1e-9) + 8.0 * np.finfo(np.float64).eps * float(np.abs(projected).max(initial=0.0))
+    order, along, window = _sweep_order(projected, window)
     count = np.empty(n, np.int64)
     parallel.run(partial(_candidates, along, window, count), n)
     total = int(count.sum())
@@ -99,6 +101,34 @@ def _close_pairs(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray
     check = partial(_sweep_block, ordered, x, order, count, tol)
     found = parallel.each(check, list(zip(cuts[:-1], cuts[1:], strict=True)))
     return np.concatenate([i for i, _ in found]), np.concatenate([j for _, j in found])
+
+
+def _sweep_order(projected: np.ndarray, window: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """(order, along, reach): the points in sweep order, the sorted values the candidates are
+    found in, and how far along them a point's candidates reach (``window`` of ``projected``).
+
+    Where they fit in 63 bits with the points' positions, the values are the projections in
+    integer steps of ``_SWEEP_STEPS`` to the window, sorted by the thread pool's integer sort
+    (``sorted_with_order``), the window a step wider for the rounding down: a float argsort
+    runs on one thread. Else the projections themselves."""
+    n = len(projected)
+    step = window / _SWEEP_STEPS
+    if n and step > 0:
+        low = float(projected.min())
+        if (float(projected.max()) - low) / step * 2.0 ** n.bit_length() < 2.0**62:
+            steps = np.empty(n, np.int64)
+            parallel.run(partial(_in_steps, projected, low, step, steps), n)
+            along, order = sorted_with_order(steps, overwrite=True)
+            return order, along, _SWEEP_STEPS + 1
+    order = np.argsort(projected)
+    return order, projected[order], window
+
+
+def _in_steps(projected: np.ndarray, low: float, step: float, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: ``projected`` from ``low`` in whole ``step``s, rounded down."""
+    for start in range(lo, hi, _HASH_BLOCK):
+        stop = min(start + _HASH_BLOCK, hi)
+        out[start:stop] = np.floor((projected[start:stop] - low) / step)
 
 
 def _candidates(along: np.ndarray, window: float, count: np.ndarray, lo: int, hi: int) -> None:
