@@ -160,8 +160,12 @@ def test_bucket_order_is_numpys_stable_argsort(threads, monkeypatch):
         np.testing.assert_array_equal(order, np.argsort(bucket, kind="stable"))
 
 
-@pytest.mark.parametrize("dtype", [np.int32, np.int64])
-def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype):
+@pytest.mark.parametrize("dtype", [np.int16, np.int32, np.int64])
+@pytest.mark.parametrize("threads", [1, 3])
+def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype, threads, monkeypatch):
+    # blocks of a few keys each: the table's marks, ranks and gathers split over the threads
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
     rng = np.random.default_rng(6)
     key = (rng.integers(0, 50, 200) * 3 - 20).astype(dtype)
     dense = dense_ranks(key)
@@ -173,8 +177,11 @@ def test_dense_keys_are_their_ranks_among_the_distinct_keys(dtype):
 
 @pytest.mark.parametrize("spread", [1, 1000], ids=["table", "sort"])
 @pytest.mark.parametrize("count", [0, 1, 300])
-def test_renumbered_keys_are_numpys_unique_and_inverse(spread, count):
+@pytest.mark.parametrize("threads", [1, 3])
+def test_renumbered_keys_are_numpys_unique_and_inverse(spread, count, threads, monkeypatch):
     """Over a range a table holds (a part's own vertices) and past it (numbered by a sort)."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
     key = (np.random.default_rng(7).integers(0, 80, count) * spread - 40).astype(np.int32)
     distinct, inverse = renumbered(key)
     expected, expected_inverse = np.unique(key, return_inverse=True)

@@ -248,7 +248,7 @@ def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             at, present, rank = _table(key, low, span, np.int64)
             first = np.full(span, n, np.int64)
             np.minimum.at(first, at, np.arange(n))
-            return (np.flatnonzero(present) + low).astype(key.dtype), first[present], rank[at]
+            return (np.flatnonzero(present) + low).astype(key.dtype), first[present], _ranks(rank, at)
     return _sorted_unique(key)
 
 
@@ -262,7 +262,7 @@ def renumbered(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         span = int(key.max()) - low + 1
         if span <= _TABLE_PER_KEY * n:
             at, present, rank = _table(key, low, span, np.int64)
-            return (np.flatnonzero(present) + low).astype(key.dtype), rank[at]
+            return (np.flatnonzero(present) + low).astype(key.dtype), _ranks(rank, at)
     distinct, _, inverse = _sorted_unique(key)
     return distinct, inverse
 
@@ -290,19 +290,40 @@ def dense_ranks(key: np.ndarray) -> np.ndarray:
         return unique_first(key)[2]
     # ranks below the span, at most _TABLE_PER_KEY times the keys: int32 for any mesh it indexes
     at, _, rank = _table(key, low, span, np.int32 if span <= np.iinfo(np.int32).max else np.int64)
-    return rank[at]
+    return _ranks(rank, at)
 
 
 def _table(key: np.ndarray, low: int, span: int, dtype) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The table over the range of ``key`` (``span`` values from ``low``) that ``unique_first``
     and ``dense_ranks`` number keys by: each key's place in it, whether each value is present,
-    and each value's rank among those present (``dtype``)."""
-    at = key - low
+    and each value's rank among those present (``dtype``); on the thread pool."""
+    # below the span, a few times the keys: in the keys' own type where it is a word or more
+    at = np.empty(len(key), key.dtype if key.dtype.itemsize >= 4 else np.int32)
+    parallel.run(partial(_less, key, low, at), len(key))
     present = np.zeros(span, bool)
-    present[at] = True
-    rank = np.cumsum(present, dtype=dtype)
-    rank -= 1
+    parallel.mark(present, at)
+    rank = parallel.cumsum(present, dtype, start=-1)
     return at, present, rank
+
+
+def _ranks(rank: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``rank[at]``: the keys' ranks from their places in the table (``_table``), on the
+    thread pool."""
+    out = np.empty(len(at), rank.dtype)
+    parallel.run(partial(_taken, rank, at, out), len(at))
+    return out
+
+
+def _less(key: np.ndarray, low: int, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: ``key[lo:hi] - low``."""
+    np.subtract(key[lo:hi], low, out=out[lo:hi])
+
+
+def _taken(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: ``table[at[lo:hi]]``, a block at a time."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        np.take(table, at[start:stop], out=out[start:stop])
 
 
 def grouped(values: np.ndarray) -> list[tuple[int, np.ndarray]]:
