@@ -246,21 +246,38 @@ def test_both_forms_of_the_edges_draw_them(renderer, monkeypatch):
 def test_every_face_contoured_reads_no_table(renderer, monkeypatch):
     """Where the contour lines stand for the outline of every face (a scan: all smooth), the
     edges read no table of contoured faces: the same picture, to the bit, as with the table
-    read for each sample, by the fragment passes and (OpenGL 4.3) the compute form; and a
-    mesh with faces of its own outline still reads it."""
+    read for each sample, by the fragment passes and (OpenGL 4.3) the compute form; where the
+    lines' levels count every layer the frame may draw, the edges are built to find part
+    boundaries alone (none in a mesh of one part), the same picture again; and a mesh with
+    faces of its own outline still reads the table."""
     from blueprint.pipeline import executor
 
     every_face = executor.every_face
+
+    def no_face(contoured):  # the table read, whatever the faces
+        return False
+
     sphere = noisy_sphere(0.006)
-    options = dict(size=(256, 256), view="iso", smooth_contours=True, renderer=renderer)
+    # two spheres, one half in front of the other: part boundaries where they overlap
+    far = sphere.positions * 0.8 + (0.9, 0.3, -1.5)
+    pair = examples.assemble({"near": (sphere.positions, sphere.faces), "far": (far, sphere.faces)})
+    options = dict(size=(256, 256), view="front", smooth_contours=True, renderer=renderer)
     for compute in (False, True) if renderer.ctx.version_code >= 430 else (False,):
         monkeypatch.setattr(renderer, "use_compute", compute)
-        pictures = []
-        for table in (False, True):
-            monkeypatch.setattr(executor, "every_face", (lambda contoured: False) if table else every_face)
-            pictures.append(np.asarray(blueprint.render(sphere, **options)))
-            assert (renderer.executor.last_run.contoured is None) == (not table)
-        assert np.array_equal(*pictures), compute
+        # 2 layers: the lines' levels count all the frame draws, and the edges are built to
+        # draw part boundaries alone (CONTOURS_EVERY_LAYER), none at all for one part
+        for model, layers in ((sphere, 2), (pair, 2), (sphere, None)):
+            pictures = []
+            for table in (False, True):
+                monkeypatch.setattr(executor, "every_face", no_face if table else every_face)
+                pictures.append(np.asarray(blueprint.render(model, max_layers=layers, **options)))
+                run = renderer.executor.last_run
+                assert (run.contoured is None) == (not table)
+                edges = run.pl.bound.passes["edges"]
+                defines = executor._defines(edges, run)
+                assert defines.get("CONTOURS_EVERY_LAYER", False) == (layers is not None and not table)
+                assert defines.get("ONE_PART", False) == (model is sphere and not table)
+            assert np.array_equal(*pictures), (compute, layers, model is sphere)
     monkeypatch.undo()
     plate = examples.box((-1.2, -1.2, 1.3), (0.0, 1.2, 1.35))
     both = examples.assemble({"sphere": (sphere.positions, sphere.faces), "plate": plate})

@@ -909,12 +909,17 @@ def every_face(contoured: np.ndarray) -> bool:
 
 def _defines(p, st: RunState) -> dict:
     """The defines of pass ``p``'s program in run ``st``: its switches', and where it leaves
-    the contoured faces' outline to the contour lines and every face of the run is one, that."""
+    the contoured faces' outline to the contour lines and every face of the run is one, that,
+    whether the lines' levels count every layer the run may draw, and whether its mesh is one
+    part."""
     if not p.op.switches:
         return {}
     defines = p.op.defines(p.uniforms)
     if defines.get("SMOOTH_CONTOURS") and st.contours is not None and st.contoured is None:
-        defines = {**defines, "EVERY_FACE_CONTOURED": True}
+        every_layer = st.max_layers is not None and st.contours.layers >= st.max_layers
+        one_part = st.mesh.part_count == 1
+        found = {"EVERY_FACE_CONTOURED": True, "CONTOURS_EVERY_LAYER": every_layer, "ONE_PART": one_part}
+        defines = {**defines, **found}
     return defines
 
 

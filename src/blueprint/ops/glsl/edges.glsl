@@ -15,6 +15,14 @@
 #ifndef EVERY_FACE_CONTOURED
 #define EVERY_FACE_CONTOURED 0
 #endif
+// the contour lines' levels count every layer this pass draws (below u_contour_layers)
+#ifndef CONTOURS_EVERY_LAYER
+#define CONTOURS_EVERY_LAYER 0
+#endif
+// the mesh is one part: no part boundary
+#ifndef ONE_PART
+#define ONE_PART 0
+#endif
 #if !EVERY_FACE_CONTOURED
 #include "table.glsl"
 // 1 for each face whose outline is drawn as a line of the smooth surface's contour instead
@@ -76,6 +84,27 @@ float crease(vec3 a, vec3 b) {
     return 1.0 - smoothstep(u_normal_cos.y, u_normal_cos.x, dot(a, b));
 }
 
+#if SMOOTH_CONTOURS && EVERY_FACE_CONTOURED && CONTOURS_EVERY_LAYER
+// Every face's outline in every layer drawn is the contour lines' (a scan's frame within the
+// layers their levels count): what edge_value below leaves to draw is part boundaries alone,
+// and a software rasteriser runs none of its other reads and tests.
+float edge_value(ivec2 p, int layer) {
+#if ONE_PART
+    return 0.0;
+#endif
+    if (!u_part_edges || EDGE_DEPTH(p, -1) >= 1.0) {
+        return 0.0;
+    }
+    ivec2 last = EDGE_LAST;
+    int part = EDGE_IDS(p, -1).y;
+    bool part_edge = false;
+    for (int i = 0; i < 4; ++i) {
+        ivec2 q = clamp(p + OFFSETS[i], ivec2(0), last);
+        part_edge = part_edge || (EDGE_DEPTH(q, i) < 1.0 && EDGE_IDS(q, i).y != part);
+    }
+    return part_edge ? 1.0 : 0.0;
+}
+#else
 float edge_value(ivec2 p, int layer) {
     ivec2 last = EDGE_LAST;
     float zc = EDGE_DEPTH(p, -1);
@@ -202,6 +231,8 @@ float edge_value(ivec2 p, int layer) {
     }
     return max(e, outline);
 }
+
+#endif
 
 // edge_value in the ink of depth layer ``layer``
 float layer_edge_value(ivec2 p, int layer) {
