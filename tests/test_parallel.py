@@ -141,3 +141,25 @@ def test_the_thread_count_is_set_by_the_environment(monkeypatch, text, expected)
 def test_a_thread_count_that_is_not_one_leaves_the_cores(monkeypatch, text):
     monkeypatch.setenv(settings.THREADS_ENV, text)
     assert settings.thread_count() == max(1, min(len(os.sched_getaffinity(0)), 64))
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_rows_taken_a_block_at_a_time_equal_one_take(threads, monkeypatch):
+    """``take``: rows of a table by an index array (of rows too), blocks of a few rows on
+    each thread, into an array of the table's type or cast into another's."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 5)
+    rng = np.random.default_rng(4)
+    table = rng.standard_normal((30, 3)).astype(np.float32)
+    at = rng.integers(0, 30, 61).astype(np.int32)
+    out = np.full((61, 3), np.nan, np.float32)
+    parallel.take(table, at, out, min_block=4)
+    np.testing.assert_array_equal(out, table[at])
+    faces = rng.integers(0, 30, (23, 3))
+    corners = np.full((23, 3), -1, np.int32)
+    parallel.take(np.arange(30, dtype=np.int32)[::-1].copy(), faces, corners, min_block=4)
+    np.testing.assert_array_equal(corners, 29 - faces)
+    offsets = rng.integers(0, 2**31, 30)
+    narrow = np.zeros(61, np.uint32)
+    parallel.take(offsets, at, narrow, min_block=4)
+    np.testing.assert_array_equal(narrow, offsets[at].astype(np.uint32))

@@ -21,7 +21,19 @@ from blueprint.allocator import one_arena
 if TYPE_CHECKING:
     from concurrent.futures import ThreadPoolExecutor
 
-__all__ = ["MIN_BLOCK", "begin", "cumsum", "cuts", "each", "flatnonzero", "mark", "rises", "run", "sort"]
+__all__ = [
+    "MIN_BLOCK",
+    "begin",
+    "cumsum",
+    "cuts",
+    "each",
+    "flatnonzero",
+    "mark",
+    "rises",
+    "run",
+    "sort",
+    "take",
+]
 
 T = TypeVar("T")
 U = TypeVar("U")
@@ -142,6 +154,23 @@ def mark(flags: np.ndarray, at: np.ndarray, min_block: int | None = None) -> Non
         flags[at[lo:hi]] = True
 
     run(marked, len(at), min_block)
+
+
+def take(table: np.ndarray, at: np.ndarray, out: np.ndarray, min_block: int | None = None) -> None:
+    """``out[:] = table[at]``: the rows ``at`` (in range) of ``table``, a block of ``at`` a
+    thread, ``MIN_BLOCK`` rows at a time; cast where ``out`` is of another type. Taken with
+    ``mode="clip"``: "raise" takes into a copy of ``out`` first."""
+    same = out.dtype == table.dtype
+
+    def taken(lo: int, hi: int) -> None:
+        for start in range(lo, hi, MIN_BLOCK):
+            stop = min(start + MIN_BLOCK, hi)
+            if same:
+                np.take(table, at[start:stop], axis=0, out=out[start:stop], mode="clip")
+            else:
+                out[start:stop] = np.take(table, at[start:stop], axis=0, mode="clip")
+
+    run(taken, len(at), min_block)
 
 
 def rises(values: np.ndarray, min_block: int | None = None) -> np.ndarray:

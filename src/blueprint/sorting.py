@@ -310,20 +310,13 @@ def _ranks(rank: np.ndarray, at: np.ndarray) -> np.ndarray:
     """``rank[at]``: the keys' ranks from their places in the table (``_table``), on the
     thread pool."""
     out = np.empty(len(at), rank.dtype)
-    parallel.run(partial(_taken, rank, at, out), len(at))
+    parallel.take(rank, at, out)
     return out
 
 
 def _less(key: np.ndarray, low: int, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: ``key[lo:hi] - low``."""
     np.subtract(key[lo:hi], low, out=out[lo:hi])
-
-
-def _taken(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    """``out[lo:hi]``: ``table[at[lo:hi]]``, a block at a time."""
-    for start in range(lo, hi, _BLOCK):
-        stop = min(start + _BLOCK, hi)
-        np.take(table, at[start:stop], out=out[start:stop])
 
 
 def grouped(values: np.ndarray) -> list[tuple[int, np.ndarray]]:

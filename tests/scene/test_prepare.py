@@ -677,18 +677,6 @@ def test_the_vertex_sums_a_block_at_a_time_equal_one_bincount(threads, monkeypat
 
 
 @pytest.mark.parametrize("threads", [1, 2])
-def test_rows_taken_a_block_at_a_time_equal_one_take(threads, monkeypatch):
-    monkeypatch.setattr(settings, "THREADS", threads)
-    monkeypatch.setattr(normals, "_ROWS", 5)
-    rng = np.random.default_rng(4)
-    table = rng.standard_normal((30, 3)).astype(np.float32)
-    at = rng.integers(0, 30, 61).astype(np.int32)
-    out = np.full((61, 3), np.nan, np.float32)
-    parallel.run(partial(normals._taken, table, at, out), len(at), min_block=4)
-    np.testing.assert_array_equal(out, table[at])
-
-
-@pytest.mark.parametrize("threads", [1, 2])
 def test_sharp_edges_a_block_at_a_time_equal_the_cosines_compared(threads, monkeypatch):
     """The crease test of the paired edges: the cosine between their faces' unit normals below
     the limit up to sign, as computed for every edge at once; the other edges never sharp."""
@@ -708,15 +696,3 @@ def test_sharp_edges_a_block_at_a_time_equal_the_cosines_compared(threads, monke
     cos = np.einsum("ij,ij->i", unit[order[pair] // 3], unit[order[pair + 1] // 3])
     np.testing.assert_array_equal(np.flatnonzero(sharp), pair[np.abs(cos) < limit])
     assert 0 < sharp.sum() < len(pair)
-
-
-@pytest.mark.parametrize("threads", [1, 2])
-def test_gathered_a_block_at_a_time_equals_one_take(threads, monkeypatch):
-    monkeypatch.setattr(settings, "THREADS", threads)
-    monkeypatch.setattr(prepare, "_BLOCK", 9)
-    rng = np.random.default_rng(7)
-    table = rng.integers(0, 1 << 30, 40)
-    at = rng.integers(0, 40, 101).astype(np.int32)
-    out = np.zeros(101, np.uint32)
-    parallel.run(partial(prepare._gathered, table, at, out), len(at), min_block=10)
-    np.testing.assert_array_equal(out, table[at].astype(np.uint32))

@@ -55,7 +55,7 @@ def _welded(
     diagonal = _diagonal(positions, faces) if diagonal is None else diagonal
     group, _ = weld_groups(positions, diagonal * rel_tol, distinct)
     welded = np.empty(faces.shape, np.int32)
-    parallel.run(partial(_taken, group.astype(np.int32), faces, welded), len(faces))
+    parallel.take(group.astype(np.int32), faces, welded)
     return welded
 
 
@@ -325,7 +325,7 @@ def corner_normals(
     del summed  # before the corners' normals are made
     result = np.empty((len(faces), 3, 3), np.float32)
     corners = result.reshape(-1, 3)
-    parallel.run(partial(_taken, vertex_normals, vertex, corners), len(vertex))
+    parallel.take(vertex_normals, vertex, corners)
     del vertex_normals
     # the corners of the other vertices: their faces' own normals where the vertex has too
     # many, else from their pairs
@@ -418,14 +418,6 @@ def _divided_where(rows: np.ndarray, by: np.ndarray, where: np.ndarray, lo: int,
 
 def _row_norms(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
     out[lo:hi] = row_norm(rows[lo:hi])
-
-
-def _taken(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    """``out[lo:hi]``: the rows ``at[lo:hi]`` (in range) of ``table``, a block at a time; not
-    ``mode="raise"``, which takes into a copy of ``out`` first."""
-    for start in range(lo, hi, _ROWS):
-        stop = min(start + _ROWS, hi)
-        np.take(table, at[start:stop], axis=0, out=out[start:stop], mode="clip")
 
 
 def _within_cone(welded: np.ndarray, unit: np.ndarray, axis: np.ndarray, length: np.ndarray) -> np.ndarray:

@@ -317,7 +317,7 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     count[inside_key[firsts]] = distinct
     offset = np.cumsum(count) - count
     inverse = np.empty(n, np.uint32)
-    parallel.run(partial(_gathered, offset, key, inverse), n)
+    parallel.take(offset, key, inverse)
     at = offset[inside_key] + rank
     inverse[inside] = at
     chosen = last[np.repeat(np.arange(keys), count)]
@@ -410,14 +410,6 @@ def _differs_from(
         differs = np.take(bits, last[key[rows]], axis=0) != bits[rows]
         np.logical_or(differs[:, 0], differs[:, 1], out=out[rows])
         out[rows] |= differs[:, 2]
-
-
-def _gathered(table: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    """``out[lo:hi]``: ``table[at[lo:hi]]``, a block at a time (the values taken are as wide
-    as the table's)."""
-    for start in range(lo, hi, _BLOCK):
-        stop = min(start + _BLOCK, hi)
-        out[start:stop] = table[at[start:stop]]
 
 
 def _normal_key(normals: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:

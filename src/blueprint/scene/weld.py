@@ -270,7 +270,7 @@ def _exact_groups(positions: np.ndarray, dtype=np.int64) -> tuple[np.ndarray, np
     parallel.mark(seen, firsts)
     ranks = parallel.cumsum(seen, np.int32, start=-1)
     rank = np.empty(len(firsts), np.int32)
-    parallel.run(partial(_gathered, ranks, firsts, rank), len(firsts))
+    parallel.take(ranks, firsts, rank)
     del ranks
     parallel.run(partial(_ranked, rank, group), n)
     inverse = np.empty(n, dtype)
@@ -325,10 +325,6 @@ def _firsts(order: np.ndarray, new: np.ndarray, group: np.ndarray, out: np.ndarr
     picked = order[lo:hi][new[lo:hi]]
     at = int(group[lo - 1]) + 1 if lo else 0
     out[at : at + len(picked)] = picked
-
-
-def _gathered(values: np.ndarray, at: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
-    np.take(values, at[lo:hi], out=out[lo:hi])
 
 
 def _unpacked(key: np.ndarray, low: np.uint64, lo: int, hi: int) -> None:
