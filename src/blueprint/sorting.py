@@ -240,31 +240,25 @@ def _bucket_of(
 def unique_first(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``np.unique(key, return_index=True, return_inverse=True)`` of a 1-D integer array: the
     distinct keys, the index of each one's first occurrence, and each entry's distinct key."""
-    n = len(key)
-    if n:
-        low = int(key.min())
-        span = int(key.max()) - low + 1
-        if span <= _TABLE_PER_KEY * n:
-            at, present, rank = _table(key, low, span, np.int64)
-            first = np.full(span, n, np.int64)
-            np.minimum.at(first, at, np.arange(n))
-            return (np.flatnonzero(present) + low).astype(key.dtype), first[present], _ranks(rank, at)
-    return _sorted_unique(key)
+    numbered = _numbered(key, np.int64)
+    if numbered is None:
+        return _sorted_unique(key)
+    low, at, present, inverse = numbered
+    first = np.full(len(present), len(key), np.int64)
+    np.minimum.at(first, at, np.arange(len(key)))
+    return (np.flatnonzero(present) + low).astype(key.dtype), first[present], inverse
 
 
 def renumbered(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(key, return_inverse=True)`` of a 1-D integer array: the distinct keys and each
     entry's number among them, as ``unique_first`` finds them but without the first
     occurrences (a vertex list's own vertices, its corners numbered over them)."""
-    n = len(key)
-    if n:
-        low = int(key.min())
-        span = int(key.max()) - low + 1
-        if span <= _TABLE_PER_KEY * n:
-            at, present, rank = _table(key, low, span, np.int64)
-            return (np.flatnonzero(present) + low).astype(key.dtype), _ranks(rank, at)
-    distinct, _, inverse = _sorted_unique(key)
-    return distinct, inverse
+    numbered = _numbered(key, np.int64)
+    if numbered is None:
+        distinct, _, inverse = _sorted_unique(key)
+        return distinct, inverse
+    low, _, present, inverse = numbered
+    return (np.flatnonzero(present) + low).astype(key.dtype), inverse
 
 
 def _sorted_unique(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -284,34 +278,34 @@ def dense_ranks(key: np.ndarray) -> np.ndarray:
     without the first occurrences)."""
     if len(key) == 0:
         return np.zeros(0, np.int32)
+    # ranks below the span, at most _TABLE_PER_KEY times the keys: int32 for any mesh it indexes
+    numbered = _numbered(key, np.int32)
+    return unique_first(key)[2] if numbered is None else numbered[3]
+
+
+def _numbered(key: np.ndarray, dtype) -> tuple[int, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The keys numbered through a table over their range where it spans at most
+    ``_TABLE_PER_KEY`` times their number (None elsewhere, and for no keys): the lowest key,
+    each key's place in the table, whether each value is present, and each key's rank among
+    the values present (``dtype``, or int64 where the range is wider); on the thread pool."""
+    n = len(key)
+    if n == 0:
+        return None
     low = int(key.min())
     span = int(key.max()) - low + 1
-    if span > _TABLE_PER_KEY * len(key):
-        return unique_first(key)[2]
-    # ranks below the span, at most _TABLE_PER_KEY times the keys: int32 for any mesh it indexes
-    at, _, rank = _table(key, low, span, np.int32 if span <= np.iinfo(np.int32).max else np.int64)
-    return _ranks(rank, at)
-
-
-def _table(key: np.ndarray, low: int, span: int, dtype) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The table over the range of ``key`` (``span`` values from ``low``) that ``unique_first``
-    and ``dense_ranks`` number keys by: each key's place in it, whether each value is present,
-    and each value's rank among those present (``dtype``); on the thread pool."""
+    if span > _TABLE_PER_KEY * n:
+        return None
+    if span > np.iinfo(dtype).max:
+        dtype = np.int64
     # below the span, a few times the keys: in the keys' own type where it is a word or more
-    at = np.empty(len(key), key.dtype if key.dtype.itemsize >= 4 else np.int32)
-    parallel.run(partial(_less, key, low, at), len(key))
+    at = np.empty(n, key.dtype if key.dtype.itemsize >= 4 else np.int32)
+    parallel.run(partial(_less, key, low, at), n)
     present = np.zeros(span, bool)
     parallel.mark(present, at)
     rank = parallel.cumsum(present, dtype, start=-1)
-    return at, present, rank
-
-
-def _ranks(rank: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """``rank[at]``: the keys' ranks from their places in the table (``_table``), on the
-    thread pool."""
-    out = np.empty(len(at), rank.dtype)
-    parallel.take(rank, at, out)
-    return out
+    ranks = np.empty(n, rank.dtype)
+    parallel.take(rank, at, ranks)
+    return low, at, present, ranks
 
 
 def _less(key: np.ndarray, low: int, out: np.ndarray, lo: int, hi: int) -> None:
