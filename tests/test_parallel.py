@@ -116,6 +116,7 @@ def test_running_sums_maxima_and_found_positions_equal_numpys(n, threads, monkey
     parallel.mark(marked, at, min_block=10)
     expected[at] = True
     np.testing.assert_array_equal(marked, expected)
+    np.testing.assert_array_equal(parallel.chosen_at(flags, at, min_block=10), np.flatnonzero(flags[at]))
 
 
 @pytest.mark.parametrize("dtype", [np.int64, np.uint64, np.int32, np.uint8])

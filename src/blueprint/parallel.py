@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MIN_BLOCK",
     "begin",
+    "chosen_at",
     "cumsum",
     "cuts",
     "each",
@@ -143,6 +144,17 @@ def flatnonzero(values: np.ndarray, negated: bool = False, min_block: int | None
         return np.flatnonzero(~block if negated else block) + lo
 
     found = run(found_in, len(values), min_block)
+    return found[0] if len(found) == 1 else np.concatenate(found)
+
+
+def chosen_at(chosen: np.ndarray, at: np.ndarray, min_block: int | None = None) -> np.ndarray:
+    """``np.flatnonzero(chosen[at])``: the places of ``at`` (1-D, in range) whose entry of the
+    bool table ``chosen`` is set, each block's found side by side, no table of them all."""
+
+    def found_in(lo: int, hi: int) -> np.ndarray:
+        return np.flatnonzero(chosen[at[lo:hi]]) + lo
+
+    found = run(found_in, len(at), min_block)
     return found[0] if len(found) == 1 else np.concatenate(found)
 
 

@@ -215,9 +215,11 @@ def test_gpu_arrays_equal_unique_rows(shape, crease, threads, form, monkeypatch)
 @pytest.mark.parametrize("threads", [1, 3])
 def test_split_vertices_number_the_pairs_of_vertex_and_normal(threads, form, monkeypatch):
     """``_split_vertices`` against the distinct (key, quantized normal) pairs in order, each
-    with its last corner: keys of a few corners (compared pairwise) and of more than
-    ``_TABLE_DEGREE`` (sorted), normals drawn from a few, some keys of one normal alone."""
+    with a corner of its own: keys of a few corners (compared pairwise) and of more than
+    ``_TABLE_DEGREE`` (sorted), normals drawn from a few, some keys of one normal alone; the
+    corners in blocks of 64 a thread."""
     monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 64)
     rng = np.random.default_rng(5)
     sizes = []  # the most corners of a key, each trial
     for _ in range(24):
@@ -232,10 +234,9 @@ def test_split_vertices_number_the_pairs_of_vertex_and_normal(threads, form, mon
         pairs = sorted(set(zip(key.tolist(), quantized.tolist(), strict=True)))
         number = {pair: k for k, pair in enumerate(pairs)}
         expected = np.array([number[pair] for pair in zip(key.tolist(), quantized.tolist(), strict=True)])
-        last = np.zeros(len(pairs), np.int64)
-        np.maximum.at(last, expected, np.arange(n))
         np.testing.assert_array_equal(inverse, expected)
-        np.testing.assert_array_equal(chosen, last)
+        # each pair drawn from a corner of its own
+        np.testing.assert_array_equal(expected[chosen], np.arange(len(pairs)))
         sizes.append(int(np.bincount(key).max()))
     assert min(sizes) <= prepare._TABLE_DEGREE < max(sizes)
 
@@ -658,18 +659,19 @@ def test_a_soup_with_unused_vertices_between_its_corners_draws_them_as_its_own(p
     assert indices.max() + 1 == len(vertices) < len(corners)
 
 
-@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("threads", [1, 2, 4, 5])
 def test_the_vertex_sums_a_block_at_a_time_equal_one_bincount(threads, monkeypatch):
     """Summed a block of faces at a time from zero, each vertex's area normals are those of one
-    ``bincount`` over every corner, bit for bit (the same additions in the same order)."""
+    ``bincount`` over every corner, bit for bit (the same additions in the same order): a
+    coordinate a thread, and from four threads a range of vertices a thread."""
     monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 6)
     monkeypatch.setattr(normals, "_ROWS", 7)
     rng = np.random.default_rng(3)
     faces, vertices = 100, 40
     vertex = rng.integers(0, vertices - 3, 3 * faces).astype(np.int32)  # the last three unused
     area = rng.standard_normal((faces, 3)) * 10.0 ** rng.integers(-6, 6, (faces, 1))
-    summed, degree = np.full((vertices, 3), np.nan), np.full(vertices, -1, np.int64)
-    parallel.run(partial(normals._vertex_sums, vertex, area, summed, degree), 4, min_block=1)
+    summed, degree = normals._vertex_sums(vertex, area, vertices)
     for axis in range(3):
         expected = np.bincount(vertex, np.repeat(area[:, axis], 3), minlength=vertices)
         assert summed[:, axis].tobytes() == expected.tobytes()

@@ -6,7 +6,7 @@ from functools import partial
 
 import numpy as np
 
-from blueprint import parallel
+from blueprint import parallel, settings
 from blueprint.columns import column_max, column_min, indexed_cross, row_norm, square_blocks
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import SortedKeys, stable_argsort
@@ -19,6 +19,9 @@ _MAX_DEGREE = 64
 _CONE = 44.0
 # Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
 _ROWS = 1 << 16
+# Threads from which the vertices' sums are made a range of vertices a thread (``_range_sums``),
+# each reading every corner, not a coordinate a thread (``_axis_sums``: four threads at most).
+_RANGES_FROM = 4
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
 # Corners of a block (vertices times their degree) from which their sums are made a corner at
@@ -313,9 +316,7 @@ def corner_normals(
     # Where no pair of the faces around a vertex is told apart (no crease there, and every two
     # faces' normals less than 90 degrees apart, so none counts with a flipped sign), each of
     # its corners sums the area normals of all of them, in corner order as the pairs would.
-    summed = np.empty((vertices, 3))
-    degree = np.empty(vertices, np.int64)
-    parallel.run(partial(_vertex_sums, vertex, area_normals, summed, degree), 4, min_block=1)
+    summed, degree = _vertex_sums(vertex, area_normals, vertices)
     norm = np.empty(vertices)
     parallel.run(partial(_row_norms, summed, norm), vertices)
     shared = ~sharp & (degree <= _MAX_DEGREE) & (norm > 0) & _within_cone(welded, unit, summed, norm)
@@ -331,28 +332,36 @@ def corner_normals(
     # many, else from their pairs
     crowded = ~shared & (degree > _MAX_DEGREE)
     if crowded.any():
-        flat = np.concatenate(parallel.run(partial(_corners_of, crowded, vertex), len(vertex)))
+        flat = parallel.chosen_at(crowded, vertex)
         corners[flat] = np.take(unit, flat // 3, axis=0)
         del flat
-    paired = np.concatenate(parallel.run(partial(_corners_of, ~shared & ~crowded, vertex), len(vertex)))
+    paired = parallel.chosen_at(~shared & ~crowded, vertex)
     if len(paired):
         _pairwise(paired, vertex[paired], area_normals, unit, sharp, crease_angle, corners)
     return result
 
 
-def _corners_of(chosen: np.ndarray, vertex: np.ndarray, lo: int, hi: int) -> np.ndarray:
-    """The corners from lo to hi whose ``vertex`` is ``chosen``, ascending."""
-    return np.flatnonzero(chosen[vertex[lo:hi]]) + lo
+def _vertex_sums(vertex: np.ndarray, area: np.ndarray, vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """Of the corners' ``vertex`` (3F,) among ``vertices``: (V, 3) the sum of the ``area`` (F, 3)
+    normals of each vertex's faces, each adding its corners in order from zero, as one
+    ``bincount`` would, bit for bit; and (V,) its corners. A coordinate a thread
+    (``_axis_sums``), or a range of vertices a thread where there are threads to spare for it
+    (``_range_sums``)."""
+    summed = np.empty((vertices, 3))
+    degree = np.empty(vertices, np.int64)
+    if settings.THREADS < _RANGES_FROM:
+        parallel.run(partial(_axis_sums, vertex, area, summed, degree), 4, min_block=1)
+    else:
+        parallel.run(partial(_range_sums, vertex, area, summed, degree), vertices)
+    return summed, degree
 
 
-def _vertex_sums(
+def _axis_sums(
     vertex: np.ndarray, area: np.ndarray, summed: np.ndarray, degree: np.ndarray, first: int, last: int
 ) -> None:
-    """Of the corners' ``vertex`` (3F,): for ``axis`` 0 to 2 from ``first`` to ``last``, the sum
-    of the ``area`` (F, 3) normals of each vertex's faces into ``summed[:, axis]``, and for 3,
-    each vertex's corners into ``degree``. A coordinate a thread, a block of ``_ROWS`` faces at
-    a time: each sum adds the corners in order from zero, as one ``bincount`` would, bit for
-    bit, without its copies of every corner's weight and index."""
+    """``_vertex_sums``: for ``axis`` 0 to 2 from ``first`` to ``last``, the sums into
+    ``summed[:, axis]``, and for 3, the degrees into ``degree``. A coordinate a thread, a block
+    of ``_ROWS`` faces at a time, without a copy of every corner's weight and index."""
     faces = len(area)
     for axis in range(first, last):
         if axis == 3:
@@ -367,6 +376,26 @@ def _vertex_sums(
                 stop = min(start + _ROWS, faces)
                 np.add.at(total, vertex[3 * start : 3 * stop], np.repeat(area[start:stop, axis], 3))
             summed[:, axis] = total
+
+
+def _range_sums(
+    vertex: np.ndarray, area: np.ndarray, summed: np.ndarray, degree: np.ndarray, lo: int, hi: int
+) -> None:
+    """``_vertex_sums`` of the vertices from lo to hi into ``summed`` and ``degree``: a range of
+    vertices a thread, each reading every corner a block of ``_ROWS`` faces at a time."""
+    total = np.zeros((3, hi - lo))
+    count = np.zeros(hi - lo, np.int64)
+    faces = len(area)
+    for start in range(0, faces, _ROWS):
+        corners = vertex[3 * start : 3 * min(start + _ROWS, faces)]
+        mine = np.flatnonzero((corners >= lo) & (corners < hi))
+        at = corners[mine] - lo
+        rows = np.take(area, mine // 3 + start, axis=0)
+        for axis in range(3):
+            np.add.at(total[axis], at, rows[:, axis])
+        np.add.at(count, at, 1)
+    summed[lo:hi] = total.T
+    degree[lo:hi] = count
 
 
 def _sums_by_table(

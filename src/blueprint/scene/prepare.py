@@ -283,31 +283,27 @@ def _apart(
 
 def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct (vertex and part, quantized normal) pairs of the corners, in that order:
-    the last corner of each, and each corner's pair (its number among them, uint32).
+    a corner of each, and each corner's pair (its number among them, uint32).
 
     ``vertex_part`` (3F,) int orders the vertex and the part; the normals' three 16-bit
     components (``_normal_key``) order the rest. No sort of every corner: a vertex whose
-    corners' normals are one, bit for bit (every vertex off a crease), is one pair, its last
-    corner found by a table; the corners of the other vertices are grouped by key (one sort
-    of one key) and told apart by normal within each (``_pairs_by_normal``)."""
+    corners' normals are one, bit for bit (every vertex off a crease), is one pair, any of its
+    corners found by a table; the corners of the other vertices are grouped by key (one sort
+    of one key) and told apart by normal within each (``_pairs_by_normal``), each pair's
+    last corner its own."""
     n = len(vertex_part)
     key = dense_ranks(vertex_part)
     keys = int(key.max(initial=-1)) + 1
-    # the last corner of each key, and where a corner's normal differs from it, the key's
-    # corners are sorted by normal
-    last = np.full(keys, -1, np.int64)
-    for start in range(0, n, _BLOCK):
-        stop = min(start + _BLOCK, n)
-        np.maximum.at(last, key[start:stop], np.arange(start, stop))
-    bits = normals.view(np.uint32)
-    differs = np.zeros(n, bool)
-    parallel.run(partial(_differs_from, bits, last, key, differs), n)
+    # a corner of each key, whichever thread wrote last: where the key's corners have one
+    # normal, any of them draws its vertex alike; where a corner's normal differs from it,
+    # the key is mixed, its corners sorted by normal
+    some = np.empty(keys, np.int64)
+    parallel.run(partial(_some_corner, key, some), n)
     mixed = np.zeros(keys, bool)
-    mixed[key[differs]] = True
-    del differs
+    parallel.run(partial(_mixed, normals.view(np.uint32), some, key, mixed), n)
     # the corners of the other keys, each key's together in corner order; their pairs found
     # among each key's corners (``_pairs_by_normal``)
-    inside = np.flatnonzero(mixed[key])
+    inside = parallel.chosen_at(mixed, key)
     inside = inside[stable_argsort(key[inside])]
     inside_key = key[inside]
     rank, ends, distinct, firsts = _pairs_by_normal(inside, inside_key, _normal_key(normals, inside))
@@ -320,9 +316,28 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     parallel.take(offset, key, inverse)
     at = offset[inside_key] + rank
     inverse[inside] = at
-    chosen = last[np.repeat(np.arange(keys), count)]
+    chosen = np.repeat(some, count)
     chosen[at] = ends
     return chosen, inverse
+
+
+def _some_corner(key: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[key[i]] = i`` for the corners from lo to hi: each key's entry one of its corners
+    (whole words written, so whichever thread's comes last, it is one of them)."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        out[key[start:stop]] = np.arange(start, stop)
+
+
+def _mixed(bits: np.ndarray, some: np.ndarray, key: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[key[i]] = True`` where corner ``i``'s normal ``bits`` (N, 3), from lo to hi, differ
+    from those of its key's corner ``some``: only True is written, by any thread."""
+    for start in range(lo, hi, _BLOCK):
+        rows = slice(start, min(start + _BLOCK, hi))
+        differs = np.take(bits, some[key[rows]], axis=0) != bits[rows]
+        found = differs[:, 0] | differs[:, 1]
+        found |= differs[:, 2]
+        out[key[rows][found]] = True
 
 
 def _pairs_by_normal(
@@ -398,18 +413,6 @@ def _compared_by_rows(value: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     for i in range(d):
         np.sum((value < value[i]) & first, axis=0, out=less[i])
     return first.T, last.T, less.T
-
-
-def _differs_from(
-    bits: np.ndarray, last: np.ndarray, key: np.ndarray, out: np.ndarray, lo: int, hi: int
-) -> None:
-    """``out[lo:hi]``: corner ``i``'s normal ``bits`` (N, 3) differ from those of its key's last
-    corner."""
-    for start in range(lo, hi, _BLOCK):
-        rows = slice(start, min(start + _BLOCK, hi))
-        differs = np.take(bits, last[key[rows]], axis=0) != bits[rows]
-        np.logical_or(differs[:, 0], differs[:, 1], out=out[rows])
-        out[rows] |= differs[:, 2]
 
 
 def _normal_key(normals: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
