@@ -644,6 +644,24 @@ def test_one_triangle_over_and_over_is_refused(tmp_path):
     assert loader.load_model(path).triangle_count == 256
 
 
+@pytest.mark.parametrize("threads", [1, 3])
+def test_the_copies_bucketed_a_block_a_thread_bound_the_most_copies(threads, monkeypatch):
+    """The coincidence check's buckets, counted a block a thread and added: at least the most
+    copies of one value (their copies spread over every block), -0.0 with 0.0; every value a
+    bucket where one is NaN."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(loader, "_BLOCK", 100)
+    rng = np.random.default_rng(9)
+    for copies in (1, 40, 300):
+        key = rng.random(2_000)
+        key[rng.choice(len(key), copies, replace=False)] = 0.25
+        key[:2] = 0.0, -0.0
+        most = max(copies, 2)
+        assert most <= loader._bucketed_most(key) < most + 20
+    key[5] = np.nan
+    assert loader._bucketed_most(key) == len(key)
+
+
 def test_frames_glyph_counts_and_glyph_coordinates_are_bounded(tmp_path):
     _box().export(tmp_path / "box.stl")
     line = one_line(

@@ -278,8 +278,10 @@ def _checked(
     return choose_parts(model, include, exclude)
 
 
-# Keys the coincidence check hashes at a time.
+# Keys the coincidence check hashes at a time, and about as many as share a bucket of its hash:
+# a bucket holds more than ``COINCIDENT_LIMIT`` values of one copy alone, not by chance.
 _BLOCK = 1 << 16
+_PER_BUCKET = 16
 
 
 def _checked_instances(
@@ -342,23 +344,29 @@ def _check_coincident(key: np.ndarray, name: str) -> None:
 
 
 def _bucketed_most(key: np.ndarray) -> int:
-    """The most values of ``key`` (float64) in one bucket of a hash of their bits, about as
-    many buckets as values: at least the most copies of one value, found without a sort."""
-    shift = np.uint64(64 - min(22, max(10, len(key).bit_length())))
-    buckets = np.empty(len(key), np.intp)
-    if any(parallel.run(functools.partial(_buckets, key, shift, buckets), len(key), min_block=_BLOCK)):
+    """The most values of ``key`` (float64) in one bucket of a hash of their bits, some
+    ``_PER_BUCKET`` values a bucket: at least the most copies of one value, found without a
+    sort, each block's buckets counted side by side."""
+    bits = min(22, max(10, (len(key) // _PER_BUCKET).bit_length()))
+    counted = parallel.run(functools.partial(_bucket_counts, key, bits), len(key), min_block=_BLOCK)
+    if any(counts is None for counts in counted):
         return len(key)  # a NaN
-    return int(np.bincount(buckets).max())
+    total = counted[0]
+    for counts in counted[1:]:
+        total += counts
+    return int(total.max())
 
 
-def _buckets(key: np.ndarray, shift: np.uint64, out: np.ndarray, lo: int, hi: int) -> bool:
-    """``out[lo:hi]``: ``_bucketed_most``'s buckets of ``key[lo:hi]``; whether one is NaN."""
+def _bucket_counts(key: np.ndarray, bits: int, lo: int, hi: int) -> np.ndarray | None:
+    """The values of ``key[lo:hi]`` in each of ``2 ** bits`` buckets of a hash of their bits;
+    None where one is NaN."""
     block = key[lo:hi]
     if np.isnan(block).any():
-        return True
-    bits = (block + 0.0).view(np.uint64)  # -0.0 is 0.0, as np.unique counts them
-    out[lo:hi] = (bits * np.uint64(0x9E3779B97F4A7C15)) >> shift
-    return False
+        return None
+    hashed = (block + 0.0).view(np.uint64)  # -0.0 is 0.0, as np.unique counts them
+    hashed *= np.uint64(0x9E3779B97F4A7C15)
+    hashed >>= np.uint64(64 - bits)
+    return np.bincount(hashed.view(np.int64), minlength=1 << bits)
 
 
 def _archive_scene(path: Path, kind: str):

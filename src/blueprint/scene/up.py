@@ -54,7 +54,7 @@ def _base_fractions(positions: np.ndarray, faces: np.ndarray, axes) -> dict[int,
     positions = np.asarray(positions)
     faces = np.asarray(faces)
     used = np.zeros(len(positions), bool)
-    used[faces.reshape(-1)] = True
+    parallel.mark(used, faces.reshape(-1))
     points = positions if used.all() else positions[used]
     lo = column_min(points).astype(np.float64)
     extent = column_max(points).astype(np.float64) - lo

@@ -12,11 +12,12 @@ by; edges; other elements; declared sizes the data does not match) is left to tr
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 
-from blueprint import settings
+from blueprint import parallel, settings
 from blueprint.errors import InputError
 from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.polygons import triangulated
@@ -177,20 +178,28 @@ def ply_arrays(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
     Returns
     -------
     (positions, faces) or None
-        (V, 3) float64 and (F, 3) int64, or None where the file is anything the module's
-        docstring leaves to trimesh.
+        (V, 3) float32 where the file's coordinates are, else float64, and (F, 3) integers of
+        the file's index type (int64 where it is wider than 32 bits or not an integer), the
+        values trimesh reads; or None where the file is anything the module's docstring
+        leaves to trimesh.
     """
-    if not affordable(data):
-        return None
     header = _header(data)
     if header is None:
         return None
     encoding, elements, body = header
+    # a binary body's rows are read in place: its lines hold no index
+    if not affordable(data, lines=encoding == "ascii"):
+        return None
     tables = _ascii(data, elements, body) if encoding == "ascii" else _binary(data, elements, body, encoding)
     if tables is None:
         return None
     vertex, (corners, counts) = tables
-    positions = np.column_stack([vertex[axis] for axis in "xyz"]).astype(np.float64)
+    # float32 coordinates stay float32, as the model keeps them: their float64 copies are the
+    # same values
+    single = all(vertex[axis].dtype.kind == "f" and vertex[axis].dtype.itemsize == 4 for axis in "xyz")
+    positions = np.empty((len(vertex["x"]), 3), np.float32 if single else np.float64)
+    for k, axis in enumerate("xyz"):
+        positions[:, k] = vertex[axis]
     return positions, triangulated(corners, counts)
 
 
@@ -226,8 +235,23 @@ def _binary(data: bytes, elements: list[_Element], body: int, endian: str):
     corners = tables["face"][face.properties[face.lists()[0]][0]]["f1"]
     if corners.shape[1] < 3:
         return None
-    flat = corners.reshape(-1).astype(np.int64)
-    return tables["vertex"], (flat, np.full(len(corners), corners.shape[1]))
+    flat = np.empty(corners.shape, _index_type(corners.dtype))
+    parallel.run(partial(_copied, corners, flat), len(corners))
+    return tables["vertex"], (flat.reshape(-1), np.full(len(corners), corners.shape[1]))
+
+
+def _index_type(kind: np.dtype) -> np.dtype:
+    """The type a face's indices are kept in: their own (native order) where they are integers
+    of 32 bits or fewer, else int64, into which they are cast as trimesh casts them."""
+    if kind.kind in "iu" and kind.itemsize <= 4:
+        return kind.newbyteorder("=")
+    return np.dtype(np.int64)
+
+
+def _copied(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi] = rows[lo:hi]``: the faces' corners out of their records, a block of rows a
+    thread."""
+    out[lo:hi] = rows[lo:hi]
 
 
 def _by_name(elements: list[_Element]) -> dict[str, _Element]:

@@ -9,19 +9,20 @@ __all__ = ["triangulated"]
 
 
 def triangulated(corners: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(T, 3) int64: polygons triangulated as trimesh does: the triangles first, as they are;
+    """(T, 3): polygons triangulated as trimesh does: the triangles first, as they are;
     then every quad's (0, 1, 2), then every quad's (2, 3, 0); then each larger polygon as a
     fan from its first corner, in order; polygons of fewer than three corners left out.
 
     Parameters
     ----------
-    corners : (C,) int64
-        The corners of every polygon, one polygon after another.
+    corners : (C,) int
+        The corners of every polygon, one polygon after another: the triangles' corners keep
+        their type, int64 where polygons of more corners are cut.
     counts : (P,) int64
         The corners of each polygon.
     """
     if len(corners) == 3 * len(counts) and (counts == 3).all():
-        return corners.reshape(-1, 3).astype(np.int64, copy=False)  # triangles alone, as they are
+        return corners.reshape(-1, 3)  # triangles alone, as they are
     first = np.cumsum(counts) - counts
     tri = first[counts == 3]
     quad = first[counts == 4]

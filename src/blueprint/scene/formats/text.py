@@ -29,12 +29,14 @@ __all__ = [
 _RUNS_PER_BYTE = 1 / 64
 
 
-def affordable(data: bytes) -> bool:
-    """Whether the passes over ``data`` fit the memory budget: they hold some 80 bytes of
-    index a line and a few copies of the text (a file of nothing but newlines holds the most)."""
+def affordable(data: bytes, lines: bool = True) -> bool:
+    """Whether the passes over ``data`` fit the memory budget: they hold a few copies of the
+    text and, where they read its ``lines``, some 80 bytes of index a line (a file of nothing
+    but newlines holds the most)."""
     from blueprint import settings
 
-    return 80 * data.count(b"\n") + 6 * len(data) <= settings.MEMORY_BUDGET // 2
+    indexed = 80 * data.count(b"\n") if lines else 0
+    return indexed + 6 * len(data) <= settings.MEMORY_BUDGET // 2
 
 
 def is_ascii(buf: np.ndarray) -> bool:
