@@ -164,3 +164,24 @@ def test_rows_taken_a_block_at_a_time_equal_one_take(threads, monkeypatch):
     narrow = np.zeros(61, np.uint32)
     parallel.take(offsets, at, narrow, min_block=4)
     np.testing.assert_array_equal(narrow, offsets[at].astype(np.uint32))
+    taken = parallel.taken(table, at, min_block=4)
+    assert taken.dtype == np.float32 and taken.shape == (61, 3)
+    np.testing.assert_array_equal(taken, table[at])
+    np.testing.assert_array_equal(parallel.taken(offsets, at, np.int64, min_block=4), offsets[at])
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_rows_put_and_pieces_joined_a_block_a_thread_equal_numpys(threads, monkeypatch):
+    """``put``: values into their places, a place repeated with one value; ``joined``: pieces
+    (some empty) end to end, as ``np.concatenate`` puts them."""
+    monkeypatch.setattr(settings, "THREADS", threads)
+    rng = np.random.default_rng(6)
+    at = rng.integers(0, 50, 200)
+    values = at * 7 + 1  # one value a place
+    out, expected = np.zeros(50, np.int64), np.zeros(50, np.int64)
+    parallel.put(out, at, values, min_block=8)
+    expected[at] = values
+    np.testing.assert_array_equal(out, expected)
+    pieces = [rng.integers(0, 9, n) for n in (5, 0, 17, 1, 0, 30)]
+    np.testing.assert_array_equal(parallel.joined(pieces), np.concatenate(pieces))
+    assert parallel.joined(pieces[:1]) is pieces[0]

@@ -29,11 +29,14 @@ __all__ = [
     "cuts",
     "each",
     "flatnonzero",
+    "joined",
     "mark",
+    "put",
     "rises",
     "run",
     "sort",
     "take",
+    "taken",
 ]
 
 T = TypeVar("T")
@@ -143,8 +146,7 @@ def flatnonzero(values: np.ndarray, negated: bool = False, min_block: int | None
         block = values[lo:hi]
         return np.flatnonzero(~block if negated else block) + lo
 
-    found = run(found_in, len(values), min_block)
-    return found[0] if len(found) == 1 else np.concatenate(found)
+    return joined(run(found_in, len(values), min_block))
 
 
 def chosen_at(chosen: np.ndarray, at: np.ndarray, min_block: int | None = None) -> np.ndarray:
@@ -154,8 +156,22 @@ def chosen_at(chosen: np.ndarray, at: np.ndarray, min_block: int | None = None) 
     def found_in(lo: int, hi: int) -> np.ndarray:
         return np.flatnonzero(chosen[at[lo:hi]]) + lo
 
-    found = run(found_in, len(at), min_block)
-    return found[0] if len(found) == 1 else np.concatenate(found)
+    return joined(run(found_in, len(at), min_block))
+
+
+def joined(pieces: list[np.ndarray]) -> np.ndarray:
+    """``np.concatenate(pieces)`` of 1-D arrays of one type, each piece copied into its place by
+    a thread of its own."""
+    if len(pieces) == 1:
+        return pieces[0]
+    ends = np.cumsum([len(piece) for piece in pieces])
+    out = np.empty(int(ends[-1]), pieces[0].dtype)
+
+    def placed(k: int) -> None:
+        out[ends[k] - len(pieces[k]) : ends[k]] = pieces[k]
+
+    each(placed, list(range(len(pieces))))
+    return out
 
 
 def mark(flags: np.ndarray, at: np.ndarray, min_block: int | None = None) -> None:
@@ -183,6 +199,23 @@ def take(table: np.ndarray, at: np.ndarray, out: np.ndarray, min_block: int | No
                 out[start:stop] = np.take(table, at[start:stop], axis=0, mode="clip")
 
     run(taken, len(at), min_block)
+
+
+def taken(table: np.ndarray, at: np.ndarray, dtype=None, min_block: int | None = None) -> np.ndarray:
+    """``table[at]`` (as ``dtype`` where given), taken by ``take`` into a new array."""
+    out = np.empty((len(at), *table.shape[1:]), table.dtype if dtype is None else dtype)
+    take(table, at, out, min_block)
+    return out
+
+
+def put(out: np.ndarray, at: np.ndarray, values: np.ndarray, min_block: int | None = None) -> None:
+    """``out[at] = values``, a block of ``at`` a thread: where a place of ``at`` repeats, its
+    values are the same (whichever thread writes last)."""
+
+    def placed(lo: int, hi: int) -> None:
+        out[at[lo:hi]] = values[lo:hi]
+
+    run(placed, len(at), min_block)
 
 
 def rises(values: np.ndarray, min_block: int | None = None) -> np.ndarray:

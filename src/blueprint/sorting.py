@@ -40,12 +40,9 @@ def stable_argsort(key: np.ndarray) -> np.ndarray:
         return np.argsort((key - low).astype(narrow), kind="stable")
     bits = n.bit_length()
     if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
-        packed = key.astype(np.int64)
-        packed -= low
-        packed <<= bits
-        packed |= np.arange(n)
+        packed = _packed(key, low, bits, np.empty(n, np.int64))
         parallel.sort(packed)
-        packed &= (1 << bits) - 1
+        parallel.run(partial(_positions, packed, bits), n)
         return packed
     found = _by_buckets(key, low, high)
     return np.argsort(key, kind="stable") if found is None else found[1]
@@ -61,24 +58,16 @@ def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndar
     low, high = int(key.min()), int(key.max())
     bits = n.bit_length()
     if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
-        packed = key if overwrite and key.dtype == np.int64 else np.empty(n, np.int64)
-
-        def pack(lo: int, hi: int) -> None:
-            block = packed[lo:hi]
-            block[:] = key[lo:hi]
-            block -= low
-            block <<= bits
-            for start in range(lo, hi, _BLOCK):
-                packed[start : min(start + _BLOCK, hi)] |= np.arange(start, min(start + _BLOCK, hi))
-
-        parallel.run(pack, n)
+        packed = _packed(
+            key, low, bits, key if overwrite and key.dtype == np.int64 else np.empty(n, np.int64)
+        )
         parallel.sort(packed)
         ordered = np.empty(n, np.int64)
 
         def unpack(lo: int, hi: int) -> None:
             np.right_shift(packed[lo:hi], bits, out=ordered[lo:hi])
             ordered[lo:hi] += low
-            packed[lo:hi] &= (1 << bits) - 1
+            _positions(packed, bits, lo, hi)
 
         parallel.run(unpack, n)
         return ordered, packed
@@ -87,6 +76,31 @@ def sorted_with_order(key: np.ndarray, overwrite: bool = False) -> tuple[np.ndar
         return found
     order = np.argsort(key, kind="stable")
     return key[order].astype(np.int64), order
+
+
+def _packed(key: np.ndarray, low: int, bits: int, out: np.ndarray) -> np.ndarray:
+    """``out`` (int64, may be ``key`` itself): each key less ``low`` shifted left by ``bits``,
+    its position in the low bits (keys that sort as the keys do, in a stable order), a block
+    a thread."""
+
+    copied = out is not key
+
+    def pack(lo: int, hi: int) -> None:
+        block = out[lo:hi]
+        if copied:
+            block[:] = key[lo:hi]
+        block -= low
+        block <<= bits
+        for start in range(lo, hi, _BLOCK):
+            out[start : min(start + _BLOCK, hi)] |= np.arange(start, min(start + _BLOCK, hi))
+
+    parallel.run(pack, len(key))
+    return out
+
+
+def _positions(packed: np.ndarray, bits: int, lo: int, hi: int) -> None:
+    """``packed[lo:hi]`` (``_packed``) to the positions in their low ``bits``, in place."""
+    packed[lo:hi] &= (1 << bits) - 1
 
 
 class SortedKeys:
@@ -108,15 +122,7 @@ class SortedKeys:
         bits = n.bit_length()
         if (float(high) - float(low) + 1.0) * 2.0**bits < 2.0**62 and high < 1 << 63:
             self._low, self._bits = low, bits
-
-            def pack(lo: int, hi: int) -> None:
-                key[lo:hi] -= low
-                key[lo:hi] <<= bits
-                for start in range(lo, hi, _BLOCK):
-                    key[start : min(start + _BLOCK, hi)] |= np.arange(start, min(start + _BLOCK, hi))
-
-            parallel.run(pack, n)
-            parallel.sort(key)
+            parallel.sort(_packed(key, low, bits, key))
             self._packed = key
             return
         found = _by_buckets(key, low, high, keys=False)

@@ -431,6 +431,11 @@ def _sums_by_rows(
     return summed.transpose(2, 0, 1).reshape(-1, 3)
 
 
+def _faces_of_corners(corners: np.ndarray, lo: int, hi: int) -> None:
+    """``corners[lo:hi]`` (three a face) to their faces, in place."""
+    corners[lo:hi] //= 3
+
+
 def _unit_rows(rows: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
     """``out[lo:hi]``: ``rows[lo:hi]`` (N, 3) over their lengths (zero rows stay zero)."""
     for start in range(lo, hi, _ROWS):
@@ -485,9 +490,11 @@ def _pairwise(
     sign of their cosine; where that sum is zero, the corner's own face's. Written into ``out``
     (3F, 3) float32."""
     order = stable_argsort(vertex)
-    corner_face = corners[order] // 3
-    sorted_vertex = vertex[order]
-    starts = np.flatnonzero(np.r_[True, sorted_vertex[1:] != sorted_vertex[:-1]])
+    corner_face = parallel.taken(corners, order)
+    parallel.run(partial(_faces_of_corners, corner_face), len(corner_face))
+    sorted_vertex = parallel.taken(vertex, order)
+    # in order, a vertex's first corner is the one that passes every vertex before it
+    starts = parallel.flatnonzero(parallel.rises(sorted_vertex))
     degree = np.diff(np.r_[starts, len(order)])
     cos_crease = np.cos(np.radians(crease_angle)) - 1e-9
     # the vertices of one degree d together: each its faces' d x d cosines and the sum of its

@@ -182,12 +182,31 @@ def _vertex_part_keys(model: Model, corner_vertex: np.ndarray) -> np.ndarray:
     parts = len(model.part_names)
     if parts < 2:
         return corner_vertex
-    corner_part = np.repeat(model.face_part, 3)
+    n = len(corner_vertex)
+    corner_part = np.empty(n, np.int32)
+    parallel.run(partial(_corner_parts, model.face_part, corner_part), n)
+    # each vertex's part from any of its corners: where one differs, a vertex lies in two
     vertex_part = np.zeros(len(model.positions), np.int32)
-    vertex_part[corner_vertex] = corner_part
-    if np.array_equal(vertex_part[corner_vertex], corner_part):
+    parallel.put(vertex_part, corner_vertex, corner_part)
+    if all(parallel.run(partial(_parts_agree, vertex_part, corner_vertex, corner_part), n)):
         return corner_vertex
-    return corner_vertex.astype(np.int64) * parts + corner_part
+    key = corner_vertex.astype(np.int64) * parts
+    key += corner_part
+    return key
+
+
+def _corner_parts(face_part: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: the parts of corners lo to hi (three a face), a block at a time."""
+    for start in range(lo, hi, _BLOCK):
+        stop = min(start + _BLOCK, hi)
+        out[start:stop] = face_part[np.arange(start, stop) // 3]
+
+
+def _parts_agree(
+    vertex_part: np.ndarray, corner_vertex: np.ndarray, corner_part: np.ndarray, lo: int, hi: int
+) -> bool:
+    """Whether each corner from lo to hi lies in its vertex's part."""
+    return bool(np.array_equal(vertex_part[corner_vertex[lo:hi]], corner_part[lo:hi]))
 
 
 def _numbered_by_first_corner(corner_vertex: np.ndarray, vertices: int) -> bool:
@@ -304,8 +323,8 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     # the corners of the other keys, each key's together in corner order; their pairs found
     # among each key's corners (``_pairs_by_normal``)
     inside = parallel.chosen_at(mixed, key)
-    inside = inside[stable_argsort(key[inside])]
-    inside_key = key[inside]
+    inside = parallel.taken(inside, stable_argsort(parallel.taken(key, inside)))
+    inside_key = parallel.taken(key, inside)
     rank, ends, distinct, firsts = _pairs_by_normal(inside, inside_key, _normal_key(normals, inside))
     # pairs a key: one, or its distinct normals
     count = np.ones(keys, np.int64)
@@ -314,11 +333,17 @@ def _split_vertices(vertex_part: np.ndarray, normals: np.ndarray) -> tuple[np.nd
     offset = np.cumsum(count) - count
     inverse = np.empty(n, np.uint32)
     parallel.take(offset, key, inverse)
-    at = offset[inside_key] + rank
-    inverse[inside] = at
+    at = parallel.taken(offset, inside_key)
+    parallel.run(partial(_added, at, rank), len(at))
+    parallel.put(inverse, inside, at)
     chosen = np.repeat(some, count)
-    chosen[at] = ends
+    parallel.put(chosen, at, ends)
     return chosen, inverse
+
+
+def _added(values: np.ndarray, more: np.ndarray, lo: int, hi: int) -> None:
+    """``values[lo:hi] += more[lo:hi]``."""
+    values[lo:hi] += more[lo:hi]
 
 
 def _some_corner(key: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
@@ -351,7 +376,8 @@ def _pairs_by_normal(
     before each), those of one d together, a block at a time: no sort of the corners by
     normal. Keys of more corners than ``_TABLE_DEGREE`` are sorted by normal instead."""
     n = len(corners)
-    firsts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]]) if n else np.zeros(0, np.int64)
+    # the keys in order: a key's first corner is the one that passes every key before it
+    firsts = parallel.flatnonzero(parallel.rises(key))
     size = np.diff(np.r_[firsts, n])
     rank = np.empty(n, np.int64)
     ends = np.empty(n, np.int64)
