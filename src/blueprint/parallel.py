@@ -209,8 +209,9 @@ def taken(table: np.ndarray, at: np.ndarray, dtype=None, min_block: int | None =
 
 
 def put(out: np.ndarray, at: np.ndarray, values: np.ndarray, min_block: int | None = None) -> None:
-    """``out[at] = values``, a block of ``at`` a thread: where a place of ``at`` repeats, its
-    values are the same (whichever thread writes last)."""
+    """``out[at] = values``, a block of ``at`` a thread: a place of ``at`` that repeats ends
+    with one of its values, whichever thread writes last (where they differ, not always the
+    last of them)."""
 
     def placed(lo: int, hi: int) -> None:
         out[at[lo:hi]] = values[lo:hi]
