@@ -25,6 +25,7 @@ __all__ = [
     "ranges",
     "row_norm",
     "square_blocks",
+    "used_bounds",
 ]
 
 # Faces whose cross products ``indexed_cross`` makes at a time.
@@ -39,6 +40,21 @@ def column_min(values: np.ndarray) -> np.ndarray:
 def column_max(values: np.ndarray) -> np.ndarray:
     """``values.max(axis=0)`` of a 2-D array."""
     return np.array([values[:, k].max() for k in range(values.shape[1])], dtype=values.dtype)
+
+
+def used_bounds(positions: np.ndarray, faces: np.ndarray) -> np.ndarray | None:
+    """(2, 3) float64: the lowest and highest corner of the ``positions`` (V, 3) that ``faces``
+    use, each once (all of them where there are no faces); None where that is none."""
+    used = positions
+    if len(faces):
+        # each used vertex marked once, not read once a corner (some six times in a closed mesh)
+        mask = np.zeros(len(positions), bool)
+        parallel.mark(mask, np.asarray(faces).reshape(-1))
+        if not mask.all():
+            used = positions[mask]
+    if len(used) == 0:
+        return None
+    return np.array([column_min(used), column_max(used)], dtype=np.float64)
 
 
 def column_ptp(values: np.ndarray) -> np.ndarray:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from blueprint import parallel
-from blueprint.columns import column_cross, column_max, column_min, face_cross, indexed_cross
+from blueprint.columns import column_cross, face_cross, indexed_cross, used_bounds
 from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.units import UNITS_MM
 
@@ -204,14 +204,7 @@ class Model:
             boxes = self.instance_boxes()
             self._cache["bounds"] = np.array([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
         if "bounds" not in self._cache:
-            used = self.positions
-            if len(self.faces):
-                # each used vertex once, not once a corner (some six times in a closed mesh)
-                mask = np.zeros(len(self.positions), bool)
-                parallel.mark(mask, self.faces.reshape(-1))
-                if not mask.all():
-                    used = self.positions[mask]
-            self._cache["bounds"] = np.array([column_min(used), column_max(used)], dtype=np.float64)
+            self._cache["bounds"] = used_bounds(self.positions, self.faces)
         return self._cache["bounds"].copy()
 
     def instance_boxes(self) -> np.ndarray:

@@ -7,7 +7,7 @@ from functools import partial
 import numpy as np
 
 from blueprint import parallel, settings
-from blueprint.columns import column_max, column_min, indexed_cross, row_norm, square_blocks
+from blueprint.columns import indexed_cross, row_norm, square_blocks, used_bounds
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import SortedKeys, stable_argsort
 
@@ -197,12 +197,8 @@ def _pair_sharp(
 
 def _diagonal(positions: np.ndarray, faces: np.ndarray) -> float:
     """The diagonal of the bounding box of the vertices the faces use (1 where it is 0)."""
-    used = np.zeros(len(positions), bool)
-    used[np.asarray(faces).reshape(-1)] = True
-    points = positions if used.all() else positions[used]
-    if len(points) == 0:
-        return 1.0
-    return diagonal_of(np.array([column_min(points), column_max(points)], np.float64))
+    bounds = used_bounds(positions, faces)
+    return 1.0 if bounds is None else diagonal_of(bounds)
 
 
 def diagonal_of(bounds: np.ndarray) -> float:

@@ -16,7 +16,7 @@ from functools import partial
 import numpy as np
 
 from blueprint import parallel
-from blueprint.columns import column_max, column_min, face_cross, row_norm
+from blueprint.columns import face_cross, row_norm, used_bounds
 
 # The bottom slab, as a fraction of the model's extent along the axis.
 _SLAB = 0.01
@@ -53,12 +53,8 @@ def _base_fractions(positions: np.ndarray, faces: np.ndarray, axes) -> dict[int,
     time: all at once they would take 72 bytes a face."""
     positions = np.asarray(positions)
     faces = np.asarray(faces)
-    used = np.zeros(len(positions), bool)
-    parallel.mark(used, faces.reshape(-1))
-    points = positions if used.all() else positions[used]
-    lo = column_min(points).astype(np.float64)
-    extent = column_max(points).astype(np.float64) - lo
-    del used, points
+    lo, high = used_bounds(positions, faces)
+    extent = high - lo
     flat_areas: dict[int, list[np.ndarray]] = {}
     for axis in axes:
         if extent[axis] > 0 and np.prod(np.delete(extent, axis)) > 0:
