@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint.gpu.fences import OneAhead
 from blueprint.scene.model import Model
 from blueprint.scene.prepare import gpu_arrays
 
@@ -13,8 +14,8 @@ GEOMETRY_VERT = "blueprint.render:glsl/geometry.vert"
 PLACEMENTS_BINDING = 10
 # the most faces a draw call of a software rasteriser draws: llvmpipe holds every triangle of a
 # draw call until it has rasterised them, so a big group is drawn a run of faces at a time, each
-# finished before the next is given (flushed only, they would all be held at once again)
-PIECE_FACES = 1 << 17
+# set up while the one before is rasterised (flushed only, they would all be held at once again)
+PIECE_FACES = 1 << 16
 # Parts a k-buffer's or A-buffer's surface holds beside a normal of three halves (16 bits, one
 # value kept for none); a mesh of more packs its surfaces' normals in 32 bits (kbuffer.glsl's
 # WIDE_PARTS) and its parts whole.
@@ -492,21 +493,26 @@ def _first_face(program):
 
 class _Draws:
     """A mesh's draw calls for one program: each draw's vertex array, (vertex array,
-    instances, first index, indices, wait, first face), its indices at its instances, finished
-    before the next draw where ``wait`` (a piece of a group drawn in pieces)."""
+    instances, first index, indices, wait, first face), its indices at its instances; after a
+    draw with ``wait`` (a piece of a group drawn in pieces) the draw before it is waited for
+    (``OneAhead``), so that one piece is set up while the last is rasterised."""
 
     def __init__(self, arrays: list, program) -> None:
         self.arrays = arrays
         self.first_face = _first_face(program)
 
     def render(self) -> None:
+        ahead = None
         for vao, count, first, indices, wait, face in self.arrays:
             if indices:
                 if self.first_face is not None:
                     self.first_face.value = face
                 vao.render(vertices=indices, first=first, instances=count)
                 if wait:
-                    vao.ctx.finish()
+                    ahead = ahead or OneAhead(vao.ctx)
+                    ahead.drawn()
+        if ahead is not None:
+            ahead.close()
 
 
 class _ChunkDraws:
@@ -523,6 +529,7 @@ class _ChunkDraws:
             vbo, ibo = ctx.buffer(vertices), ctx.buffer(indices)
             held = [vbo, ibo]
             layout = _layout(vbo, _VERTEX_FIELDS, program, "")
+            ahead = OneAhead(ctx)
             for records, first, count, wait in draws:
                 placed = ctx.buffer(records)
                 vao = ctx.vertex_array(
@@ -536,7 +543,8 @@ class _ChunkDraws:
                     first_face.value = int(records["face"][0])
                 vao.render(vertices=count, first=first, instances=len(records))
                 if wait:
-                    ctx.finish()
+                    ahead.drawn()
+            ahead.close()
             # the driver frees the chunk's buffers only once its draws are done
             ctx.finish()
             for obj in reversed(held):
