@@ -660,13 +660,16 @@ def test_a_soup_with_unused_vertices_between_its_corners_draws_them_as_its_own(p
 
 
 @pytest.mark.parametrize("threads", [1, 2, 4, 5])
-def test_the_vertex_sums_a_block_at_a_time_equal_one_bincount(threads, monkeypatch):
-    """Summed a block of faces at a time from zero, each vertex's area normals are those of one
-    ``bincount`` over every corner, bit for bit (the same additions in the same order): a
-    coordinate a thread, and from four threads a range of vertices a thread."""
+@pytest.mark.parametrize("run_corners", [1 << 18, 40, 5])
+def test_the_vertex_sums_a_block_at_a_time_equal_one_bincount(threads, run_corners, monkeypatch):
+    """Gathered a block of faces at a time, a range of vertices a thread and a run of them at a
+    time, each vertex's area normals are those of one ``bincount`` over every corner, bit for
+    bit (the same additions in the same order): the range whole, in runs of some vertices, and
+    a vertex a run."""
     monkeypatch.setattr(settings, "THREADS", threads)
     monkeypatch.setattr(parallel, "MIN_BLOCK", 6)
     monkeypatch.setattr(normals, "_ROWS", 7)
+    monkeypatch.setattr(normals, "_SUM_CORNERS", run_corners)
     rng = np.random.default_rng(3)
     faces, vertices = 100, 40
     vertex = rng.integers(0, vertices - 3, 3 * faces).astype(np.int32)  # the last three unused

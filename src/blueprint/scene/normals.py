@@ -6,7 +6,7 @@ from functools import partial
 
 import numpy as np
 
-from blueprint import parallel, settings
+from blueprint import parallel
 from blueprint.columns import indexed_cross, row_norm, square_blocks, used_bounds
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
 from blueprint.sorting import SortedKeys, stable_argsort
@@ -19,9 +19,8 @@ _MAX_DEGREE = 64
 _CONE = 44.0
 # Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
 _ROWS = 1 << 16
-# Threads from which the vertices' sums are made a range of vertices a thread (``_range_sums``),
-# each reading every corner, not a coordinate a thread (``_axis_sums``: four threads at most).
-_RANGES_FROM = 4
+# Corners a run of a thread's vertex sums has, about (``_range_sums``): some 40 bytes each.
+_SUM_CORNERS = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
 # Corners of a block (vertices times their degree) from which their sums are made a corner at
@@ -340,58 +339,53 @@ def corner_normals(
 def _vertex_sums(vertex: np.ndarray, area: np.ndarray, vertices: int) -> tuple[np.ndarray, np.ndarray]:
     """Of the corners' ``vertex`` (3F,) among ``vertices``: (V, 3) the sum of the ``area`` (F, 3)
     normals of each vertex's faces, each adding its corners in order from zero, as one
-    ``bincount`` would, bit for bit; and (V,) its corners. A coordinate a thread
-    (``_axis_sums``), or a range of vertices a thread where there are threads to spare for it
+    ``bincount`` would, bit for bit; and (V,) its corners. A range of vertices a thread
     (``_range_sums``)."""
     summed = np.empty((vertices, 3))
     degree = np.empty(vertices, np.int64)
-    if settings.THREADS < _RANGES_FROM:
-        parallel.run(partial(_axis_sums, vertex, area, summed, degree), 4, min_block=1)
-    else:
-        parallel.run(partial(_range_sums, vertex, area, summed, degree), vertices)
+    parallel.run(partial(_range_sums, vertex, area, summed, degree), vertices)
     return summed, degree
-
-
-def _axis_sums(
-    vertex: np.ndarray, area: np.ndarray, summed: np.ndarray, degree: np.ndarray, first: int, last: int
-) -> None:
-    """``_vertex_sums``: for ``axis`` 0 to 2 from ``first`` to ``last``, the sums into
-    ``summed[:, axis]``, and for 3, the degrees into ``degree``. A coordinate a thread, a block
-    of ``_ROWS`` faces at a time, without a copy of every corner's weight and index."""
-    faces = len(area)
-    for axis in range(first, last):
-        if axis == 3:
-            degree[:] = 0
-            # counts of longer blocks: each block's count is as long as every vertex
-            for start in range(0, faces, 4 * _ROWS):
-                corners = vertex[3 * start : 3 * min(start + 4 * _ROWS, faces)]
-                degree += np.bincount(corners, minlength=len(degree))
-        else:
-            total = np.zeros(len(degree))
-            for start in range(0, faces, _ROWS):
-                stop = min(start + _ROWS, faces)
-                np.add.at(total, vertex[3 * start : 3 * stop], np.repeat(area[start:stop, axis], 3))
-            summed[:, axis] = total
 
 
 def _range_sums(
     vertex: np.ndarray, area: np.ndarray, summed: np.ndarray, degree: np.ndarray, lo: int, hi: int
 ) -> None:
-    """``_vertex_sums`` of the vertices from lo to hi into ``summed`` and ``degree``: a range of
-    vertices a thread, each reading every corner a block of ``_ROWS`` faces at a time."""
-    total = np.zeros((3, hi - lo))
-    count = np.zeros(hi - lo, np.int64)
+    """``_vertex_sums`` of the vertices from lo to hi into ``summed`` and ``degree``, summed by
+    ``bincount`` (which lets go of the GIL, where ``np.add.at`` holds it and the threads would
+    wait on each other): the range cut into runs of a power of two of vertices with some
+    ``_SUM_CORNERS`` corners, each run's corners gathered in order from every block of ``_ROWS``
+    faces (four bytes each), then summed."""
+    if hi <= lo:
+        return
+    corner_type = np.int32 if len(vertex) <= np.iinfo(np.int32).max else np.int64
+    width = max(1, _SUM_CORNERS * len(summed) // max(len(vertex), 1))
+    shift = width.bit_length() - 1
+    runs: list[list[np.ndarray]] = [[] for _ in range(((hi - lo - 1) >> shift) + 1)]
     faces = len(area)
     for start in range(0, faces, _ROWS):
         corners = vertex[3 * start : 3 * min(start + _ROWS, faces)]
         mine = np.flatnonzero((corners >= lo) & (corners < hi))
-        at = corners[mine] - lo
-        rows = np.take(area, mine // 3 + start, axis=0)
+        run = ((corners[mine] - lo) >> shift).astype(np.uint16)
+        mine += 3 * start
+        if len(runs) == 1:
+            runs[0].append(mine.astype(corner_type))
+            continue
+        # a stable sort of 16-bit keys: NumPy's radix sort, linear
+        mine = mine[np.argsort(run, kind="stable")].astype(corner_type)
+        ends = np.cumsum(np.bincount(run, minlength=len(runs)))
+        for k, piece in enumerate(np.split(mine, ends[:-1])):
+            if len(piece):
+                runs[k].append(piece)
+    for k, pieces in enumerate(runs):
+        first, last = lo + (k << shift), min(hi, lo + ((k + 1) << shift))
+        corner = np.concatenate(pieces) if pieces else np.zeros(0, corner_type)
+        runs[k] = []
+        at = np.take(vertex, corner).astype(np.intp)
+        at -= first
+        rows = np.take(area, corner // 3, axis=0)
+        degree[first:last] = np.bincount(at, minlength=last - first)
         for axis in range(3):
-            np.add.at(total[axis], at, rows[:, axis])
-        np.add.at(count, at, 1)
-    summed[lo:hi] = total.T
-    degree[lo:hi] = count
+            summed[first:last, axis] = np.bincount(at, rows[:, axis], minlength=last - first)
 
 
 def _sums_by_table(
