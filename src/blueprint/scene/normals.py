@@ -19,8 +19,12 @@ _MAX_DEGREE = 64
 _CONE = 44.0
 # Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
 _ROWS = 1 << 16
-# Corners a run of a thread's vertex sums has, about (``_range_sums``): some 40 bytes each.
-_SUM_CORNERS = 1 << 18
+# Vertex ranges the vertices' sums are cut into at most, each of some ``_SUM_CORNERS`` corners
+# at least (``_vertex_sums``), and faces whose corners are put in order of their ranges at a
+# time (``_by_range``): a range's sum holds some 40 bytes a corner.
+_SUM_RANGES = 256
+_SUM_CORNERS = 1 << 16
+_RANGE_ROWS = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
 # Corners of a block (vertices times their degree) from which their sums are made a corner at
@@ -339,53 +343,77 @@ def corner_normals(
 def _vertex_sums(vertex: np.ndarray, area: np.ndarray, vertices: int) -> tuple[np.ndarray, np.ndarray]:
     """Of the corners' ``vertex`` (3F,) among ``vertices``: (V, 3) the sum of the ``area`` (F, 3)
     normals of each vertex's faces, each adding its corners in order from zero, as one
-    ``bincount`` would, bit for bit; and (V,) its corners. A range of vertices a thread
-    (``_range_sums``)."""
+    ``bincount`` would, bit for bit; and (V,) its corners. By ``bincount`` (which lets go of
+    the GIL, where ``np.add.at`` holds it and threads would wait on each other), a range of
+    vertices at a time: each block of faces' corners put in order of their vertices' ranges
+    (``_by_range``), then each range's corners, gathered from every block, summed
+    (``_range_sums``), blocks and ranges side by side on the pool."""
     summed = np.empty((vertices, 3))
     degree = np.empty(vertices, np.int64)
-    parallel.run(partial(_range_sums, vertex, area, summed, degree), vertices)
+    wanted = min(_SUM_RANGES, max(1, len(vertex) // _SUM_CORNERS))
+    shift = 0
+    while ((vertices - 1) >> shift) + 1 > wanted:
+        shift += 1
+    ranges = ((vertices - 1) >> shift) + 1 if vertices else 0
+    if ranges <= 1:
+        corners = np.arange(len(vertex), dtype=np.int64)
+        _summed_range(vertex, area, corners, 0, vertices, summed, degree)
+        return summed, degree
+    pieces: list = [None] * -(-len(area) // _RANGE_ROWS)
+    parallel.run(partial(_by_range, vertex, shift, ranges, pieces), len(pieces), min_block=1)
+    parallel.run(partial(_range_sums, vertex, area, shift, pieces, summed, degree), ranges, min_block=1)
     return summed, degree
 
 
-def _range_sums(
-    vertex: np.ndarray, area: np.ndarray, summed: np.ndarray, degree: np.ndarray, lo: int, hi: int
-) -> None:
-    """``_vertex_sums`` of the vertices from lo to hi into ``summed`` and ``degree``, summed by
-    ``bincount`` (which lets go of the GIL, where ``np.add.at`` holds it and the threads would
-    wait on each other): the range cut into runs of a power of two of vertices with some
-    ``_SUM_CORNERS`` corners, each run's corners gathered in order from every block of ``_ROWS``
-    faces (four bytes each), then summed."""
-    if hi <= lo:
-        return
+def _by_range(vertex: np.ndarray, shift: int, ranges: int, pieces: list, lo: int, hi: int) -> None:
+    """``pieces[i]`` for the blocks ``i`` from lo to hi of ``_RANGE_ROWS`` faces: (the block's
+    corners in order of their vertices' ranges, ``vertex >> shift``, stably; where each of
+    the ``ranges`` ranges' corners end)."""
     corner_type = np.int32 if len(vertex) <= np.iinfo(np.int32).max else np.int64
-    width = max(1, _SUM_CORNERS * len(summed) // max(len(vertex), 1))
-    shift = width.bit_length() - 1
-    runs: list[list[np.ndarray]] = [[] for _ in range(((hi - lo - 1) >> shift) + 1)]
-    faces = len(area)
-    for start in range(0, faces, _ROWS):
-        corners = vertex[3 * start : 3 * min(start + _ROWS, faces)]
-        mine = np.flatnonzero((corners >= lo) & (corners < hi))
-        run = ((corners[mine] - lo) >> shift).astype(np.uint16)
-        mine += 3 * start
-        if len(runs) == 1:
-            runs[0].append(mine.astype(corner_type))
-            continue
-        # a stable sort of 16-bit keys: NumPy's radix sort, linear
-        mine = mine[np.argsort(run, kind="stable")].astype(corner_type)
-        ends = np.cumsum(np.bincount(run, minlength=len(runs)))
-        for k, piece in enumerate(np.split(mine, ends[:-1])):
-            if len(piece):
-                runs[k].append(piece)
-    for k, pieces in enumerate(runs):
-        first, last = lo + (k << shift), min(hi, lo + ((k + 1) << shift))
-        corner = np.concatenate(pieces) if pieces else np.zeros(0, corner_type)
-        runs[k] = []
-        at = np.take(vertex, corner).astype(np.intp)
-        at -= first
-        rows = np.take(area, corner // 3, axis=0)
-        degree[first:last] = np.bincount(at, minlength=last - first)
-        for axis in range(3):
-            summed[first:last, axis] = np.bincount(at, rows[:, axis], minlength=last - first)
+    for i in range(lo, hi):
+        start = 3 * i * _RANGE_ROWS
+        ids = (vertex[start : start + 3 * _RANGE_ROWS] >> shift).astype(np.uint8)
+        # a stable sort of bytes: NumPy's radix sort, linear
+        order = np.argsort(ids, kind="stable")
+        order += start
+        pieces[i] = order.astype(corner_type), np.cumsum(np.bincount(ids, minlength=ranges))
+
+
+def _range_sums(
+    vertex: np.ndarray,
+    area: np.ndarray,
+    shift: int,
+    pieces: list,
+    summed: np.ndarray,
+    degree: np.ndarray,
+    lo: int,
+    hi: int,
+) -> None:
+    """``_vertex_sums`` of the vertex ranges from lo to hi (``_by_range``'s ``pieces``): each
+    range's corners gathered from every block in order, then summed."""
+    for r in range(lo, hi):
+        corners = np.concatenate([order[ends[r - 1] if r else 0 : ends[r]] for order, ends in pieces])
+        first = r << shift
+        _summed_range(vertex, area, corners, first, min(len(degree), first + (1 << shift)), summed, degree)
+
+
+def _summed_range(
+    vertex: np.ndarray,
+    area: np.ndarray,
+    corners: np.ndarray,
+    first: int,
+    last: int,
+    summed: np.ndarray,
+    degree: np.ndarray,
+) -> None:
+    """``summed`` and ``degree`` of the vertices from ``first`` to ``last``, from their
+    ``corners``, in order."""
+    at = np.take(vertex, corners).astype(np.intp)
+    at -= first
+    rows = np.take(area, corners // 3, axis=0)
+    degree[first:last] = np.bincount(at, minlength=last - first)
+    for axis in range(3):
+        summed[first:last, axis] = np.bincount(at, rows[:, axis], minlength=last - first)
 
 
 def _sums_by_table(
