@@ -31,9 +31,11 @@ from blueprint import examples
 from blueprint.pipeline.blueprint import stream_blueprint
 from blueprint.pipeline.layers import LayerCapture
 from blueprint.render.abuffer import (
+    BINDING_ALIGNMENT,
     FIRST_ROOM,
     MOST_LAYERS,
     NODE_BYTES,
+    SURFACE_BYTES,
     ABufferSource,
     projected_fragments,
     spare_room,
@@ -484,6 +486,35 @@ def test_edges_from_the_lists_draw_the_same(renderer, abuffer, gpu_form, monkeyp
     assert listed == ["edges"]
     assert from_lists.layers == unpacked.layers >= 6
     np.testing.assert_array_equal(from_lists.image, unpacked.image)
+
+
+def test_nodes_past_one_binding_in_a_second(renderer, abuffer, gpu_form, monkeypatch):
+    """Where one storage binding holds fewer nodes than the lists may (a GPU's 2 GiB against a
+    quarter of its memory), the nodes past it are read and written in a second binding of the
+    nodes' buffer: the same drawing and layers as lists in one binding."""
+    model = examples.gearbox()
+    options = dict(size=(120, 90), max_layers=None, supersample=1)
+    abuffer(True)
+    whole = renderer.render(model, **options)
+    room = renderer.abuffer_room[(120, 90)]
+    splits = []
+    prepared = ABufferSource.__init__
+
+    def watch(self, *args, **kwargs):
+        prepared(self, *args, **kwargs)
+        splits.append(self.split)
+
+    monkeypatch.setattr(ABufferSource, "__init__", watch)
+    # a binding of two thirds of the room's nodes: the frame's fragments (``spare_room``: four
+    # fifths of the room, less its spare) pass it, two such bindings and the slim fragments' one
+    # hold them
+    monkeypatch.setattr(renderer.device, "storage_bytes", SURFACE_BYTES * (room * 2 // 3) + BINDING_ALIGNMENT)
+    split = renderer.render(examples.gearbox(), **options)  # a mesh of its own: programs anew
+    assert renderer.executor.last_run.groups[0].capture.way == "A-buffer"
+    assert splits and all(0 < at < (room - 1024) * 4 // 5 for at in splits)
+    assert split.layers == whole.layers > 8
+    assert split.layer_pixels == whole.layer_pixels
+    np.testing.assert_array_equal(split.image, whole.image)
 
 
 @pytest.mark.parametrize("form", ["gpu_form", "software_form"])

@@ -68,6 +68,10 @@ AB_ROW = 4096
 LIST_UNITS = (5, 6, 7)
 # the pool's targets of a size's lists, after its name (``_buffers``): what a fragment's room takes
 LIST_PARTS = ("nodes", "links", "order", "slim")
+# storage binding of the nodes past a binding's reach (abuffer.glsl's AB_SPLIT), and the offsets a
+# binding may start at: whole multiples of this many bytes (the most a driver may ask for)
+NODES_HIGH_BINDING = 16
+BINDING_ALIGNMENT = 256
 
 
 def _lists_name(size: tuple[int, int]) -> str:
@@ -79,6 +83,17 @@ def list_defines(r) -> dict:
     """The defines of a program that reads or writes the lists on renderer ``r`` (abuffer.glsl):
     images on a software rasteriser, storage buffers elsewhere."""
     return {"AB_IMAGES": 1} if r.software else {}
+
+
+def split_node(r, max_bytes: int, node_bytes: int) -> int:
+    """The first node of the lists' second binding of nodes (abuffer.glsl's AB_SPLIT) where
+    lists in storage buffers of at most ``max_bytes`` (``node_bytes`` a fragment) may hold more
+    nodes than one binding does (``Device.storage_bytes``): its nodes, whole multiples of
+    ``BINDING_ALIGNMENT`` bytes; else 0."""
+    if r.software:
+        return 0
+    held = r.storage_bytes // BINDING_ALIGNMENT * BINDING_ALIGNMENT // SURFACE_BYTES
+    return held if 0 < held < max_bytes // node_bytes else 0
 
 
 class Overflow(Exception):
@@ -95,10 +110,11 @@ class _Prepared:
         r = capturer.device
         self.model = capturer.model_of(mesh)
         images = r.software
-        self.defines = {**list_defines(r), **mesh.surface_defines}
         # a mesh drawn in chunks is not on the GPU whole when the resolve would read its faces
         self.slim = row.slim and mesh.chunk_faces is None
         self.node_bytes = NODE_BYTES + (SLIM_BYTES if self.slim else 0)
+        self.split = split_node(r, row.max_bytes, self.node_bytes)
+        self.defines = {**list_defines(r), **mesh.surface_defines, "AB_SPLIT": self.split}
         capture = self.capture_defines = {**self.defines, "SLIM": self.slim}
         # where the lists live in images (a software rasteriser) an atomic on the fragment
         # counter runs a lane at a time: the subgroup's fragments take their nodes with one
@@ -165,6 +181,7 @@ class ABufferSource:
         if p is None:
             p = mesh.prepared[(ABufferSource, row, tiles)] = _Prepared(capturer, row, mesh, tiles)
         self.model, self.defines, self.slim, self.node_bytes = p.model, p.defines, p.slim, p.node_bytes
+        self.split = p.split
         self.capture_defines, self.fetch_head, self.raster = p.capture_defines, p.fetch_head, p.raster
         self.geometry, self.resolve, self.clear, self.unpack = p.geometry, p.resolve, p.clear, p.unpack
         self.resolve_long = p.resolve_long
@@ -277,11 +294,13 @@ class ABufferSource:
 
     def _most_room(self) -> int:
         """The most fragments lists may hold within ``max_bytes`` and, in storage buffers, what
-        a binding holds of their nodes (``Device.storage_bytes``), or in images, their rows of
+        one binding holds of their nodes (``Device.storage_bytes``), or two where they are
+        split (``split_node``), and one of their slim fragments; or in images, their rows of
         ``AB_ROW`` entries each; the compute rasteriser's buffers are counted where it draws
         them (``_computes``)."""
         if not self.images:
-            return min(self.max_bytes // self.node_bytes, self.r.storage_bytes // SURFACE_BYTES)
+            nodes = 2 * self.split if self.split else self.r.storage_bytes // SURFACE_BYTES
+            return min(self.max_bytes // self.node_bytes, nodes, self.r.storage_bytes // SLIM_BYTES)
         return min(self.max_bytes // (AB_ROW * self.node_bytes), self.r.max_texture) * AB_ROW
 
     def draw(self, layer: int, query=None, guard=None) -> int | None:
@@ -418,7 +437,15 @@ class ABufferSource:
                 pool.texture(f"{name}.{part}", size, fmt).bind_to_image(unit, read=True, write=True)
         else:
             for binding, (part, nbytes) in enumerate((("nodes", SURFACE_BYTES), ("links", 4), ("order", 4))):
-                pool.buffer(f"{name}.{part}", nbytes * room).bind_to_storage_buffer(binding)
+                buffer = pool.buffer(f"{name}.{part}", nbytes * room)
+                if part != "nodes" or not self.split:
+                    buffer.bind_to_storage_buffer(binding)
+                    continue
+                # the nodes past the split in a second binding (where none is, the first again)
+                low = min(buffer.size, SURFACE_BYTES * self.split)
+                buffer.bind_to_storage_buffer(binding, size=low)
+                high = (low, buffer.size - low) if buffer.size > low else (0, low)
+                buffer.bind_to_storage_buffer(NODES_HIGH_BINDING, offset=high[0], size=high[1])
         held = pool.buffer(f"{name}.totals", 16), pool.buffer(f"{name}.depths", 4 * (MOST_LAYERS + 1))
         for binding, buf in enumerate(held, 3):
             buf.bind_to_storage_buffer(binding)

@@ -12,6 +12,9 @@
 #ifndef SLIM
 #define SLIM 0
 #endif
+#ifndef AB_SPLIT
+#define AB_SPLIT 0
+#endif
 #define AB_ROW 4096
 #if AB_IMAGES
 layout(binding = 5, rgba32ui) coherent uniform uimage2D u_nodes;
@@ -38,10 +41,33 @@ layout(std430, binding = 1) coherent buffer Links {
 layout(std430, binding = 2) coherent buffer Order {
     uint order[];
 };
+#if AB_SPLIT
+// nodes from AB_SPLIT on, in a second binding of the nodes' buffer: one binding holds some 2 GiB
+// at most (GL_MAX_SHADER_STORAGE_BLOCK_SIZE), 134 M nodes
+layout(std430, binding = 16) coherent buffer NodesHigh {
+    uvec4 nodes_high[];
+};
+
+uvec4 ab_node(uint i) {
+    return i < uint(AB_SPLIT) ? nodes[i] : nodes_high[i - uint(AB_SPLIT)];
+}
+
+void ab_set_node(uint i, uvec4 v) {
+    if (i < uint(AB_SPLIT)) {
+        nodes[i] = v;
+    } else {
+        nodes_high[i - uint(AB_SPLIT)] = v;
+    }
+}
+
+#define AB_NODE(i) ab_node(i)
+#define AB_SET_NODE(i, v) ab_set_node((i), (v))
+#else
 #define AB_NODE(i) nodes[i]
+#define AB_SET_NODE(i, v) nodes[i] = (v)
+#endif
 #define AB_LINK(i) links[i]
 #define AB_ORDER(i) order[i]
-#define AB_SET_NODE(i, v) nodes[i] = (v)
 #define AB_SET_LINK(i, v) links[i] = (v)
 #define AB_SET_ORDER(i, v) order[i] = (v)
 #endif
