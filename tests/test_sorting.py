@@ -17,6 +17,7 @@ from blueprint.columns import (
 )
 from blueprint.sorting import (
     SortedKeys,
+    _balanced,
     _bucket_order,
     dense_ranks,
     renumbered,
@@ -82,6 +83,24 @@ def test_sorts_equal_numpys(count, low, high, threads, monkeypatch):
         at = np.random.default_rng(1).integers(0, max(count, 1), min(count, 7))
         np.testing.assert_array_equal(sorted_keys.order(at), expected_order[at])
         np.testing.assert_array_equal(sorted_keys.keys(at), key[expected_order][at])
+
+
+@pytest.mark.parametrize("parts", [1, 2, 3, 16])
+def test_bucket_runs_share_the_keys_among_the_threads(parts):
+    """The buckets sorted side by side are cut into runs of about as many keys each, however
+    the keys lie: every bucket once, in order, at most ``parts`` runs, none holding more than a
+    share and one bucket."""
+    rng = np.random.default_rng(parts)
+    for counts in (
+        np.r_[rng.integers(900, 1100, 17), np.zeros(15, np.int64)],  # the top buckets empty
+        np.r_[np.zeros(10, np.int64), 5000, rng.integers(0, 50, 21)],  # one bucket holds most
+        rng.integers(0, 3, 64),
+    ):
+        runs = _balanced(counts, parts)
+        assert runs[0][0] == 0 and runs[-1][1] == len(counts) and len(runs) <= parts
+        assert all(a[1] == b[0] and a[0] < a[1] for a, b in zip(runs, runs[1:], strict=False))
+        held = [int(counts[a:b].sum()) for a, b in runs]
+        assert max(held) <= counts.sum() / parts + counts.max()
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int64])

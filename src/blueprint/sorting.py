@@ -194,8 +194,18 @@ def _by_buckets(
                 packed += low + (b << shift)
                 ordered[start:stop] = packed
 
-    parallel.run(sort_buckets, len(counts), min_block=1)
+    parallel.each(lambda run: sort_buckets(*run), _balanced(counts, settings.THREADS))
     return ordered, positions
+
+
+def _balanced(counts: np.ndarray, parts: int) -> list[tuple[int, int]]:
+    """Runs of consecutive buckets of ``counts`` keys each holding about as many keys, at most
+    ``parts`` of them: keys spread over less than their buckets' range (the top buckets of a
+    power of two empty) would leave the threads of the top buckets idle."""
+    ends = np.cumsum(counts)
+    marks = np.searchsorted(ends, ends[-1] * np.arange(1, parts) // parts, side="right")
+    edges = np.unique(np.concatenate([[0], marks, [len(counts)]]))
+    return list(zip(edges[:-1].tolist(), edges[1:].tolist(), strict=True))
 
 
 def _bucket_order(bucket: np.ndarray, per_block: np.ndarray, dtype) -> np.ndarray:
