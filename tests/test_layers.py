@@ -73,8 +73,11 @@ LAYERS = (
     Layer("cli", ("blueprint.cli", "blueprint.__main__")),
 )
 
-# Members that may import only these members (besides their own modules).
-ONLY = {"blueprint.export": ("blueprint.errors", "blueprint.scene")}
+# Members that may import only these members (besides their own modules): the writers take the
+# base's settings and thread pool (a big PNG deflated in pieces side by side), nothing that draws.
+ONLY = {
+    "blueprint.export": ("blueprint.errors", "blueprint.settings", "blueprint.parallel", "blueprint.scene")
+}
 
 GUI_LIBRARIES = ("click", "glfw")
 GUI_MEMBERS = ("blueprint.cli", "blueprint.viewer")

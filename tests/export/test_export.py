@@ -5,11 +5,14 @@ from __future__ import annotations
 
 import io
 import os
+import zlib
 
 import numpy as np
 import pytest
 from PIL import Image
 
+from blueprint import settings
+from blueprint.export import files
 from blueprint.export.files import atomic_write, png_bytes, save_png
 
 
@@ -51,6 +54,23 @@ def test_png_bytes_decode_to_the_same_pixels(tmp_path, shape):
     assert decoded.mode == expected_mode
     np.testing.assert_array_equal(np.asarray(decoded).reshape(shape), image)
     assert save_png(tmp_path / "x.png", image).read_bytes() == data
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_png_rows_deflated_in_pieces_decode_to_the_same_pixels(monkeypatch, threads):
+    """Rows of many pieces are deflated a piece at a time side by side, the pieces one zlib
+    stream: an independent reader decodes the pixels, zlib checks the stream's checksum."""
+    monkeypatch.setattr(files, "_PNG_PIECE", 1000)
+    monkeypatch.setattr(settings, "THREADS", threads)
+    image = np.random.default_rng(5).integers(0, 4, size=(90, 110, 4), dtype=np.uint8) * 60
+    image[30:60] = 255  # runs that deflate back-references would reach across pieces for
+    data = png_bytes(image)
+    decoded = Image.open(io.BytesIO(data))
+    decoded.load()
+    np.testing.assert_array_equal(np.asarray(decoded), image)
+    start = data.index(b"IDAT") + 4
+    rows = zlib.decompress(data[start : start + int.from_bytes(data[start - 8 : start - 4], "big")])
+    assert len(rows) == 90 * (1 + 110 * 4)
 
 
 @pytest.mark.parametrize(
