@@ -432,6 +432,19 @@ def gpu_form(renderer, monkeypatch):
     monkeypatch.setattr(renderer.executor, "tiled", False)
 
 
+def _sources_made(monkeypatch, attribute: str) -> list:
+    """The ``attribute`` of each A-buffer source made from here on, in order."""
+    seen = []
+    made = ABufferSource.__init__
+
+    def watch(self, *args, **kwargs):
+        made(self, *args, **kwargs)
+        seen.append(getattr(self, attribute))
+
+    monkeypatch.setattr(ABufferSource, "__init__", watch)
+    return seen
+
+
 @pytest.mark.parametrize("max_layers", [5, 30, None])  # the gearbox has 15 layers here
 def test_counts_read_late_draw_the_same(renderer, abuffer, monkeypatch, max_layers):
     """Where the CPU should not wait for the capture (a GPU's frames), the counts are read only
@@ -444,14 +457,7 @@ def test_counts_read_late_draw_the_same(renderer, abuffer, monkeypatch, max_laye
     at_once = renderer.render(model, **options)
     monkeypatch.setattr(renderer, "software", False)  # a GPU's frame: nothing looks per layer
     monkeypatch.setattr(renderer.executor, "tiled", False)
-    deferred = []
-    issued = ABufferSource.__init__
-
-    def watch(self, *args, **kwargs):
-        issued(self, *args, **kwargs)
-        deferred.append(self.defer)
-
-    monkeypatch.setattr(ABufferSource, "__init__", watch)
+    deferred = _sources_made(monkeypatch, "defer")
     for room in (None, 10):
         if room is not None:
             renderer.abuffer_room[(120, 90)] = room
@@ -497,14 +503,7 @@ def test_nodes_past_one_binding_in_a_second(renderer, abuffer, gpu_form, monkeyp
     abuffer(True)
     whole = renderer.render(model, **options)
     room = renderer.abuffer_room[(120, 90)]
-    splits = []
-    prepared = ABufferSource.__init__
-
-    def watch(self, *args, **kwargs):
-        prepared(self, *args, **kwargs)
-        splits.append(self.split)
-
-    monkeypatch.setattr(ABufferSource, "__init__", watch)
+    splits = _sources_made(monkeypatch, "split")
     # a binding of two thirds of the room's nodes: the frame's fragments (``spare_room``: four
     # fifths of the room, less its spare) pass it, two such bindings and the slim fragments' one
     # hold them
