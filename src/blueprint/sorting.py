@@ -17,7 +17,15 @@ import numpy as np
 
 from blueprint import parallel, settings
 
-__all__ = ["SortedKeys", "dense_ranks", "grouped", "sorted_with_order", "stable_argsort", "unique_first"]
+__all__ = [
+    "SortedKeys",
+    "bucketed",
+    "dense_ranks",
+    "grouped",
+    "sorted_with_order",
+    "stable_argsort",
+    "unique_first",
+]
 
 # Indices packed into keys at a time (``sorted_with_order``).
 _BLOCK = 1 << 20
@@ -82,7 +90,6 @@ def _packed(key: np.ndarray, low: int, bits: int, out: np.ndarray) -> np.ndarray
     """``out`` (int64, may be ``key`` itself): each key less ``low`` shifted left by ``bits``,
     its position in the low bits (keys that sort as the keys do, in a stable order), a block
     a thread."""
-
     copied = out is not key
 
     def pack(lo: int, hi: int) -> None:
@@ -206,6 +213,17 @@ def _balanced(counts: np.ndarray, parts: int) -> list[tuple[int, int]]:
     marks = np.searchsorted(ends, ends[-1] * np.arange(1, parts) // parts, side="right")
     edges = np.unique(np.concatenate([[0], marks, [len(counts)]]))
     return list(zip(edges[:-1].tolist(), edges[1:].tolist(), strict=True))
+
+
+def bucketed(key: np.ndarray, shift: int, buckets: int) -> tuple[np.ndarray, np.ndarray]:
+    """The stable order of the non-negative integer ``key`` by ``key >> shift``, which takes
+    ``buckets`` values, at most 256 (int32 where that holds the positions), and where each
+    bucket's run ends in it: a stable counting sort, a block a thread."""
+    n = len(key)
+    bucket = np.empty(n, np.uint8)
+    per_block = np.array(parallel.run(partial(_bucket_of, key, 0, shift, buckets, bucket), n))
+    order = _bucket_order(bucket, per_block, np.int32 if n <= np.iinfo(np.int32).max else np.int64)
+    return order, np.cumsum(per_block.sum(axis=0))
 
 
 def _bucket_order(bucket: np.ndarray, per_block: np.ndarray, dtype) -> np.ndarray:

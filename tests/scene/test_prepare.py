@@ -662,13 +662,12 @@ def test_a_soup_with_unused_vertices_between_its_corners_draws_them_as_its_own(p
 @pytest.mark.parametrize("threads", [1, 2, 4, 5])
 @pytest.mark.parametrize("run_corners", [1 << 18, 40, 5])
 def test_the_vertex_sums_a_block_at_a_time_equal_one_bincount(threads, run_corners, monkeypatch):
-    """Put in order of their vertices' ranges a block of faces at a time, then gathered a range
+    """Put in order of their vertices' ranges a block of corners a thread, then summed a range
     at a time, each vertex's area normals are those of one ``bincount`` over every corner, bit
     for bit (the same additions in the same order): every vertex one range, ranges of some
     vertices, and a vertex a range."""
     monkeypatch.setattr(settings, "THREADS", threads)
     monkeypatch.setattr(parallel, "MIN_BLOCK", 6)
-    monkeypatch.setattr(normals, "_RANGE_ROWS", 7)
     monkeypatch.setattr(normals, "_SUM_CORNERS", run_corners)
     rng = np.random.default_rng(3)
     faces, vertices = 100, 40

@@ -9,7 +9,7 @@ import numpy as np
 from blueprint import parallel
 from blueprint.columns import indexed_cross, row_norm, square_blocks, used_bounds
 from blueprint.scene.weld import check_mesh, connected_components_of, weld_groups
-from blueprint.sorting import SortedKeys, stable_argsort
+from blueprint.sorting import SortedKeys, bucketed, stable_argsort
 
 # Vertices with more faces than this (fans of cylinder caps, cones) keep flat normals: their
 # smoothing would cost degree² pairs, and such fans are planar or pointed anyway.
@@ -19,12 +19,11 @@ _MAX_DEGREE = 64
 _CONE = 44.0
 # Faces a thread reads at a time: its blocks' temporaries stay small, however many threads.
 _ROWS = 1 << 16
-# Vertex ranges the vertices' sums are cut into at most, each of some ``_SUM_CORNERS`` corners
-# at least (``_vertex_sums``), and faces whose corners are put in order of their ranges at a
-# time (``_by_range``): a range's sum holds some 40 bytes a corner.
+# Vertex ranges the vertices' sums are cut into at most (a byte's values: ``sorting.bucketed``),
+# each of some ``_SUM_CORNERS`` corners at least (``_vertex_sums``): a range's sum holds some 40
+# bytes a corner.
 _SUM_RANGES = 256
 _SUM_CORNERS = 1 << 16
-_RANGE_ROWS = 1 << 18
 # Pairs of corners around a vertex smoothed at a time (``corner_normals``): some 100 bytes each.
 _PAIR_BLOCK = 1 << 18
 # Corners of a block (vertices times their degree) from which their sums are made a corner at
@@ -345,9 +344,9 @@ def _vertex_sums(vertex: np.ndarray, area: np.ndarray, vertices: int) -> tuple[n
     normals of each vertex's faces, each adding its corners in order from zero, as one
     ``bincount`` would, bit for bit; and (V,) its corners. By ``bincount`` (which lets go of
     the GIL, where ``np.add.at`` holds it and threads would wait on each other), a range of
-    vertices at a time: each block of faces' corners put in order of their vertices' ranges
-    (``_by_range``), then each range's corners, gathered from every block, summed
-    (``_range_sums``), blocks and ranges side by side on the pool."""
+    vertices at a time: the corners put in order of their vertices' ranges
+    (``sorting.bucketed``), then each range's corners summed (``_range_sums``), the ranges side
+    by side on the pool."""
     summed = np.empty((vertices, 3))
     degree = np.empty(vertices, np.int64)
     wanted = min(_SUM_RANGES, max(1, len(vertex) // _SUM_CORNERS))
@@ -359,40 +358,26 @@ def _vertex_sums(vertex: np.ndarray, area: np.ndarray, vertices: int) -> tuple[n
         corners = np.arange(len(vertex), dtype=np.int64)
         _summed_range(vertex, area, corners, 0, vertices, summed, degree)
         return summed, degree
-    pieces: list = [None] * -(-len(area) // _RANGE_ROWS)
-    parallel.run(partial(_by_range, vertex, shift, ranges, pieces), len(pieces), min_block=1)
-    parallel.run(partial(_range_sums, vertex, area, shift, pieces, summed, degree), ranges, min_block=1)
+    order, ends = bucketed(vertex, shift, ranges)
+    parallel.run(partial(_range_sums, vertex, area, shift, order, ends, summed, degree), ranges, min_block=1)
     return summed, degree
-
-
-def _by_range(vertex: np.ndarray, shift: int, ranges: int, pieces: list, lo: int, hi: int) -> None:
-    """``pieces[i]`` for the blocks ``i`` from lo to hi of ``_RANGE_ROWS`` faces: (the block's
-    corners in order of their vertices' ranges, ``vertex >> shift``, stably; where each of
-    the ``ranges`` ranges' corners end)."""
-    corner_type = np.int32 if len(vertex) <= np.iinfo(np.int32).max else np.int64
-    for i in range(lo, hi):
-        start = 3 * i * _RANGE_ROWS
-        ids = (vertex[start : start + 3 * _RANGE_ROWS] >> shift).astype(np.uint8)
-        # a stable sort of bytes: NumPy's radix sort, linear
-        order = np.argsort(ids, kind="stable")
-        order += start
-        pieces[i] = order.astype(corner_type), np.cumsum(np.bincount(ids, minlength=ranges))
 
 
 def _range_sums(
     vertex: np.ndarray,
     area: np.ndarray,
     shift: int,
-    pieces: list,
+    order: np.ndarray,
+    ends: np.ndarray,
     summed: np.ndarray,
     degree: np.ndarray,
     lo: int,
     hi: int,
 ) -> None:
-    """``_vertex_sums`` of the vertex ranges from lo to hi (``_by_range``'s ``pieces``): each
-    range's corners gathered from every block in order, then summed."""
+    """``_vertex_sums`` of the vertex ranges from lo to hi: each range's corners, in corner
+    order where they end in ``order`` (``ends``), summed."""
     for r in range(lo, hi):
-        corners = np.concatenate([order[ends[r - 1] if r else 0 : ends[r]] for order, ends in pieces])
+        corners = order[ends[r - 1] if r else 0 : ends[r]]
         first = r << shift
         _summed_range(vertex, area, corners, first, min(len(degree), first + (1 << shift)), summed, degree)
 
