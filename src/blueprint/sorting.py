@@ -194,9 +194,7 @@ def _by_buckets(
             packed -= low + (b << shift)
             packed <<= bits
             packed |= np.arange(stop - start)
-            # a bucket's keys keep the runs of a mesh's local numbering, which the stable sort
-            # (timsort) finds and merges
-            packed.sort(kind="stable")
+            packed.sort()
             positions[start:stop] = at[packed & ((1 << bits) - 1)]
             if keys:
                 packed >>= bits
