@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import os
 import socket
+import stat
 import subprocess
 import sys
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -253,6 +255,43 @@ def test_read_file_checks_the_open_file_too(tmp_path, monkeypatch):
     with pytest.raises(InputError) as error:
         read_file(path, 1 << 20)
     assert str(error.value) == f"{path}: not a regular file (a FIFO)"
+
+
+def test_read_file_takes_room_for_the_file_not_the_limit(tmp_path):
+    """A file of kilobytes under a limit of a gigabyte is read into room for its own bytes:
+    ``read(limit + 1)`` took room for the limit at once."""
+    path = tmp_path / "small.bin"
+    path.write_bytes(bytes(range(256)) * 64)
+    tracemalloc.start()
+    try:
+        data = read_file(path, 1 << 30)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert data == path.read_bytes()
+    assert peak < 1 << 20
+
+
+@pytest.mark.parametrize(("grown", "limit", "refused"), [(0, 100, False), (50, 100, False), (60, 100, True)])
+def test_read_file_reads_on_where_the_file_grew_after_its_size_was_taken(
+    tmp_path, monkeypatch, grown, limit, refused
+):
+    """The sizes the checks and the read take are 50 bytes; the file holds ``grown`` more: read
+    on to the limit, and past it refused, as a file over the limit is."""
+    path = tmp_path / "growing.bin"
+    path.write_bytes(bytes(range(50 + grown)))
+    real_stat, real_fstat = os.stat, os.fstat
+
+    def taken(found: os.stat_result) -> os.stat_result:
+        return os.stat_result((*found[:6], 50, *found[7:])) if stat.S_ISREG(found.st_mode) else found
+
+    monkeypatch.setattr(settings.os, "stat", lambda p, *a, **k: taken(real_stat(p, *a, **k)))
+    monkeypatch.setattr(settings.os, "fstat", lambda fd: taken(real_fstat(fd)))
+    if refused:
+        with pytest.raises(InputError, match="over the limit"):
+            read_file(path, limit)
+    else:
+        assert read_file(path, limit) == path.read_bytes()
 
 
 def test_a_socket_is_refused(tmp_path):

@@ -46,6 +46,7 @@ __all__ = [
     "open_file",
     "parse_size",
     "parse_text",
+    "read_at_most",
     "read_file",
     "read_settings",
     "show",
@@ -249,12 +250,27 @@ def open_file(path: str | os.PathLike, limit: int, what: str = "a file") -> Bina
     return fh
 
 
+def read_at_most(fh: BinaryIO, most: int) -> bytes:
+    """At most ``most`` bytes of ``fh`` from where it stands, read into room for what the file
+    holds: ``fh.read(most)`` takes room for ``most`` bytes at once, the gigabytes of a model
+    file's limit for a file of kilobytes. Should the file grow while it is read, what it grew
+    by is read on, up to ``most``."""
+    try:
+        left = os.fstat(fh.fileno()).st_size - fh.tell()
+    except (AttributeError, OSError, ValueError):
+        return fh.read(most)  # a stream in memory, which holds what it reads already
+    first = fh.read(min(max(left, 0) + 1, most))
+    if len(first) <= left:
+        return first
+    return first + fh.read(most - len(first))
+
+
 def read_file(path: str | os.PathLike, limit: int, what: str = "a file") -> bytes:
     """The bytes of a regular file of at most ``limit`` bytes (see ``open_file``); no more than
     ``limit`` bytes are ever read, should the file grow after the check."""
     with open_file(path, limit, what) as fh:
         try:
-            data = fh.read(limit + 1)
+            data = read_at_most(fh, limit + 1)
         except OSError as exc:
             raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
     if len(data) > limit:

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.settings import human_size, open_file
+from blueprint.settings import human_size, open_file, read_at_most
 
 __all__ = ["STREAM_SUFFIXES", "ZIP_CONTAINERS", "check_zip", "expand_stream", "members"]
 
@@ -96,7 +96,7 @@ def expand_stream(path: Path, kind: str) -> bytes:
     limit, ratio = _limits()
     with open_file(path, settings.MODEL_FILE_LIMIT, "a model file") as fh:
         # no more than the limit, should the file grow after its check
-        compressed = fh.read(settings.MODEL_FILE_LIMIT)
+        compressed = read_at_most(fh, settings.MODEL_FILE_LIMIT)
     out = bytearray()
     data = compressed
     try:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from blueprint import settings
 from blueprint.errors import InputError
-from blueprint.settings import human_size, open_file
+from blueprint.settings import human_size, open_file, read_at_most
 
 # the most of a file read to find its header
 HEADER_BYTES = 1 << 16
@@ -46,7 +46,7 @@ def read_all(path: Path, data: bytes | None = None) -> bytes:
         return data
     limit = settings.MODEL_FILE_LIMIT
     with open_file(path, limit, "a model file") as fh:
-        return fh.read(limit + 1)
+        return read_at_most(fh, limit + 1)
 
 
 def refuse_count(path: Path, count: int, what: str, size: int) -> InputError:
@@ -313,7 +313,7 @@ def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
             else stack.enter_context(open_file(path, limit, "a model file"))
         )
         if ext == "gltf":
-            raw = fh.read(limit + 1)
+            raw = read_at_most(fh, limit + 1)
         else:
             head = fh.read(20)
             if len(head) < 20 or head[:4] != b"glTF" or head[16:20] != b"JSON":

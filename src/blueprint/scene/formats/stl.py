@@ -21,7 +21,7 @@ from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
 from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.weld import distinct_rows
-from blueprint.settings import open_file
+from blueprint.settings import open_file, read_at_most
 
 __all__ = ["read_stl"]
 
@@ -48,7 +48,7 @@ def read_stl(path: Path, size: int) -> Mesh | None:
                 )
             if not head.lstrip().lower().startswith(b"solid"):
                 return None
-            return _ascii(path, head + fh.read(settings.MODEL_FILE_LIMIT + 1 - len(head)))
+            return _ascii(path, head + read_at_most(fh, settings.MODEL_FILE_LIMIT + 1 - len(head)))
         check_triangle_count(path, count)
         positions = np.empty((3 * count, 3), np.float32)
         parallel.run(partial(_records, fh.fileno(), positions), count, min_block=_RECORDS)
