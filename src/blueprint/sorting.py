@@ -172,16 +172,15 @@ def _by_buckets(
     )
     for power in range(fewest, _MAX_BUCKETS.bit_length()):
         shift = max(span - power, 0)
-        bucket = np.empty(n, np.uint8)
-        per_block = np.array(parallel.run(partial(_bucket_of, key, low, shift, 1 << power, bucket), n))
+        bucket, per_block = _counted(key, low, shift, 1 << power)
         counts = per_block.sum(axis=0)
         bits = int(counts.max()).bit_length()
         if shift + bits <= 62:
             break
     else:
         return None
-    # held through the buckets' sorts: int32 where it holds the positions, half as wide
-    order = _bucket_order(bucket, per_block, np.int32 if n <= np.iinfo(np.int32).max else np.int64)
+    # held through the buckets' sorts
+    order = _bucket_order(bucket, per_block, _positions_type(n))
     del bucket
     ends = np.cumsum(counts)
     ordered, positions = np.empty(n, np.int64) if keys else None, np.empty(n, np.int64)
@@ -219,11 +218,20 @@ def bucketed(key: np.ndarray, shift: int, buckets: int) -> tuple[np.ndarray, np.
     """The stable order of the non-negative integer ``key`` by ``key >> shift``, which takes
     ``buckets`` values, at most 256 (int32 where that holds the positions), and where each
     bucket's run ends in it: a stable counting sort, a block a thread."""
-    n = len(key)
-    bucket = np.empty(n, np.uint8)
-    per_block = np.array(parallel.run(partial(_bucket_of, key, 0, shift, buckets, bucket), n))
-    order = _bucket_order(bucket, per_block, np.int32 if n <= np.iinfo(np.int32).max else np.int64)
-    return order, np.cumsum(per_block.sum(axis=0))
+    bucket, per_block = _counted(key, 0, shift, buckets)
+    return _bucket_order(bucket, per_block, _positions_type(len(key))), np.cumsum(per_block.sum(axis=0))
+
+
+def _counted(key: np.ndarray, low: int, shift: int, values: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each key's bucket ``(key - low) >> shift`` as a byte, and each block's count of each of
+    the ``values`` buckets (blocks, values), a block a thread (``_bucket_of``)."""
+    bucket = np.empty(len(key), np.uint8)
+    return bucket, np.array(parallel.run(partial(_bucket_of, key, low, shift, values, bucket), len(key)))
+
+
+def _positions_type(n: int) -> type:
+    """The integer type of ``n`` keys' positions: int32 where it holds them, half as wide."""
+    return np.int32 if n <= np.iinfo(np.int32).max else np.int64
 
 
 def _bucket_order(bucket: np.ndarray, per_block: np.ndarray, dtype) -> np.ndarray:
