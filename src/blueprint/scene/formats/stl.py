@@ -20,6 +20,7 @@ from blueprint.errors import InputError
 from blueprint.scene.formats.base import Mesh
 from blueprint.scene.formats.text import affordable, blanked, find_all, is_ascii, only, parse
 from blueprint.scene.headers import check_triangle_count
+from blueprint.scene.order import local_order
 from blueprint.scene.weld import distinct_rows
 from blueprint.settings import open_file, read_at_most
 
@@ -52,6 +53,10 @@ def read_stl(path: Path, size: int) -> Mesh | None:
         check_triangle_count(path, count)
         positions = np.empty((3 * count, 3), np.float32)
         parallel.run(partial(_records, fh.fileno(), positions), count, min_block=_RECORDS)
+    # triangles a file scatters put together before their corners are numbered by first use
+    order = local_order(positions[0::3])
+    if order is not None:
+        positions = parallel.taken(positions.reshape(-1, 9), order).reshape(-1, 3)
     return _corners(positions)
 
 
