@@ -134,3 +134,31 @@ def test_a_scattered_file_with_bad_faces_is_refused_in_one_line(sphere, tmp_path
     write_ply(path, positions, faces)
     with pytest.raises(blueprint.InputError, match="bad.ply"):
         blueprint.load_model(path)
+
+
+def test_a_scene_of_one_mesh_is_ordered_as_a_mesh_file(sphere, tmp_path):
+    positions, faces = sphere
+    scattered = shuffled(faces)
+    path = tmp_path / "scattered.glb"
+    trimesh.Trimesh(positions, scattered, process=False).export(path)
+    loaded = blueprint.load_model(path)
+    assert local_order(loaded.positions, loaded.faces[:, 0]) is None
+    assert np.array_equal(
+        triangles(loaded.positions.astype(np.float32), loaded.faces), triangles(positions, scattered)
+    )
+
+
+def test_a_scene_of_several_meshes_keeps_its_order(sphere, tmp_path):
+    """Parts stay whole and in the scene's order: only a one-mesh scene's faces are moved."""
+    positions, faces = sphere
+    scattered = shuffled(faces)
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.Trimesh(positions, scattered, process=False), geom_name="scan")
+    scene.add_geometry(trimesh.creation.box(), geom_name="box")
+    path = tmp_path / "two.glb"
+    scene.export(path)
+    loaded = blueprint.load_model(path)
+    scan = loaded.part_names.index("scan")
+    assert np.array_equal(
+        loaded.faces[loaded.face_part == scan] - loaded.faces[loaded.face_part == scan].min(), scattered
+    )

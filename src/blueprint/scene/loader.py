@@ -59,10 +59,10 @@ def load_model(
         environment meshes (skyboxes, domes, huge ground planes) are left out, with a warning
         (see ``blueprint.scene.environment``).
 
-    A mesh file's faces keep its order, unless it holds ``scene.order.MIN_FACES`` faces or more
-    and scatters them over the model: then they are put in an order that keeps neighbours
-    together, which draws faster, and the triangle IDs of layers and lines index the model's
-    ``faces`` in that order.
+    A mesh file's faces (a scene's of one mesh too) keep its order, unless it holds
+    ``scene.order.MIN_FACES`` faces or more and scatters them over the model: then they are put
+    in an order that keeps neighbours together, which draws faster, and the triangle IDs of
+    layers and lines index the model's ``faces`` in that order.
 
     Raises
     ------
@@ -544,7 +544,11 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
 
     if instanced and worth_instancing(total, unique):
         return _kept_instances(placed, drawn, used), None, None, names
-    return (*_flattened(placed, drawn), names)
+    positions, faces, face_part = _flattened(placed, drawn)
+    if len(drawn) == 1:
+        # one mesh, as a scan is: its faces in a local order where it scatters them
+        faces = reordered_faces(positions, faces)
+    return positions, faces, face_part, names
 
 
 def _check_own_vertices(placed: Placed, meshes: np.ndarray, label: str) -> None:
