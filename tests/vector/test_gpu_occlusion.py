@@ -2,6 +2,7 @@
 and right against ray casting at the sample points."""
 
 import dataclasses
+import time
 
 import numpy as np
 import pytest
@@ -158,6 +159,28 @@ def test_gpu_levels_match_ray_casting_at_sample_points(renderer, source):
     # the rest, off by one, are rays grazing a faceted shaft's silhouette, where hits and
     # misses change within a hair of the line
     assert agree.mean() >= 0.98, f"{(~agree).sum()} of {stable.sum()} samples disagree"
+
+
+def test_setting_the_faces_drawing_counts_to_the_peel_alone(renderer, source, monkeypatch):
+    """The faces set drawing before the lines are found count to the peel, and the occlusion
+    after the lines is not short of that time: no stage is negative, and they add up to the
+    drawing's."""
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    draw_vector(model, camera, SIZE, renderer=renderer)
+    set_drawing = renderer.face_kbuffer
+
+    def slowly(*args, **kwargs):
+        time.sleep(0.3)
+        return set_drawing(*args, **kwargs)
+
+    monkeypatch.setattr(renderer, "face_kbuffer", slowly)
+    start = time.perf_counter()
+    drawing = draw_vector(model, camera, SIZE, renderer=renderer)
+    took = time.perf_counter() - start
+    assert drawing.seconds["peel"] >= 0.3
+    assert min(drawing.seconds.values()) >= 0.0, drawing.seconds
+    assert sum(drawing.seconds.values()) <= took
 
 
 def test_a_drawing_reads_back_levels_only(renderer, source, monkeypatch):

@@ -471,7 +471,7 @@ def draw_lines(
         behind = occlusion.in_front(only_shaded) > 0
     pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
     pieces = _chained(pieces, count)
-    seconds["occlusion"] = time.perf_counter() - clock - seconds["peel"]
+    seconds["occlusion"] = time.perf_counter() - clock - (seconds["peel"] - occlusion.ahead)
 
     clock = time.perf_counter()
     pieces = _simplified(pieces, options.tolerance)
@@ -585,6 +585,9 @@ class Occlusion:
         band = grazing_band(model, frame.view, frame.projection, crease_angle)
         self.test = DepthTest(frame.ortho, frame.camera.pixel_angle(frame.size[1]), tolerance, band)
         self.peeled: PixelLayers | None = None
+        # of the peel's seconds, those spent before the levels' ``clock``: setting the faces
+        # k-buffer drawing (``draw_faces``), which ``gpu_levels`` counts with the peel
+        self.ahead = 0.0
 
     def _on_gpu(self, planes):
         frame = self.frame
@@ -602,11 +605,13 @@ class Occlusion:
 
     def levels(self, clock: float, seconds: dict[str, float]) -> tuple[np.ndarray, int]:
         """(S,) occlusion level of each sample (-1: left out) and the layers counted; the
-        seconds of the peel (of those since ``clock``) into ``seconds["peel"]``."""
+        seconds of the peel (of those since ``clock``, and ``ahead`` of them) into
+        ``seconds["peel"]``."""
         samples, planes, part, test = self.samples, self.planes, face_parts(self.model), self.test
         on_gpu = None if self.layers is not None else self._on_gpu(planes)
         if on_gpu is not None:
             seconds["peel"] = on_gpu.peel_seconds
+            self.ahead = 0.0 if self.drawn is None else self.drawn.seconds
             return self._phantoms_dropped(on_gpu), on_gpu.layers
         frame = self.frame
         if self.layers is None:
