@@ -6,9 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from instanced_scenes import copies
 
 import blueprint
 from blueprint.scene.camera import fit_camera
+from blueprint.scene.instances import INSTANCED_FACTOR
 from blueprint.scene.order import MIN_FACES, local_order, reordered_faces
 
 # 81 920 faces: past MIN_FACES
@@ -148,17 +150,41 @@ def test_a_scene_of_one_mesh_is_ordered_as_a_mesh_file(sphere, tmp_path):
     )
 
 
-def test_a_scene_of_several_meshes_keeps_its_order(sphere, tmp_path):
-    """Parts stay whole and in the scene's order: only a one-mesh scene's faces are moved."""
+def test_each_mesh_of_a_scene_is_ordered_on_its_own(sphere, tmp_path):
+    """A scene's big mesh has its faces put together; the parts stay whole, in the scene's
+    order, and a small mesh keeps its faces' order."""
     positions, faces = sphere
     scattered = shuffled(faces)
+    box = trimesh.creation.box()
+    box_faces = np.asarray(box.faces)[::-1]
     scene = trimesh.Scene()
+    scene.add_geometry(trimesh.Trimesh(box.vertices, box_faces, process=False), geom_name="box")
     scene.add_geometry(trimesh.Trimesh(positions, scattered, process=False), geom_name="scan")
-    scene.add_geometry(trimesh.creation.box(), geom_name="box")
     path = tmp_path / "two.glb"
     scene.export(path)
     loaded = blueprint.load_model(path)
-    scan = loaded.part_names.index("scan")
+    scan, cube = loaded.part_names.index("scan"), loaded.part_names.index("box")
+    assert np.all(np.diff(loaded.face_part) >= 0) or np.all(np.diff(loaded.face_part) <= 0)
+    mine = loaded.faces[loaded.face_part == scan]
+    assert local_order(loaded.positions, mine[:, 0]) is None
     assert np.array_equal(
-        loaded.faces[loaded.face_part == scan] - loaded.faces[loaded.face_part == scan].min(), scattered
+        triangles(loaded.positions.astype(np.float32), mine), triangles(positions, scattered)
+    )
+    box_rows = loaded.faces[loaded.face_part == cube]
+    assert np.array_equal(box_rows - box_rows.min(), box_faces)
+
+
+def test_a_mesh_drawn_many_times_is_ordered_once(sphere, tmp_path):
+    """A scene kept as instances has its mesh's faces put together, once for every copy."""
+    positions, faces = sphere
+    scattered = shuffled(faces)
+    scene = copies(int(INSTANCED_FACTOR) + 1, trimesh.Trimesh(positions, scattered, process=False))
+    path = tmp_path / "copies.glb"
+    scene.export(path)
+    loaded = blueprint.load_model(path)
+    assert loaded.instances is not None
+    vertices, mesh_faces = loaded.instances.mesh_arrays(0)
+    assert local_order(vertices, mesh_faces[:, 0]) is None
+    assert np.array_equal(
+        triangles(np.asarray(vertices, np.float32), mesh_faces), triangles(positions, scattered)
     )

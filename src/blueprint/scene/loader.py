@@ -20,7 +20,7 @@ from blueprint.scene.environment import PartGlobs, choose_parts
 from blueprint.scene.formats import FORMATS, Converted, Format, Instance, Mesh, Placed, placed_of
 from blueprint.scene.headers import check_instance_count, check_triangle_count
 from blueprint.scene.model import Model
-from blueprint.scene.order import reordered_faces
+from blueprint.scene.order import MIN_FACES, reordered_faces
 from blueprint.scene.units import object_unit
 from blueprint.scene.up import up_of
 from blueprint.settings import MODEL_FILE_LIMIT, check_file, open_file, read_file
@@ -59,10 +59,10 @@ def load_model(
         environment meshes (skyboxes, domes, huge ground planes) are left out, with a warning
         (see ``blueprint.scene.environment``).
 
-    A mesh file's faces (a scene's of one mesh too) keep its order, unless it holds
-    ``scene.order.MIN_FACES`` faces or more and scatters them over the model: then they are put
-    in an order that keeps neighbours together, which draws faster, and the triangle IDs of
-    layers and lines index the model's ``faces`` in that order.
+    A mesh's faces keep the file's order, unless it holds ``scene.order.MIN_FACES`` faces or
+    more and scatters them over the mesh: then they are put in an order that keeps neighbours
+    together, which draws faster (each mesh of a scene on its own, its parts whole), and the
+    triangle IDs of layers and lines index the model's ``faces`` in that order.
 
     Raises
     ------
@@ -535,6 +535,7 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
     if not len(drawn):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32), [stem or "mesh"]
     _check_own_vertices(placed, used, label)
+    _in_local_order(placed, used)
     single = len(placed) == 1 and stem is not None
     taken: set[str] = set()
     counts: dict[str, int] = {}
@@ -544,11 +545,7 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
 
     if instanced and worth_instancing(total, unique):
         return _kept_instances(placed, drawn, used), None, None, names
-    positions, faces, face_part = _flattened(placed, drawn)
-    if len(drawn) == 1:
-        # one mesh, as a scan is: its faces in a local order where it scatters them
-        faces = reordered_faces(positions, faces)
-    return positions, faces, face_part, names
+    return (*_flattened(placed, drawn), names)
 
 
 def _check_own_vertices(placed: Placed, meshes: np.ndarray, label: str) -> None:
@@ -564,6 +561,23 @@ def _check_own_vertices(placed: Placed, meshes: np.ndarray, label: str) -> None:
         high = np.maximum(np.maximum(local[:, 0], local[:, 1]), local[:, 2])
         if low.min() < 0 or (high >= np.repeat(vertex_count[lo:hi], face_count[lo:hi])).any():
             raise InputError(f"{label}: faces refer to vertices that do not exist")
+
+
+def _in_local_order(placed: Placed, meshes: np.ndarray) -> None:
+    """Put the faces of each of ``meshes`` of ``placed`` that has ``order.MIN_FACES`` faces or
+    more in a local order where the file scatters them (``order.reordered_faces``), in place:
+    each mesh's faces stay its own, flattened or kept as instances. A loop over those meshes
+    alone, at most the file's faces over ``MIN_FACES`` of them."""
+    face_count = np.diff(placed.face_start)[meshes]
+    for m in meshes[face_count >= MIN_FACES].tolist():
+        lo, hi = placed.face_start[m], placed.face_start[m + 1]
+        vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]]
+        faces = placed.faces[lo:hi]
+        ordered = reordered_faces(vertices, faces)
+        if ordered is not faces:
+            if not placed.faces.flags.writeable:
+                placed.faces = placed.faces.copy()
+            placed.faces[lo:hi] = ordered
 
 
 def _kept_instances(placed: Placed, drawn: np.ndarray, used: np.ndarray) -> Instances:
