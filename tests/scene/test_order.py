@@ -98,18 +98,24 @@ def test_loaded_ply_draws_the_same_face_for_face(sphere, tmp_path):
     assert np.array_equal(ours_corners, positions[scattered[theirs.triangle[drawn]]])
 
 
-def test_loaded_stl_stays_a_soup_numbered_by_first_corner(sphere, tmp_path):
+@pytest.mark.parametrize("suffix", ["stl", "glb"])
+def test_an_stl_and_a_scene_of_one_mesh_are_ordered_as_read(sphere, tmp_path, suffix):
+    """An STL stays a soup numbered by first corner; a scene's one mesh is ordered as a mesh
+    file's faces are."""
     positions, faces = sphere
     scattered = shuffled(faces)
-    path = tmp_path / "scattered.stl"
+    path = tmp_path / f"scattered.{suffix}"
     trimesh.Trimesh(positions, scattered, process=False).export(path)
     loaded = blueprint.load_model(path)
-    assert loaded.soup
-    assert np.array_equal(triangles(loaded.positions, loaded.faces), triangles(positions, scattered))
     assert local_order(loaded.positions, loaded.faces[:, 0]) is None
-    _, first = np.unique(loaded.faces.ravel(), return_index=True)
-    assert np.all(np.diff(first) > 0)
-    assert len(np.unique(loaded.positions, axis=0)) == len(loaded.positions)
+    assert np.array_equal(
+        triangles(loaded.positions.astype(np.float32), loaded.faces), triangles(positions, scattered)
+    )
+    if suffix == "stl":
+        assert loaded.soup
+        _, first = np.unique(loaded.faces.ravel(), return_index=True)
+        assert np.all(np.diff(first) > 0)
+        assert len(np.unique(loaded.positions, axis=0)) == len(loaded.positions)
 
 
 @pytest.mark.parametrize("flaw", ["out of range", "negative"])
@@ -136,18 +142,6 @@ def test_a_scattered_file_with_bad_faces_is_refused_in_one_line(sphere, tmp_path
     write_ply(path, positions, faces)
     with pytest.raises(blueprint.InputError, match="bad.ply"):
         blueprint.load_model(path)
-
-
-def test_a_scene_of_one_mesh_is_ordered_as_a_mesh_file(sphere, tmp_path):
-    positions, faces = sphere
-    scattered = shuffled(faces)
-    path = tmp_path / "scattered.glb"
-    trimesh.Trimesh(positions, scattered, process=False).export(path)
-    loaded = blueprint.load_model(path)
-    assert local_order(loaded.positions, loaded.faces[:, 0]) is None
-    assert np.array_equal(
-        triangles(loaded.positions.astype(np.float32), loaded.faces), triangles(positions, scattered)
-    )
 
 
 def test_each_mesh_of_a_scene_is_ordered_on_its_own(sphere, tmp_path):
