@@ -96,7 +96,10 @@ def _load_model(path: Path, up: str | None, include: PartGlobs, exclude: PartGlo
         if len(found.faces) == 0:
             raise InputError(f"{name}: no triangles in the file")
         parts = np.zeros(len(found.faces), np.int32)
-        joined = (found.positions, reordered_faces(found.positions, found.faces), parts, [path.stem])
+        # a soup's triangles were put in order as they were read, before its corners were
+        # numbered (``formats.stl``)
+        faces = found.faces if found.soup else reordered_faces(found.positions, found.faces)
+        joined = (found.positions, faces, parts, [path.stem])
         return _loaded(joined, name, up, fmt, include, exclude, soup=found.soup)
     if isinstance(found, Placed):
         joined = _joined(found, path.stem, name, instanced=fmt.up != "guess")
@@ -575,8 +578,6 @@ def _in_local_order(placed: Placed, meshes: np.ndarray) -> None:
         faces = placed.faces[lo:hi]
         ordered = reordered_faces(vertices, faces)
         if ordered is not faces:
-            if not placed.faces.flags.writeable:
-                placed.faces = placed.faces.copy()
             placed.faces[lo:hi] = ordered
 
 

@@ -24,8 +24,9 @@ __all__ = ["MIN_FACES", "local_order", "reordered_faces"]
 
 # Meshes of fewer faces keep the file's order: a software rasteriser draws them in one piece.
 MIN_FACES = 1 << 16
-# Bits of a cell's coordinate on each axis (a grid of 1024^3 cells).
+# Bits of a cell's coordinate on each axis (a grid of 1024^3 cells), and the highest coordinate.
 _BITS = 10
+_CELLS = (1 << _BITS) - 1
 # Windows of consecutive faces measured, spread evenly through the file, and the faces of each;
 # and the median spread of a window's first corners (root mean square about their mean), in
 # that of as many faces side by side (their count's square root times the faces' spacing), past
@@ -42,6 +43,10 @@ def _spread(value: np.ndarray) -> np.ndarray:
     value = (value | (value << 8)) & 0x0300F00F
     value = (value | (value << 4)) & 0x030C30C3
     return (value | (value << 2)) & 0x09249249
+
+
+# every cell coordinate's bits spread, looked up a key at a time
+_SPREAD = _spread(np.arange(_CELLS + 1, dtype=np.uint32))
 
 
 def local_order(points: np.ndarray, first: np.ndarray | None = None) -> np.ndarray | None:
@@ -67,8 +72,7 @@ def local_order(points: np.ndarray, first: np.ndarray | None = None) -> np.ndarr
     spread = np.sqrt(((window - window.mean(axis=1, keepdims=True)) ** 2).sum(axis=2).mean(axis=1))
     if np.median(spread) <= _SCATTERED * np.sqrt(_WINDOW) * spacing:
         return None
-    cells = (1 << _BITS) - 1
-    scale = cells / max(float(extent.max()), np.finfo(np.float32).tiny)
+    scale = _CELLS / max(float(extent.max()), np.finfo(np.float32).tiny)
     key = np.empty(count, np.uint32)
     parallel.run(partial(_cell_keys, points, first, low, scale, key), count)
     return stable_argsort(key)
@@ -78,15 +82,13 @@ def _cell_keys(points, first, low: np.ndarray, scale: float, out: np.ndarray, lo
     """``out[lo:hi]``: the Morton keys of the grid cells of faces ``lo:hi``'s first corners (as
     ``local_order`` reads them), the grid's ``low`` corner and cells a unit ``scale``."""
     corner = points[lo:hi] if first is None else np.take(points, first[lo:hi], axis=0, mode="clip")
-    cells = (1 << _BITS) - 1
-    spread = _spread(np.arange(cells + 1, dtype=np.uint32))
     key = out[lo:hi]
     key[:] = 0
     for axis in range(3):
         # in the points' own type: float32 for every format that reads into it
         offset = (corner[:, axis] - corner.dtype.type(low[axis])) * corner.dtype.type(scale)
         cell = offset.astype(np.uint32)
-        key |= np.take(spread, np.minimum(cell, cells, out=cell)) << axis
+        key |= np.take(_SPREAD, np.minimum(cell, _CELLS, out=cell)) << axis
 
 
 def reordered_faces(positions: np.ndarray, faces: np.ndarray) -> np.ndarray:
