@@ -456,7 +456,11 @@ def draw_lines(
         # the faces' planes found beside the joining, whose chain walk holds one core
         planes_found = parallel.begin(face_planes, model, frame.view)
         lines = join_polylines(segments)
+        del segments  # the placed segments of a big assembly weigh as much as its samples
         samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing)
+        # the occlusion reads the samples alone, and the pieces each polyline's part
+        line_part = lines.part
+        del lines
         seconds["lines"] = time.perf_counter() - clock
 
         clock = time.perf_counter()
@@ -469,7 +473,7 @@ def draw_lines(
         only_shaded = planes.copy()
         only_shaded[:-1][~shaded_parts[face_parts(model)]] = 0.0
         behind = occlusion.in_front(only_shaded) > 0
-    pieces = split_by_level(samples, levels, lines.part, max(count - 1, 0), behind=behind, renderer=renderer)
+    pieces = split_by_level(samples, levels, line_part, max(count - 1, 0), behind=behind, renderer=renderer)
     pieces = _chained(pieces, count)
     seconds["occlusion"] = time.perf_counter() - clock - (seconds["peel"] - occlusion.ahead)
 
