@@ -310,14 +310,21 @@ def test_highlight_by_a_second_model_on_the_command_line(tmp_path):
     assert colour not in {g.get("stroke") for g in other.iter(f"{SVG}g")}
 
 
-def test_samples_of_polylines_equal_those_made_segment_by_segment():
-    """``sample_polylines`` lays out every sample in its final place in one pass: each equals,
-    bit for bit, the samples made polyline by polyline and segment by segment (``count``
-    samples from a segment's first point, the polyline's last point after them with its last
-    segment's faces, kind and edge), lines partly behind the eye included."""
+@pytest.mark.parametrize("block", [1, 3, 7, None])
+def test_samples_of_polylines_equal_those_made_segment_by_segment(block, monkeypatch):
+    """``sample_polylines`` lays out every sample in its final place, a block of points at a
+    time (of one point, three, seven and the default here, so blocks end inside polylines
+    and at their ends): each equals, bit for bit, the samples made polyline by polyline and
+    segment by segment (``count`` samples from a segment's first point, the polyline's last
+    point after them with its last segment's faces, kind and edge), lines partly behind the
+    eye included."""
     from blueprint.scene.camera import clip_to_pixels, transform
     from blueprint.vector.lines import Polylines
+    from blueprint.vector.occlusion import samples
     from blueprint.vector.occlusion.samples import sample_polylines
+
+    if block is not None:
+        monkeypatch.setattr(samples, "_POINTS", block)
 
     rng = np.random.default_rng(8)
     sizes = rng.integers(2, 6, 40)
@@ -351,6 +358,14 @@ def test_samples_of_polylines_equal_those_made_segment_by_segment():
         rows.append(offsets[i + 1] - 2), vertex.append(True), line.append(i)
     eye = transform(np.array(model), view)
     assert got.eye.tobytes() == eye[:, :3].tobytes()
+    clip = eye @ projection.T
+    assert got.pixel.tobytes() == clip_to_pixels(clip, (64, 64)).tobytes()
+    w_s = clip[:, 3]
+    inside = (
+        (w_s > 0) & (np.abs(clip[:, 2]) <= w_s) & (np.abs(clip[:, 0]) <= w_s) & (np.abs(clip[:, 1]) <= w_s)
+    )
+    np.testing.assert_array_equal(got.inside, inside)
+    assert 0 < inside.sum() < len(inside)
     np.testing.assert_array_equal(got.faces, lines.faces[rows])
     np.testing.assert_array_equal(got.kind, lines.kind[rows])
     np.testing.assert_array_equal(got.edge, lines.edge[rows])

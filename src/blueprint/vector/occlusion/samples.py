@@ -7,12 +7,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import row_norm
 from blueprint.scene.camera import clip_to_pixels, transform
 
 from ..lines import Polylines
 
 __all__ = ["Samples", "sample_polylines"]
+
+# Points of the polylines sampled at once by one thread: their samples' temporaries, not every
+# sample's, lie in memory together.
+_POINTS = 1 << 14
 
 
 @dataclass(frozen=True)
@@ -101,39 +106,93 @@ def sample_polylines(
     w = clip[:, 3]
     length = row_norm(pix[starts + 1] - pix[starts])
     length = np.where((w[starts] > 0) & (w[starts + 1] > 0) & np.isfinite(length), length, 0.0)
+    del clip, pix, w  # the points' own, before the samples' arrays are made
     count = np.maximum(np.ceil(length / spacing), 1).astype(np.int64)
     count = np.minimum(count, 1 << 16)
     # the samples in their final order, point after point: a segment's samples from its first
     # point, a polyline's last point as one sample of its own after them
     per_point = np.ones(len(points), np.int64)
     per_point[starts] = count
-    # every point's values repeated for its samples, not gathered sample by sample
     total = np.cumsum(per_point)
-    k = np.arange(total[-1]) - np.repeat(total - per_point, per_point)
-    t = k / np.repeat(per_point, per_point)
-    # the step to the next point (none after the very last)
-    step = np.empty_like(points)
-    np.subtract(points[1:], points[:-1], out=step[:-1])
-    np.subtract(points[-1:], points[-1:], out=step[-1:])
-    model = np.repeat(points, per_point, axis=0)
-    model += t[:, None] * np.repeat(step, per_point, axis=0)
-    last = offsets[1:] - 1
-    model[total[last] - 1] = points[last]
     # a last point has the attributes of the segment before it
     source = np.arange(len(points))
-    source[last] -= 1
-    faces = np.repeat(lines.faces[source], per_point, axis=0)
-    kind = np.repeat(lines.kind[source], per_point)
-    edge = np.repeat(lines.edge[source], per_point)
-    vertex = k == 0
-    line = np.repeat(line_of_point, per_point)
-    eye = transform(model, view)
-    clip = eye @ projection.T
-    inside = (
-        (clip[:, 3] > 0)
-        & (clip[:, 2] >= -clip[:, 3])
-        & (clip[:, 2] <= clip[:, 3])
-        & (np.abs(clip[:, 0]) <= clip[:, 3])
-        & (np.abs(clip[:, 1]) <= clip[:, 3])
+    source[offsets[1:] - 1] -= 1
+    n = int(total[-1])
+    out = Samples(
+        np.empty((n, 3)),
+        np.empty((n, 2)),
+        np.empty((n, 2), np.int64),
+        np.empty(n, np.uint8),
+        np.empty(n, np.int64),
+        np.empty(n, np.int64),
+        np.empty(n, bool),
+        np.empty(n, bool),
     )
-    return Samples(eye[:, :3], clip_to_pixels(clip, size), faces, kind, edge, line, vertex, inside)
+    arrays = _PointArrays(points, lines.faces, lines.kind, lines.edge, line_of_point, source, is_last)
+    sampled = functools.partial(_sampled, arrays, per_point, total, view, projection, size, out)
+    parallel.run(sampled, len(points))
+    return out
+
+
+@dataclass(frozen=True)
+class _PointArrays:
+    """What ``_sampled`` reads of every point of the polylines: the point, its segment's faces,
+    kind and edge, its polyline, the point whose segment it takes them from (a polyline's last
+    point the one before it) and whether it is a polyline's last."""
+
+    points: np.ndarray
+    faces: np.ndarray
+    kind: np.ndarray
+    edge: np.ndarray
+    line: np.ndarray
+    source: np.ndarray
+    is_last: np.ndarray
+
+
+def _sampled(
+    arrays: _PointArrays,
+    per_point: np.ndarray,
+    total: np.ndarray,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+    out: Samples,
+    lo: int,
+    hi: int,
+) -> None:
+    """The samples of points lo to hi (``per_point`` each, ending at ``total``) into their rows
+    of ``out``, a block of points at a time: every point's values repeated for its samples, not
+    gathered sample by sample, and the temporaries those of a block."""
+    points = arrays.points
+    for first in range(lo, hi, _POINTS):
+        last = min(first + _POINTS, hi)
+        each = per_point[first:last]
+        begin, end = int(total[first] - each[0]), int(total[last - 1])
+        rows = slice(begin, end)
+        k = np.arange(end - begin) - np.repeat(total[first:last] - each - begin, each)
+        t = k / np.repeat(each, each)
+        # the step to the next point (none after the very last)
+        step = np.zeros((last - first, 3))
+        ahead = min(last, len(points) - 1)
+        np.subtract(points[first + 1 : ahead + 1], points[first:ahead], out=step[: ahead - first])
+        model = np.repeat(points[first:last], each, axis=0)
+        model += t[:, None] * np.repeat(step, each, axis=0)
+        ends = np.flatnonzero(arrays.is_last[first:last])
+        model[total[first + ends] - 1 - begin] = points[first + ends]
+        source = arrays.source[first:last]
+        out.faces[rows] = np.repeat(arrays.faces[source], each, axis=0)
+        out.kind[rows] = np.repeat(arrays.kind[source], each)
+        out.edge[rows] = np.repeat(arrays.edge[source], each)
+        out.line[rows] = np.repeat(arrays.line[first:last], each)
+        out.vertex[rows] = k == 0
+        eye = transform(model, view)
+        clip = eye @ projection.T
+        out.inside[rows] = (
+            (clip[:, 3] > 0)
+            & (clip[:, 2] >= -clip[:, 3])
+            & (clip[:, 2] <= clip[:, 3])
+            & (np.abs(clip[:, 0]) <= clip[:, 3])
+            & (np.abs(clip[:, 1]) <= clip[:, 3])
+        )
+        out.eye[rows] = eye[:, :3]
+        out.pixel[rows] = clip_to_pixels(clip, size)
