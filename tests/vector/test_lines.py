@@ -156,6 +156,38 @@ def test_join_chains_and_closes_loops():
     np.testing.assert_array_equal(loop_line[0], loop_line[-1])
 
 
+def test_joining_in_blocks_is_joining_at_once(monkeypatch):
+    """``join_polylines`` keys the points, finds the segments' directions and writes the
+    polylines a block at a time on the pool: cut into blocks of a few rows over four threads,
+    the polylines are those joined in one block, bit for bit (segments drawn twice, walked
+    backwards, ending on other edges, meeting at junctions)."""
+    from blueprint import parallel, settings
+    from blueprint.vector import lines as lines_module
+
+    rng = np.random.default_rng(5)
+    grid = rng.integers(0, 6, (300, 2, 3)).astype(float) * 0.5
+    grid = np.concatenate([grid, grid[:40, ::-1]])  # some twice, the other way round
+    n = len(grid)
+    segments = Segments(
+        grid,
+        rng.integers(-1, 50, (n, 2)),
+        rng.integers(0, 3, n).astype(np.int32),
+        rng.choice([CREASE, SILHOUETTE, BORDER], n).astype(np.uint8),
+        rng.integers(-1, 99, n),
+        rng.integers(-1, 99, n),
+    )
+    monkeypatch.setattr(settings, "THREADS", 1)
+    whole = join_polylines(segments)
+    monkeypatch.setattr(settings, "THREADS", 4)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
+    monkeypatch.setattr(lines_module, "_ROWS", 5)
+    blocks = join_polylines(segments)
+    for name in ("points", "offsets", "faces", "part", "kind", "edge"):
+        a, b = getattr(whole, name), getattr(blocks, name)
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), name
+    assert 10 < len(whole) < n
+
+
 def test_intersections_stay_bounded_on_the_engine(shared_models):
     from blueprint.scene.loader import load_model
 

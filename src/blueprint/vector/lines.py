@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.columns import column_max, column_min, column_ptp, cross, face_cross, row_norm
 from blueprint.errors import InputError
 from blueprint.scene.camera import clip_to_pixels, transform
@@ -82,6 +84,8 @@ _EDGE_ON = 1e-9
 _EDGE_ON_SMOOTH = 1e-6
 # Endpoints closer than this fraction of the model's diagonal are one point when joining.
 _JOIN_REL = 1e-6
+# Points keyed at once by one thread when joining: their temporaries, not every point's.
+_ROWS = 1 << 16
 # Signed plane distances below this fraction of the diagonal count as zero (touching, not cutting).
 _TOUCH_REL = 1e-7
 # Cell entries of the intersection broad phase, per candidate triangle, before cells grow.
@@ -1216,12 +1220,26 @@ def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
     rounded points (one packed integer key per point, as ``np.unique``'s inverse)."""
     if len(points) == 0:
         return np.zeros(0, np.int64)
-    q = np.round((points - column_min(points)) / quantum).astype(np.int64)
-    span = column_max(q) + 1
+    low = column_min(points)
+    # rounding is monotonic: the largest rounded point is the largest point rounded
+    span = np.round((column_max(points) - low) / quantum).astype(np.int64) + 1
     if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
-        key = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
+        key = np.empty(len(points), np.int64)
+        parallel.run(partial(_point_keys, points, low, quantum, span, key), len(points))
         return _ranks(*sorted_with_order(key, overwrite=True))
+    q = np.round((points - low) / quantum).astype(np.int64)
     return np.unique(q, axis=0, return_inverse=True)[1].reshape(-1)
+
+
+def _point_keys(
+    points: np.ndarray, low: np.ndarray, quantum: float, span: np.ndarray, out: np.ndarray, lo: int, hi: int
+) -> None:
+    """``out[lo:hi]``: the points' rounded coordinates packed into one integer (``span`` of
+    them on each axis), a block of points at a time."""
+    for start in range(lo, hi, _ROWS):
+        stop = min(start + _ROWS, hi)
+        q = np.round((points[start:stop] - low) / quantum).astype(np.int64)
+        out[start:stop] = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
 
 
 def _ranks(ordered: np.ndarray, order: np.ndarray) -> np.ndarray:
@@ -1274,8 +1292,8 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     node = _ranks(ordered, by_node)
     # half-end h = 2 s + e is segment s's end e (0: start, 1: end); a segment leaves its end
     # as its start leaves backwards
-    ahead = (segments.points[:, 1] - segments.points[:, 0])[keep]
-    ahead /= np.maximum(row_norm(ahead), 1e-300)[:, None]
+    ahead = np.empty((len(keep), 3))
+    parallel.run(partial(_unit_steps, segments.points, keep, ahead), len(keep))
 
     def leaving(h: np.ndarray) -> np.ndarray:
         direction = ahead[h >> 1]
@@ -1296,15 +1314,8 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     chain_of = np.repeat(np.arange(len(lengths)), lengths)
     slot = offsets[chain_of] + (np.arange(len(seg)) - chain_start[chain_of])
     flat_points = segments.points.reshape(-1, 3)
-    # a segment walked backwards starts at its second point
-    out_points[slot] = flat_points[2 * source + rev]
-    out_faces[slot] = segments.faces[source]
-    out_kind[slot] = segments.kind[source]
-    # a segment walked backwards starts on its second point's edge
-    edge = segments.edge[source]
-    if segments.edge_end is not None:
-        edge = np.where(rev, segments.edge_end[source], edge)
-    out_edge[slot] = edge
+    out = out_points, out_faces, out_kind, out_edge
+    parallel.run(partial(_joined_rows, segments, source, rev, slot, out), len(seg))
     last = chain_start + lengths - 1
     out_points[offsets[1:] - 1] = flat_points[2 * source[last] + 1 - rev[last]]
     return Polylines(
@@ -1315,3 +1326,36 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
         out_kind,
         out_edge,
     )
+
+
+def _unit_steps(points: np.ndarray, keep: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:
+    """``out[lo:hi]``: the unit direction of each segment ``keep[lo:hi]`` of ``points`` (K, 2, 3)
+    from its first point to its second."""
+    at = keep[lo:hi]
+    step = points[at, 1] - points[at, 0]
+    step /= np.maximum(row_norm(step), 1e-300)[:, None]
+    out[lo:hi] = step
+
+
+def _joined_rows(
+    segments: Segments,
+    source: np.ndarray,
+    rev: np.ndarray,
+    slot: np.ndarray,
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    lo: int,
+    hi: int,
+) -> None:
+    """The rows ``slot[lo:hi]`` of the joined polylines' points, faces, kinds and edges
+    (``out``): the first point, faces, kind and edge of the segments ``source[lo:hi]`` as
+    walked (``rev``: backwards)."""
+    points, faces, kind, edge = out
+    at, back, rows = source[lo:hi], rev[lo:hi], slot[lo:hi]
+    # a segment walked backwards starts at its second point, and on its second point's edge
+    points[rows] = segments.points.reshape(-1, 3)[2 * at + back]
+    faces[rows] = segments.faces[at]
+    kind[rows] = segments.kind[at]
+    on = segments.edge[at]
+    if segments.edge_end is not None:
+        on = np.where(back, segments.edge_end[at], on)
+    edge[rows] = on
