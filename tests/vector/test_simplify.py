@@ -40,6 +40,28 @@ def test_many_polylines_keep_their_ends_and_stay_within_tolerance():
     assert kept.sum() == len(points) < len(walk)
 
 
+def test_polylines_simplified_in_blocks_are_each_simplified_alone(monkeypatch):
+    """The polylines' intervals split a block at a time on the pool (blocks of 16 over four
+    threads here): each polyline comes out as it does simplified alone, bit for bit."""
+    from blueprint import parallel, settings
+
+    rng = np.random.default_rng(4)
+    lengths = rng.integers(1, 40, 300)
+    offsets = np.r_[0, np.cumsum(lengths)]
+    walk = np.cumsum(rng.normal(size=(offsets[-1], 2)), axis=0)
+    monkeypatch.setattr(settings, "THREADS", 4)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
+    points, new_offsets, kept = douglas_peucker(walk, offsets, 0.4)
+    monkeypatch.setattr(settings, "THREADS", 1)
+    for i in range(len(lengths)):
+        alone, _, alone_kept = douglas_peucker(
+            walk[offsets[i] : offsets[i + 1]], np.array([0, lengths[i]]), 0.4
+        )
+        assert points[new_offsets[i] : new_offsets[i + 1]].tobytes() == alone.tobytes()
+        np.testing.assert_array_equal(kept[offsets[i] : offsets[i + 1]], alone_kept)
+    assert len(points) < len(walk)
+
+
 def test_closed_loop_and_bad_tolerance():
     t = np.linspace(0, 2 * np.pi, 65)
     circle = np.stack([np.cos(t), np.sin(t)], axis=1) * 50

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
+
+from blueprint import parallel
 
 __all__ = ["douglas_peucker"]
 
@@ -47,7 +51,22 @@ def douglas_peucker(
     a, b = offsets[:-1], offsets[1:] - 1
     busy = b - a >= 2
     a, b = a[busy], b[busy]
-    tol2 = float(tolerance) ** 2
+    # the polylines' intervals split side by side on the pool, a block of them a thread: each
+    # interval splits on its own, and marks only its own points
+    parallel.run(partial(_split_intervals, points, a, b, float(tolerance) ** 2, keep), len(a))
+    counts = (
+        np.add.reduceat(keep.astype(np.int64), offsets[:-1]) if len(offsets) > 1 else np.zeros(0, np.int64)
+    )
+    return points[keep], np.r_[0, np.cumsum(counts)].astype(np.int64), keep
+
+
+def _split_intervals(
+    points: np.ndarray, a: np.ndarray, b: np.ndarray, tol2: float, keep: np.ndarray, lo: int, hi: int
+) -> None:
+    """Mark in ``keep`` the points that the intervals ``a[lo:hi]`` to ``b[lo:hi]`` keep: round
+    after round, every interval whose farthest inner point lies farther than ``tol2``'s root
+    from the chord is split there."""
+    a, b = a[lo:hi], b[lo:hi]
     while len(a):
         inner = b - a - 1
         first = np.cumsum(inner) - inner
@@ -71,7 +90,3 @@ def douglas_peucker(
         b = np.concatenate([m, b[split]])
         busy = b - a >= 2
         a, b = a[busy], b[busy]
-    counts = (
-        np.add.reduceat(keep.astype(np.int64), offsets[:-1]) if len(offsets) > 1 else np.zeros(0, np.int64)
-    )
-    return points[keep], np.r_[0, np.cumsum(counts)].astype(np.int64), keep
