@@ -374,11 +374,17 @@ def test_samples_of_polylines_equal_those_made_segment_by_segment(block, monkeyp
     assert len(got.line) > 2 * len(points)
 
 
-def test_the_direction_across_each_line_found_once_equals_that_of_its_neighbours():
-    """``Samples.across`` finds every sample's unit vector across its line at once; at each
-    sample it equals the one from its neighbours on the same line (itself at a line's ends),
-    and samples whose neighbours lie on them have none."""
+@pytest.mark.parametrize("threads", [1, 4])
+def test_the_direction_across_each_line_found_once_equals_that_of_its_neighbours(threads, monkeypatch):
+    """``Samples.across`` finds every sample's unit vector across its line at once (a block of
+    samples a thread: blocks of 16 over four threads here, ending inside lines and at their
+    ends); at each sample it equals the one from its neighbours on the same line (itself at a
+    line's ends), and samples whose neighbours lie on them have none."""
+    from blueprint import parallel, settings
     from blueprint.vector.occlusion.samples import Samples
+
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
 
     rng = np.random.default_rng(6)
     line = np.repeat(np.arange(50), rng.integers(1, 9, 50))

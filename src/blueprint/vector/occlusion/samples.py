@@ -48,26 +48,45 @@ class Samples:
         """(S,) bool: whether each sample's line has a screen direction there (from the
         neighbouring samples on the same line), and (S, 2) float64 the unit vector across it
         (0 where none); found once for the several tests that look to either side."""
-        line, pixel = self.line, self.pixel
-        # from the sample before to the sample after, then at the ends of the lines (few) from
-        # or to the sample itself where the line has none there
-        tangent = np.empty_like(pixel)
-        np.subtract(pixel[2:], pixel[:-2], out=tangent[1:-1])
-        same = line[1:] == line[:-1]
-        last = np.flatnonzero(~same)
-        ends = np.unique(np.r_[0, last, last + 1, len(line) - 1])
-        ends = ends[(ends >= 0) & (ends < len(line))]
-        ahead = np.where(np.r_[same, False][ends], ends + 1, ends)
-        behind = np.where(np.r_[False, same][ends], ends - 1, ends)
-        tangent[ends] = pixel[ahead] - pixel[behind]
-        length = row_norm(tangent)
-        good = length > 0
-        unit = np.divide(tangent, length[:, None], out=tangent, where=good[:, None])
-        unit[~good] = 0.0
-        across = np.empty_like(pixel)
-        np.negative(unit[:, 1], out=across[:, 0])
-        across[:, 1] = unit[:, 0]
+        good = np.empty(len(self.line), bool)
+        across = np.empty_like(self.pixel)
+        parallel.run(functools.partial(_across, self.line, self.pixel, good, across), len(self.line))
         return good, across
+
+
+def _across(
+    line: np.ndarray, pixel: np.ndarray, good: np.ndarray, across: np.ndarray, lo: int, hi: int
+) -> None:
+    """``Samples.across`` of the samples lo to hi, into ``good`` and ``across``: each one's
+    tangent from the sample before to the sample after, or from or to the sample itself
+    where its line has none there (at the lines' ends)."""
+    n = len(line)
+    if hi == lo:
+        return
+    tangent = np.empty((hi - lo, 2))
+    inner_lo, inner_hi = max(lo, 1), min(hi, n - 1)
+    if inner_hi > inner_lo:
+        np.subtract(
+            pixel[inner_lo + 1 : inner_hi + 1],
+            pixel[inner_lo - 1 : inner_hi - 1],
+            out=tangent[inner_lo - lo : inner_hi - lo],
+        )
+    # the lines' ends (few), and the array's
+    before = np.r_[False, line[lo + 1 : hi] == line[lo : hi - 1]]
+    if lo > 0:
+        before[0] = line[lo - 1] == line[lo]
+    after = np.r_[line[lo + 1 : hi] == line[lo : hi - 1], False]
+    if hi < n:
+        after[-1] = line[hi] == line[hi - 1]
+    ends = np.flatnonzero(~(before & after))
+    at = ends + lo
+    tangent[ends] = pixel[np.where(after[ends], at + 1, at)] - pixel[np.where(before[ends], at - 1, at)]
+    length = row_norm(tangent)
+    good[lo:hi] = length > 0
+    unit = np.divide(tangent, length[:, None], out=tangent, where=good[lo:hi, None])
+    unit[~good[lo:hi]] = 0.0
+    np.negative(unit[:, 1], out=across[lo:hi, 0])
+    across[lo:hi, 1] = unit[:, 0]
 
 
 def sample_polylines(
