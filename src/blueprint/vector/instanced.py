@@ -639,7 +639,10 @@ def _intersections(model: Model, eps: float, phases, renderer):
         placed = _placed(corners[face], inst.transform[me[sides[side]]])
         # the placed triangles' own boxes against the other's: the moved box held more
         held = other[sides[side]]
-        meets = (placed.max(axis=1) >= lo[held]).all(axis=1) & (placed.min(axis=1) <= hi[held]).all(axis=1)
+        # a corner at a time: NumPy reduces short rows slowly
+        high = np.maximum(np.maximum(placed[:, 0], placed[:, 1]), placed[:, 2]) >= lo[held]
+        low = np.minimum(np.minimum(placed[:, 0], placed[:, 1]), placed[:, 2]) <= hi[held]
+        meets = high[:, 0] & high[:, 1] & high[:, 2] & low[:, 0] & low[:, 1] & low[:, 2]
         side, face, placed = side[meets], face[meets], placed[meets]
         placed[..., 0] += ((pair_part[sides[side]] // 2) * span)[:, None]
         tri.append(placed)
