@@ -456,7 +456,7 @@ def draw_lines(
         # the faces' planes found beside the joining, whose chain walk holds one core
         planes_found = parallel.begin(face_planes, model, frame.view)
         lines = join_polylines(segments)
-        del segments  # the placed segments of a big assembly weigh as much as its samples
+        del segments  # a big assembly's placed segments: hundreds of megabytes
         samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing)
         # the occlusion reads the samples alone, and the pieces each polyline's part
         line_part = lines.part

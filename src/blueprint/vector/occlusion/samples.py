@@ -60,9 +60,9 @@ def _across(
     """``Samples.across`` of the samples lo to hi, into ``good`` and ``across``: each one's
     tangent from the sample before to the sample after, or from or to the sample itself
     where its line has none there (at the lines' ends)."""
-    n = len(line)
     if hi == lo:
         return
+    n = len(line)
     tangent = np.empty((hi - lo, 2))
     inner_lo, inner_hi = max(lo, 1), min(hi, n - 1)
     if inner_hi > inner_lo:
