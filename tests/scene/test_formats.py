@@ -403,15 +403,24 @@ def test_text_formats_load_without_trimesh(suffix, tmp_path):
     assert loaded_in_a_process(path, "len(m.faces)") == [str(faces), "False"]
 
 
-def test_meshes_placed_once_each_are_placed_as_one_by_one(monkeypatch):
-    """Distinct meshes of one instance each are placed a block of one vertex count at a time:
-    the same arrays, to the bit, as placing each alone."""
+@pytest.mark.parametrize("threads", [1, 4])
+def test_meshes_placed_once_each_are_placed_as_one_by_one(threads, monkeypatch):
+    """Distinct meshes of one instance each are placed a block of one vertex count at a time,
+    and a mesh drawn several times a block of its instances at a time, the blocks side by
+    side on the thread pool: the same arrays, to the bit, as placing each alone."""
+    from blueprint import settings
+
+    monkeypatch.setattr(settings, "THREADS", threads)
+    shared_vertices, shared_faces = RNG.normal(size=(4, 3)), RNG.integers(0, 4, (3, 3))
     meshes = []
     for k in range(60):
         n = int(RNG.integers(3, 6))
         transform = (
             None if k % 7 == 0 else np.r_[np.c_[RNG.normal(size=(3, 3)), RNG.normal(size=3)], [[0, 0, 0, 1]]]
         )
+        if k % 5 == 0:  # a mesh drawn twelve times over, among the distinct ones
+            meshes.append(Instance(f"n{k}", "shared", shared_vertices, shared_faces, transform))
+            continue
         meshes.append(
             Instance(f"n{k}", f"m{k}", RNG.normal(size=(n, 3)), RNG.integers(0, n, (k % 4 + 1, 3)), transform)
         )
@@ -427,7 +436,7 @@ def test_meshes_placed_once_each_are_placed_as_one_by_one(monkeypatch):
     np.testing.assert_array_equal(positions, np.concatenate([p for p, _ in expected]))
     np.testing.assert_array_equal(faces, np.concatenate([f for _, f in expected]))
     assert parts.tolist() == [k for k, m in enumerate(meshes) for _ in range(len(m.faces))]
-    assert names == [f"m{k}" for k in range(60)]
+    assert len(names) == 60 and names[1] == "m1" and sum(name.startswith("shared") for name in names) == 12
 
 
 def test_off_header_checks_still_refuse_in_one_line(tmp_path):

@@ -619,33 +619,43 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
     index = np.int32 if len(positions) <= np.iinfo(np.int32).max else np.int64
     faces = np.empty((int(face_count.sum()), 3), index)
     uses = np.bincount(mesh, minlength=len(placed.vertex_start) - 1)[mesh]
-    # NaN and infinite vertices are refused with their count once joined, not warned about here
-    with np.errstate(all="ignore"):
-        # the meshes drawn several times, a block of one mesh's instances at a time
-        shared = np.flatnonzero(uses > 1)
-        for m, which in grouped(mesh[shared]):
-            members = shared[which]
-            vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]].astype(np.float64)
-            step = max(1, _PLACED_ROWS // max(len(vertices), int(face_count[members[0]])))
-            for first in range(0, len(members), step):
-                block = members[first : first + step]
+    # blocks of instances, each written to its own rows of the joined arrays: side by side on
+    # the thread pool. The meshes drawn several times, a block of one mesh's instances at a
+    # time; the meshes placed once (many small distinct parts), by their vertex count
+    blocks = []
+    shared = np.flatnonzero(uses > 1)
+    for m, which in grouped(mesh[shared]):
+        members = shared[which]
+        step = max(1, _PLACED_ROWS // max(int(vertex_count[members[0]]), int(face_count[members[0]])))
+        blocks += [(m, members[first : first + step]) for first in range(0, len(members), step)]
+    alone = np.flatnonzero(uses == 1)
+    for count, which in grouped(vertex_count[alone]):
+        members = alone[which]
+        step = max(1, _PLACED_ROWS // max(count, 1))
+        blocks += [(None, members[first : first + step]) for first in range(0, len(members), step)]
+
+    def place(task) -> None:
+        m, block = task
+        # NaN and infinite vertices are refused with their count once joined, not warned about
+        with np.errstate(all="ignore"):
+            if m is not None:
+                vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]]
                 rows = vertex_start[block][:, None] + np.arange(len(vertices))
-                _place(vertices[None], placed, drawn[block], rows, positions)
-        # the meshes placed once (many small distinct parts), by their vertex count
-        alone = np.flatnonzero(uses == 1)
-        for count, which in grouped(vertex_count[alone]):
-            members = alone[which]
-            step = max(1, _PLACED_ROWS // max(count, 1))
-            for first in range(0, len(members), step):
-                block = members[first : first + step]
-                at = np.arange(count)
+                _place(vertices.astype(np.float64)[None], placed, drawn[block], rows, positions)
+            else:
+                at = np.arange(vertex_count[block[0]])
                 stacked = placed.vertices[placed.vertex_start[mesh[block]][:, None] + at].astype(np.float64)
                 _place(stacked, placed, drawn[block], vertex_start[block][:, None] + at, positions)
-    # every instance's faces, numbering the joined vertices
-    for lo, hi in runs(face_count, _PLACED_ROWS):
+
+    def numbered(run: tuple[int, int]) -> None:
+        # every instance's faces, numbering the joined vertices
+        lo, hi = run
         rows = ranges(placed.face_start[mesh[lo:hi]], face_count[lo:hi])
         at = slice(face_start[lo], face_start[lo] + len(rows))
         faces[at] = placed.faces[rows] + np.repeat(vertex_start[lo:hi], face_count[lo:hi])[:, None]
+
+    parallel.each(place, blocks)
+    parallel.each(numbered, runs(face_count, _PLACED_ROWS))
     parts = np.repeat(np.arange(len(drawn), dtype=np.int32), face_count)
     return positions, faces, parts
 
