@@ -243,9 +243,11 @@ class VectorDrawing:
                 return
         key = np.stack([self.part[order], self.level[order], self.kind[order]], axis=1)
         cut = np.flatnonzero(np.any(key[1:] != key[:-1], axis=1)) + 1
-        for chunk in np.split(order, cut):
-            first = chunk[0]
-            yield int(self.part[first]), int(self.kind[first]), int(self.level[first]), chunk
+        # each run's part, kind and level as Python numbers at once: a drawing of many parts has
+        # hundreds of thousands of runs
+        first = order[np.r_[0, cut]]
+        parts, kinds, levels = (values[first].tolist() for values in (self.part, self.kind, self.level))
+        yield from zip(parts, kinds, levels, np.split(order, cut), strict=True)
 
     def polyline(self, i: int) -> np.ndarray:
         return self.lines.polyline(i)
