@@ -626,8 +626,10 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
     shared = np.flatnonzero(uses > 1)
     for m, which in grouped(mesh[shared]):
         members = shared[which]
-        step = max(1, _PLACED_ROWS // max(int(vertex_count[members[0]]), int(face_count[members[0]])))
-        blocks += [(m, members[first : first + step]) for first in range(0, len(members), step)]
+        # the mesh's vertices in double precision once, for all its blocks
+        vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]].astype(np.float64)
+        step = max(1, _PLACED_ROWS // max(len(vertices), int(face_count[members[0]])))
+        blocks += [(vertices, members[first : first + step]) for first in range(0, len(members), step)]
     alone = np.flatnonzero(uses == 1)
     for count, which in grouped(vertex_count[alone]):
         members = alone[which]
@@ -635,13 +637,12 @@ def _flattened(placed: Placed, drawn: np.ndarray) -> tuple[np.ndarray, np.ndarra
         blocks += [(None, members[first : first + step]) for first in range(0, len(members), step)]
 
     def place(task) -> None:
-        m, block = task
+        vertices, block = task
         # NaN and infinite vertices are refused with their count once joined, not warned about
         with np.errstate(all="ignore"):
-            if m is not None:
-                vertices = placed.vertices[placed.vertex_start[m] : placed.vertex_start[m + 1]]
+            if vertices is not None:
                 rows = vertex_start[block][:, None] + np.arange(len(vertices))
-                _place(vertices.astype(np.float64)[None], placed, drawn[block], rows, positions)
+                _place(vertices[None], placed, drawn[block], rows, positions)
             else:
                 at = np.arange(vertex_count[block[0]])
                 stacked = placed.vertices[placed.vertex_start[mesh[block]][:, None] + at].astype(np.float64)
