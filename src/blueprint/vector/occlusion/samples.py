@@ -117,7 +117,6 @@ def sample_polylines(
         )
     clip = transform(points, projection @ view)
     pix = clip_to_pixels(clip, size)
-    line_of_point = np.repeat(np.arange(len(lines)), np.diff(offsets))
     is_last = np.zeros(len(points), bool)
     is_last[offsets[1:] - 1] = True
     starts = np.flatnonzero(~is_last)  # segment j runs from point j to point j + 1
@@ -133,9 +132,6 @@ def sample_polylines(
     per_point = np.ones(len(points), np.int64)
     per_point[starts] = count
     total = np.cumsum(per_point)
-    # a last point has the attributes of the segment before it
-    source = np.arange(len(points))
-    source[offsets[1:] - 1] -= 1
     n = int(total[-1])
     out = Samples(
         np.empty((n, 3)),
@@ -147,29 +143,14 @@ def sample_polylines(
         np.empty(n, bool),
         np.empty(n, bool),
     )
-    arrays = _PointArrays(points, lines.faces, lines.kind, lines.edge, line_of_point, source, is_last)
-    sampled = functools.partial(_sampled, arrays, per_point, total, view, projection, size, out)
+    sampled = functools.partial(_sampled, lines, is_last, per_point, total, view, projection, size, out)
     parallel.run(sampled, len(points))
     return out
 
 
-@dataclass(frozen=True)
-class _PointArrays:
-    """What ``_sampled`` reads of every point of the polylines: the point, its segment's faces,
-    kind and edge, its polyline, the point whose segment it takes them from (a polyline's last
-    point the one before it) and whether it is a polyline's last."""
-
-    points: np.ndarray
-    faces: np.ndarray
-    kind: np.ndarray
-    edge: np.ndarray
-    line: np.ndarray
-    source: np.ndarray
-    is_last: np.ndarray
-
-
 def _sampled(
-    arrays: _PointArrays,
+    lines: Polylines,
+    is_last: np.ndarray,
     per_point: np.ndarray,
     total: np.ndarray,
     view: np.ndarray,
@@ -181,8 +162,9 @@ def _sampled(
 ) -> None:
     """The samples of points lo to hi (``per_point`` each, ending at ``total``) into their rows
     of ``out``, a block of points at a time: every point's values repeated for its samples, not
-    gathered sample by sample, and the temporaries those of a block."""
-    points = arrays.points
+    gathered sample by sample, and the temporaries those of a block. ``is_last`` (P,) marks each
+    polyline's last point, which takes the attributes of the segment before it."""
+    points = lines.points
     for first in range(lo, hi, _POINTS):
         last = min(first + _POINTS, hi)
         each = per_point[first:last]
@@ -196,13 +178,16 @@ def _sampled(
         np.subtract(points[first + 1 : ahead + 1], points[first:ahead], out=step[: ahead - first])
         model = np.repeat(points[first:last], each, axis=0)
         model += t[:, None] * np.repeat(step, each, axis=0)
-        ends = np.flatnonzero(arrays.is_last[first:last])
+        ends = np.flatnonzero(is_last[first:last])
         model[total[first + ends] - 1 - begin] = points[first + ends]
-        source = arrays.source[first:last]
-        out.faces[rows] = np.repeat(arrays.faces[source], each, axis=0)
-        out.kind[rows] = np.repeat(arrays.kind[source], each)
-        out.edge[rows] = np.repeat(arrays.edge[source], each)
-        out.line[rows] = np.repeat(arrays.line[first:last], each)
+        at = np.arange(first, last)
+        line = np.searchsorted(lines.offsets, at, side="right") - 1
+        source = at
+        source[ends] -= 1
+        out.faces[rows] = np.repeat(lines.faces[source], each, axis=0)
+        out.kind[rows] = np.repeat(lines.kind[source], each)
+        out.edge[rows] = np.repeat(lines.edge[source], each)
+        out.line[rows] = np.repeat(line, each)
         out.vertex[rows] = k == 0
         eye = transform(model, view)
         clip = eye @ projection.T
