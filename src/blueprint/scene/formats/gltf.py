@@ -30,7 +30,13 @@ import numpy as np
 from blueprint import settings
 from blueprint.columns import ranges, runs
 from blueprint.scene.formats.base import Placed
-from blueprint.scene.headers import all_of, check_gltf_document, check_gltf_graph, gltf_document
+from blueprint.scene.headers import (
+    all_of,
+    check_gltf_document,
+    check_gltf_graph,
+    collection_paused,
+    gltf_document,
+)
 from blueprint.settings import read_file
 
 __all__ = ["Placed", "check_glb", "check_gltf", "read", "read_data", "read_glb"]
@@ -576,11 +582,12 @@ def read_data(path: Path, data: bytes) -> Placed | None:
     """The meshes and instances of the GLB bytes ``data`` (``read_glb``) of the file ``path``, its
     document and node graph checked first (``check_gltf_document``); None where trimesh
     reads them."""
-    doc = gltf_document(path, "glb", len(data), data)
-    if doc is None:
-        return None
-    check_gltf_document(path, doc)
-    return read_glb(data, doc)
+    with collection_paused():
+        doc = gltf_document(path, "glb", len(data), data)
+        if doc is None:
+            return None
+        check_gltf_document(path, doc)
+        return read_glb(data, doc)
 
 
 def check_glb(path: Path, size: int, data: bytes | None = None) -> None:
