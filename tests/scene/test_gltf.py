@@ -262,6 +262,8 @@ def test_trimesh_exports_read_as_trimesh_reads_them(tmp_path):
         "a camera node",
         "a camera without its fields",
         "unreachable nodes",
+        "a flat scene",
+        "a flat scene with a node named world",
     ],
 )
 def test_variants_read_as_trimesh_reads_them(tmp_path, change):
@@ -295,6 +297,16 @@ def test_variants_read_as_trimesh_reads_them(tmp_path, change):
     elif change == "unreachable nodes":
         doc["nodes"][5]["children"] = [6]
         doc["nodes"].append({"name": "bolt-left", "mesh": 0})
+    elif change.startswith("a flat scene"):
+        # every node a root, every mesh's and node's name its own: the readers' quick paths
+        doc["meshes"][1]["name"] = "nut"
+        doc["nodes"][0]["name"] = "frame-0"
+        for node in doc["nodes"]:
+            node.pop("children", None)
+        doc["scenes"] = [{"nodes": [3, 0, 5, 1, 4, 2]}]
+        if change.endswith("world"):
+            # named after its mesh, so that the part takes the node's name
+            doc["meshes"][1]["name"] = doc["nodes"][5]["name"] = "world"
     path = glb.write(tmp_path / "variant.glb")
     assert_same(path)
 

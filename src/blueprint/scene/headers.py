@@ -107,8 +107,9 @@ def check_gltf_document(path: Path, doc) -> None:
         return
     triangles = _mesh_triangles(doc)
     roots = _gltf_roots(doc, len(nodes))
-    for root in roots:
-        _node(path, nodes, root, None)
+    if not all_of(roots, int) or (roots and (min(roots) < 0 or max(roots) >= len(nodes))):
+        for root in roots:
+            _node(path, nodes, root, None)  # the first that is no node, named
 
     def own(node: int) -> tuple[int, int, int | None]:
         mesh = nodes[node].get("mesh")
@@ -350,22 +351,18 @@ def _gltf_json(path: Path, ext: str, size: int, limit: int, data: bytes | None):
 
 
 def _mesh_triangles(doc: dict) -> list[int]:
-    """Triangles of each of the document's meshes, as their accessors declare them."""
-    accessors = doc.get("accessors") if isinstance(doc.get("accessors"), list) else []
+    """Triangles of each of the document's meshes, as their accessors declare them, of a
+    document whose shape is checked (``check_gltf_shape``): its indices are accessors'."""
+    counts = [accessor.get("count", 0) for accessor in doc.get("accessors", [])]
     out = []
-    for mesh in doc.get("meshes") or []:
+    for mesh in doc.get("meshes", []):
         total = 0
-        for primitive in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
-            if not isinstance(primitive, dict):
-                continue
+        for primitive in mesh.get("primitives", []):
             index = primitive.get("indices")
             if index is None:
-                attributes = primitive.get("attributes")
-                index = attributes.get("POSITION") if isinstance(attributes, dict) else None
-            accessor = accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else None
-            count = accessor.get("count") if isinstance(accessor, dict) else None
-            if isinstance(count, int) and count > 0:
-                total += count // 3
+                index = primitive.get("attributes", {}).get("POSITION")
+            if index is not None:
+                total += counts[index] // 3
         out.append(total)
     return out
 

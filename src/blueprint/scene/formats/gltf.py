@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from blueprint import settings
+from blueprint import parallel, settings
 from blueprint.columns import ranges, runs
 from blueprint.scene.formats.base import Placed
 from blueprint.scene.headers import (
@@ -110,6 +110,9 @@ def _walk(doc: dict, nodes: list, roots: list[int], children: list[list[int]]) -
     """The nodes of the scene in trimesh's order (a stack of (parent, child) edges, the last
     pushed taken first), without the camera nodes trimesh takes out of its graph (and what
     hangs below them), and each one's parent's place in that order (-1 for a root)."""
+    if not any(children) and not any("camera" in nodes[root] for root in roots):
+        # a scene of roots alone, none a camera: the last pushed taken first
+        return roots[::-1], [-1] * len(roots)
     cameras = doc.get("cameras")
     camera_taken = False
     placed: dict[int, int] = {}
@@ -140,15 +143,24 @@ def _world(nodes: list, visited: list[int], parents: list[int]) -> np.ndarray:
     time (one matrix product a level)."""
     local = _local_matrices([nodes[i] for i in visited])
     parent = np.array(parents, np.int64)
-    depth = np.zeros(len(parent), np.int64)
-    for k, above in enumerate(parents):
-        if above >= 0:
-            depth[k] = depth[above] + 1
+    depth = _depths(parent)
     world = local.copy()
     for level in range(1, int(depth.max(initial=0)) + 1):
         chosen = np.flatnonzero(depth == level)
         world[chosen] = np.matmul(world[parent[chosen]], local[chosen])
     return world
+
+
+def _depths(parent: np.ndarray) -> np.ndarray:
+    """(N,) int64: how many levels each node lies below its root (``parent``: each node's, -1
+    for a root), a level at a time (the header's check bounds the levels)."""
+    depth = np.zeros(len(parent), np.int64)
+    below = np.flatnonzero(parent >= 0)
+    while len(below):
+        depth[below] = depth[parent[below]] + 1
+        # one more than its parent's: final; the rest move down with their parents
+        below = below[depth[below] != depth[parent[below]] + 1]
+    return depth
 
 
 def _chunks(data: bytes, doc: dict | None = None) -> tuple[dict, memoryview | None]:
@@ -241,9 +253,9 @@ class _Accessors:
     def rows(self, chosen: np.ndarray, dtype: str, width: int) -> np.ndarray:
         """The rows of the accessors ``chosen``, all of component type ``dtype`` and ``width``
         numbers a row, one accessor after another: (rows, width). Read in blocks of accessors
-        by one gather each, of the components as an array of their type: glTF aligns each
-        accessor and its stride to its components (a file that does not is left to
-        trimesh)."""
+        by one gather each, side by side on the pool, of the components as an array of their
+        type: glTF aligns each accessor and its stride to its components (a file that does
+        not is left to trimesh)."""
         item = np.dtype(dtype).itemsize
         start, stride, count = self.start[chosen], self.stride[chosen], self.count[chosen]
         if (start % item).any() or (stride % item).any():
@@ -252,10 +264,14 @@ class _Accessors:
         typed = np.frombuffer(self.binary, dtype, len(self.binary) // item)
         out = np.empty((int(count.sum()), width), dtype)
         first = np.cumsum(count) - count
-        for lo, hi in runs(count, _BLOCK_ROWS):
+
+        def gather(block: tuple[int, int]) -> None:
+            lo, hi = block
             rows = ranges(np.zeros(hi - lo, np.int64), count[lo:hi])
             at = np.repeat(start[lo:hi], count[lo:hi]) + rows * np.repeat(stride[lo:hi], count[lo:hi])
             out[first[lo] : first[lo] + len(rows)] = typed[at[:, None] + np.arange(width)]
+
+        parallel.each(gather, list(runs(count, _BLOCK_ROWS)))
         return out
 
 
@@ -319,16 +335,24 @@ def _meshes(doc: dict, access: _Accessors) -> _Meshes:
             values = access.rows(index[chosen], _DTYPES[kind], 1).reshape(-1)
             flat[ranges(corner_start[at], corners[at])] = values
     found.faces = flat.reshape(-1, 3)
+    found.first = np.r_[0, np.cumsum([len(p) for p in lists], dtype=np.int64)]
+    found.names = _primitive_names(named, lists, len(primitives))
+    return found
+
+
+def _primitive_names(named: list[str], lists: list[list], count: int) -> list[str]:
+    """Each of ``count`` primitives' name: its mesh's (``named``), made unique in turn."""
+    if count == len(named) and "" not in named and len(set(named)) == count:
+        return list(named)  # the common file: one primitive a mesh, every name its own
     taken: dict[str, None] = {}
     counts: dict = {}
-    found.names = []
+    names = []
     for name, primitives_of in zip(named, lists, strict=True):
         for _ in primitives_of:
             unique = _unique_name(name, taken, counts)
             taken[unique] = None
-            found.names.append(unique)
-    found.first = np.r_[0, np.cumsum([len(p) for p in lists], dtype=np.int64)]
-    return found
+            names.append(unique)
+    return names
 
 
 def _accessor_indices(values: list, count: int) -> np.ndarray:
@@ -341,18 +365,23 @@ def _accessor_indices(values: list, count: int) -> np.ndarray:
 
 def _node_names(nodes: list) -> list[str]:
     """Each node's frame name as trimesh gives it: its name or its index, made unique."""
-    taken: dict[str, int] = {}
-    counts: dict = {}
-    for index, node in enumerate(nodes):
-        if not isinstance(node, dict):
-            raise _Leave
-        name = node.get("name", str(index))
-        if not isinstance(name, str):
-            raise _Leave
-        taken[_unique_name(name, taken, counts)] = index
-    names = [""] * len(nodes)
-    for name, index in taken.items():
-        names[index] = name
+    if not all_of(nodes, dict):
+        raise _Leave
+    given = [node.get("name", str(index)) for index, node in enumerate(nodes)]
+    if not all_of(given, str):
+        raise _Leave
+    if "" not in given and len(set(given)) == len(given):
+        # every name its own already: each is kept
+        names = given
+        taken = dict(zip(names, range(len(names)), strict=True))
+    else:
+        taken = {}
+        counts: dict = {}
+        for index, name in enumerate(given):
+            taken[_unique_name(name, taken, counts)] = index
+        names = [""] * len(nodes)
+        for name, index in taken.items():
+            names[index] = name
     if _BASE_FRAME in taken:
         names[taken[_BASE_FRAME]] = _unique_name(_BASE_FRAME, set(names))
     return names
