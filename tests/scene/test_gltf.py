@@ -366,6 +366,62 @@ def test_many_meshes_read_in_blocks_as_trimesh_reads_them(tmp_path, monkeypatch)
         np.testing.assert_array_equal(getattr(kept, field), getattr(theirs_kept, field))
 
 
+def test_accessors_laid_end_to_end_read_as_trimesh_reads_them(tmp_path, monkeypatch):
+    """Packed accessors one after another in one view each of positions and indices (as most
+    writers lay them) are read a block at a time by one copy; a block that holds a gap (an
+    accessor moved on by a row) is gathered instead. Blocks of a few rows over 40 meshes give
+    trimesh's arrays either way."""
+    from blueprint.scene.formats import gltf
+
+    rng = np.random.default_rng(5)
+    glb = Glb(scene=0)
+    positions, indices, index_at, vertex_at = [], [], 0, 0
+    glb.doc["meshes"], glb.doc["accessors"] = [], []
+    for k in range(40):
+        count = int(rng.integers(3, 9))
+        gap = 12 if k == 17 else 0
+        positions.append(
+            np.zeros(gap, np.uint8).tobytes() + rng.normal(size=(count, 3)).astype("<f4").tobytes()
+        )
+        faces = rng.integers(0, count, size=3 * int(rng.integers(1, 5))).astype("<u2")
+        indices.append(faces.tobytes())
+        glb.doc["accessors"] += [
+            {
+                "bufferView": 0,
+                "byteOffset": vertex_at + gap,
+                "componentType": 5126,
+                "count": count,
+                "type": "VEC3",
+            },
+            {
+                "bufferView": 1,
+                "byteOffset": index_at,
+                "componentType": 5123,
+                "count": len(faces),
+                "type": "SCALAR",
+            },
+        ]
+        vertex_at += len(positions[-1])
+        index_at += len(indices[-1])
+        primitive = {"attributes": {"POSITION": 2 * k}, "indices": 2 * k + 1}
+        glb.doc["meshes"].append({"name": f"m{k}", "primitives": [primitive]})
+    vertex_bytes, index_bytes = b"".join(positions), b"".join(indices)
+    index_bytes += b"\0" * (-len(index_bytes) % 4)
+    glb.binary = vertex_bytes + index_bytes
+    glb.doc["bufferViews"] = [
+        {"buffer": 0, "byteOffset": 0, "byteLength": len(vertex_bytes)},
+        {"buffer": 0, "byteOffset": len(vertex_bytes), "byteLength": len(index_bytes)},
+    ]
+    glb.doc["nodes"] = [{"name": f"n{k}", "mesh": k, "translation": [float(k), 0.0, 0.0]} for k in range(40)]
+    glb.doc["scenes"] = [{"nodes": list(range(40))}]
+    path = glb.write(tmp_path / "end-to-end.glb")
+    # blocks of one accessor (each one copy), of a few (the gap's gathered), of all of them
+    # (the indices one copy; the positions, across the gap, gathered)
+    for block_rows in (1, 7, 40, 1 << 16):
+        monkeypatch.setattr(gltf, "_BLOCK_ROWS", block_rows)
+        assert_same(path)
+
+
 @pytest.mark.parametrize("name", [GEARBOX.name, *SHARED])
 def test_shipped_and_shared_models_read_as_trimesh_reads_them(name):
     path = GEARBOX if name == GEARBOX.name else SHARED_MODELS / name

@@ -253,9 +253,10 @@ class _Accessors:
     def rows(self, chosen: np.ndarray, dtype: str, width: int) -> np.ndarray:
         """The rows of the accessors ``chosen``, all of component type ``dtype`` and ``width``
         numbers a row, one accessor after another: (rows, width). Read in blocks of accessors
-        by one gather each, side by side on the pool, of the components as an array of their
-        type: glTF aligns each accessor and its stride to its components (a file that does
-        not is left to trimesh)."""
+        side by side on the pool, each by one gather, or by one copy where its accessors' rows
+        lie packed one after another, of the components as an array of their type: glTF aligns
+        each accessor and its stride to its components (a file that does not is left to
+        trimesh)."""
         item = np.dtype(dtype).itemsize
         start, stride, count = self.start[chosen], self.stride[chosen], self.count[chosen]
         if (start % item).any() or (stride % item).any():
@@ -267,6 +268,12 @@ class _Accessors:
 
         def gather(block: tuple[int, int]) -> None:
             lo, hi = block
+            held = count[lo:hi]
+            ends = start[lo:hi] + held * width
+            if (stride[lo:hi] == width).all() and (start[lo + 1 : hi] == ends[:-1]).all():
+                # packed rows of accessors laid end to end (as most writers lay them): one span
+                out[first[lo] : first[lo] + int(held.sum())] = typed[start[lo] : ends[-1]].reshape(-1, width)
+                return
             rows = ranges(np.zeros(hi - lo, np.int64), count[lo:hi])
             at = np.repeat(start[lo:hi], count[lo:hi]) + rows * np.repeat(stride[lo:hi], count[lo:hi])
             out[first[lo] : first[lo] + len(rows)] = typed[at[:, None] + np.arange(width)]
