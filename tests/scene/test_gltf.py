@@ -264,6 +264,7 @@ def test_trimesh_exports_read_as_trimesh_reads_them(tmp_path):
         "unreachable nodes",
         "a flat scene",
         "a flat scene with a node named world",
+        "nodes named after their meshes",
     ],
 )
 def test_variants_read_as_trimesh_reads_them(tmp_path, change):
@@ -307,8 +308,17 @@ def test_variants_read_as_trimesh_reads_them(tmp_path, change):
         if change.endswith("world"):
             # named after its mesh, so that the part takes the node's name
             doc["meshes"][1]["name"] = doc["nodes"][5]["name"] = "world"
+    elif change == "nodes named after their meshes":
+        # every part named after its node (the second "bolt" mesh is bolt_1 to trimesh)
+        names = {0: "bolt", 1: "bolt_1", 2: "GLTF"}
+        for k, node in enumerate(doc["nodes"]):
+            if "mesh" in node:
+                node["name"] = f"{names[node['mesh']]}-{k}"
     path = glb.write(tmp_path / "variant.glb")
     assert_same(path)
+    if change == "nodes named after their meshes":
+        # in trimesh's order (a node's last child first)
+        assert ours(path)[3] == ["GLTF-4", "bolt-2", "bolt_1-3", "bolt-1"]
 
 
 def test_a_mesh_of_several_primitives_names_its_parts_after_the_mesh(tmp_path):
@@ -578,13 +588,19 @@ def test_a_mesh_that_does_not_exist_is_refused(tmp_path):
 
 
 @pytest.mark.parametrize("index", [3, 5, 2**31 - 2, 2**32 - 1])
-def test_an_index_past_its_own_mesh_is_refused(tmp_path, index):
+@pytest.mark.parametrize("used", [(0, 1, 2), (2, 1, 0)])
+def test_an_index_past_its_own_mesh_is_refused(tmp_path, index, used):
     """An index past its mesh's vertices would name those of the mesh placed next to it, or,
-    joined into 32-bit faces, wrap into range: the file is refused, not drawn wrong."""
-    glb = Glb(scene=0, scenes=[{"nodes": [0, 1]}])
+    joined into 32-bit faces, wrap into range: the file is refused, not drawn wrong, whether
+    the meshes are placed in the file's order (their faces read as they lie) or not."""
+    glb = Glb(scene=0, scenes=[{"nodes": [0, 1, 2]}])
     past = glb.primitive(faces=(0, 1, index))
-    glb.doc["meshes"] = [{"primitives": [glb.primitive()]}, {"primitives": [past]}]
-    glb.doc["nodes"] = [{"mesh": 0}, {"mesh": 1, "translation": [2, 0, 0]}]
+    glb.doc["meshes"] = [
+        {"primitives": [glb.primitive()]},
+        {"primitives": [past]},
+        {"primitives": [glb.primitive()]},
+    ]
+    glb.doc["nodes"] = [{"mesh": m, "translation": [2.0 * k, 0, 0]} for k, m in enumerate(used)]
     path = glb.write(tmp_path / "past.glb")
     with pytest.raises(InputError) as caught:
         loader.load_model(path)

@@ -543,7 +543,12 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
     taken: set[str] = set()
     counts: dict[str, int] = {}
     node, geometry = placed.node, placed.geometry
-    names = [stem if single else _part_name(node[k], geometry[k], taken, counts) for k in drawn.tolist()]
+    if single:
+        names = [stem]
+    elif all(node[k] is not None and node[k].startswith(geometry[k]) for k in drawn.tolist()):
+        names = [node[k] for k in drawn.tolist()]  # every part named after its node
+    else:
+        names = [_part_name(node[k], geometry[k], taken, counts) for k in drawn.tolist()]
     from blueprint.scene.instances import worth_instancing
 
     if instanced and worth_instancing(total, unique):
@@ -554,16 +559,24 @@ def _joined(placed: Placed, stem: str | None, label: str, instanced: bool = Fals
 def _check_own_vertices(placed: Placed, meshes: np.ndarray, label: str) -> None:
     """Refuse a face of ``meshes`` of ``placed`` that indexes past its own mesh's vertices, which
     joined or placed would name another mesh's (or, in 32 bits, wrap into range), naming
-    ``label``; a block of meshes at a time."""
+    ``label``; blocks of meshes side by side on the pool."""
     vertex_count = np.diff(placed.vertex_start)[meshes]
     face_count = np.diff(placed.face_start)[meshes]
-    for lo, hi in runs(face_count, _PLACED_ROWS):
-        local = placed.faces[ranges(placed.face_start[meshes[lo:hi]], face_count[lo:hi])]
+
+    def fine(block: tuple[int, int]) -> bool:
+        lo, hi = block
+        start = placed.face_start[meshes[lo:hi]]
+        if (meshes[lo + 1 : hi] == meshes[lo : hi - 1] + 1).all():
+            local = placed.faces[start[0] : start[0] + face_count[lo:hi].sum()]  # meshes in a row
+        else:
+            local = placed.faces[ranges(start, face_count[lo:hi])]
         # a column at a time: NumPy reduces short rows slowly
         low = np.minimum(np.minimum(local[:, 0], local[:, 1]), local[:, 2])
         high = np.maximum(np.maximum(local[:, 0], local[:, 1]), local[:, 2])
-        if low.min() < 0 or (high >= np.repeat(vertex_count[lo:hi], face_count[lo:hi])).any():
-            raise InputError(f"{label}: faces refer to vertices that do not exist")
+        return low.min() >= 0 and not (high >= np.repeat(vertex_count[lo:hi], face_count[lo:hi])).any()
+
+    if not all(parallel.each(fine, runs(face_count, _PLACED_ROWS))):
+        raise InputError(f"{label}: faces refer to vertices that do not exist")
 
 
 def _in_local_order(placed: Placed, meshes: np.ndarray) -> None:
