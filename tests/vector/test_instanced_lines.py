@@ -156,6 +156,44 @@ def test_intersections_of_repeated_pairs_are_placed_at_each():
     np.testing.assert_allclose(ours.points[second], ours.points[first] + [5.0, 0, 0], atol=1e-9)
 
 
+def test_intersections_on_several_threads_are_those_of_one(monkeypatch):
+    """The intersections' segments placed at each pair a block at a time on the pool, and put in
+    order of their faces by the pool's sort: on three threads, byte for byte those of one."""
+    from blueprint import parallel, settings
+    from blueprint.vector.instanced import INTERSECTIONS
+
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 8)  # blocks of a few segments
+    pairs = []
+    for k in range(12):
+        # three placements of the wedge against the prism: three groups of alike pairs
+        shift = 0.25 + 0.1 * (k % 3)
+        pairs += [
+            ("l", placed(None, (5.0 * k, 0, 0))),
+            ("wedge", placed(None, (5.0 * k + shift, 0.25, 0.25))),
+        ]
+    scene = trimesh_scene(pairs, {"l": l_prism(), "wedge": wedge()})
+    found = []
+    for threads in (1, 3):
+        monkeypatch.setattr(settings, "THREADS", threads)
+        INTERSECTIONS.clear()
+        lines = intersection_segments(model_from_object(scene, name="pairs"))
+        found.append([lines.points, lines.faces, lines.part])
+    assert len(found[0][0]) > 0
+    for a, b in zip(*found, strict=True):
+        assert a.tobytes() == b.tobytes()
+
+
+def test_intersections_are_ordered_by_their_faces_as_lexsort_orders_them():
+    """``instanced._by_faces``: pairs of faces in ``np.lexsort``'s order, rows alike in their
+    own, by one key of the pool's sort where the pairs fit one, else by lexsort itself."""
+    from blueprint.vector.instanced import _by_faces
+
+    faces = np.random.default_rng(3).integers(0, 50, (5000, 2))
+    want = np.lexsort((faces[:, 1], faces[:, 0]))
+    np.testing.assert_array_equal(_by_faces(faces, 50), want)
+    np.testing.assert_array_equal(_by_faces(faces, 1 << 32), want)
+
+
 def test_points_moved_in_whole_arrays_equal_einsum_to_the_bit():
     """``instanced._moved`` and ``_dot3`` give einsum's float64 values bit for bit (zeros of
     either sign included): for points placed by blocks of transforms, for face normals by

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from blueprint.sorting import stable_argsort
+from blueprint.sorting import renumbered, stable_argsort
 
 __all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
 
@@ -219,7 +219,7 @@ def chain_pieces(
     if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
         # the rows packed in their order into one integer: a 1-D unique, numbered alike
         packed = ((rows[:, 0] - low[0]) * span[1] + (rows[:, 1] - low[1])) * span[2] + (rows[:, 2] - low[2])
-        node = np.unique(packed, return_inverse=True)[1].reshape(-1)
+        node = renumbered(packed)[1]
     else:
         node = np.unique(rows, axis=0, return_inverse=True)[1].reshape(-1)
     inward = np.stack([points[first_point + 1], points[last_point - 1]], axis=1).reshape(-1, 2)

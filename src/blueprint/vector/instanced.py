@@ -420,14 +420,23 @@ def _joined(items: list, shape: tuple, dtype) -> np.ndarray:
     return np.concatenate(items) if items else np.zeros((0, *shape), dtype)
 
 
+def _gathered(columns: dict[str, tuple[list, tuple, type]], rows: np.ndarray) -> dict[str, np.ndarray]:
+    """Each column's pieces (with the shape of a row and the type of an empty one) joined and
+    its ``rows`` taken, the columns side by side on the pool."""
+    names = list(columns)
+    return dict(zip(names, parallel.each(lambda name: _joined(*columns[name])[rows], names), strict=True))
+
+
 def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_face, view, projection, size):
     which = _joined(found.edge_inst, (), np.int64)
     edge = first_edge[which] + _joined(found.edge, (), np.int64)
     order = stable_argsort(edge)
-    points = _joined(found.edge_points, (2, 3), np.float64)[order]
+    ordered = _gathered(
+        {"points": (found.edge_points, (2, 3), np.float64), "outline": (found.outline, (), bool)}, order
+    )
+    points, outline = ordered["points"], ordered["outline"]
     # the edge-on outlines are wholly in front of the eye and kept whole, as the flat path keeps
     # them; the other lines are clipped to the near plane
-    outline = _joined(found.outline, (), bool)[order]
     inside = np.flatnonzero(~outline)
     _, clipped, kept = near_clipped(points[inside] if len(inside) < len(points) else points, view, projection)
     kept = inside[kept]
@@ -440,13 +449,22 @@ def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_f
     # every other row of the kept edges gathered once, in their order
     rows = order[keep]
     which = which[rows]
-    sides = _joined(found.edge_sides, (2,), np.int64)[rows]
-    kind = _joined(found.edge_kind, (), np.uint8)[rows]
+    edges = _gathered(
+        {
+            "sides": (found.edge_sides, (2,), np.int64),
+            "kind": (found.edge_kind, (), np.uint8),
+            "edge_on": (found.edge_on, (2,), bool),
+            "smooth": (found.smooth_crease, (), bool),
+            "vertices": (found.edge_vertices, (2,), np.int64),
+            "exact": (found.side_exact, (2,), bool),
+        },
+        rows,
+    )
+    sides, kind = edges["sides"], edges["kind"]
     silhouette = kind == SILHOUETTE
     # an outline edge beside a face seen edge-on is a silhouette whichever way it rounds
-    edge_on = _joined(found.edge_on, (2,), bool)[rows].any(axis=1)
-    kind[(kind == CREASE) & edge_on] = SILHOUETTE
-    kind[(kind == CREASE) & _joined(found.smooth_crease, (), bool)[rows]] = SMOOTH
+    kind[(kind == CREASE) & edges["edge_on"].any(axis=1)] = SILHOUETTE
+    kind[(kind == CREASE) & edges["smooth"]] = SMOOTH
     out = {
         "points": points,
         "faces": np.where(sides >= 0, first_face[which][:, None] + sides, -1),
@@ -454,8 +472,8 @@ def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_f
         "kind": kind,
         "edge": edge[rows],
         "silhouette": silhouette,
-        "vertices": first_vertex[which][:, None] + _joined(found.edge_vertices, (2,), np.int64)[rows],
-        "exact": _joined(found.side_exact, (2,), bool)[rows],
+        "vertices": first_vertex[which][:, None] + edges["vertices"],
+        "exact": edges["exact"],
     }
     which = _joined(found.contour_inst, (), np.int64)
     face = first_face[which] + _joined(found.contour_face, (), np.int64)
@@ -465,15 +483,22 @@ def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_f
     )
     rows = order[keep]
     which = which[rows]
+    contours = _gathered(
+        {
+            "edges": (found.contour_edges, (2,), np.int64),
+            "vertices": (found.contour_vertices, (2, 2), np.int64),
+            "vertex_points": (found.contour_vertex_points, (2, 2, 3), np.float64),
+        },
+        rows,
+    )
     out.update(
         contour_points=points,
         contour_pixels=pixels,
         contour_face=face[rows],
         contour_part=inst.part[which].astype(np.int32),
-        contour_edges=first_edge[which][:, None] + _joined(found.contour_edges, (2,), np.int64)[rows],
-        contour_vertices=first_vertex[which][:, None, None]
-        + _joined(found.contour_vertices, (2, 2), np.int64)[rows],
-        contour_vertex_points=_joined(found.contour_vertex_points, (2, 2, 3), np.float64)[rows],
+        contour_edges=first_edge[which][:, None] + contours["edges"],
+        contour_vertices=first_vertex[which][:, None, None] + contours["vertices"],
+        contour_vertex_points=contours["vertex_points"],
     )
     return out
 
@@ -676,7 +701,22 @@ def _intersections(model: Model, eps: float, phases, renderer):
     first_face = _starts(inst.instance_faces())
     pa, pb = i[pair], j[pair]
     faces = np.stack([first_face[pa] + la[seg], first_face[pb] + lb[seg]], axis=1)
-    placed = _placed(points[seg], inst.transform[pa])
-    part_out = np.minimum(inst.part[pa], inst.part[pb]).astype(np.int32)
-    order = np.lexsort((faces[:, 1], faces[:, 0]))
-    return placed[order], faces[order], part_out[order]
+    order = _by_faces(faces, int(first_face[-1]))
+    seg, pa, faces = seg[order], pa[order], faces[order]
+    part_out = np.minimum(inst.part[pa], inst.part[pb[order]]).astype(np.int32)
+    placed = np.empty((len(seg), 2, 3))
+
+    def place(lo: int, hi: int) -> None:
+        placed[lo:hi] = _placed(points[seg[lo:hi]], inst.transform[pa[lo:hi]])
+
+    parallel.run(place, len(seg))
+    return placed, faces, part_out
+
+
+def _by_faces(faces: np.ndarray, count: int) -> np.ndarray:
+    """The order of the rows of ``faces`` (K, 2) (each of ``count`` faces) by their first face,
+    then their second, rows alike in their order: ``np.lexsort`` of the two, by the thread
+    pool's sort of one key where the pairs fit one."""
+    if float(count) * float(count) >= 2.0**62:
+        return np.lexsort((faces[:, 1], faces[:, 0]))
+    return stable_argsort(faces[:, 0] * count + faces[:, 1])
