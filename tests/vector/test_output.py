@@ -61,6 +61,20 @@ def test_svg_parses_with_the_image_as_view_box_and_groups_per_part(gear_drawing,
     assert all(p.get("stroke") != "#0a1f44" for (gid, _), p in paths.items() if gid == "gear")
 
 
+def test_svg_text_written_in_blocks_of_groups_on_several_threads_is_one_threads(gear_drawing, monkeypatch):
+    """The paths' text and source edges are written a block of groups at a time side by side
+    on the pool: over blocks of a few points on three threads, the same bytes as one block."""
+    from blueprint import parallel, settings
+    from blueprint.vector.svg import svg_bytes
+
+    monkeypatch.setattr(settings, "THREADS", 1)
+    want = svg_bytes(gear_drawing)
+    monkeypatch.setattr(settings, "THREADS", 3)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 16)
+    assert svg_bytes(gear_drawing) == want
+    assert want.count(b"<path") > 20 and b"data-edges" in want
+
+
 def test_dxf_parts_whose_names_sanitise_alike_get_layers_of_their_own(renderer, tmp_path):
     import ezdxf
 

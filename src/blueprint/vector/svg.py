@@ -8,6 +8,7 @@ from html import escape as _escape
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.compose.glyphs.raster import ANCHOR_SIDES
 from blueprint.scene.sheet import MARK_KINDS
 
@@ -273,13 +274,8 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
         return out[0] + "</g>\n"
     # within a path its lines by their lowest edge: the edges' differences stay small
     index = _by_lowest_edge(lines, [g[3] for g in groups])
-    lengths = lines.offsets[index + 1] - lines.offsets[index]
-    sub_offsets = np.r_[0, np.cumsum(lengths)]
-    rows = np.repeat(lines.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
     bounds = np.r_[0, np.cumsum([len(g[3]) for g in groups])]
-    drawn = np.zeros(len(index), bool)
-    texts = paths_data(lines.points[rows], sub_offsets, bounds, factor, 0, drawn, relative=True)
-    edge_lists = edge_texts(lines, index[drawn], np.r_[0, np.cumsum(drawn)][bounds])
+    texts, edge_lists = _group_texts(lines, index, bounds, factor)
     current = None
     # a stroke is the same for every path of one kind, level and highlight: written once
     strokes: dict[tuple[int, bool], tuple[LineStyle, str]] = {}
@@ -317,6 +313,37 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
         out.append("</g>\n</g>\n")
     out.append("</g>\n")
     return "".join(out)
+
+
+def _group_texts(lines: Lines, index: np.ndarray, bounds: np.ndarray, factor: float) -> tuple[list, list]:
+    """The path data (``paths_data``, relative, on a grid of ``factor``) and the source edges
+    (``edge_texts``) of each group of the lines ``index[bounds[g]:bounds[g + 1]]``, blocks of
+    groups of about equal points side by side on the pool (a group's text is its own)."""
+    lengths = lines.offsets[index + 1] - lines.offsets[index]
+    sub_offsets = np.r_[0, np.cumsum(lengths)]
+    rows = np.repeat(lines.offsets[index] - sub_offsets[:-1], lengths) + np.arange(sub_offsets[-1])
+    first_point = sub_offsets[bounds]
+    cuts = [lo for lo, _ in parallel.cuts(int(first_point[-1]))]
+    splits = np.unique(np.r_[np.searchsorted(first_point[:-1], cuts), len(bounds) - 1]).tolist()
+
+    def block(g: int, h: int) -> tuple[list, list]:
+        lo, hi = bounds[g], bounds[h]
+        at, end = sub_offsets[lo], sub_offsets[hi]
+        drawn = np.zeros(hi - lo, bool)
+        texts = paths_data(
+            lines.points[rows[at:end]],
+            sub_offsets[lo : hi + 1] - at,
+            bounds[g : h + 1] - lo,
+            factor,
+            0,
+            drawn,
+            True,
+        )
+        edges = edge_texts(lines, index[lo:hi][drawn], np.r_[0, np.cumsum(drawn)][bounds[g : h + 1] - lo])
+        return texts, edges
+
+    found = parallel.each(lambda k: block(splits[k], splits[k + 1]), list(range(len(splits) - 1)))
+    return [t for texts, _ in found for t in texts], [e for _, edges in found for e in edges]
 
 
 def _by_lowest_edge(lines: Lines, groups: list[np.ndarray]) -> np.ndarray:
