@@ -52,6 +52,23 @@ def test_runs_of_different_lines_do_not_merge():
     np.testing.assert_array_equal(_smooth(levels, line, pixel, 2.5), levels)
 
 
+@pytest.mark.parametrize("count", [1, 7, 5000])
+def test_ends_too_wide_for_one_key_are_numbered_as_unique_numbers_them(count):
+    """The pieces' ends whose key and cells span more than one integer holds are numbered a
+    column at a time: as ``np.unique`` of the rows numbers them (negative cells, repeats, keys
+    of 60 bits)."""
+    from blueprint.vector.chain import _row_numbers
+
+    rng = np.random.default_rng(count)
+    rows = np.c_[
+        rng.integers(0, 4, count) << 58,
+        rng.integers(-(2**40), 2**40, count) >> 32,
+        rng.integers(-3, 3, count),
+    ]
+    want = np.unique(rows, axis=0, return_inverse=True)[1].reshape(-1)
+    np.testing.assert_array_equal(_row_numbers(rows), want)
+
+
 def test_join_runs_straight_on_through_a_junction():
     # a straight line through (1, 0, 0), where a branch leaves at right angles
     segments = Segments(
