@@ -22,6 +22,7 @@ __all__ = [
     "bucketed",
     "dense_ranks",
     "grouped",
+    "row_numbers",
     "sorted_with_order",
     "stable_argsort",
     "unique_first",
@@ -301,6 +302,17 @@ def renumbered(key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return distinct, inverse
     low, _, present, inverse = numbered
     return (np.flatnonzero(present) + low).astype(key.dtype), inverse
+
+
+def row_numbers(rows: np.ndarray) -> np.ndarray:
+    """(N,) int64: each of the integer ``rows`` (N, K) numbered among the distinct rows in
+    their order, first column first (``np.unique(rows, axis=0, return_inverse=True)``'s
+    inverse): the last columns' numbers and the one before packed into one key, a column at a
+    time, each key below N squared."""
+    number = renumbered(rows[:, -1])[1]
+    for k in range(rows.shape[1] - 2, -1, -1):
+        number = renumbered(renumbered(rows[:, k])[1] * (int(number.max()) + 1) + number)[1]
+    return number
 
 
 def _sorted_unique(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

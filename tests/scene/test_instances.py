@@ -219,6 +219,20 @@ def test_copies_in_one_place_are_refused_in_one_line():
         loader.model_from_object(scene, name="stack")
 
 
+def test_copies_placed_by_transforms_equal_as_numbers_are_one_place():
+    """Transforms equal as numbers place copies in one place, though -0.0 and 0.0 differ in
+    their bits: 150 of each are 300 copies, refused; 150 a transform apart are not."""
+    signed = np.eye(4)
+    signed[:3, 3] = -0.0
+    scene = trimesh_scene([("l", np.eye(4))] * 150 + [("l", signed)] * 150)
+    with pytest.raises(InputError, match="300 faces lie on one another"):
+        loader.model_from_object(scene, name="stack")
+    moved = np.eye(4)
+    moved[0, 3] = 1e-9
+    apart = trimesh_scene([("l", np.eye(4))] * 150 + [("l", moved)] * 150)
+    assert loader.model_from_object(apart, name="two").triangle_count > 0
+
+
 def test_nan_vertices_counted_per_instance():
     mesh = trimesh.Trimesh(
         [[0, 0, 0], [1, 0, 0], [0, 1, 0], [np.nan, 0, 0]], [[0, 1, 2], [0, 1, 3]], process=False

@@ -57,7 +57,7 @@ def test_ends_too_wide_for_one_key_are_numbered_as_unique_numbers_them(count):
     """The pieces' ends whose key and cells span more than one integer holds are numbered a
     column at a time: as ``np.unique`` of the rows numbers them (negative cells, repeats, keys
     of 60 bits)."""
-    from blueprint.vector.chain import _row_numbers
+    from blueprint.sorting import row_numbers
 
     rng = np.random.default_rng(count)
     rows = np.c_[
@@ -66,7 +66,7 @@ def test_ends_too_wide_for_one_key_are_numbered_as_unique_numbers_them(count):
         rng.integers(-3, 3, count),
     ]
     want = np.unique(rows, axis=0, return_inverse=True)[1].reshape(-1)
-    np.testing.assert_array_equal(_row_numbers(rows), want)
+    np.testing.assert_array_equal(row_numbers(rows), want)
 
 
 def test_join_runs_straight_on_through_a_junction():

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from blueprint.columns import face_cross, ranges, row_norm
-from blueprint.sorting import stable_argsort
+from blueprint.sorting import row_numbers, stable_argsort, unique_first
 
 __all__ = ["Instances", "flatten", "instance_boxes", "worth_instancing"]
 
@@ -253,7 +253,9 @@ def most_coincident(inst: Instances) -> int:
     and area, as the loader finds them) times the instances of that mesh placed by one
     transform."""
     key = np.concatenate([inst.mesh[:, None].astype(np.float64), inst.transform.reshape(-1, 16)], axis=1)
-    _, which, placed_alike = np.unique(key, axis=0, return_index=True, return_counts=True)
+    # the (finite) rows alike as floats alike as bits, -0.0 made 0.0: grouped by the pool's sorts
+    _, which, group = unique_first(row_numbers((key + 0.0).view(np.int64)))
+    placed_alike = np.bincount(group)
     within = np.ones(inst.mesh_count, np.int64)
     for m in np.unique(inst.mesh):
         vertices, mesh_faces = inst.mesh_arrays(int(m))

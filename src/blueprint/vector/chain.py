@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from blueprint.sorting import renumbered, stable_argsort
+from blueprint.sorting import renumbered, row_numbers, stable_argsort
 
 __all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
 
@@ -179,17 +179,6 @@ def _walks(starts: np.ndarray, onward: np.ndarray, closed: bool) -> tuple[np.nda
     return out, lengths
 
 
-def _row_numbers(rows: np.ndarray) -> np.ndarray:
-    """(N,) int64: each of the integer ``rows`` (N, K) numbered among the distinct rows in
-    their order, first column first (``np.unique(rows, axis=0, return_inverse=True)``'s
-    inverse): the last columns' numbers and the one before packed into one key, a column at a
-    time, each key below N squared."""
-    number = renumbered(rows[:, -1])[1]
-    for k in range(rows.shape[1] - 2, -1, -1):
-        number = renumbered(renumbered(rows[:, k])[1] * (int(number.max()) + 1) + number)[1]
-    return number
-
-
 def chain_pieces(
     points: np.ndarray, offsets: np.ndarray, key: np.ndarray, quantum: float = 1e-3
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -232,7 +221,7 @@ def chain_pieces(
         packed = ((rows[:, 0] - low[0]) * span[1] + (rows[:, 1] - low[1])) * span[2] + (rows[:, 2] - low[2])
         node = renumbered(packed)[1]
     else:
-        node = _row_numbers(rows)
+        node = row_numbers(rows)
     inward = np.stack([points[first_point + 1], points[last_point - 1]], axis=1).reshape(-1, 2)
     leaving = inward - ends
     leaving /= np.maximum(np.linalg.norm(leaving, axis=1), 1e-300)[:, None]
