@@ -269,7 +269,8 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
     factor, base = factor * unit, base * unit
     scaled = f' transform="scale({_shorten(repr(1 / unit))})"' if decimals else ""
     out = [f'<g id="{gid}"{scaled} fill="none" stroke-linecap="round" stroke-linejoin="round">\n']
-    groups = [g for g in groups if style.shows(g[1])]
+    shown = {kind: style.shows(kind) for kind in range(len(KINDS))}
+    groups = [g for g in groups if shown[g[1]]]
     if not groups:
         return out[0] + "</g>\n"
     # within a path its lines by their lowest edge: the edges' differences stay small
@@ -291,7 +292,7 @@ def _line_group(drawing, gid: str, groups, taken: set[str], factor: float, decim
             part_id = safe_id(name, taken)
             out.append(
                 f'<g id="{part_id}" inkscape:groupmode="layer" inkscape:label="{_escape(name)}" '
-                f'data-part="{_escape(str(part))}">\n'
+                f'data-part="{part}">\n'
             )
         elif current[1] != level:
             out.append("</g>\n")
