@@ -338,7 +338,7 @@ def _group_texts(lines: Lines, index: np.ndarray, bounds: np.ndarray, factor: fl
             factor,
             0,
             drawn,
-            True,
+            relative=True,
         )
         edges = edge_texts(lines, index[lo:hi][drawn], np.r_[0, np.cumsum(drawn)][bounds[g : h + 1] - lo])
         return texts, edges

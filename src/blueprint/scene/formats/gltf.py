@@ -374,23 +374,20 @@ def _node_names(nodes: list) -> list[str]:
     """Each node's frame name as trimesh gives it: its name or its index, made unique."""
     if not all_of(nodes, dict):
         raise _Leave
-    given = [node.get("name", str(index)) for index, node in enumerate(nodes)]
-    if not all_of(given, str):
+    names = [node.get("name", str(index)) for index, node in enumerate(nodes)]
+    if not all_of(names, str):
         raise _Leave
-    if "" not in given and len(set(given)) == len(given):
-        # every name its own already: each is kept
-        names = given
-        taken = dict(zip(names, range(len(names)), strict=True))
-    else:
-        taken = {}
+    if "" in names or len(set(names)) < len(names):
+        # a name given twice, or empty: trimesh's numbers, node by node
+        taken: dict[str, int] = {}
         counts: dict = {}
-        for index, name in enumerate(given):
+        for index, name in enumerate(names):
             taken[_unique_name(name, taken, counts)] = index
         names = [""] * len(nodes)
         for name, index in taken.items():
             names[index] = name
-    if _BASE_FRAME in taken:
-        names[taken[_BASE_FRAME]] = _unique_name(_BASE_FRAME, set(names))
+    if _BASE_FRAME in names:
+        names[names.index(_BASE_FRAME)] = _unique_name(_BASE_FRAME, set(names))
     return names
 
 
