@@ -403,3 +403,25 @@ def test_the_direction_across_each_line_found_once_equals_that_of_its_neighbours
         if length > 0:
             np.testing.assert_allclose(across[i], [-tangent[1] / length, tangent[0] / length], rtol=1e-15)
     assert 0 < good.sum() < n
+
+
+def test_probed_pixels_marked_in_blocks_on_several_threads_are_one_threads(monkeypatch):
+    """The pixels the occlusion probes, marked a block of samples a thread: over blocks of a
+    few samples on three threads, those of one."""
+    from blueprint import parallel, settings
+    from blueprint.examples import gearbox
+    from blueprint.vector.lines import join_polylines, model_segments
+    from blueprint.vector.occlusion.pixels import probe_pixels
+    from blueprint.vector.occlusion.samples import sample_polylines
+
+    model = gearbox()
+    camera = Camera.fit(model.positions, "iso", aspect=1.0)
+    view, projection = camera.view_matrix(), camera.projection_matrix()
+    lines = join_polylines(model_segments(model, view, projection, (256, 256)))
+    samples = sample_polylines(lines, view, projection, (256, 256))
+    monkeypatch.setattr(settings, "THREADS", 1)
+    want = probe_pixels(samples, (256, 256))
+    monkeypatch.setattr(settings, "THREADS", 3)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 64)
+    np.testing.assert_array_equal(probe_pixels(samples, (256, 256)), want)
+    assert len(samples.pixel) > 1000 and len(want) > 1000

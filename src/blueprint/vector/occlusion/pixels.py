@@ -8,6 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from blueprint import parallel
+
 from ..lines import BORDER, CREASE, SILHOUETTE
 from .samples import Samples
 
@@ -67,22 +69,30 @@ def flat_index(spot: np.ndarray, height: int, width: int) -> np.ndarray:
 
 def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -> np.ndarray:
     """Sorted flat indices of every pixel that ``levels.classify_samples`` and
-    ``levels.verify_creases`` look at for these samples: what a peel must keep of its layers."""
+    ``levels.verify_creases`` look at for these samples: what a peel must keep of its layers.
+    Marked a block of samples a thread (only True is written, by any of them)."""
     width, height = size
     probed = np.zeros(height * width, bool)
     inside = np.flatnonzero(samples.inside)
-    px = around(samples.pixel[inside])
-    # the 2 x 2 pixels' columns and rows clamped once each, as ``flat_index`` clamps them
-    columns = [np.clip(px[:, 0] + dx, 0, width - 1) for dx in (0, 1)]
-    rows = [np.clip(px[:, 1] + dy, 0, height - 1) * width for dy in (0, 1)]
-    for dx, dy in NEIGHBOURS.tolist():
-        probed[rows[dy] + columns[dx]] = True
+
+    def corners(lo: int, hi: int) -> None:
+        px = around(samples.pixel[inside[lo:hi]])
+        # the 2 x 2 pixels' columns and rows clamped once each, as ``flat_index`` clamps them
+        columns = [np.clip(px[:, 0] + dx, 0, width - 1) for dx in (0, 1)]
+        rows = [np.clip(px[:, 1] + dy, 0, height - 1) * width for dy in (0, 1)]
+        for dx, dy in NEIGHBOURS.tolist():
+            probed[rows[dy] + columns[dx]] = True
+
+    parallel.run(corners, len(inside))
     edges = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
     edges, across = across_line(samples, edges)
-    pixel, step = samples.pixel[edges], offset * across
-    for side in (np.add, np.subtract):
-        spot = np.floor(side(pixel, step, out=across), out=across).astype(np.int64)
-        probed[flat_index(spot, height, width)] = True
+
+    def sides(lo: int, hi: int) -> None:
+        pixel, step = samples.pixel[edges[lo:hi]], offset * across[lo:hi]
+        for side in (np.add, np.subtract):
+            probed[flat_index(np.floor(side(pixel, step)).astype(np.int64), height, width)] = True
+
+    parallel.run(sides, len(edges))
     return np.flatnonzero(probed)
 
 
