@@ -309,6 +309,8 @@ def row_numbers(rows: np.ndarray) -> np.ndarray:
     their order, first column first (``np.unique(rows, axis=0, return_inverse=True)``'s
     inverse): the last columns' numbers and the one before packed into one key, a column at a
     time, each key below N squared."""
+    if len(rows) == 0:
+        return np.zeros(0, np.int64)
     number = renumbered(rows[:, -1])[1]
     for k in range(rows.shape[1] - 2, -1, -1):
         number = renumbered(renumbered(rows[:, k])[1] * (int(number.max()) + 1) + number)[1]

@@ -52,7 +52,7 @@ def test_runs_of_different_lines_do_not_merge():
     np.testing.assert_array_equal(_smooth(levels, line, pixel, 2.5), levels)
 
 
-@pytest.mark.parametrize("count", [1, 7, 5000])
+@pytest.mark.parametrize("count", [0, 1, 7, 5000])
 def test_ends_too_wide_for_one_key_are_numbered_as_unique_numbers_them(count):
     """The pieces' ends whose key and cells span more than one integer holds are numbered a
     column at a time: as ``np.unique`` of the rows numbers them (negative cells, repeats, keys
