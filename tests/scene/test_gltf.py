@@ -333,6 +333,32 @@ def test_a_mesh_of_several_primitives_names_its_parts_after_the_mesh(tmp_path):
     assert ours(path)[3] == ["body", "body_1", "body[2]", "body_1[2]"]
 
 
+def test_the_collector_is_paused_while_a_document_is_read_and_left_as_it_was(tmp_path, monkeypatch):
+    """A GLB is parsed and read with Python's cyclic collector off, and left on or off as the
+    caller had it, also where the file is refused."""
+    import gc
+
+    from blueprint.scene.formats import gltf
+
+    seen = []
+    real = gltf.read_glb
+    monkeypatch.setattr(gltf, "read_glb", lambda *a: seen.append(gc.isenabled()) or real(*a))
+    path = assembly().write(tmp_path / "assembly.glb")
+    bad = tmp_path / "bad.glb"
+    bad.write_bytes(_lie(_simple().bytes(), "a mesh that does not exist"))
+    was = gc.isenabled()
+    try:
+        for enabled in (True, False):
+            gc.enable() if enabled else gc.disable()
+            assert gltf.read_data(path, path.read_bytes()) is not None
+            with pytest.raises(InputError):
+                gltf.read_data(bad, bad.read_bytes())
+            assert gc.isenabled() == enabled
+    finally:
+        gc.enable() if was else gc.disable()
+    assert seen == [False, False]
+
+
 def test_many_meshes_read_in_blocks_as_trimesh_reads_them(tmp_path, monkeypatch):
     """The accessors are read a block of them at a time, by one gather each: blocks of a few
     rows over 60 meshes of one to three primitives (byte, short and int indices, none, spread
