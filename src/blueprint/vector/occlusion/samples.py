@@ -180,9 +180,8 @@ def _sampled(
         model += t[:, None] * np.repeat(step, each, axis=0)
         ends = np.flatnonzero(is_last[first:last])
         model[total[first + ends] - 1 - begin] = points[first + ends]
-        at = np.arange(first, last)
-        line = np.searchsorted(lines.offsets, at, side="right") - 1
-        source = at
+        source = np.arange(first, last)
+        line = np.searchsorted(lines.offsets, source, side="right") - 1
         source[ends] -= 1
         out.faces[rows] = np.repeat(lines.faces[source], each, axis=0)
         out.kind[rows] = np.repeat(lines.kind[source], each)
