@@ -332,16 +332,17 @@ def _single_below(value: float) -> np.float32:
 def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float32) -> np.ndarray:
     """The drop flag of every live sample from coincident.comp, ``_cpu_drop``'s on the GPU
     (``dist2`` the distance squared): the search's arrays laid out as the shader's inputs, two
-    storage buffers, then its tables (``_TABLES``)."""
+    storage buffers, then its tables (``_TABLES``), each input made and uploaded in turn, so
+    that no two of the host's copies are held at once."""
     s, live, source = search, search.live, search.source
-    singles = [
-        s.looks,
-        _columns(np.int32, s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count),
-        _table_rows(s.stretch, source),
-        _table_rows(s.units, source),
-        table_of(_columns(np.int32, s.src_key % (s.bins * s.ranks), s.line[source]), np.int32),
-        table_of(_columns(np.int32, s.cell_start, s.cell_count), np.int32),
-    ]
+    inputs = (
+        lambda: s.looks,
+        lambda: _columns(np.int32, s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count),
+        lambda: _table_rows(s.stretch, source),
+        lambda: _table_rows(s.units, source),
+        lambda: table_of(_columns(np.int32, s.src_key % (s.bins * s.ranks), s.line[source]), np.int32),
+        lambda: table_of(_columns(np.int32, s.cell_start, s.cell_count), np.int32),
+    )
     count = len(live)
     renderer.make_current()
     ctx = renderer.ctx
@@ -354,10 +355,13 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     put(prog, "u_budget", BUDGET)
     put(prog, "u_distance2", float(dist2))
     put(prog, "u_sin_limit", float(sin_limit))
-    buffers = [ctx.buffer(data) for data in singles[:2]]
-    buffers.append(ctx.buffer(reserve=4 * count))
-    tables = [table_texture(ctx, data) for data in singles[2:]]
+    buffers, tables = [], []
     try:
+        for made in inputs[:2]:
+            buffers.append(ctx.buffer(made()))
+        buffers.append(ctx.buffer(reserve=4 * count))
+        for made in inputs[2:]:
+            tables.append(table_texture(ctx, made()))
         for binding, buffer in zip((0, 1, 2), buffers, strict=True):
             buffer.bind_to_storage_buffer(binding)
         for unit, (name, texture) in enumerate(zip(_TABLES, tables, strict=True)):

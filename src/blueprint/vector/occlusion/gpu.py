@@ -268,6 +268,7 @@ def stack_levels(
     np.putmask(table, table < 0, len(planes) - 1)
     face_table = table_texture(ctx, table)
     where_texture = ctx.texture((width, height), 2, where, dtype="i4")
+    del faces, table, where, pixels, y, x, texel  # uploaded: the pass reads the textures
     where_texture.filter = (ctx.NEAREST, ctx.NEAREST)
 
     def bind(prog) -> None:
@@ -305,30 +306,6 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     made = isinstance(planes, FaceTables)
     banded = made or test.band is not None
     contour = contour_rows(samples, inside) if banded else np.zeros(len(inside), bool)
-    # occlusion.comp's Sample: eye (float), flags, the 2 x 2 pixels' first, the pixels to either
-    # side of the line, own faces (int), written in place as its int32 words, a block of rows
-    # a thread
-    packed = np.empty((len(inside), 12), np.int32)
-
-    def pack(lo: int, hi: int) -> None:
-        # every sample inside the view (a drawing at scale): its columns read whole, not gathered
-        rows = slice(lo, hi) if whole else inside[lo:hi]
-        out = packed[lo:hi]
-        out.view(np.float32)[:, :3] = samples.eye[rows]
-        flags = np.logical_not(_CONTOUR_KINDS[samples.kind[rows]]).view(np.uint8)
-        flags |= checked[rows].view(np.uint8) << 1
-        flags |= contour[lo:hi].view(np.uint8) << 2
-        out[:, 3] = flags
-        # pixels floored here in double precision, as the CPU reference has them, in one
-        # scratch array; those to the sides of samples not checked are not read
-        pixel, step = samples.pixel[rows], offset * across[rows]
-        floored = np.subtract(pixel, 0.5)
-        out[:, 4:6] = np.floor(floored, out=floored)
-        out[:, 6:8] = np.floor(np.add(pixel, step, out=floored), out=floored)
-        out[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
-        out[:, 10:] = samples.faces[rows]
-
-    parallel.run(pack, len(inside))
 
     ctx = renderer.ctx
     remap = planes.remap if made else None
@@ -355,7 +332,9 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     if remap is not None:
         remap.use(location=MAX_LAYERS + 2)
         put(prog, "u_remap", MAX_LAYERS + 2)
-    buffers = {0: ctx.buffer(packed), 2: ctx.buffer(reserve=16 * len(inside))}
+    # the samples packed straight into the GPU's copy: the host's is not held beside the pass
+    buffers = {0: ctx.buffer(_packed(samples, inside, whole, checked, contour, across, offset))}
+    buffers[2] = ctx.buffer(reserve=16 * len(inside))
     try:
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
@@ -372,3 +351,31 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     level[slice(None) if whole else inside] = result[:, 0]
     sides[slice(None) if whole else inside] = result[:, 1:3]
     return level, sides, checked
+
+
+def _packed(samples, inside: np.ndarray, whole: bool, checked, contour, across, offset: float) -> np.ndarray:
+    """occlusion.comp's Sample rows of the samples ``inside`` (every sample where ``whole``):
+    eye (float), flags, the 2 x 2 pixels' first, the pixels to either side of the line, own
+    faces (int), written in place as its int32 words, a block of rows a thread."""
+    packed = np.empty((len(inside), 12), np.int32)
+
+    def pack(lo: int, hi: int) -> None:
+        # every sample inside the view (a drawing at scale): its columns read whole, not gathered
+        rows = slice(lo, hi) if whole else inside[lo:hi]
+        out = packed[lo:hi]
+        out.view(np.float32)[:, :3] = samples.eye[rows]
+        flags = np.logical_not(_CONTOUR_KINDS[samples.kind[rows]]).view(np.uint8)
+        flags |= checked[rows].view(np.uint8) << 1
+        flags |= contour[lo:hi].view(np.uint8) << 2
+        out[:, 3] = flags
+        # pixels floored here in double precision, as the CPU reference has them, in one
+        # scratch array; those to the sides of samples not checked are not read
+        pixel, step = samples.pixel[rows], offset * across[rows]
+        floored = np.subtract(pixel, 0.5)
+        out[:, 4:6] = np.floor(floored, out=floored)
+        out[:, 6:8] = np.floor(np.add(pixel, step, out=floored), out=floored)
+        out[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
+        out[:, 10:] = samples.faces[rows]
+
+    parallel.run(pack, len(inside))
+    return packed
