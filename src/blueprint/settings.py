@@ -32,6 +32,7 @@ __all__ = [
     "MODEL_FILE_LIMIT",
     "PART_BYTES",
     "PICTURE_TRIANGLE_BYTES",
+    "SAMPLE_BYTES",
     "SETTINGS_FILE_LIMIT",
     "THREADS",
     "THREADS_ENV",
@@ -154,6 +155,12 @@ IMAGE_PIXEL_LIMIT = min(1 << 26, MEMORY_BUDGET // 16)
 # foretell (scene.headers.peak_estimate) and the triangles a model may have, all instances
 # together (refused before they are made).
 TRIANGLE_BYTES = 896
+# ...and a vector drawing's line sample (about a pixel of line apart), beside its triangles: the
+# samples grow with the drawing's size, not its triangles (a field of boxes at 8192 x 8192 took
+# seven times its triangles' share); the peak's growth a sample from the samples' making on, the
+# larger, of benchmarks/scale.py's engines and a field of boxes, with a third more
+# (benchmarks/notes/memory-guard.md). Weighed once the lines are joined, before any sample is made.
+SAMPLE_BYTES = 672
 # ...and where the model is drawn only as pictures (scene.headers.pictures_only: no lines'
 # adjacency), the growth a triangle of the PNG of a soup, the larger, with the same margin.
 PICTURE_TRIANGLE_BYTES = 512

@@ -15,10 +15,11 @@ from helpers import BLUEPRINT, hostile_corpus, needs_cli, one_error
 from blueprint import settings
 from blueprint.api.frames import render_frame
 from blueprint.errors import InputError
-from blueprint.examples import assemble, box, prism
+from blueprint.examples import assemble, box, example_path, prism
 from blueprint.render import budget
 from blueprint.scene.headers import peak_estimate, pictures_only
 from blueprint.scene.loader import load_model
+from blueprint.vector import drawing
 
 FACES = 400_000
 
@@ -295,6 +296,72 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
         "than the memory budget of 512 MiB",
     )
     assert not (tmp_path / "kept.svg").exists()
+
+
+def test_a_vector_drawing_is_weighed_by_its_line_samples(monkeypatch, renderer):
+    """The samples of a drawing's lines follow their length in pixels, not the triangles: once
+    the lines are joined, their count is weighed beside the triangles and the drawing refused
+    in one line, before any sample is made, where the two pass the budget; at the budget it is
+    drawn. The count the error names is the count the drawing makes."""
+    model = load_model(example_path())
+    made = []
+
+    def counted(*args, **kwargs):
+        samples = sample_polylines(*args, **kwargs)
+        made.append(len(samples.eye))
+        return samples
+
+    sample_polylines = drawing.sample_polylines
+    monkeypatch.setattr(drawing, "sample_polylines", counted)
+    options = {"size": (256, 256), "renderer": renderer, "spacing": 0.1, "max_layers": 2}
+    drawing.draw_vector(model, **options)
+    samples = made[-1]
+    estimate = model.triangle_count * settings.TRIANGLE_BYTES + samples * settings.SAMPLE_BYTES
+    # the samples, not the triangles, are what the budget does not hold
+    assert model.triangle_count * settings.TRIANGLE_BYTES < estimate // 8
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate)
+    drawing.draw_vector(model, **options)
+    assert made[-1] == samples
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", estimate - 1)
+    with pytest.raises(InputError) as refused:
+        drawing.draw_vector(model, **options)
+    assert len(made) == 2  # refused before the samples were made
+    assert str(refused.value) == (
+        f"{model.source} as a vector drawing of 256 x 256 pixels: {model.triangle_count} triangles and "
+        f"{samples} line samples need about {settings.human_size(estimate)} of memory at "
+        f"{settings.TRIANGLE_BYTES} bytes a triangle and {settings.SAMPLE_BYTES} a sample, more than the "
+        f"memory budget of {settings.human_size(estimate - 1)} (a smaller size takes fewer samples; "
+        "BLUEPRINT_MEMORY_LIMIT sets the budget)"
+    )
+
+
+@needs_cli
+def test_an_svg_whose_samples_pass_the_budget_is_refused_in_one_line(tmp_path):
+    """A field of 20 000 boxes, whose triangles the budget holds, has more line samples than it
+    holds: ``render`` to an SVG exits 2 with the one line and writes nothing."""
+    hostile = hostile_corpus()
+    corners, faces = hostile.box_arrays()
+    copies = 20_000
+    moves = _box_moves()[:copies]
+    model = tmp_path / "boxes.glb"
+    nodes = [{"mesh": 0, "translation": move} for move in moves.tolist()]
+    model.write_bytes(hostile.glb(nodes, list(range(copies)), corners, faces=faces))
+    budget_bytes = 256 << 20
+    assert 12 * copies * settings.TRIANGLE_BYTES < budget_bytes
+    out = tmp_path / "boxes.svg"
+    proc = subprocess.run(
+        [str(BLUEPRINT), "render", str(model), "-o", str(out), "--size", "256", "256", "--max-layers", "1"],
+        capture_output=True,
+        text=True,
+        env={**os.environ, "BLUEPRINT_MEMORY_LIMIT": str(budget_bytes)},
+        timeout=120,
+    )
+    one_error(
+        proc,
+        f"{model} as a vector drawing of 256 x 256 pixels: {12 * copies} triangles and ",
+        "a sample, more than the memory budget of 256 MiB (a smaller size takes fewer samples",
+    )
+    assert list(tmp_path.iterdir()) == [model]
 
 
 @needs_cli

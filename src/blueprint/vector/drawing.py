@@ -14,12 +14,13 @@ import time
 from collections.abc import Iterable
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from blueprint import parallel
+from blueprint import parallel, settings
 from blueprint.blas import one_blas_thread
 from blueprint.compose.hatch import hatch_spacing_px
 from blueprint.compose.style import STYLES, Style
@@ -462,7 +463,8 @@ def draw_lines(
         planes_found = parallel.begin(face_planes, model, frame.view)
         lines = join_polylines(segments)
         del segments  # a big assembly's placed segments: hundreds of megabytes
-        samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing)
+        weigh = partial(_check_samples, model, size)
+        samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing, weigh)
         # the occlusion reads the samples alone, and the pieces each polyline's part
         line_part = lines.part
         del lines
@@ -540,6 +542,24 @@ def _check_placed_lines(model: Model) -> None:
     triangles, as a flat model's does, where a picture's follows its unique ones."""
     if model.instances is not None and not model.is_flat:
         check_triangle_count(f"{model.source or 'the model'} as a vector drawing", model.triangle_count)
+
+
+def _check_samples(model: Model, size: tuple[int, int], samples: int) -> None:
+    """Refuse in one line a drawing whose line ``samples``, at ``settings.SAMPLE_BYTES`` each
+    beside its drawn triangles at ``settings.TRIANGLE_BYTES``, pass the memory budget: the
+    samples follow the lines' length in pixels, so a model the budget holds at one size may
+    not fit at a larger one. Called before any sample is made."""
+    triangles = model.triangle_count
+    estimate = triangles * settings.TRIANGLE_BYTES + samples * settings.SAMPLE_BYTES
+    if estimate <= settings.MEMORY_BUDGET:
+        return
+    raise InputError(
+        f"{model.source or 'the model'} as a vector drawing of {size[0]} x {size[1]} pixels: "
+        f"{triangles} triangles and {samples} line samples need about {settings.human_size(estimate)} "
+        f"of memory at {settings.TRIANGLE_BYTES} bytes a triangle and {settings.SAMPLE_BYTES} a sample, "
+        f"more than the memory budget of {settings.human_size(settings.MEMORY_BUDGET)} (a smaller "
+        f"size takes fewer samples; {settings.MEMORY_ENV} sets the budget)"
+    )
 
 
 def _frame(model, camera, size, renderer, options: VectorOptions, layers, chosen) -> ViewFrame:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -95,11 +96,14 @@ def sample_polylines(
     projection: np.ndarray,
     size: tuple[int, int],
     spacing: float = 1.0,
+    weigh: Callable[[int], None] | None = None,
 ) -> Samples:
     """Samples about ``spacing`` pixels apart along every segment, its vertices included.
 
     Points are interpolated in model space, so on screen they fall on the projected segment
-    (a straight line in perspective as well), a little unevenly spaced.
+    (a straight line in perspective as well), a little unevenly spaced. ``weigh`` is called
+    with the count of samples before any is made (to refuse a drawing their memory would not
+    fit, by raising).
     """
     points, offsets = lines.points, lines.offsets
     if len(points) == 0:
@@ -133,6 +137,8 @@ def sample_polylines(
     per_point[starts] = count
     total = np.cumsum(per_point)
     n = int(total[-1])
+    if weigh is not None:
+        weigh(n)
     out = Samples(
         np.empty((n, 3)),
         np.empty((n, 2)),
