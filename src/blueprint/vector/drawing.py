@@ -472,6 +472,7 @@ def draw_lines(
 
         clock = time.perf_counter()
         planes = planes_found()
+        del planes_found  # (which holds its result)
     occlusion = Occlusion(renderer, model, frame, samples, planes, options.crease_angle, layers, drawn)
     levels, count = occlusion.levels(clock, seconds)
     behind = None
@@ -480,9 +481,14 @@ def draw_lines(
         only_shaded = planes.copy()
         only_shaded[:-1][~shaded_parts[face_parts(model)]] = 0.0
         behind = occlusion.in_front(only_shaded) > 0
+    ahead = occlusion.ahead
+    # the faces' planes (a drawn triangle's 32 bytes), the layers read back and the directions
+    # across the lines serve the tests of occlusion alone: freed before the pieces are cut
+    del occlusion, planes
+    samples.forget_across()
     pieces = split_by_level(samples, levels, line_part, max(count - 1, 0), behind=behind, renderer=renderer)
     pieces = _chained(pieces, count)
-    seconds["occlusion"] = time.perf_counter() - clock - (seconds["peel"] - occlusion.ahead)
+    seconds["occlusion"] = time.perf_counter() - clock - (seconds["peel"] - ahead)
 
     clock = time.perf_counter()
     pieces = _simplified(pieces, options.tolerance)

@@ -417,7 +417,11 @@ def _outline_edges(ml: _MeshLines, edge_on: np.ndarray, lines: tuple, transforms
 
 
 def _joined(items: list, shape: tuple, dtype) -> np.ndarray:
-    return np.concatenate(items) if items else np.zeros((0, *shape), dtype)
+    """The blocks' pieces ``items`` in one array (rows of ``shape`` and ``dtype`` where there are
+    none), the list emptied: the pieces are not held beside the whole."""
+    joined = np.concatenate(items) if items else np.zeros((0, *shape), dtype)
+    items.clear()
+    return joined
 
 
 def _gathered(columns: dict[str, tuple[list, tuple, type]], rows: np.ndarray) -> dict[str, np.ndarray]:

@@ -1294,13 +1294,12 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     # as its start leaves backwards
     ahead = np.empty((len(keep), 3))
     parallel.run(partial(_unit_steps, segments.points, keep, ahead), len(keep))
-
-    def leaving(h: np.ndarray) -> np.ndarray:
-        direction = ahead[h >> 1]
-        return np.where((h & 1)[:, None] == 1, -direction, direction)
-
-    partner = pair_ends(node, leaving, np.cos(np.radians(turn)), by_node)
+    partner = pair_ends(node, partial(_leaving, ahead), np.cos(np.radians(turn)), by_node)
+    # the points' and nodes' numbers go before the walk and the output (a big assembly's
+    # millions of segments: their arrays are most of the joining's peak)
+    del pid, lo, hi, proper, chosen, first, seg_part, ordered, by_node, node, ahead
     seg, rev, lengths = chain_order(partner)
+    del partner
     # the segments' rows in the input, gathered once for the output
     source = keep[seg]
     # points of chain c: the first segment's start, then every segment's end
@@ -1326,6 +1325,13 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
         out_kind,
         out_edge,
     )
+
+
+def _leaving(ahead: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """The unit directions in which the half-ends ``h`` leave their nodes: their segments'
+    ``ahead``, backwards for a segment's end."""
+    direction = ahead[h >> 1]
+    return np.where((h & 1)[:, None] == 1, -direction, direction)
 
 
 def _unit_steps(points: np.ndarray, keep: np.ndarray, out: np.ndarray, lo: int, hi: int) -> None:

@@ -54,6 +54,11 @@ class Samples:
         parallel.run(functools.partial(_across, self.line, self.pixel, good, across), len(self.line))
         return good, across
 
+    def forget_across(self) -> None:
+        """Free ``across`` (found again if asked for), once the tests that look to either side
+        of the lines are done."""
+        self.__dict__.pop("across", None)
+
 
 def _across(
     line: np.ndarray, pixel: np.ndarray, good: np.ndarray, across: np.ndarray, lo: int, hi: int
