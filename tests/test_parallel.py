@@ -30,6 +30,18 @@ def test_run_gives_each_block_to_a_thread_and_the_results_in_order(monkeypatch):
     assert all(name.startswith("blueprint") for name in names.values())
 
 
+def test_stepped_work_goes_over_its_rows_a_step_at_a_time(monkeypatch):
+    seen = []
+    parallel.stepped(lambda lo, hi: seen.append((lo, hi)), step=4)(3, 13)
+    assert seen == [(3, 7), (7, 11), (11, 13)]
+    seen.clear()
+    parallel.stepped(lambda lo, hi: seen.append((lo, hi)))(5, 5)
+    assert seen == []
+    monkeypatch.setattr(parallel, "STEP", 6)
+    parallel.stepped(lambda lo, hi: seen.append((lo, hi)))(0, 13)
+    assert seen == [(0, 6), (6, 12), (12, 13)]
+
+
 def test_each_runs_every_item_on_the_pool_and_gives_the_results_in_order(monkeypatch):
     """``parallel.each`` hands items of uneven work to the pool's threads and returns their
     results in the items' order; with one thread, or inside one of the pool's, it runs them in

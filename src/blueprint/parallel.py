@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MIN_BLOCK",
+    "STEP",
     "begin",
     "chosen_at",
     "cumsum",
@@ -35,6 +36,7 @@ __all__ = [
     "rises",
     "run",
     "sort",
+    "stepped",
     "take",
     "taken",
 ]
@@ -45,6 +47,8 @@ U = TypeVar("U")
 # Rows below which a block is not split off for a thread of its own: handing it over costs
 # more than the work.
 MIN_BLOCK = 1 << 16
+# Rows a ``stepped`` work takes at a time: its temporaries stay a few megabytes.
+STEP = 1 << 16
 
 # set by the command line (blueprint.cli.main): its process may serve every thread from one
 # arena; a program that calls the library keeps its allocator as it set it
@@ -97,6 +101,18 @@ def run(work: Callable[[int, int], T], n: int, min_block: int | None = None) -> 
     if len(blocks) == 1 or getattr(_worker, "busy", False):
         return [work(start, stop) for start, stop in blocks]
     return list(_executor().map(lambda block: work(*block), blocks))
+
+
+def stepped(work: Callable[[int, int], None], step: int | None = None) -> Callable[[int, int], None]:
+    """``work`` made to go over its rows ``step`` (``STEP``) at a time: a block's temporaries are
+    then those of a step, not of the block (a thread's share of millions of rows)."""
+
+    def steps(start: int, stop: int) -> None:
+        rows = STEP if step is None else step
+        for lo in range(start, stop, rows):
+            work(lo, min(lo + rows, stop))
+
+    return steps
 
 
 def begin(work: Callable[..., T], *args) -> Callable[[], T]:

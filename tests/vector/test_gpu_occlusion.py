@@ -368,8 +368,11 @@ def test_grazing_band_equal_on_the_cpu_and_the_gpu(renderer, source, through):
 
 def test_the_occlusion_split_over_threads_draws_what_one_thread_does(renderer, monkeypatch):
     """The samples packed for the pass, the coincident search's rows and the crease check's
-    phantoms worked a block of rows a thread: the same pieces, point for point, as in one."""
+    phantoms worked a block of rows a thread, a few rows at a time, and the pass's samples
+    uploaded and read in steps of a few rows: the same pieces, point for point, as in one
+    thread at once."""
     from blueprint import parallel, settings
+    from blueprint.vector.occlusion import gpu
 
     model = gearbox()
     camera = Camera.fit(model.positions, "iso", azimuth=20, aspect=1.0)
@@ -377,6 +380,8 @@ def test_the_occlusion_split_over_threads_draws_what_one_thread_does(renderer, m
     one = draw_vector(model, camera, SIZE, renderer=renderer).lines
     monkeypatch.setattr(settings, "THREADS", 3)
     monkeypatch.setattr(parallel, "MIN_BLOCK", 64)
+    monkeypatch.setattr(parallel, "STEP", 37)
+    monkeypatch.setattr(gpu, "_STEP_ROWS", 1000)
     split = draw_vector(model, camera, SIZE, renderer=renderer).lines
     assert len(one.offsets) > 100
     for name in ("points", "offsets", "level", "kind", "part", "edges"):

@@ -34,6 +34,10 @@ MAX_LAYERS = 8
 # Units the copy pass binds inside a peel, clear of the ones the peel's own passes use.
 _COPY_UNITS = (14, 15)
 _GROUP = 64
+# occlusion.comp's Sample in 32-bit words, and the samples packed and uploaded (or their results
+# read) at a time: 48 MiB of them
+_SAMPLE_WORDS = 12
+_STEP_ROWS = 1 << 20
 # Rows of pixels one invocation of deepest.comp looks at.
 _DEEPEST_ROWS = 64
 # Kinds of line by their ``lines`` code: mesh edges (whose sides the crease check looks at), and
@@ -332,15 +336,24 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
     if remap is not None:
         remap.use(location=MAX_LAYERS + 2)
         put(prog, "u_remap", MAX_LAYERS + 2)
-    # the samples packed straight into the GPU's copy: the host's is not held beside the pass
-    buffers = {0: ctx.buffer(_packed(samples, inside, whole, checked, contour, across, offset))}
-    buffers[2] = ctx.buffer(reserve=16 * len(inside))
+    # the samples packed and uploaded, and the results read, a step of rows at a time: the
+    # host holds no copy of all of either beside the GPU's
+    n = len(inside)
+    steps = [(lo, min(lo + _STEP_ROWS, n)) for lo in range(0, n, _STEP_ROWS)]
+    buffers = {0: ctx.buffer(reserve=4 * _SAMPLE_WORDS * n), 2: ctx.buffer(reserve=16 * n)}
     try:
+        for lo, hi in steps:
+            packed = _packed(samples, inside, whole, checked, contour, across, offset, lo, hi)
+            buffers[0].write(packed, offset=4 * _SAMPLE_WORDS * lo)
         for binding, buffer in buffers.items():
             buffer.bind_to_storage_buffer(binding)
-        run_over(prog, len(inside), _GROUP)
+        run_over(prog, n, _GROUP)
         ctx.memory_barrier()
-        result = np.frombuffer(buffers[2].read(), np.int32).reshape(-1, 4)
+        for lo, hi in steps:
+            result = np.frombuffer(buffers[2].read(16 * (hi - lo), offset=16 * lo), np.int32).reshape(-1, 4)
+            rows = slice(lo, hi) if whole else inside[lo:hi]
+            level[rows] = result[:, 0]
+            sides[rows] = result[:, 1:3]
     finally:
         for buffer in buffers.values():
             buffer.release()
@@ -348,25 +361,23 @@ def _classify(renderer, defines, bind, samples, planes, size, test, offset, laye
             plane_texture.release()
             if band_texture is not None:
                 band_texture.release()
-    level[slice(None) if whole else inside] = result[:, 0]
-    sides[slice(None) if whole else inside] = result[:, 1:3]
     return level, sides, checked
 
 
-def _packed(samples, inside: np.ndarray, whole: bool, checked, contour, across, offset: float) -> np.ndarray:
-    """occlusion.comp's Sample rows of the samples ``inside`` (every sample where ``whole``):
-    eye (float), flags, the 2 x 2 pixels' first, the pixels to either side of the line, own
-    faces (int), written in place as its int32 words, a block of rows a thread."""
-    packed = np.empty((len(inside), 12), np.int32)
+def _packed(samples, inside: np.ndarray, whole: bool, checked, contour, across, offset: float, lo, hi):
+    """occlusion.comp's Sample rows of the samples ``inside[lo:hi]`` (every sample where
+    ``whole``): eye (float), flags, the 2 x 2 pixels' first, the pixels to either side of the
+    line, own faces (int), written in place as its int32 words, a block of rows a thread."""
+    packed = np.empty((hi - lo, _SAMPLE_WORDS), np.int32)
 
-    def pack(lo: int, hi: int) -> None:
+    def pack(a: int, b: int) -> None:
         # every sample inside the view (a drawing at scale): its columns read whole, not gathered
-        rows = slice(lo, hi) if whole else inside[lo:hi]
-        out = packed[lo:hi]
+        rows = slice(lo + a, lo + b) if whole else inside[lo + a : lo + b]
+        out = packed[a:b]
         out.view(np.float32)[:, :3] = samples.eye[rows]
         flags = np.logical_not(_CONTOUR_KINDS[samples.kind[rows]]).view(np.uint8)
         flags |= checked[rows].view(np.uint8) << 1
-        flags |= contour[lo:hi].view(np.uint8) << 2
+        flags |= contour[lo + a : lo + b].view(np.uint8) << 2
         out[:, 3] = flags
         # pixels floored here in double precision, as the CPU reference has them, in one
         # scratch array; those to the sides of samples not checked are not read
@@ -377,5 +388,5 @@ def _packed(samples, inside: np.ndarray, whole: bool, checked, contour, across, 
         out[:, 8:10] = np.floor(np.subtract(pixel, step, out=floored), out=floored)
         out[:, 10:] = samples.faces[rows]
 
-    parallel.run(pack, len(inside))
+    parallel.run(pack, hi - lo)
     return packed

@@ -269,8 +269,8 @@ def drop_phantoms(
         found = _phantoms(samples, rows[b], tri_a[b], tri_b[b], planes, face_part, test, cos_limit)
         level[found] = -1
 
-    # a block of samples a thread, each writing its own samples' levels
-    parallel.run(drop, len(rows))
+    # a block of samples a thread, each writing its own samples' levels, a step at a time
+    parallel.run(parallel.stepped(drop), len(rows))
     return level
 
 

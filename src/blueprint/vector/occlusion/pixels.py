@@ -70,7 +70,8 @@ def flat_index(spot: np.ndarray, height: int, width: int) -> np.ndarray:
 def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -> np.ndarray:
     """Sorted flat indices of every pixel that ``levels.classify_samples`` and
     ``levels.verify_creases`` look at for these samples: what a peel must keep of its layers.
-    Marked a block of samples a thread (only True is written, by any of them)."""
+    Marked a block of samples a thread, a step of them at a time (only True is written, by any
+    of them)."""
     width, height = size
     probed = np.zeros(height * width, bool)
     inside = np.flatnonzero(samples.inside)
@@ -83,7 +84,7 @@ def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -
         for dx, dy in NEIGHBOURS.tolist():
             probed[rows[dy] + columns[dx]] = True
 
-    parallel.run(corners, len(inside))
+    parallel.run(parallel.stepped(corners), len(inside))
     edges = np.flatnonzero(np.isin(samples.kind, (SILHOUETTE, BORDER, CREASE)) & samples.inside)
     edges, across = across_line(samples, edges)
 
@@ -92,7 +93,7 @@ def probe_pixels(samples: Samples, size: tuple[int, int], offset: float = 1.0) -
         for side in (np.add, np.subtract):
             probed[flat_index(np.floor(side(pixel, step)).astype(np.int64), height, width)] = True
 
-    parallel.run(sides, len(edges))
+    parallel.run(parallel.stepped(sides), len(edges))
     return np.flatnonzero(probed)
 
 
