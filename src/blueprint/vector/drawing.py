@@ -482,8 +482,7 @@ def draw_lines(
         only_shaded[:-1][~shaded_parts[face_parts(model)]] = 0.0
         behind = occlusion.in_front(only_shaded) > 0
     ahead = occlusion.ahead
-    # the faces' planes (a drawn triangle's 32 bytes), the layers read back and the directions
-    # across the lines serve the tests of occlusion alone: freed before the pieces are cut
+    # the faces' planes, the layers read back and the directions across lines: occlusion's alone
     del occlusion, planes
     samples.forget_across()
     pieces = split_by_level(samples, levels, line_part, max(count - 1, 0), behind=behind, renderer=renderer)
