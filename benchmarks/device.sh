@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # One device run: set up OpenGL and wheels, check a render, then time blueprint, its code-path
 # variants, streamed drawings a second and capture in compute against the graphics pipeline, the
-# textbook baseline, the extra features, vector drawings and generated models of growing size
-# (benchmarks/scale.py). The wheels a bare H200 lacks come from
+# textbook baseline, the extra features, vector drawings, generated models of growing size
+# (benchmarks/scale.py) and what their vector drawings hold by phase
+# (benchmarks/vector_memory.py). The wheels a bare H200 lacks come from
 #   bash ../shared/tools/device-gl-prep fpdf2==2.8.9 ezdxf==1.4.5 pikepdf==10.18.0 lxml==6.2.0 \
 #     defusedxml==0.7.1 fonttools==4.68.0 pyparsing==3.3.3
 # (vector drawings write PDF layers with pikepdf). Models come in .models/ (copied from
@@ -35,4 +36,8 @@ python3 benchmarks/table1.py --models-dir .models --frames 20 --cpu-frames 1 > $
 python3 benchmarks/vector.py --models-dir .models --runs 3 > $OUT/vector.jsonl
 python3 benchmarks/scale.py --size 2048 2048 --sizes scan=1310720,5242880,20971520 --sizes assembly=5,10,20 \
   --sizes parts=100000 --timeout 300 --workdir /tmp/scale > $OUT/scale.jsonl
+# a vector drawing's host memory by phase, where the GPU's buffers are not in the process
+engines="/tmp/scale/assembly-2CylinderEngine-5x5.glb /tmp/scale/assembly-2CylinderEngine-10x10.glb"
+python3 benchmarks/vector_memory.py $engines --size 1024 1024 > $OUT/vector_memory.jsonl
+python3 benchmarks/vector_memory.py $engines --size 2048 2048 >> $OUT/vector_memory.jsonl
 python3 benchmarks/summary.py $OUT/*.jsonl
