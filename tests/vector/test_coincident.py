@@ -103,15 +103,18 @@ def _brute_force_drop(samples: Samples, level: np.ndarray) -> np.ndarray:
     live = np.flatnonzero(level >= 0)
     s = _Search.of(samples, level, live)
     source = s.source
-    rel = s.pixel32[live][:, None] - s.pixel32[source][None]
-    f = s.forward32[source][None]
-    t = np.clip((rel[..., 0] * f[..., 0] + rel[..., 1] * f[..., 1]) * s.inv_length2[source][None], 0, 1)
+    # the live samples' pixels and directions (``looks``), the covering stretches in the
+    # search's order, their ranks from their keys
+    rel = s.looks[:, None, :2] - s.pixel32[None]
+    f = s.forward32[None]
+    t = np.clip((rel[..., 0] * f[..., 0] + rel[..., 1] * f[..., 1]) * s.inv_length2[None], 0, 1)
     gx, gy = rel[..., 0] - t * f[..., 0], rel[..., 1] - t * f[..., 1]
-    d, u = s.direction[live][:, None], s.unit32[source][None]
+    d, u = s.looks[:, None, 2:], s.unit32[None]
     turn = np.abs(d[..., 0] * u[..., 1] - d[..., 1] * u[..., 0])
     sin_limit = np.sin(np.radians(10.0))
     hit = (gx * gx + gy * gy <= np.float32(0.25)) & (turn <= sin_limit)
-    hit &= (s.rank[source][None] < s.rank[live][:, None]) & (s.line[source][None] != s.line[live][:, None])
+    source_rank = s.src_key % s.ranks
+    hit &= (source_rank[None] < s.live_rank[:, None]) & (s.line[source][None] != s.line[live][:, None])
     cells = np.floor(samples.pixel).astype(np.int64)
     hit &= (np.abs(cells[live][:, None] - cells[source][None]) <= 1).all(axis=2)
     out = level.copy()

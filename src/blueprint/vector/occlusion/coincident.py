@@ -86,23 +86,22 @@ def _direction_bin(unit: np.ndarray, bins: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _Search:
-    """What the search for coincident stretches reads: every sample's stretch to the next
-    sample of its line (``stretch``: its start ``pixel32`` and step ``forward32``; ``units``:
-    its ``unit32`` direction and ``inv_length2``; float32 as the compute pass has them, laid
-    out as its tables' rows), the samples' own directions and ranks (level, then line), and
-    the stretches that cover others (``source``) sorted by their cell of a dense grid of
-    1-pixel cells (``span`` cells across, one cell of margin all round), then by their
-    direction's bin (of ``bins``), then by rank (``src_key``, cell, bin and rank in one number);
-    the live samples' pixels and directions (``looks``, the compute pass's rows), cells
+    """What the search for coincident stretches reads: the stretches that cover others (a live
+    sample's stretch to the next sample of its line; ``source``, their samples) sorted by their
+    cell of a dense grid of 1-pixel cells (``span`` cells across, one cell of margin all round),
+    then by their direction's bin (of ``bins``), then by rank (level, then line; ``src_key``,
+    cell, bin and rank in one number), and in that order their start and step (``stretch``:
+    ``pixel32``, ``forward32``) and their direction and inverse squared length (``units``:
+    ``unit32``, ``inv_length2``), float32 as the compute pass has them, laid out as its tables'
+    rows; the live samples' pixels and directions (``looks``, the compute pass's rows), cells
     (``key``), ranks, and the first (``first_bin``) and count (``bin_count``) of the bins they
-    look in: their own and the two beside it, every bin for a sample without a direction."""
+    look in: their own and the two beside it, every bin for a sample without a direction.
+    Nothing is kept a sample that is neither live nor covering."""
 
     stretch: np.ndarray
     units: np.ndarray
-    direction: np.ndarray
     looks: np.ndarray
     line: np.ndarray
-    rank: np.ndarray
     ranks: int
     bins: int
     source: np.ndarray
@@ -118,19 +117,19 @@ class _Search:
 
     @property
     def pixel32(self) -> np.ndarray:
-        return self.stretch[:, :2]
+        return self.stretch[: len(self.source), :2]
 
     @property
     def forward32(self) -> np.ndarray:
-        return self.stretch[:, 2:]
+        return self.stretch[: len(self.source), 2:]
 
     @property
     def unit32(self) -> np.ndarray:
-        return self.units[:, :2]
+        return self.units[: len(self.source), :2]
 
     @property
     def inv_length2(self) -> np.ndarray:
-        return self.units[:, 2]
+        return self.units[: len(self.source), 2]
 
     @classmethod
     def of(cls, samples: Samples, level: np.ndarray, live: np.ndarray, bins: int = 1) -> _Search:
@@ -141,11 +140,13 @@ class _Search:
         # a stretch that is hidden deeper or left out covers nothing
         covers = has_next & (length > 0) & (level >= 0) & (np.r_[level[1:], -1] >= 0)
         rank = _run_ranks(level, line, length)
+        del length
         # the direction of each sample's own line there (its last sample looks back)
         direction = np.ascontiguousarray(units[:, :2])
         back = np.flatnonzero(~has_next[1:]) + 1
         direction[back] = direction[back - 1]
         looks, live_bin, live_cell, first_bin, span = _live_rows(pixel, direction, live, bins)
+        del direction
         # a covering stretch is a live sample's: its cell and bin (of its direction) are its own
         covering = covers[live]
         source = live[covering]
@@ -157,19 +158,19 @@ class _Search:
         ranks = int(rank.max()) + 1  # ranks run 0 to R - 1 over the R runs: the keys fit
         src_key = (src_cell * bins + live_bin[covering]) * ranks + rank[source]
         src_key, order = sorted_with_order(src_key, overwrite=True)
+        source = source[order]
+        del order
         cell_count = np.bincount(src_cell, minlength=int(span[0] * span[1]))
         aimless = (looks[:, 2] == 0) & (looks[:, 3] == 0)
         side = 1 if bins > 1 else 0
         return cls(
-            stretch,
-            units,
-            direction,
+            _table_rows(stretch, source),
+            _table_rows(units, source),
             looks,
             line,
-            rank,
             ranks,
             bins,
-            source[order],
+            source,
             src_key,
             np.cumsum(cell_count) - cell_count,
             cell_count,
@@ -307,16 +308,19 @@ def _test_pairs(s: _Search, rows, lo, count, distance: float, sin_limit: float, 
             continue
         index = np.repeat(rows[start : start + len(c)], c)
         within = np.arange(total) - np.repeat(np.cumsum(c) - c, c)
-        other = np.take(s.source, np.repeat(lo[start : start + len(c)], c) + within)
+        # the other stretch's place in the search's order, and its sample
+        place = np.repeat(lo[start : start + len(c)], c) + within
+        other = np.take(s.source, place)
         mine = np.take(s.live, index)
         ok = np.take(s.line, other) != np.take(s.line, mine)
-        index, mine, other = index[ok], mine[ok], other[ok]
+        index, place = index[ok], place[ok]
         # distance from the sample to the other stretch, and the angle between them
-        rel = np.take(s.pixel32, mine, axis=0) - np.take(s.pixel32, other, axis=0)
-        f = np.take(s.forward32, other, axis=0)
-        t = np.clip((rel[:, 0] * f[:, 0] + rel[:, 1] * f[:, 1]) * np.take(s.inv_length2, other), 0, 1)
+        look = np.take(s.looks, index, axis=0)
+        rel = look[:, :2] - np.take(s.pixel32, place, axis=0)
+        f = np.take(s.forward32, place, axis=0)
+        t = np.clip((rel[:, 0] * f[:, 0] + rel[:, 1] * f[:, 1]) * np.take(s.inv_length2, place), 0, 1)
         gx, gy = rel[:, 0] - t * f[:, 0], rel[:, 1] - t * f[:, 1]
-        d, u = np.take(s.direction, mine, axis=0), np.take(s.unit32, other, axis=0)
+        d, u = look[:, 2:], np.take(s.unit32, place, axis=0)
         turn = np.abs(d[:, 0] * u[:, 1] - d[:, 1] * u[:, 0])
         hit = (gx * gx + gy * gy <= distance * distance) & (turn <= sin_limit)
         drop[index[hit]] = True
@@ -338,8 +342,8 @@ def _gpu_drop(renderer, search: _Search, dist2: np.float32, sin_limit: np.float3
     inputs = (
         lambda: s.looks,
         lambda: _columns(np.int32, s.key, s.live_rank, s.line[live], s.first_bin + 256 * s.bin_count),
-        lambda: _table_rows(s.stretch, source),
-        lambda: _table_rows(s.units, source),
+        lambda: s.stretch,
+        lambda: s.units,
         lambda: table_of(_columns(np.int32, s.src_key % (s.bins * s.ranks), s.line[source]), np.int32),
         lambda: table_of(_columns(np.int32, s.cell_start, s.cell_count), np.int32),
     )
