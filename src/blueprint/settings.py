@@ -32,7 +32,9 @@ __all__ = [
     "MODEL_FILE_LIMIT",
     "PART_BYTES",
     "PICTURE_TRIANGLE_BYTES",
+    "PLACED_TRIANGLE_BYTES",
     "SAMPLE_BYTES",
+    "SEGMENT_BYTES",
     "SETTINGS_FILE_LIMIT",
     "THREADS",
     "THREADS_ENV",
@@ -161,6 +163,14 @@ TRIANGLE_BYTES = 896
 # larger, of benchmarks/scale.py's engines and a field of boxes, with a third more
 # (benchmarks/notes/memory-guard.md). Weighed once the lines are joined, before any sample is made.
 SAMPLE_BYTES = 672
+# ...and a vector drawing of a scene kept as instances, whose lines are found once a mesh and
+# placed an instance at a time: a drawn triangle with its lines aside (the faces' planes and
+# parts; a field of instanced spheres, whose lines are few), and a line segment placed (through
+# their joining; instanced engines and a field of boxes), each the larger measured with a third
+# more (benchmarks/notes/memory-guard.md). Weighed before any line is found, as the segments are
+# placed, and with the samples (SAMPLE_BYTES) before they are made.
+PLACED_TRIANGLE_BYTES = 128
+SEGMENT_BYTES = 672
 # ...and where the model is drawn only as pictures (scene.headers.pictures_only: no lines'
 # adjacency), the growth a triangle of the PNG of a soup, the larger, with the same margin.
 PICTURE_TRIANGLE_BYTES = 512

@@ -3,6 +3,7 @@ budget is refused in one line before its body is read; a frame whose GPU buffers
 memory the device has free is refused before any is allocated (``render.budget``)."""
 
 import os
+import re
 import subprocess
 import time
 from pathlib import Path
@@ -239,6 +240,15 @@ def _box_moves() -> np.ndarray:
     return np.c_[2.0 * (np.arange(COPIES) % side), 3.0 * (np.arange(COPIES) // side), np.zeros(COPIES)]
 
 
+def _box_grid(path: Path, copies: int) -> Path:
+    """A GLB of ``copies`` instances of one box at ``path``, on the grid of ``_box_moves``."""
+    hostile = hostile_corpus()
+    corners, faces = hostile.box_arrays()
+    nodes = [{"mesh": 0, "translation": move} for move in _box_moves()[:copies].tolist()]
+    path.write_bytes(hostile.glb(nodes, list(range(copies)), corners, faces=faces))
+    return path
+
+
 def _box_field(path: Path) -> Path:
     """A GLB of COPIES instances of one box (``_box_moves``) at ``path``."""
     hostile = hostile_corpus()
@@ -253,8 +263,9 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     """A GLB of 10^5 instances of a box is drawn under a memory budget that refuses the same
     triangles flattened into one mesh (its unique triangles and instance records weigh far
     less than 1.2 M drawn ones). Its vector drawing, whose lines are placed instance by instance,
-    is weighed by its drawn triangles and refused in one line. (It keeps the instances too: the
-    tests of ``vector.instanced`` hold that it never flattens them.)"""
+    is weighed by its drawn triangles and the segments placed so far, and refused in one line
+    as they pass the budget. (It keeps the instances too: the tests of ``vector.instanced``
+    hold that it never flattens them.)"""
     hostile = hostile_corpus()
     corners, faces = hostile.box_arrays()
     moves = _box_moves()
@@ -286,16 +297,93 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"{drawn} triangles" in proc.stdout
     assert (tmp_path / "kept.png").stat().st_size > 0
-    # a vector drawing places, samples and occludes every instance's lines: weighed by its
-    # drawn triangles, as the flat model is, and refused before any line is found
+    # a vector drawing places, samples and occludes every instance's lines: the 12 edges of
+    # each box (1.2 M) pass the budget as they are placed, and it is refused then
     proc = render(kept, "kept.svg")
-    one_error(
-        proc,
-        f"{kept} as a vector drawing: {drawn} triangles to draw need about "
-        f"{settings.human_size(drawn * settings.TRIANGLE_BYTES)} of memory at 896 bytes a triangle, more "
-        "than the memory budget of 512 MiB",
+    line = one_error(proc, f"{kept} as a vector drawing of 64 x 64 pixels: {drawn} triangles and ")
+    placed = int(re.search(r"and (\d+) line segments placed so far need", line).group(1))
+    assert placed <= 12 * COPIES
+    assert drawn * settings.PLACED_TRIANGLE_BYTES + placed * settings.SEGMENT_BYTES > budget_bytes
+    assert line.endswith(
+        f"at {settings.PLACED_TRIANGLE_BYTES} bytes a triangle and {settings.SEGMENT_BYTES} a segment, "
+        "more than the memory budget of 512 MiB (BLUEPRINT_MEMORY_LIMIT sets the budget)"
     )
     assert not (tmp_path / "kept.svg").exists()
+
+
+def _instanced_prisms(path: Path, copies: int) -> int:
+    """A GLB of ``copies`` instances of a round prism (smooth sides, few lines a triangle) at
+    ``path``; its drawn triangles."""
+    hostile = hostile_corpus()
+    vertices, faces = prism(1.0, 2.0, 256)
+    nodes = [{"mesh": 0, "translation": [3.0 * (k % 8), 3.0 * (k // 8), 0.0]} for k in range(copies)]
+    path.write_bytes(hostile.glb(nodes, list(range(copies)), vertices, faces=faces))
+    return len(faces) * copies
+
+
+@needs_cli
+def test_an_instanced_svg_is_weighed_by_its_placed_lines_not_its_triangles_alone(tmp_path):
+    """An instanced assembly whose drawn triangles at a flat model's bytes pass the budget, but
+    whose lines, placed instance by instance, are few: its SVG is drawn. Under a budget that
+    its drawn triangles alone pass, it is refused in one line before any line is found."""
+    model = tmp_path / "prisms.glb"
+    drawn = _instanced_prisms(model, 64)
+    budget_bytes = 32 << 20
+    assert drawn * settings.TRIANGLE_BYTES > budget_bytes > 2 * drawn * settings.PLACED_TRIANGLE_BYTES
+
+    def render(budget: int, out: str) -> subprocess.CompletedProcess:
+        command = [str(BLUEPRINT), "render", str(model), "-o", str(tmp_path / out), "--size", "128", "128"]
+        env = {**os.environ, "BLUEPRINT_MEMORY_LIMIT": str(budget)}
+        return subprocess.run(command, capture_output=True, text=True, env=env, timeout=120)
+
+    proc = render(budget_bytes, "drawn.svg")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "drawn.svg").read_text().count(' d="M') > 64
+    small = drawn * settings.PLACED_TRIANGLE_BYTES - 1
+    proc = render(small, "refused.svg")
+    one_error(
+        proc,
+        f"{model} as a vector drawing of 128 x 128 pixels: {drawn} triangles need about "
+        f"{settings.human_size(drawn * settings.PLACED_TRIANGLE_BYTES)} of memory at "
+        f"{settings.PLACED_TRIANGLE_BYTES} bytes a triangle, more than the memory budget of "
+        f"{settings.human_size(small)} (BLUEPRINT_MEMORY_LIMIT sets the budget)",
+    )
+    assert not (tmp_path / "refused.svg").exists()
+
+
+def test_placed_segments_are_weighed_as_each_block_is_placed(tmp_path, monkeypatch, renderer):
+    """The running count of an instanced drawing's placed segments is told as each block of
+    instances is placed: refused at the first count the budget does not hold, with the count
+    so far, on one thread and from the pool's."""
+    from blueprint import parallel
+    from blueprint.vector import instanced
+
+    model = load_model(_box_grid(tmp_path / "boxes.glb", 300))
+    told = []
+    placing_weighed = instanced.placing_weighed
+
+    def counting(weigh):
+        return placing_weighed(lambda count: (told.append(count), weigh(count)))
+
+    monkeypatch.setattr(drawing, "placing_weighed", counting)
+    monkeypatch.setattr(instanced, "_ROWS", 24)  # a box a block
+    monkeypatch.setattr(settings, "THREADS", 1)
+    options = {"size": (64, 64), "renderer": renderer, "max_layers": 1}
+    drawing.draw_vector(model, **options)
+    assert told == list(range(12, 12 * 300 + 1, 12))  # a box's twelve edges a block
+    triangles = model.triangle_count * settings.PLACED_TRIANGLE_BYTES
+    cut = told[150]
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", triangles + cut * settings.SEGMENT_BYTES - 1)
+    told.clear()
+    with pytest.raises(InputError, match=f": 3600 triangles and {cut} line segments placed so far need"):
+        drawing.draw_vector(model, **options)
+    assert told[-1] == cut and len(told) == 151
+    monkeypatch.setattr(settings, "THREADS", 3)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 1)
+    with pytest.raises(InputError) as refused:
+        drawing.draw_vector(model, **options)
+    placed = int(re.search(r"and (\d+) line segments placed so far", str(refused.value)).group(1))
+    assert cut <= placed <= 12 * 300
 
 
 def test_a_vector_drawing_is_weighed_by_its_line_samples(monkeypatch, renderer):
@@ -339,15 +427,10 @@ def test_a_vector_drawing_is_weighed_by_its_line_samples(monkeypatch, renderer):
 def test_an_svg_whose_samples_pass_the_budget_is_refused_in_one_line(tmp_path):
     """A field of 20 000 boxes, whose triangles the budget holds, has more line samples than it
     holds: ``render`` to an SVG exits 2 with the one line and writes nothing."""
-    hostile = hostile_corpus()
-    corners, faces = hostile.box_arrays()
     copies = 20_000
-    moves = _box_moves()[:copies]
-    model = tmp_path / "boxes.glb"
-    nodes = [{"mesh": 0, "translation": move} for move in moves.tolist()]
-    model.write_bytes(hostile.glb(nodes, list(range(copies)), corners, faces=faces))
+    model = _box_grid(tmp_path / "boxes.glb", copies)
     budget_bytes = 256 << 20
-    assert 12 * copies * settings.TRIANGLE_BYTES < budget_bytes
+    assert 12 * copies * (settings.PLACED_TRIANGLE_BYTES + settings.SEGMENT_BYTES) < budget_bytes
     out = tmp_path / "boxes.svg"
     proc = subprocess.run(
         [str(BLUEPRINT), "render", str(model), "-o", str(out), "--size", "256", "256", "--max-layers", "1"],

@@ -156,6 +156,29 @@ def test_intersections_of_repeated_pairs_are_placed_at_each():
     np.testing.assert_allclose(ours.points[second], ours.points[first] + [5.0, 0, 0], atol=1e-9)
 
 
+def test_intersections_are_counted_before_they_are_placed():
+    """Within ``instanced.placing_weighed``, the intersections' segments, every pair of each
+    group of alike pairs, are told before they are placed (to be refused there)."""
+    from blueprint.vector.instanced import placing_weighed
+
+    pairs = []
+    for k in range(3):
+        pairs += [("l", placed(None, (5.0 * k, 0, 0))), ("wedge", placed(None, (5.0 * k + 0.25, 0.25, 0.25)))]
+    model = model_from_object(trimesh_scene(pairs, {"l": l_prism(), "wedge": wedge()}), name="pairs")
+    told = []
+    with placing_weighed(told.append):
+        found = intersection_segments(model)
+    assert len(found) > 0 and told == [len(found)]
+
+    def refuse(count):
+        raise InputError(f"{count} segments")
+
+    # (another scene: the first's intersections are kept by its content, and not placed again)
+    again = model_from_object(trimesh_scene(pairs[:4], {"l": l_prism(), "wedge": wedge()}), name="again")
+    with placing_weighed(refuse), pytest.raises(InputError, match=r"^\d+ segments$"):
+        intersection_segments(again)
+
+
 def test_intersections_on_several_threads_are_those_of_one(monkeypatch):
     """The intersections' segments placed at each pair a block at a time on the pool, and put in
     order of their faces by the pool's sort: on three threads, byte for byte those of one."""

@@ -12,7 +12,6 @@ import math
 import os
 import time
 from collections.abc import Iterable
-from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -33,7 +32,6 @@ from blueprint.render.gbuffer import depth_tolerance
 from blueprint.render.renderer import LayerRenderer, Layers
 from blueprint.scene.camera import SHEET_CELLS, Camera, fit_camera, sheet_cameras
 from blueprint.scene.dimension import UNITS_MM
-from blueprint.scene.headers import check_triangle_count
 from blueprint.scene.model import Model
 from blueprint.scene.parts import designated_parts
 from blueprint.scene.section import Cut, SectionPlane, cut_model
@@ -53,7 +51,7 @@ from blueprint.scene.units import drawing_unit, warn_if_assumed
 
 from .chain import chain_pieces, walked
 from .dxf import write_dxf
-from .instanced import face_parts
+from .instanced import face_parts, placing_weighed
 from .lines import grazing_band, join_polylines, model_segments
 from .linework import KINDS, Lines, runs_of
 from .occlusion import (
@@ -431,7 +429,6 @@ def draw_lines(
     layers: Layers | None = None,
 ) -> VectorDrawing:
     """``draw_vector`` with its options as one value, checked already."""
-    _check_placed_lines(model)
     seconds: dict[str, float] = {}
     shaded_parts = None if options.shade is None else designated_parts(model, options.shade)
     glyphs = options.glyphs
@@ -445,6 +442,8 @@ def draw_lines(
     chosen = _highlight(options.highlight, model)
     frame = _frame(model, camera, size, renderer, options, layers, chosen)
     camera, size = frame.camera, frame.size
+    if _placed_lines(model):
+        _weighed(model, size)  # its drawn triangles, before any line is found
     page = _page(size, camera, options.scale, options.units, model)
 
     drawn = None
@@ -452,27 +451,7 @@ def draw_lines(
         _size_frame(renderer, model, frame)
         # the faces k-buffer drawn by the driver while the lines are found (its time is the peel's)
         drawn = draw_faces(renderer, model, camera, size, frame.max_layers)
-    clock = time.perf_counter()
-    # the intersections and the faces' planes read every corner of a flat model; a model kept
-    # as instances places its meshes' instead (``instanced``)
-    with model.holding_corners() if model.instances is None else nullcontext():
-        segments = model_segments(
-            model, frame.view, frame.projection, size, options.crease_angle, options.intersections, renderer
-        )
-        # the faces' planes found beside the joining, whose chain walk holds one core
-        planes_found = parallel.begin(face_planes, model, frame.view)
-        lines = join_polylines(segments)
-        del segments  # a big assembly's placed segments: hundreds of megabytes
-        weigh = partial(_check_samples, model, size)
-        samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing, weigh)
-        # the occlusion reads the samples alone, and the pieces each polyline's part
-        line_part = lines.part
-        del lines
-        seconds["lines"] = time.perf_counter() - clock
-
-        clock = time.perf_counter()
-        planes = planes_found()
-        del planes_found  # (which holds its result)
+    samples, line_part, planes, clock = _sampled_lines(model, frame, options, renderer, seconds)
     occlusion = Occlusion(renderer, model, frame, samples, planes, options.crease_angle, layers, drawn)
     levels, count = occlusion.levels(clock, seconds)
     behind = None
@@ -540,30 +519,69 @@ class ViewFrame:
         return bool(np.isclose(self.projection[3, 3], 1.0))
 
 
-def _check_placed_lines(model: Model) -> None:
-    """Refuse in one line a model kept as instances whose drawn triangles pass the memory
-    budget (``headers.check_triangle_count``): its lines are found once a mesh, but placed,
-    sampled and occluded an instance at a time, so a vector drawing's memory follows the drawn
-    triangles, as a flat model's does, where a picture's follows its unique ones."""
-    if model.instances is not None and not model.is_flat:
-        check_triangle_count(f"{model.source or 'the model'} as a vector drawing", model.triangle_count)
+def _sampled_lines(model: Model, frame: ViewFrame, options: VectorOptions, renderer, seconds: dict):
+    """A drawing's lines found, joined and sampled, each step weighed against the memory budget
+    before it holds its arrays (``_weighed``), its seconds into ``seconds["lines"]``: (the
+    samples, each polyline's part, the faces' planes, the clock of occlusion's start)."""
+    size = frame.size
+    clock = time.perf_counter()
+    # the intersections and the faces' planes read every corner of a flat model; a model kept
+    # as instances places its meshes' instead (``instanced``)
+    # told the segments placed so far as they are placed, then the samples before they are made
+    placing = partial(_weighed, model, size)
+    with model.holding_corners() if model.instances is None else placing_weighed(placing):
+        segments = model_segments(
+            model, frame.view, frame.projection, size, options.crease_angle, options.intersections, renderer
+        )
+        if _placed_lines(model):
+            placing(len(segments))
+        # the faces' planes found beside the joining, whose chain walk holds one core
+        planes_found = parallel.begin(face_planes, model, frame.view)
+        lines = join_polylines(segments)
+        del segments  # a big assembly's placed segments: hundreds of megabytes
+        weigh = partial(_weighed, model, size, 0)
+        samples = sample_polylines(lines, frame.view, frame.projection, size, options.spacing, weigh)
+        # the occlusion reads the samples alone, and the pieces each polyline's part
+        line_part = lines.part
+        del lines
+        seconds["lines"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        planes = planes_found()
+    return samples, line_part, planes, clock
 
 
-def _check_samples(model: Model, size: tuple[int, int], samples: int) -> None:
-    """Refuse in one line a drawing whose line ``samples``, at ``settings.SAMPLE_BYTES`` each
-    beside its drawn triangles at ``settings.TRIANGLE_BYTES``, pass the memory budget: the
-    samples follow the lines' length in pixels, so a model the budget holds at one size may
-    not fit at a larger one. Called before any sample is made."""
+def _placed_lines(model: Model) -> bool:
+    """Whether ``model``'s lines are found once a mesh and placed an instance at a time
+    (``instanced``): a model kept as instances."""
+    return model.instances is not None
+
+
+def _weighed(model: Model, size, segments: int = 0, samples: int = 0) -> None:
+    """Refuse in one line a vector drawing of ``model`` at ``size`` whose drawn triangles, with
+    the line ``segments`` placed and the ``samples`` made, pass the memory budget. A flat
+    model's triangles weigh ``settings.TRIANGLE_BYTES`` each, its lines with them (its header
+    was weighed so); a model kept as instances, whose lines are found once a mesh and placed an
+    instance at a time, ``settings.PLACED_TRIANGLE_BYTES`` and each placed segment
+    ``settings.SEGMENT_BYTES``. Samples, which follow the lines' length in pixels, not the
+    triangles, weigh ``settings.SAMPLE_BYTES`` (the segments are let go by then)."""
     triangles = model.triangle_count
-    estimate = triangles * settings.TRIANGLE_BYTES + samples * settings.SAMPLE_BYTES
+    rate = settings.PLACED_TRIANGLE_BYTES if _placed_lines(model) else settings.TRIANGLE_BYTES
+    estimate = triangles * rate + segments * settings.SEGMENT_BYTES + samples * settings.SAMPLE_BYTES
     if estimate <= settings.MEMORY_BUDGET:
         return
+    counts, rates = [f"{triangles} triangles"], [f"{rate} bytes a triangle"]
+    if segments:
+        counts.append(f"{segments} line segments placed so far")
+        rates.append(f"{settings.SEGMENT_BYTES} a segment")
+    if samples:
+        counts.append(f"{samples} line samples")
+        rates.append(f"{settings.SAMPLE_BYTES} a sample")
+    smaller = "a smaller size takes fewer samples; " if samples else ""
     raise InputError(
         f"{model.source or 'the model'} as a vector drawing of {size[0]} x {size[1]} pixels: "
-        f"{triangles} triangles and {samples} line samples need about {settings.human_size(estimate)} "
-        f"of memory at {settings.TRIANGLE_BYTES} bytes a triangle and {settings.SAMPLE_BYTES} a sample, "
-        f"more than the memory budget of {settings.human_size(settings.MEMORY_BUDGET)} (a smaller "
-        f"size takes fewer samples; {settings.MEMORY_ENV} sets the budget)"
+        f"{' and '.join(counts)} need about {settings.human_size(estimate)} of memory at "
+        f"{' and '.join(rates)}, more than the memory budget of "
+        f"{settings.human_size(settings.MEMORY_BUDGET)} ({smaller}{settings.MEMORY_ENV} sets the budget)"
     )
 
 

@@ -21,7 +21,10 @@ creases are its own (the picture's per-mesh preparation takes them so too).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 import numpy as np
@@ -258,6 +261,36 @@ class _Found:
     contour_vertex_points: list
 
 
+class _Placed:
+    """The line segments one drawing has placed so far, the running count told to ``weigh``
+    (which refuses, by raising, a count the memory budget does not hold) as each block is
+    placed, from any of the pool's threads."""
+
+    def __init__(self, weigh: Callable[[int], None]) -> None:
+        self.weigh, self.count, self._lock = weigh, 0, threading.Lock()
+
+    def add(self, count: int) -> None:
+        with self._lock:
+            self.count += count
+            total = self.count
+        self.weigh(total)
+
+
+_PLACING: ContextVar[_Placed | None] = ContextVar("placing", default=None)
+
+
+@contextmanager
+def placing_weighed(weigh: Callable[[int], None]) -> Iterator[None]:
+    """Within, the segments this module places (``instanced_features``' blocks, the
+    intersections before they are placed at every pair) are counted, and ``weigh`` is told
+    the count so far as each block comes, before the next is held beside it."""
+    token = _PLACING.set(_Placed(weigh))
+    try:
+        yield
+    finally:
+        _PLACING.reset(token)
+
+
 def instanced_features(
     model: Model,
     view: np.ndarray,
@@ -297,10 +330,14 @@ def instanced_features(
         rows = max(len(ml.adj.edges), len(ml.adj.faces), len(ml.adj.positions))
         tasks += [(ml, block, at_angle) for block in _blocks(members, rows)]
 
+    placed = _PLACING.get()
+
     def features(task) -> _Found:
         ml, block, at_angle = task
         found = _Found(*([] for _ in range(16)))
         _block_features(ml, block, q_all[block], sign_all[block], at_angle, tests, inst, found)
+        if placed is not None:
+            placed.add(sum(len(e) for e in found.edge) + sum(len(f) for f in found.contour_face))
         return found
 
     # the blocks side by side, what each found joined in the blocks' order
@@ -699,6 +736,9 @@ def _intersections(model: Model, eps: float, phases, renderer):
     seg_order = stable_argsort(k)
     # every (segment, pair of its group) once
     repeat = counts[k[seg_order]]
+    placed = _PLACING.get()
+    if placed is not None:
+        placed.add(int(repeat.sum()))
     seg = np.repeat(seg_order, repeat)
     within = np.arange(len(seg)) - np.repeat(np.cumsum(repeat) - repeat, repeat)
     pair = members[member_start[k[seg]] + within]
