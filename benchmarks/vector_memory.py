@@ -38,14 +38,11 @@ import json, sys
 import blueprint.vector.drawing as d
 
 def status():
-    found = {}
     with open("/proc/self/status") as fh:
-        for line in fh:
-            if line.startswith(("VmHWM", "VmRSS")):
-                found[line[:5]] = int(line.split()[1]) >> 10
+        peak = next(int(line.split()[1]) >> 10 for line in fh if line.startswith("VmHWM"))
     with open("/proc/self/clear_refs", "w") as fh:
         fh.write("5")
-    return found["VmHWM"]
+    return peak
 
 phases, counts = {}, {}
 current = ["before"]
@@ -67,7 +64,11 @@ def wrapped(owner, name, phase, count):
 def counted(key, value):
     counts[key] = value
 
-wrapped(d, "model_segments", "segments", lambda r, a: counted("segments", len(r)))
+def segments_counted(result, args):
+    counted("triangles", int(args[0].triangle_count))
+    counted("segments", len(result))
+
+wrapped(d, "model_segments", "segments", segments_counted)
 wrapped(d, "join_polylines", "join", lambda r, a: counted("points", len(r.points)))
 wrapped(d, "sample_polylines", "sample", lambda r, a: counted("samples", len(r.line)))
 
@@ -79,16 +80,7 @@ def levels_counted(result, args):
 
 wrapped(d.Occlusion, "levels", "levels", levels_counted)
 wrapped(d, "split_by_level", "pieces", lambda r, a: None)
-original_init = d.Occlusion.__init__
-def init(self, renderer, model, *args, **kwargs):
-    counted("triangles", int(model.triangle_count))
-    original_init(self, renderer, model, *args, **kwargs)
-d.Occlusion.__init__ = init
-original_chained = d._chained
-def chained(*args, **kwargs):
-    mark("rest")
-    return original_chained(*args, **kwargs)
-d._chained = chained
+wrapped(d, "_chained", "rest", lambda r, a: None)
 
 import blueprint.cli as cli
 try:

@@ -249,15 +249,6 @@ def _box_grid(path: Path, copies: int) -> Path:
     return path
 
 
-def _box_field(path: Path) -> Path:
-    """A GLB of COPIES instances of one box (``_box_moves``) at ``path``."""
-    hostile = hostile_corpus()
-    corners, faces = hostile.box_arrays()
-    nodes = [{"mesh": 0, "translation": move} for move in _box_moves().tolist()]
-    path.write_bytes(hostile.glb(nodes, list(range(COPIES)), corners, faces=faces))
-    return path
-
-
 @needs_cli
 def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     """A GLB of 10^5 instances of a box is drawn under a memory budget that refuses the same
@@ -269,7 +260,7 @@ def test_instances_are_weighed_by_their_unique_geometry(tmp_path):
     hostile = hostile_corpus()
     corners, faces = hostile.box_arrays()
     moves = _box_moves()
-    kept, flat = _box_field(tmp_path / "kept.glb"), tmp_path / "flat.glb"
+    kept, flat = _box_grid(tmp_path / "kept.glb", COPIES), tmp_path / "flat.glb"
     positions = (corners[None] + moves[:, None]).reshape(-1, 3)
     flat_faces = (faces[None] + 8 * np.arange(COPIES)[:, None, None]).reshape(-1, 3)
     flat.write_bytes(hostile.glb([{"mesh": 0}], [0], positions, faces=flat_faces))
@@ -453,7 +444,7 @@ def test_a_crowd_of_instances_in_a_few_pixels_draws_its_svg(tmp_path):
     search for coincident lines looks at a bounded number each, so the SVG is written (it was
     quadratic in a pixel's crowd) and holds the lines that stay."""
     out = tmp_path / "boxes.svg"
-    command = [str(BLUEPRINT), "render", str(_box_field(tmp_path / "boxes.glb")), "-o", str(out)]
+    command = [str(BLUEPRINT), "render", str(_box_grid(tmp_path / "boxes.glb", COPIES)), "-o", str(out)]
     proc = subprocess.run(
         [*command, "--size", "64", "64", "--max-layers", "1"], capture_output=True, text=True, timeout=120
     )

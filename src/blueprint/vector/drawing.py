@@ -534,6 +534,8 @@ def _sampled_lines(model: Model, frame: ViewFrame, options: VectorOptions, rende
             model, frame.view, frame.projection, size, options.crease_angle, options.intersections, renderer
         )
         if _placed_lines(model):
+            # all of them once more: intersections kept from an earlier drawing of the same
+            # model are not placed again, so not counted as they are placed
             placing(len(segments))
         # the faces' planes found beside the joining, whose chain walk holds one core
         planes_found = parallel.begin(face_planes, model, frame.view)
