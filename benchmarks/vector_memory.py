@@ -103,7 +103,7 @@ def measure(model: Path, size, max_layers: int, memory: str, src: Path) -> dict:
         command += ["--size", str(size[0]), str(size[1]), "--max-layers", str(max_layers)]
         env = {
             **os.environ,
-            "PYTHONPATH": str(src),
+            "PYTHONPATH": os.pathsep.join(p for p in (str(src), os.environ.get("PYTHONPATH")) if p),
             "BLUEPRINT_SUPERVISE": "0",
             "BLUEPRINT_MEMORY_LIMIT": memory,
         }
