@@ -39,6 +39,8 @@ from blueprint.sorting import (
         (1000, 0, 2**51),
         (1000, 0, 2**53),
         (300, 0, 2**62),
+        (65000, 0, 2**62),
+        (200000, 0, 2**62),
         (300, 2**63, 2**64 - 1),
     ],
     ids=[
@@ -51,6 +53,8 @@ from blueprint.sorting import (
         "widest-packed",
         "just-too-wide-to-pack",
         "too-wide-to-pack",
+        "too-wide-to-pack-in-the-most-buckets",
+        "too-wide-to-pack-in-the-fewest-buckets",
         "beyond-int64",
     ],
 )

@@ -158,8 +158,9 @@ def _by_buckets(
     """``sorted_with_order`` of keys too wide to sort packed with their positions: the keys
     split by the top bits of ``key - low`` into at most ``_MAX_BUCKETS`` buckets (a stable
     counting sort), then each bucket's keys, less those bits, packed with their positions in
-    it and sorted, the buckets side by side; None where a bucket's still do not fit. Without
-    ``keys``, the order alone (the sorted keys None)."""
+    it and sorted, the buckets side by side; where a bucket's still do not fit, each bucket's
+    keys sorted by a stable argsort (None on one thread). Without ``keys``, the order alone
+    (the sorted keys None)."""
     n = len(key)
     span = (high - low).bit_length()
     if span > 62 or high >= 1 << 63:
@@ -179,7 +180,15 @@ def _by_buckets(
         if shift + bits <= 62:
             break
     else:
-        return None
+        if settings.THREADS == 1:
+            return None  # one stable sort of them all
+        # too wide to pack with their positions in the most buckets: each bucket's keys are
+        # sorted as they are, the buckets still side by side
+        if fewest >= _MAX_BUCKETS.bit_length():  # (else the loop's last count is of the most)
+            shift = max(span - (_MAX_BUCKETS.bit_length() - 1), 0)
+            bucket, per_block = _counted(key, low, shift, _MAX_BUCKETS)
+            counts = per_block.sum(axis=0)
+        bits = None
     # held through the buckets' sorts
     order = _bucket_order(bucket, per_block, _positions_type(n))
     del bucket
@@ -190,6 +199,13 @@ def _by_buckets(
         for b in range(first, last):
             start, stop = int(ends[b] - counts[b]), int(ends[b])
             at = order[start:stop]
+            if bits is None:
+                held = np.asarray(key[at], np.int64)
+                by_key = np.argsort(held, kind="stable")
+                positions[start:stop] = at[by_key]
+                if keys:
+                    ordered[start:stop] = held[by_key]
+                continue
             packed = np.asarray(key[at], np.int64)
             packed -= low + (b << shift)
             packed <<= bits
