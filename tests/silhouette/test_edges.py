@@ -220,6 +220,29 @@ def test_segments_in_front_of_the_near_plane_are_projected_without_a_copy():
     np.testing.assert_allclose(model[2], [[0, -1, -5], [0, -1, -1]], atol=1e-12)
 
 
+@pytest.mark.parametrize("threads", [1, 3])
+def test_near_kept_is_near_clipped_a_step_at_a_time(threads, monkeypatch):
+    """The kept endpoints and rows of segments taken a few rows a step on the pool are those of
+    all at once, bit for bit: steps where none is cut, steps where some are cut or dropped
+    (wholly behind the eye), the last step short; the endpoints given where none is cut."""
+    from blueprint import parallel, settings
+    from blueprint.silhouette.edges import near_clipped, near_kept
+
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 8)
+    monkeypatch.setattr(parallel, "STEP", 5)
+    proj = perspective(70.0, W / H, 0.5, 100.0)
+    view = look_at((0.3, 0.2, 4.0), (0.0, 0.0, 0.0), (0, 1, 0))
+    rng = np.random.default_rng(7)
+    ahead = rng.uniform(-1, 1, (43, 2, 3))
+    for segments in (ahead, np.concatenate([ahead[:12], rng.uniform(-6, 6, (31, 2, 3)), ahead[12:]])):
+        _, model, kept = near_clipped(segments, view, proj)
+        got_model, got_kept = near_kept(segments, view, proj)
+        assert got_model.tobytes() == model.tobytes() and got_kept.tolist() == kept.tolist()
+    assert len(kept) < len(segments) and not np.array_equal(model, segments[kept])  # some cut, some dropped
+    assert near_kept(ahead, view, proj)[0] is ahead
+
+
 @pytest.mark.parametrize(
     "kwargs",
     [

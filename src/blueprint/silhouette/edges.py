@@ -306,7 +306,39 @@ def _projected(model: np.ndarray, view, projection, size) -> tuple[np.ndarray, n
 def near_clipped(model: np.ndarray, view, projection) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``_projected`` without the pixels, for callers that make them later or not at all: the
     kept segments' clip coordinates (M, 2, 4), model endpoints (M, 2, 3) and rows (M,)."""
-    clip = transform(model, projection @ view)
+    return _near(transform(model, projection @ view), model)
+
+
+def near_kept(model: np.ndarray, view, projection) -> tuple[np.ndarray, np.ndarray]:
+    """``near_clipped``'s kept model endpoints (M, 2, 3) and rows (M,), for callers that need
+    no clip coordinates: the segments taken a step of rows at a time on the pool, so that
+    those of millions of segments are never all held; ``model`` itself where none reaches
+    past the near plane (most drawings)."""
+    matrix = projection @ view
+
+    def steps(lo: int, hi: int) -> list[tuple[int, np.ndarray, np.ndarray]]:
+        found = []
+        for start in range(lo, hi, parallel.STEP):
+            piece = model[start : min(start + parallel.STEP, hi)]
+            _, kept_model, kept = _near(transform(piece, matrix), piece)
+            if kept_model is not piece:
+                found.append((start, kept_model, kept + start))
+        return found
+
+    clipped = [step for block in parallel.run(steps, len(model)) for step in block]
+    if not clipped:
+        return model, np.arange(len(model))
+    models, rows, done = [], [], 0
+    for start, kept_model, kept in clipped:
+        models += [model[done:start], kept_model]
+        rows += [np.arange(done, start), kept]
+        done = min(start + parallel.STEP, len(model))
+    return np.concatenate([*models, model[done:]]), np.concatenate([*rows, np.arange(done, len(model))])
+
+
+def _near(clip: np.ndarray, model: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments of clip coordinates ``clip`` (N, 2, 4) and model endpoints ``model`` clipped to
+    the near plane and to w > 0 (``near_clipped``)."""
     # Near plane of an OpenGL frustum: z_clip >= -w_clip; then keep the divide safe.
     clip, model, keep = _clip(clip, model, clip[..., 2] + clip[..., 3])
     clip, model, kept = _clip(clip, model, clip[..., 3] - _MIN_W)

@@ -38,7 +38,7 @@ from blueprint.scene.model import Model
 from blueprint.silhouette import Adjacency, build_adjacency, smooth_surface
 from blueprint.silhouette.contours import _EDGE_ON as _VERTEX_EDGE_ON
 from blueprint.silhouette.contours import _edge_keys
-from blueprint.silhouette.edges import _first_two_faces, _projected, near_clipped, sharp_edges
+from blueprint.silhouette.edges import _first_two_faces, _projected, near_kept, sharp_edges
 from blueprint.sorting import grouped, stable_argsort
 
 from .cache import ModelCache
@@ -443,7 +443,7 @@ def _outline_edges(ml: _MeshLines, edge_on: np.ndarray, lines: tuple, transforms
     # found as the flat path finds them: where the near plane leaves a piece of them
     b, e, points = lines
     beside = column[e] >= 0
-    kept = near_clipped(points[beside], tests.view, tests.projection)[2]
+    kept = near_kept(points[beside], tests.view, tests.projection)[1]
     found = np.zeros((len(edge_on), len(two)), bool)
     found[b[beside][kept], column[e[beside][kept]]] = True
     rows, k = np.nonzero(tests.outlines(edge_on, pair, found))
@@ -479,7 +479,7 @@ def _assembled(found: _Found, inst: Instances, first_vertex, first_edge, first_f
     # the edge-on outlines are wholly in front of the eye and kept whole, as the flat path keeps
     # them; the other lines are clipped to the near plane
     inside = np.flatnonzero(~outline)
-    _, clipped, kept = near_clipped(points[inside] if len(inside) < len(points) else points, view, projection)
+    clipped, kept = near_kept(points[inside] if len(inside) < len(points) else points, view, projection)
     kept = inside[kept]
     keep = outline.copy()
     keep[kept] = True
