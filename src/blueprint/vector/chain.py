@@ -12,6 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.sorting import renumbered, row_numbers, stable_argsort
 
 __all__ = ["chain_order", "chain_pieces", "pair_ends", "walked"]
@@ -67,7 +68,12 @@ def pair_ends(
     ha, hb = order[np.concatenate(first_i)], order[np.concatenate(first_j)]
     # straight on: the two pieces leave the node in opposite directions
     direction = leaving if callable(leaving) else leaving.__getitem__
-    straight = -np.einsum("ij,ij->i", direction(ha), direction(hb))
+    straight = np.empty(len(ha))
+
+    def turns(lo: int, hi: int) -> None:
+        straight[lo:hi] = -np.einsum("ij,ij->i", direction(ha[lo:hi]), direction(hb[lo:hi]))
+
+    parallel.run(parallel.stepped(turns), len(ha))
     ok = straight >= min_cos
     rank = np.argsort(-straight[ok], kind="stable")
     x, y = ha[ok][rank], hb[ok][rank]

@@ -158,20 +158,30 @@ class Segments:
     def __len__(self) -> int:
         return len(self.points)
 
+    def taken(self, rows: np.ndarray) -> Segments:
+        """The segments ``rows``, their columns taken side by side on the pool."""
+        names = [name for name in _SEGMENT_COLUMNS if getattr(self, name) is not None]
+        taken = parallel.each(lambda name: getattr(self, name)[rows], names)
+        return Segments(**dict(zip(names, taken, strict=True)))
+
     @staticmethod
     def concatenate(items: list[Segments]) -> Segments:
         items = [s for s in items if len(s)] or [Segments.empty()]
-        ends = None
-        if any(s.edge_end is not None for s in items):
-            ends = np.concatenate([s.end_edges() for s in items]).astype(np.int64)
-        return Segments(
-            np.concatenate([s.points for s in items]),
-            np.concatenate([s.faces for s in items]),
-            np.concatenate([s.part for s in items]).astype(np.int32),
-            np.concatenate([s.kind for s in items]).astype(np.uint8),
-            np.concatenate([s.edge for s in items]).astype(np.int64),
-            ends,
-        )
+        ends = any(s.edge_end is not None for s in items)
+        # the columns joined side by side on the pool: a big assembly's are millions of rows
+        columns = {
+            "points": lambda s: s.points,
+            "faces": lambda s: s.faces,
+            "part": lambda s: s.part.astype(np.int32, copy=False),
+            "kind": lambda s: s.kind.astype(np.uint8, copy=False),
+            "edge": lambda s: s.edge.astype(np.int64, copy=False),
+            **({"edge_end": lambda s: s.end_edges().astype(np.int64, copy=False)} if ends else {}),
+        }
+        joined = parallel.each(lambda name: np.concatenate([columns[name](s) for s in items]), list(columns))
+        return Segments(**dict(zip(columns, joined, strict=True)))
+
+
+_SEGMENT_COLUMNS = ("points", "faces", "part", "kind", "edge", "edge_end")
 
 
 @dataclass(frozen=True)
@@ -415,13 +425,7 @@ def _instanced_feature_segments(model: Model, view, projection, size, crease_ang
     edge_pairs = np.concatenate([edge_pairs, np.stack([bridge_edge, bridge_edge], axis=1)])
     return Segments.concatenate(
         [
-            Segments(
-                edges.points[~replaced],
-                faces[~replaced],
-                edges.part[~replaced],
-                kind[~replaced],
-                edges.edge[~replaced],
-            ),
+            edges.taken(parallel.flatnonzero(replaced, negated=True)),
             Segments(
                 np.concatenate([points, bridge]),
                 np.stack([contour_faces, np.full(len(contour_faces), -1)], axis=1),
@@ -1243,14 +1247,26 @@ def _point_keys(
 
 
 def _ranks(ordered: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """Each key's rank among the distinct keys, from the keys sorted and their order."""
-    if len(ordered) == 0:
-        return np.zeros(0, np.int64)
-    new = np.empty(len(ordered), np.int64)
-    new[0] = 0
-    np.not_equal(ordered[1:], ordered[:-1], out=new[1:])
-    ranks = np.empty(len(ordered), np.int64)
-    ranks[order] = np.cumsum(new)
+    """Each key's rank among the distinct keys, from the keys sorted and their order: where
+    the sorted keys change, their running count and its scatter, a block a thread."""
+    n = len(ordered)
+    new = np.empty(n, bool)
+
+    def changes(lo: int, hi: int) -> None:
+        np.not_equal(ordered[lo + 1 : hi], ordered[lo : hi - 1], out=new[lo + 1 : hi])
+        if lo > 0:
+            new[lo] = ordered[lo] != ordered[lo - 1]
+
+    parallel.run(changes, n)
+    if n:
+        new[0] = False
+    rank = parallel.cumsum(new, np.int64)
+    ranks = np.empty(n, np.int64)
+
+    def scatter(lo: int, hi: int) -> None:
+        ranks[order[lo:hi]] = rank[lo:hi]
+
+    parallel.run(scatter, n)
     return ranks
 
 
