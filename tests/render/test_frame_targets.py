@@ -14,6 +14,7 @@ from capture_helpers import one_way
 from instanced_scenes import flattened, mixed_scene
 
 import blueprint
+from blueprint import settings
 from blueprint.examples import gearbox
 from blueprint.gpu.targets import FORMATS, INTERNAL_FORMATS
 from blueprint.render import abuffer, budget
@@ -124,7 +125,7 @@ def test_a_frame_holds_its_ways_targets_alone(renderer, way, max_layers, size, h
 def test_placed_fragments_are_the_flattened_scenes(monkeypatch):
     """The fragments foretold of a scene kept as instances are those of its flattened twin,
     whatever the block of faces placed at a time (one block, and blocks that cut instances
-    apart); None where a corner lies behind the eye."""
+    apart, on one thread or side by side); None where a corner lies behind the eye."""
     model = mixed_scene()
     twin = flattened(mixed_scene())
     size = (160, 120)
@@ -134,7 +135,12 @@ def test_placed_fragments_are_the_flattened_scenes(monkeypatch):
     assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
     monkeypatch.setattr(abuffer, "AREA_BLOCK", 7)
     assert len(twin.faces) > 7 * 3
-    assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
+    monkeypatch.setattr(settings, "THREADS", 1)
+    one_thread = placed_fragments(model.instances, camera, size)
+    assert one_thread == pytest.approx(expected, rel=1e-5)
+    # the blocks side by side: the same sum, bit for bit
+    monkeypatch.setattr(settings, "THREADS", 3)
+    assert placed_fragments(model.instances, camera, size) == one_thread
     inside = blueprint.Camera(eye=(0, 0, 0), target=(0, 0, -1), up=(0, 1, 0), near=0.01, far=9)
     assert placed_fragments(model.instances, inside, size) is None
     assert not model.is_flat

@@ -19,6 +19,7 @@ import functools
 
 import numpy as np
 
+from blueprint import parallel
 from blueprint.gpu.device import TOTAL_AVAILABLE_NVX, nvx_memory, run_over
 from blueprint.render.gbuffer import BACK_BIAS, GBuffer, abuffer_uniforms, depth_tolerance
 from blueprint.render.mesh import geometry_program, target_uniform
@@ -694,22 +695,31 @@ def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float 
     ends = np.cumsum(counts)
     starts = ends - counts
     face_start, vertex_start = instances.face_start[instances.mesh], instances.vertex_start[instances.mesh]
+    faces = int(ends[-1]) if len(ends) else 0
+
+    def areas(first: int, last: int) -> list[float | None]:
+        found = []
+        for start in range(first * AREA_BLOCK, min(last * AREA_BLOCK, faces), AREA_BLOCK):
+            flat = np.arange(start, min(start + AREA_BLOCK, faces))
+            inst = np.searchsorted(ends, flat, side="right")
+            face = face_start[inst] + (flat - starts[inst])
+            corners = instances.faces[face] + vertex_start[inst][:, None]
+            block_turn, block_shift = turn[inst], shift[inst]
+            # a corner at a time: a block's corners placed at once would hold three times the memory
+            clips = [
+                np.einsum("bi,bij->bj", instances.positions[corners[:, k]].astype(np.float32), block_turn)
+                + block_shift
+                for k in range(3)
+            ]
+            found.append(_twice_area(clips))
+        return found
+
+    # the blocks side by side on the pool, their areas summed in order as one thread would
+    found = [area for part in parallel.run(areas, -(-faces // AREA_BLOCK), min_block=1) for area in part]
+    if any(area is None for area in found):
+        return None
     total = 0.0
-    for start in range(0, int(ends[-1]) if len(ends) else 0, AREA_BLOCK):
-        flat = np.arange(start, min(start + AREA_BLOCK, int(ends[-1])))
-        inst = np.searchsorted(ends, flat, side="right")
-        face = face_start[inst] + (flat - starts[inst])
-        corners = instances.faces[face] + vertex_start[inst][:, None]
-        block_turn, block_shift = turn[inst], shift[inst]
-        # a corner at a time: a block's corners placed at once would hold three times the memory
-        clips = [
-            np.einsum("bi,bij->bj", instances.positions[corners[:, k]].astype(np.float32), block_turn)
-            + block_shift
-            for k in range(3)
-        ]
-        area = _twice_area(clips)
-        if area is None:
-            return None
+    for area in found:
         total += area
     return _pixels(total, size)
 
