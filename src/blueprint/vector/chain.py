@@ -50,9 +50,14 @@ def pair_ends(
     if order is None:
         order = stable_argsort(node)
     starts = np.cumsum(degree) - degree
-    two = np.flatnonzero(degree == 2)
-    a, b = order[starts[two]], order[starts[two] + 1]
-    partner[a], partner[b] = b, a
+    # the half-ends at nodes of two, paired: gathered and put a block a thread (most of them)
+    first = parallel.taken(starts, parallel.flatnonzero(degree == 2))
+    a = parallel.taken(order, first)
+    first += 1
+    b = parallel.taken(order, first)
+    del first
+    parallel.put(partner, a, b)
+    parallel.put(partner, b, a)
     junction = np.flatnonzero(degree > 2)
     if len(junction) == 0:
         return partner
@@ -145,10 +150,11 @@ def _loop_starts(onward: np.ndarray, looped: np.ndarray) -> np.ndarray:
     number[looped] = np.arange(len(looped))  # ascending: numbers order as half-ends do
     least, ahead = np.arange(len(looped)), number[onward[looped]]
     while True:
-        lower = np.minimum(least, least[ahead])
+        lower = parallel.taken(least, ahead)
+        np.minimum(lower, least, out=lower)
         if np.array_equal(lower, least):
             break
-        least, ahead = lower, ahead[ahead]
+        least, ahead = lower, parallel.taken(ahead, ahead)
     own = least == np.arange(len(looped))
     return looped[own & (least < least[number[looped ^ 1]])]
 
