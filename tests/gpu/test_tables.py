@@ -68,3 +68,19 @@ def test_one_column_and_limits(renderer):
     assert table_fits(TABLE_WIDTH * 16384, 16384) and not table_fits(TABLE_WIDTH * 16384 + 1, 16384)
     with pytest.raises(ValueError, match="1 to 4 columns"):
         table_texture(renderer.ctx, np.zeros((3, 5), np.float32))
+
+
+@pytest.mark.parametrize("threads", [1, 3])
+def test_a_table_cast_a_block_a_thread_is_the_rows_cast(threads, monkeypatch):
+    """``table_of``: the rows cast to the table's type in their place, a block of rows a
+    thread, the rows past them zero."""
+    from blueprint import parallel, settings
+    from blueprint.gpu.tables import table_of
+
+    monkeypatch.setattr(settings, "THREADS", threads)
+    monkeypatch.setattr(parallel, "MIN_BLOCK", 5)
+    data = np.random.default_rng(3).normal(0, 1e3, (TABLE_WIDTH + 37, 3))
+    table = table_of(data, np.float32)
+    assert table.shape == (table_rows(len(data)), 3) and table.dtype == np.float32
+    assert table[: len(data)].tobytes() == data.astype(np.float32).tobytes()
+    assert not table[len(data) :].any()

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from blueprint import parallel
+
 __all__ = ["TABLE_WIDTH", "table_fits", "table_of", "table_rows", "table_texture"]
 
 # Rows a texture row (table.glsl's TABLE_WIDTH): a power of two, so that a shader finds the
@@ -52,8 +54,12 @@ def table_texture(ctx, data: np.ndarray):
 def table_of(data: np.ndarray, dtype) -> np.ndarray:
     """An (N,) or (N, C) array as ``dtype`` in an array of ``table_rows(N)`` rows, those past N
     zero: what ``table_texture`` takes as it is, so that a table cast from another type is
-    written once, not cast and then copied into its texture's rows."""
+    written once, not cast and then copied into its texture's rows; a block of rows a thread."""
     table = np.empty((table_rows(len(data)), *data.shape[1:]), dtype)
-    table[: len(data)] = data
+
+    def copy(lo: int, hi: int) -> None:
+        table[lo:hi] = data[lo:hi]
+
+    parallel.run(copy, len(data))
     table[len(data) :] = 0
     return table
