@@ -11,6 +11,7 @@ the faces they lie on so that occlusion can tell a line's own surface from the o
 from __future__ import annotations
 
 import weakref
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import partial
 
@@ -161,7 +162,7 @@ class Segments:
     def taken(self, rows: np.ndarray) -> Segments:
         """The segments ``rows``, their columns taken side by side on the pool."""
         names = [name for name in _SEGMENT_COLUMNS if getattr(self, name) is not None]
-        taken = parallel.each(lambda name: getattr(self, name)[rows], names)
+        taken = _columns_each(lambda name: getattr(self, name)[rows], names, len(rows))
         return Segments(**dict(zip(names, taken, strict=True)))
 
     @staticmethod
@@ -177,11 +178,23 @@ class Segments:
             "edge": lambda s: s.edge.astype(np.int64, copy=False),
             **({"edge_end": lambda s: s.end_edges().astype(np.int64, copy=False)} if ends else {}),
         }
-        joined = parallel.each(lambda name: np.concatenate([columns[name](s) for s in items]), list(columns))
+        joined = _columns_each(
+            lambda name: np.concatenate([columns[name](s) for s in items]),
+            list(columns),
+            sum(len(s) for s in items),
+        )
         return Segments(**dict(zip(columns, joined, strict=True)))
 
 
 _SEGMENT_COLUMNS = ("points", "faces", "part", "kind", "edge", "edge_end")
+
+
+def _columns_each(work: Callable, names: list[str], rows: int) -> list[np.ndarray]:
+    """``work(name)`` for the columns ``names`` of ``rows`` rows, side by side on the pool
+    where they are many (a thread's hand-over costs more than a few rows' copy)."""
+    if rows < parallel.MIN_BLOCK:
+        return [work(name) for name in names]
+    return parallel.each(work, names)
 
 
 @dataclass(frozen=True)
