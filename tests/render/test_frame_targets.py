@@ -133,7 +133,7 @@ def test_placed_fragments_are_the_flattened_scenes(monkeypatch):
     expected = projected_fragments(twin.positions, twin.faces, camera, size)
     assert expected > 0
     assert placed_fragments(model.instances, camera, size) == pytest.approx(expected, rel=1e-5)
-    monkeypatch.setattr(abuffer, "AREA_BLOCK", 7)
+    monkeypatch.setattr(abuffer, "PLACED_BLOCK", 7)
     assert len(twin.faces) > 7 * 3
     monkeypatch.setattr(settings, "THREADS", 1)
     one_thread = placed_fragments(model.instances, camera, size)

@@ -56,8 +56,10 @@ LONG_MOST = 960
 SORTED = 48
 # room for this many fragments a pixel before a first frame has counted them
 FIRST_ROOM = 4
-# faces whose areas on the picture ``projected_fragments`` sums at a time
+# faces whose areas on the picture ``projected_fragments`` sums at a time, and
+# ``placed_fragments`` on each thread (a few threads' blocks hold what one of the former does)
 AREA_BLOCK = 1 << 15
+PLACED_BLOCK = 1 << 13
 # pixels along a side of the tiles whose layers are counted, for a software rasteriser to unpack
 # and draw each layer only where it has pixels (blueprint.pipeline.tiles)
 TILE = 16
@@ -684,8 +686,9 @@ def projected_fragments(
 
 def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float | None:
     """``projected_fragments`` of the scene ``instances`` (``scene.instances.Instances``) place:
-    each instance's faces through its transform, ``AREA_BLOCK`` faces of the flattened scene at
-    a time, so that no more than a block's corners are ever placed at once."""
+    each instance's faces through its transform, ``PLACED_BLOCK`` faces of the flattened scene
+    at a time on each thread, so that no more than a block's corners a thread are ever placed at
+    once."""
     rows = (camera.projection_matrix() @ camera.view_matrix())[[0, 1, 3]]
     # each instance's rows from its mesh's coordinates to clip x, y and w: (N, 3, 4)
     placed = np.einsum("ij,njk->nik", rows, instances.transform)
@@ -699,8 +702,8 @@ def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float 
 
     def areas(first: int, last: int) -> list[float | None]:
         found = []
-        for start in range(first * AREA_BLOCK, min(last * AREA_BLOCK, faces), AREA_BLOCK):
-            flat = np.arange(start, min(start + AREA_BLOCK, faces))
+        for start in range(first * PLACED_BLOCK, min(last * PLACED_BLOCK, faces), PLACED_BLOCK):
+            flat = np.arange(start, min(start + PLACED_BLOCK, faces))
             inst = np.searchsorted(ends, flat, side="right")
             face = face_start[inst] + (flat - starts[inst])
             corners = instances.faces[face] + vertex_start[inst][:, None]
@@ -715,7 +718,7 @@ def placed_fragments(instances, camera: Camera, size: tuple[int, int]) -> float 
         return found
 
     # the blocks side by side on the pool, their areas summed in order as one thread would
-    found = [area for part in parallel.run(areas, -(-faces // AREA_BLOCK), min_block=1) for area in part]
+    found = [area for part in parallel.run(areas, -(-faces // PLACED_BLOCK), min_block=1) for area in part]
     if any(area is None for area in found):
         return None
     total = 0.0
