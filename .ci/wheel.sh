@@ -19,19 +19,35 @@ start=$SECONDS
 wheel=$(ls "$work"/wheel/blueprint_drawings-*.whl)
 echo "wheel: built $(basename "$wheel") in $((SECONDS - start)) s"
 
-failed=()
+# each Python's virtualenv made and the wheel installed into it side by side (mostly unpacking
+# and waiting on the package index), then the smoke tests one after another
+install() {
+    local python=$1 venv=$2 log=$3 start=$SECONDS
+    # -qq: the package index's configuration warns of every name its local mirrors lack
+    if "$python" -m venv "$venv" > "$log" 2>&1 && "$venv/bin/python" -m pip install -qq "$wheel" >> "$log" 2>&1; then
+        echo "wheel: $4: installed with its dependencies in $((SECONDS - start)) s" >> "$log.done"
+    else
+        echo "wheel: $4: installing the wheel failed" >> "$log.done"
+    fi
+}
+versions=()
 for python in "${pythons[@]}"; do
     version=$("$python" -c 'import sys; print("%d.%d.%d" % sys.version_info[:3])')
-    venv="$work/venv-$version"
-    start=$SECONDS
-    "$python" -m venv "$venv"
-    # -qq: the package index's configuration warns of every name its local mirrors lack
-    if ! "$venv/bin/python" -m pip install -qq "$wheel"; then
-        echo "wheel: Python $version: installing the wheel failed"
+    [[ " ${versions[*]} " == *" $version "* ]] && continue  # one venv a version
+    versions+=("$version")
+    install "$python" "$work/venv-$version" "$work/install-$version.log" "Python $version" &
+done
+wait
+
+failed=()
+for version in "${versions[@]}"; do
+    cat "$work/install-$version.log.done"
+    if grep -q "failed" "$work/install-$version.log.done"; then
+        tail -5 "$work/install-$version.log"
         failed+=("$version")
         continue
     fi
-    echo "wheel: Python $version: installed with its dependencies in $((SECONDS - start)) s"
+    venv="$work/venv-$version"
     mkdir "$work/smoke-$version"
     start=$SECONDS
     if ! (cd "$work/smoke-$version" && "$venv/bin/python" "$root/.ci/smoke.py"); then
@@ -43,4 +59,4 @@ if [ ${#failed[@]} -gt 0 ]; then
     echo "wheel: failed on Python ${failed[*]}"
     exit 1
 fi
-echo "wheel: ok on ${#pythons[@]} Python versions"
+echo "wheel: ok on ${#versions[@]} Python versions"
