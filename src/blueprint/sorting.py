@@ -23,6 +23,7 @@ __all__ = [
     "dense_ranks",
     "grouped",
     "row_numbers",
+    "sorted_ranks",
     "sorted_with_order",
     "stable_argsort",
     "unique_first",
@@ -337,11 +338,34 @@ def _sorted_unique(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     """``unique_first`` by one stable sort of the keys."""
     order = stable_argsort(key)
     ordered = key[order]
-    new = np.ones(len(key), bool)
-    new[1:] = ordered[1:] != ordered[:-1]
-    inverse = np.empty(len(key), np.int64)
-    inverse[order] = np.cumsum(new) - 1
-    return ordered[new], order[new], inverse
+    new = _run_starts(ordered)
+    return ordered[new], order[new], _scattered_ranks(new, order)
+
+
+def sorted_ranks(ordered: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """(N,) int64: each key's rank among the distinct keys (``np.unique``'s inverse), from the
+    keys sorted, ``ordered``, and where each came from, ``order``."""
+    return _scattered_ranks(_run_starts(ordered), order)
+
+
+def _run_starts(ordered: np.ndarray) -> np.ndarray:
+    """(N,) bool: where a run of equal sorted keys begins (the first key's), a block a thread."""
+    new = np.empty(len(ordered), bool)
+
+    def changes(lo: int, hi: int) -> None:
+        np.not_equal(ordered[lo + 1 : hi], ordered[lo : hi - 1], out=new[lo + 1 : hi])
+        new[lo] = lo == 0 or ordered[lo] != ordered[lo - 1]
+
+    if len(ordered):
+        parallel.run(changes, len(ordered))
+    return new
+
+
+def _scattered_ranks(new: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """The runs' numbers (``_run_starts`` ``new``) of the sorted keys, put where each came from."""
+    ranks = np.empty(len(new), np.int64)
+    parallel.put(ranks, order, parallel.cumsum(new, np.int64, start=-1))
+    return ranks
 
 
 def dense_ranks(key: np.ndarray) -> np.ndarray:

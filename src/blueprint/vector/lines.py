@@ -37,7 +37,7 @@ from blueprint.silhouette import (
     smooth_surface,
     toward_eye,
 )
-from blueprint.sorting import renumbered, sorted_with_order, stable_argsort, unique_first
+from blueprint.sorting import renumbered, sorted_ranks, sorted_with_order, stable_argsort, unique_first
 
 from .cache import ModelCache
 from .chain import chain_order, pair_ends
@@ -1243,7 +1243,7 @@ def _point_ids(points: np.ndarray, quantum: float) -> np.ndarray:
     if float(span[0]) * float(span[1]) * float(span[2]) < 2.0**62:
         key = np.empty(len(points), np.int64)
         parallel.run(partial(_point_keys, points, low, quantum, span, key), len(points))
-        return _ranks(*sorted_with_order(key, overwrite=True))
+        return sorted_ranks(*sorted_with_order(key, overwrite=True))
     q = np.round((points - low) / quantum).astype(np.int64)
     return np.unique(q, axis=0, return_inverse=True)[1].reshape(-1)
 
@@ -1257,30 +1257,6 @@ def _point_keys(
         stop = min(start + _ROWS, hi)
         q = np.round((points[start:stop] - low) / quantum).astype(np.int64)
         out[start:stop] = (q[:, 2] * span[1] + q[:, 1]) * span[0] + q[:, 0]
-
-
-def _ranks(ordered: np.ndarray, order: np.ndarray) -> np.ndarray:
-    """Each key's rank among the distinct keys, from the keys sorted and their order: where
-    the sorted keys change, their running count and its scatter, a block a thread."""
-    n = len(ordered)
-    new = np.empty(n, bool)
-
-    def changes(lo: int, hi: int) -> None:
-        np.not_equal(ordered[lo + 1 : hi], ordered[lo : hi - 1], out=new[lo + 1 : hi])
-        if lo > 0:
-            new[lo] = ordered[lo] != ordered[lo - 1]
-
-    parallel.run(changes, n)
-    if n:
-        new[0] = False
-    rank = parallel.cumsum(new, np.int64)
-    ranks = np.empty(n, np.int64)
-
-    def scatter(lo: int, hi: int) -> None:
-        ranks[order[lo:hi]] = rank[lo:hi]
-
-    parallel.run(scatter, n)
-    return ranks
 
 
 def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
@@ -1318,7 +1294,7 @@ def join_polylines(segments: Segments, turn: float = 30.0) -> Polylines:
     # nodes: a point within one part, numbered by point then part; the sort's order is the one
     # ``pair_ends`` walks the nodes in
     ordered, by_node = sorted_with_order(pid.reshape(-1) * (int(seg_part.max()) + 1) + np.repeat(seg_part, 2))
-    node = _ranks(ordered, by_node)
+    node = sorted_ranks(ordered, by_node)
     # half-end h = 2 s + e is segment s's end e (0: start, 1: end); a segment leaves its end
     # as its start leaves backwards
     ahead = np.empty((len(keep), 3))
