@@ -200,14 +200,13 @@ def _by_buckets(
         for b in range(first, last):
             start, stop = int(ends[b] - counts[b]), int(ends[b])
             at = order[start:stop]
+            packed = np.asarray(key[at], np.int64)
             if bits is None:
-                held = np.asarray(key[at], np.int64)
-                by_key = np.argsort(held, kind="stable")
+                by_key = np.argsort(packed, kind="stable")
                 positions[start:stop] = at[by_key]
                 if keys:
-                    ordered[start:stop] = held[by_key]
+                    ordered[start:stop] = packed[by_key]
                 continue
-            packed = np.asarray(key[at], np.int64)
             packed -= low + (b << shift)
             packed <<= bits
             packed |= np.arange(stop - start)
